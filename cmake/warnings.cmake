@@ -1,0 +1,22 @@
+# Warnings of the house style. -Wconversion is left out on purpose: in numerical code full of
+# size_t indices and double arithmetic it mostly flags intended conversions; -Wshadow,
+# -Wstrict-prototypes, -Wmissing-prototypes, -Wvla and -Wcast-qual catch the real mistakes.
+set(CBM_WARNINGS
+    -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Wvla
+    -Wcast-qual -Wformat=2 -Wundef -Wimplicit-fallthrough -Wno-unused-parameter)
+
+if(CBM_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined
+                      -fno-omit-frame-pointer)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# Reproducible floating point: no contraction into FMA, never -ffast-math.
+add_compile_options(-ffp-contract=off)
+
+function(cbm_set_warnings target)
+  target_compile_options(${target} PRIVATE ${CBM_WARNINGS})
+  if(CBM_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()

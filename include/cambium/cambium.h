@@ -1,0 +1,9 @@
+/* cambium: grows plants, trees above all, with real biomechanics. The umbrella header. */
+#ifndef CAMBIUM_H
+#define CAMBIUM_H
+
+#include "cambium/base.h"
+#include "cambium/geom.h"
+#include "cambium/io.h"
+
+#endif

@@ -1,0 +1,106 @@
+/* cambium: the scene, the geometry a plant produces for the writers.
+ *
+ * A scene is a triangle mesh (positions and normals in metres, y up) whose triangles belong to
+ * parts. A part is one organ instance (a branch segment, a leaf, a fruit, ...) with the data the
+ * writers colour by or keep as per-segment attributes (order, stress ratio, age, reaction wood).
+ * Producers (the turtle, the built-in tree models) open a part, then add tubes (generalized
+ * cylinders with elliptical sections), spheres, polygons or ready meshes to it.
+ */
+#ifndef CAMBIUM_GEOM_H
+#define CAMBIUM_GEOM_H
+
+#include "cambium/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum cbm_organ {
+    CBM_ORGAN_BRANCH,
+    CBM_ORGAN_LEAF,
+    CBM_ORGAN_FRUIT,
+    CBM_ORGAN_FLOWER,
+    CBM_ORGAN_BUD,
+    CBM_ORGAN_GROUND,
+    CBM_ORGAN_OTHER,
+    CBM_ORGAN_COUNT
+} cbm_organ;
+
+/// Name of an organ kind ("branch", "leaf", ...).
+CBM_API const char *cbm_organ_name(cbm_organ o);
+
+/// What a part is. Unknown quantities are NaN (e.g. stress of a cpfg model without mechanics).
+typedef struct cbm_part {
+    cbm_organ organ;
+    int32_t order;        ///< branch order (trunk 0), -1 if unknown
+    int64_t segment;      ///< mechanical segment id or module index, -1 if none
+    int64_t parent;       ///< parent segment id, -1 if none
+    int32_t material;     ///< colour-map / material index, -1 if none
+    float color[4];       ///< linear RGBA in [0,1]
+    double stress_ratio;  ///< bending stress / modulus of rupture
+    double stress;        ///< bending stress, Pa
+    double age;           ///< wood age, years
+    double reaction_wood; ///< fraction of reaction wood in the section, 0..1
+} cbm_part;
+
+/// A part with neutral defaults: branch, order -1, no ids, grey, NaN quantities.
+CBM_API cbm_part cbm_part_default(void);
+
+typedef struct cbm_scene_vertex {
+    float p[3]; ///< position, m
+    float n[3]; ///< unit normal
+} cbm_scene_vertex;
+
+/// A cross-section of a generalized cylinder: centre, frame (H along the axis, U along the
+/// semi-axis a, L along the semi-axis b).
+typedef struct cbm_section {
+    cbm_vec3 center; ///< m
+    cbm_frame frame;
+    double a; ///< semi-axis along U, m
+    double b; ///< semi-axis along L, m
+} cbm_section;
+
+typedef struct cbm_scene cbm_scene;
+
+CBM_API cbm_status cbm_scene_create(cbm_context *ctx, cbm_scene **out);
+CBM_API void cbm_scene_destroy(cbm_scene *scene);
+/// Removes all geometry and parts; keeps the memory.
+CBM_API void cbm_scene_clear(cbm_scene *scene);
+
+/// Starts a new part; later geometry belongs to it. *id (optional) receives its index.
+CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, uint32_t *id);
+
+/// Generalized cylinder: begin, then one ring per section (each ring is joined to the previous
+/// one with `sides` quads), then end. `caps` closes the two ends with flat discs.
+CBM_API cbm_status cbm_scene_tube_begin(cbm_scene *scene, int sides, bool caps);
+CBM_API cbm_status cbm_scene_tube_ring(cbm_scene *scene, const cbm_section *s);
+CBM_API cbm_status cbm_scene_tube_end(cbm_scene *scene);
+/// One straight piece between two sections (begin, two rings, end).
+CBM_API cbm_status cbm_scene_add_tube(cbm_scene *scene, const cbm_section *s0,
+                                      const cbm_section *s1, int sides, bool caps);
+CBM_API cbm_status cbm_scene_add_sphere(cbm_scene *scene, cbm_vec3 center, double radius,
+                                        int slices);
+/// Planar or nearly planar polygon, convex or not (ear clipping); normal by Newell's method.
+CBM_API cbm_status cbm_scene_add_polygon(cbm_scene *scene, const cbm_vec3 *pts, size_t n);
+/// A ready triangle mesh; normals may be NULL (then computed from the faces).
+CBM_API cbm_status cbm_scene_add_mesh(cbm_scene *scene, const cbm_vec3 *pos, const cbm_vec3 *nrm,
+                                      size_t nverts, const uint32_t *tri, size_t ntri);
+
+CBM_API size_t cbm_scene_vertex_count(const cbm_scene *scene);
+CBM_API const cbm_scene_vertex *cbm_scene_vertices(const cbm_scene *scene);
+CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
+/// 3 vertex indices per triangle.
+CBM_API const uint32_t *cbm_scene_triangles(const cbm_scene *scene);
+/// The part of each triangle.
+CBM_API const uint32_t *cbm_scene_triangle_parts(const cbm_scene *scene);
+CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
+CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
+/// Mutable access, e.g. to fill stress after a solve.
+CBM_API cbm_part *cbm_scene_part(cbm_scene *scene, uint32_t id);
+/// Axis-aligned bounds of all vertices; false if the scene is empty.
+CBM_API bool cbm_scene_bounds(const cbm_scene *scene, cbm_vec3 *lo, cbm_vec3 *hi);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,429 @@
+/* The scene: an indexed triangle mesh with one part per organ instance, and the tessellation of
+ * the primitives plants are made of: generalized cylinders with elliptical sections (rings of
+ * `sides` vertices joined by quads, normals of the ellipse), UV spheres, polygons (ear clipping
+ * after projection on the plane of Newell's normal) and ready meshes. */
+#include "cambium/geom.h"
+
+#include "../core/core.h"
+#include "../core/vecmath.h"
+
+#include <float.h>
+#include <math.h>
+
+struct cbm_scene {
+    cbm_context *ctx;
+    CBM_ARRAY(cbm_scene_vertex) verts;
+    CBM_ARRAY(uint32_t) tris;  /* 3 per triangle */
+    CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
+    CBM_ARRAY(cbm_part) parts;
+    /* tube in progress */
+    int tube_sides;
+    bool tube_caps, tube_open;
+    uint32_t tube_prev;  /* first vertex of the previous ring */
+    size_t tube_rings;
+    cbm_section tube_last;
+};
+
+static const char *const organ_names[CBM_ORGAN_COUNT] = {"branch", "leaf",   "fruit", "flower",
+                                                         "bud",    "ground", "other"};
+
+const char *cbm_organ_name(cbm_organ o)
+{
+    if ((unsigned)o >= CBM_ORGAN_COUNT)
+        return "other";
+    return organ_names[o];
+}
+
+cbm_part cbm_part_default(void)
+{
+    cbm_part p;
+    memset(&p, 0, sizeof p);
+    p.organ = CBM_ORGAN_BRANCH;
+    p.order = -1;
+    p.segment = -1;
+    p.parent = -1;
+    p.material = -1;
+    p.color[0] = p.color[1] = p.color[2] = 0.6f;
+    p.color[3] = 1.0f;
+    p.stress_ratio = NAN;
+    p.stress = NAN;
+    p.age = NAN;
+    p.reaction_wood = NAN;
+    return p;
+}
+
+cbm_status cbm_scene_create(cbm_context *ctx, cbm_scene **out)
+{
+    if (!ctx || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_scene *s = cbm__calloc(ctx, 1, sizeof *s);
+    if (!s)
+        return CBM_E_NOMEM;
+    s->ctx = ctx;
+    *out = s;
+    return CBM_OK;
+}
+
+void cbm_scene_destroy(cbm_scene *s)
+{
+    if (!s)
+        return;
+    cbm_context *ctx = s->ctx;
+    CBM_ARRAY_FREE(ctx, s->verts);
+    CBM_ARRAY_FREE(ctx, s->tris);
+    CBM_ARRAY_FREE(ctx, s->tpart);
+    CBM_ARRAY_FREE(ctx, s->parts);
+    cbm__free(ctx, s, sizeof *s);
+}
+
+void cbm_scene_clear(cbm_scene *s)
+{
+    s->verts.len = s->tris.len = s->tpart.len = s->parts.len = 0;
+    s->tube_open = false;
+}
+
+static cbm_status ensure_part(cbm_scene *s)
+{
+    if (s->parts.len > 0)
+        return CBM_OK;
+    cbm_part p = cbm_part_default();
+    return CBM_ARRAY_PUSH(s->ctx, s->parts, p);
+}
+
+cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id)
+{
+    if (!s || !part)
+        return CBM_E_INVALID;
+    if (s->parts.len >= UINT32_MAX)
+        return CBM_E_LIMIT;
+    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *part));
+    if (id)
+        *id = (uint32_t)(s->parts.len - 1);
+    return CBM_OK;
+}
+
+static cbm_status push_vertex(cbm_scene *s, cbm_vec3 p, cbm_vec3 n)
+{
+    if (s->verts.len >= UINT32_MAX - 1)
+        return CBM_E_LIMIT;
+    cbm_scene_vertex v = {{(float)p.x, (float)p.y, (float)p.z}, {(float)n.x, (float)n.y, (float)n.z}};
+    return CBM_ARRAY_PUSH(s->ctx, s->verts, v);
+}
+
+static cbm_status push_tri(cbm_scene *s, uint32_t a, uint32_t b, uint32_t c)
+{
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tris, s->tris.len + 3));
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tpart, s->tpart.len + 1));
+    s->tris.data[s->tris.len++] = a;
+    s->tris.data[s->tris.len++] = b;
+    s->tris.data[s->tris.len++] = c;
+    s->tpart.data[s->tpart.len++] = (uint32_t)(s->parts.len - 1);
+    return CBM_OK;
+}
+
+/* ---- generalized cylinders ---- */
+
+cbm_status cbm_scene_tube_begin(cbm_scene *s, int sides, bool caps)
+{
+    if (!s || sides < 3 || sides > 1024)
+        return CBM_E_INVALID;
+    CBM_TRY(ensure_part(s));
+    s->tube_sides = sides;
+    s->tube_caps = caps;
+    s->tube_open = true;
+    s->tube_rings = 0;
+    return CBM_OK;
+}
+
+static cbm_status add_cap(cbm_scene *s, const cbm_section *sec, uint32_t ring, bool at_start)
+{
+    /* A flat disc: a fan around the centre with its own vertices (sharp edge). */
+    cbm_vec3 n = at_start ? v3_neg(sec->frame.h) : sec->frame.h;
+    uint32_t c = (uint32_t)s->verts.len;
+    CBM_TRY(push_vertex(s, sec->center, n));
+    for (int i = 0; i < s->tube_sides; i++) {
+        const cbm_scene_vertex *v = &s->verts.data[ring + (uint32_t)i];
+        CBM_TRY(push_vertex(s, v3(v->p[0], v->p[1], v->p[2]), n));
+    }
+    for (int i = 0; i < s->tube_sides; i++) {
+        uint32_t a = c + 1 + (uint32_t)i, b = c + 1 + (uint32_t)((i + 1) % s->tube_sides);
+        CBM_TRY(at_start ? push_tri(s, c, a, b) : push_tri(s, c, b, a));
+    }
+    return CBM_OK;
+}
+
+cbm_status cbm_scene_tube_ring(cbm_scene *s, const cbm_section *sec)
+{
+    if (!s || !sec || !s->tube_open)
+        return CBM_E_INVALID;
+    if (!v3_isfinite(sec->center) || !isfinite(sec->a) || !isfinite(sec->b))
+        return CBM_E_NONFINITE;
+    uint32_t first = (uint32_t)s->verts.len;
+    int n = s->tube_sides;
+    double a = fabs(sec->a), b = fabs(sec->b);
+    for (int i = 0; i < n; i++) {
+        double t = 2.0 * CBM_PI * i / n, c = cos(t), sn = sin(t);
+        /* point a cos t U + b sin t L; normal ~ (cos t / a) U + (sin t / b) L */
+        cbm_vec3 p = v3_add(sec->center,
+                            v3_add(v3_scale(sec->frame.u, a * c), v3_scale(sec->frame.l, b * sn)));
+        cbm_vec3 nn = v3_add(v3_scale(sec->frame.u, b * c), v3_scale(sec->frame.l, a * sn));
+        nn = v3_normalize(nn);
+        if (a == 0.0 && b == 0.0)
+            nn = v3_normalize(v3_add(v3_scale(sec->frame.u, c), v3_scale(sec->frame.l, sn)));
+        CBM_TRY(push_vertex(s, p, nn));
+    }
+    if (s->tube_rings == 0) {
+        if (s->tube_caps)
+            CBM_TRY(add_cap(s, sec, first, true));
+    } else {
+        uint32_t p = s->tube_prev;
+        for (int i = 0; i < n; i++) {
+            uint32_t i0 = (uint32_t)i, i1 = (uint32_t)((i + 1) % n);
+            /* the ring runs from U towards L, clockwise seen from +H: wind outwards */
+            CBM_TRY(push_tri(s, p + i0, first + i1, p + i1));
+            CBM_TRY(push_tri(s, p + i0, first + i0, first + i1));
+        }
+    }
+    s->tube_prev = first;
+    s->tube_last = *sec;
+    s->tube_rings++;
+    return CBM_OK;
+}
+
+cbm_status cbm_scene_tube_end(cbm_scene *s)
+{
+    if (!s || !s->tube_open)
+        return CBM_E_INVALID;
+    s->tube_open = false;
+    if (s->tube_caps && s->tube_rings > 0)
+        CBM_TRY(add_cap(s, &s->tube_last, s->tube_prev, false));
+    return CBM_OK;
+}
+
+cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1,
+                              int sides, bool caps)
+{
+    CBM_TRY(cbm_scene_tube_begin(s, sides, caps));
+    CBM_TRY(cbm_scene_tube_ring(s, s0));
+    CBM_TRY(cbm_scene_tube_ring(s, s1));
+    return cbm_scene_tube_end(s);
+}
+
+/* ---- spheres ---- */
+
+cbm_status cbm_scene_add_sphere(cbm_scene *s, cbm_vec3 c, double r, int slices)
+{
+    if (!s || slices < 3 || slices > 1024 || !(r >= 0.0) || !v3_isfinite(c))
+        return CBM_E_INVALID;
+    CBM_TRY(ensure_part(s));
+    int stacks = slices / 2 < 2 ? 2 : slices / 2;
+    uint32_t base = (uint32_t)s->verts.len;
+    for (int i = 0; i <= stacks; i++) {
+        double th = CBM_PI * i / stacks, st = sin(th), ct = cos(th);
+        for (int j = 0; j < slices; j++) {
+            double ph = 2.0 * CBM_PI * j / slices;
+            cbm_vec3 n = v3(st * cos(ph), ct, st * sin(ph));
+            CBM_TRY(push_vertex(s, v3_madd(c, n, r), n));
+        }
+    }
+    for (int i = 0; i < stacks; i++) {
+        for (int j = 0; j < slices; j++) {
+            uint32_t a = base + (uint32_t)(i * slices + j);
+            uint32_t b = base + (uint32_t)(i * slices + (j + 1) % slices);
+            uint32_t cc = a + (uint32_t)slices, d = b + (uint32_t)slices;
+            if (i > 0)
+                CBM_TRY(push_tri(s, a, b, d));
+            if (i < stacks - 1)
+                CBM_TRY(push_tri(s, a, d, cc));
+        }
+    }
+    return CBM_OK;
+}
+
+/* ---- polygons ---- */
+
+static double cross2(double ax, double ay, double bx, double by)
+{
+    return ax * by - ay * bx;
+}
+
+cbm_status cbm_scene_add_polygon(cbm_scene *s, const cbm_vec3 *pts, size_t n)
+{
+    if (!s || (!pts && n))
+        return CBM_E_INVALID;
+    if (n < 3)
+        return CBM_OK; /* nothing to draw */
+    CBM_TRY(ensure_part(s));
+    cbm_vec3 nrm = v3(0, 0, 0);
+    for (size_t i = 0; i < n; i++) {
+        cbm_vec3 a = pts[i], b = pts[(i + 1) % n];
+        if (!v3_isfinite(a))
+            return CBM_E_NONFINITE;
+        nrm.x += (a.y - b.y) * (a.z + b.z);
+        nrm.y += (a.z - b.z) * (a.x + b.x);
+        nrm.z += (a.x - b.x) * (a.y + b.y);
+    }
+    if (v3_norm(nrm) == 0.0)
+        return CBM_OK; /* degenerate: no area */
+    nrm = v3_normalize(nrm);
+    /* 2-D basis of the plane */
+    cbm_vec3 ex = fabs(nrm.x) < 0.9 ? v3(1, 0, 0) : v3(0, 1, 0);
+    ex = v3_normalize(v3_sub(ex, v3_scale(nrm, v3_dot(ex, nrm))));
+    cbm_vec3 ey = v3_cross(nrm, ex);
+    uint32_t base = (uint32_t)s->verts.len;
+    for (size_t i = 0; i < n; i++)
+        CBM_TRY(push_vertex(s, pts[i], nrm));
+    /* ear clipping over an index list, O(n^2) (polygons of plants are small) */
+    uint32_t *idx = cbm__alloc(s->ctx, n * sizeof *idx);
+    double *xy = cbm__alloc(s->ctx, 2 * n * sizeof *xy);
+    cbm_status st = CBM_OK;
+    if (!idx || !xy) {
+        st = CBM_E_NOMEM;
+        goto done;
+    }
+    for (size_t i = 0; i < n; i++) {
+        idx[i] = (uint32_t)i;
+        xy[2 * i] = v3_dot(pts[i], ex);
+        xy[2 * i + 1] = v3_dot(pts[i], ey);
+    }
+    size_t m = n, guard = 0;
+    while (m > 3 && st == CBM_OK) {
+        bool clipped = false;
+        for (size_t k = 0; k < m; k++) {
+            uint32_t i0 = idx[(k + m - 1) % m], i1 = idx[k], i2 = idx[(k + 1) % m];
+            double ax = xy[2 * i0], ay = xy[2 * i0 + 1], bx = xy[2 * i1], by = xy[2 * i1 + 1];
+            double cx = xy[2 * i2], cy = xy[2 * i2 + 1];
+            double area = cross2(bx - ax, by - ay, cx - ax, cy - ay);
+            if (area <= 0.0)
+                continue; /* reflex or degenerate */
+            bool inside = false;
+            for (size_t q = 0; q < m && !inside; q++) {
+                uint32_t j = idx[q];
+                if (j == i0 || j == i1 || j == i2)
+                    continue;
+                double px = xy[2 * j], py = xy[2 * j + 1];
+                if (cross2(bx - ax, by - ay, px - ax, py - ay) >= 0 &&
+                    cross2(cx - bx, cy - by, px - bx, py - by) >= 0 &&
+                    cross2(ax - cx, ay - cy, px - cx, py - cy) >= 0)
+                    inside = true;
+            }
+            if (inside)
+                continue;
+            st = push_tri(s, base + i0, base + i1, base + i2);
+            memmove(idx + k, idx + k + 1, (m - k - 1) * sizeof *idx);
+            m--;
+            clipped = true;
+            break;
+        }
+        if (!clipped) {
+            /* self-intersecting or numerically degenerate: fall back to a fan */
+            for (size_t k = 1; k + 1 < m && st == CBM_OK; k++)
+                st = push_tri(s, base + idx[0], base + idx[k], base + idx[k + 1]);
+            m = 0;
+        }
+        if (++guard > 4 * n)
+            break;
+    }
+    if (m == 3 && st == CBM_OK)
+        st = push_tri(s, base + idx[0], base + idx[1], base + idx[2]);
+done:
+    cbm__free(s->ctx, idx, n * sizeof *idx);
+    cbm__free(s->ctx, xy, 2 * n * sizeof *xy);
+    return st;
+}
+
+cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 *nrm,
+                              size_t nverts, const uint32_t *tri, size_t ntri)
+{
+    if (!s || (!pos && nverts) || (!tri && ntri))
+        return CBM_E_INVALID;
+    CBM_TRY(ensure_part(s));
+    for (size_t i = 0; i < 3 * ntri; i++)
+        if (tri[i] >= nverts)
+            return CBM_E_INVALID;
+    uint32_t base = (uint32_t)s->verts.len;
+    for (size_t i = 0; i < nverts; i++) {
+        if (!v3_isfinite(pos[i]))
+            return CBM_E_NONFINITE;
+        CBM_TRY(push_vertex(s, pos[i], nrm ? v3_normalize(nrm[i]) : v3(0, 0, 0)));
+    }
+    for (size_t t = 0; t < ntri; t++)
+        CBM_TRY(push_tri(s, base + tri[3 * t], base + tri[3 * t + 1], base + tri[3 * t + 2]));
+    if (!nrm) {
+        /* area-weighted vertex normals */
+        for (size_t t = 0; t < ntri; t++) {
+            cbm_vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], c = pos[tri[3 * t + 2]];
+            cbm_vec3 fn = v3_cross(v3_sub(b, a), v3_sub(c, a));
+            for (int k = 0; k < 3; k++) {
+                float *vn = s->verts.data[base + tri[3 * t + (size_t)k]].n;
+                vn[0] += (float)fn.x;
+                vn[1] += (float)fn.y;
+                vn[2] += (float)fn.z;
+            }
+        }
+        for (size_t i = 0; i < nverts; i++) {
+            float *vn = s->verts.data[base + i].n;
+            cbm_vec3 v = v3_normalize(v3(vn[0], vn[1], vn[2]));
+            if (v3_norm(v) == 0.0)
+                v = v3(0, 1, 0);
+            vn[0] = (float)v.x;
+            vn[1] = (float)v.y;
+            vn[2] = (float)v.z;
+        }
+    }
+    return CBM_OK;
+}
+
+size_t cbm_scene_vertex_count(const cbm_scene *s)
+{
+    return s->verts.len;
+}
+const cbm_scene_vertex *cbm_scene_vertices(const cbm_scene *s)
+{
+    return s->verts.data;
+}
+size_t cbm_scene_triangle_count(const cbm_scene *s)
+{
+    return s->tpart.len;
+}
+const uint32_t *cbm_scene_triangles(const cbm_scene *s)
+{
+    return s->tris.data;
+}
+const uint32_t *cbm_scene_triangle_parts(const cbm_scene *s)
+{
+    return s->tpart.data;
+}
+size_t cbm_scene_part_count(const cbm_scene *s)
+{
+    return s->parts.len;
+}
+const cbm_part *cbm_scene_parts(const cbm_scene *s)
+{
+    return s->parts.data;
+}
+cbm_part *cbm_scene_part(cbm_scene *s, uint32_t id)
+{
+    return id < s->parts.len ? &s->parts.data[id] : NULL;
+}
+
+bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
+{
+    if (s->verts.len == 0)
+        return false;
+    double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    for (size_t i = 0; i < s->verts.len; i++)
+        for (int k = 0; k < 3; k++) {
+            double v = s->verts.data[i].p[k];
+            if (v < l[k])
+                l[k] = v;
+            if (v > h[k])
+                h[k] = v;
+        }
+    if (lo)
+        *lo = v3(l[0], l[1], l[2]);
+    if (hi)
+        *hi = v3(h[0], h[1], h[2]);
+    return true;
+}

@@ -1,0 +1,161 @@
+/* The test runner's main: registry, selection by name, failure counting, helpers. */
+#define _POSIX_C_SOURCE 200809L
+#include "test.h"
+
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define MAX_TESTS 1024
+
+static struct {
+    const char *name;
+    cbm_test_fn fn;
+} tests[MAX_TESTS];
+static int ntests;
+static int current_failures;
+static const char *current_name = "";
+
+void cbm_test_register(const char *name, cbm_test_fn fn)
+{
+    if (ntests >= MAX_TESTS) {
+        fprintf(stderr, "too many tests\n");
+        exit(2);
+    }
+    tests[ntests].name = name;
+    tests[ntests].fn = fn;
+    ntests++;
+}
+
+void cbm_test_fail(const char *file, int line, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "%s:%d: %s: FAIL: ", file, line, current_name);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    current_failures++;
+}
+
+cbm_context *test_ctx(void)
+{
+    cbm_context *ctx = NULL;
+    cbm_context_def def = cbm_context_def_default();
+    if (cbm_context_create(&def, &ctx) != CBM_OK) {
+        fprintf(stderr, "cannot create context\n");
+        exit(2);
+    }
+    return ctx;
+}
+
+void test_ctx_end_at(cbm_context *ctx, const char *file, int line)
+{
+    if (!ctx)
+        return;
+    size_t b = cbm_context_bytes(ctx);
+    if (b != 0)
+        cbm_test_fail(file, line, "%zu bytes still allocated at the end of the test", b);
+    cbm_context_destroy(ctx);
+}
+
+typedef struct {
+    long countdown; /* fail when it reaches 0; negative: never */
+    int injected;
+} oom_state;
+
+static void *oom_alloc(void *ud, void *ptr, size_t old_size, size_t new_size)
+{
+    oom_state *st = ud;
+    (void)old_size;
+    if (new_size == 0) {
+        free(ptr);
+        return NULL;
+    }
+    if (new_size > old_size || !ptr) {
+        if (st->countdown == 0) {
+            st->injected = 1;
+            st->countdown = -1;
+            return NULL;
+        }
+        if (st->countdown > 0)
+            st->countdown--;
+    }
+    return realloc(ptr, new_size);
+}
+
+int test_oom_loop_at(test_oom_fn fn, void *ud, const char *file, int line)
+{
+    for (long n = 0; n < 1000000; n++) {
+        oom_state st = {n, 0};
+        cbm_context_def def = cbm_context_def_default();
+        def.alloc = oom_alloc;
+        def.alloc_ud = &st;
+        cbm_context *ctx = NULL;
+        if (cbm_context_create(&def, &ctx) != CBM_OK)
+            continue; /* the context itself was the failed allocation */
+        cbm_status s = fn(ctx, ud);
+        if (s != CBM_OK && s != CBM_E_NOMEM)
+            cbm_test_fail(file, line, "OOM loop run %ld: status %s", n, cbm_status_name(s));
+        if (cbm_context_bytes(ctx) != 0)
+            cbm_test_fail(file, line, "OOM loop run %ld: %zu bytes leaked", n,
+                          cbm_context_bytes(ctx));
+        cbm_context_destroy(ctx);
+        if (!st.injected) {
+            if (s != CBM_OK)
+                cbm_test_fail(file, line, "OOM loop: failed without injected failure");
+            return (int)n + 1;
+        }
+        if (current_failures > 20)
+            return (int)n + 1;
+    }
+    cbm_test_fail(file, line, "OOM loop did not finish");
+    return 0;
+}
+
+const char *test_source_dir(void)
+{
+    return CBM_TEST_SOURCE_DIR;
+}
+
+const char *test_tmp_dir(void)
+{
+    static char dir[4096];
+    snprintf(dir, sizeof dir, "%s/%s", CBM_TEST_BINARY_DIR "/tmp", current_name);
+    mkdir(CBM_TEST_BINARY_DIR "/tmp", 0777);
+    mkdir(dir, 0777);
+    return dir;
+}
+
+int main(int argc, char **argv)
+{
+    int passed = 0, failed = 0;
+    for (int i = 0; i < ntests; i++) {
+        if (argc > 1) {
+            int want = 0;
+            for (int a = 1; a < argc; a++)
+                if (strcmp(argv[a], tests[i].name) == 0)
+                    want = 1;
+            if (!want)
+                continue;
+        }
+        current_name = tests[i].name;
+        current_failures = 0;
+        tests[i].fn();
+        if (current_failures) {
+            failed++;
+            printf("FAIL %s\n", tests[i].name);
+        } else {
+            passed++;
+            printf("ok   %s\n", tests[i].name);
+        }
+        fflush(stdout);
+    }
+    if (argc > 1 && passed + failed == 0) {
+        fprintf(stderr, "no test matched\n");
+        return 2;
+    }
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed ? 1 : 0;
+}

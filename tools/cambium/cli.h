@@ -1,0 +1,29 @@
+/* Shared pieces of the command-line tool: the command table and the helpers every command
+ * uses (context with a stderr diagnostics sink, error reporting, number parsing). */
+#ifndef CBM_CLI_H
+#define CBM_CLI_H
+
+#include "cambium/cambium.h"
+
+#include <stdio.h>
+
+/// Exit codes: 0 success, 1 failure of the job (bad model, solver failure, I/O), 2 bad usage.
+enum { CLI_OK = 0, CLI_FAIL = 1, CLI_USAGE = 2 };
+
+typedef int (*cli_command_fn)(int argc, char **argv);
+
+/// A context whose diagnostics print to stderr as "file:line:col: error: message".
+cbm_context *cli_context(void);
+/// Destroys the context made by cli_context.
+void cli_context_end(cbm_context *ctx);
+/// Prints "cambium: <what>: <last error or status message>" to stderr and returns CLI_FAIL.
+int cli_fail(cbm_context *ctx, cbm_status s, const char *what);
+/// Prints "cambium <cmd>: <message>" and returns CLI_USAGE.
+int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/// Strict number parsing: the whole string must be a finite number.
+bool cli_parse_double(const char *s, double *out);
+bool cli_parse_long(const char *s, long *out);
+/// The extension of a path after the last dot ("csv"), "" if none.
+const char *cli_extension(const char *path);
+
+#endif
