@@ -73,7 +73,7 @@ CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, 
 /// Generalized cylinder: begin, then one ring per section (each ring is joined to the previous
 /// one with `sides` quads), then end. `caps` closes the two ends with flat discs.
 CBM_API cbm_status cbm_scene_tube_begin(cbm_scene *scene, int sides, bool caps);
-CBM_API cbm_status cbm_scene_tube_ring(cbm_scene *scene, const cbm_section *s);
+CBM_API cbm_status cbm_scene_tube_ring(cbm_scene *scene, const cbm_section *sec);
 CBM_API cbm_status cbm_scene_tube_end(cbm_scene *scene);
 /// One straight piece between two sections (begin, two rings, end).
 CBM_API cbm_status cbm_scene_add_tube(cbm_scene *scene, const cbm_section *s0,
