@@ -81,6 +81,7 @@ void cbm__arena_destroy(cbm__arena *a);
 CBM_PRINTF(6, 7)
 void cbm__diag(cbm_context *ctx, cbm_severity sev, const char *file, int line, int col,
                const char *fmt, ...);
+CBM_PRINTF(6, 0)
 void cbm__vdiag(cbm_context *ctx, cbm_severity sev, const char *file, int line, int col,
                 const char *fmt, va_list ap);
 /// Records an error message (no location) and returns the status, for `return cbm__fail(...)`.
