@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 struct cbm_out {
@@ -57,6 +58,10 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         release(o);
         return cbm__fail(ctx, CBM_E_IO, "%s: cannot create output file: %s", path, strerror(e));
     }
+    /* mkstemp creates mode 0600: give the file the usual permissions (0666 less the umask) */
+    mode_t mask = umask(0);
+    umask(mask);
+    (void)fchmod(fd, 0666 & ~mask);
     o->tmp = cbm__strdup(ctx, tmp);
     cbm__free(ctx, tmp, n);
     o->f = o->tmp ? fdopen(fd, "wb") : NULL;
@@ -124,8 +129,8 @@ cbm_status cbm_out_commit(cbm_out *o)
         e = errno;
     if (e) {
         unlink(o->tmp);
-        cbm_status s = cbm__fail(ctx, CBM_E_IO, "%s: cannot write output file: %s", o->path,
-                                 strerror(e));
+        cbm_status s =
+            cbm__fail(ctx, CBM_E_IO, "%s: cannot write output file: %s", o->path, strerror(e));
         release(o);
         return s;
     }
