@@ -101,9 +101,11 @@ cbm_status cbm_write_obj(cbm_context *ctx, const cbm_scene *s, const char *path,
     for (size_t i = 0; i < np; i++)
         pmtl[i] = mtl_find(&t, color_key(parts[i].organ, col + 4 * i));
 
-    /* the material library: materials in id order */
-    if ((st = cbm_out_open(ctx, mpath, &mo)) != CBM_OK)
+    /* the .obj is opened first so that an unwritable target is reported under its own name */
+    if ((st = cbm_out_open(ctx, path, &oo)) != CBM_OK ||
+        (st = cbm_out_open(ctx, mpath, &mo)) != CBM_OK)
         goto done;
+    /* the material library: materials in id order */
     FILE *f = cbm_out_stream(mo);
     fprintf(f, "# cambium materials: one per organ and colour (display sRGB)\n");
     for (uint32_t id = 0; id < t.count; id++) {
@@ -120,8 +122,6 @@ cbm_status cbm_write_obj(cbm_context *ctx, const cbm_scene *s, const char *path,
             break;
         }
     }
-    if ((st = cbm_out_open(ctx, path, &oo)) != CBM_OK)
-        goto done;
     f = cbm_out_stream(oo);
     const char *mbase = strrchr(mpath, '/');
     mbase = mbase ? mbase + 1 : mpath;
@@ -161,12 +161,16 @@ cbm_status cbm_write_obj(cbm_context *ctx, const cbm_scene *s, const char *path,
             fprintf(f, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c);
         }
     }
+    /* the .mtl first (the .obj names it); if the .obj then fails, the new .mtl goes too */
     st = cbm_out_commit(mo);
     mo = NULL;
-    if (st == CBM_OK)
+    if (st == CBM_OK) {
         st = cbm_out_commit(oo);
-    else
+        if (st != CBM_OK)
+            remove(mpath);
+    } else {
         cbm_out_abort(oo);
+    }
     oo = NULL;
 done:
     cbm_out_abort(mo);
