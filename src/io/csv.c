@@ -30,15 +30,14 @@ cbm_status cbm_write_parts_csv(cbm_context *ctx, const cbm_scene *s, const char 
     const cbm_part *parts = cbm_scene_parts(s);
     const cbm_scene_vertex *v = cbm_scene_vertices(s);
     const uint32_t *tp = cbm_scene_triangle_parts(s);
-    size_t bytes = (np ? np : 1) * (3 * sizeof(double) + 2 * sizeof(size_t));
-    double *cen = cbm__calloc(ctx, 1, bytes);
+    size_t m = np ? np : 1;
+    double *cen = cbm__calloc(ctx, 3 * m, sizeof *cen);
+    size_t *ntri = cbm__calloc(ctx, 2 * m, sizeof *ntri), *nvert = ntri ? ntri + m : NULL;
     uint32_t *vpart = NULL;
-    if (!cen)
-        return CBM_E_NOMEM;
-    size_t *ntri = (size_t *)(cen + 3 * (np ? np : 1)), *nvert = ntri + (np ? np : 1);
-    cbm_status st = cbm__vertex_parts(ctx, s, &vpart);
+    cbm_status st = cen && ntri ? cbm__vertex_parts(ctx, s, &vpart) : CBM_E_NOMEM;
     if (st != CBM_OK) {
-        cbm__free(ctx, cen, bytes);
+        cbm__free(ctx, cen, 3 * m * sizeof *cen);
+        cbm__free(ctx, ntri, 2 * m * sizeof *ntri);
         return st;
     }
     for (size_t t = 0; t < nt; t++)
@@ -75,7 +74,8 @@ cbm_status cbm_write_parts_csv(cbm_context *ctx, const cbm_scene *s, const char 
         }
         st = cbm_out_commit(out);
     }
-    cbm__free(ctx, cen, bytes);
+    cbm__free(ctx, cen, 3 * m * sizeof *cen);
+    cbm__free(ctx, ntri, 2 * m * sizeof *ntri);
     cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
     return st;
 }
