@@ -52,15 +52,15 @@ CBM_API const char *cbm_mech_discretization_name(cbm_mech_discretization d);
 
 /// One ring (growth layer) of a segment's section.
 typedef struct cbm_ring {
-    double youngs_modulus;      ///< E, Pa (> 0)
-    double shear_modulus;       ///< G, Pa (> 0)
-    double density;             ///< kg/m^3 (>= 0)
-    double a;                   ///< outer semi-axis along U, m (>= b, >= inner ring's a)
-    double b;                   ///< outer semi-axis along L, m (> 0, >= inner ring's b)
-    cbm_vec3 rest_rate;         ///< rest rotation rate of this ring, local (H, L, U), rad/m
-    double modulus_of_rupture;  ///< Pa; 0 = unknown (no stress ratio)
-    double age;                 ///< years since the ring was laid down
-    double reaction;            ///< reaction-wood fraction of this ring, 0..1
+    double youngs_modulus;     ///< E, Pa (> 0)
+    double shear_modulus;      ///< G, Pa (> 0)
+    double density;            ///< kg/m^3 (>= 0)
+    double a;                  ///< outer semi-axis along U, m (>= b, >= inner ring's a)
+    double b;                  ///< outer semi-axis along L, m (> 0, >= inner ring's b)
+    cbm_vec3 rest_rate;        ///< rest rotation rate of this ring, local (H, L, U), rad/m
+    double modulus_of_rupture; ///< Pa; 0 = unknown (no stress ratio)
+    double age;                ///< years since the ring was laid down
+    double reaction;           ///< reaction-wood fraction of this ring, 0..1
 } cbm_ring;
 
 /// A ring with neutral defaults: E = 10 GPa, G = E/16, density 600 kg/m^3, a = b = 0.01 m,
@@ -87,11 +87,11 @@ typedef struct cbm_segment_def {
 CBM_API cbm_segment_def cbm_segment_def_default(void);
 
 typedef struct cbm_plant_def {
-    cbm_vec3 gravity;              ///< m/s^2, default (0, -9.81, 0)
-    cbm_vec3 base_position;        ///< m, proximal node of the roots
-    cbm_quat base_orientation;     ///< frame of the clamp: H = q e_x, L = q e_y, U = q e_z
+    cbm_vec3 gravity;                       ///< m/s^2, default (0, -9.81, 0)
+    cbm_vec3 base_position;                 ///< m, proximal node of the roots
+    cbm_quat base_orientation;              ///< frame of the clamp: H = q e_x, L = q e_y, U = q e_z
     cbm_mech_discretization discretization; ///< default CBM_MECH_STAGGERED
-    size_t capacity;               ///< segments to reserve (0 = grow on demand)
+    size_t capacity;                        ///< segments to reserve (0 = grow on demand)
 } cbm_plant_def;
 
 /// Defaults: gravity (0,-9.81,0), base at the origin with identity orientation (H = +x,
@@ -115,11 +115,9 @@ CBM_API cbm_status cbm_plant_add_segment(cbm_plant *plant, const cbm_segment_def
 /// Adds an outer ring to a segment (it must enclose the current outer ring). Aggregates update.
 CBM_API cbm_status cbm_plant_add_ring(cbm_plant *plant, size_t seg, const cbm_ring *ring);
 /// Replaces ring k (0 = innermost) of a segment; semi-axes must stay nested. Aggregates update.
-CBM_API cbm_status cbm_plant_set_ring(cbm_plant *plant, size_t seg, size_t k,
-                                      const cbm_ring *ring);
+CBM_API cbm_status cbm_plant_set_ring(cbm_plant *plant, size_t seg, size_t k, const cbm_ring *ring);
 /// Copies ring k of a segment into *out.
-CBM_API cbm_status cbm_plant_get_ring(const cbm_plant *plant, size_t seg, size_t k,
-                                      cbm_ring *out);
+CBM_API cbm_status cbm_plant_get_ring(const cbm_plant *plant, size_t seg, size_t k, cbm_ring *out);
 CBM_API size_t cbm_plant_ring_count(const cbm_plant *plant, size_t seg);
 CBM_API cbm_status cbm_plant_set_length(cbm_plant *plant, size_t seg, double length);
 /// Point mass (kg), tip force (N, world) and tip moment (N m, world) at the distal end.
@@ -144,33 +142,39 @@ CBM_API cbm_vec3 cbm_plant_gravity(const cbm_plant *plant);
 
 /// Everything about one segment.
 typedef struct cbm_segment_state {
-    int64_t parent;          ///< -1 for a root
-    int32_t order;           ///< branch order
-    bool continuation;       ///< first child of its parent (its joint includes half the parent)
+    int64_t parent;    ///< -1 for a root
+    int32_t order;     ///< branch order
+    bool continuation; ///< first child of its parent (its joint includes half the parent)
     size_t child_count;
-    double length;           ///< m
-    double a, b;             ///< outer semi-axes, m
+    double length; ///< m
+    double a, b;   ///< outer semi-axes, m
     size_t ring_count;
-    double area;             ///< section area, m^2
-    double mass_per_length;  ///< kg/m
-    cbm_vec3 rigidity;       ///< (C_H, C_L, C_U) = (sum GJ, sum EI_L, sum EI_U), N m^2
-    cbm_vec3 rest_rate;      ///< rigidity-weighted rest rotation rate, local, rad/m
-    cbm_vec3 omega;          ///< current rotation rate of the joint at the proximal end, local
-    double point_mass;       ///< kg at the distal end
-    cbm_vec3 tip_force;      ///< N, world
-    cbm_vec3 tip_moment;     ///< N m, world
-    cbm_quat orientation;    ///< frame of the segment (H = q e_x, L = q e_y, U = q e_z)
-    cbm_frame frame;         ///< the same frame as vectors
-    cbm_vec3 proximal;       ///< m, proximal node
-    cbm_vec3 distal;         ///< m, distal node
-    double carried_mass;     ///< kg: own wood + point mass + everything distal
-    cbm_vec3 force;          ///< N, world: total load carried through the proximal joint
-    cbm_vec3 moment;         ///< N m, world: moment of all carried loads about the proximal node
-    cbm_vec3 moment_local;   ///< the same in the segment's (H, L, U) components
-    double stress;           ///< Pa, peak bending stress at the proximal joint (M a / I, ellipse)
-    double stress_ratio;     ///< stress / modulus of rupture of the outer ring (NaN if MOR = 0)
-    double age;              ///< years, age of the oldest ring
-    double reaction;         ///< area fraction of reaction wood in the section, 0..1
+    double area;            ///< section area, m^2
+    double mass_per_length; ///< kg/m
+    cbm_vec3 rigidity;      ///< (C_H, C_L, C_U) = (sum GJ, sum EI_L, sum EI_U), N m^2
+    cbm_vec3 rest_rate;     ///< rigidity-weighted rest rotation rate, local, rad/m
+    cbm_vec3 omega;         ///< current rotation rate of the joint at the proximal end, local
+    /// current rotation rate of the segment's own material, local, rad/m: the mean over its two
+    /// halves, rest + C^-1 (M_proximal + M_distal)/2 (staggered; M_distal is the continuation
+    /// joint's moment or the tip moment), Omega itself for the chain. This is the "current
+    /// Omega" a new ring memorises (Taylor-Hell 6.32): with it a ring added under unchanged load
+    /// leaves the shape unchanged up to O(h^2).
+    cbm_vec3 rate;
+    double point_mass;     ///< kg at the distal end
+    cbm_vec3 tip_force;    ///< N, world
+    cbm_vec3 tip_moment;   ///< N m, world
+    cbm_quat orientation;  ///< frame of the segment (H = q e_x, L = q e_y, U = q e_z)
+    cbm_frame frame;       ///< the same frame as vectors
+    cbm_vec3 proximal;     ///< m, proximal node
+    cbm_vec3 distal;       ///< m, distal node
+    double carried_mass;   ///< kg: own wood + point mass + everything distal
+    cbm_vec3 force;        ///< N, world: total load carried through the proximal joint
+    cbm_vec3 moment;       ///< N m, world: moment of all carried loads about the proximal node
+    cbm_vec3 moment_local; ///< the same in the segment's (H, L, U) components
+    double stress;         ///< Pa, peak bending stress at the proximal joint (M a / I, ellipse)
+    double stress_ratio;   ///< stress / modulus of rupture of the outer ring (NaN if MOR = 0)
+    double age;            ///< years, age of the oldest ring
+    double reaction;       ///< area fraction of reaction wood in the section, 0..1
 } cbm_segment_state;
 
 CBM_API cbm_status cbm_plant_segment(const cbm_plant *plant, size_t seg, cbm_segment_state *out);
@@ -195,8 +199,8 @@ CBM_API cbm_status cbm_plant_distal_frame(const cbm_plant *plant, size_t seg, cb
 /* ---- solving ---- */
 
 typedef enum cbm_mech_solver {
-    CBM_MECH_RELAX,  ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
-    CBM_MECH_NEWTON  ///< Newton-Krylov (GMRES, stiffness preconditioner, tangent passes)
+    CBM_MECH_RELAX, ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
+    CBM_MECH_NEWTON ///< Newton-Krylov (GMRES, stiffness preconditioner, tangent passes)
 } cbm_mech_solver;
 
 /// Name of a solver ("relax", "fast").
@@ -205,23 +209,23 @@ CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
 CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
 
 typedef struct cbm_solve_def {
-    cbm_mech_solver solver;   ///< default CBM_MECH_NEWTON
-    double tolerance;         ///< relative residual to reach, default 1e-8
-    double alpha;             ///< relaxation factor in (0, 1], default 0.5 (relax only)
-    size_t max_passes;        ///< 0 = limits.max_passes of the context
-    int krylov_dim;           ///< GMRES restart length, default 20 (Newton only)
-    bool warm_start;          ///< start from the current Omega (default true); else from rest
+    cbm_mech_solver solver; ///< default CBM_MECH_NEWTON
+    double tolerance;       ///< relative residual to reach, default 1e-8
+    double alpha;           ///< relaxation factor in (0, 1], default 0.5 (relax only)
+    size_t max_passes;      ///< 0 = limits.max_passes of the context
+    int krylov_dim;         ///< GMRES restart length, default 20 (Newton only)
+    bool warm_start;        ///< start from the current Omega (default true); else from rest
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);
 
 /// What a solve did.
 typedef struct cbm_solve_stats {
-    size_t passes;          ///< forward + backward sweeps (also the tangent sweeps of Newton)
-    double residual;        ///< max_i |C (Omega_i - rest_i) - M_i| / characteristic moment
-    double char_moment;     ///< N m, the characteristic moment (max_i |M_i|, >0)
-    size_t newton_steps;    ///< Newton iterations (0 for relax)
-    size_t krylov_iterations; ///< total GMRES iterations
+    size_t passes;             ///< forward + backward sweeps (also the tangent sweeps of Newton)
+    double residual;           ///< max_i |C (Omega_i - rest_i) - M_i| / characteristic moment
+    double char_moment;        ///< N m, the characteristic moment (max_i |M_i|, >0)
+    size_t newton_steps;       ///< Newton iterations (0 for relax)
+    size_t krylov_iterations;  ///< total GMRES iterations
     size_t continuation_steps; ///< load steps taken by the globalisation (1 = full load at once)
 } cbm_solve_stats;
 

@@ -9,24 +9,24 @@
 
 /* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors. */
 typedef struct cbm__mech_work {
-    size_t cap;       /* segments the arrays below hold */
-    int krylov_cap;   /* Krylov basis vectors allocated (m + 1), 0 = none */
-    double *dual;     /* length over which joint i bends, m */
-    cbm_vec3 *cj;     /* joint rigidity (C_H, C_L, C_U), N m^2 */
-    cbm_vec3 *rj;     /* joint rest rotation rate, local, rad/m */
-    cbm_vec3 *wown;   /* own weight of the segment (world, N), times the load scale */
-    double *lever;    /* distance from the proximal node to where wown acts, m */
-    cbm_vec3 *ftip;   /* point-mass weight + tip force, world, N (scaled) */
-    cbm_vec3 *mtip;   /* tip moment, world, N m (scaled) */
+    size_t cap;     /* segments the arrays below hold */
+    int krylov_cap; /* Krylov basis vectors allocated (m + 1), 0 = none */
+    double *dual;   /* length over which joint i bends, m */
+    cbm_vec3 *cj;   /* joint rigidity (C_H, C_L, C_U), N m^2 */
+    cbm_vec3 *rj;   /* joint rest rotation rate, local, rad/m */
+    cbm_vec3 *wown; /* own weight of the segment (world, N), times the load scale */
+    double *lever;  /* distance from the proximal node to where wown acts, m */
+    cbm_vec3 *ftip; /* point-mass weight + tip force, world, N (scaled) */
+    cbm_vec3 *mtip; /* tip moment, world, N m (scaled) */
     /* Newton-Krylov */
-    cbm_vec3 *res;    /* residual C (Omega - rest) - M_local */
-    cbm_vec3 *step;   /* Newton step */
-    cbm_vec3 *save;   /* Omega at the last accepted continuation level */
-    cbm_vec3 *dth;    /* tangent: world rotation of each frame */
-    cbm_vec3 *dm;     /* tangent: world moment */
-    cbm_vec3 *tmp;    /* a vector of the Krylov space */
-    cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
-    double *hess;     /* (m + 1) x m Hessenberg matrix and Givens data */
+    cbm_vec3 *res;   /* residual C (Omega - rest) - M_local */
+    cbm_vec3 *step;  /* Newton step */
+    cbm_vec3 *save;  /* Omega at the last accepted continuation level */
+    cbm_vec3 *dth;   /* tangent: world rotation of each frame */
+    cbm_vec3 *dm;    /* tangent: world moment */
+    cbm_vec3 *tmp;   /* a vector of the Krylov space */
+    cbm_vec3 *basis; /* krylov_cap vectors of 3n doubles */
+    double *hess;    /* (m + 1) x m Hessenberg matrix and Givens data */
 } cbm__mech_work;
 
 struct cbm_plant {
@@ -41,27 +41,27 @@ struct cbm_plant {
     /* topology and rest geometry */
     int64_t *parent;
     int32_t *order;
-    uint8_t *cont;     /* 1 if the first child of its parent (or a root) */
+    uint8_t *cont; /* 1 if the first child of its parent (or a root) */
     uint32_t *nchild;
     double *len;
-    double *angles;    /* 3 per segment: divergence, deviation, roll */
-    cbm_quat *branch;  /* B_i */
+    double *angles;   /* 3 per segment: divergence, deviation, roll */
+    cbm_quat *branch; /* B_i */
     /* section: ring pool indices and aggregates */
     size_t *ring_first, *ring_count;
-    cbm_vec3 *rig;     /* (sum GJ, sum EI_L, sum EI_U) */
-    cbm_vec3 *rest;    /* rigidity-weighted rest rate */
-    double *mpl;       /* kg/m */
-    double *area;      /* m^2 */
+    cbm_vec3 *rig;  /* (sum GJ, sum EI_L, sum EI_U) */
+    cbm_vec3 *rest; /* rigidity-weighted rest rate */
+    double *mpl;    /* kg/m */
+    double *area;   /* m^2 */
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;
     cbm_vec3 *tipf, *tipm;
     /* results */
     cbm_quat *q;
-    cbm_vec3 *pos;     /* proximal node */
-    cbm_vec3 *force;   /* world, through the proximal joint */
-    cbm_vec3 *moment;  /* world, about the proximal node */
-    double *cmass;     /* carried mass */
+    cbm_vec3 *pos;    /* proximal node */
+    cbm_vec3 *force;  /* world, through the proximal joint */
+    cbm_vec3 *moment; /* world, about the proximal node */
+    double *cmass;    /* carried mass */
 
     CBM_ARRAY(cbm_ring) rings;
     size_t ring_live; /* rings referenced by segments (the rest are holes) */
@@ -81,8 +81,7 @@ void cbm__mech_forward(cbm_plant *p);
 /// Backward sweep: forces and moments; returns the max residual |C(Omega - rest) - M_local|
 /// (N m) and *mmax = max |M|. If alpha > 0, also applies the relaxation update to Omega.
 /// If res != NULL, stores the residual per joint. Returns NaN if anything is non-finite.
-double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax,
-                          double *sumsq);
+double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax, double *sumsq);
 /// Names the first segment holding a non-finite value; returns CBM_E_NONFINITE.
 cbm_status cbm__mech_report_nonfinite(cbm_plant *p);
 /// Tangent passes: out = J v, where J = d(residual)/d(Omega) at the last evaluated state.

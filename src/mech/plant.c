@@ -108,9 +108,9 @@ cbm_plant_def cbm_plant_def_default(void)
 
 /* Every per-segment array, with its element size, for growth and removal. */
 #define PLANT_ARRAYS(X)                                                                            \
-    X(parent) X(order) X(cont) X(nchild) X(len) X(branch) X(ring_first) X(ring_count) X(rig)      \
-        X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment)   \
-            X(cmass)
+    X(parent)                                                                                      \
+    X(order) X(cont) X(nchild) X(len) X(branch) X(ring_first) X(ring_count) X(rig) X(rest) X(mpl)  \
+        X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment) X(cmass)
 
 static cbm_status plant_reserve(cbm_plant *p, size_t need)
 {
@@ -164,10 +164,9 @@ cbm_status cbm_plant_create(cbm_context *ctx, const cbm_plant_def *def, cbm_plan
     p->ctx = ctx;
     p->gravity = d.gravity;
     p->base_pos = d.base_position;
-    double qn = d.base_orientation.w * d.base_orientation.w +
-                d.base_orientation.x * d.base_orientation.x +
-                d.base_orientation.y * d.base_orientation.y +
-                d.base_orientation.z * d.base_orientation.z;
+    double qn =
+        d.base_orientation.w * d.base_orientation.w + d.base_orientation.x * d.base_orientation.x +
+        d.base_orientation.y * d.base_orientation.y + d.base_orientation.z * d.base_orientation.z;
     p->base_q = (qn > 0.0 && isfinite(qn)) ? q_normalize(d.base_orientation) : q_identity();
     p->disc = d.discretization == CBM_MECH_CHAIN ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
     p->load_scale = 1.0;
@@ -252,8 +251,8 @@ static void update_section(cbm_plant *p, size_t i)
     (void)ai;
     (void)bi;
     p->rig[i] = c;
-    p->rest[i] = v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0,
-                    c.z > 0 ? cr.z / c.z : 0.0);
+    p->rest[i] =
+        v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0, c.z > 0 ? cr.z / c.z : 0.0);
     p->mpl[i] = mpl;
     p->area[i] = area0;
 }
@@ -315,8 +314,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     if (!(isfinite(def->length) && def->length > 0.0))
         return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: length must be positive", i);
     if (!isfinite(def->divergence) || !isfinite(def->deviation) || !isfinite(def->roll))
-        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: branching angles must be finite",
-                         i);
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: branching angles must be finite", i);
     if (!(isfinite(def->point_mass) && def->point_mass >= 0.0) || !v3_isfinite(def->tip_force) ||
         !v3_isfinite(def->tip_moment) || !v3_isfinite(def->omega))
         return cbm__fail(p->ctx, CBM_E_INVALID,
@@ -340,8 +338,8 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->nchild[i] = 0;
     if (par >= 0)
         p->nchild[par]++;
-    p->order[i] = def->order >= 0 ? def->order
-                                  : (par < 0 ? 0 : p->order[par] + (p->cont[i] ? 0 : 1));
+    p->order[i] =
+        def->order >= 0 ? def->order : (par < 0 ? 0 : p->order[par] + (p->cont[i] ? 0 : 1));
     p->len[i] = def->length;
     p->angles[3 * i] = def->divergence;
     p->angles[3 * i + 1] = def->deviation;
@@ -597,6 +595,27 @@ static cbm_frame quat_frame(cbm_quat q)
     return f;
 }
 
+/* Moment at the distal node of segment i carried by its distal half (world): the continuation
+ * child's joint moment, or the tip moment at a free end. */
+static cbm_vec3 distal_moment(const cbm_plant *p, size_t i)
+{
+    for (size_t c = i + 1; c < p->n; c++)
+        if (p->parent[c] == (int64_t)i && (p->cont[c] & 1))
+            return p->moment[c];
+    bool leaf = p->nchild[i] == 0;
+    return leaf ? v3_scale(p->tipm[i], p->load_scale) : v3(0, 0, 0);
+}
+
+static cbm_vec3 segment_rate(const cbm_plant *p, size_t i)
+{
+    if (p->disc == CBM_MECH_CHAIN)
+        return p->omega[i];
+    cbm_frame f = quat_frame(p->q[i]);
+    cbm_vec3 m = v3_scale(v3_add(p->moment[i], distal_moment(p, i)), 0.5);
+    cbm_vec3 ml = frame_to_local(f, m), c = p->rig[i], r = p->rest[i];
+    return v3(r.x + ml.x / c.x, r.y + ml.y / c.y, r.z + ml.z / c.z);
+}
+
 cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
 {
     if (!p || !o)
@@ -644,6 +663,7 @@ cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
         a0 = ar;
     }
     o->age = age;
+    o->rate = segment_rate(p, i);
     o->reaction = a0 > 0.0 ? rw / a0 : 0.0;
     return CBM_OK;
 }
@@ -659,16 +679,11 @@ cbm_status cbm_plant_distal_frame(const cbm_plant *p, size_t i, cbm_quat *out)
          * compliance times the moment at the distal node (the continuation child's moment,
          * or the tip moment at a free end) */
         cbm_frame f = quat_frame(q);
-        cbm_vec3 md = v3_scale(p->tipm[i], p->load_scale);
-        for (size_t c = i + 1; c < p->n; c++)
-            if (p->parent[c] == (int64_t)i && (p->cont[c] & 1)) {
-                md = p->moment[c]; /* the continuation joint's moment, about this node */
-                break;
-            }
+        cbm_vec3 md = distal_moment(p, i);
         cbm_vec3 ml = frame_to_local(f, md);
         cbm_vec3 c = p->rig[i];
-        cbm_vec3 w = v3(p->rest[i].x + ml.x / c.x, p->rest[i].y + ml.y / c.y,
-                        p->rest[i].z + ml.z / c.z);
+        cbm_vec3 w =
+            v3(p->rest[i].x + ml.x / c.x, p->rest[i].y + ml.y / c.y, p->rest[i].z + ml.z / c.z);
         q = q_normalize(q_mul(q, q_from_rotvec(v3_scale(w, 0.5 * p->len[i]))));
     }
     *out = q;

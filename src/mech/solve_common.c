@@ -63,8 +63,7 @@
 /* ---- workspace ---- */
 
 #define WORK_ARRAYS(X)                                                                             \
-    X(dual) X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm)     \
-        X(tmp)
+    X(dual) X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(tmp)
 
 void cbm__mech_work_free(cbm_plant *p)
 {
@@ -151,8 +150,9 @@ void cbm__mech_prepare(cbm_plant *p)
             cbm_vec3 cp = p->rig[pa], ci = p->rig[i];
             cbm_vec3 rp = p->rest[pa], ri = p->rest[i];
             w->dual[i] = d;
-            w->cj[i] = v3(d / (0.5 * lp / cp.x + 0.5 * l / ci.x), d / (0.5 * lp / cp.y + 0.5 * l / ci.y),
-                          d / (0.5 * lp / cp.z + 0.5 * l / ci.z));
+            w->cj[i] =
+                v3(d / (0.5 * lp / cp.x + 0.5 * l / ci.x), d / (0.5 * lp / cp.y + 0.5 * l / ci.y),
+                   d / (0.5 * lp / cp.z + 0.5 * l / ci.z));
             w->rj[i] = v3_scale(v3_add(v3_scale(rp, 0.5 * lp), v3_scale(ri, 0.5 * l)), 1.0 / d);
             w->lever[i] = 0.5 * l;
         }
@@ -328,8 +328,8 @@ cbm_status cbm__mech_report_nonfinite(cbm_plant *p)
         else if (!v3_isfinite(p->moment[i]))
             what = "moment";
         if (what)
-            return cbm__fail(p->ctx, CBM_E_NONFINITE,
-                             "segment %zu: the %s became NaN or infinite", i, what);
+            return cbm__fail(p->ctx, CBM_E_NONFINITE, "segment %zu: the %s became NaN or infinite",
+                             i, what);
     }
     return cbm__fail(p->ctx, CBM_E_NONFINITE, "the residual became NaN or infinite");
 }

@@ -22,11 +22,11 @@
 
 typedef struct nk {
     cbm_plant *p;
-    size_t n3;          /* 3 n */
+    size_t n3; /* 3 n */
     size_t max_passes;
     cbm_solve_stats *st;
-    double rel;         /* relative residual of the current state */
-    double norm;        /* |R|_2 of the current state */
+    double rel;  /* relative residual of the current state */
+    double norm; /* |R|_2 of the current state */
     double rmax, mmax;
 } nk;
 
