@@ -36,10 +36,10 @@ typedef struct cbm_bend_spec {
     double tropism;        ///< N, strength of the upward tropism force of new segments (0 = none)
     double modulus_of_rupture; ///< Pa, for the stress ratio and breakage (0 = none)
     cbm_mech_solver solver;
-    double tolerance;      ///< relative residual
-    double alpha;          ///< relaxation factor
-    long max_passes;       ///< 0 = the context's limit
-    int krylov_dim;        ///< GMRES restart length
+    double tolerance; ///< relative residual
+    double alpha;     ///< relaxation factor
+    long max_passes;  ///< 0 = the context's limit
+    int krylov_dim;   ///< GMRES restart length
     cbm_mech_discretization discretization;
     long steps;            ///< growth steps, 0 = static
     double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
@@ -61,9 +61,9 @@ CBM_API cbm_status cbm_bend_build(cbm_context *ctx, const cbm_bend_spec *spec, c
 
 /// What cbm_bend_run did.
 typedef struct cbm_bend_result {
-    cbm_solve_stats stats;   ///< of the last solve; passes summed over all growth steps
-    long steps_done;         ///< growth steps completed
-    size_t broken_segments;  ///< segments removed by breakage (stress above the MOR)
+    cbm_solve_stats stats;  ///< of the last solve; passes summed over all growth steps
+    long steps_done;        ///< growth steps completed
+    size_t broken_segments; ///< segments removed by breakage (stress above the MOR)
 } cbm_bend_result;
 
 /// Builds, grows (if steps > 0) and solves. *out receives the plant (also on

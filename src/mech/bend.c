@@ -60,8 +60,8 @@ typedef struct key_desc {
     const char *name;
     key_kind kind;
     size_t offset;
-    double lo, hi;   /* allowed range (inclusive) */
-    bool lo_open;    /* lo excluded */
+    double lo, hi; /* allowed range (inclusive) */
+    bool lo_open;  /* lo excluded */
 } key_desc;
 
 #define OFF(f) offsetof(cbm_bend_spec, f)
@@ -98,8 +98,8 @@ static const key_desc keys[] = {
 
 static bool is_word(char c)
 {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '-' || c == '.' || c == '+';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-' || c == '.' || c == '+';
 }
 
 typedef struct reader {
@@ -406,9 +406,8 @@ static cbm_status grow_step(cbm_plant *p, const cbm_bend_spec *s, long step)
     size_t n0 = s->length_initial > 0 ? (size_t)lround(s->length_initial / h) : (size_t)s->segments;
     if (n0 < 1)
         n0 = 1;
-    size_t target = n0 + (size_t)((double)((size_t)s->segments - n0) * (double)step /
-                                      (double)s->steps +
-                                  0.5);
+    size_t target =
+        n0 + (size_t)((double)((size_t)s->segments - n0) * (double)step / (double)s->steps + 0.5);
     if (target > (size_t)s->segments)
         target = (size_t)s->segments;
     while (n < target) {
@@ -435,7 +434,8 @@ static cbm_status grow_step(cbm_plant *p, const cbm_bend_spec *s, long step)
             cbm_segment_state st;
             CBM_TRY(cbm_plant_segment(p, i, &st));
             double r0 = radius_at(s, ((double)i + 0.5) / (double)s->segments);
-            double r1 = r0 + (s->radius_final - radius_at(s, 0.0)) * (double)step / (double)s->steps;
+            double r1 =
+                r0 + (s->radius_final - radius_at(s, 0.0)) * (double)step / (double)s->steps;
             if (r1 <= st.a)
                 continue;
             cbm_ring g = spec_ring(s, r1);
@@ -536,8 +536,8 @@ cbm_status cbm_bend_nodes(const cbm_plant *p, cbm_bend_node *nodes, size_t nn)
             if (j == 0) {
                 /* the clamp: the segment's frame turned back by the base half-joint */
                 cbm_vec3 w = st.omega;
-                double d = cbm_plant_discretization(p) == CBM_MECH_STAGGERED ? 0.5 * st.length
-                                                                                : st.length;
+                double d =
+                    cbm_plant_discretization(p) == CBM_MECH_STAGGERED ? 0.5 * st.length : st.length;
                 q = q_normalize(q_mul(st.orientation, q_from_rotvec(v3_scale(w, -d))));
             } else
                 CBM_TRY(cbm_plant_distal_frame(p, j - 1, &q));
@@ -554,8 +554,9 @@ cbm_status cbm_bend_nodes(const cbm_plant *p, cbm_bend_node *nodes, size_t nn)
         o->angle_deg = elevation_deg(q);
         /* curvature: rest + M/C of the segment at the node, in-plane (world z) component */
         cbm_vec3 ml = frame_to_local(st.frame, m);
-        cbm_vec3 k = v3(st.rest_rate.x + ml.x / st.rigidity.x, st.rest_rate.y + ml.y / st.rigidity.y,
-                        st.rest_rate.z + ml.z / st.rigidity.z);
+        cbm_vec3 k =
+            v3(st.rest_rate.x + ml.x / st.rigidity.x, st.rest_rate.y + ml.y / st.rigidity.y,
+               st.rest_rate.z + ml.z / st.rigidity.z);
         o->curvature = frame_to_world(st.frame, k).z;
         o->moment = m.z;
         double il, iu;

@@ -14,7 +14,7 @@
 #include <time.h>
 
 #define MAX_SPEC_BYTES (1u << 20)
-#define MAX_OUTPUTS 8
+#define MAX_OUTPUTS    8
 
 static void help(void)
 {
@@ -88,7 +88,8 @@ int cmd_bend(int argc, char **argv)
                 return cli_usage_error("bend", "at most %d outputs", MAX_OUTPUTS);
             const char *ext = cli_extension(argv[i + 1]);
             if (strcmp(ext, "csv") && strcmp(ext, "json"))
-                return cli_usage_error("bend", "%s: unsupported output format '.%s' (use .csv or "
+                return cli_usage_error("bend",
+                                       "%s: unsupported output format '.%s' (use .csv or "
                                        ".json)",
                                        argv[i + 1], ext);
             outs[nout++] = argv[++i];
