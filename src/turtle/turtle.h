@@ -18,49 +18,49 @@
 /* The turtle commands, ABOP and cpfg. The names in comments are the module symbols. */
 typedef enum cbm_tcmd {
     CBM_T_NONE = 0,
-    CBM_T_F,            /* F  move forward drawing */
-    CBM_T_f,            /* f  move forward without drawing */
-    CBM_T_G,            /* G  move forward drawing, not a polygon vertex */
-    CBM_T_g,            /* g  move forward, not drawing, not a polygon vertex */
-    CBM_T_LEFT,         /* +  turn left */
-    CBM_T_RIGHT,        /* -  turn right */
-    CBM_T_PITCH_DOWN,   /* &  */
-    CBM_T_PITCH_UP,     /* ^  */
-    CBM_T_ROLL_LEFT,    /* \  */
-    CBM_T_ROLL_RIGHT,   /* /  */
-    CBM_T_TURN_AROUND,  /* |  */
-    CBM_T_PUSH,         /* [  */
-    CBM_T_POP,          /* ]  */
-    CBM_T_WIDTH,        /* !  set or decrement width */
-    CBM_T_COLOR_INC,    /* '  increment colour index */
-    CBM_T_COLOR_DEC,    /* ;  decrement colour index (cpfg) */
-    CBM_T_WIDTH_INC,    /* #  increment width (cpfg) */
-    CBM_T_SURFACE,      /* ~  predefined surface */
-    CBM_T_CUT,          /* %  cut the rest of the branch */
-    CBM_T_POLY_BEGIN,   /* {  */
-    CBM_T_POLY_END,     /* }  */
-    CBM_T_POLY_VERTEX,  /* .  */
-    CBM_T_ROLL_HORIZ,   /* @v roll to horizontal */
-    CBM_T_SPHERE,       /* @O */
-    CBM_T_CIRCLE,       /* @o */
-    CBM_T_CONTOUR,      /* @c */
-    CBM_T_MOVE_TO,      /* @M */
-    CBM_T_TROPISM_SET,  /* @Ts */
-    CBM_T_GC_START,     /* @Gs */
-    CBM_T_GC_CONTROL,   /* @Gc */
-    CBM_T_GC_END,       /* @Ge */
-    CBM_T_QUERY_P,      /* ?P */
-    CBM_T_QUERY_H,      /* ?H */
-    CBM_T_QUERY_L,      /* ?L */
-    CBM_T_QUERY_U,      /* ?U */
+    CBM_T_F,                /* F  move forward drawing */
+    CBM_T_f,                /* f  move forward without drawing */
+    CBM_T_G,                /* G  move forward drawing, not a polygon vertex */
+    CBM_T_g,                /* g  move forward, not drawing, not a polygon vertex */
+    CBM_T_LEFT,             /* +  turn left */
+    CBM_T_RIGHT,            /* -  turn right */
+    CBM_T_PITCH_DOWN,       /* &  */
+    CBM_T_PITCH_UP,         /* ^  */
+    CBM_T_ROLL_LEFT,        /* \  */
+    CBM_T_ROLL_RIGHT,       /* /  */
+    CBM_T_TURN_AROUND,      /* |  */
+    CBM_T_PUSH,             /* [  */
+    CBM_T_POP,              /* ]  */
+    CBM_T_WIDTH,            /* !  set or decrement width */
+    CBM_T_COLOR_INC,        /* '  increment colour index */
+    CBM_T_COLOR_DEC,        /* ;  decrement colour index (cpfg) */
+    CBM_T_WIDTH_INC,        /* #  increment width (cpfg) */
+    CBM_T_SURFACE,          /* ~  predefined surface */
+    CBM_T_CUT,              /* %  cut the rest of the branch */
+    CBM_T_POLY_BEGIN,       /* {  */
+    CBM_T_POLY_END,         /* }  */
+    CBM_T_POLY_VERTEX,      /* .  */
+    CBM_T_ROLL_HORIZ,       /* @v roll to horizontal */
+    CBM_T_SPHERE,           /* @O */
+    CBM_T_CIRCLE,           /* @o */
+    CBM_T_CONTOUR,          /* @c */
+    CBM_T_MOVE_TO,          /* @M */
+    CBM_T_TROPISM_SET,      /* @Ts */
+    CBM_T_GC_START,         /* @Gs */
+    CBM_T_GC_CONTROL,       /* @Gc */
+    CBM_T_GC_END,           /* @Ge */
+    CBM_T_QUERY_P,          /* ?P */
+    CBM_T_QUERY_H,          /* ?H */
+    CBM_T_QUERY_L,          /* ?L */
+    CBM_T_QUERY_U,          /* ?U */
     CBM_T_USER_FIRST = 1000 /* further commands are the turtle module's own business */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.
 int cbm__turtle_lookup(const char *name, size_t len);
 
-typedef struct cbm_view cbm_view;         /* view file settings */
-typedef struct cbm_funcset cbm_funcset;   /* function files */
+typedef struct cbm_view cbm_view;       /* view file settings */
+typedef struct cbm_funcset cbm_funcset; /* function files */
 typedef struct cbm_turtle cbm_turtle;
 
 /// Interprets the string into `scene` (may be NULL: only queries and bounds are computed).
