@@ -14,6 +14,7 @@
 
 #include "cambium/base.h"
 #include "cambium/geom.h"
+#include "cambium/mech.h"
 
 #include <stdio.h>
 
@@ -96,6 +97,26 @@ CBM_API cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *scene, const
 /// reaction wood, colour, triangle count, centroid.
 CBM_API cbm_status cbm_write_parts_csv(cbm_context *ctx, const cbm_scene *scene, const char *path,
                                        const cbm_write_options *opts);
+
+/* ---- the mechanical plant: tables and scene ----
+ * The plant must have been solved or evaluated (cbm_plant_solve, cbm_plant_evaluate), so that
+ * positions, loads and stresses are current. */
+
+/// One CSV row per segment: id, parent, order, proximal and distal points (m), semi-axes a, b
+/// (m), length (m), E of the outer ring (Pa), rigidities EI_L, EI_U (N m^2), carried mass (kg),
+/// moment at the proximal joint in local (H, L, U) components (N m; L and U bend, H twists),
+/// bending moment magnitude (N m), stress (Pa), stress / MOR, Omega and rest Omega (local,
+/// rad/m), age (years), reaction wood fraction.
+CBM_API cbm_status cbm_write_segments_csv(cbm_context *ctx, const cbm_plant *plant,
+                                          const char *path);
+/// The plant as an OpenAlea multiscale tree graph (MTG coding file, FORM-A): scales plant (P),
+/// axis (A), segment (S); '<' joins a segment to its continuation, '+' starts a lateral axis;
+/// per-segment features as in the CSV. Loads with openalea.mtg's read_mtg.
+CBM_API cbm_status cbm_write_mtg(cbm_context *ctx, const cbm_plant *plant, const char *path);
+/// Writes a plant by extension: .csv (segments table), .mtg, or any scene format (the plant
+/// through cbm_plant_to_scene with `sides` sides, then cbm_scene_write).
+CBM_API cbm_status cbm_write_plant(cbm_context *ctx, const cbm_plant *plant, const char *path,
+                                   const cbm_write_options *opts, int sides);
 
 /// A rendered picture in memory: 8-bit sRGB RGBA, row-major from the top. Owned by the caller,
 /// released with cbm_image_destroy.
