@@ -158,3 +158,32 @@ TEST(plant_to_picture_and_mesh)
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
+
+static cbm_status write_tables(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    cbm_plant *p = NULL;
+    cbm_status st = cbm_plant_create(ctx, NULL, &p);
+    if (st != CBM_OK)
+        return st;
+    for (int i = 0; i < 6 && st == CBM_OK; i++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = i == 0 ? -1 : (i == 4 ? 1 : i - 1);
+        st = cbm_plant_add_segment(p, &d, NULL);
+    }
+    if (st == CBM_OK)
+        st = cbm_plant_evaluate(p, NULL);
+    if (st == CBM_OK)
+        st = cbm_write_plant(ctx, p, io_path("oom.csv"), NULL, 6);
+    if (st == CBM_OK)
+        st = cbm_write_plant(ctx, p, io_path("oom.mtg"), NULL, 6);
+    if (st == CBM_OK)
+        st = cbm_write_plant(ctx, p, io_path("oom.ply"), NULL, 6);
+    cbm_plant_destroy(p);
+    return st;
+}
+
+TEST(plant_tables_out_of_memory)
+{
+    CHECK(test_oom_loop(write_tables, NULL) > 5);
+}

@@ -293,6 +293,16 @@ TEST(png_round_trip)
     CHECK_STATUS(cbm_image_read_png(ctx, io_path("missing.png"), &back), CBM_E_IO);
     o.width = 0;
     CHECK_STATUS(cbm_render(ctx, s, &o, &img), CBM_E_INVALID);
+    /* an empty scene is the background alone */
+    cbm_scene *e = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &e));
+    o = small_opts(20, 10);
+    o.background[0] = 0.0f;
+    CHECK_OK(cbm_render(ctx, e, &o, &img));
+    for (int i = 0; img && i < 20 * 10; i++)
+        CHECK(img->rgba[4 * i] == 0 && img->rgba[4 * i + 1] == 255 && img->rgba[4 * i + 3] == 255);
+    cbm_image_destroy(img);
+    cbm_scene_destroy(e);
     cbm_scene_destroy(s);
     test_ctx_end(ctx);
 }
