@@ -7,6 +7,10 @@
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+typedef cbm_status (*cbm_write_fn)(cbm_context *, const cbm_scene *, const char *,
+                                   const cbm_write_options *);
 
 static cbm_scene *demo(cbm_context *ctx, size_t segments, bool ground)
 {
@@ -294,6 +298,60 @@ TEST(disk_full_leaves_nothing)
     }
     setrlimit(RLIMIT_FSIZE, &old);
     signal(SIGXFSZ, SIG_DFL);
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* /dev/full: written in place (never replaced), ENOSPC reported; /dev/null accepts anything. The
+ * OBJ writer is left out: its .mtl would go beside the target, into /dev. */
+TEST(device_targets_are_written_in_place)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = demo(ctx, 100, true);
+    cbm_write_options o = cbm_write_options_default();
+    o.width = o.height = 64;
+    o.threads = 1;
+    const char *exts[] = {"ply", "glb", "png", "svg", "csv"};
+    cbm_write_fn fns[] = {cbm_write_ply, cbm_write_glb, cbm_write_png, cbm_write_svg,
+                          cbm_write_parts_csv};
+    for (int k = 0; k < 5; k++) {
+        cbm_context_clear_errors(ctx);
+        CHECK_STATUS(fns[k](ctx, s, "/dev/full", &o), CBM_E_IO);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), "/dev/full: ") &&
+                      strstr(cbm_context_last_error(ctx), "No space left"),
+                  "%s: message '%s'", exts[k], cbm_context_last_error(ctx));
+        CHECK_OK(fns[k](ctx, s, "/dev/null", &o));
+        struct stat sb;
+        CHECK(stat("/dev/full", &sb) == 0 && S_ISCHR(sb.st_mode));
+        CHECK(stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode));
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* A symbolic link to a regular file: the file is replaced, the link stays a link. */
+TEST(links_are_kept)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    char real[4200], link[4200];
+    snprintf(real, sizeof real, "%s/real.csv", test_tmp_dir());
+    snprintf(link, sizeof link, "%s/link.csv", test_tmp_dir());
+    FILE *f = fopen(real, "w");
+    CHECK(f != NULL);
+    if (f) {
+        fputs("old\n", f);
+        fclose(f);
+    }
+    remove(link);
+    CHECK(symlink("real.csv", link) == 0);
+    CHECK_OK(cbm_scene_write(ctx, s, link, NULL));
+    struct stat sb;
+    CHECK(lstat(link, &sb) == 0 && S_ISLNK(sb.st_mode));
+    char *b = io_read_all(real, NULL);
+    CHECK(b && strncmp(b, "id,segment,", 11) == 0);
+    free(b);
     cbm_scene_destroy(s);
     test_ctx_end(ctx);
 }

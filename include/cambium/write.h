@@ -74,6 +74,11 @@ CBM_API cbm_write_options cbm_write_options_default(void);
 CBM_API cbm_status cbm_scene_write(cbm_context *ctx, const cbm_scene *scene, const char *path,
                                    const cbm_write_options *opts);
 
+/// Writes the scene in the named format ("obj", "ply", "glb", "png", "svg", "csv") whatever the
+/// path's extension, e.g. to a device or a pipe ("/dev/stdout").
+CBM_API cbm_status cbm_scene_write_as(cbm_context *ctx, const cbm_scene *scene, const char *path,
+                                      const char *format, const cbm_write_options *opts);
+
 /// Wavefront OBJ with normals, vertex colours (x y z r g b) and a .mtl file beside it (same
 /// name, extension .mtl), one material per organ and colour.
 CBM_API cbm_status cbm_write_obj(cbm_context *ctx, const cbm_scene *scene, const char *path,

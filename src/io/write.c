@@ -36,24 +36,43 @@ cbm_write_options cbm_write_options_default(void)
     return o;
 }
 
-static bool ext_is(const char *path, const char *ext)
+static bool same_ci(const char *a, const char *b)
 {
-    const char *dot = strrchr(path, '.');
-    const char *slash = strrchr(path, '/');
-    if (!dot || (slash && dot < slash))
-        return false;
-    dot++;
-    size_t n = strlen(ext);
-    if (strlen(dot) != n)
-        return false;
-    for (size_t i = 0; i < n; i++) {
-        char c = dot[i];
-        if (c >= 'A' && c <= 'Z')
-            c = (char)(c - 'A' + 'a');
-        if (c != ext[i])
+    for (; *a && *b; a++, b++) {
+        char c = *a >= 'A' && *a <= 'Z' ? (char)(*a - 'A' + 'a') : *a;
+        if (c != *b)
             return false;
     }
-    return true;
+    return *a == *b;
+}
+
+cbm_status cbm_scene_write_as(cbm_context *ctx, const cbm_scene *scene, const char *path,
+                              const char *format, const cbm_write_options *opts)
+{
+    if (!ctx || !path || !format)
+        return CBM_E_INVALID;
+    cbm_write_options def = cbm_write_options_default();
+    if (!opts)
+        opts = &def;
+    if (same_ci(format, "glb"))
+        return cbm_write_glb(ctx, scene, path, opts);
+    if (!scene && opts->frame_count > 0 && opts->frames)
+        scene = opts->frames[opts->frame_count - 1];
+    if (!scene)
+        return cbm__fail(ctx, CBM_E_INVALID, "%s: no scene to write", path);
+    if (same_ci(format, "obj"))
+        return cbm_write_obj(ctx, scene, path, opts);
+    if (same_ci(format, "ply"))
+        return cbm_write_ply(ctx, scene, path, opts);
+    if (same_ci(format, "png"))
+        return cbm_write_png(ctx, scene, path, opts);
+    if (same_ci(format, "svg"))
+        return cbm_write_svg(ctx, scene, path, opts);
+    if (same_ci(format, "csv"))
+        return cbm_write_parts_csv(ctx, scene, path, opts);
+    return cbm__fail(ctx, CBM_E_UNSUPPORTED,
+                     "%s: unknown output format '%s' (expected obj ply glb png svg csv)", path,
+                     format);
 }
 
 cbm_status cbm_scene_write(cbm_context *ctx, const cbm_scene *scene, const char *path,
@@ -61,27 +80,12 @@ cbm_status cbm_scene_write(cbm_context *ctx, const cbm_scene *scene, const char 
 {
     if (!ctx || !path)
         return CBM_E_INVALID;
-    cbm_write_options def = cbm_write_options_default();
-    if (!opts)
-        opts = &def;
-    if (ext_is(path, "glb"))
-        return cbm_write_glb(ctx, scene, path, opts);
-    if (!scene && opts->frame_count > 0 && opts->frames)
-        scene = opts->frames[opts->frame_count - 1];
-    if (!scene)
-        return cbm__fail(ctx, CBM_E_INVALID, "%s: no scene to write", path);
-    if (ext_is(path, "obj"))
-        return cbm_write_obj(ctx, scene, path, opts);
-    if (ext_is(path, "ply"))
-        return cbm_write_ply(ctx, scene, path, opts);
-    if (ext_is(path, "png"))
-        return cbm_write_png(ctx, scene, path, opts);
-    if (ext_is(path, "svg"))
-        return cbm_write_svg(ctx, scene, path, opts);
-    if (ext_is(path, "csv"))
-        return cbm_write_parts_csv(ctx, scene, path, opts);
-    return cbm__fail(ctx, CBM_E_UNSUPPORTED,
-                     "%s: unknown output format (expected .obj .ply .glb .png .svg .csv)", path);
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    if (!dot || (slash && dot < slash))
+        return cbm__fail(ctx, CBM_E_UNSUPPORTED,
+                         "%s: no extension to name the format (.obj .ply .glb .png .svg .csv)",
+                         path);
+    return cbm_scene_write_as(ctx, scene, path, dot + 1, opts);
 }
 
 /* ---- parts ---- */

@@ -65,6 +65,16 @@ for e in obj ply glb png svg csv; do
 done
 check '[ -z "$(ls -A "$t/full")" ]' "full disk leaves nothing ($(ls -A "$t/full"))"
 
+# devices are written in place: /dev/full reports the full disk and stays a device
+for e in ply glb png svg csv; do
+  "$bin" demo --segments 10 --size 32 -o "$e:/dev/full" 2>"$t/err" >/dev/null
+  check '[ $? -eq 1 ] && grep -q "/dev/full: .*No space left" "$t/err"' "/dev/full reported ($e)"
+done
+# FORMAT:PATH and stdout
+"$bin" demo --segments 50 --size 32 -o png:- > "$t/stdout.png"
+check '[ $? -eq 0 ] && head -c 4 "$t/stdout.png" | grep -q PNG' "png:- writes a PNG to stdout"
+check '[ -c /dev/full ] && [ -c /dev/null ]' "devices left in place"
+
 "$bin" demo --help >/dev/null; check '[ $? -eq 0 ]' "demo --help"
 [ $fail -eq 0 ] && echo "output_files: all passed"
 exit $fail

@@ -142,6 +142,38 @@ int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_
     return 1;
 }
 
+bool cli_output_target_parse(const char *arg, cli_output_target *out)
+{
+    static const char *const formats[] = {"obj", "ply", "glb", "png", "svg", "csv"};
+    const char *colon = strchr(arg, ':');
+    const char *fmt = NULL;
+    size_t flen = 0;
+    out->path = arg;
+    if (colon && colon - arg >= 3 && colon - arg <= 4) {
+        for (size_t k = 0; k < sizeof formats / sizeof formats[0]; k++)
+            if ((size_t)(colon - arg) == strlen(formats[k]) &&
+                !strncmp(arg, formats[k], strlen(formats[k]))) {
+                fmt = arg;
+                flen = (size_t)(colon - arg);
+                out->path = colon + 1;
+            }
+    }
+    if (!fmt) {
+        fmt = cli_extension(arg);
+        flen = strlen(fmt);
+    }
+    if (!strcmp(out->path, "-"))
+        out->path = "/dev/stdout";
+    if (!*out->path || flen == 0 || flen >= sizeof out->format)
+        return false;
+    memcpy(out->format, fmt, flen);
+    out->format[flen] = '\0';
+    for (size_t k = 0; k < sizeof formats / sizeof formats[0]; k++)
+        if (!strcmp(out->format, formats[k]))
+            return true;
+    return false;
+}
+
 double cli_seconds(void)
 {
     struct timespec t;

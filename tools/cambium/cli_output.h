@@ -12,6 +12,15 @@ extern const char cli_output_help[];
 /// returns 0 if it is not one; on a bad value prints a usage error for `cmd` and returns -1.
 int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_options *o);
 
+/// An output: "FILE.ext" (format from the extension), or "FORMAT:PATH" with "-" for stdout.
+typedef struct cli_output_target {
+    char format[8];
+    const char *path;
+} cli_output_target;
+
+/// Parses an -o argument; false if the format is unknown.
+bool cli_output_target_parse(const char *arg, cli_output_target *out);
+
 /// Progress line on stderr, redrawn at most 10 times a second; silent unless stderr is a
 /// terminal (or CBM_PROGRESS=1 forces it, for tests).
 typedef struct cli_progress {

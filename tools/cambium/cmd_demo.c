@@ -15,7 +15,8 @@ static void help(void)
     printf("usage: cambium demo [--segments N] [--sides N] [--seed N] [--frames F] [--timing]\n"
            "                    -o FILE [-o FILE]... [output options]\n\n"
            "Writes a synthetic tree of N branch segments (default 2000) with leaves, fruit and\n"
-           "ground, in the formats named by the extensions (.obj .ply .glb .png .svg .csv).\n"
+           "ground, in the formats named by the extensions (.obj .ply .glb .png .svg .csv);\n"
+           "FORMAT:PATH names the format explicitly (png:- writes a PNG to stdout).\n"
            "--frames F makes .glb files a growth animation of F frames. --timing prints the\n"
            "time each step takes to stderr.\n\n%s",
            cli_output_help);
@@ -68,13 +69,13 @@ int cmd_demo(int argc, char **argv)
     }
     if (nout == 0)
         return cli_usage_error("demo", "no output: give at least one -o FILE");
-    for (int k = 0; k < nout; k++) {
-        const char *e = cli_extension(outs[k]);
-        if (strcmp(e, "obj") && strcmp(e, "ply") && strcmp(e, "glb") && strcmp(e, "png") &&
-            strcmp(e, "svg") && strcmp(e, "csv"))
-            return cli_usage_error("demo", "%s: unknown format (.obj .ply .glb .png .svg .csv)",
+    cli_output_target targets[MAX_OUTPUTS];
+    for (int k = 0; k < nout; k++)
+        if (!cli_output_target_parse(outs[k], &targets[k]))
+            return cli_usage_error("demo",
+                                   "%s: unknown format (.obj .ply .glb .png .svg .csv, "
+                                   "or FORMAT:PATH)",
                                    outs[k]);
-    }
     cbm_context *ctx = cli_context();
     size_t nf = frames > 0 ? (size_t)frames : 1;
     cbm_scene **sc = calloc(nf, sizeof *sc);
@@ -105,7 +106,7 @@ int cmd_demo(int argc, char **argv)
     }
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         double t = cli_seconds();
-        st = cbm_scene_write(ctx, sc[nf - 1], outs[k], &o);
+        st = cbm_scene_write_as(ctx, sc[nf - 1], targets[k].path, targets[k].format, &o);
         if (st != CBM_OK)
             rc = cli_fail(ctx, st, outs[k]);
         else if (timing)
