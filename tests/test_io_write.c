@@ -192,6 +192,47 @@ TEST(glb_nodes_attributes_and_animation)
     test_ctx_end(ctx);
 }
 
+/* Frame by frame, refilling one scene, gives the same file as the list of frames. */
+TEST(glb_animation_frame_by_frame)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *fr[3];
+    for (int k = 0; k < 3; k++)
+        fr[k] = demo(ctx, 30 + 50 * (size_t)k, true);
+    cbm_write_options o = cbm_write_options_default();
+    o.frames = (const cbm_scene *const *)fr;
+    o.frame_count = 3;
+    o.color_by = CBM_COLOR_AGE;
+    CHECK_OK(cbm_scene_write(ctx, NULL, io_path("list.glb"), &o));
+    cbm_animation *a = NULL;
+    CHECK_OK(cbm_animation_create(ctx, &o, &a));
+    cbm_scene *one = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &one));
+    for (int k = 0; k < 3; k++) {
+        cbm_scene_clear(one);
+        CHECK_OK(cbm_scene_demo_tree(ctx, one, 30 + 50 * (size_t)k, 6, true, 3));
+        CHECK_OK(cbm_animation_add_frame(a, one));
+    }
+    CHECK_EQ_INT(cbm_animation_frame_count(a), 3);
+    CHECK_OK(cbm_animation_write(a, io_path("steps.glb")));
+    CHECK_STATUS(cbm_animation_add_frame(a, one), CBM_E_INVALID);
+    cbm_animation_destroy(a);
+    size_t la = 0, lb = 0;
+    char *x = io_read_all(io_path("list.glb"), &la), *y = io_read_all(io_path("steps.glb"), &lb);
+    CHECK(x && y && la == lb && memcmp(x, y, la) == 0);
+    free(x);
+    free(y);
+    o.frame_time = -1;
+    CHECK_STATUS(cbm_animation_create(ctx, &o, &a), CBM_E_INVALID);
+    o.frames = NULL;
+    o.frame_count = 0;
+    CHECK_OK(cbm_scene_write(ctx, one, io_path("static.glb"), &o)); /* frame_time unused */
+    cbm_scene_destroy(one);
+    for (int k = 0; k < 3; k++)
+        cbm_scene_destroy(fr[k]);
+    test_ctx_end(ctx);
+}
+
 TEST(svg_well_formed_and_sorted)
 {
     cbm_context *ctx = test_ctx();

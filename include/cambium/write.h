@@ -92,6 +92,19 @@ CBM_API cbm_status cbm_write_ply(cbm_context *ctx, const cbm_scene *scene, const
 /// With opts->frames: one node per frame and a STEP animation of their visibility.
 CBM_API cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *path,
                                  const cbm_write_options *opts);
+/// A growth animation built frame by frame (for `--every K` in long runs: each frame's geometry
+/// is copied into the animation at once, so one scene can be refilled for the next step).
+/// Written as cbm_write_glb writes frames. The options (copied at creation) give the colour
+/// mode, ground and frame_time (> 0 s).
+typedef struct cbm_animation cbm_animation;
+CBM_API cbm_status cbm_animation_create(cbm_context *ctx, const cbm_write_options *opts,
+                                        cbm_animation **out);
+CBM_API cbm_status cbm_animation_add_frame(cbm_animation *anim, const cbm_scene *scene);
+CBM_API size_t cbm_animation_frame_count(const cbm_animation *anim);
+/// Writes the .glb; afterwards the animation takes no more frames (CBM_E_INVALID).
+CBM_API cbm_status cbm_animation_write(cbm_animation *anim, const char *path);
+CBM_API void cbm_animation_destroy(cbm_animation *anim);
+
 /// PNG picture (8-bit RGBA) of the scene ray cast with Embree.
 CBM_API cbm_status cbm_write_png(cbm_context *ctx, const cbm_scene *scene, const char *path,
                                  const cbm_write_options *opts);

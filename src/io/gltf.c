@@ -419,118 +419,153 @@ static void le32(uint8_t *b, uint32_t v)
     b[3] = (uint8_t)(v >> 24);
 }
 
-static cbm_status build(glb *g, const cbm_scene *scene, size_t *root, long *anim_input,
-                        size_t *anim_first, size_t *nframes)
+struct cbm_animation {
+    glb g;
+    cbm_write_options o;      /* a copy: g.o points here */
+    CBM_ARRAY(size_t) frames; /* per frame: first group node in children, group count */
+    bool animated, finished;
+};
+
+cbm_status cbm_animation_create(cbm_context *ctx, const cbm_write_options *opts,
+                                cbm_animation **out)
 {
-    const cbm_write_options *o = g->o;
-    cbm_context *ctx = g->ctx;
-    bool anim = o->frames && o->frame_count > 0;
-    size_t nf = anim ? o->frame_count : 1;
-    if (anim && !(o->frame_time > 0))
-        return cbm__fail(ctx, CBM_E_INVALID, "glTF animation: frame_time must be > 0 s");
-    size_t first[1] = {0}, cnt[1] = {0};
-    /* group nodes of every frame first, then frame nodes, then the root */
-    size_t *gfirst = cbm__alloc(ctx, 2 * nf * sizeof *gfirst);
-    if (!gfirst)
+    if (!ctx || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_animation *a = cbm__calloc(ctx, 1, sizeof *a);
+    if (!a)
         return CBM_E_NOMEM;
+    a->o = opts ? *opts : cbm_write_options_default();
+    a->o.frames = NULL;
+    a->o.frame_count = 0;
+    if (!(a->o.frame_time > 0)) {
+        cbm__free(ctx, a, sizeof *a);
+        return cbm__fail(ctx, CBM_E_INVALID, "glTF animation: frame_time must be > 0 s");
+    }
+    a->g.ctx = ctx;
+    a->g.o = &a->o;
+    a->animated = true;
+    *out = a;
+    return CBM_OK;
+}
+
+void cbm_animation_destroy(cbm_animation *a)
+{
+    if (!a)
+        return;
+    cbm_context *ctx = a->g.ctx;
+    CBM_ARRAY_FREE(ctx, a->g.bin);
+    CBM_ARRAY_FREE(ctx, a->g.acc);
+    CBM_ARRAY_FREE(ctx, a->g.views);
+    CBM_ARRAY_FREE(ctx, a->g.meshes);
+    CBM_ARRAY_FREE(ctx, a->g.nodes);
+    CBM_ARRAY_FREE(ctx, a->g.children);
+    CBM_ARRAY_FREE(ctx, a->frames);
+    cbm__free(ctx, a, sizeof *a);
+}
+
+cbm_status cbm_animation_add_frame(cbm_animation *a, const cbm_scene *scene)
+{
+    if (!a || !scene || a->finished)
+        return CBM_E_INVALID;
+    size_t first = 0, cnt = 0;
+    CBM_TRY(CBM_ARRAY_RESERVE(a->g.ctx, a->frames, a->frames.len + 2));
+    CBM_TRY(add_scene_groups(&a->g, scene, &first, &cnt));
+    a->frames.data[a->frames.len++] = first;
+    a->frames.data[a->frames.len++] = cnt;
+    return CBM_OK;
+}
+
+size_t cbm_animation_frame_count(const cbm_animation *a)
+{
+    return a ? a->frames.len / 2 : 0;
+}
+
+/* Frame nodes, the root and the animation accessors, after the last frame. */
+static cbm_status finish(cbm_animation *a, size_t *root, long *anim_input, size_t *anim_first,
+                         size_t *nframes)
+{
+    glb *g = &a->g;
+    cbm_context *ctx = g->ctx;
+    size_t nf = a->frames.len / 2;
     cbm_status st = CBM_OK;
+    *nframes = 0;
+    *anim_input = -1;
+    node r;
+    memset(&r, 0, sizeof r);
+    snprintf(r.name, sizeof r.name, "plant");
+    r.mesh = -1;
+    r.organ = r.order = -1;
+    if (!a->animated) {
+        r.child0 = nf ? a->frames.data[0] : 0;
+        r.nchild = nf ? a->frames.data[1] : 0;
+        CBM_TRY(CBM_ARRAY_PUSH(ctx, g->nodes, r));
+        *root = g->nodes.len - 1;
+        return CBM_OK;
+    }
+    *anim_first = g->nodes.len;
     for (size_t f = 0; f < nf && st == CBM_OK; f++) {
-        const cbm_scene *s = anim ? o->frames[f] : scene;
-        if (!s) {
-            st = cbm__fail(ctx, CBM_E_INVALID, "glTF animation: frame %zu has no scene", f);
-            break;
-        }
-        st = add_scene_groups(g, s, first, cnt);
-        gfirst[2 * f] = first[0];
-        gfirst[2 * f + 1] = cnt[0];
+        node fn;
+        memset(&fn, 0, sizeof fn);
+        snprintf(fn.name, sizeof fn.name, "frame %zu", f);
+        fn.mesh = -1;
+        fn.organ = fn.order = -1;
+        fn.child0 = a->frames.data[2 * f];
+        fn.nchild = a->frames.data[2 * f + 1];
+        fn.hidden = f + 1 < nf;
+        fn.frame = true;
+        st = CBM_ARRAY_PUSH(ctx, g->nodes, fn);
     }
-    if (st == CBM_OK && anim) {
-        *anim_first = g->nodes.len;
-        for (size_t f = 0; f < nf && st == CBM_OK; f++) {
-            node fn;
-            memset(&fn, 0, sizeof fn);
-            snprintf(fn.name, sizeof fn.name, "frame %zu", f);
-            fn.mesh = -1;
-            fn.organ = fn.order = -1;
-            fn.child0 = gfirst[2 * f];
-            fn.nchild = gfirst[2 * f + 1];
-            fn.hidden = f + 1 < nf;
-            fn.frame = true;
-            st = CBM_ARRAY_PUSH(ctx, g->nodes, fn);
-        }
-        size_t c0 = g->children.len;
-        for (size_t f = 0; f < nf && st == CBM_OK; f++)
-            st = CBM_ARRAY_PUSH(ctx, g->children, *anim_first + f);
-        node r;
-        memset(&r, 0, sizeof r);
-        snprintf(r.name, sizeof r.name, "plant");
-        r.mesh = -1;
-        r.organ = r.order = -1;
-        r.child0 = c0;
-        r.nchild = nf;
-        if (st == CBM_OK)
-            st = CBM_ARRAY_PUSH(ctx, g->nodes, r);
-        *root = g->nodes.len - 1;
-        /* times, then one scale track per frame node */
-        float *buf = cbm__alloc(ctx, 3 * nf * sizeof *buf);
-        if (!buf)
-            st = CBM_E_NOMEM;
-        size_t id;
-        if (st == CBM_OK) {
-            for (size_t f = 0; f < nf; f++)
-                buf[f] = (float)(o->frame_time * (double)f);
-            st = add_accessor(g, buf, nf, 1, GL_FLOAT, 0, true, &id);
-            *anim_input = (long)id;
-        }
-        for (size_t f = 0; f < nf && st == CBM_OK; f++) {
-            for (size_t k = 0; k < nf; k++)
-                buf[3 * k] = buf[3 * k + 1] = buf[3 * k + 2] = k == f ? 1.0f : 0.0f;
-            st = add_accessor(g, buf, nf, 3, GL_FLOAT, 0, false, &id);
-        }
-        cbm__free(ctx, buf, 3 * nf * sizeof *buf);
-        *nframes = nf;
-    } else if (st == CBM_OK) {
-        node r;
-        memset(&r, 0, sizeof r);
-        snprintf(r.name, sizeof r.name, "plant");
-        r.mesh = -1;
-        r.organ = r.order = -1;
-        r.child0 = gfirst[0];
-        r.nchild = gfirst[1];
+    size_t c0 = g->children.len;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++)
+        st = CBM_ARRAY_PUSH(ctx, g->children, *anim_first + f);
+    r.child0 = c0;
+    r.nchild = nf;
+    if (st == CBM_OK)
         st = CBM_ARRAY_PUSH(ctx, g->nodes, r);
-        *root = g->nodes.len - 1;
+    *root = g->nodes.len - 1;
+    if (st != CBM_OK || nf == 0)
+        return st;
+    /* times, then one scale track per frame node (1 in its slot, 0 elsewhere) */
+    float *buf = cbm__alloc(ctx, 3 * nf * sizeof *buf);
+    if (!buf)
+        return CBM_E_NOMEM;
+    size_t id;
+    for (size_t f = 0; f < nf; f++)
+        buf[f] = (float)(a->o.frame_time * (double)f);
+    st = add_accessor(g, buf, nf, 1, GL_FLOAT, 0, true, &id);
+    *anim_input = (long)id;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
+        for (size_t k = 0; k < nf; k++)
+            buf[3 * k] = buf[3 * k + 1] = buf[3 * k + 2] = k == f ? 1.0f : 0.0f;
+        st = add_accessor(g, buf, nf, 3, GL_FLOAT, 0, false, &id);
     }
-    cbm__free(ctx, gfirst, 2 * nf * sizeof *gfirst);
+    cbm__free(ctx, buf, 3 * nf * sizeof *buf);
+    *nframes = nf;
     return st;
 }
 
-cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *path,
-                         const cbm_write_options *opts)
+cbm_status cbm_animation_write(cbm_animation *a, const char *path)
 {
-    if (!ctx || !path)
+    if (!a || !path || a->finished)
         return CBM_E_INVALID;
-    cbm_write_options def;
-    const cbm_write_options *o = cbm__opts(opts, &def);
-    if (!scene && !(o->frames && o->frame_count))
-        return cbm__fail(ctx, CBM_E_INVALID, "%s: no scene to write", path);
-    glb g;
-    memset(&g, 0, sizeof g);
-    g.ctx = ctx;
-    g.o = o;
+    a->finished = true;
+    glb *g = &a->g;
+    cbm_context *ctx = g->ctx;
     size_t root = 0, anim_first = 0, nframes = 0;
     long anim_input = -1;
     cbm_json *j = NULL;
-    cbm_status st = build(&g, scene, &root, &anim_input, &anim_first, &nframes);
+    cbm_status st = finish(a, &root, &anim_input, &anim_first, &nframes);
     if (st == CBM_OK)
         st = cbm_json_create(ctx, &j);
     const char *text = NULL;
     size_t tlen = 0;
     if (st == CBM_OK) {
-        write_json(&g, j, root, anim_input, anim_first, nframes);
+        write_json(g, j, root, anim_input, anim_first, nframes);
         st = cbm_json_text(j, &text, &tlen);
     }
     if (st == CBM_OK) {
-        size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g.bin.len + 3) & ~(size_t)3;
+        size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin.len + 3) & ~(size_t)3;
         size_t total = 12 + 8 + jpad + (bpad ? 8 + bpad : 0);
         if (total > UINT32_MAX) {
             st = cbm__fail(ctx, CBM_E_LIMIT, "%s: scene too large for a .glb (%zu bytes > 4 GiB)",
@@ -553,20 +588,43 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
                     le32(h, (uint32_t)bpad);
                     memcpy(h + 4, "BIN\0", 4);
                     cbm_out_write(out, h, 8);
-                    cbm_out_write(out, g.bin.data, g.bin.len);
+                    cbm_out_write(out, g->bin.data, g->bin.len);
                     const uint8_t zero[4] = {0, 0, 0, 0};
-                    cbm_out_write(out, zero, bpad - g.bin.len);
+                    cbm_out_write(out, zero, bpad - g->bin.len);
                 }
                 st = cbm_out_commit(out);
             }
         }
     }
     cbm_json_destroy(j);
-    CBM_ARRAY_FREE(ctx, g.bin);
-    CBM_ARRAY_FREE(ctx, g.acc);
-    CBM_ARRAY_FREE(ctx, g.views);
-    CBM_ARRAY_FREE(ctx, g.meshes);
-    CBM_ARRAY_FREE(ctx, g.nodes);
-    CBM_ARRAY_FREE(ctx, g.children);
+    return st;
+}
+
+cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *path,
+                         const cbm_write_options *opts)
+{
+    if (!ctx || !path)
+        return CBM_E_INVALID;
+    cbm_write_options def;
+    const cbm_write_options *o = cbm__opts(opts, &def);
+    bool anim = o->frames && o->frame_count > 0;
+    if (!scene && !anim)
+        return cbm__fail(ctx, CBM_E_INVALID, "%s: no scene to write", path);
+    cbm_write_options copy = *o;
+    if (!anim && !(copy.frame_time > 0))
+        copy.frame_time = 1.0; /* unused without animation */
+    cbm_animation *a;
+    CBM_TRY(cbm_animation_create(ctx, &copy, &a));
+    a->animated = anim;
+    cbm_status st = CBM_OK;
+    size_t nf = anim ? o->frame_count : 1;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
+        const cbm_scene *s = anim ? o->frames[f] : scene;
+        st = s ? cbm_animation_add_frame(a, s)
+               : cbm__fail(ctx, CBM_E_INVALID, "%s: animation frame %zu has no scene", path, f);
+    }
+    if (st == CBM_OK)
+        st = cbm_animation_write(a, path);
+    cbm_animation_destroy(a);
     return st;
 }

@@ -1,11 +1,11 @@
 /* cambium demo: writes a synthetic tree (cbm_scene_demo_tree) in every format asked with -o, to
  * try the writers and viewers, and to measure them (--timing). With --frames F, a .glb holds a
- * growth animation of F frames (the tree grown to 1/F, 2/F, ... of its segments); the other
+ * growth animation of F frames (the tree grown to 1/F, 2/F, ... of its segments), built frame by
+ * frame with cbm_animation from one scene refilled at each step, as a long run would; the other
  * formats get the last frame. */
 #include "cli_output.h"
 #include "commands.h"
 
-#include <stdlib.h>
 #include <string.h>
 
 #define MAX_OUTPUTS 16
@@ -78,17 +78,24 @@ int cmd_demo(int argc, char **argv)
                                    outs[k]);
     cbm_context *ctx = cli_context();
     size_t nf = frames > 0 ? (size_t)frames : 1;
-    cbm_scene **sc = calloc(nf, sizeof *sc);
     int rc = CLI_OK;
-    cbm_status st = sc ? CBM_OK : CBM_E_NOMEM;
+    cbm_scene *sc = NULL;
+    cbm_animation *anim[MAX_OUTPUTS] = {NULL};
+    cbm_status st = cbm_scene_create(ctx, &sc);
+    /* a growth animation per .glb output, filled frame by frame from one scene */
+    for (int k = 0; k < nout && st == CBM_OK && frames > 0; k++)
+        if (!strcmp(targets[k].format, "glb"))
+            st = cbm_animation_create(ctx, &o, &anim[k]);
     cli_progress pr;
     cli_progress_begin(&pr);
     double t0 = cli_seconds();
     for (size_t f = 0; f < nf && st == CBM_OK; f++) {
         size_t n = (size_t)segments * (f + 1) / nf;
-        st = cbm_scene_create(ctx, &sc[f]);
-        if (st == CBM_OK)
-            st = cbm_scene_demo_tree(ctx, sc[f], n ? n : 1, (int)sides, o.ground, (uint64_t)seed);
+        cbm_scene_clear(sc);
+        st = cbm_scene_demo_tree(ctx, sc, n ? n : 1, (int)sides, o.ground, (uint64_t)seed);
+        for (int k = 0; k < nout && st == CBM_OK; k++)
+            if (anim[k])
+                st = cbm_animation_add_frame(anim[k], sc);
         cbm_progress state = {f + 1, nf, n, 0, 0};
         cli_progress_update(&pr, &state);
     }
@@ -99,24 +106,22 @@ int cmd_demo(int argc, char **argv)
     }
     if (timing)
         fprintf(stderr, "demo: %ld segments, %zu triangles built in %.3f s\n", segments,
-                cbm_scene_triangle_count(sc[nf - 1]), cli_seconds() - t0);
-    if (frames > 0) {
-        o.frames = (const cbm_scene *const *)sc;
-        o.frame_count = nf;
-    }
+                cbm_scene_triangle_count(sc), cli_seconds() - t0);
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         double t = cli_seconds();
-        st = cbm_scene_write_as(ctx, sc[nf - 1], targets[k].path, targets[k].format, &o);
+        if (anim[k])
+            st = cbm_animation_write(anim[k], targets[k].path);
+        else
+            st = cbm_scene_write_as(ctx, sc, targets[k].path, targets[k].format, &o);
         if (st != CBM_OK)
             rc = cli_fail(ctx, st, outs[k]);
         else if (timing)
             fprintf(stderr, "demo: wrote %s in %.3f s\n", outs[k], cli_seconds() - t);
     }
 done:
-    if (sc)
-        for (size_t f = 0; f < nf; f++)
-            cbm_scene_destroy(sc[f]);
-    free(sc);
+    for (int k = 0; k < nout; k++)
+        cbm_animation_destroy(anim[k]);
+    cbm_scene_destroy(sc);
     cli_context_end(ctx);
     return rc;
 }
