@@ -150,6 +150,57 @@ static char *glb_json(const char *path, size_t *file_len)
     return json;
 }
 
+/* The value of the k-th element of the accessor an attribute names, found through the JSON
+ * (accessors and bufferViews are written as flat arrays of objects in a fixed key order). */
+static float glb_attribute(const char *path, const char *attr, size_t k)
+{
+    size_t len = 0;
+    char *b = io_read_all(path, &len), *json = b ? b + 20 : NULL;
+    float v = NAN;
+    char key[64];
+    snprintf(key, sizeof key, "\"%s\":", attr);
+    const char *at = json ? strstr(json, key) : NULL;
+    const char *acc = json ? strstr(json, "\"accessors\":[") : NULL;
+    const char *views = json ? strstr(json, "\"bufferViews\":[") : NULL;
+    if (at && acc && views) {
+        long ai = strtol(at + strlen(key), NULL, 10);
+        const char *a = acc;
+        for (long i = 0; i <= ai && a; i++)
+            a = strstr(a + 1, "{\"bufferView\":");
+        long vi = a ? strtol(a + 14, NULL, 10) : -1;
+        const char *w = views;
+        for (long i = 0; i <= vi && w; i++)
+            w = strstr(w + 1, "{\"buffer\":0,\"byteOffset\":");
+        if (w) {
+            long off = strtol(w + 25, NULL, 10);
+            uint32_t jl = rd32((const unsigned char *)b + 12);
+            size_t pos = 28 + jl + (size_t)off + 4 * k;
+            if (pos + 4 <= len)
+                v = rdf((const unsigned char *)b + pos);
+        }
+    }
+    free(b);
+    return v;
+}
+
+TEST(glb_per_segment_attributes)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    CHECK_OK(cbm_scene_write(ctx, s, io_path("small.glb"), NULL));
+    /* the first mesh is branch order 0: the tube with stress ratio 0.5, age 3, segment 7 */
+    for (size_t k = 0; k < 10; k++) {
+        CHECK(glb_attribute(io_path("small.glb"), "_STRESS_RATIO", k) == 0.5f);
+        CHECK(glb_attribute(io_path("small.glb"), "_AGE", k) == 3.0f);
+        CHECK(glb_attribute(io_path("small.glb"), "_REACTION_WOOD", k) == 0.25f);
+        CHECK(glb_attribute(io_path("small.glb"), "_ORDER", k) == 0.0f);
+        CHECK(glb_attribute(io_path("small.glb"), "_SEGMENT", k) == 7.0f);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
 TEST(glb_nodes_attributes_and_animation)
 {
     cbm_context *ctx = test_ctx();
