@@ -2,3 +2,7 @@
 # `make deps`). Each is required: the build stops with the package to install if one is missing.
 set(CBM_DEP_LIBS "")
 set(CBM_DEP_INCLUDES "")
+find_package(embree 3 REQUIRED) # libembree-dev: ray casting of the PNG renderer (and light)
+find_package(PNG REQUIRED) # libpng-dev: PNG encoding and decoding
+find_package(Threads REQUIRED) # render threads
+list(APPEND CBM_DEP_LIBS embree PNG::PNG Threads::Threads)

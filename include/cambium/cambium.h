@@ -5,5 +5,8 @@
 #include "cambium/base.h"
 #include "cambium/geom.h"
 #include "cambium/io.h"
+#include "cambium/mech.h"
+#include "cambium/bend.h"
+#include "cambium/write.h"
 
 #endif

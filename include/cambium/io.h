@@ -17,7 +17,8 @@ extern "C" {
 
 typedef struct cbm_out cbm_out;
 
-/// Opens a temporary file in the target's directory. The target is not touched until commit.
+/// Opens a temporary file in the target's directory. The target is not touched until commit
+/// (a device or FIFO target is written in place, never replaced).
 CBM_API cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out);
 /// Appends bytes. Errors are sticky: later calls do nothing and commit reports the first one.
 CBM_API cbm_status cbm_out_write(cbm_out *o, const void *data, size_t size);

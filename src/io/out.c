@@ -1,8 +1,10 @@
 /* Atomic output files: write to "<dir>/.<name>.tmpXXXXXX", then fflush + fsync + rename onto
  * the target. rename(2) within one directory is atomic on POSIX file systems, so a reader sees
  * either the old file or the complete new one, and an error at any point removes the temporary
- * file. */
-#define _POSIX_C_SOURCE 200809L
+ * file. A target that exists and is neither a regular file nor a directory (a device such as
+ * /dev/null or /dev/full, a FIFO) is written in place instead, so it is never replaced; write
+ * errors on it (ENOSPC from /dev/full) are still reported. */
+#define _XOPEN_SOURCE 700
 #include "cambium/io.h"
 
 #include "../core/core.h"
@@ -12,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 struct cbm_out {
@@ -19,13 +22,15 @@ struct cbm_out {
     FILE *f;
     char *path;
     char *tmp;
-    int err; /* first errno seen, 0 if none */
+    char *target; /* rename destination when path is a link to a regular file, else NULL */
+    int err;      /* first errno seen, 0 if none */
 };
 
 static void release(cbm_out *o)
 {
     cbm__strfree(o->ctx, o->path);
     cbm__strfree(o->ctx, o->tmp);
+    cbm__strfree(o->ctx, o->target);
     cbm__free(o->ctx, o, sizeof *o);
 }
 
@@ -39,6 +44,37 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         return CBM_E_NOMEM;
     o->ctx = ctx;
     o->path = cbm__strdup(ctx, path);
+    /* Write in place, never replace: the standard streams (/dev/stdout, /dev/fd/N,
+     * /proc/self/fd/N: the user means the stream), and targets that are neither regular files
+     * nor directories (devices such as /dev/null or /dev/full, FIFOs): renaming a temporary file
+     * onto them would replace the device node or the link itself. */
+    struct stat sb;
+    bool stream = !strncmp(path, "/dev/std", 8) || !strncmp(path, "/dev/fd/", 8) ||
+                  !strncmp(path, "/proc/self/fd/", 14);
+    if (o->path &&
+        (stream || (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode)))) {
+        o->f = fopen(path, "wb");
+        if (!o->f) {
+            int e = errno;
+            release(o);
+            return cbm__fail(ctx, CBM_E_IO, "%s: cannot open for writing: %s", path, strerror(e));
+        }
+        *out = o;
+        return CBM_OK;
+    }
+    /* A symbolic link to a regular file: replace the file it points to, keep the link. */
+    if (o->path && lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode)) {
+        char *real = realpath(path, NULL); /* malloc'd by the C library */
+        if (real) {
+            o->target = cbm__strdup(ctx, real);
+            free(real);
+            if (!o->target) {
+                release(o);
+                return CBM_E_NOMEM;
+            }
+            path = o->target;
+        }
+    }
     const char *slash = strrchr(path, '/');
     size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
     const char *base = path + dirlen;
@@ -57,6 +93,10 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         release(o);
         return cbm__fail(ctx, CBM_E_IO, "%s: cannot create output file: %s", path, strerror(e));
     }
+    /* mkstemp creates mode 0600: give the file the usual permissions (0666 less the umask) */
+    mode_t mask = umask(0);
+    umask(mask);
+    (void)fchmod(fd, 0666 & ~mask);
     o->tmp = cbm__strdup(ctx, tmp);
     cbm__free(ctx, tmp, n);
     o->f = o->tmp ? fdopen(fd, "wb") : NULL;
@@ -120,10 +160,11 @@ cbm_status cbm_out_commit(cbm_out *o)
         e = errno;
     if (fclose(o->f) != 0 && !e)
         e = errno ? errno : EIO;
-    if (!e && rename(o->tmp, o->path) != 0)
+    if (!e && o->tmp && rename(o->tmp, o->target ? o->target : o->path) != 0)
         e = errno;
     if (e) {
-        unlink(o->tmp);
+        if (o->tmp)
+            unlink(o->tmp);
         cbm_status s =
             cbm__fail(ctx, CBM_E_IO, "%s: cannot write output file: %s", o->path, strerror(e));
         release(o);
@@ -138,6 +179,7 @@ void cbm_out_abort(cbm_out *o)
     if (!o)
         return;
     fclose(o->f);
-    unlink(o->tmp);
+    if (o->tmp)
+        unlink(o->tmp);
     release(o);
 }

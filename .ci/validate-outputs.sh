@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Validates the files the writers produce with outside tools: the Khronos glTF validator (npm
+# gltf-validator, installed into build/tools/gltf), assimp (OBJ, PLY), xmllint (SVG), libpng's
+# pngfix (PNG). Usage: .ci/validate-outputs.sh [CAMBIUM]   (default build/bin/cambium)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${1:-build/bin/cambium}
+val=build/tools/gltf
+if [ ! -d "$val/node_modules/gltf-validator" ]; then
+  if ! command -v npm >/dev/null; then
+    sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends npm >&2
+  fi
+  mkdir -p "$val"
+  (cd "$val" && npm install --silent --no-audit --no-fund gltf-validator >/dev/null)
+fi
+out=build/ci-outputs
+rm -rf "$out"
+mkdir -p "$out"
+"$bin" demo --segments 3000 -o "$out/tree.glb" -o "$out/tree.obj" -o "$out/tree.ply" \
+  -o "$out/tree.svg" -o "$out/tree.png" -o "$out/tree.csv"
+"$bin" demo --segments 3000 --frames 6 --color-by order -o "$out/growth.glb"
+"$bin" demo --segments 500 --color-by stress --no-ground -o "$out/stress.glb" -o "$out/stress.obj" \
+  -o "$out/stress.ply"
+for v in front side top; do
+  "$bin" demo --segments 800 --view "$v" --color-by age -o "$out/$v.svg" -o "$out/$v.png"
+done
+echo "== glTF validator"
+NODE_PATH="$val/node_modules" node .ci/gltf-validate.js "$out"/*.glb
+echo "== assimp"
+for f in "$out"/*.obj "$out"/*.ply; do
+  faces=$(assimp info "$f" | sed -n 's/^Faces: *//p')
+  echo "$f: $faces faces"
+  [ "${faces:-0}" -gt 0 ]
+done
+echo "== xmllint"
+xmllint --noout "$out"/*.svg && echo "$(ls "$out"/*.svg | wc -l) SVG files well-formed"
+echo "== pngfix"
+for f in "$out"/*.png; do pngfix "$f" >/dev/null && echo "$f: ok"; done

@@ -1,0 +1,258 @@
+/* cambium: statics of a branching plant of rigid segments (Jirasek et al. 2000; Taylor-Hell 2005,
+ * ch. 6 and 8).
+ *
+ * A plant is a tree of segments stored struct-of-arrays in topological order: a segment's parent
+ * always has a smaller index; any number of children per node. Each segment is a rigid rod of
+ * given length with an elliptical section (semi-axes a >= b, U along a) made of a stack of rings
+ * (innermost first), each ring with its own Young's modulus, shear modulus, density, outer
+ * semi-axes, rest rotation rate, age and reaction-wood fraction. The solver uses per-segment
+ * aggregates derived from the rings (recomputed whenever a ring changes):
+ *   rigidities C = (C_H, C_L, C_U) = sum over rings of (G J, E I_L, E I_U), with
+ *   I_L = pi a^3 b / 4 (bending about L: U is along a), I_U = pi a b^3 / 4,
+ *   J = pi a^3 b^3 / (a^2 + b^2) (ellipse), ring values = outer minus inner;
+ *   mass per length = sum of density * ring area;
+ *   rest rotation rate = rigidity-weighted mean of the rings' rest rates, per local component
+ *   (Jirasek eq. 24 = Taylor-Hell 6.29-6.34 in closed form).
+ *
+ * Frames: a segment's orientation is the unit quaternion q with H = q e_x, L = q e_y, U = q e_z
+ * (world axes; y is up, gravity by default 9.81 m/s^2 along -y). The rotation rates Omega
+ * (current) and rest Omega (unloaded) are stored in LOCAL (H, L, U) components. The frame of
+ * segment i is q_i = q_parent * B_i * exp(d_i Omega_i) where B_i is the fixed branching rotation
+ * (divergence about H, deviation about U, roll about H; Taylor-Hell 6.2) and d_i the length over
+ * which the joint at the proximal end of i bends (see the discretisations below). Roots use the
+ * plant's base orientation in place of q_parent. See src/mech/solve_common.c for the full design.
+ *
+ * Everything is allocated through the context; limits.max_segments and limits.max_passes apply.
+ */
+#ifndef CAMBIUM_MECH_H
+#define CAMBIUM_MECH_H
+
+#include "cambium/base.h"
+#include "cambium/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cbm_plant cbm_plant;
+
+/// How a segment's weight and the bending of a joint are placed along the rod.
+typedef enum cbm_mech_discretization {
+    /// Default, second order: each segment's weight at its centroid; the joint at the proximal
+    /// end of a segment bends over the dual length (half of the parent + half of the segment; the
+    /// clamp joint and the first joint of a lateral branch over half the segment).
+    CBM_MECH_STAGGERED,
+    /// The seeds' first-order chain: each segment's mass at its distal end, the joint at its
+    /// proximal end bending over the full segment length with the segment's rigidity.
+    CBM_MECH_CHAIN
+} cbm_mech_discretization;
+
+/// Name ("staggered", "chain") of a discretisation.
+CBM_API const char *cbm_mech_discretization_name(cbm_mech_discretization d);
+
+/// One ring (growth layer) of a segment's section.
+typedef struct cbm_ring {
+    double youngs_modulus;     ///< E, Pa (> 0)
+    double shear_modulus;      ///< G, Pa (> 0)
+    double density;            ///< kg/m^3 (>= 0)
+    double a;                  ///< outer semi-axis along U, m (>= b, >= inner ring's a)
+    double b;                  ///< outer semi-axis along L, m (> 0, >= inner ring's b)
+    cbm_vec3 rest_rate;        ///< rest rotation rate of this ring, local (H, L, U), rad/m
+    double modulus_of_rupture; ///< Pa; 0 = unknown (no stress ratio)
+    double age;                ///< years since the ring was laid down
+    double reaction;           ///< reaction-wood fraction of this ring, 0..1
+} cbm_ring;
+
+/// A ring with neutral defaults: E = 10 GPa, G = E/16, density 600 kg/m^3, a = b = 0.01 m,
+/// straight at rest, MOR 0, age 0, no reaction wood.
+CBM_API cbm_ring cbm_ring_default(void);
+
+/// A new segment.
+typedef struct cbm_segment_def {
+    int64_t parent;      ///< index of the parent segment, -1 for a root (clamped at the base)
+    double length;       ///< m (> 0)
+    double divergence;   ///< spin about the parent's H before the deviation, rad (Taylor-Hell 6.2)
+    double deviation;    ///< rotation about the spun U (turns H towards L), rad
+    double roll;         ///< spin about the new H after the deviation, rad
+    cbm_ring core;       ///< the first (innermost) ring; more rings with cbm_plant_add_ring
+    cbm_vec3 omega;      ///< initial current rotation rate, local, rad/m (usually = rest rate)
+    double point_mass;   ///< kg at the distal end (leaves, fruit, any load)
+    cbm_vec3 tip_force;  ///< N, world, at the distal end (dead load)
+    cbm_vec3 tip_moment; ///< N m, world, at the distal end (dead load)
+    int32_t order;       ///< branch order; -1 = automatic (root 0, first child of a node keeps
+                         ///< the parent's order, later children parent + 1)
+} cbm_segment_def;
+
+/// Defaults: root, length 0.1 m, no branching angles, cbm_ring_default() core, no loads.
+CBM_API cbm_segment_def cbm_segment_def_default(void);
+
+typedef struct cbm_plant_def {
+    cbm_vec3 gravity;                       ///< m/s^2, default (0, -9.81, 0)
+    cbm_vec3 base_position;                 ///< m, proximal node of the roots
+    cbm_quat base_orientation;              ///< frame of the clamp: H = q e_x, L = q e_y, U = q e_z
+    cbm_mech_discretization discretization; ///< default CBM_MECH_STAGGERED
+    size_t capacity;                        ///< segments to reserve (0 = grow on demand)
+} cbm_plant_def;
+
+/// Defaults: gravity (0,-9.81,0), base at the origin with identity orientation (H = +x,
+/// L = +y, U = +z), staggered discretisation.
+CBM_API cbm_plant_def cbm_plant_def_default(void);
+
+CBM_API cbm_status cbm_plant_create(cbm_context *ctx, const cbm_plant_def *def, cbm_plant **out);
+/// Releases the plant and its solver workspace. NULL is allowed.
+CBM_API void cbm_plant_destroy(cbm_plant *plant);
+
+/// Base orientation of a clamp whose heading is elevated `elevation` rad above the horizontal
+/// +x axis, bending in the x-y plane: H = (cos e, sin e, 0), U = (-sin e, cos e, 0), L = (0,0,-1).
+CBM_API cbm_quat cbm_mech_clamp_orientation(double elevation);
+
+/* ---- building and editing ---- */
+
+/// Appends a segment; *index (optional) receives its index. CBM_E_INVALID (naming the field)
+/// for a bad parent, length, ring or load; CBM_E_LIMIT beyond limits.max_segments.
+CBM_API cbm_status cbm_plant_add_segment(cbm_plant *plant, const cbm_segment_def *def,
+                                         size_t *index);
+/// Adds an outer ring to a segment (it must enclose the current outer ring). Aggregates update.
+CBM_API cbm_status cbm_plant_add_ring(cbm_plant *plant, size_t seg, const cbm_ring *ring);
+/// Replaces ring k (0 = innermost) of a segment; semi-axes must stay nested. Aggregates update.
+CBM_API cbm_status cbm_plant_set_ring(cbm_plant *plant, size_t seg, size_t k, const cbm_ring *ring);
+/// Copies ring k of a segment into *out.
+CBM_API cbm_status cbm_plant_get_ring(const cbm_plant *plant, size_t seg, size_t k, cbm_ring *out);
+CBM_API size_t cbm_plant_ring_count(const cbm_plant *plant, size_t seg);
+CBM_API cbm_status cbm_plant_set_length(cbm_plant *plant, size_t seg, double length);
+/// Point mass (kg), tip force (N, world) and tip moment (N m, world) at the distal end.
+CBM_API cbm_status cbm_plant_set_load(cbm_plant *plant, size_t seg, double point_mass,
+                                      cbm_vec3 tip_force, cbm_vec3 tip_moment);
+/// Current rotation rate (local, rad/m); the next solve starts from it when warm-started.
+CBM_API cbm_status cbm_plant_set_omega(cbm_plant *plant, size_t seg, cbm_vec3 omega);
+CBM_API cbm_status cbm_plant_set_branching(cbm_plant *plant, size_t seg, double divergence,
+                                           double deviation, double roll);
+CBM_API void cbm_plant_set_gravity(cbm_plant *plant, cbm_vec3 gravity);
+CBM_API void cbm_plant_set_base(cbm_plant *plant, cbm_vec3 position, cbm_quat orientation);
+CBM_API void cbm_plant_set_discretization(cbm_plant *plant, cbm_mech_discretization d);
+CBM_API cbm_mech_discretization cbm_plant_discretization(const cbm_plant *plant);
+/// Removes segment `seg` and everything it carries (breakage, pruning), keeping topological
+/// order (indices of later segments shift down). *removed (optional) receives the count.
+CBM_API cbm_status cbm_plant_remove_subtree(cbm_plant *plant, size_t seg, size_t *removed);
+
+/* ---- queries (valid after a solve or cbm_plant_evaluate) ---- */
+
+CBM_API size_t cbm_plant_segment_count(const cbm_plant *plant);
+CBM_API cbm_vec3 cbm_plant_gravity(const cbm_plant *plant);
+
+/// Everything about one segment.
+typedef struct cbm_segment_state {
+    int64_t parent;    ///< -1 for a root
+    int32_t order;     ///< branch order
+    bool continuation; ///< first child of its parent (its joint includes half the parent)
+    size_t child_count;
+    double length; ///< m
+    double a, b;   ///< outer semi-axes, m
+    size_t ring_count;
+    double area;            ///< section area, m^2
+    double mass_per_length; ///< kg/m
+    cbm_vec3 rigidity;      ///< (C_H, C_L, C_U) = (sum GJ, sum EI_L, sum EI_U), N m^2
+    cbm_vec3 rest_rate;     ///< rigidity-weighted rest rotation rate, local, rad/m
+    cbm_vec3 omega;         ///< current rotation rate of the joint at the proximal end, local
+    /// current rotation rate of the segment's own material, local, rad/m: the mean over its two
+    /// halves, rest + C^-1 (M_proximal + M_distal)/2 (staggered; M_distal is the continuation
+    /// joint's moment or the tip moment), Omega itself for the chain. This is the "current
+    /// Omega" a new ring memorises (Taylor-Hell 6.32): with it a ring added under unchanged load
+    /// leaves the shape unchanged up to O(h^2).
+    cbm_vec3 rate;
+    double point_mass;     ///< kg at the distal end
+    cbm_vec3 tip_force;    ///< N, world
+    cbm_vec3 tip_moment;   ///< N m, world
+    cbm_quat orientation;  ///< frame of the segment (H = q e_x, L = q e_y, U = q e_z)
+    cbm_frame frame;       ///< the same frame as vectors
+    cbm_vec3 proximal;     ///< m, proximal node
+    cbm_vec3 distal;       ///< m, distal node
+    double carried_mass;   ///< kg: own wood + point mass + everything distal
+    cbm_vec3 force;        ///< N, world: total load carried through the proximal joint
+    cbm_vec3 moment;       ///< N m, world: moment of all carried loads about the proximal node
+    cbm_vec3 moment_local; ///< the same in the segment's (H, L, U) components
+    double stress;         ///< Pa, peak bending stress at the proximal joint (M a / I, ellipse)
+    double stress_ratio;   ///< stress / modulus of rupture of the outer ring (NaN if MOR = 0)
+    double age;            ///< years, age of the oldest ring
+    double reaction;       ///< area fraction of reaction wood in the section, 0..1
+} cbm_segment_state;
+
+CBM_API cbm_status cbm_plant_segment(const cbm_plant *plant, size_t seg, cbm_segment_state *out);
+
+/// Raw struct-of-arrays views (length cbm_plant_segment_count), valid until the next edit.
+CBM_API const int64_t *cbm_plant_parents(const cbm_plant *plant);
+CBM_API const cbm_quat *cbm_plant_orientations(const cbm_plant *plant);
+/// Proximal node of each segment; the distal node is proximal + length * H.
+CBM_API const cbm_vec3 *cbm_plant_positions(const cbm_plant *plant);
+CBM_API const cbm_vec3 *cbm_plant_omegas(const cbm_plant *plant);
+/// Moment about the proximal node, world components.
+CBM_API const cbm_vec3 *cbm_plant_moments(const cbm_plant *plant);
+
+/// Total mass of the plant (wood + point masses), kg.
+CBM_API double cbm_plant_total_mass(const cbm_plant *plant);
+
+/// Frame of the continuum tangent at the distal node of `seg`: the segment's frame turned by the
+/// bending of the segment's distal half (second-order accurate node angle in the staggered
+/// discretisation; the segment frame itself for the chain).
+CBM_API cbm_status cbm_plant_distal_frame(const cbm_plant *plant, size_t seg, cbm_quat *out);
+
+/* ---- solving ---- */
+
+typedef enum cbm_mech_solver {
+    CBM_MECH_RELAX, ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
+    CBM_MECH_NEWTON ///< Newton-Krylov (GMRES, stiffness preconditioner, tangent passes)
+} cbm_mech_solver;
+
+/// Name of a solver ("relax", "fast").
+CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
+/// Parses "relax", "fast", "newton" (case-sensitive). false if unknown.
+CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
+
+typedef struct cbm_solve_def {
+    cbm_mech_solver solver; ///< default CBM_MECH_NEWTON
+    double tolerance;       ///< relative residual to reach, default 1e-8
+    double alpha;           ///< relaxation factor in (0, 1], default 0.5 (relax only)
+    size_t max_passes;      ///< 0 = limits.max_passes of the context
+    int krylov_dim;         ///< GMRES restart length, default 20 (Newton only)
+    bool warm_start;        ///< start from the current Omega (default true); else from rest
+} cbm_solve_def;
+
+CBM_API cbm_solve_def cbm_solve_def_default(void);
+
+/// What a solve did.
+typedef struct cbm_solve_stats {
+    size_t passes;             ///< forward + backward sweeps (also the tangent sweeps of Newton)
+    double residual;           ///< max_i |C (Omega_i - rest_i) - M_i| / characteristic moment
+    double char_moment;        ///< N m, the characteristic moment (max_i |M_i|, >0)
+    size_t newton_steps;       ///< Newton iterations (0 for relax)
+    size_t krylov_iterations;  ///< total GMRES iterations
+    size_t continuation_steps; ///< load steps taken by the globalisation (1 = full load at once)
+} cbm_solve_stats;
+
+/// Brings the plant to static equilibrium. Results (frames, positions, moments, stresses) are
+/// always readable afterwards. CBM_E_NOT_CONVERGED if the tolerance is not reached within the
+/// pass budget (stats still filled, residual reported); CBM_E_NONFINITE with a message naming
+/// the segment if a NaN or infinity appears; CBM_E_INVALID for an empty plant or zero rigidity.
+/// No allocation happens inside the iteration (the workspace is kept in the plant).
+CBM_API cbm_status cbm_plant_solve(cbm_plant *plant, const cbm_solve_def *def,
+                                   cbm_solve_stats *stats);
+
+/// One forward and one backward pass with the current Omega, no update: frames, positions,
+/// masses, forces, moments and stresses. *residual (optional) receives the relative residual.
+CBM_API cbm_status cbm_plant_evaluate(cbm_plant *plant, double *residual);
+
+/// Emits one part per segment into the scene: a tube with elliptical end sections (U along a),
+/// organ branch, order, segment and parent ids, stress, stress/MOR ratio, age, reaction wood.
+/// Point masses are not drawn. `sides` >= 3.
+CBM_API cbm_status cbm_plant_to_scene(const cbm_plant *plant, cbm_scene *scene, int sides);
+
+/* ---- section helpers (exact formulas for a solid ellipse) ---- */
+
+/// Second moments of area of a solid ellipse with semi-axes a (along U) and b (along L), m^4:
+/// *i_l = pi a^3 b / 4 (about L), *i_u = pi a b^3 / 4 (about U), *j = pi a^3 b^3 / (a^2 + b^2).
+CBM_API void cbm_mech_ellipse_moments(double a, double b, double *i_l, double *i_u, double *j);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

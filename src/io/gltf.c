@@ -1,0 +1,630 @@
+/* glTF 2.0 binary (.glb) writer (Khronos glTF 2.0 specification, sections 3 and 4; GLB layout:
+ * 12-byte header, JSON chunk padded with spaces, BIN chunk padded with zeros, all 4-aligned).
+ *
+ * The triangles of a scene are grouped per organ kind, and per branch order for branches; each
+ * group becomes one mesh (one primitive, indexed, UNSIGNED_INT indices) under its own node named
+ * "branch order 2", "leaf", ... with extras {organ, order}. Vertex attributes: POSITION (m),
+ * NORMAL, COLOR_0 (linear RGBA of the colour mode) and the per-part data as application
+ * attributes _STRESS_RATIO, _AGE (years), _REACTION_WOOD, _ORDER and _SEGMENT (FLOAT scalars;
+ * -1 where unknown, since glTF floats must be finite). One material per organ kind, white base
+ * colour (COLOR_0 multiplies it), double-sided for the flat organs (leaf, flower, ground).
+ *
+ * Animation (frames given): one node per frame holding that frame's group nodes. Every frame
+ * node has a scale channel with STEP interpolation over the shared frame times: 1 while it is
+ * the current frame, 0 otherwise. This is the form viewers handle best: morph targets need the
+ * same vertex count in every frame (a growing plant does not have it), and KHR_node_visibility
+ * is not yet supported widely, while STEP scale animations play in three.js, Blender, Babylon.js
+ * and the Khronos sample viewer. Without playback, the static pose shows the last frame. */
+#include "writers.h"
+
+#include "cambium/io.h"
+
+#include <math.h>
+#include <stdio.h>
+
+#define GL_FLOAT                5126
+#define GL_UNSIGNED_INT         5125
+#define GL_ARRAY_BUFFER         34962
+#define GL_ELEMENT_ARRAY_BUFFER 34963
+#define MAX_ORDER_GROUPS        32
+
+typedef struct accessor {
+    size_t view, count;
+    int ctype, ncomp;
+    bool minmax;
+    float min[3], max[3];
+} accessor;
+
+typedef struct view {
+    size_t offset, length;
+    int target; /* 0 for none */
+} view;
+
+typedef struct mesh {
+    size_t pos, nrm, col, stress, age, react, order, seg, idx;
+    int material;
+} mesh;
+
+typedef struct node {
+    char name[48];
+    long mesh;             /* -1 if none */
+    size_t child0, nchild; /* range in the children array */
+    int organ, order;      /* -1 if not a group node */
+    bool hidden;           /* scale 0 in the static pose */
+    bool frame;
+} node;
+
+typedef struct glb {
+    cbm_context *ctx;
+    const cbm_write_options *o;
+    CBM_ARRAY(uint8_t) bin;
+    CBM_ARRAY(accessor) acc;
+    CBM_ARRAY(view) views;
+    CBM_ARRAY(mesh) meshes;
+    CBM_ARRAY(node) nodes;
+    CBM_ARRAY(size_t) children;
+    bool organ_used[CBM_ORGAN_COUNT];
+} glb;
+
+static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
+{
+    size_t off = (g->bin.len + 3) & ~(size_t)3;
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
+    memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
+    if (bytes)
+        memcpy(g->bin.data + off, data, bytes);
+    g->bin.len = off + bytes;
+    view v = {off, bytes, target};
+    CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->views, v));
+    *id = g->views.len - 1;
+    return CBM_OK;
+}
+
+static cbm_status add_accessor(glb *g, const void *data, size_t count, int ncomp, int ctype,
+                               int target, bool minmax, size_t *id)
+{
+    accessor a;
+    memset(&a, 0, sizeof a);
+    CBM_TRY(add_view(g, data, count * (size_t)ncomp * 4, target, &a.view));
+    a.count = count;
+    a.ncomp = ncomp;
+    a.ctype = ctype;
+    a.minmax = minmax;
+    if (minmax) {
+        const float *f = data;
+        for (int k = 0; k < ncomp; k++) {
+            a.min[k] = INFINITY;
+            a.max[k] = -INFINITY;
+        }
+        for (size_t i = 0; i < count; i++)
+            for (int k = 0; k < ncomp; k++) {
+                a.min[k] = fminf(a.min[k], f[i * (size_t)ncomp + (size_t)k]);
+                a.max[k] = fmaxf(a.max[k], f[i * (size_t)ncomp + (size_t)k]);
+            }
+    }
+    CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
+    *id = g->acc.len - 1;
+    return CBM_OK;
+}
+
+static int group_of(const cbm_part *p)
+{
+    if (p->organ == CBM_ORGAN_BRANCH && p->order >= 0)
+        return CBM_ORGAN_COUNT + (p->order < MAX_ORDER_GROUPS ? p->order : MAX_ORDER_GROUPS - 1);
+    return (int)p->organ < CBM_ORGAN_COUNT ? (int)p->organ : CBM_ORGAN_OTHER;
+}
+
+static float known(double x)
+{
+    return isfinite(x) ? (float)x : -1.0f;
+}
+
+/* One mesh with its node per non-empty group of the scene; node ids appended to children. */
+static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_child, size_t *count)
+{
+    cbm_context *ctx = g->ctx;
+    const cbm_write_options *o = g->o;
+    size_t nv = cbm_scene_vertex_count(s), nt = cbm_scene_triangle_count(s);
+    size_t np = cbm_scene_part_count(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    const cbm_scene_vertex *v = cbm_scene_vertices(s);
+    const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
+    enum { NG = CBM_ORGAN_COUNT + MAX_ORDER_GROUPS };
+    size_t ntg[NG] = {0};
+    for (size_t t = 0; t < nt; t++)
+        if (cbm__part_kept(&parts[tp[t]], o))
+            ntg[group_of(&parts[tp[t]])]++;
+    float *col = NULL, *fbuf = NULL;
+    uint32_t *vpart = NULL, *remap = NULL, *verts = NULL, *idx = NULL;
+    size_t maxt = 0;
+    for (int k = 0; k < NG; k++)
+        maxt = ntg[k] > maxt ? ntg[k] : maxt;
+    size_t cap_v = maxt > 0 ? 3 * maxt : 1;
+    cbm_status st;
+    if ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
+        (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
+        goto done;
+    remap = cbm__alloc(ctx, (nv ? nv : 1) * sizeof *remap);
+    verts = cbm__alloc(ctx, cap_v * sizeof *verts);
+    idx = cbm__alloc(ctx, cap_v * sizeof *idx);
+    fbuf = cbm__alloc(ctx, cap_v * 4 * sizeof *fbuf);
+    if (!remap || !verts || !idx || !fbuf) {
+        st = CBM_E_NOMEM;
+        goto done;
+    }
+    *first_child = g->children.len;
+    *count = 0;
+    /* groups in a fixed order: branch orders, then the organs */
+    for (int gi = 0; gi < NG; gi++) {
+        int grp = gi < MAX_ORDER_GROUPS ? CBM_ORGAN_COUNT + gi : gi - MAX_ORDER_GROUPS;
+        if (!ntg[grp])
+            continue;
+        memset(remap, 0xff, (nv ? nv : 1) * sizeof *remap);
+        size_t nvg = 0, ni = 0;
+        for (size_t t = 0; t < nt; t++) {
+            const cbm_part *p = &parts[tp[t]];
+            if (!cbm__part_kept(p, o) || group_of(p) != grp)
+                continue;
+            for (int k = 0; k < 3; k++) {
+                uint32_t vi = tri[3 * t + (size_t)k];
+                if (remap[vi] == UINT32_MAX) {
+                    remap[vi] = (uint32_t)nvg;
+                    verts[nvg++] = vi;
+                }
+                idx[ni++] = remap[vi];
+            }
+        }
+        mesh m;
+        m.material = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp; /* organ; renumbered */
+        g->organ_used[m.material] = true;
+        for (size_t i = 0; i < nvg; i++)
+            memcpy(fbuf + 3 * i, v[verts[i]].p, 3 * sizeof(float));
+        if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, true, &m.pos)) != CBM_OK)
+            goto done;
+        for (size_t i = 0; i < nvg; i++) {
+            const float *n = v[verts[i]].n;
+            double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+            for (int k = 0; k < 3; k++)
+                fbuf[3 * i + (size_t)k] = len > 0 ? (float)(n[k] / len) : (k == 1 ? 1.0f : 0.0f);
+        }
+        if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.nrm)) !=
+            CBM_OK)
+            goto done;
+        for (size_t i = 0; i < nvg; i++)
+            for (int k = 0; k < 4; k++)
+                fbuf[4 * i + (size_t)k] =
+                    fminf(1.0f, fmaxf(0.0f, col[4 * vpart[verts[i]] + (size_t)k]));
+        if ((st = add_accessor(g, fbuf, nvg, 4, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.col)) !=
+            CBM_OK)
+            goto done;
+        size_t *dst[5] = {&m.stress, &m.age, &m.react, &m.order, &m.seg};
+        for (int q = 0; q < 5; q++) {
+            for (size_t i = 0; i < nvg; i++) {
+                const cbm_part *p = &parts[vpart[verts[i]]];
+                double x = q == 0   ? p->stress_ratio
+                           : q == 1 ? p->age
+                           : q == 2 ? p->reaction_wood
+                           : q == 3 ? (p->order >= 0 ? (double)p->order : NAN)
+                                    : (p->segment >= 0 ? (double)p->segment : NAN);
+                fbuf[i] = known(x);
+            }
+            if ((st = add_accessor(g, fbuf, nvg, 1, GL_FLOAT, GL_ARRAY_BUFFER, false, dst[q])) !=
+                CBM_OK)
+                goto done;
+        }
+        if ((st = add_accessor(g, idx, ni, 1, GL_UNSIGNED_INT, GL_ELEMENT_ARRAY_BUFFER, false,
+                               &m.idx)) != CBM_OK ||
+            (st = CBM_ARRAY_PUSH(ctx, g->meshes, m)) != CBM_OK)
+            goto done;
+        node nd;
+        memset(&nd, 0, sizeof nd);
+        nd.mesh = (long)g->meshes.len - 1;
+        nd.organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
+        nd.order = grp >= CBM_ORGAN_COUNT ? grp - CBM_ORGAN_COUNT : -1;
+        if (nd.order >= 0)
+            snprintf(nd.name, sizeof nd.name, "branch order %d", nd.order);
+        else
+            snprintf(nd.name, sizeof nd.name, "%s", cbm_organ_name((cbm_organ)nd.organ));
+        if ((st = CBM_ARRAY_PUSH(ctx, g->nodes, nd)) != CBM_OK ||
+            (st = CBM_ARRAY_PUSH(ctx, g->children, g->nodes.len - 1)) != CBM_OK)
+            goto done;
+        (*count)++;
+    }
+done:
+    cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
+    cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
+    cbm__free(ctx, remap, (nv ? nv : 1) * sizeof *remap);
+    cbm__free(ctx, verts, cap_v * sizeof *verts);
+    cbm__free(ctx, idx, cap_v * sizeof *idx);
+    cbm__free(ctx, fbuf, cap_v * 4 * sizeof *fbuf);
+    return st;
+}
+
+static void json_floats(cbm_json *j, const char *key, const float *f, int n)
+{
+    cbm_json_begin_array(j, key);
+    for (int k = 0; k < n; k++)
+        cbm_json_number(j, NULL, f[k]);
+    cbm_json_end_array(j);
+}
+
+static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t anim_first,
+                       size_t nframes)
+{
+    static const char *const types[5] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
+    cbm_json_begin_object(j, NULL);
+    cbm_json_begin_object(j, "asset");
+    cbm_json_string(j, "version", "2.0");
+    cbm_json_string(j, "generator", "cambium " CBM_VERSION_STRING);
+    cbm_json_end_object(j);
+    cbm_json_int(j, "scene", 0);
+    cbm_json_begin_array(j, "scenes");
+    cbm_json_begin_object(j, NULL);
+    cbm_json_string(j, "name", "plant");
+    cbm_json_begin_array(j, "nodes");
+    cbm_json_int(j, NULL, (int64_t)root);
+    cbm_json_end_array(j);
+    cbm_json_end_object(j);
+    cbm_json_end_array(j);
+
+    cbm_json_begin_array(j, "nodes");
+    for (size_t i = 0; i < g->nodes.len; i++) {
+        const node *n = &g->nodes.data[i];
+        cbm_json_begin_object(j, NULL);
+        cbm_json_string(j, "name", n->name);
+        if (n->mesh >= 0)
+            cbm_json_int(j, "mesh", n->mesh);
+        if (n->nchild) {
+            cbm_json_begin_array(j, "children");
+            for (size_t c = 0; c < n->nchild; c++)
+                cbm_json_int(j, NULL, (int64_t)g->children.data[n->child0 + c]);
+            cbm_json_end_array(j);
+        }
+        if (n->hidden) {
+            const float z[3] = {0, 0, 0};
+            json_floats(j, "scale", z, 3);
+        }
+        if (n->organ >= 0) {
+            cbm_json_begin_object(j, "extras");
+            cbm_json_string(j, "organ", cbm_organ_name((cbm_organ)n->organ));
+            if (n->order >= 0)
+                cbm_json_int(j, "order", n->order);
+            cbm_json_end_object(j);
+        } else if (i == root) {
+            cbm_json_begin_object(j, "extras");
+            cbm_json_string(j, "units", "m");
+            cbm_json_string(j, "up", "+y");
+            cbm_json_string(j, "unknown_attribute_value", "-1");
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_object(j);
+    }
+    cbm_json_end_array(j);
+
+    if (g->meshes.len) {
+        cbm_json_begin_array(j, "meshes");
+        for (size_t i = 0; i < g->meshes.len; i++) {
+            const mesh *m = &g->meshes.data[i];
+            cbm_json_begin_object(j, NULL);
+            cbm_json_begin_array(j, "primitives");
+            cbm_json_begin_object(j, NULL);
+            cbm_json_begin_object(j, "attributes");
+            cbm_json_int(j, "POSITION", (int64_t)m->pos);
+            cbm_json_int(j, "NORMAL", (int64_t)m->nrm);
+            cbm_json_int(j, "COLOR_0", (int64_t)m->col);
+            cbm_json_int(j, "_STRESS_RATIO", (int64_t)m->stress);
+            cbm_json_int(j, "_AGE", (int64_t)m->age);
+            cbm_json_int(j, "_REACTION_WOOD", (int64_t)m->react);
+            cbm_json_int(j, "_ORDER", (int64_t)m->order);
+            cbm_json_int(j, "_SEGMENT", (int64_t)m->seg);
+            cbm_json_end_object(j);
+            cbm_json_int(j, "indices", (int64_t)m->idx);
+            int mat = 0;
+            for (int k = 0; k < m->material; k++)
+                mat += g->organ_used[k];
+            cbm_json_int(j, "material", mat);
+            cbm_json_int(j, "mode", 4);
+            cbm_json_end_object(j);
+            cbm_json_end_array(j);
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "materials");
+        for (int k = 0; k < CBM_ORGAN_COUNT; k++) {
+            if (!g->organ_used[k])
+                continue;
+            cbm_json_begin_object(j, NULL);
+            cbm_json_string(j, "name", cbm_organ_name((cbm_organ)k));
+            cbm_json_begin_object(j, "pbrMetallicRoughness");
+            const float white[4] = {1, 1, 1, 1};
+            json_floats(j, "baseColorFactor", white, 4);
+            cbm_json_number(j, "metallicFactor", 0.0);
+            cbm_json_number(j, "roughnessFactor", k == CBM_ORGAN_FRUIT ? 0.45 : 0.85);
+            cbm_json_end_object(j);
+            if (k == CBM_ORGAN_LEAF || k == CBM_ORGAN_FLOWER || k == CBM_ORGAN_GROUND)
+                cbm_json_bool(j, "doubleSided", true);
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+    }
+    if (g->acc.len) {
+        cbm_json_begin_array(j, "accessors");
+        for (size_t i = 0; i < g->acc.len; i++) {
+            const accessor *a = &g->acc.data[i];
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "bufferView", (int64_t)a->view);
+            cbm_json_int(j, "componentType", a->ctype);
+            cbm_json_int(j, "count", (int64_t)a->count);
+            cbm_json_string(j, "type", types[a->ncomp]);
+            if (a->minmax) {
+                json_floats(j, "min", a->min, a->ncomp);
+                json_floats(j, "max", a->max, a->ncomp);
+            }
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "bufferViews");
+        for (size_t i = 0; i < g->views.len; i++) {
+            const view *v = &g->views.data[i];
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "buffer", 0);
+            cbm_json_int(j, "byteOffset", (int64_t)v->offset);
+            cbm_json_int(j, "byteLength", (int64_t)v->length);
+            if (v->target)
+                cbm_json_int(j, "target", v->target);
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "buffers");
+        cbm_json_begin_object(j, NULL);
+        cbm_json_int(j, "byteLength", (int64_t)((g->bin.len + 3) & ~(size_t)3));
+        cbm_json_end_object(j);
+        cbm_json_end_array(j);
+    }
+    if (anim_input >= 0) {
+        cbm_json_begin_array(j, "animations");
+        cbm_json_begin_object(j, NULL);
+        cbm_json_string(j, "name", "growth");
+        cbm_json_begin_array(j, "channels");
+        for (size_t f = 0; f < nframes; f++) {
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "sampler", (int64_t)f);
+            cbm_json_begin_object(j, "target");
+            cbm_json_int(j, "node", (int64_t)(anim_first + f));
+            cbm_json_string(j, "path", "scale");
+            cbm_json_end_object(j);
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "samplers");
+        for (size_t f = 0; f < nframes; f++) {
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "input", anim_input);
+            cbm_json_int(j, "output", anim_input + 1 + (long)f);
+            cbm_json_string(j, "interpolation", "STEP");
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_end_object(j);
+        cbm_json_end_array(j);
+    }
+    cbm_json_end_object(j);
+}
+
+static void le32(uint8_t *b, uint32_t v)
+{
+    b[0] = (uint8_t)v;
+    b[1] = (uint8_t)(v >> 8);
+    b[2] = (uint8_t)(v >> 16);
+    b[3] = (uint8_t)(v >> 24);
+}
+
+struct cbm_animation {
+    glb g;
+    cbm_write_options o;      /* a copy: g.o points here */
+    CBM_ARRAY(size_t) frames; /* per frame: first group node in children, group count */
+    bool animated, finished;
+};
+
+cbm_status cbm_animation_create(cbm_context *ctx, const cbm_write_options *opts,
+                                cbm_animation **out)
+{
+    if (!ctx || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_animation *a = cbm__calloc(ctx, 1, sizeof *a);
+    if (!a)
+        return CBM_E_NOMEM;
+    a->o = opts ? *opts : cbm_write_options_default();
+    a->o.frames = NULL;
+    a->o.frame_count = 0;
+    if (!(a->o.frame_time > 0)) {
+        cbm__free(ctx, a, sizeof *a);
+        return cbm__fail(ctx, CBM_E_INVALID, "glTF animation: frame_time must be > 0 s");
+    }
+    a->g.ctx = ctx;
+    a->g.o = &a->o;
+    a->animated = true;
+    *out = a;
+    return CBM_OK;
+}
+
+void cbm_animation_destroy(cbm_animation *a)
+{
+    if (!a)
+        return;
+    cbm_context *ctx = a->g.ctx;
+    CBM_ARRAY_FREE(ctx, a->g.bin);
+    CBM_ARRAY_FREE(ctx, a->g.acc);
+    CBM_ARRAY_FREE(ctx, a->g.views);
+    CBM_ARRAY_FREE(ctx, a->g.meshes);
+    CBM_ARRAY_FREE(ctx, a->g.nodes);
+    CBM_ARRAY_FREE(ctx, a->g.children);
+    CBM_ARRAY_FREE(ctx, a->frames);
+    cbm__free(ctx, a, sizeof *a);
+}
+
+cbm_status cbm_animation_add_frame(cbm_animation *a, const cbm_scene *scene)
+{
+    if (!a || !scene || a->finished)
+        return CBM_E_INVALID;
+    size_t first = 0, cnt = 0;
+    CBM_TRY(CBM_ARRAY_RESERVE(a->g.ctx, a->frames, a->frames.len + 2));
+    CBM_TRY(add_scene_groups(&a->g, scene, &first, &cnt));
+    a->frames.data[a->frames.len++] = first;
+    a->frames.data[a->frames.len++] = cnt;
+    return CBM_OK;
+}
+
+size_t cbm_animation_frame_count(const cbm_animation *a)
+{
+    return a ? a->frames.len / 2 : 0;
+}
+
+/* Frame nodes, the root and the animation accessors, after the last frame. */
+static cbm_status finish(cbm_animation *a, size_t *root, long *anim_input, size_t *anim_first,
+                         size_t *nframes)
+{
+    glb *g = &a->g;
+    cbm_context *ctx = g->ctx;
+    size_t nf = a->frames.len / 2;
+    cbm_status st = CBM_OK;
+    *nframes = 0;
+    *anim_input = -1;
+    node r;
+    memset(&r, 0, sizeof r);
+    snprintf(r.name, sizeof r.name, "plant");
+    r.mesh = -1;
+    r.organ = r.order = -1;
+    if (!a->animated) {
+        r.child0 = nf ? a->frames.data[0] : 0;
+        r.nchild = nf ? a->frames.data[1] : 0;
+        CBM_TRY(CBM_ARRAY_PUSH(ctx, g->nodes, r));
+        *root = g->nodes.len - 1;
+        return CBM_OK;
+    }
+    *anim_first = g->nodes.len;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
+        node fn;
+        memset(&fn, 0, sizeof fn);
+        snprintf(fn.name, sizeof fn.name, "frame %zu", f);
+        fn.mesh = -1;
+        fn.organ = fn.order = -1;
+        fn.child0 = a->frames.data[2 * f];
+        fn.nchild = a->frames.data[2 * f + 1];
+        fn.hidden = f + 1 < nf;
+        fn.frame = true;
+        st = CBM_ARRAY_PUSH(ctx, g->nodes, fn);
+    }
+    size_t c0 = g->children.len;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++)
+        st = CBM_ARRAY_PUSH(ctx, g->children, *anim_first + f);
+    r.child0 = c0;
+    r.nchild = nf;
+    if (st == CBM_OK)
+        st = CBM_ARRAY_PUSH(ctx, g->nodes, r);
+    *root = g->nodes.len - 1;
+    if (st != CBM_OK || nf == 0)
+        return st;
+    /* times, then one scale track per frame node (1 in its slot, 0 elsewhere) */
+    float *buf = cbm__alloc(ctx, 3 * nf * sizeof *buf);
+    if (!buf)
+        return CBM_E_NOMEM;
+    size_t id;
+    for (size_t f = 0; f < nf; f++)
+        buf[f] = (float)(a->o.frame_time * (double)f);
+    st = add_accessor(g, buf, nf, 1, GL_FLOAT, 0, true, &id);
+    *anim_input = (long)id;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
+        for (size_t k = 0; k < nf; k++)
+            buf[3 * k] = buf[3 * k + 1] = buf[3 * k + 2] = k == f ? 1.0f : 0.0f;
+        st = add_accessor(g, buf, nf, 3, GL_FLOAT, 0, false, &id);
+    }
+    cbm__free(ctx, buf, 3 * nf * sizeof *buf);
+    *nframes = nf;
+    return st;
+}
+
+cbm_status cbm_animation_write(cbm_animation *a, const char *path)
+{
+    if (!a || !path || a->finished)
+        return CBM_E_INVALID;
+    a->finished = true;
+    glb *g = &a->g;
+    cbm_context *ctx = g->ctx;
+    size_t root = 0, anim_first = 0, nframes = 0;
+    long anim_input = -1;
+    cbm_json *j = NULL;
+    cbm_status st = finish(a, &root, &anim_input, &anim_first, &nframes);
+    if (st == CBM_OK)
+        st = cbm_json_create(ctx, &j);
+    const char *text = NULL;
+    size_t tlen = 0;
+    if (st == CBM_OK) {
+        write_json(g, j, root, anim_input, anim_first, nframes);
+        st = cbm_json_text(j, &text, &tlen);
+    }
+    if (st == CBM_OK) {
+        size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin.len + 3) & ~(size_t)3;
+        size_t total = 12 + 8 + jpad + (bpad ? 8 + bpad : 0);
+        if (total > UINT32_MAX) {
+            st = cbm__fail(ctx, CBM_E_LIMIT, "%s: scene too large for a .glb (%zu bytes > 4 GiB)",
+                           path, total);
+        } else {
+            cbm_out *out;
+            st = cbm_out_open(ctx, path, &out);
+            if (st == CBM_OK) {
+                uint8_t h[12];
+                memcpy(h, "glTF", 4);
+                le32(h + 4, 2);
+                le32(h + 8, (uint32_t)total);
+                cbm_out_write(out, h, 12);
+                le32(h, (uint32_t)jpad);
+                memcpy(h + 4, "JSON", 4);
+                cbm_out_write(out, h, 8);
+                cbm_out_write(out, text, tlen);
+                cbm_out_write(out, "   ", jpad - tlen);
+                if (bpad) {
+                    le32(h, (uint32_t)bpad);
+                    memcpy(h + 4, "BIN\0", 4);
+                    cbm_out_write(out, h, 8);
+                    cbm_out_write(out, g->bin.data, g->bin.len);
+                    const uint8_t zero[4] = {0, 0, 0, 0};
+                    cbm_out_write(out, zero, bpad - g->bin.len);
+                }
+                st = cbm_out_commit(out);
+            }
+        }
+    }
+    cbm_json_destroy(j);
+    return st;
+}
+
+cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *path,
+                         const cbm_write_options *opts)
+{
+    if (!ctx || !path)
+        return CBM_E_INVALID;
+    cbm_write_options def;
+    const cbm_write_options *o = cbm__opts(opts, &def);
+    bool anim = o->frames && o->frame_count > 0;
+    if (!scene && !anim)
+        return cbm__fail(ctx, CBM_E_INVALID, "%s: no scene to write", path);
+    cbm_write_options copy = *o;
+    if (!anim && !(copy.frame_time > 0))
+        copy.frame_time = 1.0; /* unused without animation */
+    cbm_animation *a;
+    CBM_TRY(cbm_animation_create(ctx, &copy, &a));
+    a->animated = anim;
+    cbm_status st = CBM_OK;
+    size_t nf = anim ? o->frame_count : 1;
+    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
+        const cbm_scene *s = anim ? o->frames[f] : scene;
+        st = s ? cbm_animation_add_frame(a, s)
+               : cbm__fail(ctx, CBM_E_INVALID, "%s: animation frame %zu has no scene", path, f);
+    }
+    if (st == CBM_OK)
+        st = cbm_animation_write(a, path);
+    cbm_animation_destroy(a);
+    return st;
+}

@@ -1,0 +1,67 @@
+/* Private pieces shared by the writers: the camera fitted to a scene, colour maps and the colour
+ * bar, the vertex-to-part map and the part filter (ground on/off). */
+#ifndef CBM_IO_WRITERS_H
+#define CBM_IO_WRITERS_H
+
+#include "cambium/write.h"
+
+#include "../core/core.h"
+
+/// Orthographic camera: a point p projects to pixel ((p - center).right * scale + width / 2,
+/// height / 2 - (p - center).up * scale); depth grows along dir (away from the viewer).
+typedef struct cbm__camera {
+    cbm_vec3 dir, right, up; /* orthonormal, dir = right x up reversed: right x up = -dir */
+    cbm_vec3 center;         /* m, maps to the centre of the drawing area */
+    double scale;            /* pixels per metre */
+    double cx, cy;           /* pixel position of center */
+    double depth_min;        /* smallest depth of the scene along dir (m, from center) */
+} cbm__camera;
+
+/// Fits an orthographic camera so the kept parts (ground excluded) fill `fill` (0..1) of a
+/// draw area of w x h pixels whose centre is at (cx, cy). False if nothing is drawn.
+bool cbm__camera_fit(cbm__camera *cam, const cbm_scene *scene, const cbm_write_options *o, double w,
+                     double h, double cx, double cy, double fill);
+/// The camera's unit viewing direction for the options.
+cbm_vec3 cbm__view_direction(const cbm_write_options *o);
+
+/// Whether a part is written under the options (ground parts are dropped when ground is off).
+bool cbm__part_kept(const cbm_part *p, const cbm_write_options *o);
+/// The part each vertex belongs to (from the triangles; unused vertices get UINT32_MAX).
+/// *out has cbm_scene_vertex_count entries, released with cbm__free(ctx, p, n * 4).
+cbm_status cbm__vertex_parts(cbm_context *ctx, const cbm_scene *s, uint32_t **out);
+
+/// The quantity shown by a colour mode for a part (NaN if unknown) and its range.
+double cbm__part_quantity(const cbm_part *p, cbm_color_by by);
+void cbm__color_range(const cbm_scene *s, const cbm_write_options *o, double *lo, double *hi);
+/// The colour map of a quantity mode at t in [0, 1], linear RGB.
+void cbm__colormap(cbm_color_by by, double t, float rgb[3]);
+/// Colour of a part with a precomputed range.
+void cbm__part_color_range(const cbm_part *p, const cbm_write_options *o, double lo, double hi,
+                           float rgba[4]);
+/// Title of the colour bar of a mode ("stress / MOR", ...).
+const char *cbm__color_title(cbm_color_by by);
+
+/// Per-part display colours under the options (linear RGBA, 4 floats per part), and the
+/// colour range used. Released with cbm__free(ctx, c, 4 * nparts * sizeof(float)).
+cbm_status cbm__part_colors(cbm_context *ctx, const cbm_scene *s, const cbm_write_options *o,
+                            float **out, double *lo, double *hi);
+/// Kept-vertex remap: new index of each vertex (UINT32_MAX if dropped) and the count kept.
+cbm_status cbm__vertex_remap(cbm_context *ctx, const cbm_scene *s, const cbm_write_options *o,
+                             const uint32_t *vpart, uint32_t **out, size_t *kept);
+/// Default options when opts is NULL.
+const cbm_write_options *cbm__opts(const cbm_write_options *o, cbm_write_options *def);
+
+/// A zeroed w x h picture.
+cbm_status cbm__image_create(cbm_context *ctx, int w, int h, cbm_image **out);
+/// Draws text with the 5x7 font, `px` pixels per font pixel, top-left corner at (x, y).
+void cbm__draw_text(cbm_image *img, int x, int y, int px, const char *text, const uint8_t rgb[3]);
+/// Width in pixels of text drawn at `px`.
+int cbm__text_width(const char *text, int px);
+
+/// linear -> sRGB 8-bit
+uint8_t cbm__srgb8(double linear);
+
+/// 5x7 bitmap glyph of a printable ASCII character: 7 rows of 5 bits (bit 4 leftmost).
+const uint8_t *cbm__glyph(char c);
+
+#endif

@@ -1,0 +1,98 @@
+/* Private layout of the plant shared by plant.c and the solver files (solve_*.c): the
+ * struct-of-arrays segment data, the ring pool, and the solver workspace kept in the plant so
+ * that no allocation happens inside a solve's iteration. */
+#ifndef CBM_MECH_INTERNAL_H
+#define CBM_MECH_INTERNAL_H
+
+#include "cambium/mech.h"
+#include "core/core.h"
+
+/* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors. */
+typedef struct cbm__mech_work {
+    size_t cap;     /* segments the arrays below hold */
+    int krylov_cap; /* Krylov basis vectors allocated (m + 1), 0 = none */
+    double *dual;   /* length over which joint i bends, m */
+    cbm_vec3 *cj;   /* joint rigidity (C_H, C_L, C_U), N m^2 */
+    cbm_vec3 *rj;   /* joint rest rotation rate, local, rad/m */
+    cbm_vec3 *wown; /* own weight of the segment (world, N), times the load scale */
+    double *lever;  /* distance from the proximal node to where wown acts, m */
+    cbm_vec3 *ftip; /* point-mass weight + tip force, world, N (scaled) */
+    cbm_vec3 *mtip; /* tip moment, world, N m (scaled) */
+    /* Newton-Krylov */
+    cbm_vec3 *res;   /* residual C (Omega - rest) - M_local */
+    cbm_vec3 *step;  /* Newton step */
+    cbm_vec3 *save;  /* Omega at the last accepted continuation level */
+    cbm_vec3 *dth;   /* tangent: world rotation of each frame */
+    cbm_vec3 *dm;    /* tangent: world moment */
+    cbm_vec3 *tmp;   /* a vector of the Krylov space */
+    cbm_vec3 *basis; /* krylov_cap vectors of 3n doubles */
+    double *hess;    /* (m + 1) x m Hessenberg matrix and Givens data */
+} cbm__mech_work;
+
+struct cbm_plant {
+    cbm_context *ctx;
+    cbm_vec3 gravity;
+    cbm_vec3 base_pos;
+    cbm_quat base_q;
+    cbm_mech_discretization disc;
+    double load_scale; /* 1 except during load continuation */
+
+    size_t n, cap;
+    /* topology and rest geometry */
+    int64_t *parent;
+    int32_t *order;
+    uint8_t *cont; /* 1 if the first child of its parent (or a root) */
+    uint32_t *nchild;
+    double *len;
+    double *angles;   /* 3 per segment: divergence, deviation, roll */
+    cbm_quat *branch; /* B_i */
+    /* section: ring pool indices and aggregates */
+    size_t *ring_first, *ring_count;
+    cbm_vec3 *rig;  /* (sum GJ, sum EI_L, sum EI_U) */
+    cbm_vec3 *rest; /* rigidity-weighted rest rate */
+    double *mpl;    /* kg/m */
+    double *area;   /* m^2 */
+    /* state and loads */
+    cbm_vec3 *omega;
+    double *pmass;
+    cbm_vec3 *tipf, *tipm;
+    /* results */
+    cbm_quat *q;
+    cbm_vec3 *pos;    /* proximal node */
+    cbm_vec3 *force;  /* world, through the proximal joint */
+    cbm_vec3 *moment; /* world, about the proximal node */
+    double *cmass;    /* carried mass */
+
+    CBM_ARRAY(cbm_ring) rings;
+    size_t ring_live; /* rings referenced by segments (the rest are holes) */
+
+    cbm__mech_work work;
+};
+
+/* ---- solve_common.c ---- */
+
+/// Ensures the joint workspace for n segments (allocates only when it grows).
+cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim);
+void cbm__mech_work_free(cbm_plant *p);
+/// Joint arrays from the segment aggregates and loads (times p->load_scale).
+void cbm__mech_prepare(cbm_plant *p);
+/// Forward sweep: frames and proximal positions from Omega.
+void cbm__mech_forward(cbm_plant *p);
+/// Backward sweep: forces and moments; returns the max residual |C(Omega - rest) - M_local|
+/// (N m) and *mmax = max |M|. If alpha > 0, also applies the relaxation update to Omega.
+/// If res != NULL, stores the residual per joint. Returns NaN if anything is non-finite.
+double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax, double *sumsq);
+/// Names the first segment holding a non-finite value; returns CBM_E_NONFINITE.
+cbm_status cbm__mech_report_nonfinite(cbm_plant *p);
+/// Tangent passes: out = J v, where J = d(residual)/d(Omega) at the last evaluated state.
+void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out);
+/// Relative residual from the max residual and moments.
+double cbm__mech_relres(double rmax, double mmax, double *char_moment);
+
+/* ---- solve_relax.c / solve_newton.c ---- */
+cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
+                                 cbm_solve_stats *st);
+cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
+                                  cbm_solve_stats *st);
+
+#endif

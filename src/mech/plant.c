@@ -1,0 +1,717 @@
+/* The plant data structure: segments struct-of-arrays in topological order, a pool of rings per
+ * segment, the section aggregates the solvers use, queries, subtree removal and the scene
+ * export.
+ *
+ * Section aggregates (recomputed whenever a ring of the segment changes): for rings k = 0..n-1
+ * (innermost first) with outer semi-axes (a_k, b_k) and inner semi-axes (a_{k-1}, b_{k-1})
+ * (0 for the core), the ring's second moments are the differences of the solid-ellipse values
+ *   I_L = pi a^3 b / 4 (bending about L; U is along the long semi-axis a: Taylor-Hell 8.9-8.10,
+ *   erratum 3 of the digest: the thesis' code swapped them), I_U = pi a b^3 / 4,
+ *   J = pi a^3 b^3 / (a^2 + b^2) (torsion constant of an ellipse),
+ * so C = sum_k (G_k J_k, E_k I_L,k, E_k I_U,k) (Taylor-Hell 6.25-6.28, 6.33-6.34), and the rest
+ * rotation rate is the rigidity-weighted mean, per local component c in {H, L, U},
+ *   rest_c = sum_k C_k,c rest_k,c / sum_k C_k,c,
+ * which is the closed form of the incremental averaging of Jirasek eq. 24 = Taylor-Hell
+ * 6.29-6.31 (adding ring k with rest rate r_k to a core of rigidity C and rest rate R gives
+ * (C R + C_k r_k) / (C + C_k)). The mass per length is sum_k density_k * ring area.
+ *
+ * Rings live in one pool; each segment owns a contiguous run [first, first + count). Adding a
+ * ring to a segment whose run is not at the end of the pool moves the run to the end; the pool
+ * is compacted when more than half of it is holes.
+ */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+
+/* ---- small helpers ---- */
+
+const char *cbm_mech_discretization_name(cbm_mech_discretization d)
+{
+    return d == CBM_MECH_CHAIN ? "chain" : "staggered";
+}
+
+const char *cbm_mech_solver_name(cbm_mech_solver s)
+{
+    return s == CBM_MECH_RELAX ? "relax" : "fast";
+}
+
+bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out)
+{
+    if (!name)
+        return false;
+    if (!strcmp(name, "relax") || !strcmp(name, "relaxation")) {
+        *out = CBM_MECH_RELAX;
+        return true;
+    }
+    if (!strcmp(name, "fast") || !strcmp(name, "newton") || !strcmp(name, "newton-krylov")) {
+        *out = CBM_MECH_NEWTON;
+        return true;
+    }
+    return false;
+}
+
+void cbm_mech_ellipse_moments(double a, double b, double *i_l, double *i_u, double *j)
+{
+    double a2 = a * a, b2 = b * b;
+    if (i_l)
+        *i_l = CBM_PI * a2 * a * b / 4.0;
+    if (i_u)
+        *i_u = CBM_PI * a * b2 * b / 4.0;
+    if (j)
+        *j = (a2 + b2) > 0.0 ? CBM_PI * a2 * a * b2 * b / (a2 + b2) : 0.0;
+}
+
+cbm_quat cbm_mech_clamp_orientation(double elevation)
+{
+    /* identity maps (x, y, z) to (H, L, U); we want H = (c, s, 0), L = (0, 0, -1),
+     * U = (-s, c, 0): a rotation by +pi/2 about x (takes y to z and z to -y) ... composed:
+     * first rotate about x by -pi/2 (y -> -z, z -> y), then about z by the elevation. */
+    cbm_quat rx = q_axis_angle(v3(1, 0, 0), -0.5 * CBM_PI);
+    cbm_quat rz = q_axis_angle(v3(0, 0, 1), elevation);
+    return q_normalize(q_mul(rz, rx));
+}
+
+cbm_ring cbm_ring_default(void)
+{
+    cbm_ring r;
+    memset(&r, 0, sizeof r);
+    r.youngs_modulus = 10e9;
+    r.shear_modulus = 10e9 / 16.0;
+    r.density = 600.0;
+    r.a = r.b = 0.01;
+    return r;
+}
+
+cbm_segment_def cbm_segment_def_default(void)
+{
+    cbm_segment_def d;
+    memset(&d, 0, sizeof d);
+    d.parent = -1;
+    d.length = 0.1;
+    d.core = cbm_ring_default();
+    d.order = -1;
+    return d;
+}
+
+cbm_plant_def cbm_plant_def_default(void)
+{
+    cbm_plant_def d;
+    memset(&d, 0, sizeof d);
+    d.gravity = v3(0.0, -9.81, 0.0);
+    d.base_orientation = q_identity();
+    d.discretization = CBM_MECH_STAGGERED;
+    return d;
+}
+
+/* ---- storage ---- */
+
+/* Every per-segment array, with its element size, for growth and removal. */
+#define PLANT_ARRAYS(X)                                                                            \
+    X(parent)                                                                                      \
+    X(order)                                                                                       \
+    X(cont)                                                                                        \
+    X(nchild) X(len) X(branch) X(ring_first) X(ring_count) X(rig) X(rest) X(mpl) X(area) X(omega)  \
+        X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment) X(cmass)
+
+static cbm_status plant_reserve(cbm_plant *p, size_t need)
+{
+    if (need <= p->cap)
+        return CBM_OK;
+    size_t nc = p->cap ? p->cap : 16;
+    while (nc < need)
+        nc += nc / 2 + 16;
+    cbm_context *ctx = p->ctx;
+    /* table of every per-segment array; on failure the arrays already grown are shrunk back so
+     * the byte accounting stays exact */
+    void **ptr[32];
+    size_t esz[32];
+    int k = 0;
+#define ENTRY(f)                                                                                   \
+    ptr[k] = (void **)&p->f;                                                                       \
+    esz[k] = sizeof *p->f;                                                                         \
+    k++;
+    PLANT_ARRAYS(ENTRY)
+#undef ENTRY
+    ptr[k] = (void **)&p->angles;
+    esz[k] = 3 * sizeof(double);
+    k++;
+    for (int j = 0; j < k; j++) {
+        void *np = cbm__realloc(ctx, *ptr[j], p->cap * esz[j], nc * esz[j]);
+        if (!np) {
+            for (int r = 0; r < j; r++) {
+                void *sp = cbm__realloc(ctx, *ptr[r], nc * esz[r], p->cap * esz[r]);
+                if (sp || p->cap == 0)
+                    *ptr[r] = sp;
+            }
+            return CBM_E_NOMEM;
+        }
+        *ptr[j] = np;
+    }
+    p->cap = nc;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_create(cbm_context *ctx, const cbm_plant_def *def, cbm_plant **out)
+{
+    if (!ctx || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_plant_def d = def ? *def : cbm_plant_def_default();
+    if (!v3_isfinite(d.gravity) || !v3_isfinite(d.base_position))
+        return cbm__fail(ctx, CBM_E_INVALID, "plant: gravity and base position must be finite");
+    cbm_plant *p = cbm__calloc(ctx, 1, sizeof *p);
+    if (!p)
+        return CBM_E_NOMEM;
+    p->ctx = ctx;
+    p->gravity = d.gravity;
+    p->base_pos = d.base_position;
+    double qn =
+        d.base_orientation.w * d.base_orientation.w + d.base_orientation.x * d.base_orientation.x +
+        d.base_orientation.y * d.base_orientation.y + d.base_orientation.z * d.base_orientation.z;
+    p->base_q = (qn > 0.0 && isfinite(qn)) ? q_normalize(d.base_orientation) : q_identity();
+    p->disc = d.discretization == CBM_MECH_CHAIN ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
+    p->load_scale = 1.0;
+    if (d.capacity) {
+        size_t lim = cbm_context_limits(ctx)->max_segments;
+        size_t c = d.capacity < lim ? d.capacity : lim;
+        if (plant_reserve(p, c) != CBM_OK) {
+            cbm_plant_destroy(p);
+            return CBM_E_NOMEM;
+        }
+    }
+    *out = p;
+    return CBM_OK;
+}
+
+void cbm_plant_destroy(cbm_plant *p)
+{
+    if (!p)
+        return;
+    cbm_context *ctx = p->ctx;
+#define FREE(f) cbm__free(ctx, p->f, p->cap * sizeof *p->f);
+    PLANT_ARRAYS(FREE)
+#undef FREE
+    cbm__free(ctx, p->angles, p->cap * 3 * sizeof(double));
+    CBM_ARRAY_FREE(ctx, p->rings);
+    cbm__mech_work_free(p);
+    cbm__free(ctx, p, sizeof *p);
+}
+
+/* ---- sections ---- */
+
+static cbm_status check_ring(cbm_plant *p, const cbm_ring *r, const cbm_ring *inner,
+                             const char *what, size_t seg)
+{
+    const char *bad = NULL;
+    if (!(isfinite(r->youngs_modulus) && r->youngs_modulus > 0.0))
+        bad = "Young's modulus must be positive";
+    else if (!(isfinite(r->shear_modulus) && r->shear_modulus > 0.0))
+        bad = "shear modulus must be positive";
+    else if (!(isfinite(r->density) && r->density >= 0.0))
+        bad = "density must be >= 0";
+    else if (!(isfinite(r->b) && r->b > 0.0 && isfinite(r->a) && r->a >= r->b))
+        bad = "semi-axes must satisfy a >= b > 0";
+    else if (!v3_isfinite(r->rest_rate))
+        bad = "rest rotation rate must be finite";
+    else if (!(isfinite(r->modulus_of_rupture) && r->modulus_of_rupture >= 0.0))
+        bad = "modulus of rupture must be >= 0";
+    else if (!isfinite(r->age))
+        bad = "age must be finite";
+    else if (!(isfinite(r->reaction) && r->reaction >= 0.0 && r->reaction <= 1.0))
+        bad = "reaction-wood fraction must be in [0, 1]";
+    else if (inner && (r->a < inner->a || r->b < inner->b))
+        bad = "a ring must enclose the ring inside it";
+    if (bad)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: %s: %s", seg, what, bad);
+    return CBM_OK;
+}
+
+static void update_section(cbm_plant *p, size_t i)
+{
+    const cbm_ring *r = p->rings.data + p->ring_first[i];
+    size_t nr = p->ring_count[i];
+    double ai = 0.0, bi = 0.0, il0 = 0.0, iu0 = 0.0, j0 = 0.0, area0 = 0.0;
+    cbm_vec3 c = v3(0, 0, 0), cr = v3(0, 0, 0);
+    double mpl = 0.0;
+    for (size_t k = 0; k < nr; k++) {
+        double il, iu, j;
+        cbm_mech_ellipse_moments(r[k].a, r[k].b, &il, &iu, &j);
+        double ar = CBM_PI * r[k].a * r[k].b;
+        cbm_vec3 ck = v3(r[k].shear_modulus * (j - j0), r[k].youngs_modulus * (il - il0),
+                         r[k].youngs_modulus * (iu - iu0));
+        c = v3_add(c, ck);
+        cr = v3_add(cr, v3_mul(ck, r[k].rest_rate));
+        mpl += r[k].density * (ar - area0);
+        il0 = il;
+        iu0 = iu;
+        j0 = j;
+        area0 = ar;
+        ai = r[k].a;
+        bi = r[k].b;
+    }
+    (void)ai;
+    (void)bi;
+    p->rig[i] = c;
+    p->rest[i] =
+        v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0, c.z > 0 ? cr.z / c.z : 0.0);
+    p->mpl[i] = mpl;
+    p->area[i] = area0;
+}
+
+static cbm_quat branch_quat(double div, double dev, double roll)
+{
+    cbm_quat a = q_axis_angle(v3(1, 0, 0), div);
+    cbm_quat b = q_axis_angle(v3(0, 0, 1), dev);
+    cbm_quat c = q_axis_angle(v3(1, 0, 0), roll);
+    return q_normalize(q_mul(q_mul(a, b), c));
+}
+
+static cbm_status check_seg(const cbm_plant *p, size_t seg)
+{
+    if (seg >= p->n)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu does not exist (plant has %zu)", seg,
+                         p->n);
+    return CBM_OK;
+}
+
+/* Rebuilds the pool in segment order into a fresh array. */
+static cbm_status rebuild_rings(cbm_plant *p)
+{
+    cbm_context *ctx = p->ctx;
+    cbm_ring *nd = cbm__alloc(ctx, (p->ring_live ? p->ring_live : 1) * sizeof *nd);
+    if (!nd)
+        return CBM_E_NOMEM;
+    size_t w = 0;
+    for (size_t i = 0; i < p->n; i++) {
+        memcpy(nd + w, p->rings.data + p->ring_first[i], p->ring_count[i] * sizeof *nd);
+        p->ring_first[i] = w;
+        w += p->ring_count[i];
+    }
+    CBM_ARRAY_FREE(ctx, p->rings);
+    p->rings.data = nd;
+    p->rings.len = w;
+    p->rings.cap = p->ring_live ? p->ring_live : 1;
+    return CBM_OK;
+}
+
+static void maybe_compact(cbm_plant *p)
+{
+    if (p->rings.len > 64 && 2 * p->ring_live < p->rings.len) {
+        (void)rebuild_rings(p); /* on NOMEM the holes simply stay */
+    }
+}
+
+/* ---- building ---- */
+
+cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_t *index)
+{
+    if (!p || !def)
+        return CBM_E_INVALID;
+    size_t i = p->n;
+    if (def->parent < -1 || (def->parent >= 0 && (size_t)def->parent >= p->n))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: parent %lld is not an existing segment", i,
+                         (long long)def->parent);
+    if (!(isfinite(def->length) && def->length > 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: length must be positive", i);
+    if (!isfinite(def->divergence) || !isfinite(def->deviation) || !isfinite(def->roll))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: branching angles must be finite", i);
+    if (!(isfinite(def->point_mass) && def->point_mass >= 0.0) || !v3_isfinite(def->tip_force) ||
+        !v3_isfinite(def->tip_moment) || !v3_isfinite(def->omega))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: loads and rotation rate must be finite (point mass >= 0)",
+                         i);
+    CBM_TRY(check_ring(p, &def->core, NULL, "core ring", i));
+    size_t lim = cbm_context_limits(p->ctx)->max_segments;
+    if (lim && i + 1 > lim)
+        return cbm__fail(p->ctx, CBM_E_LIMIT, "plant: more than %zu segments (limits.max_segments)",
+                         lim);
+    if (plant_reserve(p, i + 1) != CBM_OK)
+        return CBM_E_NOMEM;
+    if (CBM_ARRAY_PUSH(p->ctx, p->rings, def->core) != CBM_OK)
+        return CBM_E_NOMEM;
+    p->ring_live++;
+    p->ring_first[i] = p->rings.len - 1;
+    p->ring_count[i] = 1;
+    int64_t par = def->parent;
+    p->parent[i] = par;
+    p->cont[i] = (par < 0 || p->nchild[par] == 0) ? 1 : 0;
+    p->nchild[i] = 0;
+    if (par >= 0)
+        p->nchild[par]++;
+    p->order[i] =
+        def->order >= 0 ? def->order : (par < 0 ? 0 : p->order[par] + (p->cont[i] ? 0 : 1));
+    p->len[i] = def->length;
+    p->angles[3 * i] = def->divergence;
+    p->angles[3 * i + 1] = def->deviation;
+    p->angles[3 * i + 2] = def->roll;
+    p->branch[i] = branch_quat(def->divergence, def->deviation, def->roll);
+    p->omega[i] = def->omega;
+    p->pmass[i] = def->point_mass;
+    p->tipf[i] = def->tip_force;
+    p->tipm[i] = def->tip_moment;
+    p->q[i] = q_identity();
+    p->pos[i] = p->base_pos;
+    p->force[i] = p->moment[i] = v3(0, 0, 0);
+    p->cmass[i] = 0.0;
+    p->n = i + 1;
+    update_section(p, i);
+    if (index)
+        *index = i;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_add_ring(cbm_plant *p, size_t seg, const cbm_ring *ring)
+{
+    if (!p || !ring)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    size_t f = p->ring_first[seg], c = p->ring_count[seg];
+    CBM_TRY(check_ring(p, ring, &p->rings.data[f + c - 1], "new ring", seg));
+    if (f + c != p->rings.len) {
+        /* move the run to the end of the pool */
+        if (CBM_ARRAY_RESERVE(p->ctx, p->rings, p->rings.len + c + 1) != CBM_OK)
+            return CBM_E_NOMEM;
+        memcpy(p->rings.data + p->rings.len, p->rings.data + f, c * sizeof(cbm_ring));
+        p->ring_first[seg] = f = p->rings.len;
+        p->rings.len += c;
+    }
+    if (CBM_ARRAY_PUSH(p->ctx, p->rings, *ring) != CBM_OK)
+        return CBM_E_NOMEM;
+    p->ring_count[seg] = c + 1;
+    p->ring_live++;
+    update_section(p, seg);
+    maybe_compact(p);
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_set_ring(cbm_plant *p, size_t seg, size_t k, const cbm_ring *ring)
+{
+    if (!p || !ring)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    size_t f = p->ring_first[seg], c = p->ring_count[seg];
+    if (k >= c)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: ring %zu does not exist (%zu rings)",
+                         seg, k, c);
+    CBM_TRY(check_ring(p, ring, k > 0 ? &p->rings.data[f + k - 1] : NULL, "ring", seg));
+    if (k + 1 < c && (ring->a > p->rings.data[f + k + 1].a || ring->b > p->rings.data[f + k + 1].b))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: ring %zu must stay inside the ring around it", seg, k);
+    p->rings.data[f + k] = *ring;
+    update_section(p, seg);
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_get_ring(const cbm_plant *p, size_t seg, size_t k, cbm_ring *out)
+{
+    if (!p || !out)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    if (k >= p->ring_count[seg])
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: ring %zu does not exist", seg, k);
+    *out = p->rings.data[p->ring_first[seg] + k];
+    return CBM_OK;
+}
+
+size_t cbm_plant_ring_count(const cbm_plant *p, size_t seg)
+{
+    return (p && seg < p->n) ? p->ring_count[seg] : 0;
+}
+
+cbm_status cbm_plant_set_length(cbm_plant *p, size_t seg, double length)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    if (!(isfinite(length) && length > 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: length must be positive", seg);
+    p->len[seg] = length;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_set_load(cbm_plant *p, size_t seg, double point_mass, cbm_vec3 tip_force,
+                              cbm_vec3 tip_moment)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    if (!(isfinite(point_mass) && point_mass >= 0.0) || !v3_isfinite(tip_force) ||
+        !v3_isfinite(tip_moment))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: loads must be finite (point mass >= 0)", seg);
+    p->pmass[seg] = point_mass;
+    p->tipf[seg] = tip_force;
+    p->tipm[seg] = tip_moment;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_set_omega(cbm_plant *p, size_t seg, cbm_vec3 omega)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    if (!v3_isfinite(omega))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: rotation rate must be finite", seg);
+    p->omega[seg] = omega;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_set_branching(cbm_plant *p, size_t seg, double div, double dev, double roll)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    if (!isfinite(div) || !isfinite(dev) || !isfinite(roll))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: branching angles must be finite",
+                         seg);
+    p->angles[3 * seg] = div;
+    p->angles[3 * seg + 1] = dev;
+    p->angles[3 * seg + 2] = roll;
+    p->branch[seg] = branch_quat(div, dev, roll);
+    return CBM_OK;
+}
+
+void cbm_plant_set_gravity(cbm_plant *p, cbm_vec3 g)
+{
+    if (p && v3_isfinite(g))
+        p->gravity = g;
+}
+
+void cbm_plant_set_base(cbm_plant *p, cbm_vec3 position, cbm_quat q)
+{
+    if (!p || !v3_isfinite(position))
+        return;
+    double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    if (!(qn > 0.0 && isfinite(qn)))
+        return;
+    p->base_pos = position;
+    p->base_q = q_normalize(q);
+}
+
+void cbm_plant_set_discretization(cbm_plant *p, cbm_mech_discretization d)
+{
+    if (p)
+        p->disc = d == CBM_MECH_CHAIN ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
+}
+
+cbm_mech_discretization cbm_plant_discretization(const cbm_plant *p)
+{
+    return p->disc;
+}
+
+cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    size_t n = p->n, m = n - seg;
+    /* map[i - seg] = new index of old segment i, or -1 if removed */
+    int64_t *map = cbm__alloc(p->ctx, m * sizeof *map);
+    if (!map)
+        return CBM_E_NOMEM;
+    size_t w = seg, nrm = 0;
+    for (size_t i = seg; i < n; i++) {
+        int64_t pa = p->parent[i];
+        bool rm = (i == seg) || (pa >= (int64_t)seg && map[pa - (int64_t)seg] < 0);
+        if (rm) {
+            map[i - seg] = -1;
+            nrm++;
+            p->ring_live -= p->ring_count[i];
+            continue;
+        }
+        map[i - seg] = (int64_t)w;
+        if (pa >= (int64_t)seg)
+            pa = map[pa - (int64_t)seg];
+#define MOVE(f) p->f[w] = p->f[i];
+        PLANT_ARRAYS(MOVE)
+#undef MOVE
+        p->angles[3 * w] = p->angles[3 * i];
+        p->angles[3 * w + 1] = p->angles[3 * i + 1];
+        p->angles[3 * w + 2] = p->angles[3 * i + 2];
+        p->parent[w] = pa;
+        w++;
+    }
+    cbm__free(p->ctx, map, m * sizeof *map);
+    p->n = w;
+    /* recompute child counts and continuation flags */
+    for (size_t i = 0; i < w; i++)
+        p->nchild[i] = 0;
+    for (size_t i = 0; i < w; i++) {
+        int64_t pa = p->parent[i];
+        p->cont[i] = (pa < 0 || p->nchild[pa] == 0) ? 1 : 0;
+        if (pa >= 0)
+            p->nchild[pa]++;
+    }
+    maybe_compact(p);
+    if (removed)
+        *removed = nrm;
+    return CBM_OK;
+}
+
+/* ---- queries ---- */
+
+size_t cbm_plant_segment_count(const cbm_plant *p)
+{
+    return p ? p->n : 0;
+}
+
+cbm_vec3 cbm_plant_gravity(const cbm_plant *p)
+{
+    return p->gravity;
+}
+
+const int64_t *cbm_plant_parents(const cbm_plant *p)
+{
+    return p->parent;
+}
+const cbm_quat *cbm_plant_orientations(const cbm_plant *p)
+{
+    return p->q;
+}
+const cbm_vec3 *cbm_plant_positions(const cbm_plant *p)
+{
+    return p->pos;
+}
+const cbm_vec3 *cbm_plant_omegas(const cbm_plant *p)
+{
+    return p->omega;
+}
+const cbm_vec3 *cbm_plant_moments(const cbm_plant *p)
+{
+    return p->moment;
+}
+
+double cbm_plant_total_mass(const cbm_plant *p)
+{
+    double m = 0.0;
+    for (size_t i = 0; i < p->n; i++)
+        m += p->mpl[i] * p->len[i] + p->pmass[i];
+    return m;
+}
+
+static cbm_frame quat_frame(cbm_quat q)
+{
+    cbm_frame f = {q_rotate(q, v3(1, 0, 0)), q_rotate(q, v3(0, 1, 0)), q_rotate(q, v3(0, 0, 1))};
+    return f;
+}
+
+/* Moment at the distal node of segment i carried by its distal half (world): the continuation
+ * child's joint moment, or the tip moment at a free end. */
+static cbm_vec3 distal_moment(const cbm_plant *p, size_t i)
+{
+    for (size_t c = i + 1; c < p->n; c++)
+        if (p->parent[c] == (int64_t)i && (p->cont[c] & 1))
+            return p->moment[c];
+    bool leaf = p->nchild[i] == 0;
+    return leaf ? v3_scale(p->tipm[i], p->load_scale) : v3(0, 0, 0);
+}
+
+static cbm_vec3 segment_rate(const cbm_plant *p, size_t i)
+{
+    if (p->disc == CBM_MECH_CHAIN)
+        return p->omega[i];
+    cbm_frame f = quat_frame(p->q[i]);
+    cbm_vec3 m = v3_scale(v3_add(p->moment[i], distal_moment(p, i)), 0.5);
+    cbm_vec3 ml = frame_to_local(f, m), c = p->rig[i], r = p->rest[i];
+    return v3(r.x + ml.x / c.x, r.y + ml.y / c.y, r.z + ml.z / c.z);
+}
+
+cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
+{
+    if (!p || !o)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, i));
+    memset(o, 0, sizeof *o);
+    const cbm_ring *r = p->rings.data + p->ring_first[i];
+    size_t nr = p->ring_count[i];
+    o->parent = p->parent[i];
+    o->order = p->order[i];
+    o->continuation = (p->cont[i] & 1) != 0;
+    o->child_count = p->nchild[i];
+    o->length = p->len[i];
+    o->a = r[nr - 1].a;
+    o->b = r[nr - 1].b;
+    o->ring_count = nr;
+    o->area = p->area[i];
+    o->mass_per_length = p->mpl[i];
+    o->rigidity = p->rig[i];
+    o->rest_rate = p->rest[i];
+    o->omega = p->omega[i];
+    o->point_mass = p->pmass[i];
+    o->tip_force = p->tipf[i];
+    o->tip_moment = p->tipm[i];
+    o->orientation = p->q[i];
+    o->frame = quat_frame(p->q[i]);
+    o->proximal = p->pos[i];
+    o->distal = v3_madd(p->pos[i], o->frame.h, p->len[i]);
+    o->carried_mass = p->cmass[i];
+    o->force = p->force[i];
+    o->moment = p->moment[i];
+    o->moment_local = frame_to_local(o->frame, p->moment[i]);
+    double il, iu;
+    cbm_mech_ellipse_moments(o->a, o->b, &il, &iu, NULL);
+    double sl = o->moment_local.y * o->a / il, su = o->moment_local.z * o->b / iu;
+    o->stress = sqrt(sl * sl + su * su);
+    double mor = r[nr - 1].modulus_of_rupture;
+    o->stress_ratio = mor > 0.0 ? o->stress / mor : NAN;
+    double age = 0.0, rw = 0.0, a0 = 0.0;
+    for (size_t k = 0; k < nr; k++) {
+        if (r[k].age > age)
+            age = r[k].age;
+        double ar = CBM_PI * r[k].a * r[k].b;
+        rw += r[k].reaction * (ar - a0);
+        a0 = ar;
+    }
+    o->age = age;
+    o->rate = segment_rate(p, i);
+    o->reaction = a0 > 0.0 ? rw / a0 : 0.0;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_distal_frame(const cbm_plant *p, size_t i, cbm_quat *out)
+{
+    if (!p || !out)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, i));
+    cbm_quat q = p->q[i];
+    if (p->disc == CBM_MECH_STAGGERED) {
+        /* the distal half of the segment bends with the segment's own rest rate plus the
+         * compliance times the moment at the distal node (the continuation child's moment,
+         * or the tip moment at a free end) */
+        cbm_frame f = quat_frame(q);
+        cbm_vec3 md = distal_moment(p, i);
+        cbm_vec3 ml = frame_to_local(f, md);
+        cbm_vec3 c = p->rig[i];
+        cbm_vec3 w =
+            v3(p->rest[i].x + ml.x / c.x, p->rest[i].y + ml.y / c.y, p->rest[i].z + ml.z / c.z);
+        q = q_normalize(q_mul(q, q_from_rotvec(v3_scale(w, 0.5 * p->len[i]))));
+    }
+    *out = q;
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_to_scene(const cbm_plant *p, cbm_scene *scene, int sides)
+{
+    if (!p || !scene || sides < 3)
+        return CBM_E_INVALID;
+    for (size_t i = 0; i < p->n; i++) {
+        cbm_segment_state st;
+        CBM_TRY(cbm_plant_segment(p, i, &st));
+        cbm_part part = cbm_part_default();
+        part.organ = CBM_ORGAN_BRANCH;
+        part.order = st.order;
+        part.segment = (int64_t)i;
+        part.parent = st.parent;
+        part.stress = st.stress;
+        part.stress_ratio = st.stress_ratio;
+        part.age = st.age;
+        part.reaction_wood = st.reaction;
+        CBM_TRY(cbm_scene_begin_part(scene, &part, NULL));
+        cbm_section s0 = {st.proximal, {st.frame.h, st.frame.l, st.frame.u}, st.a, st.b};
+        cbm_section s1 = {st.distal, {st.frame.h, st.frame.l, st.frame.u}, st.a, st.b};
+        CBM_TRY(cbm_scene_add_tube(scene, &s0, &s1, sides, st.child_count == 0));
+    }
+    return CBM_OK;
+}

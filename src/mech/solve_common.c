@@ -1,0 +1,471 @@
+/* The two passes shared by every statics solver, their tangent (forward-mode) linearisation, and
+ * the solve entry point.
+ *
+ * DESIGN (Jirasek et al. 2000 §Mech eqs. 1-22; Taylor-Hell 2005 §6.1-6.2, eqs. 6.3, 6.14-6.24,
+ * 6.35-6.37).
+ *
+ * Frames. Segment i is a rigid rod with orientation quaternion q_i: H = q e_x (heading, along
+ * the segment), L = q e_y, U = q e_z (U along the long semi-axis a of the section). World y is
+ * up. The frame is obtained by composing rotations from the base outward:
+ *     q_i = q_parent * B_i * exp(d_i Omega_i)
+ * where q_parent is the parent's frame (the plant's base orientation for a root), B_i the fixed
+ * branching rotation (divergence about H, deviation about the spun U, roll about the new H:
+ * Taylor-Hell 6.2, applied as exact quaternions, the "text" version of erratum 8 with the
+ * rotation rate of the joint itself), and exp(r) the rotation by the rotation vector r given in
+ * LOCAL components. Because a rotation leaves its own axis fixed, the components of
+ * d_i Omega_i are the same in the frames before and after the joint, so Omega_i (current) and the
+ * rest rate are both stored in LOCAL (H, L, U) components and never need co-rotation (this fixes
+ * erratum 10 of the Taylor-Hell digest, where they were kept in world components).
+ *
+ * Where Omega lives: Omega_i is the rotation rate of the joint at the PROXIMAL node of segment
+ * i; the joint bends over the length d_i:
+ *   staggered (default, second order): d_i = (l_parent + l_i)/2 for the first child of a node
+ *     (the continuation), l_i/2 for a root (the clamp) and for lateral children. The joint is a
+ *     series spring of the two half segments: compliance d/C = l_p/(2 C_p) + l_i/(2 C_i) and
+ *     rest rotation d rest = (l_p rest_p + l_i rest_i)/2, per local component. Each segment's
+ *     weight acts at its centroid. Segment headings then approximate the tangent at segment
+ *     midpoints and node positions P_child = P_parent + l_parent H_parent are the midpoint rule
+ *     of P' = H: error O(h^2).
+ *   chain (the seeds, first order): d_i = l_i with C_i and rest_i; the segment's mass at its
+ *     distal end.
+ *
+ * Forward pass (base to tip, topological order): q_i as above (exp by a short series for small
+ * angles, exact otherwise; renormalised), proximal node P_i = P_parent + l_parent H_parent.
+ *
+ * Backward pass (tip to base): with F_c and M_c of the children already added into segment i's
+ * accumulators,
+ *     F_i = sum_c F_c + f_tip,i + w_i          (w_i = m'_i l_i g, f_tip = m_point g + tip force)
+ *     M_i = sum_c M_c + H_i x (l_i (sum_c F_c + f_tip,i) + lever_i w_i) + tip moment
+ * (moment about the proximal node of all loads carried; lever = l/2 staggered, l chain). This is
+ * the recursion 6.15/6.20 with the sum over children 6.37; it equals the direct sum 6.14 (a test
+ * checks it). The equilibrium of joint i (Jirasek eq. 16 with eq. 12) is
+ *     R_i(Omega) = C_i (Omega_i - rest_i) - M_i^local = 0,      M^local = (M.H, M.L, M.U),
+ * componentwise with C = (C_H, C_L, C_U) (errata 3 and 8: I_L = pi a^3 b/4 resists bending
+ * about L).
+ *
+ * Residual and stopping: relative residual = max_i |R_i| / max_i |M_i| (the characteristic
+ * moment; if every moment is 0, max_i |C_i (Omega_i - rest_i)|, and 0 if that is 0 too).
+ *
+ * Solvers (solve_relax.c, solve_newton.c) use these two passes; one pass = one forward + one
+ * backward sweep, counted the same way for both, including the tangent sweeps of Newton.
+ *
+ * Tangent passes (Jacobian-vector products for Newton-Krylov): perturbing Omega by v, the world
+ * rotation of frame i is dth_i = dth_parent + R_i J_r(d_i Omega_i) d_i v_i (J_r the right
+ * Jacobian of SO(3)); loads are dead (fixed in world), so dM_i = sum_c dM_c + (dth_i x H_i) x
+ * (l_i (F_i - w_i) + lever_i w_i), and dR_i = C_i v_i - R_i^T (dM_i - dth_i x M_i). The result is
+ * the exact derivative of the discrete residual (a test compares it with finite differences).
+ */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+
+/* ---- workspace ---- */
+
+#define WORK_ARRAYS(X)                                                                             \
+    X(dual) X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(tmp)
+
+void cbm__mech_work_free(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+#define FREE(f) cbm__free(p->ctx, w->f, w->cap * sizeof *w->f);
+    WORK_ARRAYS(FREE)
+#undef FREE
+    cbm__free(p->ctx, w->basis, (size_t)w->krylov_cap * w->cap * sizeof(cbm_vec3));
+    int m = w->krylov_cap > 0 ? w->krylov_cap - 1 : 0;
+    cbm__free(p->ctx, w->hess, (size_t)(m + 1) * (size_t)(m + 4) * sizeof(double));
+    memset(w, 0, sizeof *w);
+}
+
+cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
+{
+    cbm__mech_work *w = &p->work;
+    int kc = krylov_dim > 0 ? krylov_dim + 1 : 0;
+    if (p->n <= w->cap && kc <= w->krylov_cap)
+        return CBM_OK;
+    size_t cap = p->n > w->cap ? p->n : w->cap;
+    if (kc < w->krylov_cap)
+        kc = w->krylov_cap;
+    cbm__mech_work_free(p);
+    cbm__mech_work nw;
+    memset(&nw, 0, sizeof nw);
+    bool ok = true;
+#define ALLOC(f)                                                                                   \
+    nw.f = cbm__alloc(p->ctx, cap * sizeof *nw.f);                                                 \
+    ok = ok && nw.f;
+    WORK_ARRAYS(ALLOC)
+#undef ALLOC
+    if (kc > 0) {
+        nw.basis = cbm__alloc(p->ctx, (size_t)kc * cap * sizeof(cbm_vec3));
+        nw.hess = cbm__alloc(p->ctx, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
+        ok = ok && nw.basis && nw.hess;
+    }
+    nw.cap = cap;
+    nw.krylov_cap = kc;
+    p->work = nw;
+    if (!ok) {
+        /* free what was obtained (NULL entries free nothing) */
+#define FREE(f)                                                                                    \
+    if (nw.f)                                                                                      \
+        cbm__free(p->ctx, nw.f, cap * sizeof *nw.f);
+        WORK_ARRAYS(FREE)
+#undef FREE
+        if (nw.basis)
+            cbm__free(p->ctx, nw.basis, (size_t)kc * cap * sizeof(cbm_vec3));
+        if (nw.hess)
+            cbm__free(p->ctx, nw.hess, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
+        memset(&p->work, 0, sizeof p->work);
+        return CBM_E_NOMEM;
+    }
+    return CBM_OK;
+}
+
+/* ---- prepare ---- */
+
+void cbm__mech_prepare(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    double s = p->load_scale;
+    cbm_vec3 g = v3_scale(p->gravity, s);
+    bool stag = p->disc == CBM_MECH_STAGGERED;
+    for (size_t i = 0; i < p->n; i++) {
+        double l = p->len[i];
+        int64_t pa = p->parent[i];
+        w->wown[i] = v3_scale(g, p->mpl[i] * l);
+        w->ftip[i] = v3_add(v3_scale(g, p->pmass[i]), v3_scale(p->tipf[i], s));
+        w->mtip[i] = v3_scale(p->tipm[i], s);
+        if (!stag) {
+            w->dual[i] = l;
+            w->cj[i] = p->rig[i];
+            w->rj[i] = p->rest[i];
+            w->lever[i] = l;
+        } else if (pa < 0 || !(p->cont[i] & 1)) {
+            w->dual[i] = 0.5 * l;
+            w->cj[i] = p->rig[i];
+            w->rj[i] = p->rest[i];
+            w->lever[i] = 0.5 * l;
+        } else {
+            double lp = p->len[pa];
+            double d = 0.5 * (lp + l);
+            cbm_vec3 cp = p->rig[pa], ci = p->rig[i];
+            cbm_vec3 rp = p->rest[pa], ri = p->rest[i];
+            w->dual[i] = d;
+            w->cj[i] =
+                v3(d / (0.5 * lp / cp.x + 0.5 * l / ci.x), d / (0.5 * lp / cp.y + 0.5 * l / ci.y),
+                   d / (0.5 * lp / cp.z + 0.5 * l / ci.z));
+            w->rj[i] = v3_scale(v3_add(v3_scale(rp, 0.5 * lp), v3_scale(ri, 0.5 * l)), 1.0 / d);
+            w->lever[i] = 0.5 * l;
+        }
+    }
+    /* carried mass (independent of the shape) */
+    for (size_t i = p->n; i-- > 0;)
+        p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
+    for (size_t i = p->n; i-- > 0;)
+        if (p->parent[i] >= 0)
+            p->cmass[p->parent[i]] += p->cmass[i];
+}
+
+/* ---- the passes ---- */
+
+/* exp of a local rotation vector as a quaternion: short series for small angles (error below
+ * 3e-17 for |r| < 0.2), sin/cos otherwise */
+static inline cbm_quat qexp(cbm_vec3 r)
+{
+    double a2 = r.x * r.x + r.y * r.y + r.z * r.z;
+    double c, k;
+    if (a2 < 0.04) {
+        double h2 = 0.25 * a2;
+        c = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))));
+        k = 0.5 * (1.0 + h2 * (-1.0 / 6.0 +
+                               h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0)))));
+    } else {
+        double a = sqrt(a2);
+        c = cos(0.5 * a);
+        k = sin(0.5 * a) / a;
+    }
+    cbm_quat q = {c, r.x * k, r.y * k, r.z * k};
+    return q;
+}
+
+static inline cbm_vec3 q_h(cbm_quat q)
+{
+    return v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
+              2.0 * (q.x * q.z - q.w * q.y));
+}
+
+static inline void q_frame(cbm_quat q, cbm_vec3 *h, cbm_vec3 *l, cbm_vec3 *u)
+{
+    double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    *h = v3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy));
+    *l = v3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx));
+    *u = v3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy));
+}
+
+static inline cbm_quat qnorm(cbm_quat q)
+{
+    double n2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    /* one Newton step of 1/sqrt around 1 is enough to keep |q| = 1 to round-off, since the
+     * product of unit quaternions drifts by O(1e-16) per step */
+    double s = 1.5 - 0.5 * n2;
+    cbm_quat r = {q.w * s, q.x * s, q.y * s, q.z * s};
+    return r;
+}
+
+void cbm__mech_forward(cbm_plant *p)
+{
+    const size_t n = p->n;
+    const int64_t *restrict par = p->parent;
+    const double *restrict len = p->len;
+    const double *restrict dual = p->work.dual;
+    const cbm_quat *restrict br = p->branch;
+    const cbm_vec3 *restrict om = p->omega;
+    cbm_quat *restrict q = p->q;
+    cbm_vec3 *restrict pos = p->pos;
+    cbm_vec3 *restrict f = p->force;
+    cbm_vec3 *restrict m = p->moment;
+    for (size_t i = 0; i < n; i++) {
+        int64_t pa = par[i];
+        cbm_quat qa;
+        cbm_vec3 pp;
+        if (pa < 0) {
+            qa = p->base_q;
+            pp = p->base_pos;
+        } else {
+            qa = q[pa];
+            pp = v3_madd(pos[pa], q_h(qa), len[pa]);
+        }
+        cbm_quat b = br[i];
+        if (b.w != 1.0)
+            qa = q_mul(qa, b);
+        q[i] = qnorm(q_mul(qa, qexp(v3_scale(om[i], dual[i]))));
+        pos[i] = pp;
+        f[i] = v3(0, 0, 0);
+        m[i] = v3(0, 0, 0);
+    }
+}
+
+double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax_out,
+                          double *sumsq_out)
+{
+    const cbm__mech_work *w = &p->work;
+    const int64_t *restrict par = p->parent;
+    const double *restrict len = p->len;
+    const double *restrict lever = w->lever;
+    const cbm_vec3 *restrict wown = w->wown, *restrict ftip = w->ftip, *restrict mtip = w->mtip;
+    const cbm_vec3 *restrict cj = w->cj, *restrict rj = w->rj;
+    const cbm_quat *restrict q = p->q;
+    cbm_vec3 *restrict f = p->force;
+    cbm_vec3 *restrict m = p->moment;
+    cbm_vec3 *restrict om = p->omega;
+    double rmax = 0.0, mmax = 0.0, emax = 0.0, sum = 0.0, ss = 0.0;
+    for (size_t i = p->n; i-- > 0;) {
+        cbm_vec3 h, l, u;
+        q_frame(q[i], &h, &l, &u);
+        cbm_vec3 fd = v3_add(f[i], ftip[i]);
+        cbm_vec3 arm = v3_add(v3_scale(fd, len[i]), v3_scale(wown[i], lever[i]));
+        cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), mtip[i]);
+        cbm_vec3 fi = v3_add(fd, wown[i]);
+        f[i] = fi;
+        m[i] = mi;
+        int64_t pa = par[i];
+        if (pa >= 0) {
+            f[pa] = v3_add(f[pa], fi);
+            m[pa] = v3_add(m[pa], mi);
+        }
+        cbm_vec3 ml = v3(v3_dot(mi, h), v3_dot(mi, l), v3_dot(mi, u));
+        cbm_vec3 c = cj[i], o = om[i], r0 = rj[i];
+        cbm_vec3 e = v3(c.x * (o.x - r0.x), c.y * (o.y - r0.y), c.z * (o.z - r0.z));
+        cbm_vec3 r = v3_sub(e, ml);
+        double rn = v3_norm2(r), mn = v3_norm2(mi), en = v3_norm2(e);
+        sum += rn + mn;
+        ss += rn;
+        if (rn > rmax)
+            rmax = rn;
+        if (mn > mmax)
+            mmax = mn;
+        if (en > emax)
+            emax = en;
+        if (res)
+            res[i] = r;
+        if (alpha > 0.0) {
+            cbm_vec3 t = v3(r0.x + ml.x / c.x, r0.y + ml.y / c.y, r0.z + ml.z / c.z);
+            om[i] = v3_add(v3_scale(o, 1.0 - alpha), v3_scale(t, alpha));
+        }
+    }
+    if (!isfinite(sum))
+        return NAN;
+    if (mmax == 0.0)
+        mmax = emax;
+    *mmax_out = sqrt(mmax);
+    if (sumsq_out)
+        *sumsq_out = ss;
+    return sqrt(rmax);
+}
+
+double cbm__mech_relres(double rmax, double mmax, double *char_moment)
+{
+    if (char_moment)
+        *char_moment = mmax;
+    if (rmax == 0.0)
+        return 0.0;
+    return mmax > 0.0 ? rmax / mmax : INFINITY;
+}
+
+cbm_status cbm__mech_report_nonfinite(cbm_plant *p)
+{
+    for (size_t i = 0; i < p->n; i++) {
+        const char *what = NULL;
+        if (!v3_isfinite(p->omega[i]))
+            what = "rotation rate";
+        else if (!v3_isfinite(p->pos[i]))
+            what = "position";
+        else if (!isfinite(p->q[i].w + p->q[i].x + p->q[i].y + p->q[i].z))
+            what = "orientation";
+        else if (!v3_isfinite(p->force[i]))
+            what = "force";
+        else if (!v3_isfinite(p->moment[i]))
+            what = "moment";
+        if (what)
+            return cbm__fail(p->ctx, CBM_E_NONFINITE, "segment %zu: the %s became NaN or infinite",
+                             i, what);
+    }
+    return cbm__fail(p->ctx, CBM_E_NONFINITE, "the residual became NaN or infinite");
+}
+
+void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    const int64_t *restrict par = p->parent;
+    const double *restrict dual = w->dual;
+    const cbm_vec3 *restrict om = p->omega;
+    const cbm_quat *restrict q = p->q;
+    cbm_vec3 *restrict dth = w->dth;
+    cbm_vec3 *restrict dm = w->dm;
+    for (size_t i = 0; i < n; i++) {
+        cbm_vec3 r = v3_scale(om[i], dual[i]);
+        cbm_vec3 x = v3_scale(v[i], dual[i]);
+        double t2 = v3_norm2(r), c1, c2;
+        if (t2 < 1e-4) {
+            c1 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
+            c2 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
+        } else {
+            double t = sqrt(t2);
+            c1 = (1.0 - cos(t)) / t2;
+            c2 = (t - sin(t)) / (t2 * t);
+        }
+        cbm_vec3 rx = v3_cross(r, x);
+        cbm_vec3 jx = v3_add(v3_sub(x, v3_scale(rx, c1)), v3_scale(v3_cross(r, rx), c2));
+        cbm_vec3 wj = q_rotate(q[i], jx);
+        int64_t pa = par[i];
+        dth[i] = pa < 0 ? wj : v3_add(dth[pa], wj);
+        dm[i] = v3(0, 0, 0);
+    }
+    const double *restrict len = p->len;
+    const double *restrict lever = w->lever;
+    const cbm_vec3 *restrict wown = w->wown;
+    const cbm_vec3 *restrict cj = w->cj;
+    const cbm_vec3 *restrict f = p->force;
+    const cbm_vec3 *restrict m = p->moment;
+    for (size_t i = n; i-- > 0;) {
+        cbm_vec3 h, l, u;
+        q_frame(q[i], &h, &l, &u);
+        cbm_vec3 arm = v3_add(v3_scale(v3_sub(f[i], wown[i]), len[i]), v3_scale(wown[i], lever[i]));
+        cbm_vec3 dh = v3_cross(dth[i], h);
+        cbm_vec3 dmi = v3_add(dm[i], v3_cross(dh, arm));
+        dm[i] = dmi;
+        int64_t pa = par[i];
+        if (pa >= 0)
+            dm[pa] = v3_add(dm[pa], dmi);
+        cbm_vec3 z = v3_sub(dmi, v3_cross(dth[i], m[i]));
+        cbm_vec3 c = cj[i];
+        out[i] = v3(c.x * v[i].x - v3_dot(z, h), c.y * v[i].y - v3_dot(z, l),
+                    c.z * v[i].z - v3_dot(z, u));
+    }
+}
+
+/* ---- entry points ---- */
+
+static cbm_status check_plant(cbm_plant *p)
+{
+    if (p->n == 0)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "plant: no segments to solve");
+    for (size_t i = 0; i < p->n; i++) {
+        cbm_vec3 c = p->rig[i];
+        if (!(c.x > 0.0 && c.y > 0.0 && c.z > 0.0 && isfinite(c.x + c.y + c.z)))
+            return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu: rigidity is zero or not finite",
+                             i);
+        if (!v3_isfinite(p->omega[i]))
+            return cbm__fail(p->ctx, CBM_E_NONFINITE, "segment %zu: rotation rate is not finite",
+                             i);
+    }
+    return CBM_OK;
+}
+
+cbm_solve_def cbm_solve_def_default(void)
+{
+    cbm_solve_def d;
+    memset(&d, 0, sizeof d);
+    d.solver = CBM_MECH_NEWTON;
+    d.tolerance = 1e-8;
+    d.alpha = 0.5;
+    d.krylov_dim = 20;
+    d.warm_start = true;
+    return d;
+}
+
+cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    CBM_TRY(check_plant(p));
+    CBM_TRY(cbm__mech_work_reserve(p, 0));
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    cbm__mech_forward(p);
+    double mmax;
+    double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
+    if (!isfinite(r))
+        return cbm__mech_report_nonfinite(p);
+    if (residual)
+        *residual = cbm__mech_relres(r, mmax, NULL);
+    return CBM_OK;
+}
+
+cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_stats *stats)
+{
+    cbm_solve_stats st;
+    memset(&st, 0, sizeof st);
+    if (stats)
+        *stats = st;
+    if (!p)
+        return CBM_E_INVALID;
+    cbm_solve_def d = def ? *def : cbm_solve_def_default();
+    if (!(isfinite(d.tolerance) && d.tolerance > 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: tolerance must be positive");
+    if (d.solver == CBM_MECH_RELAX && !(isfinite(d.alpha) && d.alpha > 0.0 && d.alpha <= 1.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: alpha must be in (0, 1]");
+    if (d.solver == CBM_MECH_NEWTON && (d.krylov_dim < 1 || d.krylov_dim > 500))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: krylov_dim must be in 1..500");
+    CBM_TRY(check_plant(p));
+    size_t lim = cbm_context_limits(p->ctx)->max_passes;
+    size_t maxp = d.max_passes ? d.max_passes : lim;
+    if (lim && maxp > lim)
+        maxp = lim;
+    if (maxp < 2)
+        maxp = 2;
+    CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 0));
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    if (!d.warm_start)
+        for (size_t i = 0; i < p->n; i++)
+            p->omega[i] = p->work.rj[i];
+    cbm_status s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
+                                              : cbm__mech_solve_newton(p, &d, maxp, &st);
+    p->load_scale = 1.0;
+    if (stats)
+        *stats = st;
+    return s;
+}

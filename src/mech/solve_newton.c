@@ -1,0 +1,290 @@
+/* The fast statics solver: inexact Newton-Krylov on the joint equilibrium
+ *     R(Omega) = C (Omega - rest) - M_local(Omega) = 0      (3 unknowns per segment),
+ * with the same forward and backward passes as the relaxation (solve_common.c).
+ *
+ * - Linear solves: restarted GMRES (Saad & Schultz 1986), modified Gram-Schmidt, Givens
+ *   rotations, RIGHT-preconditioned by the elastic stiffness S = diag(C): we solve
+ *   (J S^-1) y = -R and take the step S^-1 y. J S^-1 = I - K S^-1 (K the load stiffness), close
+ *   to the identity for moderate loads, so few Krylov iterations are needed.
+ * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
+ *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
+ * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
+ * - Globalisation: backtracking line search on |R|_2 (Armijo, c = 1e-4, halving up to 12 times);
+ *   if it fails or Newton stalls, load continuation: the loads are scaled by lambda, restarting
+ *   from the last converged level (lambda = 0 is the rest state), halving the increment on
+ *   failure and doubling it on success; intermediate levels are solved to 1e-4.
+ * All vectors are in the plant's workspace, allocated before the iteration starts.
+ */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+
+typedef struct nk {
+    cbm_plant *p;
+    size_t n3; /* 3 n */
+    size_t max_passes;
+    cbm_solve_stats *st;
+    double rel;  /* relative residual of the current state */
+    double norm; /* |R|_2 of the current state */
+    double rmax, mmax;
+} nk;
+
+static double dot(const double *a, const double *b, size_t n)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < n; i++)
+        s += a[i] * b[i];
+    return s;
+}
+
+/* Evaluates R at the current Omega into work.res; false if non-finite. */
+static bool evaluate(nk *k)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_forward(p);
+    double ss = 0.0;
+    double r = cbm__mech_backward(p, 0.0, p->work.res, &k->mmax, &ss);
+    k->st->passes++;
+    if (!isfinite(r))
+        return false;
+    k->rmax = r;
+    k->norm = sqrt(ss);
+    k->rel = cbm__mech_relres(r, k->mmax, &k->st->char_moment);
+    return true;
+}
+
+/* GMRES for (J S^-1) y = -res; the step S^-1 y goes to work.step. Returns false when the pass
+ * budget ran out. */
+static bool gmres(nk *k, double eta, int m)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n3 = k->n3, n = p->n;
+    double *V = (double *)w->basis;
+    double *H = w->hess;                  /* (m+1) x m, column-major: H[j*(m+1) + i] */
+    double *cs = H + (size_t)(m + 1) * m; /* m */
+    double *sn = cs + m;                  /* m */
+    double *g = sn + m;                   /* m + 1 */
+    double *x = (double *)w->step;        /* accumulated y (preconditioned variable) */
+    double *t = (double *)w->tmp;
+    const cbm_vec3 *cj = w->cj;
+    memset(x, 0, n3 * sizeof *x);
+    double bnorm = k->norm;
+    if (bnorm == 0.0)
+        return true;
+    double target = eta * bnorm;
+    /* r0 = -res (x = 0) */
+    const double *res = (const double *)w->res;
+    double beta = bnorm;
+    for (size_t i = 0; i < n3; i++)
+        V[i] = -res[i] / beta;
+    for (int cycle = 0; cycle < 4; cycle++) {
+        memset(g, 0, (size_t)(m + 1) * sizeof *g);
+        g[0] = beta;
+        int j = 0;
+        for (; j < m; j++) {
+            if (k->st->passes + 2 >= k->max_passes)
+                return false;
+            double *vj = V + (size_t)j * n3, *vn = V + (size_t)(j + 1) * n3;
+            /* t = S^-1 v_j; v_{j+1} = J t */
+            for (size_t i = 0; i < n; i++) {
+                t[3 * i] = vj[3 * i] / cj[i].x;
+                t[3 * i + 1] = vj[3 * i + 1] / cj[i].y;
+                t[3 * i + 2] = vj[3 * i + 2] / cj[i].z;
+            }
+            cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)vn);
+            k->st->passes++;
+            k->st->krylov_iterations++;
+            double *hc = H + (size_t)j * (m + 1);
+            for (int i = 0; i <= j; i++) {
+                double *vi = V + (size_t)i * n3;
+                double h = dot(vn, vi, n3);
+                hc[i] = h;
+                for (size_t q = 0; q < n3; q++)
+                    vn[q] -= h * vi[q];
+            }
+            double hn = sqrt(dot(vn, vn, n3));
+            hc[j + 1] = hn;
+            if (hn > 0.0)
+                for (size_t q = 0; q < n3; q++)
+                    vn[q] /= hn;
+            for (int i = 0; i < j; i++) {
+                double a = hc[i], b = hc[i + 1];
+                hc[i] = cs[i] * a + sn[i] * b;
+                hc[i + 1] = -sn[i] * a + cs[i] * b;
+            }
+            double a = hc[j], b = hc[j + 1], r = hypot(a, b);
+            cs[j] = r > 0.0 ? a / r : 1.0;
+            sn[j] = r > 0.0 ? b / r : 0.0;
+            hc[j] = r;
+            hc[j + 1] = 0.0;
+            g[j + 1] = -sn[j] * g[j];
+            g[j] = cs[j] * g[j];
+            if (fabs(g[j + 1]) <= target || hn == 0.0) {
+                j++;
+                break;
+            }
+        }
+        /* back substitution: coefficients into g[0..j-1] */
+        for (int i = j - 1; i >= 0; i--) {
+            double s = g[i];
+            for (int c = i + 1; c < j; c++)
+                s -= H[(size_t)c * (m + 1) + i] * g[c];
+            double d = H[(size_t)i * (m + 1) + i];
+            g[i] = d != 0.0 ? s / d : 0.0;
+        }
+        for (int i = 0; i < j; i++) {
+            const double *vi = V + (size_t)i * n3;
+            for (size_t q = 0; q < n3; q++)
+                x[q] += g[i] * vi[q];
+        }
+        /* true residual of the linear system: -res - J S^-1 x */
+        if (k->st->passes + 2 >= k->max_passes)
+            break;
+        for (size_t i = 0; i < n; i++) {
+            t[3 * i] = x[3 * i] / cj[i].x;
+            t[3 * i + 1] = x[3 * i + 1] / cj[i].y;
+            t[3 * i + 2] = x[3 * i + 2] / cj[i].z;
+        }
+        cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)V);
+        k->st->passes++;
+        for (size_t q = 0; q < n3; q++)
+            V[q] = -res[q] - V[q];
+        beta = sqrt(dot(V, V, n3));
+        if (beta <= target || beta == 0.0)
+            break;
+        for (size_t q = 0; q < n3; q++)
+            V[q] /= beta;
+    }
+    /* step = S^-1 x */
+    for (size_t i = 0; i < n; i++) {
+        x[3 * i] /= cj[i].x;
+        x[3 * i + 1] /= cj[i].y;
+        x[3 * i + 2] /= cj[i].z;
+    }
+    return true;
+}
+
+typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE } nk_result;
+
+/* Newton iterations at the current load level until rel < tol. */
+static nk_result newton_level(nk *k, double tol, int m)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n3 = k->n3;
+    double *om = (double *)p->omega;
+    double *step = (double *)w->step;
+    if (!evaluate(k))
+        return NK_NONFINITE;
+    double eta = 0.1, prev = k->norm;
+    for (int it = 0; it < 60; it++) {
+        if (k->rel < tol)
+            return NK_DONE;
+        if (k->st->passes + 3 >= k->max_passes)
+            return NK_BUDGET;
+        if (!gmres(k, eta, m))
+            return NK_BUDGET;
+        k->st->newton_steps++;
+        /* line search */
+        double f0 = k->norm, lam = 1.0;
+        bool ok = false;
+        for (int ls = 0; ls < 12; ls++) {
+            for (size_t q = 0; q < n3; q++)
+                om[q] += lam * step[q];
+            if (k->st->passes + 1 >= k->max_passes)
+                return NK_BUDGET;
+            bool fin = evaluate(k);
+            if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
+                ok = true;
+                break;
+            }
+            for (size_t q = 0; q < n3; q++)
+                om[q] -= lam * step[q];
+            lam *= 0.5;
+        }
+        if (!ok) {
+            if (!evaluate(k)) /* restore the state of the unmoved Omega */
+                return NK_NONFINITE;
+            return NK_STALL;
+        }
+        /* Eisenstat-Walker choice 2 */
+        double ratio = k->norm / prev;
+        double e = 0.9 * ratio * ratio, safe = 0.9 * eta * eta;
+        if (safe > 0.1 && safe > e)
+            e = safe;
+        eta = e < 0.1 ? e : 0.1;
+        if (eta < 1e-6)
+            eta = 1e-6;
+        prev = k->norm;
+    }
+    return NK_STALL;
+}
+
+cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
+                                  cbm_solve_stats *st)
+{
+    nk k;
+    memset(&k, 0, sizeof k);
+    k.p = p;
+    k.n3 = 3 * p->n;
+    k.max_passes = max_passes;
+    k.st = st;
+    int m = def->krylov_dim;
+    double tol = def->tolerance;
+    cbm__mech_work *w = &p->work;
+    const char *why = "the pass budget ran out";
+
+    /* first try the full load from the starting Omega */
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    st->continuation_steps = 1;
+    nk_result r = newton_level(&k, tol, m);
+    if (r == NK_STALL) {
+        /* load continuation from the rest state */
+        double done = 0.0, dl = 0.5;
+        for (size_t i = 0; i < p->n; i++)
+            w->save[i] = w->rj[i];
+        for (;;) {
+            double lam = done + dl < 1.0 ? done + dl : 1.0;
+            memcpy(p->omega, w->save, p->n * sizeof *p->omega);
+            p->load_scale = lam;
+            cbm__mech_prepare(p);
+            st->continuation_steps++;
+            r = newton_level(&k, lam < 1.0 ? (tol > 1e-4 ? tol : 1e-4) : tol, m);
+            if (r == NK_DONE) {
+                if (lam >= 1.0)
+                    break;
+                done = lam;
+                memcpy(w->save, p->omega, p->n * sizeof *p->omega);
+                dl *= 2.0;
+            } else if (r == NK_STALL) {
+                dl *= 0.5;
+                if (dl < 1e-6) {
+                    why = "Newton stalled even with small load steps";
+                    break;
+                }
+            } else
+                break;
+        }
+        if (r != NK_DONE) {
+            /* leave a consistent state at full load for the caller to read */
+            p->load_scale = 1.0;
+            cbm__mech_prepare(p);
+            if (r != NK_NONFINITE && !evaluate(&k))
+                r = NK_NONFINITE;
+        }
+    }
+    p->load_scale = 1.0;
+    if (r == NK_NONFINITE)
+        return cbm__mech_report_nonfinite(p);
+    st->residual = k.rel;
+    if (r == NK_DONE)
+        return CBM_OK;
+    if (r == NK_STALL && st->continuation_steps == 1)
+        why = "Newton stalled";
+    return cbm__fail(p->ctx, CBM_E_NOT_CONVERGED,
+                     "fast solver: relative residual %.3g after %zu passes (tolerance %.3g): %s",
+                     k.rel, st->passes, tol, why);
+}

@@ -1,0 +1,485 @@
+/* The mesh and table writers: OBJ + MTL, PLY, glTF binary (static and animated), SVG, parts
+ * CSV, the dispatch by extension, disk errors (nothing left behind) and out-of-memory loops. */
+#define _POSIX_C_SOURCE 200809L
+#include "io_util.h"
+
+#include <dirent.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+typedef cbm_status (*cbm_write_fn)(cbm_context *, const cbm_scene *, const char *,
+                                   const cbm_write_options *);
+
+static cbm_scene *demo(cbm_context *ctx, size_t segments, bool ground)
+{
+    cbm_scene *s = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &s));
+    CHECK_OK(cbm_scene_demo_tree(ctx, s, segments, 6, ground, 3));
+    return s;
+}
+
+static size_t kept_triangles(const cbm_scene *s, bool ground)
+{
+    size_t n = 0;
+    for (size_t t = 0; t < cbm_scene_triangle_count(s); t++)
+        n += ground || cbm_scene_parts(s)[cbm_scene_triangle_parts(s)[t]].organ != CBM_ORGAN_GROUND;
+    return n;
+}
+
+TEST(obj_counts_groups_and_materials)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = demo(ctx, 300, true);
+    for (int ground = 0; ground < 2; ground++) {
+        cbm_write_options o = cbm_write_options_default();
+        o.ground = ground;
+        CHECK_OK(cbm_scene_write(ctx, s, io_path("tree.obj"), &o));
+        char *obj = io_read_all(io_path("tree.obj"), NULL);
+        char *mtl = io_read_all(io_path("tree.mtl"), NULL);
+        CHECK(obj && mtl);
+        if (!obj || !mtl)
+            break;
+        CHECK_EQ_INT(io_count(obj, "\nf "), kept_triangles(s, ground));
+        CHECK_EQ_INT(io_count(obj, "\nv "), io_count(obj, "\nvn "));
+        CHECK(strstr(obj, "mtllib tree.mtl\n") != NULL);
+        CHECK(strstr(obj, "\ng branch_order_0\n") != NULL);
+        CHECK(strstr(obj, "\ng branch_order_2\n") != NULL);
+        CHECK(strstr(obj, "\ng leaf\n") != NULL);
+        CHECK(strstr(obj, "\ng fruit\n") != NULL);
+        CHECK((strstr(obj, "\ng ground\n") != NULL) == (ground == 1));
+        /* every material used is defined */
+        CHECK(io_count(mtl, "newmtl ") >= 3);
+        for (const char *u = strstr(obj, "usemtl "); u; u = strstr(u + 1, "usemtl ")) {
+            char name[64], def[80];
+            CHECK(sscanf(u, "usemtl %63s", name) == 1);
+            snprintf(def, sizeof def, "newmtl %s\n", name);
+            CHECK_MSG(strstr(mtl, def) != NULL, "material %s not defined", name);
+        }
+        /* face indices in range */
+        size_t nv = io_count(obj, "\nv ");
+        for (const char *f = strstr(obj, "\nf "); f; f = strstr(f + 1, "\nf ")) {
+            unsigned a, b, c;
+            CHECK(sscanf(f, "\nf %u//%*u %u//%*u %u//%*u", &a, &b, &c) == 3);
+            CHECK(a >= 1 && b >= 1 && c >= 1 && a <= nv && b <= nv && c <= nv);
+        }
+        free(obj);
+        free(mtl);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+static uint32_t rd32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static float rdf(const unsigned char *p)
+{
+    uint32_t u = rd32(p);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+TEST(ply_binary_layout_and_values)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    CHECK_OK(cbm_scene_write(ctx, s, io_path("small.ply"), NULL));
+    size_t len = 0;
+    char *b = io_read_all(io_path("small.ply"), &len);
+    CHECK(b != NULL);
+    if (b) {
+        size_t nv = 0, nf = 0;
+        CHECK(strncmp(b, "ply\nformat binary_little_endian 1.0\n", 36) == 0);
+        const char *ev = strstr(b, "element vertex "), *ef = strstr(b, "element face ");
+        CHECK(ev && ef && sscanf(ev, "element vertex %zu", &nv) == 1 &&
+              sscanf(ef, "element face %zu", &nf) == 1);
+        const char *end = strstr(b, "end_header\n");
+        CHECK(end != NULL);
+        size_t head = (size_t)(end - b) + 11;
+        CHECK_EQ_INT(nv, cbm_scene_vertex_count(s));
+        CHECK_EQ_INT(nf, cbm_scene_triangle_count(s));
+        CHECK_EQ_INT(len, head + 52 * nv + 17 * nf);
+        const unsigned char *v0 = (const unsigned char *)b + head;
+        const cbm_scene_vertex *sv = cbm_scene_vertices(s);
+        CHECK(rdf(v0) == sv[0].p[0] && rdf(v0 + 4) == sv[0].p[1] && rdf(v0 + 8) == sv[0].p[2]);
+        CHECK_NEAR(rdf(v0 + 28), 0.5, 1e-7); /* stress ratio of the tube */
+        CHECK_NEAR(rdf(v0 + 32), 3.0, 1e-7); /* age */
+        CHECK_EQ_INT(rd32(v0 + 44), 7);      /* segment */
+        const unsigned char *f0 = v0 + 52 * nv;
+        CHECK_EQ_INT(f0[0], 3);
+        CHECK_EQ_INT(rd32(f0 + 1), cbm_scene_triangles(s)[0]);
+        /* the last face is the fruit's: part 2 */
+        CHECK_EQ_INT(rd32(f0 + 17 * (nf - 1) + 13), 2);
+        free(b);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* Minimal GLB checks: header, chunk layout, JSON content. Full validation is the Khronos
+ * validator's job in the CLI tests. */
+static char *glb_json(const char *path, size_t *file_len)
+{
+    size_t len = 0;
+    char *b = io_read_all(path, &len);
+    if (!b)
+        return NULL;
+    const unsigned char *u = (const unsigned char *)b;
+    CHECK(len >= 20 && memcmp(b, "glTF", 4) == 0);
+    CHECK_EQ_INT(rd32(u + 4), 2);
+    CHECK_EQ_INT(rd32(u + 8), len);
+    uint32_t jl = rd32(u + 12);
+    CHECK(memcmp(b + 16, "JSON", 4) == 0);
+    CHECK(jl % 4 == 0 && 20 + jl <= len);
+    if (20 + jl < len) {
+        uint32_t bl = rd32(u + 20 + jl);
+        CHECK(memcmp(b + 24 + jl, "BIN\0", 4) == 0);
+        CHECK_EQ_INT(28 + jl + bl, len);
+    }
+    char *json = malloc(jl + 1);
+    memcpy(json, b + 20, jl);
+    json[jl] = '\0';
+    free(b);
+    *file_len = len;
+    return json;
+}
+
+/* The value of the k-th element of the accessor an attribute names, found through the JSON
+ * (accessors and bufferViews are written as flat arrays of objects in a fixed key order). */
+static float glb_attribute(const char *path, const char *attr, size_t k)
+{
+    size_t len = 0;
+    char *b = io_read_all(path, &len), *json = b ? b + 20 : NULL;
+    float v = NAN;
+    char key[64];
+    snprintf(key, sizeof key, "\"%s\":", attr);
+    const char *at = json ? strstr(json, key) : NULL;
+    const char *acc = json ? strstr(json, "\"accessors\":[") : NULL;
+    const char *views = json ? strstr(json, "\"bufferViews\":[") : NULL;
+    if (at && acc && views) {
+        long ai = strtol(at + strlen(key), NULL, 10);
+        const char *a = acc;
+        for (long i = 0; i <= ai && a; i++)
+            a = strstr(a + 1, "{\"bufferView\":");
+        long vi = a ? strtol(a + 14, NULL, 10) : -1;
+        const char *w = views;
+        for (long i = 0; i <= vi && w; i++)
+            w = strstr(w + 1, "{\"buffer\":0,\"byteOffset\":");
+        if (w) {
+            long off = strtol(w + 25, NULL, 10);
+            uint32_t jl = rd32((const unsigned char *)b + 12);
+            size_t pos = 28 + jl + (size_t)off + 4 * k;
+            if (pos + 4 <= len)
+                v = rdf((const unsigned char *)b + pos);
+        }
+    }
+    free(b);
+    return v;
+}
+
+TEST(glb_per_segment_attributes)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    CHECK_OK(cbm_scene_write(ctx, s, io_path("small.glb"), NULL));
+    /* the first mesh is branch order 0: the tube with stress ratio 0.5, age 3, segment 7 */
+    for (size_t k = 0; k < 10; k++) {
+        CHECK(glb_attribute(io_path("small.glb"), "_STRESS_RATIO", k) == 0.5f);
+        CHECK(glb_attribute(io_path("small.glb"), "_AGE", k) == 3.0f);
+        CHECK(glb_attribute(io_path("small.glb"), "_REACTION_WOOD", k) == 0.25f);
+        CHECK(glb_attribute(io_path("small.glb"), "_ORDER", k) == 0.0f);
+        CHECK(glb_attribute(io_path("small.glb"), "_SEGMENT", k) == 7.0f);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+TEST(glb_nodes_attributes_and_animation)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *fr[3];
+    for (int k = 0; k < 3; k++)
+        fr[k] = demo(ctx, 40 + 120 * (size_t)k, true);
+    CHECK_OK(cbm_scene_write(ctx, fr[2], io_path("tree.glb"), NULL));
+    size_t len;
+    char *j = glb_json(io_path("tree.glb"), &len);
+    CHECK(j != NULL);
+    if (j) {
+        CHECK(strstr(j, "\"name\":\"branch order 0\"") && strstr(j, "\"name\":\"branch order 2\""));
+        CHECK(strstr(j, "\"name\":\"leaf\"") && strstr(j, "\"name\":\"fruit\""));
+        CHECK(strstr(j, "\"extras\":{\"organ\":\"branch\",\"order\":1}"));
+        CHECK(strstr(j, "\"_STRESS_RATIO\":") && strstr(j, "\"_AGE\":") &&
+              strstr(j, "\"_ORDER\":") && strstr(j, "\"_SEGMENT\":"));
+        CHECK(strstr(j, "\"NORMAL\":") && strstr(j, "\"COLOR_0\":"));
+        CHECK(strstr(j, "\"animations\"") == NULL);
+        free(j);
+    }
+    cbm_write_options o = cbm_write_options_default();
+    o.frames = (const cbm_scene *const *)fr;
+    o.frame_count = 3;
+    o.frame_time = 0.25;
+    CHECK_OK(cbm_scene_write(ctx, NULL, io_path("growth.glb"), &o));
+    j = glb_json(io_path("growth.glb"), &len);
+    CHECK(j != NULL);
+    if (j) {
+        CHECK(strstr(j, "\"name\":\"frame 0\"") && strstr(j, "\"name\":\"frame 2\""));
+        CHECK_EQ_INT(io_count(j, "\"interpolation\":\"STEP\""), 3);
+        CHECK_EQ_INT(io_count(j, "\"path\":\"scale\""), 3);
+        CHECK_EQ_INT(io_count(j, "\"scale\":[0,0,0]"), 2); /* the last frame shows statically */
+        CHECK(strstr(j, "\"max\":[0.5]") != NULL);         /* frame times 0, 0.25, 0.5 s */
+        free(j);
+    }
+    o.frame_time = 0;
+    CHECK_STATUS(cbm_scene_write(ctx, NULL, io_path("bad.glb"), &o), CBM_E_INVALID);
+    for (int k = 0; k < 3; k++)
+        cbm_scene_destroy(fr[k]);
+    test_ctx_end(ctx);
+}
+
+/* Frame by frame, refilling one scene, gives the same file as the list of frames. */
+TEST(glb_animation_frame_by_frame)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *fr[3];
+    for (int k = 0; k < 3; k++)
+        fr[k] = demo(ctx, 30 + 50 * (size_t)k, true);
+    cbm_write_options o = cbm_write_options_default();
+    o.frames = (const cbm_scene *const *)fr;
+    o.frame_count = 3;
+    o.color_by = CBM_COLOR_AGE;
+    CHECK_OK(cbm_scene_write(ctx, NULL, io_path("list.glb"), &o));
+    cbm_animation *a = NULL;
+    CHECK_OK(cbm_animation_create(ctx, &o, &a));
+    cbm_scene *one = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &one));
+    for (int k = 0; k < 3; k++) {
+        cbm_scene_clear(one);
+        CHECK_OK(cbm_scene_demo_tree(ctx, one, 30 + 50 * (size_t)k, 6, true, 3));
+        CHECK_OK(cbm_animation_add_frame(a, one));
+    }
+    CHECK_EQ_INT(cbm_animation_frame_count(a), 3);
+    CHECK_OK(cbm_animation_write(a, io_path("steps.glb")));
+    CHECK_STATUS(cbm_animation_add_frame(a, one), CBM_E_INVALID);
+    cbm_animation_destroy(a);
+    size_t la = 0, lb = 0;
+    char *x = io_read_all(io_path("list.glb"), &la), *y = io_read_all(io_path("steps.glb"), &lb);
+    CHECK(x && y && la == lb && memcmp(x, y, la) == 0);
+    free(x);
+    free(y);
+    o.frame_time = -1;
+    CHECK_STATUS(cbm_animation_create(ctx, &o, &a), CBM_E_INVALID);
+    o.frames = NULL;
+    o.frame_count = 0;
+    CHECK_OK(cbm_scene_write(ctx, one, io_path("static.glb"), &o)); /* frame_time unused */
+    cbm_scene_destroy(one);
+    for (int k = 0; k < 3; k++)
+        cbm_scene_destroy(fr[k]);
+    test_ctx_end(ctx);
+}
+
+TEST(svg_well_formed_and_sorted)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = demo(ctx, 200, true);
+    cbm_write_options o = cbm_write_options_default();
+    o.view = CBM_VIEW_FRONT;
+    o.color_by = CBM_COLOR_AGE;
+    CHECK_OK(cbm_scene_write(ctx, s, io_path("front.svg"), &o));
+    char *b = io_read_all(io_path("front.svg"), NULL);
+    CHECK(b != NULL);
+    if (b) {
+        CHECK(strncmp(b, "<?xml version=\"1.0\"", 19) == 0);
+        CHECK(strstr(b, "</svg>\n") != NULL);
+        size_t paths = io_count(b, "<path ");
+        /* back faces of closed organs culled: fewer paths than triangles, but many */
+        CHECK(paths > cbm_scene_triangle_count(s) / 4 && paths < cbm_scene_triangle_count(s));
+        CHECK(strstr(b, "AGE (YEARS)") != NULL && strstr(b, "linearGradient") != NULL);
+        CHECK_EQ_INT(io_count(b, "<g"), io_count(b, "</g>"));
+        free(b);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+TEST(csv_one_row_per_part)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    CHECK_OK(cbm_scene_write(ctx, s, io_path("parts.csv"), NULL));
+    char *b = io_read_all(io_path("parts.csv"), NULL);
+    CHECK(b != NULL);
+    if (b) {
+        const char *head = "id,segment,parent,organ,order,material,stress_Pa,stress_ratio,";
+        CHECK(strncmp(b, head, strlen(head)) == 0);
+        CHECK_EQ_INT(io_count(b, "\n"), 1 + cbm_scene_part_count(s));
+        CHECK(strstr(b, "\n0,7,-1,branch,0,-1,,0.5,3,0.25,") != NULL);
+        CHECK(strstr(b, "\n1,-1,-1,leaf,-1,-1,,,,,") != NULL);
+        free(b);
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+TEST(unknown_extension_and_missing_directory)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    CHECK_STATUS(cbm_scene_write(ctx, s, io_path("x.stl"), NULL), CBM_E_UNSUPPORTED);
+    CHECK(strstr(cbm_context_last_error(ctx), "x.stl") != NULL);
+    const char *exts[] = {"obj", "ply", "glb", "png", "svg", "csv"};
+    for (int k = 0; k < 6; k++) {
+        char p[4200];
+        snprintf(p, sizeof p, "%s/no/such/dir/out.%s", test_tmp_dir(), exts[k]);
+        cbm_context_clear_errors(ctx);
+        CHECK_STATUS(cbm_scene_write(ctx, s, p, NULL), CBM_E_IO);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), p) != NULL, "%s: message '%s'", exts[k],
+                  cbm_context_last_error(ctx));
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+static size_t dir_entries(const char *dir)
+{
+    DIR *d = opendir(dir);
+    size_t n = 0;
+    if (!d)
+        return 0;
+    for (struct dirent *e; (e = readdir(d));)
+        n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return n;
+}
+
+/* A full disk, simulated with a file-size limit (EFBIG on write): every writer reports CBM_E_IO
+ * naming the path and leaves nothing in the directory. */
+TEST(disk_full_leaves_nothing)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = demo(ctx, 400, true);
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s/full", test_tmp_dir());
+    mkdir(dir, 0777);
+    struct rlimit old, lim;
+    getrlimit(RLIMIT_FSIZE, &old);
+    lim = old;
+    lim.rlim_cur = 4096;
+    signal(SIGXFSZ, SIG_IGN);
+    CHECK(setrlimit(RLIMIT_FSIZE, &lim) == 0);
+    const char *exts[] = {"obj", "ply", "glb", "png", "svg", "csv"};
+    cbm_write_options o = cbm_write_options_default();
+    o.width = o.height = 256;
+    o.threads = 1;
+    for (int k = 0; k < 6; k++) {
+        char p[4300];
+        snprintf(p, sizeof p, "%s/tree.%s", dir, exts[k]);
+        cbm_context_clear_errors(ctx);
+        CHECK_STATUS(cbm_scene_write(ctx, s, p, &o), CBM_E_IO);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), p) != NULL, "%s: message '%s'", exts[k],
+                  cbm_context_last_error(ctx));
+        CHECK_EQ_INT(dir_entries(dir), 0);
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+    signal(SIGXFSZ, SIG_DFL);
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* /dev/full: written in place (never replaced), ENOSPC reported; /dev/null accepts anything. The
+ * OBJ writer is left out: its .mtl would go beside the target, into /dev. */
+TEST(device_targets_are_written_in_place)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = demo(ctx, 100, true);
+    cbm_write_options o = cbm_write_options_default();
+    o.width = o.height = 64;
+    o.threads = 1;
+    const char *exts[] = {"ply", "glb", "png", "svg", "csv"};
+    cbm_write_fn fns[] = {cbm_write_ply, cbm_write_glb, cbm_write_png, cbm_write_svg,
+                          cbm_write_parts_csv};
+    for (int k = 0; k < 5; k++) {
+        cbm_context_clear_errors(ctx);
+        CHECK_STATUS(fns[k](ctx, s, "/dev/full", &o), CBM_E_IO);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), "/dev/full: ") &&
+                      strstr(cbm_context_last_error(ctx), "No space left"),
+                  "%s: message '%s'", exts[k], cbm_context_last_error(ctx));
+        CHECK_OK(fns[k](ctx, s, "/dev/null", &o));
+        struct stat sb;
+        CHECK(stat("/dev/full", &sb) == 0 && S_ISCHR(sb.st_mode));
+        CHECK(stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode));
+    }
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* A symbolic link to a regular file: the file is replaced, the link stays a link. */
+TEST(links_are_kept)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(io_small_scene(ctx, &s));
+    char real[4200], link[4200];
+    snprintf(real, sizeof real, "%s/real.csv", test_tmp_dir());
+    snprintf(link, sizeof link, "%s/link.csv", test_tmp_dir());
+    FILE *f = fopen(real, "w");
+    CHECK(f != NULL);
+    if (f) {
+        fputs("old\n", f);
+        fclose(f);
+    }
+    remove(link);
+    CHECK(symlink("real.csv", link) == 0);
+    CHECK_OK(cbm_scene_write(ctx, s, link, NULL));
+    struct stat sb;
+    CHECK(lstat(link, &sb) == 0 && S_ISLNK(sb.st_mode));
+    char *b = io_read_all(real, NULL);
+    CHECK(b && strncmp(b, "id,segment,", 11) == 0);
+    free(b);
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+typedef struct oom_case {
+    const char *name;
+} oom_case;
+
+static cbm_status write_small(cbm_context *ctx, void *ud)
+{
+    const oom_case *c = ud;
+    cbm_scene *s = NULL;
+    cbm_status st0 = io_small_scene(ctx, &s);
+    if (st0 != CBM_OK)
+        return st0;
+    cbm_write_options o = cbm_write_options_default();
+    o.width = o.height = 32;
+    o.threads = 1;
+    o.color_by = CBM_COLOR_STRESS;
+    cbm_scene *fr[2] = {s, s};
+    if (strstr(c->name, "anim")) {
+        o.frames = (const cbm_scene *const *)fr;
+        o.frame_count = 2;
+    }
+    cbm_status st = cbm_scene_write(ctx, s, c->name, &o);
+    cbm_scene_destroy(s);
+    return st;
+}
+
+TEST(out_of_memory_every_writer)
+{
+    const char *names[] = {"oom.obj", "oom.ply", "oom.glb", "oom_anim.glb",
+                           "oom.svg", "oom.csv", "oom.png"};
+    for (int k = 0; k < 7; k++) {
+        oom_case c = {io_path(names[k])};
+        int runs = test_oom_loop(write_small, &c);
+        CHECK_MSG(runs > 3, "%s: %d runs", names[k], runs);
+    }
+}
