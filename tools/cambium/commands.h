@@ -4,7 +4,10 @@
 #define CBM_COMMANDS_H
 
 int cmd_info(int argc, char **argv);
+int cmd_buckle(int argc, char **argv);
 
-#define CBM_COMMANDS(X) X("info", cmd_info, "what a model or output file holds")
+#define CBM_COMMANDS(X)                                                                            \
+    X("info", cmd_info, "what a model or output file holds")                                      \
+    X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")
 
 #endif
