@@ -23,8 +23,8 @@ static inline double radius_uniform(double s, double L)
     return 0.01;
 }
 
-static inline cbm_plant *make_rod(cbm_context *ctx, int n, double L, radius_fn rf, double E, double rho,
-                           double elev, cbm_mech_discretization disc)
+static inline cbm_plant *make_rod(cbm_context *ctx, int n, double L, radius_fn rf, double E,
+                                  double rho, double elev, cbm_mech_discretization disc)
 {
     cbm_plant_def pd = cbm_plant_def_default();
     pd.base_orientation = cbm_mech_clamp_orientation(elev);
@@ -63,7 +63,8 @@ typedef struct elastica {
     double x, y, theta, m0;
 } elastica;
 
-static inline void el_rhs(double s, const double *u, double *du, double w, double P, double EI, double L)
+static inline void el_rhs(double s, const double *u, double *du, double w, double P, double EI,
+                          double L)
 {
     du[0] = u[1] / EI;
     du[1] = (w * (L - s) + P) * cos(u[0]);
@@ -72,7 +73,7 @@ static inline void el_rhs(double s, const double *u, double *du, double w, doubl
 }
 
 static inline elastica el_integrate(double m0, double th0, double w, double P, double EI, double L,
-                             int steps)
+                                    int steps)
 {
     double u[4] = {th0, m0, 0, 0}, k1[4], k2[4], k3[4], k4[4], t[4];
     double h = L / steps;
@@ -95,8 +96,8 @@ static inline elastica el_integrate(double m0, double th0, double w, double P, d
     return e;
 }
 
-static inline elastica elastica_solve(double th0, double w, double P, double Mt, double EI, double L,
-                               int steps)
+static inline elastica elastica_solve(double th0, double w, double P, double Mt, double EI,
+                                      double L, int steps)
 {
     /* M(L) - Mt is increasing in M(0); bracket by the rigid-rod moments */
     double span = w * L * L / 2 + P * L + fabs(Mt);

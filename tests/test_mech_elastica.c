@@ -12,8 +12,8 @@ static double solve_tip_y(cbm_context *ctx, int n, double L, radius_fn rf, doubl
 {
     cbm_plant *p = make_rod(ctx, n, L, rf, E, rho, elev, disc);
     if (P != 0.0)
-        CHECK_OK(cbm_plant_set_load(p, (size_t)n - 1, 0.0, (cbm_vec3){0, -P, 0},
-                                    (cbm_vec3){0, 0, 0}));
+        CHECK_OK(
+            cbm_plant_set_load(p, (size_t)n - 1, 0.0, (cbm_vec3){0, -P, 0}, (cbm_vec3){0, 0, 0}));
     cbm_solve_def sd = cbm_solve_def_default();
     sd.tolerance = 1e-13;
     cbm_solve_stats st;
@@ -37,11 +37,11 @@ TEST(mech_discretisation_factors)
     for (size_t k = 0; k < sizeof ns / sizeof *ns; k++) {
         double N = ns[k];
         double dw = w * L * L * L * L / (8 * E * I), dp = P * L * L * L / (3 * E * I);
-        double yw = solve_tip_y(ctx, ns[k], L, radius_uniform, E, rho, 0, CBM_MECH_STAGGERED, 0,
-                                NULL);
+        double yw =
+            solve_tip_y(ctx, ns[k], L, radius_uniform, E, rho, 0, CBM_MECH_STAGGERED, 0, NULL);
         CHECK_REL(-yw / dw, 1.0 + 1.0 / (N * N), 1e-10);
-        double yp = solve_tip_y(ctx, ns[k], L, radius_uniform, E, 0.0, 0, CBM_MECH_STAGGERED, P,
-                                NULL);
+        double yp =
+            solve_tip_y(ctx, ns[k], L, radius_uniform, E, 0.0, 0, CBM_MECH_STAGGERED, P, NULL);
         CHECK_REL(-yp / dp, 1.0 + 0.5 / (N * N), 1e-10);
         double cw = solve_tip_y(ctx, ns[k], L, radius_uniform, E, rho, 0, CBM_MECH_CHAIN, 0, NULL);
         CHECK_REL(-cw / dw, 1.0 + 10.0 / (3 * N) + 3.0 / (N * N) + 2.0 / (3 * N * N * N), 1e-10);
@@ -59,8 +59,7 @@ static double taper(double s, double L)
 /* Linear (small-deflection) tip deflection of a cantilever by the unit-load method, Simpson's
  * rule with 20000 intervals: delta = int_0^L M(s) (L - s) / EI(s) ds with M the moment of the
  * transverse load (weight per length w(s) = rho A(s) g cos(elev), tip load P cos(elev)). */
-static double linear_deflection(double L, radius_fn rf, double E, double rho, double elev,
-                                double P)
+static double linear_deflection(double L, radius_fn rf, double E, double rho, double elev, double P)
 {
     int n = 20000;
     double h = L / n, sum = 0;
@@ -111,8 +110,8 @@ TEST(mech_small_deflection_cantilevers)
             err[k] = fabs(d - ref) / ref;
         }
         double o1 = log2(err[0] / err[1]), o2 = log2(err[1] / err[2]);
-        printf("%s: ref %.9g rel err %.3g %.3g %.3g orders %.3f %.3f\n", cases[c].what, ref,
-               err[0], err[1], err[2], o1, o2);
+        printf("%s: ref %.9g rel err %.3g %.3g %.3g orders %.3f %.3f\n", cases[c].what, ref, err[0],
+               err[1], err[2], o1, o2);
         CHECK_MSG(err[2] < 1e-3, "%s: error %.3g", cases[c].what, err[2]);
         CHECK_MSG(o2 > 1.9 && o2 < 2.1, "%s: order %.3f", cases[c].what, o2);
     }
@@ -128,8 +127,8 @@ TEST(mech_tip_moment_circle)
     double L = 1.0, E = 1e9, r = 0.01, EI = E * PI * r * r * r * r / 4;
     double kappa = 1.5 * PI / L; /* three quarters of a turn */
     for (int disc = 0; disc < 2; disc++) {
-        cbm_plant *p = make_rod(ctx, n, L, radius_uniform, E, 0.0, 0.0,
-                                (cbm_mech_discretization)disc);
+        cbm_plant *p =
+            make_rod(ctx, n, L, radius_uniform, E, 0.0, 0.0, (cbm_mech_discretization)disc);
         cbm_plant_set_gravity(p, (cbm_vec3){0, 0, 0});
         CHECK_OK(cbm_plant_set_load(p, (size_t)n - 1, 0.0, (cbm_vec3){0, 0, 0},
                                     (cbm_vec3){0, 0, kappa * EI}));
@@ -179,7 +178,9 @@ TEST(mech_elastica_tip_load)
     cbm_context *ctx = test_ctx();
     struct {
         double k, v, du;
-    } tab[] = {{1.0, 0.30172, 0.05643}, {2.0, 0.49346, 0.16064}, {5.0, 0.71379, 0.38763},
+    } tab[] = {{1.0, 0.30172, 0.05643},
+               {2.0, 0.49346, 0.16064},
+               {5.0, 0.71379, 0.38763},
                {10.0, 0.81061, 0.55500}};
     double L = 1.0, E = 1e9, r = 0.01, EI = E * PI * r * r * r * r / 4;
     for (size_t c = 0; c < sizeof tab / sizeof *tab; c++) {
@@ -211,8 +212,8 @@ TEST(mech_elastica_self_weight)
     cbm_context *ctx = test_ctx();
     struct {
         double alpha, x, y;
-    } tab[] = {{1, 0.9912, -0.1235}, {5, 0.8467, -0.4959}, {10, 0.6564, -0.7002},
-               {15, 0.5296, -0.7860}};
+    } tab[] = {
+        {1, 0.9912, -0.1235}, {5, 0.8467, -0.4959}, {10, 0.6564, -0.7002}, {15, 0.5296, -0.7860}};
     double L = 1.0, r = 0.01, rho = 1000.0, w = rho * PI * r * r * g0;
     for (size_t c = 0; c < sizeof tab / sizeof *tab; c++) {
         double EI = w * L * L * L / tab[c].alpha, E = EI / (PI * r * r * r * r / 4);

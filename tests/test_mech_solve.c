@@ -62,8 +62,9 @@ TEST(mech_torque_recursion_equals_direct_sum)
         cbm_plant_set_discretization(p, (cbm_mech_discretization)disc);
         /* arbitrary rotation rates: the identity holds for any configuration */
         for (size_t i = 0; i < 120; i++)
-            CHECK_OK(cbm_plant_set_omega(p, i, (cbm_vec3){0.3 * sin((double)i), cos(0.7 * (double)i),
-                                                           0.5 * sin(1.3 * (double)i)}));
+            CHECK_OK(cbm_plant_set_omega(p, i,
+                                         (cbm_vec3){0.3 * sin((double)i), cos(0.7 * (double)i),
+                                                    0.5 * sin(1.3 * (double)i)}));
         CHECK_OK(cbm_plant_evaluate(p, NULL));
         cbm_vec3 g = cbm_plant_gravity(p);
         double total = 0;
@@ -83,7 +84,8 @@ TEST(mech_torque_recursion_equals_direct_sum)
                               s.proximal.y + frac * s.length * s.frame.h.y,
                               s.proximal.z + frac * s.length * s.frame.h.z};
                 cbm_vec3 fw = {g.x * wm, g.y * wm, g.z * wm};
-                cbm_vec3 ft = {g.x * s.point_mass + s.tip_force.x, g.y * s.point_mass + s.tip_force.y,
+                cbm_vec3 ft = {g.x * s.point_mass + s.tip_force.x,
+                               g.y * s.point_mass + s.tip_force.y,
                                g.z * s.point_mass + s.tip_force.z};
                 cbm_vec3 rc = {c.x - si.proximal.x, c.y - si.proximal.y, c.z - si.proximal.z};
                 cbm_vec3 rt = {s.distal.x - si.proximal.x, s.distal.y - si.proximal.y,
@@ -188,8 +190,8 @@ TEST(mech_solvers_same_equilibrium)
         cbm_segment_state x, y;
         CHECK_OK(cbm_plant_segment(a, i, &x));
         CHECK_OK(cbm_plant_segment(b, i, &y));
-        double d = hypot(hypot(x.distal.x - y.distal.x, x.distal.y - y.distal.y),
-                         x.distal.z - y.distal.z);
+        double d =
+            hypot(hypot(x.distal.x - y.distal.x, x.distal.y - y.distal.y), x.distal.z - y.distal.z);
         if (d > dmax)
             dmax = d;
         double s = hypot(hypot(x.distal.x, x.distal.y), x.distal.z);

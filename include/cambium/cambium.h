@@ -6,5 +6,6 @@
 #include "cambium/geom.h"
 #include "cambium/io.h"
 #include "cambium/mech.h"
+#include "cambium/bend.h"
 
 #endif

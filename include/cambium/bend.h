@@ -1,0 +1,90 @@
+/* cambium: the `bend` workbench job: one branch or rod described by a small spec file, solved
+ * for static equilibrium, optionally grown step by step. The spec format and every key are
+ * documented in docs/bend.md.
+ *
+ * Spec: plain text, one `key = value` per line, `#` starts a comment, SI units, angles in
+ * degrees. Unknown keys, repeated keys and bad values are errors reported as
+ * `FILE:line:col: error: message` through the context's diagnostics.
+ */
+#ifndef CAMBIUM_BEND_H
+#define CAMBIUM_BEND_H
+
+#include "cambium/base.h"
+#include "cambium/mech.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// A parsed bend spec (SI units; angle in degrees as written).
+typedef struct cbm_bend_spec {
+    double length;         ///< m, final length of the rod
+    long segments;         ///< number of segments of the final rod
+    double radius;         ///< m, uniform radius (semi-axis a) when no taper is given
+    double radius_base;    ///< m, radius at the base for a linear taper (0 = radius)
+    double radius_tip;     ///< m, radius at the tip for a linear taper (0 = radius)
+    double aspect;         ///< b / a of the elliptical section (a vertical), (0, 1]
+    double youngs_modulus; ///< E, Pa
+    double shear_modulus;  ///< G, Pa (0 = E / 16, a typical wood ratio)
+    double density;        ///< kg/m^3
+    double gravity;        ///< m/s^2, acting along -y
+    double angle;          ///< elevation of the clamped base above the horizontal, degrees
+    double tip_load;       ///< N, downward force at the tip
+    double tip_mass;       ///< kg at the tip
+    double tip_moment;     ///< N m at the tip, counter-clockwise in the x-y plane (lifts the tip)
+    double rest_curvature; ///< 1/m, uniform rest curvature in the bending plane (+ = upward)
+    double tropism;        ///< N, strength of the upward tropism force of new segments (0 = none)
+    double modulus_of_rupture; ///< Pa, for the stress ratio and breakage (0 = none)
+    cbm_mech_solver solver;
+    double tolerance; ///< relative residual
+    double alpha;     ///< relaxation factor
+    long max_passes;  ///< 0 = the context's limit
+    int krylov_dim;   ///< GMRES restart length
+    cbm_mech_discretization discretization;
+    long steps;            ///< growth steps, 0 = static
+    double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
+    double radius_final;   ///< m, radius after the last step (secondary growth), 0 = none
+} cbm_bend_spec;
+
+/// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,
+/// angle 0, no loads, fast solver, tolerance 1e-8, alpha 0.5, Krylov 20, staggered, static.
+CBM_API cbm_bend_spec cbm_bend_spec_default(void);
+
+/// Parses spec text (`len` bytes, need not be NUL-terminated). `file` names the spec in
+/// messages. On error returns CBM_E_SYNTAX (malformed line) or CBM_E_SEMANTIC (unknown key, bad
+/// or inconsistent value) after reporting every problem found as a diagnostic.
+CBM_API cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len,
+                                       const char *file, cbm_bend_spec *out);
+
+/// Builds the rod of the spec at its initial state (length_initial, radius) without solving.
+CBM_API cbm_status cbm_bend_build(cbm_context *ctx, const cbm_bend_spec *spec, cbm_plant **out);
+
+/// What cbm_bend_run did.
+typedef struct cbm_bend_result {
+    cbm_solve_stats stats;  ///< of the last solve; passes summed over all growth steps
+    long steps_done;        ///< growth steps completed
+    size_t broken_segments; ///< segments removed by breakage (stress above the MOR)
+} cbm_bend_result;
+
+/// Builds, grows (if steps > 0) and solves. *out receives the plant (also on
+/// CBM_E_NOT_CONVERGED, so its state can be reported); the caller destroys it.
+CBM_API cbm_status cbm_bend_run(cbm_context *ctx, const cbm_bend_spec *spec, cbm_plant **out,
+                                cbm_bend_result *result);
+
+/// One row of the node table, from base to tip.
+typedef struct cbm_bend_node {
+    double s;         ///< m, arc length from the base
+    double x, y, z;   ///< m (x horizontal away from the base in the bending plane, y up)
+    double angle_deg; ///< elevation of the tangent above the horizontal, degrees
+    double curvature; ///< 1/m, in-plane, counter-clockwise positive
+    double moment;    ///< N m, bending moment of the loads beyond the node, ccw positive
+    double stress;    ///< Pa, peak bending stress at the node
+} cbm_bend_node;
+
+/// Fills n_nodes = segment count + 1 rows (for a single unbranched rod).
+CBM_API cbm_status cbm_bend_nodes(const cbm_plant *plant, cbm_bend_node *nodes, size_t n_nodes);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,180 @@
+/* cambium bend SPEC [-o FILE.csv|FILE.json]... [--json]: the mechanics workbench. Reads a spec
+ * (docs/bend.md), builds the rod, grows it if asked, solves for static equilibrium and writes
+ * the node table (CSV: s,x,y,z,angle_deg,curvature,moment,stress) and/or a JSON summary. Output
+ * files are written atomically through cbm_out; nothing is written when the job fails. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+#include "commands.h"
+
+#include "cambium/bend.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define MAX_SPEC_BYTES (1u << 20)
+#define MAX_OUTPUTS    8
+
+static void help(void)
+{
+    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json]\n\n"
+           "Solves one branch or rod described by SPEC (key = value lines; see docs/bend.md)\n"
+           "for static equilibrium. -o writes the node table (.csv: s,x,y,z,angle_deg,\n"
+           "curvature,moment,stress; SI units, degrees) or the summary (.json); --json prints\n"
+           "the summary (tip_x, tip_y, tip_z, tip_angle_deg, base_moment, passes, residual,\n"
+           "seconds, ...) on stdout.\n");
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static char *read_spec(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = malloc(MAX_SPEC_BYTES + 1);
+    if (!buf) {
+        fclose(f);
+        return NULL;
+    }
+    size_t n = fread(buf, 1, MAX_SPEC_BYTES + 1, f);
+    bool bad = ferror(f) != 0;
+    fclose(f);
+    if (bad) {
+        free(buf);
+        return NULL;
+    }
+    *len = n;
+    return buf;
+}
+
+static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
+                       const cbm_bend_node *base, const cbm_bend_result *r, double secs, size_t n)
+{
+    fprintf(f,
+            "{\"tip_x\": %.12g, \"tip_y\": %.12g, \"tip_z\": %.12g, \"tip_angle_deg\": %.12g, "
+            "\"base_moment\": %.12g, \"passes\": %zu, \"residual\": %.6g, \"seconds\": %.6g, "
+            "\"solver\": \"%s\", \"discretization\": \"%s\", \"segments\": %zu, "
+            "\"newton_steps\": %zu, \"krylov_iterations\": %zu, \"base_stress\": %.12g, "
+            "\"steps\": %ld, \"broken_segments\": %zu}\n",
+            tip->x, tip->y, tip->z, tip->angle_deg, base->moment, r->stats.passes,
+            r->stats.residual, secs, cbm_mech_solver_name(spec->solver),
+            cbm_mech_discretization_name(spec->discretization), n, r->stats.newton_steps,
+            r->stats.krylov_iterations, base->stress, r->steps_done, r->broken_segments);
+}
+
+int cmd_bend(int argc, char **argv)
+{
+    const char *spec_path = NULL;
+    const char *outs[MAX_OUTPUTS];
+    int nout = 0;
+    bool json = false;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            help();
+            return CLI_OK;
+        } else if (!strcmp(argv[i], "--json"))
+            json = true;
+        else if (!strcmp(argv[i], "-o")) {
+            if (i + 1 >= argc)
+                return cli_usage_error("bend", "-o needs a file name");
+            if (nout == MAX_OUTPUTS)
+                return cli_usage_error("bend", "at most %d outputs", MAX_OUTPUTS);
+            const char *ext = cli_extension(argv[i + 1]);
+            if (strcmp(ext, "csv") && strcmp(ext, "json"))
+                return cli_usage_error("bend",
+                                       "%s: unsupported output format '.%s' (use .csv or "
+                                       ".json)",
+                                       argv[i + 1], ext);
+            outs[nout++] = argv[++i];
+        } else if (argv[i][0] == '-' && argv[i][1])
+            return cli_usage_error("bend", "unknown option '%s'", argv[i]);
+        else if (spec_path)
+            return cli_usage_error("bend", "expected one SPEC, found '%s' too", argv[i]);
+        else
+            spec_path = argv[i];
+    }
+    if (!spec_path)
+        return cli_usage_error("bend", "expected a SPEC file (see cambium bend --help)");
+
+    size_t len = 0;
+    char *text = read_spec(spec_path, &len);
+    if (!text) {
+        fprintf(stderr, "cambium: %s: cannot read the spec\n", spec_path);
+        return CLI_FAIL;
+    }
+    if (len > MAX_SPEC_BYTES) {
+        free(text);
+        fprintf(stderr, "cambium: %s: spec larger than %u bytes\n", spec_path, MAX_SPEC_BYTES);
+        return CLI_FAIL;
+    }
+    cbm_context *ctx = cli_context();
+    cbm_bend_spec spec;
+    cbm_status s = cbm_bend_spec_parse(ctx, text, len, spec_path, &spec);
+    free(text);
+    if (s != CBM_OK) {
+        int rc = cli_fail(ctx, s, spec_path);
+        cli_context_end(ctx);
+        return rc;
+    }
+    double t0 = now();
+    cbm_plant *plant = NULL;
+    cbm_bend_result res;
+    s = cbm_bend_run(ctx, &spec, &plant, &res);
+    double secs = now() - t0;
+    if (s != CBM_OK) {
+        int rc = cli_fail(ctx, s, "bend");
+        cbm_plant_destroy(plant);
+        cli_context_end(ctx);
+        return rc;
+    }
+    size_t n = cbm_plant_segment_count(plant);
+    cbm_bend_node *nodes = malloc((n + 1) * sizeof *nodes);
+    if (!nodes) {
+        cbm_plant_destroy(plant);
+        cli_context_end(ctx);
+        fprintf(stderr, "cambium: out of memory\n");
+        return CLI_FAIL;
+    }
+    s = cbm_bend_nodes(plant, nodes, n + 1);
+    int rc = CLI_OK;
+    if (s != CBM_OK)
+        rc = cli_fail(ctx, s, "bend");
+    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        cbm_out *o = NULL;
+        s = cbm_out_open(ctx, outs[k], &o);
+        if (s == CBM_OK) {
+            FILE *f = cbm_out_stream(o);
+            if (!strcmp(cli_extension(outs[k]), "json"))
+                write_json(f, &spec, &nodes[n], &nodes[0], &res, secs, n);
+            else {
+                fprintf(f, "s,x,y,z,angle_deg,curvature,moment,stress\n");
+                for (size_t j = 0; j <= n; j++) {
+                    const cbm_bend_node *d = &nodes[j];
+                    fprintf(f, "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", d->s, d->x,
+                            d->y, d->z, d->angle_deg, d->curvature, d->moment, d->stress);
+                }
+            }
+            s = cbm_out_commit(o);
+        }
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, outs[k]);
+    }
+    if (rc == CLI_OK && json)
+        write_json(stdout, &spec, &nodes[n], &nodes[0], &res, secs, n);
+    if (rc == CLI_OK && !json && nout == 0)
+        printf("tip (%.6g, %.6g, %.6g) m, tip angle %.6g deg, base moment %.6g N m, %zu passes, "
+               "residual %.3g, %.3g s\n",
+               nodes[n].x, nodes[n].y, nodes[n].z, nodes[n].angle_deg, nodes[0].moment,
+               res.stats.passes, res.stats.residual, secs);
+    free(nodes);
+    cbm_plant_destroy(plant);
+    cli_context_end(ctx);
+    return rc;
+}
