@@ -42,8 +42,8 @@ TEST(growth_branch_breaks_at_predicted_length)
             CHECK_EQ_INT(cbm_plant_segment_count(p), 0);
         }
     }
-    printf("predicted L* = %.5f m -> breaks at %zu segments of %.2f m; broke at %zu\n", lstar,
-           want, h, broke_at);
+    printf("predicted L* = %.5f m -> breaks at %zu segments of %.2f m; broke at %zu\n", lstar, want,
+           h, broke_at);
     CHECK_EQ_INT(broke_at, want);
     cbm_plant_destroy(p);
     test_ctx_end(ctx);

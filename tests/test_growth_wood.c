@@ -127,11 +127,11 @@ TEST(growth_reaction_wood_ring)
     /* the section: I_L = pi a^3 b / 4 for the ellipse (a along U), rings outer minus inner */
     cbm_segment_state s2;
     CHECK_OK(cbm_plant_segment(p, 0, &s2));
-    double cl = 1e9 * PI * pow(0.011, 4) / 4 +
-                1.5e9 * PI * (pow(0.012, 3) * 0.011 - pow(0.011, 4)) / 4;
+    double cl =
+        1e9 * PI * pow(0.011, 4) / 4 + 1.5e9 * PI * (pow(0.012, 3) * 0.011 - pow(0.011, 4)) / 4;
     CHECK_REL(s2.rigidity.y, cl, 1e-12);
-    double cu = 1e9 * PI * pow(0.011, 4) / 4 +
-                1.5e9 * PI * (0.012 * pow(0.011, 3) - pow(0.011, 4)) / 4;
+    double cu =
+        1e9 * PI * pow(0.011, 4) / 4 + 1.5e9 * PI * (0.012 * pow(0.011, 3) - pow(0.011, 4)) / 4;
     CHECK_REL(s2.rigidity.z, cu, 1e-12);
     CHECK(s2.reaction > 0.0 && s2.reaction < 0.5);
     cbm_plant_destroy(p);

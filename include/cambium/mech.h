@@ -252,7 +252,6 @@ CBM_API cbm_status cbm_plant_to_scene(const cbm_plant *plant, cbm_scene *scene, 
 /// *i_l = pi a^3 b / 4 (about L), *i_u = pi a b^3 / 4 (about U), *j = pi a^3 b^3 / (a^2 + b^2).
 CBM_API void cbm_mech_ellipse_moments(double a, double b, double *i_l, double *i_u, double *j);
 
-
 /* ---- growth: primary growth with tropism, pipe-model rings with shape memory, wood ageing,
  * reaction wood, breakage, self-weight buckling (src/mech/growth.c, wood.c, breakage.c,
  * buckle.c; Taylor-Hell 2005 ch. 4.1, 6.1.5, 6.3, 8; Jirasek et al. 2000 eq. 24) ---- */
@@ -370,13 +369,13 @@ CBM_API cbm_status cbm_plant_break(cbm_plant *plant, size_t *broken, size_t max_
 
 /// Self-weight buckling of a vertical column (Taylor-Hell §6.3, Greenhill).
 typedef struct cbm_buckle_def {
-    double youngs_modulus; ///< E, Pa
-    double shear_modulus;  ///< G, Pa; 0 = E / 16
-    double density;        ///< kg/m^3
-    double radius;         ///< m
-    double segment;        ///< m, segment length of the grown column
-    double gravity;        ///< m/s^2; default 9.81
-    size_t max_segments;   ///< give up beyond this many segments; default 100000
+    double youngs_modulus;                  ///< E, Pa
+    double shear_modulus;                   ///< G, Pa; 0 = E / 16
+    double density;                         ///< kg/m^3
+    double radius;                          ///< m
+    double segment;                         ///< m, segment length of the grown column
+    double gravity;                         ///< m/s^2; default 9.81
+    size_t max_segments;                    ///< give up beyond this many segments; default 100000
     cbm_mech_discretization discretization; ///< default staggered
 } cbm_buckle_def;
 

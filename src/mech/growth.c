@@ -19,9 +19,9 @@
  * (the pipe model of Shinozaki; with leaf_area = the area of a new internode it is Jirasek's "a
  * new internode adds its area to every earlier segment"). The
  * goal semi-axis keeps the current aspect zeta = b/a (8.18-8.19): a_goal = sqrt(A_goal /
- * (pi zeta)), and a' = a + kappa (a_goal - a) (4.3), b' = zeta a'. Girth never decreases: a goal below the
- * current size adds nothing. A leaning segment also gets the reaction-wood increment a += delta
- * (8.20, src/mech/wood.c), which ovalises the section (b is kept).
+ * (pi zeta)), and a' = a + kappa (a_goal - a) (4.3), b' = zeta a'. Girth never decreases: a goal
+ * below the current size adds nothing. A leaning segment also gets the reaction-wood increment a +=
+ * delta (8.20, src/mech/wood.c), which ovalises the section (b is kept).
  *
  * Shape memory (6.29-6.34 = Jirasek eq. 24). A ring laid on a loaded segment is moulded on the
  * deformed segment: its own rest rate is the current rotation rate Omega (6.32/8.24). The
@@ -129,8 +129,8 @@ cbm_status cbm_plant_grow_segment(cbm_plant *p, const cbm_segment_def *def,
                              "tropism: strength must be finite and direction non-zero");
         /* bad parent, length or core are reported by cbm_plant_add_segment */
         bool parent_ok = d.parent == -1 || (d.parent >= 0 && (size_t)d.parent < p->n);
-        if (parent_ok && isfinite(d.length) && d.length > 0.0 && d.core.a > 0.0 &&
-            d.core.b > 0.0 && d.core.youngs_modulus > 0.0 && d.core.shear_modulus > 0.0) {
+        if (parent_ok && isfinite(d.length) && d.length > 0.0 && d.core.a > 0.0 && d.core.b > 0.0 &&
+            d.core.youngs_modulus > 0.0 && d.core.shear_modulus > 0.0) {
             cbm_quat qp = d.parent >= 0 ? p->q[d.parent] : p->base_q;
             double lp = d.parent >= 0 ? p->len[d.parent] : d.length;
             cbm_vec3 f = v3_scale(v3_normalize(tropism->direction), tropism->strength);

@@ -44,8 +44,8 @@ int cmd_buckle(int argc, char **argv)
             d.discretization = CBM_MECH_CHAIN;
             continue;
         }
-        static const char *const opts[] = {"--E",       "--density", "--radius",      "--segment",
-                                           "--G",       "--gravity", "--max-segments"};
+        static const char *const opts[] = {"--E", "--density", "--radius",      "--segment",
+                                           "--G", "--gravity", "--max-segments"};
         int k = -1;
         for (int j = 0; j < 7; j++)
             if (!strcmp(a, opts[j]))
@@ -68,12 +68,24 @@ int cmd_buckle(int argc, char **argv)
             return cli_usage_error("buckle", "%s: '%s' is not a number", a, v);
         bool pos = x > 0.0;
         switch (k) {
-        case 0: d.youngs_modulus = x; break;
-        case 1: d.density = x; break;
-        case 2: d.radius = x; break;
-        case 3: d.segment = x; break;
-        case 4: d.shear_modulus = x; break;
-        default: d.gravity = x; break;
+        case 0:
+            d.youngs_modulus = x;
+            break;
+        case 1:
+            d.density = x;
+            break;
+        case 2:
+            d.radius = x;
+            break;
+        case 3:
+            d.segment = x;
+            break;
+        case 4:
+            d.shear_modulus = x;
+            break;
+        default:
+            d.gravity = x;
+            break;
         }
         if (!pos)
             return cli_usage_error("buckle", "%s must be positive (got %s)", a, v);
