@@ -208,13 +208,23 @@ CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
 /// Parses "relax", "fast", "newton" (case-sensitive). false if unknown.
 CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
 
+/// Preconditioner of the fast solver's GMRES (right preconditioning).
+typedef enum cbm_mech_precond {
+    /// Default: the exact Newton matrix of the tree factorised in O(n) by condensing subtrees
+    /// from the tips (like the articulated-body recursion); GMRES then needs one iteration.
+    CBM_MECH_PRECOND_TREE,
+    /// The elastic stiffness S = diag(C_H, C_L, C_U) of every joint.
+    CBM_MECH_PRECOND_STIFFNESS
+} cbm_mech_precond;
+
 typedef struct cbm_solve_def {
-    cbm_mech_solver solver; ///< default CBM_MECH_NEWTON
-    double tolerance;       ///< relative residual to reach, default 1e-8
-    double alpha;           ///< relaxation factor in (0, 1], default 0.5 (relax only)
-    size_t max_passes;      ///< 0 = limits.max_passes of the context
-    int krylov_dim;         ///< GMRES restart length, default 20 (Newton only)
-    bool warm_start;        ///< start from the current Omega (default true); else from rest
+    cbm_mech_solver solver;          ///< default CBM_MECH_NEWTON
+    double tolerance;                ///< relative residual to reach, default 1e-8
+    double alpha;                    ///< relaxation factor in (0, 1], default 0.5 (relax only)
+    size_t max_passes;               ///< 0 = limits.max_passes of the context
+    int krylov_dim;                  ///< GMRES restart length, default 10 (Newton only)
+    cbm_mech_precond preconditioner; ///< default CBM_MECH_PRECOND_TREE (Newton only)
+    bool warm_start; ///< start from the current Omega (default true); else from rest
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);

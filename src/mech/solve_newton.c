@@ -2,10 +2,14 @@
  *     R(Omega) = C (Omega - rest) - M_local(Omega) = 0      (3 unknowns per segment),
  * with the same forward and backward passes as the relaxation (solve_common.c).
  *
- * - Linear solves: restarted GMRES (Saad & Schultz 1986), modified Gram-Schmidt, Givens
- *   rotations, RIGHT-preconditioned by the elastic stiffness S = diag(C): we solve
- *   (J S^-1) y = -R and take the step S^-1 y. J S^-1 = I - K S^-1 (K the load stiffness), close
- *   to the identity for moderate loads, so few Krylov iterations are needed.
+ * - Linear solves: restarted flexible GMRES (Saad & Schultz 1986; Saad 1993), modified
+ *   Gram-Schmidt, Givens rotations, RIGHT-preconditioned, either by the elastic stiffness
+ *   S = diag(C) (J S^-1 = I - K S^-1, K the load stiffness: close to the identity for moderate
+ *   loads) or, by default, by the exact O(n) factorisation of the Newton matrix of the tree
+ *   (solve_tree.c). The exact factorisation makes the preconditioned operator the identity,
+ *   so GMRES would return P^-1 (-R) after one iteration: the step is taken directly (factor and
+ *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
+ *   only when a joint's pivot block was singular and had to be regularised.
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
@@ -28,6 +32,7 @@ typedef struct nk {
     double rel;  /* relative residual of the current state */
     double norm; /* |R|_2 of the current state */
     double rmax, mmax;
+    bool tree; /* tree preconditioner */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -54,27 +59,43 @@ static bool evaluate(nk *k)
     return true;
 }
 
-/* GMRES for (J S^-1) y = -res; the step S^-1 y goes to work.step. Returns false when the pass
- * budget ran out. */
+/* z = P^-1 v (the preconditioner) */
+static void precond(nk *k, const double *v, double *z)
+{
+    cbm_plant *p = k->p;
+    if (k->tree) {
+        cbm__mech_tree_apply(p, (const cbm_vec3 *)v, (cbm_vec3 *)z);
+        k->st->passes++;
+        return;
+    }
+    const cbm_vec3 *cj = p->work.cj;
+    for (size_t i = 0; i < p->n; i++) {
+        z[3 * i] = v[3 * i] / cj[i].x;
+        z[3 * i + 1] = v[3 * i + 1] / cj[i].y;
+        z[3 * i + 2] = v[3 * i + 2] / cj[i].z;
+    }
+}
+
+/* Flexible GMRES (Saad 1993) for J x = -res with right preconditioning: the preconditioned
+ * vectors z_j = P^-1 v_j are kept, so the step is sum g_j z_j without a further solve. The step
+ * goes to work.step. Returns false when the pass budget ran out. */
 static bool gmres(nk *k, double eta, int m)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
-    size_t n3 = k->n3, n = p->n;
+    size_t n3 = k->n3;
     double *V = (double *)w->basis;
+    double *Z = (double *)w->zbasis;
     double *H = w->hess;                  /* (m+1) x m, column-major: H[j*(m+1) + i] */
     double *cs = H + (size_t)(m + 1) * m; /* m */
     double *sn = cs + m;                  /* m */
     double *g = sn + m;                   /* m + 1 */
-    double *x = (double *)w->step;        /* accumulated y (preconditioned variable) */
-    double *t = (double *)w->tmp;
-    const cbm_vec3 *cj = w->cj;
+    double *x = (double *)w->step;
     memset(x, 0, n3 * sizeof *x);
     double bnorm = k->norm;
     if (bnorm == 0.0)
         return true;
     double target = eta * bnorm;
-    /* r0 = -res (x = 0) */
     const double *res = (const double *)w->res;
     double beta = bnorm;
     for (size_t i = 0; i < n3; i++)
@@ -84,16 +105,12 @@ static bool gmres(nk *k, double eta, int m)
         g[0] = beta;
         int j = 0;
         for (; j < m; j++) {
-            if (k->st->passes + 2 >= k->max_passes)
+            if (k->st->passes + 3 >= k->max_passes)
                 return false;
             double *vj = V + (size_t)j * n3, *vn = V + (size_t)(j + 1) * n3;
-            /* t = S^-1 v_j; v_{j+1} = J t */
-            for (size_t i = 0; i < n; i++) {
-                t[3 * i] = vj[3 * i] / cj[i].x;
-                t[3 * i + 1] = vj[3 * i + 1] / cj[i].y;
-                t[3 * i + 2] = vj[3 * i + 2] / cj[i].z;
-            }
-            cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)vn);
+            double *zj = Z + (size_t)j * n3;
+            precond(k, vj, zj);
+            cbm__mech_jvp(p, (const cbm_vec3 *)zj, (cbm_vec3 *)vn);
             k->st->passes++;
             k->st->krylov_iterations++;
             double *hc = H + (size_t)j * (m + 1);
@@ -135,19 +152,15 @@ static bool gmres(nk *k, double eta, int m)
             g[i] = d != 0.0 ? s / d : 0.0;
         }
         for (int i = 0; i < j; i++) {
-            const double *vi = V + (size_t)i * n3;
+            const double *zi = Z + (size_t)i * n3;
             for (size_t q = 0; q < n3; q++)
-                x[q] += g[i] * vi[q];
+                x[q] += g[i] * zi[q];
         }
-        /* true residual of the linear system: -res - J S^-1 x */
-        if (k->st->passes + 2 >= k->max_passes)
+        /* the Arnoldi estimate says converged: done. Otherwise restart from the true residual
+         * -res - J x of the linear system. */
+        if (j < m || k->st->passes + 2 >= k->max_passes)
             break;
-        for (size_t i = 0; i < n; i++) {
-            t[3 * i] = x[3 * i] / cj[i].x;
-            t[3 * i + 1] = x[3 * i + 1] / cj[i].y;
-            t[3 * i + 2] = x[3 * i + 2] / cj[i].z;
-        }
-        cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)V);
+        cbm__mech_jvp(p, (const cbm_vec3 *)x, (cbm_vec3 *)V);
         k->st->passes++;
         for (size_t q = 0; q < n3; q++)
             V[q] = -res[q] - V[q];
@@ -156,12 +169,6 @@ static bool gmres(nk *k, double eta, int m)
             break;
         for (size_t q = 0; q < n3; q++)
             V[q] /= beta;
-    }
-    /* step = S^-1 x */
-    for (size_t i = 0; i < n; i++) {
-        x[3 * i] /= cj[i].x;
-        x[3 * i + 1] /= cj[i].y;
-        x[3 * i + 2] /= cj[i].z;
     }
     return true;
 }
@@ -184,7 +191,19 @@ static nk_result newton_level(nk *k, double tol, int m)
             return NK_DONE;
         if (k->st->passes + 3 >= k->max_passes)
             return NK_BUDGET;
-        if (!gmres(k, eta, m))
+        bool direct = false;
+        if (k->tree) {
+            /* factor and solve J step = -res in one pass; trusted when no pivot was singular
+             * (the factorisation is then exact and GMRES would stop after one iteration with
+             * this very step); otherwise the factorisation preconditions FGMRES */
+            for (size_t q = 0; q < n3; q++)
+                step[q] = -((const double *)w->res)[q];
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp);
+            k->st->passes++;
+            memcpy(step, w->tmp, n3 * sizeof *step);
+            direct = sing == 0;
+        }
+        if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
         k->st->newton_steps++;
         /* line search */
@@ -231,6 +250,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.n3 = 3 * p->n;
     k.max_passes = max_passes;
     k.st = st;
+    k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
     int m = def->krylov_dim;
     double tol = def->tolerance;
     cbm__mech_work *w = &p->work;
