@@ -13,8 +13,25 @@
  * valid.
  */
 #include "mech/growth_internal.h"
+#include "core/vecmath.h"
 
 #include <math.h>
+
+/* Peak bending stress at the proximal joint of segment i and the outer ring's MOR (the same
+ * formula as cbm_segment_state.stress, without the per-segment queries so that a pass over the
+ * plant stays O(n)). */
+static double joint_stress(const cbm_plant *p, size_t i, double *mor)
+{
+    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    cbm_quat q = p->q[i];
+    cbm_vec3 m = p->moment[i];
+    double ml = v3_dot(m, q_rotate(q, v3(0, 1, 0))), mu = v3_dot(m, q_rotate(q, v3(0, 0, 1)));
+    double il, iu;
+    cbm_mech_ellipse_moments(r->a, r->b, &il, &iu, NULL);
+    double sl = ml * r->a / il, su = mu * r->b / iu;
+    *mor = r->modulus_of_rupture;
+    return sqrt(sl * sl + su * su);
+}
 
 cbm_status cbm_plant_break(cbm_plant *p, size_t *broken, size_t max_broken, size_t *n_broken,
                            size_t *n_removed)
@@ -40,15 +57,12 @@ cbm_status cbm_plant_break(cbm_plant *p, size_t *broken, size_t max_broken, size
             flag[i] = 1;
             continue;
         }
-        cbm_segment_state st;
-        s = cbm_plant_segment(p, i, &st);
-        if (s != CBM_OK)
-            break;
-        if (!isfinite(st.stress)) {
+        double mor, stress = joint_stress(p, i, &mor);
+        if (!isfinite(stress)) {
             s = cbm__fail(p->ctx, CBM_E_NONFINITE, "segment %zu: bending stress is not finite", i);
             break;
         }
-        if (st.stress_ratio > 1.0) {
+        if (mor > 0.0 && stress > mor) {
             flag[i] = 2;
             if (broken && nb < max_broken)
                 broken[nb] = i;
