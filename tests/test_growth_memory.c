@@ -387,3 +387,45 @@ TEST(growth_out_of_memory)
 {
     CHECK(test_oom_loop(oom_growth, NULL) > 0);
 }
+
+/* The upright roll (Taylor-Hell Fig. 8.4): after the roll U is perpendicular to H, as close to
+ * up as possible (U . up = |up - (up . H) H|), a horizontal heading gets U = (0, 1, 0), and a
+ * vertical heading needs no roll. */
+TEST(growth_upright_roll)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_segment_def d = cbm_segment_def_default();
+    CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    double roll = 1.0;
+    d.parent = 0;
+    CHECK_OK(cbm_plant_upright_roll(p, &d, &roll)); /* vertical heading */
+    CHECK(roll == 0.0);
+    for (int k = 0; k < 12; k++) {
+        d.divergence = 0.7 * k;
+        d.deviation = k == 6 ? -PI / 2 : 0.15 * k - 0.8; /* k = 6: horizontal */
+        CHECK_OK(cbm_plant_upright_roll(p, &d, &roll));
+        d.roll = roll;
+        size_t i;
+        CHECK_OK(cbm_plant_add_segment(p, &d, &i));
+        CHECK_OK(cbm_plant_evaluate(p, NULL));
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(p, i, &s));
+        cbm_vec3 h = s.frame.h, u = s.frame.u;
+        CHECK_NEAR(v3_dot(u, h), 0.0, 1e-12);
+        cbm_vec3 up = {0, 1, 0};
+        double best = v3_norm(v3_sub(up, v3_scale(h, v3_dot(up, h))));
+        CHECK_NEAR(v3_dot(u, up), best, 1e-12);
+        if (k == 6) {
+            CHECK_NEAR(h.y, 0.0, 1e-12);
+            CHECK_NEAR(u.y, 1.0, 1e-12);
+        }
+        d.roll = 0;
+    }
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}

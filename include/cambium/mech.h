@@ -337,6 +337,14 @@ CBM_API cbm_growth_def cbm_growth_def_default(void);
 CBM_API cbm_status cbm_plant_grow_segment(cbm_plant *plant, const cbm_segment_def *def,
                                           const cbm_tropism *tropism, size_t *index);
 
+/// Roll (rad, about the new heading) that turns the U axis of a segment about to be added with
+/// `def` (parent frame, divergence, deviation) as close as possible to "up" (against gravity), so
+/// that U x H spans the vertical plane of H and the long semi-axis a lies in the plane of a
+/// vertical lean (Taylor-Hell §8.4.2, Fig. 8.4: U = H x (up x H)); 0 when H is vertical. Put it
+/// in def->roll. Frames of the parent must be current.
+CBM_API cbm_status cbm_plant_upright_roll(const cbm_plant *plant, const cbm_segment_def *def,
+                                          double *roll);
+
 /// What a growth step did.
 typedef struct cbm_growth_stats {
     size_t rings_added;    ///< rings laid down

@@ -148,6 +148,33 @@ cbm_status cbm_plant_grow_segment(cbm_plant *p, const cbm_segment_def *def,
     return cbm_plant_add_segment(p, &d, index);
 }
 
+cbm_status cbm_plant_upright_roll(const cbm_plant *p, const cbm_segment_def *def, double *roll)
+{
+    if (!p || !def || !roll)
+        return CBM_E_INVALID;
+    *roll = 0.0;
+    if (def->parent < -1 || (def->parent >= 0 && (size_t)def->parent >= p->n))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "upright roll: parent %lld is not a segment",
+                         (long long)def->parent);
+    if (!isfinite(def->divergence) || !isfinite(def->deviation))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "upright roll: branching angles must be finite");
+    cbm_quat qp = def->parent >= 0 ? p->q[def->parent] : p->base_q;
+    cbm_quat q0 = q_mul(qp, branching(def->divergence, def->deviation, 0.0));
+    cbm_vec3 h = q_rotate(q0, v3(1, 0, 0)), l = q_rotate(q0, v3(0, 1, 0));
+    cbm_vec3 u = q_rotate(q0, v3(0, 0, 1));
+    double gn = v3_norm(p->gravity);
+    cbm_vec3 up = gn > 0.0 ? v3_scale(p->gravity, -1.0 / gn) : v3(0, 1, 0);
+    /* U* = H x (up x H) = up - (up . H) H */
+    cbm_vec3 want = v3_sub(up, v3_scale(h, v3_dot(up, h)));
+    double wn = v3_norm(want);
+    if (wn < 1e-12)
+        return CBM_OK;
+    want = v3_scale(want, 1.0 / wn);
+    /* a roll phi about H takes U to cos(phi) U - sin(phi) L */
+    *roll = atan2(-v3_dot(want, l), v3_dot(want, u));
+    return CBM_OK;
+}
+
 /* The ring of new wood on segment `seg`, reaction wood or not (wood.c fills the material). */
 cbm_status cbm__growth_ring(cbm_plant *p, size_t seg, double a, double b, const cbm_growth_def *d,
                             bool reaction)
