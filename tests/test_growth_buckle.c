@@ -160,3 +160,43 @@ TEST(growth_buckle_errors)
     CHECK_STATUS(cbm_mech_buckle(ctx, &d, &r), CBM_E_LIMIT);
     test_ctx_end(ctx);
 }
+
+/* The protocol literally: one column grown a segment at a time, the push followed after each
+ * segment; the factor rises with every segment and first reaches 1 at the count the bisection
+ * of cbm_mech_buckle finds. */
+TEST(growth_buckle_sequential_growth_agrees)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_buckle_def d = cbm_buckle_def_default();
+    d.youngs_modulus = 8.77e9;
+    d.density = 745;
+    cbm_buckle_result r;
+    CHECK_OK(cbm_mech_buckle(ctx, &d, &r));
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_segment_def sd = cbm_segment_def_default();
+    sd.length = d.segment;
+    sd.core.youngs_modulus = d.youngs_modulus;
+    sd.core.shear_modulus = d.youngs_modulus / 16;
+    sd.core.density = d.density;
+    sd.core.a = sd.core.b = d.radius;
+    double prev = 0.0;
+    size_t first = 0;
+    for (size_t n = 1; n <= r.segments + 5; n++) {
+        sd.parent = (int64_t)n - 2;
+        CHECK_OK(cbm_plant_add_segment(p, &sd, NULL));
+        double f;
+        CHECK_OK(cbm_plant_stability_factor(p, &f, NULL));
+        CHECK(f > prev);
+        prev = f;
+        if (!first && f >= 1.0)
+            first = n;
+    }
+    printf("grown one segment at a time: first failure at %zu segments (bisection: %zu)\n", first,
+           r.segments);
+    CHECK_EQ_INT(first, r.segments);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}

@@ -266,6 +266,12 @@ TEST(growth_pipe_model_identities)
 {
     cbm_context *ctx = test_ctx();
     static const int64_t par[] = {-1, 0, 1, 0, 1, 4, 3};
+    /* circle limit of the ellipse formulas (8.9-8.11): I = pi r^4 / 4, J = pi r^4 / 2 */
+    double il, iu, jj;
+    cbm_mech_ellipse_moments(0.03, 0.03, &il, &iu, &jj);
+    CHECK_REL(il, PI * pow(0.03, 4) / 4, 1e-15);
+    CHECK_REL(iu, PI * pow(0.03, 4) / 4, 1e-15);
+    CHECK_REL(jj, PI * pow(0.03, 4) / 2, 1e-15);
     /* P = 2, kappa = 1, with ellipses of aspect 0.7 */
     cbm_plant *p = small_tree(ctx, 0.7);
     cbm_growth_def g = cbm_growth_def_default();
