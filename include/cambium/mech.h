@@ -409,11 +409,14 @@ typedef struct cbm_buckle_result {
     size_t passes;             ///< linearised passes used in all
 } cbm_buckle_result;
 
-/// Decay factor of a small perturbation of the straight equilibrium of `plant` under the
-/// relaxation with alpha = 1: the largest eigenvalue of C^-1 dM/dOmega, found by power
-/// iteration from a fixed perturbation of every segment (the perturbation returns, i.e. the
-/// column returns upright, iff the factor is < 1). The plant is evaluated in its current state
-/// (Omega as it is). *passes (optional) receives the linearised passes used.
+/// Growth factor per pass of a small perturbation of the plant's current equilibrium under the
+/// relaxation with alpha = 1: the spectral radius of K = C^-1 dM/dOmega (dM/dOmega the solvers'
+/// tangent), found by power iteration from a fixed push of every segment; the push dies out iff
+/// the factor is < 1. For a column under compression every eigenvalue of K is >= 0 and this is
+/// the physical stability (the column returns upright); where a load is in tension (a hanging
+/// chain) K can have negative eigenvalues and a factor >= 1 then only says that the alpha = 1
+/// relaxation oscillates. The plant is evaluated at its current Omega (call after a solve).
+/// *passes (optional) receives the linearised passes used.
 CBM_API cbm_status cbm_plant_stability_factor(cbm_plant *plant, double *factor, size_t *passes);
 
 /// Taylor-Hell's protocol: a vertical column grown one segment at a time, perturbed, until the
