@@ -385,8 +385,17 @@ static cbm_status oom_growth(cbm_context *ctx, void *ud)
     size_t nb;
     if (s == CBM_OK)
         s = cbm_plant_break(p, NULL, 0, &nb, NULL);
+    g.ageing = CBM_AGEING_CORE;
+    g.adult_age = 5;
+    if (s == CBM_OK)
+        s = cbm_plant_age_wood(p, &g, 1.0);
     cbm_plant_destroy(p);
-    return s;
+    if (s != CBM_OK)
+        return s;
+    cbm_buckle_def bd = cbm_buckle_def_default();
+    bd.segment = 5.0; /* a few segments */
+    cbm_buckle_result br;
+    return cbm_mech_buckle(ctx, &bd, &br);
 }
 
 TEST(growth_out_of_memory)
