@@ -2,6 +2,7 @@
  * new rings (6.29-6.34 = Jirasek eq. 24) and its limits, the pipe model (4.1-4.3, 8.17). */
 #include "mech_testlib.h"
 #include "core/vecmath.h"
+#include "mech/growth_internal.h"
 
 static cbm_growth_def weightless_wood(void)
 {
@@ -442,5 +443,47 @@ TEST(growth_upright_roll)
         d.roll = 0;
     }
     cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* The rates a ring memorises, computed for the whole plant at once (O(n)), are the per-segment
+ * query's rate (CBM_MEMORY_SEGMENT) and omega (CBM_MEMORY_JOINT), on a branched tree with tip
+ * moments, for both discretisations. */
+TEST(growth_rates_match_segment_query)
+{
+    cbm_context *ctx = test_ctx();
+    for (int disc = 0; disc < 2; disc++) {
+        cbm_plant_def pd = cbm_plant_def_default();
+        pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
+        pd.discretization = disc ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
+        cbm_plant *p = NULL;
+        CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+        for (int i = 0; i < 60; i++) {
+            cbm_segment_def d = cbm_segment_def_default();
+            if (i > 0) {
+                double u = cbm_context_uniform(ctx);
+                d.parent = (int64_t)(i - 1 - (int)(u * u * u * i));
+                d.divergence = 2.4 * i;
+                d.deviation = cbm_context_uniform(ctx) - 0.5;
+            }
+            d.core.youngs_modulus = 2e8;
+            d.core.a = 0.01 / (1 + 0.05 * i);
+            d.core.b = 0.8 * d.core.a;
+            if (i % 7 == 3)
+                d.tip_moment = (cbm_vec3){0.001, -0.002, 0.0005};
+            CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+        }
+        CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+        cbm_vec3 r[60], o[60];
+        CHECK_OK(cbm__growth_rates(p, CBM_MEMORY_SEGMENT, r));
+        CHECK_OK(cbm__growth_rates(p, CBM_MEMORY_JOINT, o));
+        for (size_t i = 0; i < 60; i++) {
+            cbm_segment_state s;
+            CHECK_OK(cbm_plant_segment(p, i, &s));
+            CHECK(v3_norm(v3_sub(r[i], s.rate)) <= 1e-12 * (1 + v3_norm(s.rate)));
+            CHECK(v3_norm(v3_sub(o[i], s.omega)) == 0.0);
+        }
+        cbm_plant_destroy(p);
+    }
     test_ctx_end(ctx);
 }

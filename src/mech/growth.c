@@ -175,20 +175,18 @@ cbm_status cbm_plant_upright_roll(const cbm_plant *p, const cbm_segment_def *def
     return CBM_OK;
 }
 
-/* The ring of new wood on segment `seg`, reaction wood or not (wood.c fills the material). */
-cbm_status cbm__growth_ring(cbm_plant *p, size_t seg, double a, double b, const cbm_growth_def *d,
-                            bool reaction)
+/* The ring of new wood on segment `seg` (outer semi-axes a, b), memorising `cur` (wood.c fills
+ * the material and the rest rate, reaction wood or not). */
+static cbm_status growth_ring(cbm_plant *p, size_t seg, double a, double b, const cbm_growth_def *d,
+                              bool reaction, cbm_vec3 cur)
 {
-    cbm_segment_state st;
-    CBM_TRY(cbm_plant_segment(p, seg, &st));
-    cbm_vec3 cur = d->memory == CBM_MEMORY_JOINT ? st.omega : st.rate;
     cbm_ring r;
     memset(&r, 0, sizeof r);
     r.a = a;
     r.b = b;
     r.density = d->density;
     r.modulus_of_rupture = d->modulus_of_rupture;
-    cbm__wood_new_ring(d, reaction, cur, st.rest_rate, &r);
+    cbm__wood_new_ring(d, reaction, cur, p->rest[seg], &r);
     return cbm_plant_add_ring(p, seg, &r);
 }
 
@@ -198,11 +196,45 @@ cbm_status cbm_plant_add_growth_ring(cbm_plant *p, size_t seg, double a, double 
     if (!p || !def)
         return CBM_E_INVALID;
     CBM_TRY(cbm__growth_check(p->ctx, def));
-    bool rw = false;
-    CBM_TRY(cbm__wood_leans(p, seg, def, &rw));
-    CBM_TRY(cbm__growth_ring(p, seg, a, b, def, rw));
+    cbm_segment_state st;
+    CBM_TRY(cbm_plant_segment(p, seg, &st));
+    cbm_vec3 cur = def->memory == CBM_MEMORY_JOINT ? st.omega : st.rate;
+    bool rw = cbm__wood_leans(def, cur, st.rest_rate);
+    CBM_TRY(growth_ring(p, seg, a, b, def, rw, cur));
     if (reaction)
         *reaction = rw;
+    return CBM_OK;
+}
+
+cbm_status cbm__growth_rates(cbm_plant *p, cbm_ring_memory memory, cbm_vec3 *out)
+{
+    size_t n = p->n;
+    if (memory == CBM_MEMORY_JOINT || p->disc == CBM_MECH_CHAIN) {
+        memcpy(out, p->omega, n * sizeof *out);
+        return CBM_OK;
+    }
+    /* the moment at each distal node: the continuation child's joint moment, or the tip moment
+     * at a free end (as cbm_segment_state.rate) */
+    int64_t *cc = cbm__alloc(p->ctx, n * sizeof *cc);
+    if (!cc)
+        return CBM_E_NOMEM;
+    for (size_t i = 0; i < n; i++)
+        cc[i] = -1;
+    for (size_t i = 0; i < n; i++) {
+        int64_t pa = p->parent[i];
+        if (pa >= 0 && (p->cont[i] & 1) && cc[pa] < 0)
+            cc[pa] = (int64_t)i;
+    }
+    for (size_t i = 0; i < n; i++) {
+        cbm_vec3 md = cc[i] >= 0
+                          ? p->moment[cc[i]]
+                          : (p->nchild[i] == 0 ? v3_scale(p->tipm[i], p->load_scale) : v3(0, 0, 0));
+        cbm_vec3 m = v3_scale(v3_add(p->moment[i], md), 0.5);
+        cbm_quat qc = q_conj(p->q[i]);
+        cbm_vec3 ml = q_rotate(qc, m), c = p->rig[i], r = p->rest[i];
+        out[i] = v3(r.x + ml.x / c.x, r.y + ml.y / c.y, r.z + ml.z / c.z);
+    }
+    cbm__free(p->ctx, cc, n * sizeof *cc);
     return CBM_OK;
 }
 
@@ -218,13 +250,13 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
     size_t n = p->n;
     if (n == 0)
         return CBM_OK;
-    /* acc[i] = sum over the children of i of area^(P/2) after their growth */
+    /* acc[i] = sum over the children of i of area^(P/2) after their growth; cur[i] = the rate a
+     * ring on i memorises, from the state before this step */
     double *acc = cbm__calloc(p->ctx, n, sizeof *acc);
-    if (!acc)
-        return CBM_E_NOMEM;
+    cbm_vec3 *cur = cbm__alloc(p->ctx, n * sizeof *cur);
+    cbm_status s = acc && cur ? cbm__growth_rates(p, def->memory, cur) : CBM_E_NOMEM;
     const double h = 0.5 * def->pipe_exponent;
-    cbm_status s = CBM_OK;
-    for (size_t i = n; i-- > 0;) {
+    for (size_t i = n; s == CBM_OK && i-- > 0;) {
         cbm_ring outer;
         s = cbm_plant_get_ring(p, i, p->ring_count[i] - 1, &outer);
         if (s != CBM_OK)
@@ -238,10 +270,7 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
                 na = a + def->pipe_rate * (ag - a);
         }
         double nb = zeta * na;
-        bool rw = false;
-        s = cbm__wood_leans(p, i, def, &rw);
-        if (s != CBM_OK)
-            break;
+        bool rw = cbm__wood_leans(def, cur[i], p->rest[i]);
         if (rw)
             na += def->reaction_increment;
         if (nb < b)
@@ -249,7 +278,7 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
         if (na < nb)
             na = nb;
         if (na - a > def->min_ring || (rw && def->reaction_increment > 0.0)) {
-            s = cbm__growth_ring(p, i, na, nb, def, rw);
+            s = growth_ring(p, i, na, nb, def, rw, cur[i]);
             if (s != CBM_OK)
                 break;
             gs.rings_added++;
@@ -263,7 +292,10 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
         if (p->parent[i] >= 0)
             acc[p->parent[i]] += pow(CBM_PI * na * nb, h);
     }
-    cbm__free(p->ctx, acc, n * sizeof *acc);
+    if (acc)
+        cbm__free(p->ctx, acc, n * sizeof *acc);
+    if (cur)
+        cbm__free(p->ctx, cur, n * sizeof *cur);
     if (stats)
         *stats = gs;
     return s;

@@ -6,11 +6,12 @@
 
 /// Validates a growth definition, naming the bad field.
 cbm_status cbm__growth_check(cbm_context *ctx, const cbm_growth_def *d);
-/// Lays a ring of new wood (outer semi-axes a, b) on a segment; `reaction` selects reaction wood.
-cbm_status cbm__growth_ring(cbm_plant *p, size_t seg, double a, double b, const cbm_growth_def *d,
-                            bool reaction);
-/// Whether segment `seg` leans (|Omega - rest| above the reaction threshold, 8.7-8.8).
-cbm_status cbm__wood_leans(const cbm_plant *p, size_t seg, const cbm_growth_def *d, bool *leans);
+/// The rate a new ring memorises, for every segment at once in O(n): cbm_segment_state.rate
+/// (CBM_MEMORY_SEGMENT) or .omega (CBM_MEMORY_JOINT). out holds segment_count entries.
+cbm_status cbm__growth_rates(cbm_plant *p, cbm_ring_memory memory, cbm_vec3 *out);
+/// Whether a segment at rate `current` with rest rate `rest` leans (|Omega - rest| above the
+/// reaction threshold, 8.7-8.8).
+bool cbm__wood_leans(const cbm_growth_def *d, cbm_vec3 current, cbm_vec3 rest);
 /// Material and rest rate of a new ring (E, G, rest rate, reaction fraction; 8.23-8.25).
 /// `current` is the rate the ring memorises, `rest` the segment's rest rate (the EP).
 void cbm__wood_new_ring(const cbm_growth_def *d, bool reaction, cbm_vec3 current, cbm_vec3 rest,

@@ -26,16 +26,9 @@
 
 #include <math.h>
 
-cbm_status cbm__wood_leans(const cbm_plant *p, size_t seg, const cbm_growth_def *d, bool *leans)
+bool cbm__wood_leans(const cbm_growth_def *d, cbm_vec3 current, cbm_vec3 rest)
 {
-    *leans = false;
-    if (!isfinite(d->reaction_threshold) && d->reaction_threshold > 0.0)
-        return CBM_OK;
-    cbm_segment_state st;
-    CBM_TRY(cbm_plant_segment(p, seg, &st));
-    cbm_vec3 cur = d->memory == CBM_MEMORY_JOINT ? st.omega : st.rate;
-    *leans = v3_norm(v3_sub(cur, st.rest_rate)) > d->reaction_threshold;
-    return CBM_OK;
+    return v3_norm(v3_sub(current, rest)) > d->reaction_threshold;
 }
 
 void cbm__wood_new_ring(const cbm_growth_def *d, bool reaction, cbm_vec3 current, cbm_vec3 rest,
