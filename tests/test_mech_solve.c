@@ -279,6 +279,40 @@ TEST(mech_solvers_same_equilibrium)
     test_ctx_end(ctx);
 }
 
+/* An inclined heavy rod (60 deg, w L^3 / EI = 50, tip load) has several equilibria; the fast
+ * solver follows the loading path and reaches the one the relaxation reaches from rest. */
+TEST(mech_fast_follows_loading_path)
+{
+    cbm_context *ctx = test_ctx();
+    double L = 1, r = 0.01, rho = 1000, w = rho * PI * r * r * 9.81, EI = w / 50.0;
+    double E = EI / (PI * r * r * r * r / 4);
+    for (int load = 0; load < 2; load++) {
+        cbm_plant *a = make_rod(ctx, 200, L, radius_uniform, E, rho, PI / 3, CBM_MECH_STAGGERED);
+        cbm_plant *b = make_rod(ctx, 200, L, radius_uniform, E, rho, PI / 3, CBM_MECH_STAGGERED);
+        if (load) {
+            CHECK_OK(cbm_plant_set_load(a, 199, 0, (cbm_vec3){0, -0.5, 0}, (cbm_vec3){0, 0, 0}));
+            CHECK_OK(cbm_plant_set_load(b, 199, 0, (cbm_vec3){0, -0.5, 0}, (cbm_vec3){0, 0, 0}));
+        }
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.tolerance = 1e-10;
+        cbm_solve_stats sa, sb;
+        CHECK_OK(cbm_plant_solve(a, &sd, &sa));
+        sd.solver = CBM_MECH_RELAX;
+        sd.alpha = 0.1;
+        CHECK_OK(cbm_plant_solve(b, &sd, &sb));
+        cbm_vec3 ta = rod_tip(a), tb = rod_tip(b);
+        printf("inclined heavy rod, tip load %d: fast (%.9f, %.9f) %zu passes, relax (%.9f, "
+               "%.9f) %zu passes\n",
+               load, ta.x, ta.y, sa.passes, tb.x, tb.y, sb.passes);
+        CHECK(ta.x > 0.2);
+        CHECK_NEAR(ta.x, tb.x, 1e-7);
+        CHECK_NEAR(ta.y, tb.y, 1e-7);
+        cbm_plant_destroy(a);
+        cbm_plant_destroy(b);
+    }
+    test_ctx_end(ctx);
+}
+
 TEST(mech_rings_and_sections)
 {
     cbm_context *ctx = test_ctx();

@@ -301,7 +301,13 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
         cbm_vec3 r = v3_sub(e, ml);
         double rn = v3_norm2(r), mn = v3_norm2(mi), en = v3_norm2(e);
         sum += rn + mn;
-        ss += rn;
+        {
+            /* merit of the line search: the unbalanced rotation of each joint (rad),
+             * d C^-1 r, so that every joint weighs alike whatever its size */
+            double dj = w->dual[i];
+            cbm_vec3 z = v3(dj * r.x / c.x, dj * r.y / c.y, dj * r.z / c.z);
+            ss += v3_norm2(z);
+        }
         if (rn > rmax)
             rmax = rn;
         if (mn > mmax)

@@ -13,16 +13,32 @@
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
- * - Globalisation: backtracking line search on |R|_2 (Armijo, c = 1e-4, halving up to 12 times);
- *   if it fails or Newton stalls, load continuation: the loads are scaled by lambda, restarting
- *   from the last converged level (lambda = 0 is the rest state), halving the increment on
- *   failure and doubling it on success; intermediate levels are solved to 1e-4.
+ * - Globalisation, in three layers:
+ *   1. a trust region on rotations: a Newton step is scaled so that no frame turns by more than
+ *      MAX_TURN rad (the linearisation of a large rotation overshoots);
+ *   2. backtracking line search (Armijo, c = 1e-4, halving up to 12 times) on the merit
+ *      |d C^-1 R|_2, the unbalanced rotation of each joint in radians, so that thin twigs and
+ *      the trunk weigh alike;
+ *   3. load continuation when the start is far from equilibrium (the first full Newton step
+ *      would turn a frame by more than MAX_TURN) or Newton stalls (line search fails, or six
+ *      heavily damped steps in a row): the loads are scaled by lambda from the rest state
+ *      (lambda = 0 is exact there), first increment MAX_TURN / (rotation of the first step),
+ *      doubled after an easy level (<= 4 Newton steps), halved after a stall; intermediate
+ *      levels solved to 1e-3. This follows the loading path, so the equilibrium reached is the
+ *      one the relaxation reaches from rest when several exist (an inclined heavy rod can also
+ *      rest curled back over its base);
+ *   4. last resort: bursts of 25 relaxation passes (alpha 0.1, halved when a burst does not
+ *      help) between Newton attempts at the full load.
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
+
+#ifndef MAX_TURN
+#define MAX_TURN 0.5
+#endif
 
 typedef struct nk {
     cbm_plant *p;
@@ -32,7 +48,9 @@ typedef struct nk {
     double rel;  /* relative residual of the current state */
     double norm; /* |R|_2 of the current state */
     double rmax, mmax;
-    bool tree; /* tree preconditioner */
+    bool tree;         /* tree preconditioner */
+    double max_turn;   /* largest frame rotation of one Newton step, rad */
+    double first_turn; /* largest frame rotation of the first full Newton step, rad */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -173,10 +191,10 @@ static bool gmres(nk *k, double eta, int m)
     return true;
 }
 
-typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE } nk_result;
+typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE } nk_result;
 
 /* Newton iterations at the current load level until rel < tol. */
-static nk_result newton_level(nk *k, double tol, int m)
+static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -186,12 +204,14 @@ static nk_result newton_level(nk *k, double tol, int m)
     if (!evaluate(k))
         return NK_NONFINITE;
     double eta = 0.1, prev = k->norm;
+    int small = 0;
     for (int it = 0; it < 60; it++) {
         if (k->rel < tol)
             return NK_DONE;
         if (k->st->passes + 3 >= k->max_passes)
             return NK_BUDGET;
         bool direct = false;
+        double lam0 = 1.0;
         if (k->tree) {
             /* factor and solve J step = -res in one pass; trusted when no pivot was singular
              * (the factorisation is then exact and GMRES would stop after one iteration with
@@ -202,12 +222,27 @@ static nk_result newton_level(nk *k, double tol, int m)
             k->st->passes++;
             memcpy(step, w->tmp, n3 * sizeof *step);
             direct = sing == 0;
+            /* trust region on rotations: the forward sweep of the solve left the world
+             * rotation of every frame under the full step in work.dth; limit the largest to
+             * max_turn radians (the linearisation of a large rotation overshoots) */
+            double tmax = 0.0;
+            for (size_t i = 0; i < p->n; i++) {
+                double t = v3_norm2(w->dth[i]);
+                if (t > tmax)
+                    tmax = t;
+            }
+            tmax = sqrt(tmax);
+            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+            if (it == 0)
+                k->first_turn = tmax;
+            if (it == 0 && abort_large && lam0 < 1.0)
+                return NK_LARGE; /* far from equilibrium: follow the load path instead */
         }
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
         k->st->newton_steps++;
         /* line search */
-        double f0 = k->norm, lam = 1.0;
+        double f0 = k->norm, lam = lam0;
         bool ok = false;
         for (int ls = 0; ls < 12; ls++) {
             for (size_t q = 0; q < n3; q++)
@@ -228,6 +263,10 @@ static nk_result newton_level(nk *k, double tol, int m)
                 return NK_NONFINITE;
             return NK_STALL;
         }
+        /* slow progress (heavily damped steps again and again): let the caller globalise */
+        small = lam <= 1.0 / 16.0 ? small + 1 : 0;
+        if (small >= 6)
+            return NK_STALL;
         /* Eisenstat-Walker choice 2 */
         double ratio = k->norm / prev;
         double e = 0.9 * ratio * ratio, safe = 0.9 * eta * eta;
@@ -251,6 +290,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.max_passes = max_passes;
     k.st = st;
     k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
+    k.max_turn = MAX_TURN;
     int m = def->krylov_dim;
     double tol = def->tolerance;
     cbm__mech_work *w = &p->work;
@@ -260,10 +300,13 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     st->continuation_steps = 1;
-    nk_result r = newton_level(&k, tol, m);
-    if (r == NK_STALL) {
-        /* load continuation from the rest state */
-        double done = 0.0, dl = 0.5;
+    nk_result r = newton_level(&k, tol, m, k.tree);
+    if (r == NK_LARGE || r == NK_STALL) {
+        /* load continuation from the rest state (lambda = 0 is exact there): the equilibrium
+         * reached is the one on the loading path, as with the relaxation */
+        double done = 0.0;
+        double dl = r == NK_LARGE && k.first_turn > 0 ? k.max_turn / k.first_turn : 0.25;
+        dl = dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
         for (size_t i = 0; i < p->n; i++)
             w->save[i] = w->rj[i];
         for (;;) {
@@ -272,21 +315,45 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
             p->load_scale = lam;
             cbm__mech_prepare(p);
             st->continuation_steps++;
-            r = newton_level(&k, lam < 1.0 ? (tol > 1e-4 ? tol : 1e-4) : tol, m);
+            size_t ns = st->newton_steps;
+            r = newton_level(&k, lam < 1.0 ? (tol > 1e-3 ? tol : 1e-3) : tol, m, false);
             if (r == NK_DONE) {
                 if (lam >= 1.0)
                     break;
                 done = lam;
                 memcpy(w->save, p->omega, p->n * sizeof *p->omega);
-                dl *= 2.0;
+                if (st->newton_steps - ns <= 4)
+                    dl *= 2.0;
             } else if (r == NK_STALL) {
                 dl *= 0.5;
-                if (dl < 1e-6) {
+                if (dl < 1e-4) {
                     why = "Newton stalled even with small load steps";
                     break;
                 }
             } else
                 break;
+        }
+        if (r == NK_STALL) {
+            /* last resort: relaxation bursts (the seeds' iteration) between Newton attempts at
+             * the full load, from the furthest state reached */
+            p->load_scale = 1.0;
+            cbm__mech_prepare(p);
+            double ra = 0.1;
+            for (int burst = 0; r == NK_STALL && burst < 8; burst++) {
+                double before = k.norm;
+                for (int it = 0; it < 25 && st->passes + 2 < max_passes; it++) {
+                    cbm__mech_forward(p);
+                    double mm;
+                    double rr = cbm__mech_backward(p, ra, NULL, &mm, NULL);
+                    st->passes++;
+                    if (!isfinite(rr))
+                        break;
+                }
+                r = newton_level(&k, tol, m, false);
+                if (r == NK_STALL && !(k.norm < before))
+                    ra *= 0.5;
+                st->continuation_steps++;
+            }
         }
         if (r != NK_DONE) {
             /* leave a consistent state at full load for the caller to read */
