@@ -111,11 +111,11 @@ int cmd_buckle(int argc, char **argv)
                r.buckling_length, r.greenhill_length, r.segments, d.segment, r.growth_factor,
                r.last_stable_factor, cbm_mech_discretization_name(d.discretization), r.passes);
     else
-        printf("buckling length  %.4f m  (%zu segments of %g m; perturbation factor %.6f, "
+        printf("buckling length  %.4f m  (%zu segment%s of %g m; perturbation factor %.6f, "
                "%.6f one segment shorter)\n"
                "Greenhill length %.4f m  (7.837 E I / q)^(1/3)\n",
-               r.buckling_length, r.segments, d.segment, r.growth_factor, r.last_stable_factor,
-               r.greenhill_length);
+               r.buckling_length, r.segments, r.segments == 1 ? "" : "s", d.segment,
+               r.growth_factor, r.last_stable_factor, r.greenhill_length);
     cli_context_end(ctx);
     return CLI_OK;
 }
