@@ -487,3 +487,54 @@ TEST(growth_rates_match_segment_query)
     }
     test_ctx_end(ctx);
 }
+
+/* Fig. 6.7: self-weight, negative geotropism and radial growth give an S-shaped stem: the old,
+ * thick base part has memorised its sag and leans away, the young distal part turns back up. The
+ * elevation of the stem along its length first falls, then rises to the tip. */
+TEST(growth_s_shaped_stem)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(70.0 * PI / 180.0);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    const double a0 = 0.002;
+    cbm_tropism t = cbm_tropism_default();
+    t.strength = 0.05;
+    cbm_growth_def g = cbm_growth_def_default();
+    g.youngs_juvenile = g.youngs_adult = 1e8;
+    g.density = 700;
+    g.leaf_area = PI * a0 * a0;
+    cbm_segment_def d = cbm_segment_def_default();
+    d.length = 0.05;
+    d.core.youngs_modulus = 1e8;
+    d.core.shear_modulus = 1e8 / 16;
+    d.core.density = 700;
+    d.core.a = d.core.b = a0;
+    const int n = 40;
+    for (int i = 0; i < n; i++) {
+        d.parent = i - 1;
+        CHECK_OK(cbm_plant_grow_segment(p, &d, &t, NULL));
+        CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+        CHECK_OK(cbm_plant_grow_rings(p, &g, NULL));
+        CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+    }
+    double el[40], lo = 1e9;
+    int imin = 0;
+    for (int i = 0; i < n; i++) {
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(p, (size_t)i, &s));
+        el[i] = asin(s.frame.h.y) * 180.0 / PI;
+        if (el[i] < lo) {
+            lo = el[i];
+            imin = i;
+        }
+    }
+    printf("elevation: base %.1f deg, lowest %.1f deg at segment %d, tip %.1f deg\n", el[0], lo,
+           imin, el[n - 1]);
+    CHECK(imin > 2 && imin < n - 3);
+    CHECK(el[0] > lo + 5.0);
+    CHECK(el[n - 1] > lo + 5.0);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
