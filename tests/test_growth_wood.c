@@ -212,3 +212,61 @@ TEST(growth_reaction_wood_rights_a_lean)
     CHECK(beta0[Y] <= beta0[0] + 1e-9);
     test_ctx_end(ctx);
 }
+
+/* Bad input is named and changes nothing. */
+TEST(growth_errors)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant *p = make_rod(ctx, 2, 0.2, radius_uniform, 1e9, 600, 0.0, CBM_MECH_STAGGERED);
+    CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+    cbm_growth_def g = wood();
+    CHECK_STATUS(cbm_plant_add_growth_ring(p, 7, 0.02, 0.02, &g, NULL), CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "segment 7") != NULL);
+    CHECK_STATUS(cbm_plant_add_growth_ring(p, 0, 0.005, 0.005, &g, NULL), CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "enclose") != NULL);
+    CHECK_EQ_INT(cbm_plant_ring_count(p, 0), 1);
+    static const struct {
+        const char *field;
+        int which;
+    } bad[] = {{"pipe_exponent", 0}, {"youngs_adult", 1}, {"reaction_beta", 2},
+               {"shear_ratio", 3},   {"leaf_area", 4},    {"reaction_threshold", 5}};
+    for (int k = 0; k < 6; k++) {
+        cbm_growth_def b = wood();
+        switch (bad[k].which) {
+        case 0:
+            b.pipe_exponent = 0;
+            break;
+        case 1:
+            b.youngs_adult = 0.5 * b.youngs_juvenile;
+            break;
+        case 2:
+            b.reaction_beta = 1.5;
+            break;
+        case 3:
+            b.shear_ratio = NAN;
+            break;
+        case 4:
+            b.leaf_area = -1;
+            break;
+        default:
+            b.reaction_threshold = NAN;
+            break;
+        }
+        CHECK_STATUS(cbm_plant_grow_rings(p, &b, NULL), CBM_E_INVALID);
+        CHECK(strstr(cbm_context_last_error(ctx), bad[k].field) != NULL);
+    }
+    CHECK_EQ_INT(cbm_plant_ring_count(p, 0), 1);
+    double e;
+    CHECK_STATUS(cbm_plant_structural_modulus(p, 9, &e, NULL), CBM_E_INVALID);
+    cbm_segment_def d = cbm_segment_def_default();
+    d.parent = 5;
+    double roll;
+    CHECK_STATUS(cbm_plant_upright_roll(p, &d, &roll), CBM_E_INVALID);
+    cbm_tropism t = cbm_tropism_default();
+    t.strength = 0.1;
+    CHECK_STATUS(cbm_plant_grow_segment(p, &d, &t, NULL), CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "parent") != NULL);
+    CHECK_EQ_INT(cbm_plant_segment_count(p), 2);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
