@@ -148,3 +148,62 @@ TEST(growth_break_at_thin_segment)
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
+
+/* Fig. 8.9: a horizontal branch whose fruit grows each step, with reaction wood. With a low
+ * modulus of rupture it breaks before the reaction wood can act; with a high one the reaction
+ * wood forms and it does not break. */
+static void fruit_season(cbm_context *ctx, double mor, size_t *broken, size_t *rw_rings)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(0.2);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_segment_def d = cbm_segment_def_default();
+    d.length = 0.05;
+    d.core.youngs_modulus = 1e9;
+    d.core.shear_modulus = 1e9 / 16;
+    d.core.density = 700;
+    d.core.modulus_of_rupture = mor;
+    for (int i = 0; i < 10; i++) {
+        d.parent = i - 1;
+        d.core.a = d.core.b = 0.004 * sqrt(10.0 - i);
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    cbm_growth_def g = cbm_growth_def_default();
+    g.youngs_juvenile = 1e9;
+    g.youngs_adult = 2e9;
+    g.density = 700;
+    g.modulus_of_rupture = mor;
+    g.reaction_threshold = 0.05;
+    g.reaction_beta = 0.3;
+    g.reaction_increment = 0.0005;
+    *broken = *rw_rings = 0;
+    for (int k = 1; k <= 20 && cbm_plant_segment_count(p) == 10; k++) {
+        CHECK_OK(cbm_plant_set_load(p, 9, 0.01 * k, v3(0, 0, 0), v3(0, 0, 0)));
+        CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+        size_t nb = 0;
+        CHECK_OK(cbm_plant_break(p, NULL, 0, &nb, NULL));
+        *broken += nb;
+        if (nb)
+            break;
+        cbm_growth_stats gs;
+        CHECK_OK(cbm_plant_grow_rings(p, &g, &gs));
+        *rw_rings += gs.reaction_rings;
+    }
+    cbm_plant_destroy(p);
+}
+
+TEST(growth_breakage_or_reaction_wood)
+{
+    cbm_context *ctx = test_ctx();
+    size_t b_lo, rw_lo, b_hi, rw_hi;
+    fruit_season(ctx, 6e5, &b_lo, &rw_lo);
+    fruit_season(ctx, 1e8, &b_hi, &rw_hi);
+    printf("MOR 0.6 MPa: %zu breaks, %zu reaction rings; MOR 100 MPa: %zu breaks, %zu reaction "
+           "rings\n",
+           b_lo, rw_lo, b_hi, rw_hi);
+    CHECK_EQ_INT(b_lo, 1);
+    CHECK_EQ_INT(b_hi, 0);
+    CHECK(rw_hi > rw_lo);
+    test_ctx_end(ctx);
+}
