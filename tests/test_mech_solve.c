@@ -162,6 +162,47 @@ TEST(mech_tangent_matches_finite_differences)
     test_ctx_end(ctx);
 }
 
+/* The O(n) tree factorisation inverts the tangent operator exactly: solve(J v) = v. */
+TEST(mech_tree_factorisation_inverts_tangent)
+{
+    cbm_context *ctx = test_ctx();
+    size_t n = 150;
+    cbm_plant *p = random_tree(ctx, n, 1e6); /* soft: large geometric stiffness */
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    CHECK_OK(cbm__mech_work_reserve(p, 2));
+    cbm__mech_prepare(p);
+    double mm;
+    cbm__mech_forward(p);
+    cbm__mech_backward(p, 0.0, NULL, &mm, NULL);
+    cbm_vec3 *v = calloc(n, sizeof *v), *jv = calloc(n, sizeof *jv),
+             *back = calloc(n, sizeof *back);
+    for (size_t i = 0; i < n; i++)
+        v[i] = (cbm_vec3){sin(1.0 + (double)i), cos(2.0 * (double)i), sin(0.3 * (double)i)};
+    cbm__mech_jvp(p, v, jv);
+    CHECK_EQ_INT(cbm__mech_tree_solve(p, jv, back), 0);
+    double md = 0, mv = 0;
+    for (size_t i = 0; i < n; i++) {
+        md = fmax(md,
+                  fabs(back[i].x - v[i].x) + fabs(back[i].y - v[i].y) + fabs(back[i].z - v[i].z));
+        mv = fmax(mv, fabs(v[i].x) + fabs(v[i].y) + fabs(v[i].z));
+    }
+    printf("tree solve of J v: max error %.3g (|v| %.3g)\n", md, mv);
+    CHECK(md < 1e-9 * mv);
+    /* factor + apply (the preconditioner of FGMRES) gives the same */
+    cbm__mech_tree_factor(p);
+    cbm__mech_tree_apply(p, jv, back);
+    md = 0;
+    for (size_t i = 0; i < n; i++)
+        md = fmax(md,
+                  fabs(back[i].x - v[i].x) + fabs(back[i].y - v[i].y) + fabs(back[i].z - v[i].z));
+    CHECK(md < 1e-9 * mv);
+    free(v);
+    free(jv);
+    free(back);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
 TEST(mech_solvers_same_equilibrium)
 {
     cbm_context *ctx = test_ctx();
@@ -180,6 +221,20 @@ TEST(mech_solvers_same_equilibrium)
     sd.solver = CBM_MECH_RELAX;
     sd.alpha = 0.7;
     CHECK_OK(cbm_plant_solve(b, &sd, &sb));
+    /* the stiffness-preconditioned GMRES reaches it too */
+    cbm_context_seed(ctx, 1);
+    cbm_plant *c0 = random_tree(ctx, n, 3e8);
+    cbm_solve_def sk = cbm_solve_def_default();
+    sk.tolerance = 1e-10;
+    sk.preconditioner = CBM_MECH_PRECOND_STIFFNESS;
+    cbm_solve_stats sc;
+    CHECK_OK(cbm_plant_solve(c0, &sk, &sc));
+    CHECK(sc.krylov_iterations > 0);
+    cbm_vec3 ta = rod_tip(a), tc0 = rod_tip(c0);
+    CHECK_NEAR(ta.x, tc0.x, 1e-9);
+    CHECK_NEAR(ta.y, tc0.y, 1e-9);
+    CHECK_NEAR(ta.z, tc0.z, 1e-9);
+    cbm_plant_destroy(c0);
     printf("branched tree of %zu: fast %zu passes (%zu Newton, %zu Krylov), relax %zu passes; "
            "residuals %.3g %.3g\n",
            n, sa.passes, sa.newton_steps, sa.krylov_iterations, sb.passes, sa.residual,
@@ -221,6 +276,40 @@ TEST(mech_solvers_same_equilibrium)
     CHECK_NEAR(tc.y, td.y, 1e-9);
     cbm_plant_destroy(c);
     cbm_plant_destroy(d);
+    test_ctx_end(ctx);
+}
+
+/* An inclined heavy rod (60 deg, w L^3 / EI = 50, tip load) has several equilibria; the fast
+ * solver follows the loading path and reaches the one the relaxation reaches from rest. */
+TEST(mech_fast_follows_loading_path)
+{
+    cbm_context *ctx = test_ctx();
+    double L = 1, r = 0.01, rho = 1000, w = rho * PI * r * r * 9.81, EI = w / 50.0;
+    double E = EI / (PI * r * r * r * r / 4);
+    for (int load = 0; load < 2; load++) {
+        cbm_plant *a = make_rod(ctx, 200, L, radius_uniform, E, rho, PI / 3, CBM_MECH_STAGGERED);
+        cbm_plant *b = make_rod(ctx, 200, L, radius_uniform, E, rho, PI / 3, CBM_MECH_STAGGERED);
+        if (load) {
+            CHECK_OK(cbm_plant_set_load(a, 199, 0, (cbm_vec3){0, -0.5, 0}, (cbm_vec3){0, 0, 0}));
+            CHECK_OK(cbm_plant_set_load(b, 199, 0, (cbm_vec3){0, -0.5, 0}, (cbm_vec3){0, 0, 0}));
+        }
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.tolerance = 1e-10;
+        cbm_solve_stats sa, sb;
+        CHECK_OK(cbm_plant_solve(a, &sd, &sa));
+        sd.solver = CBM_MECH_RELAX;
+        sd.alpha = 0.1;
+        CHECK_OK(cbm_plant_solve(b, &sd, &sb));
+        cbm_vec3 ta = rod_tip(a), tb = rod_tip(b);
+        printf("inclined heavy rod, tip load %d: fast (%.9f, %.9f) %zu passes, relax (%.9f, "
+               "%.9f) %zu passes\n",
+               load, ta.x, ta.y, sa.passes, tb.x, tb.y, sb.passes);
+        CHECK(ta.x > 0.2);
+        CHECK_NEAR(ta.x, tb.x, 1e-7);
+        CHECK_NEAR(ta.y, tb.y, 1e-7);
+        cbm_plant_destroy(a);
+        cbm_plant_destroy(b);
+    }
     test_ctx_end(ctx);
 }
 

@@ -208,13 +208,23 @@ CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
 /// Parses "relax", "fast", "newton" (case-sensitive). false if unknown.
 CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
 
+/// Preconditioner of the fast solver's GMRES (right preconditioning).
+typedef enum cbm_mech_precond {
+    /// Default: the exact Newton matrix of the tree factorised in O(n) by condensing subtrees
+    /// from the tips (like the articulated-body recursion); GMRES then needs one iteration.
+    CBM_MECH_PRECOND_TREE,
+    /// The elastic stiffness S = diag(C_H, C_L, C_U) of every joint.
+    CBM_MECH_PRECOND_STIFFNESS
+} cbm_mech_precond;
+
 typedef struct cbm_solve_def {
-    cbm_mech_solver solver; ///< default CBM_MECH_NEWTON
-    double tolerance;       ///< relative residual to reach, default 1e-8
-    double alpha;           ///< relaxation factor in (0, 1], default 0.5 (relax only)
-    size_t max_passes;      ///< 0 = limits.max_passes of the context
-    int krylov_dim;         ///< GMRES restart length, default 20 (Newton only)
-    bool warm_start;        ///< start from the current Omega (default true); else from rest
+    cbm_mech_solver solver;          ///< default CBM_MECH_NEWTON
+    double tolerance;                ///< relative residual to reach, default 1e-8
+    double alpha;                    ///< relaxation factor in (0, 1], default 0.5 (relax only)
+    size_t max_passes;               ///< 0 = limits.max_passes of the context
+    int krylov_dim;                  ///< GMRES restart length, default 10 (Newton only)
+    cbm_mech_precond preconditioner; ///< default CBM_MECH_PRECOND_TREE (Newton only)
+    bool warm_start; ///< start from the current Omega (default true); else from rest
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);
@@ -251,6 +261,174 @@ CBM_API cbm_status cbm_plant_to_scene(const cbm_plant *plant, cbm_scene *scene, 
 /// Second moments of area of a solid ellipse with semi-axes a (along U) and b (along L), m^4:
 /// *i_l = pi a^3 b / 4 (about L), *i_u = pi a b^3 / 4 (about U), *j = pi a^3 b^3 / (a^2 + b^2).
 CBM_API void cbm_mech_ellipse_moments(double a, double b, double *i_l, double *i_u, double *j);
+
+/* ---- growth: primary growth with tropism, pipe-model rings with shape memory, wood ageing,
+ * reaction wood, breakage, self-weight buckling (src/mech/growth.c, wood.c, breakage.c,
+ * buckle.c; Taylor-Hell 2005 ch. 4.1, 6.1.5, 6.3, 8; Jirasek et al. 2000 eq. 24) ---- */
+
+/// Tropism of new segments (Taylor-Hell 6.8-6.12): a force F = strength * direction applied at
+/// the parent's link gives the torque l_parent x F; the new segment's rest rotation rate is that
+/// torque divided by its own rigidity, componentwise in its local frame.
+typedef struct cbm_tropism {
+    cbm_vec3 direction; ///< world, normalised internally; default (0, 1, 0) (negative geotropism)
+    double strength;    ///< N (the thesis' TROP); 0 = no tropism
+} cbm_tropism;
+
+/// Defaults: direction (0, 1, 0), strength 0.
+CBM_API cbm_tropism cbm_tropism_default(void);
+
+/// Which current rotation rate a new ring memorises as its rest rate (Taylor-Hell 6.32 / 8.24).
+typedef enum cbm_ring_memory {
+    /// Default: the segment's own material rate (cbm_segment_state.rate), so that a ring added
+    /// under unchanged load leaves the shape unchanged (exactly for the chain discretisation, to
+    /// O(h^2) for the staggered one).
+    CBM_MEMORY_SEGMENT,
+    /// The listing's Ring_omega_e = Omega: the rotation rate of the segment's proximal joint.
+    CBM_MEMORY_JOINT
+} cbm_ring_memory;
+
+/// How wood ages (Taylor-Hell 8.2-8.6).
+typedef enum cbm_ageing {
+    /// Default: every ring keeps its own modulus, E_k = min(E_adult, E_juv + age_k (E_adult -
+    /// E_juv) / adult_age) (8.2 applied ring by ring; the structural modulus 8.5 is then an
+    /// output, cbm_plant_structural_modulus).
+    CBM_AGEING_RINGS,
+    /// The listing: the rings of a segment are first merged into a core of the structural
+    /// moduli E = C_L / I_L, G = C_H / J (8.1, 8.5-8.6), which then rises by dt (E_adult -
+    /// E_juv) / adult_age until E_adult (8.2); the rest rate is kept.
+    CBM_AGEING_CORE
+} cbm_ageing;
+
+/// Secondary growth and wood: the pipe model (4.1-4.3, 8.17), the wood of new rings, ageing
+/// (8.2), reaction wood (8.7-8.25).
+typedef struct cbm_growth_def {
+    double pipe_exponent; ///< P (> 0): parent area^(P/2) = sum of children's area^(P/2); default 2
+    double pipe_rate;     ///< kappa in (0, 1]: fraction of the goal reached per step; default 1
+    double min_ring;      ///< m: thinner increments of a are skipped (thesis EPSILON), 1e-9
+    /// m^2: pipe area of the leaf or bud every segment carries itself (the lateral of 4.1 at
+    /// every node); with P = 2 a segment's goal area is then leaf_area times the number of
+    /// segments at or beyond it (Jirasek §SecGrowth). Default 0 (only children count).
+    double leaf_area;
+    double youngs_juvenile;    ///< E_juv, Pa, modulus of new wood; default 10 GPa
+    double youngs_adult;       ///< E_adult, Pa (>= E_juv); default = youngs_juvenile
+    double adult_age;          ///< years from E_juv to E_adult; default 0 = no ageing
+    double shear_ratio;        ///< G / E of new wood (> 0); default 1/16
+    double density;            ///< kg/m^3 of new wood; default 600
+    double modulus_of_rupture; ///< Pa, of new wood; 0 = unknown
+    cbm_ring_memory memory;    ///< default CBM_MEMORY_SEGMENT
+    cbm_ageing ageing;         ///< default CBM_AGEING_RINGS
+    /// reaction wood: a new ring is reaction wood if |Omega - rest| > threshold (rad/m, 8.7-8.8);
+    /// default INFINITY = never
+    double reaction_threshold;
+    double reaction_beta;      ///< beta in [0, 1]: ring rest = (1-beta) Omega + beta rest (8.25)
+    double reaction_increment; ///< m added to a after the pipe computation (8.20); default 0.001
+    double reaction_youngs;    ///< E_rw, Pa; E_ring = (E_rw + E_juv)/2 (8.23); 0 = youngs_adult
+} cbm_growth_def;
+
+/// Defaults as documented per field.
+CBM_API cbm_growth_def cbm_growth_def_default(void);
+
+/// Appends a segment whose rest rotation rate (and initial Omega) is set by the tropism
+/// (6.8-6.12): tau = l_parent H_parent x F in world (a root uses its own length and the base
+/// heading), then rest = (tau.H / C_H, tau.L / C_L, tau.U / C_U) in the new segment's frame
+/// before bending (parent frame times branching rotation), C from def->core. The rest rate of
+/// def->core is replaced; def->omega is ignored. Frames of the parent must be current (after a
+/// solve or cbm_plant_evaluate). `tropism` NULL = none.
+CBM_API cbm_status cbm_plant_grow_segment(cbm_plant *plant, const cbm_segment_def *def,
+                                          const cbm_tropism *tropism, size_t *index);
+
+/// Roll (rad, about the new heading) that turns the U axis of a segment about to be added with
+/// `def` (parent frame, divergence, deviation) as close as possible to "up" (against gravity), so
+/// that U x H spans the vertical plane of H and the long semi-axis a lies in the plane of a
+/// vertical lean (Taylor-Hell §8.4.2, Fig. 8.4: U = H x (up x H)); 0 when H is vertical. Put it
+/// in def->roll. Frames of the parent must be current.
+CBM_API cbm_status cbm_plant_upright_roll(const cbm_plant *plant, const cbm_segment_def *def,
+                                          double *roll);
+
+/// What a growth step did.
+typedef struct cbm_growth_stats {
+    size_t rings_added;    ///< rings laid down
+    size_t reaction_rings; ///< of which reaction wood
+    double max_increment;  ///< m, largest increase of a semi-axis a
+} cbm_growth_stats;
+
+/// Lays a new ring on segment `seg` with outer semi-axes (a, b) (>= the current ones), wood of
+/// `def`, and rest rate from shape memory (6.29-6.32, Jirasek eq. 24) or, if the segment leans
+/// (|Omega - rest| > threshold), reaction wood (8.20-8.25). *reaction (optional) says which.
+/// State (frames, moments) must be current (after a solve).
+CBM_API cbm_status cbm_plant_add_growth_ring(cbm_plant *plant, size_t seg, double a, double b,
+                                             const cbm_growth_def *def, bool *reaction);
+
+/// One secondary-growth step of the whole plant, tip to base: the goal area of a segment is
+/// (leaf_area^(P/2) + sum_c area_c^(P/2))^(2/P) over its children c after their growth (8.17;
+/// radius form 4.1-4.2 for circles); a' = a + kappa (a_goal - a) (4.3) keeping b/a (8.18-8.19),
+/// plus the reaction-wood increment when the segment leans; girth never decreases. Each
+/// increase is one ring (cbm_plant_add_growth_ring). State must be current (after a solve).
+CBM_API cbm_status cbm_plant_grow_rings(cbm_plant *plant, const cbm_growth_def *def,
+                                        cbm_growth_stats *stats);
+
+/// Ages all wood by dt years (8.2; see cbm_ageing).
+CBM_API cbm_status cbm_plant_age_wood(cbm_plant *plant, const cbm_growth_def *def, double dt);
+
+/// Structural moduli of a segment (8.1, 8.5-8.6): E = C_L / I_L, G = C_H / J of the outer
+/// ellipse, Pa.
+CBM_API cbm_status cbm_plant_structural_modulus(const cbm_plant *plant, size_t seg, double *e,
+                                                double *g);
+
+/// Breakage (Taylor-Hell 8.26-8.27): every segment whose peak bending stress at its proximal
+/// joint (cbm_segment_state.stress, M a / I for the ellipse) exceeds the modulus of rupture of
+/// its outer ring (rings with MOR 0 never break) is removed with everything it carries; a broken
+/// segment inside an already broken subtree is not counted separately. The indices (before
+/// removal, increasing) of the segments that broke go to broken[0..max_broken) (may be NULL);
+/// *n_broken and *n_removed (optional) receive the counts. State must be current (after a
+/// solve); re-solve afterwards.
+CBM_API cbm_status cbm_plant_break(cbm_plant *plant, size_t *broken, size_t max_broken,
+                                   size_t *n_broken, size_t *n_removed);
+
+/// Self-weight buckling of a vertical column (Taylor-Hell §6.3, Greenhill).
+typedef struct cbm_buckle_def {
+    double youngs_modulus;                  ///< E, Pa
+    double shear_modulus;                   ///< G, Pa; 0 = E / 16
+    double density;                         ///< kg/m^3
+    double radius;                          ///< m
+    double segment;                         ///< m, segment length of the grown column
+    double gravity;                         ///< m/s^2; default 9.81
+    size_t max_segments;                    ///< give up beyond this many segments; default 100000
+    cbm_mech_discretization discretization; ///< default staggered
+} cbm_buckle_def;
+
+/// Defaults: E 10 GPa, G = E/16, density 600, radius 0.05, segment 0.1, gravity 9.81.
+CBM_API cbm_buckle_def cbm_buckle_def_default(void);
+
+typedef struct cbm_buckle_result {
+    size_t segments;           ///< segments of the first column that does not return upright
+    double buckling_length;    ///< m, segments * segment
+    double greenhill_length;   ///< m, (7.837 E I / q)^(1/3), q = density pi r^2 g
+    double growth_factor;      ///< decay factor of the perturbation at the buckling length (>= 1)
+    double last_stable_factor; ///< the same one segment shorter (< 1)
+    size_t passes;             ///< linearised passes used in all
+} cbm_buckle_result;
+
+/// Growth factor per pass of a small perturbation of the plant's current equilibrium under the
+/// relaxation with alpha = 1: the spectral radius of K = C^-1 dM/dOmega (dM/dOmega the solvers'
+/// tangent), found by power iteration from a fixed push of every segment; the push dies out iff
+/// the factor is < 1. For a column under compression every eigenvalue of K is >= 0 and this is
+/// the physical stability (the column returns upright); where a load is in tension (a hanging
+/// chain) K can have negative eigenvalues and a factor >= 1 then only says that the alpha = 1
+/// relaxation oscillates. The plant is evaluated at its current Omega (call after a solve).
+/// *passes (optional) receives the linearised passes used.
+CBM_API cbm_status cbm_plant_stability_factor(cbm_plant *plant, double *factor, size_t *passes);
+
+/// Taylor-Hell's protocol: a vertical column grown one segment at a time, perturbed, until the
+/// perturbation no longer decays; bisection over the segment count (the factor grows with
+/// length). CBM_E_LIMIT if the column still stands at max_segments.
+CBM_API cbm_status cbm_mech_buckle(cbm_context *ctx, const cbm_buckle_def *def,
+                                   cbm_buckle_result *out);
+
+/// Critical length of a vertical self-weighted column of n equal segments (continuous length,
+/// bisection to relative tolerance rel_tol): the length at which the stability factor is 1.
+CBM_API cbm_status cbm_mech_buckle_length(cbm_context *ctx, const cbm_buckle_def *def, size_t n,
+                                          double rel_tol, double *length);
 
 #ifdef __cplusplus
 }

@@ -19,14 +19,20 @@ typedef struct cbm__mech_work {
     cbm_vec3 *ftip; /* point-mass weight + tip force, world, N (scaled) */
     cbm_vec3 *mtip; /* tip moment, world, N m (scaled) */
     /* Newton-Krylov */
-    cbm_vec3 *res;   /* residual C (Omega - rest) - M_local */
-    cbm_vec3 *step;  /* Newton step */
-    cbm_vec3 *save;  /* Omega at the last accepted continuation level */
-    cbm_vec3 *dth;   /* tangent: world rotation of each frame */
-    cbm_vec3 *dm;    /* tangent: world moment */
-    cbm_vec3 *tmp;   /* a vector of the Krylov space */
-    cbm_vec3 *basis; /* krylov_cap vectors of 3n doubles */
-    double *hess;    /* (m + 1) x m Hessenberg matrix and Givens data */
+    cbm_vec3 *res;    /* residual C (Omega - rest) - M_local */
+    cbm_vec3 *step;   /* Newton step */
+    cbm_vec3 *save;   /* Omega at the last accepted continuation level */
+    cbm_vec3 *dth;    /* tangent: world rotation of each frame */
+    cbm_vec3 *dm;     /* tangent: world moment */
+    cbm_vec3 *tmp;    /* a vector of the Krylov space */
+    cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
+    cbm_vec3 *zbasis; /* the preconditioned vectors (flexible GMRES), krylov_cap of 3n */
+    double *fdinv;    /* tree factorisation, 9 doubles per segment each: D^-1 */
+    double *fq;       /* Q = R^T (W + [M]x) */
+    double *fa;       /* a = R J_r(d Omega) d */
+    double *fwad;     /* W a D^-1 */
+    double *fw;       /* W accumulators */
+    double *hess;     /* (m + 1) x m Hessenberg matrix and Givens data */
 } cbm__mech_work;
 
 struct cbm_plant {
@@ -86,6 +92,20 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
 cbm_status cbm__mech_report_nonfinite(cbm_plant *p);
 /// Tangent passes: out = J v, where J = d(residual)/d(Omega) at the last evaluated state.
 void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out);
+/// Factorises the Newton matrix at the last evaluated state (tree preconditioner); returns the
+/// number of joints whose pivot block was singular (replaced by the stiffness).
+size_t cbm__mech_tree_factor(cbm_plant *p);
+/// Factorises and solves J out = b in one backward and one forward sweep; returns as above.
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/// out = J^-1 b with the factorisation (out and b may not alias).
+void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/// Factorises the Newton matrix at the last evaluated state (tree preconditioner); returns the
+/// number of joints whose pivot block was singular (replaced by the stiffness).
+size_t cbm__mech_tree_factor(cbm_plant *p);
+/// Factorises and solves J out = b in one backward and one forward sweep; returns as above.
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/// out = J^-1 b with the factorisation (out and b may not alias).
+void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
 /// Relative residual from the max residual and moments.
 double cbm__mech_relres(double rmax, double mmax, double *char_moment);
 

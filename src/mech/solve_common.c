@@ -72,6 +72,14 @@ void cbm__mech_work_free(cbm_plant *p)
     WORK_ARRAYS(FREE)
 #undef FREE
     cbm__free(p->ctx, w->basis, (size_t)w->krylov_cap * w->cap * sizeof(cbm_vec3));
+    cbm__free(p->ctx, w->zbasis, (size_t)w->krylov_cap * w->cap * sizeof(cbm_vec3));
+    if (w->krylov_cap > 0) {
+        cbm__free(p->ctx, w->fdinv, 9 * w->cap * sizeof(double));
+        cbm__free(p->ctx, w->fq, 9 * w->cap * sizeof(double));
+        cbm__free(p->ctx, w->fa, 9 * w->cap * sizeof(double));
+        cbm__free(p->ctx, w->fwad, 9 * w->cap * sizeof(double));
+        cbm__free(p->ctx, w->fw, 9 * w->cap * sizeof(double));
+    }
     int m = w->krylov_cap > 0 ? w->krylov_cap - 1 : 0;
     cbm__free(p->ctx, w->hess, (size_t)(m + 1) * (size_t)(m + 4) * sizeof(double));
     memset(w, 0, sizeof *w);
@@ -97,8 +105,15 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 #undef ALLOC
     if (kc > 0) {
         nw.basis = cbm__alloc(p->ctx, (size_t)kc * cap * sizeof(cbm_vec3));
+        nw.zbasis = cbm__alloc(p->ctx, (size_t)kc * cap * sizeof(cbm_vec3));
         nw.hess = cbm__alloc(p->ctx, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
-        ok = ok && nw.basis && nw.hess;
+        nw.fdinv = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
+        nw.fq = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
+        nw.fa = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
+        nw.fwad = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
+        nw.fw = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
+        ok = ok && nw.basis && nw.zbasis && nw.hess && nw.fdinv && nw.fq && nw.fa && nw.fwad &&
+             nw.fw;
     }
     nw.cap = cap;
     nw.krylov_cap = kc;
@@ -112,6 +127,12 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 #undef FREE
         if (nw.basis)
             cbm__free(p->ctx, nw.basis, (size_t)kc * cap * sizeof(cbm_vec3));
+        if (nw.zbasis)
+            cbm__free(p->ctx, nw.zbasis, (size_t)kc * cap * sizeof(cbm_vec3));
+        double *fs[5] = {nw.fdinv, nw.fq, nw.fa, nw.fwad, nw.fw};
+        for (int k = 0; k < 5; k++)
+            if (fs[k])
+                cbm__free(p->ctx, fs[k], 9 * cap * sizeof(double));
         if (nw.hess)
             cbm__free(p->ctx, nw.hess, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
         memset(&p->work, 0, sizeof p->work);
@@ -280,7 +301,13 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
         cbm_vec3 r = v3_sub(e, ml);
         double rn = v3_norm2(r), mn = v3_norm2(mi), en = v3_norm2(e);
         sum += rn + mn;
-        ss += rn;
+        {
+            /* merit of the line search: the unbalanced rotation of each joint (rad),
+             * d C^-1 r, so that every joint weighs alike whatever its size */
+            double dj = w->dual[i];
+            cbm_vec3 z = v3(dj * r.x / c.x, dj * r.y / c.y, dj * r.z / c.z);
+            ss += v3_norm2(z);
+        }
         if (rn > rmax)
             rmax = rn;
         if (mn > mmax)
@@ -411,7 +438,8 @@ cbm_solve_def cbm_solve_def_default(void)
     d.solver = CBM_MECH_NEWTON;
     d.tolerance = 1e-8;
     d.alpha = 0.5;
-    d.krylov_dim = 20;
+    d.krylov_dim = 10;
+    d.preconditioner = CBM_MECH_PRECOND_TREE;
     d.warm_start = true;
     return d;
 }

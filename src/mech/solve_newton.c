@@ -2,23 +2,43 @@
  *     R(Omega) = C (Omega - rest) - M_local(Omega) = 0      (3 unknowns per segment),
  * with the same forward and backward passes as the relaxation (solve_common.c).
  *
- * - Linear solves: restarted GMRES (Saad & Schultz 1986), modified Gram-Schmidt, Givens
- *   rotations, RIGHT-preconditioned by the elastic stiffness S = diag(C): we solve
- *   (J S^-1) y = -R and take the step S^-1 y. J S^-1 = I - K S^-1 (K the load stiffness), close
- *   to the identity for moderate loads, so few Krylov iterations are needed.
+ * - Linear solves: restarted flexible GMRES (Saad & Schultz 1986; Saad 1993), modified
+ *   Gram-Schmidt, Givens rotations, RIGHT-preconditioned, either by the elastic stiffness
+ *   S = diag(C) (J S^-1 = I - K S^-1, K the load stiffness: close to the identity for moderate
+ *   loads) or, by default, by the exact O(n) factorisation of the Newton matrix of the tree
+ *   (solve_tree.c). The exact factorisation makes the preconditioned operator the identity,
+ *   so GMRES would return P^-1 (-R) after one iteration: the step is taken directly (factor and
+ *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
+ *   only when a joint's pivot block was singular and had to be regularised.
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
- * - Globalisation: backtracking line search on |R|_2 (Armijo, c = 1e-4, halving up to 12 times);
- *   if it fails or Newton stalls, load continuation: the loads are scaled by lambda, restarting
- *   from the last converged level (lambda = 0 is the rest state), halving the increment on
- *   failure and doubling it on success; intermediate levels are solved to 1e-4.
+ * - Globalisation, in three layers:
+ *   1. a trust region on rotations: a Newton step is scaled so that no frame turns by more than
+ *      MAX_TURN rad (the linearisation of a large rotation overshoots);
+ *   2. backtracking line search (Armijo, c = 1e-4, halving up to 12 times) on the merit
+ *      |d C^-1 R|_2, the unbalanced rotation of each joint in radians, so that thin twigs and
+ *      the trunk weigh alike;
+ *   3. load continuation when the start is far from equilibrium (the first full Newton step
+ *      would turn a frame by more than MAX_TURN) or Newton stalls (line search fails, or six
+ *      heavily damped steps in a row): the loads are scaled by lambda from the rest state
+ *      (lambda = 0 is exact there), first increment MAX_TURN / (rotation of the first step),
+ *      doubled after an easy level (<= 4 Newton steps), halved after a stall; intermediate
+ *      levels solved to 1e-3. This follows the loading path, so the equilibrium reached is the
+ *      one the relaxation reaches from rest when several exist (an inclined heavy rod can also
+ *      rest curled back over its base);
+ *   4. last resort: bursts of 25 relaxation passes (alpha 0.1, halved when a burst does not
+ *      help) between Newton attempts at the full load.
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
+
+#ifndef MAX_TURN
+#define MAX_TURN 0.5
+#endif
 
 typedef struct nk {
     cbm_plant *p;
@@ -28,6 +48,9 @@ typedef struct nk {
     double rel;  /* relative residual of the current state */
     double norm; /* |R|_2 of the current state */
     double rmax, mmax;
+    bool tree;         /* tree preconditioner */
+    double max_turn;   /* largest frame rotation of one Newton step, rad */
+    double first_turn; /* largest frame rotation of the first full Newton step, rad */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -54,27 +77,43 @@ static bool evaluate(nk *k)
     return true;
 }
 
-/* GMRES for (J S^-1) y = -res; the step S^-1 y goes to work.step. Returns false when the pass
- * budget ran out. */
+/* z = P^-1 v (the preconditioner) */
+static void precond(nk *k, const double *v, double *z)
+{
+    cbm_plant *p = k->p;
+    if (k->tree) {
+        cbm__mech_tree_apply(p, (const cbm_vec3 *)v, (cbm_vec3 *)z);
+        k->st->passes++;
+        return;
+    }
+    const cbm_vec3 *cj = p->work.cj;
+    for (size_t i = 0; i < p->n; i++) {
+        z[3 * i] = v[3 * i] / cj[i].x;
+        z[3 * i + 1] = v[3 * i + 1] / cj[i].y;
+        z[3 * i + 2] = v[3 * i + 2] / cj[i].z;
+    }
+}
+
+/* Flexible GMRES (Saad 1993) for J x = -res with right preconditioning: the preconditioned
+ * vectors z_j = P^-1 v_j are kept, so the step is sum g_j z_j without a further solve. The step
+ * goes to work.step. Returns false when the pass budget ran out. */
 static bool gmres(nk *k, double eta, int m)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
-    size_t n3 = k->n3, n = p->n;
+    size_t n3 = k->n3;
     double *V = (double *)w->basis;
+    double *Z = (double *)w->zbasis;
     double *H = w->hess;                  /* (m+1) x m, column-major: H[j*(m+1) + i] */
     double *cs = H + (size_t)(m + 1) * m; /* m */
     double *sn = cs + m;                  /* m */
     double *g = sn + m;                   /* m + 1 */
-    double *x = (double *)w->step;        /* accumulated y (preconditioned variable) */
-    double *t = (double *)w->tmp;
-    const cbm_vec3 *cj = w->cj;
+    double *x = (double *)w->step;
     memset(x, 0, n3 * sizeof *x);
     double bnorm = k->norm;
     if (bnorm == 0.0)
         return true;
     double target = eta * bnorm;
-    /* r0 = -res (x = 0) */
     const double *res = (const double *)w->res;
     double beta = bnorm;
     for (size_t i = 0; i < n3; i++)
@@ -84,16 +123,12 @@ static bool gmres(nk *k, double eta, int m)
         g[0] = beta;
         int j = 0;
         for (; j < m; j++) {
-            if (k->st->passes + 2 >= k->max_passes)
+            if (k->st->passes + 3 >= k->max_passes)
                 return false;
             double *vj = V + (size_t)j * n3, *vn = V + (size_t)(j + 1) * n3;
-            /* t = S^-1 v_j; v_{j+1} = J t */
-            for (size_t i = 0; i < n; i++) {
-                t[3 * i] = vj[3 * i] / cj[i].x;
-                t[3 * i + 1] = vj[3 * i + 1] / cj[i].y;
-                t[3 * i + 2] = vj[3 * i + 2] / cj[i].z;
-            }
-            cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)vn);
+            double *zj = Z + (size_t)j * n3;
+            precond(k, vj, zj);
+            cbm__mech_jvp(p, (const cbm_vec3 *)zj, (cbm_vec3 *)vn);
             k->st->passes++;
             k->st->krylov_iterations++;
             double *hc = H + (size_t)j * (m + 1);
@@ -135,19 +170,15 @@ static bool gmres(nk *k, double eta, int m)
             g[i] = d != 0.0 ? s / d : 0.0;
         }
         for (int i = 0; i < j; i++) {
-            const double *vi = V + (size_t)i * n3;
+            const double *zi = Z + (size_t)i * n3;
             for (size_t q = 0; q < n3; q++)
-                x[q] += g[i] * vi[q];
+                x[q] += g[i] * zi[q];
         }
-        /* true residual of the linear system: -res - J S^-1 x */
-        if (k->st->passes + 2 >= k->max_passes)
+        /* the Arnoldi estimate says converged: done. Otherwise restart from the true residual
+         * -res - J x of the linear system. */
+        if (j < m || k->st->passes + 2 >= k->max_passes)
             break;
-        for (size_t i = 0; i < n; i++) {
-            t[3 * i] = x[3 * i] / cj[i].x;
-            t[3 * i + 1] = x[3 * i + 1] / cj[i].y;
-            t[3 * i + 2] = x[3 * i + 2] / cj[i].z;
-        }
-        cbm__mech_jvp(p, (const cbm_vec3 *)t, (cbm_vec3 *)V);
+        cbm__mech_jvp(p, (const cbm_vec3 *)x, (cbm_vec3 *)V);
         k->st->passes++;
         for (size_t q = 0; q < n3; q++)
             V[q] = -res[q] - V[q];
@@ -157,19 +188,13 @@ static bool gmres(nk *k, double eta, int m)
         for (size_t q = 0; q < n3; q++)
             V[q] /= beta;
     }
-    /* step = S^-1 x */
-    for (size_t i = 0; i < n; i++) {
-        x[3 * i] /= cj[i].x;
-        x[3 * i + 1] /= cj[i].y;
-        x[3 * i + 2] /= cj[i].z;
-    }
     return true;
 }
 
-typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE } nk_result;
+typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE } nk_result;
 
 /* Newton iterations at the current load level until rel < tol. */
-static nk_result newton_level(nk *k, double tol, int m)
+static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -179,16 +204,45 @@ static nk_result newton_level(nk *k, double tol, int m)
     if (!evaluate(k))
         return NK_NONFINITE;
     double eta = 0.1, prev = k->norm;
+    int small = 0;
     for (int it = 0; it < 60; it++) {
         if (k->rel < tol)
             return NK_DONE;
         if (k->st->passes + 3 >= k->max_passes)
             return NK_BUDGET;
-        if (!gmres(k, eta, m))
+        bool direct = false;
+        double lam0 = 1.0;
+        if (k->tree) {
+            /* factor and solve J step = -res in one pass; trusted when no pivot was singular
+             * (the factorisation is then exact and GMRES would stop after one iteration with
+             * this very step); otherwise the factorisation preconditions FGMRES */
+            for (size_t q = 0; q < n3; q++)
+                step[q] = -((const double *)w->res)[q];
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp);
+            k->st->passes++;
+            memcpy(step, w->tmp, n3 * sizeof *step);
+            direct = sing == 0;
+            /* trust region on rotations: the forward sweep of the solve left the world
+             * rotation of every frame under the full step in work.dth; limit the largest to
+             * max_turn radians (the linearisation of a large rotation overshoots) */
+            double tmax = 0.0;
+            for (size_t i = 0; i < p->n; i++) {
+                double t = v3_norm2(w->dth[i]);
+                if (t > tmax)
+                    tmax = t;
+            }
+            tmax = sqrt(tmax);
+            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+            if (it == 0)
+                k->first_turn = tmax;
+            if (it == 0 && abort_large && lam0 < 1.0)
+                return NK_LARGE; /* far from equilibrium: follow the load path instead */
+        }
+        if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
         k->st->newton_steps++;
         /* line search */
-        double f0 = k->norm, lam = 1.0;
+        double f0 = k->norm, lam = lam0;
         bool ok = false;
         for (int ls = 0; ls < 12; ls++) {
             for (size_t q = 0; q < n3; q++)
@@ -209,6 +263,10 @@ static nk_result newton_level(nk *k, double tol, int m)
                 return NK_NONFINITE;
             return NK_STALL;
         }
+        /* slow progress (heavily damped steps again and again): let the caller globalise */
+        small = lam <= 1.0 / 16.0 ? small + 1 : 0;
+        if (small >= 6)
+            return NK_STALL;
         /* Eisenstat-Walker choice 2 */
         double ratio = k->norm / prev;
         double e = 0.9 * ratio * ratio, safe = 0.9 * eta * eta;
@@ -231,6 +289,8 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.n3 = 3 * p->n;
     k.max_passes = max_passes;
     k.st = st;
+    k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
+    k.max_turn = MAX_TURN;
     int m = def->krylov_dim;
     double tol = def->tolerance;
     cbm__mech_work *w = &p->work;
@@ -240,10 +300,13 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     st->continuation_steps = 1;
-    nk_result r = newton_level(&k, tol, m);
-    if (r == NK_STALL) {
-        /* load continuation from the rest state */
-        double done = 0.0, dl = 0.5;
+    nk_result r = newton_level(&k, tol, m, k.tree);
+    if (r == NK_LARGE || r == NK_STALL) {
+        /* load continuation from the rest state (lambda = 0 is exact there): the equilibrium
+         * reached is the one on the loading path, as with the relaxation */
+        double done = 0.0;
+        double dl = r == NK_LARGE && k.first_turn > 0 ? k.max_turn / k.first_turn : 0.25;
+        dl = dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
         for (size_t i = 0; i < p->n; i++)
             w->save[i] = w->rj[i];
         for (;;) {
@@ -252,21 +315,45 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
             p->load_scale = lam;
             cbm__mech_prepare(p);
             st->continuation_steps++;
-            r = newton_level(&k, lam < 1.0 ? (tol > 1e-4 ? tol : 1e-4) : tol, m);
+            size_t ns = st->newton_steps;
+            r = newton_level(&k, lam < 1.0 ? (tol > 1e-3 ? tol : 1e-3) : tol, m, false);
             if (r == NK_DONE) {
                 if (lam >= 1.0)
                     break;
                 done = lam;
                 memcpy(w->save, p->omega, p->n * sizeof *p->omega);
-                dl *= 2.0;
+                if (st->newton_steps - ns <= 4)
+                    dl *= 2.0;
             } else if (r == NK_STALL) {
                 dl *= 0.5;
-                if (dl < 1e-6) {
+                if (dl < 1e-4) {
                     why = "Newton stalled even with small load steps";
                     break;
                 }
             } else
                 break;
+        }
+        if (r == NK_STALL) {
+            /* last resort: relaxation bursts (the seeds' iteration) between Newton attempts at
+             * the full load, from the furthest state reached */
+            p->load_scale = 1.0;
+            cbm__mech_prepare(p);
+            double ra = 0.1;
+            for (int burst = 0; r == NK_STALL && burst < 8; burst++) {
+                double before = k.norm;
+                for (int it = 0; it < 25 && st->passes + 2 < max_passes; it++) {
+                    cbm__mech_forward(p);
+                    double mm;
+                    double rr = cbm__mech_backward(p, ra, NULL, &mm, NULL);
+                    st->passes++;
+                    if (!isfinite(rr))
+                        break;
+                }
+                r = newton_level(&k, tol, m, false);
+                if (r == NK_STALL && !(k.norm < before))
+                    ra *= 0.5;
+                st->continuation_steps++;
+            }
         }
         if (r != NK_DONE) {
             /* leave a consistent state at full load for the caller to read */

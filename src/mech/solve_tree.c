@@ -1,0 +1,230 @@
+/* Exact O(n) solution of the Newton system of the statics on a tree: the preconditioner of the
+ * fast solver's GMRES.
+ *
+ * The linearised equilibrium of joint i (tangent of the two passes, see solve_common.c) is
+ *     S_i v_i - R_i^T dM_i - R_i^T [M_i]x dth_i = b_i,
+ *     dth_i = dth_parent + a_i v_i,            a_i = R_i J_r(d_i Omega_i) d_i,
+ *     dM_i  = sum_children dM_c + G_i dth_i,   G_i = [V_i]x [H_i]x,
+ * with V_i = l_i (F_i - w_i) + lever_i w_i the lever-weighted load of the segment. Each subtree
+ * responds linearly to the rotation of its parent's frame: dM_i = Phi_i dth_parent + psi_i.
+ * Condensing from the tips (the same recursion as the articulated-body algorithm of robot
+ * dynamics, here for statics):
+ *     W_i = G_i + sum_c Phi_c,          Q_i = R_i^T (W_i + [M_i]x),      D_i = S_i - Q_i a_i,
+ *     Phi_i = W_i (I + a_i D_i^-1 Q_i), psi_i = W_i a_i D_i^-1 u_i + w_i,
+ *     u_i = b_i + R_i^T w_i,            w_i = sum_c psi_c,
+ * then from the base: v_i = D_i^-1 (u_i + Q_i dth_parent), dth_i = dth_parent + a_i v_i.
+ * The factorisation (Phi, D^-1, Q, a, W a D^-1) depends on the state only and is computed once
+ * per Newton step (one backward sweep); each solve is one backward and one forward sweep, i.e.
+ * one pass. If a D_i is singular (an unstable equilibrium at a buckling load) it is replaced by
+ * S_i there, which keeps the preconditioner usable and GMRES does the rest.
+ */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+
+typedef struct m3 {
+    double m[9]; /* row-major */
+} m3;
+
+static inline m3 skew(cbm_vec3 v)
+{
+    m3 r = {{0, -v.z, v.y, v.z, 0, -v.x, -v.y, v.x, 0}};
+    return r;
+}
+
+static inline m3 mmul(const double *a, const double *b)
+{
+    m3 r;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            r.m[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+    return r;
+}
+
+static inline cbm_vec3 mvec(const double *a, cbm_vec3 v)
+{
+    return v3(a[0] * v.x + a[1] * v.y + a[2] * v.z, a[3] * v.x + a[4] * v.y + a[5] * v.z,
+              a[6] * v.x + a[7] * v.y + a[8] * v.z);
+}
+
+/* Inverse; false if singular relative to `scale` (a typical entry^3). */
+static inline bool minv(const double *a, double scale, double *out)
+{
+    double c0 = a[4] * a[8] - a[5] * a[7], c1 = a[5] * a[6] - a[3] * a[8],
+           c2 = a[3] * a[7] - a[4] * a[6];
+    double det = a[0] * c0 + a[1] * c1 + a[2] * c2;
+    if (!(fabs(det) > 1e-13 * scale) || !isfinite(det))
+        return false;
+    double id = 1.0 / det;
+    out[0] = c0 * id;
+    out[1] = (a[2] * a[7] - a[1] * a[8]) * id;
+    out[2] = (a[1] * a[5] - a[2] * a[4]) * id;
+    out[3] = c1 * id;
+    out[4] = (a[0] * a[8] - a[2] * a[6]) * id;
+    out[5] = (a[2] * a[3] - a[0] * a[5]) * id;
+    out[6] = c2 * id;
+    out[7] = (a[1] * a[6] - a[0] * a[7]) * id;
+    out[8] = (a[0] * a[4] - a[1] * a[3]) * id;
+    return true;
+}
+
+/* R (local to world) as a row-major matrix: columns H, L, U. */
+static inline m3 rot(cbm_quat q)
+{
+    double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+    double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    m3 r = {{1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy), 2.0 * (xy + wz),
+             1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx), 2.0 * (xz - wy), 2.0 * (yz + wx),
+             1.0 - 2.0 * (xx + yy)}};
+    return r;
+}
+
+static inline m3 transpose(const double *a)
+{
+    m3 r = {{a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]}};
+    return r;
+}
+
+static void forward_solve(cbm_plant *p, cbm_vec3 *out);
+
+/* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
+ * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
+ * D was singular and replaced by S. */
+static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    size_t singular = 0;
+    memset(w->fw, 0, 9 * n * sizeof(double));
+    cbm_vec3 *acc = w->dm;
+    if (b)
+        for (size_t i = 0; i < n; i++)
+            acc[i] = v3(0, 0, 0);
+    for (size_t i = n; i-- > 0;) {
+        m3 R = rot(p->q[i]), Rt = transpose(R.m);
+        cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
+        cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
+                            v3_scale(w->wown[i], w->lever[i]));
+        m3 sv = skew(V), sh = skew(h);
+        m3 G = mmul(sv.m, sh.m);
+        double *W = w->fw + 9 * i;
+        for (int k = 0; k < 9; k++)
+            W[k] += G.m[k];
+        m3 WM = skew(p->moment[i]);
+        for (int k = 0; k < 9; k++)
+            WM.m[k] += W[k];
+        m3 Q = mmul(Rt.m, WM.m);
+        /* a = R J_r(r) d */
+        double d = w->dual[i];
+        cbm_vec3 r = v3_scale(p->omega[i], d);
+        double t2 = v3_norm2(r), c1, c2;
+        if (t2 < 1e-4) {
+            c1 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
+            c2 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
+        } else {
+            double t = sqrt(t2);
+            c1 = (1.0 - cos(t)) / t2;
+            c2 = (t - sin(t)) / (t2 * t);
+        }
+        m3 sr = skew(r), sr2 = mmul(sr.m, sr.m), J;
+        for (int k = 0; k < 9; k++)
+            J.m[k] = (k % 4 == 0 ? 1.0 : 0.0) - c1 * sr.m[k] + c2 * sr2.m[k];
+        m3 A = mmul(R.m, J.m);
+        for (int k = 0; k < 9; k++)
+            A.m[k] *= d;
+        m3 QA = mmul(Q.m, A.m), D;
+        cbm_vec3 c = w->cj[i];
+        for (int k = 0; k < 9; k++)
+            D.m[k] = -QA.m[k];
+        D.m[0] += c.x;
+        D.m[4] += c.y;
+        D.m[8] += c.z;
+        double *Di = w->fdinv + 9 * i;
+        if (!minv(D.m, c.x * c.y * c.z, Di)) {
+            singular++;
+            memset(Di, 0, 9 * sizeof(double));
+            Di[0] = 1.0 / c.x;
+            Di[4] = 1.0 / c.y;
+            Di[8] = 1.0 / c.z;
+        }
+        m3 AD = mmul(A.m, Di);
+        m3 WAD = mmul(W, AD.m);
+        m3 ADQ = mmul(AD.m, Q.m);
+        for (int k = 0; k < 9; k++)
+            ADQ.m[k] += (k % 4 == 0 ? 1.0 : 0.0);
+        m3 Phi = mmul(W, ADQ.m);
+        memcpy(w->fq + 9 * i, Q.m, sizeof Q.m);
+        memcpy(w->fa + 9 * i, A.m, sizeof A.m);
+        memcpy(w->fwad + 9 * i, WAD.m, sizeof WAD.m);
+        int64_t pa = p->parent[i];
+        if (pa >= 0) {
+            double *Wp = w->fw + 9 * (size_t)pa;
+            for (int k = 0; k < 9; k++)
+                Wp[k] += Phi.m[k];
+        }
+        if (b) {
+            cbm_vec3 wi = acc[i];
+            cbm_vec3 ui = v3_add(b[i], mvec(Rt.m, wi));
+            out[i] = ui;
+            cbm_vec3 psi = v3_add(mvec(WAD.m, ui), wi);
+            if (pa >= 0)
+                acc[pa] = v3_add(acc[pa], psi);
+        }
+    }
+    if (b)
+        forward_solve(p, out);
+    return singular;
+}
+
+size_t cbm__mech_tree_factor(cbm_plant *p)
+{
+    return factor(p, NULL, NULL);
+}
+
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+{
+    return factor(p, b, out);
+}
+
+void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    cbm_vec3 *acc = w->dm;
+    for (size_t i = 0; i < n; i++)
+        acc[i] = v3(0, 0, 0);
+    for (size_t i = n; i-- > 0;) {
+        cbm_quat q = p->q[i];
+        cbm_vec3 h, l, u;
+        double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+        double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
+        double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+        h = v3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy));
+        l = v3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx));
+        u = v3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy));
+        cbm_vec3 wi = acc[i];
+        cbm_vec3 ui = v3_add(b[i], v3(v3_dot(h, wi), v3_dot(l, wi), v3_dot(u, wi)));
+        out[i] = ui;
+        cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), wi);
+        int64_t pa = p->parent[i];
+        if (pa >= 0)
+            acc[pa] = v3_add(acc[pa], psi);
+    }
+    forward_solve(p, out);
+}
+
+static void forward_solve(cbm_plant *p, cbm_vec3 *out)
+{
+    cbm__mech_work *w = &p->work;
+    cbm_vec3 *dth = w->dth;
+    for (size_t i = 0; i < p->n; i++) {
+        int64_t pa = p->parent[i];
+        cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
+        cbm_vec3 rhs = v3_add(out[i], mvec(w->fq + 9 * i, tp));
+        cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
+        out[i] = v;
+        dth[i] = v3_add(tp, mvec(w->fa + 9 * i, v));
+    }
+}
