@@ -4,8 +4,10 @@
 #define CBM_COMMANDS_H
 
 int cmd_info(int argc, char **argv);
+int cmd_run(int argc, char **argv);
 
 #define CBM_COMMANDS(X)                                                                            \
-    X("info", cmd_info, "what a model or output file holds")
+    X("info", cmd_info, "what a model or output file holds")                                       \
+    X("run", cmd_run, "derive an L-system model and write its outputs")
 
 #endif
