@@ -121,6 +121,8 @@ static const char *describe(const cbm__compiler *c, char *buf)
         return "end of file";
     if (ch == '\n')
         return "end of line";
+    if (!strncmp(c->text + c->pos, "-->", 3))
+        return "'-->'";
     if (isprint((unsigned char)ch))
         snprintf(buf, 16, "'%c'", ch);
     else
@@ -289,10 +291,10 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
     }
     if (*t == '(') {
         c->pos++;
-        int32_t e = parse_ternary(c, true);
+        int32_t e = parse_ternary(c, nl);
         if (e < 0)
             return -1;
-        if (!match(c, ")", true)) {
+        if (!match(c, ")", nl)) {
             expected(c, "')'");
             return -1;
         }
@@ -311,11 +313,11 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
             }
             int32_t first = -1, last = -1;
             int n = 0;
-            cbm__skip(c, true);
+            cbm__skip(c, nl);
             if (c->text[c->pos] != ')') {
                 for (;;) {
                     int32_t a;
-                    cbm__skip(c, true);
+                    cbm__skip(c, nl);
                     if (c->text[c->pos] == '"') { /* printf format: skipped */
                         c->pos++;
                         while (c->text[c->pos] && c->text[c->pos] != '"' && c->text[c->pos] != '\n')
@@ -324,7 +326,7 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                             c->pos++;
                         a = cbm__node_num(c, 0);
                     } else {
-                        a = parse_ternary(c, true);
+                        a = parse_ternary(c, nl);
                     }
                     if (a < 0)
                         return -1;
@@ -334,11 +336,11 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                         first = a;
                     last = a;
                     n++;
-                    if (!match(c, ",", true))
+                    if (!match(c, ",", nl))
                         break;
                 }
             }
-            if (!match(c, ")", true)) {
+            if (!match(c, ")", nl)) {
                 expected(c, "')' or ',' in the arguments");
                 return -1;
             }

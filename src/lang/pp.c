@@ -137,8 +137,12 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                                      (size_t)(m.nparams + 1) * sizeof(char *));
             char *pn = dup_n(ctx, a, (size_t)(p - a));
             if (!np || !pn) {
-                if (np)
-                    m.params = np;
+                char **arr = np ? np : m.params;
+                for (int i = 0; i < m.nparams; i++)
+                    cbm__strfree(ctx, arr[i]);
+                cbm__free(ctx, arr, (size_t)(m.nparams + (np ? 1 : 0)) * sizeof(char *));
+                m.params = NULL;
+                m.nparams = 0;
                 cbm__strfree(ctx, pn);
                 free_macro(ctx, &m);
                 st->status = CBM_E_NOMEM;

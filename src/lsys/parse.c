@@ -182,7 +182,7 @@ static bool parse_succ(parser *p, int32_t *first, int32_t *count)
             c->pos++;
             int32_t last = -1;
             for (;;) {
-                int32_t e = cbm__parse_expr(c, true);
+                int32_t e = cbm__parse_expr(c, false);
                 if (e < 0)
                     return false;
                 if (m.np >= LSYS_MAX_PARAMS) {
@@ -195,7 +195,7 @@ static bool parse_succ(parser *p, int32_t *first, int32_t *count)
                     m.args = e;
                 last = e;
                 m.np++;
-                cbm__skip(c, true);
+                cbm__skip(c, false);
                 if (p->t[c->pos] == ',') {
                     c->pos++;
                     continue;
