@@ -1082,7 +1082,8 @@ void cbm__eval_stmt(cbm__eval *e, int32_t i)
             while (e->error == CBM_OK && cbm__eval_expr(e, n->a)) {
                 if (--e->while_budget < 0) {
                     e->error = CBM_E_LIMIT;
-                    e->error_msg = "a while loop ran for more than 10^8 iterations";
+                    e->error_msg =
+                        "while loops ran for more iterations than the limit (max_loop_iterations)";
                     return;
                 }
                 cbm__eval_stmt(e, n->b);

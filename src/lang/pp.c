@@ -255,7 +255,7 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                     continue;
                 }
                 j++;
-                int np = m->nparams == 0 ? 0 : 1;
+                int np = 1;
                 size_t starts[64], ends[64];
                 starts[0] = j;
                 int level = 0;
@@ -281,9 +281,15 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                         m->name);
                     return;
                 }
-                if (np > 0)
-                    ends[np - 1] = j;
-                if (np != m->nparams && !(m->nparams == 0 && np == 0)) {
+                ends[np - 1] = j;
+                if (m->nparams == 0 && np == 1) { /* X() takes one empty argument */
+                    bool blank = true;
+                    for (size_t q = starts[0]; q < j; q++)
+                        blank = blank && (s[q] == ' ' || s[q] == '\t');
+                    if (blank)
+                        np = 0;
+                }
+                if (np != m->nparams) {
                     err(st, file, line, (int)a + 1, "wrong number of arguments to macro '%s'",
                         m->name);
                     i = j + 1;

@@ -224,6 +224,8 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
 {
     if (pr->post >= 0)
         cbm__eval_stmt(&ls->ev, pr->post);
+    if (pr->nsucc == 0)
+        return CBM_OK;
     if (pr->const_succ) {
         CBM_TRY(lstr_room(ls->ctx, dst, (size_t)pr->nsucc, 0, 0));
         memcpy(dst->sym + dst->n, ls->const_bytes.data + pr->succ_bytes, (size_t)pr->nsucc);
@@ -317,7 +319,7 @@ static cbm_status run_block(cbm_lsys *ls, int32_t block, const char *what)
 {
     if (block < 0)
         return CBM_OK;
-    ls->ev.while_budget = 100000000;
+    ls->ev.while_budget = ls->loop_budget;
     cbm__eval_stmt(&ls->ev, block);
     if (ls->ev.error != CBM_OK)
         return cbm__fail(ls->ctx, ls->ev.error, "%s: %s", what, ls->ev.error_msg);
@@ -460,7 +462,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
         prepare_scratch(ls, ls->decomp.depth > ls->homo.depth ? ls->decomp.depth : ls->homo.depth));
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_block(ls, ls->start_each, "StartEach"));
-    ls->ev.while_budget = 100000000;
+    ls->ev.while_budget = ls->loop_budget;
     cbm_status s = derive(ls);
     if (s != CBM_OK) {
         char what[64];

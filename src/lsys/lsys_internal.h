@@ -75,6 +75,7 @@ struct cbm_lsys {
     bool float32;
     bool ignore_seed;
     int64_t seed_override; /* -1: none */
+    long loop_budget;
     double (*func)(void *ud, int id, double x);
     void *func_ud;
     double *array_init; /* initial values of all arrays, concatenated */

@@ -366,7 +366,7 @@ static int eval_int(parser *p, int32_t e, size_t pos, const char *what, int lo, 
     double v = 0;
     if (!cbm__node_const(p->c, e, &v)) {
         /* evaluate with zero globals: the value may use functions */
-        cbm__eval ev = {.ctx = p->ls->ctx, .nodes = p->c->nodes.data};
+        cbm__eval ev = {.ctx = p->ls->ctx, .nodes = p->c->nodes.data, .arrays = p->c->arrays.data};
         double zeros[64] = {0};
         if (p->c->globals.len > 64) {
             cbm__cerr(p->c, pos, "%s must be a constant expression", what);

@@ -34,6 +34,7 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
     def.text = text;
     def.float32 = float32;
     def.seed = 1;
+    def.max_loop_iterations = 100000;
     cbm_lsys *ls = NULL;
     if (cbm_lsys_load(ctx, &def, &ls) == CBM_OK) {
         cbm_status s = cbm_lsys_reset(ls);
