@@ -432,3 +432,46 @@ TEST(out_of_memory_at_every_allocation)
     int runs = test_oom_loop(oom_run, NULL);
     CHECK(runs > 20);
 }
+
+/* ---- environmental interpretation hook (query modules) ---- */
+static cbm_status fill_queries(void *ud, cbm_lsys *ls)
+{
+    int *calls = ud;
+    (*calls)++;
+    cbm_lsys_cursor c;
+    int prev = 0;
+    cbm_lsys_cursor_begin(ls, false, &c);
+    while (cbm_lsys_cursor_next(ls, false, &c)) {
+        if (prev == '?' && c.symbol == 'P') {
+            double *p = cbm_lsys_cursor_params(ls, &c);
+            if (!p)
+                return CBM_E_INTERNAL;
+            p[0] = 10.0 * *calls;
+            p[1] = -1;
+        }
+        prev = c.symbol;
+    }
+    return CBM_OK;
+}
+
+TEST(query_modules_are_filled_before_each_step)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_text(ctx,
+                       "Lsystem: 1\nderivation length: 2\nconsider: ?P\nAxiom: A?P(0,0)\n"
+                       "A > ?P(x,y) : x > 15 --> B(x,y)\nendlsystem\n",
+                       false, &ls));
+    int calls = 0;
+    cbm_lsys_set_interpreter(ls, fill_queries, &calls);
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls)); /* P = (10, -1): not yet */
+    CHECK_OK(cbm_lsys_step(ls)); /* P = (20, -1): A -> B */
+    CHECK_EQ_INT(calls, 2);
+    tbuf got = {0};
+    format_string(ls, false, false, &got);
+    CHECK_MSG(!strcmp(got.s, "B(20,-1)?P(20,-1)"), "%s", got.s);
+    tb_free(&got);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}

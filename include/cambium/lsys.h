@@ -71,6 +71,15 @@ CBM_API void cbm_lsys_cursor_begin(const cbm_lsys *ls, bool homomorphism, cbm_ls
 /// Loads the next module into c; false at the end.
 CBM_API bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c);
 
+/// Environmental interpretation (cpfg's ProcessEnvironment): called at the start of every
+/// derivation step with the string about to be derived, so the turtle can fill the query
+/// modules (?P ?H ?L ?U) through cbm_lsys_cursor_params. A non-OK status stops the step.
+typedef cbm_status (*cbm_lsys_interpret_fn)(void *ud, cbm_lsys *ls);
+CBM_API void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud);
+/// Writable parameters of the module that cbm_lsys_cursor_next last returned from the derived
+/// string (not the homomorphic image); NULL if it has none.
+CBM_API double *cbm_lsys_cursor_params(cbm_lsys *ls, const cbm_lsys_cursor *c);
+
 /// Whether the model has a homomorphism: section.
 CBM_API bool cbm_lsys_has_homomorphism(const cbm_lsys *ls);
 /// Computes the image of the current string under the homomorphism (with its maximum depth).

@@ -460,6 +460,12 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
                          cbm_context_limits(ls->ctx)->max_steps);
     CBM_TRY(
         prepare_scratch(ls, ls->decomp.depth > ls->homo.depth ? ls->decomp.depth : ls->homo.depth));
+    if (ls->interp) {
+        cbm_status is = ls->interp(ls->interp_ud, ls);
+        if (is != CBM_OK)
+            return is;
+        ls->homo_valid = false;
+    }
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_block(ls, ls->start_each, "StartEach"));
     ls->ev.while_budget = ls->loop_budget;
@@ -609,4 +615,17 @@ bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor
     }
     c->module++;
     return true;
+}
+
+void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud)
+{
+    ls->interp = fn;
+    ls->interp_ud = ud;
+}
+
+double *cbm_lsys_cursor_params(cbm_lsys *ls, const cbm_lsys_cursor *c)
+{
+    if (c->nparams == 0 || c->param < (size_t)c->nparams || c->param > ls->cur.npar)
+        return NULL;
+    return ls->cur.par + (c->param - (size_t)c->nparams);
 }

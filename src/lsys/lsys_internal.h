@@ -78,6 +78,8 @@ struct cbm_lsys {
     long loop_budget;
     double (*func)(void *ud, int id, double x);
     void *func_ud;
+    cbm_lsys_interpret_fn interp;
+    void *interp_ud;
     double *array_init; /* initial values of all arrays, concatenated */
     size_t array_init_len;
     int32_t axiom, naxiom; /* in smods */
