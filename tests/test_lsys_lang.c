@@ -443,11 +443,10 @@ static cbm_status fill_queries(void *ud, cbm_lsys *ls)
     cbm_lsys_cursor_begin(ls, false, &c);
     while (cbm_lsys_cursor_next(ls, false, &c)) {
         if (prev == '?' && c.symbol == 'P') {
-            double *p = cbm_lsys_cursor_params(ls, &c);
-            if (!p)
+            CBM_TRY(cbm_lsys_cursor_set_param(ls, &c, 0, 10.0 * *calls));
+            CBM_TRY(cbm_lsys_cursor_set_param(ls, &c, 1, -1));
+            if (c.params[0] != 10.0 * *calls || cbm_lsys_cursor_set_param(ls, &c, 2, 0) == CBM_OK)
                 return CBM_E_INTERNAL;
-            p[0] = 10.0 * *calls;
-            p[1] = -1;
         }
         prev = c.symbol;
     }

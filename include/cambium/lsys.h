@@ -60,9 +60,11 @@ CBM_API size_t cbm_lsys_param_count(const cbm_lsys *ls);
 /// Sequential reading of the current string (or of its homomorphic image).
 typedef struct cbm_lsys_cursor {
     size_t module, pmodule, param; /* positions in the packed arrays (private) */
+    bool homomorphism;             /* private */
     int symbol;                    ///< the module's symbol (ASCII)
     int nparams;
-    const double *params; ///< nparams values
+    const double *params; ///< nparams values (valid until the next call)
+    double buf[255];      /* private: values converted from float32 storage */
 } cbm_lsys_cursor;
 
 /// Starts a cursor at the first module; homomorphism selects the string after the
@@ -76,9 +78,9 @@ CBM_API bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsy
 /// modules (?P ?H ?L ?U) through cbm_lsys_cursor_params. A non-OK status stops the step.
 typedef cbm_status (*cbm_lsys_interpret_fn)(void *ud, cbm_lsys *ls);
 CBM_API void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud);
-/// Writable parameters of the module that cbm_lsys_cursor_next last returned from the derived
-/// string (not the homomorphic image); NULL if it has none.
-CBM_API double *cbm_lsys_cursor_params(cbm_lsys *ls, const cbm_lsys_cursor *c);
+/// Sets parameter i of the module that cbm_lsys_cursor_next last returned from the derived
+/// string (not the homomorphic image). CBM_E_INVALID if there is no such parameter.
+CBM_API cbm_status cbm_lsys_cursor_set_param(cbm_lsys *ls, cbm_lsys_cursor *c, int i, double v);
 
 /// Whether the model has a homomorphism: section.
 CBM_API bool cbm_lsys_has_homomorphism(const cbm_lsys *ls);

@@ -32,6 +32,23 @@ static inline void pos_prev(const lstr *s, lpos *p)
         p->k -= s->pc[--p->j];
 }
 
+static inline size_t esz(const lstr *s)
+{
+    return s->f32 ? sizeof(float) : sizeof(double);
+}
+
+/* Loads n parameters from position k of s into dst (doubles). */
+static inline void par_load(const lstr *s, size_t k, double *dst, int n)
+{
+    if (s->f32) {
+        const float *p = (const float *)s->par + k;
+        for (int i = 0; i < n; i++)
+            dst[i] = p[i];
+    } else {
+        memcpy(dst, (const double *)s->par + k, (size_t)n * sizeof(double));
+    }
+}
+
 static inline int mod_np(const lstr *s, const lpos *p)
 {
     return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
@@ -41,8 +58,10 @@ void cbm__lstr_free(cbm_context *ctx, lstr *s)
 {
     cbm__free(ctx, s->sym, s->cap);
     cbm__free(ctx, s->pc, s->pccap);
-    cbm__free(ctx, s->par, s->parcap * sizeof(double));
+    bool f32 = s->f32;
+    cbm__free(ctx, s->par, s->parcap * esz(s));
     memset(s, 0, sizeof *s);
+    s->f32 = f32;
 }
 
 static cbm_status lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, size_t npar)
@@ -52,7 +71,7 @@ static cbm_status lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, 
     if (s->npm + npm > s->pccap)
         CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
     if (s->npar + npar > s->parcap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->par, &s->parcap, sizeof(double), s->npar + npar));
+        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, esz(s), s->npar + npar));
     return CBM_OK;
 }
 
@@ -69,7 +88,8 @@ static cbm_status copy_module(cbm_context *ctx, const lstr *src, lpos *p, lstr *
     dst->sym[dst->n++] = src->sym[p->i];
     if (np) {
         dst->pc[dst->npm++] = (uint8_t)np;
-        memcpy(dst->par + dst->npar, src->par + p->k, (size_t)np * sizeof(double));
+        memcpy((char *)dst->par + dst->npar * esz(dst), (const char *)src->par + p->k * esz(src),
+               (size_t)np * esz(src));
         dst->npar += (size_t)np;
     }
     pos_next(src, p);
@@ -84,7 +104,7 @@ static bool match_pred(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos
         if (p.i >= s->n || (s->sym[p.i] & 0x7f) != m[i].sym || mod_np(s, &p) != m[i].np)
             return false;
         if (m[i].np) {
-            memcpy(ls->frame + slot, s->par + p.k, (size_t)m[i].np * sizeof(double));
+            par_load(s, p.k, ls->frame + slot, m[i].np);
             slot += m[i].np;
         }
         pos_next(s, &p);
@@ -134,7 +154,7 @@ static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int sl
             if (c != m[k].sym || mod_np(s, &r) != m[k].np)
                 return false;
             if (m[k].np) {
-                memcpy(ls->frame + slot, s->par + r.k, (size_t)m[k].np * sizeof(double));
+                par_load(s, r.k, ls->frame + slot, m[k].np);
                 slot += m[k].np;
             }
             pos_next(s, &r);
@@ -177,7 +197,7 @@ static bool match_lc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
                 return false;
             slot -= m[k].np;
             if (m[k].np)
-                memcpy(ls->frame + slot, s->par + l.k, (size_t)m[k].np * sizeof(double));
+                par_load(s, l.k, ls->frame + slot, m[k].np);
             k--;
         }
     }
@@ -214,11 +234,6 @@ static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *e
     return true;
 }
 
-static inline double store(const cbm_lsys *ls, double v)
-{
-    return ls->float32 ? (double)(float)v : v;
-}
-
 /* Appends the successor of pr (parameters evaluated with the bound frame). */
 static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
 {
@@ -241,10 +256,16 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
         }
         dst->sym[dst->n++] = (uint8_t)(m[i].sym | LSYS_PARAM_BIT);
         dst->pc[dst->npm++] = m[i].np;
-        double *out = dst->par + dst->npar;
         int k = 0;
-        for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
-            out[k++] = store(ls, cbm__eval_expr(&ls->ev, a));
+        if (dst->f32) {
+            float *out = (float *)dst->par + dst->npar;
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
+                out[k++] = (float)cbm__eval_expr(&ls->ev, a);
+        } else {
+            double *out = (double *)dst->par + dst->npar;
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
+                out[k++] = cbm__eval_expr(&ls->ev, a);
+        }
         dst->npar += m[i].np;
     }
     return CBM_OK;
@@ -310,6 +331,7 @@ static cbm_status prepare_scratch(cbm_lsys *ls, int depth)
     CBM_TRY(CBM_ARRAY_RESERVE(ls->ctx, ls->scratch, need));
     while (ls->scratch.len < need) {
         lstr z = {0};
+        z.f32 = ls->float32;
         ls->scratch.data[ls->scratch.len++] = z;
     }
     return CBM_OK;
@@ -594,8 +616,10 @@ void cbm_lsys_set_func(cbm_lsys *ls, cbm_lsys_func_fn fn, void *ud)
 void cbm_lsys_cursor_begin(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c)
 {
     (void)ls;
-    (void)homomorphism;
-    memset(c, 0, sizeof *c);
+    c->module = c->pmodule = c->param = 0;
+    c->symbol = c->nparams = 0;
+    c->params = NULL;
+    c->homomorphism = homomorphism;
 }
 
 bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c)
@@ -609,7 +633,12 @@ bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor
     c->params = NULL;
     if (b & LSYS_PARAM_BIT) {
         c->nparams = s->pc[c->pmodule];
-        c->params = s->par + c->param;
+        if (s->f32) {
+            par_load(s, c->param, c->buf, c->nparams);
+            c->params = c->buf;
+        } else {
+            c->params = (const double *)s->par + c->param;
+        }
         c->param += (size_t)c->nparams;
         c->pmodule++;
     }
@@ -623,9 +652,18 @@ void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud)
     ls->interp_ud = ud;
 }
 
-double *cbm_lsys_cursor_params(cbm_lsys *ls, const cbm_lsys_cursor *c)
+cbm_status cbm_lsys_cursor_set_param(cbm_lsys *ls, cbm_lsys_cursor *c, int i, double v)
 {
-    if (c->nparams == 0 || c->param < (size_t)c->nparams || c->param > ls->cur.npar)
-        return NULL;
-    return ls->cur.par + (c->param - (size_t)c->nparams);
+    if (i < 0 || i >= c->nparams || c->param < (size_t)c->nparams || c->param > ls->cur.npar ||
+        c->homomorphism)
+        return CBM_E_INVALID;
+    size_t k = c->param - (size_t)c->nparams + (size_t)i;
+    if (ls->cur.f32) {
+        ((float *)ls->cur.par)[k] = (float)v;
+        c->buf[i] = (float)v;
+    } else {
+        ((double *)ls->cur.par)[k] = v;
+    }
+    ls->homo_valid = false;
+    return CBM_OK;
 }

@@ -91,6 +91,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->ctx = ctx;
     ls->float32 = def->float32;
     ls->ignore_seed = def->ignore_seed;
+    ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = def->float32;
     ls->seed_override = def->seed;
     ls->loop_budget = def->max_loop_iterations > 0 ? def->max_loop_iterations : 100000000;
     ls->start_block = ls->end_block = ls->start_each = ls->end_each = -1;

@@ -3,7 +3,7 @@
  * The module string is three contiguous arrays, double-buffered between steps:
  *   sym[i]  the symbol of module i (7-bit ASCII); bit 7 set when the module has parameters;
  *   pc[j]   the parameter count of the j-th parametric module;
- *   par[k]  all parameters, in order.
+ *   par[k]  all parameters, in order (double; float in float32 mode, as cpfg stores them).
  * A non-parametric module costs one byte, and walking left or right (context matching) only
  * needs the three running indices (module, parametric module, parameter).
  */
@@ -21,8 +21,9 @@ typedef struct lstr {
     size_t n, cap;
     uint8_t *pc;
     size_t npm, pccap;
-    double *par;
+    void *par; /* double, or float in float32 mode */
     size_t npar, parcap;
+    bool f32;
 } lstr;
 
 /* a position in a string */
