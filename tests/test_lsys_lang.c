@@ -439,14 +439,16 @@ static cbm_status fill_queries(void *ud, cbm_lsys *ls)
     int *calls = ud;
     (*calls)++;
     cbm_lsys_cursor c;
-    int prev = 0;
-    cbm_lsys_cursor_begin(ls, false, &c);
-    while (cbm_lsys_cursor_next(ls, false, &c)) {
+    int prev = 0, k = 0;
+    cbm_lsys_cursor_begin(ls, true, &c);
+    while (cbm_lsys_cursor_next(ls, true, &c)) {
         if (prev == '?' && c.symbol == 'P') {
-            CBM_TRY(cbm_lsys_cursor_set_param(ls, &c, 0, 10.0 * *calls));
+            CBM_TRY(cbm_lsys_cursor_set_param(ls, &c, 0, 10.0 * *calls + k));
             CBM_TRY(cbm_lsys_cursor_set_param(ls, &c, 1, -1));
-            if (c.params[0] != 10.0 * *calls || cbm_lsys_cursor_set_param(ls, &c, 2, 0) == CBM_OK)
+            if (c.params[0] != 10.0 * *calls + k ||
+                cbm_lsys_cursor_set_param(ls, &c, 2, 0) == CBM_OK)
                 return CBM_E_INTERNAL;
+            k++;
         }
         prev = c.symbol;
     }
@@ -455,11 +457,14 @@ static cbm_status fill_queries(void *ud, cbm_lsys *ls)
 
 TEST(query_modules_are_filled_before_each_step)
 {
+    /* the interpreter sees the homomorphic image (A --> XF); the values it gives the image's
+     * query module go to the string's */
     cbm_context *ctx = test_ctx();
     cbm_lsys *ls = NULL;
     CHECK_OK(load_text(ctx,
                        "Lsystem: 1\nderivation length: 2\nconsider: ?P\nAxiom: A?P(0,0)\n"
-                       "A > ?P(x,y) : x > 15 --> B(x,y)\nendlsystem\n",
+                       "A > ?P(x,y) : x > 15 --> B(x,y)\n"
+                       "homomorphism\nA --> XF\nendlsystem\n",
                        false, &ls));
     int calls = 0;
     cbm_lsys_set_interpreter(ls, fill_queries, &calls);
@@ -467,9 +472,11 @@ TEST(query_modules_are_filled_before_each_step)
     CHECK_OK(cbm_lsys_step(ls)); /* P = (10, -1): not yet */
     CHECK_OK(cbm_lsys_step(ls)); /* P = (20, -1): A -> B */
     CHECK_EQ_INT(calls, 2);
+    CHECK_OK(cbm_lsys_interpret(ls));
+    CHECK_EQ_INT(calls, 3);
     tbuf got = {0};
     format_string(ls, false, false, &got);
-    CHECK_MSG(!strcmp(got.s, "B(20,-1)?P(20,-1)"), "%s", got.s);
+    CHECK_MSG(!strcmp(got.s, "B(20,-1)?P(30,-1)"), "%s", got.s);
     tb_free(&got);
     cbm_lsys_destroy(ls);
     test_ctx_end(ctx);

@@ -73,13 +73,20 @@ CBM_API void cbm_lsys_cursor_begin(const cbm_lsys *ls, bool homomorphism, cbm_ls
 /// Loads the next module into c; false at the end.
 CBM_API bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c);
 
-/// Environmental interpretation (cpfg's ProcessEnvironment): called at the start of every
-/// derivation step with the string about to be derived, so the turtle can fill the query
-/// modules (?P ?H ?L ?U) through cbm_lsys_cursor_params. A non-OK status stops the step.
+/// Environmental interpretation (cpfg's ProcessEnvironment). The callback interprets the string
+/// after the homomorphism (read it with a cursor with homomorphism = true) and writes the values
+/// of the query modules (?P ?H ?L ?U: the modules that follow a '?') into that image with
+/// cbm_lsys_cursor_set_param; the engine then gives the k-th query module of the image's values
+/// to the k-th query module of the string. This runs at the start of every derivation step and
+/// whenever cbm_lsys_interpret is called (after the last step, so the final string carries its
+/// values as cpfg's does). A non-OK status from the callback stops the step.
 typedef cbm_status (*cbm_lsys_interpret_fn)(void *ud, cbm_lsys *ls);
 CBM_API void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud);
-/// Sets parameter i of the module that cbm_lsys_cursor_next last returned from the derived
-/// string (not the homomorphic image). CBM_E_INVALID if there is no such parameter.
+/// Runs the interpretation protocol above now (nothing without an interpreter).
+CBM_API cbm_status cbm_lsys_interpret(cbm_lsys *ls);
+/// Sets parameter i of the module that cbm_lsys_cursor_next last returned (from the string, or
+/// from the homomorphic image when the cursor reads it). CBM_E_INVALID if there is no such
+/// parameter.
 CBM_API cbm_status cbm_lsys_cursor_set_param(cbm_lsys *ls, cbm_lsys_cursor *c, int i, double v);
 
 /// Whether the model has a homomorphism: section.

@@ -482,12 +482,8 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
                          cbm_context_limits(ls->ctx)->max_steps);
     CBM_TRY(
         prepare_scratch(ls, ls->decomp.depth > ls->homo.depth ? ls->decomp.depth : ls->homo.depth));
-    if (ls->interp) {
-        cbm_status is = ls->interp(ls->interp_ud, ls);
-        if (is != CBM_OK)
-            return is;
-        ls->homo_valid = false;
-    }
+    if (ls->interp)
+        CBM_TRY(cbm_lsys_interpret(ls));
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_block(ls, ls->start_each, "StartEach"));
     ls->ev.while_budget = ls->loop_budget;
@@ -654,16 +650,56 @@ void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud)
 
 cbm_status cbm_lsys_cursor_set_param(cbm_lsys *ls, cbm_lsys_cursor *c, int i, double v)
 {
-    if (i < 0 || i >= c->nparams || c->param < (size_t)c->nparams || c->param > ls->cur.npar ||
-        c->homomorphism)
+    lstr *s = c->homomorphism ? &ls->homo_str : &ls->cur;
+    if (i < 0 || i >= c->nparams || c->param < (size_t)c->nparams || c->param > s->npar ||
+        (c->homomorphism && !ls->homo_valid))
         return CBM_E_INVALID;
     size_t k = c->param - (size_t)c->nparams + (size_t)i;
-    if (ls->cur.f32) {
-        ((float *)ls->cur.par)[k] = (float)v;
+    if (s->f32) {
+        ((float *)s->par)[k] = (float)v;
         c->buf[i] = (float)v;
     } else {
-        ((double *)ls->cur.par)[k] = v;
+        ((double *)s->par)[k] = v;
     }
-    ls->homo_valid = false;
+    if (!c->homomorphism)
+        ls->homo_valid = false;
+    return CBM_OK;
+}
+
+/* The values of the query modules of the image (the modules that follow a '?') go to the query
+ * modules of the string, the k-th to the k-th, as many parameters as both have. */
+static void return_queries(cbm_lsys *ls)
+{
+    const lstr *img = &ls->homo_str;
+    lstr *str = &ls->cur;
+    lpos a = {0, 0, 0}, b = {0, 0, 0};
+    for (;;) {
+        while (a.i < img->n && !(a.i > 0 && (img->sym[a.i - 1] & 0x7f) == '?'))
+            pos_next(img, &a);
+        while (b.i < str->n && !(b.i > 0 && (str->sym[b.i - 1] & 0x7f) == '?'))
+            pos_next(str, &b);
+        if (a.i >= img->n || b.i >= str->n)
+            return;
+        int na = mod_np(img, &a), nb = mod_np(str, &b);
+        double v[LSYS_MAX_PARAMS];
+        par_load(img, a.k, v, na < nb ? na : nb);
+        for (int j = 0; j < na && j < nb; j++) {
+            if (str->f32)
+                ((float *)str->par)[b.k + (size_t)j] = (float)v[j];
+            else
+                ((double *)str->par)[b.k + (size_t)j] = v[j];
+        }
+        pos_next(img, &a);
+        pos_next(str, &b);
+    }
+}
+
+cbm_status cbm_lsys_interpret(cbm_lsys *ls)
+{
+    if (!ls->interp)
+        return CBM_OK;
+    CBM_TRY(cbm_lsys_apply_homomorphism(ls));
+    CBM_TRY(ls->interp(ls->interp_ud, ls));
+    return_queries(ls);
     return CBM_OK;
 }
