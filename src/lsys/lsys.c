@@ -32,13 +32,6 @@ static cbm_status index_set(cbm_lsys *ls, prodset *set)
     return CBM_OK;
 }
 
-static void free_set(cbm_lsys *ls, prodset *set)
-{
-    CBM_ARRAY_FREE(ls->ctx, set->prods);
-    if (set->order)
-        cbm__free(ls->ctx, set->order, (set->prods.cap ? set->prods.cap : 1) * 0 + 0);
-}
-
 void cbm_lsys_destroy(cbm_lsys *ls)
 {
     if (!ls)
@@ -51,7 +44,6 @@ void cbm_lsys_destroy(cbm_lsys *ls)
             cbm__free(ctx, sets[i]->order, (n ? n : 1) * sizeof(int32_t));
         CBM_ARRAY_FREE(ctx, sets[i]->prods);
     }
-    (void)free_set;
     CBM_ARRAY_FREE(ctx, ls->fmods);
     CBM_ARRAY_FREE(ctx, ls->smods);
     CBM_ARRAY_FREE(ctx, ls->const_bytes);
