@@ -548,12 +548,32 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     return CBM_OK;
 }
 
+static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
+
 cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
 {
     lstr *out = &ls->homo_str;
     lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->homo.depth));
     const lstr *cur = &ls->cur;
+    /* with its own seed:, the homomorphism draws from its own erand48 stream, restarted at every
+     * pass (cpfg), so the image is the same at every interpretation */
+    cbm__rand48 saved = ls->ev.ran;
+    if (ls->homo.seed_expr >= 0) {
+        long seed = (long)cbm__eval_expr(&ls->ev, ls->homo.seed_expr);
+        cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(seed & 0xFFFF),
+                           (uint16_t)((seed >> 16) & 0xFFFF));
+    }
+    cbm_status s = homomorphism(ls, cur, out);
+    if (ls->homo.seed_expr >= 0)
+        ls->ev.ran = saved;
+    if (s == CBM_OK)
+        ls->homo_valid = true;
+    return s;
+}
+
+static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out)
+{
     lpos p = {0, 0, 0};
     while (p.i < cur->n) {
         bool done = false;
@@ -571,7 +591,6 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
                              "the homomorphism would exceed %zu modules (max_modules)",
                              cbm_context_limits(ls->ctx)->max_modules);
     }
-    ls->homo_valid = true;
     return CBM_OK;
 }
 

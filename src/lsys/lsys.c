@@ -88,6 +88,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->loop_budget = def->max_loop_iterations > 0 ? def->max_loop_iterations : 100000000;
     ls->start_block = ls->end_block = ls->start_each = ls->end_each = -1;
     ls->dlength_expr = ls->seed_expr = -1;
+    ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
     cbm_status s = cbm__compiler_init(&ls->comp, ctx, &pp);
     if (s == CBM_OK)
         s = cbm__lsys_parse(ls, &pp);

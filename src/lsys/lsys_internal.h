@@ -60,7 +60,8 @@ typedef struct prodset {
     CBM_ARRAY(prod) prods;
     int32_t *order; /* production indices grouped by first predecessor symbol */
     int32_t start[129];
-    int depth; /* maximum depth (decomposition, homomorphism) */
+    int depth;         /* maximum depth (decomposition, homomorphism) */
+    int32_t seed_expr; /* homomorphism: its own random stream (seed:), -1 if none */
     bool present;
 } prodset;
 

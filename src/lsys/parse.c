@@ -446,7 +446,13 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
                 p.set->depth = eval_int(&p, e, at, "maximum depth", 0, max_depth);
         } else if ((k = keyword(&p, "seed:"))) {
             c->pos += k;
-            ls->seed_expr = header_expr(&p, "seed:");
+            int32_t e = header_expr(&p, "seed:");
+            if (p.set == &ls->homo)
+                ls->homo.seed_expr = e;
+            else if (p.set == &ls->decomp)
+                cbm__cerr(c, at, "seed: belongs to the header or to the homomorphism");
+            else
+                ls->seed_expr = e;
         } else if ((k = keyword(&p, "consider:"))) {
             c->pos += k;
             parse_symbols(&p, true);
