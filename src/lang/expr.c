@@ -944,7 +944,7 @@ static double call(cbm__eval *e, const cbm__node *n)
         return bran(e, a[0], a[1]);
     case FN_BIRAN: {
         double n2 = a[0];
-        if (!(n2 < 1e8)) {
+        if (!(n2 < 1e8) || !(n2 > -1e8)) {
             e->error = CBM_E_RUNTIME;
             e->error_msg = "biran(n, p): n is too large";
             return 0;
@@ -955,7 +955,7 @@ static double call(cbm__eval *e, const cbm__node *n)
         return j;
     }
     case FN_SRAND: {
-        long s = (long)a[0];
+        long long s = cbm__to_ll(a[0]);
         cbm__rand48_seed16(&e->ran, 0x330E, (uint16_t)(s & 0xFFFF), (uint16_t)((s >> 16) & 0xFFFF));
         e->nran_have = 0;
         return 0;
@@ -966,7 +966,11 @@ static double call(cbm__eval *e, const cbm__node *n)
             e->error_msg = "func(id, x) needs function files (.func or .fset) on the command line";
             return 0;
         }
-        return e->func(e->func_ud, (int)a[0], a[1]);
+        return e->func(e->func_ud,
+                       (int)cbm__to_ll(a[0] > 1e9    ? 1e9
+                                       : a[0] < -1e9 ? -1e9
+                                                     : a[0]),
+                       a[1]);
     case FN_STOP:
         e->stopped = true;
         return 0;

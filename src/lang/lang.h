@@ -178,6 +178,19 @@ int32_t cbm__node_num(cbm__compiler *c, double v);
 bool cbm__node_const(const cbm__compiler *c, int32_t n, double *v);
 
 double cbm__eval_expr(cbm__eval *e, int32_t n);
+
+/// A value converted to an integer without undefined behaviour: NaN gives 0, values beyond
+/// +-2^62 are clamped, the rest truncated toward zero as C does.
+static inline long long cbm__to_ll(double v)
+{
+    if (!(v == v))
+        return 0;
+    if (v > 4.6e18)
+        return 4600000000000000000LL;
+    if (v < -4.6e18)
+        return -4600000000000000000LL;
+    return (long long)v;
+}
 void cbm__eval_stmt(cbm__eval *e, int32_t n);
 
 #endif

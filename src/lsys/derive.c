@@ -532,10 +532,16 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ls->ev.func = ls->func;
     ls->ev.func_ud = ls->func_ud;
     /* drand48: glibc's default state is 0; srand48(s) gives (s << 16) | 0x330E */
-    int64_t seed = ls->seed_override;
-    if (seed < 0 && ls->seed_expr >= 0 && !ls->ignore_seed)
-        seed = (int64_t)cbm__eval_expr(&ls->ev, ls->seed_expr);
-    ls->drand.x = seed >= 0 ? ((((uint64_t)seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
+    bool seeded = false;
+    uint64_t seed = 0;
+    if (ls->seed_override >= 0) {
+        seeded = true;
+        seed = (uint64_t)ls->seed_override;
+    } else if (ls->seed_expr >= 0 && !ls->ignore_seed) {
+        seeded = true;
+        seed = (uint64_t)cbm__to_ll(cbm__eval_expr(&ls->ev, ls->seed_expr));
+    }
+    ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
     CBM_TRY(run_block(ls, ls->start_block, "Start"));
     lstr_clear(&ls->cur);
     prod ax = {
@@ -560,7 +566,7 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
      * pass (cpfg), so the image is the same at every interpretation */
     cbm__rand48 saved = ls->ev.ran;
     if (ls->homo.seed_expr >= 0) {
-        long seed = (long)cbm__eval_expr(&ls->ev, ls->homo.seed_expr);
+        long long seed = cbm__to_ll(cbm__eval_expr(&ls->ev, ls->homo.seed_expr));
         cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(seed & 0xFFFF),
                            (uint16_t)((seed >> 16) & 0xFFFF));
     }
