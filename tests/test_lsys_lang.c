@@ -363,10 +363,12 @@ TEST(expression_depth_and_loops_are_bounded)
     CHECK_MSG(strstr(g.text, "nested too deeply"), "%s", g.text);
     cbm_context_destroy(ctx);
     ctx = test_ctx();
-    CHECK_OK(load_text(ctx,
-                       "Lsystem: 1\nderivation length: 1\nAxiom: A\n"
-                       "A : {x=0; while (1) {x=x+1;}} --> B\nendlsystem\n",
-                       false, &ls));
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "loop.l";
+    def.text = "Lsystem: 1\nderivation length: 1\nAxiom: A\n"
+               "A : {x=0; while (1) {x=x+1;}} --> B\nendlsystem\n";
+    def.max_loop_iterations = 1000000;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_STATUS(cbm_lsys_step(ls), CBM_E_LIMIT);
     CHECK(strstr(cbm_context_last_error(ctx), "while loop") != NULL);

@@ -38,7 +38,8 @@ CBM_API void cbm_lsys_set_func(cbm_lsys *ls, cbm_lsys_func_fn fn, void *ud);
 CBM_API cbm_lsys_def cbm_lsys_def_default(void);
 
 /// Loads and compiles a model. Syntax errors are reported as file:line:col diagnostics
-/// through the context (several per run); then CBM_E_SYNTAX or CBM_E_SEMANTIC.
+/// through the context (several per run), then CBM_E_SYNTAX; CBM_E_IO if the file cannot be
+/// read.
 CBM_API cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **out);
 CBM_API void cbm_lsys_destroy(cbm_lsys *ls);
 
