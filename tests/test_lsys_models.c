@@ -57,7 +57,7 @@ static int run_model(const char *path)
     if (s == CBM_OK) {
         CHECK_OK(cbm_lsys_reset(ls));
         for (int step = 0; step <= max_step; step++) {
-            if (step > 0)
+            if (step > 0 && !cbm_lsys_stopped(ls)) /* stop() ends the derivation */
                 CHECK_OK(cbm_lsys_step(ls));
             for (int i = 0; i < nex; i++) {
                 if (ex[i].step != step)

@@ -51,6 +51,9 @@ CBM_API cbm_status cbm_lsys_reset(cbm_lsys *ls);
 /// last step of the derivation length). CBM_E_LIMIT when the string would exceed the
 /// context's max_modules or the memory limit; the previous string is then kept.
 CBM_API cbm_status cbm_lsys_step(cbm_lsys *ls);
+/// Whether the model called stop() (in a production or block): the derivation should end after
+/// the step in which it was called, as in cpfg.
+CBM_API bool cbm_lsys_stopped(const cbm_lsys *ls);
 /// Steps done since reset.
 CBM_API int cbm_lsys_steps_done(const cbm_lsys *ls);
 /// Modules in the current string.

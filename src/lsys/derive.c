@@ -608,6 +608,10 @@ int cbm_lsys_steps_done(const cbm_lsys *ls)
 {
     return ls->steps;
 }
+bool cbm_lsys_stopped(const cbm_lsys *ls)
+{
+    return ls->ev.stopped;
+}
 size_t cbm_lsys_module_count(const cbm_lsys *ls)
 {
     return ls->cur.n;

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 typedef struct run_opts {
     bool homomorphism;
@@ -209,15 +210,20 @@ int cmd_run(int argc, char **argv)
     if (s == CBM_OK && every > 0)
         rc = write_outputs(ctx, ls, &o, outs, nouts, 0);
     int done = 0;
-    while (s == CBM_OK && rc == CLI_OK && done < n) {
+    bool progress = isatty(2);
+    while (s == CBM_OK && rc == CLI_OK && done < n && !cbm_lsys_stopped(ls)) {
         s = cbm_lsys_step(ls);
         if (s != CBM_OK)
             break;
         done++;
+        if (progress)
+            fprintf(stderr, "\rstep %d/%d, %zu modules ", done, n, cbm_lsys_module_count(ls));
         if (every > 0 && done % every == 0)
             rc = write_outputs(ctx, ls, &o, outs, nouts, done);
     }
     clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (progress && done > 0)
+        fputc('\n', stderr);
     if (s != CBM_OK) {
         rc = cli_fail(ctx, s, model);
         if (s == CBM_E_LIMIT && nouts) {
