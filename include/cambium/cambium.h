@@ -7,6 +7,7 @@
 #include "cambium/io.h"
 #include "cambium/mech.h"
 #include "cambium/bend.h"
+#include "cambium/lsys.h"
 #include "cambium/write.h"
 
 #endif

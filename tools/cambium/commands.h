@@ -3,15 +3,17 @@
 #ifndef CBM_COMMANDS_H
 #define CBM_COMMANDS_H
 
-int cmd_info(int argc, char **argv);
+int cmd_run(int argc, char **argv);
 int cmd_bend(int argc, char **argv);
 int cmd_buckle(int argc, char **argv);
+int cmd_info(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 
 #define CBM_COMMANDS(X)                                                                            \
-    X("info", cmd_info, "what a model or output file holds")                                       \
+    X("run", cmd_run, "derive an L-system model and write its outputs")                            \
     X("bend", cmd_bend, "static equilibrium of one branch or rod from a spec file")                \
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
+    X("info", cmd_info, "what a model or output file holds")                                       \
     X("demo", cmd_demo, "write a synthetic tree in any output format")
 
 #endif

@@ -1,0 +1,196 @@
+/* The cpfg-dialect language front end: preprocessor, expressions and statements.
+ *
+ * pp.c turns a model file into one text with C comments removed, #include files inserted and
+ * #define macros (with arguments) expanded, plus a line map back to the original files. expr.c
+ * compiles expressions and statement blocks into a flat node array and evaluates them.
+ */
+#ifndef CBM_LANG_H
+#define CBM_LANG_H
+
+#include "core/core.h"
+
+/* ---- preprocessor ---- */
+typedef struct cbm__pp_line {
+    int file; /* index into files */
+    int line; /* 1-based line in that file */
+} cbm__pp_line;
+
+typedef struct cbm__pp {
+    cbm_context *ctx;
+    CBM_ARRAY(char) text;          /* NUL-terminated expanded text */
+    CBM_ARRAY(cbm__pp_line) lines; /* one entry per line of text */
+    CBM_ARRAY(char *) files;       /* file names (owned) */
+    size_t errors;
+} cbm__pp;
+
+/// Preprocesses `text` (or the file `path` when text is NULL). defines: "NAME=VALUE" strings
+/// that override the file's own #define of the same name. Errors are reported as diagnostics
+/// and counted in pp->errors; the status is CBM_OK unless memory or limits failed.
+cbm_status cbm__pp_run(cbm_context *ctx, const char *path, const char *text,
+                       const char *const *defines, size_t ndefines, cbm__pp *pp);
+void cbm__pp_free(cbm__pp *pp);
+
+/* ---- expressions ---- */
+typedef enum cbm__op {
+    OP_NUM,
+    OP_PARAM,
+    OP_GLOBAL,
+    OP_ARRAY, /* value, formal parameter, global, array element */
+    OP_NEG,
+    OP_NOT,
+    OP_ADD,
+    OP_SUB,
+    OP_MUL,
+    OP_DIV,
+    OP_REM,
+    OP_POW,
+    OP_LT,
+    OP_GT,
+    OP_LE,
+    OP_GE,
+    OP_EQ,
+    OP_NE,
+    OP_AND,
+    OP_OR,
+    OP_COND,
+    OP_COMMA,
+    OP_CALL,
+    /* statements */
+    OP_ASSIGN,
+    OP_ASSIGN_PARAM,
+    OP_ASSIGN_ARRAY,
+    OP_IF,
+    OP_WHILE,
+    OP_DO,
+    OP_SEQ,
+    OP_NOP
+} cbm__op;
+
+typedef enum cbm__fn {
+    FN_SIN,
+    FN_COS,
+    FN_TAN,
+    FN_ASIN,
+    FN_ACOS,
+    FN_ATAN,
+    FN_ATAN2,
+    FN_EXP,
+    FN_LOG,
+    FN_FLOOR,
+    FN_CEIL,
+    FN_SIGN,
+    FN_SQRT,
+    FN_TRUNC,
+    FN_FABS,
+    FN_RAN,
+    FN_NRAN,
+    FN_BRAN,
+    FN_BIRAN,
+    FN_SRAND,
+    FN_FUNC,
+    FN_PRINTF,
+    FN_STOP,
+    FN_COUNT
+} cbm__fn;
+
+/* One node. Children are indices into the node array (-1: none); OP_CALL and OP_ARRAY keep
+ * their arguments as a chain through `next`. */
+typedef struct cbm__node {
+    uint8_t op, fn;
+    int32_t a, b, c; /* operands / condition, then, else / body */
+    int32_t next;    /* next argument or next statement */
+    int32_t slot;    /* parameter index, global or array index */
+    double v;
+} cbm__node;
+
+typedef struct cbm__array {
+    char *name;
+    int ndims;
+    int dims[4];
+    double *data;
+    size_t count;
+} cbm__array;
+
+/* Random generator of cpfg: the POSIX 48-bit LCG of drand48/erand48. */
+typedef struct cbm__rand48 {
+    uint64_t x; /* 48-bit state */
+} cbm__rand48;
+void cbm__rand48_seed16(cbm__rand48 *r, uint16_t x0, uint16_t x1, uint16_t x2);
+double cbm__rand48_next(cbm__rand48 *r);
+
+/* The evaluation environment shared by a model. */
+typedef struct cbm__eval {
+    cbm_context *ctx;
+    const cbm__node *nodes;
+    double *globals;
+    cbm__array *arrays;
+    double *params;  /* formal parameters of the production being applied (assignable) */
+    cbm__rand48 ran; /* erand48 stream of ran, nran, bran, biran (cpfg main_xsubi) */
+    int nran_have;   /* cpfg's iset: 0 draw a pair, else return the cached value */
+    double nran_cached;
+    long while_budget; /* iterations left for while loops in this evaluation */
+    double (*func)(void *ud, int id, double x);
+    void *func_ud;
+    cbm_status error; /* first runtime error */
+    const char *error_msg;
+    bool stopped;
+} cbm__eval;
+
+/* ---- the compiler: a cursor over the preprocessed text plus the node array ---- */
+typedef struct cbm__compiler {
+    cbm_context *ctx;
+    const cbm__pp *pp;
+    const char *text;
+    size_t pos;
+    CBM_ARRAY(size_t) line_start; /* offset of each line of text */
+    CBM_ARRAY(cbm__node) nodes;
+    CBM_ARRAY(char *) globals;     /* global variable names */
+    CBM_ARRAY(int32_t) global_use; /* first use (a position) of a global that is only read */
+    CBM_ARRAY(uint8_t) global_set; /* the global is assigned somewhere */
+    CBM_ARRAY(cbm__array) arrays;
+    const char *const *formals; /* names of the production's formal parameters */
+    const size_t *formal_len;
+    int nformals;
+    int depth;
+    size_t errors;
+    bool fatal; /* out of memory or too many errors: stop parsing */
+    cbm_status status;
+} cbm__compiler;
+
+cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, const cbm__pp *pp);
+void cbm__compiler_free(cbm__compiler *c);
+/// Error at a text offset, "file:line:col: error: ...".
+void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...) CBM_PRINTF(3, 4);
+/// Skips blanks; newlines too when `nl` (inside parentheses or braces), and always a newline
+/// followed by a tab (cpfg's continuation line).
+void cbm__skip(cbm__compiler *c, bool nl);
+/// Expression: returns a node index, -1 after an error (reported).
+int32_t cbm__parse_expr(cbm__compiler *c, bool nl);
+/// `{ statements }` starting at '{': returns the first statement node (chain), -1 if empty or on
+/// error (then *ok is false).
+int32_t cbm__parse_block(cbm__compiler *c, bool *ok);
+/// Declares `array name[d1][d2] = {...};` statements of a define: block (at '{').
+bool cbm__parse_define_block(cbm__compiler *c);
+/// Checks that every global that is read is assigned somewhere (reports the rest).
+void cbm__check_globals(cbm__compiler *c);
+int32_t cbm__node_num(cbm__compiler *c, double v);
+/// Constant value of a node if it has no variables and no calls.
+bool cbm__node_const(const cbm__compiler *c, int32_t n, double *v);
+
+double cbm__eval_expr(cbm__eval *e, int32_t n);
+
+/// A value converted to an integer without undefined behaviour: NaN gives 0, values beyond
+/// +-2^62 are clamped, the rest truncated toward zero as C does.
+static inline long long cbm__to_ll(double v)
+{
+    if (!(v == v))
+        return 0;
+    if (v > 4.6e18)
+        return 4600000000000000000LL;
+    if (v < -4.6e18)
+        return -4600000000000000000LL;
+    return (long long)v;
+}
+void cbm__eval_stmt(cbm__eval *e, int32_t n);
+
+#endif

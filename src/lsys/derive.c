@@ -1,0 +1,734 @@
+/* Derivation of cpfg-dialect L-systems (ABOP ch. 1-2; cpfg's generate.c semantics).
+ *
+ * One step scans the current string left to right. At each module the productions whose
+ * predecessor starts with its symbol are tried in declaration order: the strict predecessor
+ * (symbols and parameter counts), the right context, the left context, then the
+ * pre-condition statements and the condition. Context is bracket-aware as in ABOP: going right,
+ * branches the context does not mention are skipped and the end of a branch ends the context;
+ * going left, branches are skipped and '[' is climbed out of; `ignore:`/`consider:` symbols are
+ * passed over. A deterministic L-system applies the first match; a stochastic one (any
+ * production with a probability) collects every match, sums their probabilities in float32
+ * and draws drand48() once per module, as cpfg does. The successor's parameters are evaluated
+ * left to right into the other buffer (double-buffered; a successor without parameters is a
+ * byte copy). With a decomposition section every produced module is rewritten recursively up
+ * to `maximum depth`, context taken from the string being derived; the homomorphism is the
+ * same recursion applied to the final string for output and interpretation. An unmatched cut
+ * `%` removes the rest of its branch.
+ */
+#include "lsys/lsys_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+
+static inline void pos_next(const lstr *s, lpos *p)
+{
+    if (s->sym[p->i++] & LSYS_PARAM_BIT)
+        p->k += s->pc[p->j++];
+}
+
+static inline void pos_prev(const lstr *s, lpos *p)
+{
+    if (s->sym[--p->i] & LSYS_PARAM_BIT)
+        p->k -= s->pc[--p->j];
+}
+
+static inline size_t esz(const lstr *s)
+{
+    return s->f32 ? sizeof(float) : sizeof(double);
+}
+
+/* Loads n parameters from position k of s into dst (doubles). */
+static inline void par_load(const lstr *s, size_t k, double *dst, int n)
+{
+    if (s->f32) {
+        const float *p = (const float *)s->par + k;
+        for (int i = 0; i < n; i++)
+            dst[i] = p[i];
+    } else {
+        memcpy(dst, (const double *)s->par + k, (size_t)n * sizeof(double));
+    }
+}
+
+static inline int mod_np(const lstr *s, const lpos *p)
+{
+    return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
+}
+
+void cbm__lstr_free(cbm_context *ctx, lstr *s)
+{
+    cbm__free(ctx, s->sym, s->cap);
+    cbm__free(ctx, s->pc, s->pccap);
+    bool f32 = s->f32;
+    cbm__free(ctx, s->par, s->parcap * esz(s));
+    memset(s, 0, sizeof *s);
+    s->f32 = f32;
+}
+
+static cbm_status lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, size_t npar)
+{
+    if (s->n + nsym > s->cap)
+        CBM_TRY(cbm__grow(ctx, (void **)&s->sym, &s->cap, 1, s->n + nsym));
+    if (s->npm + npm > s->pccap)
+        CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
+    if (s->npar + npar > s->parcap)
+        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, esz(s), s->npar + npar));
+    return CBM_OK;
+}
+
+static inline void lstr_clear(lstr *s)
+{
+    s->n = s->npm = s->npar = 0;
+}
+
+/* Copies the module at p of src to dst and advances p. */
+static cbm_status copy_module(cbm_context *ctx, const lstr *src, lpos *p, lstr *dst)
+{
+    int np = mod_np(src, p);
+    CBM_TRY(lstr_room(ctx, dst, 1, 1, (size_t)np));
+    dst->sym[dst->n++] = src->sym[p->i];
+    if (np) {
+        dst->pc[dst->npm++] = (uint8_t)np;
+        memcpy((char *)dst->par + dst->npar * esz(dst), (const char *)src->par + p->k * esz(src),
+               (size_t)np * esz(src));
+        dst->npar += (size_t)np;
+    }
+    pos_next(src, p);
+    return CBM_OK;
+}
+
+/* ---- matching ---- */
+static bool match_pred(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos *end, int slot)
+{
+    const fmodule *m = ls->fmods.data + pr->pred;
+    for (int32_t i = 0; i < pr->npred; i++) {
+        if (p.i >= s->n || (s->sym[p.i] & 0x7f) != m[i].sym || mod_np(s, &p) != m[i].np)
+            return false;
+        if (m[i].np) {
+            par_load(s, p.k, ls->frame + slot, m[i].np);
+            slot += m[i].np;
+        }
+        pos_next(s, &p);
+    }
+    *end = p;
+    return true;
+}
+
+/* Right context from r (the module after the predecessor). */
+static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
+{
+    const fmodule *m = ls->fmods.data + pr->rc;
+    int32_t k = 0;
+    while (k < pr->nrc) {
+        if (m[k].sym == '=') { /* skip to the end of the branch */
+            int level = 0;
+            while (r.i < s->n) {
+                uint8_t c = s->sym[r.i] & 0x7f;
+                if (c == '[')
+                    level++;
+                else if (c == ']' && level-- == 0)
+                    break;
+                pos_next(s, &r);
+            }
+            k++;
+            continue;
+        }
+        if (r.i >= s->n)
+            return false;
+        uint8_t c = s->sym[r.i] & 0x7f;
+        if (ls->ignore[c]) {
+            pos_next(s, &r);
+        } else if (m[k].sym != '[' && c == '[') {
+            pos_next(s, &r);
+            int level = 0;
+            while (r.i < s->n) {
+                uint8_t d = s->sym[r.i] & 0x7f;
+                if (d == '[')
+                    level++;
+                else if (d == ']' && level-- == 0)
+                    break;
+                pos_next(s, &r);
+            }
+            if (r.i < s->n)
+                pos_next(s, &r);
+        } else {
+            if (c != m[k].sym || mod_np(s, &r) != m[k].np)
+                return false;
+            if (m[k].np) {
+                par_load(s, r.k, ls->frame + slot, m[k].np);
+                slot += m[k].np;
+            }
+            pos_next(s, &r);
+            k++;
+        }
+    }
+    return true;
+}
+
+/* Left context ending just before l. */
+static bool match_lc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
+{
+    const fmodule *m = ls->fmods.data + pr->lc;
+    int slot = 0;
+    for (int32_t k = 0; k < pr->nlc; k++)
+        slot += m[k].np;
+    int32_t k = pr->nlc - 1;
+    while (k >= 0) {
+        if (l.i == 0)
+            return false;
+        uint8_t c = s->sym[l.i - 1] & 0x7f;
+        if (c == ']') {
+            pos_prev(s, &l);
+            int level = 0;
+            for (;;) {
+                if (l.i == 0)
+                    return false;
+                pos_prev(s, &l);
+                uint8_t d = s->sym[l.i] & 0x7f;
+                if (d == ']')
+                    level++;
+                else if (d == '[' && level-- == 0)
+                    break;
+            }
+        } else if (c == '[' || ls->ignore[c]) {
+            pos_prev(s, &l);
+        } else {
+            pos_prev(s, &l);
+            if (c != m[k].sym || mod_np(s, &l) != m[k].np)
+                return false;
+            slot -= m[k].np;
+            if (m[k].np)
+                par_load(s, l.k, ls->frame + slot, m[k].np);
+            k--;
+        }
+    }
+    return true;
+}
+
+static inline bool runtime_ok(cbm_lsys *ls)
+{
+    return ls->ev.error == CBM_OK;
+}
+
+/* Whole match: predecessor in src at p, context in ctxs at lc/rc (for the main derivation
+ * these are the predecessor's own positions; for decomposition the produced module's). */
+static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *end,
+                  const lstr *ctxs, const lpos *lc, const lpos *rc)
+{
+    int lslots = 0;
+    for (int32_t k = 0; k < pr->nlc; k++)
+        lslots += ls->fmods.data[pr->lc + k].np;
+    int pslots = 0;
+    for (int32_t k = 0; k < pr->npred; k++)
+        pslots += ls->fmods.data[pr->pred + k].np;
+    if (!match_pred(ls, pr, src, p, end, lslots))
+        return false;
+    if (pr->nrc && !match_rc(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
+        return false;
+    if (pr->nlc && !match_lc(ls, pr, ctxs, lc ? *lc : p))
+        return false;
+    ls->ev.params = ls->frame;
+    if (pr->pre >= 0)
+        cbm__eval_stmt(&ls->ev, pr->pre);
+    if (pr->cond >= 0 && !cbm__eval_expr(&ls->ev, pr->cond))
+        return false;
+    return true;
+}
+
+/* Appends the successor of pr (parameters evaluated with the bound frame). */
+static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
+{
+    if (pr->post >= 0)
+        cbm__eval_stmt(&ls->ev, pr->post);
+    if (pr->nsucc == 0)
+        return CBM_OK;
+    if (pr->const_succ) {
+        CBM_TRY(lstr_room(ls->ctx, dst, (size_t)pr->nsucc, 0, 0));
+        memcpy(dst->sym + dst->n, ls->const_bytes.data + pr->succ_bytes, (size_t)pr->nsucc);
+        dst->n += (size_t)pr->nsucc;
+        return CBM_OK;
+    }
+    const smod *m = ls->smods.data + pr->succ;
+    for (int32_t i = 0; i < pr->nsucc; i++) {
+        CBM_TRY(lstr_room(ls->ctx, dst, 1, 1, m[i].np));
+        if (m[i].np == 0) {
+            dst->sym[dst->n++] = m[i].sym;
+            continue;
+        }
+        dst->sym[dst->n++] = (uint8_t)(m[i].sym | LSYS_PARAM_BIT);
+        dst->pc[dst->npm++] = m[i].np;
+        int k = 0;
+        if (dst->f32) {
+            float *out = (float *)dst->par + dst->npar;
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
+                out[k++] = (float)cbm__eval_expr(&ls->ev, a);
+        } else {
+            double *out = (double *)dst->par + dst->npar;
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
+                out[k++] = cbm__eval_expr(&ls->ev, a);
+        }
+        dst->npar += m[i].np;
+    }
+    return CBM_OK;
+}
+
+static const prod *find_first(cbm_lsys *ls, const prodset *set, const lstr *src, lpos p, lpos *end,
+                              const lstr *ctxs, const lpos *lc, const lpos *rc)
+{
+    uint8_t s = src->sym[p.i] & 0x7f;
+    for (int32_t o = set->start[s]; o < set->start[s + 1]; o++) {
+        const prod *pr = &set->prods.data[set->order[o]];
+        if (match(ls, pr, src, p, end, ctxs, lc, rc))
+            return pr;
+        if (!runtime_ok(ls))
+            return NULL;
+    }
+    return NULL;
+}
+
+/* cpfg's ApplyRecursiveProductions: rewrites the module at *p of src with `set`, recursively,
+ * appending to dst. Returns through *applied whether anything was written (at depth 0 an
+ * unmatched module is left to the caller). */
+static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpos *p, lstr *dst,
+                          const lstr *ctxs, const lpos *lc, const lpos *rc, int depth,
+                          bool *applied)
+{
+    lpos end;
+    const prod *pr = find_first(ls, set, src, *p, &end, ctxs, lc, rc);
+    if (!runtime_ok(ls))
+        return ls->ev.error;
+    if (depth >= set->depth) {
+        if (set->depth > 0) {
+            *applied = true;
+            return copy_module(ls->ctx, src, p, dst);
+        }
+        *applied = false;
+        return CBM_OK;
+    }
+    if (!pr) {
+        *applied = depth > 0;
+        return depth > 0 ? copy_module(ls->ctx, src, p, dst) : CBM_OK;
+    }
+    *applied = true;
+    lstr *buf = &ls->scratch.data[depth];
+    lstr_clear(buf);
+    CBM_TRY(append_succ(ls, pr, buf));
+    if (!runtime_ok(ls))
+        return ls->ev.error;
+    *p = end;
+    lpos q = {0, 0, 0};
+    while (q.i < buf->n) {
+        bool a;
+        CBM_TRY(rewrite(ls, set, buf, &q, dst, ctxs, lc, rc, depth + 1, &a));
+    }
+    return CBM_OK;
+}
+
+static cbm_status prepare_scratch(cbm_lsys *ls, int depth)
+{
+    size_t need = (size_t)depth + 2;
+    if (ls->scratch.len >= need)
+        return CBM_OK;
+    CBM_TRY(CBM_ARRAY_RESERVE(ls->ctx, ls->scratch, need));
+    while (ls->scratch.len < need) {
+        lstr z = {0};
+        z.f32 = ls->float32;
+        ls->scratch.data[ls->scratch.len++] = z;
+    }
+    return CBM_OK;
+}
+
+static cbm_status run_block(cbm_lsys *ls, int32_t block, const char *what)
+{
+    if (block < 0)
+        return CBM_OK;
+    ls->ev.while_budget = ls->loop_budget;
+    cbm__eval_stmt(&ls->ev, block);
+    if (ls->ev.error != CBM_OK)
+        return cbm__fail(ls->ctx, ls->ev.error, "%s: %s", what, ls->ev.error_msg);
+    return CBM_OK;
+}
+
+/* Applies decomposition to the successor held in ls->succ (context: predecessor lc..rc). */
+static cbm_status decompose_succ(cbm_lsys *ls, const lpos *lc, const lpos *rc)
+{
+    lpos q = {0, 0, 0};
+    const lstr *buf = &ls->succ;
+    while (q.i < buf->n) {
+        bool a;
+        CBM_TRY(rewrite(ls, &ls->decomp, buf, &q, &ls->next, &ls->cur, lc, rc, 0, &a));
+        if (!a)
+            CBM_TRY(copy_module(ls->ctx, buf, &q, &ls->next));
+    }
+    return CBM_OK;
+}
+
+static cbm_status derive(cbm_lsys *ls)
+{
+    cbm_context *ctx = ls->ctx;
+    const lstr *cur = &ls->cur;
+    lstr *next = &ls->next;
+    lstr_clear(next);
+    const prodset *set = &ls->main;
+    bool decomp = ls->decomp.present;
+    size_t max_modules = cbm_context_limits(ctx)->max_modules;
+    lpos p = {0, 0, 0};
+    while (p.i < cur->n) {
+        uint8_t s = cur->sym[p.i] & 0x7f;
+        const prod *pr = NULL;
+        lpos end = p;
+        if (ls->stochastic) {
+            float total = 0;
+            ls->appl.len = 0;
+            ls->applp.len = 0;
+            for (int32_t o = set->start[s]; o < set->start[s + 1]; o++) {
+                int32_t pi = set->order[o];
+                const prod *c = &set->prods.data[pi];
+                lpos e;
+                if (match(ls, c, cur, p, &e, cur, NULL, NULL)) {
+                    float pb = c->prob >= 0 ? (float)cbm__eval_expr(&ls->ev, c->prob) : 1.0f;
+                    total += pb;
+                    CBM_TRY(CBM_ARRAY_PUSH(ctx, ls->appl, pi));
+                    CBM_TRY(CBM_ARRAY_PUSH(ctx, ls->applp, pb));
+                }
+                if (!runtime_ok(ls))
+                    return CBM_E_RUNTIME;
+            }
+            float r = (float)((double)total * cbm__rand48_next(&ls->drand));
+            for (size_t a = 0; a < ls->appl.len; a++) {
+                if ((r -= ls->applp.data[a]) <= 0) {
+                    pr = &set->prods.data[ls->appl.data[a]];
+                    /* bind the chosen production's parameters again */
+                    int lslots = 0;
+                    for (int32_t k = 0; k < pr->nlc; k++)
+                        lslots += ls->fmods.data[pr->lc + k].np;
+                    int pslots = 0;
+                    for (int32_t k = 0; k < pr->npred; k++)
+                        pslots += ls->fmods.data[pr->pred + k].np;
+                    match_pred(ls, pr, cur, p, &end, lslots);
+                    if (pr->nrc)
+                        match_rc(ls, pr, cur, end, lslots + pslots);
+                    if (pr->nlc)
+                        match_lc(ls, pr, cur, p);
+                    break;
+                }
+            }
+        } else if (set->start[s] < set->start[s + 1]) {
+            pr = find_first(ls, set, cur, p, &end, cur, NULL, NULL);
+        }
+        if (!runtime_ok(ls))
+            return CBM_E_RUNTIME;
+        if (pr) {
+            if (decomp) {
+                lstr_clear(&ls->succ);
+                CBM_TRY(append_succ(ls, pr, &ls->succ));
+                lpos lc = p;
+                CBM_TRY(decompose_succ(ls, &lc, &end));
+            } else {
+                CBM_TRY(append_succ(ls, pr, next));
+            }
+            if (!runtime_ok(ls))
+                return CBM_E_RUNTIME;
+            p = end;
+        } else {
+            bool done = false;
+            if (decomp) {
+                lpos lc = p, rc = p;
+                pos_next(cur, &rc);
+                CBM_TRY(rewrite(ls, &ls->decomp, cur, &p, next, cur, &lc, &rc, 0, &done));
+            }
+            if (!done) {
+                if (s == '%' && mod_np(cur, &p) == 0) {
+                    /* cut: skip to the end of the branch (the ']' is kept) */
+                    pos_next(cur, &p);
+                    int level = 0;
+                    while (p.i < cur->n) {
+                        uint8_t c = cur->sym[p.i] & 0x7f;
+                        if (c == '[')
+                            level++;
+                        else if (c == ']' && level-- == 0)
+                            break;
+                        pos_next(cur, &p);
+                    }
+                } else {
+                    CBM_TRY(copy_module(ctx, cur, &p, next));
+                }
+            }
+        }
+        if (next->n > max_modules)
+            return cbm__fail(ctx, CBM_E_LIMIT,
+                             "step %d: the string would exceed %zu modules (the max_modules "
+                             "limit); stopped after step %d",
+                             ls->steps + 1, max_modules, ls->steps);
+    }
+    return CBM_OK;
+}
+
+/* A runtime error of the expressions becomes a failure with its message; the evaluator is
+ * cleared for the next call. */
+static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
+{
+    if (ls->ev.error != CBM_OK) {
+        cbm_status e = ls->ev.error;
+        ls->ev.error = CBM_OK;
+        return cbm__fail(ls->ctx, e, "%s: %s", what, ls->ev.error_msg);
+    }
+    return s;
+}
+
+cbm_status cbm_lsys_step(cbm_lsys *ls)
+{
+    if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
+        return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
+                         cbm_context_limits(ls->ctx)->max_steps);
+    CBM_TRY(
+        prepare_scratch(ls, ls->decomp.depth > ls->homo.depth ? ls->decomp.depth : ls->homo.depth));
+    if (ls->interp)
+        CBM_TRY(cbm_lsys_interpret(ls));
+    ls->globals[ls->q_slot] = ls->steps + 1;
+    CBM_TRY(run_block(ls, ls->start_each, "StartEach"));
+    ls->ev.while_budget = ls->loop_budget;
+    cbm_status s = derive(ls);
+    if (s != CBM_OK) {
+        char what[64];
+        snprintf(what, sizeof what, "step %d", ls->steps + 1);
+        s = runtime_fail(ls, s, what);
+    }
+    if (s == CBM_E_NOMEM && cbm_context_limits(ls->ctx)->max_bytes)
+        s = cbm__fail(ls->ctx, CBM_E_LIMIT,
+                      "step %d: the string would exceed the memory limit of %zu bytes; "
+                      "stopped after step %d",
+                      ls->steps + 1, cbm_context_limits(ls->ctx)->max_bytes, ls->steps);
+    if (s != CBM_OK)
+        return s;
+    lstr t = ls->cur;
+    ls->cur = ls->next;
+    ls->next = t;
+    ls->steps++;
+    ls->homo_valid = false;
+    CBM_TRY(run_block(ls, ls->end_each, "EndEach"));
+    if (ls->steps == ls->derivation_length)
+        CBM_TRY(run_block(ls, ls->end_block, "End"));
+    return CBM_OK;
+}
+
+cbm_status cbm_lsys_reset(cbm_lsys *ls)
+{
+    memset(ls->globals, 0, ls->nglobals * sizeof(double));
+    size_t off = 0;
+    for (size_t i = 0; i < ls->comp.arrays.len; i++) {
+        cbm__array *a = &ls->comp.arrays.data[i];
+        memcpy(a->data, ls->array_init + off, a->count * sizeof(double));
+        off += a->count;
+    }
+    ls->steps = 0;
+    ls->homo_valid = false;
+    cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
+    /* cpfg starts nran with its pair cache marked full of a zero: the first nran(m, s) before
+     * any srand returns m */
+    ls->ev.nran_have = 1;
+    ls->ev.nran_cached = 0;
+    ls->ev.error = CBM_OK;
+    ls->ev.stopped = false;
+    ls->ev.func = ls->func;
+    ls->ev.func_ud = ls->func_ud;
+    /* drand48: glibc's default state is 0; srand48(s) gives (s << 16) | 0x330E */
+    bool seeded = false;
+    uint64_t seed = 0;
+    if (ls->seed_override >= 0) {
+        seeded = true;
+        seed = (uint64_t)ls->seed_override;
+    } else if (ls->seed_expr >= 0 && !ls->ignore_seed) {
+        seeded = true;
+        seed = (uint64_t)cbm__to_ll(cbm__eval_expr(&ls->ev, ls->seed_expr));
+    }
+    ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
+    CBM_TRY(run_block(ls, ls->start_block, "Start"));
+    lstr_clear(&ls->cur);
+    prod ax = {
+        .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
+    ax.const_succ = false;
+    ls->ev.params = ls->frame;
+    CBM_TRY(append_succ(ls, &ax, &ls->cur));
+    if (!runtime_ok(ls))
+        return cbm__fail(ls->ctx, ls->ev.error, "axiom: %s", ls->ev.error_msg);
+    return CBM_OK;
+}
+
+static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
+
+cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
+{
+    lstr *out = &ls->homo_str;
+    lstr_clear(out);
+    CBM_TRY(prepare_scratch(ls, ls->homo.depth));
+    const lstr *cur = &ls->cur;
+    /* with its own seed:, the homomorphism draws from its own erand48 stream, restarted at every
+     * pass (cpfg), so the image is the same at every interpretation */
+    cbm__rand48 saved = ls->ev.ran;
+    if (ls->homo.seed_expr >= 0) {
+        long long seed = cbm__to_ll(cbm__eval_expr(&ls->ev, ls->homo.seed_expr));
+        cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(seed & 0xFFFF),
+                           (uint16_t)((seed >> 16) & 0xFFFF));
+    }
+    cbm_status s = homomorphism(ls, cur, out);
+    if (ls->homo.seed_expr >= 0)
+        ls->ev.ran = saved;
+    if (s == CBM_OK)
+        ls->homo_valid = true;
+    return s;
+}
+
+static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out)
+{
+    lpos p = {0, 0, 0};
+    while (p.i < cur->n) {
+        bool done = false;
+        if (ls->homo.present) {
+            lpos lc = p, rc = p;
+            pos_next(cur, &rc);
+            cbm_status s = rewrite(ls, &ls->homo, cur, &p, out, cur, &lc, &rc, 0, &done);
+            if (s != CBM_OK)
+                return runtime_fail(ls, s, "homomorphism");
+        }
+        if (!done)
+            CBM_TRY(copy_module(ls->ctx, cur, &p, out));
+        if (out->n > cbm_context_limits(ls->ctx)->max_modules)
+            return cbm__fail(ls->ctx, CBM_E_LIMIT,
+                             "the homomorphism would exceed %zu modules (max_modules)",
+                             cbm_context_limits(ls->ctx)->max_modules);
+    }
+    return CBM_OK;
+}
+
+int cbm_lsys_derivation_length(const cbm_lsys *ls)
+{
+    return ls->derivation_length;
+}
+int cbm_lsys_steps_done(const cbm_lsys *ls)
+{
+    return ls->steps;
+}
+bool cbm_lsys_stopped(const cbm_lsys *ls)
+{
+    return ls->ev.stopped;
+}
+size_t cbm_lsys_module_count(const cbm_lsys *ls)
+{
+    return ls->cur.n;
+}
+size_t cbm_lsys_param_count(const cbm_lsys *ls)
+{
+    return ls->cur.npar;
+}
+bool cbm_lsys_has_homomorphism(const cbm_lsys *ls)
+{
+    return ls->homo.present;
+}
+
+size_t cbm_lsys_homomorphism_module_count(const cbm_lsys *ls)
+{
+    return ls->homo_valid ? ls->homo_str.n : 0;
+}
+
+void cbm_lsys_set_func(cbm_lsys *ls, cbm_lsys_func_fn fn, void *ud)
+{
+    ls->func = fn;
+    ls->func_ud = ud;
+    ls->ev.func = fn;
+    ls->ev.func_ud = ud;
+}
+
+void cbm_lsys_cursor_begin(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c)
+{
+    (void)ls;
+    c->module = c->pmodule = c->param = 0;
+    c->symbol = c->nparams = 0;
+    c->params = NULL;
+    c->homomorphism = homomorphism;
+}
+
+bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor *c)
+{
+    const lstr *s = homomorphism && ls->homo_valid ? &ls->homo_str : &ls->cur;
+    if (c->module >= s->n)
+        return false;
+    uint8_t b = s->sym[c->module];
+    c->symbol = b & 0x7f;
+    c->nparams = 0;
+    c->params = NULL;
+    if (b & LSYS_PARAM_BIT) {
+        c->nparams = s->pc[c->pmodule];
+        if (s->f32) {
+            par_load(s, c->param, c->buf, c->nparams);
+            c->params = c->buf;
+        } else {
+            c->params = (const double *)s->par + c->param;
+        }
+        c->param += (size_t)c->nparams;
+        c->pmodule++;
+    }
+    c->module++;
+    return true;
+}
+
+void cbm_lsys_set_interpreter(cbm_lsys *ls, cbm_lsys_interpret_fn fn, void *ud)
+{
+    ls->interp = fn;
+    ls->interp_ud = ud;
+}
+
+cbm_status cbm_lsys_cursor_set_param(cbm_lsys *ls, cbm_lsys_cursor *c, int i, double v)
+{
+    lstr *s = c->homomorphism ? &ls->homo_str : &ls->cur;
+    if (i < 0 || i >= c->nparams || c->param < (size_t)c->nparams || c->param > s->npar ||
+        (c->homomorphism && !ls->homo_valid))
+        return CBM_E_INVALID;
+    size_t k = c->param - (size_t)c->nparams + (size_t)i;
+    if (s->f32) {
+        ((float *)s->par)[k] = (float)v;
+        c->buf[i] = (float)v;
+    } else {
+        ((double *)s->par)[k] = v;
+    }
+    if (!c->homomorphism)
+        ls->homo_valid = false;
+    return CBM_OK;
+}
+
+/* The values of the query modules of the image (the modules that follow a '?') go to the query
+ * modules of the string, the k-th to the k-th, as many parameters as both have. */
+static void return_queries(cbm_lsys *ls)
+{
+    const lstr *img = &ls->homo_str;
+    lstr *str = &ls->cur;
+    lpos a = {0, 0, 0}, b = {0, 0, 0};
+    for (;;) {
+        while (a.i < img->n && !(a.i > 0 && (img->sym[a.i - 1] & 0x7f) == '?'))
+            pos_next(img, &a);
+        while (b.i < str->n && !(b.i > 0 && (str->sym[b.i - 1] & 0x7f) == '?'))
+            pos_next(str, &b);
+        if (a.i >= img->n || b.i >= str->n)
+            return;
+        int na = mod_np(img, &a), nb = mod_np(str, &b);
+        double v[LSYS_MAX_PARAMS];
+        par_load(img, a.k, v, na < nb ? na : nb);
+        for (int j = 0; j < na && j < nb; j++) {
+            if (str->f32)
+                ((float *)str->par)[b.k + (size_t)j] = (float)v[j];
+            else
+                ((double *)str->par)[b.k + (size_t)j] = v[j];
+        }
+        pos_next(img, &a);
+        pos_next(str, &b);
+    }
+}
+
+cbm_status cbm_lsys_interpret(cbm_lsys *ls)
+{
+    if (!ls->interp)
+        return CBM_OK;
+    CBM_TRY(cbm_lsys_apply_homomorphism(ls));
+    CBM_TRY(ls->interp(ls->interp_ud, ls));
+    return_queries(ls);
+    return CBM_OK;
+}

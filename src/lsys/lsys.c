@@ -1,0 +1,140 @@
+/* Loading and releasing an L-system model: preprocess, parse, then index the productions by
+ * the first symbol of their predecessor (declaration order kept within a symbol, which is the
+ * order cpfg tries them in) and allocate the run state (globals, parameter frame). */
+#include "lsys/lsys_internal.h"
+
+#include <stdlib.h>
+
+cbm_lsys_def cbm_lsys_def_default(void)
+{
+    cbm_lsys_def d;
+    memset(&d, 0, sizeof d);
+    d.seed = -1;
+    return d;
+}
+
+static cbm_status index_set(cbm_lsys *ls, prodset *set)
+{
+    size_t n = set->prods.len;
+    set->order = cbm__calloc(ls->ctx, n ? n : 1, sizeof(int32_t));
+    if (!set->order)
+        return CBM_E_NOMEM;
+    int32_t counts[129] = {0};
+    for (size_t i = 0; i < n; i++)
+        counts[ls->fmods.data[set->prods.data[i].pred].sym + 1]++;
+    set->start[0] = 0;
+    for (int s = 1; s <= 128; s++)
+        set->start[s] = set->start[s - 1] + counts[s];
+    int32_t fill[128];
+    memcpy(fill, set->start, sizeof fill);
+    for (size_t i = 0; i < n; i++)
+        set->order[fill[ls->fmods.data[set->prods.data[i].pred].sym]++] = (int32_t)i;
+    return CBM_OK;
+}
+
+void cbm_lsys_destroy(cbm_lsys *ls)
+{
+    if (!ls)
+        return;
+    cbm_context *ctx = ls->ctx;
+    prodset *sets[3] = {&ls->main, &ls->decomp, &ls->homo};
+    for (int i = 0; i < 3; i++) {
+        size_t n = sets[i]->prods.len;
+        if (sets[i]->order)
+            cbm__free(ctx, sets[i]->order, (n ? n : 1) * sizeof(int32_t));
+        CBM_ARRAY_FREE(ctx, sets[i]->prods);
+    }
+    CBM_ARRAY_FREE(ctx, ls->fmods);
+    CBM_ARRAY_FREE(ctx, ls->smods);
+    CBM_ARRAY_FREE(ctx, ls->const_bytes);
+    cbm__free(ctx, ls->globals, ls->nglobals * sizeof(double));
+    cbm__free(ctx, ls->frame, (size_t)(ls->max_formals + 1) * sizeof(double));
+    cbm__free(ctx, ls->array_init, ls->array_init_len * sizeof(double));
+    cbm__lstr_free(ctx, &ls->cur);
+    cbm__lstr_free(ctx, &ls->next);
+    cbm__lstr_free(ctx, &ls->homo_str);
+    cbm__lstr_free(ctx, &ls->succ);
+    for (size_t i = 0; i < ls->scratch.len; i++)
+        cbm__lstr_free(ctx, &ls->scratch.data[i]);
+    CBM_ARRAY_FREE(ctx, ls->scratch);
+    CBM_ARRAY_FREE(ctx, ls->appl);
+    CBM_ARRAY_FREE(ctx, ls->applp);
+    cbm__compiler_free(&ls->comp);
+    cbm__free(ctx, ls, sizeof *ls);
+}
+
+cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **out)
+{
+    if (!ctx || !def || !out || (!def->path && !def->text))
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm__pp pp;
+    CBM_TRY(cbm__pp_run(ctx, def->path, def->text, def->defines, def->define_count, &pp));
+    if (pp.errors) {
+        size_t n = pp.errors;
+        cbm__pp_free(&pp);
+        return cbm__fail(ctx, CBM_E_SYNTAX, "%zu preprocessor error%s", n, n == 1 ? "" : "s");
+    }
+    cbm_lsys *ls = cbm__calloc(ctx, 1, sizeof *ls);
+    if (!ls) {
+        cbm__pp_free(&pp);
+        return CBM_E_NOMEM;
+    }
+    ls->ctx = ctx;
+    ls->float32 = def->float32;
+    ls->ignore_seed = def->ignore_seed;
+    ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = def->float32;
+    ls->seed_override = def->seed;
+    ls->loop_budget = def->max_loop_iterations > 0 ? def->max_loop_iterations : 100000000;
+    ls->start_block = ls->end_block = ls->start_each = ls->end_each = -1;
+    ls->dlength_expr = ls->seed_expr = -1;
+    ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
+    cbm_status s = cbm__compiler_init(&ls->comp, ctx, &pp);
+    if (s == CBM_OK)
+        s = cbm__lsys_parse(ls, &pp);
+    cbm__pp_free(&pp);
+    ls->comp.pp = NULL;
+    ls->comp.text = NULL;
+    if (s == CBM_OK)
+        s = index_set(ls, &ls->main);
+    if (s == CBM_OK)
+        s = index_set(ls, &ls->decomp);
+    if (s == CBM_OK)
+        s = index_set(ls, &ls->homo);
+    if (s == CBM_OK) {
+        ls->q_slot = (int32_t)ls->comp.globals.len;
+        for (size_t i = 0; i < ls->comp.globals.len; i++)
+            if (!strcmp(ls->comp.globals.data[i], "Q"))
+                ls->q_slot = (int32_t)i;
+        ls->nglobals = ls->comp.globals.len + 1;
+        ls->globals = cbm__calloc(ctx, ls->nglobals, sizeof(double));
+        ls->frame = cbm__calloc(ctx, (size_t)ls->max_formals + 1, sizeof(double));
+        for (size_t i = 0; i < ls->comp.arrays.len; i++)
+            ls->array_init_len += ls->comp.arrays.data[i].count;
+        ls->array_init =
+            cbm__calloc(ctx, ls->array_init_len ? ls->array_init_len : 1, sizeof(double));
+        if (!ls->array_init_len && ls->array_init) {
+            cbm__free(ctx, ls->array_init, sizeof(double));
+            ls->array_init = NULL;
+        }
+        if (!ls->globals || !ls->frame || (ls->array_init_len && !ls->array_init))
+            s = CBM_E_NOMEM;
+    }
+    if (s != CBM_OK) {
+        cbm_lsys_destroy(ls);
+        return s;
+    }
+    size_t off = 0;
+    for (size_t i = 0; i < ls->comp.arrays.len; i++) {
+        cbm__array *a = &ls->comp.arrays.data[i];
+        memcpy(ls->array_init + off, a->data, a->count * sizeof(double));
+        off += a->count;
+    }
+    ls->ev.ctx = ctx;
+    ls->ev.nodes = ls->comp.nodes.data;
+    ls->ev.globals = ls->globals;
+    ls->ev.arrays = ls->comp.arrays.data;
+    ls->ev.params = ls->frame;
+    *out = ls;
+    return CBM_OK;
+}

@@ -1,0 +1,110 @@
+/* Internal structures of the L-system engine: the compiled model and the packed module string.
+ *
+ * The module string is three contiguous arrays, double-buffered between steps:
+ *   sym[i]  the symbol of module i (7-bit ASCII); bit 7 set when the module has parameters;
+ *   pc[j]   the parameter count of the j-th parametric module;
+ *   par[k]  all parameters, in order (double; float in float32 mode, as cpfg stores them).
+ * A non-parametric module costs one byte, and walking left or right (context matching) only
+ * needs the three running indices (module, parametric module, parameter).
+ */
+#ifndef CBM_LSYS_INTERNAL_H
+#define CBM_LSYS_INTERNAL_H
+
+#include "cambium/lsys.h"
+#include "lang/lang.h"
+
+#define LSYS_PARAM_BIT  0x80u
+#define LSYS_MAX_PARAMS 255
+
+typedef struct lstr {
+    uint8_t *sym;
+    size_t n, cap;
+    uint8_t *pc;
+    size_t npm, pccap;
+    void *par; /* double, or float in float32 mode */
+    size_t npar, parcap;
+    bool f32;
+} lstr;
+
+/* a position in a string */
+typedef struct lpos {
+    size_t i, j, k;
+} lpos;
+
+/* A module of a predecessor or context: symbol and parameter count. Formal parameter names are
+ * slots of the production's frame in the order they appear (left context, predecessor, right
+ * context). */
+typedef struct fmodule {
+    uint8_t sym, np;
+} fmodule;
+
+/* A module of a successor: symbol and its parameter expressions (a chain of nodes). */
+typedef struct smod {
+    uint8_t sym, np;
+    int32_t args;
+} smod;
+
+typedef struct prod {
+    int32_t lc, nlc;     /* left context in fmods, in text order */
+    int32_t pred, npred; /* strict predecessor */
+    int32_t rc, nrc;     /* right context */
+    int nformals;
+    int32_t pre, cond, post, prob; /* -1: none */
+    int32_t succ, nsucc;           /* in smods */
+    bool const_succ;               /* successor without parameters: copied as bytes */
+    int32_t succ_bytes;            /* offset in const_bytes */
+    size_t pos;                    /* text offset, for messages */
+} prod;
+
+typedef struct prodset {
+    CBM_ARRAY(prod) prods;
+    int32_t *order; /* production indices grouped by first predecessor symbol */
+    int32_t start[129];
+    int depth;         /* maximum depth (decomposition, homomorphism) */
+    int32_t seed_expr; /* homomorphism: its own random stream (seed:), -1 if none */
+    bool present;
+} prodset;
+
+struct cbm_lsys {
+    cbm_context *ctx;
+    cbm__compiler comp; /* nodes, globals, arrays */
+    CBM_ARRAY(fmodule) fmods;
+    CBM_ARRAY(smod) smods;
+    CBM_ARRAY(uint8_t) const_bytes;
+    prodset main, decomp, homo;
+    bool ignore[128];
+    bool stochastic;
+    bool float32;
+    bool ignore_seed;
+    int64_t seed_override; /* -1: none */
+    long loop_budget;
+    double (*func)(void *ud, int id, double x);
+    void *func_ud;
+    cbm_lsys_interpret_fn interp;
+    void *interp_ud;
+    double *array_init; /* initial values of all arrays, concatenated */
+    size_t array_init_len;
+    int32_t axiom, naxiom; /* in smods */
+    int32_t start_block, end_block, start_each, end_each;
+    int32_t dlength_expr, seed_expr;
+    int derivation_length;
+    int max_formals;
+    int32_t q_slot; /* global Q: the current step */
+    /* run state */
+    cbm__eval ev;
+    double *globals;
+    size_t nglobals;
+    double *frame;
+    cbm__rand48 drand; /* drand48 stream of stochastic choice */
+    lstr cur, next, homo_str, succ;
+    CBM_ARRAY(lstr) scratch; /* successor buffers per decomposition depth */
+    CBM_ARRAY(int32_t) appl; /* applicable productions (stochastic) */
+    CBM_ARRAY(float) applp;
+    int steps;
+    bool homo_valid;
+};
+
+void cbm__lstr_free(cbm_context *ctx, lstr *s);
+cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);
+
+#endif

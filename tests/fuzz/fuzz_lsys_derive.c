@@ -1,0 +1,60 @@
+/* libFuzzer target: loading, deriving (up to 8 steps) and the homomorphism of arbitrary models
+ * under small limits (modules, memory, steps, decomposition depth, loop iterations), in double
+ * and float32 modes. Must never crash, leak or hang. */
+#include "cambium/cambium.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size);
+
+int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
+{
+    if (size > 1 << 14)
+        return 0;
+    char *text = malloc(size + 1);
+    if (!text)
+        return 0;
+    bool float32 = size & 1; /* both number modes, without spending input bytes */
+    memcpy(text, data, size);
+    text[size] = 0;
+    cbm_context_def cd = cbm_context_def_default();
+    cd.limits.max_bytes = 64u << 20;
+    cd.limits.max_modules = 200000;
+    cd.limits.max_steps = 50;
+    cd.limits.max_decomp_depth = 20;
+    cd.limits.max_expr_depth = 64;
+    cbm_context *ctx = NULL;
+    if (cbm_context_create(&cd, &ctx) != CBM_OK) {
+        free(text);
+        return 0;
+    }
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "fuzz.l";
+    def.text = text;
+    def.float32 = float32;
+    def.seed = 1;
+    def.max_loop_iterations = 100000;
+    cbm_lsys *ls = NULL;
+    if (cbm_lsys_load(ctx, &def, &ls) == CBM_OK) {
+        cbm_status s = cbm_lsys_reset(ls);
+        for (int i = 0; i < 8 && s == CBM_OK; i++)
+            s = cbm_lsys_step(ls);
+        if (s == CBM_OK)
+            (void)cbm_lsys_apply_homomorphism(ls);
+        cbm_lsys_destroy(ls);
+    }
+    if (cbm_context_bytes(ctx) != 0)
+        abort();
+    cbm_context_destroy(ctx);
+    free(text);
+    return 0;
+}
+
+#ifndef CBM_FUZZ_NO_MAIN
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    return cbm_fuzz_lsys_derive(data, size);
+}
+#endif

@@ -1,0 +1,49 @@
+/* libFuzzer target: the model-language front end (preprocessor and parser) on arbitrary text,
+ * under small limits. Must never crash, leak or hang; every failure is a status with a message.
+ * Build with `make fuzz`; run build-fuzz/bin/fuzz_lsys_parse tests/fuzz/corpus/lsys. */
+#include "cambium/cambium.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+int cbm_fuzz_lsys_parse(const uint8_t *data, size_t size);
+
+int cbm_fuzz_lsys_parse(const uint8_t *data, size_t size)
+{
+    if (size > 1 << 16)
+        return 0;
+    char *text = malloc(size + 1);
+    if (!text)
+        return 0;
+    memcpy(text, data, size);
+    text[size] = 0;
+    cbm_context_def cd = cbm_context_def_default();
+    cd.limits.max_bytes = 64u << 20;
+    cd.limits.max_modules = 100000;
+    cd.limits.max_steps = 50;
+    cd.limits.max_decomp_depth = 50;
+    cbm_context *ctx = NULL;
+    if (cbm_context_create(&cd, &ctx) != CBM_OK) {
+        free(text);
+        return 0;
+    }
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "fuzz.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    if (cbm_lsys_load(ctx, &def, &ls) == CBM_OK)
+        cbm_lsys_destroy(ls);
+    if (cbm_context_bytes(ctx) != 0)
+        abort(); /* a leak */
+    cbm_context_destroy(ctx);
+    free(text);
+    return 0;
+}
+
+#ifndef CBM_FUZZ_NO_MAIN
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    return cbm_fuzz_lsys_parse(data, size);
+}
+#endif

@@ -1,0 +1,117 @@
+/* Helpers of the L-system tests: loading a model, formatting strings in memory, comparing with
+ * cpfg's string files (exactly, or with a relative tolerance on the numbers). */
+#ifndef CBM_TEST_LSYS_UTIL_H
+#define CBM_TEST_LSYS_UTIL_H
+
+#include "test.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct tbuf {
+    char *s;
+    size_t n, cap;
+} tbuf;
+
+static inline void tb_put(tbuf *b, const char *s, size_t n)
+{
+    if (b->n + n + 1 > b->cap) {
+        b->cap = (b->n + n + 1) * 2;
+        b->s = realloc(b->s, b->cap);
+    }
+    memcpy(b->s + b->n, s, n);
+    b->n += n;
+    b->s[b->n] = 0;
+}
+
+static inline void tb_free(tbuf *b)
+{
+    free(b->s);
+    memset(b, 0, sizeof *b);
+}
+
+/* The string as cpfg -str (without the line wrapping) when exact_fmt is false (%g), or one
+ * module per line with %.9g when true. */
+static inline void format_string(const cbm_lsys *ls, bool homo, bool exact_fmt, tbuf *b)
+{
+    cbm_lsys_cursor c;
+    char tmp[64];
+    cbm_lsys_cursor_begin(ls, homo, &c);
+    tb_put(b, "", 0);
+    while (cbm_lsys_cursor_next(ls, homo, &c)) {
+        char ch = (char)c.symbol;
+        tb_put(b, &ch, 1);
+        for (int i = 0; i < c.nparams; i++) {
+            int k = snprintf(tmp, sizeof tmp, exact_fmt ? "%c%.9g" : "%c%g", i ? ',' : '(',
+                             c.params[i]);
+            tb_put(b, tmp, (size_t)k);
+        }
+        if (c.nparams)
+            tb_put(b, ")", 1);
+        if (exact_fmt)
+            tb_put(b, "\n", 1);
+    }
+}
+
+/* Reads a file; with join, newlines are removed (cpfg's 70-column wrapping). NULL if absent. */
+static inline char *read_text(const char *path, bool join)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    tbuf b = {0};
+    tb_put(&b, "", 0);
+    char buf[65536];
+    size_t k;
+    while ((k = fread(buf, 1, sizeof buf, f)) > 0) {
+        if (!join) {
+            tb_put(&b, buf, k);
+            continue;
+        }
+        for (size_t i = 0; i < k; i++)
+            if (buf[i] != '\n' && buf[i] != '\r')
+                tb_put(&b, buf + i, 1);
+    }
+    fclose(f);
+    return b.s;
+}
+
+static inline bool numch(char c)
+{
+    return (c >= '0' && c <= '9') || c == '.' || c == '-' || c == '+' || c == 'e' || c == 'E';
+}
+
+/* Compares two strings, numbers inside parentheses within rel (relative) or abs_tol.
+ * Returns the offset of the first difference in a, or (size_t)-1 when equal. */
+static inline size_t compare_tol(const char *a, const char *b, double rel, double abs_tol)
+{
+    size_t i = 0, j = 0;
+    int depth = 0;
+    while (a[i] && b[j]) {
+        if (depth > 0 && numch(a[i]) && numch(b[j]) && a[i] != 'e' && a[i] != 'E') {
+            char *ea, *eb;
+            double x = strtod(a + i, &ea), y = strtod(b + j, &eb);
+            if (ea == a + i || eb == b + j)
+                return i;
+            double d = x - y;
+            if (d < 0)
+                d = -d;
+            double m = (x < 0 ? -x : x) > (y < 0 ? -y : y) ? (x < 0 ? -x : x) : (y < 0 ? -y : y);
+            if (d > abs_tol && d > rel * m)
+                return i;
+            i = (size_t)(ea - a);
+            j = (size_t)(eb - b);
+            continue;
+        }
+        if (a[i] != b[j])
+            return i;
+        if (a[i] == '(')
+            depth++;
+        if (a[i] == ')')
+            depth--;
+        i++, j++;
+    }
+    return a[i] == b[j] ? (size_t)-1 : i;
+}
+
+#endif
