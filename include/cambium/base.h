@@ -18,16 +18,16 @@ extern "C" {
 #endif
 
 #if defined(__GNUC__)
-#define CBM_API __attribute__((visibility("default")))
+#define CBM_API          __attribute__((visibility("default")))
 #define CBM_PRINTF(f, a) __attribute__((format(printf, f, a)))
 #else
 #define CBM_API
 #define CBM_PRINTF(f, a)
 #endif
 
-#define CBM_VERSION_MAJOR 0
-#define CBM_VERSION_MINOR 1
-#define CBM_VERSION_PATCH 0
+#define CBM_VERSION_MAJOR  0
+#define CBM_VERSION_MINOR  1
+#define CBM_VERSION_PATCH  0
 #define CBM_VERSION_STRING "0.1.0"
 
 /// The status codes, defined once with their names and messages (X-macro).
@@ -94,13 +94,13 @@ typedef void (*cbm_diag_fn)(void *ud, const cbm_diagnostic *d);
 
 /// Limits that keep any input from running away. 0 means "no limit" only where noted.
 typedef struct cbm_limits {
-    size_t max_bytes;      ///< live bytes through the allocator (0 = unlimited)
-    size_t max_modules;    ///< modules in an L-system string
-    size_t max_steps;      ///< derivation steps in one run
-    size_t max_segments;   ///< mechanical segments in one plant
-    size_t max_passes;     ///< solver passes in one equilibrium solve
-    int max_expr_depth;    ///< nesting depth of expressions and statements
-    int max_decomp_depth;  ///< decomposition / homomorphism recursion depth
+    size_t max_bytes;       ///< live bytes through the allocator (0 = unlimited)
+    size_t max_modules;     ///< modules in an L-system string
+    size_t max_steps;       ///< derivation steps in one run
+    size_t max_segments;    ///< mechanical segments in one plant
+    size_t max_passes;      ///< solver passes in one equilibrium solve
+    int max_expr_depth;     ///< nesting depth of expressions and statements
+    int max_decomp_depth;   ///< decomposition / homomorphism recursion depth
     size_t max_diagnostics; ///< errors reported before giving up
 } cbm_limits;
 

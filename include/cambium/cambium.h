@@ -5,5 +5,6 @@
 #include "cambium/base.h"
 #include "cambium/geom.h"
 #include "cambium/io.h"
+#include "cambium/turtle.h"
 
 #endif

@@ -249,8 +249,8 @@ void cbm__vdiag(cbm_context *ctx, cbm_severity sev, const char *file, int line, 
     if (sev == CBM_ERROR) {
         ctx->errors++;
         if (file && line > 0)
-            snprintf(ctx->last_error, sizeof ctx->last_error, "%.300s:%d:%d: error: %.600s", file, line,
-                     col, msg);
+            snprintf(ctx->last_error, sizeof ctx->last_error, "%.300s:%d:%d: error: %.600s", file,
+                     line, col, msg);
         else if (file)
             snprintf(ctx->last_error, sizeof ctx->last_error, "%.300s: error: %.600s", file, msg);
         else

@@ -11,8 +11,7 @@
 /* Invariant check: stays on in debug and release-with-debug-info builds (it is compiled out
  * only when CBM_NO_ASSERT is defined). Use it for "cannot happen", never for bad input. */
 #ifndef CBM_NO_ASSERT
-#define CBM_ASSERT(c)                                                                              \
-    ((c) ? (void)0 : cbm__assert_fail(#c, __FILE__, __LINE__))
+#define CBM_ASSERT(c) ((c) ? (void)0 : cbm__assert_fail(#c, __FILE__, __LINE__))
 #else
 #define CBM_ASSERT(c) ((void)0)
 #endif
@@ -50,16 +49,16 @@ cbm_status cbm__grow(cbm_context *ctx, void **data, size_t *cap, size_t elem_siz
         size_t len, cap;                                                                           \
     }
 #define CBM_ARRAY_RESERVE(ctx, arr, n)                                                             \
-    ((n) <= (arr).cap ? CBM_OK                                                                     \
-                      : cbm__grow((ctx), (void **)&(arr).data, &(arr).cap, sizeof(*(arr).data),    \
-                                  (n)))
+    ((n) <= (arr).cap                                                                              \
+         ? CBM_OK                                                                                  \
+         : cbm__grow((ctx), (void **)&(arr).data, &(arr).cap, sizeof(*(arr).data), (n)))
 /* Evaluates to a cbm_status. */
 #define CBM_ARRAY_PUSH(ctx, arr, value)                                                            \
     (CBM_ARRAY_RESERVE(ctx, arr, (arr).len + 1) == CBM_OK                                          \
          ? ((arr).data[(arr).len++] = (value), CBM_OK)                                             \
          : CBM_E_NOMEM)
 #define CBM_ARRAY_FREE(ctx, arr)                                                                   \
-    (cbm__free((ctx), (arr).data, (arr).cap * sizeof(*(arr).data)), (arr).data = NULL,            \
+    (cbm__free((ctx), (arr).data, (arr).cap * sizeof(*(arr).data)), (arr).data = NULL,             \
      (arr).len = (arr).cap = 0)
 
 /* ---- arena: scratch memory released all at once ---- */

@@ -19,7 +19,7 @@ struct cbm_scene {
     /* tube in progress */
     int tube_sides;
     bool tube_caps, tube_open;
-    uint32_t tube_prev;  /* first vertex of the previous ring */
+    uint32_t tube_prev; /* first vertex of the previous ring */
     size_t tube_rings;
     cbm_section tube_last;
 };
@@ -107,7 +107,8 @@ static cbm_status push_vertex(cbm_scene *s, cbm_vec3 p, cbm_vec3 n)
 {
     if (s->verts.len >= UINT32_MAX - 1)
         return CBM_E_LIMIT;
-    cbm_scene_vertex v = {{(float)p.x, (float)p.y, (float)p.z}, {(float)n.x, (float)n.y, (float)n.z}};
+    cbm_scene_vertex v = {{(float)p.x, (float)p.y, (float)p.z},
+                          {(float)n.x, (float)n.y, (float)n.z}};
     return CBM_ARRAY_PUSH(s->ctx, s->verts, v);
 }
 
@@ -201,8 +202,8 @@ cbm_status cbm_scene_tube_end(cbm_scene *s)
     return CBM_OK;
 }
 
-cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1,
-                              int sides, bool caps)
+cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1, int sides,
+                              bool caps)
 {
     CBM_TRY(cbm_scene_tube_begin(s, sides, caps));
     CBM_TRY(cbm_scene_tube_ring(s, s0));
@@ -333,8 +334,8 @@ done:
     return st;
 }
 
-cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 *nrm,
-                              size_t nverts, const uint32_t *tri, size_t ntri)
+cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 *nrm, size_t nverts,
+                              const uint32_t *tri, size_t ntri)
 {
     if (!s || (!pos && nverts) || (!tri && ntri))
         return CBM_E_INVALID;

@@ -124,8 +124,8 @@ cbm_status cbm_out_commit(cbm_out *o)
         e = errno;
     if (e) {
         unlink(o->tmp);
-        cbm_status s = cbm__fail(ctx, CBM_E_IO, "%s: cannot write output file: %s", o->path,
-                                 strerror(e));
+        cbm_status s =
+            cbm__fail(ctx, CBM_E_IO, "%s: cannot write output file: %s", o->path, strerror(e));
         release(o);
         return s;
     }

@@ -14,54 +14,59 @@
 #define CBM_TURTLE_H
 
 #include "cambium/geom.h"
+#include "cambium/turtle.h"
 
 /* The turtle commands, ABOP and cpfg. The names in comments are the module symbols. */
 typedef enum cbm_tcmd {
     CBM_T_NONE = 0,
-    CBM_T_F,            /* F  move forward drawing */
-    CBM_T_f,            /* f  move forward without drawing */
-    CBM_T_G,            /* G  move forward drawing, not a polygon vertex */
-    CBM_T_g,            /* g  move forward, not drawing, not a polygon vertex */
-    CBM_T_LEFT,         /* +  turn left */
-    CBM_T_RIGHT,        /* -  turn right */
-    CBM_T_PITCH_DOWN,   /* &  */
-    CBM_T_PITCH_UP,     /* ^  */
-    CBM_T_ROLL_LEFT,    /* \  */
-    CBM_T_ROLL_RIGHT,   /* /  */
-    CBM_T_TURN_AROUND,  /* |  */
-    CBM_T_PUSH,         /* [  */
-    CBM_T_POP,          /* ]  */
-    CBM_T_WIDTH,        /* !  set or decrement width */
-    CBM_T_COLOR_INC,    /* '  increment colour index */
-    CBM_T_COLOR_DEC,    /* ;  decrement colour index (cpfg) */
-    CBM_T_WIDTH_INC,    /* #  increment width (cpfg) */
-    CBM_T_SURFACE,      /* ~  predefined surface */
-    CBM_T_CUT,          /* %  cut the rest of the branch */
-    CBM_T_POLY_BEGIN,   /* {  */
-    CBM_T_POLY_END,     /* }  */
-    CBM_T_POLY_VERTEX,  /* .  */
-    CBM_T_ROLL_HORIZ,   /* @v roll to horizontal */
-    CBM_T_SPHERE,       /* @O */
-    CBM_T_CIRCLE,       /* @o */
-    CBM_T_CONTOUR,      /* @c */
-    CBM_T_MOVE_TO,      /* @M */
-    CBM_T_TROPISM_SET,  /* @Ts */
-    CBM_T_GC_START,     /* @Gs */
-    CBM_T_GC_CONTROL,   /* @Gc */
-    CBM_T_GC_END,       /* @Ge */
-    CBM_T_QUERY_P,      /* ?P */
-    CBM_T_QUERY_H,      /* ?H */
-    CBM_T_QUERY_L,      /* ?L */
-    CBM_T_QUERY_U,      /* ?U */
-    CBM_T_USER_FIRST = 1000 /* further commands are the turtle module's own business */
+    CBM_T_F,                 /* F  move forward drawing */
+    CBM_T_f,                 /* f  move forward without drawing */
+    CBM_T_G,                 /* G  move forward drawing, not a polygon vertex */
+    CBM_T_g,                 /* g  move forward, not drawing, not a polygon vertex */
+    CBM_T_LEFT,              /* +  turn left */
+    CBM_T_RIGHT,             /* -  turn right */
+    CBM_T_PITCH_DOWN,        /* &  */
+    CBM_T_PITCH_UP,          /* ^  */
+    CBM_T_ROLL_LEFT,         /* \  */
+    CBM_T_ROLL_RIGHT,        /* /  */
+    CBM_T_TURN_AROUND,       /* |  */
+    CBM_T_PUSH,              /* [  */
+    CBM_T_POP,               /* ]  */
+    CBM_T_WIDTH,             /* !  set or decrement width */
+    CBM_T_COLOR_INC,         /* ' (ABOP) and ; (cpfg) increment colour index, or set it */
+    CBM_T_COLOR_DEC,         /* ,  decrement colour index, or set it (cpfg) */
+    CBM_T_WIDTH_INC,         /* #  increment width (cpfg) */
+    CBM_T_SURFACE,           /* ~  predefined surface */
+    CBM_T_CUT,               /* %  cut the rest of the branch */
+    CBM_T_POLY_BEGIN,        /* {  */
+    CBM_T_POLY_END,          /* }  */
+    CBM_T_POLY_VERTEX,       /* .  */
+    CBM_T_ROLL_HORIZ,        /* @v roll to horizontal */
+    CBM_T_SPHERE,            /* @O */
+    CBM_T_CIRCLE,            /* @o */
+    CBM_T_CONTOUR,           /* @c */
+    CBM_T_MOVE_TO,           /* @M */
+    CBM_T_TROPISM_SET,       /* @Ts */
+    CBM_T_GC_START,          /* @Gs */
+    CBM_T_GC_CONTROL,        /* @Gc */
+    CBM_T_GC_END,            /* @Ge */
+    CBM_T_QUERY_P,           /* ?P */
+    CBM_T_QUERY_H,           /* ?H */
+    CBM_T_QUERY_L,           /* ?L */
+    CBM_T_QUERY_U,           /* ?U */
+    CBM_T_USER_FIRST = 1000, /* further commands are the turtle module's own business */
+    CBM_T_ELASTICITY = CBM_T_USER_FIRST, /* _  set or increment the ABOP tropism elasticity */
+    CBM_T_TROPISM_INC,                   /* @Ti(i, de) */
+    CBM_T_TROPISM_DEC,                   /* @Td(i, de) */
+    CBM_T_CONTOUR_SET,                   /* @#(id) contour of generalized cylinders */
+    CBM_T_SIDES_SET                      /* @!(n) sides of cylinders */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.
 int cbm__turtle_lookup(const char *name, size_t len);
 
-typedef struct cbm_view cbm_view;         /* view file settings */
-typedef struct cbm_funcset cbm_funcset;   /* function files */
-typedef struct cbm_turtle cbm_turtle;
+/* cbm_view (view file settings), cbm_funcset (function files) and cbm_turtle are declared in
+ * include/cambium/turtle.h. */
 
 /// Interprets the string into `scene` (may be NULL: only queries and bounds are computed).
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
@@ -73,6 +78,15 @@ void cbm__turtle_reset(cbm_turtle *t);
 cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams);
 /// Finishes the pass (closes open generalized cylinders, polygons).
 cbm_status cbm__turtle_finish(cbm_turtle *t);
+/// `~` (CBM_T_SURFACE) names its surface with the module that follows it (`~l(2)`: the module
+/// `l` with parameter 2 is the surface `l` scaled by 2; 3 parameters scale x, y, z). The engine
+/// calls cbm__turtle_exec for `~`, then this function with the next module instead of executing
+/// that module.
+cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
+                               int nparams);
+/// Keep a record of the primitives (cylinders, polygons, ...; see cbm_turtle_prims). Off by
+/// default.
+void cbm__turtle_set_record(cbm_turtle *t, bool record);
 
 /// Value of function `id` (1-based, in the order the function files were given, as cpfg) at x.
 double cbm__funcset_eval(const cbm_funcset *fs, int id, double x);

@@ -5,7 +5,6 @@
 
 int cmd_info(int argc, char **argv);
 
-#define CBM_COMMANDS(X)                                                                            \
-    X("info", cmd_info, "what a model or output file holds")
+#define CBM_COMMANDS(X) X("info", cmd_info, "what a model or output file holds")
 
 #endif

@@ -1,0 +1,1018 @@
+/* The turtle: interprets the modules of a cpfg/ABOP string into geometry.
+ *
+ * State (ABOP ch. 1.5, cpfg manual "Turtle interpretation"): position P and frame H, L, U, line
+ * width, colour index, elasticities, contour; `[` and `]` push and pop it. The frame follows
+ * cpfg's convention: initially H = +y, L = -x, U = -z, so that L = H x U. Rotations are those of
+ * ABOP eq. 1.1 applied as cpfg does, e.g. turn (+): H' = H cos a + L sin a, L' = L cos a - H sin a;
+ * the sine and cosine of the view's angle increment are precomputed. Tropism (ABOP section 2.2,
+ * eq. 2.?: the heading bends by alpha = e |H x T|) comes in two forms, as in cpfg: the ABOP one
+ * ("tropism direction", elasticity changed by `_`), applied after each move by two rotations
+ * towards T (in the H-U and H-L planes, sin(alpha) = e T.U and e T.L), and cpfg's movements
+ * ("tropism: T: A: E:"), applied before each move by rotating H about H x V by min(|H x V|, 1)
+ * rad, where V sums e_i (cos(g_i) T_i + sin(g_i) T_i x (H x T_i) / |H x T_i|); U is then carried
+ * along by the minimal rotation from the previous heading.
+ *
+ * Segments are emitted as cpfg does: a segment starts at F/G and ends at the next "node end"
+ * (the next F f G g [ ] { } ~ @ or the end of the string), with the width at the start and at the
+ * end (a cone when they differ) and the colour at the start; degenerate segments (length^2 <=
+ * 1e-5, or zero width) are dropped. Polygons collect the positions of `.`, F and f between `{`
+ * and `}` (nested polygons allowed). `%` cuts the rest of the branch. Generalized cylinders
+ * (@Gs @Gc(n) @Ge(n)) join the turtle states at their control points with cubic Hermite
+ * curves whose tangents are the headings scaled by the chord (cpfg's default), n rings each.
+ * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
+ * Interpretation is linear in the number of modules, with no allocation per module beyond the
+ * amortised growth of the output arrays and the branch stack.
+ */
+#include "tint.h"
+
+#include "../core/vecmath.h"
+
+#include <stdio.h>
+
+typedef struct tstate {
+    cbm_vec3 pos, h, l, u;
+    cbm_vec3 prev_h, prev_u;
+    double width;
+    double elasticity;
+    double mov_e[CBM__MAX_MOVEMENTS];
+    int color;
+    int contour;
+    int sides;
+    bool gc_on;
+    size_t gc_first; /* first spine point of this branch's generalized cylinder */
+    size_t gc_len;   /* spine points when the branch was opened (restored by ]) */
+} tstate;
+
+typedef struct gcpt {
+    cbm_vec3 pos, h, u;
+    double width;
+    int rings;
+} gcpt;
+
+struct cbm_turtle {
+    cbm_context *ctx;
+    const cbm_view *view;
+    cbm_scene *scene;
+    bool record;
+    tstate cur;
+    CBM_ARRAY(tstate) stack;
+    /* the open segment */
+    bool node_open;
+    cbm_vec3 node_p, node_h, node_u;
+    double node_w;
+    int node_color;
+    /* polygons */
+    CBM_ARRAY(cbm_vec3) polypts;
+    CBM_ARRAY(size_t) polystart;
+    /* % */
+    int cut_depth; /* > 0 while skipping: bracket depth inside the cut part */
+    /* generalized cylinders */
+    CBM_ARRAY(gcpt) gc;
+    CBM_ARRAY(cbm_section) rings;
+    /* surface pending (~ waits for the module naming the surface) */
+    bool surface_pending;
+    /* record */
+    CBM_ARRAY(cbm_prim) prims;
+    CBM_ARRAY(cbm_vec3) pts;
+    bool box_set;
+    cbm_vec3 lo, hi;
+    CBM_ARRAY(cbm_vec3) scratch;
+    int64_t module_index;
+};
+
+/* ---- lookup ---- */
+
+typedef struct tname {
+    const char *name;
+    int cmd;
+} tname;
+
+static const tname names[] = {
+    {"F", CBM_T_F},
+    {"f", CBM_T_f},
+    {"G", CBM_T_G},
+    {"g", CBM_T_g},
+    {"+", CBM_T_LEFT},
+    {"-", CBM_T_RIGHT},
+    {"&", CBM_T_PITCH_DOWN},
+    {"^", CBM_T_PITCH_UP},
+    {"\\", CBM_T_ROLL_LEFT},
+    {"/", CBM_T_ROLL_RIGHT},
+    {"|", CBM_T_TURN_AROUND},
+    {"[", CBM_T_PUSH},
+    {"]", CBM_T_POP},
+    {"!", CBM_T_WIDTH},
+    {"'", CBM_T_COLOR_INC},
+    {";", CBM_T_COLOR_INC},
+    {",", CBM_T_COLOR_DEC},
+    {"#", CBM_T_WIDTH_INC},
+    {"~", CBM_T_SURFACE},
+    {"%", CBM_T_CUT},
+    {"{", CBM_T_POLY_BEGIN},
+    {"}", CBM_T_POLY_END},
+    {".", CBM_T_POLY_VERTEX},
+    {"_", CBM_T_ELASTICITY},
+    {"@v", CBM_T_ROLL_HORIZ},
+    {"@O", CBM_T_SPHERE},
+    {"@o", CBM_T_CIRCLE},
+    {"@c", CBM_T_CONTOUR},
+    {"@M", CBM_T_MOVE_TO},
+    {"@Ts", CBM_T_TROPISM_SET},
+    {"@Ti", CBM_T_TROPISM_INC},
+    {"@Td", CBM_T_TROPISM_DEC},
+    {"@Gs", CBM_T_GC_START},
+    {"@Gc", CBM_T_GC_CONTROL},
+    {"@Ge", CBM_T_GC_END},
+    {"@#", CBM_T_CONTOUR_SET},
+    {"@!", CBM_T_SIDES_SET},
+    {"?P", CBM_T_QUERY_P},
+    {"?H", CBM_T_QUERY_H},
+    {"?L", CBM_T_QUERY_L},
+    {"?U", CBM_T_QUERY_U},
+};
+
+int cbm__turtle_lookup(const char *name, size_t len)
+{
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (strlen(names[i].name) == len && memcmp(names[i].name, name, len) == 0)
+            return names[i].cmd;
+    return CBM_T_NONE;
+}
+
+/* ---- creation ---- */
+
+static void init_state(cbm_turtle *t)
+{
+    const cbm_view *v = t->view;
+    tstate *s = &t->cur;
+    memset(s, 0, sizeof *s);
+    s->pos = v3(0, 0, 0);
+    s->h = v3(0, 1, 0);
+    s->l = v3(-1, 0, 0);
+    s->u = v3(0, 0, -1);
+    s->prev_h = s->h;
+    s->prev_u = s->u;
+    s->width = v->width;
+    s->elasticity = v->elasticity;
+    for (int i = 0; i < v->nmov; i++)
+        s->mov_e[i] = v->mov[i].elasticity;
+    s->color = v->color;
+    s->contour = 0;
+    s->sides = v->sides;
+}
+
+cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
+                              cbm_turtle **out)
+{
+    if (!ctx || !view || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_turtle *t = cbm__calloc(ctx, 1, sizeof *t);
+    if (!t)
+        return CBM_E_NOMEM;
+    t->ctx = ctx;
+    t->view = view;
+    t->scene = scene;
+    cbm__turtle_reset(t);
+    *out = t;
+    return CBM_OK;
+}
+
+void cbm__turtle_set_record(cbm_turtle *t, bool record)
+{
+    t->record = record;
+}
+
+void cbm__turtle_destroy(cbm_turtle *t)
+{
+    if (!t)
+        return;
+    cbm_context *ctx = t->ctx;
+    CBM_ARRAY_FREE(ctx, t->stack);
+    CBM_ARRAY_FREE(ctx, t->polypts);
+    CBM_ARRAY_FREE(ctx, t->polystart);
+    CBM_ARRAY_FREE(ctx, t->gc);
+    CBM_ARRAY_FREE(ctx, t->rings);
+    CBM_ARRAY_FREE(ctx, t->prims);
+    CBM_ARRAY_FREE(ctx, t->pts);
+    CBM_ARRAY_FREE(ctx, t->scratch);
+    cbm__free(ctx, t, sizeof *t);
+}
+
+void cbm__turtle_reset(cbm_turtle *t)
+{
+    init_state(t);
+    t->stack.len = 0;
+    t->node_open = false;
+    t->polypts.len = 0;
+    t->polystart.len = 0;
+    t->cut_depth = 0;
+    t->gc.len = 0;
+    t->surface_pending = false;
+    t->prims.len = 0;
+    t->pts.len = 0;
+    t->box_set = false;
+    t->module_index = 0;
+}
+
+/* ---- helpers ---- */
+
+static void box_add(cbm_turtle *t, cbm_vec3 p)
+{
+    if (!t->box_set) {
+        t->lo = t->hi = p;
+        t->box_set = true;
+        return;
+    }
+    if (p.x < t->lo.x)
+        t->lo.x = p.x;
+    if (p.y < t->lo.y)
+        t->lo.y = p.y;
+    if (p.z < t->lo.z)
+        t->lo.z = p.z;
+    if (p.x > t->hi.x)
+        t->hi.x = p.x;
+    if (p.y > t->hi.y)
+        t->hi.y = p.y;
+    if (p.z > t->hi.z)
+        t->hi.z = p.z;
+}
+
+static cbm_part make_part(const cbm_turtle *t, cbm_organ organ, int color)
+{
+    cbm_part p = cbm_part_default();
+    p.organ = organ;
+    p.order = (int32_t)t->stack.len;
+    p.segment = t->module_index;
+    p.material = color;
+    int c = color & 255;
+    for (int i = 0; i < 4; i++)
+        p.color[i] = t->view->colors[c][i];
+    return p;
+}
+
+static cbm_status push_prim(cbm_turtle *t, const cbm_prim *p)
+{
+    if (!t->record)
+        return CBM_OK;
+    return CBM_ARRAY_PUSH(t->ctx, t->prims, *p);
+}
+
+/* A right-handed section frame with H along d, U as close as possible to up. */
+static cbm_frame section_frame(cbm_vec3 d, cbm_vec3 up)
+{
+    cbm_frame f;
+    f.h = d;
+    cbm_vec3 u = v3_madd(up, d, -v3_dot(up, d));
+    if (v3_norm2(u) < 1e-24) {
+        cbm_vec3 a = fabs(d.x) < 0.9 ? v3(1, 0, 0) : v3(0, 1, 0);
+        u = v3_madd(a, d, -v3_dot(a, d));
+    }
+    f.u = v3_normalize(u);
+    f.l = v3_cross(f.u, f.h); /* H x L = U */
+    return f;
+}
+
+/* cpfg's "change_dir": v2' = c v2 + s v3, v3' = c v3 - s v2 */
+static inline void rotate_pair(cbm_vec3 *v2, cbm_vec3 *v3p, double s, double c)
+{
+    cbm_vec3 a = *v2, b = *v3p;
+    *v2 = v3(c * a.x + s * b.x, c * a.y + s * b.y, c * a.z + s * b.z);
+    *v3p = v3(c * b.x - s * a.x, c * b.y - s * a.y, c * b.z - s * a.z);
+}
+
+/* ---- segments ---- */
+
+static cbm_status end_node(cbm_turtle *t)
+{
+    box_add(t, t->cur.pos);
+    if (!t->node_open)
+        return CBM_OK;
+    t->node_open = false;
+    cbm_vec3 p0 = t->node_p, p1 = t->cur.pos;
+    cbm_vec3 d = v3_sub(p1, p0);
+    double w0 = t->node_w, w1 = t->cur.width;
+    if (v3_norm2(d) <= 0.00001 || w1 <= 0.0)
+        return CBM_OK;
+    cbm_prim pr;
+    memset(&pr, 0, sizeof pr);
+    pr.kind = CBM_PRIM_CYLINDER;
+    pr.color = t->node_color;
+    pr.p0 = p0;
+    pr.p1 = p1;
+    pr.r0 = w0 / 2.0;
+    pr.r1 = w1 / 2.0;
+    CBM_TRY(push_prim(t, &pr));
+    if (!t->scene)
+        return CBM_OK;
+    cbm_part part = make_part(t, CBM_ORGAN_BRANCH, t->node_color);
+    CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+    cbm_vec3 dir = v3_normalize(d);
+    cbm_frame f = section_frame(dir, t->node_u);
+    if (t->view->line_style == CBM__LS_POLYGON) {
+        /* a flat ribbon in the H-L plane, as cpfg's polygon lines */
+        cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0),
+                         v3_madd(p1, f.l, pr.r1), v3_madd(p1, f.l, -pr.r1)};
+        return cbm_scene_add_polygon(t->scene, q, 4);
+    }
+    int sides = t->view->line_style == CBM__LS_CYLINDER ? t->cur.sides : 4;
+    cbm_section s0 = {p0, f, pr.r0, pr.r0};
+    cbm_section s1 = {p1, f, pr.r1, pr.r1};
+    return cbm_scene_add_tube(t->scene, &s0, &s1, sides, false);
+}
+
+static void start_node(cbm_turtle *t)
+{
+    t->node_open = true;
+    t->node_p = t->cur.pos;
+    t->node_h = t->cur.h;
+    t->node_u = t->cur.u;
+    t->node_w = t->cur.width;
+    t->node_color = t->cur.color;
+}
+
+/* ---- tropisms ---- */
+
+/* ABOP tropism after a move: two rotations towards T (cpfg's "bend"). */
+static void bend(cbm_turtle *t)
+{
+    tstate *s = &t->cur;
+    double e = s->elasticity;
+    if (e == 0.0)
+        return;
+    cbm_vec3 T = t->view->tropism_dir;
+    double bc = e * v3_dot(T, s->u);
+    double bs = sqrt(fmax(0.0, 1.0 - bc * bc));
+    rotate_pair(&s->h, &s->u, bc, bs);
+    bc = e * v3_dot(T, s->l);
+    bs = sqrt(fmax(0.0, 1.0 - bc * bc));
+    rotate_pair(&s->h, &s->l, bc, bs);
+}
+
+/* Rotate v about the unit axis n by angle (right hand). */
+static cbm_vec3 rot_axis(cbm_vec3 v, cbm_vec3 n, double angle)
+{
+    return q_rotate(q_axis_angle(n, angle), v);
+}
+
+/* U follows H by the minimal rotation from the previous heading; L = H x U. */
+static void adjust_up_and_left(tstate *s)
+{
+    cbm_vec3 r = v3_cross(s->prev_h, s->h);
+    double len = v3_norm(r);
+    if (len > 0.000001) {
+        if (len > 1.0)
+            len = 1.0;
+        double angle = asin(len);
+        if (v3_dot(s->h, s->prev_h) < 0)
+            angle = CBM_PI - angle;
+        s->u = rot_axis(s->prev_u, v3_scale(r, 1.0 / v3_norm(r)), angle);
+    }
+    s->l = v3_cross(s->h, s->u);
+}
+
+static void movements(cbm_turtle *t)
+{
+    const cbm_view *v = t->view;
+    if (v->nmov == 0)
+        return;
+    tstate *s = &t->cur;
+    cbm_vec3 V = v3(0, 0, 0), tw = v3(0, 0, 0);
+    for (int i = 0; i < v->nmov; i++) {
+        const cbm__movement *m = &v->mov[i];
+        double e = s->mov_e[i];
+        if (m->torque) {
+            tw = v3_madd(tw, m->dir, e);
+            continue;
+        }
+        V = v3_madd(V, m->dir, m->cos_g * e);
+        if (m->sin_g != 0.0) {
+            cbm_vec3 hx = v3_cross(s->h, m->dir);
+            double len = v3_norm(hx);
+            if (len < 0.0000001) {
+                hx = s->l;
+                len = 1.0;
+            }
+            V = v3_madd(V, v3_cross(m->dir, hx), m->sin_g * e / len);
+        }
+    }
+    cbm_vec3 rv = v3_cross(s->h, V);
+    double len = v3_norm(rv);
+    if (len >= 0.000001) {
+        double a = len > 1.0 ? 1.0 : len;
+        s->h = v3_normalize(rot_axis(s->h, v3_scale(rv, 1.0 / len), a));
+        adjust_up_and_left(s);
+    }
+    double twl = v3_norm(tw);
+    if (twl > 0.0) {
+        /* torque: roll U towards the projection of the torque direction on the plane normal
+         * to H, by an angle |U x D| (capped at 1 rad) */
+        cbm_vec3 dn = v3_scale(tw, 1.0 / twl);
+        cbm_vec3 c = v3_cross(s->h, dn);
+        if (v3_dot(c, c) > 0.00000001) {
+            cbm_vec3 D = v3_scale(v3_cross(c, s->h), twl);
+            cbm_vec3 ax = v3_cross(s->u, D);
+            double al = v3_norm(ax);
+            if (al >= 0.0000001) {
+                s->u = rot_axis(s->u, v3_scale(ax, 1.0 / al), al > 1.0 ? 1.0 : al);
+                s->l = v3_cross(s->h, s->u);
+            }
+            s->prev_h = s->h;
+            s->prev_u = s->u;
+        }
+    }
+}
+
+/* ---- generalized cylinders ---- */
+
+static cbm_status gc_point(cbm_turtle *t, int rings)
+{
+    gcpt g = {t->cur.pos, t->cur.h, t->cur.u, t->cur.width, rings < 1 ? 1 : rings};
+    return CBM_ARRAY_PUSH(t->ctx, t->gc, g);
+}
+
+static cbm_vec3 hermite(cbm_vec3 p0, cbm_vec3 t0, cbm_vec3 p1, cbm_vec3 t1, double s,
+                        cbm_vec3 *tan)
+{
+    double s2 = s * s, s3 = s2 * s;
+    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2,
+           h11 = s3 - s2;
+    double d00 = 6 * s2 - 6 * s, d10 = 3 * s2 - 4 * s + 1, d01 = -6 * s2 + 6 * s,
+           d11 = 3 * s2 - 2 * s;
+    *tan = v3_add(v3_add(v3_scale(p0, d00), v3_scale(t0, d10)),
+                  v3_add(v3_scale(p1, d01), v3_scale(t1, d11)));
+    return v3_add(v3_add(v3_scale(p0, h00), v3_scale(t0, h10)),
+                  v3_add(v3_scale(p1, h01), v3_scale(t1, h11)));
+}
+
+/* Emits the generalized cylinder of spine points gc[first..len) and clears them. */
+static cbm_status gc_emit(cbm_turtle *t, size_t first)
+{
+    size_t n = t->gc.len - first;
+    if (n < 2) {
+        t->gc.len = first;
+        return CBM_OK;
+    }
+    const gcpt *g = t->gc.data + first;
+    t->rings.len = 0;
+    cbm_vec3 up = g[0].u;
+    for (size_t i = 0; i + 1 < n; i++) {
+        double chord = v3_norm(v3_sub(g[i + 1].pos, g[i].pos));
+        cbm_vec3 t0 = v3_scale(g[i].h, chord), t1 = v3_scale(g[i + 1].h, chord);
+        int r = g[i + 1].rings;
+        for (int k = (i == 0 ? 0 : 1); k <= r; k++) {
+            double s = (double)k / r;
+            cbm_vec3 tan;
+            cbm_vec3 p = hermite(g[i].pos, t0, g[i + 1].pos, t1, s, &tan);
+            cbm_vec3 d = v3_norm2(tan) > 0 ? v3_normalize(tan) : g[i].h;
+            cbm_frame f = section_frame(d, up); /* parallel transport of the up vector */
+            up = f.u;
+            double w = (1 - s) * g[i].width + s * g[i + 1].width;
+            cbm_section sec = {p, f, w / 2, w / 2};
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->rings, sec));
+        }
+    }
+    /* record and box: ring extents */
+    for (size_t i = 0; i < t->rings.len; i++) {
+        const cbm_section *sec = &t->rings.data[i];
+        for (int k = 0; k < t->cur.sides; k++) {
+            double a = 2 * CBM_PI * k / t->cur.sides;
+            cbm_vec3 q = v3_madd(v3_madd(sec->center, sec->frame.u, sec->a * cos(a)),
+                                 sec->frame.l, sec->b * sin(a));
+            box_add(t, q);
+        }
+    }
+    if (t->record) {
+        cbm_prim pr;
+        memset(&pr, 0, sizeof pr);
+        pr.kind = CBM_PRIM_GCYL;
+        pr.color = t->cur.color;
+        pr.p0 = g[0].pos;
+        pr.p1 = g[n - 1].pos;
+        pr.r0 = g[0].width / 2;
+        pr.r1 = g[n - 1].width / 2;
+        pr.first = t->pts.len;
+        pr.count = n;
+        for (size_t i = 0; i < n; i++)
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, g[i].pos));
+        CBM_TRY(push_prim(t, &pr));
+    }
+    if (t->scene) {
+        cbm_part part = make_part(t, CBM_ORGAN_BRANCH, t->cur.color);
+        CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+        CBM_TRY(cbm_scene_tube_begin(t->scene, t->cur.sides, false));
+        for (size_t i = 0; i < t->rings.len; i++)
+            CBM_TRY(cbm_scene_tube_ring(t->scene, &t->rings.data[i]));
+        CBM_TRY(cbm_scene_tube_end(t->scene));
+    }
+    t->gc.len = first;
+    return CBM_OK;
+}
+
+/* ---- surfaces ---- */
+
+static const cbm__surface *find_surface(const cbm_view *v, char id)
+{
+    for (size_t i = 0; i < v->surfaces.len; i++)
+        if (v->surfaces.data[i].id == id)
+            return &v->surfaces.data[i];
+    return NULL;
+}
+
+cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
+                               int nparams)
+{
+    t->surface_pending = false;
+    if (t->cut_depth > 0)
+        return CBM_OK;
+    if (len != 1)
+        return cbm__fail(t->ctx, CBM_E_RUNTIME,
+                         "~ must be followed by a one-letter surface name, found '%.*s'",
+                         (int)len, name);
+    const cbm__surface *sf = find_surface(t->view, name[0]);
+    if (!sf)
+        return CBM_OK; /* cpfg draws nothing for an unknown surface */
+    double sx = 1, sy = 1, sz = 1;
+    if (nparams >= 3) {
+        sx = params[0];
+        sy = params[1];
+        sz = params[2];
+    } else if (nparams >= 1) {
+        sx = sy = sz = params[0];
+    }
+    const tstate *s = &t->cur;
+    const double k = 1.0;
+    /* surface coordinates (already relative to the contact point): X along L, Y along H, Z
+     * along U */
+    size_t nv = sf->pos.len;
+    t->scratch.len = 0;
+    CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, nv * 2));
+    for (size_t i = 0; i < nv; i++) {
+        cbm_vec3 q = sf->pos.data[i];
+        cbm_vec3 w = v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, q.x * k * sx),
+                                                  v3_scale(s->h, q.y * k * sy)),
+                                           v3_scale(s->u, q.z * k * sz)));
+        cbm_vec3 nq = sf->nrm.data[i];
+        cbm_vec3 nw = v3_normalize(v3_add(
+            v3_add(v3_scale(s->l, nq.x / sx), v3_scale(s->h, nq.y / sy)), v3_scale(s->u, nq.z / sz)));
+        t->scratch.data[i] = w;
+        t->scratch.data[nv + i] = nw;
+        box_add(t, w);
+    }
+    t->scratch.len = 2 * nv;
+    if (t->record) {
+        cbm_prim pr;
+        memset(&pr, 0, sizeof pr);
+        pr.kind = CBM_PRIM_SURFACE;
+        pr.id = sf->id;
+        pr.color = s->color;
+        pr.p0 = s->pos;
+        pr.r0 = sx;
+        pr.first = t->pts.len;
+        pr.count = nv;
+        for (size_t i = 0; i < nv; i++)
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, t->scratch.data[i]));
+        CBM_TRY(push_prim(t, &pr));
+    }
+    if (t->scene) {
+        cbm_part part = make_part(t, CBM_ORGAN_LEAF, s->color);
+        CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+        CBM_TRY(cbm_scene_add_mesh(t->scene, t->scratch.data, t->scratch.data + nv, nv,
+                                   sf->tri.data, sf->tri.len / 3));
+    }
+    /* the turtle moves to the surface's end point (cpfg: x, z scaled as y when not index 0) */
+    cbm_vec3 e = sf->end;
+    t->cur.pos = v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, e.x * k * sx),
+                                              v3_scale(s->h, e.y * k * sx)),
+                                       v3_scale(s->u, e.z * k * sx)));
+    return CBM_OK;
+}
+
+/* ---- the commands ---- */
+
+static double param0(const double *p, int n, double dflt)
+{
+    return n > 0 ? p[0] : dflt;
+}
+
+static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    double d = nparams > 0 ? params[0] : s->width;
+    double r = d / 2.0;
+    cbm_prim pr;
+    memset(&pr, 0, sizeof pr);
+    pr.kind = cmd == CBM_T_SPHERE ? CBM_PRIM_SPHERE : CBM_PRIM_DISC;
+    pr.color = s->color;
+    pr.p0 = s->pos;
+    pr.p1 = s->u;
+    pr.r0 = pr.r1 = r;
+    CBM_TRY(push_prim(t, &pr));
+    if (cmd == CBM_T_SPHERE) {
+        for (int i = 0; i < 8; i++)
+            box_add(t, v3(s->pos.x + ((i & 1) ? r : -r), s->pos.y + ((i & 2) ? r : -r),
+                          s->pos.z + ((i & 4) ? r : -r)));
+    } else {
+        for (int i = 0; i < 4; i++)
+            box_add(t, v3(s->pos.x + ((i & 1) ? r : -r), s->pos.y + ((i & 2) ? r : -r),
+                          s->pos.z));
+    }
+    if (!t->scene || !(r > 0))
+        return CBM_OK;
+    cbm_part part = make_part(t, cmd == CBM_T_SPHERE ? CBM_ORGAN_FRUIT : CBM_ORGAN_OTHER,
+                              s->color);
+    CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+    if (cmd == CBM_T_SPHERE)
+        return cbm_scene_add_sphere(t->scene, s->pos, r, s->sides);
+    int n = s->sides;
+    CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, (size_t)n));
+    for (int k = 0; k < n; k++) {
+        double a = 2 * CBM_PI * k / n;
+        t->scratch.data[k] = v3_madd(v3_madd(s->pos, s->h, r * cos(a)), s->l, r * sin(a));
+    }
+    return cbm_scene_add_polygon(t->scene, t->scratch.data, (size_t)n);
+}
+
+static cbm_status query(cbm_turtle *t, int cmd, double *params, int nparams)
+{
+    const tstate *s = &t->cur;
+    cbm_vec3 v = cmd == CBM_T_QUERY_P   ? s->pos
+                 : cmd == CBM_T_QUERY_H ? s->h
+                 : cmd == CBM_T_QUERY_L ? s->l
+                                        : s->u;
+    double c[3] = {v.x, v.y, v.z};
+    for (int i = 0; i < nparams && i < 3; i++)
+        params[i] = c[i];
+    return CBM_OK;
+}
+
+static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    movements(t);
+    CBM_TRY(end_node(t));
+    double len = param0(params, nparams, t->view->step);
+    bool draw = cmd == CBM_T_F || cmd == CBM_T_G;
+    if (draw)
+        start_node(t);
+    s->pos = v3_madd(s->pos, s->h, len);
+    bend(t);
+    if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->polypts, s->pos));
+    if (draw) {
+        s->prev_h = s->h;
+        s->prev_u = s->u;
+    }
+    return CBM_OK;
+}
+
+static cbm_status poly_end(cbm_turtle *t)
+{
+    if (t->polystart.len == 0)
+        return CBM_OK; /* cpfg: unmatched } ignored */
+    CBM_TRY(end_node(t));
+    size_t first = t->polystart.data[--t->polystart.len];
+    size_t n = t->polypts.len - first;
+    const cbm_vec3 *p = t->polypts.data + first;
+    if (n >= 3) {
+        cbm_prim pr;
+        memset(&pr, 0, sizeof pr);
+        pr.kind = CBM_PRIM_POLYGON;
+        pr.color = t->cur.color;
+        pr.p0 = p[0];
+        pr.first = t->pts.len;
+        pr.count = n;
+        if (t->record) {
+            for (size_t i = 0; i < n; i++)
+                CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, p[i]));
+            CBM_TRY(push_prim(t, &pr));
+        }
+        if (t->scene) {
+            cbm_part part = make_part(t, CBM_ORGAN_LEAF, t->cur.color);
+            CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+            CBM_TRY(cbm_scene_add_polygon(t->scene, p, n));
+        }
+    }
+    t->polypts.len = first;
+    return CBM_OK;
+}
+
+cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    const cbm_view *v = t->view;
+    t->module_index++;
+    if (t->surface_pending) {
+        /* the engine must pass the module after ~ to cbm__turtle_surface */
+        t->surface_pending = false;
+    }
+    if (t->cut_depth > 0) {
+        if (cmd == CBM_T_PUSH)
+            t->cut_depth++;
+        else if (cmd == CBM_T_POP && --t->cut_depth == 0)
+            goto exec; /* the ] closing the cut branch is interpreted */
+        return CBM_OK;
+    }
+exec:
+    switch (cmd) {
+    case CBM_T_NONE:
+        return CBM_OK;
+    case CBM_T_F:
+    case CBM_T_f:
+    case CBM_T_G:
+    case CBM_T_g:
+        return move(t, cmd, params, nparams);
+    case CBM_T_LEFT:
+    case CBM_T_RIGHT: {
+        double sn = v->sin_a, cs = v->cos_a;
+        if (nparams > 0) {
+            double a = params[0] * CBM_PI / 180.0;
+            sn = sin(a);
+            cs = cos(a);
+        }
+        rotate_pair(&s->h, &s->l, cmd == CBM_T_LEFT ? sn : -sn, cs);
+        return CBM_OK;
+    }
+    case CBM_T_PITCH_DOWN:
+    case CBM_T_PITCH_UP: {
+        double sn = v->sin_a, cs = v->cos_a;
+        if (nparams > 0) {
+            double a = params[0] * CBM_PI / 180.0;
+            sn = sin(a);
+            cs = cos(a);
+        }
+        rotate_pair(&s->h, &s->u, cmd == CBM_T_PITCH_DOWN ? sn : -sn, cs);
+        return CBM_OK;
+    }
+    case CBM_T_ROLL_RIGHT:
+    case CBM_T_ROLL_LEFT: {
+        double sn = v->sin_a, cs = v->cos_a;
+        if (nparams > 0) {
+            double a = params[0] * CBM_PI / 180.0;
+            sn = sin(a);
+            cs = cos(a);
+        }
+        rotate_pair(&s->l, &s->u, cmd == CBM_T_ROLL_RIGHT ? sn : -sn, cs);
+        return CBM_OK;
+    }
+    case CBM_T_TURN_AROUND:
+        rotate_pair(&s->h, &s->l, 0.0, -1.0);
+        return CBM_OK;
+    case CBM_T_PUSH: {
+        CBM_TRY(end_node(t));
+        if (t->stack.len >= cbm_context_limits(t->ctx)->max_modules)
+            return cbm__fail(t->ctx, CBM_E_LIMIT, "turtle: branches nested deeper than %zu",
+                             t->stack.len);
+        s->gc_len = t->gc.len;
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->stack, *s));
+        s->gc_on = false;
+        return CBM_OK;
+    }
+    case CBM_T_POP: {
+        CBM_TRY(end_node(t));
+        if (t->stack.len == 0)
+            return CBM_OK; /* cpfg: unmatched ] ignored */
+        if (s->gc_on)
+            CBM_TRY(gc_emit(t, s->gc_first));
+        *s = t->stack.data[--t->stack.len];
+        t->gc.len = s->gc_len;
+        return CBM_OK;
+    }
+    case CBM_T_WIDTH:
+    case CBM_T_WIDTH_INC: {
+        if (nparams > 0)
+            s->width = (float)params[0];
+        else if (cmd == CBM_T_WIDTH)
+            s->width -= v->width_inc;
+        else
+            s->width += v->width_inc;
+        if (s->width < 0.0000001f)
+            s->width = 0.0000001f;
+        return CBM_OK;
+    }
+    case CBM_T_COLOR_INC:
+    case CBM_T_COLOR_DEC:
+        if (nparams > 0)
+            s->color = (int)params[0];
+        else
+            s->color += cmd == CBM_T_COLOR_INC ? v->color_inc : -v->color_inc;
+        if (s->color < 0)
+            s->color += 256;
+        if (s->color > 255)
+            s->color -= 256;
+        return CBM_OK;
+    case CBM_T_ELASTICITY:
+        if (nparams > 0)
+            s->elasticity = (float)params[0];
+        else
+            s->elasticity += v->elasticity_inc;
+        return CBM_OK;
+    case CBM_T_SURFACE:
+        CBM_TRY(end_node(t));
+        t->surface_pending = true;
+        return CBM_OK;
+    case CBM_T_CUT:
+        if (nparams > 0)
+            return CBM_OK; /* cpfg's parametric % belongs to environment programs */
+        t->cut_depth = 1;
+        return CBM_OK;
+    case CBM_T_POLY_BEGIN:
+        CBM_TRY(end_node(t));
+        if (nparams > 0 && params[0] != 0.0)
+            return CBM_OK; /* cpfg's spline polygons {(n) are not supported: ignored */
+        return CBM_ARRAY_PUSH(t->ctx, t->polystart, t->polypts.len);
+    case CBM_T_POLY_END:
+        if (nparams > 0 && params[0] != 0.0)
+            return CBM_OK;
+        return poly_end(t);
+    case CBM_T_POLY_VERTEX:
+        if (t->polystart.len > 0)
+            return CBM_ARRAY_PUSH(t->ctx, t->polypts, s->pos);
+        return CBM_OK;
+    default:
+        break;
+    }
+    /* the @ commands end the current segment first, as in cpfg */
+    if (cmd >= CBM_T_ROLL_HORIZ && cmd <= CBM_T_GC_END) {
+        CBM_TRY(end_node(t));
+    } else if (cmd >= CBM_T_USER_FIRST && cmd != CBM_T_ELASTICITY) {
+        CBM_TRY(end_node(t));
+    }
+    switch (cmd) {
+    case CBM_T_ROLL_HORIZ:
+        if (s->h.y < 1.0 && s->h.y > -1.0) {
+            s->l = v3_normalize(v3_cross(v3(0, 1, 0), s->h));
+            s->u = v3_cross(s->l, s->h);
+        }
+        return CBM_OK;
+    case CBM_T_SPHERE:
+    case CBM_T_CIRCLE:
+    case CBM_T_CONTOUR:
+        return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
+                              nparams);
+    case CBM_T_MOVE_TO:
+        if (nparams >= 2) {
+            s->pos = v3(params[0], params[1], nparams >= 3 ? params[2] : 0.0);
+            box_add(t, s->pos);
+        }
+        return CBM_OK;
+    case CBM_T_TROPISM_SET:
+    case CBM_T_TROPISM_INC:
+    case CBM_T_TROPISM_DEC: {
+        if (nparams == 0)
+            return CBM_OK; /* cpfg applies @T only with an index */
+        int i = (int)params[0] - 1;
+        if (i < 0 || i >= v->nmov)
+            return CBM_OK; /* cpfg: "Movement index out of range", ignored */
+        double aux = nparams >= 2 ? params[1] : v->mov[i].elasticity_inc;
+        if (cmd == CBM_T_TROPISM_DEC)
+            aux = -aux;
+        else if (cmd == CBM_T_TROPISM_SET)
+            aux = nparams >= 2 ? params[1] - s->mov_e[i] : -s->mov_e[i];
+        s->mov_e[i] += aux;
+        return CBM_OK;
+    }
+    case CBM_T_GC_START:
+        if (s->gc_on)
+            CBM_TRY(gc_emit(t, s->gc_first));
+        s->gc_on = true;
+        s->gc_first = t->gc.len;
+        return gc_point(t, 1);
+    case CBM_T_GC_CONTROL:
+    case CBM_T_GC_END: {
+        if (!s->gc_on)
+            return CBM_OK;
+        int rings = nparams > 0 ? (int)params[0] : 1;
+        if (rings > 10000)
+            rings = 10000;
+        CBM_TRY(gc_point(t, rings));
+        if (cmd == CBM_T_GC_END) {
+            s->gc_on = false;
+            return gc_emit(t, s->gc_first);
+        }
+        return CBM_OK;
+    }
+    case CBM_T_CONTOUR_SET:
+        s->contour = nparams > 0 ? (int)params[0] : 0;
+        return CBM_OK;
+    case CBM_T_SIDES_SET:
+        s->sides = nparams > 0 ? (int)params[0] : 8;
+        if (s->sides < 3)
+            s->sides = 3;
+        if (s->sides > 1024)
+            s->sides = 1024;
+        return CBM_OK;
+    case CBM_T_QUERY_P:
+    case CBM_T_QUERY_H:
+    case CBM_T_QUERY_L:
+    case CBM_T_QUERY_U:
+        return query(t, cmd, params, nparams);
+    default:
+        return CBM_OK;
+    }
+}
+
+cbm_status cbm__turtle_finish(cbm_turtle *t)
+{
+    t->cut_depth = 0;
+    CBM_TRY(end_node(t));
+    while (t->polystart.len > 0)
+        CBM_TRY(poly_end(t));
+    if (t->cur.gc_on) {
+        t->cur.gc_on = false;
+        CBM_TRY(gc_emit(t, t->cur.gc_first));
+    }
+    /* generalized cylinders left open in unclosed branches */
+    for (size_t i = t->stack.len; i-- > 0;) {
+        if (t->stack.data[i].gc_on) {
+            t->stack.data[i].gc_on = false;
+            CBM_TRY(gc_emit(t, t->stack.data[i].gc_first));
+        }
+    }
+    return CBM_OK;
+}
+
+/* ---- public API ---- */
+
+cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cbm_turtle_def *def,
+                                cbm_tmodule *mods, size_t n, cbm_scene *scene, cbm_turtle **out)
+{
+    if (!ctx || !view || (!mods && n) || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_turtle *t;
+    CBM_TRY(cbm__turtle_create(ctx, view, scene, &t));
+    t->record = def ? def->record : true;
+    cbm_status s = CBM_OK;
+    for (size_t i = 0; i < n && s == CBM_OK; i++) {
+        const char *nm = mods[i].name ? mods[i].name : "";
+        int cmd = cbm__turtle_lookup(nm, strlen(nm));
+        if (cmd == CBM_T_SURFACE) {
+            s = cbm__turtle_exec(t, cmd, mods[i].params, mods[i].nparams);
+            if (s == CBM_OK && i + 1 < n) {
+                i++;
+                const char *sn = mods[i].name ? mods[i].name : "";
+                s = cbm__turtle_surface(t, sn, strlen(sn), mods[i].params, mods[i].nparams);
+            }
+            continue;
+        }
+        if (cmd != CBM_T_NONE)
+            s = cbm__turtle_exec(t, cmd, mods[i].params, mods[i].nparams);
+    }
+    if (s == CBM_OK)
+        s = cbm__turtle_finish(t);
+    if (s != CBM_OK) {
+        cbm__turtle_destroy(t);
+        return s;
+    }
+    *out = t;
+    return CBM_OK;
+}
+
+void cbm_turtle_destroy(cbm_turtle *t)
+{
+    cbm__turtle_destroy(t);
+}
+
+size_t cbm_turtle_prim_count(const cbm_turtle *t)
+{
+    return t ? t->prims.len : 0;
+}
+
+const cbm_prim *cbm_turtle_prims(const cbm_turtle *t)
+{
+    return t ? t->prims.data : NULL;
+}
+
+const cbm_vec3 *cbm_turtle_points(const cbm_turtle *t)
+{
+    return t ? t->pts.data : NULL;
+}
+
+bool cbm_turtle_box(const cbm_turtle *t, cbm_vec3 *lo, cbm_vec3 *hi)
+{
+    if (!t || !t->box_set)
+        return false;
+    if (lo)
+        *lo = t->lo;
+    if (hi)
+        *hi = t->hi;
+    return true;
+}
+
+void cbm_turtle_state(const cbm_turtle *t, cbm_vec3 *pos, cbm_vec3 *h, cbm_vec3 *l, cbm_vec3 *u,
+                      double *width, int *color)
+{
+    if (pos)
+        *pos = t->cur.pos;
+    if (h)
+        *h = t->cur.h;
+    if (l)
+        *l = t->cur.l;
+    if (u)
+        *u = t->cur.u;
+    if (width)
+        *width = t->cur.width;
+    if (color)
+        *color = t->cur.color;
+}
