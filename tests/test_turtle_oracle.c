@@ -1,0 +1,393 @@
+/* Geometry of the turtle against cpfg's own outputs (../shared/oracles/vlab/cpfg-*).
+ *
+ * For each model, the string cpfg interpreted is taken from the oracle, not derived here:
+ * ref/final.homo.str (after the homomorphism, cpfg's %g notation, line-wrapped) when the model has
+ * a homomorphism, else ref/final.exact.txt (one module per line, exact float32 parameters). The
+ * string runs through our turtle with the model's view file and colour map or materials, and we
+ * compare with ref/final.ray.gz (cylinders and cones with end points and radii, polygons,
+ * spheres, discs, in order) and with the bounding box of ref/final.vv.
+ * Tolerances: points and radii within 1e-4 * (1 + |value|) + 2e-4 * scale, where scale is the
+ * largest extent of the box (the .ray file prints 6 significant digits, and final.homo.str's
+ * parameters have 6 digits too, which accumulates along long branches); box within 1e-3 * scale.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "test.h"
+
+#include "turtle/tint.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define ORACLE CBM_TEST_SOURCE_DIR "/../shared/oracles/vlab/"
+
+/* ---- reading the string ---- */
+
+typedef struct modlist {
+    cbm_tmodule *m;
+    char (*name)[4];
+    double *par;
+    size_t n, cap, npar, parcap;
+} modlist;
+
+static char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    size_t cap = 1 << 16, n = 0;
+    char *b = malloc(cap);
+    size_t got;
+    while ((got = fread(b + n, 1, cap - n - 1, f)) > 0) {
+        n += got;
+        if (n + 1 >= cap)
+            b = realloc(b, cap *= 2);
+    }
+    fclose(f);
+    b[n] = 0;
+    if (len)
+        *len = n;
+    return b;
+}
+
+/* Parses cpfg's string notation (single-character symbols with optional parameters; newlines
+ * ignored) into raw modules, then joins @X, @Xy and ?X into our multi-character names. */
+static void parse_string(const char *text, modlist *L)
+{
+    size_t len = strlen(text);
+    char *s = malloc(len + 1);
+    size_t k = 0;
+    for (size_t i = 0; i < len; i++)
+        if (text[i] != '\n' && text[i] != '\r')
+            s[k++] = text[i];
+    s[k] = 0;
+    /* raw modules */
+    size_t cap = k + 1;
+    char *sym = malloc(cap);
+    int *np = malloc(cap * sizeof(int));
+    size_t *pf = malloc(cap * sizeof(size_t));
+    double *par = malloc((k + 1) * sizeof(double));
+    size_t nraw = 0, npar = 0;
+    const char *p = s;
+    while (*p) {
+        if (*p == ' ') {
+            p++;
+            continue;
+        }
+        sym[nraw] = *p++;
+        np[nraw] = 0;
+        pf[nraw] = npar;
+        if (*p == '(') {
+            p++;
+            for (;;) {
+                char *end;
+                double v = strtod(p, &end);
+                if (end == p)
+                    break;
+                par[npar++] = v;
+                np[nraw]++;
+                p = end;
+                if (*p == ',')
+                    p++;
+                else
+                    break;
+            }
+            if (*p == ')')
+                p++;
+        }
+        nraw++;
+    }
+    L->m = malloc((nraw + 1) * sizeof *L->m);
+    L->name = malloc((nraw + 1) * sizeof *L->name);
+    L->par = par;
+    L->n = 0;
+    for (size_t i = 0; i < nraw; i++) {
+        char nm[4] = {sym[i], 0, 0, 0};
+        size_t src = i;
+        if ((sym[i] == '@' || sym[i] == '?') && i + 1 < nraw) {
+            nm[1] = sym[i + 1];
+            src = ++i;
+            /* @T, @G, @m, @P, @D, @b take a sub-symbol when they have no parameter */
+            if (sym[src - 1] == '@' && strchr("TGmPDb", nm[1]) && np[src] == 0 && i + 1 < nraw) {
+                nm[2] = sym[i + 1];
+                src = ++i;
+            }
+        }
+        memcpy(L->name[L->n], nm, 4);
+        L->m[L->n].nparams = np[src];
+        L->m[L->n].params = par + pf[src];
+        L->n++;
+    }
+    for (size_t i = 0; i < L->n; i++)
+        L->m[i].name = L->name[i];
+    free(s);
+    free(sym);
+    free(np);
+    free(pf);
+}
+
+static void modlist_free(modlist *L)
+{
+    free(L->m);
+    free(L->name);
+    free(L->par);
+}
+
+/* ---- reading the .ray file ---- */
+
+typedef struct rayprim {
+    int kind; /* CBM_PRIM_* */
+    double v[8];
+    size_t first, count; /* polygon points in pts */
+} rayprim;
+
+typedef struct ray {
+    rayprim *p;
+    size_t n;
+    double *pts; /* 3 per polygon point */
+    size_t npts;
+} ray;
+
+static bool is_number(const char *t)
+{
+    char *end;
+    strtod(t, &end);
+    return end != t && *end == 0;
+}
+
+static bool read_ray(const char *path, ray *R)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "gzip -dc '%s'", path);
+    FILE *f = popen(cmd, "r");
+    if (!f)
+        return false;
+    memset(R, 0, sizeof *R);
+    size_t cap = 1024, pcap = 1024;
+    R->p = malloc(cap * sizeof *R->p);
+    R->pts = malloc(pcap * sizeof(double));
+    char tok[256];
+    bool body = false;
+    char pending[256] = "";
+    for (;;) {
+        if (pending[0]) {
+            strcpy(tok, pending);
+            pending[0] = 0;
+        } else if (fscanf(f, "%255s", tok) != 1) {
+            break;
+        }
+        if (!body) {
+            if (strcmp(tok, "#else") == 0)
+                body = true;
+            continue;
+        }
+        int kind = -1, nv = 0;
+        if (strcmp(tok, "cylinder") == 0) {
+            kind = CBM_PRIM_CYLINDER;
+            nv = 7;
+        } else if (strcmp(tok, "cone") == 0) {
+            kind = CBM_PRIM_CYLINDER;
+            nv = 8;
+        } else if (strcmp(tok, "sphere") == 0) {
+            kind = CBM_PRIM_SPHERE;
+            nv = 4;
+        } else if (strcmp(tok, "disc") == 0) {
+            kind = CBM_PRIM_DISC;
+            nv = 7;
+        } else if (strcmp(tok, "poly") == 0) {
+            kind = CBM_PRIM_POLYGON;
+        }
+        if (kind < 0)
+            continue;
+        char sname[64];
+        if (fscanf(f, "%63s", sname) != 1)
+            break;
+        if (R->n == cap)
+            R->p = realloc(R->p, (cap *= 2) * sizeof *R->p);
+        rayprim *rp = &R->p[R->n++];
+        memset(rp, 0, sizeof *rp);
+        rp->kind = kind;
+        if (kind == CBM_PRIM_POLYGON) {
+            rp->first = R->npts;
+            while (fscanf(f, "%255s", tok) == 1) {
+                if (!is_number(tok)) {
+                    strcpy(pending, tok);
+                    break;
+                }
+                if (R->npts * 3 + 3 > pcap)
+                    R->pts = realloc(R->pts, (pcap *= 2) * sizeof(double));
+                R->pts[R->npts * 3] = strtod(tok, NULL);
+                if (fscanf(f, "%lf %lf", &R->pts[R->npts * 3 + 1], &R->pts[R->npts * 3 + 2]) != 2)
+                    break;
+                R->npts++;
+                if (R->npts * 3 + 3 > pcap)
+                    R->pts = realloc(R->pts, (pcap *= 2) * sizeof(double));
+            }
+            rp->count = R->npts - rp->first;
+            continue;
+        }
+        for (int i = 0; i < nv; i++)
+            if (fscanf(f, "%lf", &rp->v[i]) != 1)
+                break;
+        if (nv == 7 && kind == CBM_PRIM_CYLINDER) {
+            /* r x y z x y z -> r0 x0 y0 z0 r1 x1 y1 z1 */
+            double r = rp->v[0];
+            double e[3] = {rp->v[4], rp->v[5], rp->v[6]};
+            rp->v[4] = r;
+            rp->v[5] = e[0];
+            rp->v[6] = e[1];
+            rp->v[7] = e[2];
+        }
+    }
+    pclose(f);
+    return body;
+}
+
+/* ---- the comparison ---- */
+
+typedef struct model {
+    const char *dir, *lfile, *view, *colors;
+    bool homo;
+} model;
+
+static bool near(double a, double b, double scale)
+{
+    return fabs(a - b) <= 1e-4 * (1 + fabs(b)) + 2e-4 * scale;
+}
+
+static void run_model(const model *md, bool compare_prims)
+{
+    char path[1024];
+    cbm_context *ctx = test_ctx();
+    cbm_view *view = NULL;
+    snprintf(path, sizeof path, ORACLE "%s/model/%s", md->dir, md->view);
+    CHECK_OK(cbm_view_load(ctx, path, &view));
+    if (!view) {
+        test_ctx_end(ctx);
+        return;
+    }
+    if (md->colors) {
+        snprintf(path, sizeof path, ORACLE "%s/model/%s", md->dir, md->colors);
+        CHECK_OK(cbm_view_load_side_file(view, path));
+    }
+    snprintf(path, sizeof path, ORACLE "%s/ref/%s", md->dir,
+             md->homo ? "final.homo.str" : "final.exact.txt");
+    char *text = slurp(path, NULL);
+    CHECK_MSG(text != NULL, "cannot read %s", path);
+    if (!text) {
+        cbm_view_destroy(view);
+        test_ctx_end(ctx);
+        return;
+    }
+    modlist L;
+    parse_string(text, &L);
+    free(text);
+
+    cbm_scene *scene = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    cbm_turtle *t = NULL;
+    cbm_turtle_def def = {true};
+    CHECK_OK(cbm_turtle_interpret(ctx, view, &def, L.m, L.n, scene, &t));
+    if (t) {
+        /* box */
+        snprintf(path, sizeof path, ORACLE "%s/ref/final.vv", md->dir);
+        char *vv = slurp(path, NULL);
+        double b[6] = {0};
+        CHECK(vv && sscanf(vv, "box: x: %lf,%lf y: %lf,%lf z: %lf,%lf", &b[0], &b[1], &b[2],
+                           &b[3], &b[4], &b[5]) == 6);
+        free(vv);
+        cbm_vec3 lo, hi;
+        CHECK(cbm_turtle_box(t, &lo, &hi));
+        double scale = fmax(b[1] - b[0], fmax(b[3] - b[2], b[5] - b[4]));
+        double tol = 1e-3 * scale;
+        CHECK_NEAR(lo.x, b[0], tol);
+        CHECK_NEAR(hi.x, b[1], tol);
+        CHECK_NEAR(lo.y, b[2], tol);
+        CHECK_NEAR(hi.y, b[3], tol);
+        CHECK_NEAR(lo.z, b[4], tol);
+        CHECK_NEAR(hi.z, b[5], tol);
+
+        if (compare_prims) {
+            ray R = {0};
+            snprintf(path, sizeof path, ORACLE "%s/ref/final.ray.gz", md->dir);
+            CHECK(read_ray(path, &R));
+            const cbm_prim *P = cbm_turtle_prims(t);
+            const cbm_vec3 *pts = cbm_turtle_points(t);
+            size_t np = cbm_turtle_prim_count(t);
+            /* our record in the ray's terms: GC and surfaces are not compared */
+            size_t j = 0, bad = 0, compared = 0;
+            for (size_t i = 0; i < np; i++) {
+                if (P[i].kind == CBM_PRIM_GCYL || P[i].kind == CBM_PRIM_SURFACE)
+                    continue;
+                if (j >= R.n) {
+                    bad++;
+                    continue;
+                }
+                const rayprim *r = &R.p[j++];
+                compared++;
+                bool ok = (int)P[i].kind == r->kind;
+                if (ok && r->kind == CBM_PRIM_CYLINDER) {
+                    double mine[8] = {P[i].r0, P[i].p0.x, P[i].p0.y, P[i].p0.z,
+                                      P[i].r1, P[i].p1.x, P[i].p1.y, P[i].p1.z};
+                    for (int k = 0; k < 8; k++)
+                        ok = ok && near(mine[k], r->v[k], scale);
+                } else if (ok && (r->kind == CBM_PRIM_SPHERE || r->kind == CBM_PRIM_DISC)) {
+                    double mine[7] = {P[i].r0, P[i].p0.x, P[i].p0.y, P[i].p0.z,
+                                      P[i].p1.x, P[i].p1.y, P[i].p1.z};
+                    int nk = r->kind == CBM_PRIM_SPHERE ? 4 : 7;
+                    for (int k = 0; k < nk; k++)
+                        ok = ok && near(mine[k], r->v[k], scale);
+                } else if (ok) {
+                    ok = P[i].count == r->count;
+                    for (size_t k = 0; ok && k < r->count; k++) {
+                        const cbm_vec3 q = pts[P[i].first + k];
+                        const double *w = &R.pts[3 * (r->first + k)];
+                        ok = near(q.x, w[0], scale) && near(q.y, w[1], scale) &&
+                             near(q.z, w[2], scale);
+                    }
+                }
+                if (!ok) {
+                    if (bad < 3)
+                        fprintf(stderr,
+                                "%s: primitive %zu (kind %d) differs: ours r0 %g (%g %g %g) r1 %g "
+                                "(%g %g %g); cpfg %g (%g %g %g) %g (%g %g %g)\n",
+                                md->dir, j - 1, r->kind, P[i].r0, P[i].p0.x, P[i].p0.y, P[i].p0.z,
+                                P[i].r1, P[i].p1.x, P[i].p1.y, P[i].p1.z, r->v[0], r->v[1],
+                                r->v[2], r->v[3], r->v[4], r->v[5], r->v[6], r->v[7]);
+                    bad++;
+                }
+            }
+            CHECK_MSG(j == R.n, "%s: cpfg has %zu primitives, we compared %zu", md->dir, R.n, j);
+            CHECK_MSG(bad == 0, "%s: %zu of %zu primitives differ", md->dir, bad, compared);
+            free(R.p);
+            free(R.pts);
+        }
+        CHECK(cbm_scene_triangle_count(scene) > 0);
+        cbm_turtle_destroy(t);
+    }
+    cbm_scene_destroy(scene);
+    modlist_free(&L);
+    cbm_view_destroy(view);
+    test_ctx_end(ctx);
+}
+
+#define MODEL(name, dir, l, v, c, homo, prims)                                                     \
+    TEST(name)                                                                                     \
+    {                                                                                              \
+        model m = {dir, l, v, c, homo};                                                            \
+        run_model(&m, prims);                                                                      \
+    }
+
+MODEL(quadratic_koch, "cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, true)
+MODEL(compound_homo, "cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, true)
+MODEL(compound_param, "cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, true)
+MODEL(continuous_decomp, "cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, true)
+MODEL(florigen_param, "cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, true)
+MODEL(hormone_up, "cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, true)
+MODEL(monopodial, "cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, true)
+MODEL(sympodial, "cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, true)
+MODEL(random_moss, "cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, true)
+MODEL(weeping_birch, "cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, true)
+MODEL(query_position, "cpfg-query-position", "plant.l", "plant.v", "plant.map", false, true)
+MODEL(leaf_rnd, "cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, true)
+MODEL(tropisms, "cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, true)
+MODEL(lilac, "cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, true)
