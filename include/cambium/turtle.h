@@ -68,7 +68,7 @@ typedef enum cbm_prim_kind {
 
 typedef struct cbm_prim {
     cbm_prim_kind kind;
-    int color;        ///< colour index
+    int color; ///< colour index
     cbm_vec3 p0, p1;
     double r0, r1;
     size_t first, count; ///< range in cbm_turtle_points
@@ -83,8 +83,8 @@ typedef struct cbm_turtle_def {
 /// Interprets modules[0..n) with the view into scene (may be NULL). *out receives the turtle
 /// with its record, to read with the accessors below and release with cbm_turtle_destroy.
 CBM_API cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view,
-                                        const cbm_turtle_def *def, cbm_tmodule *modules,
-                                        size_t n, cbm_scene *scene, cbm_turtle **out);
+                                        const cbm_turtle_def *def, cbm_tmodule *modules, size_t n,
+                                        cbm_scene *scene, cbm_turtle **out);
 CBM_API void cbm_turtle_destroy(cbm_turtle *t);
 CBM_API size_t cbm_turtle_prim_count(const cbm_turtle *t);
 CBM_API const cbm_prim *cbm_turtle_prims(const cbm_turtle *t);

@@ -24,6 +24,7 @@ void cbm__surface_free(cbm_context *ctx, cbm__surface *s)
     CBM_ARRAY_FREE(ctx, s->pos);
     CBM_ARRAY_FREE(ctx, s->nrm);
     CBM_ARRAY_FREE(ctx, s->tri);
+    CBM_ARRAY_FREE(ctx, s->ctrl);
 }
 
 static bool getline_(const char **p, char *buf, size_t cap, int *line)
@@ -121,7 +122,7 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
     s->up = up;
     s->size = size;
 #define XFORM(q)                                                                                   \
-    v3_add(v3_add(v3_scale(left, ((q).x - cp.x) * k), v3_scale(hd, ((q).y - cp.y) * k)),          \
+    v3_add(v3_add(v3_scale(left, ((q).x - cp.x) * k), v3_scale(hd, ((q).y - cp.y) * k)),           \
            v3_scale(up, ((q).z - cp.z) * k))
     s->end = XFORM(ep);
     if (subdiv < 1)
@@ -159,6 +160,7 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
             for (int j = 0; j < 4; j++) {
                 cbm_vec3 raw = v3((float)v[3 * j], (float)v[3 * j + 1], (float)v[3 * j + 2]);
                 c[i][j] = XFORM(raw);
+                CBM_TRY(CBM_ARRAY_PUSH(ctx, s->ctrl, c[i][j]));
             }
         }
         uint32_t base = (uint32_t)s->pos.len;
@@ -197,8 +199,7 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
     return CBM_OK;
 }
 
-cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text,
-                             cbm__contour *c)
+cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text, cbm__contour *c)
 {
     memset(c, 0, sizeof *c);
     const char *p = text;
@@ -223,8 +224,7 @@ cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *tex
             CBM_ARRAY_FREE(ctx, c->xy);
             return fmt_err(ctx, path, line, "expected a contour point 'x y z [m]'");
         }
-        if (CBM_ARRAY_PUSH(ctx, c->xy, x) != CBM_OK ||
-            CBM_ARRAY_PUSH(ctx, c->xy, y) != CBM_OK) {
+        if (CBM_ARRAY_PUSH(ctx, c->xy, x) != CBM_OK || CBM_ARRAY_PUSH(ctx, c->xy, y) != CBM_OK) {
             CBM_ARRAY_FREE(ctx, c->xy);
             return CBM_E_NOMEM;
         }

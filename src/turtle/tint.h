@@ -10,7 +10,7 @@
 #include "../core/core.h"
 
 #define CBM__MAX_MOVEMENTS 8 /* tropisms + torques of one view file */
-#define CBM__MAX_CONTOURS 64
+#define CBM__MAX_CONTOURS  64
 
 /* ---- function files (.func): a clamped uniform cubic B-spline y(x) ---- */
 typedef struct cbm__func {
@@ -39,6 +39,7 @@ typedef struct cbm__surface {
     cbm_vec3 heading, up;     /* the surface's own frame */
     CBM_ARRAY(cbm_vec3) pos;  /* tessellated vertices X, Y, Z: placed at P + X L + Y H + Z U */
     CBM_ARRAY(cbm_vec3) nrm;  /* their normals */
+    CBM_ARRAY(cbm_vec3) ctrl; /* Bezier control points, same coordinates (cpfg's box) */
     CBM_ARRAY(uint32_t) tri;  /* 3 per triangle */
 } cbm__surface;
 
@@ -54,15 +55,14 @@ typedef struct cbm__contour {
     CBM_ARRAY(double) xy; /* 2 per point, closed implicitly */
 } cbm__contour;
 
-cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text,
-                             cbm__contour *c);
+cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text, cbm__contour *c);
 
 /* ---- movements (tropisms and torques of the view file, cpfg's "tropism:" lines) ---- */
 typedef struct cbm__movement {
-    int torque;           /* 0 tropism, 1 torque ("twist") */
-    cbm_vec3 dir;         /* unit vector times intensity */
-    double cos_g, sin_g;  /* angle gamma to the direction (A:, degrees in the file) */
-    double elasticity;    /* initial elasticity (E:) */
+    int torque;            /* 0 tropism, 1 torque ("twist") */
+    cbm_vec3 dir;          /* unit vector times intensity */
+    double cos_g, sin_g;   /* angle gamma to the direction (A:, degrees in the file) */
+    double elasticity;     /* initial elasticity (E:) */
     double elasticity_inc; /* step of @Ti/@Td (S:) */
 } cbm__movement;
 
@@ -79,8 +79,8 @@ struct cbm_view {
     double step;         /* step of F, f without parameter */
     double scale;        /* scale factor of the view (display only; kept) */
     cbm__line_style line_style;
-    int sides;            /* contour sides of cylinders */
-    bool gc_twist;        /* twist of cylinders */
+    int sides;     /* contour sides of cylinders */
+    bool gc_twist; /* twist of cylinders */
     /* ABOP tropism (T, e of ABOP eq. 2.? "tropism direction", "initial elasticity") */
     cbm_vec3 tropism_dir;
     double elasticity, elasticity_inc;

@@ -311,8 +311,8 @@ static cbm_status end_node(cbm_turtle *t)
     cbm_frame f = section_frame(dir, t->node_u);
     if (t->view->line_style == CBM__LS_POLYGON) {
         /* a flat ribbon in the H-L plane, as cpfg's polygon lines */
-        cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0),
-                         v3_madd(p1, f.l, pr.r1), v3_madd(p1, f.l, -pr.r1)};
+        cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0), v3_madd(p1, f.l, pr.r1),
+                         v3_madd(p1, f.l, -pr.r1)};
         return cbm_scene_add_polygon(t->scene, q, 4);
     }
     int sides = t->view->line_style == CBM__LS_CYLINDER ? t->cur.sides : 4;
@@ -431,12 +431,10 @@ static cbm_status gc_point(cbm_turtle *t, int rings)
     return CBM_ARRAY_PUSH(t->ctx, t->gc, g);
 }
 
-static cbm_vec3 hermite(cbm_vec3 p0, cbm_vec3 t0, cbm_vec3 p1, cbm_vec3 t1, double s,
-                        cbm_vec3 *tan)
+static cbm_vec3 hermite(cbm_vec3 p0, cbm_vec3 t0, cbm_vec3 p1, cbm_vec3 t1, double s, cbm_vec3 *tan)
 {
     double s2 = s * s, s3 = s2 * s;
-    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2,
-           h11 = s3 - s2;
+    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
     double d00 = 6 * s2 - 6 * s, d10 = 3 * s2 - 4 * s + 1, d01 = -6 * s2 + 6 * s,
            d11 = 3 * s2 - 2 * s;
     *tan = v3_add(v3_add(v3_scale(p0, d00), v3_scale(t0, d10)),
@@ -477,8 +475,8 @@ static cbm_status gc_emit(cbm_turtle *t, size_t first)
         const cbm_section *sec = &t->rings.data[i];
         for (int k = 0; k < t->cur.sides; k++) {
             double a = 2 * CBM_PI * k / t->cur.sides;
-            cbm_vec3 q = v3_madd(v3_madd(sec->center, sec->frame.u, sec->a * cos(a)),
-                                 sec->frame.l, sec->b * sin(a));
+            cbm_vec3 q = v3_madd(v3_madd(sec->center, sec->frame.u, sec->a * cos(a)), sec->frame.l,
+                                 sec->b * sin(a));
             box_add(t, q);
         }
     }
@@ -527,8 +525,8 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
         return CBM_OK;
     if (len != 1)
         return cbm__fail(t->ctx, CBM_E_RUNTIME,
-                         "~ must be followed by a one-letter surface name, found '%.*s'",
-                         (int)len, name);
+                         "~ must be followed by a one-letter surface name, found '%.*s'", (int)len,
+                         name);
     const cbm__surface *sf = find_surface(t->view, name[0]);
     if (!sf)
         return CBM_OK; /* cpfg draws nothing for an unknown surface */
@@ -549,15 +547,21 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
     CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, nv * 2));
     for (size_t i = 0; i < nv; i++) {
         cbm_vec3 q = sf->pos.data[i];
-        cbm_vec3 w = v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, q.x * k * sx),
-                                                  v3_scale(s->h, q.y * k * sy)),
-                                           v3_scale(s->u, q.z * k * sz)));
+        cbm_vec3 w = v3_add(
+            s->pos, v3_add(v3_add(v3_scale(s->l, q.x * k * sx), v3_scale(s->h, q.y * k * sy)),
+                           v3_scale(s->u, q.z * k * sz)));
         cbm_vec3 nq = sf->nrm.data[i];
-        cbm_vec3 nw = v3_normalize(v3_add(
-            v3_add(v3_scale(s->l, nq.x / sx), v3_scale(s->h, nq.y / sy)), v3_scale(s->u, nq.z / sz)));
+        cbm_vec3 nw =
+            v3_normalize(v3_add(v3_add(v3_scale(s->l, nq.x / sx), v3_scale(s->h, nq.y / sy)),
+                                v3_scale(s->u, nq.z / sz)));
         t->scratch.data[i] = w;
         t->scratch.data[nv + i] = nw;
-        box_add(t, w);
+    }
+    /* cpfg's box holds the control points of the patches */
+    for (size_t i = 0; i < sf->ctrl.len; i++) {
+        cbm_vec3 q = sf->ctrl.data[i];
+        box_add(t, v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, q.x * sx), v3_scale(s->h, q.y * sy)),
+                                         v3_scale(s->u, q.z * sz))));
     }
     t->scratch.len = 2 * nv;
     if (t->record) {
@@ -582,9 +586,9 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
     }
     /* the turtle moves to the surface's end point (cpfg: x, z scaled as y when not index 0) */
     cbm_vec3 e = sf->end;
-    t->cur.pos = v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, e.x * k * sx),
-                                              v3_scale(s->h, e.y * k * sx)),
-                                       v3_scale(s->u, e.z * k * sx)));
+    t->cur.pos =
+        v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, e.x * k * sx), v3_scale(s->h, e.y * k * sx)),
+                              v3_scale(s->u, e.z * k * sx)));
     return CBM_OK;
 }
 
@@ -614,13 +618,11 @@ static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, i
                           s->pos.z + ((i & 4) ? r : -r)));
     } else {
         for (int i = 0; i < 4; i++)
-            box_add(t, v3(s->pos.x + ((i & 1) ? r : -r), s->pos.y + ((i & 2) ? r : -r),
-                          s->pos.z));
+            box_add(t, v3(s->pos.x + ((i & 1) ? r : -r), s->pos.y + ((i & 2) ? r : -r), s->pos.z));
     }
     if (!t->scene || !(r > 0))
         return CBM_OK;
-    cbm_part part = make_part(t, cmd == CBM_T_SPHERE ? CBM_ORGAN_FRUIT : CBM_ORGAN_OTHER,
-                              s->color);
+    cbm_part part = make_part(t, cmd == CBM_T_SPHERE ? CBM_ORGAN_FRUIT : CBM_ORGAN_OTHER, s->color);
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     if (cmd == CBM_T_SPHERE)
         return cbm_scene_add_sphere(t->scene, s->pos, r, s->sides);

@@ -164,8 +164,7 @@ cbm_status cbm_view_add_contour(cbm_view *v, int id, const char *path)
     if (s != CBM_OK)
         return s;
     c.id = id;
-    if (v->contours.len >= CBM__MAX_CONTOURS ||
-        CBM_ARRAY_PUSH(v->ctx, v->contours, c) != CBM_OK) {
+    if (v->contours.len >= CBM__MAX_CONTOURS || CBM_ARRAY_PUSH(v->ctx, v->contours, c) != CBM_OK) {
         CBM_ARRAY_FREE(v->ctx, c.xy);
         return v->contours.len >= CBM__MAX_CONTOURS
                    ? cbm__fail(v->ctx, CBM_E_LIMIT, "%s: more than %d contours", path,
@@ -187,8 +186,8 @@ cbm_status cbm_view_load_colormap(cbm_view *v, const char *path)
     fclose(f);
     if (n < 768)
         return cbm__fail(v->ctx, CBM_E_FORMAT,
-                         "%s: a colour map holds 256 RGB byte triples (768 bytes), found %zu",
-                         path, n);
+                         "%s: a colour map holds 256 RGB byte triples (768 bytes), found %zu", path,
+                         n);
     for (int i = 0; i < 256; i++) {
         for (int c = 0; c < 3; c++)
             v->colors[i][c] = srgb_to_linear(b[3 * i + c]);
@@ -312,8 +311,7 @@ static int numbers(const char *s, double *out, int n)
     return k;
 }
 
-static cbm_status read_movement(cbm_view *v, const char *path, int line, const char *s,
-                                int torque)
+static cbm_status read_movement(cbm_view *v, const char *path, int line, const char *s, int torque)
 {
     if (v->nmov >= CBM__MAX_MOVEMENTS) {
         cbm__diag(v->ctx, CBM_WARNING, path, line, 1, "more than %d tropisms; ignored",
@@ -337,9 +335,8 @@ static cbm_status read_movement(cbm_view *v, const char *path, int line, const c
         int want = key == 'T' ? 3 : 1;
         int got = numbers(s, val, want);
         if (got != want) {
-            cbm__diag(v->ctx, CBM_ERROR, path, line, 1,
-                      "tropism: expected %d number%s after '%c:'", want, want > 1 ? "s" : "",
-                      key);
+            cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "tropism: expected %d number%s after '%c:'",
+                      want, want > 1 ? "s" : "", key);
             return CBM_E_FORMAT;
         }
         /* skip what numbers() consumed */
@@ -541,8 +538,7 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             side_path(v, name, full, sizeof full);
             cbm_status s2 = cbm_view_add_function(v, full, got == 2 ? samples : -1);
             if (s2 != CBM_OK) {
-                cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "cannot read function file %s",
-                          full);
+                cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "cannot read function file %s", full);
                 result = s2;
             }
         } else if (KEY("surface")) {
