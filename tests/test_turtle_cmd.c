@@ -144,8 +144,8 @@ TEST(move_and_segments)
     cbm_view *v;
     prog p;
     cbm_vec3 P;
-    cbm_turtle *t = run(ctx, &v, "angle increment: 90\ninitial line width: 2\n", &p,
-                        "F(2.5) - F f G(0.5) g");
+    cbm_turtle *t =
+        run(ctx, &v, "angle increment: 90\ninitial line width: 2\n", &p, "F(2.5) - F f G(0.5) g");
     cbm_turtle_state(t, &P, NULL, NULL, NULL, NULL, NULL);
     check_v(P, 3.5, 2.5, 0, 1e-12);
     CHECK_EQ_INT(cbm_turtle_prim_count(t), 3); /* F, F, G; f and g draw nothing */
@@ -235,8 +235,8 @@ TEST(polygons)
     cbm_context *ctx = test_ctx();
     cbm_view *v;
     prog p;
-    cbm_turtle *t = run(ctx, &v, "angle increment: 90\n", &p,
-                        "{ . f + f + G + f } { . f(2) { . g . } + f }");
+    cbm_turtle *t =
+        run(ctx, &v, "angle increment: 90\n", &p, "{ . f + f + G + f } { . f(2) { . g . } + f }");
     const cbm_prim *pr = cbm_turtle_prims(t);
     size_t n = cbm_turtle_prim_count(t);
     const cbm_vec3 *pts = cbm_turtle_points(t);
@@ -308,8 +308,8 @@ TEST(abop_tropism)
     prog p;
     cbm_vec3 H;
     /* after +(90), H = -x, L = -y; T = -y, e = 0.5: sin(alpha) = e T.L = 0.5 */
-    cbm_turtle *t = run(ctx, &v, "tropism direction: 0,-1,0\ninitial elasticity: 0.5\n", &p,
-                        "+(90) F");
+    cbm_turtle *t =
+        run(ctx, &v, "tropism direction: 0,-1,0\ninitial elasticity: 0.5\n", &p, "+(90) F");
     cbm_turtle_state(t, NULL, &H, NULL, NULL, NULL, NULL);
     check_v(H, -sqrt(0.75), -0.5, 0, 1e-12);
     cbm_turtle_destroy(t);

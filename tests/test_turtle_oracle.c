@@ -371,6 +371,9 @@ static void run_model(const model *md, bool compare_prims)
                 j++;
             CHECK_MSG(j == R.n, "%s: cpfg has %zu primitives, we compared %zu", md->dir, R.n, j);
             CHECK(compared > 0);
+            fprintf(stderr,
+                    "%s: %zu modules, %zu of cpfg's %zu .ray primitives compared, %zu differ\n",
+                    md->dir, L.n, compared, R.n, bad);
             CHECK_MSG(bad == 0, "%s: %zu of %zu primitives differ", md->dir, bad, compared);
             free(R.p);
             free(R.pts);
