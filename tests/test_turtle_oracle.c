@@ -6,9 +6,9 @@
  * string runs through our turtle with the model's view file and colour map or materials, and we
  * compare with ref/final.ray.gz (cylinders and cones with end points and radii, polygons,
  * spheres, discs, in order) and with the bounding box of ref/final.vv.
- * Tolerances: points and radii within 1e-4 * (1 + |value|) + 2e-4 * scale, where scale is the
+ * Tolerances: points and radii within 1e-5 * (1 + |value|) + 1e-5 * scale, where scale is the
  * largest extent of the box (the .ray file prints 6 significant digits, and final.homo.str's
- * parameters have 6 digits too, which accumulates along long branches); box within 1e-3 * scale.
+ * parameters have 6 digits too, which accumulates along long branches); box within 1e-4 * scale.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "test.h"
@@ -250,9 +250,13 @@ typedef struct model {
     int only_kind; /* -1: all; else compare only this kind, and require box containment */
 } model;
 
+static double maxdev; /* largest |ours - cpfg| of the current model's primitives */
+
 static bool near(double a, double b, double scale)
 {
-    return fabs(a - b) <= 1e-4 * (1 + fabs(b)) + 2e-4 * scale;
+    if (fabs(a - b) > maxdev)
+        maxdev = fabs(a - b);
+    return fabs(a - b) <= 1e-5 * (1 + fabs(b)) + 1e-5 * scale;
 }
 
 static void run_model(const model *md, bool compare_prims)
@@ -299,7 +303,11 @@ static void run_model(const model *md, bool compare_prims)
         cbm_vec3 lo, hi;
         CHECK(cbm_turtle_box(t, &lo, &hi));
         double scale = fmax(b[1] - b[0], fmax(b[3] - b[2], b[5] - b[4]));
-        double tol = 1e-3 * scale;
+        double tol = 1e-4 * scale;
+        double bdev = fmax(fmax(fabs(lo.x - b[0]), fabs(hi.x - b[1])),
+                           fmax(fmax(fabs(lo.y - b[2]), fabs(hi.y - b[3])),
+                                fmax(fabs(lo.z - b[4]), fabs(hi.z - b[5]))));
+        maxdev = 0.0;
         if (md->only_kind < 0) {
             CHECK_NEAR(lo.x, b[0], tol);
             CHECK_NEAR(hi.x, b[1], tol);
@@ -372,8 +380,9 @@ static void run_model(const model *md, bool compare_prims)
             CHECK_MSG(j == R.n, "%s: cpfg has %zu primitives, we compared %zu", md->dir, R.n, j);
             CHECK(compared > 0);
             fprintf(stderr,
-                    "%s: %zu modules, %zu of cpfg's %zu .ray primitives compared, %zu differ\n",
-                    md->dir, L.n, compared, R.n, bad);
+                    "%s: %zu modules, %zu of cpfg's %zu .ray primitives compared, %zu differ, "
+                    "max deviation %.2g (box %.2g) of size %.3g\n",
+                    md->dir, L.n, compared, R.n, bad, maxdev, bdev, scale);
             CHECK_MSG(bad == 0, "%s: %zu of %zu primitives differ", md->dir, bad, compared);
             free(R.p);
             free(R.pts);
