@@ -136,7 +136,7 @@ static void modlist_free(modlist *L)
 
 typedef struct rayprim {
     int kind; /* CBM_PRIM_* */
-    double v[8];
+    double v[16];
     size_t first, count; /* polygon points in pts */
 } rayprim;
 
@@ -195,6 +195,25 @@ static bool read_ray(const char *path, ray *R)
             nv = 7;
         } else if (strcmp(tok, "poly") == 0) {
             kind = CBM_PRIM_POLYGON;
+        } else if (strcmp(tok, "object") == 0) {
+            /* object ID scale sx sy sz transform (3 rows: L H U) translate x y z */
+            char id[64], w1[64], w2[64], w3[64];
+            if (R->n == cap)
+                R->p = realloc(R->p, (cap *= 2) * sizeof *R->p);
+            rayprim *rp = &R->p[R->n];
+            memset(rp, 0, sizeof *rp);
+            rp->kind = CBM_PRIM_SURFACE;
+            if (fscanf(f, "%63s %63s %lf %lf %lf %63s", id, w1, &rp->v[0], &rp->v[1], &rp->v[2],
+                       w2) == 6 &&
+                strcmp(w1, "scale") == 0 && strcmp(w2, "transform") == 0) {
+                for (int i = 0; i < 9; i++)
+                    if (fscanf(f, "%lf", &rp->v[6 + i]) != 1)
+                        break;
+                if (fscanf(f, "%63s %lf %lf %lf", w3, &rp->v[3], &rp->v[4], &rp->v[5]) == 4 &&
+                    strcmp(w3, "translate") == 0)
+                    R->n++;
+            }
+            continue;
         }
         if (kind < 0)
             continue;
@@ -331,7 +350,7 @@ static void run_model(const model *md, bool compare_prims)
             /* our record in the ray's terms: GC and surfaces are not compared */
             size_t j = 0, bad = 0, compared = 0;
             for (size_t i = 0; i < np; i++) {
-                if (P[i].kind == CBM_PRIM_GCYL || P[i].kind == CBM_PRIM_SURFACE)
+                if (P[i].kind == CBM_PRIM_GCYL)
                     continue;
                 if (md->only_kind >= 0 && (int)P[i].kind != md->only_kind)
                     continue;
@@ -355,6 +374,14 @@ static void run_model(const model *md, bool compare_prims)
                     int nk = r->kind == CBM_PRIM_SPHERE ? 4 : 7;
                     for (int k = 0; k < nk; k++)
                         ok = ok && near(mine[k], r->v[k], scale);
+                } else if (ok && r->kind == CBM_PRIM_SURFACE) {
+                    /* scale (uniform here), position, and the frame rows L, H, U */
+                    const cbm_frame *F = &P[i].frame;
+                    double mine[15] = {P[i].r0,   P[i].r0, P[i].r0, P[i].p0.x, P[i].p0.y,
+                                       P[i].p0.z, F->l.x,  F->l.y,  F->l.z,    F->h.x,
+                                       F->h.y,    F->h.z,  F->u.x,  F->u.y,    F->u.z};
+                    for (int k = 0; k < 15; k++)
+                        ok = ok && near(mine[k], r->v[k], k >= 6 ? 1.0 : scale);
                 } else if (ok) {
                     ok = P[i].count == r->count;
                     for (size_t k = 0; ok && k < r->count; k++) {

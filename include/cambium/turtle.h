@@ -73,6 +73,7 @@ typedef struct cbm_prim {
     double r0, r1;
     size_t first, count; ///< range in cbm_turtle_points
     char id;             ///< surface id
+    cbm_frame frame;     ///< the turtle's H, L, U where the primitive starts (cpfg: L = H x U)
 } cbm_prim;
 
 /// Options of one interpretation.

@@ -298,6 +298,9 @@ static cbm_status end_node(cbm_turtle *t)
     memset(&pr, 0, sizeof pr);
     pr.kind = CBM_PRIM_CYLINDER;
     pr.color = t->node_color;
+    pr.frame.h = t->node_h;
+    pr.frame.u = t->node_u;
+    pr.frame.l = v3_cross(t->node_h, t->node_u);
     pr.p0 = p0;
     pr.p1 = p1;
     pr.r0 = w0 / 2.0;
@@ -569,6 +572,9 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
         memset(&pr, 0, sizeof pr);
         pr.kind = CBM_PRIM_SURFACE;
         pr.id = sf->id;
+        pr.frame.h = s->h;
+        pr.frame.l = s->l;
+        pr.frame.u = s->u;
         pr.color = s->color;
         pr.p0 = s->pos;
         pr.r0 = sx;
@@ -608,6 +614,9 @@ static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, i
     memset(&pr, 0, sizeof pr);
     pr.kind = cmd == CBM_T_SPHERE ? CBM_PRIM_SPHERE : CBM_PRIM_DISC;
     pr.color = s->color;
+    pr.frame.h = s->h;
+    pr.frame.l = s->l;
+    pr.frame.u = s->u;
     pr.p0 = s->pos;
     pr.p1 = s->u;
     pr.r0 = pr.r1 = r;
