@@ -81,7 +81,7 @@ struct cbm_view {
     cbm__line_style line_style;
     int sides;     /* contour sides of cylinders */
     bool gc_twist; /* twist of cylinders */
-    /* ABOP tropism (T, e of ABOP eq. 2.? "tropism direction", "initial elasticity") */
+    /* ABOP tropism (T and e of ABOP section 2.2: "tropism direction", "initial elasticity") */
     cbm_vec3 tropism_dir;
     double elasticity, elasticity_inc;
     cbm__movement mov[CBM__MAX_MOVEMENTS];
