@@ -353,31 +353,103 @@ TEST(cpfg_tropism)
     test_ctx_end(ctx);
 }
 
+static cbm_turtle *run_scene(cbm_context *ctx, const cbm_view *v, prog *p, const char *src,
+                             cbm_scene *scene)
+{
+    parse(p, src);
+    cbm_turtle *t = NULL;
+    cbm_turtle_def def = {true};
+    CHECK_OK(cbm_turtle_interpret(ctx, v, &def, p->m, p->n, scene, &t));
+    return t;
+}
+
 TEST(generalized_cylinder)
 {
     cbm_context *ctx = test_ctx();
+    char path[1024];
+    snprintf(path, sizeof path, "%s/gc.v", test_tmp_dir());
+    write_file(path, "line style: cylinder\n");
     cbm_view *v;
-    CHECK_OK(cbm_view_create(ctx, &v));
+    CHECK_OK(cbm_view_load(ctx, path, &v));
     prog p;
-    parse(&p, "@Gs f + f [ F ] @Gc(4) f @Ge(3)");
     cbm_scene *scene;
     CHECK_OK(cbm_scene_create(ctx, &scene));
-    cbm_turtle *t = NULL;
-    cbm_turtle_def def = {true};
-    CHECK_OK(cbm_turtle_interpret(ctx, v, &def, p.m, p.n, scene, &t));
+    cbm_turtle *t = run_scene(ctx, v, &p, "@Gs f + f [ F ] @Gc(4) f @Ge(3)", scene);
     const cbm_prim *pr = cbm_turtle_prims(t);
+    const cbm_vec3 *pts = cbm_turtle_points(t);
     size_t ngc = 0;
     for (size_t i = 0; i < cbm_turtle_prim_count(t); i++)
         if (pr[i].kind == CBM_PRIM_GCYL) {
             ngc++;
-            CHECK_EQ_INT(pr[i].count, 3);
+            CHECK_EQ_INT(pr[i].count, 3 * 2 * 8 * (ngc == 1 ? 4 : 3));
+            if (ngc == 1) {
+                /* first triangle (new ring 0, new ring 1, old ring 0): the old ring's first
+                 * point is P + r U with r = 0.5, U = -z */
+                check_v(pts[pr[i].first + 2], 0, 0, -0.5, 1e-12);
+                check_v(pr[i].p0, 0, 0, 0, 1e-12);
+            }
         }
-    CHECK_EQ_INT(ngc, 1);
-    /* 1 + 4 + 3 rings of 8 sides, 7 bands of 8 quads, plus the branch F as a 4-sided tube */
-    CHECK_EQ_INT(cbm_scene_triangle_count(scene), 7 * 8 * 2 + 4 * 2);
+    CHECK_EQ_INT(ngc, 2);
+    /* 4 + 3 bands of 8 sides, and the branch F as an 8-sided tube */
+    CHECK_EQ_INT(cbm_scene_triangle_count(scene), 7 * 8 * 2 + 8 * 2);
+    cbm_turtle_destroy(t);
+    /* a branch continues the cylinder from the last control point before it (as cpfg) */
+    cbm_scene_clear(scene);
+    t = run_scene(ctx, v, &p, "@Gs f [ f @Gc(2) ] f @Ge(2) @Gc(2)", scene);
+    pr = cbm_turtle_prims(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 2);
+    for (size_t i = 0; i < cbm_turtle_prim_count(t); i++) {
+        check_v(pr[i].p0, 0, 0, 0, 1e-12);
+        check_v(pr[i].p1, 0, 2, 0, 1e-12);
+    }
     cbm_turtle_destroy(t);
     cbm_scene_destroy(scene);
     cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
+TEST(contour)
+{
+    cbm_context *ctx = test_ctx();
+    char path[1024], cpath[1024];
+    snprintf(cpath, sizeof cpath, "%s/line.con", test_tmp_dir());
+    /* an open contour along x: a flat ribbon */
+    write_file(cpath, "cver 1 3\nname: line\npoints: 2 6\ntype: or\nsamples: 5\n"
+                      "-1 0 0 3\n1 0 0 3\n");
+    snprintf(path, sizeof path, "%s/con.v", test_tmp_dir());
+    write_file(path, "line style: cylinder\ncontour sides: 6\ncontour: 7 line.con\n");
+    cbm_view *v;
+    CHECK_OK(cbm_view_load(ctx, path, &v));
+    prog p;
+    cbm_turtle *t = run_scene(ctx, v, &p, "@#(7) !(2) @Gs F @Ge(1)", NULL);
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    const cbm_vec3 *pts = cbm_turtle_points(t);
+    size_t n = cbm_turtle_prim_count(t);
+    CHECK_EQ_INT(n, 2); /* the F segment and the cylinder */
+    if (n == 2) {
+        CHECK_EQ_INT(pr[1].kind, CBM_PRIM_GCYL);
+        CHECK_EQ_INT(pr[1].count, 3 * 2 * 6);
+        /* radius 1; x along U = -z, no component along L = -x */
+        double zmin = 1, zmax = -1;
+        for (size_t k = 0; k < pr[1].count; k++) {
+            cbm_vec3 q = pts[pr[1].first + k];
+            CHECK_NEAR(q.x, 0.0, 1e-6);
+            zmin = fmin(zmin, q.z);
+            zmax = fmax(zmax, q.z);
+        }
+        CHECK_NEAR(zmax, 1.0, 1e-6); /* the first contour point, x = -1 */
+        CHECK(zmin < -0.9 && zmin > -1.0 - 1e-6);
+    }
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    /* malformed contours */
+    write_file(cpath, "cver 1 3\nname: x\npoints: 2 2\ntype: or\nsamples: 5\n0 0 0 1\n1 0 0 1\n");
+    CHECK_OK(cbm_view_create(ctx, &v));
+    CHECK_STATUS(cbm_view_add_contour(v, 1, cpath), CBM_E_FORMAT);
+    write_file(cpath, "cver 1 3\nname: x\npoints: 3 3\ntype: or\nsamples: 5\n0 0 0 1\n");
+    CHECK_STATUS(cbm_view_add_contour(v, 1, cpath), CBM_E_FORMAT);
+    cbm_view_destroy(v);
+    cbm_context_clear_errors(ctx);
     test_ctx_end(ctx);
 }
 

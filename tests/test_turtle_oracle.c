@@ -134,6 +134,8 @@ static void modlist_free(modlist *L)
 
 /* ---- reading the .ray file ---- */
 
+#define TRIANGLE 100 /* a .ray triangle (of a generalized cylinder) */
+
 typedef struct rayprim {
     int kind; /* CBM_PRIM_* */
     double v[16];
@@ -195,6 +197,20 @@ static bool read_ray(const char *path, ray *R)
             nv = 7;
         } else if (strcmp(tok, "poly") == 0) {
             kind = CBM_PRIM_POLYGON;
+        } else if (strcmp(tok, "triangle") == 0) {
+            /* a triangle of a generalized cylinder: 3 lines "x y z nx ny nz" */
+            if (R->n == cap)
+                R->p = realloc(R->p, (cap *= 2) * sizeof *R->p);
+            rayprim *rp = &R->p[R->n++];
+            memset(rp, 0, sizeof *rp);
+            rp->kind = TRIANGLE;
+            for (int k = 0; k < 3; k++) {
+                double nrm[3];
+                if (fscanf(f, "%lf %lf %lf %lf %lf %lf", &rp->v[3 * k], &rp->v[3 * k + 1],
+                           &rp->v[3 * k + 2], &nrm[0], &nrm[1], &nrm[2]) != 6)
+                    break;
+            }
+            continue;
         } else if (strcmp(tok, "object") == 0) {
             /* object ID scale sx sy sz transform (3 rows: L H U) translate x y z */
             char id[64], w1[64], w2[64], w3[64];
@@ -350,8 +366,35 @@ static void run_model(const model *md, bool compare_prims)
             /* our record in the ray's terms: GC and surfaces are not compared */
             size_t j = 0, bad = 0, compared = 0;
             for (size_t i = 0; i < np; i++) {
-                if (P[i].kind == CBM_PRIM_GCYL)
+                if (P[i].kind == CBM_PRIM_GCYL) {
+                    /* our triangles, in cpfg's order */
+                    for (size_t k = 0; k + 3 <= P[i].count; k += 3) {
+                        if (j >= R.n || R.p[j].kind != TRIANGLE) {
+                            bad++;
+                            continue;
+                        }
+                        const rayprim *r = &R.p[j++];
+                        compared++;
+                        bool ok = true;
+                        for (int q = 0; q < 3; q++) {
+                            cbm_vec3 a = pts[P[i].first + k + (size_t)q];
+                            ok = ok && near(a.x, r->v[3 * q], scale) &&
+                                 near(a.y, r->v[3 * q + 1], scale) &&
+                                 near(a.z, r->v[3 * q + 2], scale);
+                        }
+                        if (!ok) {
+                            if (bad < 3)
+                                fprintf(stderr,
+                                        "%s: triangle %zu differs: ours (%g %g %g) cpfg (%g %g "
+                                        "%g)\n",
+                                        md->dir, j - 1, pts[P[i].first + k].x,
+                                        pts[P[i].first + k].y, pts[P[i].first + k].z, r->v[0],
+                                        r->v[1], r->v[2]);
+                            bad++;
+                        }
+                    }
                     continue;
+                }
                 if (md->only_kind >= 0 && (int)P[i].kind != md->only_kind)
                     continue;
                 while (md->only_kind >= 0 && j < R.n && R.p[j].kind != md->only_kind)

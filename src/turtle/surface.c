@@ -9,8 +9,9 @@
  * tessellated once into a (n+1) x (n+1) grid of vertices with normals from the cross product of
  * the partial derivatives.
  *
- * A contour file ("cver 1 1": name:, points: N M, type:, samples:, then N lines "x y z m") gives
- * a closed cross-section; points are kept in the (x, y) plane.
+ * A contour file ("cver 1 1" to "cver 1 3": name:, points: N M, type: (o|c)..., samples:, then N
+ * lines "x y z multiplicity"; or the old "N dim open|closed" then N points) gives the control
+ * points of a uniform cubic B-spline cross-section, open or closed; the turtle resamples it.
  */
 #include "tint.h"
 
@@ -199,40 +200,76 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
     return CBM_OK;
 }
 
+static cbm_status push_point(cbm_context *ctx, cbm__contour *c, double x, double y, double z)
+{
+    CBM_TRY(CBM_ARRAY_PUSH(ctx, c->pts, x));
+    CBM_TRY(CBM_ARRAY_PUSH(ctx, c->pts, y));
+    return CBM_ARRAY_PUSH(ctx, c->pts, z);
+}
+
 cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text, cbm__contour *c)
 {
     memset(c, 0, sizeof *c);
     const char *p = text;
     int line = 0;
     char buf[512];
-    int npts = -1;
-    while (getline_(&p, buf, sizeof buf, &line)) {
-        int a, b;
-        if (sscanf(buf, "points: %d %d", &a, &b) >= 1) {
-            npts = a;
-            break;
+    int vmaj, vmin, npts = -1, dim = 3;
+    c->closed = true;
+    if (!getline_(&p, buf, sizeof buf, &line))
+        return fmt_err(ctx, path, 1, "empty contour file");
+    bool versioned = sscanf(buf, "cver %d %d", &vmaj, &vmin) == 2;
+    if (!versioned) {
+        /* old format: "num dim open|closed", then the points */
+        char type[16] = "";
+        if (sscanf(buf, "%d %d %15s", &npts, &dim, type) != 3 || (dim != 2 && dim != 3))
+            return fmt_err(ctx, path, line, "expected 'cver 1 N' or 'points dimension type'");
+        c->closed = strcmp(type, "closed") == 0;
+    } else {
+        if (vmaj != 1 || vmin < 1 || vmin > 3)
+            return fmt_err(ctx, path, line, "unsupported contour version (cver 1 1 to 1 3)");
+        /* header lines up to the first point */
+        const char *save = p;
+        int save_line = line;
+        while (getline_(&p, buf, sizeof buf, &line)) {
+            double x, y, z, m;
+            if (sscanf(buf, "%lf %lf %lf %lf", &x, &y, &z, &m) == 4) {
+                p = save;
+                line = save_line;
+                break;
+            }
+            int a, b;
+            char type[16];
+            if (sscanf(buf, "points: %d %d", &a, &b) >= 1)
+                npts = a;
+            else if (sscanf(buf, "type: %15s", type) == 1)
+                c->closed = type[0] == 'c';
+            save = p;
+            save_line = line;
         }
     }
-    if (npts < 3 || npts > 100000)
-        return fmt_err(ctx, path, line, "expected 'points: N' with N >= 3");
-    /* skip type:, samples: */
-    while (npts > 0 && getline_(&p, buf, sizeof buf, &line)) {
-        double x, y, z;
-        if (strchr(buf, ':'))
-            continue;
-        if (sscanf(buf, "%lf %lf %lf", &x, &y, &z) < 2) {
-            CBM_ARRAY_FREE(ctx, c->xy);
-            return fmt_err(ctx, path, line, "expected a contour point 'x y z [m]'");
+    if (npts < 1 || npts > 100000)
+        return fmt_err(ctx, path, line, "expected the number of points ('points: N')");
+    for (int i = 0; i < npts; i++) {
+        if (!getline_(&p, buf, sizeof buf, &line))
+            return fmt_err(ctx, path, line, "fewer contour points than announced");
+        double x = 0, y = 0, z = 0, m = 1;
+        int got = sscanf(buf, "%lf %lf %lf %lf", &x, &y, &z, &m);
+        int want = versioned ? 4 : dim;
+        if (got < want)
+            return fmt_err(ctx, path, line,
+                           versioned ? "expected a contour point 'x y z multiplicity'"
+                                     : "expected a contour point");
+        if (!versioned) {
+            m = 1;
+            if (dim == 2)
+                z = 0;
         }
-        if (CBM_ARRAY_PUSH(ctx, c->xy, x) != CBM_OK || CBM_ARRAY_PUSH(ctx, c->xy, y) != CBM_OK) {
-            CBM_ARRAY_FREE(ctx, c->xy);
-            return CBM_E_NOMEM;
-        }
-        npts--;
+        if (m < 1 || m > 4)
+            return fmt_err(ctx, path, line, "multiplicity must be 1 to 4");
+        for (int k = 0; k < (int)m; k++)
+            CBM_TRY(push_point(ctx, c, (float)x, (float)y, (float)z));
     }
-    if (npts > 0) {
-        CBM_ARRAY_FREE(ctx, c->xy);
-        return fmt_err(ctx, path, line, "fewer contour points than 'points:' says");
-    }
+    if (c->pts.len / 3 < 4)
+        return fmt_err(ctx, path, line, "a contour needs at least 4 control points");
     return CBM_OK;
 }

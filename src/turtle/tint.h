@@ -49,10 +49,11 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
                              int subdiv, cbm__surface *s);
 void cbm__surface_free(cbm_context *ctx, cbm__surface *s);
 
-/* ---- contours (.con): a closed cross-section curve in the (x, y) plane ---- */
+/* ---- contours (.con): cross-section curves, uniform cubic B-splines of control points ---- */
 typedef struct cbm__contour {
     int id;
-    CBM_ARRAY(double) xy; /* 2 per point, closed implicitly */
+    bool closed;
+    CBM_ARRAY(double) pts; /* 3 per control point (x, y, z), multiplicities expanded */
 } cbm__contour;
 
 cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *text, cbm__contour *c);

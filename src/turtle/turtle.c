@@ -29,6 +29,15 @@
 
 #include <stdio.h>
 
+/* A control point of a generalized cylinder: the turtle state that matters there. */
+typedef struct gcpt {
+    cbm_vec3 pos, h, l, u;
+    double width;
+    double tan[2]; /* tangent parameters (cpfg: leaving, arriving) */
+    int contour;   /* 0: circle; k: the view's contour k-1 */
+    int sides;
+} gcpt;
+
 typedef struct tstate {
     cbm_vec3 pos, h, l, u;
     cbm_vec3 prev_h, prev_u;
@@ -38,16 +47,15 @@ typedef struct tstate {
     int color;
     int contour;
     int sides;
-    bool gc_on;
-    size_t gc_first; /* first spine point of this branch's generalized cylinder */
-    size_t gc_len;   /* spine points when the branch was opened (restored by ]) */
+    double tan[2]; /* @Gt tangent parameters */
+    bool gc_on;    /* a generalized cylinder is open; gc is its last control point */
+    gcpt gc;
 } tstate;
 
-typedef struct gcpt {
-    cbm_vec3 pos, h, u;
-    double width;
-    int rings;
-} gcpt;
+typedef struct ccache {
+    int contour, sides;
+    size_t off; /* 3 * (sides + 1) floats in cpts */
+} ccache;
 
 struct cbm_turtle {
     cbm_context *ctx;
@@ -67,8 +75,10 @@ struct cbm_turtle {
     /* % */
     int cut_depth; /* > 0 while skipping: bracket depth inside the cut part */
     /* generalized cylinders */
-    CBM_ARRAY(gcpt) gc;
-    CBM_ARRAY(cbm_section) rings;
+    CBM_ARRAY(ccache) ccache; /* contours resampled for a number of sides */
+    CBM_ARRAY(double) cpts;
+    CBM_ARRAY(cbm_vec3) ringv; /* ring vertices of one connection */
+    CBM_ARRAY(uint32_t) ringt;
     /* surface pending (~ waits for the module naming the surface) */
     bool surface_pending;
     /* record */
@@ -123,6 +133,7 @@ static const tname names[] = {
     {"@Gs", CBM_T_GC_START},
     {"@Gc", CBM_T_GC_CONTROL},
     {"@Ge", CBM_T_GC_END},
+    {"@Gt", CBM_T_GC_TANGENT},
     {"@#", CBM_T_CONTOUR_SET},
     {"@!", CBM_T_SIDES_SET},
     {"?P", CBM_T_QUERY_P},
@@ -159,6 +170,7 @@ static void init_state(cbm_turtle *t)
     s->color = v->color;
     s->contour = 0;
     s->sides = v->sides;
+    s->tan[0] = s->tan[1] = 1.2; /* cpfg's default tangent parameter */
 }
 
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
@@ -191,8 +203,10 @@ void cbm__turtle_destroy(cbm_turtle *t)
     CBM_ARRAY_FREE(ctx, t->stack);
     CBM_ARRAY_FREE(ctx, t->polypts);
     CBM_ARRAY_FREE(ctx, t->polystart);
-    CBM_ARRAY_FREE(ctx, t->gc);
-    CBM_ARRAY_FREE(ctx, t->rings);
+    CBM_ARRAY_FREE(ctx, t->ccache);
+    CBM_ARRAY_FREE(ctx, t->cpts);
+    CBM_ARRAY_FREE(ctx, t->ringv);
+    CBM_ARRAY_FREE(ctx, t->ringt);
     CBM_ARRAY_FREE(ctx, t->prims);
     CBM_ARRAY_FREE(ctx, t->pts);
     CBM_ARRAY_FREE(ctx, t->scratch);
@@ -207,7 +221,6 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->polypts.len = 0;
     t->polystart.len = 0;
     t->cut_depth = 0;
-    t->gc.len = 0;
     t->surface_pending = false;
     t->prims.len = 0;
     t->pts.len = 0;
@@ -283,35 +296,31 @@ static inline void rotate_pair(cbm_vec3 *v2, cbm_vec3 *v3p, double s, double c)
 
 /* ---- segments ---- */
 
-static cbm_status end_node(cbm_turtle *t)
+/* A segment in cpfg's terms: dropped when degenerate (length^2 <= 1e-5 or no end width). */
+static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
+                               int color, cbm_vec3 h, cbm_vec3 u)
 {
-    box_add(t, t->cur.pos);
-    if (!t->node_open)
-        return CBM_OK;
-    t->node_open = false;
-    cbm_vec3 p0 = t->node_p, p1 = t->cur.pos;
     cbm_vec3 d = v3_sub(p1, p0);
-    double w0 = t->node_w, w1 = t->cur.width;
     if (v3_norm2(d) <= 0.00001 || w1 <= 0.0)
         return CBM_OK;
     cbm_prim pr;
     memset(&pr, 0, sizeof pr);
     pr.kind = CBM_PRIM_CYLINDER;
-    pr.color = t->node_color;
-    pr.frame.h = t->node_h;
-    pr.frame.u = t->node_u;
-    pr.frame.l = v3_cross(t->node_h, t->node_u);
+    pr.color = color;
     pr.p0 = p0;
     pr.p1 = p1;
     pr.r0 = w0 / 2.0;
     pr.r1 = w1 / 2.0;
+    pr.frame.h = h;
+    pr.frame.u = u;
+    pr.frame.l = v3_cross(h, u);
     CBM_TRY(push_prim(t, &pr));
     if (!t->scene)
         return CBM_OK;
-    cbm_part part = make_part(t, CBM_ORGAN_BRANCH, t->node_color);
+    cbm_part part = make_part(t, CBM_ORGAN_BRANCH, color);
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     cbm_vec3 dir = v3_normalize(d);
-    cbm_frame f = section_frame(dir, t->node_u);
+    cbm_frame f = section_frame(dir, u);
     if (t->view->line_style == CBM__LS_POLYGON) {
         /* a flat ribbon in the H-L plane, as cpfg's polygon lines */
         cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0), v3_madd(p1, f.l, pr.r1),
@@ -322,6 +331,16 @@ static cbm_status end_node(cbm_turtle *t)
     cbm_section s0 = {p0, f, pr.r0, pr.r0};
     cbm_section s1 = {p1, f, pr.r1, pr.r1};
     return cbm_scene_add_tube(t->scene, &s0, &s1, sides, false);
+}
+
+static cbm_status end_node(cbm_turtle *t)
+{
+    box_add(t, t->cur.pos);
+    if (!t->node_open)
+        return CBM_OK;
+    t->node_open = false;
+    return emit_segment(t, t->node_p, t->cur.pos, t->node_w, t->cur.width, t->node_color, t->node_h,
+                        t->node_u);
 }
 
 static void start_node(cbm_turtle *t)
@@ -428,85 +447,284 @@ static void movements(cbm_turtle *t)
 
 /* ---- generalized cylinders ---- */
 
-static cbm_status gc_point(cbm_turtle *t, int rings)
+/* cpfg's minimal rotation of a frame: U follows the rotation taking prev_h to h (by
+ * asin |h x prev_h|), then turns by -beta about h; L = H x U. */
+static void adjust_frame(cbm_vec3 h, cbm_vec3 prev_h, cbm_vec3 prev_u, double beta, cbm_vec3 *u,
+                         cbm_vec3 *l)
 {
-    gcpt g = {t->cur.pos, t->cur.h, t->cur.u, t->cur.width, rings < 1 ? 1 : rings};
-    return CBM_ARRAY_PUSH(t->ctx, t->gc, g);
+    cbm_vec3 r = v3_cross(h, prev_h);
+    double len = v3_norm(r);
+    cbm_vec3 up = prev_u;
+    if (len > 0.0) {
+        double a = asin(len > 1.0 ? 1.0 : len);
+        up = rot_axis(up, v3_scale(r, -1.0 / len), a);
+    }
+    if (beta != 0.0)
+        up = rot_axis(up, h, -beta);
+    *u = up;
+    *l = v3_cross(h, up);
 }
 
-static cbm_vec3 hermite(cbm_vec3 p0, cbm_vec3 t0, cbm_vec3 p1, cbm_vec3 t1, double s, cbm_vec3 *tan)
+/* Angle by which g2's up must turn about its heading to follow g1 without twist (cpfg). */
+static double twist_angle(const gcpt *g1, const gcpt *g2)
 {
-    double s2 = s * s, s3 = s2 * s;
-    double h00 = 2 * s3 - 3 * s2 + 1, h10 = s3 - 2 * s2 + s, h01 = -2 * s3 + 3 * s2, h11 = s3 - s2;
-    double d00 = 6 * s2 - 6 * s, d10 = 3 * s2 - 4 * s + 1, d01 = -6 * s2 + 6 * s,
-           d11 = 3 * s2 - 2 * s;
-    *tan = v3_add(v3_add(v3_scale(p0, d00), v3_scale(t0, d10)),
-                  v3_add(v3_scale(p1, d01), v3_scale(t1, d11)));
-    return v3_add(v3_add(v3_scale(p0, h00), v3_scale(t0, h10)),
-                  v3_add(v3_scale(p1, h01), v3_scale(t1, h11)));
+    cbm_vec3 up = g1->u;
+    cbm_vec3 r = v3_cross(g2->h, g1->h);
+    double len = v3_norm(r);
+    if (len > 0.000001)
+        up = rot_axis(up, v3_scale(r, -1.0 / len), asin(len > 1.0 ? 1.0 : len));
+    double c = v3_norm(v3_cross(g2->u, up));
+    double angle = asin(c > 1.0 ? 1.0 : c);
+    if (v3_dot(g2->u, up) < 0.0)
+        angle = CBM_PI - angle;
+    if (v3_dot(g2->l, up) < 0.0)
+        angle = -angle;
+    return angle;
 }
 
-/* Emits the generalized cylinder of spine points gc[first..len) and clears them. */
-static cbm_status gc_emit(cbm_turtle *t, size_t first)
+/* Uniform cubic B-spline of the contour's control points at parameter tt (indices wrap). */
+static void contour_eval(const cbm__contour *c, float tt, float out[3])
 {
-    size_t n = t->gc.len - first;
-    if (n < 2) {
-        t->gc.len = first;
+    int num = (int)(c->pts.len / 3);
+    int first = (int)floorf(tt);
+    float u = tt - (float)first;
+    float b[4] = {(1 - u) * (1 - u) * (1 - u) / 6.0f, (3 * u * u * u - 6 * u * u + 4) / 6.0f,
+                  (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6.0f, u * u * u / 6.0f};
+    out[0] = out[1] = out[2] = 0.0f;
+    for (int i = 0; i < 4; i++) {
+        int k = ((first + i) % num + num) % num;
+        for (int d = 0; d < 3; d++)
+            out[d] += b[i] * (float)c->pts.data[3 * k + d];
+    }
+}
+
+/* Points of contour `contour` (0: the unit circle) resampled at `sides` equal arc lengths (as
+ * cpfg: arc length tabulated at 10 points per knot interval, closed contours rotated so their
+ * first point lies on +x); sides + 1 points, the last equal to the first when closed. */
+static cbm_status contour_points(cbm_turtle *t, int contour, int sides, const double **out)
+{
+    for (size_t i = 0; i < t->ccache.len; i++)
+        if (t->ccache.data[i].contour == contour && t->ccache.data[i].sides == sides) {
+            *out = t->cpts.data + t->ccache.data[i].off;
+            return CBM_OK;
+        }
+    size_t off = t->cpts.len;
+    CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->cpts, off + 3 * (size_t)(sides + 1)));
+    double *p = t->cpts.data + off;
+    const cbm__contour *c = contour > 0 && (size_t)contour <= t->view->contours.len
+                                ? &t->view->contours.data[contour - 1]
+                                : NULL;
+    if (!c) {
+        float step = (float)(2.0 * CBM_PI) / (float)sides, angle = 0.0f;
+        for (int i = 0; i < sides; i++) {
+            p[3 * i] = (float)cos(angle);
+            p[3 * i + 1] = (float)sin(angle);
+            p[3 * i + 2] = 0.0;
+            angle += step;
+        }
+        for (int d = 0; d < 3; d++)
+            p[3 * sides + d] = p[d];
+    } else {
+        const int n = 10;
+        int num = (int)(c->pts.len / 3);
+        int segments = c->closed ? num : num - 3;
+        if (segments < 1)
+            segments = 1;
+        float *len = cbm__alloc(t->ctx, (size_t)(segments * n) * sizeof(float));
+        if (!len)
+            return CBM_E_NOMEM;
+        float last[3], act[3], total = 0.0f, invn = 1.0f / (float)n;
+        contour_eval(c, 0.0f, last);
+        for (int i = 0; i < segments; i++) {
+            float tt = (float)i;
+            for (int j = 0; j < n; j++, tt += invn) {
+                contour_eval(c, tt, act);
+                float dx = last[0] - act[0], dy = last[1] - act[1];
+                total += sqrtf(dx * dx + dy * dy);
+                len[i * n + j] = total;
+                memcpy(last, act, sizeof last);
+            }
+        }
+        float rot[2][2] = {{1, 0}, {0, 1}};
+        if (c->closed) {
+            contour_eval(c, 0.0f, act);
+            float dx = last[0] - act[0], dy = last[1] - act[1];
+            total += sqrtf(dx * dx + dy * dy);
+            float q = act[0] * act[0] + act[1] * act[1];
+            if (q >= 0.000000001f) {
+                float inv = 1.0f / sqrtf(q);
+                rot[0][0] = act[0] * inv;
+                rot[0][1] = -act[1] * inv;
+                rot[1][0] = -rot[0][1];
+                rot[1][1] = rot[0][0];
+            }
+        }
+        float step = total / (float)sides, target = 0.0f, eps = 1e-10f / step;
+        int j = 0, last_j = segments * n - 1;
+        int npts = c->closed ? sides : sides + 1;
+        for (int i = 0; i < npts; i++) {
+            float tt;
+            if (i == 0) {
+                while (len[j] < eps && j < last_j)
+                    j++;
+                tt = 0.0f;
+            } else {
+                while (len[j] < target && j < last_j)
+                    j++;
+                int j2 = j - 1;
+                while (j2 > 0 && len[j] - len[j2] <= eps)
+                    j2--;
+                if (j2 < 0)
+                    j2 = 0;
+                float d = len[j] - len[j2];
+                tt = (float)j2 / (float)n + (d > 0.0f ? (target - len[j2]) / d / (float)n : 0.0f);
+            }
+            contour_eval(c, tt, act);
+            p[3 * i] = act[0] * rot[0][0] + act[1] * rot[1][0];
+            p[3 * i + 1] = act[0] * rot[0][1] + act[1] * rot[1][1];
+            p[3 * i + 2] = act[2];
+            target += step;
+        }
+        if (c->closed)
+            for (int d = 0; d < 3; d++)
+                p[3 * sides + d] = p[d];
+        cbm__free(t->ctx, len, (size_t)(segments * n) * sizeof(float));
+    }
+    t->cpts.len = off + 3 * (size_t)(sides + 1);
+    ccache cc = {contour, sides, off};
+    CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ccache, cc));
+    *out = t->cpts.data + off;
+    return CBM_OK;
+}
+
+static gcpt gc_snapshot(const tstate *s)
+{
+    gcpt g = {s->pos, s->h, s->l, s->u, s->width, {s->tan[0], s->tan[1]}, s->contour, s->sides};
+    return g;
+}
+
+/* One ring: contour points mixed (1-mix, mix) between the two contours, scaled by radius and
+ * placed at P + x U - y L + z H * zscale, as cpfg's make_contour. */
+static cbm_status push_ring(cbm_turtle *t, cbm_vec3 P, cbm_vec3 h, cbm_vec3 u, cbm_vec3 l,
+                            double radius, const double *c1, const double *c2, double mix,
+                            double zscale, int sides)
+{
+    for (int k = 0; k <= sides; k++) {
+        double x = radius * (c1[3 * k] * (1 - mix) + c2[3 * k] * mix);
+        double y = radius * (c1[3 * k + 1] * (1 - mix) + c2[3 * k + 1] * mix);
+        double z = radius * (c1[3 * k + 2] * (1 - mix) + c2[3 * k + 2] * mix);
+        cbm_vec3 q =
+            v3_add(v3_add(P, v3_scale(u, x)), v3_add(v3_scale(l, -y), v3_scale(h, z * zscale)));
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringv, q));
+    }
+    return CBM_OK;
+}
+
+/* cpfg's segment from a generalized cylinder's last control point g1 to the turtle: a cubic
+ * Hermite spine with tangents H1 |P2-P1| tan1 and H2 |P2-P1| tan0, `rings` bands, radius and
+ * contour interpolated linearly, each ring's U carried from g1 by the minimal rotation (and the
+ * twist when "twist of cylinders" is on). Then the turtle becomes the last control point. */
+static cbm_status gc_connect(cbm_turtle *t, int rings)
+{
+    tstate *s = &t->cur;
+    const cbm_view *v = t->view;
+    gcpt g1 = s->gc, g2 = gc_snapshot(s);
+    double twist = 0.0;
+    if (v->gc_twist)
+        twist = twist_angle(&g1, &g2);
+    else
+        adjust_frame(g2.h, g1.h, g1.u, 0.0, &g2.u, &g2.l);
+    s->gc = g2;
+    double len = v3_norm(v3_sub(g2.pos, g1.pos));
+    if (len < 0.00001)
         return CBM_OK;
+    cbm_vec3 R1 = v3_scale(g1.h, len * g1.tan[1]), R2 = v3_scale(g2.h, len * g2.tan[0]);
+    cbm_vec3 d = v3_sub(g1.pos, g2.pos);
+    cbm_vec3 c2 = v3_sub(v3_sub(v3_scale(d, -3.0), v3_scale(R1, 2.0)), R2);
+    cbm_vec3 c3 = v3_add(v3_add(v3_scale(d, 2.0), R1), R2);
+    double dr = 0.5 * (g2.width - g1.width);
+    int sides = g1.sides;
+    bool cyl = v->line_style == CBM__LS_CYLINDER;
+    const double *k1 = NULL, *k2 = NULL;
+    if (cyl) {
+        CBM_TRY(contour_points(t, g1.contour, sides, &k1));
+        CBM_TRY(contour_points(t, g2.contour, sides, &k2));
     }
-    const gcpt *g = t->gc.data + first;
-    t->rings.len = 0;
-    cbm_vec3 up = g[0].u;
-    for (size_t i = 0; i + 1 < n; i++) {
-        double chord = v3_norm(v3_sub(g[i + 1].pos, g[i].pos));
-        cbm_vec3 t0 = v3_scale(g[i].h, chord), t1 = v3_scale(g[i + 1].h, chord);
-        int r = g[i + 1].rings;
-        for (int k = (i == 0 ? 0 : 1); k <= r; k++) {
-            double s = (double)k / r;
-            cbm_vec3 tan;
-            cbm_vec3 p = hermite(g[i].pos, t0, g[i + 1].pos, t1, s, &tan);
-            cbm_vec3 d = v3_norm2(tan) > 0 ? v3_normalize(tan) : g[i].h;
-            cbm_frame f = section_frame(d, up); /* parallel transport of the up vector */
-            up = f.u;
-            double w = (1 - s) * g[i].width + s * g[i + 1].width;
-            cbm_section sec = {p, f, w / 2, w / 2};
-            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->rings, sec));
+    t->ringv.len = 0;
+    cbm_vec3 prev = g1.pos;
+    for (int i = 0; i <= rings; i++) {
+        double r = (double)i / rings;
+        cbm_vec3 P, H, U, L;
+        double radius;
+        if (i == 0) {
+            P = g1.pos;
+            H = g1.h;
+            U = g1.u;
+            L = g1.l;
+            radius = 0.5 * g1.width;
+        } else if (i == rings) {
+            P = g2.pos;
+            H = g2.h;
+            U = g2.u;
+            L = g2.l;
+            radius = 0.5 * g2.width;
+        } else {
+            P = v3_add(v3_add(g1.pos, v3_scale(R1, r)),
+                       v3_add(v3_scale(c2, r * r), v3_scale(c3, r * r * r)));
+            H = v3_normalize(v3_add(R1, v3_add(v3_scale(c2, 2 * r), v3_scale(c3, 3 * r * r))));
+            adjust_frame(H, g1.h, g1.u, twist * r, &U, &L);
+            radius = 0.5 * g1.width + dr * r;
+        }
+        if (cyl) {
+            double zs = i == 0 ? g1.tan[1] : i == rings ? g2.tan[0] : 1.0 / len;
+            CBM_TRY(push_ring(t, P, H, U, L, radius, k1, k2, r, zs, sides));
+        } else if (i > 0) {
+            /* pixel and polygon lines: cpfg draws the spine as segments */
+            CBM_TRY(emit_segment(t, prev, P, g1.width, i == rings ? g2.width : g1.width, s->color,
+                                 H, U));
+            box_add(t, P);
+        }
+        prev = P;
+    }
+    if (!cyl)
+        return CBM_OK;
+    /* the bands, in cpfg's triangle order */
+    uint32_t w = (uint32_t)sides + 1;
+    t->ringt.len = 0;
+    for (int i = 1; i <= rings; i++) {
+        uint32_t a = (uint32_t)(i - 1) * w, b = (uint32_t)i * w;
+        for (uint32_t k = 1; k <= (uint32_t)sides; k++) {
+            uint32_t tri[6] = {b + k - 1, b + k, a + k - 1, a + k - 1, b + k, a + k};
+            for (int m = 0; m < 6; m++)
+                CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringt, tri[m]));
         }
     }
-    /* record and box: ring extents */
-    for (size_t i = 0; i < t->rings.len; i++) {
-        const cbm_section *sec = &t->rings.data[i];
-        for (int k = 0; k < t->cur.sides; k++) {
-            double a = 2 * CBM_PI * k / t->cur.sides;
-            cbm_vec3 q = v3_madd(v3_madd(sec->center, sec->frame.u, sec->a * cos(a)), sec->frame.l,
-                                 sec->b * sin(a));
-            box_add(t, q);
-        }
-    }
+    for (size_t i = 0; i < t->ringv.len; i++)
+        box_add(t, t->ringv.data[i]);
     if (t->record) {
         cbm_prim pr;
         memset(&pr, 0, sizeof pr);
         pr.kind = CBM_PRIM_GCYL;
-        pr.color = t->cur.color;
-        pr.p0 = g[0].pos;
-        pr.p1 = g[n - 1].pos;
-        pr.r0 = g[0].width / 2;
-        pr.r1 = g[n - 1].width / 2;
+        pr.color = s->color;
+        pr.p0 = g1.pos;
+        pr.p1 = g2.pos;
+        pr.r0 = g1.width / 2;
+        pr.r1 = g2.width / 2;
+        pr.frame.h = g1.h;
+        pr.frame.l = g1.l;
+        pr.frame.u = g1.u;
         pr.first = t->pts.len;
-        pr.count = n;
-        for (size_t i = 0; i < n; i++)
-            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, g[i].pos));
+        pr.count = t->ringt.len;
+        for (size_t i = 0; i < t->ringt.len; i++)
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, t->ringv.data[t->ringt.data[i]]));
         CBM_TRY(push_prim(t, &pr));
     }
     if (t->scene) {
-        cbm_part part = make_part(t, CBM_ORGAN_BRANCH, t->cur.color);
+        cbm_part part = make_part(t, CBM_ORGAN_BRANCH, s->color);
         CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
-        CBM_TRY(cbm_scene_tube_begin(t->scene, t->cur.sides, false));
-        for (size_t i = 0; i < t->rings.len; i++)
-            CBM_TRY(cbm_scene_tube_ring(t->scene, &t->rings.data[i]));
-        CBM_TRY(cbm_scene_tube_end(t->scene));
+        CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, NULL, t->ringv.len, t->ringt.data,
+                                   t->ringt.len / 3));
     }
-    t->gc.len = first;
     return CBM_OK;
 }
 
@@ -774,19 +992,13 @@ exec:
         if (t->stack.len >= cbm_context_limits(t->ctx)->max_modules)
             return cbm__fail(t->ctx, CBM_E_LIMIT, "turtle: branches nested deeper than %zu",
                              t->stack.len);
-        s->gc_len = t->gc.len;
-        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->stack, *s));
-        s->gc_on = false;
-        return CBM_OK;
+        return CBM_ARRAY_PUSH(t->ctx, t->stack, *s);
     }
     case CBM_T_POP: {
         CBM_TRY(end_node(t));
         if (t->stack.len == 0)
             return CBM_OK; /* cpfg: unmatched ] ignored */
-        if (s->gc_on)
-            CBM_TRY(gc_emit(t, s->gc_first));
         *s = t->stack.data[--t->stack.len];
-        t->gc.len = s->gc_len;
         return CBM_OK;
     }
     case CBM_T_WIDTH:
@@ -884,27 +1096,43 @@ exec:
         return CBM_OK;
     }
     case CBM_T_GC_START:
-        if (s->gc_on)
-            CBM_TRY(gc_emit(t, s->gc_first));
+        /* the turtle becomes the first control point (an open one is restarted, as cpfg) */
         s->gc_on = true;
-        s->gc_first = t->gc.len;
-        return gc_point(t, 1);
+        s->gc = gc_snapshot(s);
+        return CBM_OK;
     case CBM_T_GC_CONTROL:
     case CBM_T_GC_END: {
-        if (!s->gc_on)
-            return CBM_OK;
-        int rings = nparams > 0 ? (int)params[0] : 1;
-        if (rings > 10000)
-            rings = 10000;
-        CBM_TRY(gc_point(t, rings));
-        if (cmd == CBM_T_GC_END) {
-            s->gc_on = false;
-            return gc_emit(t, s->gc_first);
+        int rings = 4; /* cpfg's default */
+        if (nparams > 0) {
+            double r = params[0];
+            rings = r < 1.0 ? 1 : r > 10000.0 ? 10000 : (int)r;
         }
+        if (!s->gc_on) {
+            /* cpfg starts a cylinder at a control point without @Gs */
+            s->gc_on = cmd == CBM_T_GC_CONTROL;
+            s->gc = gc_snapshot(s);
+            return CBM_OK;
+        }
+        CBM_TRY(gc_connect(t, rings));
+        if (cmd == CBM_T_GC_END)
+            s->gc_on = false;
         return CBM_OK;
     }
+    case CBM_T_GC_TANGENT:
+        if (nparams > 0) {
+            s->tan[0] = params[0];
+            s->tan[1] = nparams > 1 ? params[1] : params[0];
+        }
+        return CBM_OK;
     case CBM_T_CONTOUR_SET:
-        s->contour = nparams > 0 ? (int)params[0] : 0;
+        /* the view's contour with this id; the circle when none (as cpfg) */
+        s->contour = 0;
+        if (nparams > 0)
+            for (size_t i = 0; i < v->contours.len; i++)
+                if (v->contours.data[i].id == (int)params[0]) {
+                    s->contour = (int)i + 1;
+                    break;
+                }
         return CBM_OK;
     case CBM_T_SIDES_SET:
         s->sides = nparams > 0 ? (int)params[0] : 8;
@@ -929,17 +1157,6 @@ cbm_status cbm__turtle_finish(cbm_turtle *t)
     CBM_TRY(end_node(t));
     while (t->polystart.len > 0)
         CBM_TRY(poly_end(t));
-    if (t->cur.gc_on) {
-        t->cur.gc_on = false;
-        CBM_TRY(gc_emit(t, t->cur.gc_first));
-    }
-    /* generalized cylinders left open in unclosed branches */
-    for (size_t i = t->stack.len; i-- > 0;) {
-        if (t->stack.data[i].gc_on) {
-            t->stack.data[i].gc_on = false;
-            CBM_TRY(gc_emit(t, t->stack.data[i].gc_first));
-        }
-    }
     return CBM_OK;
 }
 

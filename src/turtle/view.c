@@ -83,7 +83,7 @@ void cbm_view_destroy(cbm_view *v)
         cbm__surface_free(ctx, &v->surfaces.data[i]);
     CBM_ARRAY_FREE(ctx, v->surfaces);
     for (size_t i = 0; i < v->contours.len; i++)
-        CBM_ARRAY_FREE(ctx, v->contours.data[i].xy);
+        CBM_ARRAY_FREE(ctx, v->contours.data[i].pts);
     CBM_ARRAY_FREE(ctx, v->contours);
     cbm__free(ctx, v, sizeof *v);
 }
@@ -161,11 +161,13 @@ cbm_status cbm_view_add_contour(cbm_view *v, int id, const char *path)
     cbm__contour c;
     cbm_status s = cbm__contour_read(v->ctx, path, text, &c);
     cbm__free_file(v->ctx, text, len);
-    if (s != CBM_OK)
+    if (s != CBM_OK) {
+        CBM_ARRAY_FREE(v->ctx, c.pts);
         return s;
+    }
     c.id = id;
     if (v->contours.len >= CBM__MAX_CONTOURS || CBM_ARRAY_PUSH(v->ctx, v->contours, c) != CBM_OK) {
-        CBM_ARRAY_FREE(v->ctx, c.xy);
+        CBM_ARRAY_FREE(v->ctx, c.pts);
         return v->contours.len >= CBM__MAX_CONTOURS
                    ? cbm__fail(v->ctx, CBM_E_LIMIT, "%s: more than %d contours", path,
                                CBM__MAX_CONTOURS)
