@@ -403,6 +403,16 @@ TEST(generalized_cylinder)
         check_v(pr[i].p1, 0, 2, 0, 1e-12);
     }
     cbm_turtle_destroy(t);
+    /* radius tangents (0, 1) (@Gr(90, 1)): ring r at Hermite t = 3r^2 - 2r^3 and radius
+     * w/2 + 2r^3 - 3r^2 + r; on a straight spine with tangents 1.2 H, y(t) = 1.2t - 0.6t^2 +
+     * 0.4t^3. Ring 1 of 4: t = 0.15625, radius 0.59375; its first point is P + r U. */
+    t = run_scene(ctx, v, &p, "@Gr(90,1) @Gs f @Gc(4)", NULL);
+    pr = cbm_turtle_prims(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 1);
+    double tt = 0.15625;
+    check_v(cbm_turtle_points(t)[pr[0].first], 0, 1.2 * tt - 0.6 * tt * tt + 0.4 * tt * tt * tt,
+            -0.59375, 1e-12);
+    cbm_turtle_destroy(t);
     cbm_scene_destroy(scene);
     cbm_view_destroy(v);
     test_ctx_end(ctx);
@@ -450,6 +460,23 @@ TEST(contour)
     CHECK_STATUS(cbm_view_add_contour(v, 1, cpath), CBM_E_FORMAT);
     cbm_view_destroy(v);
     cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
+TEST(nonfinite_parameter)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    prog p;
+    parse(&p, "F F(1) +(2)");
+    p.par[1][0] = NAN;
+    cbm_turtle *t = NULL;
+    CHECK_STATUS(cbm_turtle_interpret(ctx, v, NULL, p.m, p.n, NULL, &t), CBM_E_NONFINITE);
+    CHECK(t == NULL);
+    CHECK(strstr(cbm_context_last_error(ctx), "module 2") != NULL);
+    cbm_context_clear_errors(ctx);
+    cbm_view_destroy(v);
     test_ctx_end(ctx);
 }
 

@@ -18,7 +18,10 @@
  * 1e-5, or zero width) are dropped. Polygons collect the positions of `.`, F and f between `{`
  * and `}` (nested polygons allowed). `%` cuts the rest of the branch. Generalized cylinders
  * (@Gs @Gc(n) @Ge(n)) join the turtle states at their control points with cubic Hermite
- * curves whose tangents are the headings scaled by the chord (cpfg's default), n rings each.
+ * curves (Foley et al., eq. 11.19) whose tangents are the headings scaled by the chord and by
+ * the tangent parameters (1.2 by default, as cpfg), n bands each; the rings are contours
+ * resampled by arc length, carried along by the minimal rotation of U (cpfg's generalized
+ * cylinders, Prusinkiewicz et al., "Animation of plant development", SIGGRAPH 1993).
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
@@ -33,8 +36,10 @@
 typedef struct gcpt {
     cbm_vec3 pos, h, l, u;
     double width;
-    double tan[2]; /* tangent parameters (cpfg: leaving, arriving) */
-    int contour;   /* 0: circle; k: the view's contour k-1 */
+    double tan[2];     /* tangent parameters (cpfg: leaving, arriving) */
+    double rtan[2][2]; /* radius tangents (dt, dr) at the start and the end; 0: linear */
+    bool rtan_scale;   /* scale the radius tangents by the segment length */
+    int contour;       /* 0: circle; k: the view's contour k-1 */
     int sides;
 } gcpt;
 
@@ -47,8 +52,10 @@ typedef struct tstate {
     int color;
     int contour;
     int sides;
-    double tan[2]; /* @Gt tangent parameters */
-    bool gc_on;    /* a generalized cylinder is open; gc is its last control point */
+    double tan[2];     /* @Gt tangent parameters */
+    double rtan[2][2]; /* @Gr radius tangents */
+    bool rtan_scale;
+    bool gc_on; /* a generalized cylinder is open; gc is its last control point */
     gcpt gc;
 } tstate;
 
@@ -134,6 +141,7 @@ static const tname names[] = {
     {"@Gc", CBM_T_GC_CONTROL},
     {"@Ge", CBM_T_GC_END},
     {"@Gt", CBM_T_GC_TANGENT},
+    {"@Gr", CBM_T_GC_RADIUS},
     {"@#", CBM_T_CONTOUR_SET},
     {"@!", CBM_T_SIDES_SET},
     {"?P", CBM_T_QUERY_P},
@@ -599,7 +607,19 @@ static cbm_status contour_points(cbm_turtle *t, int contour, int sides, const do
 
 static gcpt gc_snapshot(const tstate *s)
 {
-    gcpt g = {s->pos, s->h, s->l, s->u, s->width, {s->tan[0], s->tan[1]}, s->contour, s->sides};
+    gcpt g;
+    memset(&g, 0, sizeof g);
+    g.pos = s->pos;
+    g.h = s->h;
+    g.l = s->l;
+    g.u = s->u;
+    g.width = s->width;
+    g.tan[0] = s->tan[0];
+    g.tan[1] = s->tan[1];
+    memcpy(g.rtan, s->rtan, sizeof g.rtan);
+    g.rtan_scale = s->rtan_scale;
+    g.contour = s->contour;
+    g.sides = s->sides;
     return g;
 }
 
@@ -643,6 +663,23 @@ static cbm_status gc_connect(cbm_turtle *t, int rings)
     cbm_vec3 c2 = v3_sub(v3_sub(v3_scale(d, -3.0), v3_scale(R1, 2.0)), R2);
     cbm_vec3 c3 = v3_add(v3_add(v3_scale(d, 2.0), R1), R2);
     double dr = 0.5 * (g2.width - g1.width);
+    /* the radius along the segment: a Hermite curve in (t, r) from (0, w1/2) to (1, w2/2) with
+     * the radius tangents of the two control points (linear when they are zero) */
+    double rt0[2] = {g1.rtan[1][0], g1.rtan[1][1]}, rt1[2] = {g2.rtan[0][0], g2.rtan[0][1]};
+    if (g2.rtan_scale) {
+        rt0[1] *= len;
+        rt1[1] *= len;
+    }
+    if (rt0[0] == 0.0 && rt0[1] == 0.0) {
+        rt0[0] = 1.0;
+        rt0[1] = dr;
+    }
+    if (rt1[0] == 0.0 && rt1[1] == 0.0) {
+        rt1[0] = 1.0;
+        rt1[1] = dr;
+    }
+    double ta = 3 - 2 * rt0[0] - rt1[0], tb = -2 + rt0[0] + rt1[0];
+    double ra = 3 * dr - 2 * rt0[1] - rt1[1], rb = -2 * dr + rt0[1] + rt1[1];
     int sides = g1.sides;
     bool cyl = v->line_style == CBM__LS_CYLINDER;
     const double *k1 = NULL, *k2 = NULL;
@@ -654,6 +691,7 @@ static cbm_status gc_connect(cbm_turtle *t, int rings)
     cbm_vec3 prev = g1.pos;
     for (int i = 0; i <= rings; i++) {
         double r = (double)i / rings;
+        double tt = ((tb * r + ta) * r + rt0[0]) * r;
         cbm_vec3 P, H, U, L;
         double radius;
         if (i == 0) {
@@ -669,15 +707,15 @@ static cbm_status gc_connect(cbm_turtle *t, int rings)
             L = g2.l;
             radius = 0.5 * g2.width;
         } else {
-            P = v3_add(v3_add(g1.pos, v3_scale(R1, r)),
-                       v3_add(v3_scale(c2, r * r), v3_scale(c3, r * r * r)));
-            H = v3_normalize(v3_add(R1, v3_add(v3_scale(c2, 2 * r), v3_scale(c3, 3 * r * r))));
-            adjust_frame(H, g1.h, g1.u, twist * r, &U, &L);
-            radius = 0.5 * g1.width + dr * r;
+            P = v3_add(v3_add(g1.pos, v3_scale(R1, tt)),
+                       v3_add(v3_scale(c2, tt * tt), v3_scale(c3, tt * tt * tt)));
+            H = v3_normalize(v3_add(R1, v3_add(v3_scale(c2, 2 * tt), v3_scale(c3, 3 * tt * tt))));
+            adjust_frame(H, g1.h, g1.u, twist * tt, &U, &L);
+            radius = 0.5 * g1.width + ((rb * r + ra) * r + rt0[1]) * r;
         }
         if (cyl) {
             double zs = i == 0 ? g1.tan[1] : i == rings ? g2.tan[0] : 1.0 / len;
-            CBM_TRY(push_ring(t, P, H, U, L, radius, k1, k2, r, zs, sides));
+            CBM_TRY(push_ring(t, P, H, U, L, radius, k1, k2, i == rings ? 1.0 : tt, zs, sides));
         } else if (i > 0) {
             /* pixel and polygon lines: cpfg draws the spine as segments */
             CBM_TRY(emit_segment(t, prev, P, g1.width, i == rings ? g2.width : g1.width, s->color,
@@ -935,6 +973,13 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
         /* the engine must pass the module after ~ to cbm__turtle_surface */
         t->surface_pending = false;
     }
+    if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_U) {
+        for (int i = 0; i < nparams; i++)
+            if (!isfinite(params[i]))
+                return cbm__fail(t->ctx, CBM_E_NONFINITE,
+                                 "turtle: parameter %d of module %lld is %g", i + 1,
+                                 (long long)t->module_index, params[i]);
+    }
     if (t->cut_depth > 0) {
         if (cmd == CBM_T_PUSH)
             t->cut_depth++;
@@ -1118,6 +1163,20 @@ exec:
             s->gc_on = false;
         return CBM_OK;
     }
+    case CBM_T_GC_RADIUS:
+        if (nparams == 1) {
+            s->rtan_scale = params[0] != 0.0;
+        } else if (nparams >= 2) {
+            double a = params[0] * CBM_PI / 180.0;
+            s->rtan[0][0] = s->rtan[1][0] = cos(a) * params[1];
+            s->rtan[0][1] = s->rtan[1][1] = sin(a) * params[1];
+            if (nparams >= 4) {
+                double b = params[2] * CBM_PI / 180.0;
+                s->rtan[1][0] = cos(b) * params[3];
+                s->rtan[1][1] = sin(b) * params[3];
+            }
+        }
+        return CBM_OK;
     case CBM_T_GC_TANGENT:
         if (nparams > 0) {
             s->tan[0] = params[0];
