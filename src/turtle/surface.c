@@ -2,7 +2,7 @@
  *
  * A surface file starts with the extents line, then CONTACT POINT, END POINT, HEADING, UP and
  * SIZE, then patches: a name line, a colour line, three neighbour lines and 16 control points
- * (4 rows of 4 "x y z") of a bicubic Bezier patch (Foley et al., Computer Graphics, eq. 11.85).
+ * (4 rows of 4 "x y z") of a bicubic Bezier patch (tensor product of cubic Bernstein polynomials).
  * As cpfg, every point is moved so the contact point is at the origin, scaled by
  * (view size / SIZE), and expressed in the surface's frame (L = H x U, then U = L x H, with H and
  * U normalised); the turtle then places the point X, Y, Z at P + X L + Y H + Z U. Each patch is

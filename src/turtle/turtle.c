@@ -18,10 +18,10 @@
  * 1e-5, or zero width) are dropped. Polygons collect the positions of `.`, F and f between `{`
  * and `}` (nested polygons allowed). `%` cuts the rest of the branch. Generalized cylinders
  * (@Gs @Gc(n) @Ge(n)) join the turtle states at their control points with cubic Hermite
- * curves (Foley et al., eq. 11.19) whose tangents are the headings scaled by the chord and by
- * the tangent parameters (1.2 by default, as cpfg), n bands each; the rings are contours
- * resampled by arc length, carried along by the minimal rotation of U (cpfg's generalized
- * cylinders, Prusinkiewicz et al., "Animation of plant development", SIGGRAPH 1993).
+ * curves whose tangents are the headings scaled by the chord and by the tangent parameters
+ * (1.2 by default, as cpfg), n bands each; the rings are contours resampled by arc length,
+ * carried along by the minimal rotation of U (cpfg's generalized cylinders, cpfg manual
+ * "Generalized cylinders").
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
