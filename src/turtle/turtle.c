@@ -3,10 +3,10 @@
  * State (ABOP ch. 1.5, cpfg manual "Turtle interpretation"): position P and frame H, L, U, line
  * width, colour index, elasticities, contour; `[` and `]` push and pop it. The frame follows
  * cpfg's convention: initially H = +y, L = -x, U = -z, so that L = H x U. Rotations are those of
- * ABOP section 1.5 (R_U, R_L, R_H) applied as cpfg does, e.g. turn (+): H' = H cos a + L sin a, L'
- * = L cos a - H sin a; the sine and cosine of the view's angle increment are precomputed. Tropism
- * (ABOP section 2.2, where the heading bends by alpha = e |H x T|) comes in two forms, as in cpfg:
- * the ABOP one
+ * ABOP section 1.5 (R_U, R_L, R_H) applied as cpfg does, e.g. turn (+):
+ * H' = H cos a + L sin a, L' = L cos a - H sin a; the sine and cosine of the view's angle
+ * increment are precomputed. Tropism (ABOP section 2.2, where the heading bends by
+ * alpha = e |H x T|) comes in two forms, as in cpfg: the ABOP one
  * ("tropism direction", elasticity changed by `_`), applied after each move by two rotations
  * towards T (in the H-U and H-L planes, sin(alpha) = e T.U and e T.L), and cpfg's movements
  * ("tropism: T: A: E:"), applied before each move by rotating H about H x V by min(|H x V|, 1)
