@@ -301,6 +301,30 @@ TEST(at_commands)
     test_ctx_end(ctx);
 }
 
+TEST(single_symbol_modules)
+{
+    /* cpfg's strings hold one symbol per module: @, ? and ~ combine with the following ones */
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    prog p;
+    cbm_turtle *t = run(ctx, &v, "tropism: T: 1 0 0 E: 0.5\n", &p,
+                        "@ M(1,2,3) ? P(0,0,0) ?(2) @ T s(1,0) F @ Z @ O(4) X F");
+    CHECK_NEAR(p.par[3][0], 1.0, TOL);
+    CHECK_NEAR(p.par[3][1], 2.0, TOL);
+    CHECK_NEAR(p.par[3][2], 3.0, TOL);
+    cbm_vec3 P, H;
+    cbm_turtle_state(t, &P, &H, NULL, NULL, NULL, NULL);
+    check_v(H, 0, 1, 0, TOL); /* @Ts(1,0) removed the tropism */
+    check_v(P, 1, 4, 3, TOL);
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 3); /* F, the sphere, F; @Z is no command */
+    CHECK_EQ_INT(pr[1].kind, CBM_PRIM_SPHERE);
+    CHECK_NEAR(pr[1].r0, 2.0, TOL);
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
 TEST(abop_tropism)
 {
     cbm_context *ctx = test_ctx();

@@ -50,7 +50,7 @@ static char *slurp(const char *path, size_t *len)
 }
 
 /* Parses cpfg's string notation (single-character symbols with optional parameters; newlines
- * ignored) into raw modules, then joins @X, @Xy and ?X into our multi-character names. */
+ * ignored) into modules. */
 static void parse_string(const char *text, modlist *L)
 {
     size_t len = strlen(text);
@@ -100,21 +100,12 @@ static void parse_string(const char *text, modlist *L)
     L->name = malloc((nraw + 1) * sizeof *L->name);
     L->par = par;
     L->n = 0;
+    /* one module per symbol: the turtle combines @, ? and ~ with what follows, as cpfg */
     for (size_t i = 0; i < nraw; i++) {
         char nm[4] = {sym[i], 0, 0, 0};
-        size_t src = i;
-        if ((sym[i] == '@' || sym[i] == '?') && i + 1 < nraw) {
-            nm[1] = sym[i + 1];
-            src = ++i;
-            /* @T, @G, @m, @P, @D, @b take a sub-symbol when they have no parameter */
-            if (sym[src - 1] == '@' && strchr("TGmPDb", nm[1]) && np[src] == 0 && i + 1 < nraw) {
-                nm[2] = sym[i + 1];
-                src = ++i;
-            }
-        }
         memcpy(L->name[L->n], nm, 4);
-        L->m[L->n].nparams = np[src];
-        L->m[L->n].params = par + pf[src];
+        L->m[L->n].nparams = np[i];
+        L->m[L->n].params = par + pf[i];
         L->n++;
     }
     for (size_t i = 0; i < L->n; i++)

@@ -89,6 +89,8 @@ struct cbm_turtle {
     CBM_ARRAY(uint32_t) ringt;
     /* surface pending (~ waits for the module naming the surface) */
     bool surface_pending;
+    char prefix[3]; /* cbm__turtle_feed: '@', '?', '~' or "@T"... waiting for their module */
+    int nprefix;
     /* record */
     CBM_ARRAY(cbm_prim) prims;
     CBM_ARRAY(cbm_vec3) pts;
@@ -231,6 +233,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->polystart.len = 0;
     t->cut_depth = 0;
     t->surface_pending = false;
+    t->nprefix = 0;
     t->prims.len = 0;
     t->pts.len = 0;
     t->box_set = false;
@@ -1214,10 +1217,69 @@ exec:
 cbm_status cbm__turtle_finish(cbm_turtle *t)
 {
     t->cut_depth = 0;
+    t->nprefix = 0;
     CBM_TRY(end_node(t));
     while (t->polystart.len > 0)
         CBM_TRY(poly_end(t));
     return CBM_OK;
+}
+
+/* ---- single-symbol modules (cpfg's string) ---- */
+
+cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int nparams)
+{
+    if (t->nprefix == 0) {
+        switch (symbol) {
+        case '@':
+            t->prefix[0] = '@';
+            t->nprefix = 1;
+            /* cpfg ends the current segment at every @ */
+            if (t->cut_depth == 0)
+                return end_node(t);
+            return CBM_OK;
+        case '?':
+            if (nparams > 0)
+                return CBM_OK; /* cpfg's sub-L-system ?(n): not a query */
+            t->prefix[0] = '?';
+            t->nprefix = 1;
+            return CBM_OK;
+        case '~':
+            t->prefix[0] = '~';
+            t->nprefix = 1;
+            return cbm__turtle_exec(t, CBM_T_SURFACE, params, nparams);
+        default: {
+            char c = (char)symbol;
+            int cmd = cbm__turtle_lookup(&c, 1);
+            if (cmd == CBM_T_NONE) {
+                t->module_index++;
+                return CBM_OK;
+            }
+            return cbm__turtle_exec(t, cmd, params, nparams);
+        }
+        }
+    }
+    char name[4];
+    memcpy(name, t->prefix, (size_t)t->nprefix);
+    name[t->nprefix] = (char)symbol;
+    size_t len = (size_t)t->nprefix + 1;
+    if (t->prefix[0] == '~') {
+        t->nprefix = 0;
+        return cbm__turtle_surface(t, name + 1, 1, params, nparams);
+    }
+    /* @T, @G, @m, @P, @D, @b take a sub-symbol when they have no parameter (cpfg) */
+    if (t->prefix[0] == '@' && t->nprefix == 1 && nparams == 0 && symbol != 0 &&
+        strchr("TGmPDb", symbol)) {
+        t->prefix[1] = (char)symbol;
+        t->nprefix = 2;
+        return CBM_OK;
+    }
+    t->nprefix = 0;
+    int cmd = cbm__turtle_lookup(name, len);
+    if (cmd == CBM_T_NONE) {
+        t->module_index++;
+        return CBM_OK; /* an @ or ? function we do not draw */
+    }
+    return cbm__turtle_exec(t, cmd, params, nparams);
 }
 
 /* ---- public API ---- */
@@ -1234,6 +1296,11 @@ cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cb
     cbm_status s = CBM_OK;
     for (size_t i = 0; i < n && s == CBM_OK; i++) {
         const char *nm = mods[i].name ? mods[i].name : "";
+        if (strlen(nm) == 1 || t->nprefix > 0) {
+            /* cpfg's single symbols: @, ? and ~ combine with the next modules */
+            s = cbm__turtle_feed(t, (unsigned char)nm[0], mods[i].params, mods[i].nparams);
+            continue;
+        }
         int cmd = cbm__turtle_lookup(nm, strlen(nm));
         if (cmd == CBM_T_SURFACE) {
             s = cbm__turtle_exec(t, cmd, mods[i].params, mods[i].nparams);

@@ -86,6 +86,13 @@ cbm_status cbm__turtle_finish(cbm_turtle *t);
 /// that module.
 cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
                                int nparams);
+/// Executes one module of cpfg's string, where modules are single symbols: `@`, `?` and `~` take
+/// the following module(s) as their function, as cpfg reads its string (`@` `O`(2) is @O(2);
+/// `@` `T` `s`(1,0) is @Ts(1,0) since @T, @G, @m, @P, @D, @b without parameter take a second
+/// symbol; `?` `P`(x,y,z) is ?P; `~` `l`(2) is surface l scaled by 2). Other symbols are looked
+/// up and executed; symbols that are not turtle commands are skipped. An engine with one-character
+/// symbols can call this for every module instead of lookup + exec.
+cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int nparams);
 /// Keep a record of the primitives (cylinders, polygons, ...; see cbm_turtle_prims). Off by
 /// default.
 void cbm__turtle_set_record(cbm_turtle *t, bool record);
