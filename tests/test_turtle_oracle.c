@@ -128,7 +128,8 @@ static void modlist_free(modlist *L)
 #define TRIANGLE 100 /* a .ray triangle (of a generalized cylinder) */
 
 typedef struct rayprim {
-    int kind; /* CBM_PRIM_* */
+    int kind;  /* CBM_PRIM_* */
+    int color; /* colour index (surface sN is index N - 256), -1 if none */
     double v[16];
     size_t first, count; /* polygon points in pts */
 } rayprim;
@@ -232,6 +233,7 @@ static bool read_ray(const char *path, ray *R)
         rayprim *rp = &R->p[R->n++];
         memset(rp, 0, sizeof *rp);
         rp->kind = kind;
+        rp->color = sname[0] == 's' ? atoi(sname + 1) - 256 : -1;
         if (kind == CBM_PRIM_POLYGON) {
             rp->first = R->npts;
             while (fscanf(f, "%255s", tok) == 1) {
@@ -397,6 +399,12 @@ static void run_model(const model *md, bool compare_prims)
                 const rayprim *r = &R.p[j++];
                 compared++;
                 bool ok = (int)P[i].kind == r->kind;
+                if (ok && r->kind != CBM_PRIM_SURFACE && r->color != P[i].color) {
+                    if (bad < 3)
+                        fprintf(stderr, "%s: primitive %zu has colour %d, cpfg %d\n", md->dir,
+                                j - 1, P[i].color, r->color);
+                    ok = false;
+                }
                 if (ok && r->kind == CBM_PRIM_CYLINDER) {
                     double mine[8] = {P[i].r0, P[i].p0.x, P[i].p0.y, P[i].p0.z,
                                       P[i].r1, P[i].p1.x, P[i].p1.y, P[i].p1.z};

@@ -79,6 +79,7 @@ struct cbm_turtle {
     int node_color;
     /* polygons */
     CBM_ARRAY(cbm_vec3) polypts;
+    CBM_ARRAY(int) polycolor; /* colour index at each vertex (cpfg colours by the first) */
     CBM_ARRAY(size_t) polystart;
     /* % */
     int cut_depth; /* > 0 while skipping: bracket depth inside the cut part */
@@ -213,6 +214,7 @@ void cbm__turtle_destroy(cbm_turtle *t)
     cbm_context *ctx = t->ctx;
     CBM_ARRAY_FREE(ctx, t->stack);
     CBM_ARRAY_FREE(ctx, t->polypts);
+    CBM_ARRAY_FREE(ctx, t->polycolor);
     CBM_ARRAY_FREE(ctx, t->polystart);
     CBM_ARRAY_FREE(ctx, t->ccache);
     CBM_ARRAY_FREE(ctx, t->cpts);
@@ -230,6 +232,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->stack.len = 0;
     t->node_open = false;
     t->polypts.len = 0;
+    t->polycolor.len = 0;
     t->polystart.len = 0;
     t->cut_depth = 0;
     t->surface_pending = false;
@@ -917,6 +920,12 @@ static cbm_status query(cbm_turtle *t, int cmd, double *params, int nparams)
     return CBM_OK;
 }
 
+static cbm_status poly_vertex(cbm_turtle *t)
+{
+    CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->polypts, t->cur.pos));
+    return CBM_ARRAY_PUSH(t->ctx, t->polycolor, t->cur.color);
+}
+
 static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams)
 {
     tstate *s = &t->cur;
@@ -929,7 +938,7 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     s->pos = v3_madd(s->pos, s->h, len);
     bend(t);
     if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
-        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->polypts, s->pos));
+        CBM_TRY(poly_vertex(t));
     if (draw) {
         s->prev_h = s->h;
         s->prev_u = s->u;
@@ -949,7 +958,7 @@ static cbm_status poly_end(cbm_turtle *t)
         cbm_prim pr;
         memset(&pr, 0, sizeof pr);
         pr.kind = CBM_PRIM_POLYGON;
-        pr.color = t->cur.color;
+        pr.color = t->polycolor.data[first];
         pr.p0 = p[0];
         pr.first = t->pts.len;
         pr.count = n;
@@ -959,12 +968,13 @@ static cbm_status poly_end(cbm_turtle *t)
             CBM_TRY(push_prim(t, &pr));
         }
         if (t->scene) {
-            cbm_part part = make_part(t, CBM_ORGAN_LEAF, t->cur.color);
+            cbm_part part = make_part(t, CBM_ORGAN_LEAF, pr.color);
             CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
             CBM_TRY(cbm_scene_add_polygon(t->scene, p, n));
         }
     }
     t->polypts.len = first;
+    t->polycolor.len = first;
     return CBM_OK;
 }
 
@@ -1099,7 +1109,7 @@ exec:
         return poly_end(t);
     case CBM_T_POLY_VERTEX:
         if (t->polystart.len > 0)
-            return CBM_ARRAY_PUSH(t->ctx, t->polypts, s->pos);
+            return poly_vertex(t);
         return CBM_OK;
     default:
         break;
