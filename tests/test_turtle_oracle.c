@@ -465,29 +465,89 @@ static void run_model(const model *md, bool compare_prims)
     test_ctx_end(ctx);
 }
 
-#define MODEL(name, dir, l, v, c, homo, prims) MODEL_K(name, dir, l, v, c, homo, prims, -1)
-#define MODEL_K(name, dir, l, v, c, homo, prims, kind)                                             \
-    TEST(name)                                                                                     \
-    {                                                                                              \
-        model m = {dir, l, v, c, homo, kind};                                                      \
-        run_model(&m, prims);                                                                      \
-    }
+TEST(quadratic_koch)
+{
+    model m = {"cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, -1};
+    run_model(&m, true);
+}
 
-MODEL(quadratic_koch, "cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, true)
-MODEL(compound_homo, "cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, true)
-MODEL(compound_param, "cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, true)
-MODEL(continuous_decomp, "cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, true)
-MODEL(florigen_param, "cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, true)
-MODEL(hormone_up, "cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, true)
-MODEL(monopodial, "cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, true)
-MODEL(sympodial, "cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, true)
-MODEL(random_moss, "cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, true)
-MODEL(weeping_birch, "cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, true)
+TEST(compound_homo)
+{
+    model m = {"cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    run_model(&m, true);
+}
+
+TEST(compound_param)
+{
+    model m = {"cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    run_model(&m, true);
+}
+
+TEST(continuous_decomp)
+{
+    model m = {"cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    run_model(&m, true);
+}
+
+TEST(florigen_param)
+{
+    model m = {"cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, -1};
+    run_model(&m, true);
+}
+
+TEST(hormone_up)
+{
+    model m = {"cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, -1};
+    run_model(&m, true);
+}
+
+TEST(monopodial)
+{
+    model m = {"cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, -1};
+    run_model(&m, true);
+}
+
+TEST(sympodial)
+{
+    model m = {"cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, -1};
+    run_model(&m, true);
+}
+
+TEST(random_moss)
+{
+    model m = {"cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, -1};
+    run_model(&m, true);
+}
+
+TEST(weeping_birch)
+{
+    model m = {"cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, -1};
+    run_model(&m, true);
+}
+
 /* cpfg's oracle has no string after the homomorphism of this model, whose spheres and cylinders
  * come from it: the discs (@c of the derived string itself) are compared, and the box must
  * contain ours. */
-MODEL_K(query_position, "cpfg-query-position", "plant.l", "plant.v", "plant.map", false, true,
-        CBM_PRIM_DISC)
-MODEL(leaf_rnd, "cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, true)
-MODEL(tropisms, "cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, true)
-MODEL(lilac, "cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, true)
+TEST(query_position)
+{
+    model m = {"cpfg-query-position", "plant.l", "plant.v", "plant.map", false, CBM_PRIM_DISC};
+    run_model(&m, true);
+}
+
+TEST(leaf_rnd)
+{
+    model m = {"cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, -1};
+    run_model(&m, true);
+}
+
+TEST(tropisms)
+{
+    model m = {"cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, -1};
+    run_model(&m, true);
+}
+
+TEST(lilac)
+{
+    model m = {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1};
+    run_model(&m, true);
+}
