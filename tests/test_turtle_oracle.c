@@ -551,3 +551,53 @@ TEST(lilac)
     model m = {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1};
     run_model(&m, true);
 }
+
+/* func(id, x) against cpfg: in cpfg-monopodial the homomorphism maps I(t) to
+ * F(0.5 func(1, t/20)) and L(t) to ;F(1.5 func(2, t/20)), so the F parameters of cpfg's string
+ * after the homomorphism (6 significant digits) give cpfg's function values at the t of
+ * final.exact.txt. */
+TEST(function_values_monopodial)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *view = NULL;
+    CHECK_OK(cbm_view_load(ctx, ORACLE "cpfg-monopodial/model/leaf.v", &view));
+    char *exact = slurp(ORACLE "cpfg-monopodial/ref/final.exact.txt", NULL);
+    char *homo = slurp(ORACLE "cpfg-monopodial/ref/final.homo.str", NULL);
+    CHECK(view && exact && homo);
+    if (view && exact && homo) {
+        modlist E, H;
+        parse_string(exact, &E);
+        parse_string(homo, &H);
+        const cbm_funcset *fs = cbm_view_functions(view);
+        CHECK_EQ_INT(cbm_funcset_count(fs), 2);
+        size_t j = 0, checked = 0;
+        double worst = 0.0;
+        for (size_t i = 0; i < E.n; i++) {
+            char c = E.m[i].name[0];
+            if ((c != 'I' && c != 'L') || E.m[i].nparams != 1)
+                continue;
+            while (j < H.n && H.m[j].name[0] != 'F')
+                j++;
+            if (j >= H.n)
+                break;
+            double cpfg = H.m[j++].params[0];
+            double x = (float)(E.m[i].params[0] / 20.0);
+            double ours =
+                c == 'I' ? 0.5 * cbm_funcset_value(fs, 1, x) : 1.5 * cbm_funcset_value(fs, 2, x);
+            double dev = fabs(ours - cpfg) / fmax(fabs(cpfg), 1e-3);
+            if (dev > worst)
+                worst = dev;
+            checked++;
+        }
+        CHECK(checked > 100);
+        CHECK_MSG(worst < 1e-5, "largest relative deviation from cpfg's func values: %g", worst);
+        fprintf(stderr, "func: %zu values checked against cpfg, largest relative deviation %.2g\n",
+                checked, worst);
+        modlist_free(&E);
+        modlist_free(&H);
+    }
+    free(exact);
+    free(homo);
+    cbm_view_destroy(view);
+    test_ctx_end(ctx);
+}
