@@ -530,6 +530,26 @@ TEST(functions)
     CHECK_NEAR(cbm__funcset_eval(fs, 2, 0.37), 1.0, 1e-12);
     CHECK_NEAR(cbm__funcset_eval(fs, 3, 0.5), 0.0, 0.0); /* unknown id */
     cbm_view_destroy(v);
+    /* a gallery named by the view file, functions found by name */
+    char gpath[1024], vpath[1024];
+    snprintf(gpath, sizeof gpath, "%s/g.fset", test_tmp_dir());
+    write_file(gpath, "funcgalleryver 1 1\nitems: 2\n"
+                      "fver 1 1\nname: one\nsamples: 5\nflip: off\npoints: 4\n"
+                      "0 1\n0.3 1\n0.6 1\n1 1\n"
+                      "fver 1 1\nname: two\nsamples: 5\nflip: off\npoints: 4\n"
+                      "0 2\n0.3 2\n0.6 2\n1 2\n");
+    snprintf(vpath, sizeof vpath, "%s/g.v", test_tmp_dir());
+    write_file(vpath, "function set: g.fset\n");
+    CHECK_OK(cbm_view_load(ctx, vpath, &v));
+    fs = cbm_view_functions(v);
+    CHECK_EQ_INT(cbm_funcset_find(fs, "two"), 2);
+    CHECK_NEAR(cbm_funcset_value(fs, 2, 0.4), 2.0, 1e-12);
+    CHECK_NEAR(cbm_view_func_callback(v, 1, 0.4), 1.0, 1e-12);
+    cbm_view_destroy(v);
+    write_file(gpath, "funcgalleryver 1 1\nitems: 2\n"
+                      "fver 1 1\nname: one\nsamples: 5\nflip: off\npoints: 4\n"
+                      "0 1\n0.3 1\n0.6 1\n1 1\n");
+    CHECK_STATUS(cbm_view_load(ctx, vpath, &v), CBM_E_FORMAT);
     /* malformed: too few points */
     write_file(path, "fver 1 1\nname: bad\nsamples: 5\nflip: off\npoints: 2\n0 0\n1 1\n");
     CHECK_OK(cbm_view_create(ctx, &v));

@@ -601,3 +601,31 @@ TEST(function_values_monopodial)
     cbm_view_destroy(view);
     test_ctx_end(ctx);
 }
+
+/* A function gallery (.fset, lpfg-sympodial) holds the same curves as cpfg-sympodial's .func
+ * files, tabulated at 100 samples instead of 10: found by name, and equal where both tables
+ * sample the same x (x = k/9 is not a multiple of 1/99 except at 0 and 1; compare there and
+ * require closeness elsewhere). */
+TEST(function_gallery)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *view = NULL;
+    CHECK_OK(cbm_view_create(ctx, &view));
+    CHECK_OK(cbm_view_load_side_file(view, ORACLE "lpfg-sympodial/model/functions.fset"));
+    CHECK_OK(cbm_view_add_function(view, ORACLE "cpfg-sympodial/model/internode.func", -1));
+    CHECK_OK(cbm_view_add_function(view, ORACLE "cpfg-sympodial/model/flower.func", -1));
+    const cbm_funcset *fs = cbm_view_functions(view);
+    CHECK_EQ_INT(cbm_funcset_count(fs), 4);
+    CHECK_EQ_INT(cbm_funcset_find(fs, "flower"), 1);
+    CHECK_EQ_INT(cbm_funcset_find(fs, "internode"), 2);
+    CHECK_EQ_INT(cbm_funcset_find(fs, "leaf"), 0);
+    for (int i = 0; i <= 20; i++) {
+        double x = i / 20.0;
+        CHECK_NEAR(cbm_funcset_value(fs, 2, x), cbm_funcset_value(fs, 3, x), 2e-2);
+        CHECK_NEAR(cbm_funcset_value(fs, 1, x), cbm_funcset_value(fs, 4, x), 2e-2);
+    }
+    CHECK_NEAR(cbm_funcset_value(fs, 2, 0.0), cbm_funcset_value(fs, 3, 0.0), 1e-12);
+    CHECK_NEAR(cbm_view_func_callback(view, 1, 1.0), cbm_funcset_value(fs, 4, 1.0), 1e-12);
+    cbm_view_destroy(view);
+    test_ctx_end(ctx);
+}

@@ -40,10 +40,18 @@ CBM_API cbm_status cbm_view_add_contour(cbm_view *view, int id, const char *path
 CBM_API cbm_status cbm_view_load_colormap(cbm_view *view, const char *path);
 /// Reads a material file (.mat: records of index + 14 bytes); the diffuse colour is used.
 CBM_API cbm_status cbm_view_load_materials(cbm_view *view, const char *path);
-/// Reads a side file chosen by its extension (.v .func .s .con .map .mat), as cpfg's command line.
+/// Reads a side file chosen by its extension (.v .func .fset .s .con .map .mat), as cpfg's
+/// command line.
 CBM_API cbm_status cbm_view_load_side_file(cbm_view *view, const char *path);
 /// The functions of the view (never NULL).
 CBM_API const cbm_funcset *cbm_view_functions(const cbm_view *view);
+/// Adds the functions of a function gallery (.fset, lpfg's and cpfg's "function set"), in order.
+CBM_API cbm_status cbm_view_add_function_set(cbm_view *view, const char *path);
+/// The id (1-based) of the function named `name` (the file's "name:"), 0 if none.
+CBM_API int cbm_funcset_find(const cbm_funcset *fs, const char *name);
+/// The value of the view's function id at x, with the view (cbm_view *) as user data, for an
+/// expression evaluator's callback, e.g. cbm_lsys_set_func(ls, cbm_view_func_callback, view).
+CBM_API double cbm_view_func_callback(void *view, int id, double x);
 /// Number of functions in the set.
 CBM_API int cbm_funcset_count(const cbm_funcset *fs);
 /// Value of function id (1-based) at x in [0, 1] (clamped). 0 for an unknown id.

@@ -12,8 +12,9 @@
  * makes the curve's last point (t = 1) evaluate to the origin, which the bisection never reaches.
  *
  * Formats: "fver 1 1" (name:, samples:, optional background and markers lines, flip:, points: N,
- * then N lines "x y [multiplicity]") and the older "range: a b" (points: N, then N lines "x y";
- * samples from the view file).
+ * then N lines "x y [multiplicity]"), the older "range: a b" (points: N, then N lines "x y";
+ * samples from the view file), and function galleries (.fset: "funcgalleryver 1 1", "items: N",
+ * then N functions in the "fver 1 1" form).
  */
 #include "tint.h"
 
@@ -184,14 +185,15 @@ void cbm__func_free(cbm_context *ctx, cbm__func *f)
     memset(f, 0, sizeof *f);
 }
 
-cbm_status cbm__func_read(cbm_context *ctx, const char *path, const char *text, int samples,
-                          cbm__func *f)
+/* One function from the cursor L (which is left after it). */
+static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int samples,
+                            cbm__func *f)
 {
     memset(f, 0, sizeof *f);
-    lines L = {text, 0};
+    lines L = *Lp;
     char buf[256];
     if (!next_line(&L, buf, sizeof buf))
-        return bad(ctx, path, 1, "empty function file");
+        return bad(ctx, path, L.line + 1, "expected a function ('fver 1 1'), found the end");
     int vmaj = 0, vmin = 0;
     float lo, up;
     bool v101 = false;
@@ -290,6 +292,51 @@ cbm_status cbm__func_read(cbm_context *ctx, const char *path, const char *text, 
             f->vals[i] = exact_value(f, (double)i / (double)(samples - 1));
         f->samples = samples;
     }
+    *Lp = L;
+    return CBM_OK;
+}
+
+cbm_status cbm__func_read(cbm_context *ctx, const char *path, const char *text, int samples,
+                          cbm__func *f)
+{
+    lines L = {text, 0};
+    CBM_TRY(read_func(ctx, path, &L, samples, f));
+    if (!f->name[0]) {
+        /* the older format has no name: the file's, without directory and extension */
+        const char *b = strrchr(path, '/');
+        b = b ? b + 1 : path;
+        size_t n = strcspn(b, ".");
+        if (n >= sizeof f->name)
+            n = sizeof f->name - 1;
+        memcpy(f->name, b, n);
+        f->name[n] = '\0';
+    }
+    return CBM_OK;
+}
+
+cbm_status cbm__funcset_read_gallery(cbm_context *ctx, const char *path, const char *text,
+                                     cbm_funcset *fs)
+{
+    lines L = {text, 0};
+    char buf[256];
+    int vmaj, vmin, items;
+    if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "funcgalleryver %d %d", &vmaj, &vmin) != 2)
+        return bad(ctx, path, L.line, "expected 'funcgalleryver 1 1'");
+    if (vmaj != 1 || vmin != 1)
+        return bad(ctx, path, L.line, "unsupported function gallery version (expected 1 1)");
+    if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "items: %d", &items) != 1 || items < 0 ||
+        items > 100000)
+        return bad(ctx, path, L.line, "expected 'items: N'");
+    for (int i = 0; i < items; i++) {
+        cbm__func f;
+        cbm_status s = read_func(ctx, path, &L, -1, &f);
+        if (s != CBM_OK)
+            return s;
+        if (CBM_ARRAY_PUSH(ctx, fs->funcs, f) != CBM_OK) {
+            cbm__func_free(ctx, &f);
+            return CBM_E_NOMEM;
+        }
+    }
     return CBM_OK;
 }
 
@@ -300,6 +347,22 @@ double cbm__funcset_eval(const cbm_funcset *fs, int id, double x)
     if (!fs || id < 1 || (size_t)id > fs->funcs.len)
         return 0.0;
     return func_value(&fs->funcs.data[id - 1], x);
+}
+
+int cbm_funcset_find(const cbm_funcset *fs, const char *name)
+{
+    if (!fs || !name)
+        return 0;
+    for (size_t i = 0; i < fs->funcs.len; i++)
+        if (strcmp(fs->funcs.data[i].name, name) == 0)
+            return (int)i + 1;
+    return 0;
+}
+
+double cbm_view_func_callback(void *view, int id, double x)
+{
+    const cbm_view *v = view;
+    return v ? cbm__funcset_eval(&v->funcs, id, x) : 0.0;
 }
 
 int cbm_funcset_count(const cbm_funcset *fs)

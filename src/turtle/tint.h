@@ -29,6 +29,9 @@ struct cbm_funcset {
 cbm_status cbm__func_read(cbm_context *ctx, const char *path, const char *text, int samples,
                           cbm__func *f);
 void cbm__func_free(cbm_context *ctx, cbm__func *f);
+/* Appends the functions of a gallery (.fset); on failure the ones read so far stay in fs. */
+cbm_status cbm__funcset_read_gallery(cbm_context *ctx, const char *path, const char *text,
+                                     cbm_funcset *fs);
 
 /* ---- surfaces (.s): bicubic Bezier patches, tessellated once when read ---- */
 typedef struct cbm__surface {

@@ -121,6 +121,18 @@ cbm_status cbm_view_add_function(cbm_view *v, const char *path, int samples)
     return CBM_OK;
 }
 
+cbm_status cbm_view_add_function_set(cbm_view *v, const char *path)
+{
+    if (!v || !path)
+        return CBM_E_INVALID;
+    char *text;
+    size_t len;
+    CBM_TRY(cbm__read_file(v->ctx, path, &text, &len));
+    cbm_status s = cbm__funcset_read_gallery(v->ctx, path, text, &v->funcs);
+    cbm__free_file(v->ctx, text, len);
+    return s;
+}
+
 cbm_status cbm_view_add_surface(cbm_view *v, char id, const char *path, double size)
 {
     if (!v || !path)
@@ -252,6 +264,8 @@ cbm_status cbm_view_load_side_file(cbm_view *v, const char *path)
     }
     if (strcmp(e, "func") == 0)
         return cbm_view_add_function(v, path, -1);
+    if (strcmp(e, "fset") == 0)
+        return cbm_view_add_function_set(v, path);
     if (strcmp(e, "map") == 0)
         return cbm_view_load_colormap(v, path);
     if (strcmp(e, "mat") == 0)
@@ -541,6 +555,20 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             cbm_status s2 = cbm_view_add_function(v, full, got == 2 ? samples : -1);
             if (s2 != CBM_OK) {
                 cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "cannot read function file %s", full);
+                result = s2;
+            }
+        } else if (KEY("function set")) {
+            char name[512];
+            if (sscanf(a, " %511s", name) != 1) {
+                cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "function set: expects a file name");
+                result = CBM_E_FORMAT;
+                continue;
+            }
+            char full[1100];
+            side_path(v, name, full, sizeof full);
+            cbm_status s2 = cbm_view_add_function_set(v, full);
+            if (s2 != CBM_OK) {
+                cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "cannot read function set %s", full);
                 result = s2;
             }
         } else if (KEY("surface")) {
