@@ -251,8 +251,10 @@ static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int s
             return bad(ctx, path, L.line, "expected 'x y [multiplicity]'");
         if (k < 3 || !v101)
             m = 1.0;
-        if (m < 1.0 || m > 4.0)
+        if (!(m >= 1.0 && m <= 4.0))
             return bad(ctx, path, L.line, "multiplicity must be 1 to 4");
+        if (!isfinite(x) || !isfinite(y))
+            return bad(ctx, path, L.line, "control point is not a finite number");
         total += (int)m;
     }
     L = save;

@@ -115,7 +115,12 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
     if (!getline_(&p, buf, sizeof buf, &line) || sscanf(buf, " SIZE: %f", &maxdim) != 1 ||
         !(maxdim > 0))
         return fmt_err(ctx, path, line, "expected 'SIZE: s' with s > 0");
+    if (!v3_isfinite(cp) || !v3_isfinite(ep) || !v3_isfinite(hd) || !v3_isfinite(up) ||
+        !isfinite(maxdim) || v3_norm2(hd) == 0.0 || v3_norm2(up) == 0.0)
+        return fmt_err(ctx, path, line, "the surface's points and frame must be finite, non-zero");
     cbm_vec3 left = v3_cross(hd, up);
+    if (v3_norm2(left) < 1e-24)
+        return fmt_err(ctx, path, line, "the surface's HEADING and UP are parallel");
     up = v3_cross(left, hd);
     double k = size / maxdim;
     s->contact = cp;
@@ -158,6 +163,9 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
             }
             if (got != 12)
                 return fmt_err(ctx, path, line, "expected 4 control points 'x y z' in a row");
+            for (int e = 0; e < 12; e++)
+                if (!isfinite(v[e]) || fabs(v[e]) > 1e30)
+                    return fmt_err(ctx, path, line, "control point is not a finite number");
             for (int j = 0; j < 4; j++) {
                 cbm_vec3 raw = v3((float)v[3 * j], (float)v[3 * j + 1], (float)v[3 * j + 2]);
                 c[i][j] = XFORM(raw);
@@ -264,8 +272,10 @@ cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *tex
             if (dim == 2)
                 z = 0;
         }
-        if (m < 1 || m > 4)
+        if (!(m >= 1 && m <= 4))
             return fmt_err(ctx, path, line, "multiplicity must be 1 to 4");
+        if (!isfinite(x) || !isfinite(y) || !isfinite(z))
+            return fmt_err(ctx, path, line, "contour point is not a finite number");
         for (int k = 0; k < (int)m; k++)
             CBM_TRY(push_point(ctx, c, (float)x, (float)y, (float)z));
     }

@@ -99,6 +99,29 @@ struct cbm_view {
     char dir[512]; /* directory side files are looked up in */
 };
 
+/* Side files from text (the file readers and the fuzz targets use these). name is the file's
+ * name in messages; a surface's id is name[0]; a contour's id is the count of contours + 1. */
+typedef enum cbm__side_kind {
+    CBM__SIDE_VIEW,
+    CBM__SIDE_FUNC,
+    CBM__SIDE_FSET,
+    CBM__SIDE_SURFACE,
+    CBM__SIDE_CONTOUR
+} cbm__side_kind;
+cbm_status cbm__view_add_text(cbm_view *v, cbm__side_kind kind, const char *name, const char *text);
+
+/* A double from input as an int: truncated, clamped to +-2e9, NaN as 0 (no undefined casts). */
+static inline int cbm__to_int(double x)
+{
+    if (!(x == x))
+        return 0;
+    if (x > 2e9)
+        return 2000000000;
+    if (x < -2e9)
+        return -2000000000;
+    return (int)x;
+}
+
 /* Reads a whole file into memory (NUL-terminated), bytes counted by the context. */
 cbm_status cbm__read_file(cbm_context *ctx, const char *path, char **text, size_t *len);
 void cbm__free_file(cbm_context *ctx, char *text, size_t len);

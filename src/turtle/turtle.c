@@ -378,11 +378,12 @@ static void bend(cbm_turtle *t)
     if (e == 0.0)
         return;
     cbm_vec3 T = t->view->tropism_dir;
-    double bc = e * v3_dot(T, s->u);
-    double bs = sqrt(fmax(0.0, 1.0 - bc * bc));
+    /* sin(alpha) is clamped to [-1, 1] (cpfg gives NaN when e |T.U| > 1) */
+    double bc = fmax(-1.0, fmin(1.0, e * v3_dot(T, s->u)));
+    double bs = sqrt(1.0 - bc * bc);
     rotate_pair(&s->h, &s->u, bc, bs);
-    bc = e * v3_dot(T, s->l);
-    bs = sqrt(fmax(0.0, 1.0 - bc * bc));
+    bc = fmax(-1.0, fmin(1.0, e * v3_dot(T, s->l)));
+    bs = sqrt(1.0 - bc * bc);
     rotate_pair(&s->h, &s->l, bc, bs);
 }
 
@@ -936,6 +937,10 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     if (draw)
         start_node(t);
     s->pos = v3_madd(s->pos, s->h, len);
+    if (!v3_isfinite(s->pos))
+        return cbm__fail(t->ctx, CBM_E_NONFINITE,
+                         "turtle: the position is no longer finite at module %lld",
+                         (long long)t->module_index);
     bend(t);
     if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
         CBM_TRY(poly_vertex(t));
@@ -953,7 +958,7 @@ static cbm_status poly_end(cbm_turtle *t)
     CBM_TRY(end_node(t));
     size_t first = t->polystart.data[--t->polystart.len];
     size_t n = t->polypts.len - first;
-    const cbm_vec3 *p = t->polypts.data + first;
+    const cbm_vec3 *p = n ? t->polypts.data + first : NULL;
     if (n >= 3) {
         cbm_prim pr;
         memset(&pr, 0, sizeof pr);
@@ -1075,7 +1080,7 @@ exec:
     case CBM_T_COLOR_INC:
     case CBM_T_COLOR_DEC:
         if (nparams > 0)
-            s->color = (int)params[0];
+            s->color = cbm__to_int(params[0]);
         else
             s->color += cmd == CBM_T_COLOR_INC ? v->color_inc : -v->color_inc;
         if (s->color < 0)
@@ -1143,7 +1148,7 @@ exec:
     case CBM_T_TROPISM_DEC: {
         if (nparams == 0)
             return CBM_OK; /* cpfg applies @T only with an index */
-        int i = (int)params[0] - 1;
+        int i = cbm__to_int(params[0]) - 1;
         if (i < 0 || i >= v->nmov)
             return CBM_OK; /* cpfg: "Movement index out of range", ignored */
         double aux = nparams >= 2 ? params[1] : v->mov[i].elasticity_inc;
@@ -1202,13 +1207,13 @@ exec:
         s->contour = 0;
         if (nparams > 0)
             for (size_t i = 0; i < v->contours.len; i++)
-                if (v->contours.data[i].id == (int)params[0]) {
+                if (v->contours.data[i].id == cbm__to_int(params[0])) {
                     s->contour = (int)i + 1;
                     break;
                 }
         return CBM_OK;
     case CBM_T_SIDES_SET:
-        s->sides = nparams > 0 ? (int)params[0] : 8;
+        s->sides = nparams > 0 ? cbm__to_int(params[0]) : 8;
         if (s->sides < 3)
             s->sides = 3;
         if (s->sides > 1024)

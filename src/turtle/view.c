@@ -102,18 +102,12 @@ static void side_path(const cbm_view *v, const char *name, char *buf, size_t cap
         snprintf(buf, cap, "%s/%s", v->dir, name);
 }
 
-cbm_status cbm_view_add_function(cbm_view *v, const char *path, int samples)
+/* ---- side files from their text ---- */
+
+static cbm_status add_function_text(cbm_view *v, const char *path, const char *text, int samples)
 {
-    if (!v || !path)
-        return CBM_E_INVALID;
-    char *text;
-    size_t len;
-    CBM_TRY(cbm__read_file(v->ctx, path, &text, &len));
     cbm__func f;
-    cbm_status s = cbm__func_read(v->ctx, path, text, samples, &f);
-    cbm__free_file(v->ctx, text, len);
-    if (s != CBM_OK)
-        return s;
+    CBM_TRY(cbm__func_read(v->ctx, path, text, samples, &f));
     if (CBM_ARRAY_PUSH(v->ctx, v->funcs.funcs, f) != CBM_OK) {
         cbm__func_free(v->ctx, &f);
         return CBM_E_NOMEM;
@@ -121,28 +115,11 @@ cbm_status cbm_view_add_function(cbm_view *v, const char *path, int samples)
     return CBM_OK;
 }
 
-cbm_status cbm_view_add_function_set(cbm_view *v, const char *path)
+static cbm_status add_surface_text(cbm_view *v, char id, const char *path, const char *text,
+                                   double size)
 {
-    if (!v || !path)
-        return CBM_E_INVALID;
-    char *text;
-    size_t len;
-    CBM_TRY(cbm__read_file(v->ctx, path, &text, &len));
-    cbm_status s = cbm__funcset_read_gallery(v->ctx, path, text, &v->funcs);
-    cbm__free_file(v->ctx, text, len);
-    return s;
-}
-
-cbm_status cbm_view_add_surface(cbm_view *v, char id, const char *path, double size)
-{
-    if (!v || !path)
-        return CBM_E_INVALID;
-    char *text;
-    size_t len;
-    CBM_TRY(cbm__read_file(v->ctx, path, &text, &len));
     cbm__surface sf;
     cbm_status s = cbm__surface_read(v->ctx, path, text, size > 0.0 ? size : 1.0, 6, &sf);
-    cbm__free_file(v->ctx, text, len);
     if (s != CBM_OK) {
         cbm__surface_free(v->ctx, &sf);
         return s;
@@ -163,29 +140,100 @@ cbm_status cbm_view_add_surface(cbm_view *v, char id, const char *path, double s
     return CBM_OK;
 }
 
-cbm_status cbm_view_add_contour(cbm_view *v, int id, const char *path)
+static cbm_status add_contour_text(cbm_view *v, int id, const char *path, const char *text)
+{
+    if (v->contours.len >= CBM__MAX_CONTOURS)
+        return cbm__fail(v->ctx, CBM_E_LIMIT, "%s: more than %d contours", path, CBM__MAX_CONTOURS);
+    cbm__contour c;
+    cbm_status s = cbm__contour_read(v->ctx, path, text, &c);
+    if (s != CBM_OK) {
+        CBM_ARRAY_FREE(v->ctx, c.pts);
+        return s;
+    }
+    c.id = id;
+    if (CBM_ARRAY_PUSH(v->ctx, v->contours, c) != CBM_OK) {
+        CBM_ARRAY_FREE(v->ctx, c.pts);
+        return CBM_E_NOMEM;
+    }
+    return CBM_OK;
+}
+
+static cbm_status parse_view(cbm_view *v, const char *path, const char *text);
+
+cbm_status cbm__view_add_text(cbm_view *v, cbm__side_kind kind, const char *name, const char *text)
+{
+    if (!v || !name || !text)
+        return CBM_E_INVALID;
+    switch (kind) {
+    case CBM__SIDE_VIEW:
+        return parse_view(v, name, text);
+    case CBM__SIDE_FUNC:
+        return add_function_text(v, name, text, -1);
+    case CBM__SIDE_FSET:
+        return cbm__funcset_read_gallery(v->ctx, name, text, &v->funcs);
+    case CBM__SIDE_SURFACE:
+        return add_surface_text(v, name[0], name, text, 1.0);
+    case CBM__SIDE_CONTOUR:
+        return add_contour_text(v, (int)v->contours.len + 1, name, text);
+    }
+    return CBM_E_INVALID;
+}
+
+/* Reads the file and hands its text to one of the readers above. */
+typedef struct side_args {
+    cbm__side_kind kind;
+    int samples, id;
+    double size;
+} side_args;
+
+static cbm_status add_file(cbm_view *v, const char *path, const side_args *a)
 {
     if (!v || !path)
         return CBM_E_INVALID;
     char *text;
     size_t len;
     CBM_TRY(cbm__read_file(v->ctx, path, &text, &len));
-    cbm__contour c;
-    cbm_status s = cbm__contour_read(v->ctx, path, text, &c);
+    cbm_status s;
+    switch (a->kind) {
+    case CBM__SIDE_FUNC:
+        s = add_function_text(v, path, text, a->samples);
+        break;
+    case CBM__SIDE_SURFACE:
+        s = add_surface_text(v, (char)a->id, path, text, a->size);
+        break;
+    case CBM__SIDE_CONTOUR:
+        s = add_contour_text(v, a->id, path, text);
+        break;
+    default:
+        s = cbm__view_add_text(v, a->kind, path, text);
+        break;
+    }
     cbm__free_file(v->ctx, text, len);
-    if (s != CBM_OK) {
-        CBM_ARRAY_FREE(v->ctx, c.pts);
-        return s;
-    }
-    c.id = id;
-    if (v->contours.len >= CBM__MAX_CONTOURS || CBM_ARRAY_PUSH(v->ctx, v->contours, c) != CBM_OK) {
-        CBM_ARRAY_FREE(v->ctx, c.pts);
-        return v->contours.len >= CBM__MAX_CONTOURS
-                   ? cbm__fail(v->ctx, CBM_E_LIMIT, "%s: more than %d contours", path,
-                               CBM__MAX_CONTOURS)
-                   : CBM_E_NOMEM;
-    }
-    return CBM_OK;
+    return s;
+}
+
+cbm_status cbm_view_add_function(cbm_view *v, const char *path, int samples)
+{
+    side_args a = {CBM__SIDE_FUNC, samples, 0, 0.0};
+    return add_file(v, path, &a);
+}
+
+cbm_status cbm_view_add_function_set(cbm_view *v, const char *path)
+{
+    side_args a = {CBM__SIDE_FSET, 0, 0, 0.0};
+    return add_file(v, path, &a);
+}
+
+cbm_status cbm_view_add_surface(cbm_view *v, char id, const char *path, double size)
+{
+    side_args a = {CBM__SIDE_SURFACE, 0, id, size};
+    return add_file(v, path, &a);
+}
+
+cbm_status cbm_view_add_contour(cbm_view *v, int id, const char *path)
+{
+    side_args a = {CBM__SIDE_CONTOUR, 0, id, 0.0};
+    return add_file(v, path, &a);
 }
 
 cbm_status cbm_view_load_colormap(cbm_view *v, const char *path)
@@ -243,8 +291,6 @@ static const char *ext_of(const char *path)
         return "";
     return dot + 1;
 }
-
-static cbm_status parse_view(cbm_view *v, const char *path, const char *text);
 
 cbm_status cbm_view_load_side_file(cbm_view *v, const char *path)
 {
@@ -319,7 +365,7 @@ static int numbers(const char *s, double *out, int n)
             s++;
         char *end;
         double x = strtod(s, &end);
-        if (end == s)
+        if (end == s || !isfinite(x))
             break;
         out[k++] = x;
         s = end;
@@ -466,10 +512,10 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             set_angle(v, (float)x[0]);
         } else if (KEY("initial color")) {
             NEED(1);
-            v->color = (int)x[0];
+            v->color = cbm__to_int(x[0]);
         } else if (KEY("color increment")) {
             NEED(1);
-            v->color_inc = (int)x[0];
+            v->color_inc = cbm__to_int(x[0]);
         } else if (KEY("initial line width")) {
             NEED(1);
             v->width = (float)x[0];
@@ -528,12 +574,12 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             }
         } else if (KEY("contour sides")) {
             NEED(1);
-            v->sides = x[0] < 3 ? 3 : (int)x[0];
+            v->sides = x[0] < 3 ? 3 : cbm__to_int(x[0]);
             if (v->sides > 1024)
                 v->sides = 1024;
         } else if (KEY("polygonization level")) {
             NEED(1);
-            int level = (int)x[0];
+            int level = cbm__to_int(x[0]);
             if (level > 9)
                 level = 9;
             v->sides = (int)rint(pow(2.0, level + 1));
