@@ -58,9 +58,9 @@ static bool acceptable(cbm_status s)
 }
 
 /* A program touching surfaces, contours, generalized cylinders, polygons and tropisms. */
-static const char *const program[] = {"@#", "@Gs", "F", "~", "a", "~", "l", "@Gc", "+",  "F",
-                                      "_",  "@Ge", "{", ".", "F", ".", "F", ".", "}",  "@O",
-                                      "@Ts", "F", "?P", "[", "&", "F", "%", "F", "]", "!"};
+static const char *const program[] = {"@#",  "@Gs", "F",  "~", "a", "~", "l", "@Gc", "+", "F",
+                                      "_",   "@Ge", "{",  ".", "F", ".", "F", ".",   "}", "@O",
+                                      "@Ts", "F",   "?P", "[", "&", "F", "%", "F",   "]", "!"};
 
 static void run_program(cbm_context *ctx, const cbm_view *v)
 {
@@ -89,8 +89,8 @@ static void run_program(cbm_context *ctx, const cbm_view *v)
 static void mutate(char *buf, size_t *len, size_t cap)
 {
     int k = 1 + (int)(next_rand() % 4);
-    static const char *const junk[] = {"-1", "1e300", "nan", "0", "999999", ":", "\n", " ",
-                                       "points: 3", "-0.0", "4 4 4 4"};
+    static const char *const junk[] = {"-1", "1e300", "nan",       "0",    "999999", ":",
+                                       "\n", " ",     "points: 3", "-0.0", "4 4 4 4"};
     for (int i = 0; i < k; i++) {
         size_t n = *len;
         size_t at = n ? (size_t)(next_rand() % n) : 0;
@@ -157,11 +157,10 @@ TEST(mutated_side_files)
             cbm_view *v = NULL;
             CHECK_OK(cbm_view_create(ctx, &v));
             /* surfaces are named by the first letter of their name: 'a' and 'l' are used */
-            const char *name = seeds[f].kind == CBM__SIDE_SURFACE ? (it & 1 ? "a.s" : "l.s")
-                                                                  : seeds[f].path;
+            const char *name =
+                seeds[f].kind == CBM__SIDE_SURFACE ? (it & 1 ? "a.s" : "l.s") : seeds[f].path;
             cbm_status s = cbm__view_add_text(v, seeds[f].kind, name, buf);
-            CHECK_MSG(acceptable(s), "%s mutation %d: %s", seeds[f].path, it,
-                      cbm_status_name(s));
+            CHECK_MSG(acceptable(s), "%s mutation %d: %s", seeds[f].path, it, cbm_status_name(s));
             run_program(ctx, v);
             cbm_view_destroy(v);
             cbm_context_clear_errors(ctx);
@@ -178,9 +177,10 @@ TEST(random_programs)
 {
     /* every command with parameters from a mix of ordinary and extreme values */
     static const char *const names[] = {
-        "F", "f", "G", "g", "+", "-", "&", "^", "\\", "/", "|", "[", "]", "!", "'", ";", ",",
-        "#", "~", "%", "{", "}", ".", "_", "@v", "@O", "@o", "@c", "@M", "@Ts", "@Ti", "@Td",
-        "@Gs", "@Gc", "@Ge", "@Gt", "@Gr", "@#", "@!", "?P", "?H", "?L", "?U", "@", "?", "A"};
+        "F",   "f",  "G",  "g",  "+",  "-",   "&",   "^",   "\\",  "/",   "|",   "[",
+        "]",   "!",  "'",  ";",  ",",  "#",   "~",   "%",   "{",   "}",   ".",   "_",
+        "@v",  "@O", "@o", "@c", "@M", "@Ts", "@Ti", "@Td", "@Gs", "@Gc", "@Ge", "@Gt",
+        "@Gr", "@#", "@!", "?P", "?H", "?L",  "?U",  "@",   "?",   "A"};
     static const double values[] = {0, 1, -1, 0.5, 2, 45, 90, 180, 360, -30, 1e-9, 1e6, 3, 7};
     enum { NN = sizeof names / sizeof names[0], NV = sizeof values / sizeof values[0] };
     for (int prog = 0; prog < 200; prog++) {
@@ -250,4 +250,61 @@ TEST(fuzz_corpus_replay)
     }
     closedir(d);
     CHECK(n > 0);
+}
+
+/* Out-of-memory loop over reading every kind of side file and interpreting with them. */
+static cbm_status oom_side_files(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    static const char view[] = "angle factor: 12\nline style: cylinder\ncontour sides: 5\n"
+                               "tropism: T: 0 -1 0 A: 30 E: 0.2\ntwist of cylinders: on\n";
+    static const char func[] = "fver 1 1\nname: f\nsamples: 5\nflip: off\npoints: 4\n"
+                               "0 0 1\n0.3 0.5 2\n0.6 0.6 1\n1 1 1\n";
+    static const char fset[] = "funcgalleryver 1 1\nitems: 1\nfver 1 1\nname: g\nsamples: 4\n"
+                               "flip: off\npoints: 4\n0 1\n0.3 1\n0.6 1\n1 1\n";
+    static const char surf[] = "0 1 0 1 0 0\nCONTACT POINT  X: 0 Y: 0 Z: 0\n"
+                               "END POINT  X: 0 Y: 1 Z: 0\nHEADING  X: 0 Y: 1 Z: 0\n"
+                               "UP  X: 0 Y: 0 Z: -1\nSIZE: 1\np\nc\na\nb\nd\n"
+                               "0 0 0 1 0 0 2 0 0 3 0 0\n0 1 0 1 1 0 2 1 0 3 1 0\n"
+                               "0 2 0 1 2 0 2 2 0 3 2 0\n0 3 0 1 3 0 2 3 0 3 3 0\n";
+    static const char con[] = "cver 1 3\nname: c\npoints: 4 4\ntype: cr\nsamples: 4\n"
+                              "1 0 0 1\n0 1 0 1\n-1 0 0 1\n0 -1 0 1\n";
+    cbm_view *v;
+    CBM_TRY(cbm_view_create(ctx, &v));
+    cbm_status s = cbm__view_add_text(v, CBM__SIDE_VIEW, "t.v", view);
+    if (s == CBM_OK)
+        s = cbm__view_add_text(v, CBM__SIDE_FUNC, "f.func", func);
+    if (s == CBM_OK)
+        s = cbm__view_add_text(v, CBM__SIDE_FSET, "g.fset", fset);
+    if (s == CBM_OK)
+        s = cbm__view_add_text(v, CBM__SIDE_SURFACE, "l.s", surf);
+    if (s == CBM_OK)
+        s = cbm__view_add_text(v, CBM__SIDE_CONTOUR, "c.con", con);
+    if (s == CBM_OK) {
+        cbm_scene *scene;
+        s = cbm_scene_create(ctx, &scene);
+        if (s == CBM_OK) {
+            static const char *const prog[] = {"@#", "@Gs", "F", "~", "l", "+", "F", "@Gc",
+                                               "{",  ".",   "f", "+", "f", ".", "}", "@Ge"};
+            cbm_tmodule m[16];
+            double par[16] = {1, 0, 1, 0, 1, 30, 1, 3, 0, 0, 1, 60, 1, 0, 0, 2};
+            for (int i = 0; i < 16; i++) {
+                m[i].name = prog[i];
+                m[i].params = &par[i];
+                m[i].nparams = (i == 0 || i == 7 || i == 15) ? 1 : 0;
+            }
+            cbm_turtle *t = NULL;
+            cbm_turtle_def def = {true};
+            s = cbm_turtle_interpret(ctx, v, &def, m, 16, scene, &t);
+            cbm_turtle_destroy(t);
+            cbm_scene_destroy(scene);
+        }
+    }
+    cbm_view_destroy(v);
+    return s;
+}
+
+TEST(out_of_memory_side_files)
+{
+    CHECK(test_oom_loop(oom_side_files, NULL) > 20);
 }

@@ -10,7 +10,7 @@
 #include <string.h>
 
 static const char *const program[] = {"@#", "@Gs", "F", "~", "a", "~", "l", "@Gc", "+", "F",
-                                      "_",  "@Ge", "{", ".", "F", ".", "F", ".", "}", "@O"};
+                                      "_",  "@Ge", "{", ".", "F", ".", "F", ".",   "}", "@O"};
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
