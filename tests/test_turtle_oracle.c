@@ -275,7 +275,8 @@ static bool read_ray(const char *path, ray *R)
 typedef struct model {
     const char *dir, *lfile, *view, *colors;
     bool homo;
-    int only_kind; /* -1: all; else compare only this kind, and require box containment */
+    int only_kind;  /* -1: all; else compare only this kind, and require box containment */
+    double obj_tol; /* scene bounds against cpfg's final.obj.gz; < 0: not comparable */
 } model;
 
 static double maxdev; /* largest |ours - cpfg| of the current model's primitives */
@@ -457,6 +458,39 @@ static void run_model(const model *md, bool compare_prims)
             free(R.pts);
         }
         CHECK(cbm_scene_triangle_count(scene) > 0);
+        /* the scene's bounds against cpfg's OBJ export, where there is one */
+        snprintf(path, sizeof path, "gzip -dc '" ORACLE "%s/ref/final.obj.gz' 2>/dev/null",
+                 md->dir);
+        FILE *obj = popen(path, "r");
+        if (obj) {
+            char line[512];
+            double olo[3] = {INFINITY, INFINITY, INFINITY},
+                   ohi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            size_t nv = 0;
+            while (fgets(line, sizeof line, obj)) {
+                double q[3];
+                if (line[0] == 'v' && line[1] == ' ' &&
+                    sscanf(line + 2, "%lf %lf %lf", &q[0], &q[1], &q[2]) == 3) {
+                    for (int k = 0; k < 3; k++) {
+                        olo[k] = fmin(olo[k], q[k]);
+                        ohi[k] = fmax(ohi[k], q[k]);
+                    }
+                    nv++;
+                }
+            }
+            pclose(obj);
+            cbm_vec3 slo, shi;
+            if (nv > 0 && cbm_scene_bounds(scene, &slo, &shi)) {
+                double d = fmax(fmax(fabs(slo.x - olo[0]), fabs(shi.x - ohi[0])),
+                                fmax(fmax(fabs(slo.y - olo[1]), fabs(shi.y - ohi[1])),
+                                     fmax(fabs(slo.z - olo[2]), fabs(shi.z - ohi[2]))));
+                fprintf(stderr, "%s: scene bounds vs cpfg's OBJ: largest difference %.3g\n",
+                        md->dir, d);
+                if (md->obj_tol >= 0.0)
+                    CHECK_MSG(d <= md->obj_tol, "%s: scene bounds differ from cpfg's OBJ by %g",
+                              md->dir, d);
+            }
+        }
         cbm_turtle_destroy(t);
     }
     cbm_scene_destroy(scene);
@@ -467,61 +501,61 @@ static void run_model(const model *md, bool compare_prims)
 
 TEST(quadratic_koch)
 {
-    model m = {"cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, -1};
+    model m = {"cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(compound_homo)
 {
-    model m = {"cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    model m = {"cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(compound_param)
 {
-    model m = {"cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    model m = {"cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(continuous_decomp)
 {
-    model m = {"cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, -1};
+    model m = {"cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(florigen_param)
 {
-    model m = {"cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, -1};
+    model m = {"cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(hormone_up)
 {
-    model m = {"cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, -1};
+    model m = {"cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(monopodial)
 {
-    model m = {"cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, -1};
+    model m = {"cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(sympodial)
 {
-    model m = {"cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, -1};
+    model m = {"cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, -1, 2e-3};
     run_model(&m, true);
 }
 
 TEST(random_moss)
 {
-    model m = {"cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, -1};
+    model m = {"cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, -1, -1};
     run_model(&m, true);
 }
 
 TEST(weeping_birch)
 {
-    model m = {"cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, -1};
+    model m = {"cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3};
     run_model(&m, true);
 }
 
@@ -530,25 +564,25 @@ TEST(weeping_birch)
  * contain ours. */
 TEST(query_position)
 {
-    model m = {"cpfg-query-position", "plant.l", "plant.v", "plant.map", false, CBM_PRIM_DISC};
+    model m = {"cpfg-query-position", "plant.l", "plant.v", "plant.map", false, CBM_PRIM_DISC, -1};
     run_model(&m, true);
 }
 
 TEST(leaf_rnd)
 {
-    model m = {"cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, -1};
+    model m = {"cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-2};
     run_model(&m, true);
 }
 
 TEST(tropisms)
 {
-    model m = {"cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, -1};
+    model m = {"cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, -1, 1e-3};
     run_model(&m, true);
 }
 
 TEST(lilac)
 {
-    model m = {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1};
+    model m = {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1, 1e-3};
     run_model(&m, true);
 }
 

@@ -342,7 +342,7 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
                          v3_madd(p1, f.l, -pr.r1)};
         return cbm_scene_add_polygon(t->scene, q, 4);
     }
-    int sides = t->view->line_style == CBM__LS_CYLINDER ? t->cur.sides : 4;
+    int sides = t->cur.sides; /* as cpfg's own OBJ output, pixel lines too */
     cbm_section s0 = {p0, f, pr.r0, pr.r0};
     cbm_section s1 = {p1, f, pr.r1, pr.r1};
     return cbm_scene_add_tube(t->scene, &s0, &s1, sides, false);
