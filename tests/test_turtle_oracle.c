@@ -484,8 +484,8 @@ static void run_model(const model *md, bool compare_prims)
                 double d = fmax(fmax(fabs(slo.x - olo[0]), fabs(shi.x - ohi[0])),
                                 fmax(fmax(fabs(slo.y - olo[1]), fabs(shi.y - ohi[1])),
                                      fmax(fabs(slo.z - olo[2]), fabs(shi.z - ohi[2]))));
-                fprintf(stderr, "%s: scene bounds vs cpfg's OBJ: largest difference %.3g\n",
-                        md->dir, d);
+                fprintf(stderr, "%s: scene bounds vs cpfg's OBJ: largest difference %.3g (ours %g %g %g %g %g %g)\n",
+                        md->dir, d, slo.x, shi.x, slo.y, shi.y, slo.z, shi.z);
                 if (md->obj_tol >= 0.0)
                     CHECK_MSG(d <= md->obj_tol, "%s: scene bounds differ from cpfg's OBJ by %g",
                               md->dir, d);

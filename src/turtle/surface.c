@@ -82,7 +82,7 @@ static cbm_status fmt_err(cbm_context *ctx, const char *path, int line, const ch
 }
 
 cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *text, double size,
-                             int subdiv, cbm__surface *s)
+                             int sprec, int tprec, cbm__surface *s)
 {
     memset(s, 0, sizeof *s);
     const char *p = text;
@@ -95,8 +95,22 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
         return fmt_err(ctx, path, 1, "empty surface file");
     if (!getline_(&p, buf, sizeof buf, &line))
         return fmt_err(ctx, path, line, "expected CONTACT POINT");
-    if (strstr(buf, "PRECISION") && !getline_(&p, buf, sizeof buf, &line))
-        return fmt_err(ctx, path, line, "expected CONTACT POINT");
+    /* precision: the view's, else the file's PRECISION line, else 5; as cpfg, a missing t
+     * precision takes the file's (or default) s precision */
+    int fs = 5;
+    if (strstr(buf, "PRECISION")) {
+        int a = 0, b = 0;
+        if (sscanf(buf, " PRECISION S: %d T: %d", &a, &b) == 2)
+            fs = a;
+        if (!getline_(&p, buf, sizeof buf, &line))
+            return fmt_err(ctx, path, line, "expected CONTACT POINT");
+    }
+    if (sprec <= 0)
+        sprec = fs;
+    if (tprec <= 0)
+        tprec = fs;
+    sprec = sprec < 1 ? 1 : sprec > 10 ? 10 : sprec;
+    tprec = tprec < 1 ? 1 : tprec > 10 ? 10 : tprec;
     if (sscanf(buf, " CONTACT POINT X: %f Y: %f Z: %f", &x, &y, &z) != 3)
         return fmt_err(ctx, path, line, "expected 'CONTACT POINT  X: x Y: y Z: z'");
     cp = v3(x, y, z);
@@ -131,9 +145,7 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
     v3_add(v3_add(v3_scale(left, ((q).x - cp.x) * k), v3_scale(hd, ((q).y - cp.y) * k)),           \
            v3_scale(up, ((q).z - cp.z) * k))
     s->end = XFORM(ep);
-    if (subdiv < 1)
-        subdiv = 1;
-    int n = subdiv;
+    const int ns = sprec, nt = tprec;
     for (;;) {
         /* patch header: name, colour line, three neighbour lines */
         if (!getline_(&p, buf, sizeof buf, &line))
@@ -173,10 +185,10 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
             }
         }
         uint32_t base = (uint32_t)s->pos.len;
-        for (int a = 0; a <= n; a++) {
-            double u = (double)a / n;
-            for (int b = 0; b <= n; b++) {
-                double t = (double)b / n;
+        for (int a = 0; a <= ns; a++) {
+            double u = (double)a / ns;
+            for (int b = 0; b <= nt; b++) {
+                double t = (double)b / nt;
                 cbm_vec3 P = v3(0, 0, 0), Pu = v3(0, 0, 0), Pt = v3(0, 0, 0);
                 for (int i = 0; i < 4; i++)
                     for (int j = 0; j < 4; j++) {
@@ -191,10 +203,10 @@ cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *tex
                 CBM_TRY(CBM_ARRAY_PUSH(ctx, s->nrm, v3_normalize(N)));
             }
         }
-        for (int a = 0; a < n; a++)
-            for (int b = 0; b < n; b++) {
-                uint32_t i0 = base + (uint32_t)(a * (n + 1) + b);
-                uint32_t i1 = i0 + 1, i2 = i0 + (uint32_t)(n + 1), i3 = i2 + 1;
+        for (int a = 0; a < ns; a++)
+            for (int b = 0; b < nt; b++) {
+                uint32_t i0 = base + (uint32_t)(a * (nt + 1) + b);
+                uint32_t i1 = i0 + 1, i2 = i0 + (uint32_t)(nt + 1), i3 = i2 + 1;
                 uint32_t tri[6] = {i0, i2, i1, i1, i2, i3};
                 for (int m = 0; m < 6; m++)
                     CBM_TRY(CBM_ARRAY_PUSH(ctx, s->tri, tri[m]));

@@ -46,10 +46,11 @@ typedef struct cbm__surface {
     CBM_ARRAY(uint32_t) tri;  /* 3 per triangle */
 } cbm__surface;
 
-/* size: the view file's size of the surface; subdiv: grid cells per patch side. On failure s
- * may hold memory: release it with cbm__surface_free. */
+/* size: the view file's size of the surface; sprec, tprec: cpfg's precisions (grid cells per
+ * patch side; 0: the file's or the default). On failure s may hold memory: release it with
+ * cbm__surface_free. */
 cbm_status cbm__surface_read(cbm_context *ctx, const char *path, const char *text, double size,
-                             int subdiv, cbm__surface *s);
+                             int sprec, int tprec, cbm__surface *s);
 void cbm__surface_free(cbm_context *ctx, cbm__surface *s);
 
 /* ---- contours (.con): cross-section curves, uniform cubic B-splines of control points ---- */

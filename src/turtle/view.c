@@ -116,10 +116,11 @@ static cbm_status add_function_text(cbm_view *v, const char *path, const char *t
 }
 
 static cbm_status add_surface_text(cbm_view *v, char id, const char *path, const char *text,
-                                   double size)
+                                   double size, int sprec, int tprec)
 {
     cbm__surface sf;
-    cbm_status s = cbm__surface_read(v->ctx, path, text, size > 0.0 ? size : 1.0, 6, &sf);
+    cbm_status s =
+        cbm__surface_read(v->ctx, path, text, size > 0.0 ? size : 1.0, sprec, tprec, &sf);
     if (s != CBM_OK) {
         cbm__surface_free(v->ctx, &sf);
         return s;
@@ -172,7 +173,7 @@ cbm_status cbm__view_add_text(cbm_view *v, cbm__side_kind kind, const char *name
     case CBM__SIDE_FSET:
         return cbm__funcset_read_gallery(v->ctx, name, text, &v->funcs);
     case CBM__SIDE_SURFACE:
-        return add_surface_text(v, name[0], name, text, 1.0);
+        return add_surface_text(v, name[0], name, text, 1.0, 0, 0);
     case CBM__SIDE_CONTOUR:
         return add_contour_text(v, (int)v->contours.len + 1, name, text);
     }
@@ -184,6 +185,7 @@ typedef struct side_args {
     cbm__side_kind kind;
     int samples, id;
     double size;
+    int sprec, tprec;
 } side_args;
 
 static cbm_status add_file(cbm_view *v, const char *path, const side_args *a)
@@ -199,7 +201,7 @@ static cbm_status add_file(cbm_view *v, const char *path, const side_args *a)
         s = add_function_text(v, path, text, a->samples);
         break;
     case CBM__SIDE_SURFACE:
-        s = add_surface_text(v, (char)a->id, path, text, a->size);
+        s = add_surface_text(v, (char)a->id, path, text, a->size, a->sprec, a->tprec);
         break;
     case CBM__SIDE_CONTOUR:
         s = add_contour_text(v, a->id, path, text);
@@ -214,25 +216,33 @@ static cbm_status add_file(cbm_view *v, const char *path, const side_args *a)
 
 cbm_status cbm_view_add_function(cbm_view *v, const char *path, int samples)
 {
-    side_args a = {CBM__SIDE_FUNC, samples, 0, 0.0};
+    side_args a = {CBM__SIDE_FUNC, samples, 0, 0.0, 0, 0};
     return add_file(v, path, &a);
 }
 
 cbm_status cbm_view_add_function_set(cbm_view *v, const char *path)
 {
-    side_args a = {CBM__SIDE_FSET, 0, 0, 0.0};
+    side_args a = {CBM__SIDE_FSET, 0, 0, 0.0, 0, 0};
     return add_file(v, path, &a);
 }
 
 cbm_status cbm_view_add_surface(cbm_view *v, char id, const char *path, double size)
 {
-    side_args a = {CBM__SIDE_SURFACE, 0, id, size};
+    side_args a = {CBM__SIDE_SURFACE, 0, id, size, 0, 0};
+    return add_file(v, path, &a);
+}
+
+/* A surface with cpfg's s and t precisions (0: the file's or the default). */
+static cbm_status add_surface_prec(cbm_view *v, char id, const char *path, double size, int sp,
+                                   int tp)
+{
+    side_args a = {CBM__SIDE_SURFACE, 0, id, size, sp, tp};
     return add_file(v, path, &a);
 }
 
 cbm_status cbm_view_add_contour(cbm_view *v, int id, const char *path)
 {
-    side_args a = {CBM__SIDE_CONTOUR, 0, id, 0.0};
+    side_args a = {CBM__SIDE_CONTOUR, 0, id, 0.0, 0, 0};
     return add_file(v, path, &a);
 }
 
@@ -621,6 +631,9 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             char id;
             char name[512];
             float size = 1.0f;
+            int sp = 0, tp = 0;
+            if (sscanf(a, " %c %511s %f %d %d", &id, name, &size, &sp, &tp) < 5)
+                sp = tp = 0; /* cpfg takes the precisions only as a pair */
             if (sscanf(a, " %c %511s %f", &id, name, &size) < 2) {
                 cbm__diag(v->ctx, CBM_ERROR, path, line, 1,
                           "surface: expects an id, a file name and a size");
@@ -629,7 +642,7 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             }
             char full[1100];
             side_path(v, name, full, sizeof full);
-            cbm_status s2 = cbm_view_add_surface(v, id, full, size);
+            cbm_status s2 = add_surface_prec(v, id, full, size, sp, tp);
             if (s2 != CBM_OK) {
                 cbm__diag(v->ctx, CBM_ERROR, path, line, 1, "cannot read surface file %s", full);
                 result = s2;
