@@ -983,6 +983,120 @@ static cbm_status poly_end(cbm_turtle *t)
     return CBM_OK;
 }
 
+/* The @ commands (and the queries): they end the current segment first, as in cpfg. */
+static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    const cbm_view *v = t->view;
+    if (cmd >= CBM_T_ROLL_HORIZ && cmd <= CBM_T_GC_END) {
+        CBM_TRY(end_node(t));
+    } else if (cmd >= CBM_T_USER_FIRST && cmd != CBM_T_ELASTICITY) {
+        CBM_TRY(end_node(t));
+    }
+    switch (cmd) {
+    case CBM_T_ROLL_HORIZ:
+        if (s->h.y < 1.0 && s->h.y > -1.0) {
+            s->l = v3_normalize(v3_cross(v3(0, 1, 0), s->h));
+            s->u = v3_cross(s->l, s->h);
+        }
+        return CBM_OK;
+    case CBM_T_SPHERE:
+    case CBM_T_CIRCLE:
+    case CBM_T_CONTOUR:
+        return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
+                              nparams);
+    case CBM_T_MOVE_TO:
+        if (nparams >= 2) {
+            s->pos = v3(params[0], params[1], nparams >= 3 ? params[2] : 0.0);
+            box_add(t, s->pos);
+        }
+        return CBM_OK;
+    case CBM_T_TROPISM_SET:
+    case CBM_T_TROPISM_INC:
+    case CBM_T_TROPISM_DEC: {
+        if (nparams == 0)
+            return CBM_OK; /* cpfg applies @T only with an index */
+        int i = cbm__to_int(params[0]) - 1;
+        if (i < 0 || i >= v->nmov)
+            return CBM_OK; /* cpfg: "Movement index out of range", ignored */
+        double aux = nparams >= 2 ? params[1] : v->mov[i].elasticity_inc;
+        if (cmd == CBM_T_TROPISM_DEC)
+            aux = -aux;
+        else if (cmd == CBM_T_TROPISM_SET)
+            aux = nparams >= 2 ? params[1] - s->mov_e[i] : -s->mov_e[i];
+        s->mov_e[i] += aux;
+        return CBM_OK;
+    }
+    case CBM_T_GC_START:
+        /* the turtle becomes the first control point (an open one is restarted, as cpfg) */
+        s->gc_on = true;
+        s->gc = gc_snapshot(s);
+        return CBM_OK;
+    case CBM_T_GC_CONTROL:
+    case CBM_T_GC_END: {
+        int rings = 4; /* cpfg's default */
+        if (nparams > 0) {
+            double r = params[0];
+            rings = r < 1.0 ? 1 : r > 10000.0 ? 10000 : (int)r;
+        }
+        if (!s->gc_on) {
+            /* cpfg starts a cylinder at a control point without @Gs */
+            s->gc_on = cmd == CBM_T_GC_CONTROL;
+            s->gc = gc_snapshot(s);
+            return CBM_OK;
+        }
+        CBM_TRY(gc_connect(t, rings));
+        if (cmd == CBM_T_GC_END)
+            s->gc_on = false;
+        return CBM_OK;
+    }
+    case CBM_T_GC_RADIUS:
+        if (nparams == 1) {
+            s->rtan_scale = params[0] != 0.0;
+        } else if (nparams >= 2) {
+            double a = params[0] * CBM_PI / 180.0;
+            s->rtan[0][0] = s->rtan[1][0] = cos(a) * params[1];
+            s->rtan[0][1] = s->rtan[1][1] = sin(a) * params[1];
+            if (nparams >= 4) {
+                double b = params[2] * CBM_PI / 180.0;
+                s->rtan[1][0] = cos(b) * params[3];
+                s->rtan[1][1] = sin(b) * params[3];
+            }
+        }
+        return CBM_OK;
+    case CBM_T_GC_TANGENT:
+        if (nparams > 0) {
+            s->tan[0] = params[0];
+            s->tan[1] = nparams > 1 ? params[1] : params[0];
+        }
+        return CBM_OK;
+    case CBM_T_CONTOUR_SET:
+        /* the view's contour with this id; the circle when none (as cpfg) */
+        s->contour = 0;
+        if (nparams > 0)
+            for (size_t i = 0; i < v->contours.len; i++)
+                if (v->contours.data[i].id == cbm__to_int(params[0])) {
+                    s->contour = (int)i + 1;
+                    break;
+                }
+        return CBM_OK;
+    case CBM_T_SIDES_SET:
+        s->sides = nparams > 0 ? cbm__to_int(params[0]) : 8;
+        if (s->sides < 3)
+            s->sides = 3;
+        if (s->sides > 1024)
+            s->sides = 1024;
+        return CBM_OK;
+    case CBM_T_QUERY_P:
+    case CBM_T_QUERY_H:
+    case CBM_T_QUERY_L:
+    case CBM_T_QUERY_U:
+        return query(t, cmd, params, nparams);
+    default:
+        return CBM_OK;
+    }
+}
+
 cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
 {
     tstate *s = &t->cur;
@@ -1119,114 +1233,7 @@ exec:
     default:
         break;
     }
-    /* the @ commands end the current segment first, as in cpfg */
-    if (cmd >= CBM_T_ROLL_HORIZ && cmd <= CBM_T_GC_END) {
-        CBM_TRY(end_node(t));
-    } else if (cmd >= CBM_T_USER_FIRST && cmd != CBM_T_ELASTICITY) {
-        CBM_TRY(end_node(t));
-    }
-    switch (cmd) {
-    case CBM_T_ROLL_HORIZ:
-        if (s->h.y < 1.0 && s->h.y > -1.0) {
-            s->l = v3_normalize(v3_cross(v3(0, 1, 0), s->h));
-            s->u = v3_cross(s->l, s->h);
-        }
-        return CBM_OK;
-    case CBM_T_SPHERE:
-    case CBM_T_CIRCLE:
-    case CBM_T_CONTOUR:
-        return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
-                              nparams);
-    case CBM_T_MOVE_TO:
-        if (nparams >= 2) {
-            s->pos = v3(params[0], params[1], nparams >= 3 ? params[2] : 0.0);
-            box_add(t, s->pos);
-        }
-        return CBM_OK;
-    case CBM_T_TROPISM_SET:
-    case CBM_T_TROPISM_INC:
-    case CBM_T_TROPISM_DEC: {
-        if (nparams == 0)
-            return CBM_OK; /* cpfg applies @T only with an index */
-        int i = cbm__to_int(params[0]) - 1;
-        if (i < 0 || i >= v->nmov)
-            return CBM_OK; /* cpfg: "Movement index out of range", ignored */
-        double aux = nparams >= 2 ? params[1] : v->mov[i].elasticity_inc;
-        if (cmd == CBM_T_TROPISM_DEC)
-            aux = -aux;
-        else if (cmd == CBM_T_TROPISM_SET)
-            aux = nparams >= 2 ? params[1] - s->mov_e[i] : -s->mov_e[i];
-        s->mov_e[i] += aux;
-        return CBM_OK;
-    }
-    case CBM_T_GC_START:
-        /* the turtle becomes the first control point (an open one is restarted, as cpfg) */
-        s->gc_on = true;
-        s->gc = gc_snapshot(s);
-        return CBM_OK;
-    case CBM_T_GC_CONTROL:
-    case CBM_T_GC_END: {
-        int rings = 4; /* cpfg's default */
-        if (nparams > 0) {
-            double r = params[0];
-            rings = r < 1.0 ? 1 : r > 10000.0 ? 10000 : (int)r;
-        }
-        if (!s->gc_on) {
-            /* cpfg starts a cylinder at a control point without @Gs */
-            s->gc_on = cmd == CBM_T_GC_CONTROL;
-            s->gc = gc_snapshot(s);
-            return CBM_OK;
-        }
-        CBM_TRY(gc_connect(t, rings));
-        if (cmd == CBM_T_GC_END)
-            s->gc_on = false;
-        return CBM_OK;
-    }
-    case CBM_T_GC_RADIUS:
-        if (nparams == 1) {
-            s->rtan_scale = params[0] != 0.0;
-        } else if (nparams >= 2) {
-            double a = params[0] * CBM_PI / 180.0;
-            s->rtan[0][0] = s->rtan[1][0] = cos(a) * params[1];
-            s->rtan[0][1] = s->rtan[1][1] = sin(a) * params[1];
-            if (nparams >= 4) {
-                double b = params[2] * CBM_PI / 180.0;
-                s->rtan[1][0] = cos(b) * params[3];
-                s->rtan[1][1] = sin(b) * params[3];
-            }
-        }
-        return CBM_OK;
-    case CBM_T_GC_TANGENT:
-        if (nparams > 0) {
-            s->tan[0] = params[0];
-            s->tan[1] = nparams > 1 ? params[1] : params[0];
-        }
-        return CBM_OK;
-    case CBM_T_CONTOUR_SET:
-        /* the view's contour with this id; the circle when none (as cpfg) */
-        s->contour = 0;
-        if (nparams > 0)
-            for (size_t i = 0; i < v->contours.len; i++)
-                if (v->contours.data[i].id == cbm__to_int(params[0])) {
-                    s->contour = (int)i + 1;
-                    break;
-                }
-        return CBM_OK;
-    case CBM_T_SIDES_SET:
-        s->sides = nparams > 0 ? cbm__to_int(params[0]) : 8;
-        if (s->sides < 3)
-            s->sides = 3;
-        if (s->sides > 1024)
-            s->sides = 1024;
-        return CBM_OK;
-    case CBM_T_QUERY_P:
-    case CBM_T_QUERY_H:
-    case CBM_T_QUERY_L:
-    case CBM_T_QUERY_U:
-        return query(t, cmd, params, nparams);
-    default:
-        return CBM_OK;
-    }
+    return exec_at(t, cmd, params, nparams);
 }
 
 cbm_status cbm__turtle_finish(cbm_turtle *t)
