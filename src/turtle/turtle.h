@@ -4,7 +4,9 @@
  * (cbm__turtle_lookup), and during interpretation calls cbm__turtle_exec for every module of the
  * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U) get their
  * parameters written back through `params`. Modules that are not turtle commands are skipped by
- * the engine (lookup returns CBM_T_NONE).
+ * the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
+ * An engine whose modules are cpfg's single symbols (`@` `M`(1,2) rather than `@M`(1,2)) calls
+ * cbm__turtle_feed for every module instead: it combines `@`, `?` and `~` with what follows.
  *
  * Side files (view file, surfaces, colour maps, materials, function files) are read by the
  * turtle module (src/turtle/...), because the view file configures the turtle; function files
@@ -70,7 +72,7 @@ int cbm__turtle_lookup(const char *name, size_t len);
 /* cbm_view (view file settings), cbm_funcset (function files) and cbm_turtle are declared in
  * include/cambium/turtle.h. */
 
-/// Interprets the string into `scene` (may be NULL: only queries and bounds are computed).
+/// A turtle drawing into `scene` (may be NULL: only queries, the record and the box are kept).
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
                               cbm_turtle **out);
 void cbm__turtle_destroy(cbm_turtle *t);
@@ -78,7 +80,7 @@ void cbm__turtle_destroy(cbm_turtle *t);
 void cbm__turtle_reset(cbm_turtle *t);
 /// Executes one module. params may be written (query modules).
 cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams);
-/// Finishes the pass (closes open generalized cylinders, polygons).
+/// Finishes the pass (ends the last segment, closes open polygons).
 cbm_status cbm__turtle_finish(cbm_turtle *t);
 /// `~` (CBM_T_SURFACE) names its surface with the module that follows it (`~l(2)`: the module
 /// `l` with parameter 2 is the surface `l` scaled by 2; 3 parameters scale x, y, z). The engine
