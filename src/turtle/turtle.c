@@ -581,11 +581,11 @@ static cbm_status contour_points(cbm_turtle *t, int contour, int sides, const do
         for (int i = 0; i < npts; i++) {
             float tt;
             if (i == 0) {
-                while (len[j] < eps && j < last_j)
+                while (j < last_j && len[j] < eps)
                     j++;
                 tt = 0.0f;
             } else {
-                while (len[j] < target && j < last_j)
+                while (j < last_j && len[j] < target)
                     j++;
                 int j2 = j - 1;
                 while (j2 > 0 && len[j] - len[j2] <= eps)
