@@ -325,6 +325,30 @@ TEST(single_symbol_modules)
     test_ctx_end(ctx);
 }
 
+TEST(twist_adjust)
+{
+    /* after F the reference is H = +y, U = -z; &(90) pitches (H = -z, U = -y); @Tp rebuilds U by
+     * the minimal rotation from the reference: the same frame. After /(90) (a roll, which the
+     * minimal rotation undoes) @Tp gives back U = -y; with @Tf first the roll is kept. */
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    prog p;
+    cbm_vec3 H, L, U;
+    cbm_turtle *t = run(ctx, &v, NULL, &p, "F &(90) /(90) @Tp");
+    cbm_turtle_state(t, NULL, &H, &L, &U, NULL, NULL);
+    check_v(H, 0, 0, -1, 1e-12);
+    check_v(U, 0, -1, 0, 1e-12);
+    check_v(v3_cross(H, U), L.x, L.y, L.z, 1e-12);
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    t = run(ctx, &v, NULL, &p, "F &(90) /(90) @Tf @Tp");
+    cbm_turtle_state(t, NULL, &H, &L, &U, NULL, NULL);
+    check_v(U, 1, 0, 0, 1e-12); /* rolled: U' = -L, L = -x before the roll */
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
 TEST(abop_tropism)
 {
     cbm_context *ctx = test_ctx();

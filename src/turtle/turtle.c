@@ -146,6 +146,8 @@ static const tname names[] = {
     {"@Ge", CBM_T_GC_END},
     {"@Gt", CBM_T_GC_TANGENT},
     {"@Gr", CBM_T_GC_RADIUS},
+    {"@Tp", CBM_T_TWIST_ADJUST},
+    {"@Tf", CBM_T_TWIST_KEEP},
     {"@#", CBM_T_CONTOUR_SET},
     {"@!", CBM_T_SIDES_SET},
     {"?P", CBM_T_QUERY_P},
@@ -1050,6 +1052,13 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
             s->gc_on = false;
         return CBM_OK;
     }
+    case CBM_T_TWIST_ADJUST:
+        adjust_up_and_left(s);
+        return CBM_OK;
+    case CBM_T_TWIST_KEEP:
+        s->prev_h = s->h;
+        s->prev_u = s->u;
+        return CBM_OK;
     case CBM_T_GC_RADIUS:
         if (nparams == 1) {
             s->rtan_scale = params[0] != 0.0;

@@ -62,8 +62,10 @@ typedef enum cbm_tcmd {
     CBM_T_TROPISM_DEC,                   /* @Td(i, de) */
     CBM_T_CONTOUR_SET,                   /* @#(id) contour of generalized cylinders */
     CBM_T_SIDES_SET,                     /* @!(n) sides of cylinders */
-    CBM_T_GC_TANGENT, /* @Gt(a[,b]) tangent parameters of generalized cylinders */
-    CBM_T_GC_RADIUS   /* @Gr(...) radius tangents of generalized cylinders */
+    CBM_T_GC_TANGENT,   /* @Gt(a[,b]) tangent parameters of generalized cylinders */
+    CBM_T_GC_RADIUS,    /* @Gr(...) radius tangents of generalized cylinders */
+    CBM_T_TWIST_ADJUST, /* @Tp: U follows H from the last drawn segment without twist */
+    CBM_T_TWIST_KEEP    /* @Tf: the current frame becomes the reference of @Tp */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.
