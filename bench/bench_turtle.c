@@ -1,9 +1,10 @@
 /* Benchmark of the turtle: interprets the quadratic Koch curve (ABOP fig. 1.9b, axiom F,
  * F -> F+F-F-FF+F+F-F, as cpfg's cpfg-quadratic-koch example with axiom -F) after n steps,
- * module by module through cbm__turtle_exec as the L-system engine does, without a scene, with
- * the primitive record, and (for smaller n) into a scene. Prints one CSV line per run:
+ * module by module as the L-system engine does (cbm__turtle_feed on the symbols, or
+ * cbm__turtle_exec on commands looked up once), without a scene, with the primitive record, and
+ * (for smaller n) into a scene. Prints one CSV line per run:
  * what,steps,modules,seconds,ns_per_module,peak_bytes.
- * Usage: bench_turtle [max_steps (default 7)] */
+ * Usage: bench_turtle [max_steps (default 7)] [exec: only the plain exec runs, for profiling] */
 #define _POSIX_C_SOURCE 200809L
 #include "turtle/tint.h"
 
@@ -51,14 +52,12 @@ static unsigned char *koch(int n, size_t *len)
         m = k;
     }
     free(tmp);
-    for (size_t j = 0; j < m; j++)
-        s[j] = (unsigned char)cbm__turtle_lookup((const char *)&s[j], 1);
     *len = m;
     return s;
 }
 
 static void run(const char *what, int steps, const unsigned char *cmds, size_t n, bool record,
-                bool with_scene)
+                bool with_scene, bool feed)
 {
     cbm_context_def def = cbm_context_def_default();
     def.limits.max_bytes = 0;
@@ -79,8 +78,14 @@ static void run(const char *what, int steps, const unsigned char *cmds, size_t n
     cbm__turtle_set_record(t, record);
     double t0 = now();
     cbm_status s = CBM_OK;
-    for (size_t i = 0; i < n && s == CBM_OK; i++)
-        s = cbm__turtle_exec(t, cmds[i], NULL, 0);
+    if (feed) {
+        /* the symbols as the engine holds them: the turtle looks each one up */
+        for (size_t i = 0; i < n && s == CBM_OK; i++)
+            s = cbm__turtle_feed(t, cmds[i], NULL, 0);
+    } else {
+        for (size_t i = 0; i < n && s == CBM_OK; i++)
+            s = cbm__turtle_exec(t, cmds[i], NULL, 0);
+    }
     if (s == CBM_OK)
         s = cbm__turtle_finish(t);
     double dt = now() - t0;
@@ -95,17 +100,25 @@ static void run(const char *what, int steps, const unsigned char *cmds, size_t n
 int main(int argc, char **argv)
 {
     int max = argc > 1 ? atoi(argv[1]) : 7;
+    bool only_exec = argc > 2 && strcmp(argv[2], "exec") == 0; /* for profiling */
     if (max < 1 || max > 9)
         max = 7;
     printf("what,steps,modules,seconds,ns_per_module,peak_bytes\n");
     for (int n = max - 2; n <= max; n++) {
         size_t len;
-        unsigned char *cmds = koch(n, &len);
-        run("turtle", n, cmds, len, false, false);
-        run("turtle+record", n, cmds, len, true, false);
-        if (n <= 6)
-            run("turtle+scene", n, cmds, len, false, true);
+        unsigned char *syms = koch(n, &len);
+        if (!only_exec)
+            run("feed", n, syms, len, false, false, true);
+        unsigned char *cmds = malloc(len);
+        for (size_t j = 0; j < len; j++)
+            cmds[j] = (unsigned char)cbm__turtle_lookup((const char *)&syms[j], 1);
+        run("exec", n, cmds, len, false, false, false);
+        if (!only_exec)
+            run("exec+record", n, cmds, len, true, false, false);
+        if (n <= 6 && !only_exec)
+            run("exec+scene", n, cmds, len, false, true, false);
         free(cmds);
+        free(syms);
     }
     return 0;
 }

@@ -95,6 +95,19 @@ TEST(lookup)
     CHECK_EQ_INT(cbm__turtle_lookup(",", 1), CBM_T_COLOR_DEC);
     CHECK_EQ_INT(cbm__turtle_lookup("_", 1), CBM_T_ELASTICITY);
     CHECK_EQ_INT(cbm__turtle_lookup("A", 1), CBM_T_NONE);
+    static const char chars[] = "FfGg+-&^\\/|[]!';,#~%{}._";
+    static const int cmds[] = {
+        CBM_T_F,           CBM_T_f,          CBM_T_G,           CBM_T_g,         CBM_T_LEFT,
+        CBM_T_RIGHT,       CBM_T_PITCH_DOWN, CBM_T_PITCH_UP,    CBM_T_ROLL_LEFT, CBM_T_ROLL_RIGHT,
+        CBM_T_TURN_AROUND, CBM_T_PUSH,       CBM_T_POP,         CBM_T_WIDTH,     CBM_T_COLOR_INC,
+        CBM_T_COLOR_INC,   CBM_T_COLOR_DEC,  CBM_T_WIDTH_INC,   CBM_T_SURFACE,   CBM_T_CUT,
+        CBM_T_POLY_BEGIN,  CBM_T_POLY_END,   CBM_T_POLY_VERTEX, CBM_T_ELASTICITY};
+    CHECK_EQ_INT(sizeof chars - 1, sizeof cmds / sizeof cmds[0]);
+    for (size_t i = 0; i + 1 < sizeof chars; i++)
+        CHECK_EQ_INT(cbm__turtle_lookup(&chars[i], 1), cmds[i]);
+    char hi = (char)0xC3;
+    CHECK_EQ_INT(cbm__turtle_lookup(&hi, 1), CBM_T_NONE);
+    CHECK_EQ_INT(cbm__turtle_lookup("@Tp", 3), CBM_T_TWIST_ADJUST);
     CHECK_EQ_INT(cbm__turtle_lookup("@G", 2), CBM_T_NONE);
 }
 

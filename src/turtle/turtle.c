@@ -156,8 +156,27 @@ static const tname names[] = {
     {"?U", CBM_T_QUERY_U},
 };
 
+/* One-character commands, by character (the common case, looked up per module by
+ * cbm__turtle_feed). */
+static const unsigned char single[128] = {
+    ['F'] = CBM_T_F,          ['f'] = CBM_T_f,           ['G'] = CBM_T_G,
+    ['g'] = CBM_T_g,          ['+'] = CBM_T_LEFT,        ['-'] = CBM_T_RIGHT,
+    ['&'] = CBM_T_PITCH_DOWN, ['^'] = CBM_T_PITCH_UP,    ['\\'] = CBM_T_ROLL_LEFT,
+    ['/'] = CBM_T_ROLL_RIGHT, ['|'] = CBM_T_TURN_AROUND, ['['] = CBM_T_PUSH,
+    [']'] = CBM_T_POP,        ['!'] = CBM_T_WIDTH,       ['\''] = CBM_T_COLOR_INC,
+    [';'] = CBM_T_COLOR_INC,  [','] = CBM_T_COLOR_DEC,   ['#'] = CBM_T_WIDTH_INC,
+    ['~'] = CBM_T_SURFACE,    ['%'] = CBM_T_CUT,         ['{'] = CBM_T_POLY_BEGIN,
+    ['}'] = CBM_T_POLY_END,   ['.'] = CBM_T_POLY_VERTEX,
+};
+
 int cbm__turtle_lookup(const char *name, size_t len)
 {
+    if (len == 1) {
+        unsigned char c = (unsigned char)name[0];
+        if (c == '_')
+            return CBM_T_ELASTICITY;
+        return c < 128 ? single[c] : CBM_T_NONE;
+    }
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (strlen(names[i].name) == len && memcmp(names[i].name, name, len) == 0)
             return names[i].cmd;
@@ -318,7 +337,7 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
                                int color, cbm_vec3 h, cbm_vec3 u)
 {
     cbm_vec3 d = v3_sub(p1, p0);
-    if (v3_norm2(d) <= 0.00001 || w1 <= 0.0)
+    if (v3_norm2(d) <= 0.00001 || w1 <= 0.0 || (!t->record && !t->scene))
         return CBM_OK;
     cbm_prim pr;
     memset(&pr, 0, sizeof pr);
