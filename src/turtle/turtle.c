@@ -88,8 +88,6 @@ struct cbm_turtle {
     CBM_ARRAY(double) cpts;
     CBM_ARRAY(cbm_vec3) ringv; /* ring vertices of one connection */
     CBM_ARRAY(uint32_t) ringt;
-    /* surface pending (~ waits for the module naming the surface) */
-    bool surface_pending;
     char prefix[3]; /* cbm__turtle_feed: '@', '?', '~' or "@T"... waiting for their module */
     int nprefix;
     /* record */
@@ -256,7 +254,6 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->polycolor.len = 0;
     t->polystart.len = 0;
     t->cut_depth = 0;
-    t->surface_pending = false;
     t->nprefix = 0;
     t->prims.len = 0;
     t->pts.len = 0;
@@ -808,7 +805,6 @@ static const cbm__surface *find_surface(const cbm_view *v, char id)
 cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
                                int nparams)
 {
-    t->surface_pending = false;
     if (t->cut_depth > 0)
         return CBM_OK;
     if (len != 1)
@@ -1130,10 +1126,6 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     tstate *s = &t->cur;
     const cbm_view *v = t->view;
     t->module_index++;
-    if (t->surface_pending) {
-        /* the engine must pass the module after ~ to cbm__turtle_surface */
-        t->surface_pending = false;
-    }
     if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_U) {
         for (int i = 0; i < nparams; i++)
             if (!isfinite(params[i]))
@@ -1144,11 +1136,10 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     if (t->cut_depth > 0) {
         if (cmd == CBM_T_PUSH)
             t->cut_depth++;
-        else if (cmd == CBM_T_POP && --t->cut_depth == 0)
-            goto exec; /* the ] closing the cut branch is interpreted */
-        return CBM_OK;
+        if (cmd != CBM_T_POP || --t->cut_depth > 0)
+            return CBM_OK;
+        /* the ] closing the cut branch is interpreted */
     }
-exec:
     switch (cmd) {
     case CBM_T_NONE:
         return CBM_OK;
@@ -1237,9 +1228,7 @@ exec:
             s->elasticity += v->elasticity_inc;
         return CBM_OK;
     case CBM_T_SURFACE:
-        CBM_TRY(end_node(t));
-        t->surface_pending = true;
-        return CBM_OK;
+        return end_node(t); /* the surface comes with the next module (cbm__turtle_surface) */
     case CBM_T_CUT:
         if (nparams > 0)
             return CBM_OK; /* cpfg's parametric % belongs to environment programs */
