@@ -424,6 +424,24 @@ static cbm_turtle *run_scene(cbm_context *ctx, const cbm_view *v, prog *p, const
     return t;
 }
 
+TEST(torque)
+{
+    /* T = +x, e = 0.5, H = +y, U = -z: D = 0.5 x; cpfg's code turns U about U x D = -0.5 y by
+     * -0.5 rad, i.e. about +y by 0.5 rad: U = (-sin 0.5, 0, -cos 0.5), away from D */
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    prog p;
+    cbm_vec3 H, L, U;
+    cbm_turtle *t = run(ctx, &v, "torque: T: 1 0 0 E: 0.5\n", &p, "F");
+    cbm_turtle_state(t, NULL, &H, &L, &U, NULL, NULL);
+    check_v(H, 0, 1, 0, 1e-12);
+    check_v(U, -sin(0.5), 0, -cos(0.5), 1e-12);
+    check_v(L, -cos(0.5), 0, sin(0.5), 1e-12);
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
 TEST(generalized_cylinder)
 {
     cbm_context *ctx = test_ctx();

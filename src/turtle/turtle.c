@@ -461,8 +461,9 @@ static void movements(cbm_turtle *t)
     }
     double twl = v3_norm(tw);
     if (twl > 0.0) {
-        /* torque: roll U towards the projection of the torque direction on the plane normal
-         * to H, by an angle |U x D| (capped at 1 rad) */
+        /* torque: roll U about H by the angle |U x D| (capped at 1 rad), D the torque direction
+         * projected normal to H, in the sense of cpfg's code: away from D (its comment says
+         * towards; the code's quaternion rotates by the opposite angle), so U settles at -D */
         cbm_vec3 dn = v3_scale(tw, 1.0 / twl);
         cbm_vec3 c = v3_cross(s->h, dn);
         if (v3_dot(c, c) > 0.00000001) {
@@ -470,7 +471,7 @@ static void movements(cbm_turtle *t)
             cbm_vec3 ax = v3_cross(s->u, D);
             double al = v3_norm(ax);
             if (al >= 0.0000001) {
-                s->u = rot_axis(s->u, v3_scale(ax, 1.0 / al), al > 1.0 ? 1.0 : al);
+                s->u = rot_axis(s->u, v3_scale(ax, 1.0 / al), al > 1.0 ? -1.0 : -al);
                 s->l = v3_cross(s->h, s->u);
             }
             s->prev_h = s->h;
