@@ -684,6 +684,44 @@ TEST(surface_file)
     test_ctx_end(ctx);
 }
 
+TEST(engine_interface)
+{
+    /* the engine's way: lookup once, exec per module, ~ followed by cbm__turtle_surface; and a
+     * second pass after reset gives the same result */
+    cbm_context *ctx = test_ctx();
+    char path[1024];
+    snprintf(path, sizeof path, "%s/e.s", test_tmp_dir());
+    write_file(path, "0 1 0 1 0 0\nCONTACT POINT  X: 0 Y: 0 Z: 0\nEND POINT  X: 0 Y: 2 Z: 0\n"
+                     "HEADING  X: 0 Y: 1 Z: 0\nUP  X: 0 Y: 0 Z: -1\nSIZE: 1\np\nc\na\nb\nd\n"
+                     "0 0 0 1 0 0 2 0 0 3 0 0\n0 1 0 1 1 0 2 1 0 3 1 0\n"
+                     "0 2 0 1 2 0 2 2 0 3 2 0\n0 3 0 1 3 0 2 3 0 3 3 0\n");
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    CHECK_OK(cbm_view_add_surface(v, 'k', path, 1.0));
+    cbm_turtle *t;
+    CHECK_OK(cbm__turtle_create(ctx, v, NULL, &t));
+    cbm__turtle_set_record(t, true);
+    int F = cbm__turtle_lookup("F", 1), S = cbm__turtle_lookup("~", 1),
+        Q = cbm__turtle_lookup("?P", 2);
+    for (int pass = 0; pass < 2; pass++) {
+        cbm__turtle_reset(t);
+        double one[1] = {1.5}, q[3] = {0, 0, 0};
+        CHECK_OK(cbm__turtle_exec(t, F, NULL, 0));
+        CHECK_OK(cbm__turtle_exec(t, S, NULL, 0));
+        CHECK_OK(cbm__turtle_surface(t, "k", 1, one, 1));
+        CHECK_OK(cbm__turtle_exec(t, Q, q, 3));
+        CHECK_OK(cbm__turtle_finish(t));
+        /* F to y = 1, then the surface's end point y = 2, scaled by 1.5 */
+        CHECK_NEAR(q[1], 4.0, 1e-12);
+        CHECK_EQ_INT(cbm_turtle_prim_count(t), 2);
+    }
+    CHECK_STATUS(cbm__turtle_surface(t, "kk", 2, NULL, 0), CBM_E_RUNTIME);
+    cbm__turtle_destroy(t);
+    cbm_view_destroy(v);
+    cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
 static cbm_status oom_body(cbm_context *ctx, void *ud)
 {
     (void)ud;

@@ -1342,15 +1342,6 @@ cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cb
             continue;
         }
         int cmd = cbm__turtle_lookup(nm, strlen(nm));
-        if (cmd == CBM_T_SURFACE) {
-            s = cbm__turtle_exec(t, cmd, mods[i].params, mods[i].nparams);
-            if (s == CBM_OK && i + 1 < n) {
-                i++;
-                const char *sn = mods[i].name ? mods[i].name : "";
-                s = cbm__turtle_surface(t, sn, strlen(sn), mods[i].params, mods[i].nparams);
-            }
-            continue;
-        }
         if (cmd != CBM_T_NONE)
             s = cbm__turtle_exec(t, cmd, mods[i].params, mods[i].nparams);
     }
