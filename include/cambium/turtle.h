@@ -3,9 +3,11 @@
  * A view (cbm_view) holds the settings of a cpfg view file (angle increment, initial width, line
  * style, tropisms, contour sides, ...) and the side files it names or that are added to it:
  * function files (.func), surfaces (.s), contours (.con), a colour map (.map) or materials (.mat).
- * cbm_turtle_interpret runs a string given as a list of modules (name + parameters) through the
- * turtle into a scene, and keeps a record of the primitives in cpfg's .ray terms (cylinders and
- * cones with end points and radii, polygons, spheres, discs, surfaces) and cpfg's view-volume box.
+ * cbm_turtle_interpret runs a string given as a list of modules (name + parameters; cpfg's
+ * one-character modules such as "@" "M" are combined as cpfg does) through the turtle into a
+ * scene, and keeps a record of the primitives in cpfg's .ray terms (cylinders and cones with end
+ * points and radii, polygons, spheres, discs, surfaces, generalized-cylinder triangles) and
+ * cpfg's view-volume box. docs/turtle.md lists the commands and settings.
  * Lengths are in the model's units (cpfg has none; read them as metres), angles in degrees in the
  * files and parameters, as cpfg.
  */
@@ -32,7 +34,8 @@ CBM_API void cbm_view_destroy(cbm_view *view);
 /// Adds a function file (.func, cpfg "fver 1 1" or "range:" format). Functions are numbered
 /// from 1 in the order they are added, as cpfg's func(id, x). samples <= 2: the file's own.
 CBM_API cbm_status cbm_view_add_function(cbm_view *view, const char *path, int samples);
-/// Adds a predefined surface (.s, cpfg's bicubic patch format) drawn by ~id, scaled by 1/size.
+/// Adds a predefined surface (.s, cpfg's bicubic patch format) drawn by ~id, scaled so that the
+/// file's SIZE becomes `size` (cpfg's view-file size).
 CBM_API cbm_status cbm_view_add_surface(cbm_view *view, char id, const char *path, double size);
 /// Adds a contour (.con) selected by @#(id) for generalized cylinders.
 CBM_API cbm_status cbm_view_add_contour(cbm_view *view, int id, const char *path);
@@ -57,7 +60,8 @@ CBM_API int cbm_funcset_count(const cbm_funcset *fs);
 /// Value of function id (1-based) at x in [0, 1] (clamped). 0 for an unknown id.
 CBM_API double cbm_funcset_value(const cbm_funcset *fs, int id, double x);
 
-/// One module of a string: its name ("F", "@Gs", "?P", "~") and its parameters.
+/// One module of a string: its name ("F", "@Gs", "?P", or cpfg's single symbols "@", "~", ...)
+/// and its parameters.
 typedef struct cbm_tmodule {
     const char *name;
     int nparams;
@@ -70,8 +74,9 @@ typedef enum cbm_prim_kind {
     CBM_PRIM_POLYGON,  ///< points[first .. first+count)
     CBM_PRIM_SPHERE,   ///< centre p0, radius r0
     CBM_PRIM_DISC,     ///< centre p0, radius r0, normal p1 (the turtle's up)
-    CBM_PRIM_SURFACE,  ///< predefined surface `id` at p0, scale r0, points = its triangle corners
-    CBM_PRIM_GCYL      ///< generalized cylinder: points = spine points, count of them
+    CBM_PRIM_SURFACE,  ///< predefined surface `id` at p0, scale r0; points: its placed vertices
+    CBM_PRIM_GCYL      ///< a generalized-cylinder piece p0 -> p1 (radii r0, r1); points: its
+                       ///< triangles' corners, 3 per triangle, in cpfg's order
 } cbm_prim_kind;
 
 typedef struct cbm_prim {
@@ -89,8 +94,9 @@ typedef struct cbm_turtle_def {
     bool record; ///< keep the primitive record (cbm_turtle_prims)
 } cbm_turtle_def;
 
-/// Interprets modules[0..n) with the view into scene (may be NULL). *out receives the turtle
-/// with its record, to read with the accessors below and release with cbm_turtle_destroy.
+/// Interprets modules[0..n) with the view into scene (may be NULL). def may be NULL (record on).
+/// *out receives the turtle with its record, to read with the accessors below and release with
+/// cbm_turtle_destroy. On failure *out is NULL and the context holds the message.
 CBM_API cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view,
                                         const cbm_turtle_def *def, cbm_tmodule *modules, size_t n,
                                         cbm_scene *scene, cbm_turtle **out);
