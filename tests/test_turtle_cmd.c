@@ -232,11 +232,20 @@ TEST(branches_and_cut)
     cbm_view *v;
     prog p;
     cbm_vec3 P, H;
-    cbm_turtle *t = run(ctx, &v, NULL, &p, "[ + F [ F ] ] F [ F % F [ F ] F ] F ]");
+    const char *src = "[ + F [ F ] ] F [ F % F [ F ] F ] F ]";
+    /* cpfg's default interprets past % (the engine cuts when deriving): every F draws */
+    cbm_turtle *t = run(ctx, &v, NULL, &p, src);
     cbm_turtle_state(t, &P, &H, NULL, NULL, NULL, NULL);
     check_v(P, 0, 2, 0, TOL);
     check_v(H, 0, 1, 0, TOL);
-    /* + F, F (inner), F, F before %, F: five; the cut part draws nothing; unmatched ] ignored */
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 8);
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    /* with "interpretation past %: off" the rest of the branch is skipped: + F, F (inner), F,
+     * F before %, F after the branch; the unmatched ] is ignored */
+    t = run(ctx, &v, "interpretation past %: off\n", &p, src);
+    cbm_turtle_state(t, &P, &H, NULL, NULL, NULL, NULL);
+    check_v(P, 0, 2, 0, TOL);
     CHECK_EQ_INT(cbm_turtle_prim_count(t), 5);
     cbm_turtle_destroy(t);
     cbm_view_destroy(v);

@@ -86,6 +86,7 @@ struct cbm_view {
     cbm__line_style line_style;
     int sides;     /* contour sides of cylinders */
     bool gc_twist; /* twist of cylinders */
+    bool past_cut; /* interpret past % (cpfg's default: the engine cuts when deriving) */
     /* ABOP tropism (T and e of ABOP section 2.2: "tropism direction", "initial elasticity") */
     cbm_vec3 tropism_dir;
     double elasticity, elasticity_inc;

@@ -1231,9 +1231,10 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_SURFACE:
         return end_node(t); /* the surface comes with the next module (cbm__turtle_surface) */
     case CBM_T_CUT:
-        if (nparams > 0)
-            return CBM_OK; /* cpfg's parametric % belongs to environment programs */
-        t->cut_depth = 1;
+        /* cpfg cuts when deriving; the turtle skips the rest of the branch only with
+         * "interpretation past %: off". The parametric % belongs to environment programs. */
+        if (nparams == 0 && !v->past_cut)
+            t->cut_depth = 1;
         return CBM_OK;
     case CBM_T_POLY_BEGIN:
         CBM_TRY(end_node(t));

@@ -38,6 +38,7 @@ static void set_defaults(cbm_view *v)
     v->scale = 1.0;
     v->line_style = CBM__LS_PIXEL;
     v->sides = 8;
+    v->past_cut = true;
     v->tropism_dir = v3(0, 1, 0);
     v->elasticity = 0.0;
     v->elasticity_inc = 0.0;
@@ -597,6 +598,11 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
                 v->sides = 3;
         } else if (KEY("twist of cylinders")) {
             v->gc_twist = word_on(a);
+        } else if (KEY("interpretation past %")) {
+            const char *w = a;
+            while (*w == ' ' || *w == '\t')
+                w++;
+            v->past_cut = strncmp(w, "off", 3) != 0;
         } else if (KEY("function")) {
             char name[512];
             int samples = -1;
