@@ -135,7 +135,7 @@ TEST(plant_not_blank_centred_and_filling)
     cbm_scene *s = NULL;
     CHECK_OK(cbm_scene_create(ctx, &s));
     CHECK_OK(cbm_scene_demo_tree(ctx, s, 500, 6, false, 2));
-    const cbm_view views[4] = {CBM_VIEW_FRONT, CBM_VIEW_SIDE, CBM_VIEW_TOP, CBM_VIEW_ISO};
+    const cbm_camera_view views[4] = {CBM_VIEW_FRONT, CBM_VIEW_SIDE, CBM_VIEW_TOP, CBM_VIEW_ISO};
     for (int v = 0; v < 4; v++) {
         cbm_write_options o = small_opts(200, 160);
         o.view = views[v];

@@ -9,5 +9,6 @@
 #include "cambium/bend.h"
 #include "cambium/lsys.h"
 #include "cambium/write.h"
+#include "cambium/turtle.h"
 
 #endif

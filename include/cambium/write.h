@@ -24,13 +24,13 @@ extern "C" {
 
 /// Where the camera looks from (PNG, SVG). Front looks along -z, side along -x (from +x), top
 /// along -y; iso from (+1, +0.8, +1) towards the plant; vector uses view_dir.
-typedef enum cbm_view {
+typedef enum cbm_camera_view {
     CBM_VIEW_FRONT,
     CBM_VIEW_SIDE,
     CBM_VIEW_TOP,
     CBM_VIEW_ISO,
     CBM_VIEW_VECTOR
-} cbm_view;
+} cbm_camera_view;
 
 /// What the colour of a part shows.
 typedef enum cbm_color_by {
@@ -44,7 +44,7 @@ typedef enum cbm_color_by {
 
 typedef struct cbm_write_options {
     int width, height;     ///< picture size, pixels (PNG, SVG)
-    cbm_view view;         ///< camera direction (PNG, SVG)
+    cbm_camera_view view;  ///< camera direction (PNG, SVG)
     cbm_vec3 view_dir;     ///< with CBM_VIEW_VECTOR: direction the camera looks along
     float background[4];   ///< linear RGBA; alpha 0 gives a transparent PNG / no SVG backdrop
     cbm_color_by color_by; ///< colouring of every writer (vertex colours, materials, pixels)

@@ -4,7 +4,9 @@
  * (cbm__turtle_lookup), and during interpretation calls cbm__turtle_exec for every module of the
  * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U) get their
  * parameters written back through `params`. Modules that are not turtle commands are skipped by
- * the engine (lookup returns CBM_T_NONE).
+ * the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
+ * An engine whose modules are cpfg's single symbols (`@` `M`(1,2) rather than `@M`(1,2)) calls
+ * cbm__turtle_feed for every module instead: it combines `@`, `?` and `~` with what follows.
  *
  * Side files (view file, surfaces, colour maps, materials, function files) are read by the
  * turtle module (src/turtle/...), because the view file configures the turtle; function files
@@ -14,56 +16,65 @@
 #define CBM_TURTLE_H
 
 #include "cambium/geom.h"
+#include "cambium/turtle.h"
 
 /* The turtle commands, ABOP and cpfg. The names in comments are the module symbols. */
 typedef enum cbm_tcmd {
     CBM_T_NONE = 0,
-    CBM_T_F,                /* F  move forward drawing */
-    CBM_T_f,                /* f  move forward without drawing */
-    CBM_T_G,                /* G  move forward drawing, not a polygon vertex */
-    CBM_T_g,                /* g  move forward, not drawing, not a polygon vertex */
-    CBM_T_LEFT,             /* +  turn left */
-    CBM_T_RIGHT,            /* -  turn right */
-    CBM_T_PITCH_DOWN,       /* &  */
-    CBM_T_PITCH_UP,         /* ^  */
-    CBM_T_ROLL_LEFT,        /* \  */
-    CBM_T_ROLL_RIGHT,       /* /  */
-    CBM_T_TURN_AROUND,      /* |  */
-    CBM_T_PUSH,             /* [  */
-    CBM_T_POP,              /* ]  */
-    CBM_T_WIDTH,            /* !  set or decrement width */
-    CBM_T_COLOR_INC,        /* '  increment colour index */
-    CBM_T_COLOR_DEC,        /* ;  decrement colour index (cpfg) */
-    CBM_T_WIDTH_INC,        /* #  increment width (cpfg) */
-    CBM_T_SURFACE,          /* ~  predefined surface */
-    CBM_T_CUT,              /* %  cut the rest of the branch */
-    CBM_T_POLY_BEGIN,       /* {  */
-    CBM_T_POLY_END,         /* }  */
-    CBM_T_POLY_VERTEX,      /* .  */
-    CBM_T_ROLL_HORIZ,       /* @v roll to horizontal */
-    CBM_T_SPHERE,           /* @O */
-    CBM_T_CIRCLE,           /* @o */
-    CBM_T_CONTOUR,          /* @c */
-    CBM_T_MOVE_TO,          /* @M */
-    CBM_T_TROPISM_SET,      /* @Ts */
-    CBM_T_GC_START,         /* @Gs */
-    CBM_T_GC_CONTROL,       /* @Gc */
-    CBM_T_GC_END,           /* @Ge */
-    CBM_T_QUERY_P,          /* ?P */
-    CBM_T_QUERY_H,          /* ?H */
-    CBM_T_QUERY_L,          /* ?L */
-    CBM_T_QUERY_U,          /* ?U */
-    CBM_T_USER_FIRST = 1000 /* further commands are the turtle module's own business */
+    CBM_T_F,                 /* F  move forward drawing */
+    CBM_T_f,                 /* f  move forward without drawing */
+    CBM_T_G,                 /* G  move forward drawing, not a polygon vertex */
+    CBM_T_g,                 /* g  move forward, not drawing, not a polygon vertex */
+    CBM_T_LEFT,              /* +  turn left */
+    CBM_T_RIGHT,             /* -  turn right */
+    CBM_T_PITCH_DOWN,        /* &  */
+    CBM_T_PITCH_UP,          /* ^  */
+    CBM_T_ROLL_LEFT,         /* \  */
+    CBM_T_ROLL_RIGHT,        /* /  */
+    CBM_T_TURN_AROUND,       /* |  */
+    CBM_T_PUSH,              /* [  */
+    CBM_T_POP,               /* ]  */
+    CBM_T_WIDTH,             /* !  set or decrement width */
+    CBM_T_COLOR_INC,         /* ' (ABOP) and ; (cpfg) increment colour index, or set it */
+    CBM_T_COLOR_DEC,         /* ,  decrement colour index, or set it (cpfg) */
+    CBM_T_WIDTH_INC,         /* #  increment width (cpfg) */
+    CBM_T_SURFACE,           /* ~  predefined surface */
+    CBM_T_CUT,               /* %  cut the rest of the branch */
+    CBM_T_POLY_BEGIN,        /* {  */
+    CBM_T_POLY_END,          /* }  */
+    CBM_T_POLY_VERTEX,       /* .  */
+    CBM_T_ROLL_HORIZ,        /* @v roll to horizontal */
+    CBM_T_SPHERE,            /* @O */
+    CBM_T_CIRCLE,            /* @o */
+    CBM_T_CONTOUR,           /* @c */
+    CBM_T_MOVE_TO,           /* @M */
+    CBM_T_TROPISM_SET,       /* @Ts */
+    CBM_T_GC_START,          /* @Gs */
+    CBM_T_GC_CONTROL,        /* @Gc */
+    CBM_T_GC_END,            /* @Ge */
+    CBM_T_QUERY_P,           /* ?P */
+    CBM_T_QUERY_H,           /* ?H */
+    CBM_T_QUERY_L,           /* ?L */
+    CBM_T_QUERY_U,           /* ?U */
+    CBM_T_USER_FIRST = 1000, /* further commands are the turtle module's own business */
+    CBM_T_ELASTICITY = CBM_T_USER_FIRST, /* _  set or increment the ABOP tropism elasticity */
+    CBM_T_TROPISM_INC,                   /* @Ti(i, de) */
+    CBM_T_TROPISM_DEC,                   /* @Td(i, de) */
+    CBM_T_CONTOUR_SET,                   /* @#(id) contour of generalized cylinders */
+    CBM_T_SIDES_SET,                     /* @!(n) sides of cylinders */
+    CBM_T_GC_TANGENT,   /* @Gt(a[,b]) tangent parameters of generalized cylinders */
+    CBM_T_GC_RADIUS,    /* @Gr(...) radius tangents of generalized cylinders */
+    CBM_T_TWIST_ADJUST, /* @Tp: U follows H from the last drawn segment without twist */
+    CBM_T_TWIST_KEEP    /* @Tf: the current frame becomes the reference of @Tp */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.
 int cbm__turtle_lookup(const char *name, size_t len);
 
-typedef struct cbm_view cbm_view;       /* view file settings */
-typedef struct cbm_funcset cbm_funcset; /* function files */
-typedef struct cbm_turtle cbm_turtle;
+/* cbm_view (view file settings), cbm_funcset (function files) and cbm_turtle are declared in
+ * include/cambium/turtle.h. */
 
-/// Interprets the string into `scene` (may be NULL: only queries and bounds are computed).
+/// A turtle drawing into `scene` (may be NULL: only queries, the record and the box are kept).
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
                               cbm_turtle **out);
 void cbm__turtle_destroy(cbm_turtle *t);
@@ -71,8 +82,24 @@ void cbm__turtle_destroy(cbm_turtle *t);
 void cbm__turtle_reset(cbm_turtle *t);
 /// Executes one module. params may be written (query modules).
 cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams);
-/// Finishes the pass (closes open generalized cylinders, polygons).
+/// Finishes the pass (ends the last segment, closes open polygons).
 cbm_status cbm__turtle_finish(cbm_turtle *t);
+/// `~` (CBM_T_SURFACE) names its surface with the module that follows it (`~l(2)`: the module
+/// `l` with parameter 2 is the surface `l` scaled by 2; 3 parameters scale x, y, z). The engine
+/// calls cbm__turtle_exec for `~`, then this function with the next module instead of executing
+/// that module.
+cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
+                               int nparams);
+/// Executes one module of cpfg's string, where modules are single symbols: `@`, `?` and `~` take
+/// the following module(s) as their function, as cpfg reads its string (`@` `O`(2) is @O(2);
+/// `@` `T` `s`(1,0) is @Ts(1,0) since @T, @G, @m, @P, @D, @b without parameter take a second
+/// symbol; `?` `P`(x,y,z) is ?P; `~` `l`(2) is surface l scaled by 2). Other symbols are looked
+/// up and executed; symbols that are not turtle commands are skipped. An engine with one-character
+/// symbols can call this for every module instead of lookup + exec.
+cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int nparams);
+/// Keep a record of the primitives (cylinders, polygons, ...; see cbm_turtle_prims). Off by
+/// default.
+void cbm__turtle_set_record(cbm_turtle *t, bool record);
 
 /// Value of function `id` (1-based, in the order the function files were given, as cpfg) at x.
 double cbm__funcset_eval(const cbm_funcset *fs, int id, double x);

@@ -97,7 +97,7 @@ int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_
         static const char *const names[] = {"front", "side", "top", "iso"};
         for (int k = 0; k < 4; k++)
             if (!strcmp(v, names[k])) {
-                o->view = (cbm_view)k;
+                o->view = (cbm_camera_view)k;
                 return 1;
             }
         double x, y, z;
