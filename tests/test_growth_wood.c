@@ -27,14 +27,12 @@ TEST(growth_wood_ageing_rate_and_structural_modulus)
         CHECK_OK(cbm_plant_set_ring(p, i, 0, &r));
     }
     CHECK_OK(cbm_plant_solve(p, NULL, NULL));
-    double t = 0.0;
     for (int year = 1; year <= 14; year++) {
         /* a new ring each year on segment 0, then everything ages a year */
         cbm_segment_state s;
         CHECK_OK(cbm_plant_segment(p, 0, &s));
         CHECK_OK(cbm_plant_add_growth_ring(p, 0, s.a + 0.001, s.b + 0.001, &g, NULL));
         CHECK_OK(cbm_plant_age_wood(p, &g, 1.0));
-        t += 1.0;
         CHECK_OK(cbm_plant_solve(p, NULL, NULL));
     }
     /* the core of segment 1 is 14 years old: adult since year 10 */
