@@ -24,8 +24,8 @@ typedef struct cbm_model cbm_model;
 
 /// How a model is loaded: the L-system and its side files.
 typedef struct cbm_model_def {
-    cbm_lsys_def lsys;              ///< the model file and its options (defines, float32, seed)
-    const char *const *side_files;  ///< .v .func .fset .s .con .map .mat, read in this order
+    cbm_lsys_def lsys;             ///< the model file and its options (defines, float32, seed)
+    const char *const *side_files; ///< .v .func .fset .s .con .map .mat, read in this order
     size_t side_count;
 } cbm_model_def;
 
