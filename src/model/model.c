@@ -9,8 +9,9 @@
  * in the query modules back into the image; the engine hands them to the string's query modules
  * in order. Steps whose string has no query module skip the pass (it could not change anything),
  * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
- * with a turtle that draws into a scene and keeps the primitive record. ABOP ch. 1 (turtle
- * interpretation); Prusinkiewicz et al. 1994 "Synthetic topiary" (query modules).
+ * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
+ * it reads the string itself rather than a copy (half the memory on the largest strings). ABOP ch.
+ * 1 (turtle interpretation); Prusinkiewicz et al. 1994 "Synthetic topiary" (query modules).
  */
 #include "cambium/model.h"
 
@@ -25,6 +26,7 @@ struct cbm_model {
     cbm_view *view;
     cbm_turtle *query_turtle; /* no scene, no record: the per-step pass */
     cbm_turtle *pass;         /* the turtle of the pass in progress */
+    bool image;               /* the pass reads the homomorphic image (else the string) */
 };
 
 /* The turtle over the homomorphic image; query values written back into the image. */
@@ -34,11 +36,11 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
     cbm_turtle *t = m->pass;
     cbm__turtle_reset(t);
     cbm_lsys_cursor c;
-    cbm_lsys_cursor_begin(ls, true, &c);
+    cbm_lsys_cursor_begin(ls, m->image, &c);
     double buf[256];
     bool after_query = false;
     cbm_status s = CBM_OK;
-    while (s == CBM_OK && cbm_lsys_cursor_next(ls, true, &c)) {
+    while (s == CBM_OK && cbm_lsys_cursor_next(ls, m->image, &c)) {
         int n = c.nparams;
         if (n > 0)
             memcpy(buf, c.params, (size_t)n * sizeof(double));
@@ -136,6 +138,7 @@ cbm_status cbm_model_step(cbm_model *m)
     if (!m)
         return CBM_E_INVALID;
     m->pass = m->query_turtle;
+    m->image = true;
     cbm__turtle_set_record(m->pass, false);
     cbm_lsys_set_interpreter(m->ls, cbm_model_has_queries(m) ? interpret_cb : NULL, m);
     cbm_status s = cbm_lsys_step(m->ls);
@@ -153,9 +156,17 @@ cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_
     CBM_TRY(cbm__turtle_create(m->ctx, m->view, scene, &t));
     cbm__turtle_set_record(t, record);
     m->pass = t;
-    cbm_lsys_set_interpreter(m->ls, interpret_cb, m);
-    cbm_status s = cbm_lsys_interpret(m->ls);
-    cbm_lsys_set_interpreter(m->ls, NULL, NULL);
+    cbm_status s;
+    if (cbm_lsys_has_homomorphism(m->ls)) {
+        m->image = true;
+        cbm_lsys_set_interpreter(m->ls, interpret_cb, m);
+        s = cbm_lsys_interpret(m->ls);
+        cbm_lsys_set_interpreter(m->ls, NULL, NULL);
+    } else {
+        /* the image would be a copy of the string: read and fill the string itself */
+        m->image = false;
+        s = interpret_cb(m, m->ls);
+    }
     m->pass = m->query_turtle;
     if (s != CBM_OK || !turtle)
         cbm__turtle_destroy(t);
