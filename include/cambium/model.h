@@ -54,6 +54,22 @@ CBM_API cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool reco
 /// Whether the current string holds query modules (`?` followed by P, H, L or U).
 CBM_API bool cbm_model_has_queries(const cbm_model *m);
 
+/// What a model holds (for `cambium info`).
+typedef struct cbm_model_summary {
+    int derivation_length;   ///< steps
+    size_t productions;      ///< main productions
+    size_t decompositions;   ///< decomposition: productions
+    size_t homomorphisms;    ///< homomorphism: productions
+    int decomposition_depth; ///< maximum depth:
+    int homomorphism_depth;  ///< maximum depth:
+    bool stochastic;         ///< productions with probabilities
+    bool has_start_end;      ///< Start:, End:, StartEach: or EndEach: blocks
+    int functions;           ///< functions read from the side files
+} cbm_model_summary;
+
+/// Fills *out for a loaded model (before or after a derivation).
+CBM_API void cbm_model_describe(const cbm_model *m, cbm_model_summary *out);
+
 #ifdef __cplusplus
 }
 #endif

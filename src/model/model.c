@@ -16,6 +16,7 @@
 #include "cambium/model.h"
 
 #include "core/core.h"
+#include "lsys/lsys_internal.h"
 #include "turtle/turtle.h"
 
 #include <stdio.h>
@@ -173,4 +174,22 @@ cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_
     else
         *turtle = t;
     return s;
+}
+
+void cbm_model_describe(const cbm_model *m, cbm_model_summary *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!m)
+        return;
+    const cbm_lsys *ls = m->ls;
+    out->derivation_length = ls->derivation_length;
+    out->productions = ls->main.prods.len;
+    out->decompositions = ls->decomp.prods.len;
+    out->homomorphisms = ls->homo.prods.len;
+    out->decomposition_depth = ls->decomp.present ? ls->decomp.depth : 0;
+    out->homomorphism_depth = ls->homo.present ? ls->homo.depth : 0;
+    out->stochastic = ls->stochastic;
+    out->has_start_end =
+        ls->start_block >= 0 || ls->end_block >= 0 || ls->start_each >= 0 || ls->end_each >= 0;
+    out->functions = cbm_funcset_count(cbm_view_functions(m->view));
 }
