@@ -76,6 +76,12 @@ grep -q "inf" "$T/err" || fail "message: $(cat "$T/err")"
 [ "$(wc -l < "$T/l.str")" -eq 724 ] || fail "last complete step (724 modules)"
 [ "$(grep -c '^f ' "$T/l.obj")" -gt 0 ] || fail "geometry of the last complete step"
 
+# the memory limit: a clear message, exit 1, no file
+"$BIN" run "$M/abop-2.8a.l" -n 9 --max-memory 20 -o "$T/big.glb" 2> "$T/err"
+[ $? -eq 1 ] || fail "memory limit exit status"
+grep -q "memory limit is 20 MB" "$T/err" || fail "memory message: $(cat "$T/err")"
+[ ! -e "$T/big.glb" ] || fail "file left after running out of memory"
+
 # cambium info on the model and the outputs
 "$BIN" info "$M/abop-2.8a.l" | grep -q "productions: 3" || fail "info model"
 "$BIN" info "$M/abop-2.8a.l" | grep -q "derivation length: 8 steps" || fail "info length"

@@ -1,5 +1,6 @@
 /* cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N] [-o OUT]...
- *                     [--every K] [--homomorphism] [--float32] [--max-modules N] [--timing]
+ *                     [--every K] [--homomorphism] [--float32] [--max-modules N]
+ *                     [--max-memory MB] [--timing]
  *                     [output options]
  *
  * Loads a cpfg-dialect model with its side files (cbm_model: view file, function files,
@@ -21,6 +22,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define MAX_OUTPUTS 64
 
@@ -99,7 +101,8 @@ static void usage(void)
 {
     printf("usage: cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N]\n"
            "                  [-o OUT]... [--every K] [--homomorphism] [--float32]\n"
-           "                  [--max-modules N] [--timing] [output options]\n\n"
+           "                  [--max-modules N] [--max-memory MB] [--timing]\n"
+           "                  [output options]\n\n"
            "Derives a cpfg-dialect L-system, interprets it with the turtle and writes the\n"
            "outputs. Without -o prints a one-line summary.\n"
            "  SIDE FILES        by extension: .v view file, .func/.fset functions, .s surface,\n"
@@ -120,6 +123,8 @@ static void usage(void)
            "  --float32         follow cpfg exactly: float32 parameters, seed: ignored as in\n"
            "                    cpfg's batch mode\n"
            "  --max-modules N   stop when the string would exceed N modules\n"
+           "  --max-memory MB   stop when the library would hold more than MB megabytes\n"
+           "                    (default: 3/4 of the physical memory; 0: no limit)\n"
            "  --timing          print the time and memory of each phase to stderr\n\n%s",
            cli_output_help);
 }
@@ -220,6 +225,17 @@ static cbm_status write_str(run *r, const char *path)
     return s;
 }
 
+/* cli_fail, with the memory limit named when memory ran out under it. */
+static int run_fail(const run *r, cbm_status s, const char *what)
+{
+    int rc = cli_fail(r->ctx, s, what);
+    size_t limit = cbm_context_limits(r->ctx)->max_bytes;
+    if (s == CBM_E_NOMEM && limit)
+        fprintf(stderr, "cambium: the memory limit is %zu MB (--max-memory MB changes it)\n",
+                limit >> 20);
+    return rc;
+}
+
 /* What write_outputs writes after a step. */
 enum { ROW = 0, NUMBERED = 1, FINAL = 2 };
 
@@ -229,7 +245,7 @@ static int write_outputs(run *r, int what, int done)
 {
     cbm_status s = interpret(r, done);
     if (s != CBM_OK)
-        return cli_fail(r->ctx, s, "interpretation");
+        return run_fail(r, s, "interpretation");
     double t0 = cli_seconds();
     if (what != FINAL && r->json)
         json_step(r, done);
@@ -238,26 +254,26 @@ static int write_outputs(run *r, int what, int done)
         target *t = &r->targets[i];
         if (!strcmp(t->format, "json")) {
             if (what == FINAL && (s = cbm_json_write_file(r->json, t->path)) != CBM_OK)
-                rc = cli_fail(r->ctx, s, t->arg);
+                rc = run_fail(r, s, t->arg);
             continue;
         }
         if (t->anim) {
             s = what == NUMBERED ? cbm_animation_add_frame(t->anim, r->scene)
                                  : cbm_animation_write(t->anim, t->path);
             if (s != CBM_OK)
-                rc = cli_fail(r->ctx, s, t->arg);
+                rc = run_fail(r, s, t->arg);
             continue;
         }
         char *numbered = what == NUMBERED ? step_path(t->path, done) : NULL;
         if (what == NUMBERED && !numbered)
-            return cli_fail(r->ctx, CBM_E_NOMEM, "output");
+            return run_fail(r, CBM_E_NOMEM, "output");
         const char *path = numbered ? numbered : t->path;
         if (!strcmp(t->format, "str"))
             s = write_str(r, path);
         else
             s = cbm_scene_write_as(r->ctx, r->scene, path, t->format, &r->wopt);
         if (s != CBM_OK)
-            rc = cli_fail(r->ctx, s, path);
+            rc = run_fail(r, s, path);
         free(numbered);
     }
     r->t_write += cli_seconds() - t0;
@@ -283,7 +299,7 @@ int cmd_run(int argc, char **argv)
     size_t nside = 0;
     target targets[MAX_OUTPUTS];
     int ntargets = 0;
-    long steps = -1, every = 0, seed = -1, max_modules = 0;
+    long steps = -1, every = 0, seed = -1, max_modules = 0, max_memory = -1;
     bool float32 = false, timing = false, homomorphism = false;
     cbm_write_options wopt = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
@@ -299,7 +315,7 @@ int cmd_run(int argc, char **argv)
         if (r > 0)
             continue;
         if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed") ||
-            !strcmp(a, "--max-modules")) {
+            !strcmp(a, "--max-modules") || !strcmp(a, "--max-memory")) {
             long v;
             if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0)
                 return cli_usage_error("run", "%s expects a non-negative integer", a);
@@ -310,6 +326,8 @@ int cmd_run(int argc, char **argv)
                 every = v;
             else if (!strcmp(a, "--seed"))
                 seed = v;
+            else if (!strcmp(a, "--max-memory"))
+                max_memory = v;
             else
                 max_modules = v;
         } else if (!strncmp(a, "-D", 2)) {
@@ -358,11 +376,17 @@ int cmd_run(int argc, char **argv)
                                    targets[k].arg);
 
     cbm_context *ctx = cli_context();
-    if (max_modules > 0) {
-        cbm_limits lim = *cbm_context_limits(ctx);
+    cbm_limits lim = *cbm_context_limits(ctx);
+    if (max_modules > 0)
         lim.max_modules = (size_t)max_modules;
-        cbm_context_set_limits(ctx, &lim);
-    }
+    /* a run that would exhaust the machine stops with a message instead: by default at 3/4 of
+     * the physical memory (the strings, the scene and the writers' buffers count) */
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (max_memory < 0 && pages > 0 && page > 0)
+        lim.max_bytes = (size_t)pages / 4 * 3 * (size_t)page;
+    else if (max_memory > 0)
+        lim.max_bytes = (size_t)max_memory << 20;
+    cbm_context_set_limits(ctx, &lim);
     run r = {0};
     r.ctx = ctx;
     r.wopt = wopt;
