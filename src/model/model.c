@@ -28,6 +28,7 @@ struct cbm_model {
     cbm_turtle *query_turtle; /* no scene, no record: the per-step pass */
     cbm_turtle *pass;         /* the turtle of the pass in progress */
     bool image;               /* the pass reads the homomorphic image (else the string) */
+    bool may_query;           /* some successor or the axiom holds a '?' */
 };
 
 /* The turtle over the homomorphic image; query values written back into the image. */
@@ -83,6 +84,8 @@ cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model 
         cbm_model_destroy(m);
         return s;
     }
+    for (size_t i = 0; i < m->ls->smods.len && !m->may_query; i++)
+        m->may_query = (m->ls->smods.data[i].sym & 0x7f) == '?';
     /* without function files func() stays an error naming what is missing */
     if (cbm_funcset_count(cbm_view_functions(m->view)) > 0)
         cbm_lsys_set_func(m->ls, cbm_view_func_callback, m->view);
@@ -118,18 +121,19 @@ cbm_status cbm_model_reset(cbm_model *m)
     return cbm_lsys_reset(m->ls);
 }
 
+/* A query module: '?' without parameters followed by P, H, L or U. A scan of the packed symbol
+ * bytes (memchr), skipped for models none of whose successors or axiom holds a '?'. */
 bool cbm_model_has_queries(const cbm_model *m)
 {
-    if (!m)
+    if (!m || !m->may_query)
         return false;
-    cbm_lsys_cursor c;
-    cbm_lsys_cursor_begin(m->ls, false, &c);
-    bool after_query = false;
-    while (cbm_lsys_cursor_next(m->ls, false, &c)) {
-        if (after_query &&
-            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U'))
+    const lstr *str = &m->ls->cur;
+    const uint8_t *p = str->sym, *end = str->sym + str->n;
+    while (p < end && (p = memchr(p, '?', (size_t)(end - p))) != NULL) {
+        p++;
+        int next = p < end ? (*p & 0x7f) : 0;
+        if (next == 'P' || next == 'H' || next == 'L' || next == 'U')
             return true;
-        after_query = c.symbol == '?' && c.nparams == 0;
     }
     return false;
 }
