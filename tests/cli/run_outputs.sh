@@ -85,7 +85,7 @@ grep -q "memory limit is 20 MB" "$T/err" || fail "memory message: $(cat "$T/err"
 # cambium info on the model and the outputs
 "$BIN" info "$M/abop-2.8a.l" | grep -q "productions: 3" || fail "info model"
 "$BIN" info "$M/abop-2.8a.l" | grep -q "derivation length: 8 steps" || fail "info length"
-"$BIN" info "$M/abop-2.8a.l" | grep -q "abop-2.8a.v" || fail "info side files"
+"$BIN" info "$M/abop-2.8a.l" | grep -q "view file: abop-2.8a.v" || fail "info view file"
 "$BIN" info "$T/t.str" | grep -q "2182 modules" || fail "info str"
 "$BIN" info "$T/t.png" | grep -q "64 x 64 pixels" || fail "info png"
 "$BIN" info "$T/t.ply" | grep -q "element face" || fail "info ply"

@@ -1,12 +1,12 @@
 /* cambium info FILE: what a model or an output file holds, in a few lines.
  *
- * A model (.l) is loaded (with the view file and function files beside it, as a cpfg model
- * directory holds them) and described: productions, decomposition and homomorphism, derivation
- * length, the axiom, and the side files it uses or that lie beside it. Output files are read
- * just enough to count what they hold: .str modules and parameters; .obj vertices, faces and
- * bounds; .ply its header; .glb nodes, meshes, animation and bounds (from the POSITION
- * accessors' min/max); .png size and pixel format; .svg size and elements; .csv rows and
- * columns; .json the steps of a run summary.
+ * A model (.l) is loaded (with the view file beside it, named as the model or the only one, as
+ * a cpfg model directory holds it; the view file names the function files) and described:
+ * productions, decomposition and homomorphism, derivation length, the axiom, and the side files it
+ * uses or that lie beside it. Output files are read just enough to count what they hold: .str
+ * modules and parameters; .obj vertices, faces and bounds; .ply its header; .glb nodes, meshes,
+ * animation and bounds (from the POSITION accessors' min/max); .png size and pixel format; .svg
+ * size and elements; .csv rows and columns; .json the steps of a run summary.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
@@ -68,22 +68,23 @@ static int info_model(const char *path)
     }
     if (d)
         closedir(d);
-    /* the view file first (it names the function files, whose order func() follows) */
+    /* the view file: the one named as the model (plant.l, plant.v), else the only one there;
+     * it names the function files, surfaces and contours the model uses */
+    char base[4096];
+    const char *name = slash ? slash + 1 : path;
+    snprintf(base, sizeof base, "%.*s.v", (int)(strlen(name) - 2), name);
+    const char *view = NULL;
+    size_t nview = 0;
     for (size_t k = 0; k < nfound; k++)
         if (!strcmp(cli_extension(found[k]), "v")) {
-            char *t = found[k];
-            found[k] = found[0];
-            found[0] = t;
-            break;
+            nview++;
+            if (!strcmp(found[k] + strlen(dir) + 1, base) || !view)
+                view = found[k];
         }
-    /* load with the view file and function files only: other side files are display data */
-    const char *sides[64];
-    size_t nside = 0;
-    for (size_t k = 0; k < nfound; k++) {
-        const char *e = cli_extension(found[k]);
-        if (!strcmp(e, "v") || !strcmp(e, "func") || !strcmp(e, "fset"))
-            sides[nside++] = found[k];
-    }
+    if (nview > 1 && strcmp(view + strlen(dir) + 1, base))
+        view = NULL;
+    const char *sides[1] = {view};
+    size_t nside = view ? 1 : 0;
     cbm_context *ctx = cli_context();
     cbm_model_def def = {cbm_lsys_def_default(), sides, nside};
     def.lsys.path = path;
@@ -118,10 +119,12 @@ static int info_model(const char *path)
         if (uses_func)
             printf("  calls func(id, x): needs function files (%d read from beside it)\n",
                    sm.functions);
+        if (view)
+            printf("  view file: %s\n", view + strlen(dir) + 1);
         printf("  side files beside it:%s", nfound ? "" : " none");
-        for (size_t k = 0; k < nfound; k++)
+        for (size_t k = 0; k < nfound && k < 12; k++)
             printf(" %s", found[k] + strlen(dir) + 1);
-        printf("\n");
+        printf("%s\n", nfound > 12 ? " ..." : "");
     }
     cbm_model_destroy(m);
     cli_context_end(ctx);
