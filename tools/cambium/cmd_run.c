@@ -20,6 +20,7 @@
 #include "commands.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -317,8 +318,11 @@ int cmd_run(int argc, char **argv)
         if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed") ||
             !strcmp(a, "--max-modules") || !strcmp(a, "--max-memory")) {
             long v;
-            if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0)
-                return cli_usage_error("run", "%s expects a non-negative integer", a);
+            if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0 ||
+                ((!strcmp(a, "-n") || !strcmp(a, "--every")) && v > 100000000))
+                return cli_usage_error("run", "%s expects a non-negative integer%s", a,
+                                       strcmp(a, "-n") && strcmp(a, "--every") ? ""
+                                                                               : " up to 10^8");
             i++;
             if (!strcmp(a, "-n"))
                 steps = v;
@@ -326,6 +330,8 @@ int cmd_run(int argc, char **argv)
                 every = v;
             else if (!strcmp(a, "--seed"))
                 seed = v;
+            else if (!strcmp(a, "--max-memory") && (unsigned long)v > (SIZE_MAX >> 21))
+                return cli_usage_error("run", "--max-memory: %ld MB is too large", v);
             else if (!strcmp(a, "--max-memory"))
                 max_memory = v;
             else
