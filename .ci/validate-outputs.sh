@@ -25,6 +25,15 @@ mkdir -p "$out"
 for v in front side top; do
   "$bin" demo --segments 800 --view "$v" --color-by age -o "$out/$v.svg" -o "$out/$v.png"
 done
+# cambium run: ABOP models through the turtle into every format, and a growth animation
+"$bin" run tests/lsys/abop-2.8a.l tests/lsys/abop-2.8a.v -n 6 -o "$out/run-2.8a.glb" \
+  -o "$out/run-2.8a.obj" -o "$out/run-2.8a.ply" -o "$out/run-2.8a.svg" -o "$out/run-2.8a.png" \
+  -o "$out/run-2.8a.csv"
+"$bin" run tests/lsys/abop-2.8a.l tests/lsys/abop-2.8a.v -n 6 --every 2 --color-by order \
+  -o "$out/run-2.8a-growth.glb"
+"$bin" run tests/lsys/abop-1.24c.l tests/lsys/abop-1.24c.v --view front -o "$out/run-1.24c.glb" -o "$out/run-1.24c.obj" \
+  -o "$out/run-1.24c.ply" -o "$out/run-1.24c.svg" -o "$out/run-1.24c.png"
+"$bin" run tests/lsys/abop-1.27.l tests/lsys/abop-1.27.v -o "$out/run-1.27.glb" -o "$out/run-1.27.obj" -o "$out/run-1.27.ply"
 echo "== glTF validator"
 NODE_PATH="$val/node_modules" node .ci/gltf-validate.js "$out"/*.glb
 echo "== assimp"

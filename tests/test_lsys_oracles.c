@@ -4,8 +4,9 @@
  * per-step strings of ref/steps/ (cpfg -str, %g) exactly and the string after the homomorphism
  * (final.homo.str). Double mode must give the same modules with parameters within 1e-5
  * relative, except where a discrete decision depends on float32 rounding (documented per model
- * below). Models whose derivation needs the turtle (query modules) or function files are
- * checked as far as they can be without them, and say what they skip. */
+ * below). Each model runs with its side files (view file, function files, colour map or
+ * materials) through cbm_model, so func(id, x) and the query modules (filled by the turtle) work
+ * as in cpfg. */
 #include "lsys_util.h"
 
 #include <dirent.h>
@@ -17,23 +18,48 @@ static const char *oracle_dir(void)
     return path;
 }
 
-/* The model file named in ref/commands.txt ("cpfg ... NAME.l NAME.v"). */
-static bool model_path(const char *folder, char *out, size_t n)
+/* The model file and the side files named in ref/commands.txt's first line
+ * ("cpfg -g -m NAME.map -str final.str NAME.l NAME.v"): the view file first (it names the
+ * function files, whose order func(id, x) follows), then the colour map or materials. */
+typedef struct model_files {
+    char model[4096];
+    char side[3][4096];
+    const char *sides[3];
+    size_t nside;
+} model_files;
+
+static bool model_files_find(const char *folder, model_files *mf)
 {
     char p[8192];
     snprintf(p, sizeof p, "%s/%s/ref/commands.txt", oracle_dir(), folder);
     char *t = read_text(p, false);
     if (!t)
         return false;
-    char *l = strstr(t, ".l ");
+    char *line = strstr(t, "\ncpfg ");
+    char *nl = line ? strchr(line + 1, '\n') : NULL;
+    if (nl)
+        *nl = 0;
     bool ok = false;
-    if (l) {
-        char *s = l;
-        while (s > t && s[-1] != ' ')
-            s--;
-        snprintf(out, n, "%s/%s/model/%.*s", oracle_dir(), folder, (int)(l + 2 - s), s);
-        ok = true;
+    char *view = NULL, *colors = NULL;
+    mf->nside = 0;
+    for (char *w = line ? strtok(line + 1, " ") : NULL; w; w = strtok(NULL, " ")) {
+        size_t n = strlen(w);
+        if ((!strcmp(w, "-m") || !strcmp(w, "-M")))
+            colors = strtok(NULL, " ");
+        else if (n > 2 && !strcmp(w + n - 2, ".l")) {
+            snprintf(mf->model, sizeof mf->model, "%s/%s/model/%s", oracle_dir(), folder, w);
+            ok = true;
+        } else if (n > 2 && !strcmp(w + n - 2, ".v"))
+            view = w;
     }
+    const char *names[2] = {view, colors};
+    for (int k = 0; k < 2; k++)
+        if (names[k]) {
+            snprintf(mf->side[mf->nside], sizeof mf->side[0], "%s/%s/model/%s", oracle_dir(),
+                     folder, names[k]);
+            mf->sides[mf->nside] = mf->side[mf->nside];
+            mf->nside++;
+        }
     free(t);
     return ok;
 }
@@ -54,12 +80,12 @@ static const oracle ORACLES[] = {
     {"cpfg-hormone-up", NULL, false},
     /* as monopodial below: {t = t - PL;} t > 0 on an accumulated time (step 300 differs) */
     {"cpfg-leaf-rnd", NULL, true},
-    {"cpfg-lilac", "func(id,x) in the derivation needs the function files (.func)", false},
+    {"cpfg-lilac", NULL, false},
     /* {t = t - PL;} t > 0 after t += dt steps: in double t - PL is 3.8e-15 where float32 gives
      * 0, so a branch starts one step earlier */
     {"cpfg-monopodial", NULL, true},
     {"cpfg-quadratic-koch", NULL, false},
-    {"cpfg-query-position", "query modules ?P take their values from the turtle", false},
+    {"cpfg-query-position", NULL, false},
     {"cpfg-random-moss-abop1.27", NULL, false},
     {"cpfg-sympodial", NULL, true}, /* as monopodial */
     {"cpfg-tropisms", NULL, false},
@@ -77,39 +103,42 @@ static bool oracles_present(void)
     return true;
 }
 
-static cbm_lsys *load(cbm_context *ctx, const char *folder, bool float32)
+/* The model with its side files: func(id, x) reads the function files and query modules get
+ * their values from the turtle, as in cpfg. */
+static cbm_model *load(cbm_context *ctx, const char *folder, bool float32)
 {
-    char path[8192];
-    if (!model_path(folder, path, sizeof path)) {
+    model_files mf;
+    if (!model_files_find(folder, &mf)) {
         cbm_test_fail(__FILE__, __LINE__, "%s: no model named in commands.txt", folder);
         return NULL;
     }
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = path;
-    def.float32 = float32;
-    def.ignore_seed = true; /* cpfg's batch mode */
-    cbm_lsys *ls = NULL;
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    cbm_model_def def = {cbm_lsys_def_default(), mf.sides, mf.nside};
+    def.lsys.path = mf.model;
+    def.lsys.float32 = float32;
+    def.lsys.ignore_seed = true; /* cpfg's batch mode */
+    cbm_model *m = NULL;
+    cbm_status s = cbm_model_load(ctx, &def, &m);
     CHECK_MSG(s == CBM_OK, "%s: load: %s", folder, cbm_context_last_error(ctx));
-    return ls;
+    return m;
 }
 
 /* Derives in float32 mode comparing the steps, the final string and the homomorphism. */
 static void check_exact(const oracle *o)
 {
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = load(ctx, o->folder, true);
-    if (!ls) {
+    cbm_model *m = load(ctx, o->folder, true);
+    cbm_lsys *ls = cbm_model_lsys(m);
+    if (!m) {
         test_ctx_end(ctx);
         return;
     }
     char p[8192];
     int n = cbm_lsys_derivation_length(ls);
-    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_model_reset(m));
     int compared = 0;
     for (int step = 0; step <= n; step++) {
         if (step > 0) {
-            cbm_status s = cbm_lsys_step(ls);
+            cbm_status s = cbm_model_step(m);
             if (s != CBM_OK && o->needs) {
                 printf("SKIP %s from step %d: %s (%s)\n", o->folder, step, o->needs,
                        cbm_context_last_error(ctx));
@@ -119,6 +148,9 @@ static void check_exact(const oracle *o)
             if (s != CBM_OK)
                 goto done;
         }
+        /* cpfg draws every frame before it writes its string: queries hold this step's values */
+        if (cbm_model_has_queries(m))
+            CHECK_OK(cbm_model_interpret(m, NULL, false, NULL));
         snprintf(p, sizeof p, "%s/%s/ref/steps/step%03d.str", oracle_dir(), o->folder, step);
         char *want = read_text(p, true);
         if (!want)
@@ -141,6 +173,8 @@ static void check_exact(const oracle *o)
         tb_free(&got);
     }
     CHECK_MSG(compared > 0, "%s: no step files compared", o->folder);
+    /* the final string carries the values of its query modules, as cpfg's */
+    CHECK_OK(cbm_model_interpret(m, NULL, false, NULL));
     snprintf(p, sizeof p, "%s/%s/ref/final.exact.txt", oracle_dir(), o->folder);
     char *want = read_text(p, false);
     CHECK(want != NULL);
@@ -157,22 +191,17 @@ static void check_exact(const oracle *o)
     want = read_text(p, true);
     if (want) {
         cbm_status s = cbm_lsys_apply_homomorphism(ls);
-        if (s != CBM_OK && strstr(cbm_context_last_error(ctx), "func")) {
-            printf("SKIP %s homomorphism: it calls func(id,x), which needs the function files\n",
-                   o->folder);
-        } else {
-            CHECK_MSG(s == CBM_OK, "%s homomorphism: %s", o->folder, cbm_context_last_error(ctx));
-            tbuf got = {0};
-            format_string(ls, true, false, &got);
-            size_t at = compare_tol(got.s, want, 0, 0);
-            CHECK_MSG(!strcmp(got.s, want), "%s final.homo.str differs at %zu: %.30s vs %.30s",
-                      o->folder, at, got.s + at, want + at);
-            tb_free(&got);
-        }
+        CHECK_MSG(s == CBM_OK, "%s homomorphism: %s", o->folder, cbm_context_last_error(ctx));
+        tbuf got = {0};
+        format_string(ls, true, false, &got);
+        size_t at = compare_tol(got.s, want, 0, 0);
+        CHECK_MSG(!strcmp(got.s, want), "%s final.homo.str differs at %zu: %.30s vs %.30s",
+                  o->folder, at, got.s + at, want + at);
+        tb_free(&got);
         free(want);
     }
 done:
-    cbm_lsys_destroy(ls);
+    cbm_model_destroy(m);
     test_ctx_end(ctx);
 }
 
@@ -185,16 +214,20 @@ static void check_double(const oracle *o)
         return;
     }
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = load(ctx, o->folder, false);
-    if (!ls) {
+    cbm_model *m = load(ctx, o->folder, false);
+    cbm_lsys *ls = cbm_model_lsys(m);
+    if (!m) {
         test_ctx_end(ctx);
         return;
     }
-    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_model_reset(m));
     char p[8192];
     for (int step = 0; step <= cbm_lsys_derivation_length(ls); step++) {
         if (step > 0)
-            CHECK_OK(cbm_lsys_step(ls));
+            CHECK_OK(cbm_model_step(m));
+        /* cpfg draws every frame before it writes its string: queries hold this step's values */
+        if (cbm_model_has_queries(m))
+            CHECK_OK(cbm_model_interpret(m, NULL, false, NULL));
         snprintf(p, sizeof p, "%s/%s/ref/steps/step%03d.str", oracle_dir(), o->folder, step);
         char *want = read_text(p, true);
         if (!want)
@@ -208,6 +241,8 @@ static void check_double(const oracle *o)
         tb_free(&got);
         free(want);
     }
+    /* the final string carries the values of its query modules, as cpfg's */
+    CHECK_OK(cbm_model_interpret(m, NULL, false, NULL));
     snprintf(p, sizeof p, "%s/%s/ref/final.exact.txt", oracle_dir(), o->folder);
     char *want = read_text(p, false);
     if (want) {
@@ -219,7 +254,7 @@ static void check_double(const oracle *o)
         tb_free(&got);
         free(want);
     }
-    cbm_lsys_destroy(ls);
+    cbm_model_destroy(m);
     test_ctx_end(ctx);
 }
 

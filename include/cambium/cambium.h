@@ -10,5 +10,6 @@
 #include "cambium/lsys.h"
 #include "cambium/write.h"
 #include "cambium/turtle.h"
+#include "cambium/model.h"
 
 #endif

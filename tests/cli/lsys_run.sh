@@ -18,10 +18,10 @@ fail() { echo "FAIL: $*"; exit 1; }
 "$BIN" run "$SRC/tests/lsys/abop-1.24a.l" -n 2 -o "$T/n.str" || fail "-n"
 [ "$(wc -l < "$T/n.str")" -eq 61 ] || fail "-n 2"
 
-# --every writes NAME-STEP.EXT
+# --every writes NAME.STEP.EXT
 "$BIN" run "$SRC/tests/lsys/abop-1.24a.l" -n 4 --every 2 -o "$T/e.str" || fail "--every"
-for s in 0000 0002 0004; do [ -f "$T/e-$s.str" ] || fail "missing e-$s.str"; done
-[ "$(wc -l < "$T/e-0002.str")" -eq 61 ] || fail "e-0002"
+for s in 0000 0002 0004; do [ -f "$T/e.$s.str" ] || fail "missing e.$s.str"; done
+[ "$(wc -l < "$T/e.0002.str")" -eq 61 ] || fail "e.0002"
 
 # --homomorphism
 "$BIN" run "$SRC/tests/lsys/decomposition-homomorphism.l" --homomorphism -o "$T/h.str" || fail "homo"

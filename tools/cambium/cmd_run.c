@@ -1,78 +1,136 @@
 /* cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N] [-o OUT]...
  *                     [--every K] [--homomorphism] [--float32] [--max-modules N]
+ *                     [--max-memory MB] [--timing]
+ *                     [output options]
  *
- * Loads a cpfg-dialect model, derives it for its derivation length (or -n STEPS) and writes the
- * requested outputs. Outputs are chosen by extension in one table (OUTPUTS) so writers of other
- * formats plug in there; side files are sorted by extension in SIDE_KINDS. With --every K the
- * outputs are also written after every K-th step as NAME-STEP.EXT. When a limit stops the
- * derivation, the outputs of the last complete step are written and the exit status is 1.
+ * Loads a cpfg-dialect model with its side files (cbm_model: view file, function files,
+ * surfaces, colour map, materials, by extension), derives it for its derivation length (or -n
+ * STEPS) with the turtle filling query modules where the string has them, interprets the final
+ * string into a scene and writes the requested outputs, chosen by extension (or FORMAT:PATH):
+ * .str (the string), .json (a summary per step), and the scene writers of cambium/write.h (.obj
+ * .ply .glb .png .svg .csv) with the shared output options of cli_output.h. With --every K the
+ * outputs are also written after step 0 and every K-th step as NAME.STEP.EXT (NAME.0003.png),
+ * except .glb, which becomes one animation with a frame per K steps. Without -o it derives,
+ * interprets and prints a one-line summary. When a limit stops the derivation, the outputs of
+ * the last complete step are written and the exit status is 1; any other error writes nothing
+ * more (every file goes through cbm_out: complete or absent).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "cli.h"
+#include "cli_output.h"
 #include "commands.h"
 
+#include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
-typedef struct run_opts {
-    bool homomorphism;
-} run_opts;
+#define MAX_OUTPUTS 64
 
-typedef cbm_status (*output_fn)(cbm_context *ctx, cbm_lsys *ls, const run_opts *o, cbm_out *out);
-
-static cbm_status out_str(cbm_context *ctx, cbm_lsys *ls, const run_opts *o, cbm_out *out)
-{
-    (void)ctx;
-    if (o->homomorphism) {
-        cbm_status s = cbm_lsys_apply_homomorphism(ls);
-        if (s != CBM_OK)
-            return s;
-    }
-    return cbm_lsys_write_str(ls, o->homomorphism, out);
-}
-
-/* The output formats by extension. */
+/* Outputs that are not scene formats. */
 static const struct {
-    const char *ext;
-    output_fn fn;
-    const char *what;
-} OUTPUTS[] = {
-    {"str", out_str, "the derived string, one module per line, parameters as %.9g"},
+    const char *ext, *what;
+} OTHER_OUTPUTS[] = {
+    {"str", "the derived string, one module per line, parameters as %.9g"},
+    {"json", "a summary per step: modules, primitives, bounding box, seconds"},
+};
+
+static const struct {
+    const char *ext, *what;
+} SCENE_OUTPUTS[] = {
+    {"obj", "Wavefront OBJ with normals and colours (+ .mtl)"},
+    {"ply", "binary PLY with normals, colours and part data"},
+    {"glb", "glTF 2.0 binary; with --every one growth animation"},
+    {"png", "shaded picture (Embree ray casting)"},
+    {"svg", "vector projection"},
+    {"csv", "one row per part (segment, organ, colour, centroid, ...)"},
 };
 
 /* Side files by extension (read by the turtle and the function evaluator). */
-static const char *const SIDE_KINDS[] = {"v", "func", "fset", "s", "map", "mat", "a", "e", "txt"};
+static const char *const SIDE_KINDS[] = {"v", "func", "fset", "s", "con", "map", "mat"};
+/* Files of a cpfg model directory that cambium has no use for (animation, environment, text). */
+static const char *const IGNORED_KINDS[] = {"a", "e", "txt"};
 
-static output_fn find_output(const char *path)
+typedef struct target {
+    char format[8];
+    const char *path;
+    const char *arg;
+    cbm_animation *anim; /* .glb with --every */
+} target;
+
+static bool in_list(const char *ext, const char *const *list, size_t n)
 {
-    const char *ext = cli_extension(path);
-    for (size_t i = 0; i < sizeof OUTPUTS / sizeof OUTPUTS[0]; i++)
-        if (!strcmp(ext, OUTPUTS[i].ext))
-            return OUTPUTS[i].fn;
-    return NULL;
+    for (size_t k = 0; k < n; k++)
+        if (!strcmp(ext, list[k]))
+            return true;
+    return false;
+}
+
+/* "x.str", "str:PATH", "x.json", or a scene target; false if the format is unknown. */
+static bool parse_target(const char *arg, target *t)
+{
+    memset(t, 0, sizeof *t);
+    t->arg = arg;
+    for (size_t k = 0; k < sizeof OTHER_OUTPUTS / sizeof OTHER_OUTPUTS[0]; k++) {
+        const char *e = OTHER_OUTPUTS[k].ext;
+        size_t n = strlen(e);
+        if (!strncmp(arg, e, n) && arg[n] == ':' && arg[n + 1]) {
+            snprintf(t->format, sizeof t->format, "%s", e);
+            t->path = strcmp(arg + n + 1, "-") ? arg + n + 1 : "/dev/stdout";
+            return true;
+        }
+        if (!strcmp(cli_extension(arg), e)) {
+            snprintf(t->format, sizeof t->format, "%s", e);
+            t->path = arg;
+            return true;
+        }
+    }
+    cli_output_target tt;
+    if (!cli_output_target_parse(arg, &tt))
+        return false;
+    snprintf(t->format, sizeof t->format, "%s", tt.format);
+    t->path = tt.path;
+    return true;
+}
+
+static bool is_scene_format(const char *f)
+{
+    return strcmp(f, "str") && strcmp(f, "json");
 }
 
 static void usage(void)
 {
     printf("usage: cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N]\n"
            "                  [-o OUT]... [--every K] [--homomorphism] [--float32]\n"
-           "                  [--max-modules N]\n\n"
-           "Derives a cpfg-dialect L-system. Without -o prints a one-line summary.\n"
+           "                  [--max-modules N] [--max-memory MB] [--timing]\n"
+           "                  [output options]\n\n"
+           "Derives a cpfg-dialect L-system, interprets it with the turtle and writes the\n"
+           "outputs. Without -o prints a one-line summary.\n"
+           "  SIDE FILES        by extension: .v view file, .func/.fset functions, .s surface,\n"
+           "                    .con contour, .map colour map, .mat materials (.a .e .txt are\n"
+           "                    accepted and ignored)\n"
            "  -n STEPS          derivation steps (default: the model's derivation length)\n"
            "  -D NAME=VALUE     overrides the model's #define NAME\n"
            "  --seed N          seed of stochastic production choice (srand48(N))\n"
-           "  -o OUT            output, by extension:\n");
-    for (size_t i = 0; i < sizeof OUTPUTS / sizeof OUTPUTS[0]; i++)
-        printf("                      .%-5s %s\n", OUTPUTS[i].ext, OUTPUTS[i].what);
-    printf("  --every K         also write the outputs after every K-th step as NAME-STEP.EXT\n"
+           "  -o OUT            output by extension, or FORMAT:PATH (- for stdout):\n");
+    for (size_t i = 0; i < sizeof OTHER_OUTPUTS / sizeof OTHER_OUTPUTS[0]; i++)
+        printf("                      .%-5s %s\n", OTHER_OUTPUTS[i].ext, OTHER_OUTPUTS[i].what);
+    for (size_t i = 0; i < sizeof SCENE_OUTPUTS / sizeof SCENE_OUTPUTS[0]; i++)
+        printf("                      .%-5s %s\n", SCENE_OUTPUTS[i].ext, SCENE_OUTPUTS[i].what);
+    printf("  --every K         also write the outputs after step 0 and every K-th step as\n"
+           "                    NAME.STEP.EXT (NAME.0003.png); a .glb becomes one animation\n"
+           "                    with a frame per K steps\n"
            "  --homomorphism    write the string after the homomorphism\n"
            "  --float32         follow cpfg exactly: float32 parameters, seed: ignored as in\n"
            "                    cpfg's batch mode\n"
-           "  --max-modules N   stop when the string would exceed N modules\n");
+           "  --max-modules N   stop when the string would exceed N modules\n"
+           "  --max-memory MB   stop when the library would hold more than MB megabytes\n"
+           "                    (default: 3/4 of the physical memory; 0: no limit)\n"
+           "  --timing          print the time and memory of each phase to stderr\n\n%s",
+           cli_output_help);
 }
 
+/* NAME.EXT -> NAME.0003.EXT */
 static char *step_path(const char *path, int step)
 {
     const char *dot = strrchr(path, '.');
@@ -82,33 +140,155 @@ static char *step_path(const char *path, int step)
     size_t n = strlen(path) + 16;
     char *p = malloc(n);
     if (p)
-        snprintf(p, n, "%.*s-%04d%s", (int)(dot - path), path, step, dot);
+        snprintf(p, n, "%.*s.%04d%s", (int)(dot - path), path, step, dot);
     return p;
 }
 
-static int write_outputs(cbm_context *ctx, cbm_lsys *ls, const run_opts *o, char **outs, int nouts,
-                         int step)
+typedef struct run {
+    cbm_context *ctx;
+    cbm_model *model;
+    cbm_lsys *ls;
+    cbm_write_options wopt;
+    bool homomorphism;
+    target *targets;
+    int ntargets;
+    bool need_scene, need_json;
+    cbm_scene *scene; /* the scene of the current step, when a scene output asks */
+    cbm_json *json;
+    int interpreted_step; /* step whose interpretation the scene holds, -1: none */
+    size_t prims;         /* primitives of the last interpretation (with json) */
+    cbm_vec3 lo, hi;      /* its box */
+    bool has_box;
+    double t_start, t_derive, t_interpret, t_write;
+} run;
+
+/* Interprets the current string: fills its query modules, draws the scene if one is needed,
+ * and keeps the box (and the primitive count when the json summary asks). */
+static cbm_status interpret(run *r, int step)
 {
-    for (int i = 0; i < nouts; i++) {
-        char *path = step >= 0 ? step_path(outs[i], step) : outs[i];
-        if (!path)
-            return cli_fail(ctx, CBM_E_NOMEM, "output");
-        cbm_out *out = NULL;
-        cbm_status s = cbm_out_open(ctx, path, &out);
-        if (s == CBM_OK) {
-            s = find_output(outs[i])(ctx, ls, o, out);
-            if (s == CBM_OK)
-                s = cbm_out_commit(out);
-            else
-                cbm_out_abort(out);
-        }
-        int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, path);
-        if (step >= 0)
-            free(path);
-        if (rc != CLI_OK)
-            return rc;
+    if (r->interpreted_step == step)
+        return CBM_OK;
+    double t0 = cli_seconds();
+    if (r->scene)
+        cbm_scene_clear(r->scene);
+    cbm_turtle *t = NULL;
+    cbm_status s = cbm_model_interpret(r->model, r->scene, r->need_json, &t);
+    if (s != CBM_OK)
+        return s;
+    r->prims = cbm_turtle_prim_count(t);
+    r->has_box = cbm_turtle_box(t, &r->lo, &r->hi);
+    cbm_turtle_destroy(t);
+    r->interpreted_step = step;
+    r->t_interpret += cli_seconds() - t0;
+    return CBM_OK;
+}
+
+static void json_step(run *r, int step)
+{
+    cbm_json *j = r->json;
+    cbm_json_begin_object(j, NULL);
+    cbm_json_int(j, "step", step);
+    cbm_json_int(j, "modules", (int64_t)cbm_lsys_module_count(r->ls));
+    cbm_json_int(j, "parameters", (int64_t)cbm_lsys_param_count(r->ls));
+    cbm_json_int(j, "primitives", (int64_t)r->prims);
+    if (r->has_box) {
+        cbm_json_begin_object(j, "box");
+        cbm_json_begin_array(j, "min");
+        cbm_json_number(j, NULL, r->lo.x);
+        cbm_json_number(j, NULL, r->lo.y);
+        cbm_json_number(j, NULL, r->lo.z);
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "max");
+        cbm_json_number(j, NULL, r->hi.x);
+        cbm_json_number(j, NULL, r->hi.y);
+        cbm_json_number(j, NULL, r->hi.z);
+        cbm_json_end_array(j);
+        cbm_json_end_object(j);
+    } else {
+        cbm_json_null(j, "box");
     }
-    return CLI_OK;
+    cbm_json_number(j, "seconds", cli_seconds() - r->t_start);
+    cbm_json_end_object(j);
+}
+
+static cbm_status write_str(run *r, const char *path)
+{
+    cbm_status s = r->homomorphism ? cbm_lsys_apply_homomorphism(r->ls) : CBM_OK;
+    cbm_out *out = NULL;
+    if (s == CBM_OK)
+        s = cbm_out_open(r->ctx, path, &out);
+    if (s != CBM_OK)
+        return s;
+    s = cbm_lsys_write_str(r->ls, r->homomorphism, out);
+    if (s == CBM_OK)
+        return cbm_out_commit(out);
+    cbm_out_abort(out);
+    return s;
+}
+
+/* cli_fail, with the memory limit named when memory ran out under it. */
+static int run_fail(const run *r, cbm_status s, const char *what)
+{
+    int rc = cli_fail(r->ctx, s, what);
+    size_t limit = cbm_context_limits(r->ctx)->max_bytes;
+    if (s == CBM_E_NOMEM && limit)
+        fprintf(stderr, "cambium: the memory limit is %zu MB (--max-memory MB changes it)\n",
+                limit >> 20);
+    return rc;
+}
+
+/* What write_outputs writes after a step. */
+enum { ROW = 0, NUMBERED = 1, FINAL = 2 };
+
+/* After step `done`: ROW adds the json row; NUMBERED also writes NAME.STEP.EXT files and adds
+ * animation frames; FINAL writes the final files (the animations, the json document). */
+static int write_outputs(run *r, int what, int done)
+{
+    cbm_status s = interpret(r, done);
+    if (s != CBM_OK)
+        return run_fail(r, s, "interpretation");
+    double t0 = cli_seconds();
+    if (what != FINAL && r->json)
+        json_step(r, done);
+    int rc = CLI_OK;
+    for (int i = 0; i < r->ntargets && rc == CLI_OK && what != ROW; i++) {
+        target *t = &r->targets[i];
+        if (!strcmp(t->format, "json")) {
+            if (what == FINAL && (s = cbm_json_write_file(r->json, t->path)) != CBM_OK)
+                rc = run_fail(r, s, t->arg);
+            continue;
+        }
+        if (t->anim) {
+            s = what == NUMBERED ? cbm_animation_add_frame(t->anim, r->scene)
+                                 : cbm_animation_write(t->anim, t->path);
+            if (s != CBM_OK)
+                rc = run_fail(r, s, t->arg);
+            continue;
+        }
+        char *numbered = what == NUMBERED ? step_path(t->path, done) : NULL;
+        if (what == NUMBERED && !numbered)
+            return run_fail(r, CBM_E_NOMEM, "output");
+        const char *path = numbered ? numbered : t->path;
+        if (!strcmp(t->format, "str"))
+            s = write_str(r, path);
+        else
+            s = cbm_scene_write_as(r->ctx, r->scene, path, t->format, &r->wopt);
+        if (s != CBM_OK)
+            rc = run_fail(r, s, path);
+        free(numbered);
+    }
+    r->t_write += cli_seconds() - t0;
+    return rc;
+}
+
+/* Closes the json document (its rows are complete). */
+static void json_end(run *r)
+{
+    if (!r->json)
+        return;
+    cbm_json_end_array(r->json);
+    cbm_json_number(r->json, "seconds", cli_seconds() - r->t_start);
+    cbm_json_end_object(r->json);
 }
 
 int cmd_run(int argc, char **argv)
@@ -116,23 +296,33 @@ int cmd_run(int argc, char **argv)
     const char *model = NULL;
     const char *defines[256];
     size_t ndefines = 0;
-    char *outs[64];
-    int nouts = 0;
-    long steps = -1, every = 0, seed = -1, max_modules = 0;
-    run_opts o = {0};
-    bool float32 = false;
-    int nside = 0;
+    const char *sides[256];
+    size_t nside = 0;
+    target targets[MAX_OUTPUTS];
+    int ntargets = 0;
+    long steps = -1, every = 0, seed = -1, max_modules = 0, max_memory = -1;
+    bool float32 = false, timing = false, homomorphism = false;
+    cbm_write_options wopt = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         bool has_next = i + 1 < argc;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage();
             return CLI_OK;
-        } else if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed") ||
-                   !strcmp(a, "--max-modules")) {
+        }
+        int r = cli_output_option("run", argc, argv, &i, &wopt);
+        if (r < 0)
+            return CLI_USAGE;
+        if (r > 0)
+            continue;
+        if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed") ||
+            !strcmp(a, "--max-modules") || !strcmp(a, "--max-memory")) {
             long v;
-            if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0)
-                return cli_usage_error("run", "%s expects a non-negative integer", a);
+            if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0 ||
+                ((!strcmp(a, "-n") || !strcmp(a, "--every")) && v > 100000000))
+                return cli_usage_error("run", "%s expects a non-negative integer%s", a,
+                                       strcmp(a, "-n") && strcmp(a, "--every") ? ""
+                                                                               : " up to 10^8");
             i++;
             if (!strcmp(a, "-n"))
                 steps = v;
@@ -140,6 +330,10 @@ int cmd_run(int argc, char **argv)
                 every = v;
             else if (!strcmp(a, "--seed"))
                 seed = v;
+            else if (!strcmp(a, "--max-memory") && (unsigned long)v > (SIZE_MAX >> 21))
+                return cli_usage_error("run", "--max-memory: %ld MB is too large", v);
+            else if (!strcmp(a, "--max-memory"))
+                max_memory = v;
             else
                 max_modules = v;
         } else if (!strncmp(a, "-D", 2)) {
@@ -150,98 +344,171 @@ int cmd_run(int argc, char **argv)
         } else if (!strcmp(a, "-o")) {
             if (!has_next)
                 return cli_usage_error("run", "-o expects a file name");
-            if (!find_output(argv[i + 1]))
-                return cli_usage_error("run", "no writer for '.%s' output (%s)",
-                                       cli_extension(argv[i + 1]), argv[i + 1]);
-            if (nouts >= 64)
+            if (ntargets >= MAX_OUTPUTS)
                 return cli_usage_error("run", "too many outputs");
-            outs[nouts++] = argv[++i];
+            if (!parse_target(argv[i + 1], &targets[ntargets]))
+                return cli_usage_error("run",
+                                       "no writer for '%s' (.str .json .obj .ply .glb .png "
+                                       ".svg .csv, or FORMAT:PATH)",
+                                       argv[i + 1]);
+            ntargets++;
+            i++;
         } else if (!strcmp(a, "--homomorphism")) {
-            o.homomorphism = true;
+            homomorphism = true;
         } else if (!strcmp(a, "--float32")) {
             float32 = true;
+        } else if (!strcmp(a, "--timing")) {
+            timing = true;
         } else if (a[0] == '-') {
             return cli_usage_error("run", "unknown option '%s'", a);
         } else if (!model && !strcmp(cli_extension(a), "l")) {
             model = a;
-        } else {
-            bool known = false;
-            for (size_t k = 0; k < sizeof SIDE_KINDS / sizeof SIDE_KINDS[0]; k++)
-                if (!strcmp(cli_extension(a), SIDE_KINDS[k]))
-                    known = true;
-            if (!known)
-                return cli_usage_error("run", "'%s': not a model (.l) or a known side file", a);
-            FILE *f = fopen(a, "rb");
-            if (!f) {
-                fprintf(stderr, "cambium: %s: cannot open\n", a);
-                return CLI_FAIL;
-            }
-            fclose(f);
-            nside++;
+        } else if (in_list(cli_extension(a), SIDE_KINDS,
+                           sizeof SIDE_KINDS / sizeof SIDE_KINDS[0])) {
+            if (nside >= 256)
+                return cli_usage_error("run", "too many side files");
+            sides[nside++] = a;
+        } else if (!in_list(cli_extension(a), IGNORED_KINDS,
+                            sizeof IGNORED_KINDS / sizeof IGNORED_KINDS[0])) {
+            return cli_usage_error("run", "'%s': not a model (.l) or a known side file", a);
         }
     }
     if (!model)
         return cli_usage_error("run", "expected a MODEL.l");
+    for (int k = 0; k < ntargets; k++)
+        if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
+            strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))
+            return cli_usage_error("run", "--every writes numbered files: %s cannot be stdout",
+                                   targets[k].arg);
+
     cbm_context *ctx = cli_context();
-    if (max_modules > 0) {
-        cbm_limits lim = *cbm_context_limits(ctx);
+    cbm_limits lim = *cbm_context_limits(ctx);
+    if (max_modules > 0)
         lim.max_modules = (size_t)max_modules;
-        cbm_context_set_limits(ctx, &lim);
-    }
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = model;
-    def.defines = defines;
-    def.define_count = ndefines;
-    def.float32 = float32;
-    def.ignore_seed = float32;
-    def.seed = seed;
-    cbm_lsys *ls = NULL;
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
-    if (s != CBM_OK) {
-        int rc = cli_fail(ctx, s, model);
-        cli_context_end(ctx);
-        return rc;
-    }
-    int n = steps >= 0 ? (int)steps : cbm_lsys_derivation_length(ls);
+    /* a run that would exhaust the machine stops with a message instead: by default at 3/4 of
+     * the physical memory (the strings, the scene and the writers' buffers count) */
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (max_memory < 0 && pages > 0 && page > 0)
+        lim.max_bytes = (size_t)pages / 4 * 3 * (size_t)page;
+    else if (max_memory > 0)
+        lim.max_bytes = (size_t)max_memory << 20;
+    cbm_context_set_limits(ctx, &lim);
+    run r = {0};
+    r.ctx = ctx;
+    r.wopt = wopt;
+    r.homomorphism = homomorphism;
+    r.targets = targets;
+    r.ntargets = ntargets;
+    r.interpreted_step = -1;
+    r.t_start = cli_seconds();
+    cbm_model_def def = {cbm_lsys_def_default(), sides, nside};
+    def.lsys.path = model;
+    def.lsys.defines = defines;
+    def.lsys.define_count = ndefines;
+    def.lsys.float32 = float32;
+    def.lsys.ignore_seed = float32;
+    def.lsys.seed = seed;
     int rc = CLI_OK;
-    s = cbm_lsys_reset(ls);
-    if (s == CBM_OK && every > 0)
-        rc = write_outputs(ctx, ls, &o, outs, nouts, 0);
-    int done = 0;
-    bool progress = isatty(2);
-    while (s == CBM_OK && rc == CLI_OK && done < n && !cbm_lsys_stopped(ls)) {
-        s = cbm_lsys_step(ls);
+    cbm_status s = cbm_model_load(ctx, &def, &r.model);
+    if (s != CBM_OK) {
+        rc = cli_fail(ctx, s, model);
+        goto done;
+    }
+    r.ls = cbm_model_lsys(r.model);
+    for (int k = 0; k < ntargets; k++) {
+        r.need_scene |= is_scene_format(targets[k].format);
+        r.need_json |= !strcmp(targets[k].format, "json");
+    }
+    if (r.need_scene)
+        s = cbm_scene_create(ctx, &r.scene);
+    if (s == CBM_OK && r.need_json)
+        s = cbm_json_create(ctx, &r.json);
+    for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
+        if (!strcmp(targets[k].format, "glb"))
+            s = cbm_animation_create(ctx, &wopt, &targets[k].anim);
+    if (s != CBM_OK) {
+        rc = cli_fail(ctx, s, "output");
+        goto done;
+    }
+    if (r.json) {
+        cbm_json_begin_object(r.json, NULL);
+        cbm_json_string(r.json, "model", model);
+        cbm_json_bool(r.json, "float32", float32);
+        if (seed >= 0)
+            cbm_json_int(r.json, "seed", seed);
+        cbm_json_begin_array(r.json, "steps");
+    }
+
+    int n = steps >= 0 ? (int)steps : cbm_lsys_derivation_length(r.ls);
+    /* rows of the json summary and numbered outputs: step 0 and every K-th step (K = 1 for the
+     * json rows without --every), and the last step */
+    long row_every = every > 0 ? every : 1;
+    s = cbm_model_reset(r.model);
+    if (s == CBM_OK && (every > 0 || r.json))
+        rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, 0);
+    int done = 0, last_row = 0;
+    cli_progress pr;
+    cli_progress_begin(&pr);
+    while (s == CBM_OK && rc == CLI_OK && done < n && !cbm_lsys_stopped(r.ls)) {
+        double t0 = cli_seconds();
+        s = cbm_model_step(r.model);
+        r.t_derive += cli_seconds() - t0;
         if (s != CBM_OK)
             break;
         done++;
-        if (progress)
-            fprintf(stderr, "\rstep %d/%d, %zu modules ", done, n, cbm_lsys_module_count(ls));
-        if (every > 0 && done % every == 0)
-            rc = write_outputs(ctx, ls, &o, outs, nouts, done);
+        cbm_progress state = {(size_t)done, (size_t)n, cbm_lsys_module_count(r.ls), 0, 0};
+        cli_progress_update(&pr, &state);
+        if ((every > 0 || r.json) && done % row_every == 0) {
+            last_row = done;
+            rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, done);
+        }
     }
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    if (progress && done > 0)
-        fputc('\n', stderr);
+    cli_progress_end(&pr);
     if (s != CBM_OK) {
         rc = cli_fail(ctx, s, model);
-        if (s == CBM_E_LIMIT && nouts) {
-            fprintf(stderr, "cambium: writing the string of step %d, the last complete one\n",
-                    done);
-            write_outputs(ctx, ls, &o, outs, nouts, -1);
-        }
-    } else if (rc == CLI_OK) {
-        rc = write_outputs(ctx, ls, &o, outs, nouts, -1);
-        if (rc == CLI_OK && nouts == 0) {
-            double secs =
-                (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-            printf("%s: %d steps, %zu modules, %zu parameters, %d side file%s, %.3f s\n", model,
-                   done, cbm_lsys_module_count(ls), cbm_lsys_param_count(ls), nside,
-                   nside == 1 ? "" : "s", secs);
-        }
+        if (s != CBM_E_LIMIT || ntargets == 0)
+            goto done;
+        fprintf(stderr, "cambium: writing the outputs of step %d, the last complete one\n", done);
+    } else if (rc != CLI_OK) {
+        goto done;
     }
-    cbm_lsys_destroy(ls);
+    /* the last step ends the json rows and the animations even off the K grid */
+    int final_rc = CLI_OK;
+    if (last_row != done && (r.json || every > 0)) {
+        final_rc = write_outputs(&r, ROW, done);
+        for (int k = 0; k < ntargets && final_rc == CLI_OK; k++)
+            if (targets[k].anim) {
+                cbm_status fs = cbm_animation_add_frame(targets[k].anim, r.scene);
+                if (fs != CBM_OK)
+                    final_rc = cli_fail(ctx, fs, targets[k].arg);
+            }
+    }
+    json_end(&r);
+    if (final_rc == CLI_OK)
+        final_rc = write_outputs(&r, FINAL, done);
+    if (rc == CLI_OK)
+        rc = final_rc;
+    if (rc == CLI_OK && ntargets == 0) {
+        printf("%s: %d steps, %zu modules, %zu parameters", model, done,
+               cbm_lsys_module_count(r.ls), cbm_lsys_param_count(r.ls));
+        if (r.has_box)
+            printf(", box %.4g..%.4g x %.4g..%.4g x %.4g..%.4g", r.lo.x, r.hi.x, r.lo.y, r.hi.y,
+                   r.lo.z, r.hi.z);
+        printf(", %zu side file%s, %.3f s\n", nside, nside == 1 ? "" : "s",
+               cli_seconds() - r.t_start);
+    }
+    if (timing)
+        fprintf(stderr,
+                "run: derive %.3f s, interpret %.3f s, write %.3f s, total %.3f s; "
+                "peak %.1f MB in the library\n",
+                r.t_derive, r.t_interpret, r.t_write, cli_seconds() - r.t_start,
+                (double)cbm_context_peak_bytes(ctx) / 1e6);
+done:
+    for (int k = 0; k < ntargets; k++)
+        cbm_animation_destroy(targets[k].anim);
+    cbm_json_destroy(r.json);
+    cbm_scene_destroy(r.scene);
+    cbm_model_destroy(r.model);
     cli_context_end(ctx);
     return rc;
 }

@@ -1,0 +1,199 @@
+/* A cpfg model run end to end: the L-system engine (src/lsys) joined with the view, the side
+ * files and the turtle (src/turtle), as cpfg joins them.
+ *
+ * Algorithm. func(id, x) in expressions reads the view's function files
+ * (cbm_view_func_callback). Environmental interpretation (cpfg's ProcessEnvironment): before a
+ * derivation step whose string holds query modules, the engine computes the homomorphic image,
+ * and the callback below runs the turtle over it module by module (cbm__turtle_feed joins cpfg's
+ * one-character modules `@ M(...)`, `? P(...)`, `~ l(...)`) and writes the values the turtle put
+ * in the query modules back into the image; the engine hands them to the string's query modules
+ * in order. Steps whose string has no query module skip the pass (it could not change anything),
+ * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
+ * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
+ * it reads the string itself rather than a copy (half the memory on the largest strings). ABOP ch.
+ * 1 (turtle interpretation); Prusinkiewicz et al. 1994 "Synthetic topiary" (query modules).
+ */
+#include "cambium/model.h"
+
+#include "core/core.h"
+#include "lsys/lsys_internal.h"
+#include "turtle/turtle.h"
+
+#include <stdio.h>
+
+struct cbm_model {
+    cbm_context *ctx;
+    cbm_lsys *ls;
+    cbm_view *view;
+    cbm_turtle *query_turtle; /* no scene, no record: the per-step pass */
+    cbm_turtle *pass;         /* the turtle of the pass in progress */
+    bool image;               /* the pass reads the homomorphic image (else the string) */
+    bool may_query;           /* some successor or the axiom holds a '?' */
+};
+
+/* The turtle over the homomorphic image; query values written back into the image. */
+static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
+{
+    cbm_model *m = ud;
+    cbm_turtle *t = m->pass;
+    cbm__turtle_reset(t);
+    cbm_lsys_cursor c;
+    cbm_lsys_cursor_begin(ls, m->image, &c);
+    double buf[256];
+    bool after_query = false;
+    cbm_status s = CBM_OK;
+    while (s == CBM_OK && cbm_lsys_cursor_next(ls, m->image, &c)) {
+        int n = c.nparams;
+        if (n > 0)
+            memcpy(buf, c.params, (size_t)n * sizeof(double));
+        s = cbm__turtle_feed(t, c.symbol, buf, n);
+        if (s == CBM_OK && after_query && n > 0 &&
+            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U'))
+            for (int i = 0; i < n && s == CBM_OK; i++)
+                s = cbm_lsys_cursor_set_param(ls, &c, i, buf[i]);
+        after_query = c.symbol == '?' && n == 0;
+    }
+    if (s == CBM_OK)
+        s = cbm__turtle_finish(t);
+    return s;
+}
+
+cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model **out)
+{
+    if (!ctx || !def || !out || (def->side_count && !def->side_files))
+        return CBM_E_INVALID;
+    *out = NULL;
+    cbm_model *m = cbm__calloc(ctx, 1, sizeof *m);
+    if (!m)
+        return CBM_E_NOMEM;
+    m->ctx = ctx;
+    cbm_status s = cbm_view_create(ctx, &m->view);
+    for (size_t i = 0; i < def->side_count && s == CBM_OK; i++) {
+        s = cbm_view_load_side_file(m->view, def->side_files[i]);
+        if (s != CBM_OK && !strstr(cbm_context_last_error(ctx), def->side_files[i])) {
+            char msg[512];
+            snprintf(msg, sizeof msg, "%s", cbm_context_last_error(ctx));
+            s = cbm__fail(ctx, s, "%s: %s", def->side_files[i], msg);
+        }
+    }
+    if (s == CBM_OK)
+        s = cbm_lsys_load(ctx, &def->lsys, &m->ls);
+    if (s == CBM_OK)
+        s = cbm__turtle_create(ctx, m->view, NULL, &m->query_turtle);
+    if (s != CBM_OK) {
+        cbm_model_destroy(m);
+        return s;
+    }
+    for (size_t i = 0; i < m->ls->smods.len && !m->may_query; i++)
+        m->may_query = (m->ls->smods.data[i].sym & 0x7f) == '?';
+    /* without function files func() stays an error naming what is missing */
+    if (cbm_funcset_count(cbm_view_functions(m->view)) > 0)
+        cbm_lsys_set_func(m->ls, cbm_view_func_callback, m->view);
+    *out = m;
+    return CBM_OK;
+}
+
+void cbm_model_destroy(cbm_model *m)
+{
+    if (!m)
+        return;
+    cbm__turtle_destroy(m->query_turtle);
+    cbm_lsys_destroy(m->ls);
+    cbm_view_destroy(m->view);
+    cbm__free(m->ctx, m, sizeof *m);
+}
+
+cbm_lsys *cbm_model_lsys(cbm_model *m)
+{
+    return m ? m->ls : NULL;
+}
+
+const cbm_view *cbm_model_view(const cbm_model *m)
+{
+    return m ? m->view : NULL;
+}
+
+cbm_status cbm_model_reset(cbm_model *m)
+{
+    if (!m)
+        return CBM_E_INVALID;
+    cbm_lsys_set_interpreter(m->ls, NULL, NULL);
+    return cbm_lsys_reset(m->ls);
+}
+
+/* A query module: '?' without parameters followed by P, H, L or U. A scan of the packed symbol
+ * bytes (memchr), skipped for models none of whose successors or axiom holds a '?'. */
+bool cbm_model_has_queries(const cbm_model *m)
+{
+    if (!m || !m->may_query)
+        return false;
+    const lstr *str = &m->ls->cur;
+    const uint8_t *p = str->sym, *end = str->sym + str->n;
+    while (p < end && (p = memchr(p, '?', (size_t)(end - p))) != NULL) {
+        p++;
+        int next = p < end ? (*p & 0x7f) : 0;
+        if (next == 'P' || next == 'H' || next == 'L' || next == 'U')
+            return true;
+    }
+    return false;
+}
+
+cbm_status cbm_model_step(cbm_model *m)
+{
+    if (!m)
+        return CBM_E_INVALID;
+    m->pass = m->query_turtle;
+    m->image = true;
+    cbm__turtle_set_record(m->pass, false);
+    cbm_lsys_set_interpreter(m->ls, cbm_model_has_queries(m) ? interpret_cb : NULL, m);
+    cbm_status s = cbm_lsys_step(m->ls);
+    cbm_lsys_set_interpreter(m->ls, NULL, NULL);
+    return s;
+}
+
+cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_turtle **turtle)
+{
+    if (turtle)
+        *turtle = NULL;
+    if (!m)
+        return CBM_E_INVALID;
+    cbm_turtle *t = NULL;
+    CBM_TRY(cbm__turtle_create(m->ctx, m->view, scene, &t));
+    cbm__turtle_set_record(t, record);
+    m->pass = t;
+    cbm_status s;
+    if (cbm_lsys_has_homomorphism(m->ls)) {
+        m->image = true;
+        cbm_lsys_set_interpreter(m->ls, interpret_cb, m);
+        s = cbm_lsys_interpret(m->ls);
+        cbm_lsys_set_interpreter(m->ls, NULL, NULL);
+    } else {
+        /* the image would be a copy of the string: read and fill the string itself */
+        m->image = false;
+        s = interpret_cb(m, m->ls);
+    }
+    m->pass = m->query_turtle;
+    if (s != CBM_OK || !turtle)
+        cbm__turtle_destroy(t);
+    else
+        *turtle = t;
+    return s;
+}
+
+void cbm_model_describe(const cbm_model *m, cbm_model_summary *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!m)
+        return;
+    const cbm_lsys *ls = m->ls;
+    out->derivation_length = ls->derivation_length;
+    out->productions = ls->main.prods.len;
+    out->decompositions = ls->decomp.prods.len;
+    out->homomorphisms = ls->homo.prods.len;
+    out->decomposition_depth = ls->decomp.present ? ls->decomp.depth : 0;
+    out->homomorphism_depth = ls->homo.present ? ls->homo.depth : 0;
+    out->stochastic = ls->stochastic;
+    out->has_start_end =
+        ls->start_block >= 0 || ls->end_block >= 0 || ls->start_each >= 0 || ls->end_each >= 0;
+    out->functions = cbm_funcset_count(cbm_view_functions(m->view));
+}

@@ -1,0 +1,4 @@
+angle increment: 25.7
+initial line width: 0.3
+line style: cylinder
+contour sides: 6
