@@ -8,5 +8,6 @@
 #include "cambium/mech.h"
 #include "cambium/bend.h"
 #include "cambium/write.h"
+#include "cambium/tree.h"
 
 #endif

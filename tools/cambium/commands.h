@@ -7,11 +7,13 @@ int cmd_info(int argc, char **argv);
 int cmd_bend(int argc, char **argv);
 int cmd_buckle(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
+int cmd_grow(int argc, char **argv);
 
 #define CBM_COMMANDS(X)                                                                            \
     X("info", cmd_info, "what a model or output file holds")                                       \
     X("bend", cmd_bend, "static equilibrium of one branch or rod from a spec file")                \
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
-    X("demo", cmd_demo, "write a synthetic tree in any output format")
+    X("demo", cmd_demo, "write a synthetic tree in any output format")                             \
+    X("grow", cmd_grow, "grow a built-in tree model (fruit tree, aspen) with mechanics")
 
 #endif
