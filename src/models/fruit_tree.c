@@ -17,8 +17,8 @@
  *   both: equilibrium (6.24 fixed point, solved); breakage of every segment whose bending stress
  *     exceeds the modulus of rupture (8.26-8.27); segments bent through the ground are cropped;
  *     pipe-model rings at rate kappa with shape memory and reaction wood (4.1-4.3, 6.25-6.34,
- *     8.17-8.25, cbm_plant_grow_rings); ageing of the wood by 1 / growth_steps_per_year years
- *     (8.2).
+ *     8.17-8.25, cbm_plant_grow_rings). Once a year the wood ages by the year's growth steps /
+ *     growth_steps_per_year years (8.2).
  * Summer ends when no apex is left; winter when the leaves and fruit are gone and the rings have
  * caught up (no increment above min_ring) or after max_winter_steps; then branches that laid no
  * ring for years_to_shed years are shed (§4.3.2), and the spring pass (tree_spring.c) decides
@@ -89,7 +89,8 @@ static cbm_status new_organs(cbm_tree *t, size_t i, int count)
         s->leaf = s->leaf_goal / 3.0;
     }
     double x = uniform(t, 0.0, 2.0 * (double)(d->max_buds - count) / (double)d->max_buds);
-    if (d->fruit_mass > 0.0 && x < d->fruit_prob && count > 2) {
+    if (d->fruit_mass > 0.0 && x < d->fruit_prob && count > 2 &&
+        t->year + 1 >= d->first_fruit_year) {
         s->fruit_goal = normal_pos(t, d->fruit_mass, 0.5 * d->fruit_mass, 0.05);
         s->fruit = s->fruit_goal / 3.0;
     }
@@ -103,8 +104,7 @@ static cbm_status push_seg(cbm_tree *t, const tree_seg *s)
 
 /* Adds one segment to the plant and its model state. */
 static cbm_status add_seg(cbm_tree *t, size_t parent, double length, double divergence,
-                          double deviation, double e, double trop, const tree_seg *s,
-                          size_t *out)
+                          double deviation, double e, double trop, const tree_seg *s, size_t *out)
 {
     cbm_segment_def sd = cbm_segment_def_default();
     sd.parent = (int64_t)parent;
@@ -199,6 +199,8 @@ static cbm_status remove_marked(cbm_tree *t, uint8_t *gone, size_t *removed)
 static cbm_status solve(cbm_tree *t)
 {
     cbm_solve_stats st;
+    if (t->plant->n == 0)
+        return CBM_OK; /* the tree broke at its base: nothing left to grow */
     double t0 = now();
     cbm_status s = cbm_plant_solve(t->plant, &t->solve, &st);
     t->cur.seconds_solve += now() - t0;
@@ -292,8 +294,6 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
         }
     }
     cbm__free(t->ctx, a0, (n ? n : 1) * sizeof *a0);
-    if (s == CBM_OK)
-        s = cbm_plant_age_wood(p, &t->growth, 1.0 / t->def.growth_steps_per_year);
     *max_increment = gs.max_increment;
     t->cur.seconds_rings += now() - t0;
     return s;
@@ -350,7 +350,7 @@ static void begin_year(cbm_tree *t)
     t->winter_steps = 0;
     t->unloaded_recorded = false;
     for (size_t i = 0; i < t->seg.len; i++)
-        t->seg.data[i].flags &= (uint8_t)~(SEG_REACT | SEG_GREW);
+        t->seg.data[i].flags &= (uint8_t) ~(SEG_REACT | SEG_GREW);
 }
 
 cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree **out)
@@ -390,6 +390,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     t->solve = cbm_solve_def_default();
     t->solve.tolerance = def->solve_tolerance;
     t->solve.warm_start = true;
+    t->solve.max_passes = (size_t)def->solve_max_passes;
     cbm_plant_def pd = cbm_plant_def_default();
     pd.gravity = v3(0, -9.81, 0);
     pd.base_orientation = cbm_mech_clamp_orientation(def->elevation);
@@ -520,6 +521,11 @@ static cbm_status shed_unproductive(cbm_tree *t)
 
 static cbm_status end_year(cbm_tree *t)
 {
+    /* ageing (8.2) once a year by the year's growth steps: the rings of the year age together */
+    double t0 = now();
+    CBM_TRY(cbm_plant_age_wood(t->plant, &t->growth,
+                               (double)t->cur.growth_steps / t->def.growth_steps_per_year));
+    t->cur.seconds_rings += now() - t0;
     CBM_TRY(shed_unproductive(t));
     if (!t->unloaded_recorded) {
         double h, w;
@@ -532,7 +538,7 @@ static cbm_status end_year(cbm_tree *t)
     CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->years, t->cur));
     t->year++;
     begin_year(t);
-    double t0 = now();
+    t0 = now();
     CBM_TRY(cbm__tree_spring(t));
     CBM_TRY(solve(t));
     t->cur.seconds += now() - t0;

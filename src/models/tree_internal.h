@@ -9,13 +9,13 @@
 #include "mech/mech_internal.h"
 
 enum {
-    SEG_LATERAL = 1,  /* a lateral bud internode (length bud_length) */
-    SEG_BUD = 2,      /* carries an undecided bud (the listing's PotentialApex) */
-    SEG_ABORTED = 4,  /* an aborted bud: takes no resources */
-    SEG_APEX = 8,     /* carries a growing apex */
-    SEG_TRUNK1 = 16,  /* part of the first year's trunk (lean measure) */
-    SEG_REACT = 32,   /* laid reaction wood this year */
-    SEG_GREW = 64     /* laid a ring this year */
+    SEG_LATERAL = 1, /* a lateral bud internode (length bud_length) */
+    SEG_BUD = 2,     /* carries an undecided bud (the listing's PotentialApex) */
+    SEG_ABORTED = 4, /* an aborted bud: takes no resources */
+    SEG_APEX = 8,    /* carries a growing apex */
+    SEG_TRUNK1 = 16, /* part of the first year's trunk (lean measure) */
+    SEG_REACT = 32,  /* laid reaction wood this year */
+    SEG_GREW = 64    /* laid a ring this year */
 };
 
 typedef struct tree_seg {

@@ -60,19 +60,22 @@ cbm_tree_def cbm_tree_def_default(void)
     d.first_buds = 10;
     d.phyllotaxis = 137.5 * DEG;
     d.elevation = 90.0 * DEG;
-    /* the listing gives no control points: a shoot of V = 1 makes max_buds nodes, the weakest
-     * shooting bud (V just above the threshold) a few */
-    d.numbuds_vigour.n = 3;
-    d.numbuds_vigour.x[0] = 0.0, d.numbuds_vigour.y[0] = 0.1;
-    d.numbuds_vigour.x[1] = 0.3, d.numbuds_vigour.y[1] = 0.5;
-    d.numbuds_vigour.x[2] = 1.0, d.numbuds_vigour.y[2] = 1.0;
+    /* the listing gives no control points: the weakest shooting bud (V just above the
+     * threshold) makes one node, V = 0.5 about a third of max_buds, V >= 10 (a young leader)
+     * max_buds */
+    d.numbuds_vigour.n = 5;
+    {
+        static const double nx[] = {0.0, 0.1, 0.5, 2.0, 10.0}, ny[] = {0.05, 0.1, 0.3, 0.6, 1.0};
+        for (int k = 0; k < 5; k++)
+            d.numbuds_vigour.x[k] = nx[k], d.numbuds_vigour.y[k] = ny[k];
+    }
     d.angle_min_height = func2(0, 0.35, 1, 0.25); /* 35 deg at the base of a shoot, 25 at the top */
     d.angle_max_height = func2(0, 0.6, 1, 0.45);
     d.vigour_height = func2(0, 0, 1, 1); /* f(h) = h, the general model */
     d.vigour_k = 800.0;
     d.vigour_d = 1.1;
-    d.shoot_vigour = 0.03;
-    d.sink = 0.25;
+    d.shoot_vigour = 0.2; /* listing 0.03, with its non-conserving spring split */
+    d.sink = 0.05;
     d.fairness = 1.0;
     d.years_to_shed = 0;
     d.relay_bias = false;
@@ -87,7 +90,7 @@ cbm_tree_def cbm_tree_def_default(void)
     d.tropism = 0.0008;
     d.pipe_exponent = 2.0;
     d.ring_rate = 0.6;
-    d.min_ring = 1e-8;
+    d.min_ring = 1e-5; /* listing EPSILON 1e-8 */
     d.reaction_threshold = 0.3;
     d.reaction_beta = 0.3;
     d.reaction_increment = 0.001;
@@ -96,12 +99,14 @@ cbm_tree_def cbm_tree_def_default(void)
     d.memory = CBM_MEMORY_SEGMENT;
     d.ageing = CBM_AGEING_RINGS;
     d.solve_tolerance = 1e-6;
+    d.solve_max_passes = 400;
     d.leaves = true;
     d.leaf_mass = 2e-6;
     d.leaf_density = 0.095;
     d.fruit_mass = 0.01;
     d.fruit_density = 300.0;
     d.fruit_prob = 0.27;
+    d.first_fruit_year = 3;
     d.organ_rate = 0.9;
     d.leaf_drop = 0.5;
     d.fruit_drop = 0.5;
@@ -109,13 +114,24 @@ cbm_tree_def cbm_tree_def_default(void)
     d.tropism_factor = 5.0;
     d.deviation_factor = 2.0;
     d.tropism_fade = 2.0 / 3.0;
-    d.max_winter_steps = 40;
+    d.max_winter_steps = 12;
     return d;
 }
 
 /* ---- the table ---- */
 
-typedef enum kind { K_DOUBLE, K_ANGLE, K_INT, K_U64, K_BOOL, K_FUNC, K_FORM, K_DISC, K_MEM, K_AGE } kind;
+typedef enum kind {
+    K_DOUBLE,
+    K_ANGLE,
+    K_INT,
+    K_U64,
+    K_BOOL,
+    K_FUNC,
+    K_FORM,
+    K_DISC,
+    K_MEM,
+    K_AGE
+} kind;
 
 typedef struct param {
     const char *name;
@@ -124,7 +140,10 @@ typedef struct param {
     double lo, hi; /* inclusive range (in file units); lo > hi: no check */
 } param;
 
-#define P(name, k, lo, hi) {#name, k, offsetof(cbm_tree_def, name), lo, hi}
+#define P(name, k, lo, hi)                                                                         \
+    {                                                                                              \
+#name, k, offsetof(cbm_tree_def, name), lo, hi                                             \
+    }
 static const param params[] = {
     P(seed, K_U64, 0, 0),
     P(years, K_INT, 0, 1000),
@@ -167,12 +186,14 @@ static const param params[] = {
     P(memory, K_MEM, 0, 0),
     P(ageing, K_AGE, 0, 0),
     P(solve_tolerance, K_DOUBLE, 1e-14, 0.1),
+    P(solve_max_passes, K_INT, 3, 100000000),
     P(leaves, K_BOOL, 0, 0),
     P(leaf_mass, K_DOUBLE, 0, 1e3),
     P(leaf_density, K_DOUBLE, 1e-9, 1e6),
     P(fruit_mass, K_DOUBLE, 0, 1e3),
     P(fruit_density, K_DOUBLE, 1e-9, 1e6),
     P(fruit_prob, K_DOUBLE, 0, 10),
+    P(first_fruit_year, K_INT, 1, 1000000),
     P(organ_rate, K_DOUBLE, 0, 1),
     P(leaf_drop, K_DOUBLE, 0, 1),
     P(fruit_drop, K_DOUBLE, 0, 1),
@@ -475,7 +496,9 @@ cbm_status cbm_tree_def_parse(cbm_context *ctx, cbm_tree_def *def, const char *t
             if (!pm)
                 ERR(k0, "unknown parameter '%s'", key);
             if (is_func != (pm->k == K_FUNC))
-                ERR(k0, is_func ? "'%s' is not a function" : "'%s' is a function: write 'func %s = x:y ...'",
+                ERR(k0,
+                    is_func ? "'%s' is not a function"
+                            : "'%s' is a function: write 'func %s = x:y ...'",
                     key, key);
             if (m - i >= sizeof buf)
                 ERR(i, "value too long");
@@ -560,8 +583,7 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
             OUT("%s = %d\n", pm->name, *(const int *)(const void *)base);
             break;
         case K_U64:
-            OUT("%s = %llu\n", pm->name,
-                (unsigned long long)*(const uint64_t *)(const void *)base);
+            OUT("%s = %llu\n", pm->name, (unsigned long long)*(const uint64_t *)(const void *)base);
             break;
         case K_BOOL:
             OUT("%s = %d\n", pm->name, *(const bool *)(const void *)base ? 1 : 0);
@@ -612,10 +634,9 @@ static const builtin builtins[] = {
 
 const char *const *cbm_tree_builtin_names(void)
 {
-    static const char *const names[] = {"fruit-tree",          "fruit-tree-fair",
-                                        "fruit-tree-unfair",   "fruit-tree-high-mor",
-                                        "fruit-tree-low-mor",  "poplar-wild",
-                                        "poplar-crooked",      NULL};
+    static const char *const names[] = {
+        "fruit-tree",         "fruit-tree-fair", "fruit-tree-unfair", "fruit-tree-high-mor",
+        "fruit-tree-low-mor", "poplar-wild",     "poplar-crooked",    NULL};
     _Static_assert(sizeof names / sizeof names[0] == NBUILTINS + 1, "builtin names");
     return names;
 }
