@@ -383,7 +383,9 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     g.modulus_of_rupture = def->modulus_of_rupture;
     g.memory = def->memory;
     g.ageing = def->ageing;
-    g.reaction_threshold = def->reaction_threshold > 0.0 ? def->reaction_threshold : INFINITY;
+    /* the listing applies reaction wood only if beta > 0: the crooked form has none */
+    g.reaction_threshold =
+        def->reaction_threshold > 0.0 && !crooked ? def->reaction_threshold : INFINITY;
     g.reaction_beta = crooked ? 0.0 : def->reaction_beta;
     g.reaction_increment = def->reaction_increment;
     t->growth = g;

@@ -574,10 +574,10 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
         const char *base = (const char *)d + pm->off;
         switch (pm->k) {
         case K_DOUBLE:
-            OUT("%s = %.17g\n", pm->name, *(const double *)(const void *)base);
+            OUT("%s = %.15g\n", pm->name, *(const double *)(const void *)base);
             break;
         case K_ANGLE:
-            OUT("%s = %.17g\n", pm->name, *(const double *)(const void *)base / DEG);
+            OUT("%s = %.15g\n", pm->name, *(const double *)(const void *)base / DEG);
             break;
         case K_INT:
             OUT("%s = %d\n", pm->name, *(const int *)(const void *)base);
@@ -604,7 +604,7 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
             const cbm_tree_func *f = (const cbm_tree_func *)(const void *)base;
             OUT("func %s =", pm->name);
             for (int k = 0; k < f->n; k++)
-                OUT(" %.17g:%.17g", f->x[k], f->y[k]);
+                OUT(" %.15g:%.15g", f->x[k], f->y[k]);
             OUT("\n");
             break;
         }
