@@ -14,6 +14,9 @@ for k in year segments height_m crown_width_m leaves fruit breaks reaction_wood_
     grep -q "\"$k\":" "$tmp/t.json" || { echo "missing $k"; exit 1; }
 done
 test "$(grep -o '"year":' "$tmp/t.json" | wc -l)" -eq 3
+# a growth animation: one frame every 10 growth steps
+"$bin" grow -y 1 --every 10 -o "$tmp/anim.glb" --quiet
+test -s "$tmp/anim.glb"
 # same seed, same table
 "$bin" grow -y 3 -D seed=5 -o "$tmp/u.csv" --quiet
 cmp "$tmp/t.csv" "$tmp/u.csv"
