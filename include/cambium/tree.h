@@ -96,9 +96,12 @@ typedef struct cbm_tree_def {
     /// iterate (counted in cbm_tree_summary.unconverged) and the next step continues from it
     int solve_max_passes;
     /* leaves and fruit */
-    bool leaves;          ///< LEAVES 1
-    double leaf_mass;     ///< kg, mean goal mass LEAF_MASS 2e-6 (sd mean/2)
-    double leaf_density;  ///< kg/m^2, leaf side = sqrt(m / leaf_density), 0.095
+    bool leaves;         ///< LEAVES 1
+    double leaf_mass;    ///< kg, mean goal mass LEAF_MASS 2e-6 (sd mean/2)
+    double leaf_density; ///< kg/m^2, leaf size sqrt(m / leaf_density), LEAF_DENSITY 0.095
+    /// drawing only: leaf side = leaf_scale sqrt(m / leaf_density) (the listing scales a
+    /// predefined leaf surface of unstated size by sqrt(m / leaf_density)); 8
+    double leaf_scale;
     double fruit_mass;    ///< kg, mean goal mass FRUIT_MASS 0.01 (sd mean/2)
     double fruit_density; ///< kg/m^3, FRUIT_DENSITY 300
     double fruit_prob;    ///< FRUIT_PROB 0.27

@@ -474,6 +474,8 @@ static cbm_status summer_step(cbm_tree *t)
         }
         t->cur.leaves = nl;
         t->cur.fruit = nf;
+        t->cur.segments = t->seg.len; /* the year's final count replaces it */
+        t->cur.lean = trunk_lean(t);
         t->season = CBM_TREE_WINTER;
     }
     return CBM_OK;

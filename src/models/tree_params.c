@@ -103,6 +103,7 @@ cbm_tree_def cbm_tree_def_default(void)
     d.leaves = true;
     d.leaf_mass = 2e-6;
     d.leaf_density = 0.095;
+    d.leaf_scale = 8.0;
     d.fruit_mass = 0.01;
     d.fruit_density = 300.0;
     d.fruit_prob = 0.27;
@@ -190,6 +191,7 @@ static const param params[] = {
     P(leaves, K_BOOL, 0, 0),
     P(leaf_mass, K_DOUBLE, 0, 1e3),
     P(leaf_density, K_DOUBLE, 1e-9, 1e6),
+    P(leaf_scale, K_DOUBLE, 0, 1e6),
     P(fruit_mass, K_DOUBLE, 0, 1e3),
     P(fruit_density, K_DOUBLE, 1e-9, 1e6),
     P(fruit_prob, K_DOUBLE, 0, 10),

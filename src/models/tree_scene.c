@@ -1,7 +1,7 @@
 /* Geometry of a built-in tree for the writers (Taylor-Hell 2005 A.1 interpretation rules):
  * the branches as elliptical generalized cylinders (cbm_plant_to_scene), each leaf as a
- * rhombus of side sqrt(m / leaf_density) in the plane of the bud's heading and its horizontal
- * (the listing's SetHead + RollToVert + Surface), each fruit as a sphere of volume m /
+ * rhombus of side leaf_scale sqrt(m / leaf_density) in the plane of the bud's heading and its
+ * horizontal (the listing's SetHead + RollToVert + Surface), each fruit as a sphere of volume m /
  * fruit_density hanging from its node, and optionally a ground square. */
 #include "models/tree_internal.h"
 #include "core/vecmath.h"
@@ -30,7 +30,7 @@ cbm_status cbm_tree_to_scene(const cbm_tree *t, cbm_scene *scene, int sides, boo
             part.order = p->order[i];
             part.color[0] = 0.13f, part.color[1] = 0.45f, part.color[2] = 0.1f, part.color[3] = 1;
             CBM_TRY(cbm_scene_begin_part(scene, &part, NULL));
-            double side = sqrt(s->leaf / d->leaf_density);
+            double side = d->leaf_scale * sqrt(s->leaf / d->leaf_density);
             /* in the plane of H and the horizontal perpendicular to it */
             cbm_vec3 w = v3_cross(v3(0, 1, 0), h);
             double wn = v3_norm(w);

@@ -14,7 +14,8 @@
 static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
-           "                    [-o FILE]... [--every K] [--timing] [--quiet] [--params]\n"
+           "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
+           "                    [--params]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
            "wild or crooked aspen, from a parameter file or a built-in model (default\n"
@@ -26,6 +27,8 @@ static void help(void)
            "  -D NAME=VALUE     set a parameter (as in a parameter file; angles in degrees)\n"
            "  --seed N          generator seed (same as -D seed=N)\n"
            "  --every K         animation frame every K growth steps (.glb outputs)\n"
+           "  --summer          stop at the end of the last summer (leaves and fruit on; the\n"
+           "                    .json then ends with that year, \"complete\": false)\n"
            "  --timing          time spent per phase on stderr\n"
            "  --quiet           no per-year lines on stdout\n"
            "  --params          print every parameter (parameter-file syntax) and exit\n\n"
@@ -35,8 +38,10 @@ static void help(void)
     printf("\n\n%s", cli_output_help);
 }
 
+static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete);
+
 static cbm_status write_summary(cbm_context *ctx, const cbm_tree *t, const char *model,
-                                const cbm_tree_def *d, double total, const char *path)
+                                const cbm_tree_def *d, double total, bool partial, const char *path)
 {
     cbm_json *j = NULL;
     cbm_status cs = cbm_json_create(ctx, &j);
@@ -48,38 +53,44 @@ static cbm_status write_summary(cbm_context *ctx, const cbm_tree *t, const char 
     cbm_json_int(j, "years_grown", cbm_tree_years(t));
     cbm_json_number(j, "seconds", total);
     cbm_json_begin_array(j, "years");
-    for (int y = 1; y <= cbm_tree_years(t); y++) {
-        const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
-        cbm_json_begin_object(j, NULL);
-        cbm_json_int(j, "year", s->year);
-        cbm_json_int(j, "segments", (int64_t)s->segments);
-        cbm_json_number(j, "height_m", s->height);
-        cbm_json_number(j, "crown_width_m", s->crown_width);
-        cbm_json_int(j, "leaves", (int64_t)s->leaves);
-        cbm_json_int(j, "fruit", (int64_t)s->fruit);
-        cbm_json_int(j, "breaks", (int64_t)s->breaks);
-        cbm_json_int(j, "shed", (int64_t)s->shed);
-        cbm_json_int(j, "removed_segments", (int64_t)s->removed);
-        cbm_json_int(j, "reaction_wood_segments", (int64_t)s->reaction_segments);
-        cbm_json_int(j, "shoots", (int64_t)s->shoots);
-        cbm_json_int(j, "relay_shoots", (int64_t)s->relay_shoots);
-        cbm_json_number(j, "tip_height_loaded_m", s->tip_height_loaded);
-        cbm_json_number(j, "tip_height_unloaded_m", s->tip_height_unloaded);
-        cbm_json_number(j, "trunk_lean_deg", s->lean);
-        cbm_json_int(j, "growth_steps", (int64_t)s->growth_steps);
-        cbm_json_int(j, "equilibrium_passes", (int64_t)s->passes);
-        cbm_json_int(j, "newton_steps", (int64_t)s->newton_steps);
-        cbm_json_int(j, "unconverged", (int64_t)s->unconverged);
-        cbm_json_number(j, "seconds", s->seconds);
-        cbm_json_number(j, "seconds_equilibrium", s->seconds_solve);
-        cbm_json_number(j, "seconds_rings", s->seconds_rings);
-        cbm_json_end_object(j);
-    }
+    for (int y = 1; y <= cbm_tree_years(t); y++)
+        summary_object(j, cbm_tree_summary_of(t, y), true);
+    if (partial) /* --summer: the last year up to the end of its summer */
+        summary_object(j, cbm_tree_summary_current(t), false);
     cbm_json_end_array(j);
     cbm_json_end_object(j);
     cbm_status s = cbm_json_write_file(j, path);
     cbm_json_destroy(j);
     return s;
+}
+
+static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete)
+{
+    cbm_json_begin_object(j, NULL);
+    cbm_json_int(j, "year", s->year);
+    cbm_json_bool(j, "complete", complete);
+    cbm_json_int(j, "segments", (int64_t)s->segments);
+    cbm_json_number(j, "height_m", s->height);
+    cbm_json_number(j, "crown_width_m", s->crown_width);
+    cbm_json_int(j, "leaves", (int64_t)s->leaves);
+    cbm_json_int(j, "fruit", (int64_t)s->fruit);
+    cbm_json_int(j, "breaks", (int64_t)s->breaks);
+    cbm_json_int(j, "shed", (int64_t)s->shed);
+    cbm_json_int(j, "removed_segments", (int64_t)s->removed);
+    cbm_json_int(j, "reaction_wood_segments", (int64_t)s->reaction_segments);
+    cbm_json_int(j, "shoots", (int64_t)s->shoots);
+    cbm_json_int(j, "relay_shoots", (int64_t)s->relay_shoots);
+    cbm_json_number(j, "tip_height_loaded_m", s->tip_height_loaded);
+    cbm_json_number(j, "tip_height_unloaded_m", s->tip_height_unloaded);
+    cbm_json_number(j, "trunk_lean_deg", s->lean);
+    cbm_json_int(j, "growth_steps", (int64_t)s->growth_steps);
+    cbm_json_int(j, "equilibrium_passes", (int64_t)s->passes);
+    cbm_json_int(j, "newton_steps", (int64_t)s->newton_steps);
+    cbm_json_int(j, "unconverged", (int64_t)s->unconverged);
+    cbm_json_number(j, "seconds", s->seconds);
+    cbm_json_number(j, "seconds_equilibrium", s->seconds_solve);
+    cbm_json_number(j, "seconds_rings", s->seconds_rings);
+    cbm_json_end_object(j);
 }
 
 static bool ends_with(const char *s, const char *suf)
@@ -94,7 +105,7 @@ int cmd_grow(int argc, char **argv)
     int nout = 0, ndef = 0;
     long years = -1, every = 0;
     const char *seed = NULL;
-    bool timing = false, quiet = false, params = false;
+    bool timing = false, quiet = false, params = false, summer = false;
     cbm_write_options o = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -113,6 +124,10 @@ int cmd_grow(int argc, char **argv)
         }
         if (!strcmp(a, "--quiet")) {
             quiet = true;
+            continue;
+        }
+        if (!strcmp(a, "--summer")) {
+            summer = true;
             continue;
         }
         if (!strcmp(a, "--params")) {
@@ -249,7 +264,11 @@ int cmd_grow(int argc, char **argv)
     cli_progress_begin(&pr);
     double t0 = cli_seconds(), t_frames = 0.0;
     size_t step = 0;
-    while (cbm_tree_years(t) < d.years && st == CBM_OK) {
+    /* with --summer the last year stops at the end of its summer (leaves and fruit on) */
+    int full = summer && d.years > 0 ? d.years - 1 : d.years;
+    while (st == CBM_OK &&
+           (cbm_tree_years(t) < full || (summer && d.years > 0 && cbm_tree_years(t) == full &&
+                                         cbm_tree_current_season(t) == CBM_TREE_SUMMER))) {
         bool done_year = false;
         st = cbm_tree_step(t, &done_year);
         step++;
@@ -308,7 +327,7 @@ int cmd_grow(int argc, char **argv)
         else if (kind[k] == 2)
             st = cbm_write_mtg(ctx, cbm_tree_plant(t), outs[k]);
         else if (kind[k] == 3)
-            st = write_summary(ctx, t, model, &d, grow_time, outs[k]);
+            st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
         else if (anim[k])
             st = cbm_animation_write(anim[k], targets[k].path);
         else {
