@@ -324,3 +324,22 @@ TEST(tree_out_of_memory)
     printf("%d out-of-memory runs\n", runs);
     CHECK(runs > 10);
 }
+
+/* A tree whose base breaks (a tiny modulus of rupture) is gone: the following years run on an
+ * empty plant without errors, and the scene is empty but valid. */
+TEST(tree_broken_at_base)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"modulus_of_rupture", "1000", NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 3, set);
+    CHECK_EQ_INT(cbm_plant_segment_count(cbm_tree_plant(t)), 0);
+    CHECK(cbm_tree_summary_of(t, 1)->breaks >= 1);
+    CHECK_EQ_INT(cbm_tree_summary_of(t, 3)->segments, 0);
+    cbm_scene *sc = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &sc));
+    CHECK_OK(cbm_tree_to_scene(t, sc, 6, false));
+    CHECK_EQ_INT(cbm_scene_part_count(sc), 0);
+    cbm_scene_destroy(sc);
+    cbm_tree_destroy(t);
+    test_ctx_end(ctx);
+}

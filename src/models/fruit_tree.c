@@ -249,7 +249,7 @@ static cbm_status break_and_crop(cbm_tree *t)
     if (s == CBM_OK) {
         size_t n = p->n;
         memset(gone, 0, n0);
-        if (nb)
+        if (nb && n > 0)
             s = cbm_plant_evaluate(p, NULL);
         for (size_t i = 0; s == CBM_OK && i < n; i++)
             if (p->parent[i] >= 0 && distal(p, i).y < -t->def.bud_length) {
