@@ -5,10 +5,11 @@
  * A tree is a cbm_plant plus, per segment, the model's state (buds, apices, leaves, fruit,
  * vigour). It grows in growth steps; each step adds one node to every active apex (summer), or
  * sheds leaves and fruit (winter), then solves the static equilibrium with the fast solver
- * (warm-started), breaks what exceeds the modulus of rupture, lays pipe-model rings (with
- * reaction wood) and ages the wood. A year is summer steps until every apex has made its nodes,
- * winter steps until the leaves and fruit are gone and the rings have caught up, and one spring
- * pass that decides the fate of every bud by resource allocation. docs/models.md describes the
+ * (warm-started), breaks what exceeds the modulus of rupture and lays pipe-model rings (with
+ * reaction wood). A year is summer steps until every apex has made its nodes, winter steps until
+ * the leaves and fruit are gone and the rings have caught up, the ageing of the wood, the
+ * shedding of unproductive branches, and one spring pass that decides the fate of every bud by
+ * resource allocation. docs/models.md describes the
  * model, every parameter and the options; src/models/fruit_tree.c the algorithm.
  *
  * Units: SI; angles are radians in cbm_tree_def and degrees in parameter files. All randomness
