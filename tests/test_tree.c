@@ -343,3 +343,25 @@ TEST(tree_broken_at_base)
     cbm_tree_destroy(t);
     test_ctx_end(ctx);
 }
+
+/* §4.3.2: branches that lay no ring for years_to_shed years are shed; with 0 none are. */
+TEST(tree_shedding_unproductive)
+{
+    cbm_context *ctx = test_ctx();
+    const char *on[] = {"years_to_shed", "2", NULL};
+    cbm_tree *a = grow(ctx, "fruit-tree", 5, on);
+    cbm_tree *b = grow(ctx, "fruit-tree", 5, NULL);
+    size_t sa = 0, sb = 0;
+    for (int y = 1; y <= 5; y++) {
+        sa += cbm_tree_summary_of(a, y)->shed;
+        sb += cbm_tree_summary_of(b, y)->shed;
+        if (y < 3) /* a branch needs two full unproductive years */
+            CHECK_EQ_INT(cbm_tree_summary_of(a, y)->shed, 0);
+    }
+    printf("branches shed in 5 years: %zu (years_to_shed = 2), %zu (never)\n", sa, sb);
+    CHECK(sa > 0);
+    CHECK_EQ_INT(sb, 0);
+    cbm_tree_destroy(a);
+    cbm_tree_destroy(b);
+    test_ctx_end(ctx);
+}
