@@ -11,5 +11,6 @@
 #include "cambium/write.h"
 #include "cambium/turtle.h"
 #include "cambium/model.h"
+#include "cambium/tree.h"
 
 #endif

@@ -4,6 +4,7 @@
 #define CBM_COMMANDS_H
 
 int cmd_run(int argc, char **argv);
+int cmd_grow(int argc, char **argv);
 int cmd_bend(int argc, char **argv);
 int cmd_buckle(int argc, char **argv);
 int cmd_info(int argc, char **argv);
@@ -11,6 +12,7 @@ int cmd_demo(int argc, char **argv);
 
 #define CBM_COMMANDS(X)                                                                            \
     X("run", cmd_run, "derive an L-system model and write its outputs")                            \
+    X("grow", cmd_grow, "grow a built-in tree model (fruit tree, aspen) with mechanics")           \
     X("bend", cmd_bend, "static equilibrium of one branch or rod from a spec file")                \
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
     X("info", cmd_info, "what a model or output file holds")                                       \

@@ -1,0 +1,123 @@
+/* Benchmark of the built-in tree models (docs/performance.md, "built-in tree models"): the
+ * default 10-year fruit tree end to end, split into equilibrium, rings and ageing, and growth
+ * (apices, spring pass, bookkeeping), then a large tree: the fruit tree with the listing's shoot
+ * threshold (0.03, which grows far more shoots) grown until it has at least --big N segments,
+ * and the next --steps growth steps timed one by one (segments, passes, seconds per phase).
+ * Writes a CSV (one row per measured step) and prints a summary.
+ *
+ * usage: bench_tree [--big N] [--steps K] [--out FILE.csv]
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cambium/cambium.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int fail(cbm_context *ctx, const char *what)
+{
+    fprintf(stderr, "bench_tree: %s: %s\n", what, cbm_context_last_error(ctx));
+    return 1;
+}
+
+int main(int argc, char **argv)
+{
+    long big = 100000, steps = 10;
+    const char *out = "bench_tree.csv";
+    for (int i = 1; i + 1 < argc; i += 2) {
+        if (!strcmp(argv[i], "--big"))
+            big = atol(argv[i + 1]);
+        else if (!strcmp(argv[i], "--steps"))
+            steps = atol(argv[i + 1]);
+        else if (!strcmp(argv[i], "--out"))
+            out = argv[i + 1];
+    }
+    cbm_context_def cd = cbm_context_def_default();
+    cbm_context *ctx = NULL;
+    if (cbm_context_create(&cd, &ctx) != CBM_OK)
+        return 1;
+    /* 1. the default fruit tree, 10 years */
+    cbm_tree_def d = cbm_tree_def_default();
+    cbm_tree *t = NULL;
+    double t0 = now();
+    if (cbm_tree_create(ctx, &d, &t) != CBM_OK || cbm_tree_run(t) != CBM_OK)
+        return fail(ctx, "fruit tree");
+    double total = now() - t0, solve = 0, rings = 0;
+    size_t passes = 0, gsteps = 0;
+    for (int y = 1; y <= cbm_tree_years(t); y++) {
+        const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
+        solve += s->seconds_solve;
+        rings += s->seconds_rings;
+        passes += s->passes;
+        gsteps += s->growth_steps;
+    }
+    cbm_scene *sc = NULL;
+    double ts = now();
+    if (cbm_scene_create(ctx, &sc) != CBM_OK || cbm_tree_to_scene(t, sc, 12, true) != CBM_OK)
+        return fail(ctx, "scene");
+    double tscene = now() - ts;
+    printf("fruit tree, 10 years: %zu segments, %zu growth steps, %.3f s (equilibrium %.3f s in "
+           "%zu passes = %.1f us/pass, rings and ageing %.3f s, growth and the rest %.3f s); "
+           "scene %.3f s, %zu triangles\n",
+           cbm_plant_segment_count(cbm_tree_plant(t)), gsteps, total, solve, passes,
+           1e6 * solve / (double)(passes ? passes : 1), rings, total - solve - rings, tscene,
+           cbm_scene_triangle_count(sc));
+    cbm_scene_destroy(sc);
+    cbm_tree_destroy(t);
+
+    /* 2. a large tree */
+    FILE *f = fopen(out, "w");
+    if (!f) {
+        perror(out);
+        return 1;
+    }
+    fprintf(f, "step,season,segments,passes,seconds,seconds_equilibrium,seconds_rings\n");
+    d = cbm_tree_def_default();
+    d.shoot_vigour = 0.03;
+    d.years = 1000;
+    if (cbm_tree_create(ctx, &d, &t) != CBM_OK)
+        return fail(ctx, "big tree");
+    double tg = now();
+    while (cbm_plant_segment_count(cbm_tree_plant(t)) < (size_t)big)
+        if (cbm_tree_step(t, NULL) != CBM_OK)
+            return fail(ctx, "growing the big tree");
+    printf("large tree: %zu segments after %d years in %.1f s\n",
+           cbm_plant_segment_count(cbm_tree_plant(t)), cbm_tree_years(t), now() - tg);
+    double sum = 0, sum_solve = 0;
+    for (long k = 0; k < steps; k++) {
+        cbm_tree_summary before = *cbm_tree_summary_current(t);
+        int y0 = cbm_tree_years(t);
+        cbm_tree_season season = cbm_tree_current_season(t);
+        double a = now();
+        if (cbm_tree_step(t, NULL) != CBM_OK)
+            return fail(ctx, "step");
+        double dt = now() - a;
+        const cbm_tree_summary *c = cbm_tree_summary_current(t);
+        size_t dp = cbm_tree_years(t) == y0 ? c->passes - before.passes : c->passes;
+        double dsolve = cbm_tree_years(t) == y0 ? c->seconds_solve - before.seconds_solve : 0;
+        double drings = cbm_tree_years(t) == y0 ? c->seconds_rings - before.seconds_rings : 0;
+        sum += dt;
+        sum_solve += dsolve;
+        fprintf(f, "%ld,%s,%zu,%zu,%.6f,%.6f,%.6f\n", k,
+                season == CBM_TREE_SUMMER ? "summer" : "winter",
+                cbm_plant_segment_count(cbm_tree_plant(t)), dp, dt, dsolve, drings);
+        printf("  step %ld (%s): %zu segments, %zu passes, %.3f s (equilibrium %.3f s, rings "
+               "%.3f s)\n",
+               k, season == CBM_TREE_SUMMER ? "summer" : "winter",
+               cbm_plant_segment_count(cbm_tree_plant(t)), dp, dt, dsolve, drings);
+    }
+    printf("large tree: %.2f growth steps per second (equilibrium %.0f %% of the time)\n",
+           (double)steps / sum, 100 * sum_solve / sum);
+    fclose(f);
+    cbm_tree_destroy(t);
+    cbm_context_destroy(ctx);
+    return 0;
+}

@@ -1,0 +1,55 @@
+/* Private layout of a built-in tree (fruit_tree.c, tree_spring.c, tree_scene.c): the plant, the
+ * model's per-segment state kept parallel to the plant's segment arrays (same index, compacted
+ * together when subtrees are removed), and the effective parameters after the form switch. */
+#ifndef CBM_TREE_INTERNAL_H
+#define CBM_TREE_INTERNAL_H
+
+#include "cambium/tree.h"
+#include "core/core.h"
+#include "mech/mech_internal.h"
+
+enum {
+    SEG_LATERAL = 1, /* a lateral bud internode (length bud_length) */
+    SEG_BUD = 2,     /* carries an undecided bud (the listing's PotentialApex) */
+    SEG_ABORTED = 4, /* an aborted bud: takes no resources */
+    SEG_APEX = 8,    /* carries a growing apex */
+    SEG_TRUNK1 = 16, /* part of the first year's trunk (lean measure) */
+    SEG_REACT = 32,  /* laid reaction wood this year */
+    SEG_GREW = 64    /* laid a ring this year */
+};
+
+typedef struct tree_seg {
+    uint8_t flags;
+    int32_t count;     /* node number in its annual shoot */
+    int32_t nodes;     /* nodes of that shoot (numBuds) */
+    int32_t low_since; /* year since which the segment has not grown, -1 */
+    double h;          /* position of the node in its annual shoot, count / nodes (bud height) */
+    double phyllo;     /* rad, divergence of the next lateral (listing phyllo) */
+    double juv_e;      /* Pa, juvenile modulus of the shoot */
+    double leaf, leaf_goal, fruit, fruit_goal; /* kg */
+    double vigour, sink, share;                /* last spring pass */
+} tree_seg;
+
+struct cbm_tree {
+    cbm_context *ctx;
+    cbm_tree_def def;
+    cbm_plant *plant;
+    cbm_rng rng;
+    CBM_ARRAY(tree_seg) seg;
+    cbm_growth_def growth;
+    cbm_solve_def solve;
+    /* effective values after the form switch */
+    double e_juv, e_adult, trop, dev_factor;
+    bool fade;
+    int year; /* completed years */
+    cbm_tree_season season;
+    int winter_steps;
+    bool unloaded_recorded;
+    CBM_ARRAY(cbm_tree_summary) years;
+    cbm_tree_summary cur;
+};
+
+/* tree_spring.c: the spring pass (bud fate by resource allocation, 4.8-4.19, 7.1). */
+cbm_status cbm__tree_spring(cbm_tree *t);
+
+#endif

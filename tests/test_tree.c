@@ -1,0 +1,367 @@
+/* The built-in fruit tree (Taylor-Hell 2005 A.1) and the aspen of ch. 7, measured against what
+ * the thesis says they do: resource conservation at every node and the fairness identities
+ * (4.9-4.19); spring-back when leaves and fruit fall (Fig. 4.1); reaction wood straightening a
+ * leaning stem (Figs. 8.6-8.7); breakage under a low modulus of rupture only (Fig. 8.9); the
+ * crooked aspen lower and wider than the wild type with relay shoots (ch. 7); F = 0.2 taller
+ * and sparser than F = 1 (Fig. 4.7); determinism (hash of the segments table); the parameter
+ * reader's errors. Runs are short: each property shows within a few years. */
+#include "test.h"
+
+#include "cambium/cambium.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static cbm_tree *grow(cbm_context *ctx, const char *model, int years, const char *const *set)
+{
+    cbm_tree_def d;
+    CHECK_OK(cbm_tree_def_builtin(ctx, model, &d));
+    for (int k = 0; set && set[k]; k += 2)
+        CHECK_OK(cbm_tree_def_set(ctx, &d, set[k], set[k + 1]));
+    d.years = years;
+    cbm_tree *t = NULL;
+    CHECK_OK(cbm_tree_create(ctx, &d, &t));
+    if (t)
+        CHECK_OK(cbm_tree_run(t));
+    return t;
+}
+
+TEST(tree_func_and_fairness_identities)
+{
+    cbm_tree_func f = {3, {0, 0.5, 1}, {0, 0.4, 1}};
+    CHECK_NEAR(cbm_tree_func_eval(&f, -1), 0, 0);
+    CHECK_NEAR(cbm_tree_func_eval(&f, 0.25), 0.2, 1e-15);
+    CHECK_NEAR(cbm_tree_func_eval(&f, 0.75), 0.7, 1e-15);
+    CHECK_NEAR(cbm_tree_func_eval(&f, 7), 1, 0);
+    for (int k = 0; k <= 20; k++) {
+        double p = k / 20.0;
+        /* F = 1 is the identity; a share of 1/2 is fair whatever F */
+        CHECK_NEAR(cbm_tree_fairness(p, 1.0), p, 1e-15);
+        for (double F = 0; F <= 1.0; F += 0.25) {
+            double q = cbm_tree_fairness(p, F);
+            CHECK(q >= 0 && q <= 1);
+            if (p < 0.5)
+                CHECK_NEAR(q, F * p, 1e-15); /* 4.18: the small share shrinks */
+            else if (p > 0.5)
+                CHECK_NEAR(1 - q, F * (1 - p), 1e-15); /* 4.19 */
+            else
+                CHECK_NEAR(q, 0.5, 0);
+        }
+    }
+    /* F = 0: winner takes all */
+    CHECK_NEAR(cbm_tree_fairness(0.3, 0.0), 0.0, 0);
+    CHECK_NEAR(cbm_tree_fairness(0.7, 0.0), 1.0, 0);
+}
+
+/* After a spring pass every node with a child that takes resources passes on exactly what it
+ * received: the children's vigour plus the sink taken at the node equal the node's vigour
+ * (4.10-4.11, 4.14, 4.16). */
+TEST(tree_resource_conservation_every_node)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree *t = grow(ctx, "fruit-tree", 4, NULL);
+    const cbm_plant *p = cbm_tree_plant(t);
+    size_t n = cbm_plant_segment_count(p), nodes = 0, sinks = 0;
+    const int64_t *par = cbm_plant_parents(p);
+    double *sum = calloc(n, sizeof *sum);
+    int *kids = calloc(n, sizeof *kids);
+    for (size_t i = 0; i < n; i++) {
+        cbm_tree_segment s;
+        CHECK_OK(cbm_tree_segment_info(t, i, &s));
+        CHECK(s.vigour >= 0.0);
+        if (par[i] >= 0) {
+            sum[par[i]] += s.vigour;
+            kids[par[i]] += !s.aborted; /* an aborted bud takes nothing */
+        }
+    }
+    for (size_t i = 0; i < n; i++) {
+        if (!kids[i])
+            continue;
+        cbm_tree_segment s;
+        CHECK_OK(cbm_tree_segment_info(t, i, &s));
+        CHECK_NEAR(sum[i] + s.sink, s.vigour, 1e-12 * (1 + s.vigour));
+        nodes++;
+        sinks += s.sink > 0.0;
+    }
+    printf("%zu nodes conserve their vigour, %zu with sinks\n", nodes, sinks);
+    CHECK(nodes > 50);
+    CHECK(sinks > 5);
+    /* the base supply (K a)^d (4.12) */
+    cbm_segment_state b;
+    CHECK_OK(cbm_plant_segment(p, 0, &b));
+    cbm_tree_segment s0;
+    CHECK_OK(cbm_tree_segment_info(t, 0, &s0));
+    CHECK_REL(s0.vigour, pow(800.0 * b.a, 1.1), 1e-12);
+    free(sum);
+    free(kids);
+    cbm_tree_destroy(t);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 4.1: when the leaves and fruit fall in winter the branch tips rise. */
+TEST(tree_spring_back_after_shedding)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"first_fruit_year", "1", "modulus_of_rupture", "2.9e7", NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 3, set);
+    for (int y = 2; y <= 3; y++) {
+        const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
+        printf("year %d: %zu fruit, mean tip height loaded %.4f m, unloaded %.4f m\n", y, s->fruit,
+               s->tip_height_loaded, s->tip_height_unloaded);
+        CHECK(s->fruit > 0);
+        CHECK(s->tip_height_unloaded > s->tip_height_loaded + 0.005);
+    }
+    cbm_tree_destroy(t);
+    test_ctx_end(ctx);
+}
+
+/* Figs. 8.6-8.7: a stem started 30 degrees from the vertical; with reaction wood its lean falls
+ * over the years, without it the stem sags further. */
+TEST(tree_reaction_wood_corrects_lean)
+{
+    cbm_context *ctx = test_ctx();
+    const char *rw[] = {"elevation", "60", "fruit_mass", "0", NULL};
+    const char *none[] = {"elevation", "60", "fruit_mass", "0", "reaction_threshold", "0", NULL};
+    cbm_tree *a = grow(ctx, "fruit-tree", 3, rw);
+    cbm_tree *b = grow(ctx, "fruit-tree", 3, none);
+    for (int y = 1; y <= 3; y++) {
+        double la = cbm_tree_summary_of(a, y)->lean, lb = cbm_tree_summary_of(b, y)->lean;
+        printf("year %d: lean %.2f deg with reaction wood, %.2f deg without (start 30)\n", y, la,
+               lb);
+        CHECK(la < 25.0);
+        CHECK(lb > 30.0);
+    }
+    CHECK(cbm_tree_summary_of(a, 3)->reaction_segments > 0);
+    CHECK_EQ_INT(cbm_tree_summary_of(b, 3)->reaction_segments, 0);
+    cbm_tree_destroy(a);
+    cbm_tree_destroy(b);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 8.9: a low modulus of rupture breaks fruit-laden branches that a high one keeps. */
+TEST(tree_low_mor_breaks_high_keeps)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree *lo = grow(ctx, "fruit-tree-low-mor", 4, NULL);
+    cbm_tree *hi = grow(ctx, "fruit-tree-high-mor", 4, NULL);
+    size_t blo = 0, bhi = 0;
+    for (int y = 1; y <= 4; y++) {
+        blo += cbm_tree_summary_of(lo, y)->breaks;
+        bhi += cbm_tree_summary_of(hi, y)->breaks;
+    }
+    printf("breaks in 4 years: %zu with low MOR, %zu with high MOR\n", blo, bhi);
+    CHECK(blo >= 5);
+    CHECK_EQ_INT(bhi, 0);
+    cbm_tree_destroy(lo);
+    cbm_tree_destroy(hi);
+    test_ctx_end(ctx);
+}
+
+/* Ch. 7: the crooked aspen (supple wood, weak and fading tropism, no reaction wood) is lower and
+ * wider than the wild type, and grows relay shoots from its bent branches. */
+TEST(tree_crooked_poplar_lower_wider_relay)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree *w = grow(ctx, "poplar-wild", 5, NULL);
+    cbm_tree *c = grow(ctx, "poplar-crooked", 5, NULL);
+    const cbm_tree_summary *sw = cbm_tree_summary_of(w, 5), *sc = cbm_tree_summary_of(c, 5);
+    size_t relay = 0;
+    for (int y = 1; y <= 5; y++)
+        relay += cbm_tree_summary_of(c, y)->relay_shoots;
+    printf("wild: height %.3f m, crown %.3f m; crooked: height %.3f m, crown %.3f m, %zu relay "
+           "shoots\n",
+           sw->height, sw->crown_width, sc->height, sc->crown_width, relay);
+    CHECK(sc->height < 0.8 * sw->height);
+    CHECK(sc->crown_width > sw->crown_width);
+    CHECK(sc->crown_width / sc->height > 2.0 * sw->crown_width / sw->height);
+    CHECK(relay >= 1);
+    cbm_tree_destroy(w);
+    cbm_tree_destroy(c);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 4.7: F = 0.2 grows a taller, sparser tree than F = 1. */
+TEST(tree_unfair_taller_sparser)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree *f1 = grow(ctx, "fruit-tree-fair", 3, NULL);
+    cbm_tree *f02 = grow(ctx, "fruit-tree-unfair", 3, NULL);
+    const cbm_tree_summary *a = cbm_tree_summary_of(f1, 3), *b = cbm_tree_summary_of(f02, 3);
+    printf("F = 1: %zu segments, height %.3f m; F = 0.2: %zu segments, height %.3f m\n",
+           a->segments, a->height, b->segments, b->height);
+    CHECK(b->height > 1.1 * a->height);
+    CHECK(b->segments < a->segments * 3 / 4);
+    cbm_tree_destroy(f1);
+    cbm_tree_destroy(f02);
+    test_ctx_end(ctx);
+}
+
+static uint64_t hash_file(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    uint64_t h = 1469598103934665603ull;
+    int c;
+    if (!f)
+        return 0;
+    while ((c = fgetc(f)) != EOF)
+        h = (h ^ (uint64_t)(unsigned char)c) * 1099511628211ull;
+    fclose(f);
+    return h;
+}
+
+static uint64_t run_hash(cbm_context *ctx, const char *seed, const char *path)
+{
+    const char *set[] = {"seed", seed, NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 3, set);
+    CHECK_OK(cbm_write_segments_csv(ctx, cbm_tree_plant(t), path));
+    cbm_tree_destroy(t);
+    return hash_file(path);
+}
+
+TEST(tree_deterministic_hash)
+{
+    cbm_context *ctx = test_ctx();
+    char path[1024];
+    snprintf(path, sizeof path, "%s/segments.csv", test_tmp_dir());
+    uint64_t a = run_hash(ctx, "7", path), b = run_hash(ctx, "7", path);
+    uint64_t c = run_hash(ctx, "8", path);
+    printf("segments table hash: seed 7 %016llx twice %016llx, seed 8 %016llx\n",
+           (unsigned long long)a, (unsigned long long)b, (unsigned long long)c);
+    CHECK(a != 0);
+    CHECK(a == b);
+    CHECK(a != c);
+    test_ctx_end(ctx);
+}
+
+TEST(tree_parameter_file)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree_def d = cbm_tree_def_default();
+    const char *good = "# a comment\n"
+                       "fairness = 0.2   # trailing comment\n"
+                       "phyllotaxis = 90\n"
+                       "form = crooked\n"
+                       "func NUMBUDS_VIGOUR = 0:0 0.5:0.4 1:1\n";
+    CHECK_OK(cbm_tree_def_parse(ctx, &d, good, strlen(good), "good.tree"));
+    CHECK_NEAR(d.fairness, 0.2, 0);
+    CHECK_NEAR(d.phyllotaxis, 90 * 3.14159265358979323846 / 180, 1e-15);
+    CHECK(d.form == CBM_TREE_CROOKED);
+    CHECK_EQ_INT(d.numbuds_vigour.n, 3);
+    CHECK_NEAR(cbm_tree_func_eval(&d.numbuds_vigour, 0.25), 0.2, 1e-15);
+    /* the formatted parameters read back to the same text */
+    size_t need = cbm_tree_def_format(&d, NULL, 0);
+    char *t1 = malloc(need + 1), *t2 = malloc(need + 1);
+    cbm_tree_def_format(&d, t1, need + 1);
+    cbm_tree_def e = cbm_tree_def_default();
+    CHECK_OK(cbm_tree_def_parse(ctx, &e, t1, strlen(t1), "formatted"));
+    cbm_tree_def_format(&e, t2, need + 1);
+    CHECK(!strcmp(t1, t2));
+    free(t1);
+    free(t2);
+    /* errors name file:line:col; every bad line is reported */
+    const char *bad = "fairness = 0.5\n"
+                      "  wobble = 3\n"
+                      "fairness = 2\n"
+                      "func NUMBUDS_VIGOUR = 0:0 0:1\n"
+                      "years 4\n";
+    cbm_context_clear_errors(ctx);
+    CHECK_STATUS(cbm_tree_def_parse(ctx, &d, bad, strlen(bad), "bad.tree"), CBM_E_SYNTAX);
+    CHECK_EQ_INT(cbm_context_error_count(ctx), 4);
+    printf("last error: %s\n", cbm_context_last_error(ctx));
+    CHECK_STATUS(cbm_tree_def_set(ctx, &d, "nonsense", "1"), CBM_E_NOT_FOUND);
+    CHECK_STATUS(cbm_tree_def_set(ctx, &d, "fairness", "abc"), CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "fairness") != NULL);
+    cbm_tree_def out;
+    CHECK_STATUS(cbm_tree_def_builtin(ctx, "no-such-tree", &out), CBM_E_NOT_FOUND);
+    /* every built-in reads and the shipped files say the same as the built-ins */
+    for (const char *const *n = cbm_tree_builtin_names(); *n; n++) {
+        cbm_tree_def bi;
+        CHECK_OK(cbm_tree_def_builtin(ctx, *n, &bi));
+        char path[1024];
+        snprintf(path, sizeof path, "%s/models/%s.tree", test_source_dir(), *n);
+        FILE *f = fopen(path, "rb");
+        if (!f)
+            continue; /* the figure variants are built-ins only */
+        fclose(f);
+        cbm_tree_def fd = cbm_tree_def_default();
+        CHECK_OK(cbm_tree_def_read(ctx, &fd, path));
+        size_t na = cbm_tree_def_format(&bi, NULL, 0), nb = cbm_tree_def_format(&fd, NULL, 0);
+        char *ta = malloc(na + 1), *tb = malloc(nb + 1);
+        cbm_tree_def_format(&bi, ta, na + 1);
+        cbm_tree_def_format(&fd, tb, nb + 1);
+        CHECK_MSG(!strcmp(ta, tb), "%s differs from the built-in %s", path, *n);
+        free(ta);
+        free(tb);
+    }
+    test_ctx_end(ctx);
+}
+
+static cbm_status oom_year(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    cbm_tree_def d = cbm_tree_def_default();
+    d.years = 1;
+    d.first_fruit_year = 1;
+    cbm_tree *t = NULL;
+    cbm_status s = cbm_tree_create(ctx, &d, &t);
+    if (s == CBM_OK)
+        s = cbm_tree_run(t);
+    cbm_scene *sc = NULL;
+    if (s == CBM_OK)
+        s = cbm_scene_create(ctx, &sc);
+    if (s == CBM_OK)
+        s = cbm_tree_to_scene(t, sc, 6, true);
+    cbm_scene_destroy(sc);
+    cbm_tree_destroy(t);
+    return s;
+}
+
+TEST(tree_out_of_memory)
+{
+    int runs = test_oom_loop(oom_year, NULL);
+    printf("%d out-of-memory runs\n", runs);
+    CHECK(runs > 10);
+}
+
+/* A tree whose base breaks (a tiny modulus of rupture) is gone: the following years run on an
+ * empty plant without errors, and the scene is empty but valid. */
+TEST(tree_broken_at_base)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"modulus_of_rupture", "1000", NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 3, set);
+    CHECK_EQ_INT(cbm_plant_segment_count(cbm_tree_plant(t)), 0);
+    CHECK(cbm_tree_summary_of(t, 1)->breaks >= 1);
+    CHECK_EQ_INT(cbm_tree_summary_of(t, 3)->segments, 0);
+    cbm_scene *sc = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &sc));
+    CHECK_OK(cbm_tree_to_scene(t, sc, 6, false));
+    CHECK_EQ_INT(cbm_scene_part_count(sc), 0);
+    cbm_scene_destroy(sc);
+    cbm_tree_destroy(t);
+    test_ctx_end(ctx);
+}
+
+/* §4.3.2: branches that lay no ring for years_to_shed years are shed; with 0 none are. */
+TEST(tree_shedding_unproductive)
+{
+    cbm_context *ctx = test_ctx();
+    const char *on[] = {"years_to_shed", "2", NULL};
+    cbm_tree *a = grow(ctx, "fruit-tree", 5, on);
+    cbm_tree *b = grow(ctx, "fruit-tree", 5, NULL);
+    size_t sa = 0, sb = 0;
+    for (int y = 1; y <= 5; y++) {
+        sa += cbm_tree_summary_of(a, y)->shed;
+        sb += cbm_tree_summary_of(b, y)->shed;
+        if (y < 3) /* a branch needs two full unproductive years */
+            CHECK_EQ_INT(cbm_tree_summary_of(a, y)->shed, 0);
+    }
+    printf("branches shed in 5 years: %zu (years_to_shed = 2), %zu (never)\n", sa, sb);
+    CHECK(sa > 0);
+    CHECK_EQ_INT(sb, 0);
+    cbm_tree_destroy(a);
+    cbm_tree_destroy(b);
+    test_ctx_end(ctx);
+}
