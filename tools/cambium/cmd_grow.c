@@ -23,7 +23,7 @@ static void help(void)
            "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
            "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
            "summary). FORMAT:PATH names a scene format explicitly.\n\n"
-           "  -y, --years N     years to grow (default: the model's 'years')\n"
+           "  -y, -n, --years N years to grow (default: the model's 'years')\n"
            "  -D NAME=VALUE     set a parameter (as in a parameter file; angles in degrees)\n"
            "  --seed N          generator seed (same as -D seed=N)\n"
            "  --every K         animation frame every K growth steps (.glb outputs)\n"
@@ -157,7 +157,7 @@ int cmd_grow(int argc, char **argv)
             if (ndef == MAX_DEFS)
                 return cli_usage_error("grow", "at most %d -D options", MAX_DEFS);
             defs[ndef++] = v;
-        } else if (!strcmp(a, "-y") || !strcmp(a, "--years")) {
+        } else if (!strcmp(a, "-y") || !strcmp(a, "--years") || !strcmp(a, "-n")) {
             if (!cli_parse_long(v, &years) || years < 0 || years > 1000)
                 return cli_usage_error("grow", "%s must be 0..1000", a);
         } else if (!strcmp(a, "--seed")) {

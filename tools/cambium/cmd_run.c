@@ -291,8 +291,36 @@ static void json_end(run *r)
     cbm_json_end_object(r->json);
 }
 
+/* `cambium run fruit-tree` and `cambium run X.tree` run a built-in tree model: the same job as
+ * `cambium grow`, under the command DESIGN.md names for every model. */
+static bool names_tree_model(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        size_t n = strlen(a);
+        if (a[0] == '-') {
+            if (!strcmp(a, "-o") || !strcmp(a, "-D") || !strcmp(a, "-n"))
+                i++; /* skip the value */
+            continue;
+        }
+        if (n > 5 && !strcmp(a + n - 5, ".tree"))
+            return true;
+        if (!strchr(a, '.') && !strchr(a, '/')) {
+            cbm_context *ctx = cli_context();
+            cbm_tree_def def;
+            bool builtin = cbm_tree_def_builtin(ctx, a, &def) == CBM_OK;
+            cli_context_end(ctx);
+            return builtin;
+        }
+        return false;
+    }
+    return false;
+}
+
 int cmd_run(int argc, char **argv)
 {
+    if (names_tree_model(argc, argv))
+        return cmd_grow(argc, argv);
     const char *model = NULL;
     const char *defines[256];
     size_t ndefines = 0;
