@@ -108,6 +108,13 @@ CBM_API cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm
 /// wrapped at 70 characters.
 CBM_API cbm_status cbm_lsys_write_cpfg(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
 
+/// L+C dialect: the declared name of a module symbol (e.g. "Internode", "SB" for '['), NULL
+/// for cpfg-dialect models and unknown symbols.
+CBM_API const char *cbm_lsys_module_name(const cbm_lsys *ls, int symbol);
+/// L+C dialect: the names used in func(name, x), in order; func(name, x) calls the function
+/// set with cbm_lsys_set_func with id = 1 + the name's index here.
+CBM_API size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names);
+
 #ifdef __cplusplus
 }
 #endif
