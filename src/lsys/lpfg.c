@@ -134,27 +134,45 @@ typedef struct bdef {
     int arity; /* -1: any */
 } bdef;
 
-static const bdef BUILTINS[] = {
-    {"sin", F_SIN, 1},           {"cos", F_COS, 1},
-    {"tan", F_TAN, 1},           {"asin", F_ASIN, 1},
-    {"acos", F_ACOS, 1},         {"atan", F_ATAN, 1},
-    {"atan2", F_ATAN2, 2},       {"exp", F_EXP, 1},
-    {"log", F_LOG, 1},           {"log10", F_LOG10, 1},
-    {"pow", F_POW, 2},           {"sqrt", F_SQRT, 1},
-    {"fabs", F_FABS, 1},         {"abs", F_FABS, 1},
-    {"floor", F_FLOOR, 1},       {"ceil", F_CEIL, 1},
-    {"fmod", F_FMOD, 2},         {"min", F_MIN, 2},
-    {"max", F_MAX, 2},           {"ran", F_RAN, 1},
-    {"nrand", F_NRAN, 2},        {"nran", F_NRAN, 2},
-    {"srand", F_SRAND, 1},       {"rand", F_RAND, 0},
-    {"RAND", F_RAND, 0},         {"drand48", F_RAND, 0},
-    {"func", F_FUNC, 2},         {"printf", F_PRINTF, -1},
-    {"Printf", F_PRINTF, -1},    {"Forward", F_FORWARD, 0},
-    {"Backward", F_BACKWARD, 0}, {"UseGroup", F_USEGROUP, 1},
-    {"Length", F_LENGTH, 1},     {"Magnitude", F_LENGTH, 1},
-    {"Normalize", F_NORMALIZE, 1}, {"Normalized", F_NORMALIZE, 1},
-    {"Stop", F_STOP, 0},         {"stop", F_STOP, 0},
-    {"CurrentGroup", F_CURGROUP, 0}};
+static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
+                                {"cos", F_COS, 1},
+                                {"tan", F_TAN, 1},
+                                {"asin", F_ASIN, 1},
+                                {"acos", F_ACOS, 1},
+                                {"atan", F_ATAN, 1},
+                                {"atan2", F_ATAN2, 2},
+                                {"exp", F_EXP, 1},
+                                {"log", F_LOG, 1},
+                                {"log10", F_LOG10, 1},
+                                {"pow", F_POW, 2},
+                                {"sqrt", F_SQRT, 1},
+                                {"fabs", F_FABS, 1},
+                                {"abs", F_FABS, 1},
+                                {"floor", F_FLOOR, 1},
+                                {"ceil", F_CEIL, 1},
+                                {"fmod", F_FMOD, 2},
+                                {"min", F_MIN, 2},
+                                {"max", F_MAX, 2},
+                                {"ran", F_RAN, 1},
+                                {"nrand", F_NRAN, 2},
+                                {"nran", F_NRAN, 2},
+                                {"srand", F_SRAND, 1},
+                                {"rand", F_RAND, 0},
+                                {"RAND", F_RAND, 0},
+                                {"drand48", F_RAND, 0},
+                                {"func", F_FUNC, 2},
+                                {"printf", F_PRINTF, -1},
+                                {"Printf", F_PRINTF, -1},
+                                {"Forward", F_FORWARD, 0},
+                                {"Backward", F_BACKWARD, 0},
+                                {"UseGroup", F_USEGROUP, 1},
+                                {"Length", F_LENGTH, 1},
+                                {"Magnitude", F_LENGTH, 1},
+                                {"Normalize", F_NORMALIZE, 1},
+                                {"Normalized", F_NORMALIZE, 1},
+                                {"Stop", F_STOP, 0},
+                                {"stop", F_STOP, 0},
+                                {"CurrentGroup", F_CURGROUP, 0}};
 
 typedef struct xn {
     uint8_t op, fn;
@@ -177,7 +195,7 @@ typedef struct lpat {
 enum { CX_LC, CX_NLC, CX_NRC, CX_RC, CX_N };
 
 typedef struct lprod {
-    int mod; /* predecessor */
+    int mod;          /* predecessor */
     int32_t pformals; /* chain of N_LOCAL lvalues of the predecessor's parameters */
     lpat cx[CX_N];    /* contexts (n = 0: none); formals in args */
     int32_t body;
@@ -274,20 +292,27 @@ typedef struct lc {
 
 static const char *const TURTLE[][3] = {
     /* lpfg name, cpfg symbol, parameter types ("f" float, "i" int, "" none) */
-    {"F", "F", "f"},         {"f", "f", "f"},        {"G", "G", "f"},
-    {"g", "g", "f"},         {"Left", "+", "f"},     {"Right", "-", "f"},
-    {"Up", "^", "f"},        {"Down", "&", "f"},     {"RollL", "\\", "f"},
-    {"RollR", "/", "f"},     {"TurnAround", "|", ""}, {"SB", "[", ""},
-    {"EB", "]", ""},         {"SetWidth", "!", "f"}, {"IncColor", "'", ""},
-    {"DecColor", ";", ""},   {"SetColor", "", "i"},  {"Cut", "%", ""},
-    {"SP", "{", ""},         {"EP", "}", ""},        {"PP", ".", ""},
-    {"Sphere", "", "f"},     {"Sphere0", "", ""},    {"Circle", "", "f"},
-    {"Circle0", "", ""},     {"Surface", "", "if"},  {"StartGC", "", ""},
-    {"PointGC", "", ""},     {"EndGC", "", ""},      {"SetHead", "", "ffffff"},
-    {"RollToVert", "", ""},  {"ScaleContour", "", "ff"}, {"LineRel3d", "", "fff"},
-    {"LineTo3d", "", "fff"}, {"MoveRel3d", "", "fff"}, {"MoveTo3d", "", "fff"},
-    {"Label", "", "i"},      {"IncWidth", "#", ""},  {"DecWidth", "", ""},
-    {"CurrentContour", "", "i"}, {"SetTropism", "", "fff"}, {"Elasticity", "", "f"},
+    {"F", "F", "f"},           {"f", "f", "f"},
+    {"G", "G", "f"},           {"g", "g", "f"},
+    {"Left", "+", "f"},        {"Right", "-", "f"},
+    {"Up", "^", "f"},          {"Down", "&", "f"},
+    {"RollL", "\\", "f"},      {"RollR", "/", "f"},
+    {"TurnAround", "|", ""},   {"SB", "[", ""},
+    {"EB", "]", ""},           {"SetWidth", "!", "f"},
+    {"IncColor", "'", ""},     {"DecColor", ";", ""},
+    {"SetColor", "", "i"},     {"Cut", "%", ""},
+    {"SP", "{", ""},           {"EP", "}", ""},
+    {"PP", ".", ""},           {"Sphere", "", "f"},
+    {"Sphere0", "", ""},       {"Circle", "", "f"},
+    {"Circle0", "", ""},       {"Surface", "", "if"},
+    {"StartGC", "", ""},       {"PointGC", "", ""},
+    {"EndGC", "", ""},         {"SetHead", "", "ffffff"},
+    {"RollToVert", "", ""},    {"ScaleContour", "", "ff"},
+    {"LineRel3d", "", "fff"},  {"LineTo3d", "", "fff"},
+    {"MoveRel3d", "", "fff"},  {"MoveTo3d", "", "fff"},
+    {"Label", "", "i"},        {"IncWidth", "#", ""},
+    {"DecWidth", "", ""},      {"CurrentContour", "", "i"},
+    {"SetTropism", "", "fff"}, {"Elasticity", "", "f"},
 };
 
 /* ---------------------------------------------------------------- small helpers */
@@ -329,7 +354,7 @@ static void conv_value(const lpfg *lp, int t, double *v)
     }
     if (t == T_V3F) {
         for (int i = 0; i < 3; i++)
-            v[i] = (double)(float)v[i];
+            v[i] = conv_scalar(T_FLOAT, v[i]);
         return;
     }
     if (t == T_V3D)
@@ -512,8 +537,8 @@ static int alloc_code(lpfg *lp, const char *name, const char *want)
     return -1;
 }
 
-static int add_mod(lc *L, const char *name, size_t len, const int *ptypes, int np,
-                   const char *want, size_t pos)
+static int add_mod(lc *L, const char *name, size_t len, const int *ptypes, int np, const char *want,
+                   size_t pos)
 {
     lpfg *lp = L->lp;
     lmod m;
@@ -790,6 +815,10 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             x.a = first;
             return node(L, x);
         }
+        if (t >= T_NBUILTIN && na == 0) { /* Name(): a zero value */
+            xn x = mk(N_CTOR, t);
+            return node(L, x);
+        }
         cbm__cerr(L->c, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
         return -1;
     }
@@ -1061,8 +1090,8 @@ static int32_t primary(lc *L)
                     r = -1;
                     break;
                 }
-                bool len = (n == 6 && !strncmp(f, "Length", 6)) ||
-                           (n == 9 && !strncmp(f, "Magnitude", 9));
+                bool len =
+                    (n == 6 && !strncmp(f, "Length", 6)) || (n == 9 && !strncmp(f, "Magnitude", 9));
                 bool nor = (n == 9 && !strncmp(f, "Normalize", 9)) ||
                            (n == 10 && !strncmp(f, "Normalized", 10));
                 if (!len && !nor) {
@@ -1101,8 +1130,7 @@ static int32_t primary(lc *L)
                     }
             }
             if (off < 0) {
-                cbm__cerr(L->c, p2, "no field '%.*s' in %s", (int)n, f,
-                          L->lp->types.data[t].name);
+                cbm__cerr(L->c, p2, "no field '%.*s' in %s", (int)n, f, L->lp->types.data[t].name);
                 r = -1;
                 break;
             }
@@ -1133,10 +1161,10 @@ typedef struct binop {
     int prec, op;
 } binop;
 
-static const binop BINOPS[] = {
-    {"||", 1, -2}, {"&&", 2, -1}, {"==", 3, B_EQ}, {"!=", 3, B_NE}, {"<=", 4, B_LE},
-    {">=", 4, B_GE}, {"<", 4, B_LT}, {">", 4, B_GT}, {"+", 5, B_ADD}, {"-", 5, B_SUB},
-    {"*", 6, B_MUL}, {"/", 6, B_DIV}, {"%", 6, B_REM}};
+static const binop BINOPS[] = {{"||", 1, -2},   {"&&", 2, -1},   {"==", 3, B_EQ}, {"!=", 3, B_NE},
+                               {"<=", 4, B_LE}, {">=", 4, B_GE}, {"<", 4, B_LT},  {">", 4, B_GT},
+                               {"+", 5, B_ADD}, {"-", 5, B_SUB}, {"*", 6, B_MUL}, {"/", 6, B_DIV},
+                               {"%", 6, B_REM}};
 
 static const binop *peek_binop(lc *L)
 {
@@ -1202,8 +1230,8 @@ static int32_t binary(lc *L, int32_t a, const binop *op, int32_t b, size_t pos)
         n.type = (int16_t)vt;
         return node(L, n);
     }
-    cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s,
-              L->lp->types.data[ta].name, L->lp->types.data[tb].name);
+    cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s, L->lp->types.data[ta].name,
+              L->lp->types.data[tb].name);
     return -1;
 }
 
@@ -1416,9 +1444,9 @@ static int pattern(lc *L, lpat *p, bool declare)
                             return -1;
                         }
                         if (v->type != md->ptype[na]) {
-                            cbm__cerr(L->c, fp, "'%.*s' has type %s, module %s wants %s",
-                                      (int)k, L->t + fp, lp->types.data[v->type].name,
-                                      md->name, lp->types.data[md->ptype[na]].name);
+                            cbm__cerr(L->c, fp, "'%.*s' has type %s, module %s wants %s", (int)k,
+                                      L->t + fp, lp->types.data[v->type].name, md->name,
+                                      lp->types.data[md->ptype[na]].name);
                             return -1;
                         }
                         x.slot = v->slot;
@@ -2328,7 +2356,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         ev(ls, x, fr, v);
         double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (n->fn == F_LENGTH)
-            out[0] = conv_scalar(n->type == T_V3F ? T_FLOAT : T_DOUBLE, l);
+            out[0] = conv_scalar(n->type, l);
         else {
             for (int i = 0; i < 3; i++)
                 out[i] = l > 0 ? v[i] / l : 0;
@@ -2569,6 +2597,8 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
         return;
     case N_CTOR: {
         int off = 0;
+        if (n->a < 0)
+            memset(out, 0, (size_t)tsize(lp, n->type) * sizeof(double));
         for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next) {
             ev(ls, x, fr, out + off);
             off += tsize(lp, lp->nodes.data[x].type);

@@ -1,0 +1,227 @@
+/* The L+C (lpfg) dialect: the six lpfg models of ../shared/oracles/vlab against lpfg's strings
+ * (ref/final.params.txt, struct parameters written raw[..] there and {..} by us), the models of
+ * tests/lpfg/ against the expectations in their comments:
+ *   // expect after N: MODULES                 (one-line form of -o x.str, space separated)
+ *   // expect interpretation after N: MODULES
+ * and error messages. */
+#include "lsys_util.h"
+
+#include "cambium/io.h"
+
+#include <dirent.h>
+#include <unistd.h>
+
+/* The string (or its interpretation) as `-o x.str` writes it, lines joined with sep. */
+static char *lpfg_string(cbm_context *ctx, cbm_lsys *ls, bool interp, char sep)
+{
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/cbm_test_lpfg_%d.str", (int)getpid());
+    cbm_out *o = NULL;
+    if (cbm_out_open(ctx, path, &o) != CBM_OK)
+        return NULL;
+    if (interp && cbm_lsys_apply_homomorphism(ls) != CBM_OK) {
+        cbm_out_abort(o);
+        return NULL;
+    }
+    cbm_status s = cbm_lsys_write_str(ls, interp, o);
+    if (s == CBM_OK)
+        s = cbm_out_commit(o);
+    else
+        cbm_out_abort(o);
+    char *t = s == CBM_OK ? read_text(path, false) : NULL;
+    remove(path);
+    if (t && sep != '\n') {
+        size_t n = strlen(t);
+        while (n && t[n - 1] == '\n')
+            t[--n] = 0;
+        for (char *p = t; *p; p++)
+            if (*p == '\n')
+                *p = sep;
+    }
+    return t;
+}
+
+static const char *oracle_dir(void)
+{
+    static char path[2048];
+    snprintf(path, sizeof path, "%s/../shared/oracles/vlab", test_source_dir());
+    return path;
+}
+
+/* lpfg's final.params.txt with raw[...] written as {...} */
+static char *reference(const char *folder)
+{
+    char p[4096];
+    snprintf(p, sizeof p, "%s/%s/ref/final.params.txt", oracle_dir(), folder);
+    char *t = read_text(p, false);
+    if (!t)
+        return NULL;
+    char *w = t;
+    for (char *r = t; *r;) {
+        if (!strncmp(r, "raw[", 4)) {
+            *w++ = '{';
+            r += 4;
+        } else if (*r == ']') {
+            *w++ = '}';
+            r++;
+        } else
+            *w++ = *r++;
+    }
+    *w = 0;
+    return t;
+}
+
+static void run_oracle(const char *folder)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s/model/lsystem.l", oracle_dir(), folder);
+    char *ref = reference(folder);
+    if (!ref) {
+        printf("SKIP: %s is absent\n", path);
+        return;
+    }
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", folder, cbm_context_last_error(ctx));
+    if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        int n = cbm_lsys_derivation_length(ls);
+        CHECK(n > 0);
+        for (int i = 0; i < n; i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        char *got = lpfg_string(ctx, ls, false, '\n');
+        CHECK(got != NULL);
+        if (got) {
+            CHECK_MSG(!strcmp(got, ref), "%s: the string differs from lpfg's", folder);
+            if (strcmp(got, ref)) {
+                size_t k = 0;
+                while (got[k] && got[k] == ref[k])
+                    k++;
+                printf("  first difference at byte %zu: ours '%.40s' lpfg '%.40s'\n", k, got + k,
+                       ref + k);
+            }
+        }
+        free(got);
+        cbm_lsys_destroy(ls);
+    }
+    free(ref);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_oracle_quadratic_koch) { run_oracle("lpfg-quadratic-koch"); }
+TEST(lpfg_oracle_compound_param) { run_oracle("lpfg-compound-param"); }
+TEST(lpfg_oracle_hormone_up) { run_oracle("lpfg-hormone-up"); }
+TEST(lpfg_oracle_sympodial) { run_oracle("lpfg-sympodial"); }
+TEST(lpfg_oracle_newcontext) { run_oracle("lpfg-newcontext"); }
+TEST(lpfg_oracle_innewcontext) { run_oracle("lpfg-innewcontext"); }
+
+static void run_model(const char *name)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/tests/lpfg/%s", test_source_dir(), name);
+    char *src = read_text(path, false);
+    CHECK_MSG(src != NULL, "cannot read %s", path);
+    if (!src)
+        return;
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", name, cbm_context_last_error(ctx));
+    int checked = 0;
+    if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        int step = 0;
+        for (char *l = src; l && *l; l = strchr(l, '\n'), l = l ? l + 1 : NULL) {
+            bool interp = !strncmp(l, "// expect interpretation after ", 31);
+            if (strncmp(l, "// expect after ", 16) && !interp)
+                continue;
+            char *p = l + (interp ? 31 : 16);
+            int want = (int)strtol(p, &p, 10);
+            p += 2;
+            char *end = strchr(p, '\n');
+            size_t n = end ? (size_t)(end - p) : strlen(p);
+            while (step < want) {
+                CHECK_OK(cbm_lsys_step(ls));
+                step++;
+            }
+            char *got = lpfg_string(ctx, ls, interp, ' ');
+            CHECK(got != NULL);
+            if (got) {
+                CHECK_MSG(strlen(got) == n && !strncmp(got, p, n),
+                          "%s after %d: got '%s', expected '%.*s'", name, want, got, (int)n, p);
+            }
+            free(got);
+            checked++;
+        }
+        cbm_lsys_destroy(ls);
+    }
+    CHECK_MSG(checked > 0, "%s states no expectation", name);
+    free(src);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_forward_signal) { run_model("forward-signal.l"); }
+TEST(lpfg_backward_sum) { run_model("backward-sum.l"); }
+TEST(lpfg_groups_globals) { run_model("groups-globals.l"); }
+TEST(lpfg_struct_vectors) { run_model("struct-vectors.l"); }
+TEST(lpfg_two_branch_context) { run_model("two-branch-context.l"); }
+TEST(lpfg_decomposition_interpretation) { run_model("decomposition-interp.l"); }
+
+static void expect_error(const char *text, const char *where, const char *what)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK(s == CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    (void)where;
+    (void)what;
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_errors)
+{
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1, 2);\n", "m.l:3:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { produce B(); }\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { y = 2; }\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { if (x) {\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nstruct P { float a; };\nmodule A(P);\nAxiom: A(1);\n",
+                 "m.l:4:", "");
+}
+
+TEST(lpfg_runtime_limits)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "loop.l";
+    def.text = "#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+               "A(x) : { while (x > 0) x = x + 1; produce A(x); }\n";
+    def.max_loop_iterations = 1000;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
+        cbm_lsys_destroy(ls);
+    }
+    def.text = "#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
+               "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
