@@ -111,12 +111,30 @@ static void run_oracle(const char *folder)
     test_ctx_end(ctx);
 }
 
-TEST(lpfg_oracle_quadratic_koch) { run_oracle("lpfg-quadratic-koch"); }
-TEST(lpfg_oracle_compound_param) { run_oracle("lpfg-compound-param"); }
-TEST(lpfg_oracle_hormone_up) { run_oracle("lpfg-hormone-up"); }
-TEST(lpfg_oracle_sympodial) { run_oracle("lpfg-sympodial"); }
-TEST(lpfg_oracle_newcontext) { run_oracle("lpfg-newcontext"); }
-TEST(lpfg_oracle_innewcontext) { run_oracle("lpfg-innewcontext"); }
+TEST(lpfg_oracle_quadratic_koch)
+{
+    run_oracle("lpfg-quadratic-koch");
+}
+TEST(lpfg_oracle_compound_param)
+{
+    run_oracle("lpfg-compound-param");
+}
+TEST(lpfg_oracle_hormone_up)
+{
+    run_oracle("lpfg-hormone-up");
+}
+TEST(lpfg_oracle_sympodial)
+{
+    run_oracle("lpfg-sympodial");
+}
+TEST(lpfg_oracle_newcontext)
+{
+    run_oracle("lpfg-newcontext");
+}
+TEST(lpfg_oracle_innewcontext)
+{
+    run_oracle("lpfg-innewcontext");
+}
 
 static void run_model(const char *name)
 {
@@ -165,12 +183,30 @@ static void run_model(const char *name)
     test_ctx_end(ctx);
 }
 
-TEST(lpfg_forward_signal) { run_model("forward-signal.l"); }
-TEST(lpfg_backward_sum) { run_model("backward-sum.l"); }
-TEST(lpfg_groups_globals) { run_model("groups-globals.l"); }
-TEST(lpfg_struct_vectors) { run_model("struct-vectors.l"); }
-TEST(lpfg_two_branch_context) { run_model("two-branch-context.l"); }
-TEST(lpfg_decomposition_interpretation) { run_model("decomposition-interp.l"); }
+TEST(lpfg_forward_signal)
+{
+    run_model("forward-signal.l");
+}
+TEST(lpfg_backward_sum)
+{
+    run_model("backward-sum.l");
+}
+TEST(lpfg_groups_globals)
+{
+    run_model("groups-globals.l");
+}
+TEST(lpfg_struct_vectors)
+{
+    run_model("struct-vectors.l");
+}
+TEST(lpfg_two_branch_context)
+{
+    run_model("two-branch-context.l");
+}
+TEST(lpfg_decomposition_interpretation)
+{
+    run_model("decomposition-interp.l");
+}
 
 static void expect_error(const char *text, const char *where, const char *what)
 {

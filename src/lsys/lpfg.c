@@ -336,8 +336,12 @@ static double conv_scalar(int t, double v)
     switch (t) {
     case T_INT:
         return (double)cbm__to_ll(v);
-    case T_FLOAT:
-        return (double)(float)v;
+    case T_FLOAT: {
+        /* through a volatile: GCC 12's SLP vectorizer drops pairs of adjacent
+         * double -> float -> double round trips at -O2 (V3f components lost their rounding) */
+        volatile float f = (float)v;
+        return (double)f;
+    }
     case T_BOOL:
         return v != 0;
     default:
