@@ -208,6 +208,11 @@ TEST(lpfg_decomposition_interpretation)
     run_model("decomposition-interp.l");
 }
 
+TEST(lpfg_c_library)
+{
+    run_model("c-library.l");
+}
+
 static void expect_error(const char *text, const char *where, const char *what)
 {
     cbm_context *ctx = test_ctx();

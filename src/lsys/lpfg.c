@@ -37,7 +37,7 @@
 #include <stdlib.h>
 
 /* ---- types ---- */
-enum { T_VOID, T_INT, T_FLOAT, T_DOUBLE, T_BOOL, T_V3F, T_V3D, T_NBUILTIN };
+enum { T_VOID, T_INT, T_FLOAT, T_DOUBLE, T_BOOL, T_V3F, T_V3D, T_QUAT, T_TVEC, T_NBUILTIN };
 #define MAXF  16 /* parameters per module, fields per struct */
 #define MAXSZ 255
 
@@ -88,6 +88,8 @@ enum {
     S_CONTINUE,
     S_PRODUCE,
     S_BLOCK,
+    S_SWITCH, /* a: value, b: body */
+    S_CASE,   /* a: label value, -1 for default */
     S_NOP
 };
 
@@ -116,6 +118,7 @@ typedef enum {
     F_NRAN,
     F_SRAND,
     F_RAND,
+    F_DRAND,
     F_FUNC,
     F_PRINTF,
     F_FORWARD,
@@ -125,6 +128,10 @@ typedef enum {
     F_NORMALIZE,
     F_STOP,
     F_CURGROUP,
+    F_DOT,
+    F_CROSS,
+    F_MAKEQ,
+    F_VECROT,
     F_NONE
 } bfn;
 
@@ -158,8 +165,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"nran", F_NRAN, 2},
                                 {"srand", F_SRAND, 1},
                                 {"rand", F_RAND, 0},
-                                {"RAND", F_RAND, 0},
-                                {"drand48", F_RAND, 0},
+                                {"drand48", F_DRAND, 0},
                                 {"func", F_FUNC, 2},
                                 {"printf", F_PRINTF, -1},
                                 {"Printf", F_PRINTF, -1},
@@ -172,7 +178,12 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Normalized", F_NORMALIZE, 1},
                                 {"Stop", F_STOP, 0},
                                 {"stop", F_STOP, 0},
-                                {"CurrentGroup", F_CURGROUP, 0}};
+                                {"CurrentGroup", F_CURGROUP, 0},
+                                {"DotProd", F_DOT, 2},
+                                {"CrossProd", F_CROSS, 2},
+                                {"MakeQuaternion", F_MAKEQ, 2},
+                                {"VecRotate", F_VECROT, 3},
+                                {"RAND_MAX", F_NONE, 0}};
 
 typedef struct xn {
     uint8_t op, fn;
@@ -195,9 +206,9 @@ typedef struct lpat {
 enum { CX_LC, CX_NLC, CX_NRC, CX_RC, CX_N };
 
 typedef struct lprod {
-    int mod;          /* predecessor */
-    int32_t pformals; /* chain of N_LOCAL lvalues of the predecessor's parameters */
-    lpat cx[CX_N];    /* contexts (n = 0: none); formals in args */
+    int mod;       /* predecessor */
+    lpat pred;     /* strict predecessor: one module or several adjacent ones */
+    lpat cx[CX_N]; /* contexts (n = 0: none); formals in args */
     int32_t body;
     int fsize; /* frame doubles */
     int group;
@@ -209,6 +220,7 @@ typedef struct lfunc {
     int ret;
     int np;
     int ptype[MAXF];
+    bool pref[MAXF]; /* reference parameter (T& x): copied back to the argument */
     int32_t body;
     int fsize;
     size_t pos;
@@ -257,7 +269,9 @@ struct lpfg {
     double *stack;
     size_t stack_cap, sp;
     int call_depth;
-    double *ret; /* where `return v;` writes v (in a function) */
+    double *ret;     /* where `return v;` writes v (in a function) */
+    uint32_t gr[34]; /* rand(): the state of the C library's random() (glibc TYPE_3) */
+    int gpos;
     bool backward;
     int group;
     lstr *out;     /* where produce appends */
@@ -287,6 +301,7 @@ typedef struct lc {
     int fsize, fmax;
     int ret_type; /* in a function */
     bool in_prod; /* produce allowed */
+    int in_switch;
     int depth;
 } lc;
 
@@ -759,6 +774,7 @@ static lgvar *find_gvar(lc *L, const char *s, size_t n)
 }
 
 static int pattern(lc *L, lpat *p, bool declare);
+static bool is_lvalue(lc *L, int32_t e);
 
 static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
 {
@@ -819,8 +835,27 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             x.a = first;
             return node(L, x);
         }
-        if (t >= T_NBUILTIN && na == 0) { /* Name(): a zero value */
+        if (lp->types.data[t].nf > 0 && na == 0) { /* Name(): a zero value */
             xn x = mk(N_CTOR, t);
+            return node(L, x);
+        }
+        if (lp->types.data[t].nf > 0 && na == lp->types.data[t].nf) { /* Name(f1, f2, ...) */
+            int32_t first = -1, last = -1;
+            for (int i = 0; i < na; i++) {
+                int32_t e = args;
+                args = ND(args).next;
+                ND(e).next = -1;
+                e = coerce(L, e, lp->types.data[t].ftype[i], pos);
+                if (e < 0)
+                    return -1;
+                if (last >= 0)
+                    ND(last).next = e;
+                else
+                    first = e;
+                last = e;
+            }
+            xn x = mk(N_CTOR, t);
+            x.a = first;
             return node(L, x);
         }
         cbm__cerr(L->c, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
@@ -881,6 +916,11 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             int32_t e = args;
             args = ND(e).next;
             ND(e).next = -1;
+            if (f->pref[a] && (!is_lvalue(L, e) || ND(e).type != f->ptype[a])) {
+                cbm__cerr(L->c, pos, "argument %d of %s() must be a variable of type %s", a + 1,
+                          f->name, lp->types.data[f->ptype[a]].name);
+                return -1;
+            }
             e = coerce(L, e, f->ptype[a], pos);
             if (e < 0)
                 return -1;
@@ -928,9 +968,30 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             return -1;
         }
         int rt = T_DOUBLE;
-        if (b->fn == F_LENGTH || b->fn == F_NORMALIZE) {
+        if (b->fn == F_DOT || b->fn == F_CROSS || b->fn == F_MAKEQ || b->fn == F_VECROT) {
+            int t0 = ND(args).type, t1 = ND(ND(args).next).type;
+            bool ok = is_vec(t1);
+            if (b->fn == F_VECROT) {
+                ok = ok && (is_vec(t0) || t0 == T_TVEC) && is_lvalue(L, args) &&
+                     is_scalar(ND(ND(ND(args).next).next).type);
+                rt = t0;
+            } else if (b->fn == F_MAKEQ) {
+                ok = is_vec(t0) && is_scalar(t1);
+                rt = T_QUAT;
+            } else {
+                ok = ok && is_vec(t0);
+                rt = b->fn == F_DOT ? (t0 == T_V3D || t1 == T_V3D ? T_DOUBLE : T_FLOAT)
+                                    : (t0 == T_V3D || t1 == T_V3D ? T_V3D : T_V3F);
+            }
+            if (!ok) {
+                cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
+                          b->fn == F_VECROT ? " (a vector or TurtleVec variable, an axis, an angle)"
+                                            : "");
+                return -1;
+            }
+        } else if (b->fn == F_LENGTH || b->fn == F_NORMALIZE) {
             int at = ND(args).type;
-            if (!is_vec(at)) {
+            if (!is_vec(at) && !(b->fn == F_NORMALIZE && at == T_TVEC)) {
                 cbm__cerr(L->c, pos, "%s() needs a vector", b->name);
                 return -1;
             }
@@ -945,7 +1006,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                 b->fn == F_SRAND || b->fn == F_STOP)
                 rt = T_VOID;
             else if (b->fn == F_CURGROUP || b->fn == F_RAND)
-                rt = b->fn == F_RAND ? T_DOUBLE : T_INT;
+                rt = T_INT;
             else if ((b->fn == F_MIN || b->fn == F_MAX || b->fn == F_FABS) && args >= 0)
                 rt = b->arity == 2 ? arith_type(ND(args).type, ND(ND(args).next).type)
                                    : (ND(args).type == T_BOOL ? T_INT : ND(args).type);
@@ -1050,6 +1111,8 @@ static int32_t primary(lc *L)
             r = num(L, 1, T_BOOL);
         else if (n == 5 && !strncmp(s, "false", 5))
             r = num(L, 0, T_BOOL);
+        else if (n == 8 && !strncmp(s, "RAND_MAX", 8))
+            r = num(L, 2147483647, T_INT);
         else if ((n == 4 && !strncmp(s, "M_PI", 4)))
             r = num(L, 3.14159265358979323846, T_DOUBLE);
         else if (L->t[L->c->pos] == '(')
@@ -1125,7 +1188,7 @@ static int32_t primary(lc *L)
                     off = f[0] - 'x';
                     ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
                 }
-            } else if (t >= T_NBUILTIN) {
+            } else if (L->lp->types.data[t].nf > 0) {
                 const ltype *ty = &L->lp->types.data[t];
                 for (int k = 0; k < ty->nf; k++)
                     if (strlen(ty->fname[k]) == n && !strncmp(ty->fname[k], f, n)) {
@@ -1232,6 +1295,10 @@ static int32_t binary(lc *L, int32_t a, const binop *op, int32_t b, size_t pos)
         return node(L, n);
     } else if (is_scalar(ta) && is_vec(tb) && op->op == B_MUL) {
         n.type = (int16_t)vt;
+        return node(L, n);
+    }
+    if (ta == T_QUAT && op->op == B_MUL && (tb == T_QUAT || is_vec(tb) || tb == T_TVEC)) {
+        n.type = (int16_t)tb; /* composition, or rotation of a vector or a frame */
         return node(L, n);
     }
     cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s, L->lp->types.data[ta].name,
@@ -1670,6 +1737,25 @@ static int32_t statement(lc *L)
         }
         if (expect(L, ";"))
             r = node(L, n);
+    } else if (accept_kw(L, "switch")) {
+        xn n = mk(S_SWITCH, 0);
+        if (expect(L, "(")) {
+            n.a = coerce(L, expr(L), T_DOUBLE, pos);
+            if (n.a >= 0 && expect(L, ")")) {
+                L->in_switch++;
+                n.b = statement(L);
+                L->in_switch--;
+                if (n.b >= 0)
+                    r = node(L, n);
+            }
+        }
+    } else if (L->in_switch && (accept_kw(L, "case") || accept_kw(L, "default"))) {
+        xn n = mk(S_CASE, 0);
+        bool dflt = L->t[pos] == 'd';
+        if (!dflt)
+            n.a = coerce(L, expr(L), T_DOUBLE, pos);
+        if ((dflt || n.a >= 0) && expect(L, ":"))
+            r = node(L, n);
     } else if (accept_kw(L, "break")) {
         if (expect(L, ";"))
             r = node(L, mk(S_BREAK, 0));
@@ -1935,13 +2021,8 @@ static void parse_production(lc *L, lset *set, int group)
         recover(L);
         return;
     }
-    if (pats[ip].n != 1) {
-        cbm__cerr(L->c, pos, "the predecessor must be one module");
-        recover(L);
-        return;
-    }
     pr.mod = lp->sms.data[pats[ip].first].mod;
-    pr.pformals = lp->sms.data[pats[ip].first].args;
+    pr.pred = pats[ip];
     int prev = ops[ip];
     for (int k = ip + 1; k < npats; k++) {
         int cx = prev == 2 ? CX_NRC : prev == 3 ? CX_RC : -1;
@@ -1998,6 +2079,7 @@ static void parse_function(lc *L, int rt, size_t pos)
     if (!accept(L, ")") && !accept_kw(L, "void")) {
         do {
             int t = parse_type(L);
+            bool ref = t >= 0 && accept(L, "&");
             size_t k = t >= 0 ? ident(L) : 0;
             if (t < 0 || !k || f.np >= MAXF) {
                 expected(L, "a parameter (type and name)");
@@ -2005,6 +2087,7 @@ static void parse_function(lc *L, int rt, size_t pos)
                 cbm__strfree(L->c->ctx, f.name);
                 return;
             }
+            f.pref[f.np] = ref;
             f.ptype[f.np++] = t;
             declare_local(L, L->t + L->c->pos, k, t);
             L->c->pos += k;
@@ -2114,10 +2197,30 @@ static cbm_status setup_builtins(lc *L)
 {
     lpfg *lp = L->lp;
     cbm_context *ctx = L->c->ctx;
-    static const char *const TN[] = {"void", "int", "float", "double", "bool", "V3f", "V3d"};
-    static const int TS[] = {0, 1, 1, 1, 1, 3, 3};
+    static const char *const TN[] = {"void", "int", "float",      "double",   "bool",
+                                     "V3f",  "V3d", "Quaternion", "TurtleVec"};
+    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9};
     for (int i = 0; i < T_NBUILTIN; i++)
         CBM_TRY(add_type(lp, ctx, TN[i], TS[i]));
+    /* Quaternion {w, x, y, z} (double), TurtleVec {H, L, U} (V3f): built-in structs */
+    static const char *const QF[] = {"w", "x", "y", "z"}, *const TF[] = {"H", "L", "U"};
+    ltype *q = &lp->types.data[T_QUAT], *tv = &lp->types.data[T_TVEC];
+    for (int i = 0; i < 4; i++) {
+        q->fname[i] = cbm__strdup(ctx, QF[i]);
+        q->ftype[i] = T_DOUBLE;
+        q->foff[i] = i;
+        q->nf++;
+        if (!q->fname[i])
+            return CBM_E_NOMEM;
+    }
+    for (int i = 0; i < 3; i++) {
+        tv->fname[i] = cbm__strdup(ctx, TF[i]);
+        tv->ftype[i] = T_V3F;
+        tv->foff[i] = 3 * i;
+        tv->nf++;
+        if (!tv->fname[i])
+            return CBM_E_NOMEM;
+    }
     for (int i = 0; i < 128; i++) {
         lp->bycode[i] = -1;
         lp->considered[i] = true;
@@ -2331,6 +2434,40 @@ static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
     return conv_scalar(t, r);
 }
 
+/* rand()/srand() as the C library lpfg models are compiled with (glibc's random(): additive
+ * feedback r[i] = r[i-3] + r[i-31] after a Lehmer initialisation, 310 values discarded), so a
+ * model that draws with rand() % 100 makes the same choices as under lpfg. */
+static uint32_t glibc_next(lpfg *lp)
+{
+    uint32_t v = lp->gr[(lp->gpos + 34 - 31) % 34] + lp->gr[(lp->gpos + 34 - 3) % 34];
+    lp->gr[lp->gpos] = v;
+    lp->gpos = (lp->gpos + 1) % 34;
+    return v;
+}
+
+static void glibc_srand(lpfg *lp, uint32_t seed)
+{
+    int32_t r = (int32_t)(seed ? seed : 1);
+    lp->gr[0] = (uint32_t)r;
+    for (int i = 1; i < 31; i++) {
+        int32_t hi = r / 127773, lo = r % 127773;
+        r = 16807 * lo - 2836 * hi;
+        if (r < 0)
+            r += 2147483647;
+        lp->gr[i] = (uint32_t)r;
+    }
+    for (int i = 31; i < 34; i++)
+        lp->gr[i] = lp->gr[i - 31];
+    lp->gpos = 0;
+    for (int i = 34; i < 344; i++)
+        glibc_next(lp);
+}
+
+static double glibc_rand(lpfg *lp)
+{
+    return (double)(glibc_next(lp) >> 1);
+}
+
 /* nrand: the polar method with values in pairs, from the erand48 stream */
 static double nrand(cbm__eval *e, double m, double s)
 {
@@ -2355,6 +2492,57 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
     lpfg *lp = ls->lp;
     double a[2] = {0, 0};
     int32_t x = n->a;
+    if (n->fn == F_DOT || n->fn == F_CROSS || n->fn == F_MAKEQ || n->fn == F_VECROT) {
+        double u[9], w[3], ang = 0;
+        int32_t x1 = lp->nodes.data[x].next;
+        ev(ls, x, fr, u);
+        ev(ls, x1, fr, w);
+        if (n->fn == F_VECROT)
+            ang = evs(ls, lp->nodes.data[x1].next, fr);
+        else if (n->fn == F_MAKEQ)
+            ang = w[0];
+        if (n->fn == F_DOT)
+            out[0] = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+        else if (n->fn == F_CROSS) {
+            out[0] = u[1] * w[2] - u[2] * w[1];
+            out[1] = u[2] * w[0] - u[0] * w[2];
+            out[2] = u[0] * w[1] - u[1] * w[0];
+        } else if (n->fn == F_MAKEQ) {
+            double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+            double sn = sin(ang / 2) / (l > 0 ? l : 1);
+            out[0] = cos(ang / 2);
+            for (int i = 0; i < 3; i++)
+                out[i + 1] = u[i] * sn;
+        } else { /* Rodrigues' rotation of each vector about the unit axis, in place */
+            double l = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            double ax[3] = {w[0] / (l > 0 ? l : 1), w[1] / (l > 0 ? l : 1), w[2] / (l > 0 ? l : 1)};
+            double c = cos(ang), sn = sin(ang);
+            int nv = n->type == T_TVEC ? 3 : 1;
+            for (int v = 0; v < nv; v++) {
+                double *p = u + 3 * v, d = ax[0] * p[0] + ax[1] * p[1] + ax[2] * p[2];
+                double cr[3] = {ax[1] * p[2] - ax[2] * p[1], ax[2] * p[0] - ax[0] * p[2],
+                                ax[0] * p[1] - ax[1] * p[0]};
+                for (int i = 0; i < 3; i++)
+                    out[3 * v + i] = p[i] * c + cr[i] * sn + ax[i] * d * (1 - c);
+            }
+            conv_value(lp, n->type, out);
+            memcpy(lv_ptr(lp, &lp->nodes.data[x], fr), out,
+                   (size_t)tsize(lp, n->type) * sizeof(double));
+            return;
+        }
+        conv_value(lp, n->type, out);
+        return;
+    }
+    if (n->fn == F_NORMALIZE && n->type == T_TVEC) {
+        ev(ls, x, fr, out);
+        for (int v = 0; v < 3; v++) {
+            double *p = out + 3 * v, l = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            for (int i = 0; i < 3; i++)
+                p[i] = l > 0 ? p[i] / l : 0;
+        }
+        conv_value(lp, n->type, out);
+        return;
+    }
     if (n->fn == F_LENGTH || n->fn == F_NORMALIZE) {
         double v[3];
         ev(ls, x, fr, v);
@@ -2432,11 +2620,15 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
     case F_NRAN:
         r = nrand(&ls->ev, a[0], a[1]);
         break;
-    case F_RAND:
+    case F_DRAND:
         r = cbm__rand48_next(&ls->ev.ran);
+        break;
+    case F_RAND:
+        r = glibc_rand(lp);
         break;
     case F_SRAND: {
         long long s = cbm__to_ll(a[0]);
+        glibc_srand(lp, (uint32_t)s);
         cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(s & 0xFFFF),
                            (uint16_t)((s >> 16) & 0xFFFF));
         ls->ev.nran_have = 0;
@@ -2493,6 +2685,14 @@ static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
     memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
     lp->ret = out;
     exec(ls, f->body, nf);
+    off = 0;
+    i = 0;
+    for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next, i++) {
+        int sz = tsize(lp, f->ptype[i]);
+        if (f->pref[i])
+            memcpy(lv_ptr(lp, &lp->nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
+        off += sz;
+    }
     lp->ret = saved;
     lp->call_depth--;
     lp->sp = save;
@@ -2537,6 +2737,30 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
             if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
                 ct = T_DOUBLE;
             out[0] = bin_scalar(n->fn, ct, a, b, lp);
+            return;
+        }
+        if (ta == T_QUAT) {
+            double q[4], b[9];
+            ev(ls, n->a, fr, q);
+            ev(ls, n->b, fr, b);
+            if (tb == T_QUAT) { /* Hamilton product */
+                out[0] = q[0] * b[0] - q[1] * b[1] - q[2] * b[2] - q[3] * b[3];
+                out[1] = q[0] * b[1] + q[1] * b[0] + q[2] * b[3] - q[3] * b[2];
+                out[2] = q[0] * b[2] - q[1] * b[3] + q[2] * b[0] + q[3] * b[1];
+                out[3] = q[0] * b[3] + q[1] * b[2] - q[2] * b[1] + q[3] * b[0];
+            } else { /* v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z) */
+                int nv = tb == T_TVEC ? 3 : 1;
+                for (int v = 0; v < nv; v++) {
+                    const double *p = b + 3 * v, *u = q + 1;
+                    double t[3] = {2 * (u[1] * p[2] - u[2] * p[1]), 2 * (u[2] * p[0] - u[0] * p[2]),
+                                   2 * (u[0] * p[1] - u[1] * p[0])};
+                    double c[3] = {u[1] * t[2] - u[2] * t[1], u[2] * t[0] - u[0] * t[2],
+                                   u[0] * t[1] - u[1] * t[0]};
+                    for (int i = 0; i < 3; i++)
+                        out[3 * v + i] = p[i] + q[0] * t[i] + c[i];
+                }
+            }
+            conv_value(lp, n->type, out);
             return;
         }
         double a[3], b[3];
@@ -2976,6 +3200,26 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
                     memcpy(lp->ret, tmp, (size_t)tsize(lp, n->type) * sizeof(double));
             }
             return X_RETURN;
+        case S_SWITCH: {
+            double v = evs(ls, n->a, fr);
+            int32_t body = lp->nodes.data[n->b].op == S_BLOCK ? lp->nodes.data[n->b].a : n->b;
+            int32_t hit = -1, dflt = -1;
+            for (int32_t c = body; c >= 0 && hit < 0; c = lp->nodes.data[c].next) {
+                const xn *cn = &lp->nodes.data[c];
+                if (cn->op != S_CASE)
+                    continue;
+                if (cn->a < 0)
+                    dflt = c;
+                else if (evs(ls, cn->a, fr) == v)
+                    hit = c;
+            }
+            if (hit < 0)
+                hit = dflt;
+            r = hit >= 0 ? exec(ls, hit, fr) : X_NORMAL;
+            if (r == X_RETURN || r == X_CONTINUE)
+                return r;
+            break;
+        }
         case S_BREAK:
             return X_BREAK;
         case S_CONTINUE:
@@ -3016,31 +3260,53 @@ static cbm_status run_block(cbm_lsys *ls, int which)
 }
 
 /* Tries the productions of `set` on the module at (i, j, k) of src; produced modules go to
- * out. nxt: the partial new string (new context), NULL outside the generative pass. */
-static bool try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i, size_t j,
-                        size_t k, const lstr *nxt, lstr *out)
+ * out. nxt: the partial new string (new context), NULL outside the generative pass. Returns the
+ * number of modules the predecessor covers (0: none applied); going Backward the module at i is
+ * the last of them, else the first. */
+static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i, size_t j, size_t k,
+                       const lstr *nxt, lstr *out)
 {
     lpfg *lp = ls->lp;
     int m = lp->bycode[src->sym[i] & 0x7f];
+    bool back = nxt && lp->backward;
     for (size_t p = 0; p < set->prods.len; p++) {
         const lprod *pr = &set->prods.data[p];
-        if (pr->mod != m || (set == &lp->main && pr->group != lp->group))
+        int32_t np = pr->pred.n;
+        int32_t anchor = back ? np - 1 : 0;
+        if (lp->sms.data[pr->pred.first + anchor].mod != m ||
+            (set == &lp->main && pr->group != lp->group))
             continue;
         double *fr = lp->stack;
         lp->sp = (size_t)pr->fsize;
         lp->ret = NULL;
-        walk self = walk_at(src, i, j, k, 1);
-        bind(ls, &self, pr->pformals, fr);
-        lp->scan[CX_LC] = self;
-        lp->scan[CX_RC] = self;
-        w_phys_next(&lp->scan[CX_RC]);
+        walk first = walk_at(src, i, j, k, 1);
+        bool ok = true;
+        for (int32_t a = 0; a < anchor && ok; a++) {
+            if (first.i == 0)
+                ok = false;
+            else
+                w_phys_prev(&first);
+        }
+        walk w = first;
+        for (int32_t a = 0; a < np && ok; a++) {
+            const lsm *pm = &lp->sms.data[pr->pred.first + a];
+            if (!w_ok(&w) || w_code(&w) != lp->mods.data[pm->mod].code) {
+                ok = false;
+                break;
+            }
+            bind(ls, &w, pm->args, fr);
+            w_phys_next(&w);
+        }
+        if (!ok)
+            continue;
+        lp->scan[CX_LC] = first;
+        lp->scan[CX_RC] = w;
         memset(&lp->scan[CX_NLC], 0, sizeof(walk));
         memset(&lp->scan[CX_NRC], 0, sizeof(walk));
         if (nxt && !lp->backward)
             lp->scan[CX_NLC] = walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
         else if (nxt)
             lp->scan[CX_NRC] = walk_end(nxt, -1);
-        bool ok = true;
         for (int c = 0; c < CX_N && ok; c++)
             if (pr->cx[c].n)
                 ok = ctx_match(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
@@ -3051,12 +3317,12 @@ static bool try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i
         lp->produced = false;
         exec(ls, pr->body, fr);
         if (lp->err != CBM_OK)
-            return false;
+            return 0;
         if (lp->produced)
-            return true;
+            return np;
         out->n = n0, out->npm = npm0, out->npar = npar0;
     }
-    return false;
+    return 0;
 }
 
 static cbm_status copy_at(cbm_context *ctx, const lstr *src, size_t i, size_t j, size_t k,
@@ -3082,9 +3348,14 @@ static cbm_status decompose(cbm_lsys *ls, const lset *set, const lstr *src, lstr
     size_t j = 0, k = 0;
     for (size_t i = 0; i < src->n; i++) {
         tmp->n = tmp->npm = tmp->npar = 0;
-        bool done = level < set->depth && try_rewrite(ls, set, src, i, j, k, NULL, tmp);
+        int done = level < set->depth ? try_rewrite(ls, set, src, i, j, k, NULL, tmp) : 0;
         if (lp->err != CBM_OK)
             return lp->err;
+        for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
+            if (src->sym[i] & LSYS_PARAM_BIT)
+                k += src->pc[j++];
+            i++;
+        }
         if (done) {
             if (level + 1 < set->depth)
                 CBM_TRY(decompose(ls, set, tmp, out, level + 1));
@@ -3129,9 +3400,21 @@ static cbm_status generate(cbm_lsys *ls)
         if (back && (src->sym[i] & LSYS_PARAM_BIT))
             k -= src->pc[--j];
         succ->n = succ->npm = succ->npar = 0;
-        bool done = try_rewrite(ls, &lp->main, src, i, j, k, nxt, succ);
+        int done = try_rewrite(ls, &lp->main, src, i, j, k, nxt, succ);
         if (lp->err != CBM_OK)
             return lp->err;
+        for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
+            if (back) {
+                i--;
+                if (src->sym[i] & LSYS_PARAM_BIT)
+                    k -= src->pc[--j];
+            } else {
+                if (src->sym[i] & LSYS_PARAM_BIT)
+                    k += src->pc[j++];
+                i++;
+            }
+            c++;
+        }
         if (done)
             CBM_TRY(append_str(ls->ctx, nxt, succ, back));
         else
@@ -3197,6 +3480,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->ev.stopped = false;
     cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
     ls->ev.nran_have = 0;
+    glibc_srand(lp, 1);
     for (size_t g = 0; g < lp->gvars.len; g++) {
         const lgvar *v = &lp->gvars.data[g];
         lp->sp = 0;
@@ -3237,6 +3521,10 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
 /* ---------------------------------------------------------------- output */
 static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v)
 {
+    if (t == T_INT || t == T_BOOL) {
+        fprintf(f, "%lld", cbm__to_ll(v[0]));
+        return v + 1;
+    }
     if (is_scalar(t)) {
         fprintf(f, "%.9g", v[0]);
         return v + 1;
