@@ -241,6 +241,56 @@ TEST(lpfg_errors)
                  "m.l:4:", "");
 }
 
+typedef struct diags {
+    char text[8192];
+    int count;
+} diags;
+
+static void sink(void *ud, const cbm_diagnostic *d)
+{
+    diags *g = ud;
+    size_t n = strlen(g->text);
+    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
+             d->col, d->message);
+    g->count++;
+}
+
+TEST(lpfg_errors_with_locations)
+{
+    diags g;
+    memset(&g, 0, sizeof g);
+    cbm_context_def cd = cbm_context_def_default();
+    cd.diag = sink;
+    cd.diag_ud = &g;
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(&cd, &ctx));
+    if (!ctx)
+        return;
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = "#include <lpfgall.h>\n"                       /* 1 */
+               "struct P { float a; };\n"                     /* 2 */
+               "module A(int);\n"                             /* 3 */
+               "module C(P);\n"                               /* 4 */
+               "Axiom: A(1, 2);\n"                            /* 5: too many parameters */
+               "A(x) : { produce B(); }\n"                    /* 6: unknown module */
+               "A(x) : { y = 2; produce A(x); }\n"            /* 7: unknown name */
+               "C(p) : { p.b = 1; produce C(p); }\n"          /* 8: no field */
+               "A(x) : { V3f v; v = v + 1; produce A(x); }\n" /* 9: invalid operands */
+               "A(x) : { produce A(x) }\n";                   /* 10: missing ; */
+    cbm_lsys *ls = NULL;
+    CHECK_STATUS(cbm_lsys_load(ctx, &def, &ls), CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    CHECK_MSG(g.count >= 6, "%d diagnostics:\n%s", g.count, g.text);
+    CHECK_MSG(strstr(g.text, "m.l:5:8: module A has 1 parameter, 2 given"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:6:18: unknown module 'B'"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:7:10: unknown name 'y'"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:8:11: no field 'b' in P"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:9:23: invalid operands to '+' (V3f and int)"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:10:23: expected ';', found '}'"), "%s", g.text);
+    cbm_context_destroy(ctx);
+}
+
 TEST(lpfg_runtime_limits)
 {
     cbm_context *ctx = test_ctx();

@@ -463,7 +463,10 @@ static void expected(lc *L, const char *what)
     char buf[64];
     skip(L);
     describe(L, buf, sizeof buf);
-    cbm__cerr(L->c, L->c->pos, "expected %s, found %s", what, buf);
+    size_t pos = L->c->pos;
+    while (pos > 0 && !L->t[pos]) /* at the end: point at the last character */
+        pos--;
+    cbm__cerr(L->c, pos, "expected %s, found %s", what, buf);
 }
 
 static bool expect(lc *L, const char *s)
@@ -491,6 +494,31 @@ static void recover(lc *L)
                 break;
             if (level < 0)
                 level = 0;
+        } else if (ch == ';' && level == 0)
+            break;
+    }
+    L->c->pos = p;
+}
+
+/* Statement-level recovery: skips to after the next `;` or balanced block, but stops before a
+ * `}` that closes the enclosing block. */
+static void recover_stmt(lc *L)
+{
+    const char *t = L->t;
+    size_t p = L->c->pos;
+    int level = 0;
+    while (t[p]) {
+        char ch = t[p];
+        if (ch == '}' && level == 0)
+            break;
+        p++;
+        if (ch == '{' || ch == '(')
+            level++;
+        else if (ch == '}' || ch == ')') {
+            if (level > 0)
+                level--;
+            if (level == 0 && ch == '}')
+                break;
         } else if (ch == ';' && level == 0)
             break;
     }
@@ -1568,11 +1596,16 @@ static int32_t block(lc *L)
             expected(L, "'}'");
             return -1;
         }
+        size_t before = L->c->pos;
         int32_t s = statement(L);
         if (s < 0) {
             ok = false;
             if (fatal(L))
                 return -1;
+            if (L->c->pos == before) /* always make progress */
+                recover_stmt(L);
+            if (L->c->pos == before && L->t[L->c->pos] != '}')
+                L->c->pos++;
             continue;
         }
         if (last >= 0)
@@ -1599,7 +1632,7 @@ static int32_t declaration(lc *L, int t)
         size_t pos = L->c->pos;
         if (!n) {
             expected(L, "a variable name");
-            recover(L);
+            recover_stmt(L);
             return -1;
         }
         L->c->pos += n;
@@ -1615,7 +1648,7 @@ static int32_t declaration(lc *L, int t)
                 init = -1;
             }
             if (init < 0) {
-                recover(L);
+                recover_stmt(L);
                 return -1;
             }
         }
@@ -1632,7 +1665,7 @@ static int32_t declaration(lc *L, int t)
         last = s;
     } while (accept(L, ","));
     if (!expect(L, ";")) {
-        recover(L);
+        recover_stmt(L);
         return -1;
     }
     return first;
@@ -1725,7 +1758,7 @@ static int32_t statement(lc *L)
         if (!peek(L, ";")) {
             if (L->ret_type == T_VOID || L->in_prod) {
                 cbm__cerr(L->c, pos, "return with a value here");
-                recover(L);
+                recover_stmt(L);
                 L->depth--;
                 return -1;
             }
@@ -1765,7 +1798,7 @@ static int32_t statement(lc *L)
     } else if (accept_kw(L, "produce")) {
         if (!L->in_prod) {
             cbm__cerr(L->c, pos, "produce outside a production");
-            recover(L);
+            recover_stmt(L);
         } else {
             lpat p;
             if (succ_list(L, &p) == 0 && expect(L, ";")) {
@@ -1774,7 +1807,7 @@ static int32_t statement(lc *L)
                 n.b = p.n;
                 r = node(L, n);
             } else
-                recover(L);
+                recover_stmt(L);
         }
     } else if ((t = parse_type(L)) >= 0) {
         r = declaration(L, t);
@@ -1785,7 +1818,7 @@ static int32_t statement(lc *L)
             s.a = e;
             r = node(L, s);
         } else if (!fatal(L))
-            recover(L);
+            recover_stmt(L);
     }
     L->depth--;
     return r;
@@ -3646,6 +3679,9 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     if (!lp)
         return CBM_E_NOMEM;
     ls->lp = lp;
+    /* parameters are stored as doubles; float parameters are rounded to float32 by their type */
+    ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = false;
+    ls->float32 = false;
     for (int i = 0; i < 4; i++)
         lp->blocks[i] = -1;
     lp->dlen_expr = -1;
