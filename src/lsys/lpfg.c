@@ -2902,11 +2902,15 @@ static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p,
 /* appends the modules of src [from i] to dst, reversed when rev */
 static cbm_status append_str(cbm_context *ctx, lstr *dst, const lstr *src, bool rev)
 {
+    if (!src->n)
+        return CBM_OK;
     CBM_TRY(room(ctx, dst, src->n, src->npm, src->npar));
     if (!rev) {
         memcpy(dst->sym + dst->n, src->sym, src->n);
-        memcpy(dst->pc + dst->npm, src->pc, src->npm);
-        memcpy((double *)dst->par + dst->npar, src->par, src->npar * sizeof(double));
+        if (src->npm)
+            memcpy(dst->pc + dst->npm, src->pc, src->npm);
+        if (src->npar)
+            memcpy((double *)dst->par + dst->npar, src->par, src->npar * sizeof(double));
         dst->n += src->n;
         dst->npm += src->npm;
         dst->npar += src->npar;
