@@ -213,6 +213,11 @@ TEST(lpfg_c_library)
     run_model("c-library.l");
 }
 
+TEST(lpfg_taylor_hell_constructs)
+{
+    run_model("taylor-hell-constructs.l");
+}
+
 static void expect_error(const char *text, const char *where, const char *what)
 {
     cbm_context *ctx = test_ctx();
