@@ -218,6 +218,11 @@ TEST(lpfg_taylor_hell_constructs)
     run_model("taylor-hell-constructs.l");
 }
 
+TEST(lpfg_group0_cut_nproduce)
+{
+    run_model("group0-cut-nproduce.l");
+}
+
 static void expect_error(const char *text, const char *where, const char *what)
 {
     cbm_context *ctx = test_ctx();

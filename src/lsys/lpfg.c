@@ -1795,7 +1795,8 @@ static int32_t statement(lc *L)
     } else if (accept_kw(L, "continue")) {
         if (expect(L, ";"))
             r = node(L, mk(S_CONTINUE, 0));
-    } else if (accept_kw(L, "produce")) {
+    } else if (peek(L, "nproduce") || accept_kw(L, "produce")) {
+        bool partial = accept_kw(L, "nproduce");
         if (!L->in_prod) {
             cbm__cerr(L->c, pos, "produce outside a production");
             recover_stmt(L);
@@ -1805,6 +1806,7 @@ static int32_t statement(lc *L)
                 xn n = mk(S_PRODUCE, 0);
                 n.a = p.first;
                 n.b = p.n;
+                n.fn = partial;
                 r = node(L, n);
             } else
                 recover_stmt(L);
@@ -3265,6 +3267,8 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
             cbm_status s = produce(ls, n->a, n->b, fr);
             if (s != CBM_OK)
                 rt_error(lp, s, "out of memory");
+            if (n->fn) /* nproduce: part of the successor, the body goes on */
+                break;
             lp->produced = true;
             return X_RETURN;
         }
@@ -3306,59 +3310,61 @@ static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i,
     lpfg *lp = ls->lp;
     int m = lp->bycode[src->sym[i] & 0x7f];
     bool back = nxt && lp->backward;
-    for (size_t p = 0; p < set->prods.len; p++) {
-        const lprod *pr = &set->prods.data[p];
-        int32_t np = pr->pred.n;
-        int32_t anchor = back ? np - 1 : 0;
-        if (lp->sms.data[pr->pred.first + anchor].mod != m ||
-            (set == &lp->main && pr->group != lp->group))
-            continue;
-        double *fr = lp->stack;
-        lp->sp = (size_t)pr->fsize;
-        lp->ret = NULL;
-        walk first = walk_at(src, i, j, k, 1);
-        bool ok = true;
-        for (int32_t a = 0; a < anchor && ok; a++) {
-            if (first.i == 0)
-                ok = false;
-            else
-                w_phys_prev(&first);
-        }
-        walk w = first;
-        for (int32_t a = 0; a < np && ok; a++) {
-            const lsm *pm = &lp->sms.data[pr->pred.first + a];
-            if (!w_ok(&w) || w_code(&w) != lp->mods.data[pm->mod].code) {
-                ok = false;
-                break;
+    /* the productions of the active group first, then those of group 0 (as lpfg) */
+    for (int pass = lp->group != 0 ? 0 : 1; pass < 2; pass++)
+        for (size_t p = 0; p < set->prods.len; p++) {
+            const lprod *pr = &set->prods.data[p];
+            int32_t np = pr->pred.n;
+            int32_t anchor = back ? np - 1 : 0;
+            if (lp->sms.data[pr->pred.first + anchor].mod != m ||
+                pr->group != (pass == 0 ? lp->group : 0))
+                continue;
+            double *fr = lp->stack;
+            lp->sp = (size_t)pr->fsize;
+            lp->ret = NULL;
+            walk first = walk_at(src, i, j, k, 1);
+            bool ok = true;
+            for (int32_t a = 0; a < anchor && ok; a++) {
+                if (first.i == 0)
+                    ok = false;
+                else
+                    w_phys_prev(&first);
             }
-            bind(ls, &w, pm->args, fr);
-            w_phys_next(&w);
+            walk w = first;
+            for (int32_t a = 0; a < np && ok; a++) {
+                const lsm *pm = &lp->sms.data[pr->pred.first + a];
+                if (!w_ok(&w) || w_code(&w) != lp->mods.data[pm->mod].code) {
+                    ok = false;
+                    break;
+                }
+                bind(ls, &w, pm->args, fr);
+                w_phys_next(&w);
+            }
+            if (!ok)
+                continue;
+            lp->scan[CX_LC] = first;
+            lp->scan[CX_RC] = w;
+            memset(&lp->scan[CX_NLC], 0, sizeof(walk));
+            memset(&lp->scan[CX_NRC], 0, sizeof(walk));
+            if (nxt && !lp->backward)
+                lp->scan[CX_NLC] = walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
+            else if (nxt)
+                lp->scan[CX_NRC] = walk_end(nxt, -1);
+            for (int c = 0; c < CX_N && ok; c++)
+                if (pr->cx[c].n)
+                    ok = ctx_match(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
+            if (!ok)
+                continue;
+            size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
+            lp->out = out;
+            lp->produced = false;
+            exec(ls, pr->body, fr);
+            if (lp->err != CBM_OK)
+                return 0;
+            if (lp->produced)
+                return np;
+            out->n = n0, out->npm = npm0, out->npar = npar0;
         }
-        if (!ok)
-            continue;
-        lp->scan[CX_LC] = first;
-        lp->scan[CX_RC] = w;
-        memset(&lp->scan[CX_NLC], 0, sizeof(walk));
-        memset(&lp->scan[CX_NRC], 0, sizeof(walk));
-        if (nxt && !lp->backward)
-            lp->scan[CX_NLC] = walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
-        else if (nxt)
-            lp->scan[CX_NRC] = walk_end(nxt, -1);
-        for (int c = 0; c < CX_N && ok; c++)
-            if (pr->cx[c].n)
-                ok = ctx_match(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
-        if (!ok)
-            continue;
-        size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
-        lp->out = out;
-        lp->produced = false;
-        exec(ls, pr->body, fr);
-        if (lp->err != CBM_OK)
-            return 0;
-        if (lp->produced)
-            return np;
-        out->n = n0, out->npm = npm0, out->npar = npar0;
-    }
     return 0;
 }
 
@@ -3432,10 +3438,27 @@ static cbm_status generate(cbm_lsys *ls)
     bool back = lp->backward;
     size_t n = src->n;
     size_t j = back ? src->npm : 0, k = back ? src->npar : 0;
+    int cutc = lp->mods.data[find_mod(lp, "Cut", 3)].code;
+    int sbc = lp->mods.data[lp->sb].code, ebc = lp->mods.data[lp->eb].code;
     for (size_t c = 0; c < n; c++) {
         size_t i = back ? n - 1 - c : c;
         if (back && (src->sym[i] & LSYS_PARAM_BIT))
             k -= src->pc[--j];
+        if (!back && (src->sym[i] & 0x7f) == cutc) { /* Cut: the rest of the branch goes */
+            int depth = 0;
+            for (; c < n; c++, i++) {
+                int sc = src->sym[i] & 0x7f;
+                if (sc == sbc)
+                    depth++;
+                else if (sc == ebc && depth-- == 0)
+                    break;
+                if (src->sym[i] & LSYS_PARAM_BIT)
+                    k += src->pc[j++];
+            }
+            if (c < n)
+                c--; /* the closing EB is copied by the next iteration */
+            continue;
+        }
         succ->n = succ->npm = succ->npar = 0;
         int done = try_rewrite(ls, &lp->main, src, i, j, k, nxt, succ);
         if (lp->err != CBM_OK)
