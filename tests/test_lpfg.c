@@ -218,6 +218,11 @@ TEST(lpfg_taylor_hell_constructs)
     run_model("taylor-hell-constructs.l");
 }
 
+TEST(lpfg_in_left_context)
+{
+    run_model("in-left-context.l");
+}
+
 TEST(lpfg_group0_cut_nproduce)
 {
     run_model("group0-cut-nproduce.l");
