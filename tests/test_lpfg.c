@@ -218,6 +218,44 @@ TEST(lpfg_taylor_hell_constructs)
     run_model("taylor-hell-constructs.l");
 }
 
+TEST(lpfg_consider)
+{
+    run_model("consider.l");
+}
+
+/* func(name, x): names numbered in order of first use, evaluated by the function set */
+static double fake_func(void *ud, int id, double x)
+{
+    (void)ud;
+    return id * 100 + x;
+}
+
+TEST(lpfg_func_by_name)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "f.l";
+    def.text = "#include <lpfgall.h>\nderivation length: 1;\nmodule A(float);\nAxiom: A(2);\n"
+               "A(x) : { produce A(func(beta, x)) A(func(alpha, x / 2)) A(func(beta, 0)); }\n";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        const char *const *names = NULL;
+        CHECK(cbm_lsys_func_names(ls, &names) == 2);
+        CHECK(names && !strcmp(names[0], "beta") && !strcmp(names[1], "alpha"));
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_RUNTIME); /* no function set */
+        cbm_lsys_set_func(ls, fake_func, NULL);
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        char *got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, "A(102) A(201) A(100)"), "%s", got ? got : "(null)");
+        free(got);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
+
 TEST(lpfg_in_left_context)
 {
     run_model("in-left-context.l");
