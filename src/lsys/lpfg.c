@@ -37,7 +37,19 @@
 #include <stdlib.h>
 
 /* ---- types ---- */
-enum { T_VOID, T_INT, T_FLOAT, T_DOUBLE, T_BOOL, T_V3F, T_V3D, T_QUAT, T_TVEC, T_NBUILTIN };
+enum {
+    T_VOID,
+    T_INT,
+    T_FLOAT,
+    T_DOUBLE,
+    T_BOOL,
+    T_V3F,
+    T_V3D,
+    T_QUAT,
+    T_TVEC,
+    T_LOCVEC,
+    T_NBUILTIN
+};
 #define MAXF  16 /* parameters per module, fields per struct */
 #define MAXSZ 255
 
@@ -132,6 +144,8 @@ typedef enum {
     F_CROSS,
     F_MAKEQ,
     F_VECROT,
+    F_TOLOCAL,
+    F_TOWORLD,
     F_NONE
 } bfn;
 
@@ -183,6 +197,8 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"CrossProd", F_CROSS, 2},
                                 {"MakeQuaternion", F_MAKEQ, 2},
                                 {"VecRotate", F_VECROT, 3},
+                                {"ToLocal", F_TOLOCAL, 2},
+                                {"ToWorld", F_TOWORLD, 2},
                                 {"RAND_MAX", F_NONE, 0}};
 
 typedef struct xn {
@@ -323,8 +339,8 @@ static const char *const TURTLE[][3] = {
     {"StartGC", "", ""},       {"PointGC", "", ""},
     {"EndGC", "", ""},         {"SetHead", "", "ffffff"},
     {"RollToVert", "", ""},    {"ScaleContour", "", "ff"},
-    {"LineRel3d", "", "fff"},  {"LineTo3d", "", "fff"},
-    {"MoveRel3d", "", "fff"},  {"MoveTo3d", "", "fff"},
+    {"LineRel3d", "", "v"},    {"LineTo3d", "", "v"},
+    {"MoveRel3d", "", "v"},    {"MoveTo3d", "", "v"},
     {"Label", "", "i"},        {"IncWidth", "#", ""},
     {"DecWidth", "", ""},      {"CurrentContour", "", "i"},
     {"SetTropism", "", "fff"}, {"Elasticity", "", "f"},
@@ -996,7 +1012,15 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             return -1;
         }
         int rt = T_DOUBLE;
-        if (b->fn == F_DOT || b->fn == F_CROSS || b->fn == F_MAKEQ || b->fn == F_VECROT) {
+        if (b->fn == F_TOLOCAL || b->fn == F_TOWORLD) {
+            int t0 = ND(args).type, t1 = ND(ND(args).next).type;
+            if (t1 != T_TVEC || (b->fn == F_TOLOCAL ? !is_vec(t0) : t0 != T_LOCVEC)) {
+                cbm__cerr(L->c, pos, "%s() takes a %s and a TurtleVec", b->name,
+                          b->fn == F_TOLOCAL ? "vector" : "LocVec");
+                return -1;
+            }
+            rt = b->fn == F_TOLOCAL ? T_LOCVEC : T_V3F;
+        } else if (b->fn == F_DOT || b->fn == F_CROSS || b->fn == F_MAKEQ || b->fn == F_VECROT) {
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
             bool ok = is_vec(t1);
             if (b->fn == F_VECROT) {
@@ -1323,6 +1347,11 @@ static int32_t binary(lc *L, int32_t a, const binop *op, int32_t b, size_t pos)
         return node(L, n);
     } else if (is_scalar(ta) && is_vec(tb) && op->op == B_MUL) {
         n.type = (int16_t)vt;
+        return node(L, n);
+    }
+    if ((ta == T_LOCVEC || tb == T_LOCVEC) && op->op <= B_DIV &&
+        (ta == tb || is_scalar(ta) || is_scalar(tb)) && !(is_scalar(ta) && op->op != B_MUL)) {
+        n.type = T_LOCVEC; /* componentwise, numbers broadcast */
         return node(L, n);
     }
     if (ta == T_QUAT && op->op == B_MUL && (tb == T_QUAT || is_vec(tb) || tb == T_TVEC)) {
@@ -2232,9 +2261,9 @@ static cbm_status setup_builtins(lc *L)
 {
     lpfg *lp = L->lp;
     cbm_context *ctx = L->c->ctx;
-    static const char *const TN[] = {"void", "int", "float",      "double",   "bool",
-                                     "V3f",  "V3d", "Quaternion", "TurtleVec"};
-    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9};
+    static const char *const TN[] = {"void", "int", "float",      "double",    "bool",
+                                     "V3f",  "V3d", "Quaternion", "TurtleVec", "LocVec"};
+    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9, 3};
     for (int i = 0; i < T_NBUILTIN; i++)
         CBM_TRY(add_type(lp, ctx, TN[i], TS[i]));
     /* Quaternion {w, x, y, z} (double), TurtleVec {H, L, U} (V3f): built-in structs */
@@ -2246,6 +2275,16 @@ static cbm_status setup_builtins(lc *L)
         q->foff[i] = i;
         q->nf++;
         if (!q->fname[i])
+            return CBM_E_NOMEM;
+    }
+    ltype *lv = &lp->types.data[T_LOCVEC];
+    static const char *const LF[] = {"h", "l", "u"};
+    for (int i = 0; i < 3; i++) {
+        lv->fname[i] = cbm__strdup(ctx, LF[i]);
+        lv->ftype[i] = T_FLOAT;
+        lv->foff[i] = i;
+        lv->nf++;
+        if (!lv->fname[i])
             return CBM_E_NOMEM;
     }
     for (int i = 0; i < 3; i++) {
@@ -2263,7 +2302,7 @@ static cbm_status setup_builtins(lc *L)
     for (size_t i = 0; i < sizeof TURTLE / sizeof TURTLE[0]; i++) {
         int pt[MAXF], np = 0;
         for (const char *p = TURTLE[i][2]; *p; p++)
-            pt[np++] = *p == 'i' ? T_INT : T_FLOAT;
+            pt[np++] = *p == 'i' ? T_INT : *p == 'v' ? T_V3F : T_FLOAT;
         if (add_mod(L, TURTLE[i][0], strlen(TURTLE[i][0]), pt, np, TURTLE[i][1], 0) < 0)
             return L->c->status != CBM_OK ? L->c->status : CBM_E_NOMEM;
     }
@@ -2568,6 +2607,17 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         conv_value(lp, n->type, out);
         return;
     }
+    if (n->fn == F_TOLOCAL || n->fn == F_TOWORLD) {
+        double v[3], f[9];
+        ev(ls, x, fr, v);
+        ev(ls, lp->nodes.data[x].next, fr, f);
+        for (int i = 0; i < 3; i++)
+            out[i] = n->fn == F_TOLOCAL
+                         ? v[0] * f[3 * i] + v[1] * f[3 * i + 1] + v[2] * f[3 * i + 2]
+                         : v[0] * f[i] + v[1] * f[3 + i] + v[2] * f[6 + i];
+        conv_value(lp, n->type, out);
+        return;
+    }
     if (n->fn == F_NORMALIZE && n->type == T_TVEC) {
         ev(ls, x, fr, out);
         for (int v = 0; v < 3; v++) {
@@ -2772,6 +2822,20 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
             if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
                 ct = T_DOUBLE;
             out[0] = bin_scalar(n->fn, ct, a, b, lp);
+            return;
+        }
+        if (n->type == T_LOCVEC) {
+            double a[3], b[3];
+            ev(ls, n->a, fr, a);
+            ev(ls, n->b, fr, b);
+            for (int i = 0; i < 3; i++) {
+                double x = a[is_scalar(ta) ? 0 : i], y = b[is_scalar(tb) ? 0 : i];
+                out[i] = n->fn == B_ADD   ? x + y
+                         : n->fn == B_SUB ? x - y
+                         : n->fn == B_MUL ? x * y
+                                          : x / y;
+            }
+            conv_value(lp, n->type, out);
             return;
         }
         if (ta == T_QUAT) {
