@@ -367,12 +367,8 @@ static double conv_scalar(int t, double v)
     switch (t) {
     case T_INT:
         return (double)cbm__to_ll(v);
-    case T_FLOAT: {
-        /* through a volatile: GCC 12's SLP vectorizer drops pairs of adjacent
-         * double -> float -> double round trips at -O2 (V3f components lost their rounding) */
-        volatile float f = (float)v;
-        return (double)f;
-    }
+    case T_FLOAT:
+        return (double)(float)v;
     case T_BOOL:
         return v != 0;
     default:
@@ -388,8 +384,12 @@ static void conv_value(const lpfg *lp, int t, double *v)
         return;
     }
     if (t == T_V3F) {
-        for (int i = 0; i < 3; i++)
-            v[i] = conv_scalar(T_FLOAT, v[i]);
+        /* through a volatile: GCC 12's SLP vectorizer drops pairs of adjacent
+         * double -> float -> double round trips at -O2 (the components lost their rounding) */
+        for (int i = 0; i < 3; i++) {
+            volatile float f = (float)v[i];
+            v[i] = (double)f;
+        }
         return;
     }
     if (t == T_V3D)
@@ -2904,8 +2904,7 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
     case N_ASSIGN: {
         const xn *l = &lp->nodes.data[n->a];
         int sz = tsize(lp, n->type);
-        ev(ls, n->b, fr, out);
-        conv_value(lp, n->type, out);
+        ev(ls, n->b, fr, out); /* of the lvalue's type (coerced at compile time) */
         memcpy(lv_ptr(lp, l, fr), out, (size_t)sz * sizeof(double));
         return;
     }
@@ -3217,9 +3216,10 @@ static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
         const lmod *m = &lp->mods.data[sm->mod];
         double v[MAXSZ + 1];
         int off = 0, a = 0;
+        /* the arguments were converted to the parameter types at compile time, and every value
+         * of a static type is representable in it (results are rounded where computed) */
         for (int32_t x = sm->args; x >= 0; x = lp->nodes.data[x].next, a++) {
             ev(ls, x, fr, v + off);
-            conv_value(lp, m->ptype[a], v + off);
             off += tsize(lp, m->ptype[a]);
         }
         CBM_TRY(push_mod(ls->ctx, out, m->code, v, m->size));
