@@ -251,6 +251,15 @@ TEST(lpfg_func_by_name)
         char *got = lpfg_string(ctx, ls, false, ' ');
         CHECK_MSG(got && !strcmp(got, "A(102) A(201) A(100)"), "%s", got ? got : "(null)");
         free(got);
+        /* the function set's own order: alpha is its function 7, beta its function 3 */
+        int ids[2] = {3, 7};
+        CHECK_STATUS(cbm_lsys_set_func_ids(ls, ids, 1), CBM_E_INVALID);
+        CHECK_OK(cbm_lsys_set_func_ids(ls, ids, 2));
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, "A(302) A(701) A(300)"), "%s", got ? got : "(null)");
+        free(got);
         cbm_lsys_destroy(ls);
     }
     test_ctx_end(ctx);

@@ -272,7 +272,8 @@ struct lpfg {
     CBM_ARRAY(lfunc) funcs;
     CBM_ARRAY(lgvar) gvars;
     CBM_ARRAY(char *) funcnames;
-    int nglobal; /* doubles */
+    CBM_ARRAY(int) funcids; /* the function-set id of each name (cbm_lsys_set_func_ids) */
+    int nglobal;            /* doubles */
     lset main, decomp, interp;
     lpat axiom;
     int32_t blocks[4]; /* Start, StartEach, EndEach, End */
@@ -2724,7 +2725,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
             rt_error(lp, CBM_E_RUNTIME,
                      "func(name, x) needs function files (.func or .fset) on the command line");
         else
-            r = ls->func(ls->func_ud, n->slot, a[0]);
+            r = ls->func(ls->func_ud, lp->funcids.data[n->slot - 1], a[0]);
         break;
     case F_FORWARD:
         lp->backward = false;
@@ -3737,6 +3738,7 @@ void cbm__lpfg_free(cbm_lsys *ls)
     for (size_t i = 0; i < lp->funcnames.len; i++)
         cbm__strfree(ctx, lp->funcnames.data[i]);
     CBM_ARRAY_FREE(ctx, lp->funcnames);
+    CBM_ARRAY_FREE(ctx, lp->funcids);
     CBM_ARRAY_FREE(ctx, lp->nodes);
     CBM_ARRAY_FREE(ctx, lp->sms);
     free_set(ctx, &lp->main);
@@ -3795,6 +3797,10 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
                          ls->comp.errors == 1 ? "" : "s");
     if (s != CBM_OK)
         return s;
+    for (size_t i = 0; i < lp->funcnames.len; i++) { /* by default the order of first use */
+        int id = (int)i + 1;
+        CBM_TRY(CBM_ARRAY_PUSH(ctx, lp->funcids, id));
+    }
     lp->stack_cap = 1u << 16;
     lp->stack = cbm__calloc(ctx, lp->stack_cap, sizeof(double));
     lp->glob = cbm__calloc(ctx, (size_t)lp->nglobal + 1, sizeof(double));
@@ -3827,4 +3833,14 @@ size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names)
 {
     *names = (const char *const *)ls->lp->funcnames.data;
     return ls->lp->funcnames.len;
+}
+
+cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
+{
+    lpfg *lp = ls->lp;
+    if (n != lp->funcnames.len || (n && !ids))
+        return CBM_E_INVALID;
+    for (size_t i = 0; i < n; i++)
+        lp->funcids.data[i] = ids[i];
+    return CBM_OK;
 }

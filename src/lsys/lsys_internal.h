@@ -119,5 +119,6 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls);
 cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
+cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
 
 #endif

@@ -65,3 +65,10 @@ size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names)
     }
     return cbm__lpfg_func_names(ls, names);
 }
+
+cbm_status cbm_lsys_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
+{
+    if (!ls || !ls->lp)
+        return n ? CBM_E_INVALID : CBM_OK;
+    return cbm__lpfg_set_func_ids(ls, ids, n);
+}
