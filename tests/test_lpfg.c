@@ -167,6 +167,8 @@ static void run_model(const char *name)
                 CHECK_OK(cbm_lsys_step(ls));
                 step++;
             }
+            if (interp)
+                CHECK(cbm_lsys_has_homomorphism(ls));
             char *got = lpfg_string(ctx, ls, interp, ' ');
             CHECK(got != NULL);
             if (got) {

@@ -628,7 +628,7 @@ size_t cbm_lsys_param_count(const cbm_lsys *ls)
 }
 bool cbm_lsys_has_homomorphism(const cbm_lsys *ls)
 {
-    return ls->homo.present;
+    return ls->lp ? cbm__lpfg_has_interpretation(ls) : ls->homo.present;
 }
 
 size_t cbm_lsys_homomorphism_module_count(const cbm_lsys *ls)

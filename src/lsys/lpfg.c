@@ -3844,3 +3844,8 @@ cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
         lp->funcids.data[i] = ids[i];
     return CBM_OK;
 }
+
+bool cbm__lpfg_has_interpretation(const cbm_lsys *ls)
+{
+    return ls->lp->interp.present && ls->lp->interp.prods.len > 0;
+}

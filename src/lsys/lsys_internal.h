@@ -116,6 +116,7 @@ void cbm__lpfg_free(cbm_lsys *ls);
 cbm_status cbm__lpfg_reset(cbm_lsys *ls);
 cbm_status cbm__lpfg_step(cbm_lsys *ls);
 cbm_status cbm__lpfg_interpretation(cbm_lsys *ls);
+bool cbm__lpfg_has_interpretation(const cbm_lsys *ls);
 cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
