@@ -108,6 +108,18 @@ CBM_API cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm
 /// wrapped at 70 characters.
 CBM_API cbm_status cbm_lsys_write_cpfg(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
 
+/// L+C dialect: the declared name of a module symbol (e.g. "Internode", "SB" for '['), NULL
+/// for cpfg-dialect models and unknown symbols.
+CBM_API const char *cbm_lsys_module_name(const cbm_lsys *ls, int symbol);
+/// L+C dialect: the names used in func(name, x), in order of first use. func(name, x) calls
+/// the function set with cbm_lsys_set_func with the id given to the name by
+/// cbm_lsys_set_func_ids (by default 1 + the name's index here).
+CBM_API size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names);
+/// L+C dialect: ids[i] is the function id passed to the cbm_lsys_set_func callback for the
+/// i-th name of cbm_lsys_func_names (e.g. from the function set's own names). n must be the
+/// number of names: CBM_E_INVALID otherwise.
+CBM_API cbm_status cbm_lsys_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
+
 #ifdef __cplusplus
 }
 #endif

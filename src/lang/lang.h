@@ -21,6 +21,7 @@ typedef struct cbm__pp {
     CBM_ARRAY(cbm__pp_line) lines; /* one entry per line of text */
     CBM_ARRAY(char *) files;       /* file names (owned) */
     size_t errors;
+    bool lpfg_lib; /* a built-in library header (<lpfgall.h>, ...) was included */
 } cbm__pp;
 
 /// Preprocesses `text` (or the file `path` when text is NULL). defines: "NAME=VALUE" strings

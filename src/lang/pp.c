@@ -439,6 +439,16 @@ static void include(pp_state *st, const char *arg, int file, int line)
         err(st, file, line, 0, "%s", "expected \"file\" after #include");
         return;
     }
+    /* the built-in library of the L+C dialect and the C headers its models include */
+    static const char *const BUILTIN[] = {
+        "lpfgall.h", "lpfg.h",      "lsys.h", "math.h",       "cmath",  "stdlib.h", "stdio.h",
+        "string.h",  "vectorlib.h", "V3f.h",  "quaternion.h", "vector", "memory.h", "stdmods.h"};
+    for (size_t b = 0; b < sizeof BUILTIN / sizeof BUILTIN[0]; b++)
+        if ((size_t)(e - arg - 1) == strlen(BUILTIN[b]) &&
+            !strncmp(arg + 1, BUILTIN[b], strlen(BUILTIN[b]))) {
+            st->pp->lpfg_lib = true;
+            return;
+        }
     if (st->include_depth >= 16) {
         err(st, file, line, 0, "%s", "#include nested too deeply");
         return;

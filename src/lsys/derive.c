@@ -477,6 +477,8 @@ static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
 
 cbm_status cbm_lsys_step(cbm_lsys *ls)
 {
+    if (ls->lp)
+        return cbm__lpfg_step(ls);
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
@@ -513,6 +515,8 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
 
 cbm_status cbm_lsys_reset(cbm_lsys *ls)
 {
+    if (ls->lp)
+        return cbm__lpfg_reset(ls);
     memset(ls->globals, 0, ls->nglobals * sizeof(double));
     size_t off = 0;
     for (size_t i = 0; i < ls->comp.arrays.len; i++) {
@@ -558,6 +562,8 @@ static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
 
 cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
 {
+    if (ls->lp)
+        return cbm__lpfg_interpretation(ls);
     lstr *out = &ls->homo_str;
     lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->homo.depth));
@@ -622,7 +628,7 @@ size_t cbm_lsys_param_count(const cbm_lsys *ls)
 }
 bool cbm_lsys_has_homomorphism(const cbm_lsys *ls)
 {
-    return ls->homo.present;
+    return ls->lp ? cbm__lpfg_has_interpretation(ls) : ls->homo.present;
 }
 
 size_t cbm_lsys_homomorphism_module_count(const cbm_lsys *ls)

@@ -57,6 +57,7 @@ void cbm_lsys_destroy(cbm_lsys *ls)
     for (size_t i = 0; i < ls->scratch.len; i++)
         cbm__lstr_free(ctx, &ls->scratch.data[i]);
     CBM_ARRAY_FREE(ctx, ls->scratch);
+    cbm__lpfg_free(ls);
     CBM_ARRAY_FREE(ctx, ls->appl);
     CBM_ARRAY_FREE(ctx, ls->applp);
     cbm__compiler_free(&ls->comp);
@@ -91,7 +92,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
     cbm_status s = cbm__compiler_init(&ls->comp, ctx, &pp);
     if (s == CBM_OK)
-        s = cbm__lsys_parse(ls, &pp);
+        s = cbm__lpfg_detect(&pp) ? cbm__lpfg_parse(ls, &pp) : cbm__lsys_parse(ls, &pp);
     cbm__pp_free(&pp);
     ls->comp.pp = NULL;
     ls->comp.text = NULL;

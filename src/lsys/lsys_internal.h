@@ -102,9 +102,24 @@ struct cbm_lsys {
     CBM_ARRAY(float) applp;
     int steps;
     bool homo_valid;
+    struct lpfg *lp; /* the L+C dialect's model (lpfg.c), NULL for the cpfg dialect */
 };
 
 void cbm__lstr_free(cbm_context *ctx, lstr *s);
 cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);
+
+/* The L+C (lpfg) dialect, lpfg.c: detection by the file's form, then its own compiler and
+ * derivation over the same packed string. */
+bool cbm__lpfg_detect(const cbm__pp *pp);
+cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp);
+void cbm__lpfg_free(cbm_lsys *ls);
+cbm_status cbm__lpfg_reset(cbm_lsys *ls);
+cbm_status cbm__lpfg_step(cbm_lsys *ls);
+cbm_status cbm__lpfg_interpretation(cbm_lsys *ls);
+bool cbm__lpfg_has_interpretation(const cbm_lsys *ls);
+cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
+const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
+size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
+cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
 
 #endif

@@ -7,6 +7,8 @@
 
 cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o)
 {
+    if (ls->lp)
+        return cbm__lpfg_write_str(ls, homomorphism, o);
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
     FILE *f = cbm_out_stream(o);
@@ -48,4 +50,25 @@ cbm_status cbm_lsys_write_cpfg(const cbm_lsys *ls, bool homomorphism, cbm_out *o
     }
     putc('\n', f);
     return ferror(f) ? CBM_E_IO : CBM_OK;
+}
+
+const char *cbm_lsys_module_name(const cbm_lsys *ls, int symbol)
+{
+    return cbm__lpfg_module_name(ls, symbol);
+}
+
+size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names)
+{
+    if (!ls->lp) {
+        *names = NULL;
+        return 0;
+    }
+    return cbm__lpfg_func_names(ls, names);
+}
+
+cbm_status cbm_lsys_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
+{
+    if (!ls || !ls->lp)
+        return n ? CBM_E_INVALID : CBM_OK;
+    return cbm__lpfg_set_func_ids(ls, ids, n);
 }

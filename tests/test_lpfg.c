@@ -1,0 +1,382 @@
+/* The L+C (lpfg) dialect: the six lpfg models of ../shared/oracles/vlab against lpfg's strings
+ * (ref/final.params.txt, struct parameters written raw[..] there and {..} by us), the models of
+ * tests/lpfg/ against the expectations in their comments:
+ *   // expect after N: MODULES                 (one-line form of -o x.str, space separated)
+ *   // expect interpretation after N: MODULES
+ * and error messages. */
+#include "lsys_util.h"
+
+#include "cambium/io.h"
+
+#include <dirent.h>
+#include <unistd.h>
+
+/* The string (or its interpretation) as `-o x.str` writes it, lines joined with sep. */
+static char *lpfg_string(cbm_context *ctx, cbm_lsys *ls, bool interp, char sep)
+{
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/cbm_test_lpfg_%d.str", (int)getpid());
+    cbm_out *o = NULL;
+    if (cbm_out_open(ctx, path, &o) != CBM_OK)
+        return NULL;
+    if (interp && cbm_lsys_apply_homomorphism(ls) != CBM_OK) {
+        cbm_out_abort(o);
+        return NULL;
+    }
+    cbm_status s = cbm_lsys_write_str(ls, interp, o);
+    if (s == CBM_OK)
+        s = cbm_out_commit(o);
+    else
+        cbm_out_abort(o);
+    char *t = s == CBM_OK ? read_text(path, false) : NULL;
+    remove(path);
+    if (t && sep != '\n') {
+        size_t n = strlen(t);
+        while (n && t[n - 1] == '\n')
+            t[--n] = 0;
+        for (char *p = t; *p; p++)
+            if (*p == '\n')
+                *p = sep;
+    }
+    return t;
+}
+
+static const char *oracle_dir(void)
+{
+    static char path[2048];
+    snprintf(path, sizeof path, "%s/../shared/oracles/vlab", test_source_dir());
+    return path;
+}
+
+/* lpfg's final.params.txt with raw[...] written as {...} */
+static char *reference(const char *folder)
+{
+    char p[4096];
+    snprintf(p, sizeof p, "%s/%s/ref/final.params.txt", oracle_dir(), folder);
+    char *t = read_text(p, false);
+    if (!t)
+        return NULL;
+    char *w = t;
+    for (char *r = t; *r;) {
+        if (!strncmp(r, "raw[", 4)) {
+            *w++ = '{';
+            r += 4;
+        } else if (*r == ']') {
+            *w++ = '}';
+            r++;
+        } else
+            *w++ = *r++;
+    }
+    *w = 0;
+    return t;
+}
+
+static void run_oracle(const char *folder)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s/model/lsystem.l", oracle_dir(), folder);
+    char *ref = reference(folder);
+    if (!ref) {
+        printf("SKIP: %s is absent\n", path);
+        return;
+    }
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", folder, cbm_context_last_error(ctx));
+    if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        int n = cbm_lsys_derivation_length(ls);
+        CHECK(n > 0);
+        for (int i = 0; i < n; i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        char *got = lpfg_string(ctx, ls, false, '\n');
+        CHECK(got != NULL);
+        if (got) {
+            CHECK_MSG(!strcmp(got, ref), "%s: the string differs from lpfg's", folder);
+            if (strcmp(got, ref)) {
+                size_t k = 0;
+                while (got[k] && got[k] == ref[k])
+                    k++;
+                printf("  first difference at byte %zu: ours '%.40s' lpfg '%.40s'\n", k, got + k,
+                       ref + k);
+            }
+        }
+        free(got);
+        cbm_lsys_destroy(ls);
+    }
+    free(ref);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_oracle_quadratic_koch)
+{
+    run_oracle("lpfg-quadratic-koch");
+}
+TEST(lpfg_oracle_compound_param)
+{
+    run_oracle("lpfg-compound-param");
+}
+TEST(lpfg_oracle_hormone_up)
+{
+    run_oracle("lpfg-hormone-up");
+}
+TEST(lpfg_oracle_sympodial)
+{
+    run_oracle("lpfg-sympodial");
+}
+TEST(lpfg_oracle_newcontext)
+{
+    run_oracle("lpfg-newcontext");
+}
+TEST(lpfg_oracle_innewcontext)
+{
+    run_oracle("lpfg-innewcontext");
+}
+
+static void run_model(const char *name)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/tests/lpfg/%s", test_source_dir(), name);
+    char *src = read_text(path, false);
+    CHECK_MSG(src != NULL, "cannot read %s", path);
+    if (!src)
+        return;
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", name, cbm_context_last_error(ctx));
+    int checked = 0;
+    if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        int step = 0;
+        for (char *l = src; l && *l; l = strchr(l, '\n'), l = l ? l + 1 : NULL) {
+            bool interp = !strncmp(l, "// expect interpretation after ", 31);
+            if (strncmp(l, "// expect after ", 16) && !interp)
+                continue;
+            char *p = l + (interp ? 31 : 16);
+            int want = (int)strtol(p, &p, 10);
+            p += 2;
+            char *end = strchr(p, '\n');
+            size_t n = end ? (size_t)(end - p) : strlen(p);
+            while (step < want) {
+                CHECK_OK(cbm_lsys_step(ls));
+                step++;
+            }
+            if (interp)
+                CHECK(cbm_lsys_has_homomorphism(ls));
+            char *got = lpfg_string(ctx, ls, interp, ' ');
+            CHECK(got != NULL);
+            if (got) {
+                CHECK_MSG(strlen(got) == n && !strncmp(got, p, n),
+                          "%s after %d: got '%s', expected '%.*s'", name, want, got, (int)n, p);
+            }
+            free(got);
+            checked++;
+        }
+        cbm_lsys_destroy(ls);
+    }
+    CHECK_MSG(checked > 0, "%s states no expectation", name);
+    free(src);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_forward_signal)
+{
+    run_model("forward-signal.l");
+}
+TEST(lpfg_backward_sum)
+{
+    run_model("backward-sum.l");
+}
+TEST(lpfg_groups_globals)
+{
+    run_model("groups-globals.l");
+}
+TEST(lpfg_struct_vectors)
+{
+    run_model("struct-vectors.l");
+}
+TEST(lpfg_two_branch_context)
+{
+    run_model("two-branch-context.l");
+}
+TEST(lpfg_decomposition_interpretation)
+{
+    run_model("decomposition-interp.l");
+}
+
+TEST(lpfg_c_library)
+{
+    run_model("c-library.l");
+}
+
+TEST(lpfg_taylor_hell_constructs)
+{
+    run_model("taylor-hell-constructs.l");
+}
+
+TEST(lpfg_consider)
+{
+    run_model("consider.l");
+}
+
+/* func(name, x): names numbered in order of first use, evaluated by the function set */
+static double fake_func(void *ud, int id, double x)
+{
+    (void)ud;
+    return id * 100 + x;
+}
+
+TEST(lpfg_func_by_name)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "f.l";
+    def.text = "#include <lpfgall.h>\nderivation length: 1;\nmodule A(float);\nAxiom: A(2);\n"
+               "A(x) : { produce A(func(beta, x)) A(func(alpha, x / 2)) A(func(beta, 0)); }\n";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        const char *const *names = NULL;
+        CHECK(cbm_lsys_func_names(ls, &names) == 2);
+        CHECK(names && !strcmp(names[0], "beta") && !strcmp(names[1], "alpha"));
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_RUNTIME); /* no function set */
+        cbm_lsys_set_func(ls, fake_func, NULL);
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        char *got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, "A(102) A(201) A(100)"), "%s", got ? got : "(null)");
+        free(got);
+        /* the function set's own order: alpha is its function 7, beta its function 3 */
+        int ids[2] = {3, 7};
+        CHECK_STATUS(cbm_lsys_set_func_ids(ls, ids, 1), CBM_E_INVALID);
+        CHECK_OK(cbm_lsys_set_func_ids(ls, ids, 2));
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, "A(302) A(701) A(300)"), "%s", got ? got : "(null)");
+        free(got);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_in_left_context)
+{
+    run_model("in-left-context.l");
+}
+
+TEST(lpfg_group0_cut_nproduce)
+{
+    run_model("group0-cut-nproduce.l");
+}
+
+static void expect_error(const char *text, const char *where, const char *what)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK(s == CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    (void)where;
+    (void)what;
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_errors)
+{
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1, 2);\n", "m.l:3:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { produce B(); }\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { y = 2; }\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\nA(x) : { if (x) {\n",
+                 "m.l:4:", "");
+    expect_error("#include <lpfgall.h>\nstruct P { float a; };\nmodule A(P);\nAxiom: A(1);\n",
+                 "m.l:4:", "");
+}
+
+typedef struct diags {
+    char text[8192];
+    int count;
+} diags;
+
+static void sink(void *ud, const cbm_diagnostic *d)
+{
+    diags *g = ud;
+    size_t n = strlen(g->text);
+    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
+             d->col, d->message);
+    g->count++;
+}
+
+TEST(lpfg_errors_with_locations)
+{
+    diags g;
+    memset(&g, 0, sizeof g);
+    cbm_context_def cd = cbm_context_def_default();
+    cd.diag = sink;
+    cd.diag_ud = &g;
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(&cd, &ctx));
+    if (!ctx)
+        return;
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = "#include <lpfgall.h>\n"                       /* 1 */
+               "struct P { float a; };\n"                     /* 2 */
+               "module A(int);\n"                             /* 3 */
+               "module C(P);\n"                               /* 4 */
+               "Axiom: A(1, 2);\n"                            /* 5: too many parameters */
+               "A(x) : { produce B(); }\n"                    /* 6: unknown module */
+               "A(x) : { y = 2; produce A(x); }\n"            /* 7: unknown name */
+               "C(p) : { p.b = 1; produce C(p); }\n"          /* 8: no field */
+               "A(x) : { V3f v; v = v + 1; produce A(x); }\n" /* 9: invalid operands */
+               "A(x) : { produce A(x) }\n";                   /* 10: missing ; */
+    cbm_lsys *ls = NULL;
+    CHECK_STATUS(cbm_lsys_load(ctx, &def, &ls), CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    CHECK_MSG(g.count >= 6, "%d diagnostics:\n%s", g.count, g.text);
+    CHECK_MSG(strstr(g.text, "m.l:5:8: module A has 1 parameter, 2 given"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:6:18: unknown module 'B'"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:7:10: unknown name 'y'"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:8:11: no field 'b' in P"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:9:23: invalid operands to '+' (V3f and int)"), "%s", g.text);
+    CHECK_MSG(strstr(g.text, "m.l:10:23: expected ';', found '}'"), "%s", g.text);
+    cbm_context_destroy(ctx);
+}
+
+TEST(lpfg_runtime_limits)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "loop.l";
+    def.text = "#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+               "A(x) : { while (x > 0) x = x + 1; produce A(x); }\n";
+    def.max_loop_iterations = 1000;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
+        cbm_lsys_destroy(ls);
+    }
+    def.text = "#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
+               "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
