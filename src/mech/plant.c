@@ -115,8 +115,9 @@ cbm_plant_def cbm_plant_def_default(void)
     X(len)                                                                                         \
     X(branch)                                                                                      \
     X(ring_first)                                                                                  \
-    X(ring_count) X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos)      \
-        X(force) X(moment) X(cmass)
+    X(ring_count)                                                                                  \
+    X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment) \
+        X(cmass)
 
 static cbm_status plant_reserve(cbm_plant *p, size_t need)
 {
