@@ -132,7 +132,8 @@ CBM_API void cbm_plant_set_base(cbm_plant *plant, cbm_vec3 position, cbm_quat or
 CBM_API void cbm_plant_set_discretization(cbm_plant *plant, cbm_mech_discretization d);
 CBM_API cbm_mech_discretization cbm_plant_discretization(const cbm_plant *plant);
 /// Removes segment `seg` and everything it carries (breakage, pruning), keeping topological
-/// order (indices of later segments shift down). *removed (optional) receives the count.
+/// order (indices of later segments shift down). *removed (optional) receives the count. If the
+/// removed segment was its parent's continuation, the next remaining child becomes it.
 CBM_API cbm_status cbm_plant_remove_subtree(cbm_plant *plant, size_t seg, size_t *removed);
 
 /* ---- queries (valid after a solve or cbm_plant_evaluate) ---- */

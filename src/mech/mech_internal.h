@@ -49,6 +49,7 @@ struct cbm_plant {
     int32_t *order;
     uint8_t *cont; /* 1 if the first child of its parent (or a root) */
     uint32_t *nchild;
+    int64_t *fchild; /* first child (the continuation), -1 if none */
     double *len;
     double *angles;   /* 3 per segment: divergence, deviation, roll */
     cbm_quat *branch; /* B_i */
