@@ -107,19 +107,31 @@ cbm_plant_def cbm_plant_def_default(void)
 /* ---- storage ---- */
 
 /* Every per-segment array, with its element size, for growth and removal. */
-#define PLANT_ARRAYS(X)                                                                            \
-    X(parent)                                                                                      \
-    X(order)                                                                                       \
-    X(cont)                                                                                        \
-    X(nchild)                                                                                      \
-    X(fchild)                                                                                      \
-    X(len)                                                                                         \
-    X(branch)                                                                                      \
-    X(ring_first)                                                                                  \
-    X(ring_count)                                                                                  \
-    X(rig)                                                                                         \
-    X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment)        \
-        X(cmass)
+// clang-format off
+#define PLANT_ARRAYS(X) \
+    X(parent) \
+    X(order) \
+    X(cont) \
+    X(nchild) \
+    X(fchild) \
+    X(len) \
+    X(branch) \
+    X(ring_first) \
+    X(ring_count) \
+    X(rig) \
+    X(rest) \
+    X(mpl) \
+    X(area) \
+    X(omega) \
+    X(pmass) \
+    X(tipf) \
+    X(tipm) \
+    X(q) \
+    X(pos) \
+    X(force) \
+    X(moment) \
+    X(cmass)
+// clang-format on
 
 static cbm_status plant_reserve(cbm_plant *p, size_t need)
 {
