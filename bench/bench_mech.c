@@ -234,7 +234,7 @@ int main(int argc, char **argv)
     }
     FILE *f = cbm_out_stream(o);
     const char *hdr = "workload,segments,solver,alpha,status,passes,seconds,residual,"
-                      "seconds_per_pass,stream_seconds,pass_over_stream\n";
+                      "seconds_per_pass,stream_seconds,pass_over_stream,peak_mb\n";
     fputs(hdr, f);
     printf("%s", hdr);
     const double alphas[] = {0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0};
@@ -279,10 +279,11 @@ int main(int argc, char **argv)
             for (int k = 0; k < nr; k++) {
                 char line[512];
                 double spp = rows[k].seconds / (double)rows[k].passes;
-                snprintf(line, sizeof line, "%s,%zu,%s,%g,%s,%zu,%.6g,%.3g,%.6g,%.6g,%.3g\n",
+                snprintf(line, sizeof line, "%s,%zu,%s,%g,%s,%zu,%.6g,%.3g,%.6g,%.6g,%.3g,%.1f\n",
                          names[wl], n, k == 0 ? "fast" : "relax", rel_alpha[k],
                          cbm_status_name(rows[k].status), rows[k].passes, rows[k].seconds,
-                         rows[k].residual, spp, stream, spp / stream);
+                         rows[k].residual, spp, stream, spp / stream,
+                         (double)cbm_context_peak_bytes(ctx) / 1048576.0);
                 fputs(line, f);
                 printf("%s", line);
                 fflush(stdout);
