@@ -179,7 +179,7 @@ TEST(mech_tree_factorisation_inverts_tangent)
     for (size_t i = 0; i < n; i++)
         v[i] = (cbm_vec3){sin(1.0 + (double)i), cos(2.0 * (double)i), sin(0.3 * (double)i)};
     cbm__mech_jvp(p, v, jv);
-    CHECK_EQ_INT(cbm__mech_tree_solve(p, jv, back), 0);
+    CHECK_EQ_INT(cbm__mech_tree_solve(p, jv, back, 0.0, NULL), 0);
     double md = 0, mv = 0;
     for (size_t i = 0; i < n; i++) {
         md = fmax(md,
@@ -189,7 +189,7 @@ TEST(mech_tree_factorisation_inverts_tangent)
     printf("tree solve of J v: max error %.3g (|v| %.3g)\n", md, mv);
     CHECK(md < 1e-9 * mv);
     /* factor + apply (the preconditioner of FGMRES) gives the same */
-    cbm__mech_tree_factor(p);
+    cbm__mech_tree_factor(p, 0.0, NULL);
     cbm__mech_tree_apply(p, jv, back);
     md = 0;
     for (size_t i = 0; i < n; i++)

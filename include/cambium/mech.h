@@ -238,6 +238,9 @@ typedef struct cbm_solve_stats {
     size_t newton_steps;       ///< Newton iterations (0 for relax)
     size_t krylov_iterations;  ///< total GMRES iterations
     size_t continuation_steps; ///< load steps taken by the globalisation (1 = full load at once)
+    /// joints where the final equilibrium is unstable (pivot block of the tree factorisation
+    /// not positive definite); fast solver with the tree preconditioner only, else 0
+    size_t unstable_joints;
 } cbm_solve_stats;
 
 /// Brings the plant to static equilibrium. Results (frames, positions, moments, stresses) are

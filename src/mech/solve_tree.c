@@ -17,6 +17,12 @@
  * per Newton step (one backward sweep); each solve is one backward and one forward sweep, i.e.
  * one pass. If a D_i is singular (an unstable equilibrium at a buckling load) it is replaced by
  * S_i there, which keeps the preconditioner usable and GMRES does the rest.
+ *
+ * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
+ * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
+ * positive definite symmetric part (Sylvester's criterion); the count of those that do not is
+ * returned. With mu > 0 the factorisation is that of J + mu S exactly (S only enters the
+ * pivots), the Levenberg-Marquardt shift the fast solver uses to descend to stable states.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -54,7 +60,7 @@ static inline bool minv(const double *a, double scale, double *out)
     double c0 = a[4] * a[8] - a[5] * a[7], c1 = a[5] * a[6] - a[3] * a[8],
            c2 = a[3] * a[7] - a[4] * a[6];
     double det = a[0] * c0 + a[1] * c1 + a[2] * c2;
-    if (!(fabs(det) > 1e-13 * scale) || !isfinite(det))
+    if (!(fabs(det) > 1e-13 * scale) || !isfinite(det) || det == 0.0)
         return false;
     double id = 1.0 / det;
     out[0] = c0 * id;
@@ -89,14 +95,24 @@ static inline m3 transpose(const double *a)
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 
+/* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
+static bool sym_pd(const double *d)
+{
+    double a = d[0], b = 0.5 * (d[1] + d[3]), c = 0.5 * (d[2] + d[6]);
+    double e = d[4], f = 0.5 * (d[5] + d[7]), g = d[8];
+    double m2 = a * e - b * b;
+    double m3d = a * (e * g - f * f) - b * (b * g - f * c) + c * (b * f - e * c);
+    return a > 0.0 && m2 > 0.0 && m3d > 0.0;
+}
+
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
  * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
  * D was singular and replaced by S. */
-static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    size_t singular = 0;
+    size_t singular = 0, nonpd = 0;
     memset(w->fw, 0, 9 * n * sizeof(double));
     cbm_vec3 *acc = w->dm;
     if (b)
@@ -138,10 +154,12 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
         cbm_vec3 c = w->cj[i];
         for (int k = 0; k < 9; k++)
             D.m[k] = -QA.m[k];
-        D.m[0] += c.x;
-        D.m[4] += c.y;
-        D.m[8] += c.z;
+        D.m[0] += (1.0 + mu) * c.x;
+        D.m[4] += (1.0 + mu) * c.y;
+        D.m[8] += (1.0 + mu) * c.z;
         double *Di = w->fdinv + 9 * i;
+        if (!sym_pd(D.m))
+            nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
         if (!minv(D.m, c.x * c.y * c.z, Di)) {
             singular++;
             memset(Di, 0, 9 * sizeof(double));
@@ -175,17 +193,42 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     }
     if (b)
         forward_solve(p, out);
+    if (nonpd_out)
+        *nonpd_out = nonpd;
     return singular;
 }
 
-size_t cbm__mech_tree_factor(cbm_plant *p)
+size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd)
 {
-    return factor(p, NULL, NULL);
+    return factor(p, NULL, NULL, mu, nonpd);
 }
 
-size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu,
+                            size_t *nonpd)
 {
-    return factor(p, b, out);
+    return factor(p, b, out, mu, nonpd);
+}
+
+size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle)
+{
+    /* after an unmodified factorisation: push every joint whose pivot block is not positive
+     * definite along D^-1 (1,1,1) (one step of inverse iteration towards the soft mode), by
+     * `angle` rad over the joint's length */
+    cbm__mech_work *w = &p->work;
+    size_t k = 0;
+    for (size_t i = 0; i < p->n; i++) {
+        double d[9];
+        const double *di = w->fdinv + 9 * i;
+        if (minv(di, 0.0, d) && sym_pd(d))
+            continue;
+        cbm_vec3 v = mvec(di, v3(1, 1, 1));
+        double nv = v3_norm(v);
+        if (!(nv > 0.0) || !isfinite(nv))
+            v = v3(0, 1, 0), nv = 1.0;
+        p->omega[i] = v3_add(p->omega[i], v3_scale(v, angle / (nv * w->dual[i])));
+        k++;
+    }
+    return k;
 }
 
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
