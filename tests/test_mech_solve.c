@@ -356,6 +356,73 @@ TEST(mech_fast_near_buckling)
     test_ctx_end(ctx);
 }
 
+/* Floppy random trees with several equilibria: Newton alone can converge to an unstable one (a
+ * branch balanced upright). The fast solver checks the pivots of its tree factorisation, shifts
+ * unstable configurations (J + mu S) and must end on the stable equilibrium the relaxation
+ * reaches from rest. These three trees did end on unstable equilibria before that check. */
+static cbm_plant *floppy_tree(cbm_context *ctx, int trial)
+{
+    double E = pow(10, 5.5 + 4.5 * ((trial * 37) % 60) / 60.0);
+    size_t n = 50 + (size_t)((trial * 53) % 400);
+    cbm_context_seed(ctx, 100 + (uint64_t)trial);
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation((trial % 5) * 0.4);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    for (size_t i = 0; i < n; i++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        if (i > 0) {
+            double u = cbm_context_uniform(ctx);
+            d.parent = u < 0.75 ? (int64_t)i - 1 : (int64_t)(cbm_context_uniform(ctx) * (double)i);
+            if (d.parent != (int64_t)i - 1) {
+                d.divergence = 2.4 * (double)i;
+                d.deviation = 0.3 + 0.8 * cbm_context_uniform(ctx);
+            }
+        }
+        d.length = 0.02;
+        d.core.youngs_modulus = E;
+        d.core.shear_modulus = E / 16;
+        d.core.a = 0.004 * (1 + cbm_context_uniform(ctx));
+        d.core.b = d.core.a * (0.6 + 0.4 * cbm_context_uniform(ctx));
+        if (cbm_context_uniform(ctx) < 0.2)
+            d.point_mass = 0.01 * cbm_context_uniform(ctx);
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    return p;
+}
+
+TEST(mech_fast_reaches_stable_equilibrium)
+{
+    cbm_context *ctx = test_ctx();
+    const int trials[] = {17, 19, 40};
+    for (int t = 0; t < 3; t++) {
+        cbm_plant *a = floppy_tree(ctx, trials[t]);
+        cbm_plant *b = floppy_tree(ctx, trials[t]);
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.tolerance = 1e-9;
+        cbm_solve_stats sa, sb;
+        CHECK_OK(cbm_plant_solve(a, &sd, &sa));
+        CHECK_EQ_INT(sa.unstable_joints, 0);
+        sd.solver = CBM_MECH_RELAX;
+        sd.alpha = 0.1;
+        CHECK_OK(cbm_plant_solve(b, &sd, &sb));
+        double dmax = 0;
+        for (size_t i = 0; i < cbm_plant_segment_count(a); i++) {
+            cbm_segment_state x, y;
+            CHECK_OK(cbm_plant_segment(a, i, &x));
+            CHECK_OK(cbm_plant_segment(b, i, &y));
+            dmax = fmax(dmax, fabs(x.distal.x - y.distal.x) + fabs(x.distal.y - y.distal.y) +
+                                  fabs(x.distal.z - y.distal.z));
+        }
+        printf("floppy tree %d: fast %zu passes, relax %zu passes, max node distance %.3g m\n",
+               trials[t], sa.passes, sb.passes, dmax);
+        CHECK(dmax < 1e-6);
+        cbm_plant_destroy(a);
+        cbm_plant_destroy(b);
+    }
+    test_ctx_end(ctx);
+}
+
 TEST(mech_rings_and_sections)
 {
     cbm_context *ctx = test_ctx();
