@@ -244,13 +244,18 @@ int main(int argc, char **argv)
         for (size_t n = minn; n <= maxn; n *= 10) {
             if (only && strcmp(only, names[wl]))
                 break;
-            cbm_plant *p = wl == 0   ? make_chain(ctx, n, 5.0, 0.0, 0.0)
-                           : wl == 1 ? make_chain(ctx, n, 50.0, 0.0, 0.0)
-                           : wl == 2 ? make_chain(ctx, n, 7.5, PI / 2, 0.01)
-                           : wl == 3 ? make_tree(ctx, n, 1e10, 0.005)
-                                     : make_tree(ctx, n, 3e8, 0.02);
+            /* a context per size, so peak_mb is the peak of this size */
+            cbm_context *pc = NULL;
+            if (cbm_context_create(NULL, &pc) != CBM_OK)
+                break;
+            cbm_plant *p = wl == 0   ? make_chain(pc, n, 5.0, 0.0, 0.0)
+                           : wl == 1 ? make_chain(pc, n, 50.0, 0.0, 0.0)
+                           : wl == 2 ? make_chain(pc, n, 7.5, PI / 2, 0.01)
+                           : wl == 3 ? make_tree(pc, n, 1e10, 0.005)
+                                     : make_tree(pc, n, 3e8, 0.02);
             if (!p) {
                 fprintf(stderr, "bench_mech: cannot build %zu segments\n", n);
+                cbm_context_destroy(pc);
                 break;
             }
             /* bytes one pass reads and writes (see docs/performance.md) */
@@ -283,12 +288,13 @@ int main(int argc, char **argv)
                          names[wl], n, k == 0 ? "fast" : "relax", rel_alpha[k],
                          cbm_status_name(rows[k].status), rows[k].passes, rows[k].seconds,
                          rows[k].residual, spp, stream, spp / stream,
-                         (double)cbm_context_peak_bytes(ctx) / 1048576.0);
+                         (double)cbm_context_peak_bytes(pc) / 1048576.0);
                 fputs(line, f);
                 printf("%s", line);
                 fflush(stdout);
             }
             cbm_plant_destroy(p);
+            cbm_context_destroy(pc);
         }
     }
     cbm_status s = cbm_out_commit(o);
