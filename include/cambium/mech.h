@@ -201,7 +201,7 @@ CBM_API cbm_status cbm_plant_distal_frame(const cbm_plant *plant, size_t seg, cb
 
 typedef enum cbm_mech_solver {
     CBM_MECH_RELAX, ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
-    CBM_MECH_NEWTON ///< Newton-Krylov (GMRES, stiffness preconditioner, tangent passes)
+    CBM_MECH_NEWTON ///< Newton-Krylov: O(n) tree factorisation or stiffness-preconditioned GMRES
 } cbm_mech_solver;
 
 /// Name of a solver ("relax", "fast").
