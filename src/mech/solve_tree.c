@@ -123,11 +123,13 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
         cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
                             v3_scale(w->wown[i], w->lever[i]));
-        m3 sv = skew(V), sh = skew(h);
-        m3 G = mmul(sv.m, sh.m);
+        /* G = [V]x [H]x = H V^T - (V.H) I */
         double *W = w->fw + 9 * i;
-        for (int k = 0; k < 9; k++)
-            W[k] += G.m[k];
+        double vh = v3_dot(V, h);
+        const double hv[3] = {h.x, h.y, h.z}, vv[3] = {V.x, V.y, V.z};
+        for (int r0 = 0; r0 < 3; r0++)
+            for (int c0 = 0; c0 < 3; c0++)
+                W[3 * r0 + c0] += hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0);
         m3 WM = skew(p->moment[i]);
         for (int k = 0; k < 9; k++)
             WM.m[k] += W[k];
@@ -144,9 +146,14 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
             c1 = (1.0 - cos(t)) / t2;
             c2 = (t - sin(t)) / (t2 * t);
         }
-        m3 sr = skew(r), sr2 = mmul(sr.m, sr.m), J;
-        for (int k = 0; k < 9; k++)
-            J.m[k] = (k % 4 == 0 ? 1.0 : 0.0) - c1 * sr.m[k] + c2 * sr2.m[k];
+        /* J = I - c1 [r]x + c2 [r]x^2, with [r]x^2 = r r^T - |r|^2 I */
+        m3 sr = skew(r), J;
+        const double rv[3] = {r.x, r.y, r.z};
+        for (int r0 = 0; r0 < 3; r0++)
+            for (int c0 = 0; c0 < 3; c0++) {
+                double id = r0 == c0 ? 1.0 : 0.0;
+                J.m[3 * r0 + c0] = id - c1 * sr.m[3 * r0 + c0] + c2 * (rv[r0] * rv[c0] - id * t2);
+            }
         m3 A = mmul(R.m, J.m);
         for (int k = 0; k < 9; k++)
             A.m[k] *= d;
@@ -169,10 +176,10 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         }
         m3 AD = mmul(A.m, Di);
         m3 WAD = mmul(W, AD.m);
-        m3 ADQ = mmul(AD.m, Q.m);
+        /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
+        m3 Phi = mmul(WAD.m, Q.m);
         for (int k = 0; k < 9; k++)
-            ADQ.m[k] += (k % 4 == 0 ? 1.0 : 0.0);
-        m3 Phi = mmul(W, ADQ.m);
+            Phi.m[k] += W[k];
         memcpy(w->fq + 9 * i, Q.m, sizeof Q.m);
         memcpy(w->fa + 9 * i, A.m, sizeof A.m);
         memcpy(w->fwad + 9 * i, WAD.m, sizeof WAD.m);
