@@ -206,3 +206,49 @@ TEST(mech_spec_corpus_replay)
     closedir(d);
     CHECK(files >= 5);
 }
+
+/* The node table of a tip-moment problem: uniform curvature M/EI at every node, moment M,
+ * stress M r / I, and the tangent angle kappa s (an exact circle, staggered). */
+TEST(mech_bend_nodes_tip_moment)
+{
+    cbm_context *ctx = test_ctx();
+    const char *text = "length = 1\nsegments = 32\nradius = 0.01\nE = 1e9\ngravity = 0\n"
+                       "tip_moment = 3.9269908169872414\ntolerance = 1e-13\n";
+    /* EI = 1e9 * pi 1e-8 / 4 = 7.853981633974483; M = EI/2 -> kappa = 0.5 /m */
+    cbm_bend_spec sp;
+    CHECK_OK(cbm_bend_spec_parse(ctx, text, strlen(text), "m.spec", &sp));
+    cbm_plant *p = NULL;
+    cbm_bend_result r;
+    CHECK_OK(cbm_bend_run(ctx, &sp, &p, &r));
+    cbm_bend_node nd[33];
+    CHECK_OK(cbm_bend_nodes(p, nd, 33));
+    double I = 3.14159265358979323846 * 1e-8 / 4;
+    for (int j = 0; j <= 32; j++) {
+        CHECK_NEAR(nd[j].curvature, 0.5, 1e-10);
+        CHECK_NEAR(nd[j].moment, 3.9269908169872414, 1e-10);
+        CHECK_NEAR(nd[j].stress, 3.9269908169872414 * 0.01 / I, 1e-3);
+        CHECK_NEAR(nd[j].angle_deg, 0.5 * nd[j].s * 180 / 3.14159265358979323846, 1e-8);
+    }
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* Same input, same bytes: two solves of a grown rod give bit-identical node tables. */
+TEST(mech_bend_deterministic)
+{
+    cbm_context *ctx = test_ctx();
+    const char *text = "segments = 40\nradius = 0.003\nE = 1e9\nangle = 30\nsteps = 5\n"
+                       "length_initial = 0.3\nradius_final = 0.008\ntropism = 0.01\n";
+    cbm_bend_spec sp;
+    CHECK_OK(cbm_bend_spec_parse(ctx, text, strlen(text), "d.spec", &sp));
+    cbm_bend_node a[41], b[41];
+    for (int k = 0; k < 2; k++) {
+        cbm_plant *p = NULL;
+        cbm_bend_result r;
+        CHECK_OK(cbm_bend_run(ctx, &sp, &p, &r));
+        CHECK_OK(cbm_bend_nodes(p, k ? b : a, 41));
+        cbm_plant_destroy(p);
+    }
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    test_ctx_end(ctx);
+}

@@ -132,7 +132,8 @@ CBM_API void cbm_plant_set_base(cbm_plant *plant, cbm_vec3 position, cbm_quat or
 CBM_API void cbm_plant_set_discretization(cbm_plant *plant, cbm_mech_discretization d);
 CBM_API cbm_mech_discretization cbm_plant_discretization(const cbm_plant *plant);
 /// Removes segment `seg` and everything it carries (breakage, pruning), keeping topological
-/// order (indices of later segments shift down). *removed (optional) receives the count.
+/// order (indices of later segments shift down). *removed (optional) receives the count. If the
+/// removed segment was its parent's continuation, the next remaining child becomes it.
 CBM_API cbm_status cbm_plant_remove_subtree(cbm_plant *plant, size_t seg, size_t *removed);
 
 /* ---- queries (valid after a solve or cbm_plant_evaluate) ---- */
@@ -200,7 +201,7 @@ CBM_API cbm_status cbm_plant_distal_frame(const cbm_plant *plant, size_t seg, cb
 
 typedef enum cbm_mech_solver {
     CBM_MECH_RELAX, ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
-    CBM_MECH_NEWTON ///< Newton-Krylov (GMRES, stiffness preconditioner, tangent passes)
+    CBM_MECH_NEWTON ///< Newton-Krylov: O(n) tree factorisation or stiffness-preconditioned GMRES
 } cbm_mech_solver;
 
 /// Name of a solver ("relax", "fast").
@@ -237,6 +238,9 @@ typedef struct cbm_solve_stats {
     size_t newton_steps;       ///< Newton iterations (0 for relax)
     size_t krylov_iterations;  ///< total GMRES iterations
     size_t continuation_steps; ///< load steps taken by the globalisation (1 = full load at once)
+    /// joints where the final equilibrium is unstable (pivot block of the tree factorisation
+    /// not positive definite); fast solver with the tree preconditioner only, else 0
+    size_t unstable_joints;
 } cbm_solve_stats;
 
 /// Brings the plant to static equilibrium. Results (frames, positions, moments, stresses) are

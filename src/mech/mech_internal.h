@@ -49,6 +49,7 @@ struct cbm_plant {
     int32_t *order;
     uint8_t *cont; /* 1 if the first child of its parent (or a root) */
     uint32_t *nchild;
+    int64_t *fchild; /* first child (the continuation), -1 if none */
     double *len;
     double *angles;   /* 3 per segment: divergence, deviation, roll */
     cbm_quat *branch; /* B_i */
@@ -93,17 +94,16 @@ cbm_status cbm__mech_report_nonfinite(cbm_plant *p);
 /// Tangent passes: out = J v, where J = d(residual)/d(Omega) at the last evaluated state.
 void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out);
 /// Factorises the Newton matrix at the last evaluated state (tree preconditioner); returns the
-/// number of joints whose pivot block was singular (replaced by the stiffness).
-size_t cbm__mech_tree_factor(cbm_plant *p);
-/// Factorises and solves J out = b in one backward and one forward sweep; returns as above.
-size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
-/// out = J^-1 b with the factorisation (out and b may not alias).
-void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
-/// Factorises the Newton matrix at the last evaluated state (tree preconditioner); returns the
-/// number of joints whose pivot block was singular (replaced by the stiffness).
-size_t cbm__mech_tree_factor(cbm_plant *p);
-/// Factorises and solves J out = b in one backward and one forward sweep; returns as above.
-size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/// number of joints whose pivot block was singular (replaced by the stiffness). *nonpd
+/// (optional) receives the number whose pivot block's symmetric part is not positive definite
+/// (an unstable configuration). With mu > 0 it factorises J + mu S (Levenberg-Marquardt).
+size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd);
+/// Factorises and solves (J + mu S) out = b in one backward and one forward sweep.
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu,
+                            size_t *nonpd);
+/// After an unmodified factorisation, perturbs Omega at every joint whose pivot block is not
+/// positive definite (by `angle` rad); returns their number.
+size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle);
 /// out = J^-1 b with the factorisation (out and b may not alias).
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
 /// Relative residual from the max residual and moments.

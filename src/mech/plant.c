@@ -109,8 +109,9 @@ cbm_plant_def cbm_plant_def_default(void)
 /* Every per-segment array, with its element size, for growth and removal. */
 // clang-format off
 #define PLANT_ARRAYS(X)                                                                            \
-    X(parent) X(order) X(cont) X(nchild) X(len) X(branch) X(ring_first) X(ring_count) X(rig)      \
-    X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force) X(moment)       \
+    X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
+    X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
+    X(moment)                                                                                      \
     X(cmass)
 // clang-format on
 
@@ -338,8 +339,12 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->parent[i] = par;
     p->cont[i] = (par < 0 || p->nchild[par] == 0) ? 1 : 0;
     p->nchild[i] = 0;
-    if (par >= 0)
+    p->fchild[i] = -1;
+    if (par >= 0) {
+        if (p->nchild[par] == 0)
+            p->fchild[par] = (int64_t)i;
         p->nchild[par]++;
+    }
     p->order[i] =
         def->order >= 0 ? def->order : (par < 0 ? 0 : p->order[par] + (p->cont[i] ? 0 : 1));
     p->len[i] = def->length;
@@ -536,13 +541,18 @@ cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
     cbm__free(p->ctx, map, m * sizeof *map);
     p->n = w;
     /* recompute child counts and continuation flags */
-    for (size_t i = 0; i < w; i++)
+    for (size_t i = 0; i < w; i++) {
         p->nchild[i] = 0;
+        p->fchild[i] = -1;
+    }
     for (size_t i = 0; i < w; i++) {
         int64_t pa = p->parent[i];
         p->cont[i] = (pa < 0 || p->nchild[pa] == 0) ? 1 : 0;
-        if (pa >= 0)
+        if (pa >= 0) {
+            if (p->nchild[pa] == 0)
+                p->fchild[pa] = (int64_t)i;
             p->nchild[pa]++;
+        }
     }
     maybe_compact(p);
     if (removed)
@@ -601,11 +611,10 @@ static cbm_frame quat_frame(cbm_quat q)
  * child's joint moment, or the tip moment at a free end. */
 static cbm_vec3 distal_moment(const cbm_plant *p, size_t i)
 {
-    for (size_t c = i + 1; c < p->n; c++)
-        if (p->parent[c] == (int64_t)i && (p->cont[c] & 1))
-            return p->moment[c];
-    bool leaf = p->nchild[i] == 0;
-    return leaf ? v3_scale(p->tipm[i], p->load_scale) : v3(0, 0, 0);
+    int64_t c = p->fchild[i];
+    if (c >= 0)
+        return p->moment[c]; /* the continuation joint's moment, about this node */
+    return v3_scale(p->tipm[i], p->load_scale);
 }
 
 static cbm_vec3 segment_rate(const cbm_plant *p, size_t i)

@@ -218,8 +218,18 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
              * this very step); otherwise the factorisation preconditions FGMRES */
             for (size_t q = 0; q < n3; q++)
                 step[q] = -((const double *)w->res)[q];
-            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp);
+            size_t nonpd = 0;
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
+            /* an unstable configuration: Newton would head for the unstable equilibrium;
+             * shift by mu S (Levenberg-Marquardt) until every pivot is positive definite,
+             * which gives a descent towards a stable one */
+            for (double mu = 0.1; nonpd > 0 && mu < 1e8; mu *= 4.0) {
+                if (k->st->passes + 3 >= k->max_passes)
+                    return NK_BUDGET;
+                sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
+                k->st->passes++;
+            }
             memcpy(step, w->tmp, n3 * sizeof *step);
             direct = sing == 0;
             /* trust region on rotations: the forward sweep of the solve left the world
@@ -364,6 +374,25 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
         }
     }
     p->load_scale = 1.0;
+    /* stability: Newton converges to unstable equilibria too (a branch balanced upright). Check
+     * the unmodified factorisation at the solution; where a pivot block is not positive
+     * definite, push the joint along its soft mode and solve again with the modified
+     * factorisation, which descends to a stable equilibrium. */
+    if (r == NK_DONE && k.tree) {
+        for (int attempt = 0; attempt < 4; attempt++) {
+            size_t nonpd = 0;
+            cbm__mech_tree_factor(p, 0.0, &nonpd);
+            st->passes++;
+            st->unstable_joints = nonpd;
+            if (nonpd == 0 || attempt == 3 || st->passes + 4 >= max_passes)
+                break;
+            cbm__mech_tree_perturb_unstable(p, 0.05);
+            st->continuation_steps++;
+            r = newton_level(&k, tol, m, false);
+            if (r != NK_DONE)
+                break;
+        }
+    }
     if (r == NK_NONFINITE)
         return cbm__mech_report_nonfinite(p);
     st->residual = k.rel;

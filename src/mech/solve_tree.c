@@ -17,6 +17,12 @@
  * per Newton step (one backward sweep); each solve is one backward and one forward sweep, i.e.
  * one pass. If a D_i is singular (an unstable equilibrium at a buckling load) it is replaced by
  * S_i there, which keeps the preconditioner usable and GMRES does the rest.
+ *
+ * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
+ * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
+ * positive definite symmetric part (Sylvester's criterion); the count of those that do not is
+ * returned. With mu > 0 the factorisation is that of J + mu S exactly (S only enters the
+ * pivots), the Levenberg-Marquardt shift the fast solver uses to descend to stable states.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -54,7 +60,7 @@ static inline bool minv(const double *a, double scale, double *out)
     double c0 = a[4] * a[8] - a[5] * a[7], c1 = a[5] * a[6] - a[3] * a[8],
            c2 = a[3] * a[7] - a[4] * a[6];
     double det = a[0] * c0 + a[1] * c1 + a[2] * c2;
-    if (!(fabs(det) > 1e-13 * scale) || !isfinite(det))
+    if (!(fabs(det) > 1e-13 * scale) || !isfinite(det) || det == 0.0)
         return false;
     double id = 1.0 / det;
     out[0] = c0 * id;
@@ -89,14 +95,24 @@ static inline m3 transpose(const double *a)
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 
+/* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
+static bool sym_pd(const double *d)
+{
+    double a = d[0], b = 0.5 * (d[1] + d[3]), c = 0.5 * (d[2] + d[6]);
+    double e = d[4], f = 0.5 * (d[5] + d[7]), g = d[8];
+    double m2 = a * e - b * b;
+    double m3d = a * (e * g - f * f) - b * (b * g - f * c) + c * (b * f - e * c);
+    return a > 0.0 && m2 > 0.0 && m3d > 0.0;
+}
+
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
  * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
  * D was singular and replaced by S. */
-static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    size_t singular = 0;
+    size_t singular = 0, nonpd = 0;
     memset(w->fw, 0, 9 * n * sizeof(double));
     cbm_vec3 *acc = w->dm;
     if (b)
@@ -107,11 +123,13 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
         cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
         cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
                             v3_scale(w->wown[i], w->lever[i]));
-        m3 sv = skew(V), sh = skew(h);
-        m3 G = mmul(sv.m, sh.m);
+        /* G = [V]x [H]x = H V^T - (V.H) I */
         double *W = w->fw + 9 * i;
-        for (int k = 0; k < 9; k++)
-            W[k] += G.m[k];
+        double vh = v3_dot(V, h);
+        const double hv[3] = {h.x, h.y, h.z}, vv[3] = {V.x, V.y, V.z};
+        for (int r0 = 0; r0 < 3; r0++)
+            for (int c0 = 0; c0 < 3; c0++)
+                W[3 * r0 + c0] += hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0);
         m3 WM = skew(p->moment[i]);
         for (int k = 0; k < 9; k++)
             WM.m[k] += W[k];
@@ -128,9 +146,14 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
             c1 = (1.0 - cos(t)) / t2;
             c2 = (t - sin(t)) / (t2 * t);
         }
-        m3 sr = skew(r), sr2 = mmul(sr.m, sr.m), J;
-        for (int k = 0; k < 9; k++)
-            J.m[k] = (k % 4 == 0 ? 1.0 : 0.0) - c1 * sr.m[k] + c2 * sr2.m[k];
+        /* J = I - c1 [r]x + c2 [r]x^2, with [r]x^2 = r r^T - |r|^2 I */
+        m3 sr = skew(r), J;
+        const double rv[3] = {r.x, r.y, r.z};
+        for (int r0 = 0; r0 < 3; r0++)
+            for (int c0 = 0; c0 < 3; c0++) {
+                double id = r0 == c0 ? 1.0 : 0.0;
+                J.m[3 * r0 + c0] = id - c1 * sr.m[3 * r0 + c0] + c2 * (rv[r0] * rv[c0] - id * t2);
+            }
         m3 A = mmul(R.m, J.m);
         for (int k = 0; k < 9; k++)
             A.m[k] *= d;
@@ -138,10 +161,12 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
         cbm_vec3 c = w->cj[i];
         for (int k = 0; k < 9; k++)
             D.m[k] = -QA.m[k];
-        D.m[0] += c.x;
-        D.m[4] += c.y;
-        D.m[8] += c.z;
+        D.m[0] += (1.0 + mu) * c.x;
+        D.m[4] += (1.0 + mu) * c.y;
+        D.m[8] += (1.0 + mu) * c.z;
         double *Di = w->fdinv + 9 * i;
+        if (!sym_pd(D.m))
+            nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
         if (!minv(D.m, c.x * c.y * c.z, Di)) {
             singular++;
             memset(Di, 0, 9 * sizeof(double));
@@ -151,10 +176,10 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
         }
         m3 AD = mmul(A.m, Di);
         m3 WAD = mmul(W, AD.m);
-        m3 ADQ = mmul(AD.m, Q.m);
+        /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
+        m3 Phi = mmul(WAD.m, Q.m);
         for (int k = 0; k < 9; k++)
-            ADQ.m[k] += (k % 4 == 0 ? 1.0 : 0.0);
-        m3 Phi = mmul(W, ADQ.m);
+            Phi.m[k] += W[k];
         memcpy(w->fq + 9 * i, Q.m, sizeof Q.m);
         memcpy(w->fa + 9 * i, A.m, sizeof A.m);
         memcpy(w->fwad + 9 * i, WAD.m, sizeof WAD.m);
@@ -175,17 +200,42 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     }
     if (b)
         forward_solve(p, out);
+    if (nonpd_out)
+        *nonpd_out = nonpd;
     return singular;
 }
 
-size_t cbm__mech_tree_factor(cbm_plant *p)
+size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd)
 {
-    return factor(p, NULL, NULL);
+    return factor(p, NULL, NULL, mu, nonpd);
 }
 
-size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
+size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu,
+                            size_t *nonpd)
 {
-    return factor(p, b, out);
+    return factor(p, b, out, mu, nonpd);
+}
+
+size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle)
+{
+    /* after an unmodified factorisation: push every joint whose pivot block is not positive
+     * definite along D^-1 (1,1,1) (one step of inverse iteration towards the soft mode), by
+     * `angle` rad over the joint's length */
+    cbm__mech_work *w = &p->work;
+    size_t k = 0;
+    for (size_t i = 0; i < p->n; i++) {
+        double d[9];
+        const double *di = w->fdinv + 9 * i;
+        if (minv(di, 0.0, d) && sym_pd(d))
+            continue;
+        cbm_vec3 v = mvec(di, v3(1, 1, 1));
+        double nv = v3_norm(v);
+        if (!(nv > 0.0) || !isfinite(nv))
+            v = v3(0, 1, 0), nv = 1.0;
+        p->omega[i] = v3_add(p->omega[i], v3_scale(v, angle / (nv * w->dual[i])));
+        k++;
+    }
+    return k;
 }
 
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
