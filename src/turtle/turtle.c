@@ -70,6 +70,7 @@ struct cbm_turtle {
     const cbm_view *view;
     cbm_scene *scene;
     bool record;
+    bool lpfg; /* lpfg's turtle: initial colour 1, each F its own cylinder */
     tstate cur;
     CBM_ARRAY(tstate) stack;
     /* the open segment */
@@ -245,9 +246,16 @@ void cbm__turtle_destroy(cbm_turtle *t)
     cbm__free(ctx, t, sizeof *t);
 }
 
+void cbm__turtle_set_lpfg(cbm_turtle *t, bool lpfg)
+{
+    t->lpfg = lpfg;
+}
+
 void cbm__turtle_reset(cbm_turtle *t)
 {
     init_state(t);
+    if (t->lpfg)
+        t->cur.color = 1;
     t->stack.len = 0;
     t->node_open = false;
     t->polypts.len = 0;
@@ -962,6 +970,13 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     bend(t);
     if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
         CBM_TRY(poly_vertex(t));
+    if (draw && t->lpfg) {
+        /* lpfg draws each F at once as a cylinder of the current width */
+        t->node_open = false;
+        box_add(t, s->pos);
+        CBM_TRY(emit_segment(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_color,
+                             t->node_h, t->node_u));
+    }
     if (draw) {
         s->prev_h = s->h;
         s->prev_u = s->u;
@@ -1001,6 +1016,55 @@ static cbm_status poly_end(cbm_turtle *t)
     return CBM_OK;
 }
 
+/* lpfg's SetHead(h, u): H = h/|h|, U = the part of u/|u| normal to H (lpfg's U, which is minus
+ * this turtle's U: lpfg's frame has L = U x H, cpfg's L = H x U). Null or parallel vectors leave
+ * the frame as it is, as lpfg. */
+static cbm_status set_head(cbm_turtle *t, const double *params, int nparams)
+{
+    if (nparams < 6)
+        return CBM_OK;
+    tstate *s = &t->cur;
+    cbm_vec3 h = v3(params[0], params[1], params[2]), u = v3(params[3], params[4], params[5]);
+    if (v3_norm(h) < 1e-5 || v3_norm(u) < 1e-5)
+        return CBM_OK;
+    h = v3_normalize(h);
+    u = v3_normalize(u);
+    cbm_vec3 l = v3_cross(u, h);
+    if (v3_norm(l) < 1e-5)
+        return CBM_OK;
+    s->h = h;
+    s->l = v3_normalize(l);
+    s->u = v3_cross(s->l, s->h); /* this turtle's U = L x H = -(lpfg's H x L) */
+    return CBM_OK;
+}
+
+/* lpfg's LineTo3d(p) and LineRel3d(d): a segment from the position to p (or by d), drawn with
+ * the heading along it and L normal to the old U, then the frame as before. */
+static cbm_status line_to(cbm_turtle *t, int cmd, const double *params, int nparams)
+{
+    if (nparams < 3)
+        return CBM_OK;
+    tstate *s = &t->cur;
+    cbm_vec3 p = v3(params[0], params[1], params[2]);
+    cbm_vec3 d = cmd == CBM_T_LINE_TO ? v3_sub(p, s->pos) : p;
+    double len = v3_norm(d);
+    if (len < 1e-5)
+        return CBM_OK;
+    cbm_vec3 h0 = s->h, l0 = s->l, u0 = s->u;
+    s->h = v3_scale(d, 1.0 / len);
+    cbm_vec3 l = v3_cross(s->h, s->u); /* lpfg: U x H with its U = -ours */
+    if (v3_norm(l) < 1e-5)
+        l = v3(-s->h.y, s->h.x, 0.0);
+    s->l = v3_norm(l) < 1e-5 ? v3(1, 0, 0) : v3_normalize(l);
+    s->u = v3_cross(s->l, s->h);
+    double len_param = len;
+    cbm_status st = move(t, CBM_T_F, &len_param, 1);
+    s->h = h0;
+    s->l = l0;
+    s->u = u0;
+    return st;
+}
+
 /* The @ commands (and the queries): they end the current segment first, as in cpfg. */
 static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
 {
@@ -1023,6 +1087,18 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_CONTOUR:
         return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
                               nparams);
+    case CBM_T_SET_HEAD:
+        return set_head(t, params, nparams);
+    case CBM_T_LINE_TO:
+    case CBM_T_LINE_REL:
+        return line_to(t, cmd, params, nparams);
+    case CBM_T_MOVE_REL:
+        CBM_TRY(end_node(t));
+        if (nparams >= 3) {
+            s->pos = v3_add(s->pos, v3(params[0], params[1], params[2]));
+            box_add(t, s->pos);
+        }
+        return CBM_OK;
     case CBM_T_MOVE_TO:
         if (nparams >= 2) {
             s->pos = v3(params[0], params[1], nparams >= 3 ? params[2] : 0.0);
