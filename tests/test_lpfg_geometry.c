@@ -86,8 +86,8 @@ static bool read_trace(const char *path, trace *t)
 /* The modules lpfg's text turtle traces (with the same parameters as the module). */
 static bool traced(const char *nm)
 {
-    static const char *const T[] = {"F",        "f",        "G",       "g",       "Left",
-                                    "Right",    "Down",     "Up",      "RollR",   "RollL",
+    static const char *const T[] = {"F",        "f",        "G",        "g",        "Left",
+                                    "Right",    "Down",     "Up",       "RollR",    "RollL",
                                     "IncColor", "DecColor", "SetColor", "SetWidth", "Sphere",
                                     "Sphere0",  "Circle",   "Circle0"};
     for (size_t i = 0; i < sizeof T / sizeof T[0]; i++)
@@ -105,6 +105,54 @@ static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return x < y ? -1 : x > y;
+}
+
+/* lpfg's mesh vertices bucketed in a grid of cubes of side `cell`, sorted by cube. */
+typedef struct gv {
+    int64_t key;
+    double v[3];
+} gv;
+
+static int64_t cube_key(const double *v, double cell, int dx, int dy, int dz)
+{
+    int64_t ix = (int64_t)floor(v[0] / cell) + dx + (1 << 20);
+    int64_t iy = (int64_t)floor(v[1] / cell) + dy + (1 << 20);
+    int64_t iz = (int64_t)floor(v[2] / cell) + dz + (1 << 20);
+    return (ix << 42) | (iy << 21) | iz;
+}
+
+static int cmp_gv(const void *a, const void *b)
+{
+    int64_t x = ((const gv *)a)->key, y = ((const gv *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* Whether lpfg's mesh has a vertex on the circle of radius r about P normal to the unit axis d:
+ * a ring of one of its cylinders ends there. */
+static bool ring_at(const gv *g, size_t n, double cell, const double *P, const double *d, double r,
+                    double tol)
+{
+    for (int dx = -1; dx <= 1; dx++)
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dz = -1; dz <= 1; dz++) {
+                int64_t key = cube_key(P, cell, dx, dy, dz);
+                size_t lo = 0, hi = n;
+                while (lo < hi) {
+                    size_t mid = (lo + hi) / 2;
+                    if (g[mid].key < key)
+                        lo = mid + 1;
+                    else
+                        hi = mid;
+                }
+                for (size_t k = lo; k < n && g[k].key == key; k++) {
+                    double w[3] = {g[k].v[0] - P[0], g[k].v[1] - P[1], g[k].v[2] - P[2]};
+                    double along = w[0] * d[0] + w[1] * d[1] + w[2] * d[2];
+                    double dist = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+                    if (fabs(along) <= tol && fabs(dist - r) <= tol)
+                        return true;
+                }
+            }
+    return false;
 }
 
 typedef struct lmodel {
@@ -226,9 +274,9 @@ static void run_model(const lmodel *md)
                 bad++;
                 continue;
             }
-            double len = sqrt(pow(pr[kcyl].p1.x - pr[kcyl].p0.x, 2) +
-                              pow(pr[kcyl].p1.y - pr[kcyl].p0.y, 2) +
-                              pow(pr[kcyl].p1.z - pr[kcyl].p0.z, 2));
+            double len =
+                sqrt(pow(pr[kcyl].p1.x - pr[kcyl].p0.x, 2) + pow(pr[kcyl].p1.y - pr[kcyl].p0.y, 2) +
+                     pow(pr[kcyl].p1.z - pr[kcyl].p0.z, 2));
             maxdev = fmax(maxdev, fabs(len - fabs(r->p[0])));
             if (!near(len, fabs(r->p[0])) && bad++ < 5)
                 fprintf(stderr, "%s: cylinder %zu length %g, lpfg F(%g)\n", md->dir, ncyl, len,
@@ -267,10 +315,11 @@ static void run_model(const lmodel *md)
         badr += !found;
     }
     CHECK_MSG(badr == 0, "%s: %zu cylinders with a radius no SetWidth gives", md->dir, badr);
-    fprintf(stderr,
-            "%s: %zu trace lines, %zu cylinders (lpfg's drawn F), %zu spheres, %zu ignored colours, "
-            "%zu differ, max deviation %.2g\n",
-            md->dir, ref.n, ncyl, nsph, nbadcolor, bad, maxdev);
+    fprintf(
+        stderr,
+        "%s: %zu trace lines, %zu cylinders (lpfg's drawn F), %zu spheres, %zu ignored colours, "
+        "%zu differ, max deviation %.2g\n",
+        md->dir, ref.n, ncyl, nsph, nbadcolor, bad, maxdev);
     CHECK_MSG(bad == 0, "%s: %zu differences with lpfg's trace", md->dir, bad);
     free(widths);
 
@@ -281,7 +330,8 @@ static void run_model(const lmodel *md)
         char line[512];
         double olo[3] = {INFINITY, INFINITY, INFINITY}, ohi[3] = {-INFINITY, -INFINITY, -INFINITY};
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        size_t nv = 0;
+        size_t nv = 0, cap = 1 << 16;
+        gv *g = malloc(cap * sizeof *g);
         while (fgets(line, sizeof line, obj)) {
             double q[3];
             if (line[0] == 'v' && line[1] == ' ' &&
@@ -290,10 +340,46 @@ static void run_model(const lmodel *md)
                     olo[k] = fmin(olo[k], q[k]);
                     ohi[k] = fmax(ohi[k], q[k]);
                 }
-                nv++;
+                if (nv == cap)
+                    g = realloc(g, (cap *= 2) * sizeof *g);
+                memcpy(g[nv++].v, q, sizeof q);
             }
         }
         pclose(obj);
+        /* segment end points: each of our cylinders' ends is the centre of a ring of lpfg's
+         * mesh of our radius, normal to our axis (the OBJ prints 6 significant digits) */
+        double cell = fmax(2.5 * rmax, 1e-3);
+        for (size_t k = 0; k < nv; k++)
+            g[k].key = cube_key(g[k].v, cell, 0, 0, 0);
+        qsort(g, nv, sizeof *g, cmp_gv);
+        double amax =
+            fmax(fmax(fabs(olo[0]), fabs(ohi[0])),
+                 fmax(fmax(fabs(olo[1]), fabs(ohi[1])), fmax(fabs(olo[2]), fabs(ohi[2]))));
+        double etol = 2e-6 * fmax(1.0, amax) + 1e-5 * rmax;
+        size_t nends = 0, missing = 0;
+        for (size_t k = 0; k < nprim; k++) {
+            const cbm_prim *p = &pr[k];
+            if (p->kind != CBM_PRIM_CYLINDER)
+                continue;
+            double a[3] = {p->p0.x, p->p0.y, p->p0.z}, b[3] = {p->p1.x, p->p1.y, p->p1.z};
+            double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+            double dl = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            for (int e = 0; e < 3; e++)
+                d[e] /= dl;
+            bool fa = ring_at(g, nv, cell, a, d, p->r0, etol);
+            bool fb = ring_at(g, nv, cell, b, d, p->r1, etol);
+            if ((!fa || !fb) && missing < 3)
+                fprintf(stderr,
+                        "%s: cylinder %zu (%g %g %g)-(%g %g %g) r %g: no ring in lpfg's mesh\n",
+                        md->dir, k, a[0], a[1], a[2], b[0], b[1], b[2], p->r0);
+            missing += !fa + !fb;
+            nends += 2;
+        }
+        fprintf(stderr, "%s: %zu segment end points, %zu without lpfg's ring (tolerance %.2g)\n",
+                md->dir, nends, missing, etol);
+        CHECK_MSG(missing == 0, "%s: %zu segment end points are not in lpfg's mesh", md->dir,
+                  missing);
+        free(g);
         for (size_t k = 0; k < nprim; k++) {
             const cbm_prim *p = &pr[k];
             double a[3] = {p->p0.x, p->p0.y, p->p0.z}, b[3] = {p->p1.x, p->p1.y, p->p1.z};

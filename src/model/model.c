@@ -203,8 +203,8 @@ static cbm_status set_func_ids(cbm_model *m)
         ids[i] = cbm_funcset_find(cbm_view_functions(m->view), names[i]);
         if (ids[i] <= 0)
             s = cbm__fail(m->ctx, CBM_E_NOT_FOUND,
-                          "func(%s, x): no function named \"%s\" in the function files",
-                          names[i], names[i]);
+                          "func(%s, x): no function named \"%s\" in the function files", names[i],
+                          names[i]);
     }
     if (s == CBM_OK)
         s = cbm_lsys_set_func_ids(m->ls, ids, n);

@@ -87,9 +87,9 @@ struct cbm_view {
     double step;         /* step of F, f without parameter */
     double scale;        /* scale factor of the view (display only; kept) */
     cbm__line_style line_style;
-    int sides;     /* contour sides of cylinders */
-    bool gc_twist; /* twist of cylinders */
-    bool past_cut; /* interpret past % (cpfg's default: the engine cuts when deriving) */
+    int sides;             /* contour sides of cylinders */
+    bool gc_twist;         /* twist of cylinders */
+    bool past_cut;         /* interpret past % (cpfg's default: the engine cuts when deriving) */
     bool lpfg_uncorrected; /* lpfg's "corrected rotation: off" (Up/Down, RollL/RollR swapped) */
     /* ABOP tropism (T and e of ABOP section 2.2: "tropism direction", "initial elasticity") */
     cbm_vec3 tropism_dir;

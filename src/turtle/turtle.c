@@ -974,8 +974,8 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
         /* lpfg draws each F at once as a cylinder of the current width */
         t->node_open = false;
         box_add(t, s->pos);
-        CBM_TRY(emit_segment(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_color,
-                             t->node_h, t->node_u));
+        CBM_TRY(emit_segment(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_color, t->node_h,
+                             t->node_u));
     }
     if (draw) {
         s->prev_h = s->h;
