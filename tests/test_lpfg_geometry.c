@@ -19,6 +19,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define ORACLE CBM_TEST_SOURCE_DIR "/../shared/oracles/vlab/"
 
@@ -500,5 +501,134 @@ TEST(lpfg_func_by_name)
     CHECK_STATUS(cbm_model_load(ctx, &def, &m), CBM_E_NOT_FOUND);
     CHECK(m == NULL);
     CHECK(strstr(cbm_context_last_error(ctx), "nosuchfunction") != NULL);
+    test_ctx_end(ctx);
+}
+
+/* ---- lpfg's turtle modules one by one (lpfg's turtle: H = +y, L = -x, lpfg's U = +z) ---- */
+
+/* Interprets the axiom `axiom` of a one-line L+C model; the turtle keeps its record. */
+static cbm_turtle *axiom_turtle(cbm_context *ctx, const char *axiom, const char *view)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "#include <lpfgall.h>\nderivation length: 0;\nmodule A();\nAxiom: %s;\n", axiom);
+    char vpath[64];
+    snprintf(vpath, sizeof vpath, "/tmp/cbm_lpfg_view_%ld.v", (long)getpid());
+    const char *sides[1] = {vpath};
+    size_t nsides = 0;
+    if (view) {
+        FILE *f = fopen(vpath, "w");
+        CHECK(f != NULL);
+        if (f) {
+            fputs(view, f);
+            fclose(f);
+        }
+        nsides = 1;
+    }
+    cbm_model_def def = {cbm_lsys_def_default(), sides, nsides};
+    def.lsys.path = "axiom.l";
+    def.lsys.text = text;
+    cbm_model *m = NULL;
+    cbm_turtle *t = NULL;
+    CHECK_OK(cbm_model_load(ctx, &def, &m));
+    if (view)
+        remove(vpath);
+    if (!m) {
+        fprintf(stderr, "%s\n", cbm_context_last_error(ctx));
+        return NULL;
+    }
+    CHECK_OK(cbm_model_reset(m));
+    CHECK_OK(cbm_model_interpret(m, NULL, true, &t));
+    cbm_model_destroy(m);
+    return t;
+}
+
+static const cbm_prim *nth_prim(const cbm_turtle *t, cbm_prim_kind kind, size_t n)
+{
+    for (size_t k = 0; t && k < cbm_turtle_prim_count(t); k++)
+        if (cbm_turtle_prims(t)[k].kind == kind && n-- == 0)
+            return &cbm_turtle_prims(t)[k];
+    return NULL;
+}
+
+static void check_seg(cbm_context *ctx, const char *axiom, const char *view, size_t n, double x0,
+                      double y0, double z0, double x1, double y1, double z1)
+{
+    cbm_turtle *t = axiom_turtle(ctx, axiom, view);
+    const cbm_prim *p = nth_prim(t, CBM_PRIM_CYLINDER, n);
+    CHECK_MSG(p != NULL, "%s: no cylinder %zu", axiom, n);
+    if (p) {
+        double got[6] = {p->p0.x, p->p0.y, p->p0.z, p->p1.x, p->p1.y, p->p1.z};
+        double want[6] = {x0, y0, z0, x1, y1, z1};
+        for (int k = 0; k < 6; k++)
+            CHECK_MSG(fabs(got[k] - want[k]) < 1e-9, "%s: cylinder %zu coordinate %d is %g, not %g",
+                      axiom, n, k, got[k], want[k]);
+    }
+    cbm_turtle_destroy(t);
+}
+
+TEST(lpfg_modules_frame)
+{
+    cbm_context *ctx = test_ctx();
+    check_seg(ctx, "F(1)", NULL, 0, 0, 0, 0, 0, 1, 0);
+    check_seg(ctx, "Left(90) F(1)", NULL, 0, 0, 0, 0, -1, 0, 0);
+    /* corrected rotation (lpfg's default): Down turns H towards -U, Up towards +U (+z) */
+    check_seg(ctx, "Down(90) F(1)", NULL, 0, 0, 0, 0, 0, 0, -1);
+    check_seg(ctx, "Up(90) F(1)", NULL, 0, 0, 0, 0, 0, 0, 1);
+    check_seg(ctx, "RollL(90) Left(90) F(1)", NULL, 0, 0, 0, 0, 0, 0, -1);
+    check_seg(ctx, "RollR(90) Left(90) F(1)", NULL, 0, 0, 0, 0, 0, 0, 1);
+    /* corrected rotation: off reverses them, as lpfg */
+    check_seg(ctx, "Down(90) F(1)", "corrected rotation: off\n", 0, 0, 0, 0, 0, 0, 1);
+    check_seg(ctx, "RollL(90) Left(90) F(1)", "corrected rotation: off\n", 0, 0, 0, 0, 0, 0, 1);
+    /* SetHead(H, U): then Left turns towards lpfg's L = U x H */
+    check_seg(ctx, "SetHead(2, 0, 0, 0, 0, 3) F(1)", NULL, 0, 0, 0, 0, 1, 0, 0);
+    check_seg(ctx, "SetHead(1, 0, 0, 0, 0, 1) Left(90) F(1)", NULL, 0, 0, 0, 0, 0, 1, 0);
+    check_seg(ctx, "SetHead(0, 0, 0, 0, 0, 1) F(1)", NULL, 0, 0, 0, 0, 0, 1, 0); /* ignored */
+    /* RollToVert: L horizontal (y x H), -x when H is vertical */
+    check_seg(ctx, "Left(90) RollL(30) RollToVert Left(90) F(1)", NULL, 0, 0, 0, 0, 0, 0, 1);
+    check_seg(ctx, "RollL(90) RollToVert Left(90) F(1)", NULL, 0, 0, 0, 0, -1, 0, 0);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_modules_lines_and_moves)
+{
+    cbm_context *ctx = test_ctx();
+    /* LineTo3d draws to the point and keeps the heading */
+    check_seg(ctx, "LineTo3d(V3f(3, 4, 0)) F(1)", NULL, 0, 0, 0, 0, 3, 4, 0);
+    check_seg(ctx, "LineTo3d(V3f(3, 4, 0)) F(1)", NULL, 1, 3, 4, 0, 3, 5, 0);
+    check_seg(ctx, "f(1) LineRel3d(V3f(0, 0, 2))", NULL, 0, 0, 1, 0, 0, 1, 2);
+    check_seg(ctx, "MoveRel3d(V3f(1, 0, 0)) F(1)", NULL, 0, 1, 0, 0, 1, 1, 0);
+    check_seg(ctx, "F(1) MoveTo3d(V3f(0, 5, 0)) F(1)", NULL, 1, 0, 5, 0, 0, 6, 0);
+    test_ctx_end(ctx);
+}
+
+TEST(lpfg_modules_spheres_colours_widths)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_turtle *t = axiom_turtle(ctx, "Sphere(2) SetWidth(3) Sphere0() Circle(1) Circle0()", NULL);
+    const cbm_prim *p;
+    CHECK((p = nth_prim(t, CBM_PRIM_SPHERE, 0)) && fabs(p->r0 - 2.0) < 1e-12);
+    CHECK((p = nth_prim(t, CBM_PRIM_SPHERE, 1)) && fabs(p->r0 - 1.5) < 1e-12);
+    CHECK((p = nth_prim(t, CBM_PRIM_DISC, 0)) && fabs(p->r0 - 1.0) < 1e-12);
+    CHECK((p = nth_prim(t, CBM_PRIM_DISC, 1)) && fabs(p->r0 - 1.5) < 1e-12);
+    cbm_turtle_destroy(t);
+    /* colours: 1 at the start; SetColor outside 1..255 ignored; IncColor 255 -> 1, DecColor
+     * 1 -> 255 */
+    t = axiom_turtle(ctx,
+                     "F(1) SetColor(7) F(1) SetColor(0) F(1) SetColor(300) F(1) IncColor() F(1) "
+                     "DecColor() DecColor() F(1) SetColor(255) IncColor() F(1) DecColor() F(1)",
+                     NULL);
+    static const int want[] = {1, 7, 7, 7, 8, 6, 1, 255};
+    for (size_t k = 0; k < sizeof want / sizeof want[0]; k++) {
+        p = nth_prim(t, CBM_PRIM_CYLINDER, k);
+        CHECK_MSG(p && p->color == want[k], "cylinder %zu colour %d, not %d", k, p ? p->color : -1,
+                  want[k]);
+    }
+    cbm_turtle_destroy(t);
+    /* each F is its own cylinder of the width at the F (lpfg), not a cone to the next width */
+    t = axiom_turtle(ctx, "SetWidth(2) F(1) SetWidth(4) F(1)", NULL);
+    CHECK((p = nth_prim(t, CBM_PRIM_CYLINDER, 0)) && p->r0 == 1.0 && p->r1 == 1.0);
+    CHECK((p = nth_prim(t, CBM_PRIM_CYLINDER, 1)) && p->r0 == 2.0 && p->r1 == 2.0);
+    cbm_turtle_destroy(t);
     test_ctx_end(ctx);
 }

@@ -72,7 +72,7 @@ static const lpfg_name LPFG_NAMES[] = {
     {"EndGC", C(CBM_T_GC_END)},
     {"CurrentContour", C(CBM_T_CONTOUR_SET)},
     {"SetHead", C(CBM_T_SET_HEAD)},
-    {"RollToVert", C(CBM_T_ROLL_HORIZ)},
+    {"RollToVert", C(CBM_T_ROLL_TO_VERT)},
     {"LineTo3d", C(CBM_T_LINE_TO)},
     {"LineRel3d", C(CBM_T_LINE_REL)},
     {"MoveTo3d", C(CBM_T_MOVE_TO)},

@@ -1087,6 +1087,13 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_CONTOUR:
         return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
                               nparams);
+    case CBM_T_ROLL_TO_VERT: {
+        /* lpfg's RollToVert: L = y x H, or -x when H is vertical; U (this turtle's) = L x H */
+        cbm_vec3 l = v3_cross(v3(0, 1, 0), s->h);
+        s->l = v3_norm(l) < 1e-5 ? v3(-1, 0, 0) : v3_normalize(l);
+        s->u = v3_cross(s->l, s->h);
+        return CBM_OK;
+    }
     case CBM_T_SET_HEAD:
         return set_head(t, params, nparams);
     case CBM_T_LINE_TO:
