@@ -632,3 +632,38 @@ TEST(lpfg_modules_spheres_colours_widths)
     cbm_turtle_destroy(t);
     test_ctx_end(ctx);
 }
+
+/* Every allocation of an lpfg run (func names, the function set, spheres) may fail: a clean
+ * status and no leak each time. */
+static cbm_status oom_run(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    const char *sides[] = {ORACLE "lpfg-sympodial/model/view.v",
+                           ORACLE "lpfg-sympodial/model/functions.fset"};
+    cbm_model_def def = {cbm_lsys_def_default(), sides, 2};
+    def.lsys.path = ORACLE "lpfg-sympodial/model/lsystem.l";
+    cbm_model *m = NULL;
+    cbm_status s = cbm_model_load(ctx, &def, &m);
+    if (s != CBM_OK)
+        return s;
+    cbm_scene *scene = NULL;
+    cbm_turtle *t = NULL;
+    s = cbm_model_reset(m);
+    for (int k = 0; k < 20 && s == CBM_OK; k++)
+        s = cbm_model_step(m);
+    if (s == CBM_OK)
+        s = cbm_scene_create(ctx, &scene);
+    if (s == CBM_OK)
+        s = cbm_model_interpret(m, scene, true, &t);
+    if (s == CBM_OK && !nth_prim(t, CBM_PRIM_SPHERE, 0))
+        s = CBM_E_INTERNAL;
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    cbm_model_destroy(m);
+    return s;
+}
+
+TEST(lpfg_allocation_failures)
+{
+    CHECK(test_oom_loop(oom_run, NULL) > 10);
+}
