@@ -507,7 +507,8 @@ TEST(lpfg_func_by_name)
 /* ---- lpfg's turtle modules one by one (lpfg's turtle: H = +y, L = -x, lpfg's U = +z) ---- */
 
 /* Interprets the axiom `axiom` of a one-line L+C model; the turtle keeps its record. */
-static cbm_turtle *axiom_turtle(cbm_context *ctx, const char *axiom, const char *view)
+static cbm_turtle *axiom_turtle_scene(cbm_context *ctx, const char *axiom, const char *view,
+                                      cbm_scene *scene)
 {
     char text[1024];
     snprintf(text, sizeof text,
@@ -538,9 +539,14 @@ static cbm_turtle *axiom_turtle(cbm_context *ctx, const char *axiom, const char 
         return NULL;
     }
     CHECK_OK(cbm_model_reset(m));
-    CHECK_OK(cbm_model_interpret(m, NULL, true, &t));
+    CHECK_OK(cbm_model_interpret(m, scene, true, &t));
     cbm_model_destroy(m);
     return t;
+}
+
+static cbm_turtle *axiom_turtle(cbm_context *ctx, const char *axiom, const char *view)
+{
+    return axiom_turtle_scene(ctx, axiom, view, NULL);
 }
 
 static const cbm_prim *nth_prim(const cbm_turtle *t, cbm_prim_kind kind, size_t n)
@@ -630,6 +636,21 @@ TEST(lpfg_modules_spheres_colours_widths)
     CHECK((p = nth_prim(t, CBM_PRIM_CYLINDER, 0)) && p->r0 == 1.0 && p->r1 == 1.0);
     CHECK((p = nth_prim(t, CBM_PRIM_CYLINDER, 1)) && p->r0 == 2.0 && p->r1 == 2.0);
     cbm_turtle_destroy(t);
+    /* ScaleContour(p, q): an elliptic section, width p along L (x here), q along U (z) */
+    static const char *const sc[] = {"ScaleContour(2, 4) F(1)",
+                                     "ScaleContour(2, 4) SetWidth(2) F(1)"};
+    for (int k = 0; k < 2; k++) {
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        t = axiom_turtle_scene(ctx, sc[k], NULL, scene);
+        cbm_vec3 lo, hi;
+        CHECK(cbm_scene_bounds(scene, &lo, &hi));
+        CHECK_NEAR(hi.x, 1.0, 1e-9);
+        CHECK_NEAR(hi.z, k == 0 ? 2.0 : 1.0, 1e-9);
+        CHECK_NEAR(lo.z, k == 0 ? -2.0 : -1.0, 1e-9);
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+    }
     test_ctx_end(ctx);
 }
 

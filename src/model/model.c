@@ -78,6 +78,7 @@ static const lpfg_name LPFG_NAMES[] = {
     {"MoveTo3d", C(CBM_T_MOVE_TO)},
     {"MoveRel3d", C(CBM_T_MOVE_REL)},
     {"Elasticity", C(CBM_T_ELASTICITY)},
+    {"ScaleContour", C(CBM_T_SCALE_CONTOUR)},
     {"SetColor", LP_SET_COLOR},
     {"IncColor", LP_INC_COLOR},
     {"DecColor", LP_DEC_COLOR},

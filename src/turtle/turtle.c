@@ -48,6 +48,7 @@ typedef struct tstate {
     cbm_vec3 pos, h, l, u;
     cbm_vec3 prev_h, prev_u;
     double width;
+    double width_up; /* lpfg's ScaleContour: the section's width along U (= width otherwise) */
     double elasticity;
     double mov_e[CBM__MAX_MOVEMENTS];
     int color;
@@ -77,6 +78,7 @@ struct cbm_turtle {
     bool node_open;
     cbm_vec3 node_p, node_h, node_u;
     double node_w;
+    double node_wup; /* lpfg: the width along U at the start */
     int node_color;
     /* polygons */
     CBM_ARRAY(cbm_vec3) polypts;
@@ -196,6 +198,7 @@ static void init_state(cbm_turtle *t)
     s->prev_h = s->h;
     s->prev_u = s->u;
     s->width = v->width;
+    s->width_up = v->width;
     s->elasticity = v->elasticity;
     for (int i = 0; i < v->nmov; i++)
         s->mov_e[i] = v->mov[i].elasticity;
@@ -338,8 +341,19 @@ static inline void rotate_pair(cbm_vec3 *v2, cbm_vec3 *v3p, double s, double c)
 /* ---- segments ---- */
 
 /* A segment in cpfg's terms: dropped when degenerate (length^2 <= 1e-5 or no end width). */
+static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
+                                 double wu, int color, cbm_vec3 h, cbm_vec3 u);
+
 static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
                                int color, cbm_vec3 h, cbm_vec3 u)
+{
+    return emit_segment_e(t, p0, p1, w0, w1, -1.0, color, h, u);
+}
+
+/* A segment; wu >= 0: an elliptic section of width w0 along L and wu along U (lpfg's
+ * ScaleContour; the record keeps w0 / 2). */
+static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
+                                 double wu, int color, cbm_vec3 h, cbm_vec3 u)
 {
     cbm_vec3 d = v3_sub(p1, p0);
     if (v3_norm2(d) <= 0.00001 || w1 <= 0.0 || (!t->record && !t->scene))
@@ -369,8 +383,9 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
         return cbm_scene_add_polygon(t->scene, q, 4);
     }
     int sides = t->cur.sides; /* as cpfg's own OBJ output, pixel lines too */
-    cbm_section s0 = {p0, f, pr.r0, pr.r0};
-    cbm_section s1 = {p1, f, pr.r1, pr.r1};
+    double a0 = wu >= 0.0 ? wu / 2.0 : pr.r0, a1 = wu >= 0.0 ? wu / 2.0 : pr.r1;
+    cbm_section s0 = {p0, f, a0, pr.r0};
+    cbm_section s1 = {p1, f, a1, pr.r1};
     return cbm_scene_add_tube(t->scene, &s0, &s1, sides, false);
 }
 
@@ -391,6 +406,7 @@ static void start_node(cbm_turtle *t)
     t->node_h = t->cur.h;
     t->node_u = t->cur.u;
     t->node_w = t->cur.width;
+    t->node_wup = t->cur.width_up;
     t->node_color = t->cur.color;
 }
 
@@ -974,8 +990,8 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
         /* lpfg draws each F at once as a cylinder of the current width */
         t->node_open = false;
         box_add(t, s->pos);
-        CBM_TRY(emit_segment(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_color, t->node_h,
-                             t->node_u));
+        CBM_TRY(emit_segment_e(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_wup,
+                               t->node_color, t->node_h, t->node_u));
     }
     if (draw) {
         s->prev_h = s->h;
@@ -1087,6 +1103,13 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_CONTOUR:
         return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
                               nparams);
+    case CBM_T_SCALE_CONTOUR:
+        /* lpfg's ScaleContour(p, q): the section's width along L and along U */
+        if (nparams >= 2) {
+            s->width = params[0];
+            s->width_up = params[1];
+        }
+        return CBM_OK;
     case CBM_T_ROLL_TO_VERT: {
         /* lpfg's RollToVert: L = y x H, or -x when H is vertical; U (this turtle's) = L x H */
         cbm_vec3 l = v3_cross(v3(0, 1, 0), s->h);
@@ -1292,6 +1315,7 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
             s->width += v->width_inc;
         if (s->width < 0.0000001f)
             s->width = 0.0000001f;
+        s->width_up = s->width;
         return CBM_OK;
     }
     case CBM_T_COLOR_INC:
