@@ -10,8 +10,15 @@
  * in order. Steps whose string has no query module skip the pass (it could not change anything),
  * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
  * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
- * it reads the string itself rather than a copy (half the memory on the largest strings). ABOP ch.
- * 1 (turtle interpretation); Prusinkiewicz et al. 1994 "Synthetic topiary" (query modules).
+ * it reads the string itself rather than a copy (half the memory on the largest strings).
+ * L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the model maps each
+ * symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's meaning
+ * (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
+ * RollL/RollR follow lpfg's "corrected rotation:"; Sphere takes a radius; SetColor ignores
+ * colours outside 1..255), and the turtle runs in lpfg's mode (colour 1 at the start, each F its
+ * own cylinder). func(name, x) calls the function set's function of that name, and functions are
+ * tabulated with lpfg's tolerance. ABOP ch. 1 (turtle interpretation); Prusinkiewicz et al. 1994
+ * "Synthetic topiary" (query modules); the lpfg manual (L+C turtle modules).
  */
 #include "cambium/model.h"
 
@@ -252,6 +259,7 @@ cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model 
     }
     m->lpfg = cbm_lsys_module_name(m->ls, '[') != NULL;
     if (m->lpfg) {
+        m->may_query = false; /* cpfg's ?P ?H ?L ?U: a user module may have the code '?' */
         cbm__view_lpfg_functions(m->view);
         lpfg_map(m);
         cbm__turtle_set_lpfg(m->query_turtle, true);

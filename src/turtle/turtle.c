@@ -23,6 +23,10 @@
  * (1.2 by default, as cpfg), n bands each; the rings are contours resampled by arc length,
  * carried along by the minimal rotation of U (cpfg's generalized cylinders, cpfg manual
  * "Generalized cylinders").
+ * lpfg's mode (L+C models, cbm__turtle_set_lpfg): colour 1 at the start, each F drawn at once as
+ * a cylinder of the current width, and lpfg's commands SetHead, RollToVert, LineTo3d/LineRel3d
+ * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
+ * lpfg's frame has U opposite to ours (its L = U x H), which these commands account for.
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
