@@ -10,8 +10,15 @@
  * in order. Steps whose string has no query module skip the pass (it could not change anything),
  * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
  * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
- * it reads the string itself rather than a copy (half the memory on the largest strings). ABOP ch.
- * 1 (turtle interpretation); Prusinkiewicz et al. 1994 "Synthetic topiary" (query modules).
+ * it reads the string itself rather than a copy (half the memory on the largest strings).
+ * L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the model maps each
+ * symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's meaning
+ * (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
+ * RollL/RollR follow lpfg's "corrected rotation:"; Sphere takes a radius; SetColor ignores
+ * colours outside 1..255), and the turtle runs in lpfg's mode (colour 1 at the start, each F its
+ * own cylinder). func(name, x) calls the function set's function of that name, and functions are
+ * tabulated with lpfg's tolerance. ABOP ch. 1 (turtle interpretation); Prusinkiewicz et al. 1994
+ * "Synthetic topiary" (query modules); the lpfg manual (L+C turtle modules).
  */
 #include "cambium/model.h"
 
@@ -29,7 +36,133 @@ struct cbm_model {
     cbm_turtle *pass;         /* the turtle of the pass in progress */
     bool image;               /* the pass reads the homomorphic image (else the string) */
     bool may_query;           /* some successor or the axiom holds a '?' */
+    bool lpfg;                /* L+C dialect: modules are mapped by name (lpfg_map) */
+    int16_t lmap[128];        /* L+C: the lpfg operation of each symbol (LP_*), 0: none */
 };
+
+/* lpfg's turtle modules (lpfg manual, "Turtle commands"; lpfg's turtle). Most are one turtle
+ * command; the LP_* below need lpfg's own treatment of their parameter. */
+enum {
+    LP_CMD = 0,       /* lmap holds CBM_T_* + LP_CMD_BASE */
+    LP_SET_COLOR = 1, /* SetColor(c): ignored outside 1..255 */
+    LP_INC_COLOR,     /* IncColor: 255 wraps to 1 */
+    LP_DEC_COLOR,     /* DecColor: 1 wraps to 255 */
+    LP_SPHERE,        /* Sphere(r): radius r; Sphere0: diameter = width */
+    LP_CIRCLE,        /* Circle(r), Circle0 */
+    LP_CMD_BASE = 16
+};
+
+typedef struct lpfg_name {
+    const char *name;
+    int op; /* LP_* or CBM_T_* + LP_CMD_BASE */
+} lpfg_name;
+
+#define C(cmd) ((cmd) + LP_CMD_BASE)
+static const lpfg_name LPFG_NAMES[] = {
+    {"F", C(CBM_T_F)},
+    {"f", C(CBM_T_f)},
+    {"G", C(CBM_T_G)},
+    {"g", C(CBM_T_g)},
+    {"Left", C(CBM_T_LEFT)},
+    {"Right", C(CBM_T_RIGHT)},
+    {"TurnAround", C(CBM_T_TURN_AROUND)},
+    {"SB", C(CBM_T_PUSH)},
+    {"EB", C(CBM_T_POP)},
+    {"SetWidth", C(CBM_T_WIDTH)},
+    {"IncWidth", C(CBM_T_WIDTH_INC)},
+    {"Cut", C(CBM_T_CUT)},
+    {"SP", C(CBM_T_POLY_BEGIN)},
+    {"EP", C(CBM_T_POLY_END)},
+    {"PP", C(CBM_T_POLY_VERTEX)},
+    {"StartGC", C(CBM_T_GC_START)},
+    {"PointGC", C(CBM_T_GC_CONTROL)},
+    {"EndGC", C(CBM_T_GC_END)},
+    {"CurrentContour", C(CBM_T_CONTOUR_SET)},
+    {"SetHead", C(CBM_T_SET_HEAD)},
+    {"RollToVert", C(CBM_T_ROLL_TO_VERT)},
+    {"LineTo3d", C(CBM_T_LINE_TO)},
+    {"LineRel3d", C(CBM_T_LINE_REL)},
+    {"MoveTo3d", C(CBM_T_MOVE_TO)},
+    {"MoveRel3d", C(CBM_T_MOVE_REL)},
+    {"Elasticity", C(CBM_T_ELASTICITY)},
+    {"ScaleContour", C(CBM_T_SCALE_CONTOUR)},
+    {"SetColor", LP_SET_COLOR},
+    {"IncColor", LP_INC_COLOR},
+    {"DecColor", LP_DEC_COLOR},
+    {"Sphere", LP_SPHERE},
+    {"Sphere0", LP_SPHERE},
+    {"Circle", LP_CIRCLE},
+    {"Circle0", LP_CIRCLE},
+};
+#undef C
+
+/* The lpfg operation of each symbol of an L+C model. Up/Down and RollL/RollR depend on the view's
+ * "corrected rotation:" (on by default): lpfg's frame has U opposite to this turtle's (lpfg: L =
+ * U x H), so with corrected rotation lpfg's Down and Up are cpfg's & and ^ and lpfg's RollL and
+ * RollR are cpfg's / and \; without it, the reverse. */
+static void lpfg_map(cbm_model *m)
+{
+    bool corrected = cbm__view_lpfg_corrected(m->view);
+    for (int sym = 1; sym < 128; sym++) {
+        const char *nm = cbm_lsys_module_name(m->ls, sym);
+        m->lmap[sym] = 0;
+        if (!nm)
+            continue;
+        int op = -1;
+        if (!strcmp(nm, "Down"))
+            op = corrected ? CBM_T_PITCH_DOWN : CBM_T_PITCH_UP;
+        else if (!strcmp(nm, "Up"))
+            op = corrected ? CBM_T_PITCH_UP : CBM_T_PITCH_DOWN;
+        else if (!strcmp(nm, "RollL"))
+            op = corrected ? CBM_T_ROLL_RIGHT : CBM_T_ROLL_LEFT;
+        else if (!strcmp(nm, "RollR"))
+            op = corrected ? CBM_T_ROLL_LEFT : CBM_T_ROLL_RIGHT;
+        if (op >= 0) {
+            m->lmap[sym] = (int16_t)(op + LP_CMD_BASE);
+            continue;
+        }
+        for (size_t i = 0; i < sizeof LPFG_NAMES / sizeof LPFG_NAMES[0]; i++)
+            if (!strcmp(nm, LPFG_NAMES[i].name)) {
+                m->lmap[sym] = (int16_t)LPFG_NAMES[i].op;
+                break;
+            }
+    }
+}
+
+/* One module of an L+C model through the turtle, with lpfg's meaning. */
+static cbm_status lpfg_exec(cbm_turtle *t, int op, double *p, int n)
+{
+    if (op >= LP_CMD_BASE)
+        return cbm__turtle_exec(t, op - LP_CMD_BASE, p, n);
+    int color = 1;
+    double x;
+    switch (op) {
+    case LP_SET_COLOR:
+        if (n < 1 || !(p[0] >= 1.0 && p[0] < 256.0))
+            return cbm__turtle_exec(t, CBM_T_NONE, NULL, 0); /* lpfg ignores it */
+        x = (double)(int)p[0];
+        return cbm__turtle_exec(t, CBM_T_COLOR_INC, &x, 1);
+    case LP_INC_COLOR:
+    case LP_DEC_COLOR:
+        cbm_turtle_state(t, NULL, NULL, NULL, NULL, NULL, &color);
+        if (op == LP_INC_COLOR)
+            color = color >= 255 ? 1 : color + 1;
+        else
+            color = color <= 1 ? 255 : color - 1;
+        x = color;
+        return cbm__turtle_exec(t, CBM_T_COLOR_INC, &x, 1);
+    case LP_SPHERE:
+    case LP_CIRCLE: {
+        int cmd = op == LP_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE;
+        if (n < 1)
+            return cbm__turtle_exec(t, cmd, NULL, 0); /* diameter: the width */
+        x = 2.0 * p[0];
+        return cbm__turtle_exec(t, cmd, &x, 1);
+    }
+    default:
+        return cbm__turtle_exec(t, CBM_T_NONE, NULL, 0);
+    }
+}
 
 /* The turtle over the homomorphic image; query values written back into the image. */
 static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
@@ -46,6 +179,11 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
         int n = c.nparams;
         if (n > 0)
             memcpy(buf, c.params, (size_t)n * sizeof(double));
+        if (m->lpfg) {
+            int op = c.symbol > 0 && c.symbol < 128 ? m->lmap[c.symbol] : 0;
+            s = lpfg_exec(t, op, buf, n);
+            continue;
+        }
         s = cbm__turtle_feed(t, c.symbol, buf, n);
         if (s == CBM_OK && after_query && n > 0 &&
             (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U'))
@@ -55,6 +193,30 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
     }
     if (s == CBM_OK)
         s = cbm__turtle_finish(t);
+    return s;
+}
+
+/* L+C: func(name, x) calls the function set's function of that name (its "name:" line). */
+static cbm_status set_func_ids(cbm_model *m)
+{
+    const char *const *names = NULL;
+    size_t n = cbm_lsys_func_names(m->ls, &names);
+    if (n == 0)
+        return CBM_OK;
+    int *ids = cbm__alloc(m->ctx, n * sizeof *ids);
+    if (!ids)
+        return CBM_E_NOMEM;
+    cbm_status s = CBM_OK;
+    for (size_t i = 0; i < n && s == CBM_OK; i++) {
+        ids[i] = cbm_funcset_find(cbm_view_functions(m->view), names[i]);
+        if (ids[i] <= 0)
+            s = cbm__fail(m->ctx, CBM_E_NOT_FOUND,
+                          "func(%s, x): no function named \"%s\" in the function files", names[i],
+                          names[i]);
+    }
+    if (s == CBM_OK)
+        s = cbm_lsys_set_func_ids(m->ls, ids, n);
+    cbm__free(m->ctx, ids, n * sizeof *ids);
     return s;
 }
 
@@ -87,8 +249,21 @@ cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model 
     for (size_t i = 0; i < m->ls->smods.len && !m->may_query; i++)
         m->may_query = (m->ls->smods.data[i].sym & 0x7f) == '?';
     /* without function files func() stays an error naming what is missing */
-    if (cbm_funcset_count(cbm_view_functions(m->view)) > 0)
+    if (cbm_funcset_count(cbm_view_functions(m->view)) > 0) {
         cbm_lsys_set_func(m->ls, cbm_view_func_callback, m->view);
+        s = set_func_ids(m);
+        if (s != CBM_OK) {
+            cbm_model_destroy(m);
+            return s;
+        }
+    }
+    m->lpfg = cbm_lsys_module_name(m->ls, '[') != NULL;
+    if (m->lpfg) {
+        m->may_query = false; /* cpfg's ?P ?H ?L ?U: a user module may have the code '?' */
+        cbm__view_lpfg_functions(m->view);
+        lpfg_map(m);
+        cbm__turtle_set_lpfg(m->query_turtle, true);
+    }
     *out = m;
     return CBM_OK;
 }
@@ -160,6 +335,7 @@ cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_
     cbm_turtle *t = NULL;
     CBM_TRY(cbm__turtle_create(m->ctx, m->view, scene, &t));
     cbm__turtle_set_record(t, record);
+    cbm__turtle_set_lpfg(t, m->lpfg);
     m->pass = t;
     cbm_status s;
     if (cbm_lsys_has_homomorphism(m->ls)) {

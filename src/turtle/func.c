@@ -112,8 +112,9 @@ static void curve_point(const cbm__func *f, double d, double *x, double *y)
     *y = sy;
 }
 
-/* y at x by bisection on the curve parameter (cpfg's tolerance 0.001 in x). */
-static double exact_value(const cbm__func *f, double x)
+/* y at x by bisection on the curve parameter until |x(t) - x| <= tol (cpfg: 0.001; lpfg:
+ * 0.01 / samples). */
+static double bisect_value(const cbm__func *f, double x, double tol)
 {
     double lo = 0.0, hi = 1.0, cx = 0.0, cy = 0.0;
     for (int it = 0; it < 200; it++) {
@@ -123,10 +124,27 @@ static double exact_value(const cbm__func *f, double x)
             hi = mid;
         else
             lo = mid;
-        if (fabs(cx - x) <= 0.001)
+        if (fabs(cx - x) <= tol)
             break;
     }
     return cy;
+}
+
+static double exact_value(const cbm__func *f, double x)
+{
+    return bisect_value(f, x, 0.001);
+}
+
+void cbm__funcset_lpfg(cbm_funcset *fs)
+{
+    for (size_t k = 0; k < fs->funcs.len; k++) {
+        cbm__func *f = &fs->funcs.data[k];
+        if (f->samples <= 2)
+            continue;
+        double tol = 0.01 / f->samples;
+        for (int i = 0; i < f->samples; i++)
+            f->vals[i] = bisect_value(f, (double)i / (double)(f->samples - 1), tol);
+    }
 }
 
 static double func_value(const cbm__func *f, double x)

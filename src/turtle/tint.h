@@ -25,6 +25,9 @@ struct cbm_funcset {
     cbm_context *ctx;
     CBM_ARRAY(cbm__func) funcs;
 };
+/* Re-tabulates the functions with lpfg's bisection tolerance (0.01 / samples instead of cpfg's
+ * 0.001), as lpfg's function files evaluate. */
+void cbm__funcset_lpfg(cbm_funcset *fs);
 
 cbm_status cbm__func_read(cbm_context *ctx, const char *path, const char *text, int samples,
                           cbm__func *f);
@@ -84,9 +87,10 @@ struct cbm_view {
     double step;         /* step of F, f without parameter */
     double scale;        /* scale factor of the view (display only; kept) */
     cbm__line_style line_style;
-    int sides;     /* contour sides of cylinders */
-    bool gc_twist; /* twist of cylinders */
-    bool past_cut; /* interpret past % (cpfg's default: the engine cuts when deriving) */
+    int sides;             /* contour sides of cylinders */
+    bool gc_twist;         /* twist of cylinders */
+    bool past_cut;         /* interpret past % (cpfg's default: the engine cuts when deriving) */
+    bool lpfg_uncorrected; /* lpfg's "corrected rotation: off" (Up/Down, RollL/RollR swapped) */
     /* ABOP tropism (T and e of ABOP section 2.2: "tropism direction", "initial elasticity") */
     cbm_vec3 tropism_dir;
     double elasticity, elasticity_inc;

@@ -23,6 +23,10 @@
  * (1.2 by default, as cpfg), n bands each; the rings are contours resampled by arc length,
  * carried along by the minimal rotation of U (cpfg's generalized cylinders, cpfg manual
  * "Generalized cylinders").
+ * lpfg's mode (L+C models, cbm__turtle_set_lpfg): colour 1 at the start, each F drawn at once as
+ * a cylinder of the current width, and lpfg's commands SetHead, RollToVert, LineTo3d/LineRel3d
+ * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
+ * lpfg's frame has U opposite to ours (its L = U x H), which these commands account for.
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
@@ -48,6 +52,7 @@ typedef struct tstate {
     cbm_vec3 pos, h, l, u;
     cbm_vec3 prev_h, prev_u;
     double width;
+    double width_up; /* lpfg's ScaleContour: the section's width along U (= width otherwise) */
     double elasticity;
     double mov_e[CBM__MAX_MOVEMENTS];
     int color;
@@ -70,12 +75,14 @@ struct cbm_turtle {
     const cbm_view *view;
     cbm_scene *scene;
     bool record;
+    bool lpfg; /* lpfg's turtle: initial colour 1, each F its own cylinder */
     tstate cur;
     CBM_ARRAY(tstate) stack;
     /* the open segment */
     bool node_open;
     cbm_vec3 node_p, node_h, node_u;
     double node_w;
+    double node_wup; /* lpfg: the width along U at the start */
     int node_color;
     /* polygons */
     CBM_ARRAY(cbm_vec3) polypts;
@@ -195,6 +202,7 @@ static void init_state(cbm_turtle *t)
     s->prev_h = s->h;
     s->prev_u = s->u;
     s->width = v->width;
+    s->width_up = v->width;
     s->elasticity = v->elasticity;
     for (int i = 0; i < v->nmov; i++)
         s->mov_e[i] = v->mov[i].elasticity;
@@ -245,9 +253,16 @@ void cbm__turtle_destroy(cbm_turtle *t)
     cbm__free(ctx, t, sizeof *t);
 }
 
+void cbm__turtle_set_lpfg(cbm_turtle *t, bool lpfg)
+{
+    t->lpfg = lpfg;
+}
+
 void cbm__turtle_reset(cbm_turtle *t)
 {
     init_state(t);
+    if (t->lpfg)
+        t->cur.color = 1;
     t->stack.len = 0;
     t->node_open = false;
     t->polypts.len = 0;
@@ -330,8 +345,19 @@ static inline void rotate_pair(cbm_vec3 *v2, cbm_vec3 *v3p, double s, double c)
 /* ---- segments ---- */
 
 /* A segment in cpfg's terms: dropped when degenerate (length^2 <= 1e-5 or no end width). */
+static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
+                                 double wu, int color, cbm_vec3 h, cbm_vec3 u);
+
 static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
                                int color, cbm_vec3 h, cbm_vec3 u)
+{
+    return emit_segment_e(t, p0, p1, w0, w1, -1.0, color, h, u);
+}
+
+/* A segment; wu >= 0: an elliptic section of width w0 along L and wu along U (lpfg's
+ * ScaleContour; the record keeps w0 / 2). */
+static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
+                                 double wu, int color, cbm_vec3 h, cbm_vec3 u)
 {
     cbm_vec3 d = v3_sub(p1, p0);
     if (v3_norm2(d) <= 0.00001 || w1 <= 0.0 || (!t->record && !t->scene))
@@ -361,8 +387,9 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
         return cbm_scene_add_polygon(t->scene, q, 4);
     }
     int sides = t->cur.sides; /* as cpfg's own OBJ output, pixel lines too */
-    cbm_section s0 = {p0, f, pr.r0, pr.r0};
-    cbm_section s1 = {p1, f, pr.r1, pr.r1};
+    double a0 = wu >= 0.0 ? wu / 2.0 : pr.r0, a1 = wu >= 0.0 ? wu / 2.0 : pr.r1;
+    cbm_section s0 = {p0, f, a0, pr.r0};
+    cbm_section s1 = {p1, f, a1, pr.r1};
     return cbm_scene_add_tube(t->scene, &s0, &s1, sides, false);
 }
 
@@ -383,6 +410,7 @@ static void start_node(cbm_turtle *t)
     t->node_h = t->cur.h;
     t->node_u = t->cur.u;
     t->node_w = t->cur.width;
+    t->node_wup = t->cur.width_up;
     t->node_color = t->cur.color;
 }
 
@@ -962,6 +990,13 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     bend(t);
     if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
         CBM_TRY(poly_vertex(t));
+    if (draw && t->lpfg) {
+        /* lpfg draws each F at once as a cylinder of the current width */
+        t->node_open = false;
+        box_add(t, s->pos);
+        CBM_TRY(emit_segment_e(t, t->node_p, s->pos, t->node_w, t->node_w, t->node_wup,
+                               t->node_color, t->node_h, t->node_u));
+    }
     if (draw) {
         s->prev_h = s->h;
         s->prev_u = s->u;
@@ -1001,6 +1036,55 @@ static cbm_status poly_end(cbm_turtle *t)
     return CBM_OK;
 }
 
+/* lpfg's SetHead(h, u): H = h/|h|, U = the part of u/|u| normal to H (lpfg's U, which is minus
+ * this turtle's U: lpfg's frame has L = U x H, cpfg's L = H x U). Null or parallel vectors leave
+ * the frame as it is, as lpfg. */
+static cbm_status set_head(cbm_turtle *t, const double *params, int nparams)
+{
+    if (nparams < 6)
+        return CBM_OK;
+    tstate *s = &t->cur;
+    cbm_vec3 h = v3(params[0], params[1], params[2]), u = v3(params[3], params[4], params[5]);
+    if (v3_norm(h) < 1e-5 || v3_norm(u) < 1e-5)
+        return CBM_OK;
+    h = v3_normalize(h);
+    u = v3_normalize(u);
+    cbm_vec3 l = v3_cross(u, h);
+    if (v3_norm(l) < 1e-5)
+        return CBM_OK;
+    s->h = h;
+    s->l = v3_normalize(l);
+    s->u = v3_cross(s->l, s->h); /* this turtle's U = L x H = -(lpfg's H x L) */
+    return CBM_OK;
+}
+
+/* lpfg's LineTo3d(p) and LineRel3d(d): a segment from the position to p (or by d), drawn with
+ * the heading along it and L normal to the old U, then the frame as before. */
+static cbm_status line_to(cbm_turtle *t, int cmd, const double *params, int nparams)
+{
+    if (nparams < 3)
+        return CBM_OK;
+    tstate *s = &t->cur;
+    cbm_vec3 p = v3(params[0], params[1], params[2]);
+    cbm_vec3 d = cmd == CBM_T_LINE_TO ? v3_sub(p, s->pos) : p;
+    double len = v3_norm(d);
+    if (len < 1e-5)
+        return CBM_OK;
+    cbm_vec3 h0 = s->h, l0 = s->l, u0 = s->u;
+    s->h = v3_scale(d, 1.0 / len);
+    cbm_vec3 l = v3_cross(s->h, s->u); /* lpfg: U x H with its U = -ours */
+    if (v3_norm(l) < 1e-5)
+        l = v3(-s->h.y, s->h.x, 0.0);
+    s->l = v3_norm(l) < 1e-5 ? v3(1, 0, 0) : v3_normalize(l);
+    s->u = v3_cross(s->l, s->h);
+    double len_param = len;
+    cbm_status st = move(t, CBM_T_F, &len_param, 1);
+    s->h = h0;
+    s->l = l0;
+    s->u = u0;
+    return st;
+}
+
 /* The @ commands (and the queries): they end the current segment first, as in cpfg. */
 static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
 {
@@ -1023,6 +1107,32 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_CONTOUR:
         return sphere_or_disc(t, cmd == CBM_T_SPHERE ? CBM_T_SPHERE : CBM_T_CIRCLE, params,
                               nparams);
+    case CBM_T_SCALE_CONTOUR:
+        /* lpfg's ScaleContour(p, q): the section's width along L and along U */
+        if (nparams >= 2) {
+            s->width = params[0];
+            s->width_up = params[1];
+        }
+        return CBM_OK;
+    case CBM_T_ROLL_TO_VERT: {
+        /* lpfg's RollToVert: L = y x H, or -x when H is vertical; U (this turtle's) = L x H */
+        cbm_vec3 l = v3_cross(v3(0, 1, 0), s->h);
+        s->l = v3_norm(l) < 1e-5 ? v3(-1, 0, 0) : v3_normalize(l);
+        s->u = v3_cross(s->l, s->h);
+        return CBM_OK;
+    }
+    case CBM_T_SET_HEAD:
+        return set_head(t, params, nparams);
+    case CBM_T_LINE_TO:
+    case CBM_T_LINE_REL:
+        return line_to(t, cmd, params, nparams);
+    case CBM_T_MOVE_REL:
+        CBM_TRY(end_node(t));
+        if (nparams >= 3) {
+            s->pos = v3_add(s->pos, v3(params[0], params[1], params[2]));
+            box_add(t, s->pos);
+        }
+        return CBM_OK;
     case CBM_T_MOVE_TO:
         if (nparams >= 2) {
             s->pos = v3(params[0], params[1], nparams >= 3 ? params[2] : 0.0);
@@ -1209,6 +1319,7 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
             s->width += v->width_inc;
         if (s->width < 0.0000001f)
             s->width = 0.0000001f;
+        s->width_up = s->width;
         return CBM_OK;
     }
     case CBM_T_COLOR_INC:

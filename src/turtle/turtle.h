@@ -65,7 +65,14 @@ typedef enum cbm_tcmd {
     CBM_T_GC_TANGENT,   /* @Gt(a[,b]) tangent parameters of generalized cylinders */
     CBM_T_GC_RADIUS,    /* @Gr(...) radius tangents of generalized cylinders */
     CBM_T_TWIST_ADJUST, /* @Tp: U follows H from the last drawn segment without twist */
-    CBM_T_TWIST_KEEP    /* @Tf: the current frame becomes the reference of @Tp */
+    CBM_T_TWIST_KEEP,   /* @Tf: the current frame becomes the reference of @Tp */
+    /* lpfg's commands that cpfg lacks (L+C dialect; no module symbol: the model maps names) */
+    CBM_T_SET_HEAD,     /* SetHead(hx,hy,hz, ux,uy,uz): heading and up in lpfg's frame */
+    CBM_T_LINE_TO,      /* LineTo3d(x,y,z): a segment to the point, the frame kept */
+    CBM_T_LINE_REL,     /* LineRel3d(dx,dy,dz): a segment by the vector, the frame kept */
+    CBM_T_MOVE_REL,     /* MoveRel3d(dx,dy,dz): move by the vector without drawing */
+    CBM_T_ROLL_TO_VERT, /* RollToVert: roll so that L is horizontal (-x if H is vertical) */
+    CBM_T_SCALE_CONTOUR /* ScaleContour(p, q): widths of the section along L and U */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.
@@ -100,6 +107,16 @@ cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int npara
 /// Keep a record of the primitives (cylinders, polygons, ...; see cbm_turtle_prims). Off by
 /// default.
 void cbm__turtle_set_record(cbm_turtle *t, bool record);
+
+/// lpfg's initial state (L+C models): colour index 1 instead of the view's, as lpfg's turtle.
+/// Takes effect at the next cbm__turtle_reset.
+void cbm__turtle_set_lpfg(cbm_turtle *t, bool lpfg);
+/// lpfg's view-file setting "corrected rotation:" (on unless the view file says off).
+bool cbm__view_lpfg_corrected(const cbm_view *view);
+
+/// lpfg's function evaluation for the view's functions (L+C models): tabulated with lpfg's
+/// bisection tolerance, 0.01 / samples in x, rather than cpfg's 0.001.
+void cbm__view_lpfg_functions(cbm_view *view);
 
 /// Value of function `id` (1-based, in the order the function files were given, as cpfg) at x.
 double cbm__funcset_eval(const cbm_funcset *fs, int id, double x);

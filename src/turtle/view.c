@@ -596,6 +596,11 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
             v->sides = (int)rint(pow(2.0, level + 1));
             if (v->sides <= 2)
                 v->sides = 3;
+        } else if (KEY("corrected rotation")) {
+            const char *w = a;
+            while (*w == ' ' || *w == '\t')
+                w++;
+            v->lpfg_uncorrected = strncmp(w, "off", 3) == 0;
         } else if (KEY("twist of cylinders")) {
             v->gc_twist = word_on(a);
         } else if (KEY("interpretation past %")) {
@@ -674,4 +679,14 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
 #undef NEED
     }
     return result;
+}
+
+bool cbm__view_lpfg_corrected(const cbm_view *view)
+{
+    return !view->lpfg_uncorrected;
+}
+
+void cbm__view_lpfg_functions(cbm_view *view)
+{
+    cbm__funcset_lpfg(&view->funcs);
 }
