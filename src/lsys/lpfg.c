@@ -331,7 +331,7 @@ static const char *const TURTLE[][3] = {
     {"RollL", "\\", "f"},      {"RollR", "/", "f"},
     {"TurnAround", "|", ""},   {"SB", "[", ""},
     {"EB", "]", ""},           {"SetWidth", "!", "f"},
-    {"IncColor", "'", ""},     {"DecColor", ";", ""},
+    {"IncColor", "'", ""},     {"DecColor", ",", ""},
     {"SetColor", "", "i"},     {"Cut", "%", ""},
     {"SP", "{", ""},           {"EP", "}", ""},
     {"PP", ".", ""},           {"Sphere", "", "f"},
