@@ -90,6 +90,7 @@ TEST(progress_line)
     cbm_progress q = {0, 100, 10, 0, 0.0};
     cbm_progress_format(&q, 60, buf, sizeof buf);
     CHECK(strstr(buf, "left ?") != NULL && strlen(buf) <= 60);
+    CHECK(strstr(buf, "passes") == NULL); /* no equilibrium passes: none shown */
     cbm_progress r = {30, 100, 10, 0, 600.0};
     cbm_progress_format(&r, 30, buf, sizeof buf);
     CHECK(strlen(buf) <= 30);

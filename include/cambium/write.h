@@ -199,8 +199,9 @@ typedef struct cbm_progress {
     double elapsed;     ///< s since the start
 } cbm_progress;
 
-/// One line (no newline) of at most `width` characters: a bar, step k/n, modules, passes and the
-/// time left estimated from the rate so far. Returns the line's length.
+/// One line (no newline) of at most `width` characters: a bar, step k/n, modules, equilibrium
+/// passes (when non-zero) and the time left estimated from the rate so far. Returns the line's
+/// length.
 CBM_API size_t cbm_progress_format(const cbm_progress *p, int width, char *buf, size_t size);
 
 #ifdef __cplusplus

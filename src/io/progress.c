@@ -42,8 +42,12 @@ size_t cbm_progress_format(const cbm_progress *p, int width, char *buf, size_t s
         snprintf(mods, sizeof mods, "%.3g", (double)p->modules);
     else
         snprintf(mods, sizeof mods, "%zu", p->modules);
-    int n = snprintf(tail, sizeof tail, " %3d%%  step %zu/%zu  %s modules  %zu passes  left %s",
-                     (int)floor(100.0 * frac), p->step, p->steps, mods, p->passes, left);
+    /* runs without mechanics (plain L-systems) have no equilibrium passes to show */
+    char passes[40] = "";
+    if (p->passes > 0)
+        snprintf(passes, sizeof passes, "  %zu passes", p->passes);
+    int n = snprintf(tail, sizeof tail, " %3d%%  step %zu/%zu  %s modules%s  left %s",
+                     (int)floor(100.0 * frac), p->step, p->steps, mods, passes, left);
     if (n < 0)
         return 0;
     int bar = width - n - 2;
