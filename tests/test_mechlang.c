@@ -47,22 +47,23 @@ static int symbol_of(const cbm_lsys *ls, const char *name)
     return -1;
 }
 
-static const char CHAIN[] = "#include <lpfgall.h>\n"
-                            "derivation length: 1;\n"
-                            "module I(MechSegment);\n"
-                            "module Fruit(double);\n"
-                            "mechanics: I;\n"
-                            "mass: Fruit;\n"
-                            "MechSegment S(double len, double r)\n"
-                            "{\n"
-                            "    MechSegment s;\n"
-                            "    s.length = len; s.a = r; s.b = r; s.E = 2e9; s.density = 800;\n"
-                            "    return s;\n"
-                            "}\n"
-                            "Axiom: I(S(0.2, 0.01)) Right(30) I(S(0.15, 0.008))\n"
-                            "       SB RollR(70) Right(25) RollL(10) I(S(0.1, 0.005)) Fruit(0.05) EB\n"
-                            "       I(S(0.15, 0.006)) Fruit(0.02);\n"
-                            "EndEach: { Equilibrium(); }\n";
+static const char CHAIN[] =
+    "#include <lpfgall.h>\n"
+    "derivation length: 1;\n"
+    "module I(MechSegment);\n"
+    "module Fruit(double);\n"
+    "mechanics: I;\n"
+    "mass: Fruit;\n"
+    "MechSegment S(double len, double r)\n"
+    "{\n"
+    "    MechSegment s;\n"
+    "    s.length = len; s.a = r; s.b = r; s.E = 2e9; s.density = 800;\n"
+    "    return s;\n"
+    "}\n"
+    "Axiom: I(S(0.2, 0.01)) Right(30) I(S(0.15, 0.008))\n"
+    "       SB RollR(70) Right(25) RollL(10) I(S(0.1, 0.005)) Fruit(0.05) EB\n"
+    "       I(S(0.15, 0.006)) Fruit(0.02);\n"
+    "EndEach: { Equilibrium(); }\n";
 
 /* the same chain with cbm_plant; returns the distal node of the last segment */
 static cbm_status native_chain(cbm_context *ctx, cbm_vec3 *tip, cbm_vec3 *branch_tip)
@@ -143,4 +144,249 @@ TEST(mechlang_language_and_native_agree)
     CHECK(g[0][24] > 0.07);
     cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
+}
+
+static cbm_status load_model(cbm_context *ctx, const char *name, cbm_lsys **ls)
+{
+    char p[2048];
+    snprintf(p, sizeof p, "%s/models/%s", test_source_dir(), name);
+    return load(ctx, p, NULL, ls);
+}
+
+/* Fig. 2: the heading goes below the horizontal and the tip comes back above it. */
+TEST(mechlang_jirasek_s_branch)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_model(ctx, "jirasek-s-branch.l", &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
+        CHECK_OK(cbm_lsys_step(ls));
+    static double g[64][MS];
+    size_t n = segments(ls, symbol_of(ls, "I"), g, 64);
+    CHECK_EQ_INT(n, 30);
+    double lowest = 1;
+    size_t lo = 0;
+    for (size_t i = 0; i < n; i++)
+        if (g[i][17] < lowest) {
+            lowest = g[i][17];
+            lo = i;
+        }
+    CHECK(g[0][17] > 0.1);     /* leaves the base above the horizontal */
+    CHECK(lowest < -0.3);      /* sags well below it */
+    CHECK(g[n - 1][17] > 0.1); /* the tip turns back up */
+    CHECK(lo > 3 && lo < n - 3);
+    /* pipe model: the base is thicker than the tip, by sqrt(n) */
+    CHECK_REL(g[0][1], 0.002 * sqrt(30.0), 1e-9);
+    CHECK_REL(g[n - 1][1], 0.002, 1e-9);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 5: the stem tip's elevation decreases at every step as the cherries grow. */
+TEST(mechlang_jirasek_cherries)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_model(ctx, "jirasek-cherries.l", &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    double prev[3] = {2, 2, 2};
+    static double g[64][MS];
+    for (int i = 0; i < cbm_lsys_derivation_length(ls); i++) {
+        CHECK_OK(cbm_lsys_step(ls));
+        size_t n = segments(ls, symbol_of(ls, "I"), g, 64);
+        CHECK_EQ_INT(n, 24);
+        for (int s = 0; s < 3; s++) {
+            double hy = g[8 * s + 7][17];
+            CHECK_MSG(hy < prev[s], "step %d stem %d: %g after %g", i + 1, s, hy, prev[s]);
+            prev[s] = hy;
+        }
+    }
+    CHECK(prev[0] < -0.5 && prev[1] < -0.5 && prev[2] < -0.5);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+/* A production that copies a segment keeps its Omega and rings: a second equilibrium after the
+ * rewrite finds the state it was given (no change), and the rings laid before the rewrite are
+ * still there (section and rest rate). */
+TEST(mechlang_state_survives_rewriting)
+{
+    static const char M[] = "#include <lpfgall.h>\n"
+                            "derivation length: 2;\n"
+                            "module I(MechSegment);\n"
+                            "module A(int);\n"
+                            "mechanics: I;\n"
+                            "int step;\n"
+                            "MechSegment S()\n"
+                            "{\n"
+                            "    MechSegment s;\n"
+                            "    s.length = 0.1; s.a = 0.003; s.b = 0.003; s.E = 1e9;\n"
+                            "    s.density = 900; s.age = -1;\n"
+                            "    return s;\n"
+                            "}\n"
+                            "Start: { Tropism(0, 1, 0, 0.5); PipeModel(2, 3e-5); }\n"
+                            "EndEach: { step = step + 1; if (step == 1) { AddRings(); }\n"
+                            "           Equilibrium(); }\n"
+                            "Axiom: Down(60) I(S()) I(S()) I(S()) A(0);\n"
+                            "I(s) : { produce I(s); }\n"
+                            "A(n) : { produce A(n + 1); }\n";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load(ctx, "rewrite.l", M, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    double a[4][MS], b[4][MS];
+    int sym = symbol_of(ls, "I");
+    CHECK_EQ_INT(segments(ls, sym, a, 4), 3);
+    CHECK(a[0][1] > 0.003 * 1.0001); /* thickened by the pipe model */
+    CHECK(a[2][25] == 0);            /* new segments got their rest rate and age 0 */
+    CHECK(fabs(a[2][8]) > 0);
+    CHECK_OK(cbm_lsys_step(ls));
+    CHECK_EQ_INT(segments(ls, sym, b, 4), 3);
+    for (int i = 0; i < 3; i++)
+        for (int f = 0; f < MS; f++)
+            CHECK_NEAR(b[i][f], a[i][f], 1e-9 * (fabs(a[i][f]) + 1e-6));
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+/* Breakage: the segment over its modulus of rupture goes with the rest of its branch. */
+TEST(mechlang_break)
+{
+    static const char M[] = "#include <lpfgall.h>\n"
+                            "derivation length: 1;\n"
+                            "module I(MechSegment);\n"
+                            "module Fruit(double);\n"
+                            "mechanics: I;\n"
+                            "mass: Fruit;\n"
+                            "int broken;\n"
+                            "MechSegment S(double r, double mor)\n"
+                            "{\n"
+                            "    MechSegment s;\n"
+                            "    s.length = 0.1; s.a = r; s.b = r; s.E = 1e10;\n"
+                            "    s.density = 600; s.mor = mor;\n"
+                            "    return s;\n"
+                            "}\n"
+                            "EndEach: { Equilibrium(); broken = Break(); Equilibrium(); }\n"
+                            "Axiom: I(S(0.02, 5e7)) SB Down(90) I(S(0.004, 1e6)) I(S(0.004, 5e7))\n"
+                            "       Fruit(1) EB I(S(0.02, 5e7)) Fruit(0.1);\n";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load(ctx, "break.l", M, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    double g[4][MS];
+    int sym = symbol_of(ls, "I");
+    CHECK_EQ_INT(segments(ls, sym, g, 4), 2);
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), 6); /* I [ Down ] I Fruit */
+    CHECK(g[0][24] > 0.2 && g[0][24] < 0.3);    /* the broken branch's load is gone */
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+typedef struct diags {
+    char text[4096];
+} diags;
+
+static void sink(void *ud, const cbm_diagnostic *d)
+{
+    diags *g = ud;
+    size_t n = strlen(g->text);
+    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
+             d->col, d->message);
+}
+
+static void check_error(const char *text, const char *want)
+{
+    diags g;
+    memset(&g, 0, sizeof g);
+    cbm_context_def cd = cbm_context_def_default();
+    cd.diag = sink;
+    cd.diag_ud = &g;
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(&cd, &ctx));
+    if (!ctx)
+        return;
+    cbm_lsys *ls = NULL;
+    CHECK_STATUS(load(ctx, "bad.l", text, &ls), CBM_E_SYNTAX);
+    CHECK_MSG(strstr(g.text, want) != NULL, "message '%s' lacks '%s'", g.text, want);
+    cbm_lsys_destroy(ls);
+    cbm_context_destroy(ctx);
+}
+
+TEST(mechlang_declaration_errors)
+{
+    check_error("#include <lpfgall.h>\nmodule I(V3f);\nmechanics: I;\nAxiom: I(V3f(0,0,0));\n",
+                "bad.l:3:12: mechanical module 'I' needs a MechSegment parameter");
+    check_error("#include <lpfgall.h>\nmodule I(MechSegment);\nmodule Fr(V3f);\nmechanics: I;\n"
+                "mass: Fr;\nAxiom: I(MechSegment());\n",
+                "bad.l:5:7: the first parameter of point-mass module 'Fr' must be a number");
+    check_error("#include <lpfgall.h>\nmodule I(MechSegment);\nmechanics: J;\n", "bad.l:3:12:");
+    check_error(
+        "#include <lpfgall.h>\nmodule I(MechSegment);\nmechanics: I;\nAxiom: I(MechSegment());\n"
+        "I(s) : { Equilibrium(); produce I(s); }\n",
+        "bad.l:5:10: Equilibrium() changes the whole string");
+}
+
+TEST(mechlang_runtime_errors)
+{
+    /* a zero length is refused with the segment named */
+    static const char M[] =
+        "#include <lpfgall.h>\nderivation length: 1;\nmodule I(MechSegment);\n"
+        "mechanics: I;\nAxiom: I(MechSegment());\nEndEach: { Equilibrium(); }\n";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load(ctx, "zero.l", M, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK(cbm_lsys_step(ls) != CBM_OK);
+    const char *msg = cbm_context_last_error(ctx);
+    CHECK_MSG(strstr(msg, "mechanical segment 1: length must be > 0") != NULL, "%s", msg);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+static cbm_status run_text(cbm_context *ctx, const char *path, const char *text, double *out,
+                           size_t max, size_t *n)
+{
+    cbm_lsys *ls = NULL;
+    cbm_status s = text ? load(ctx, path, text, &ls) : load_model(ctx, path, &ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(ls);
+    while (s == CBM_OK && cbm_lsys_steps_done(ls) < cbm_lsys_derivation_length(ls))
+        s = cbm_lsys_step(ls);
+    if (s == CBM_OK && out) {
+        cbm_lsys_cursor c;
+        *n = 0;
+        cbm_lsys_cursor_begin(ls, false, &c);
+        while (cbm_lsys_cursor_next(ls, false, &c))
+            for (int i = 0; i < c.nparams && *n < max; i++)
+                out[(*n)++] = c.params[i];
+    }
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
+TEST(mechlang_deterministic)
+{
+    cbm_context *ctx = test_ctx();
+    static double a[20000], b[20000];
+    size_t na = 0, nb = 0;
+    CHECK_OK(run_text(ctx, "jirasek-hanging.l", NULL, a, 20000, &na));
+    CHECK_OK(run_text(ctx, "jirasek-hanging.l", NULL, b, 20000, &nb));
+    CHECK(na > 1000);
+    CHECK_EQ_INT(na, nb);
+    CHECK(memcmp(a, b, na * sizeof a[0]) == 0);
+    test_ctx_end(ctx);
+}
+
+static cbm_status oom_chain(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    return run_text(ctx, "chain.l", CHAIN, NULL, 0, NULL);
+}
+
+TEST(mechlang_oom)
+{
+    CHECK(test_oom_loop(oom_chain, NULL) > 10);
 }

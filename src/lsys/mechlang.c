@@ -258,9 +258,9 @@ static cbm_status write_back(const cbm_plant *pl, const view *v, bool section)
         double *g = v->seg.data[i];
         cbm_segment_state st;
         CBM_TRY(cbm_plant_segment(pl, i, &st));
-        double o[] = {st.omega.x,   st.omega.y,   st.omega.z,   st.proximal.x, st.proximal.y,
-                      st.proximal.z, st.frame.h.x, st.frame.h.y, st.frame.h.z, st.frame.u.x,
-                      st.frame.u.y,  st.frame.u.z};
+        double o[] = {st.omega.x,    st.omega.y,    st.omega.z,   st.proximal.x,
+                      st.proximal.y, st.proximal.z, st.frame.h.x, st.frame.h.y,
+                      st.frame.h.z,  st.frame.u.x,  st.frame.u.y, st.frame.u.z};
         memcpy(g + MS_OMEGA, o, sizeof o);
         g[MS_STRESS] = st.stress;
         g[MS_RATIO] = isfinite(st.stress_ratio) ? st.stress_ratio : 0;
@@ -336,8 +336,8 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
     pd.gravity = m->gravity;
     pd.discretization = m->discretization;
     /* clamp: the turtle's initial frame, H = +y, L_plant = +x, U = -z */
-    pd.base_orientation = q_mul(q_axis_angle(v3(0, 0, 1), CBM_PI / 2),
-                                q_axis_angle(v3(1, 0, 0), CBM_PI));
+    pd.base_orientation =
+        q_mul(q_axis_angle(v3(0, 0, 1), CBM_PI / 2), q_axis_angle(v3(1, 0, 0), CBM_PI));
     cbm_plant *pl = NULL;
     view v;
     memset(&v, 0, sizeof v);
