@@ -350,6 +350,7 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         st = apply_tropism(m, pl, &v);
     if (st == CBM_OK && op == CBM__ML_EQUILIBRIUM) {
         cbm_solve_stats ss;
+        memset(&ss, 0, sizeof ss);
         cbm_solve_def sd = m->solve;
         sd.warm_start = true;
         st = cbm_plant_solve(pl, &sd, &ss);
@@ -357,7 +358,7 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         if (st == CBM_OK)
             st = write_back(pl, &v, false);
     } else if (st == CBM_OK && op == CBM__ML_RINGS) {
-        cbm_growth_stats gs;
+        cbm_growth_stats gs = {0, 0, 0};
         st = cbm_plant_evaluate(pl, NULL);
         if (st == CBM_OK)
             st = cbm_plant_grow_rings(pl, &m->growth, &gs);
