@@ -231,7 +231,7 @@ static cbm_status apply_tropism(const cbm__mechlang *m, cbm_plant *pl, const vie
             CBM_TRY(cbm_plant_segment(pl, (size_t)par[i], &ps));
             lever = v3_scale(ps.frame.h, ps.length);
         }
-        /* the frame before bending: the evaluated frame with Omega turned back */
+        /* the frame before bending: the evaluated frame (a new segment has not bent yet) */
         cbm_vec3 tau = v3_cross(lever, f);
         cbm_vec3 loc = frame_to_local(st.frame, tau);
         cbm_vec3 rest = v3(loc.x / st.rigidity.x, loc.y / st.rigidity.y, loc.z / st.rigidity.z);
