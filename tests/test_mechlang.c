@@ -367,6 +367,42 @@ static cbm_status run_text(cbm_context *ctx, const char *path, const char *text,
     return s;
 }
 
+/* Fig. 3: the laterals hang well below the horizontal and their tips turn back up. */
+TEST(mechlang_jirasek_hanging)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_model(ctx, "jirasek-hanging.l", &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
+        CHECK_OK(cbm_lsys_step(ls));
+    int sym = symbol_of(ls, "I"), sb = symbol_of(ls, "SB"), eb = symbol_of(ls, "EB");
+    cbm_lsys_cursor c;
+    cbm_lsys_cursor_begin(ls, false, &c);
+    int depth = 0, laterals = 0;
+    double lowest = 1, last = 1;
+    while (cbm_lsys_cursor_next(ls, false, &c)) {
+        if (c.symbol == sb) {
+            depth++;
+            lowest = last = 1;
+        } else if (c.symbol == eb) {
+            depth--;
+            laterals++;
+            CHECK_MSG(lowest < -0.6, "lateral %d: lowest heading %g", laterals, lowest);
+            CHECK_MSG(last > lowest + 0.05, "lateral %d: tip %g, lowest %g", laterals, last,
+                      lowest);
+        } else if (c.symbol == sym && depth > 0) {
+            last = c.params[17];
+            lowest = last < lowest ? last : lowest;
+        } else if (c.symbol == sym) {
+            CHECK(c.params[17] > 0.9); /* the stem stands */
+        }
+    }
+    CHECK_EQ_INT(laterals, 3);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
 TEST(mechlang_deterministic)
 {
     cbm_context *ctx = test_ctx();
