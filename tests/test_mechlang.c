@@ -251,6 +251,49 @@ TEST(mechlang_state_survives_rewriting)
     test_ctx_end(ctx);
 }
 
+/* ReactionWood: a leaning segment lays reaction wood in AddRings (a grows by the increment). */
+static const char RW[] = "#include <lpfgall.h>\n"
+                         "derivation length: 1;\n"
+                         "module I(MechSegment);\n"
+                         "mechanics: I;\n"
+                         "int rings;\n"
+                         "MechSegment S()\n"
+                         "{\n"
+                         "    MechSegment s;\n"
+                         "    s.length = 0.2; s.a = 0.003; s.b = 0.003; s.E = 1e9;\n"
+                         "    s.density = 900;\n"
+                         "    return s;\n"
+                         "}\n"
+                         "Axiom: Down(80) I(S()) I(S()) I(S());\n";
+
+TEST(mechlang_reaction_wood)
+{
+    static const char *const END[] = {
+        "EndEach: { Equilibrium(); rings = AddRings(); }\n",
+        "EndEach: { Equilibrium(); ReactionWood(0.01, 0.5, 0.001, 0); rings = AddRings(); }\n"};
+    double a[2][4][MS];
+    for (int k = 0; k < 2; k++) {
+        char text[1024];
+        snprintf(text, sizeof text, "%s%s", RW, END[k]);
+        cbm_context *ctx = test_ctx();
+        cbm_lsys *ls = NULL;
+        CHECK_OK(load(ctx, "rw.l", text, &ls));
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        CHECK_EQ_INT(segments(ls, symbol_of(ls, "I"), a[k], 4), 3);
+        cbm_lsys_destroy(ls);
+        test_ctx_end(ctx);
+    }
+    /* leaning under load: the base bends; reaction wood adds 1 mm to a */
+    CHECK(fabs(a[0][0][11]) > 0.01);
+    /* without reaction wood nothing thickens (no leaf area, equal children); with it the tip
+     * gains the increment and the pipe model carries the larger areas down */
+    for (int i = 0; i < 3; i++)
+        CHECK_NEAR(a[0][i][1], 0.003, 1e-15);
+    CHECK_NEAR(a[1][2][1], 0.004, 1e-12);
+    CHECK(a[1][1][1] > a[1][2][1] && a[1][0][1] > a[1][1][1]);
+}
+
 /* Breakage: the segment over its modulus of rupture goes with the rest of its branch. */
 TEST(mechlang_break)
 {

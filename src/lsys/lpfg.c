@@ -156,6 +156,7 @@ typedef enum {
     F_TROPISM,
     F_PIPEMODEL,
     F_WOOD,
+    F_REACTION,
     F_NONE
 } bfn;
 
@@ -217,6 +218,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
+                                {"ReactionWood", F_REACTION, 4},
                                 {"RAND_MAX", F_NONE, 0}};
 
 typedef struct xn {
@@ -1075,7 +1077,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                     cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
                     return -1;
                 }
-            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_WOOD && L->in_prod) {
+            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTION && L->in_prod) {
                 cbm__cerr(L->c, pos,
                           "%s() changes the whole string: call it in Start, StartEach, EndEach "
                           "or End",
@@ -1084,7 +1086,8 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             }
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
-                b->fn == F_TROPISM || b->fn == F_PIPEMODEL || b->fn == F_WOOD)
+                b->fn == F_TROPISM || b->fn == F_PIPEMODEL || b->fn == F_WOOD ||
+                b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2705,6 +2708,18 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         m->growth.density = a[3];
         m->growth.modulus_of_rupture = a[4];
         return;
+    case F_REACTION:
+        if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
+                     "E_reaction >= 0 Pa)");
+            return;
+        }
+        m->growth.reaction_threshold = a[0];
+        m->growth.reaction_beta = a[1];
+        m->growth.reaction_increment = a[2];
+        m->growth.reaction_youngs = a[3];
+        return;
     default:
         break;
     }
@@ -2815,7 +2830,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         }
         return;
     }
-    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_WOOD) {
+    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_REACTION) {
         call_mech(ls, n, fr, out);
         return;
     }
