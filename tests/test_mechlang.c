@@ -294,6 +294,27 @@ TEST(mechlang_reaction_wood)
     CHECK(a[1][1][1] > a[1][2][1] && a[1][0][1] > a[1][1][1]);
 }
 
+/* AgeWood: the modulus rises from E_juvenile towards E_adult (core ageing, Taylor-Hell 8.2). */
+TEST(mechlang_age_wood)
+{
+    char text[2048];
+    snprintf(text, sizeof text, "%s%s", RW,
+             "EndEach: { Wood(1e9, 2e9, 10, 900, 0); AgeWood(4); AgeWood(1); Equilibrium(); }\n");
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load(ctx, "age.l", text, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    double g[4][MS];
+    CHECK_EQ_INT(segments(ls, symbol_of(ls, "I"), g, 4), 3);
+    for (int i = 0; i < 3; i++) {
+        CHECK_REL(g[i][3], 1.5e9, 1e-12); /* 1 GPa + 5 years x (2 - 1) GPa / 10 years */
+        CHECK_NEAR(g[i][25], 5, 1e-12);
+    }
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
 /* Breakage: the segment over its modulus of rupture goes with the rest of its branch. */
 TEST(mechlang_break)
 {
@@ -465,7 +486,18 @@ static cbm_status oom_chain(cbm_context *ctx, void *ud)
     return run_text(ctx, "chain.l", CHAIN, NULL, 0, NULL);
 }
 
+static cbm_status oom_growth(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    char text[2048];
+    snprintf(text, sizeof text, "%s%s", RW,
+             "EndEach: { Equilibrium(); ReactionWood(0.01, 0.5, 0.001, 0); AddRings();\n"
+             "           AgeWood(1); Equilibrium(); Break(); }\n");
+    return run_text(ctx, "rw.l", text, NULL, 0, NULL);
+}
+
 TEST(mechlang_oom)
 {
     CHECK(test_oom_loop(oom_chain, NULL) > 10);
+    CHECK(test_oom_loop(oom_growth, NULL) > 10);
 }
