@@ -30,6 +30,7 @@
  * `ignore:`/`consider:` modules are passed over.
  */
 #include "lsys/lsys_internal.h"
+#include "lsys/mechlang.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -48,6 +49,7 @@ enum {
     T_QUAT,
     T_TVEC,
     T_LOCVEC,
+    T_MSEG, /* MechSegment (lsys/mechlang.h) */
     T_NBUILTIN
 };
 #define MAXF  16 /* parameters per module, fields per struct */
@@ -146,6 +148,15 @@ typedef enum {
     F_VECROT,
     F_TOLOCAL,
     F_TOWORLD,
+    F_EQUILIBRIUM,
+    F_ADDRINGS,
+    F_AGEWOOD,
+    F_BREAK,
+    F_GRAVITY,
+    F_TROPISM,
+    F_PIPEMODEL,
+    F_WOOD,
+    F_REACTION,
     F_NONE
 } bfn;
 
@@ -199,6 +210,15 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"VecRotate", F_VECROT, 3},
                                 {"ToLocal", F_TOLOCAL, 2},
                                 {"ToWorld", F_TOWORLD, 2},
+                                {"Equilibrium", F_EQUILIBRIUM, 0},
+                                {"AddRings", F_ADDRINGS, 0},
+                                {"AgeWood", F_AGEWOOD, 1},
+                                {"Break", F_BREAK, 0},
+                                {"Gravity", F_GRAVITY, 3},
+                                {"Tropism", F_TROPISM, 4},
+                                {"PipeModel", F_PIPEMODEL, 2},
+                                {"Wood", F_WOOD, 5},
+                                {"ReactionWood", F_REACTION, 4},
                                 {"RAND_MAX", F_NONE, 0}};
 
 typedef struct xn {
@@ -300,6 +320,8 @@ struct lpfg {
     cbm_status err;
     char errmsg[160];
     long budget;
+    cbm__mechlang mech; /* mechanics: declarations and settings */
+    bool rewriting;     /* inside a derivation pass: mechanics calls are refused */
 };
 
 /* ---- compiler state ---- */
@@ -1055,9 +1077,20 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                     cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
                     return -1;
                 }
+            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTION && L->in_prod) {
+                cbm__cerr(L->c, pos,
+                          "%s() changes the whole string: call it in Start, StartEach, EndEach "
+                          "or End",
+                          b->name);
+                return -1;
+            }
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
-                b->fn == F_SRAND || b->fn == F_STOP)
+                b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
+                b->fn == F_TROPISM || b->fn == F_PIPEMODEL || b->fn == F_WOOD ||
+                b->fn == F_REACTION)
                 rt = T_VOID;
+            else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
+                rt = T_INT;
             else if (b->fn == F_CURGROUP || b->fn == F_RAND)
                 rt = T_INT;
             else if ((b->fn == F_MIN || b->fn == F_MAX || b->fn == F_FABS) && args >= 0)
@@ -2018,6 +2051,55 @@ static void symbol_list(lc *L, bool consider)
         recover(L);
 }
 
+/* `mechanics: Module;` (its MechSegment parameter is the segment) and `mass: A, B;` (the first
+ * parameter, a number, is a point mass in kg). */
+static void mech_decl(lc *L, bool mass)
+{
+    lpfg *lp = L->lp;
+    for (;;) {
+        size_t n = ident(L), pos = L->c->pos;
+        if (!n) {
+            expected(L, "a module name");
+            recover(L);
+            return;
+        }
+        int m = find_mod(lp, L->t + pos, n);
+        L->c->pos += n;
+        if (m < 0) {
+            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
+        } else {
+            const lmod *md = &lp->mods.data[m];
+            int off = 0, found = -1;
+            for (int i = 0; i < md->np && found < 0; i++) {
+                if (mass ? i == 0 && is_scalar(md->ptype[i]) : md->ptype[i] == T_MSEG)
+                    found = off;
+                off += tsize(lp, md->ptype[i]);
+            }
+            if (found < 0 && mass)
+                cbm__cerr(L->c, pos,
+                          "the first parameter of point-mass module '%s' must be a number "
+                          "(its mass, kg)%s%s",
+                          md->name, md->np ? ", not " : "",
+                          md->np ? lp->types.data[md->ptype[0]].name : "");
+            else if (found < 0)
+                cbm__cerr(L->c, pos, "mechanical module '%s' needs a MechSegment parameter",
+                          md->name);
+            else if (!mass && lp->mech.seg_code >= 0 && lp->mech.seg_code != md->code)
+                cbm__cerr(L->c, pos, "only one module can carry the mechanical segment");
+            else if (mass)
+                lp->mech.mass_off[md->code] = found;
+            else {
+                lp->mech.seg_code = md->code;
+                lp->mech.seg_off = found;
+            }
+        }
+        if (!accept(L, ","))
+            break;
+    }
+    if (!expect(L, ";"))
+        recover(L);
+}
+
 /* `pred-with-contexts : { body }` */
 static void parse_production(lc *L, lset *set, int group)
 {
@@ -2262,9 +2344,10 @@ static cbm_status setup_builtins(lc *L)
 {
     lpfg *lp = L->lp;
     cbm_context *ctx = L->c->ctx;
-    static const char *const TN[] = {"void", "int", "float",      "double",    "bool",
-                                     "V3f",  "V3d", "Quaternion", "TurtleVec", "LocVec"};
-    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9, 3};
+    static const char *const TN[] = {"void",      "int",    "float",      "double",
+                                     "bool",      "V3f",    "V3d",        "Quaternion",
+                                     "TurtleVec", "LocVec", "MechSegment"};
+    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9, 3, MS_SIZE};
     for (int i = 0; i < T_NBUILTIN; i++)
         CBM_TRY(add_type(lp, ctx, TN[i], TS[i]));
     /* Quaternion {w, x, y, z} (double), TurtleVec {H, L, U} (V3f): built-in structs */
@@ -2296,6 +2379,26 @@ static cbm_status setup_builtins(lc *L)
         if (!tv->fname[i])
             return CBM_E_NOMEM;
     }
+    /* MechSegment: the fields at the offsets of lsys/mechlang.h */
+    static const char *const MF[] = {
+        "length", "a",   "b", "E", "G",      "density",      "mor",          "rest",
+        "omega",  "pos", "H", "U", "stress", "stress_ratio", "carried_mass", "age"};
+    static const int MO[] = {MS_LENGTH, MS_A,     MS_B,       MS_E,   MS_G, MS_DENSITY,
+                             MS_MOR,    MS_REST,  MS_OMEGA,   MS_POS, MS_H, MS_U,
+                             MS_STRESS, MS_RATIO, MS_CARRIED, MS_AGE};
+    ltype *ms = &lp->types.data[T_MSEG];
+    for (int i = 0; i < 16; i++) {
+        ms->fname[i] = cbm__strdup(ctx, MF[i]);
+        ms->ftype[i] = (MO[i] == MS_REST || MO[i] == MS_OMEGA || MO[i] == MS_POS || MO[i] == MS_H ||
+                        MO[i] == MS_U)
+                           ? T_V3D
+                           : T_DOUBLE;
+        ms->foff[i] = MO[i];
+        ms->nf++;
+        if (!ms->fname[i])
+            return CBM_E_NOMEM;
+    }
+    cbm__mechlang_init(&lp->mech);
     for (int i = 0; i < 128; i++) {
         lp->bycode[i] = -1;
         lp->considered[i] = true;
@@ -2350,6 +2453,10 @@ static void parse_top(lc *L)
             symbol_list(L, false);
         } else if (label(L, "consider")) {
             symbol_list(L, true);
+        } else if (label(L, "mechanics")) {
+            mech_decl(L, false);
+        } else if (label(L, "mass")) {
+            mech_decl(L, true);
         } else if (label(L, "Start")) {
             parse_block_item(L, 0);
         } else if (label(L, "StartEach")) {
@@ -2562,6 +2669,87 @@ static double nrand(cbm__eval *e, double m, double s)
     return m + s * v2 * f;
 }
 
+/* The mechanics built-ins (lsys/mechlang.c) over the current string. */
+static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
+{
+    lpfg *lp = ls->lp;
+    double a[5] = {0, 0, 0, 0, 0};
+    int na = 0;
+    for (int32_t x = n->a; x >= 0 && na < 5; x = lp->nodes.data[x].next)
+        a[na++] = evs(ls, x, fr);
+    if (lp->err != CBM_OK)
+        return;
+    cbm__mechlang *m = &lp->mech;
+    char msg[128];
+    switch ((bfn)n->fn) {
+    case F_GRAVITY:
+        m->gravity = (cbm_vec3){a[0], a[1], a[2]};
+        return;
+    case F_TROPISM:
+        m->tropism.direction = (cbm_vec3){a[0], a[1], a[2]};
+        m->tropism.strength = a[3];
+        return;
+    case F_PIPEMODEL:
+        if (!(a[0] > 0) || !(a[1] >= 0))
+            rt_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
+        m->growth.pipe_exponent = a[0];
+        m->growth.leaf_area = a[1];
+        return;
+    case F_WOOD:
+        if (!(a[0] > 0) || !(a[1] >= a[0]) || !(a[2] >= 0) || !(a[3] >= 0) || !(a[4] >= 0)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
+                     "modulus of rupture >= 0)");
+            return;
+        }
+        m->growth.youngs_juvenile = a[0];
+        m->growth.youngs_adult = a[1];
+        m->growth.adult_age = a[2];
+        m->growth.density = a[3];
+        m->growth.modulus_of_rupture = a[4];
+        return;
+    case F_REACTION:
+        if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
+                     "E_reaction >= 0 Pa)");
+            return;
+        }
+        m->growth.reaction_threshold = a[0];
+        m->growth.reaction_beta = a[1];
+        m->growth.reaction_increment = a[2];
+        m->growth.reaction_youngs = a[3];
+        return;
+    default:
+        break;
+    }
+    if (lp->rewriting) {
+        rt_error(lp, CBM_E_INVALID,
+                 "mechanics operations are refused during a derivation pass; call them in "
+                 "Start, StartEach, EndEach or End");
+        return;
+    }
+    int op = n->fn == F_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
+             : n->fn == F_ADDRINGS  ? CBM__ML_RINGS
+             : n->fn == F_AGEWOOD   ? CBM__ML_AGE
+                                    : CBM__ML_BREAK;
+    double r = 0;
+    cbm_status s = cbm__mechlang_run(ls->ctx, m, &ls->cur, op, a[0], &r, msg, sizeof msg);
+    if (s != CBM_OK) {
+        char full[160];
+        snprintf(full, sizeof full, "%s(): %s",
+                 n->fn == F_EQUILIBRIUM ? "Equilibrium"
+                 : n->fn == F_ADDRINGS  ? "AddRings"
+                 : n->fn == F_AGEWOOD   ? "AgeWood"
+                                        : "Break",
+                 msg);
+        rt_error(lp, s, full);
+        return;
+    }
+    ls->homo_valid = false;
+    out[0] = r;
+}
+
 static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
@@ -2640,6 +2828,10 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
                 out[i] = l > 0 ? v[i] / l : 0;
             conv_value(lp, n->type, out);
         }
+        return;
+    }
+    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_REACTION) {
+        call_mech(ls, n, fr, out);
         return;
     }
     for (int i = 0; i < 2 && x >= 0; i++, x = lp->nodes.data[x].next)
@@ -3569,9 +3761,11 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
                          cbm_context_limits(ls->ctx)->max_steps);
     lp->budget = ls->loop_budget;
     CBM_TRY(run_block(ls, 1));
+    lp->rewriting = true;
     cbm_status s = generate(ls);
     if (s == CBM_OK)
         s = decompose_cur(ls);
+    lp->rewriting = false;
     if (s != CBM_OK) {
         char what[48];
         snprintf(what, sizeof what, "step %d", ls->steps + 1);
@@ -3606,6 +3800,14 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
     ls->ev.nran_have = 0;
     glibc_srand(lp, 1);
+    { /* mechanics settings back to their defaults; the declarations stay */
+        cbm__mechlang m = lp->mech;
+        cbm__mechlang_init(&lp->mech);
+        lp->mech.seg_code = m.seg_code;
+        lp->mech.seg_off = m.seg_off;
+        memcpy(lp->mech.mass_off, m.mass_off, sizeof m.mass_off);
+    }
+    ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->gvars.len; g++) {
         const lgvar *v = &lp->gvars.data[g];
         lp->sp = 0;
@@ -3634,8 +3836,11 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     cbm_status s;
     if (!lp->interp.present || !lp->interp.prods.len)
         s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
-    else
+    else {
+        lp->rewriting = true;
         s = decompose(ls, &lp->interp, &ls->cur, &ls->homo_str, 0);
+        lp->rewriting = false;
+    }
     if (s != CBM_OK && lp->err != CBM_OK)
         return run_error(ls, "interpretation");
     if (s == CBM_OK)

@@ -1,0 +1,403 @@
+/* Mechanics inside the L+C dialect: the statics engine (include/cambium/mech.h) run over the
+ * module string, in place (Jirasek, Prusinkiewicz and Moulia 2000; Taylor-Hell 2005 ch. 6, 8).
+ *
+ * The string is the plant: one declared module carries a mechanical segment in a MechSegment
+ * parameter (inputs: length, semi-axes a >= b, E, G, density, modulus of rupture, rest rotation
+ * rate; state and outputs: Omega, proximal position, H, U, stress, stress ratio, carried mass,
+ * age), declared point-mass modules carry a mass in kg. One operation:
+ *   1. one left-to-right scan (O(n)) builds an index view: each segment's parent is the last
+ *      segment before it on its path from the root (a stack of it at `[`, restored at `]`); the
+ *      turtle rotations between the parent and the segment (+ - & ^ \ / |, explicit angles in
+ *      degrees) are composed in the parent's local frame into the branching rotation B and split
+ *      into the plant's (divergence about H, deviation about U, roll about H) Euler angles
+ *      (B = R_H(div) R_U(dev) R_H(roll)); a point mass is added at the distal end of the segment
+ *      it follows;
+ *   2. a cbm_plant is made of it (one ring per segment with the parameters' section and wood,
+ *      current Omega from the parameters), evaluated once; segments with a negative age are new:
+ *      their rest rate is set by the tropism from the frames of that evaluation (Taylor-Hell
+ *      6.8-6.12: tau = l_p H_p x F, rest = tau / C componentwise in the segment's frame before
+ *      bending; a root uses its own length and heading), Omega = rest, age 0;
+ *   3. the operation: equilibrium (cbm_plant_solve, warm-started from the stored Omega), rings
+ *      (cbm_plant_grow_rings: pipe model and shape memory, Jirasek eq. 24), ageing
+ *      (cbm_plant_age_wood, core ageing) or breakage (cbm_plant_break, then the broken modules
+ *      and the rest of their branches leave the string);
+ *   4. results go back into the parameters. A segment's rings are kept in the parameters as one
+ *      equivalent ring: E = C_L / I_L, G = C_H / J (the structural moduli, Taylor-Hell 8.5-8.6),
+ *      density = mass per length / area, rest = the rigidity-weighted rest rate, age = the oldest
+ *      ring's; this keeps C_H, C_L, the mass and the rest rate exactly (C_U too for a circular
+ *      section), so state survives any rewriting that copies the parameter.
+ * Frames: the turtle's (H, L, U) is left-handed (L = H x U, cpfg); the plant's is right-handed,
+ * so the plant's L is minus the turtle's and a turtle rotation maps to the plant's local axes
+ * with the signs in rot_of(). The clamp frame is the turtle's initial frame (H = +y, U = -z).
+ */
+#include "lsys/mechlang.h"
+
+#include "core/core.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+enum { TR_NONE, TR_LEFT, TR_RIGHT, TR_DOWN, TR_UP, TR_ROLL_L, TR_ROLL_R, TR_TURN };
+
+void cbm__mechlang_init(cbm__mechlang *m)
+{
+    memset(m, 0, sizeof *m);
+    m->seg_code = -1;
+    for (int i = 0; i < 128; i++)
+        m->mass_off[i] = -1;
+    m->turtle['+'] = TR_LEFT;
+    m->turtle['-'] = TR_RIGHT;
+    m->turtle['&'] = TR_DOWN;
+    m->turtle['^'] = TR_UP;
+    m->turtle['\\'] = TR_ROLL_L;
+    m->turtle['/'] = TR_ROLL_R;
+    m->turtle['|'] = TR_TURN;
+    m->sb = '[';
+    m->eb = ']';
+    m->gravity = v3(0, -9.81, 0);
+    m->tropism = cbm_tropism_default();
+    m->growth = cbm_growth_def_default();
+    m->growth.ageing = CBM_AGEING_CORE;
+    m->solve = cbm_solve_def_default();
+    m->discretization = CBM_MECH_STAGGERED;
+}
+
+/* The turtle rotation of `tr` by `deg` degrees as a rotation about the plant's local axes
+ * (x = H, y = L_plant = -L_turtle, z = U). */
+static cbm_quat rot_of(int tr, double deg)
+{
+    double a = deg * CBM_PI / 180.0;
+    switch (tr) {
+    case TR_LEFT: /* H towards L_turtle = -L_plant: about U by -a */
+        return q_axis_angle(v3(0, 0, 1), -a);
+    case TR_RIGHT:
+        return q_axis_angle(v3(0, 0, 1), a);
+    case TR_DOWN: /* H towards U: about L by -a */
+        return q_axis_angle(v3(0, 1, 0), -a);
+    case TR_UP:
+        return q_axis_angle(v3(0, 1, 0), a);
+    case TR_ROLL_R: /* L_turtle towards U: U towards L_plant: about H by -a */
+        return q_axis_angle(v3(1, 0, 0), -a);
+    case TR_ROLL_L:
+        return q_axis_angle(v3(1, 0, 0), a);
+    default: /* TR_TURN */
+        return q_axis_angle(v3(0, 0, 1), CBM_PI);
+    }
+}
+
+/* B = R_x(div) R_z(dev) R_x(roll): the proper Euler angles x-z-x of the rotation q. */
+static void euler_xzx(cbm_quat q, double *div, double *dev, double *roll)
+{
+    cbm_vec3 c0 = q_rotate(q, v3(1, 0, 0)), c1 = q_rotate(q, v3(0, 1, 0)),
+             c2 = q_rotate(q, v3(0, 0, 1));
+    /* M[r][c] = component r of column c */
+    double m00 = c0.x, m10 = c0.y, m20 = c0.z, m01 = c1.x, m11 = c1.y, m21 = c1.z, m02 = c2.x;
+    double sb = sqrt(m10 * m10 + m20 * m20);
+    *dev = atan2(sb, m00);
+    if (sb > 1e-12) {
+        *div = atan2(m20, m10);
+        *roll = atan2(m02, -m01);
+    } else if (m00 > 0) {
+        *div = 0;
+        *roll = atan2(m21, m11);
+    } else {
+        *div = 0;
+        *roll = atan2(m21, -m11);
+    }
+}
+
+typedef struct view {
+    CBM_ARRAY(double *) seg;  /* the MechSegment of each plant segment */
+    CBM_ARRAY(size_t) mod;    /* module index of each segment in the string */
+    CBM_ARRAY(int64_t) stack; /* branch stack: last segment */
+    CBM_ARRAY(cbm_quat) qstack;
+} view;
+
+static void view_free(cbm_context *ctx, view *v)
+{
+    CBM_ARRAY_FREE(ctx, v->seg);
+    CBM_ARRAY_FREE(ctx, v->mod);
+    CBM_ARRAY_FREE(ctx, v->stack);
+    CBM_ARRAY_FREE(ctx, v->qstack);
+}
+
+static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
+{
+    snprintf(err, errn, "mechanical segment %zu: %s", k + 1, what);
+    return CBM_E_INVALID;
+}
+
+static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant *pl, view *v,
+                        char *err, size_t errn)
+{
+    double *par = s->par;
+    size_t j = 0, k = 0;
+    int64_t last = -1;
+    cbm_quat rel = q_identity();
+    for (size_t i = 0; i < s->n; i++) {
+        int code = s->sym[i] & 0x7f;
+        int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
+        double *p = par + k;
+        if (s->sym[i] & LSYS_PARAM_BIT) {
+            j++;
+            k += (size_t)np;
+        }
+        if (code == m->sb) {
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->qstack, rel));
+        } else if (code == m->eb) {
+            if (v->stack.len) {
+                last = v->stack.data[--v->stack.len];
+                rel = v->qstack.data[--v->qstack.len];
+            }
+        } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
+            double *g = p + m->seg_off;
+            size_t ix = v->seg.len;
+            if (!(g[MS_LENGTH] > 0) || !isfinite(g[MS_LENGTH]))
+                return seg_error(err, errn, ix, "length must be > 0 (m)");
+            if (!(g[MS_A] > 0) || !isfinite(g[MS_A]))
+                return seg_error(err, errn, ix, "a must be > 0 (m)");
+            if (!(g[MS_E] > 0) || !isfinite(g[MS_E]))
+                return seg_error(err, errn, ix, "E must be > 0 (Pa)");
+            if (!(g[MS_DENSITY] >= 0))
+                return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
+            cbm_segment_def d = cbm_segment_def_default();
+            d.parent = last;
+            d.length = g[MS_LENGTH];
+            euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
+            d.core.youngs_modulus = g[MS_E];
+            d.core.shear_modulus = g[MS_G] > 0 ? g[MS_G] : g[MS_E] / 16;
+            d.core.density = g[MS_DENSITY];
+            d.core.a = g[MS_A];
+            d.core.b = g[MS_B] > 0 ? g[MS_B] : g[MS_A];
+            if (d.core.b > d.core.a)
+                return seg_error(err, errn, ix, "b must be <= a");
+            d.core.modulus_of_rupture = g[MS_MOR] > 0 ? g[MS_MOR] : 0;
+            d.core.age = g[MS_AGE] > 0 ? g[MS_AGE] : 0;
+            d.core.rest_rate = v3(g[MS_REST], g[MS_REST + 1], g[MS_REST + 2]);
+            d.omega = v3(g[MS_OMEGA], g[MS_OMEGA + 1], g[MS_OMEGA + 2]);
+            d.point_mass = 0;
+            cbm_status st = cbm_plant_add_segment(pl, &d, NULL);
+            if (st != CBM_OK) {
+                snprintf(err, errn, "mechanical segment %zu: %s", ix + 1,
+                         cbm_context_last_error(ctx));
+                return st;
+            }
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->seg, g));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, i));
+            last = (int64_t)ix;
+            rel = q_identity();
+        } else if (m->turtle[code] && np >= (m->turtle[code] == TR_TURN ? 0 : 1)) {
+            rel = q_mul(rel, rot_of(m->turtle[code], np ? p[0] : 0));
+        } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && last >= 0) {
+            double mass = p[m->mass_off[code]];
+            if (!(mass >= 0) || !isfinite(mass)) {
+                snprintf(err, errn, "point mass %g kg after mechanical segment %lld", mass,
+                         (long long)last + 1);
+                return CBM_E_INVALID;
+            }
+            cbm_segment_state st;
+            CBM_TRY(cbm_plant_segment(pl, (size_t)last, &st));
+            CBM_TRY(cbm_plant_set_load(pl, (size_t)last, st.point_mass + mass, st.tip_force,
+                                       st.tip_moment));
+        }
+    }
+    return CBM_OK;
+}
+
+/* New segments (negative age): rest rate from the tropism, Omega = rest. */
+static cbm_status apply_tropism(const cbm__mechlang *m, cbm_plant *pl, const view *v)
+{
+    bool any = false;
+    for (size_t i = 0; i < v->seg.len; i++)
+        any |= v->seg.data[i][MS_AGE] < 0;
+    if (!any)
+        return CBM_OK;
+    CBM_TRY(cbm_plant_evaluate(pl, NULL));
+    cbm_vec3 f = v3(0, 0, 0);
+    if (m->tropism.strength != 0 && v3_norm(m->tropism.direction) > 0)
+        f = v3_scale(v3_normalize(m->tropism.direction), m->tropism.strength);
+    const int64_t *par = cbm_plant_parents(pl);
+    for (size_t i = 0; i < v->seg.len; i++) {
+        double *g = v->seg.data[i];
+        if (!(g[MS_AGE] < 0))
+            continue;
+        cbm_segment_state st, ps;
+        CBM_TRY(cbm_plant_segment(pl, i, &st));
+        cbm_vec3 lever = v3_scale(st.frame.h, st.length);
+        if (par[i] >= 0) {
+            CBM_TRY(cbm_plant_segment(pl, (size_t)par[i], &ps));
+            lever = v3_scale(ps.frame.h, ps.length);
+        }
+        /* the frame before bending: the evaluated frame (a new segment has not bent yet) */
+        cbm_vec3 tau = v3_cross(lever, f);
+        cbm_vec3 loc = frame_to_local(st.frame, tau);
+        cbm_vec3 rest = v3(loc.x / st.rigidity.x, loc.y / st.rigidity.y, loc.z / st.rigidity.z);
+        cbm_ring r;
+        CBM_TRY(cbm_plant_get_ring(pl, i, 0, &r));
+        r.rest_rate = rest;
+        r.age = 0;
+        CBM_TRY(cbm_plant_set_ring(pl, i, 0, &r));
+        CBM_TRY(cbm_plant_set_omega(pl, i, rest));
+        g[MS_REST] = rest.x;
+        g[MS_REST + 1] = rest.y;
+        g[MS_REST + 2] = rest.z;
+        g[MS_OMEGA] = rest.x;
+        g[MS_OMEGA + 1] = rest.y;
+        g[MS_OMEGA + 2] = rest.z;
+        g[MS_AGE] = 0;
+    }
+    return CBM_OK;
+}
+
+static cbm_status write_back(const cbm_plant *pl, const view *v, bool section)
+{
+    for (size_t i = 0; i < v->seg.len; i++) {
+        double *g = v->seg.data[i];
+        cbm_segment_state st;
+        CBM_TRY(cbm_plant_segment(pl, i, &st));
+        double o[] = {st.omega.x,    st.omega.y,    st.omega.z,   st.proximal.x,
+                      st.proximal.y, st.proximal.z, st.frame.h.x, st.frame.h.y,
+                      st.frame.h.z,  st.frame.u.x,  st.frame.u.y, st.frame.u.z};
+        memcpy(g + MS_OMEGA, o, sizeof o);
+        g[MS_STRESS] = st.stress;
+        g[MS_RATIO] = isfinite(st.stress_ratio) ? st.stress_ratio : 0;
+        g[MS_CARRIED] = st.carried_mass;
+        if (section) {
+            double e, gm;
+            CBM_TRY(cbm_plant_structural_modulus(pl, i, &e, &gm));
+            g[MS_A] = st.a;
+            g[MS_B] = st.b;
+            g[MS_E] = e;
+            g[MS_G] = gm;
+            g[MS_DENSITY] = st.area > 0 ? st.mass_per_length / st.area : 0;
+            g[MS_REST] = st.rest_rate.x;
+            g[MS_REST + 1] = st.rest_rate.y;
+            g[MS_REST + 2] = st.rest_rate.z;
+            g[MS_AGE] = st.age;
+        }
+    }
+    return CBM_OK;
+}
+
+/* Removes the modules marked in `cut` (1 at a broken segment) and the rest of their branches. */
+static void cut_string(const cbm__mechlang *m, lstr *s, const uint8_t *cut)
+{
+    double *par = s->par;
+    size_t j = 0, k = 0, oi = 0, oj = 0, ok = 0;
+    int skipping = -1, depth = 0;
+    for (size_t i = 0; i < s->n; i++) {
+        int code = s->sym[i] & 0x7f;
+        size_t np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
+        if (skipping < 0 && cut[i]) {
+            skipping = 1;
+            depth = 0;
+        }
+        if (skipping >= 0) {
+            if (code == m->sb)
+                depth++;
+            else if (code == m->eb && depth-- == 0)
+                skipping = -1; /* the closing bracket of the branch stays */
+        }
+        if (skipping < 0) {
+            s->sym[oi++] = s->sym[i];
+            if (s->sym[i] & LSYS_PARAM_BIT) {
+                s->pc[oj++] = (uint8_t)np;
+                memmove(par + ok, par + k, np * sizeof(double));
+                ok += np;
+            }
+        }
+        if (s->sym[i] & LSYS_PARAM_BIT) {
+            j++;
+            k += np;
+        }
+    }
+    s->n = oi;
+    s->npm = oj;
+    s->npar = ok;
+}
+
+cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+                             double *result, char *err, size_t errn)
+{
+    *result = 0;
+    err[0] = 0;
+    if (m->seg_code < 0) {
+        snprintf(err, errn, "no `mechanics:` module declared");
+        return CBM_E_INVALID;
+    }
+    if (s->f32) {
+        snprintf(err, errn, "mechanics needs double parameters");
+        return CBM_E_INVALID;
+    }
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.gravity = m->gravity;
+    pd.discretization = m->discretization;
+    /* clamp: the turtle's initial frame, H = +y, L_plant = +x, U = -z */
+    pd.base_orientation =
+        q_mul(q_axis_angle(v3(0, 0, 1), CBM_PI / 2), q_axis_angle(v3(1, 0, 0), CBM_PI));
+    cbm_plant *pl = NULL;
+    view v;
+    memset(&v, 0, sizeof v);
+    cbm_status st = cbm_plant_create(ctx, &pd, &pl);
+    if (st == CBM_OK)
+        st = build(ctx, m, s, pl, &v, err, errn);
+    if (st == CBM_OK && v.seg.len == 0)
+        goto done;
+    if (st == CBM_OK)
+        st = apply_tropism(m, pl, &v);
+    if (st == CBM_OK && op == CBM__ML_EQUILIBRIUM) {
+        cbm_solve_stats ss;
+        memset(&ss, 0, sizeof ss);
+        cbm_solve_def sd = m->solve;
+        sd.warm_start = true;
+        st = cbm_plant_solve(pl, &sd, &ss);
+        *result = (double)ss.passes;
+        if (st == CBM_OK)
+            st = write_back(pl, &v, false);
+    } else if (st == CBM_OK && op == CBM__ML_RINGS) {
+        cbm_growth_stats gs = {0, 0, 0};
+        st = cbm_plant_evaluate(pl, NULL);
+        if (st == CBM_OK)
+            st = cbm_plant_grow_rings(pl, &m->growth, &gs);
+        *result = (double)gs.rings_added;
+        if (st == CBM_OK)
+            st = cbm_plant_evaluate(pl, NULL);
+        if (st == CBM_OK)
+            st = write_back(pl, &v, true);
+    } else if (st == CBM_OK && op == CBM__ML_AGE) {
+        st = cbm_plant_age_wood(pl, &m->growth, arg);
+        if (st == CBM_OK)
+            st = cbm_plant_evaluate(pl, NULL);
+        if (st == CBM_OK)
+            st = write_back(pl, &v, true);
+        *result = (double)v.seg.len;
+    } else if (st == CBM_OK && op == CBM__ML_BREAK) {
+        size_t nb = 0, n = v.seg.len, ns = s->n ? s->n : 1;
+        size_t *broken = cbm__alloc(ctx, n * sizeof *broken);
+        uint8_t *cut = cbm__calloc(ctx, ns, 1);
+        st = broken && cut ? cbm_plant_evaluate(pl, NULL) : CBM_E_NOMEM;
+        if (st == CBM_OK)
+            st = write_back(pl, &v, false);
+        if (st == CBM_OK)
+            st = cbm_plant_break(pl, broken, n, &nb, NULL);
+        if (st == CBM_OK) {
+            for (size_t i = 0; i < nb; i++)
+                cut[v.mod.data[broken[i]]] = 1;
+            cut_string(m, s, cut);
+            *result = (double)nb;
+        }
+        if (broken)
+            cbm__free(ctx, broken, n * sizeof *broken);
+        if (cut)
+            cbm__free(ctx, cut, ns);
+    }
+    if (st != CBM_OK && !err[0])
+        snprintf(err, errn, "%s", cbm_context_last_error(ctx));
+done:
+    view_free(ctx, &v);
+    cbm_plant_destroy(pl);
+    return st;
+}

@@ -1,0 +1,56 @@
+/* Mechanics inside the L+C dialect: the statics engine run over the module string (mechlang.c).
+ */
+#ifndef CBM_LSYS_MECHLANG_H
+#define CBM_LSYS_MECHLANG_H
+
+#include "cambium/mech.h"
+#include "lsys/lsys_internal.h"
+
+/* Offsets (doubles) of the fields of the built-in struct MechSegment. */
+enum {
+    MS_LENGTH = 0,
+    MS_A = 1,
+    MS_B = 2,
+    MS_E = 3,
+    MS_G = 4,
+    MS_DENSITY = 5,
+    MS_MOR = 6,
+    MS_REST = 7,   /* V3d, local (H, L, U), rad/m */
+    MS_OMEGA = 10, /* V3d, local */
+    MS_POS = 13,   /* V3d, world, proximal node */
+    MS_H = 16,     /* V3d, world */
+    MS_U = 19,     /* V3d, world */
+    MS_STRESS = 22,
+    MS_RATIO = 23,
+    MS_CARRIED = 24,
+    MS_AGE = 25,
+    MS_SIZE = 26
+};
+
+typedef struct cbm__mechlang {
+    int seg_code;      /* module code carrying the segment, -1: none declared */
+    int seg_off;       /* double offset of its MechSegment parameter */
+    int mass_off[128]; /* per module code: double offset of the mass parameter, -1: not a mass */
+    int turtle[128];   /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
+    int sb, eb;        /* codes of SB and EB */
+    cbm_vec3 gravity;
+    cbm_tropism tropism;
+    cbm_growth_def growth;
+    cbm_solve_def solve;
+    cbm_mech_discretization discretization;
+} cbm__mechlang;
+
+enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK };
+
+/* Defaults: no segment module, gravity (0, -9.81, 0), no tropism, growth and solve defaults. */
+void cbm__mechlang_init(cbm__mechlang *m);
+
+/* Runs one operation over the string s (parameters in double): builds the plant from the
+ * segments of the string, does `op` (arg: years for CBM__ML_AGE), writes the results back into
+ * the segments' parameters, and for CBM__ML_BREAK removes the broken segments and the rest of
+ * their branches from the string. *result: passes (equilibrium), rings added, segments aged,
+ * segments broken. Errors go to err (a message) with the status. */
+cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+                             double *result, char *err, size_t errn);
+
+#endif
