@@ -51,6 +51,7 @@ typedef struct nk {
     bool tree;         /* tree preconditioner */
     double max_turn;   /* largest frame rotation of one Newton step, rad */
     double first_turn; /* largest frame rotation of the first full Newton step, rad */
+    bool plain;        /* take the plain Newton step when a shifted one does not descend */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -193,13 +194,73 @@ static bool gmres(nk *k, double eta, int m)
 
 typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE } nk_result;
 
+/* The largest world rotation of a frame under the full step of the last tree solve (its
+ * forward sweep left the rotations in work.dth), rad. */
+static double largest_turn(const cbm_plant *p)
+{
+    double tmax = 0.0;
+    for (size_t i = 0; i < p->n; i++) {
+        double t = v3_norm2(p->work.dth[i]);
+        if (t > tmax)
+            tmax = t;
+    }
+    return sqrt(tmax);
+}
+
+/* Does the step d of the shifted system (J + mu C) d = -R clearly descend the merit
+ * |d C^-1 R|^2 / 2, i.e. is its slope at most -0.1 |d C^-1 R|^2? The slope needs no pass:
+ * J d = -R - mu C d. */
+static bool shifted_descends(const nk *k, const double *d, double mu)
+{
+    const cbm_plant *p = k->p;
+    const cbm__mech_work *w = &p->work;
+    const double *res = (const double *)w->res;
+    double rr = 0.0, slope = 0.0;
+    for (size_t i = 0; i < p->n; i++) {
+        const double c[3] = {w->cj[i].x, w->cj[i].y, w->cj[i].z};
+        for (int j = 0; j < 3; j++) {
+            double z = w->dual[i] / c[j], r = res[3 * i + j];
+            rr += z * z * r * r;
+            slope += z * z * r * (-r - mu * c[j] * d[3 * i + j]);
+        }
+    }
+    return slope <= -0.1 * rr;
+}
+
+/* Backtracking line search (Armijo, c = 1e-4, halving up to 12 times) along work.step from
+ * length lam: NK_DONE with the accepted length in *out and the state evaluated there, or
+ * NK_STALL with the unmoved state evaluated again. */
+static nk_result line_search(nk *k, double lam, double *out)
+{
+    cbm_plant *p = k->p;
+    double *om = (double *)p->omega;
+    const double *step = (const double *)p->work.step;
+    double f0 = k->norm;
+    for (int ls = 0; ls < 12; ls++) {
+        for (size_t q = 0; q < k->n3; q++)
+            om[q] += lam * step[q];
+        if (k->st->passes + 1 >= k->max_passes)
+            return NK_BUDGET;
+        bool fin = evaluate(k);
+        if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
+            *out = lam;
+            return NK_DONE;
+        }
+        for (size_t q = 0; q < k->n3; q++)
+            om[q] -= lam * step[q];
+        lam *= 0.5;
+    }
+    if (!evaluate(k)) /* restore the state of the unmoved Omega */
+        return NK_NONFINITE;
+    return NK_STALL;
+}
+
 /* Newton iterations at the current load level until rel < tol. */
 static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
     size_t n3 = k->n3;
-    double *om = (double *)p->omega;
     double *step = (double *)w->step;
     if (!evaluate(k))
         return NK_NONFINITE;
@@ -224,24 +285,38 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             /* an unstable configuration: Newton would head for the unstable equilibrium;
              * shift by mu S (Levenberg-Marquardt) until every pivot is positive definite,
              * which gives a descent towards a stable one */
-            for (double mu = 0.1; nonpd > 0 && mu < 1e8; mu *= 4.0) {
+            double mu = 0.0;
+            for (double m1 = 0.1; nonpd > 0 && m1 < 1e8; m1 *= 4.0) {
                 if (k->st->passes + 3 >= k->max_passes)
                     return NK_BUDGET;
+                mu = m1;
                 sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
             direct = sing == 0;
+            /* the pivot test is a sign of instability at an equilibrium only: away from one
+             * (a warm start under new loads) the load stiffness of dead loads is not
+             * symmetric, the test also fires on configurations that have a stable
+             * equilibrium nearby, and the shifted step need not descend the merit; the line
+             * search then stalls at every step. From a warm start such a step is replaced by
+             * the plain Newton step (the stability check after convergence still handles a
+             * truly unstable equilibrium); from rest the stall hands over to the load
+             * continuation, which keeps to the loading path. */
+            if (mu > 0.0 && direct && k->plain && !shifted_descends(k, step, mu)) {
+                if (k->st->passes + 3 >= k->max_passes)
+                    return NK_BUDGET;
+                for (size_t q = 0; q < n3; q++)
+                    step[q] = -((const double *)w->res)[q];
+                sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+                k->st->passes++;
+                memcpy(step, w->tmp, n3 * sizeof *step);
+                direct = sing == 0;
+            }
             /* trust region on rotations: the forward sweep of the solve left the world
              * rotation of every frame under the full step in work.dth; limit the largest to
              * max_turn radians (the linearisation of a large rotation overshoots) */
-            double tmax = 0.0;
-            for (size_t i = 0; i < p->n; i++) {
-                double t = v3_norm2(w->dth[i]);
-                if (t > tmax)
-                    tmax = t;
-            }
-            tmax = sqrt(tmax);
+            double tmax = largest_turn(p);
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
@@ -251,28 +326,10 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
         k->st->newton_steps++;
-        /* line search */
-        double f0 = k->norm, lam = lam0;
-        bool ok = false;
-        for (int ls = 0; ls < 12; ls++) {
-            for (size_t q = 0; q < n3; q++)
-                om[q] += lam * step[q];
-            if (k->st->passes + 1 >= k->max_passes)
-                return NK_BUDGET;
-            bool fin = evaluate(k);
-            if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
-                ok = true;
-                break;
-            }
-            for (size_t q = 0; q < n3; q++)
-                om[q] -= lam * step[q];
-            lam *= 0.5;
-        }
-        if (!ok) {
-            if (!evaluate(k)) /* restore the state of the unmoved Omega */
-                return NK_NONFINITE;
-            return NK_STALL;
-        }
+        double lam = lam0;
+        nk_result ls = line_search(k, lam0, &lam);
+        if (ls != NK_DONE)
+            return ls;
         /* slow progress (heavily damped steps again and again): let the caller globalise */
         small = lam <= 1.0 / 16.0 ? small + 1 : 0;
         if (small >= 6)
@@ -310,6 +367,12 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     st->continuation_steps = 1;
+    /* a start away from the rest state is a warm start (the previous equilibrium under
+     * changed loads) */
+    k.plain = false;
+    for (size_t i = 0; i < p->n && !k.plain; i++)
+        k.plain = p->omega[i].x != w->rj[i].x || p->omega[i].y != w->rj[i].y ||
+                  p->omega[i].z != w->rj[i].z;
     nk_result r = newton_level(&k, tol, m, k.tree);
     if (r == NK_LARGE || r == NK_STALL) {
         /* load continuation from the rest state (lambda = 0 is exact there): the equilibrium
