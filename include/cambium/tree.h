@@ -154,10 +154,10 @@ typedef struct cbm_tree cbm_tree;
 
 /// Year-by-year summary (also the running totals of the current year).
 typedef struct cbm_tree_summary {
-    int year;                   ///< 1-based
-    size_t segments;            ///< at the end of the year
-    double height;              ///< m, highest point at the end of summer (loaded)
-    double crown_width;         ///< m, largest horizontal extent at the end of summer
+    int year;           ///< 1-based
+    size_t segments;    ///< at the end of the year
+    double height;      ///< m, highest point at the end of summer (loaded)
+    double crown_width; ///< m, largest horizontal extent at the end of summer
     /// m, mean height at the end of summer of the branch tips that are still there once the
     /// leaves and fruit have fallen (all tips until then)
     double tip_height_loaded;

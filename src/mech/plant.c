@@ -111,7 +111,7 @@ cbm_plant_def cbm_plant_def_default(void)
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
     X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
-    X(moment)                                                                                      \
+    X(moment) X(pmass0)                                                                            \
     X(cmass)
 // clang-format on
 
@@ -173,6 +173,7 @@ cbm_status cbm_plant_create(cbm_context *ctx, const cbm_plant_def *def, cbm_plan
     p->base_q = (qn > 0.0 && isfinite(qn)) ? q_normalize(d.base_orientation) : q_identity();
     p->disc = d.discretization == CBM_MECH_CHAIN ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
     p->load_scale = 1.0;
+    p->mass_path = 1.0;
     if (d.capacity) {
         size_t lim = cbm_context_limits(ctx)->max_segments;
         size_t c = d.capacity < lim ? d.capacity : lim;
@@ -354,6 +355,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->branch[i] = branch_quat(def->divergence, def->deviation, def->roll);
     p->omega[i] = def->omega;
     p->pmass[i] = def->point_mass;
+    p->pmass0[i] = 0.0;
     p->tipf[i] = def->tip_force;
     p->tipm[i] = def->tip_moment;
     p->q[i] = q_identity();
