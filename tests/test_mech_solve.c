@@ -696,3 +696,57 @@ TEST(mech_scene_export)
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
+
+/* A warm start under new point masses (fruit appearing on a grown plant): the fast solver
+ * continues from the current equilibrium with the point masses going from the balanced ones
+ * to the new ones, instead of re-bending the whole plant from rest, and ends on the stable
+ * equilibrium the relaxation reaches from the same start. */
+TEST(mech_fast_warm_start_new_masses)
+{
+    cbm_context *ctx = test_ctx();
+    const int trials[] = {6, 19, 38};
+    for (int t = 0; t < 3; t++) {
+        cbm_plant *pl[2];
+        cbm_solve_stats st[2];
+        for (int k = 0; k < 2; k++) {
+            cbm_plant *a = floppy_tree(ctx, trials[t]);
+            size_t n = cbm_plant_segment_count(a);
+            double *pm = calloc(n, sizeof *pm);
+            for (size_t i = 0; i < n; i++) {
+                cbm_segment_state x;
+                CHECK_OK(cbm_plant_segment(a, i, &x));
+                pm[i] = x.point_mass;
+                CHECK_OK(cbm_plant_set_load(a, i, 0.0, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
+            }
+            cbm_solve_def sd = cbm_solve_def_default();
+            sd.tolerance = 1e-9;
+            CHECK_OK(cbm_plant_solve(a, &sd, NULL));
+            for (size_t i = 0; i < n; i++)
+                CHECK_OK(cbm_plant_set_load(a, i, pm[i], (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
+            free(pm);
+            if (k == 1) {
+                sd.solver = CBM_MECH_RELAX;
+                sd.alpha = 0.1;
+            }
+            CHECK_OK(cbm_plant_solve(a, &sd, &st[k]));
+            pl[k] = a;
+        }
+        double dmax = 0;
+        for (size_t i = 0; i < cbm_plant_segment_count(pl[0]); i++) {
+            cbm_segment_state x, y;
+            CHECK_OK(cbm_plant_segment(pl[0], i, &x));
+            CHECK_OK(cbm_plant_segment(pl[1], i, &y));
+            dmax = fmax(dmax, fabs(x.distal.x - y.distal.x) + fabs(x.distal.y - y.distal.y) +
+                                  fabs(x.distal.z - y.distal.z));
+        }
+        printf("floppy tree %d, masses added: fast %zu passes (%zu levels), relax %zu passes, "
+               "max node distance %.3g m\n",
+               trials[t], st[0].passes, st[0].continuation_steps, st[1].passes, dmax);
+        CHECK_EQ_INT(st[0].unstable_joints, 0);
+        CHECK(st[0].passes <= 40); /* 45-55 passes through the continuation from rest */
+        CHECK(dmax < 1e-6);
+        cbm_plant_destroy(pl[0]);
+        cbm_plant_destroy(pl[1]);
+    }
+    test_ctx_end(ctx);
+}

@@ -154,12 +154,14 @@ typedef struct cbm_tree cbm_tree;
 
 /// Year-by-year summary (also the running totals of the current year).
 typedef struct cbm_tree_summary {
-    int year;                   ///< 1-based
-    size_t segments;            ///< at the end of the year
-    double height;              ///< m, highest point at the end of summer (loaded)
-    double crown_width;         ///< m, largest horizontal extent at the end of summer
-    double tip_height_loaded;   ///< m, mean height of the branch tips at the end of summer
-    double tip_height_unloaded; ///< m, the same once the leaves and fruit have fallen
+    int year;           ///< 1-based
+    size_t segments;    ///< at the end of the year
+    double height;      ///< m, highest point at the end of summer (loaded)
+    double crown_width; ///< m, largest horizontal extent at the end of summer
+    /// m, mean height at the end of summer of the branch tips that are still there once the
+    /// leaves and fruit have fallen (all tips until then)
+    double tip_height_loaded;
+    double tip_height_unloaded; ///< m, mean height of the same tips once leaves and fruit fell
     size_t leaves;              ///< leaves at the end of summer
     size_t fruit;               ///< fruit at the end of summer
     size_t breaks;              ///< branches broken this year

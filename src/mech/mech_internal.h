@@ -42,6 +42,7 @@ struct cbm_plant {
     cbm_quat base_q;
     cbm_mech_discretization disc;
     double load_scale; /* 1 except during load continuation */
+    double mass_path;  /* 1 except during the continuation from the balanced point masses */
 
     size_t n, cap;
     /* topology and rest geometry */
@@ -62,6 +63,7 @@ struct cbm_plant {
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;
+    double *pmass0; /* point masses the last converged solve balanced (0 for new segments) */
     cbm_vec3 *tipf, *tipm;
     /* results */
     cbm_quat *q;

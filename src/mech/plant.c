@@ -111,7 +111,7 @@ cbm_plant_def cbm_plant_def_default(void)
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
     X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
-    X(moment)                                                                                      \
+    X(moment) X(pmass0)                                                                            \
     X(cmass)
 // clang-format on
 
@@ -173,6 +173,7 @@ cbm_status cbm_plant_create(cbm_context *ctx, const cbm_plant_def *def, cbm_plan
     p->base_q = (qn > 0.0 && isfinite(qn)) ? q_normalize(d.base_orientation) : q_identity();
     p->disc = d.discretization == CBM_MECH_CHAIN ? CBM_MECH_CHAIN : CBM_MECH_STAGGERED;
     p->load_scale = 1.0;
+    p->mass_path = 1.0;
     if (d.capacity) {
         size_t lim = cbm_context_limits(ctx)->max_segments;
         size_t c = d.capacity < lim ? d.capacity : lim;
@@ -354,6 +355,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->branch[i] = branch_quat(def->divergence, def->deviation, def->roll);
     p->omega[i] = def->omega;
     p->pmass[i] = def->point_mass;
+    p->pmass0[i] = 0.0;
     p->tipf[i] = def->tip_force;
     p->tipm[i] = def->tip_moment;
     p->q[i] = q_identity();
@@ -701,6 +703,33 @@ cbm_status cbm_plant_distal_frame(const cbm_plant *p, size_t i, cbm_quat *out)
     return CBM_OK;
 }
 
+/* Section at the node between segment i and its continuation child c (the first child, when
+ * it continues the axis): frame halfway between the two (normalised quaternion mean, the
+ * shorter way round) and semi-axes averaged, so that the tubes of an axis meet without steps,
+ * collars or twist jumps. Without such a child, segment i's own section. */
+static cbm_section node_section(const cbm_plant *p, size_t i, cbm_vec3 centre)
+{
+    cbm_quat q = p->q[i];
+    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    double a = r->a, b = r->b;
+    int64_t c = p->fchild[i];
+    if (c >= 0 && p->cont[c]) {
+        cbm_quat qc = p->q[c];
+        double d = q.w * qc.w + q.x * qc.x + q.y * qc.y + q.z * qc.z;
+        double sg = d < 0.0 ? -1.0 : 1.0;
+        q = q_normalize(
+            (cbm_quat){q.w + sg * qc.w, q.x + sg * qc.x, q.y + sg * qc.y, q.z + sg * qc.z});
+        const cbm_ring *rc = p->rings.data + p->ring_first[c] + p->ring_count[c] - 1;
+        a = 0.5 * (a + rc->a);
+        b = 0.5 * (b + rc->b);
+    }
+    cbm_section s = {centre,
+                     {q_rotate(q, v3(1, 0, 0)), q_rotate(q, v3(0, 1, 0)), q_rotate(q, v3(0, 0, 1))},
+                     a,
+                     b};
+    return s;
+}
+
 cbm_status cbm_plant_to_scene(const cbm_plant *p, cbm_scene *scene, int sides)
 {
     if (!p || !scene || sides < 3)
@@ -717,9 +746,18 @@ cbm_status cbm_plant_to_scene(const cbm_plant *p, cbm_scene *scene, int sides)
         part.stress_ratio = st.stress_ratio;
         part.age = st.age;
         part.reaction_wood = st.reaction;
+        /* bark */
+        part.color[0] = 0.42f, part.color[1] = 0.30f, part.color[2] = 0.20f, part.color[3] = 1;
         CBM_TRY(cbm_scene_begin_part(scene, &part, NULL));
-        cbm_section s0 = {st.proximal, {st.frame.h, st.frame.l, st.frame.u}, st.a, st.b};
-        cbm_section s1 = {st.distal, {st.frame.h, st.frame.l, st.frame.u}, st.a, st.b};
+        /* a continuous generalized cylinder along each axis: a segment that continues its
+         * parent's axis starts at the node section shared with the parent; a lateral starts
+         * with its own section inside the parent */
+        int64_t pa = st.parent;
+        cbm_section s0 =
+            pa >= 0 && p->cont[i]
+                ? node_section(p, (size_t)pa, st.proximal)
+                : (cbm_section){st.proximal, {st.frame.h, st.frame.l, st.frame.u}, st.a, st.b};
+        cbm_section s1 = node_section(p, i, st.distal);
         CBM_TRY(cbm_scene_add_tube(scene, &s0, &s1, sides, st.child_count == 0));
     }
     return CBM_OK;

@@ -153,7 +153,10 @@ void cbm__mech_prepare(cbm_plant *p)
         double l = p->len[i];
         int64_t pa = p->parent[i];
         w->wown[i] = v3_scale(g, p->mpl[i] * l);
-        w->ftip[i] = v3_add(v3_scale(g, p->pmass[i]), v3_scale(p->tipf[i], s));
+        double pm = p->mass_path == 1.0
+                        ? p->pmass[i]
+                        : p->pmass0[i] + p->mass_path * (p->pmass[i] - p->pmass0[i]);
+        w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(p->tipf[i], s));
         w->mtip[i] = v3_scale(p->tipm[i], s);
         if (!stag) {
             w->dual[i] = l;
@@ -493,6 +496,9 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     cbm_status s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
                                               : cbm__mech_solve_newton(p, &d, maxp, &st);
     p->load_scale = 1.0;
+    p->mass_path = 1.0;
+    if (s == CBM_OK) /* the point masses this Omega balances */
+        memcpy(p->pmass0, p->pmass, p->n * sizeof *p->pmass0);
     if (stats)
         *stats = st;
     return s;

@@ -27,8 +27,18 @@
  *      levels solved to 1e-3. This follows the loading path, so the equilibrium reached is the
  *      one the relaxation reaches from rest when several exist (an inclined heavy rod can also
  *      rest curled back over its base);
+ *   3a. before that, from a warm start (Omega away from the rest state) whose point masses
+ *      changed since the last converged solve: continuation over the point masses only, from
+ *      the balanced ones to the new ones (from_masses), which follows the physical loading
+ *      path from the current equilibrium (fruit and leaves appearing on a grown tree);
  *   4. last resort: bursts of 25 relaxation passes (alpha 0.1, halved when a burst does not
  *      help) between Newton attempts at the full load.
+ * Stability: where a pivot block of the factorisation is not positive definite, the step is
+ * that of J + mu C (Levenberg-Marquardt; mu from 0.1, or a quarter of the last shift needed,
+ * times 4 until every pivot is positive definite). From a warm start, a shifted step that
+ * finds no decrease and whose slope on the merit is not clearly negative is followed by the
+ * plain Newton step (the pivot test fires away from equilibria too); from rest the stall
+ * hands over to the continuation. After convergence the unmodified factorisation is checked.
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
@@ -51,6 +61,9 @@ typedef struct nk {
     bool tree;         /* tree preconditioner */
     double max_turn;   /* largest frame rotation of one Newton step, rad */
     double first_turn; /* largest frame rotation of the first full Newton step, rad */
+    double mu;         /* shift of the last shifted step */
+    double mu_hint;    /* the shift the last unstable configuration needed */
+    bool plain;        /* take the plain Newton step when a shifted one does not descend */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -193,13 +206,73 @@ static bool gmres(nk *k, double eta, int m)
 
 typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE } nk_result;
 
+/* The largest world rotation of a frame under the full step of the last tree solve (its
+ * forward sweep left the rotations in work.dth), rad. */
+static double largest_turn(const cbm_plant *p)
+{
+    double tmax = 0.0;
+    for (size_t i = 0; i < p->n; i++) {
+        double t = v3_norm2(p->work.dth[i]);
+        if (t > tmax)
+            tmax = t;
+    }
+    return sqrt(tmax);
+}
+
+/* Does the step d of the shifted system (J + mu C) d = -R clearly descend the merit
+ * |d C^-1 R|^2 / 2, i.e. is its slope at most -0.1 |d C^-1 R|^2? The slope needs no pass:
+ * J d = -R - mu C d. */
+static bool shifted_descends(const nk *k, const double *d, double mu)
+{
+    const cbm_plant *p = k->p;
+    const cbm__mech_work *w = &p->work;
+    const double *res = (const double *)w->res;
+    double rr = 0.0, slope = 0.0;
+    for (size_t i = 0; i < p->n; i++) {
+        const double c[3] = {w->cj[i].x, w->cj[i].y, w->cj[i].z};
+        for (int j = 0; j < 3; j++) {
+            double z = w->dual[i] / c[j], r = res[3 * i + j];
+            rr += z * z * r * r;
+            slope += z * z * r * (-r - mu * c[j] * d[3 * i + j]);
+        }
+    }
+    return slope <= -0.1 * rr;
+}
+
+/* Backtracking line search (Armijo, c = 1e-4, halving up to 12 times) along work.step from
+ * length lam: NK_DONE with the accepted length in *out and the state evaluated there, or
+ * NK_STALL with the unmoved state evaluated again. */
+static nk_result line_search(nk *k, double lam, double *out)
+{
+    cbm_plant *p = k->p;
+    double *om = (double *)p->omega;
+    const double *step = (const double *)p->work.step;
+    double f0 = k->norm;
+    for (int ls = 0; ls < 12; ls++) {
+        for (size_t q = 0; q < k->n3; q++)
+            om[q] += lam * step[q];
+        if (k->st->passes + 1 >= k->max_passes)
+            return NK_BUDGET;
+        bool fin = evaluate(k);
+        if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
+            *out = lam;
+            return NK_DONE;
+        }
+        for (size_t q = 0; q < k->n3; q++)
+            om[q] -= lam * step[q];
+        lam *= 0.5;
+    }
+    if (!evaluate(k)) /* restore the state of the unmoved Omega */
+        return NK_NONFINITE;
+    return NK_STALL;
+}
+
 /* Newton iterations at the current load level until rel < tol. */
 static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
     size_t n3 = k->n3;
-    double *om = (double *)p->omega;
     double *step = (double *)w->step;
     if (!evaluate(k))
         return NK_NONFINITE;
@@ -210,7 +283,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             return NK_DONE;
         if (k->st->passes + 3 >= k->max_passes)
             return NK_BUDGET;
-        bool direct = false;
+        bool direct = false, shifted = false;
         double lam0 = 1.0;
         if (k->tree) {
             /* factor and solve J step = -res in one pass; trusted when no pivot was singular
@@ -224,24 +297,27 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             /* an unstable configuration: Newton would head for the unstable equilibrium;
              * shift by mu S (Levenberg-Marquardt) until every pivot is positive definite,
              * which gives a descent towards a stable one */
-            for (double mu = 0.1; nonpd > 0 && mu < 1e8; mu *= 4.0) {
+            double mu = 0.0;
+            /* start a quarter below the shift the last step needed (Levenberg-Marquardt
+             * memory: an unstable region usually persists over several steps) */
+            double m0 = k->mu_hint > 0.4 ? 0.25 * k->mu_hint : 0.1;
+            for (double m1 = m0; nonpd > 0 && m1 < 1e8; m1 *= 4.0) {
                 if (k->st->passes + 3 >= k->max_passes)
                     return NK_BUDGET;
+                mu = m1;
+                k->mu = mu;
                 sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
             direct = sing == 0;
+            shifted = mu > 0.0 && direct;
+            if (mu > 0.0)
+                k->mu_hint = mu;
             /* trust region on rotations: the forward sweep of the solve left the world
              * rotation of every frame under the full step in work.dth; limit the largest to
              * max_turn radians (the linearisation of a large rotation overshoots) */
-            double tmax = 0.0;
-            for (size_t i = 0; i < p->n; i++) {
-                double t = v3_norm2(w->dth[i]);
-                if (t > tmax)
-                    tmax = t;
-            }
-            tmax = sqrt(tmax);
+            double tmax = largest_turn(p);
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
@@ -251,28 +327,34 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
         k->st->newton_steps++;
-        /* line search */
-        double f0 = k->norm, lam = lam0;
-        bool ok = false;
-        for (int ls = 0; ls < 12; ls++) {
-            for (size_t q = 0; q < n3; q++)
-                om[q] += lam * step[q];
-            if (k->st->passes + 1 >= k->max_passes)
+        double lam = lam0;
+        nk_result ls = line_search(k, lam0, &lam);
+        if (ls == NK_STALL && shifted && k->plain && !shifted_descends(k, step, k->mu)) {
+            /* the pivot test is a sign of instability at an equilibrium only: away from one
+             * (a warm start under new loads) the load stiffness of dead loads is not
+             * symmetric, the test also fires where a stable equilibrium is near, and the
+             * shifted step need not descend the merit (its slope is known: J d = -R - mu C d).
+             * When such a step finds no decrease from a warm start, the plain Newton step is
+             * tried; the stability check after convergence handles an unstable equilibrium.
+             * From rest the stall hands over to the load continuation (the loading path). */
+            if (k->st->passes + 3 >= k->max_passes)
                 return NK_BUDGET;
-            bool fin = evaluate(k);
-            if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
-                ok = true;
-                break;
-            }
             for (size_t q = 0; q < n3; q++)
-                om[q] -= lam * step[q];
-            lam *= 0.5;
+                step[q] = -((const double *)w->res)[q];
+            size_t nonpd = 0;
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+            k->st->passes++;
+            memcpy(step, w->tmp, n3 * sizeof *step);
+            if (sing == 0) {
+                double tmax = largest_turn(p);
+                lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+            } else if (!gmres(k, eta, m))
+                return NK_BUDGET;
+            lam = lam0;
+            ls = line_search(k, lam0, &lam);
         }
-        if (!ok) {
-            if (!evaluate(k)) /* restore the state of the unmoved Omega */
-                return NK_NONFINITE;
-            return NK_STALL;
-        }
+        if (ls != NK_DONE)
+            return ls;
         /* slow progress (heavily damped steps again and again): let the caller globalise */
         small = lam <= 1.0 / 16.0 ? small + 1 : 0;
         if (small >= 6)
@@ -288,6 +370,47 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
         prev = k->norm;
     }
     return NK_STALL;
+}
+
+/* Load continuation from the current state: the point masses go from those the start state
+ * balances (the last converged solve; 0 on segments added since) to the new ones, m(lambda) =
+ * m0 + lambda (m - m0), every other load at full value. For a local change on a grown plant
+ * (fruit and leaves appearing and growing) this follows the physical loading path from the
+ * current equilibrium instead of re-bending the whole plant from rest. Step control as in the
+ * continuation from rest. */
+static nk_result from_masses(nk *k, double tol, int m, double dl)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n = p->n;
+    memcpy(w->save, p->omega, n * sizeof *w->save);
+    double done = 0.0;
+    nk_result r = NK_STALL;
+    for (;;) {
+        double lam = done + dl < 1.0 ? done + dl : 1.0;
+        memcpy(p->omega, w->save, n * sizeof *p->omega);
+        p->mass_path = lam;
+        cbm__mech_prepare(p);
+        k->st->continuation_steps++;
+        size_t ns = k->st->newton_steps;
+        r = newton_level(k, lam < 1.0 ? (tol > 1e-3 ? tol : 1e-3) : tol, m, false);
+        if (r == NK_DONE) {
+            if (lam >= 1.0)
+                break;
+            done = lam;
+            memcpy(w->save, p->omega, n * sizeof *w->save);
+            if (k->st->newton_steps - ns <= 4)
+                dl *= 2.0;
+        } else if (r == NK_STALL) {
+            dl *= 0.5;
+            if (dl < 1.0 / 256)
+                break;
+        } else
+            break;
+    }
+    p->mass_path = 1.0;
+    cbm__mech_prepare(p);
+    return r;
 }
 
 cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
@@ -310,7 +433,23 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     st->continuation_steps = 1;
+    /* a start away from the rest state is a warm start (the previous equilibrium under
+     * changed loads) */
+    k.plain = false;
+    for (size_t i = 0; i < p->n && !k.plain; i++)
+        k.plain = p->omega[i].x != w->rj[i].x || p->omega[i].y != w->rj[i].y ||
+                  p->omega[i].z != w->rj[i].z;
     nk_result r = newton_level(&k, tol, m, k.tree);
+    bool changed = false;
+    for (size_t i = 0; i < p->n && !changed; i++)
+        changed = p->pmass0[i] != p->pmass[i];
+    if ((r == NK_LARGE || r == NK_STALL) && k.plain && changed) {
+        double dl = r == NK_LARGE && k.first_turn > 0 ? k.max_turn / k.first_turn : 0.25;
+        dl = dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
+        r = from_masses(&k, tol, m, dl);
+        if (r == NK_BUDGET && st->passes + 3 < max_passes)
+            r = NK_STALL;
+    }
     if (r == NK_LARGE || r == NK_STALL) {
         /* load continuation from the rest state (lambda = 0 is exact there): the equilibrium
          * reached is the one on the loading path, as with the relaxation */

@@ -322,6 +322,24 @@ static void measure(const cbm_tree *t, double *height, double *width, double *ti
     *tip_height = nt ? tips / (double)nt : NAN;
 }
 
+/* Spring-back (Fig. 4.1) over the same tips: the branch tips marked at the end of summer that
+ * are still there (breakage or cropping in winter removes some) give the mean loaded height
+ * (then) and the mean unloaded height (now). */
+static void spring_back(cbm_tree *t)
+{
+    const cbm_plant *p = t->plant;
+    double lo = 0.0, un = 0.0;
+    size_t nt = 0;
+    for (size_t i = 0; i < p->n; i++)
+        if ((t->seg.data[i].flags & SEG_TIP) && p->nchild[i] == 0) {
+            lo += t->seg.data[i].tip_y;
+            un += distal(p, i).y;
+            nt++;
+        }
+    t->cur.tip_height_loaded = nt ? lo / (double)nt : NAN;
+    t->cur.tip_height_unloaded = nt ? un / (double)nt : NAN;
+}
+
 static double trunk_lean(const cbm_tree *t)
 {
     const cbm_plant *p = t->plant;
@@ -350,7 +368,7 @@ static void begin_year(cbm_tree *t)
     t->winter_steps = 0;
     t->unloaded_recorded = false;
     for (size_t i = 0; i < t->seg.len; i++)
-        t->seg.data[i].flags &= (uint8_t) ~(SEG_REACT | SEG_GREW);
+        t->seg.data[i].flags &= (uint8_t) ~(SEG_REACT | SEG_GREW | SEG_TIP);
 }
 
 cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree **out)
@@ -467,6 +485,11 @@ static cbm_status summer_step(cbm_tree *t)
         t->cur.height = h;
         t->cur.crown_width = w;
         t->cur.tip_height_loaded = th;
+        for (size_t i = 0; i < t->seg.len; i++)
+            if (t->plant->nchild[i] == 0) {
+                t->seg.data[i].flags |= SEG_TIP;
+                t->seg.data[i].tip_y = distal(t->plant, i).y;
+            }
         size_t nl = 0, nf = 0;
         for (size_t i = 0; i < t->seg.len; i++) {
             nl += t->seg.data[i].leaf > 0.0;
@@ -531,10 +554,8 @@ static cbm_status end_year(cbm_tree *t)
                                (double)t->cur.growth_steps / t->def.growth_steps_per_year));
     t->cur.seconds_rings += now() - t0;
     CBM_TRY(shed_unproductive(t));
-    if (!t->unloaded_recorded) {
-        double h, w;
-        measure(t, &h, &w, &t->cur.tip_height_unloaded);
-    }
+    if (!t->unloaded_recorded)
+        spring_back(t);
     t->cur.segments = t->seg.len;
     t->cur.lean = trunk_lean(t);
     for (size_t i = 0; i < t->seg.len; i++)
@@ -565,8 +586,7 @@ static cbm_status winter_step(cbm_tree *t, bool *done)
     }
     CBM_TRY(solve(t));
     if (!any && !t->unloaded_recorded) {
-        double h, w;
-        measure(t, &h, &w, &t->cur.tip_height_unloaded);
+        spring_back(t);
         t->unloaded_recorded = true;
     }
     CBM_TRY(break_and_crop(t));

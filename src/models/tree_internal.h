@@ -15,7 +15,8 @@ enum {
     SEG_APEX = 8,    /* carries a growing apex */
     SEG_TRUNK1 = 16, /* part of the first year's trunk (lean measure) */
     SEG_REACT = 32,  /* laid reaction wood this year */
-    SEG_GREW = 64    /* laid a ring this year */
+    SEG_GREW = 64,   /* laid a ring this year */
+    SEG_TIP = 128    /* a branch tip at the end of this summer (spring-back measure) */
 };
 
 typedef struct tree_seg {
@@ -27,6 +28,7 @@ typedef struct tree_seg {
     double phyllo;     /* rad, divergence of the next lateral (listing phyllo) */
     double juv_e;      /* Pa, juvenile modulus of the shoot */
     double leaf, leaf_goal, fruit, fruit_goal; /* kg */
+    double tip_y;                              /* m, height of a SEG_TIP at the end of summer */
     double vigour, sink, share;                /* last spring pass */
 } tree_seg;
 

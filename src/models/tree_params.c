@@ -99,7 +99,7 @@ cbm_tree_def cbm_tree_def_default(void)
     d.memory = CBM_MEMORY_SEGMENT;
     d.ageing = CBM_AGEING_RINGS;
     d.solve_tolerance = 1e-6;
-    d.solve_max_passes = 400;
+    d.solve_max_passes = 3000;
     d.leaves = true;
     d.leaf_mass = 2e-6;
     d.leaf_density = 0.095;

@@ -1,8 +1,8 @@
 /* Geometry of a built-in tree for the writers (Taylor-Hell 2005 A.1 interpretation rules):
- * the branches as elliptical generalized cylinders (cbm_plant_to_scene), each leaf as a
- * rhombus of side leaf_scale sqrt(m / leaf_density) in the plane of the bud's heading and its
- * horizontal (the listing's SetHead + RollToVert + Surface), each fruit as a sphere of volume m /
- * fruit_density hanging from its node, and optionally a ground square. */
+ * the branches as elliptical generalized cylinders (cbm_plant_to_scene), each leaf as an
+ * ovate blade of length leaf_scale sqrt(m / leaf_density) in the plane of the bud's heading and
+ * its horizontal (the listing's SetHead + RollToVert + Surface), each fruit as a sphere of volume m
+ * / fruit_density hanging from its node, and optionally a ground square. */
 #include "models/tree_internal.h"
 #include "core/vecmath.h"
 
@@ -35,10 +35,20 @@ cbm_status cbm_tree_to_scene(const cbm_tree *t, cbm_scene *scene, int sides, boo
             cbm_vec3 w = v3_cross(v3(0, 1, 0), h);
             double wn = v3_norm(w);
             w = wn > 1e-9 ? v3_scale(w, 1.0 / wn) : q_rotate(p->q[i], v3(0, 1, 0));
-            cbm_vec3 pts[4] = {e, v3_add(v3_madd(e, h, 0.5 * side), v3_scale(w, 0.3 * side)),
-                               v3_madd(e, h, side),
-                               v3_sub(v3_madd(e, h, 0.5 * side), v3_scale(w, 0.3 * side))};
-            CBM_TRY(cbm_scene_add_polygon(scene, pts, 4));
+            /* an ovate blade along H: half-width 0.3 side sin(pi t)^0.75 (1 - 0.35 t) at
+             * t = 0 (base) .. 1 (pointed tip) */
+            enum { K = 9 };
+            cbm_vec3 pts[2 * K];
+            pts[0] = e;
+            pts[K] = v3_madd(e, h, side);
+            for (int k = 1; k < K; k++) {
+                double u = (double)k / K;
+                double hw = 0.3 * side * pow(sin(CBM_PI * u), 0.75) * (1.0 - 0.35 * u);
+                cbm_vec3 c = v3_madd(e, h, u * side);
+                pts[k] = v3_madd(c, w, hw);
+                pts[2 * K - k] = v3_madd(c, w, -hw);
+            }
+            CBM_TRY(cbm_scene_add_polygon(scene, pts, 2 * K));
         }
         if (s->fruit > 0.0) {
             cbm_part part = cbm_part_default();
