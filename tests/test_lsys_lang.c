@@ -408,35 +408,48 @@ TEST(released_pages_leave_the_string_unchanged)
     check_release_same(FIG28, 11, false, (size_t)80 << 20);
 }
 
+/* Derives `text` (its X(a) fails at step 20, after 2^19 F's were passed) under a byte limit;
+ * released: the string is emptied by the failure, else the string of step 19 is kept. */
+static void check_runtime_error(const char *text, size_t max_bytes, bool released)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_limits lim = *cbm_context_limits(ctx);
+    lim.max_bytes = max_bytes;
+    cbm_context_set_limits(ctx, &lim);
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_text(ctx, text, false, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    for (int i = 0; i < 19; i++)
+        CHECK_OK(cbm_lsys_step(ls));
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), ((size_t)1 << 19) + 1);
+    cbm_status s = cbm_lsys_step(ls);
+    CHECK(s != CBM_OK && s != CBM_E_LIMIT);
+    CHECK(strstr(cbm_context_last_error(ctx), "func") != NULL);
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), released ? 0 : ((size_t)1 << 19) + 1);
+    CHECK_EQ_INT(cbm_lsys_steps_done(ls), 19);
+    /* reset starts over */
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), 3);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
 TEST(runtime_error_after_released_pages_empties_the_string)
 {
-    /* X(a) fails at step 20 (func without function files), after 2^19 F's were passed */
     static const char text[] = "Lsystem: 1\nderivation length: 20\nAxiom: FX(0)\nF --> FF\n"
-                               "X(a) : a > 18 --> X(func(1, a))\nX(a) --> X(a + 1)\nendlsystem\n";
+                               "X(a) : a > 18 --> X(func(1, a))\nX(a) --> X(a + 1)\n"
+                               "B --> BBBBBBBB(1,2,3,4,5,6,7,8)\nendlsystem\n";
     static const char keep[] = "Lsystem: 1\nderivation length: 20\nAxiom: FX(0)\nF --> FF\n"
                                "X(a) : a > 18 --> X(func(1, a))\nX(a) --> X(a + 1)\n"
-                               "Q < Q --> Q\nendlsystem\n";
-    for (int k = 0; k < 2; k++) {
-        cbm_context *ctx = test_ctx();
-        cbm_lsys *ls = NULL;
-        CHECK_OK(load_text(ctx, k ? keep : text, false, &ls));
-        CHECK_OK(cbm_lsys_reset(ls));
-        for (int i = 0; i < 19; i++)
-            CHECK_OK(cbm_lsys_step(ls));
-        CHECK_EQ_INT(cbm_lsys_module_count(ls), ((size_t)1 << 19) + 1);
-        cbm_status s = cbm_lsys_step(ls);
-        CHECK(s != CBM_OK && s != CBM_E_LIMIT);
-        CHECK(strstr(cbm_context_last_error(ctx), "func") != NULL);
-        /* released: the string is gone; kept (a left context): the string of step 19 */
-        CHECK_EQ_INT(cbm_lsys_module_count(ls), k ? ((size_t)1 << 19) + 1 : 0);
-        CHECK_EQ_INT(cbm_lsys_steps_done(ls), 19);
-        /* reset starts over */
-        CHECK_OK(cbm_lsys_reset(ls));
-        CHECK_OK(cbm_lsys_step(ls));
-        CHECK_EQ_INT(cbm_lsys_module_count(ls), 3);
-        cbm_lsys_destroy(ls);
-        test_ctx_end(ctx);
-    }
+                               "B --> BBBBBBBB(1,2,3,4,5,6,7,8)\nQ < Q --> Q\nendlsystem\n";
+    check_runtime_error(text, 0, true);
+    check_runtime_error(keep, 0, false); /* a left context keeps the string */
+    /* the bound by the longest successor (B's, 8 modules and 8 parameters a module) is over
+     * 80 MB; by symbol (no B in the string) about 7 MB */
+    check_runtime_error(text, (size_t)24 << 20, true);
+    /* both over the limit: kept */
+    check_runtime_error(text, (size_t)5 << 20, false);
 }
 
 TEST(expression_depth_and_loops_are_bounded)

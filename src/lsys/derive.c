@@ -18,7 +18,8 @@
  * Memory: the peak of a step is the current string plus the one being produced. When nothing
  * can look back into the current string (no left context in the productions, no
  * decomposition) and the step cannot stop on a limit (the current string times the longest
- * successor, in modules and in bytes, is within max_modules and max_bytes), the pages of the
+ * successor, in modules and in bytes, is within max_modules and max_bytes; failing that, the
+ * same bound by symbol, from a count of the current symbols), the pages of the
  * current string that the scan has passed are handed back to the system as it goes (madvise
  * MADV_DONTNEED, Linux), so the peak is close to the final string alone. The buffer keeps its
  * capacity and is refilled as the output of the next step.
@@ -386,39 +387,64 @@ typedef struct release {
     size_t at;      /* next module index at which to release */
 } release;
 
+/* Whether a next string of at most nsym modules and npar parameters stays within the limits:
+ * max_modules, and max_bytes with the symbols and counts, the parameters, capacity doubling
+ * and a margin for the small arrays a step may grow. */
+static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
+{
+    const cbm_limits *lim = cbm_context_limits(ls->ctx);
+    if (nsym > (double)lim->max_modules)
+        return false;
+    double need = (double)cbm_context_bytes(ls->ctx) +
+                  2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20) +
+                  16.0 * (double)ls->main.prods.len;
+    return !lim->max_bytes || need <= (double)lim->max_bytes;
+}
+
 /* Whether the step over ls->cur may release its consumed pages (see the file comment). */
 static void release_begin(const cbm_lsys *ls, release *r)
 {
     memset(r, 0, sizeof *r);
 #if defined(__linux__) && defined(MADV_DONTNEED)
-    const cbm_limits *lim = cbm_context_limits(ls->ctx);
     if (ls->decomp.present || ls->cur.n < RELEASE_EVERY)
         return;
-    /* bounds of the next string: each module becomes at most the longest successor (with at
-     * most the most parameters of a successor), or itself */
-    size_t longest = 1, most = 0;
+    /* bounds of the next string: a module becomes at most the longest successor of the
+     * productions that start with its symbol (with at most their most parameters), or itself */
+    size_t len[128], par[128], longest = 1, most = 0;
+    for (int c = 0; c < 128; c++)
+        len[c] = 1, par[c] = 0;
     for (size_t i = 0; i < ls->main.prods.len; i++) {
         const prod *pr = &ls->main.prods.data[i];
         if (pr->nlc)
             return;
-        if ((size_t)pr->nsucc > longest)
-            longest = (size_t)pr->nsucc;
         size_t np = 0;
         for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
             np += ls->smods.data[pr->succ + m].np;
-        if (np > most)
-            most = np;
+        int c = ls->fmods.data[pr->pred].sym & 0x7f;
+        if ((size_t)pr->nsucc > len[c])
+            len[c] = (size_t)pr->nsucc;
+        if (np > par[c])
+            par[c] = np;
+        longest = len[c] > longest ? len[c] : longest;
+        most = par[c] > most ? par[c] : most;
     }
-    double nsym = (double)ls->cur.n * (double)longest;
-    double npar = (double)ls->cur.npar + (double)ls->cur.n * (double)most;
-    if (nsym > (double)lim->max_modules)
-        return;
-    /* the step cannot reach the byte limit: sym and pc, parameters, capacity doubling, and a
-     * margin for the small arrays a step may grow */
-    double need = (double)cbm_context_bytes(ls->ctx) +
-                  2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20);
-    if (lim->max_bytes && need > (double)lim->max_bytes)
-        return;
+    const lstr *cur = &ls->cur;
+    double nsym = (double)cur->n * (double)longest;
+    double npar = (double)cur->npar + (double)cur->n * (double)most;
+    if (!release_fits(ls, nsym, npar)) {
+        /* tighter, at the cost of one pass over the symbols: by symbol */
+        size_t hist[128] = {0};
+        for (size_t i = 0; i < cur->n; i++)
+            hist[cur->sym[i] & 0x7f]++;
+        nsym = npar = 0;
+        for (int c = 0; c < 128; c++) {
+            nsym += (double)hist[c] * (double)len[c];
+            npar += (double)hist[c] * (double)par[c];
+        }
+        npar += (double)cur->npar;
+        if (!release_fits(ls, nsym, npar))
+            return;
+    }
     long page = sysconf(_SC_PAGESIZE);
     if (page <= 0)
         return;
@@ -427,6 +453,7 @@ static void release_begin(const cbm_lsys *ls, release *r)
     r->at = RELEASE_EVERY;
 #else
     (void)ls;
+    (void)release_fits;
 #endif
 }
 
