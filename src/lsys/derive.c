@@ -492,8 +492,10 @@ static cbm_status derive(cbm_lsys *ls)
     release rel;
     release_begin(ls, &rel);
     cbm_status s = derive_scan(ls, &rel);
-    if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2]))
+    if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
         lstr_clear(&ls->cur);
+        ls->homo_valid = false;
+    }
     return s;
 }
 
