@@ -3,12 +3,15 @@
  * parametric modules), in double and float32 modes. Writes one CSV row per run to the file
  * given as argument (default bench_lsys.csv) and prints the rows. Not run by the tests.
  *
- *   build/bin/bench_lsys [out.csv]
+ *   build/bin/bench_lsys [out.csv [koch|fig28|fig28f]]
+ *
+ * With a run named, only that run is made, so that the process's peak RSS is that run's.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
 
 #include <stdio.h>
+#include <string.h>
 #include <sys/resource.h>
 #include <time.h>
 
@@ -73,10 +76,14 @@ int main(int argc, char **argv)
         return 1;
     }
     fprintf(csv, "model,mode,steps,modules,parameters,seconds,peak_mb,bytes_per_module\n");
+    const char *only = argc > 2 ? argv[2] : NULL;
     int rc = 0;
-    rc |= run(csv, "koch", KOCH, false);
-    rc |= run(csv, "fig28", FIG28, false);
-    rc |= run(csv, "fig28", FIG28, true);
+    if (!only || !strcmp(only, "koch"))
+        rc |= run(csv, "koch", KOCH, false);
+    if (!only || !strcmp(only, "fig28"))
+        rc |= run(csv, "fig28", FIG28, false);
+    if (!only || !strcmp(only, "fig28f"))
+        rc |= run(csv, "fig28", FIG28, true);
     fclose(csv);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);

@@ -347,6 +347,111 @@ TEST(memory_limit_stops_with_a_message)
     test_ctx_end(ctx);
 }
 
+/* ---- pages of the current string handed back during a step ---- */
+
+/* Derives `text` n steps twice, once as is and once with a production with a left context that
+ * never applies (Q never occurs), which keeps every page of the current string, and checks the
+ * strings are the same module by module, parameters bit for bit. */
+static void check_release_same(const char *text, int n, bool float32, size_t max_bytes)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_limits lim = *cbm_context_limits(ctx);
+    lim.max_bytes = max_bytes;
+    cbm_context_set_limits(ctx, &lim);
+    char keep[1024];
+    const char *end = strstr(text, "endlsystem");
+    CHECK(end != NULL && (size_t)(end - text) + 64 < sizeof keep);
+    snprintf(keep, sizeof keep, "%.*sQ < Q --> Q\n%s", (int)(end - text), text, end);
+    cbm_lsys *a = NULL, *b = NULL;
+    CHECK_OK(load_text(ctx, text, float32, &a));
+    CHECK_OK(load_text(ctx, keep, float32, &b));
+    CHECK_OK(cbm_lsys_reset(a));
+    CHECK_OK(cbm_lsys_reset(b));
+    for (int i = 0; i < n; i++) {
+        CHECK_OK(cbm_lsys_step(a));
+        CHECK_OK(cbm_lsys_step(b));
+    }
+    CHECK(cbm_lsys_module_count(a) > ((size_t)1 << 20));
+    CHECK_EQ_INT(cbm_lsys_module_count(a), cbm_lsys_module_count(b));
+    CHECK_EQ_INT(cbm_lsys_param_count(a), cbm_lsys_param_count(b));
+    cbm_lsys_cursor ca, cb;
+    cbm_lsys_cursor_begin(a, false, &ca);
+    cbm_lsys_cursor_begin(b, false, &cb);
+    size_t diff = 0;
+    while (cbm_lsys_cursor_next(a, false, &ca)) {
+        if (!cbm_lsys_cursor_next(b, false, &cb) || ca.symbol != cb.symbol ||
+            ca.nparams != cb.nparams ||
+            (ca.nparams && memcmp(ca.params, cb.params, (size_t)ca.nparams * sizeof(double)) != 0))
+            diff++;
+    }
+    CHECK_EQ_INT(diff, 0);
+    cbm_lsys_destroy(a);
+    cbm_lsys_destroy(b);
+    test_ctx_end(ctx);
+}
+
+static const char KOCH[] = "Lsystem: 1\nderivation length: 7\nAxiom: -F\n"
+                           "F --> F+F-F-FF+F+F-F\nendlsystem\n";
+static const char FIG28[] =
+    "#define d1 94.74\n#define d2 132.63\n#define a 18.95\n#define lr 1.109\n#define vr 1.732\n"
+    "Lsystem: 1\nderivation length: 11\nAxiom: !(1)F(200)/(45)A\n"
+    "A --> !(vr)F(50)[&(a)F(50)A]/(d1)[&(a)F(50)A]/(d2)[&(a)F(50)A]\n"
+    "F(l) --> F(l*lr)\n!(w) --> !(w*vr)\nendlsystem\n";
+
+TEST(released_pages_leave_the_string_unchanged)
+{
+    check_release_same(KOCH, 7, false, 0);
+    check_release_same(FIG28, 11, false, 0);
+    check_release_same(FIG28, 11, true, 0);
+    /* under a byte limit far above the step's bound, and one close to it */
+    check_release_same(FIG28, 11, false, (size_t)1 << 30);
+    check_release_same(FIG28, 11, false, (size_t)80 << 20);
+}
+
+/* Derives `text` (its X(a) fails at step 20, after 2^19 F's were passed) under a byte limit;
+ * released: the string is emptied by the failure, else the string of step 19 is kept. */
+static void check_runtime_error(const char *text, size_t max_bytes, bool released)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_limits lim = *cbm_context_limits(ctx);
+    lim.max_bytes = max_bytes;
+    cbm_context_set_limits(ctx, &lim);
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_text(ctx, text, false, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    for (int i = 0; i < 19; i++)
+        CHECK_OK(cbm_lsys_step(ls));
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), ((size_t)1 << 19) + 1);
+    cbm_status s = cbm_lsys_step(ls);
+    CHECK(s != CBM_OK && s != CBM_E_LIMIT);
+    CHECK(strstr(cbm_context_last_error(ctx), "func") != NULL);
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), released ? 0 : ((size_t)1 << 19) + 1);
+    CHECK_EQ_INT(cbm_lsys_steps_done(ls), 19);
+    /* reset starts over */
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    CHECK_EQ_INT(cbm_lsys_module_count(ls), 3);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+TEST(runtime_error_after_released_pages_empties_the_string)
+{
+    static const char text[] = "Lsystem: 1\nderivation length: 20\nAxiom: FX(0)\nF --> FF\n"
+                               "X(a) : a > 18 --> X(func(1, a))\nX(a) --> X(a + 1)\n"
+                               "B --> BBBBBBBB(1,2,3,4,5,6,7,8)\nendlsystem\n";
+    static const char keep[] = "Lsystem: 1\nderivation length: 20\nAxiom: FX(0)\nF --> FF\n"
+                               "X(a) : a > 18 --> X(func(1, a))\nX(a) --> X(a + 1)\n"
+                               "B --> BBBBBBBB(1,2,3,4,5,6,7,8)\nQ < Q --> Q\nendlsystem\n";
+    check_runtime_error(text, 0, true);
+    check_runtime_error(keep, 0, false); /* a left context keeps the string */
+    /* the bound by the longest successor (B's, 8 modules and 8 parameters a module) is over
+     * 80 MB; by symbol (no B in the string) about 7 MB */
+    check_runtime_error(text, (size_t)24 << 20, true);
+    /* both over the limit: kept */
+    check_runtime_error(text, (size_t)5 << 20, false);
+}
+
 TEST(expression_depth_and_loops_are_bounded)
 {
     diags g;

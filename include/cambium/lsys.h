@@ -49,7 +49,9 @@ CBM_API int cbm_lsys_derivation_length(const cbm_lsys *ls);
 CBM_API cbm_status cbm_lsys_reset(cbm_lsys *ls);
 /// One derivation step (StartEach, productions with decomposition, EndEach; End after the
 /// last step of the derivation length). CBM_E_LIMIT when the string would exceed the
-/// context's max_modules or the memory limit; the previous string is then kept.
+/// context's max_modules or the memory limit; the previous string is then kept. After any
+/// other failure (an expression's runtime error, out of memory) the string may be emptied
+/// (large strings hand their pages back to the system while being derived): reset to go on.
 CBM_API cbm_status cbm_lsys_step(cbm_lsys *ls);
 /// Whether the model called stop() (in a production or block): the derivation should end after
 /// the step in which it was called, as in cpfg.

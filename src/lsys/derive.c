@@ -14,11 +14,25 @@
  * to `maximum depth`, context taken from the string being derived; the homomorphism is the
  * same recursion applied to the final string for output and interpretation. An unmatched cut
  * `%` removes the rest of its branch.
+ *
+ * Memory: the peak of a step is the current string plus the one being produced. When nothing
+ * can look back into the current string (no left context in the productions, no
+ * decomposition) and the step cannot stop on a limit (the current string times the longest
+ * successor, in modules and in bytes, is within max_modules and max_bytes; failing that, the
+ * same bound by symbol, from a count of the current symbols), the pages of the
+ * current string that the scan has passed are handed back to the system as it goes (madvise
+ * MADV_DONTNEED, Linux), so the peak is close to the final string alone. The buffer keeps its
+ * capacity and is refilled as the output of the next step.
  */
+#define _DEFAULT_SOURCE
 #include "lsys/lsys_internal.h"
 
 #include <math.h>
 #include <stdio.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 static inline void pos_next(const lstr *s, lpos *p)
 {
@@ -362,7 +376,130 @@ static cbm_status decompose_succ(cbm_lsys *ls, const lpos *lc, const lpos *rc)
     return CBM_OK;
 }
 
+/* ---- handing consumed pages of the current string back to the system ---- */
+
+#define RELEASE_EVERY ((size_t)1 << 18) /* bytes of progress between two releases */
+
+typedef struct release {
+    bool on;
+    size_t page;
+    size_t done[3]; /* bytes of sym, pc, par already released (from the array's start) */
+    size_t at;      /* next module index at which to release */
+} release;
+
+/* Whether a next string of at most nsym modules and npar parameters stays within the limits:
+ * max_modules, and max_bytes with the symbols and counts, the parameters, capacity doubling
+ * and a margin for the small arrays a step may grow. */
+static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
+{
+    const cbm_limits *lim = cbm_context_limits(ls->ctx);
+    if (nsym > (double)lim->max_modules)
+        return false;
+    double need = (double)cbm_context_bytes(ls->ctx) +
+                  2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20) +
+                  16.0 * (double)ls->main.prods.len;
+    return !lim->max_bytes || need <= (double)lim->max_bytes;
+}
+
+/* Whether the step over ls->cur may release its consumed pages (see the file comment). */
+static void release_begin(const cbm_lsys *ls, release *r)
+{
+    memset(r, 0, sizeof *r);
+#if defined(__linux__) && defined(MADV_DONTNEED)
+    if (ls->decomp.present || ls->cur.n < RELEASE_EVERY)
+        return;
+    /* bounds of the next string: a module becomes at most the longest successor of the
+     * productions that start with its symbol (with at most their most parameters), or itself */
+    size_t len[128], par[128], longest = 1, most = 0;
+    for (int c = 0; c < 128; c++)
+        len[c] = 1, par[c] = 0;
+    for (size_t i = 0; i < ls->main.prods.len; i++) {
+        const prod *pr = &ls->main.prods.data[i];
+        if (pr->nlc)
+            return;
+        size_t np = 0;
+        for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
+            np += ls->smods.data[pr->succ + m].np;
+        int c = ls->fmods.data[pr->pred].sym & 0x7f;
+        if ((size_t)pr->nsucc > len[c])
+            len[c] = (size_t)pr->nsucc;
+        if (np > par[c])
+            par[c] = np;
+        longest = len[c] > longest ? len[c] : longest;
+        most = par[c] > most ? par[c] : most;
+    }
+    const lstr *cur = &ls->cur;
+    double nsym = (double)cur->n * (double)longest;
+    double npar = (double)cur->npar + (double)cur->n * (double)most;
+    if (!release_fits(ls, nsym, npar)) {
+        /* tighter, at the cost of one pass over the symbols: by symbol */
+        size_t hist[128] = {0};
+        for (size_t i = 0; i < cur->n; i++)
+            hist[cur->sym[i] & 0x7f]++;
+        nsym = npar = 0;
+        for (int c = 0; c < 128; c++) {
+            nsym += (double)hist[c] * (double)len[c];
+            npar += (double)hist[c] * (double)par[c];
+        }
+        npar += (double)cur->npar;
+        if (!release_fits(ls, nsym, npar))
+            return;
+    }
+    long page = sysconf(_SC_PAGESIZE);
+    if (page <= 0)
+        return;
+    r->page = (size_t)page;
+    r->on = true;
+    r->at = RELEASE_EVERY;
+#else
+    (void)ls;
+    (void)release_fits;
+#endif
+}
+
+/* Releases the whole pages of [base, base + used) not released yet; the page holding base is
+ * kept (it may hold the allocator's header). */
+static void release_range(const release *r, void *base, size_t used, size_t *done)
+{
+#if defined(__linux__) && defined(MADV_DONTNEED)
+    uintptr_t b = (uintptr_t)base;
+    uintptr_t start = (b + *done + r->page - 1) / r->page * r->page;
+    uintptr_t end = (b + used) / r->page * r->page;
+    if (base == NULL || end <= start)
+        return;
+    if (madvise((void *)start, end - start, MADV_DONTNEED) == 0)
+        *done = end - b;
+#else
+    (void)r, (void)base, (void)used, (void)done;
+#endif
+}
+
+/* Called with p the first module the step may still read. */
+static void release_consumed(release *r, const lstr *cur, const lpos *p)
+{
+    release_range(r, cur->sym, p->i, &r->done[0]);
+    release_range(r, cur->pc, p->j, &r->done[1]);
+    release_range(r, cur->par, p->k * esz(cur), &r->done[2]);
+    r->at = p->i + RELEASE_EVERY;
+}
+
+static cbm_status derive_scan(cbm_lsys *ls, release *rel);
+
+/* A step that failed after releasing part of the current string cannot keep it: the string is
+ * then emptied (cbm_lsys_step documents this). */
 static cbm_status derive(cbm_lsys *ls)
+{
+    release rel;
+    release_begin(ls, &rel);
+    cbm_status s = derive_scan(ls, &rel);
+    if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
+        lstr_clear(&ls->cur);
+        ls->homo_valid = false;
+    }
+    return s;
+}
+
+static cbm_status derive_scan(cbm_lsys *ls, release *rel)
 {
     cbm_context *ctx = ls->ctx;
     const lstr *cur = &ls->cur;
@@ -459,6 +596,8 @@ static cbm_status derive(cbm_lsys *ls)
                              "step %d: the string would exceed %zu modules (the max_modules "
                              "limit); stopped after step %d",
                              ls->steps + 1, max_modules, ls->steps);
+        if (rel->on && p.i >= rel->at)
+            release_consumed(rel, cur, &p);
     }
     return CBM_OK;
 }
