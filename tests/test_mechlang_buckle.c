@@ -118,3 +118,32 @@ TEST(mechlang_buckle_stability_refused_in_production)
     cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
 }
+
+/* the buckling model on a soft column (about 12 segments) under failing allocations: every run
+ * returns CBM_OK or CBM_E_NOMEM and releases every byte */
+static cbm_status oom_column(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/taylor-hell-buckling.l", test_source_dir());
+    const char *defs[] = {"E_WOOD=2e6", "DENSITY=500"};
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.defines = defs;
+    def.define_count = 2;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(ls);
+    for (int i = 0; s == CBM_OK && i < 200 && !cbm_lsys_stopped(ls); i++)
+        s = cbm_lsys_step(ls);
+    if (s == CBM_OK && !cbm_lsys_stopped(ls))
+        s = CBM_E_INTERNAL; /* the soft column must buckle */
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
+TEST(mechlang_buckle_oom)
+{
+    CHECK(test_oom_loop(oom_column, NULL) > 10);
+}
