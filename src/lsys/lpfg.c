@@ -152,6 +152,7 @@ typedef enum {
     F_ADDRINGS,
     F_AGEWOOD,
     F_BREAK,
+    F_STABILITY,
     F_GRAVITY,
     F_TROPISM,
     F_PIPEMODEL,
@@ -214,6 +215,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"AddRings", F_ADDRINGS, 0},
                                 {"AgeWood", F_AGEWOOD, 1},
                                 {"Break", F_BREAK, 0},
+                                {"Stability", F_STABILITY, 0},
                                 {"Gravity", F_GRAVITY, 3},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
@@ -1091,6 +1093,8 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
+            else if (b->fn == F_STABILITY)
+                rt = T_DOUBLE;
             else if (b->fn == F_CURGROUP || b->fn == F_RAND)
                 rt = T_INT;
             else if ((b->fn == F_MIN || b->fn == F_MAX || b->fn == F_FABS) && args >= 0)
@@ -2732,6 +2736,7 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
     int op = n->fn == F_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
              : n->fn == F_ADDRINGS  ? CBM__ML_RINGS
              : n->fn == F_AGEWOOD   ? CBM__ML_AGE
+             : n->fn == F_STABILITY ? CBM__ML_STABILITY
                                     : CBM__ML_BREAK;
     double r = 0;
     cbm_status s = cbm__mechlang_run(ls->ctx, m, &ls->cur, op, a[0], &r, msg, sizeof msg);
@@ -2741,6 +2746,7 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
                  n->fn == F_EQUILIBRIUM ? "Equilibrium"
                  : n->fn == F_ADDRINGS  ? "AddRings"
                  : n->fn == F_AGEWOOD   ? "AgeWood"
+                 : n->fn == F_STABILITY ? "Stability"
                                         : "Break",
                  msg);
         rt_error(lp, s, full);

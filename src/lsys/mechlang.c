@@ -19,8 +19,11 @@
  *      bending; a root uses its own length and heading), Omega = rest, age 0;
  *   3. the operation: equilibrium (cbm_plant_solve, warm-started from the stored Omega), rings
  *      (cbm_plant_grow_rings: pipe model and shape memory, Jirasek eq. 24), ageing
- *      (cbm_plant_age_wood, core ageing) or breakage (cbm_plant_break, then the broken modules
- *      and the rest of their branches leave the string);
+ *      (cbm_plant_age_wood, core ageing), breakage (cbm_plant_break, then the broken modules
+ *      and the rest of their branches leave the string) or the stability query
+ *      (cbm_plant_stability_factor: the factor by which one relaxation pass, Taylor-Hell 6.24
+ *      with alpha = 1, grows a small push of the stored equilibrium; >= 1: the plant does not
+ *      return to it, the buckling criterion of Taylor-Hell §6.3);
  *   4. results go back into the parameters. A segment's rings are kept in the parameters as one
  *      equivalent ring: E = C_L / I_L, G = C_H / J (the structural moduli, Taylor-Hell 8.5-8.6),
  *      density = mass per length / area, rest = the rigidity-weighted rest rate, age = the oldest
@@ -374,6 +377,10 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         if (st == CBM_OK)
             st = write_back(pl, &v, true);
         *result = (double)v.seg.len;
+    } else if (st == CBM_OK && op == CBM__ML_STABILITY) {
+        st = cbm_plant_stability_factor(pl, result, NULL);
+        if (st != CBM_OK)
+            *result = 0;
     } else if (st == CBM_OK && op == CBM__ML_BREAK) {
         size_t nb = 0, n = v.seg.len, ns = s->n ? s->n : 1;
         size_t *broken = cbm__alloc(ctx, n * sizeof *broken);

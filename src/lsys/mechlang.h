@@ -40,7 +40,7 @@ typedef struct cbm__mechlang {
     cbm_mech_discretization discretization;
 } cbm__mechlang;
 
-enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK };
+enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK, CBM__ML_STABILITY };
 
 /* Defaults: no segment module, gravity (0, -9.81, 0), no tropism, growth and solve defaults. */
 void cbm__mechlang_init(cbm__mechlang *m);
@@ -49,7 +49,8 @@ void cbm__mechlang_init(cbm__mechlang *m);
  * segments of the string, does `op` (arg: years for CBM__ML_AGE), writes the results back into
  * the segments' parameters, and for CBM__ML_BREAK removes the broken segments and the rest of
  * their branches from the string. *result: passes (equilibrium), rings added, segments aged,
- * segments broken. Errors go to err (a message) with the status. */
+ * segments broken, the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor at the
+ * stored omega; the string is not changed). Errors go to err (a message) with the status. */
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn);
 

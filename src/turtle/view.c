@@ -9,7 +9,8 @@
  * ("tropism direction:", "initial elasticity:", "elasticity increment:"; ABOP section 2.2).
  * A colour map holds 256 RGB byte triples; a material file holds records of an index byte and 14
  * bytes (transparency, ambient, diffuse, emissive, specular RGB, shininess); we keep the diffuse
- * colour. Colours are converted from sRGB bytes to linear RGB for the scene.
+ * colour. Colours are converted from sRGB bytes to linear RGB for the scene. Without either,
+ * index i is a grey of value i/255, except indices 1-15: a palette of plant colours.
  */
 #include "tint.h"
 
@@ -47,6 +48,28 @@ static void set_defaults(cbm_view *v)
         v->colors[i][0] = v->colors[i][1] = v->colors[i][2] = g;
         v->colors[i][3] = 1.0f;
     }
+    /* the default palette of indices 1-15 (docs/turtle.md): plant colours instead of the near
+     * black of the grey ramp; sRGB bytes */
+    static const unsigned char pal[15][3] = {
+        {110, 75, 45},   /* 1 bark brown */
+        {60, 140, 50},   /* 2 leaf green */
+        {30, 95, 35},    /* 3 dark green */
+        {150, 200, 80},  /* 4 light (young) green */
+        {190, 30, 40},   /* 5 red (fruit) */
+        {240, 200, 40},  /* 6 yellow (flower) */
+        {245, 245, 235}, /* 7 white (petal) */
+        {235, 130, 35},  /* 8 orange */
+        {130, 60, 150},  /* 9 purple */
+        {235, 140, 170}, /* 10 pink */
+        {60, 110, 190},  /* 11 blue */
+        {185, 145, 95},  /* 12 light wood */
+        {70, 45, 30},    /* 13 dark brown */
+        {128, 128, 128}, /* 14 grey */
+        {20, 20, 20},    /* 15 black */
+    };
+    for (int i = 0; i < 15; i++)
+        for (int c = 0; c < 3; c++)
+            v->colors[i + 1][c] = srgb_to_linear(pal[i][c]);
 }
 
 static void set_angle(cbm_view *v, double deg)
