@@ -175,7 +175,6 @@ static bool read_ray(const char *path, ray *R)
     return body;
 }
 
-
 /* ---- the comparison ---- */
 
 static double maxdev; /* largest |ours - cpfg| of the current model's primitives */
@@ -186,7 +185,6 @@ static bool near(double a, double b, double scale)
         maxdev = fabs(a - b);
     return fabs(a - b) <= 1e-5 * (1 + fabs(b)) + 1e-5 * scale;
 }
-
 
 void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *scene, size_t nmod,
                            bool compare_prims)
@@ -243,17 +241,15 @@ void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *sce
                     for (int q = 0; q < 3; q++) {
                         cbm_vec3 a = pts[P[i].first + k + (size_t)q];
                         ok = ok && near(a.x, r->v[3 * q], scale) &&
-                             near(a.y, r->v[3 * q + 1], scale) &&
-                             near(a.z, r->v[3 * q + 2], scale);
+                             near(a.y, r->v[3 * q + 1], scale) && near(a.z, r->v[3 * q + 2], scale);
                     }
                     if (!ok) {
                         if (bad < 3)
                             fprintf(stderr,
                                     "%s: triangle %zu differs: ours (%g %g %g) cpfg (%g %g "
                                     "%g)\n",
-                                    md->dir, j - 1, pts[P[i].first + k].x,
-                                    pts[P[i].first + k].y, pts[P[i].first + k].z, r->v[0],
-                                    r->v[1], r->v[2]);
+                                    md->dir, j - 1, pts[P[i].first + k].x, pts[P[i].first + k].y,
+                                    pts[P[i].first + k].z, r->v[0], r->v[1], r->v[2]);
                         bad++;
                     }
                 }
@@ -272,8 +268,8 @@ void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *sce
             bool ok = (int)P[i].kind == r->kind;
             if (ok && r->kind != CBM_PRIM_SURFACE && r->color != P[i].color) {
                 if (bad < 3)
-                    fprintf(stderr, "%s: primitive %zu has colour %d, cpfg %d\n", md->dir,
-                            j - 1, P[i].color, r->color);
+                    fprintf(stderr, "%s: primitive %zu has colour %d, cpfg %d\n", md->dir, j - 1,
+                            P[i].color, r->color);
                 ok = false;
             }
             if (ok && r->kind == CBM_PRIM_CYLINDER) {
@@ -300,8 +296,7 @@ void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *sce
                 for (size_t k = 0; ok && k < r->count; k++) {
                     const cbm_vec3 q = pts[P[i].first + k];
                     const double *w = &R.pts[3 * (r->first + k)];
-                    ok = near(q.x, w[0], scale) && near(q.y, w[1], scale) &&
-                         near(q.z, w[2], scale);
+                    ok = near(q.x, w[0], scale) && near(q.y, w[1], scale) && near(q.z, w[2], scale);
                 }
             }
             if (!ok) {
@@ -329,13 +324,11 @@ void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *sce
     }
     CHECK(cbm_scene_triangle_count(scene) > 0);
     /* the scene's bounds against cpfg's OBJ export, where there is one */
-    snprintf(path, sizeof path, "gzip -dc '" ORACLE "%s/ref/final.obj.gz' 2>/dev/null",
-             md->dir);
+    snprintf(path, sizeof path, "gzip -dc '" ORACLE "%s/ref/final.obj.gz' 2>/dev/null", md->dir);
     FILE *obj = popen(path, "r");
     if (obj) {
         char line[512];
-        double olo[3] = {INFINITY, INFINITY, INFINITY},
-               ohi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        double olo[3] = {INFINITY, INFINITY, INFINITY}, ohi[3] = {-INFINITY, -INFINITY, -INFINITY};
         size_t nv = 0;
         while (fgets(line, sizeof line, obj)) {
             double q[3];
