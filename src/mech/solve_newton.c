@@ -555,11 +555,26 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
             st->unstable_joints = nonpd;
             if (nonpd == 0 || attempt == 3 || st->passes + 4 >= max_passes)
                 break;
+            memcpy(w->save, p->omega, p->n * sizeof *w->save);
             cbm__mech_tree_perturb_unstable(p, 0.05);
             st->continuation_steps++;
             r = newton_level(&k, tol, m, false);
             if (r != NK_DONE)
                 break;
+            /* back at the same equilibrium (every joint within 1e-6 rad of it) after a push of
+             * 0.05 rad along the soft mode: the steps descend the energy there (plain ones only
+             * where they do), so this is a minimum along that mode and the pivot test misread
+             * the unsymmetric Newton matrix (large joint rotations under heavy dead loads) */
+            double back = 0.0;
+            for (size_t i = 0; i < p->n; i++) {
+                cbm_vec3 dv = v3_sub(p->omega[i], w->save[i]);
+                double a = w->dual[i] * fmax(fabs(dv.x), fmax(fabs(dv.y), fabs(dv.z)));
+                back = a > back ? a : back;
+            }
+            if (back < 1e-6) {
+                st->unstable_joints = 0;
+                break;
+            }
         }
     }
     if (r == NK_NONFINITE)
