@@ -38,7 +38,11 @@
  * times 4 until every pivot is positive definite). From a warm start, a shifted step that
  * finds no decrease and whose slope on the merit is not clearly negative is followed by the
  * plain Newton step (the pivot test fires away from equilibria too); from rest the stall
- * hands over to the continuation. After convergence the unmodified factorisation is checked.
+ * hands over to the continuation. From a warm start the plain step is taken unshifted whenever
+ * it descends the total potential energy (slope sum_i d_i R_i . s_i, no tip moments): the pivot
+ * test reads the unsymmetric Newton matrix and also fires at stable hanging equilibria of soft
+ * stems. After convergence the unmodified factorisation is checked; an equilibrium the solver
+ * comes back to after a push along the soft mode is reported stable.
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
