@@ -38,7 +38,11 @@
  * times 4 until every pivot is positive definite). From a warm start, a shifted step that
  * finds no decrease and whose slope on the merit is not clearly negative is followed by the
  * plain Newton step (the pivot test fires away from equilibria too); from rest the stall
- * hands over to the continuation. After convergence the unmodified factorisation is checked.
+ * hands over to the continuation. From a warm start the plain step is taken unshifted whenever
+ * it descends the total potential energy (slope sum_i d_i R_i . s_i, no tip moments): the pivot
+ * test reads the unsymmetric Newton matrix and also fires at stable hanging equilibria of soft
+ * stems. After convergence the unmodified factorisation is checked; an equilibrium the solver
+ * comes back to after a push along the soft mode is reported stable.
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
@@ -64,6 +68,7 @@ typedef struct nk {
     double mu;         /* shift of the last shifted step */
     double mu_hint;    /* the shift the last unstable configuration needed */
     bool plain;        /* take the plain Newton step when a shifted one does not descend */
+    bool conservative; /* no tip moments: the loads have a potential energy */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -239,6 +244,22 @@ static bool shifted_descends(const nk *k, const double *d, double mu)
     return slope <= -0.1 * rr;
 }
 
+/* The slope of the total potential energy along d, with the right Jacobian of each joint
+ * rotation taken as the identity: sum_i d_i R_i . d_i, J/1. The potential (elastic
+ * sum_i d_i/2 sum_c C_c (Omega_c - rest_c)^2 plus -f . x of every dead load) has the gradient
+ * d_i (C_i (Omega_i - rest_i) - J_r(d_i Omega_i)^T M_i^local), which is d_i R_i up to J_r; the
+ * stable equilibria are its minima. No pass: R is that of the current state. */
+static double energy_slope(const nk *k, const double *d)
+{
+    const cbm_plant *p = k->p;
+    const double *res = (const double *)p->work.res;
+    double s = 0.0;
+    for (size_t i = 0; i < p->n; i++)
+        s += p->work.dual[i] * (res[3 * i] * d[3 * i] + res[3 * i + 1] * d[3 * i + 1] +
+                                res[3 * i + 2] * d[3 * i + 2]);
+    return s;
+}
+
 /* Backtracking line search (Armijo, c = 1e-4, halving up to 12 times) along work.step from
  * length lam: NK_DONE with the accepted length in *out and the state evaluated there, or
  * NK_STALL with the unmoved state evaluated again. */
@@ -294,6 +315,16 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             size_t nonpd = 0;
             size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
+            /* from a warm start, a plain Newton step that descends the potential energy is
+             * taken even where the pivot test fires: the test reads the symmetric part of
+             * pivots of the unsymmetric Newton matrix (dead loads, large joint rotations), and
+             * it also fires at the stable equilibrium of a soft hanging chain or a twig that
+             * snapped through, where the shifted steps converge only linearly (a rate of
+             * about 0.8 per step). A step that descends the energy heads for a minimum, not
+             * for a balanced unstable state; the check after convergence still applies. */
+            if (nonpd > 0 && sing == 0 && k->plain && k->conservative &&
+                energy_slope(k, (const double *)w->tmp) < 0.0)
+                nonpd = 0;
             /* an unstable configuration: Newton would head for the unstable equilibrium;
              * shift by mu S (Levenberg-Marquardt) until every pivot is positive definite,
              * which gives a descent towards a stable one */
@@ -424,6 +455,9 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.st = st;
     k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
     k.max_turn = MAX_TURN;
+    k.conservative = true;
+    for (size_t i = 0; i < p->n && k.conservative; i++)
+        k.conservative = p->tipm[i].x == 0.0 && p->tipm[i].y == 0.0 && p->tipm[i].z == 0.0;
     int m = def->krylov_dim;
     double tol = def->tolerance;
     cbm__mech_work *w = &p->work;
@@ -525,11 +559,26 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
             st->unstable_joints = nonpd;
             if (nonpd == 0 || attempt == 3 || st->passes + 4 >= max_passes)
                 break;
+            memcpy(w->save, p->omega, p->n * sizeof *w->save);
             cbm__mech_tree_perturb_unstable(p, 0.05);
             st->continuation_steps++;
             r = newton_level(&k, tol, m, false);
             if (r != NK_DONE)
                 break;
+            /* back at the same equilibrium (every joint within 1e-6 rad of it) after a push of
+             * 0.05 rad along the soft mode: the steps descend the energy there (plain ones only
+             * where they do), so this is a minimum along that mode and the pivot test misread
+             * the unsymmetric Newton matrix (large joint rotations under heavy dead loads) */
+            double back = 0.0;
+            for (size_t i = 0; i < p->n; i++) {
+                cbm_vec3 dv = v3_sub(p->omega[i], w->save[i]);
+                double a = w->dual[i] * fmax(fabs(dv.x), fmax(fabs(dv.y), fabs(dv.z)));
+                back = a > back ? a : back;
+            }
+            if (back < 1e-6) {
+                st->unstable_joints = 0;
+                break;
+            }
         }
     }
     if (r == NK_NONFINITE)
