@@ -555,6 +555,7 @@ TEST(mech_errors)
     sd.max_passes = 4;
     CHECK_STATUS(cbm_plant_solve(p, &sd, &st), CBM_E_NOT_CONVERGED);
     CHECK(st.residual > 0 && isfinite(st.residual));
+    CHECK(strstr(cbm_context_last_error(ctx), "pass budget ran out") != NULL);
     /* context limit on passes */
     cbm_limits lim = *cbm_context_limits(ctx);
     cbm_limits small = lim;

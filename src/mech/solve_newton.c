@@ -461,7 +461,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     int m = def->krylov_dim;
     double tol = def->tolerance;
     cbm__mech_work *w = &p->work;
-    const char *why = "the pass budget ran out";
+    const char *why = NULL; /* set where the cause is known; else decided at the end */
 
     /* first try the full load from the starting Omega */
     p->load_scale = 1.0;
@@ -586,8 +586,13 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     st->residual = k.rel;
     if (r == NK_DONE)
         return CBM_OK;
-    if (r == NK_STALL && st->continuation_steps == 1)
+    if (r == NK_BUDGET || st->passes + 4 >= max_passes)
+        why = "the pass budget ran out";
+    else if (!why && r == NK_STALL && st->continuation_steps == 1)
         why = "Newton stalled";
+    else if (!why)
+        why = "Newton stalled; neither load continuation nor relaxation bursts reached the "
+              "tolerance";
     return cbm__fail(p->ctx, CBM_E_NOT_CONVERGED,
                      "fast solver: relative residual %.3g after %zu passes (tolerance %.3g): %s",
                      k.rel, st->passes, tol, why);
