@@ -24,6 +24,8 @@ typedef struct cbm__mech_work {
     cbm_vec3 *save;   /* Omega at the last accepted continuation level */
     cbm_vec3 *dth;    /* tangent: world rotation of each frame */
     cbm_vec3 *dm;     /* tangent: world moment */
+    cbm_vec3 *dpos;   /* tangent: world displacement of the proximal node (ground contact) */
+    cbm_vec3 *dfc;    /* tangent: world force accumulators (ground contact) */
     cbm_vec3 *tmp;    /* a vector of the Krylov space */
     cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
     cbm_vec3 *zbasis; /* the preconditioned vectors (flexible GMRES), krylov_cap of 3n */
@@ -43,6 +45,9 @@ struct cbm_plant {
     cbm_mech_discretization disc;
     double load_scale; /* 1 except during load continuation */
     double mass_path;  /* 1 except during the continuation from the balanced point masses */
+    bool ground;       /* a ground plane pushes the distal nodes below it up */
+    double ground_y;   /* m, height of the ground plane */
+    double ground_k;   /* N/m, penalty stiffness per metre of penetration */
 
     size_t n, cap;
     /* topology and rest geometry */
@@ -91,6 +96,9 @@ void cbm__mech_forward(cbm_plant *p);
 /// (N m) and *mmax = max |M|. If alpha > 0, also applies the relaxation update to Omega.
 /// If res != NULL, stores the residual per joint. Returns NaN if anything is non-finite.
 double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax, double *sumsq);
+/// Upward contact force (N) on the distal node of segment i at the current state (0 without
+/// ground or above it); *stiff (optional) receives d force / d height (N/m, <= 0).
+double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff);
 /// Names the first segment holding a non-finite value; returns CBM_E_NONFINITE.
 cbm_status cbm__mech_report_nonfinite(cbm_plant *p);
 /// Tangent passes: out = J v, where J = d(residual)/d(Omega) at the last evaluated state.

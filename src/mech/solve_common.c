@@ -54,6 +54,17 @@
  * Jacobian of SO(3)); loads are dead (fixed in world), so dM_i = sum_c dM_c + (dth_i x H_i) x
  * (l_i (F_i - w_i) + lever_i w_i), and dR_i = C_i v_i - R_i^T (dM_i - dth_i x M_i). The result is
  * the exact derivative of the discrete residual (a test compares it with finite differences).
+ *
+ * Ground contact (Jirasek et al. 2000 §2.8, penalty form): with a ground plane at height y0 and
+ * stiffness k, the distal node X_i = P_i + l_i H_i of every segment below the plane receives the
+ * upward force k (y0 - X_i.y), added to f_tip,i in the backward pass, so the contact force is a
+ * function of the current Omega inside every solver: the relaxation's fixed point and the Newton
+ * residual both include it. Its tangent: the nodes move by dP_i = dP_parent + l_parent
+ * (dth_parent x H_parent), the contact force changes by -k dX_i.y, and these force changes are
+ * carried down like the loads (dF_i = sum_c dF_c + df_c,i; dM_i gains H_i x l_i (sum_c dF_c +
+ * df_c,i)), so the tangent stays the exact derivative. The tree factorisation (solve_tree.c)
+ * carries rotations only; with contact it preconditions FGMRES, whose products use this exact
+ * tangent.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -63,7 +74,9 @@
 /* ---- workspace ---- */
 
 #define WORK_ARRAYS(X)                                                                             \
-    X(dual) X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(tmp)
+    X(dual)                                                                                        \
+    X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(dpos)       \
+        X(dfc) X(tmp)
 
 void cbm__mech_work_free(cbm_plant *p)
 {
@@ -237,6 +250,19 @@ static inline cbm_quat qnorm(cbm_quat q)
     return r;
 }
 
+double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff)
+{
+    double depth = p->ground_y - (p->pos[i].y + p->len[i] * h.y);
+    if (!p->ground || !(depth > 0.0)) {
+        if (stiff)
+            *stiff = 0.0;
+        return 0.0;
+    }
+    if (stiff)
+        *stiff = -p->ground_k;
+    return p->ground_k * depth;
+}
+
 void cbm__mech_forward(cbm_plant *p)
 {
     const size_t n = p->n;
@@ -284,10 +310,13 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
     cbm_vec3 *restrict m = p->moment;
     cbm_vec3 *restrict om = p->omega;
     double rmax = 0.0, mmax = 0.0, emax = 0.0, sum = 0.0, ss = 0.0;
+    const bool ground = p->ground;
     for (size_t i = p->n; i-- > 0;) {
         cbm_vec3 h, l, u;
         q_frame(q[i], &h, &l, &u);
         cbm_vec3 fd = v3_add(f[i], ftip[i]);
+        if (ground)
+            fd.y += cbm__mech_contact(p, i, h, NULL);
         cbm_vec3 arm = v3_add(v3_scale(fd, len[i]), v3_scale(wown[i], lever[i]));
         cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), mtip[i]);
         cbm_vec3 fi = v3_add(fd, wown[i]);
@@ -374,6 +403,9 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
     const cbm_quat *restrict q = p->q;
     cbm_vec3 *restrict dth = w->dth;
     cbm_vec3 *restrict dm = w->dm;
+    cbm_vec3 *restrict dpos = w->dpos;
+    cbm_vec3 *restrict dfc = w->dfc;
+    const bool ground = p->ground;
     for (size_t i = 0; i < n; i++) {
         cbm_vec3 r = v3_scale(om[i], dual[i]);
         cbm_vec3 x = v3_scale(v[i], dual[i]);
@@ -392,6 +424,13 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
         int64_t pa = par[i];
         dth[i] = pa < 0 ? wj : v3_add(dth[pa], wj);
         dm[i] = v3(0, 0, 0);
+        if (ground) {
+            /* the proximal node moves with the rotation of every frame below it */
+            dpos[i] = pa < 0
+                          ? v3(0, 0, 0)
+                          : v3_add(dpos[pa], v3_scale(v3_cross(dth[pa], q_h(q[pa])), p->len[pa]));
+            dfc[i] = v3(0, 0, 0);
+        }
     }
     const double *restrict len = p->len;
     const double *restrict lever = w->lever;
@@ -405,8 +444,20 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
         cbm_vec3 arm = v3_add(v3_scale(v3_sub(f[i], wown[i]), len[i]), v3_scale(wown[i], lever[i]));
         cbm_vec3 dh = v3_cross(dth[i], h);
         cbm_vec3 dmi = v3_add(dm[i], v3_cross(dh, arm));
-        dm[i] = dmi;
         int64_t pa = par[i];
+        if (ground) {
+            /* contact forces follow the nodes: dF = sum_c dF_c + k_c dy of the distal node,
+             * acting at the distal node (lever l_i H_i) */
+            double kc;
+            cbm_vec3 dfd = dfc[i];
+            (void)cbm__mech_contact(p, i, h, &kc);
+            if (kc != 0.0)
+                dfd.y += kc * (dpos[i].y + len[i] * dh.y);
+            dmi = v3_add(dmi, v3_cross(h, v3_scale(dfd, len[i])));
+            if (pa >= 0)
+                dfc[pa] = v3_add(dfc[pa], dfd);
+        }
+        dm[i] = dmi;
         if (pa >= 0)
             dm[pa] = v3_add(dm[pa], dmi);
         cbm_vec3 z = v3_sub(dmi, v3_cross(dth[i], m[i]));

@@ -128,11 +128,12 @@ static bool gmres(nk *k, double eta, int m)
     double *g = sn + m;                   /* m + 1 */
     double *x = (double *)w->step;
     memset(x, 0, n3 * sizeof *x);
-    double bnorm = k->norm;
+    const double *res = (const double *)w->res;
+    /* the 2-norm of the right-hand side (k->norm is the merit, a scaled norm) */
+    double bnorm = sqrt(dot(res, res, n3));
     if (bnorm == 0.0)
         return true;
     double target = eta * bnorm;
-    const double *res = (const double *)w->res;
     double beta = bnorm;
     for (size_t i = 0; i < n3; i++)
         V[i] = -res[i] / beta;
@@ -341,7 +342,9 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
-            direct = sing == 0;
+            /* with ground contact the factorisation lacks the contact stiffness: it then
+             * preconditions FGMRES, whose products carry the exact tangent */
+            direct = sing == 0 && !p->ground;
             shifted = mu > 0.0 && direct;
             if (mu > 0.0)
                 k->mu_hint = mu;
@@ -376,7 +379,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
             memcpy(step, w->tmp, n3 * sizeof *step);
-            if (sing == 0) {
+            if (sing == 0 && !p->ground) {
                 double tmax = largest_turn(p);
                 lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             } else if (!gmres(k, eta, m))

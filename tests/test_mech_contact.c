@@ -1,0 +1,237 @@
+/* Ground contact by penalty inside the solvers (Jirasek et al. 2000 §2.8): the tangent with the
+ * contact stiffness against finite differences; an inclined cantilever whose tip rests on the
+ * ground against the closed form of a cantilever on a spring support (the propped cantilever,
+ * reaction 3/8 w L, in the stiff limit); penetration bounded by force / k; both solvers at the
+ * same equilibrium; a flexible axis lying on the ground; no ground by default. */
+#include "mech_testlib.h"
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+/* A rod of n segments, clamped at `elev` rad (negative: pointing down) at height y_base. */
+static cbm_plant *rod_at(cbm_context *ctx, int n, double L, double r, double E, double elev,
+                         double y_base)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(elev);
+    pd.base_position = v3(0.0, y_base, 0.0);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    if (!p)
+        return NULL;
+    cbm_segment_def d = cbm_segment_def_default();
+    d.length = L / n;
+    d.core.youngs_modulus = E;
+    d.core.shear_modulus = E / 2.6;
+    d.core.density = 600.0;
+    d.core.a = d.core.b = r;
+    for (int i = 0; i < n; i++) {
+        d.parent = i - 1;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    return p;
+}
+
+static double min_node_height(const cbm_plant *p)
+{
+    double y = INFINITY;
+    for (size_t i = 0; i < cbm_plant_segment_count(p); i++) {
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(p, i, &s));
+        if (s.distal.y < y)
+            y = s.distal.y;
+    }
+    return y;
+}
+
+TEST(contact_default_none_and_errors)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant *p = rod_at(ctx, 4, 1.0, 0.01, 1e10, 0.0, 0.0);
+    CHECK(!cbm_plant_ground(p, NULL, NULL));
+    CHECK_STATUS(cbm_plant_set_ground(p, NAN, 1e3), CBM_E_INVALID);
+    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, -1.0), CBM_E_INVALID);
+    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, INFINITY), CBM_E_INVALID);
+    CHECK_OK(cbm_plant_set_ground(p, -0.5, 2e3));
+    double y0 = 0, k = 0;
+    CHECK(cbm_plant_ground(p, &y0, &k));
+    CHECK(y0 == -0.5 && k == 2e3);
+    CHECK_OK(cbm_plant_set_ground(p, -0.5, 0.0));
+    CHECK(!cbm_plant_ground(p, NULL, NULL));
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* The tangent with contact is the exact derivative of the residual. */
+TEST(contact_tangent_matches_finite_differences)
+{
+    cbm_context *ctx = test_ctx();
+    const int n = 30;
+    cbm_plant *p = rod_at(ctx, n, 2.0, 0.004, 1e9, 0.1, 0.05);
+    /* bend it so that a stretch of nodes is well below the ground, some above */
+    for (int i = 0; i < n; i++)
+        CHECK_OK(cbm_plant_set_omega(p, (size_t)i, v3(0.01 * i, 0.02, -0.4 + 0.03 * i)));
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    /* the ground halfway between the lowest and the highest node */
+    double lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(p, (size_t)i, &s));
+        lo = s.distal.y < lo ? s.distal.y : lo;
+        hi = s.distal.y > hi ? s.distal.y : hi;
+    }
+    CHECK_OK(cbm_plant_set_ground(p, 0.5 * (lo + hi), 5e3));
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    size_t below = 0;
+    for (int i = 0; i < n; i++)
+        below += cbm_plant_contact_force(p, (size_t)i) > 0.0;
+    printf("nodes in contact: %zu of %d\n", below, n);
+    CHECK(below >= 3 && below + 3 <= (size_t)n);
+    CHECK_OK(cbm__mech_work_reserve(p, 1));
+    cbm__mech_prepare(p);
+    cbm_vec3 *v = calloc(n, sizeof *v), *jv = calloc(n, sizeof *jv), *rp = calloc(n, sizeof *rp),
+             *rm = calloc(n, sizeof *rm), *om = calloc(n, sizeof *om);
+    for (int i = 0; i < n; i++) {
+        v[i] = v3(sin(3.0 * i), cos(5.0 * i), sin(7.0 * i + 1));
+        om[i] = p->omega[i];
+    }
+    double mm;
+    cbm__mech_forward(p);
+    cbm__mech_backward(p, 0.0, NULL, &mm, NULL);
+    cbm__mech_jvp(p, v, jv);
+    double eps = 1e-7, maxd = 0, maxj = 0;
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+        for (int i = 0; i < n; i++)
+            p->omega[i] = v3_add(om[i], v3_scale(v[i], sgn * eps));
+        cbm__mech_forward(p);
+        cbm__mech_backward(p, 0.0, sgn < 0 ? rm : rp, &mm, NULL);
+    }
+    for (int i = 0; i < n; i++) {
+        cbm_vec3 fd = v3_scale(v3_sub(rp[i], rm[i]), 0.5 / eps);
+        double dd = v3_norm(v3_sub(fd, jv[i]));
+        if (dd > maxd)
+            maxd = dd;
+        if (v3_norm(jv[i]) > maxj)
+            maxj = v3_norm(jv[i]);
+    }
+    printf("tangent with contact vs central differences: max diff %.3g, max |Jv| %.3g\n", maxd,
+           maxj);
+    CHECK(maxd < 1e-6 * maxj);
+    free(v);
+    free(jv);
+    free(rp);
+    free(rm);
+    free(om);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* A cantilever clamped at theta below the horizontal, its unloaded tip exactly on the ground.
+ * Small deflection, inextensible: the tip reaction R (vertical) against the weight w per length
+ * is that of a cantilever on a spring of stiffness k cos^2 theta across the rod,
+ *     R = (3/8) w L / (1 + 3 EI / (k cos^2 theta L^3)),
+ * which tends to the propped cantilever's 3/8 w L as k grows. */
+TEST(contact_propped_cantilever)
+{
+    cbm_context *ctx = test_ctx();
+    const double L = 1.0, r = 0.01, E = 1e10, th = 0.2;
+    const double EI = E * PI * pow(r, 4) / 4.0;
+    const double w = 600.0 * PI * r * r * 9.81;
+    const double ks[3] = {1e3, 1e5, 1e7};
+    double prev_err = INFINITY;
+    for (int j = 0; j < 3; j++) {
+        cbm_plant *p = rod_at(ctx, 40, L, r, E, -th, L * sin(th));
+        CHECK_OK(cbm_plant_set_ground(p, 0.0, ks[j]));
+        cbm_solve_stats st;
+        CHECK_OK(cbm_plant_solve(p, NULL, &st));
+        size_t n = cbm_plant_segment_count(p);
+        double R = 0.0;
+        for (size_t i = 0; i < n; i++)
+            R += cbm_plant_contact_force(p, i);
+        double Rt = cbm_plant_contact_force(p, n - 1);
+        double spring = 0.375 * w * L / (1.0 + 3.0 * EI / (ks[j] * cos(th) * cos(th) * L * L * L));
+        double err = fabs(R / (0.375 * w * L) - 1.0);
+        double depth = -min_node_height(p);
+        printf("k %.0e N/m: tip reaction %.6f N (spring closed form %.6f, propped 3/8 wL %.6f), "
+               "rel. error to 3/8 wL %.2e, depth %.3e m (R/k %.3e), %zu Newton steps, %zu "
+               "passes\n",
+               ks[j], R, spring, 0.375 * w * L, err, depth, R / ks[j], st.newton_steps,
+               st.passes);
+        CHECK(Rt == R); /* only the tip touches */
+        CHECK_REL(R, spring, 2e-3);
+        CHECK(err < prev_err);
+        prev_err = err;
+        CHECK_REL(depth, R / ks[j], 1e-9);
+        CHECK(st.newton_steps <= 12);
+        cbm_plant_destroy(p);
+    }
+    CHECK(prev_err < 3e-3);
+    test_ctx_end(ctx);
+}
+
+/* Relaxation and Newton reach the same equilibrium with contact. */
+TEST(contact_solvers_agree)
+{
+    cbm_context *ctx = test_ctx();
+    const double L = 1.0, th = 0.2;
+    cbm_plant *a = rod_at(ctx, 20, L, 0.01, 1e10, -th, L * sin(th));
+    cbm_plant *b = rod_at(ctx, 20, L, 0.01, 1e10, -th, L * sin(th));
+    CHECK_OK(cbm_plant_set_ground(a, 0.0, 1e3));
+    CHECK_OK(cbm_plant_set_ground(b, 0.0, 1e3));
+    cbm_solve_def rd = cbm_solve_def_default();
+    rd.solver = CBM_MECH_RELAX;
+    rd.alpha = 0.1;
+    rd.tolerance = 1e-10;
+    rd.max_passes = 20000;
+    cbm_solve_stats sa, sb;
+    CHECK_OK(cbm_plant_solve(a, &rd, &sa));
+    cbm_solve_def nd = cbm_solve_def_default();
+    nd.tolerance = 1e-10;
+    CHECK_OK(cbm_plant_solve(b, &nd, &sb));
+    size_t n = cbm_plant_segment_count(a);
+    double ra = cbm_plant_contact_force(a, n - 1), rb = cbm_plant_contact_force(b, n - 1);
+    cbm_vec3 ta = rod_tip(a), tb = rod_tip(b);
+    printf("relax: R %.9f N in %zu passes; fast: R %.9f N in %zu passes (%zu Newton steps)\n",
+           ra, sa.passes, rb, sb.passes, sb.newton_steps);
+    CHECK(ra > 0.0);
+    CHECK_REL(ra, rb, 1e-6);
+    CHECK(v3_norm(v3_sub(ta, tb)) < 1e-9);
+    cbm_plant_destroy(a);
+    cbm_plant_destroy(b);
+    test_ctx_end(ctx);
+}
+
+/* A long flexible axis clamped horizontally 5 cm above the ground (w L^4 / 8 EI = 1.3 m): it
+ * sags onto the ground and a quarter or more of it lies there; the solve converges from rest
+ * (through the load continuation) and no node sinks deeper than the ground's force over k. */
+TEST(contact_axis_lies_on_ground)
+{
+    cbm_context *ctx = test_ctx();
+    const int n = 60;
+    const double L = 2.0, r = 0.006, k = 1e4;
+    cbm_plant *p = rod_at(ctx, n, L, r, 1e9, 0.0, 0.05);
+    CHECK_OK(cbm_plant_set_ground(p, 0.0, k));
+    cbm_solve_stats st;
+    cbm_status s = cbm_plant_solve(p, NULL, &st);
+    CHECK_OK(s);
+    size_t touching = 0;
+    double rsum = 0.0;
+    for (int i = 0; i < n; i++) {
+        double f = cbm_plant_contact_force(p, (size_t)i);
+        touching += f > 0.0;
+        rsum += f;
+    }
+    double weight = 600.0 * PI * r * r * L * 9.81;
+    double depth = -min_node_height(p);
+    printf("axis on the ground: %zu of %d nodes touch, ground carries %.4f of %.4f N, depth %.3e "
+           "m (segment weight / k %.3e), %zu Newton steps, %zu continuation steps, %zu passes, "
+           "residual %.2e\n",
+           touching, n, rsum, weight, depth, weight / n / k, st.newton_steps,
+           st.continuation_steps, st.passes, st.residual);
+    CHECK(touching >= (size_t)n / 4);
+    CHECK(rsum > 0.3 * weight && rsum < weight);
+    CHECK(depth > 0.0 && depth <= rsum / k);
+    CHECK(st.residual < 1e-8);
+    CHECK(st.newton_steps <= 400);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
