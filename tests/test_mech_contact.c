@@ -47,16 +47,16 @@ TEST(contact_default_none_and_errors)
 {
     cbm_context *ctx = test_ctx();
     cbm_plant *p = rod_at(ctx, 4, 1.0, 0.01, 1e10, 0.0, 0.0);
-    CHECK(!cbm_plant_ground(p, NULL, NULL));
-    CHECK_STATUS(cbm_plant_set_ground(p, NAN, 1e3), CBM_E_INVALID);
-    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, -1.0), CBM_E_INVALID);
-    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, INFINITY), CBM_E_INVALID);
-    CHECK_OK(cbm_plant_set_ground(p, -0.5, 2e3));
+    CHECK(!cbm_plant_ground(p, NULL, NULL, NULL));
+    CHECK_STATUS(cbm_plant_set_ground(p, NAN, 1e3, 0.0), CBM_E_INVALID);
+    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, -1.0, 0.0), CBM_E_INVALID);
+    CHECK_STATUS(cbm_plant_set_ground(p, 0.0, INFINITY, 0.0), CBM_E_INVALID);
+    CHECK_OK(cbm_plant_set_ground(p, -0.5, 2e3, 0.0));
     double y0 = 0, k = 0;
-    CHECK(cbm_plant_ground(p, &y0, &k));
+    CHECK(cbm_plant_ground(p, &y0, &k, NULL));
     CHECK(y0 == -0.5 && k == 2e3);
-    CHECK_OK(cbm_plant_set_ground(p, -0.5, 0.0));
-    CHECK(!cbm_plant_ground(p, NULL, NULL));
+    CHECK_OK(cbm_plant_set_ground(p, -0.5, 0.0, 0.0));
+    CHECK(!cbm_plant_ground(p, NULL, NULL, NULL));
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
@@ -79,7 +79,7 @@ TEST(contact_tangent_matches_finite_differences)
         lo = s.distal.y < lo ? s.distal.y : lo;
         hi = s.distal.y > hi ? s.distal.y : hi;
     }
-    CHECK_OK(cbm_plant_set_ground(p, 0.5 * (lo + hi), 5e3));
+    CHECK_OK(cbm_plant_set_ground(p, 0.5 * (lo + hi), 5e3, 0.0));
     CHECK_OK(cbm_plant_evaluate(p, NULL));
     size_t below = 0;
     for (int i = 0; i < n; i++)
@@ -140,7 +140,7 @@ TEST(contact_propped_cantilever)
     double prev_err = INFINITY;
     for (int j = 0; j < 3; j++) {
         cbm_plant *p = rod_at(ctx, 40, L, r, E, -th, L * sin(th));
-        CHECK_OK(cbm_plant_set_ground(p, 0.0, ks[j]));
+        CHECK_OK(cbm_plant_set_ground(p, 0.0, ks[j], 0.0));
         cbm_solve_stats st;
         CHECK_OK(cbm_plant_solve(p, NULL, &st));
         size_t n = cbm_plant_segment_count(p);
@@ -154,8 +154,7 @@ TEST(contact_propped_cantilever)
         printf("k %.0e N/m: tip reaction %.6f N (spring closed form %.6f, propped 3/8 wL %.6f), "
                "rel. error to 3/8 wL %.2e, depth %.3e m (R/k %.3e), %zu Newton steps, %zu "
                "passes\n",
-               ks[j], R, spring, 0.375 * w * L, err, depth, R / ks[j], st.newton_steps,
-               st.passes);
+               ks[j], R, spring, 0.375 * w * L, err, depth, R / ks[j], st.newton_steps, st.passes);
         CHECK(Rt == R); /* only the tip touches */
         CHECK_REL(R, spring, 2e-3);
         CHECK(err < prev_err);
@@ -175,8 +174,8 @@ TEST(contact_solvers_agree)
     const double L = 1.0, th = 0.2;
     cbm_plant *a = rod_at(ctx, 20, L, 0.01, 1e10, -th, L * sin(th));
     cbm_plant *b = rod_at(ctx, 20, L, 0.01, 1e10, -th, L * sin(th));
-    CHECK_OK(cbm_plant_set_ground(a, 0.0, 1e3));
-    CHECK_OK(cbm_plant_set_ground(b, 0.0, 1e3));
+    CHECK_OK(cbm_plant_set_ground(a, 0.0, 1e3, 0.0));
+    CHECK_OK(cbm_plant_set_ground(b, 0.0, 1e3, 0.0));
     cbm_solve_def rd = cbm_solve_def_default();
     rd.solver = CBM_MECH_RELAX;
     rd.alpha = 0.1;
@@ -190,8 +189,8 @@ TEST(contact_solvers_agree)
     size_t n = cbm_plant_segment_count(a);
     double ra = cbm_plant_contact_force(a, n - 1), rb = cbm_plant_contact_force(b, n - 1);
     cbm_vec3 ta = rod_tip(a), tb = rod_tip(b);
-    printf("relax: R %.9f N in %zu passes; fast: R %.9f N in %zu passes (%zu Newton steps)\n",
-           ra, sa.passes, rb, sb.passes, sb.newton_steps);
+    printf("relax: R %.9f N in %zu passes; fast: R %.9f N in %zu passes (%zu Newton steps)\n", ra,
+           sa.passes, rb, sb.passes, sb.newton_steps);
     CHECK(ra > 0.0);
     CHECK_REL(ra, rb, 1e-6);
     CHECK(v3_norm(v3_sub(ta, tb)) < 1e-9);
@@ -209,7 +208,7 @@ TEST(contact_axis_lies_on_ground)
     const int n = 60;
     const double L = 2.0, r = 0.006, k = 1e4;
     cbm_plant *p = rod_at(ctx, n, L, r, 1e9, 0.0, 0.05);
-    CHECK_OK(cbm_plant_set_ground(p, 0.0, k));
+    CHECK_OK(cbm_plant_set_ground(p, 0.0, k, 0.0));
     cbm_solve_stats st;
     cbm_status s = cbm_plant_solve(p, NULL, &st);
     CHECK_OK(s);
@@ -225,8 +224,8 @@ TEST(contact_axis_lies_on_ground)
     printf("axis on the ground: %zu of %d nodes touch, ground carries %.4f of %.4f N, depth %.3e "
            "m (segment weight / k %.3e), %zu Newton steps, %zu continuation steps, %zu passes, "
            "residual %.2e\n",
-           touching, n, rsum, weight, depth, weight / n / k, st.newton_steps,
-           st.continuation_steps, st.passes, st.residual);
+           touching, n, rsum, weight, depth, weight / n / k, st.newton_steps, st.continuation_steps,
+           st.passes, st.residual);
     CHECK(touching >= (size_t)n / 4);
     CHECK(rsum > 0.3 * weight && rsum < weight);
     CHECK(depth > 0.0 && depth <= rsum / k);

@@ -130,12 +130,15 @@ CBM_API cbm_status cbm_plant_set_branching(cbm_plant *plant, size_t seg, double 
 CBM_API void cbm_plant_set_gravity(cbm_plant *plant, cbm_vec3 gravity);
 /// Ground contact by penalty (Jirasek et al. 2000 §2.8): a horizontal plane at height y0 (m,
 /// world y) pushes every distal node below it up with the force k * depth (N; k in N/m per metre
-/// of penetration, depth = y0 - y). The force depends on the shape, so both solvers carry it
-/// inside their iteration (the Newton tangent includes the contact stiffness k). k = 0 removes
-/// the ground (the default: no ground). CBM_E_INVALID for a non-finite y0 or a negative k.
-CBM_API cbm_status cbm_plant_set_ground(cbm_plant *plant, double y0, double k);
-/// true if the plant has a ground plane; *y0 and *k (optional) receive it.
-CBM_API bool cbm_plant_ground(const cbm_plant *plant, double *y0, double *k);
+/// of penetration, depth = y0 - y). With smoothing s > 0 (m) the force starts as k d^2 / (2 s)
+/// for depths d below s and is k (d - s/2) beyond, continuous with its stiffness (this helps
+/// Newton where many nodes touch and leave the ground). The force depends on the shape, so both
+/// solvers carry it inside their iteration (the Newton tangent includes the contact stiffness).
+/// k = 0 removes the ground (the default: no ground). CBM_E_INVALID for a non-finite y0 or a
+/// negative or non-finite k or smoothing.
+CBM_API cbm_status cbm_plant_set_ground(cbm_plant *plant, double y0, double k, double smoothing);
+/// true if the plant has a ground plane; *y0, *k and *smoothing (optional) receive it.
+CBM_API bool cbm_plant_ground(const cbm_plant *plant, double *y0, double *k, double *smoothing);
 /// Upward contact force (N) on the distal node of `seg` at the current state (valid after a
 /// solve or cbm_plant_evaluate); 0 without ground or above it.
 CBM_API double cbm_plant_contact_force(const cbm_plant *plant, size_t seg);

@@ -154,6 +154,7 @@ typedef enum {
     F_BREAK,
     F_STABILITY,
     F_GRAVITY,
+    F_GROUND,
     F_TROPISM,
     F_PIPEMODEL,
     F_WOOD,
@@ -217,6 +218,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Break", F_BREAK, 0},
                                 {"Stability", F_STABILITY, 0},
                                 {"Gravity", F_GRAVITY, 3},
+                                {"Ground", F_GROUND, 3},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
@@ -1088,8 +1090,8 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             }
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
-                b->fn == F_TROPISM || b->fn == F_PIPEMODEL || b->fn == F_WOOD ||
-                b->fn == F_REACTION)
+                b->fn == F_GROUND || b->fn == F_TROPISM || b->fn == F_PIPEMODEL ||
+                b->fn == F_WOOD || b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2688,6 +2690,16 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
     switch ((bfn)n->fn) {
     case F_GRAVITY:
         m->gravity = (cbm_vec3){a[0], a[1], a[2]};
+        return;
+    case F_GROUND:
+        if (!isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1]) || !(a[2] >= 0) || !isfinite(a[2])) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
+            return;
+        }
+        m->ground_y = a[0];
+        m->ground_k = a[1];
+        m->ground_s = a[2];
         return;
     case F_TROPISM:
         m->tropism.direction = (cbm_vec3){a[0], a[1], a[2]};

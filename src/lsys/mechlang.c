@@ -60,6 +60,9 @@ void cbm__mechlang_init(cbm__mechlang *m)
     m->sb = '[';
     m->eb = ']';
     m->gravity = v3(0, -9.81, 0);
+    m->ground_y = 0.0;
+    m->ground_k = 0.0;
+    m->ground_s = 0.0;
     m->tropism = cbm_tropism_default();
     m->growth = cbm_growth_def_default();
     m->growth.ageing = CBM_AGEING_CORE;
@@ -345,6 +348,8 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
     view v;
     memset(&v, 0, sizeof v);
     cbm_status st = cbm_plant_create(ctx, &pd, &pl);
+    if (st == CBM_OK)
+        st = cbm_plant_set_ground(pl, m->ground_y, m->ground_k, m->ground_s);
     if (st == CBM_OK)
         st = build(ctx, m, s, pl, &v, err, errn);
     if (st == CBM_OK && v.seg.len == 0)

@@ -34,6 +34,7 @@ typedef struct cbm__mechlang {
     int turtle[128];   /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
     int sb, eb;        /* codes of SB and EB */
     cbm_vec3 gravity;
+    double ground_y, ground_k, ground_s; /* ground (m), stiffness (N/m; 0: none), smoothing (m) */
     cbm_tropism tropism;
     cbm_growth_def growth;
     cbm_solve_def solve;
@@ -42,7 +43,8 @@ typedef struct cbm__mechlang {
 
 enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK, CBM__ML_STABILITY };
 
-/* Defaults: no segment module, gravity (0, -9.81, 0), no tropism, growth and solve defaults. */
+/* Defaults: no segment module, gravity (0, -9.81, 0), no ground, no tropism, growth and solve
+ * defaults. */
 void cbm__mechlang_init(cbm__mechlang *m);
 
 /* Runs one operation over the string s (parameters in double): builds the plant from the

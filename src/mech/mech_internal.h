@@ -48,6 +48,7 @@ struct cbm_plant {
     bool ground;       /* a ground plane pushes the distal nodes below it up */
     double ground_y;   /* m, height of the ground plane */
     double ground_k;   /* N/m, penalty stiffness per metre of penetration */
+    double ground_s;   /* m, smoothing depth (0: none) */
 
     size_t n, cap;
     /* topology and rest geometry */

@@ -486,7 +486,7 @@ void cbm_plant_set_gravity(cbm_plant *p, cbm_vec3 g)
         p->gravity = g;
 }
 
-cbm_status cbm_plant_set_ground(cbm_plant *p, double y0, double k)
+cbm_status cbm_plant_set_ground(cbm_plant *p, double y0, double k, double smoothing)
 {
     if (!p)
         return CBM_E_INVALID;
@@ -494,13 +494,16 @@ cbm_status cbm_plant_set_ground(cbm_plant *p, double y0, double k)
         return cbm__fail(p->ctx, CBM_E_INVALID, "ground: height y0 must be finite");
     if (!(isfinite(k) && k >= 0.0))
         return cbm__fail(p->ctx, CBM_E_INVALID, "ground: stiffness k must be finite and >= 0");
+    if (!(isfinite(smoothing) && smoothing >= 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "ground: smoothing must be finite and >= 0 (m)");
+    p->ground_s = smoothing;
     p->ground = k > 0.0;
     p->ground_y = y0;
     p->ground_k = k;
     return CBM_OK;
 }
 
-bool cbm_plant_ground(const cbm_plant *p, double *y0, double *k)
+bool cbm_plant_ground(const cbm_plant *p, double *y0, double *k, double *smoothing)
 {
     if (!p || !p->ground)
         return false;
@@ -508,6 +511,8 @@ bool cbm_plant_ground(const cbm_plant *p, double *y0, double *k)
         *y0 = p->ground_y;
     if (k)
         *k = p->ground_k;
+    if (smoothing)
+        *smoothing = p->ground_s;
     return true;
 }
 
@@ -515,8 +520,7 @@ double cbm_plant_contact_force(const cbm_plant *p, size_t seg)
 {
     if (!p || seg >= p->n || !p->ground)
         return 0.0;
-    double y = p->pos[seg].y + p->len[seg] * q_rotate(p->q[seg], v3(1, 0, 0)).y;
-    return y < p->ground_y ? p->ground_k * (p->ground_y - y) : 0.0;
+    return cbm__mech_contact(p, seg, q_rotate(p->q[seg], v3(1, 0, 0)), NULL);
 }
 
 void cbm_plant_set_base(cbm_plant *p, cbm_vec3 position, cbm_quat q)

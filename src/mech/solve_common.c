@@ -75,8 +75,9 @@
 
 #define WORK_ARRAYS(X)                                                                             \
     X(dual)                                                                                        \
-    X(cj) X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(dpos)       \
-        X(dfc) X(tmp)
+    X(cj)                                                                                          \
+    X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(dpos) X(dfc)      \
+        X(tmp)
 
 void cbm__mech_work_free(cbm_plant *p)
 {
@@ -258,9 +259,16 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
             *stiff = 0.0;
         return 0.0;
     }
+    double s = p->ground_s, k = p->ground_k;
+    if (depth < s) {
+        /* smoothed onset: k d^2 / (2 s), continuous in force and stiffness */
+        if (stiff)
+            *stiff = -k * depth / s;
+        return 0.5 * k * depth * depth / s;
+    }
     if (stiff)
-        *stiff = -p->ground_k;
-    return p->ground_k * depth;
+        *stiff = -k;
+    return k * (depth - 0.5 * s);
 }
 
 void cbm__mech_forward(cbm_plant *p)

@@ -351,15 +351,32 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             /* trust region on rotations: the forward sweep of the solve left the world
              * rotation of every frame under the full step in work.dth; limit the largest to
              * max_turn radians (the linearisation of a large rotation overshoots) */
+            if (!p->ground) {
+                double tmax = largest_turn(p);
+                lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+                if (it == 0)
+                    k->first_turn = tmax;
+                if (it == 0 && abort_large && lam0 < 1.0)
+                    return NK_LARGE; /* far from equilibrium: follow the load path instead */
+            }
+        }
+        if (!direct && !gmres(k, eta, m))
+            return NK_BUDGET;
+        if (k->tree && p->ground) {
+            /* the same trust region for the step FGMRES found (the factorisation's own step
+             * ignores the contact stiffness): one tangent pass leaves its rotations in
+             * work.dth */
+            if (k->st->passes + 3 >= k->max_passes)
+                return NK_BUDGET;
+            cbm__mech_jvp(p, w->step, w->tmp);
+            k->st->passes++;
             double tmax = largest_turn(p);
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
             if (it == 0 && abort_large && lam0 < 1.0)
-                return NK_LARGE; /* far from equilibrium: follow the load path instead */
+                return NK_LARGE;
         }
-        if (!direct && !gmres(k, eta, m))
-            return NK_BUDGET;
         k->st->newton_steps++;
         double lam = lam0;
         nk_result ls = line_search(k, lam0, &lam);
