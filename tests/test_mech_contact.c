@@ -2,7 +2,8 @@
  * contact stiffness against finite differences; an inclined cantilever whose tip rests on the
  * ground against the closed form of a cantilever on a spring support (the propped cantilever,
  * reaction 3/8 w L, in the stiff limit); penetration bounded by force / k; both solvers at the
- * same equilibrium; a flexible axis lying on the ground; no ground by default. */
+ * same equilibrium; a flexible axis lying on the ground; no ground by default; Ground() in the
+ * L+C dialect. */
 #include "mech_testlib.h"
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -232,5 +233,66 @@ TEST(contact_axis_lies_on_ground)
     CHECK(st.residual < 1e-8);
     CHECK(st.newton_steps <= 400);
     cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* The language route: Ground(y0, k, smoothing) in Start holds up a soft horizontal rod that
+ * would otherwise hang far below y0. Returns the lowest distal node (m) or NAN on error. */
+#include "cambium/lsys.h"
+
+static double language_lowest(cbm_context *ctx, const char *ground)
+{
+    char text[1200];
+    snprintf(text, sizeof text,
+             "#include <lpfgall.h>\n"
+             "derivation length: 1;\n"
+             "module I(MechSegment);\n"
+             "mechanics: I;\n"
+             "MechSegment S()\n"
+             "{\n"
+             "    MechSegment s;\n"
+             "    s.length = 0.05; s.a = 0.002; s.b = 0.002; s.E = 1e9; s.density = 900;\n"
+             "    s.age = 0;\n"
+             "    return s;\n"
+             "}\n"
+             "Start: { %s }\n"
+             "EndEach: { Equilibrium(); }\n"
+             "Axiom: Down(90) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S())"
+             " I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S());\n",
+             ground);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "ground.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    double low = NAN;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (!ls)
+        return NAN;
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    cbm_lsys_cursor c;
+    cbm_lsys_cursor_begin(ls, false, &c);
+    int count = 0;
+    while (cbm_lsys_cursor_next(ls, false, &c))
+        if (c.symbol == 'I' && c.nparams >= 26) {
+            double y = c.params[14] + c.params[0] * c.params[17];
+            low = count++ == 0 || y < low ? y : low;
+        }
+    CHECK_EQ_INT(count, 20);
+    cbm_lsys_destroy(ls);
+    return low;
+}
+
+TEST(contact_language_ground)
+{
+    cbm_context *ctx = test_ctx();
+    double free_low = language_lowest(ctx, "");
+    double on_ground = language_lowest(ctx, "Ground(-0.1, 1e3, 0);");
+    double smooth = language_lowest(ctx, "Ground(-0.1, 1e4, 0.0005);");
+    printf("lowest node: free %.4f m, on the ground at -0.1 m: %.6f m (smoothed %.6f m)\n",
+           free_low, on_ground, smooth);
+    CHECK(free_low < -0.3);
+    CHECK(on_ground < -0.1 && on_ground > -0.1 - 2e-4);
+    CHECK(smooth < -0.1 && smooth > -0.1 - 1e-3);
     test_ctx_end(ctx);
 }
