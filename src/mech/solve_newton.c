@@ -10,6 +10,9 @@
  *   so GMRES would return P^-1 (-R) after one iteration: the step is taken directly (factor and
  *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
  *   only when a joint's pivot block was singular and had to be regularised.
+ * - Ground contact (solve_common.c): the factorisation carries no contact stiffness, so with a
+ *   ground plane it always preconditions FGMRES (exact tangent products), and the rotation trust
+ *   region below is measured on the FGMRES step (one more tangent pass).
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
