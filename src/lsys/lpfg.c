@@ -3287,40 +3287,34 @@ static walk walk_end(const lstr *s, int dir)
     return w;
 }
 
-static bool find_eob(walk *w, int sbc, int ebc)
+/* Walks to the bracket that closes the current nesting level: forward to its ']' (opener '['),
+ * or backward to its '[' (opener ']'). Brackets opened on the way are skipped whole. */
+static bool find_closing(walk *w, int opener, int closer, bool forward)
 {
     int depth = 0;
     while (w_ok(w)) {
         int c = w_code(w);
-        if (c == sbc)
+        if (c == opener)
             depth++;
-        else if (c == ebc) {
+        else if (c == closer) {
             if (depth == 0)
                 return true;
             depth--;
         }
-        if (!w_adv(w))
+        if (!(forward ? w_adv(w) : w_back(w)))
             return false;
     }
     return false;
 }
 
+static bool find_eob(walk *w, int sbc, int ebc)
+{
+    return find_closing(w, sbc, ebc, true);
+}
+
 static bool find_bob(walk *w, int sbc, int ebc)
 {
-    int depth = 0;
-    while (w_ok(w)) {
-        int c = w_code(w);
-        if (c == ebc)
-            depth++;
-        else if (c == sbc) {
-            if (depth == 0)
-                return true;
-            depth--;
-        }
-        if (!w_back(w))
-            return false;
-    }
-    return false;
+    return find_closing(w, ebc, sbc, false);
 }
 
 static bool accept_right(const lpfg *lp, walk *w, int code)
