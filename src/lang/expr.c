@@ -509,6 +509,27 @@ static int32_t parse_body(cbm__compiler *c, bool *ok)
     return parse_statement(c, ok);
 }
 
+/* "( condition )" of if, while and do: the condition's node, or -1 after reporting what was
+ * expected and skipping to a recovery point. */
+static int32_t parse_paren_cond(cbm__compiler *c, bool *ok, const char *open_what)
+{
+    if (!match(c, "(", true)) {
+        expected(c, open_what);
+        *ok = false;
+        recover(c);
+        return -1;
+    }
+    int32_t cond = parse_ternary(c, true);
+    if (cond < 0 || !match(c, ")", true)) {
+        if (cond >= 0)
+            expected(c, "')'");
+        *ok = false;
+        recover(c);
+        return -1;
+    }
+    return cond;
+}
+
 static int32_t parse_statement(cbm__compiler *c, bool *ok)
 {
     cbm__skip(c, true);
@@ -527,20 +548,9 @@ static int32_t parse_statement(cbm__compiler *c, bool *ok)
     if (KW("if") || KW("while")) {
         bool is_if = KW("if");
         c->pos += len;
-        if (!match(c, "(", true)) {
-            expected(c, is_if ? "'(' after if" : "'(' after while");
-            *ok = false;
-            recover(c);
+        int32_t cond = parse_paren_cond(c, ok, is_if ? "'(' after if" : "'(' after while");
+        if (cond < 0)
             return -1;
-        }
-        int32_t cond = parse_ternary(c, true);
-        if (cond < 0 || !match(c, ")", true)) {
-            if (cond >= 0)
-                expected(c, "')'");
-            *ok = false;
-            recover(c);
-            return -1;
-        }
         int32_t body = parse_body(c, ok);
         int32_t other = -1;
         if (is_if) {
@@ -573,20 +583,9 @@ static int32_t parse_statement(cbm__compiler *c, bool *ok)
             return -1;
         }
         c->pos += 5;
-        if (!match(c, "(", true)) {
-            expected(c, "'('");
-            *ok = false;
-            recover(c);
+        int32_t cond = parse_paren_cond(c, ok, "'('");
+        if (cond < 0)
             return -1;
-        }
-        int32_t cond = parse_ternary(c, true);
-        if (cond < 0 || !match(c, ")", true)) {
-            if (cond >= 0)
-                expected(c, "')'");
-            *ok = false;
-            recover(c);
-            return -1;
-        }
         match(c, ";", true);
         cbm__node n = {.op = OP_DO, .a = cond, .b = body, .c = -1, .next = -1, .slot = -1};
         return add_node(c, n);
