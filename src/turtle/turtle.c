@@ -335,6 +335,20 @@ static cbm_frame section_frame(cbm_vec3 d, cbm_vec3 up)
 }
 
 /* cpfg's "change_dir": v2' = c v2 + s v3, v3' = c v3 - s v2 */
+/* Sine and cosine of a turn: the module's angle in degrees, or the view's angle increment
+ * (precomputed) when the module has no parameter. */
+static void turn_angle(const cbm_view *v, const double *params, int nparams, double *sn, double *cs)
+{
+    if (nparams > 0) {
+        double a = params[0] * CBM_PI / 180.0;
+        *sn = sin(a);
+        *cs = cos(a);
+    } else {
+        *sn = v->sin_a;
+        *cs = v->cos_a;
+    }
+}
+
 static inline void rotate_pair(cbm_vec3 *v2, cbm_vec3 *v3p, double s, double c)
 {
     cbm_vec3 a = *v2, b = *v3p;
@@ -1261,34 +1275,22 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
         return move(t, cmd, params, nparams);
     case CBM_T_LEFT:
     case CBM_T_RIGHT: {
-        double sn = v->sin_a, cs = v->cos_a;
-        if (nparams > 0) {
-            double a = params[0] * CBM_PI / 180.0;
-            sn = sin(a);
-            cs = cos(a);
-        }
+        double sn, cs;
+        turn_angle(v, params, nparams, &sn, &cs);
         rotate_pair(&s->h, &s->l, cmd == CBM_T_LEFT ? sn : -sn, cs);
         return CBM_OK;
     }
     case CBM_T_PITCH_DOWN:
     case CBM_T_PITCH_UP: {
-        double sn = v->sin_a, cs = v->cos_a;
-        if (nparams > 0) {
-            double a = params[0] * CBM_PI / 180.0;
-            sn = sin(a);
-            cs = cos(a);
-        }
+        double sn, cs;
+        turn_angle(v, params, nparams, &sn, &cs);
         rotate_pair(&s->h, &s->u, cmd == CBM_T_PITCH_DOWN ? sn : -sn, cs);
         return CBM_OK;
     }
     case CBM_T_ROLL_RIGHT:
     case CBM_T_ROLL_LEFT: {
-        double sn = v->sin_a, cs = v->cos_a;
-        if (nparams > 0) {
-            double a = params[0] * CBM_PI / 180.0;
-            sn = sin(a);
-            cs = cos(a);
-        }
+        double sn, cs;
+        turn_angle(v, params, nparams, &sn, &cs);
         rotate_pair(&s->l, &s->u, cmd == CBM_T_ROLL_RIGHT ? sn : -sn, cs);
         return CBM_OK;
     }
