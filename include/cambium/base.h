@@ -92,6 +92,9 @@ typedef struct cbm_diagnostic {
 
 typedef void (*cbm_diag_fn)(void *ud, const cbm_diagnostic *d);
 
+/// Receives text a model prints (`printf` in cpfg and L+C models): `n` bytes, not NUL-terminated.
+typedef void (*cbm_output_fn)(void *ud, const char *text, size_t n);
+
 /// Limits that keep any input from running away. 0 means "no limit" only where noted.
 typedef struct cbm_limits {
     size_t max_bytes;       ///< live bytes through the allocator (0 = unlimited)
@@ -109,6 +112,8 @@ typedef struct cbm_context_def {
     void *alloc_ud;
     cbm_diag_fn diag; ///< NULL: diagnostics are only counted and the last error kept
     void *diag_ud;
+    cbm_output_fn output; ///< NULL: text printed by models is discarded
+    void *output_ud;
     cbm_limits limits;
     uint64_t seed; ///< seed of the context's generator
 } cbm_context_def;

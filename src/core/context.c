@@ -11,6 +11,8 @@ struct cbm_context {
     void *alloc_ud;
     cbm_diag_fn diag;
     void *diag_ud;
+    cbm_output_fn output;
+    void *output_ud;
     cbm_limits limits;
     size_t bytes, peak;
     size_t errors;
@@ -92,6 +94,8 @@ cbm_status cbm_context_create(const cbm_context_def *def, cbm_context **out)
     ctx->alloc_ud = d.alloc_ud;
     ctx->diag = d.diag;
     ctx->diag_ud = d.diag_ud;
+    ctx->output = d.output;
+    ctx->output_ud = d.output_ud;
     ctx->limits = d.limits;
     cbm__rng_seed(&ctx->rng, d.seed);
     *out = ctx;
@@ -237,6 +241,19 @@ cbm_status cbm__grow(cbm_context *ctx, void **data, size_t *cap, size_t elem_siz
     *data = p;
     *cap = ncap;
     return CBM_OK;
+}
+
+/* ---- text printed by models ---- */
+
+bool cbm__output_wanted(const cbm_context *ctx)
+{
+    return ctx->output != NULL;
+}
+
+void cbm__output(cbm_context *ctx, const char *text, size_t n)
+{
+    if (ctx->output && n)
+        ctx->output(ctx->output_ud, text, n);
 }
 
 /* ---- diagnostics ---- */

@@ -88,6 +88,12 @@ void cbm__vdiag(cbm_context *ctx, cbm_severity sev, const char *file, int line, 
 CBM_PRINTF(3, 4)
 cbm_status cbm__fail(cbm_context *ctx, cbm_status s, const char *fmt, ...);
 
+/* ---- text printed by models ---- */
+/// True when the context has an output sink (cbm_context_def.output).
+bool cbm__output_wanted(const cbm_context *ctx);
+/// Sends n bytes of model output to the sink (nothing without one).
+void cbm__output(cbm_context *ctx, const char *text, size_t n);
+
 /* ---- generator: xoshiro256** seeded through splitmix64 ---- */
 typedef struct cbm_rng {
     uint64_t s[4];

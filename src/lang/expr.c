@@ -70,6 +70,7 @@ void cbm__compiler_free(cbm__compiler *c)
         cbm__free(c->ctx, c->arrays.data[i].data, c->arrays.data[i].count * sizeof(double));
     }
     CBM_ARRAY_FREE(c->ctx, c->arrays);
+    CBM_ARRAY_FREE(c->ctx, c->strings);
 }
 
 void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
@@ -146,6 +147,78 @@ static int32_t add_node(cbm__compiler *c, cbm__node n)
         return -1;
     }
     return (int32_t)c->nodes.len - 1;
+}
+
+bool cbm__string_lit(cbm__compiler *c, size_t *off)
+{
+    size_t start = c->pos++;
+    size_t body = c->pos;
+    while (c->text[c->pos] && c->text[c->pos] != '"' && c->text[c->pos] != '\n')
+        c->pos += c->text[c->pos] == '\\' && c->text[c->pos + 1] ? 2 : 1;
+    if (c->text[c->pos] != '"') {
+        cbm__cerr(c, start, "unterminated string");
+        return false;
+    }
+    size_t n = c->pos++ - body;
+    *off = c->strings.len;
+    if ((c->status = CBM_ARRAY_RESERVE(c->ctx, c->strings, *off + n + 1)) != CBM_OK) {
+        c->fatal = true;
+        return false;
+    }
+    c->strings.len = *off + cbm__unescape(c->text + body, n, c->strings.data + *off);
+    c->strings.data[c->strings.len++] = 0;
+    return true;
+}
+
+/* A string literal at the cursor (a printf argument), as an OP_STR node. */
+static int32_t string_literal(cbm__compiler *c)
+{
+    size_t off;
+    if (!cbm__string_lit(c, &off))
+        return -1;
+    cbm__node nd = {.op = OP_STR, .a = -1, .b = -1, .c = -1, .next = -1, .slot = (int32_t)off};
+    return add_node(c, nd);
+}
+
+static bool no_strings(cbm__compiler *c, int32_t first)
+{
+    for (int32_t i = first; i >= 0; i = c->nodes.data[i].next)
+        if (c->nodes.data[i].op == OP_STR) {
+            cbm__cerr(c, c->pos, "a string is only an argument of printf");
+            return false;
+        }
+    return true;
+}
+
+/* printf(format, args...): the format is a string literal whose conversions match the arguments. */
+static bool check_printf(cbm__compiler *c, size_t pos, int32_t first, int nargs)
+{
+    if (first < 0 || c->nodes.data[first].op != OP_STR) {
+        cbm__cerr(c, pos, "printf needs a format string as its first argument");
+        return false;
+    }
+    uint8_t kinds[CBM__FMT_MAX_ARGS];
+    char err[128];
+    int n = cbm__fmt_scan(c->strings.data + c->nodes.data[first].slot, kinds, CBM__FMT_MAX_ARGS,
+                          err, sizeof err);
+    if (n < 0) {
+        cbm__cerr(c, pos, "%s", err);
+        return false;
+    }
+    if (n != nargs - 1) {
+        cbm__cerr(c, pos, "printf: the format has %d conversion%s, %d argument%s given", n,
+                  n == 1 ? "" : "s", nargs - 1, nargs - 1 == 1 ? "" : "s");
+        return false;
+    }
+    int k = 0;
+    for (int32_t i = c->nodes.data[first].next; i >= 0; i = c->nodes.data[i].next, k++)
+        if ((c->nodes.data[i].op == OP_STR) != (kinds[k] == CBM__FMT_STR)) {
+            cbm__cerr(c, pos, "printf: argument %d %s", k + 2,
+                      kinds[k] == CBM__FMT_STR ? "of %s must be a string literal"
+                                               : "is a string; only %s prints a string");
+            return false;
+        }
+    return true;
 }
 
 static int32_t node2(cbm__compiler *c, int op, int32_t a, int32_t b)
@@ -318,16 +391,10 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                 for (;;) {
                     int32_t a;
                     cbm__skip(c, nl);
-                    if (c->text[c->pos] == '"') { /* printf format: skipped */
-                        c->pos++;
-                        while (c->text[c->pos] && c->text[c->pos] != '"' && c->text[c->pos] != '\n')
-                            c->pos++;
-                        if (c->text[c->pos] == '"')
-                            c->pos++;
-                        a = cbm__node_num(c, 0);
-                    } else {
+                    if (c->text[c->pos] == '"')
+                        a = string_literal(c);
+                    else
                         a = parse_ternary(c, nl);
-                    }
                     if (a < 0)
                         return -1;
                     if (last >= 0)
@@ -344,6 +411,9 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                 expected(c, "')' or ',' in the arguments");
                 return -1;
             }
+            if (FUNCS[i].fn == FN_PRINTF ? !check_printf(c, start, first, n)
+                                         : !no_strings(c, first))
+                return -1;
             if (FUNCS[i].nargs >= 0 && n != FUNCS[i].nargs) {
                 cbm__cerr(c, start, "%s() takes %d argument%s, %d given", FUNCS[i].name,
                           FUNCS[i].nargs, FUNCS[i].nargs == 1 ? "" : "s", n);
@@ -898,8 +968,26 @@ static double bran(cbm__eval *e, double a, double b)
     return Ym / (b + Ym);
 }
 
+static void print(cbm__eval *e, const cbm__node *n)
+{
+    cbm__fmt_arg a[CBM__FMT_MAX_ARGS];
+    int k = 0;
+    const char *fmt = e->strings ? e->strings + e->nodes[n->a].slot : "";
+    for (int32_t i = e->nodes[n->a].next; i >= 0 && k < CBM__FMT_MAX_ARGS;
+         i = e->nodes[i].next, k++) {
+        const cbm__node *x = &e->nodes[i];
+        a[k].s = x->op == OP_STR && e->strings ? e->strings + x->slot : NULL;
+        a[k].v = x->op == OP_STR ? 0 : cbm__eval_expr(e, i);
+    }
+    cbm__fmt_print(e->ctx, fmt, a, k);
+}
+
 static double call(cbm__eval *e, const cbm__node *n)
 {
+    if (n->fn == FN_PRINTF) {
+        print(e, n);
+        return 0;
+    }
     double a[8] = {0};
     int k = 0;
     for (int32_t i = n->a; i >= 0 && k < 8; i = e->nodes[i].next)

@@ -64,7 +64,8 @@ typedef enum cbm__op {
     OP_WHILE,
     OP_DO,
     OP_SEQ,
-    OP_NOP
+    OP_NOP,
+    OP_STR /* a string literal (printf's arguments only): slot is its offset in strings */
 } cbm__op;
 
 typedef enum cbm__fn {
@@ -123,6 +124,7 @@ double cbm__rand48_next(cbm__rand48 *r);
 typedef struct cbm__eval {
     cbm_context *ctx;
     const cbm__node *nodes;
+    const char *strings; /* the compiler's string literals (printf) */
     double *globals;
     cbm__array *arrays;
     double *params;  /* formal parameters of the production being applied (assignable) */
@@ -149,6 +151,7 @@ typedef struct cbm__compiler {
     CBM_ARRAY(int32_t) global_use; /* first use (a position) of a global that is only read */
     CBM_ARRAY(uint8_t) global_set; /* the global is assigned somewhere */
     CBM_ARRAY(cbm__array) arrays;
+    CBM_ARRAY(char) strings;    /* NUL-terminated string literals, one after the other */
     const char *const *formals; /* names of the production's formal parameters */
     const size_t *formal_len;
     int nformals;
@@ -193,5 +196,24 @@ static inline long long cbm__to_ll(double v)
     return (long long)v;
 }
 void cbm__eval_stmt(cbm__eval *e, int32_t n);
+
+/* ---- printf of models (format.c) ---- */
+enum { CBM__FMT_INT, CBM__FMT_UINT, CBM__FMT_REAL, CBM__FMT_CHAR, CBM__FMT_STR };
+#define CBM__FMT_MAX_ARGS 16
+/// Reads the string literal at c->pos (on its opening quote), decodes it into c->strings and
+/// gives its offset there; false after an error (reported).
+bool cbm__string_lit(cbm__compiler *c, size_t *off);
+/// Decodes the body of a C string literal (escapes \n \t \xHH \ooo ...) into out (at least n
+/// bytes); returns the decoded length.
+size_t cbm__unescape(const char *s, size_t n, char *out);
+/// Checks a decoded printf format: writes the kind (CBM__FMT_*) of each conversion and returns
+/// their number, or -1 with a message in err.
+int cbm__fmt_scan(const char *fmt, uint8_t *kinds, int max, char *err, size_t errn);
+typedef struct cbm__fmt_arg {
+    double v;
+    const char *s; /* the argument of a %s conversion */
+} cbm__fmt_arg;
+/// Formats a checked format with its arguments and sends the text to the context's output.
+void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args, int nargs);
 
 #endif

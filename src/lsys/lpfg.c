@@ -91,6 +91,7 @@ enum {
     N_CTOR, /* args a: fields of type */
     N_INCTX,
     N_COMMA,
+    N_STR, /* a string literal, printf's arguments only: slot is its offset in the strings */
     S_EXPR,
     S_DECL,
     S_IF,
@@ -389,11 +390,26 @@ static bool is_vec(int t)
     return t == T_V3F || t == T_V3D;
 }
 
+/* A value converted to a C int as lpfg's compiled C does on x86-64: truncated toward zero, and
+ * the "integer indefinite" INT_MIN for NaN and values outside the 32-bit range (cvttsd2si). */
+static double c_int(double v)
+{
+    if (!(v > -2147483649.0 && v < 2147483648.0))
+        return -2147483648.0;
+    return (double)(int32_t)v;
+}
+
+/* The 32-bit two's-complement wrap of an exact integer result (int arithmetic that overflows). */
+static double wrap_int(long long r)
+{
+    return (double)(int32_t)(uint32_t)(unsigned long long)r;
+}
+
 static double conv_scalar(int t, double v)
 {
     switch (t) {
     case T_INT:
-        return (double)cbm__to_ll(v);
+        return c_int(v);
     case T_FLOAT:
         return (double)(float)v;
     case T_BOOL:
@@ -791,6 +807,81 @@ static int parse_args(lc *L, int32_t *first)
     return n;
 }
 
+/* printf(format, args...): the format is a string literal checked against its arguments, which
+ * are numbers or string literals (for %s). */
+static int32_t printf_call(lc *L, size_t pos)
+{
+    cbm__compiler *c = L->c;
+    if (!expect(L, "("))
+        return -1;
+    skip(L);
+    size_t fmt;
+    if (L->t[c->pos] != '"') {
+        cbm__cerr(c, pos, "printf needs a format string as its first argument");
+        return -1;
+    }
+    if (!cbm__string_lit(c, &fmt))
+        return -1;
+    uint8_t kinds[CBM__FMT_MAX_ARGS];
+    char err[128];
+    int nconv = cbm__fmt_scan(c->strings.data + fmt, kinds, CBM__FMT_MAX_ARGS, err, sizeof err);
+    if (nconv < 0) {
+        cbm__cerr(c, pos, "%s", err);
+        return -1;
+    }
+    int32_t first = -1, last = -1;
+    int n = 0;
+    while (accept(L, ",")) {
+        skip(L);
+        size_t apos = c->pos;
+        int32_t e;
+        bool str = L->t[c->pos] == '"';
+        if (str) {
+            size_t off;
+            if (!cbm__string_lit(c, &off))
+                return -1;
+            xn x = mk(N_STR, T_VOID);
+            x.slot = (int32_t)off;
+            e = node(L, x);
+        } else {
+            e = assign_expr(L);
+        }
+        if (e < 0)
+            return -1;
+        if (!str && !is_scalar(ND(e).type)) {
+            cbm__cerr(
+                c, apos,
+                "printf: argument %d is not a number (print a vector or struct by its fields)",
+                n + 2);
+            return -1;
+        }
+        if (n < nconv && str != (kinds[n] == CBM__FMT_STR)) {
+            cbm__cerr(c, apos, "printf: argument %d %s", n + 2,
+                      str ? "is a string; only %s prints a string"
+                          : "of %s must be a string literal");
+            return -1;
+        }
+        if (last >= 0)
+            ND(last).next = e;
+        else
+            first = e;
+        last = e;
+        n++;
+    }
+    if (!expect(L, ")"))
+        return -1;
+    if (n != nconv) {
+        cbm__cerr(c, pos, "printf: the format has %d conversion%s, %d argument%s given", nconv,
+                  nconv == 1 ? "" : "s", n, n == 1 ? "" : "s");
+        return -1;
+    }
+    xn x = mk(N_CALLB, T_INT);
+    x.fn = F_PRINTF;
+    x.slot = (int32_t)fmt;
+    x.a = first;
+    return node(L, x);
+}
+
 /* brace initializer `{a, b, ...}` for a value of type t */
 static int32_t brace_init(lc *L, int t)
 {
@@ -1012,24 +1103,8 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             continue;
         int32_t args = -1;
         int na;
-        if (b->fn == F_PRINTF) { /* arguments are parsed and ignored (the library never prints) */
-            if (!expect(L, "("))
-                return -1;
-            int level = 1;
-            while (L->t[L->c->pos] && level) {
-                char ch = L->t[L->c->pos++];
-                if (ch == '"') {
-                    while (L->t[L->c->pos] && L->t[L->c->pos] != '"' && L->t[L->c->pos] != '\n')
-                        L->c->pos += L->t[L->c->pos] == '\\' ? 2 : 1;
-                    if (L->t[L->c->pos] == '"')
-                        L->c->pos++;
-                } else if (ch == '(')
-                    level++;
-                else if (ch == ')')
-                    level--;
-            }
-            return node(L, mk(N_NUM, T_INT));
-        }
+        if (b->fn == F_PRINTF)
+            return printf_call(L, pos);
         na = parse_args(L, &args);
         if (na < 0)
             return -1;
@@ -2577,6 +2652,24 @@ static double evs(cbm_lsys *ls, int32_t ni, double *fr)
 static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
 {
     double r;
+    if (t == T_INT && op <= B_REM) { /* C int arithmetic: 32 bits, wrapping on overflow */
+        long long x = (long long)c_int(a), y = (long long)c_int(b);
+        switch (op) {
+        case B_ADD:
+            return wrap_int(x + y);
+        case B_SUB:
+            return wrap_int(x - y);
+        case B_MUL:
+            return wrap_int(x * y);
+        default:
+            if (y == 0) {
+                rt_error(lp, CBM_E_RUNTIME,
+                         op == B_DIV ? "integer division by zero" : "integer remainder by zero");
+                return 0;
+            }
+            return wrap_int(op == B_DIV ? x / y : x % y);
+        }
+    }
     switch (op) {
     case B_ADD:
         r = a + b;
@@ -2771,6 +2864,19 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
 static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
+    if (n->fn == F_PRINTF) {
+        cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
+        int k = 0;
+        const char *strings = ls->comp.strings.data;
+        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->nodes.data[x].next, k++) {
+            const xn *an = &lp->nodes.data[x];
+            args[k].s = an->op == N_STR ? strings + an->slot : NULL;
+            args[k].v = an->op == N_STR ? 0 : evs(ls, x, fr);
+        }
+        cbm__fmt_print(ls->ctx, strings + n->slot, args, k);
+        out[0] = 0;
+        return;
+    }
     double a[2] = {0, 0};
     int32_t x = n->a;
     if (n->fn == F_DOT || n->fn == F_CROSS || n->fn == F_MAKEQ || n->fn == F_VECROT) {

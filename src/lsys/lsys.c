@@ -133,6 +133,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     }
     ls->ev.ctx = ctx;
     ls->ev.nodes = ls->comp.nodes.data;
+    ls->ev.strings = ls->comp.strings.data;
     ls->ev.globals = ls->globals;
     ls->ev.arrays = ls->comp.arrays.data;
     ls->ev.params = ls->frame;

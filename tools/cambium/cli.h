@@ -14,6 +14,8 @@ typedef int (*cli_command_fn)(int argc, char **argv);
 
 /// A context whose diagnostics print to stderr as "file:line:col: error: message".
 cbm_context *cli_context(void);
+/// Where the text a model prints (printf) goes: stdout by default, NULL discards it.
+void cli_set_model_output(FILE *f);
 /// Destroys the context made by cli_context.
 void cli_context_end(cbm_context *ctx);
 /// Prints "cambium: <what>: <last error or status message>" to stderr and returns CLI_FAIL.

@@ -104,8 +104,8 @@ static void usage(void)
            "                  [-o OUT]... [--every K] [--homomorphism] [--float32]\n"
            "                  [--max-modules N] [--max-memory MB] [--timing]\n"
            "                  [output options]\n\n"
-           "Derives a cpfg-dialect L-system, interprets it with the turtle and writes the\n"
-           "outputs. Without -o prints a one-line summary.\n"
+           "Derives an L-system (cpfg or L+C dialect), interprets it with the turtle and\n"
+           "writes the outputs. Without -o prints a one-line summary.\n"
            "  SIDE FILES        by extension: .v view file, .func/.fset functions, .s surface,\n"
            "                    .con contour, .map colour map, .mat materials (.a .e .txt are\n"
            "                    accepted and ignored)\n"
@@ -126,7 +126,9 @@ static void usage(void)
            "  --max-modules N   stop when the string would exceed N modules\n"
            "  --max-memory MB   stop when the library would hold more than MB megabytes\n"
            "                    (default: 3/4 of the physical memory; 0: no limit)\n"
-           "  --timing          print the time and memory of each phase to stderr\n\n%s",
+           "  --timing          print the time and memory of each phase to stderr\n"
+           "  --no-print        discard what the model prints (printf); it goes to stdout,\n"
+           "                    or to stderr when an output is written to stdout\n\n%s",
            cli_output_help);
 }
 
@@ -329,7 +331,7 @@ int cmd_run(int argc, char **argv)
     target targets[MAX_OUTPUTS];
     int ntargets = 0;
     long steps = -1, every = 0, seed = -1, max_modules = 0, max_memory = -1;
-    bool float32 = false, timing = false, homomorphism = false;
+    bool float32 = false, timing = false, homomorphism = false, no_print = false;
     cbm_write_options wopt = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -387,6 +389,8 @@ int cmd_run(int argc, char **argv)
             float32 = true;
         } else if (!strcmp(a, "--timing")) {
             timing = true;
+        } else if (!strcmp(a, "--no-print")) {
+            no_print = true;
         } else if (a[0] == '-') {
             return cli_usage_error("run", "unknown option '%s'", a);
         } else if (!model && !strcmp(cli_extension(a), "l")) {
@@ -409,6 +413,12 @@ int cmd_run(int argc, char **argv)
             return cli_usage_error("run", "--every writes numbered files: %s cannot be stdout",
                                    targets[k].arg);
 
+    cli_set_model_output(stdout);
+    for (int k = 0; k < ntargets; k++)
+        if (!strcmp(targets[k].path, "/dev/stdout"))
+            cli_set_model_output(stderr);
+    if (no_print)
+        cli_set_model_output(NULL);
     cbm_context *ctx = cli_context();
     cbm_limits lim = *cbm_context_limits(ctx);
     if (max_modules > 0)

@@ -24,10 +24,25 @@ static void print_diag(void *ud, const cbm_diagnostic *d)
     /* errors without a location are printed once by cli_fail */
 }
 
+static FILE *model_output;
+
+static void print_output(void *ud, const char *text, size_t n)
+{
+    (void)ud;
+    if (model_output)
+        fwrite(text, 1, n, model_output);
+}
+
+void cli_set_model_output(FILE *f)
+{
+    model_output = f;
+}
+
 cbm_context *cli_context(void)
 {
     cbm_context_def def = cbm_context_def_default();
     def.diag = print_diag;
+    def.output = print_output;
     cbm_context *ctx = NULL;
     if (cbm_context_create(&def, &ctx) != CBM_OK) {
         fprintf(stderr, "cambium: out of memory\n");
