@@ -59,7 +59,7 @@ cbm_status cbm_tree_to_scene(const cbm_tree *t, cbm_scene *scene, int sides, boo
             part.color[0] = 0.75f, part.color[1] = 0.08f, part.color[2] = 0.05f, part.color[3] = 1;
             CBM_TRY(cbm_scene_begin_part(scene, &part, NULL));
             double r = cbrt(0.75 / CBM_PI * s->fruit / d->fruit_density);
-            CBM_TRY(cbm_scene_add_sphere(scene, v3(e.x, e.y - r, e.z), r, 10));
+            CBM_TRY(cbm_scene_add_sphere(scene, v3(e.x, e.y - r, e.z), r, 16));
         }
     }
     if (ground) {
