@@ -92,6 +92,7 @@ static cbm_status native_chain(cbm_context *ctx, cbm_vec3 *tip, cbm_vec3 *branch
         d.core.density = 800;
         d.core.a = d.core.b = r[i];
         d.point_mass = mass[i];
+        d.lateral = i == 2; /* bracketed before the continuing segment 3 */
         s = cbm_plant_add_segment(p, &d, NULL);
     }
     cbm_solve_stats st;

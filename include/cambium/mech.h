@@ -79,8 +79,11 @@ typedef struct cbm_segment_def {
     double point_mass;   ///< kg at the distal end (leaves, fruit, any load)
     cbm_vec3 tip_force;  ///< N, world, at the distal end (dead load)
     cbm_vec3 tip_moment; ///< N m, world, at the distal end (dead load)
-    int32_t order;       ///< branch order; -1 = automatic (root 0, first child of a node keeps
-                         ///< the parent's order, later children parent + 1)
+    int32_t order;       ///< branch order; -1 = automatic (root 0, the continuation keeps the
+                         ///< parent's order, laterals parent + 1)
+    bool lateral; ///< starts a lateral axis even as its parent's first child (a bracketed branch
+                  ///< written before the continuing axis, as in L-system strings); false: the
+                  ///< parent's first child continues its axis
 } cbm_segment_def;
 
 /// Defaults: root, length 0.1 m, no branching angles, cbm_ring_default() core, no loads.

@@ -119,6 +119,7 @@ typedef struct view {
     CBM_ARRAY(size_t) mod;    /* module index of each segment in the string */
     CBM_ARRAY(int64_t) stack; /* branch stack: last segment */
     CBM_ARRAY(cbm_quat) qstack;
+    CBM_ARRAY(uint8_t) bstack; /* branch stack: "a branch opened since the last segment" */
 } view;
 
 static void view_free(cbm_context *ctx, view *v)
@@ -127,6 +128,7 @@ static void view_free(cbm_context *ctx, view *v)
     CBM_ARRAY_FREE(ctx, v->mod);
     CBM_ARRAY_FREE(ctx, v->stack);
     CBM_ARRAY_FREE(ctx, v->qstack);
+    CBM_ARRAY_FREE(ctx, v->bstack);
 }
 
 static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
@@ -142,6 +144,9 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
     size_t j = 0, k = 0;
     int64_t last = -1;
     cbm_quat rel = q_identity();
+    /* a segment after an SB that opened since its parent segment starts a lateral axis, so the
+     * segment after the bracketed branches continues the axis (I [I ...] I: the last I) */
+    uint8_t branched = 0;
     for (size_t i = 0; i < s->n; i++) {
         int code = s->sym[i] & 0x7f;
         int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
@@ -153,10 +158,13 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
         if (code == m->sb) {
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->qstack, rel));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->bstack, branched));
+            branched = 1;
         } else if (code == m->eb) {
             if (v->stack.len) {
                 last = v->stack.data[--v->stack.len];
                 rel = v->qstack.data[--v->qstack.len];
+                branched = v->bstack.data[--v->bstack.len];
             }
         } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
             double *g = p + m->seg_off;
@@ -171,6 +179,7 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
                 return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
             cbm_segment_def d = cbm_segment_def_default();
             d.parent = last;
+            d.lateral = branched != 0;
             d.length = g[MS_LENGTH];
             euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
             d.core.youngs_modulus = g[MS_E];
@@ -195,6 +204,7 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, i));
             last = (int64_t)ix;
             rel = q_identity();
+            branched = 0;
         } else if (m->turtle[code] && np >= (m->turtle[code] == TR_TURN ? 0 : 1)) {
             rel = q_mul(rel, rot_of(m->turtle[code], np ? p[0] : 0));
         } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && last >= 0) {

@@ -54,9 +54,9 @@ struct cbm_plant {
     /* topology and rest geometry */
     int64_t *parent;
     int32_t *order;
-    uint8_t *cont; /* 1 if the first child of its parent (or a root) */
+    uint8_t *cont; /* bit 0: continues its parent's axis (or a root); bit 1: declared lateral */
     uint32_t *nchild;
-    int64_t *fchild; /* first child (the continuation), -1 if none */
+    int64_t *fchild; /* the continuation child, -1 if none */
     double *len;
     double *angles;   /* 3 per segment: divergence, deviation, roll */
     cbm_quat *branch; /* B_i */

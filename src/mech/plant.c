@@ -306,6 +306,20 @@ static void maybe_compact(cbm_plant *p)
 
 /* ---- building ---- */
 
+/* Links segment i (parent already linked) to its parent: it continues the parent's axis if it is
+ * a root, or the parent has no continuation yet and i is not declared lateral (cont bit 1). */
+static void link_child(cbm_plant *p, size_t i)
+{
+    int64_t pa = p->parent[i];
+    bool lat = (p->cont[i] & 2) != 0;
+    p->cont[i] = (uint8_t)((lat ? 2 : 0) | ((pa < 0 || (!lat && p->fchild[pa] < 0)) ? 1 : 0));
+    if (pa >= 0) {
+        if (p->cont[i] & 1)
+            p->fchild[pa] = (int64_t)i;
+        p->nchild[pa]++;
+    }
+}
+
 cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_t *index)
 {
     if (!p || !def)
@@ -338,16 +352,12 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->ring_count[i] = 1;
     int64_t par = def->parent;
     p->parent[i] = par;
-    p->cont[i] = (par < 0 || p->nchild[par] == 0) ? 1 : 0;
+    p->cont[i] = def->lateral && par >= 0 ? 2 : 0;
     p->nchild[i] = 0;
     p->fchild[i] = -1;
-    if (par >= 0) {
-        if (p->nchild[par] == 0)
-            p->fchild[par] = (int64_t)i;
-        p->nchild[par]++;
-    }
+    link_child(p, i);
     p->order[i] =
-        def->order >= 0 ? def->order : (par < 0 ? 0 : p->order[par] + (p->cont[i] ? 0 : 1));
+        def->order >= 0 ? def->order : (par < 0 ? 0 : p->order[par] + ((p->cont[i] & 1) ? 0 : 1));
     p->len[i] = def->length;
     p->angles[3 * i] = def->divergence;
     p->angles[3 * i + 1] = def->deviation;
@@ -584,15 +594,8 @@ cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
         p->nchild[i] = 0;
         p->fchild[i] = -1;
     }
-    for (size_t i = 0; i < w; i++) {
-        int64_t pa = p->parent[i];
-        p->cont[i] = (pa < 0 || p->nchild[pa] == 0) ? 1 : 0;
-        if (pa >= 0) {
-            if (p->nchild[pa] == 0)
-                p->fchild[pa] = (int64_t)i;
-            p->nchild[pa]++;
-        }
-    }
+    for (size_t i = 0; i < w; i++)
+        link_child(p, i);
     maybe_compact(p);
     if (removed)
         *removed = nrm;
