@@ -122,6 +122,17 @@ CBM_API size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names
 /// number of names: CBM_E_INVALID otherwise.
 CBM_API cbm_status cbm_lsys_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
 
+typedef struct cbm_plant cbm_plant; /* cambium/mech.h */
+/// L+C dialect: true when the model declares a module carrying a mechanical segment
+/// (`mechanics:`).
+CBM_API bool cbm_lsys_has_mechanics(const cbm_lsys *ls);
+/// L+C dialect: a new plant made of the mechanical segments of the current string, at the state
+/// stored in them (no solve: positions, forces, moments and stresses evaluated at the stored
+/// rotation rates), with the model's gravity, ground and discretisation. For the plant writers
+/// (cbm_write_mtg, cbm_write_segments_csv); release with cbm_plant_destroy. CBM_E_INVALID with
+/// a message when the model declares no mechanics or the string holds an invalid segment.
+CBM_API cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4017,6 +4017,27 @@ const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol)
     return ls->lp->mods.data[ls->lp->bycode[symbol]].name;
 }
 
+bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
+{
+    return ls && ls->lp && ls->lp->mech.seg_code >= 0;
+}
+
+cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out)
+{
+    if (!ls || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    if (!cbm_lsys_has_mechanics(ls))
+        return cbm__fail(
+            ls->ctx, CBM_E_INVALID,
+            "the model declares no mechanical segments (`mechanics:` in an L+C model)");
+    char msg[256];
+    cbm_status s = cbm__mechlang_plant(ls->ctx, &ls->lp->mech, &ls->cur, out, msg, sizeof msg);
+    if (s != CBM_OK)
+        return cbm__fail(ls->ctx, s, "%s", msg);
+    return CBM_OK;
+}
+
 /* ---------------------------------------------------------------- load / free */
 bool cbm__lpfg_detect(const cbm__pp *pp)
 {

@@ -335,6 +335,56 @@ static void cut_string(const cbm__mechlang *m, lstr *s, const uint8_t *cut)
     s->npar = ok;
 }
 
+/* The plant of the string's segments (create, ground, build, tropism for new segments). */
+static cbm_status make_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
+                             view *v, char *err, size_t errn)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.gravity = m->gravity;
+    pd.discretization = m->discretization;
+    /* clamp: the turtle's initial frame, H = +y, L_plant = +x, U = -z */
+    pd.base_orientation =
+        q_mul(q_axis_angle(v3(0, 0, 1), CBM_PI / 2), q_axis_angle(v3(1, 0, 0), CBM_PI));
+    cbm_status st = cbm_plant_create(ctx, &pd, out);
+    if (st == CBM_OK)
+        st = cbm_plant_set_ground(*out, m->ground_y, m->ground_k, m->ground_s);
+    if (st == CBM_OK)
+        st = build(ctx, m, s, *out, v, err, errn);
+    if (st == CBM_OK && v->seg.len)
+        st = apply_tropism(m, *out, v);
+    return st;
+}
+
+cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
+                               char *err, size_t errn)
+{
+    *out = NULL;
+    err[0] = 0;
+    if (m->seg_code < 0) {
+        snprintf(err, errn, "no `mechanics:` module declared");
+        return CBM_E_INVALID;
+    }
+    if (s->f32) {
+        snprintf(err, errn, "mechanics needs double parameters");
+        return CBM_E_INVALID;
+    }
+    cbm_plant *pl = NULL;
+    view v;
+    memset(&v, 0, sizeof v);
+    cbm_status st = make_plant(ctx, m, s, &pl, &v, err, errn);
+    if (st == CBM_OK)
+        st = cbm_plant_evaluate(pl, NULL);
+    view_free(ctx, &v);
+    if (st != CBM_OK) {
+        if (!err[0])
+            snprintf(err, errn, "%s", cbm_context_last_error(ctx));
+        cbm_plant_destroy(pl);
+        return st;
+    }
+    *out = pl;
+    return CBM_OK;
+}
+
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn)
 {
@@ -348,24 +398,12 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         snprintf(err, errn, "mechanics needs double parameters");
         return CBM_E_INVALID;
     }
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.gravity = m->gravity;
-    pd.discretization = m->discretization;
-    /* clamp: the turtle's initial frame, H = +y, L_plant = +x, U = -z */
-    pd.base_orientation =
-        q_mul(q_axis_angle(v3(0, 0, 1), CBM_PI / 2), q_axis_angle(v3(1, 0, 0), CBM_PI));
     cbm_plant *pl = NULL;
     view v;
     memset(&v, 0, sizeof v);
-    cbm_status st = cbm_plant_create(ctx, &pd, &pl);
-    if (st == CBM_OK)
-        st = cbm_plant_set_ground(pl, m->ground_y, m->ground_k, m->ground_s);
-    if (st == CBM_OK)
-        st = build(ctx, m, s, pl, &v, err, errn);
+    cbm_status st = make_plant(ctx, m, s, &pl, &v, err, errn);
     if (st == CBM_OK && v.seg.len == 0)
         goto done;
-    if (st == CBM_OK)
-        st = apply_tropism(m, pl, &v);
     if (st == CBM_OK && op == CBM__ML_EQUILIBRIUM) {
         cbm_solve_stats ss;
         memset(&ss, 0, sizeof ss);

@@ -56,4 +56,9 @@ void cbm__mechlang_init(cbm__mechlang *m);
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn);
 
+/* A new plant of the string's segments at their stored state (cbm_lsys_mech_plant); *out NULL
+ * and a message in err on failure. */
+cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
+                               char *err, size_t errn);
+
 #endif

@@ -33,6 +33,8 @@ static const struct {
 } OTHER_OUTPUTS[] = {
     {"str", "the derived string, one module per line, parameters as %.9g"},
     {"json", "a summary per step: modules, primitives, bounding box, seconds"},
+    {"mtg", "the mechanical segments (L+C models with mechanics:) as an OpenAlea MTG"},
+    {"segments", "(segments:PATH) the mechanical segments as a CSV table, one row each"},
 };
 
 static const struct {
@@ -52,7 +54,7 @@ static const char *const SIDE_KINDS[] = {"v", "func", "fset", "s", "con", "map",
 static const char *const IGNORED_KINDS[] = {"a", "e", "txt"};
 
 typedef struct target {
-    char format[8];
+    char format[16];
     const char *path;
     const char *arg;
     cbm_animation *anim; /* .glb with --every */
@@ -95,7 +97,7 @@ static bool parse_target(const char *arg, target *t)
 
 static bool is_scene_format(const char *f)
 {
-    return strcmp(f, "str") && strcmp(f, "json");
+    return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments");
 }
 
 static void usage(void)
@@ -228,6 +230,23 @@ static cbm_status write_str(run *r, const char *path)
     return s;
 }
 
+static bool is_plant_format(const char *f)
+{
+    return !strcmp(f, "mtg") || !strcmp(f, "segments");
+}
+
+/* The mechanical segments of the string, at their stored state, as an MTG or a CSV table. */
+static cbm_status write_plant(run *r, const char *path, const char *format)
+{
+    cbm_plant *pl = NULL;
+    cbm_status s = cbm_lsys_mech_plant(r->ls, &pl);
+    if (s == CBM_OK)
+        s = !strcmp(format, "mtg") ? cbm_write_mtg(r->ctx, pl, path)
+                                   : cbm_write_segments_csv(r->ctx, pl, path);
+    cbm_plant_destroy(pl);
+    return s;
+}
+
 /* cli_fail, with the memory limit named when memory ran out under it. */
 static int run_fail(const run *r, cbm_status s, const char *what)
 {
@@ -273,6 +292,8 @@ static int write_outputs(run *r, int what, int done)
         const char *path = numbered ? numbered : t->path;
         if (!strcmp(t->format, "str"))
             s = write_str(r, path);
+        else if (is_plant_format(t->format))
+            s = write_plant(r, path, t->format);
         else
             s = cbm_scene_write_as(r->ctx, r->scene, path, t->format, &r->wopt);
         if (s != CBM_OK)
@@ -453,6 +474,15 @@ int cmd_run(int argc, char **argv)
         goto done;
     }
     r.ls = cbm_model_lsys(r.model);
+    for (int k = 0; k < ntargets; k++)
+        if (is_plant_format(targets[k].format) && !cbm_lsys_has_mechanics(r.ls)) {
+            fprintf(stderr,
+                    "cambium run: %s: %s declares no mechanical segments (`mechanics:` in an "
+                    "L+C model); the %s output needs them\n",
+                    targets[k].arg, model, targets[k].format);
+            rc = CLI_USAGE;
+            goto done;
+        }
     for (int k = 0; k < ntargets; k++) {
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");

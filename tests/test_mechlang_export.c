@@ -1,0 +1,131 @@
+/* The mechanical plant of an L+C model's string (cbm_lsys_mech_plant), for the MTG and segment
+ * table writers: it holds the string's segments in string order, at the stored state (the
+ * positions, frames, carried masses and stresses the last Equilibrium() wrote into the
+ * parameters), with laterals where the string has brackets; models without mechanics are refused.
+ */
+#include "test.h"
+
+#include "cambium/lsys.h"
+#include "cambium/mech.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define MS 26 /* doubles of a MechSegment */
+
+static cbm_status load_model(cbm_context *ctx, const char *name, cbm_lsys **ls)
+{
+    char p[2048];
+    snprintf(p, sizeof p, "%s/models/%s", test_source_dir(), name);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = p;
+    return cbm_lsys_load(ctx, &def, ls);
+}
+
+static int symbol_of(const cbm_lsys *ls, const char *name)
+{
+    for (int s = 1; s < 128; s++) {
+        const char *m = cbm_lsys_module_name(ls, s);
+        if (m && !strcmp(m, name))
+            return s;
+    }
+    return -1;
+}
+
+TEST(mechlang_export_plant_is_the_stored_state)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_model(ctx, "jirasek-hanging.l", &ls));
+    if (!ls) {
+        test_ctx_end(ctx);
+        return;
+    }
+    CHECK(cbm_lsys_has_mechanics(ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
+        CHECK_OK(cbm_lsys_step(ls));
+    cbm_plant *pl = NULL;
+    CHECK_OK(cbm_lsys_mech_plant(ls, &pl));
+    CHECK(pl != NULL);
+    int sym = symbol_of(ls, "I"), sb = symbol_of(ls, "SB"), eb = symbol_of(ls, "EB");
+    cbm_lsys_cursor c;
+    cbm_lsys_cursor_begin(ls, false, &c);
+    size_t k = 0;
+    int depth = 0, laterals = 0, max_order = 0;
+    double worst = 0;
+    while (pl && cbm_lsys_cursor_next(ls, false, &c)) {
+        if (c.symbol == sb)
+            depth++;
+        else if (c.symbol == eb)
+            depth--;
+        if (c.symbol != sym || c.nparams < MS)
+            continue;
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(pl, k, &s));
+        const double *g = c.params;
+        double d[] = {s.proximal.x - g[13],   s.proximal.y - g[14],     s.proximal.z - g[15],
+                      s.frame.h.x - g[16],    s.frame.h.y - g[17],      s.frame.h.z - g[18],
+                      s.carried_mass - g[24], (s.stress - g[22]) / 1e6, s.omega.x - g[10],
+                      s.length - g[0]};
+        for (size_t i = 0; i < sizeof d / sizeof d[0]; i++)
+            worst = fabs(d[i]) > worst ? fabs(d[i]) : worst;
+        if (!s.continuation && s.parent >= 0)
+            laterals++;
+        max_order = s.order > max_order ? s.order : max_order;
+        /* a segment inside brackets is on a lateral axis: order >= 1 */
+        CHECK(depth == 0 ? s.order == 0 : s.order >= 1);
+        k++;
+    }
+    CHECK_EQ_INT(k, pl ? cbm_plant_segment_count(pl) : 0);
+    CHECK_MSG(worst < 1e-9, "largest difference from the stored state %g", worst);
+    CHECK_EQ_INT(laterals, 3);
+    CHECK_EQ_INT(max_order, 1);
+    cbm_plant_destroy(pl);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+TEST(mechlang_export_refused_without_mechanics)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = "#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK(!cbm_lsys_has_mechanics(ls));
+        CHECK_OK(cbm_lsys_reset(ls));
+        cbm_plant *pl = (cbm_plant *)&def; /* must be reset to NULL */
+        CHECK_STATUS(cbm_lsys_mech_plant(ls, &pl), CBM_E_INVALID);
+        CHECK(pl == NULL);
+        CHECK(strstr(cbm_context_last_error(ctx), "mechanics:") != NULL);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
+
+static cbm_status oom_export(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    cbm_lsys *ls = NULL;
+    cbm_status s = load_model(ctx, "jirasek-cherries.l", &ls);
+    if (s != CBM_OK)
+        return s;
+    s = cbm_lsys_reset(ls);
+    for (int i = 0; i < 2 && s == CBM_OK; i++)
+        s = cbm_lsys_step(ls);
+    cbm_plant *pl = NULL;
+    if (s == CBM_OK)
+        s = cbm_lsys_mech_plant(ls, &pl);
+    cbm_plant_destroy(pl);
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
+TEST(mechlang_export_out_of_memory)
+{
+    CHECK(test_oom_loop(oom_export, NULL) > 10);
+}
