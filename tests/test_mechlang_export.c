@@ -129,3 +129,48 @@ TEST(mechlang_export_out_of_memory)
 {
     CHECK(test_oom_loop(oom_export, NULL) > 10);
 }
+
+/* Orders and continuations of `axiom` (segments I(S())), checked against the expected strings
+ * of orders ("01110") and continuation flags ("10001"). */
+static void check_axes(const char *axiom, const char *orders, const char *conts)
+{
+    cbm_context *ctx = test_ctx();
+    char text[1024];
+    snprintf(text, sizeof text,
+             "#include <lpfgall.h>\nmodule I(MechSegment);\nmechanics: I;\n"
+             "MechSegment S() { MechSegment s; s.length = 0.1; s.a = 0.003; s.b = 0.003; "
+             "s.E = 1e9; s.density = 700; return s; }\nAxiom: %s;\n",
+             axiom);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "axes.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_plant *pl = NULL;
+    if (ls && cbm_lsys_reset(ls) == CBM_OK)
+        CHECK_OK(cbm_lsys_mech_plant(ls, &pl));
+    size_t n = pl ? cbm_plant_segment_count(pl) : 0;
+    CHECK_EQ_INT(n, strlen(orders));
+    char o[64] = {0}, c[64] = {0};
+    for (size_t i = 0; i < n && i < 63; i++) {
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(pl, i, &s));
+        o[i] = (char)('0' + s.order);
+        c[i] = s.continuation ? '1' : '0';
+    }
+    CHECK_MSG(!strcmp(o, orders) && !strcmp(c, conts),
+              "%s: orders %s (want %s), continuations %s (want %s)", axiom, o, orders, c, conts);
+    cbm_plant_destroy(pl);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+TEST(mechlang_export_axes_from_brackets)
+{
+    /* the I after the branches continues the axis */
+    check_axes("I(S()) SB Down(30) I(S()) EB SB Up(30) I(S()) I(S()) EB I(S())", "01110", "10011");
+    /* branches in branches */
+    check_axes("I(S()) SB Down(30) I(S()) SB Up(20) I(S()) EB I(S()) EB I(S())", "01210", "10011");
+    /* no axial child: the first lateral takes the joint (continuation), keeping order 1 */
+    check_axes("I(S()) SB Down(30) I(S()) EB SB Up(30) I(S()) EB", "011", "110");
+}

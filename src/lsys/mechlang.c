@@ -120,6 +120,8 @@ typedef struct view {
     CBM_ARRAY(int64_t) stack; /* branch stack: last segment */
     CBM_ARRAY(cbm_quat) qstack;
     CBM_ARRAY(uint8_t) bstack; /* branch stack: "a branch opened since the last segment" */
+    CBM_ARRAY(uint8_t) axis;   /* per segment: bit 0 on its parent's axis, bit 1 has such a child */
+    CBM_ARRAY(int32_t) order;  /* per segment: branch order (bracket nesting along the path) */
 } view;
 
 static void view_free(cbm_context *ctx, view *v)
@@ -129,12 +131,48 @@ static void view_free(cbm_context *ctx, view *v)
     CBM_ARRAY_FREE(ctx, v->stack);
     CBM_ARRAY_FREE(ctx, v->qstack);
     CBM_ARRAY_FREE(ctx, v->bstack);
+    CBM_ARRAY_FREE(ctx, v->axis);
+    CBM_ARRAY_FREE(ctx, v->order);
 }
 
 static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
 {
     snprintf(err, errn, "mechanical segment %zu: %s", k + 1, what);
     return CBM_E_INVALID;
+}
+
+/* First pass over the string: which segment continues its parent's axis. A segment after an SB
+ * opened since its parent segment starts a lateral axis; the segment written after the branches
+ * continues the axis (I [I ...] I: the last I). */
+static cbm_status axes(cbm_context *ctx, const cbm__mechlang *m, const lstr *s, view *v)
+{
+    size_t j = 0;
+    int64_t last = -1;
+    uint8_t branched = 0;
+    v->stack.len = v->bstack.len = v->axis.len = 0;
+    for (size_t i = 0; i < s->n; i++) {
+        int code = s->sym[i] & 0x7f;
+        int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j++] : 0;
+        if (code == m->sb) {
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->bstack, branched));
+            branched = 1;
+        } else if (code == m->eb) {
+            if (v->stack.len) {
+                last = v->stack.data[--v->stack.len];
+                branched = v->bstack.data[--v->bstack.len];
+            }
+        } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
+            uint8_t a = (uint8_t)(last < 0 || !branched);
+            if (a && last >= 0)
+                v->axis.data[last] |= 2;
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->axis, a));
+            last = (int64_t)v->axis.len - 1;
+            branched = 0;
+        }
+    }
+    v->stack.len = v->bstack.len = 0;
+    return CBM_OK;
 }
 
 static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant *pl, view *v,
@@ -144,9 +182,7 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
     size_t j = 0, k = 0;
     int64_t last = -1;
     cbm_quat rel = q_identity();
-    /* a segment after an SB that opened since its parent segment starts a lateral axis, so the
-     * segment after the bracketed branches continues the axis (I [I ...] I: the last I) */
-    uint8_t branched = 0;
+    CBM_TRY(axes(ctx, m, s, v));
     for (size_t i = 0; i < s->n; i++) {
         int code = s->sym[i] & 0x7f;
         int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
@@ -158,13 +194,10 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
         if (code == m->sb) {
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->qstack, rel));
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->bstack, branched));
-            branched = 1;
         } else if (code == m->eb) {
             if (v->stack.len) {
                 last = v->stack.data[--v->stack.len];
                 rel = v->qstack.data[--v->qstack.len];
-                branched = v->bstack.data[--v->bstack.len];
             }
         } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
             double *g = p + m->seg_off;
@@ -179,7 +212,12 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
                 return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
             cbm_segment_def d = cbm_segment_def_default();
             d.parent = last;
-            d.lateral = branched != 0;
+            /* a lateral leaves the joint with the parent's distal half to the axis; where the
+             * parent has no axial child its first lateral takes that joint (the axis turns into
+             * it, as when an apex dies), keeping its lateral order */
+            bool axial = (v->axis.data[ix] & 1) != 0;
+            d.lateral = !axial && last >= 0 && (v->axis.data[last] & 2);
+            d.order = last < 0 ? 0 : v->order.data[last] + (axial ? 0 : 1);
             d.length = g[MS_LENGTH];
             euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
             d.core.youngs_modulus = g[MS_E];
@@ -202,9 +240,9 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
             }
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->seg, g));
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, i));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->order, d.order));
             last = (int64_t)ix;
             rel = q_identity();
-            branched = 0;
         } else if (m->turtle[code] && np >= (m->turtle[code] == TR_TURN ? 0 : 1)) {
             rel = q_mul(rel, rot_of(m->turtle[code], np ? p[0] : 0));
         } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && last >= 0) {
