@@ -34,11 +34,12 @@ typedef enum cbm_camera_view {
 
 /// What the colour of a part shows.
 typedef enum cbm_color_by {
-    CBM_COLOR_MATERIAL, ///< the part's own colour
-    CBM_COLOR_STRESS,   ///< bending stress / modulus of rupture, 0..1 (above 1 saturates)
-    CBM_COLOR_AGE,      ///< wood age, years
-    CBM_COLOR_REACTION, ///< fraction of reaction wood, 0..1
-    CBM_COLOR_ORDER,    ///< branch order, one colour per order
+    CBM_COLOR_MATERIAL,   ///< the part's own colour
+    CBM_COLOR_STRESS,     ///< bending stress / modulus of rupture, 0..1 (above 1 saturates)
+    CBM_COLOR_AGE,        ///< wood age, years
+    CBM_COLOR_REACTION,   ///< fraction of reaction wood, 0..1
+    CBM_COLOR_ORDER,      ///< branch order, one colour per order
+    CBM_COLOR_STRESS_MPA, ///< bending stress in MPa (range from the data unless set)
     CBM_COLOR_COUNT
 } cbm_color_by;
 

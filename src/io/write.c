@@ -204,6 +204,8 @@ double cbm__part_quantity(const cbm_part *p, cbm_color_by by)
         return p->reaction_wood;
     case CBM_COLOR_ORDER:
         return p->order >= 0 ? (double)p->order : NAN;
+    case CBM_COLOR_STRESS_MPA:
+        return p->stress * 1e-6;
     default:
         return NAN;
     }
@@ -220,6 +222,8 @@ const char *cbm__color_title(cbm_color_by by)
         return "REACTION WOOD";
     case CBM_COLOR_ORDER:
         return "BRANCH ORDER";
+    case CBM_COLOR_STRESS_MPA:
+        return "STRESS (MPA)";
     default:
         return "";
     }
@@ -242,7 +246,7 @@ void cbm__color_range(const cbm_scene *s, const cbm_write_options *o, double *lo
         }
         if (!(a <= b))
             a = 0.0, b = 1.0;
-        if (o->color_by == CBM_COLOR_AGE)
+        if (o->color_by == CBM_COLOR_AGE || o->color_by == CBM_COLOR_STRESS_MPA)
             a = fmin(a, 0.0);
     }
     if (isfinite(o->range_min))
@@ -296,6 +300,7 @@ void cbm__colormap(cbm_color_by by, double t, float rgb[3])
     float c[3];
     switch (by) {
     case CBM_COLOR_STRESS:
+    case CBM_COLOR_STRESS_MPA:
         ramp(stress, 5, t, c);
         break;
     case CBM_COLOR_REACTION:

@@ -326,7 +326,10 @@ struct lpfg {
     char errmsg[160];
     long budget;
     cbm__mechlang mech; /* mechanics: declarations and settings */
-    bool rewriting;     /* inside a derivation pass: mechanics calls are refused */
+    /* models with mechanics: the module of the string each module of the interpretation came
+     * from (empty: the interpretation is the string itself) */
+    CBM_ARRAY(size_t) origin;
+    bool rewriting; /* inside a derivation pass: mechanics calls are refused */
 };
 
 /* ---- compiler state ---- */
@@ -3764,7 +3767,10 @@ static cbm_status decompose(cbm_lsys *ls, const lset *set, const lstr *src, lstr
     lpfg *lp = ls->lp;
     lstr *tmp = &lp->scratch.data[level];
     size_t j = 0, k = 0;
+    /* the interpretation of a model with mechanics records where its modules came from */
+    bool track = level == 0 && set == &lp->interp && lp->mech.seg_code >= 0;
     for (size_t i = 0; i < src->n; i++) {
+        size_t from = out->n, source = i;
         tmp->n = tmp->npm = tmp->npar = 0;
         int done = level < set->depth ? try_rewrite(ls, set, src, i, j, k, NULL, tmp) : 0;
         if (lp->err != CBM_OK)
@@ -3782,6 +3788,8 @@ static cbm_status decompose(cbm_lsys *ls, const lset *set, const lstr *src, lstr
         } else
             CBM_TRY(copy_at(ls->ctx, src, i, j, k, out));
         CBM_TRY(check_size(ls, out));
+        for (size_t o = from; track && o < out->n; o++)
+            CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, lp->origin, source));
         if (src->sym[i] & LSYS_PARAM_BIT)
             k += src->pc[j++];
     }
@@ -3951,6 +3959,7 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
     ls->homo_str.n = ls->homo_str.npm = ls->homo_str.npar = 0;
+    lp->origin.len = 0;
     cbm_status s;
     if (!lp->interp.present || !lp->interp.prods.len)
         s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
@@ -4015,6 +4024,47 @@ const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol)
     if (!ls->lp || symbol <= 0 || symbol > 127 || ls->lp->bycode[symbol] < 0)
         return NULL;
     return ls->lp->mods.data[ls->lp->bycode[symbol]].name;
+}
+
+cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const double ***out,
+                                 size_t *n)
+{
+    const lpfg *lp = ls->lp;
+    *out = NULL;
+    *n = 0;
+    if (!lp || lp->mech.seg_code < 0 || ls->cur.f32)
+        return CBM_OK;
+    /* the MechSegment of every module of the string, NULL for other modules */
+    size_t nc = ls->cur.n;
+    const double **seg = cbm__calloc(ls->ctx, nc ? nc : 1, sizeof *seg);
+    if (!seg)
+        return CBM_E_NOMEM;
+    size_t j = 0, k = 0;
+    const double *par = ls->cur.par;
+    for (size_t i = 0; i < nc; i++) {
+        int np = (ls->cur.sym[i] & LSYS_PARAM_BIT) ? ls->cur.pc[j++] : 0;
+        if ((ls->cur.sym[i] & 0x7f) == lp->mech.seg_code && np >= lp->mech.seg_off + MS_SIZE)
+            seg[i] = par + k + lp->mech.seg_off;
+        k += (size_t)np;
+    }
+    if (!homomorphism || !lp->origin.len) {
+        *out = seg;
+        *n = nc;
+        return CBM_OK;
+    }
+    /* through the interpretation's origins */
+    size_t nh = lp->origin.len;
+    const double **img = cbm__calloc(ls->ctx, nh, sizeof *img);
+    if (!img) {
+        cbm__free(ls->ctx, (void *)seg, (nc ? nc : 1) * sizeof *seg);
+        return CBM_E_NOMEM;
+    }
+    for (size_t i = 0; i < nh; i++)
+        img[i] = lp->origin.data[i] < nc ? seg[lp->origin.data[i]] : NULL;
+    cbm__free(ls->ctx, (void *)seg, (nc ? nc : 1) * sizeof *seg);
+    *out = img;
+    *n = nh;
+    return CBM_OK;
 }
 
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
@@ -4084,6 +4134,7 @@ void cbm__lpfg_free(cbm_lsys *ls)
     CBM_ARRAY_FREE(ctx, lp->funcnames);
     CBM_ARRAY_FREE(ctx, lp->funcids);
     CBM_ARRAY_FREE(ctx, lp->nodes);
+    CBM_ARRAY_FREE(ctx, lp->origin);
     CBM_ARRAY_FREE(ctx, lp->sms);
     free_set(ctx, &lp->main);
     free_set(ctx, &lp->decomp);

@@ -121,5 +121,11 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
 cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
+/* Models with mechanics: for each module of the string (or of its interpretation, through the
+ * modules they came from) its MechSegment fields (lsys/mechlang.h offsets), NULL for other
+ * modules; *out is an array of *n pointers from the context (free with cbm__free), NULL when the
+ * model has no mechanics. */
+cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const double ***out,
+                                 size_t *n);
 
 #endif

@@ -24,8 +24,10 @@
 
 #include "core/core.h"
 #include "lsys/lsys_internal.h"
+#include "lsys/mechlang.h"
 #include "turtle/turtle.h"
 
+#include <math.h>
 #include <stdio.h>
 
 struct cbm_model {
@@ -326,6 +328,30 @@ cbm_status cbm_model_step(cbm_model *m)
     return s;
 }
 
+/* L+C models with mechanics: the parts drawn from a mechanical segment's module (by its
+ * interpretation rule) carry that segment's stress, stress ratio and age, so pictures and meshes
+ * can be coloured by them. A part's `segment` is the index of the module that drew it. */
+static cbm_status mech_parts(cbm_model *m, cbm_scene *scene, size_t first)
+{
+    const double **seg = NULL;
+    size_t n = 0;
+    CBM_TRY(cbm__lpfg_mech_fields(m->ls, m->image, &seg, &n));
+    if (!seg)
+        return CBM_OK;
+    size_t np = cbm_scene_part_count(scene);
+    for (size_t i = first; i < np; i++) {
+        cbm_part *p = cbm_scene_part(scene, (uint32_t)i);
+        if (!p || p->segment < 0 || (size_t)p->segment >= n || !seg[p->segment])
+            continue;
+        const double *g = seg[p->segment];
+        p->stress = g[MS_STRESS];
+        p->stress_ratio = g[MS_MOR] > 0 ? g[MS_RATIO] : NAN; /* no modulus of rupture: no ratio */
+        p->age = g[MS_AGE] >= 0 ? g[MS_AGE] : 0;
+    }
+    cbm__free(m->ctx, (void *)seg, (n ? n : 1) * sizeof *seg);
+    return CBM_OK;
+}
+
 cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_turtle **turtle)
 {
     if (turtle)
@@ -333,6 +359,7 @@ cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_
     if (!m)
         return CBM_E_INVALID;
     cbm_turtle *t = NULL;
+    size_t first_part = scene ? cbm_scene_part_count(scene) : 0;
     CBM_TRY(cbm__turtle_create(m->ctx, m->view, scene, &t));
     cbm__turtle_set_record(t, record);
     cbm__turtle_set_lpfg(t, m->lpfg);
@@ -349,6 +376,8 @@ cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record, cbm_
         s = interpret_cb(m, m->ls);
     }
     m->pass = m->query_turtle;
+    if (s == CBM_OK && scene && m->lpfg)
+        s = mech_parts(m, scene, first_part);
     if (s != CBM_OK || !turtle)
         cbm__turtle_destroy(t);
     else

@@ -103,7 +103,9 @@ struct cbm_turtle {
     bool box_set;
     cbm_vec3 lo, hi;
     CBM_ARRAY(cbm_vec3) scratch;
-    int64_t module_index;
+    int64_t module_index; /* modules fed so far (the one executing is module_index - 1) */
+    int64_t node_module;  /* the module that opened the segment in progress */
+    int64_t part_module;  /* >= 0: the module a part being emitted belongs to */
 };
 
 /* ---- lookup ---- */
@@ -274,6 +276,8 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->pts.len = 0;
     t->box_set = false;
     t->module_index = 0;
+    t->node_module = -1;
+    t->part_module = -1;
 }
 
 /* ---- helpers ---- */
@@ -304,7 +308,7 @@ static cbm_part make_part(const cbm_turtle *t, cbm_organ organ, int color)
     cbm_part p = cbm_part_default();
     p.organ = organ;
     p.order = (int32_t)t->stack.len;
-    p.segment = t->module_index;
+    p.segment = t->part_module >= 0 ? t->part_module : t->module_index - 1;
     p.material = color;
     int c = color & 255;
     for (int i = 0; i < 4; i++)
@@ -413,13 +417,17 @@ static cbm_status end_node(cbm_turtle *t)
     if (!t->node_open)
         return CBM_OK;
     t->node_open = false;
-    return emit_segment(t, t->node_p, t->cur.pos, t->node_w, t->cur.width, t->node_color, t->node_h,
-                        t->node_u);
+    t->part_module = t->node_module; /* the segment is the F or G that opened it */
+    cbm_status st = emit_segment(t, t->node_p, t->cur.pos, t->node_w, t->cur.width, t->node_color,
+                                 t->node_h, t->node_u);
+    t->part_module = -1;
+    return st;
 }
 
 static void start_node(cbm_turtle *t)
 {
     t->node_open = true;
+    t->node_module = t->module_index - 1;
     t->node_p = t->cur.pos;
     t->node_h = t->cur.h;
     t->node_u = t->cur.u;

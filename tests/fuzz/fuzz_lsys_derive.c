@@ -1,12 +1,21 @@
 /* libFuzzer target: loading, deriving (up to 8 steps) and the homomorphism of arbitrary models
  * under small limits (modules, memory, steps, decomposition depth, loop iterations), in double
- * and float32 modes. Must never crash, leak or hang. */
+ * and float32 modes, with printf formatting into a sink and the mechanical plant of models with
+ * mechanics. Must never crash, leak or hang. */
 #include "cambium/cambium.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size);
+
+/* what models print is formatted and dropped */
+static void sink(void *ud, const char *text, size_t n)
+{
+    (void)ud;
+    (void)text;
+    (void)n;
+}
 
 int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
 {
@@ -19,6 +28,7 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
     memcpy(text, data, size);
     text[size] = 0;
     cbm_context_def cd = cbm_context_def_default();
+    cd.output = sink;
     cd.limits.max_bytes = 64u << 20;
     cd.limits.max_modules = 200000;
     cd.limits.max_steps = 50;
@@ -42,6 +52,9 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
             s = cbm_lsys_step(ls);
         if (s == CBM_OK)
             (void)cbm_lsys_apply_homomorphism(ls);
+        cbm_plant *pl = NULL;
+        if (cbm_lsys_has_mechanics(ls) && cbm_lsys_mech_plant(ls, &pl) == CBM_OK)
+            cbm_plant_destroy(pl);
         cbm_lsys_destroy(ls);
     }
     if (cbm_context_bytes(ctx) != 0)

@@ -15,7 +15,8 @@ const char cli_output_help[] =
     "  --size W[xH]        picture size in pixels (default 800x800)\n"
     "  --view V            front | side | top | iso | X,Y,Z (direction looked along; default iso)\n"
     "  --background C      white | black | grey | transparent | #rrggbb (default white)\n"
-    "  --color-by M        material | stress | age | reaction | order (default material)\n"
+    "  --color-by M        material | stress (/ MOR) | stress-mpa | age | reaction |\n"
+    "                      order (default material)\n"
     "  --range LO:HI       colour-bar range of the quantity (default: 0:1, or from the data)\n"
     "  --no-ground         drop the ground (and do not add one under the plant in PNGs)\n"
     "  --no-legend         no colour bar\n"
@@ -111,8 +112,9 @@ int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_
         if (!parse_color(v, o->background))
             return bad(cmd, a, v);
     } else if (!strcmp(a, "--color-by")) {
-        static const char *const names[] = {"material", "stress", "age", "reaction", "order"};
-        for (int k = 0; k < 5; k++)
+        static const char *const names[] = {"material", "stress", "age",
+                                            "reaction", "order",  "stress-mpa"};
+        for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
             if (!strcmp(v, names[k])) {
                 o->color_by = (cbm_color_by)k;
                 return 1;
