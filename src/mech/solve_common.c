@@ -307,7 +307,7 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
             *stiff = 0.0;
         return 0.0;
     }
-    double s = p->ground_s, k = p->ground_k;
+    double s = p->ground_s, k = p->ground_k * p->load_scale;
     if (depth < s) {
         /* smoothed onset: k d^2 / (2 s), continuous in force and stiffness */
         if (stiff)
