@@ -63,8 +63,9 @@
  * (dth_parent x H_parent), the contact force changes by -k dX_i.y, and these force changes are
  * carried down like the loads (dF_i = sum_c dF_c + df_c,i; dM_i gains H_i x l_i (sum_c dF_c +
  * df_c,i)), so the tangent stays the exact derivative. The tree factorisation (solve_tree.c)
- * carries rotations only; with contact it preconditions FGMRES, whose products use this exact
- * tangent.
+ * carries the same contact stiffness, so the fast solver's step stays exact. During the load
+ * continuation (load_scale < 1) k is scaled with the loads: lambda = 0 is then exact at the
+ * rest state even where that reaches below the ground.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"

@@ -18,6 +18,24 @@
  * one pass. If a D_i is singular (an unstable equilibrium at a buckling load) it is replaced by
  * S_i there, which keeps the preconditioner usable and GMRES does the rest.
  *
+ * Ground contact (solve_common.c): the distal node X_i of a segment below the ground carries a
+ * spring, d f_i = -k_i n n^T dX_i, and dX_i = dX_parent + B_i dth_i with B_i = -l_i [H_i]x, so
+ * a subtree now also responds to the displacement x of its proximal node and passes a force
+ * change down: dM_i = Phi_i dth_parent + Gamma_i x + psi_i, dF_i = Lambda_i dth_parent + Xi_i x
+ * + chi_i. With the children's blocks summed into Gamma, Lambda, Xi (and psi, chi):
+ *     Xi' = sum Xi_c - k_i n n^T,   Z = sum Lambda_c + Xi' B,   Y = sum Gamma_c - B Xi',
+ *     W_i = G_i + sum Phi_c + (sum Gamma_c) B - B Z,   P_i = R_i^T Y,
+ *     D_i, Q_i as above;  the joint: v_i = D_i^-1 (u_i + Q_i dth_parent + P_i x),
+ *     Phi_i = W (I + a D^-1 Q), Gamma_i = W a D^-1 P + Y,
+ *     Lambda_i = Z (I + a D^-1 Q), Xi_i = Z a D^-1 P + Xi',
+ *     m0 = sum psi_c - B sum chi_c,  u_i = b_i + R_i^T m0,
+ *     psi_i = W a D^-1 u_i + m0,     chi_i = Z a D^-1 u_i + sum chi_c,
+ * and forward: dX_i = x + B_i dth_i. This is K_c = sum_i J_i^T k_i J_i (J_i: the node's
+ * position against every joint on its path) condensed like the lever-arm terms of the loads.
+ * The contact blocks are zero off the paths from contact nodes to the root, which are the only
+ * segments that compute them (work.fact). Cost with contact: about twice the 3x3 products on
+ * those paths; none without.
+ *
  * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
  * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
  * positive definite symmetric part (Sylvester's criterion); the count of those that do not is
