@@ -189,7 +189,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         memset(w->fxi, 0, 9 * n * sizeof(double));
     }
     cbm_vec3 *acc = w->dm, *accf = w->dfc;
-    if (b)
+    if (b && out)
         for (size_t i = 0; i < n; i++)
             acc[i] = accf[i] = v3(0, 0, 0);
     for (size_t i = n; i-- > 0;) {
@@ -279,10 +279,10 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
                 madd(w->fxi + 9 * (size_t)pa, xi.m);
             }
         }
-        if (b)
+        if (b && out)
             solve_back(p, i, b, out, &Rt, act);
     }
-    if (b)
+    if (b && out)
         forward_solve(p, out);
     if (nonpd_out)
         *nonpd_out = nonpd;
