@@ -3,7 +3,10 @@
  * ground against the closed form of a cantilever on a spring support (the propped cantilever,
  * reaction 3/8 w L, in the stiff limit); penetration bounded by force / k; both solvers at the
  * same equilibrium; a flexible axis lying on the ground; no ground by default; Ground() in the
- * L+C dialect. */
+ * L+C dialect; the O(n) tree factorisation with the contact stiffness (it inverts the exact
+ * tangent; Newton converges quadratically with it); a cycad-like rosette, relaxation and fast
+ * solver; the shipped models jirasek-ground.l (a parameter sweep: converges, smooth, no
+ * sinking) and jirasek-cycad.l. */
 #include "mech_testlib.h"
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
