@@ -569,6 +569,49 @@ TEST(contact_rosette_solvers_agree)
     test_ctx_end(ctx);
 }
 
+/* Every allocation of a solve with a ground (the contact blocks of the factorisation) may fail:
+ * the error comes back and nothing leaks. */
+static cbm_status oom_case(cbm_context *ctx, void *ud)
+{
+    (void)ud;
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(0.0);
+    pd.base_position = v3(0.0, 0.05, 0.0);
+    cbm_plant *p = NULL;
+    cbm_status s = cbm_plant_create(ctx, &pd, &p);
+    if (s)
+        return s;
+    cbm_segment_def d = cbm_segment_def_default();
+    d.length = 0.05;
+    d.core.youngs_modulus = 1e9;
+    d.core.a = d.core.b = 0.006;
+    for (int i = 0; i < 40 && !s; i++) {
+        d.parent = i - 1;
+        s = cbm_plant_add_segment(p, &d, NULL);
+    }
+    if (!s)
+        s = cbm_plant_set_ground(p, 0.0, 1e4, 0.0005);
+    if (!s)
+        s = cbm_plant_solve(p, NULL, NULL);
+    if (!s && !(cbm_plant_contact_force(p, 39) > 0.0))
+        s = CBM_E_INVALID; /* the case must reach the ground */
+    for (int i = 0; i < 20 && !s; i++) {
+        d.parent = 39 + i;
+        s = cbm_plant_add_segment(p, &d, NULL); /* the workspace grows with the plant */
+    }
+    if (!s)
+        s = cbm_plant_solve(p, NULL, NULL);
+    cbm_plant_destroy(p);
+    return s;
+}
+
+TEST(contact_out_of_memory)
+{
+    int runs = test_oom_loop(oom_case, NULL);
+    printf("out-of-memory runs: %d\n", runs);
+    CHECK(runs > 10);
+}
+
 /* ---- the shipped models ---- */
 
 typedef struct model_result {
