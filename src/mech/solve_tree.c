@@ -180,13 +180,15 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
                             2.0 * (p->q[i].x * p->q[i].y + p->q[i].w * p->q[i].z),
                             2.0 * (p->q[i].x * p->q[i].z - p->q[i].w * p->q[i].y));
             (void)cbm__mech_contact(p, i, h, &kc);
-            if (kc != 0.0)
-                for (int64_t j = (int64_t)i; j >= 0 && !w->fact[j]; j = p->parent[j])
-                    w->fact[j] = 1;
+            /* mark the path to the root; only marked segments read or receive the contact
+             * accumulators, so only theirs need clearing */
+            for (int64_t j = (int64_t)i; kc != 0.0 && j >= 0 && !w->fact[j]; j = p->parent[j]) {
+                w->fact[j] = 1;
+                memset(w->fgam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->flam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->fxi + 9 * j, 0, 9 * sizeof(double));
+            }
         }
-        memset(w->fgam, 0, 9 * n * sizeof(double));
-        memset(w->flam, 0, 9 * n * sizeof(double));
-        memset(w->fxi, 0, 9 * n * sizeof(double));
     }
     cbm_vec3 *acc = w->dm, *accf = w->dfc;
     if (b && out)
