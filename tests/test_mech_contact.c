@@ -703,7 +703,7 @@ TEST(contact_model_ground_sweep)
 
 /* Fig. 8 (models/jirasek-cycad.l): the rosette converges at every step, the tips of the old
  * fronds rest on the ground, none deeper than the bound below; a stiffer ground keeps them
- * shallower. */
+ * shallower; lighter and heavier leaflets and other insertion angles converge too. */
 TEST(contact_model_cycad)
 {
     cbm_context *ctx = test_ctx();
@@ -718,5 +718,15 @@ TEST(contact_model_cycad)
     CHECK(r.depth > 0.0 && r.depth < 5e-4);
     CHECK(rs.touching >= 8);
     CHECK(rs.depth < 0.5 * r.depth);
+    /* nearby leaflet loads and insertion angles converge too */
+    const char *sweep[] = {"PINNA=0.25", "PINNA=0.5", "ANGLE=20", "ANGLE=45"};
+    for (size_t j = 0; j < sizeof sweep / sizeof *sweep; j++) {
+        cbm_status st = run_model(ctx, "jirasek-cycad.l", sweep[j], 0.0, &r);
+        printf("cycad %-10s %s: %zu nodes on the ground, depth %.2e m\n", sweep[j],
+               cbm_status_name(st), r.touching, r.depth);
+        CHECK_OK(st);
+        CHECK(r.touching >= 8);
+        CHECK(r.depth > 0.0 && r.depth < 5e-4);
+    }
     test_ctx_end(ctx);
 }
