@@ -34,7 +34,16 @@ typedef struct cbm__mech_work {
     double *fa;       /* a = R J_r(d Omega) d */
     double *fwad;     /* W a D^-1 */
     double *fw;       /* W accumulators */
-    double *hess;     /* (m + 1) x m Hessenberg matrix and Givens data */
+    /* tree factorisation with ground contact (allocated once a plant has a ground): 9 doubles
+     * per segment each; see solve_tree.c */
+    size_t fcap;   /* segments the contact arrays hold */
+    double *fgam;  /* Gamma accumulators: d moment / d proximal-node displacement, N */
+    double *flam;  /* Lambda accumulators: d force / d rotation of the parent frame, N */
+    double *fxi;   /* Xi accumulators: d force / d proximal-node displacement, N/m */
+    double *fp;    /* P = R^T Y */
+    double *fzad;  /* Z a D^-1 */
+    uint8_t *fact; /* 1 if the segment or one it carries touches the ground */
+    double *hess;  /* (m + 1) x m Hessenberg matrix and Givens data */
 } cbm__mech_work;
 
 struct cbm_plant {

@@ -63,8 +63,9 @@
  * (dth_parent x H_parent), the contact force changes by -k dX_i.y, and these force changes are
  * carried down like the loads (dF_i = sum_c dF_c + df_c,i; dM_i gains H_i x l_i (sum_c dF_c +
  * df_c,i)), so the tangent stays the exact derivative. The tree factorisation (solve_tree.c)
- * carries rotations only; with contact it preconditions FGMRES, whose products use this exact
- * tangent.
+ * carries the same contact stiffness, so the fast solver's step stays exact. During the load
+ * continuation (load_scale < 1) k is scaled with the loads: lambda = 0 is then exact at the
+ * rest state even where that reaches below the ground.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -93,12 +94,61 @@ void cbm__mech_work_free(cbm_plant *p)
         cbm__free(p->ctx, w->fwad, 9 * w->cap * sizeof(double));
         cbm__free(p->ctx, w->fw, 9 * w->cap * sizeof(double));
     }
+    double *fc[5] = {w->fgam, w->flam, w->fxi, w->fp, w->fzad};
+    for (int k = 0; k < 5; k++)
+        cbm__free(p->ctx, fc[k], 9 * w->fcap * sizeof(double));
+    cbm__free(p->ctx, w->fact, w->fcap);
     int m = w->krylov_cap > 0 ? w->krylov_cap - 1 : 0;
     cbm__free(p->ctx, w->hess, (size_t)(m + 1) * (size_t)(m + 4) * sizeof(double));
     memset(w, 0, sizeof *w);
 }
 
+/* The arrays of the tree factorisation with ground contact, for a plant with a ground and a
+ * Krylov workspace (all or none). */
+static cbm_status contact_reserve(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    if (!p->ground || w->krylov_cap == 0 || w->fcap >= w->cap)
+        return CBM_OK;
+    size_t cap = w->cap, sz = 9 * cap * sizeof(double);
+    double *fc[5];
+    uint8_t *act = cbm__alloc(p->ctx, cap);
+    bool ok = act != NULL;
+    for (int k = 0; k < 5; k++) {
+        fc[k] = cbm__alloc(p->ctx, sz);
+        ok = ok && fc[k];
+    }
+    if (!ok) {
+        for (int k = 0; k < 5; k++)
+            if (fc[k])
+                cbm__free(p->ctx, fc[k], sz);
+        if (act)
+            cbm__free(p->ctx, act, cap);
+        return CBM_E_NOMEM;
+    }
+    double *old[5] = {w->fgam, w->flam, w->fxi, w->fp, w->fzad};
+    for (int k = 0; k < 5; k++)
+        cbm__free(p->ctx, old[k], 9 * w->fcap * sizeof(double));
+    cbm__free(p->ctx, w->fact, w->fcap);
+    w->fgam = fc[0];
+    w->flam = fc[1];
+    w->fxi = fc[2];
+    w->fp = fc[3];
+    w->fzad = fc[4];
+    w->fact = act;
+    w->fcap = cap;
+    return CBM_OK;
+}
+
+static cbm_status work_reserve(cbm_plant *p, int krylov_dim);
+
 cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
+{
+    CBM_TRY(work_reserve(p, krylov_dim));
+    return contact_reserve(p);
+}
+
+static cbm_status work_reserve(cbm_plant *p, int krylov_dim)
 {
     cbm__mech_work *w = &p->work;
     int kc = krylov_dim > 0 ? krylov_dim + 1 : 0;
@@ -258,7 +308,7 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
             *stiff = 0.0;
         return 0.0;
     }
-    double s = p->ground_s, k = p->ground_k;
+    double s = p->ground_s, k = p->ground_k * p->load_scale;
     if (depth < s) {
         /* smoothed onset: k d^2 / (2 s), continuous in force and stiffness */
         if (stiff)

@@ -10,9 +10,8 @@
  *   so GMRES would return P^-1 (-R) after one iteration: the step is taken directly (factor and
  *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
  *   only when a joint's pivot block was singular and had to be regularised.
- * - Ground contact (solve_common.c): the factorisation carries no contact stiffness, so with a
- *   ground plane it always preconditions FGMRES (exact tangent products), and the rotation trust
- *   region below is measured on the FGMRES step (one more tangent pass).
+ * - Ground contact (solve_common.c): the factorisation carries the contact stiffness too, so
+ *   the step is direct with a ground as without.
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
@@ -345,41 +344,22 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
-            /* with ground contact the factorisation lacks the contact stiffness: it then
-             * preconditions FGMRES, whose products carry the exact tangent */
-            direct = sing == 0 && !p->ground;
+            direct = sing == 0;
             shifted = mu > 0.0 && direct;
             if (mu > 0.0)
                 k->mu_hint = mu;
             /* trust region on rotations: the forward sweep of the solve left the world
              * rotation of every frame under the full step in work.dth; limit the largest to
              * max_turn radians (the linearisation of a large rotation overshoots) */
-            if (!p->ground) {
-                double tmax = largest_turn(p);
-                lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
-                if (it == 0)
-                    k->first_turn = tmax;
-                if (it == 0 && abort_large && lam0 < 1.0)
-                    return NK_LARGE; /* far from equilibrium: follow the load path instead */
-            }
-        }
-        if (!direct && !gmres(k, eta, m))
-            return NK_BUDGET;
-        if (k->tree && p->ground) {
-            /* the same trust region for the step FGMRES found (the factorisation's own step
-             * ignores the contact stiffness): one tangent pass leaves its rotations in
-             * work.dth */
-            if (k->st->passes + 3 >= k->max_passes)
-                return NK_BUDGET;
-            cbm__mech_jvp(p, w->step, w->tmp);
-            k->st->passes++;
             double tmax = largest_turn(p);
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
             if (it == 0 && abort_large && lam0 < 1.0)
-                return NK_LARGE;
+                return NK_LARGE; /* far from equilibrium: follow the load path instead */
         }
+        if (!direct && !gmres(k, eta, m))
+            return NK_BUDGET;
         k->st->newton_steps++;
         double lam = lam0;
         nk_result ls = line_search(k, lam0, &lam);
@@ -399,7 +379,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
             memcpy(step, w->tmp, n3 * sizeof *step);
-            if (sing == 0 && !p->ground) {
+            if (sing == 0) {
                 double tmax = largest_turn(p);
                 lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             } else if (!gmres(k, eta, m))

@@ -18,6 +18,24 @@
  * one pass. If a D_i is singular (an unstable equilibrium at a buckling load) it is replaced by
  * S_i there, which keeps the preconditioner usable and GMRES does the rest.
  *
+ * Ground contact (solve_common.c): the distal node X_i of a segment below the ground carries a
+ * spring, d f_i = -k_i n n^T dX_i, and dX_i = dX_parent + B_i dth_i with B_i = -l_i [H_i]x, so
+ * a subtree now also responds to the displacement x of its proximal node and passes a force
+ * change down: dM_i = Phi_i dth_parent + Gamma_i x + psi_i, dF_i = Lambda_i dth_parent + Xi_i x
+ * + chi_i. With the children's blocks summed into Gamma, Lambda, Xi (and psi, chi):
+ *     Xi' = sum Xi_c - k_i n n^T,   Z = sum Lambda_c + Xi' B,   Y = sum Gamma_c - B Xi',
+ *     W_i = G_i + sum Phi_c + (sum Gamma_c) B - B Z,   P_i = R_i^T Y,
+ *     D_i, Q_i as above;  the joint: v_i = D_i^-1 (u_i + Q_i dth_parent + P_i x),
+ *     Phi_i = W (I + a D^-1 Q), Gamma_i = W a D^-1 P + Y,
+ *     Lambda_i = Z (I + a D^-1 Q), Xi_i = Z a D^-1 P + Xi',
+ *     m0 = sum psi_c - B sum chi_c,  u_i = b_i + R_i^T m0,
+ *     psi_i = W a D^-1 u_i + m0,     chi_i = Z a D^-1 u_i + sum chi_c,
+ * and forward: dX_i = x + B_i dth_i. This is K_c = sum_i J_i^T k_i J_i (J_i: the node's
+ * position against every joint on its path) condensed like the lever-arm terms of the loads.
+ * The contact blocks are zero off the paths from contact nodes to the root, which are the only
+ * segments that compute them (work.fact). Cost with contact: about twice the 3x3 products on
+ * those paths; none without.
+ *
  * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
  * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
  * positive definite symmetric part (Sylvester's criterion); the count of those that do not is
@@ -94,6 +112,8 @@ static inline m3 transpose(const double *a)
 }
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
+static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
+                       bool act);
 
 /* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
 static bool sym_pd(const double *d)
@@ -105,6 +125,43 @@ static bool sym_pd(const double *d)
     return a > 0.0 && m2 > 0.0 && m3d > 0.0;
 }
 
+static inline void madd(double *a, const double *b)
+{
+    for (int k = 0; k < 9; k++)
+        a[k] += b[k];
+}
+
+/* B = -l [H]x: the displacement of the distal node per rotation of the segment's frame */
+static inline m3 node_lever(cbm_vec3 h, double l)
+{
+    m3 b = skew(h);
+    for (int k = 0; k < 9; k++)
+        b.m[k] *= -l;
+    return b;
+}
+
+/* The contact terms of segment i before its pivot (see the comment at the top): from the
+ * accumulated Gamma, Lambda, Xi of its children and its own contact stiffness, adds
+ * Gamma B - B Z to W and returns Xi' (in *xi), Z and Y. */
+static void contact_pre(const cbm_plant *p, size_t i, cbm_vec3 h, double *W, m3 *xi, m3 *z, m3 *y)
+{
+    const cbm__mech_work *w = &p->work;
+    m3 B = node_lever(h, p->len[i]);
+    memcpy(xi->m, w->fxi + 9 * i, sizeof xi->m);
+    double kc;
+    (void)cbm__mech_contact(p, i, h, &kc);
+    xi->m[4] += kc; /* d force.y / d height of the node (<= 0) */
+    m3 xb = mmul(xi->m, B.m);
+    const double *lam = w->flam + 9 * i, *gam = w->fgam + 9 * i;
+    for (int k = 0; k < 9; k++)
+        z->m[k] = lam[k] + xb.m[k];
+    m3 gb = mmul(gam, B.m), bz = mmul(B.m, z->m), bx = mmul(B.m, xi->m);
+    for (int k = 0; k < 9; k++) {
+        W[k] += gb.m[k] - bz.m[k];
+        y->m[k] = gam[k] - bx.m[k];
+    }
+}
+
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
  * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
  * D was singular and replaced by S. */
@@ -113,11 +170,30 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
     size_t singular = 0, nonpd = 0;
+    const bool ground = p->ground && w->fcap >= n;
     memset(w->fw, 0, 9 * n * sizeof(double));
-    cbm_vec3 *acc = w->dm;
-    if (b)
+    if (ground) {
+        memset(w->fact, 0, n);
+        for (size_t i = 0; i < n; i++) {
+            double kc;
+            cbm_vec3 h = v3(1.0 - 2.0 * (p->q[i].y * p->q[i].y + p->q[i].z * p->q[i].z),
+                            2.0 * (p->q[i].x * p->q[i].y + p->q[i].w * p->q[i].z),
+                            2.0 * (p->q[i].x * p->q[i].z - p->q[i].w * p->q[i].y));
+            (void)cbm__mech_contact(p, i, h, &kc);
+            /* mark the path to the root; only marked segments read or receive the contact
+             * accumulators, so only theirs need clearing */
+            for (int64_t j = (int64_t)i; kc != 0.0 && j >= 0 && !w->fact[j]; j = p->parent[j]) {
+                w->fact[j] = 1;
+                memset(w->fgam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->flam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->fxi + 9 * j, 0, 9 * sizeof(double));
+            }
+        }
+    }
+    cbm_vec3 *acc = w->dm, *accf = w->dfc;
+    if (b && out)
         for (size_t i = 0; i < n; i++)
-            acc[i] = v3(0, 0, 0);
+            acc[i] = accf[i] = v3(0, 0, 0);
     for (size_t i = n; i-- > 0;) {
         m3 R = rot(p->q[i]), Rt = transpose(R.m);
         cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
@@ -130,6 +206,10 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         for (int r0 = 0; r0 < 3; r0++)
             for (int c0 = 0; c0 < 3; c0++)
                 W[3 * r0 + c0] += hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0);
+        const bool act = ground && w->fact[i];
+        m3 Xi, Z, Y;
+        if (act)
+            contact_pre(p, i, h, W, &Xi, &Z, &Y);
         m3 WM = skew(p->moment[i]);
         for (int k = 0; k < 9; k++)
             WM.m[k] += W[k];
@@ -184,21 +264,27 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         memcpy(w->fa + 9 * i, A.m, sizeof A.m);
         memcpy(w->fwad + 9 * i, WAD.m, sizeof WAD.m);
         int64_t pa = p->parent[i];
-        if (pa >= 0) {
-            double *Wp = w->fw + 9 * (size_t)pa;
-            for (int k = 0; k < 9; k++)
-                Wp[k] += Phi.m[k];
+        if (pa >= 0)
+            madd(w->fw + 9 * (size_t)pa, Phi.m);
+        if (act) {
+            /* Gamma = W a D^-1 P + Y, Lambda = Z + (Z a D^-1) Q, Xi = (Z a D^-1) P + Xi' */
+            m3 P = mmul(Rt.m, Y.m), ZAD = mmul(Z.m, AD.m);
+            m3 gam = mmul(WAD.m, P.m), lam = mmul(ZAD.m, Q.m), xi = mmul(ZAD.m, P.m);
+            memcpy(w->fp + 9 * i, P.m, sizeof P.m);
+            memcpy(w->fzad + 9 * i, ZAD.m, sizeof ZAD.m);
+            if (pa >= 0) {
+                madd(gam.m, Y.m);
+                madd(lam.m, Z.m);
+                madd(xi.m, Xi.m);
+                madd(w->fgam + 9 * (size_t)pa, gam.m);
+                madd(w->flam + 9 * (size_t)pa, lam.m);
+                madd(w->fxi + 9 * (size_t)pa, xi.m);
+            }
         }
-        if (b) {
-            cbm_vec3 wi = acc[i];
-            cbm_vec3 ui = v3_add(b[i], mvec(Rt.m, wi));
-            out[i] = ui;
-            cbm_vec3 psi = v3_add(mvec(WAD.m, ui), wi);
-            if (pa >= 0)
-                acc[pa] = v3_add(acc[pa], psi);
-        }
+        if (b && out)
+            solve_back(p, i, b, out, &Rt, act);
     }
-    if (b)
+    if (b && out)
         forward_solve(p, out);
     if (nonpd_out)
         *nonpd_out = nonpd;
@@ -242,39 +328,66 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    cbm_vec3 *acc = w->dm;
+    const bool ground = p->ground && w->fcap >= n;
     for (size_t i = 0; i < n; i++)
-        acc[i] = v3(0, 0, 0);
+        w->dm[i] = w->dfc[i] = v3(0, 0, 0);
     for (size_t i = n; i-- > 0;) {
-        cbm_quat q = p->q[i];
-        cbm_vec3 h, l, u;
-        double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-        double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
-        double wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-        h = v3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy));
-        l = v3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx));
-        u = v3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy));
-        cbm_vec3 wi = acc[i];
-        cbm_vec3 ui = v3_add(b[i], v3(v3_dot(h, wi), v3_dot(l, wi), v3_dot(u, wi)));
-        out[i] = ui;
-        cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), wi);
-        int64_t pa = p->parent[i];
-        if (pa >= 0)
-            acc[pa] = v3_add(acc[pa], psi);
+        m3 Rt = transpose(rot(p->q[i]).m);
+        solve_back(p, i, b, out, &Rt, ground && w->fact[i]);
     }
     forward_solve(p, out);
+}
+
+/* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
+ * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's. */
+static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
+                       bool act)
+{
+    cbm__mech_work *w = &p->work;
+    cbm_vec3 m0 = w->dm[i]; /* sum of the children's psi (+ the contact term below) */
+    cbm_vec3 f0 = act ? w->dfc[i] : v3(0, 0, 0);
+    if (act) {
+        /* m0 = sum psi - B sum chi = sum psi + l H x sum chi */
+        cbm_vec3 h = v3(Rt->m[0], Rt->m[1], Rt->m[2]);
+        m0 = v3_add(m0, v3_scale(v3_cross(h, f0), p->len[i]));
+    }
+    cbm_vec3 ui = v3_add(b[i], mvec(Rt->m, m0));
+    out[i] = ui;
+    int64_t pa = p->parent[i];
+    if (pa < 0)
+        return;
+    cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), m0);
+    w->dm[pa] = v3_add(w->dm[pa], psi);
+    if (act) {
+        cbm_vec3 chi = v3_add(mvec(w->fzad + 9 * i, ui), f0);
+        w->dfc[pa] = v3_add(w->dfc[pa], chi);
+    }
 }
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out)
 {
     cbm__mech_work *w = &p->work;
-    cbm_vec3 *dth = w->dth;
+    cbm_vec3 *dth = w->dth, *dx = w->dpos; /* dpos: displacement of the distal node here */
+    const bool ground = p->ground && w->fcap >= p->n;
     for (size_t i = 0; i < p->n; i++) {
         int64_t pa = p->parent[i];
         cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
         cbm_vec3 rhs = v3_add(out[i], mvec(w->fq + 9 * i, tp));
+        const bool act = ground && w->fact[i];
+        cbm_vec3 xp = v3(0, 0, 0);
+        if (act) {
+            xp = pa >= 0 ? dx[pa] : v3(0, 0, 0);
+            rhs = v3_add(rhs, mvec(w->fp + 9 * i, xp));
+        }
         cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
         out[i] = v;
         dth[i] = v3_add(tp, mvec(w->fa + 9 * i, v));
+        if (act) {
+            /* dX_i = dX_parent + l_i dth_i x H_i */
+            cbm_quat q = p->q[i];
+            cbm_vec3 h = v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
+                            2.0 * (q.x * q.z - q.w * q.y));
+            dx[i] = v3_add(xp, v3_scale(v3_cross(dth[i], h), p->len[i]));
+        }
     }
 }

@@ -5,7 +5,7 @@ set -euo pipefail
 bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for m in jirasek-s-branch jirasek-hanging jirasek-cherries jirasek-ground; do
+for m in jirasek-s-branch jirasek-hanging jirasek-cherries jirasek-ground jirasek-cycad; do
     "$bin" run "$CBM_SOURCE/models/$m.l" -o "$tmp/$m.str" -o "$tmp/$m.svg"
     test -s "$tmp/$m.svg"
     grep -q '^I({' "$tmp/$m.str"
