@@ -75,10 +75,11 @@ static cbm_status native_chain(cbm_context *ctx, cbm_vec3 *tip, cbm_vec3 *branch
     cbm_status s0 = cbm_plant_create(ctx, &pd, &p);
     if (s0 != CBM_OK)
         return s0;
-    double len[] = {0.2, 0.15, 0.1, 0.15}, r[] = {0.01, 0.008, 0.005, 0.006};
+    /* the continuation (last in the string, after the bracketed lateral) is the first child */
+    double len[] = {0.2, 0.15, 0.15, 0.1}, r[] = {0.01, 0.008, 0.006, 0.005};
     int64_t par[] = {-1, 0, 1, 1};
-    double div[] = {0, 0, -70, 0}, dev[] = {0, 30, 25, 0}, roll[] = {0, 0, 10, 0};
-    double mass[] = {0, 0, 0.05, 0.02};
+    double div[] = {0, 0, 0, -70}, dev[] = {0, 30, 0, 25}, roll[] = {0, 0, 0, 10};
+    double mass[] = {0, 0, 0.02, 0.05};
     cbm_status s = CBM_OK;
     for (int i = 0; i < 4 && s == CBM_OK; i++) {
         cbm_segment_def d = cbm_segment_def_default();
@@ -100,9 +101,9 @@ static cbm_status native_chain(cbm_context *ctx, cbm_vec3 *tip, cbm_vec3 *branch
         s = cbm_plant_solve(p, &sd, &st);
     cbm_segment_state a, b;
     if (s == CBM_OK)
-        s = cbm_plant_segment(p, 3, &a);
+        s = cbm_plant_segment(p, 2, &a);
     if (s == CBM_OK)
-        s = cbm_plant_segment(p, 2, &b);
+        s = cbm_plant_segment(p, 3, &b);
     if (s == CBM_OK) {
         *tip = a.distal;
         *branch_tip = b.distal;

@@ -52,16 +52,17 @@ enum {
     T_MSEG, /* MechSegment (lsys/mechlang.h) */
     T_NBUILTIN
 };
-#define MAXF  16 /* parameters per module, fields per struct */
-#define MAXSZ 255
+#define MAXF   16 /* parameters per module or function */
+#define MAXFLD 64 /* fields per struct (the listing's InternodeData has 35) */
+#define MAXSZ  255
 
 typedef struct ltype {
     char *name;
     int size;
     int nf;
-    int ftype[MAXF];
-    int foff[MAXF];
-    char *fname[MAXF];
+    int ftype[MAXFLD];
+    int foff[MAXFLD];
+    char *fname[MAXFLD];
 } ltype;
 
 typedef struct lmod {
@@ -158,6 +159,7 @@ typedef enum {
     F_TROPISM,
     F_PIPEMODEL,
     F_WOOD,
+    F_RINGRATE,
     F_REACTION,
     F_NONE
 } bfn;
@@ -222,6 +224,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
+                                {"RingRate", F_RINGRATE, 2},
                                 {"ReactionWood", F_REACTION, 4},
                                 {"RAND_MAX", F_NONE, 0}};
 
@@ -1091,7 +1094,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
                 b->fn == F_GROUND || b->fn == F_TROPISM || b->fn == F_PIPEMODEL ||
-                b->fn == F_WOOD || b->fn == F_REACTION)
+                b->fn == F_WOOD || b->fn == F_RINGRATE || b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -1946,8 +1949,8 @@ static void parse_struct(lc *L, size_t pos)
                 recover(L);
                 goto fail;
             }
-            if (ty.nf >= MAXF) {
-                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXF, name);
+            if (ty.nf >= MAXFLD) {
+                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXFLD, name);
                 recover(L);
                 goto fail;
             }
@@ -2723,6 +2726,14 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         m->growth.adult_age = a[2];
         m->growth.density = a[3];
         m->growth.modulus_of_rupture = a[4];
+        return;
+    case F_RINGRATE:
+        if (!(a[0] > 0 && a[0] <= 1) || !(a[1] >= 0) || !isfinite(a[1])) {
+            rt_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
+            return;
+        }
+        m->growth.pipe_rate = a[0];
+        m->growth.min_ring = a[1];
         return;
     case F_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {

@@ -11,7 +11,10 @@
  *      degrees) are composed in the parent's local frame into the branching rotation B and split
  *      into the plant's (divergence about H, deviation about U, roll about H) Euler angles
  *      (B = R_H(div) R_U(dev) R_H(roll)); a point mass is added at the distal end of the segment
- *      it follows;
+ *      it follows. The segment that follows its parent on the same axis (no branch `[` opened
+ *      between them, as in `I [lateral] I`) is the parent's continuation, its first child in the
+ *      plant wherever it stands in the string: the plant is built in depth-first pre-order with
+ *      the continuation first, so the staggered joints bend over the right lengths;
  *   2. a cbm_plant is made of it (one ring per segment with the parameters' section and wood,
  *      current Omega from the parameters), evaluated once; segments with a negative age are new:
  *      their rest rate is set by the tropism from the frames of that evaluation (Taylor-Hell
@@ -114,11 +117,31 @@ static void euler_xzx(cbm_quat q, double *div, double *dev, double *roll)
     }
 }
 
+typedef struct rec {
+    size_t mod;     /* module index in the string */
+    double *g;      /* its MechSegment */
+    int64_t parent; /* parent record, -1: a root */
+    int64_t first;  /* first child record (string order), -1: none */
+    int64_t next;   /* next sibling record */
+    int64_t plant;  /* plant index */
+    cbm_quat rel;   /* turtle rotations from the parent, in its frame */
+    bool axial;     /* on the parent's axis (no branch opened between them) */
+} rec;
+
+typedef struct pmass {
+    int64_t rec;
+    double mass;
+} pmass;
+
 typedef struct view {
     CBM_ARRAY(double *) seg;  /* the MechSegment of each plant segment */
     CBM_ARRAY(size_t) mod;    /* module index of each segment in the string */
-    CBM_ARRAY(int64_t) stack; /* branch stack: last segment */
+    CBM_ARRAY(int64_t) stack; /* branch stack: last segment record */
     CBM_ARRAY(cbm_quat) qstack;
+    CBM_ARRAY(uint8_t) bstack; /* branch stack: a branch was opened since the last segment */
+    CBM_ARRAY(rec) recs;       /* segments in string order */
+    CBM_ARRAY(int64_t) last;   /* last child record of each record (while linking) */
+    CBM_ARRAY(pmass) masses;
 } view;
 
 static void view_free(cbm_context *ctx, view *v)
@@ -127,6 +150,10 @@ static void view_free(cbm_context *ctx, view *v)
     CBM_ARRAY_FREE(ctx, v->mod);
     CBM_ARRAY_FREE(ctx, v->stack);
     CBM_ARRAY_FREE(ctx, v->qstack);
+    CBM_ARRAY_FREE(ctx, v->bstack);
+    CBM_ARRAY_FREE(ctx, v->recs);
+    CBM_ARRAY_FREE(ctx, v->last);
+    CBM_ARRAY_FREE(ctx, v->masses);
 }
 
 static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
@@ -135,13 +162,57 @@ static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
     return CBM_E_INVALID;
 }
 
+/* Adds the segment of record r (parent already in the plant). */
+static cbm_status add_rec(cbm_context *ctx, cbm_plant *pl, view *v, rec *r, int64_t parent,
+                          char *err, size_t errn)
+{
+    double *g = r->g;
+    size_t ix = (size_t)(r - v->recs.data); /* string order, for messages */
+    if (!(g[MS_LENGTH] > 0) || !isfinite(g[MS_LENGTH]))
+        return seg_error(err, errn, ix, "length must be > 0 (m)");
+    if (!(g[MS_A] > 0) || !isfinite(g[MS_A]))
+        return seg_error(err, errn, ix, "a must be > 0 (m)");
+    if (!(g[MS_E] > 0) || !isfinite(g[MS_E]))
+        return seg_error(err, errn, ix, "E must be > 0 (Pa)");
+    if (!(g[MS_DENSITY] >= 0))
+        return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
+    cbm_segment_def d = cbm_segment_def_default();
+    d.parent = parent;
+    d.length = g[MS_LENGTH];
+    euler_xzx(q_normalize(r->rel), &d.divergence, &d.deviation, &d.roll);
+    d.core.youngs_modulus = g[MS_E];
+    d.core.shear_modulus = g[MS_G] > 0 ? g[MS_G] : g[MS_E] / 16;
+    d.core.density = g[MS_DENSITY];
+    d.core.a = g[MS_A];
+    d.core.b = g[MS_B] > 0 ? g[MS_B] : g[MS_A];
+    if (d.core.b > d.core.a)
+        return seg_error(err, errn, ix, "b must be <= a");
+    d.core.modulus_of_rupture = g[MS_MOR] > 0 ? g[MS_MOR] : 0;
+    d.core.age = g[MS_AGE] > 0 ? g[MS_AGE] : 0;
+    d.core.rest_rate = v3(g[MS_REST], g[MS_REST + 1], g[MS_REST + 2]);
+    d.omega = v3(g[MS_OMEGA], g[MS_OMEGA + 1], g[MS_OMEGA + 2]);
+    d.point_mass = 0;
+    size_t at = 0;
+    cbm_status st = cbm_plant_add_segment(pl, &d, &at);
+    if (st != CBM_OK) {
+        snprintf(err, errn, "mechanical segment %zu: %s", ix + 1, cbm_context_last_error(ctx));
+        return st;
+    }
+    r->plant = (int64_t)at;
+    CBM_TRY(CBM_ARRAY_PUSH(ctx, v->seg, g));
+    CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, r->mod));
+    return CBM_OK;
+}
+
 static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant *pl, view *v,
                         char *err, size_t errn)
 {
     double *par = s->par;
     size_t j = 0, k = 0;
     int64_t last = -1;
+    bool branched = false;
     cbm_quat rel = q_identity();
+    /* 1. the segments in string order, their parents, rotations and point masses */
     for (size_t i = 0; i < s->n; i++) {
         int code = s->sym[i] & 0x7f;
         int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
@@ -153,48 +224,20 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
         if (code == m->sb) {
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->qstack, rel));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->bstack, (uint8_t)branched));
+            branched = true;
         } else if (code == m->eb) {
             if (v->stack.len) {
                 last = v->stack.data[--v->stack.len];
                 rel = v->qstack.data[--v->qstack.len];
+                branched = v->bstack.data[--v->bstack.len] != 0;
             }
         } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
-            double *g = p + m->seg_off;
-            size_t ix = v->seg.len;
-            if (!(g[MS_LENGTH] > 0) || !isfinite(g[MS_LENGTH]))
-                return seg_error(err, errn, ix, "length must be > 0 (m)");
-            if (!(g[MS_A] > 0) || !isfinite(g[MS_A]))
-                return seg_error(err, errn, ix, "a must be > 0 (m)");
-            if (!(g[MS_E] > 0) || !isfinite(g[MS_E]))
-                return seg_error(err, errn, ix, "E must be > 0 (Pa)");
-            if (!(g[MS_DENSITY] >= 0))
-                return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
-            cbm_segment_def d = cbm_segment_def_default();
-            d.parent = last;
-            d.length = g[MS_LENGTH];
-            euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
-            d.core.youngs_modulus = g[MS_E];
-            d.core.shear_modulus = g[MS_G] > 0 ? g[MS_G] : g[MS_E] / 16;
-            d.core.density = g[MS_DENSITY];
-            d.core.a = g[MS_A];
-            d.core.b = g[MS_B] > 0 ? g[MS_B] : g[MS_A];
-            if (d.core.b > d.core.a)
-                return seg_error(err, errn, ix, "b must be <= a");
-            d.core.modulus_of_rupture = g[MS_MOR] > 0 ? g[MS_MOR] : 0;
-            d.core.age = g[MS_AGE] > 0 ? g[MS_AGE] : 0;
-            d.core.rest_rate = v3(g[MS_REST], g[MS_REST + 1], g[MS_REST + 2]);
-            d.omega = v3(g[MS_OMEGA], g[MS_OMEGA + 1], g[MS_OMEGA + 2]);
-            d.point_mass = 0;
-            cbm_status st = cbm_plant_add_segment(pl, &d, NULL);
-            if (st != CBM_OK) {
-                snprintf(err, errn, "mechanical segment %zu: %s", ix + 1,
-                         cbm_context_last_error(ctx));
-                return st;
-            }
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->seg, g));
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, i));
-            last = (int64_t)ix;
+            rec r = {i, p + m->seg_off, last, -1, -1, -1, rel, !branched};
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->recs, r));
+            last = (int64_t)v->recs.len - 1;
             rel = q_identity();
+            branched = false;
         } else if (m->turtle[code] && np >= (m->turtle[code] == TR_TURN ? 0 : 1)) {
             rel = q_mul(rel, rot_of(m->turtle[code], np ? p[0] : 0));
         } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && last >= 0) {
@@ -204,11 +247,52 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
                          (long long)last + 1);
                 return CBM_E_INVALID;
             }
-            cbm_segment_state st;
-            CBM_TRY(cbm_plant_segment(pl, (size_t)last, &st));
-            CBM_TRY(cbm_plant_set_load(pl, (size_t)last, st.point_mass + mass, st.tip_force,
-                                       st.tip_moment));
+            pmass pm = {last, mass};
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->masses, pm));
         }
+    }
+    /* 2. children lists, the axial child (the parent's continuation) first, then string order */
+    size_t nr = v->recs.len;
+    rec *R = v->recs.data;
+    CBM_TRY(CBM_ARRAY_RESERVE(ctx, v->last, nr));
+    v->last.len = nr;
+    for (size_t r = 0; r < nr; r++)
+        v->last.data[r] = -1;
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t r = 0; r < nr; r++) {
+            int64_t pa = R[r].parent;
+            if (pa < 0 || R[r].axial != (pass == 0))
+                continue;
+            if (R[pa].first < 0)
+                R[pa].first = (int64_t)r;
+            else
+                R[v->last.data[pa]].next = (int64_t)r;
+            v->last.data[pa] = (int64_t)r;
+        }
+    /* 3. the plant in depth-first pre-order: parents before children, continuation first */
+    v->stack.len = 0;
+    for (size_t r = nr; r-- > 0;)
+        if (R[r].parent < 0)
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, (int64_t)r));
+    while (v->stack.len) {
+        rec *r = &R[v->stack.data[--v->stack.len]];
+        CBM_TRY(add_rec(ctx, pl, v, r, r->parent >= 0 ? R[r->parent].plant : -1, err, errn));
+        size_t mark = v->stack.len;
+        for (int64_t c = r->first; c >= 0; c = R[c].next)
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, c));
+        for (size_t a = mark, b = v->stack.len; b > a + 1; a++, b--) { /* reverse */
+            int64_t t = v->stack.data[a];
+            v->stack.data[a] = v->stack.data[b - 1];
+            v->stack.data[b - 1] = t;
+        }
+    }
+    /* 4. point masses at the distal ends of their segments */
+    for (size_t q = 0; q < v->masses.len; q++) {
+        size_t seg = (size_t)R[v->masses.data[q].rec].plant;
+        cbm_segment_state st;
+        CBM_TRY(cbm_plant_segment(pl, seg, &st));
+        CBM_TRY(cbm_plant_set_load(pl, seg, st.point_mass + v->masses.data[q].mass, st.tip_force,
+                                   st.tip_moment));
     }
     return CBM_OK;
 }
