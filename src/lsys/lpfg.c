@@ -160,6 +160,7 @@ typedef enum {
     F_PIPEMODEL,
     F_WOOD,
     F_RINGRATE,
+    F_SOLVER,
     F_REACTION,
     F_NONE
 } bfn;
@@ -225,6 +226,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
                                 {"RingRate", F_RINGRATE, 2},
+                                {"Solver", F_SOLVER, 3},
                                 {"ReactionWood", F_REACTION, 4},
                                 {"RAND_MAX", F_NONE, 0}};
 
@@ -1094,7 +1096,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
                 b->fn == F_GROUND || b->fn == F_TROPISM || b->fn == F_PIPEMODEL ||
-                b->fn == F_WOOD || b->fn == F_RINGRATE || b->fn == F_REACTION)
+                b->fn == F_WOOD || b->fn == F_RINGRATE || b->fn == F_SOLVER || b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2734,6 +2736,18 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         }
         m->growth.pipe_rate = a[0];
         m->growth.min_ring = a[1];
+        return;
+    case F_SOLVER:
+        if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
+            !(a[2] == 0 || a[2] == 1)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
+                     "1)");
+            return;
+        }
+        m->solve.tolerance = a[0];
+        m->solve.max_passes = (size_t)a[1];
+        m->go_on = a[2] == 1;
         return;
     case F_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {

@@ -20,7 +20,8 @@
  *      their rest rate is set by the tropism from the frames of that evaluation (Taylor-Hell
  *      6.8-6.12: tau = l_p H_p x F, rest = tau / C componentwise in the segment's frame before
  *      bending; a root uses its own length and heading), Omega = rest, age 0;
- *   3. the operation: equilibrium (cbm_plant_solve, warm-started from the stored Omega), rings
+ *   3. the operation: equilibrium (cbm_plant_solve, warm-started from the stored Omega; with
+ *      Solver(..., go_on = 1) an unconverged solve keeps its best iterate), rings
  *      (cbm_plant_grow_rings: pipe model and shape memory, Jirasek eq. 24), ageing
  *      (cbm_plant_age_wood, core ageing), breakage (cbm_plant_break, then the broken modules
  *      and the rest of their branches leave the string) or the stability query
@@ -447,6 +448,11 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         sd.warm_start = true;
         st = cbm_plant_solve(pl, &sd, &ss);
         *result = (double)ss.passes;
+        if (st == CBM_E_NOT_CONVERGED && m->go_on) { /* the best iterate; the model goes on */
+            cbm_context_clear_errors(ctx);
+            *result = -(double)ss.passes;
+            st = CBM_OK;
+        }
         if (st == CBM_OK)
             st = write_back(pl, &v, false);
     } else if (st == CBM_OK && op == CBM__ML_RINGS) {
