@@ -3,8 +3,8 @@
  * behaviours of the thesis' figures hold: the branches spring back when the leaves and fruit
  * fall (Fig. 4.1), an unfair allocation (F = 0.2) grows a taller, sparser tree than a fair one
  * (F = 1, Fig. 4.7), a low modulus of rupture breaks branches that a high one keeps (Fig. 8.9),
- * and the crooked aspen is lower and wider than the wild one (ch. 7). Few years each, so the file also runs
- * quickly under the sanitizers. */
+ * and the crooked aspen is lower and wider than the wild one (ch. 7). Few years each, so the file
+ * also runs quickly under the sanitizers. */
 #include "test.h"
 
 #include "cambium/lsys.h"
@@ -16,11 +16,11 @@
 #define MS 26 /* doubles of a MechSegment */
 /* fields of the model's Node after the MechSegment */
 enum { N_LATERAL = MS, N_BUD, N_ABORTED, N_NODE_COUNT };
-#define N_VIGOUR (MS + 22)
-#define N_VL     (MS + 23)
-#define N_VC     (MS + 24)
+#define N_VIGOUR  (MS + 22)
+#define N_VL      (MS + 23)
+#define N_VC      (MS + 24)
 #define N_LATFATE (MS + 25)
-#define N_SIZE   (MS + 27)
+#define N_SIZE    (MS + 27)
 
 enum { GROW = 1, WINTER = 2, BASIPETAL = 3, ACROPETAL = 4 };
 
@@ -256,8 +256,8 @@ TEST(model_fruit_crooked_aspen_lower)
     stats w, c;
     CHECK_OK(grow(ctx, wild, 5, &w));
     CHECK_OK(grow(ctx, crooked, 5, &c));
-    printf("3 years: wild %.3f m high, crown %.3f m; crooked %.3f m high, crown %.3f m\n",
-           w.height, w.crown, c.height, c.crown);
+    printf("3 years: wild %.3f m high, crown %.3f m; crooked %.3f m high, crown %.3f m\n", w.height,
+           w.crown, c.height, c.crown);
     CHECK(c.height < 0.6 * w.height);
     CHECK(c.crown > w.crown); /* and wider: pendulous branches */
     test_ctx_end(ctx);
