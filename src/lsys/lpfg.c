@@ -2322,8 +2322,8 @@ static bool label(lc *L, const char *kw)
     size_t save = L->c->pos;
     skip(L);
     const char *s = L->t + L->c->pos;
-    size_t n = strlen(kw), i = 0, k = 0;
-    while (k < n) {
+    size_t i = 0, k = 0;
+    while (kw[k] != '\0') {
         if (kw[k] == ' ') {
             while (s[i] == ' ' || s[i] == '\t')
                 i++;
