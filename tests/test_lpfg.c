@@ -380,3 +380,52 @@ TEST(lpfg_runtime_limits)
     }
     test_ctx_end(ctx);
 }
+
+/* A struct of many fields (the listing's InternodeData has 35): 64 are allowed, 65 refused. */
+static char *big_struct(int fields)
+{
+    size_t cap = 4096 + 16 * (size_t)fields;
+    char *t = malloc(cap);
+    if (!t)
+        return NULL;
+    size_t n =
+        (size_t)snprintf(t, cap, "#include <lpfgall.h>\nderivation length: 2;\nstruct Big {");
+    for (int i = 0; i < fields; i++)
+        n += (size_t)snprintf(t + n, cap - n, " double f%d;", i);
+    snprintf(t + n, cap - n,
+             " };\nmodule A(Big);\nAxiom: A(Big());\n"
+             "A(b) : { b.f%d = b.f0 + 7; b.f0 = 1; produce A(b); }\n",
+             fields - 1);
+    return t;
+}
+
+TEST(lpfg_struct_many_fields)
+{
+    cbm_context *ctx = test_ctx();
+    char *t = big_struct(64);
+    CHECK(t != NULL);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "big.l";
+    def.text = t;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    cbm_lsys_cursor c;
+    cbm_lsys_cursor_begin(ls, false, &c);
+    CHECK(cbm_lsys_cursor_next(ls, false, &c));
+    CHECK_EQ_INT(c.nparams, 64);
+    CHECK_NEAR(c.params[0], 1, 0);
+    CHECK_NEAR(c.params[63], 8, 0);
+    cbm_lsys_destroy(ls);
+    free(t);
+    t = big_struct(65);
+    def.text = t;
+    ls = NULL;
+    CHECK(cbm_lsys_load(ctx, &def, &ls) == CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    free(t);
+    cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}

@@ -502,3 +502,101 @@ TEST(mechlang_oom)
     CHECK(test_oom_loop(oom_chain, NULL) > 10);
     CHECK(test_oom_loop(oom_growth, NULL) > 10);
 }
+
+/* RingRate(kappa, min_ring): a segment that carries the pipe area of a section twice its radius
+ * reaches kappa of the way there in one AddRings(); an increment thinner than min_ring waits. */
+static double ring_after(cbm_context *ctx, const char *rate, double *rings)
+{
+    char t[1024];
+    snprintf(t, sizeof t,
+             "#include <lpfgall.h>\nderivation length: 2;\nmodule I(MechSegment);\n"
+             "module R(double);\nmechanics: I;\ndouble n;\n"
+             "MechSegment S() { MechSegment s; s.length = 0.1; s.a = 0.01; s.b = 0.01;\n"
+             "  s.E = 1e9; s.density = 500; return s; }\n"
+             "Start: { PipeModel(2, M_PI * 0.02 * 0.02); %s n = -1; }\n"
+             "Axiom: I(S()) R(0);\nEndEach: { if (n < 0) n = AddRings(); }\n"
+             "R(x) : { produce R(n); }\n",
+             rate);
+    cbm_lsys *ls = NULL;
+    double a = -1;
+    if (load(ctx, "rings.l", t, &ls) == CBM_OK && cbm_lsys_reset(ls) == CBM_OK &&
+        cbm_lsys_step(ls) == CBM_OK && cbm_lsys_step(ls) == CBM_OK) {
+        cbm_lsys_cursor c;
+        cbm_lsys_cursor_begin(ls, false, &c);
+        if (cbm_lsys_cursor_next(ls, false, &c))
+            a = c.params[1];
+        if (cbm_lsys_cursor_next(ls, false, &c))
+            *rings = c.params[0];
+    }
+    cbm_lsys_destroy(ls);
+    return a;
+}
+
+TEST(mechlang_ring_rate)
+{
+    cbm_context *ctx = test_ctx();
+    double rings = -1;
+    CHECK_NEAR(ring_after(ctx, "", &rings), 0.02, 1e-15); /* default kappa 1 */
+    CHECK_NEAR(rings, 1, 0);
+    CHECK_NEAR(ring_after(ctx, "RingRate(0.6, 0);", &rings), 0.01 + 0.6 * 0.01, 1e-15);
+    CHECK_NEAR(rings, 1, 0);
+    CHECK_NEAR(ring_after(ctx, "RingRate(0.6, 0.007);", &rings), 0.01, 0); /* 6 mm < 7 mm */
+    CHECK_NEAR(rings, 0, 0);
+    CHECK(ring_after(ctx, "RingRate(0, 0);", &rings) < 0); /* kappa must be in (0, 1] */
+    const char *msg = cbm_context_last_error(ctx);
+    CHECK_MSG(strstr(msg, "RingRate(kappa in (0, 1]") != NULL, "%s", msg);
+    cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
+/* Solver(tolerance, max passes, go on): with one pass allowed a bent chain does not converge;
+ * the derivation stops, or with go on = 1 keeps the best state and Equilibrium() returns minus
+ * the passes. */
+static cbm_status solve_with(cbm_context *ctx, const char *solver, double *r)
+{
+    char t[1024];
+    snprintf(t, sizeof t,
+             "#include <lpfgall.h>\nderivation length: 2;\nmodule I(MechSegment);\n"
+             "module R(double);\nmechanics: I;\ndouble r;\n"
+             "MechSegment S() { MechSegment s; s.length = 0.5; s.a = 0.01; s.b = 0.01;\n"
+             "  s.E = 1e9; s.density = 800; return s; }\n"
+             "Start: { %s r = 0; }\n"
+             "Axiom: Right(80) I(S()) I(S()) I(S()) R(0);\nEndEach: { r = Equilibrium(); }\n"
+             "R(x) : { produce R(r); }\n",
+             solver);
+    cbm_lsys *ls = NULL;
+    cbm_status s = load(ctx, "solver.l", t, &ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_step(ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_step(ls);
+    if (s == CBM_OK) {
+        cbm_lsys_cursor c;
+        cbm_lsys_cursor_begin(ls, false, &c);
+        while (cbm_lsys_cursor_next(ls, false, &c))
+            if (c.nparams == 1)
+                *r = c.params[0];
+    }
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
+TEST(mechlang_solver_settings)
+{
+    cbm_context *ctx = test_ctx();
+    double r = 0;
+    CHECK_OK(solve_with(ctx, "", &r));
+    CHECK(r > 1); /* converged, in some passes */
+    CHECK(solve_with(ctx, "Solver(1e-12, 1, 0);", &r) == CBM_E_NOT_CONVERGED);
+    cbm_context_clear_errors(ctx);
+    r = 0;
+    CHECK_OK(solve_with(ctx, "Solver(1e-12, 1, 1);", &r));
+    CHECK(r < 0 && r >= -2);
+    CHECK(solve_with(ctx, "Solver(0, 1, 1);", &r) == CBM_E_INVALID);
+    const char *msg = cbm_context_last_error(ctx);
+    CHECK_MSG(strstr(msg, "Solver(tolerance > 0") != NULL, "%s", msg);
+    cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}

@@ -52,16 +52,17 @@ enum {
     T_MSEG, /* MechSegment (lsys/mechlang.h) */
     T_NBUILTIN
 };
-#define MAXF  16 /* parameters per module, fields per struct */
-#define MAXSZ 255
+#define MAXF   16 /* parameters per module or function */
+#define MAXFLD 64 /* fields per struct (the listing's InternodeData has 35) */
+#define MAXSZ  255
 
 typedef struct ltype {
     char *name;
     int size;
     int nf;
-    int ftype[MAXF];
-    int foff[MAXF];
-    char *fname[MAXF];
+    int ftype[MAXFLD];
+    int foff[MAXFLD];
+    char *fname[MAXFLD];
 } ltype;
 
 typedef struct lmod {
@@ -159,6 +160,8 @@ typedef enum {
     F_TROPISM,
     F_PIPEMODEL,
     F_WOOD,
+    F_RINGRATE,
+    F_SOLVER,
     F_REACTION,
     F_NONE
 } bfn;
@@ -223,6 +226,8 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
+                                {"RingRate", F_RINGRATE, 2},
+                                {"Solver", F_SOLVER, 3},
                                 {"ReactionWood", F_REACTION, 4},
                                 {"RAND_MAX", F_NONE, 0}};
 
@@ -1169,7 +1174,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
                 b->fn == F_GROUND || b->fn == F_TROPISM || b->fn == F_PIPEMODEL ||
-                b->fn == F_WOOD || b->fn == F_REACTION)
+                b->fn == F_WOOD || b->fn == F_RINGRATE || b->fn == F_SOLVER || b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2024,8 +2029,8 @@ static void parse_struct(lc *L, size_t pos)
                 recover(L);
                 goto fail;
             }
-            if (ty.nf >= MAXF) {
-                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXF, name);
+            if (ty.nf >= MAXFLD) {
+                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXFLD, name);
                 recover(L);
                 goto fail;
             }
@@ -2395,8 +2400,8 @@ static bool label(lc *L, const char *kw)
     size_t save = L->c->pos;
     skip(L);
     const char *s = L->t + L->c->pos;
-    size_t n = strlen(kw), i = 0, k = 0;
-    while (k < n) {
+    size_t i = 0, k = 0;
+    while (kw[k] != '\0') {
         if (kw[k] == ' ') {
             while (s[i] == ' ' || s[i] == '\t')
                 i++;
@@ -2819,6 +2824,26 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         m->growth.adult_age = a[2];
         m->growth.density = a[3];
         m->growth.modulus_of_rupture = a[4];
+        return;
+    case F_RINGRATE:
+        if (!(a[0] > 0 && a[0] <= 1) || !(a[1] >= 0) || !isfinite(a[1])) {
+            rt_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
+            return;
+        }
+        m->growth.pipe_rate = a[0];
+        m->growth.min_ring = a[1];
+        return;
+    case F_SOLVER:
+        if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
+            !(a[2] == 0 || a[2] == 1)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
+                     "1)");
+            return;
+        }
+        m->solve.tolerance = a[0];
+        m->solve.max_passes = (size_t)a[1];
+        m->go_on = a[2] == 1;
         return;
     case F_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {

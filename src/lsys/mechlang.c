@@ -11,7 +11,11 @@
  *      degrees) are composed in the parent's local frame into the branching rotation B and split
  *      into the plant's (divergence about H, deviation about U, roll about H) Euler angles
  *      (B = R_H(div) R_U(dev) R_H(roll)); a point mass is added at the distal end of the segment
- *      it follows;
+ *      it follows. A first scan finds the axes: the segment that follows its parent with no `[`
+ *      opened between them (`I [lateral] I`: the last I) continues the parent's axis and shares
+ *      its joint (the staggered scheme); the others are declared laterals (order + 1), except
+ *      that a segment with no axial child gives its joint to its first lateral. Segments keep
+ *      their string order in the plant;
  *   2. a cbm_plant is made of it (one ring per segment with the parameters' section and wood,
  *      current Omega from the parameters), evaluated once; segments with a negative age are new:
  *      their rest rate is set by the tropism from the frames of that evaluation (Taylor-Hell
@@ -449,6 +453,11 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         sd.warm_start = true;
         st = cbm_plant_solve(pl, &sd, &ss);
         *result = (double)ss.passes;
+        if (st == CBM_E_NOT_CONVERGED && m->go_on) { /* the best iterate; the model goes on */
+            cbm_context_clear_errors(ctx);
+            *result = -(double)ss.passes;
+            st = CBM_OK;
+        }
         if (st == CBM_OK)
             st = write_back(pl, &v, false);
     } else if (st == CBM_OK && op == CBM__ML_RINGS) {

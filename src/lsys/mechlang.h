@@ -38,6 +38,7 @@ typedef struct cbm__mechlang {
     cbm_tropism tropism;
     cbm_growth_def growth;
     cbm_solve_def solve;
+    bool go_on; /* an unconverged equilibrium keeps its best state (result -passes) */
     cbm_mech_discretization discretization;
 } cbm__mechlang;
 
@@ -51,8 +52,9 @@ void cbm__mechlang_init(cbm__mechlang *m);
  * segments of the string, does `op` (arg: years for CBM__ML_AGE), writes the results back into
  * the segments' parameters, and for CBM__ML_BREAK removes the broken segments and the rest of
  * their branches from the string. *result: passes (equilibrium), rings added, segments aged,
- * segments broken, the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor at the
- * stored omega; the string is not changed). Errors go to err (a message) with the status. */
+ * segments broken (equilibrium: minus the passes when the solve did not converge and go_on is
+ * set; the best state is kept), the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor
+ * at the stored omega; the string is not changed). Errors go to err (a message) with the status. */
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn);
 
