@@ -62,10 +62,12 @@ struct cbm_plant {
     cbm_quat *branch; /* B_i */
     /* section: ring pool indices and aggregates */
     size_t *ring_first, *ring_count;
-    cbm_vec3 *rig;  /* (sum GJ, sum EI_L, sum EI_U) */
-    cbm_vec3 *rest; /* rigidity-weighted rest rate */
-    double *mpl;    /* kg/m */
-    double *area;   /* m^2 */
+    size_t *ring_cap; /* slots of the segment's run in the pool (>= ring_count) */
+    cbm_vec3 *rig;    /* (sum GJ, sum EI_L, sum EI_U) */
+    cbm_vec3 *rigr;   /* sum over rings of the ring's rigidity times its rest rate */
+    cbm_vec3 *rest;   /* rigidity-weighted rest rate = rigr / rig */
+    double *mpl;      /* kg/m */
+    double *area;     /* m^2 */
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;
@@ -79,7 +81,7 @@ struct cbm_plant {
     double *cmass;    /* carried mass */
 
     CBM_ARRAY(cbm_ring) rings;
-    size_t ring_live; /* rings referenced by segments (the rest are holes) */
+    size_t ring_held; /* pool slots held by segments' runs (sum of ring_cap; the rest are holes) */
 
     cbm__mech_work work;
 };
