@@ -52,8 +52,9 @@ void cbm__mechlang_init(cbm__mechlang *m);
  * the segments' parameters, and for CBM__ML_BREAK removes the broken segments and the rest of
  * their branches from the string. *result: passes (equilibrium), rings added, segments aged,
  * segments broken, the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor at the
- * stored omega; the string is not changed). Errors go to err (a message) with the status. */
+ * stored omega; the string is not changed). Errors go to err (a message) with the status. The
+ * wall-clock time of the operation is added to *timing (may be NULL). */
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
-                             double *result, char *err, size_t errn);
+                             double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
 
 #endif
