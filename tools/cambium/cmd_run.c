@@ -297,8 +297,7 @@ static void print_timing(const run *r)
                 r->t_derive, r->t_derive - mech, mt.equilibrium, mt.solve, mt.passes, mt.rings,
                 mt.other, mt.operations);
     }
-    fprintf(stderr,
-            "interpret %.3f s, write %.3f s, total %.3f s; peak %.1f MB in the library\n",
+    fprintf(stderr, "interpret %.3f s, write %.3f s, total %.3f s; peak %.1f MB in the library\n",
             r->t_interpret, r->t_write, cli_seconds() - r->t_start,
             (double)cbm_context_peak_bytes(r->ctx) / 1e6);
 }
