@@ -256,15 +256,13 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
     cbm_vec3 *cur = cbm__alloc(p->ctx, n * sizeof *cur);
     cbm_status s = acc && cur ? cbm__growth_rates(p, def->memory, cur) : CBM_E_NOMEM;
     const double h = 0.5 * def->pipe_exponent;
+    /* pow(x, 1) is x exactly: the area-preserving P = 2 needs no pow */
+    const double leaf = h == 1.0 ? def->leaf_area : pow(def->leaf_area, h);
     for (size_t i = n; s == CBM_OK && i-- > 0;) {
-        cbm_ring outer;
-        s = cbm_plant_get_ring(p, i, p->ring_count[i] - 1, &outer);
-        if (s != CBM_OK)
-            break;
-        double a = outer.a, b = outer.b, zeta = b / a;
+        double a = p->outer[i].a, b = p->outer[i].b, zeta = b / a;
         double na = a;
         {
-            double goal = pow(acc[i] + pow(def->leaf_area, h), 1.0 / h);
+            double goal = h == 1.0 ? acc[i] + leaf : pow(acc[i] + leaf, 1.0 / h);
             double ag = sqrt(goal / (CBM_PI * zeta));
             if (ag > a)
                 na = a + def->pipe_rate * (ag - a);
@@ -290,7 +288,7 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
             nb = b;
         }
         if (p->parent[i] >= 0)
-            acc[p->parent[i]] += pow(CBM_PI * na * nb, h);
+            acc[p->parent[i]] += h == 1.0 ? CBM_PI * na * nb : pow(CBM_PI * na * nb, h);
     }
     if (acc)
         cbm__free(p->ctx, acc, n * sizeof *acc);

@@ -23,9 +23,10 @@
  * Rings live in one pool; each segment owns a run of ring_cap slots starting at ring_first, of
  * which the first ring_count hold its rings (innermost first). A ring added to a full run grows
  * the run in place if it ends the pool, else moves it to the end of the pool with twice the
- * capacity (amortised O(1) copies per ring, no allocation beyond the pool's geometric growth);
- * the pool is compacted (runs in segment order, capacities kept) when more than half of it is
- * holes.
+ * capacity, into a hole of that capacity if there is one (free lists per capacity class) or at
+ * the end of the pool: amortised O(1) copies per ring, no allocation beyond the pool's geometric
+ * growth. The runs of removed segments become holes too. The pool is compacted (runs in segment
+ * order, capacities kept) when more than half of it is holes.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -118,7 +119,7 @@ cbm_plant_def cbm_plant_def_default(void)
 // clang-format off
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
-    X(ring_cap) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
+    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
     X(moment) X(pmass0)                                                                            \
     X(cmass)
 // clang-format on
@@ -260,9 +261,11 @@ static void section_add(cbm_plant *p, size_t i, const double in[4], const cbm_ri
     p->area[i] = out[3];
 }
 
-/* The rigidity-weighted rest rate from the sums. */
+/* The rigidity-weighted rest rate from the sums, and the outer ring's copy. */
 static void section_rest(cbm_plant *p, size_t i)
 {
+    const cbm_ring *o = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    p->outer[i] = (cbm__outer){o->a, o->b, o->modulus_of_rupture};
     cbm_vec3 c = p->rig[i], cr = p->rigr[i];
     p->rest[i] =
         v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0, c.z > 0 ? cr.z / c.z : 0.0);
@@ -327,7 +330,41 @@ static cbm_status rebuild_rings(cbm_plant *p)
     p->rings.data = nd;
     p->rings.len = w;
     p->rings.cap = cap;
+    memset(p->ring_free, 0, sizeof p->ring_free);
     return CBM_OK;
+}
+
+/* Capacity class of a run: capacities are 1 or a power of two >= 4. */
+static int ring_class(size_t cap)
+{
+    int c = 0;
+    while (cap > 1) {
+        cap >>= 1;
+        c++;
+    }
+    return c;
+}
+
+/* The run [start, start + cap) becomes a hole, reusable by a run of the same capacity. */
+static void push_hole(cbm_plant *p, size_t start, size_t cap)
+{
+    int c = ring_class(cap);
+    size_t next = p->ring_free[c];
+    memcpy((void *)&p->rings.data[start], &next, sizeof next);
+    p->ring_free[c] = start + 1;
+}
+
+/* A hole of capacity cap, or SIZE_MAX if there is none. */
+static size_t pop_hole(cbm_plant *p, size_t cap)
+{
+    int c = ring_class(cap);
+    size_t head = p->ring_free[c];
+    if (head == 0)
+        return SIZE_MAX;
+    size_t next;
+    memcpy(&next, (const void *)&p->rings.data[head - 1], sizeof next);
+    p->ring_free[c] = next;
+    return head - 1;
 }
 
 static void maybe_compact(cbm_plant *p)
@@ -338,22 +375,31 @@ static void maybe_compact(cbm_plant *p)
 }
 
 /* Makes room for one more ring in segment seg's run: a full run at the end of the pool grows in
- * place, any other full run moves to the end of the pool with twice its capacity (its old
- * slots become a hole). Each ring is thus copied O(1) times on average. */
+ * place; any other full run moves, with twice its capacity, into a hole of that capacity or to
+ * the end of the pool, and its old slots become a hole. Each ring is thus copied O(1) times on
+ * average, and holes are reused before the pool grows. */
 static cbm_status ring_room(cbm_plant *p, size_t seg)
 {
     size_t f = p->ring_first[seg], c = p->ring_count[seg], cap = p->ring_cap[seg];
     if (c < cap)
         return CBM_OK;
     size_t nc = cap < 2 ? 4 : 2 * cap;
-    bool at_end = f + cap == p->rings.len;
-    size_t start = at_end ? f : p->rings.len;
-    if (CBM_ARRAY_RESERVE(p->ctx, p->rings, start + nc) != CBM_OK)
-        return CBM_E_NOMEM;
-    if (!at_end)
+    if (f + cap == p->rings.len) {
+        if (CBM_ARRAY_RESERVE(p->ctx, p->rings, f + nc) != CBM_OK)
+            return CBM_E_NOMEM;
+        p->rings.len = f + nc;
+    } else {
+        size_t start = pop_hole(p, nc);
+        if (start == SIZE_MAX) {
+            if (CBM_ARRAY_RESERVE(p->ctx, p->rings, p->rings.len + nc) != CBM_OK)
+                return CBM_E_NOMEM;
+            start = p->rings.len;
+            p->rings.len += nc;
+        }
         memcpy(p->rings.data + start, p->rings.data + f, c * sizeof(cbm_ring));
-    p->ring_first[seg] = start;
-    p->rings.len = start + nc;
+        push_hole(p, f, cap);
+        p->ring_first[seg] = start;
+    }
     p->ring_cap[seg] = nc;
     p->ring_held += nc - cap;
     return CBM_OK;
@@ -611,6 +657,7 @@ cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
             map[i - seg] = -1;
             nrm++;
             p->ring_held -= p->ring_cap[i];
+            push_hole(p, p->ring_first[i], p->ring_cap[i]);
             continue;
         }
         map[i - seg] = (int64_t)w;
@@ -795,8 +842,7 @@ cbm_status cbm_plant_distal_frame(const cbm_plant *p, size_t i, cbm_quat *out)
 static cbm_section node_section(const cbm_plant *p, size_t i, cbm_vec3 centre)
 {
     cbm_quat q = p->q[i];
-    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
-    double a = r->a, b = r->b;
+    double a = p->outer[i].a, b = p->outer[i].b;
     int64_t c = p->fchild[i];
     if (c >= 0 && p->cont[c]) {
         cbm_quat qc = p->q[c];
@@ -804,9 +850,8 @@ static cbm_section node_section(const cbm_plant *p, size_t i, cbm_vec3 centre)
         double sg = d < 0.0 ? -1.0 : 1.0;
         q = q_normalize(
             (cbm_quat){q.w + sg * qc.w, q.x + sg * qc.x, q.y + sg * qc.y, q.z + sg * qc.z});
-        const cbm_ring *rc = p->rings.data + p->ring_first[c] + p->ring_count[c] - 1;
-        a = 0.5 * (a + rc->a);
-        b = 0.5 * (b + rc->b);
+        a = 0.5 * (a + p->outer[c].a);
+        b = 0.5 * (b + p->outer[c].b);
     }
     cbm_section s = {centre,
                      {q_rotate(q, v3(1, 0, 0)), q_rotate(q, v3(0, 1, 0)), q_rotate(q, v3(0, 0, 1))},
