@@ -25,8 +25,8 @@
  * the run in place if it ends the pool, else moves it to the end of the pool with twice the
  * capacity, into a hole of that capacity if there is one (free lists per capacity class) or at
  * the end of the pool: amortised O(1) copies per ring, no allocation beyond the pool's geometric
- * growth. The runs of removed segments become holes too. The pool is compacted (runs in segment
- * order, capacities kept) when more than half of it is holes.
+ * growth (by half). The runs of removed segments become holes too. The pool is compacted (runs in
+ * segment order, capacities kept) when more than half of it is holes.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -334,6 +334,27 @@ static cbm_status rebuild_rings(cbm_plant *p)
     return CBM_OK;
 }
 
+/* Room for `need` slots in the pool, growing it by half (not doubling: the pool is the largest
+ * array of a grown tree). */
+static cbm_status pool_reserve(cbm_plant *p, size_t need)
+{
+    size_t cap = p->rings.cap;
+    if (need <= cap)
+        return CBM_OK;
+    size_t nc = cap + cap / 2 + 64;
+    if (nc < need)
+        nc = need + need / 4;
+    if (nc > SIZE_MAX / sizeof(cbm_ring))
+        return CBM_E_NOMEM;
+    cbm_ring *nd =
+        cbm__realloc(p->ctx, p->rings.data, cap * sizeof(cbm_ring), nc * sizeof(cbm_ring));
+    if (!nd)
+        return CBM_E_NOMEM;
+    p->rings.data = nd;
+    p->rings.cap = nc;
+    return CBM_OK;
+}
+
 /* Capacity class of a run: capacities are 1 or a power of two >= 4. */
 static int ring_class(size_t cap)
 {
@@ -385,13 +406,13 @@ static cbm_status ring_room(cbm_plant *p, size_t seg)
         return CBM_OK;
     size_t nc = cap < 2 ? 4 : 2 * cap;
     if (f + cap == p->rings.len) {
-        if (CBM_ARRAY_RESERVE(p->ctx, p->rings, f + nc) != CBM_OK)
+        if (pool_reserve(p, f + nc) != CBM_OK)
             return CBM_E_NOMEM;
         p->rings.len = f + nc;
     } else {
         size_t start = pop_hole(p, nc);
         if (start == SIZE_MAX) {
-            if (CBM_ARRAY_RESERVE(p->ctx, p->rings, p->rings.len + nc) != CBM_OK)
+            if (pool_reserve(p, p->rings.len + nc) != CBM_OK)
                 return CBM_E_NOMEM;
             start = p->rings.len;
             p->rings.len += nc;
@@ -432,8 +453,9 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
                          lim);
     if (plant_reserve(p, i + 1) != CBM_OK)
         return CBM_E_NOMEM;
-    if (CBM_ARRAY_PUSH(p->ctx, p->rings, def->core) != CBM_OK)
+    if (pool_reserve(p, p->rings.len + 1) != CBM_OK)
         return CBM_E_NOMEM;
+    p->rings.data[p->rings.len++] = def->core;
     p->ring_held++;
     p->ring_first[i] = p->rings.len - 1;
     p->ring_count[i] = 1;

@@ -288,16 +288,16 @@ static void print_timing(const run *r)
     cbm_lsys_mech_timing mt = cbm_lsys_mech_time(r->ls);
     double mech = mt.equilibrium + mt.rings + mt.other;
     if (mt.operations == 0) {
-        fprintf(stderr, "run: derive %.3f s, ", r->t_derive);
+        fprintf(stderr, "run: derive %.4f s, ", r->t_derive);
     } else {
         fprintf(stderr,
-                "run: derive %.3f s (rewriting %.3f s, equilibrium %.3f s of which solver %.3f s "
-                "in %zu passes, rings and ageing %.3f s, other mechanics %.3f s; %zu mechanics "
+                "run: derive %.4f s (rewriting %.4f s, equilibrium %.4f s of which solver %.4f s "
+                "in %zu passes, rings and ageing %.4f s, other mechanics %.4f s; %zu mechanics "
                 "operations), ",
                 r->t_derive, r->t_derive - mech, mt.equilibrium, mt.solve, mt.passes, mt.rings,
                 mt.other, mt.operations);
     }
-    fprintf(stderr, "interpret %.3f s, write %.3f s, total %.3f s; peak %.1f MB in the library\n",
+    fprintf(stderr, "interpret %.4f s, write %.4f s, total %.4f s; peak %.1f MB in the library\n",
             r->t_interpret, r->t_write, cli_seconds() - r->t_start,
             (double)cbm_context_peak_bytes(r->ctx) / 1e6);
 }
