@@ -27,8 +27,8 @@
  * deformed segment: its own rest rate is the current rotation rate Omega (6.32/8.24). The
  * segment's rest rate becomes the rigidity-weighted mean per local component,
  *     rest'_c = (C_c rest_c + C'_c Omega_c) / (C_c + C'_c),
- * which the plant computes in closed form over all rings (src/mech/plant.c), C' being the ring's
- * own rigidity (outer minus inner second moments, 8.21-8.22). The current rate used is the
+ * which the plant keeps as running sums over the rings (src/mech/plant.c: a new ring adds its
+ * terms in O(1)), C' being the ring's own rigidity (outer minus inner second moments, 8.21-8.22). The current rate used is the
  * segment's material rate (cbm_segment_state.rate, CBM_MEMORY_SEGMENT: rest + C^-1 times the mean
  * of the moments at the segment's two ends) so that, under unchanged load, the new equilibrium
  * is the old shape (exactly for the chain discretisation, where a segment is one joint; to
