@@ -28,12 +28,13 @@
  * segment's rest rate becomes the rigidity-weighted mean per local component,
  *     rest'_c = (C_c rest_c + C'_c Omega_c) / (C_c + C'_c),
  * which the plant keeps as running sums over the rings (src/mech/plant.c: a new ring adds its
- * terms in O(1)), C' being the ring's own rigidity (outer minus inner second moments, 8.21-8.22). The current rate used is the
- * segment's material rate (cbm_segment_state.rate, CBM_MEMORY_SEGMENT: rest + C^-1 times the mean
- * of the moments at the segment's two ends) so that, under unchanged load, the new equilibrium
- * is the old shape (exactly for the chain discretisation, where a segment is one joint; to
- * O(h^2) for the staggered one, where a joint spans two half segments). CBM_MEMORY_JOINT
- * memorises the proximal joint's Omega as the listing does (Ring_omega_e = Omega).
+ * terms in O(1)), C' being the ring's own rigidity (outer minus inner second moments,
+ * 8.21-8.22). The current rate used is the segment's material rate (cbm_segment_state.rate,
+ * CBM_MEMORY_SEGMENT: rest + C^-1 times the mean of the moments at the segment's two ends) so
+ * that, under unchanged load, the new equilibrium is the old shape (exactly for the chain
+ * discretisation, where a segment is one joint; to O(h^2) for the staggered one, where a joint
+ * spans two half segments). CBM_MEMORY_JOINT memorises the proximal joint's Omega as the
+ * listing does (Ring_omega_e = Omega).
  */
 #include "mech/growth_internal.h"
 #include "core/vecmath.h"
