@@ -197,10 +197,13 @@ cbm_status cbm_plant_add_growth_ring(cbm_plant *p, size_t seg, double a, double 
     if (!p || !def)
         return CBM_E_INVALID;
     CBM_TRY(cbm__growth_check(p->ctx, def));
-    cbm_segment_state st;
-    CBM_TRY(cbm_plant_segment(p, seg, &st));
-    cbm_vec3 cur = def->memory == CBM_MEMORY_JOINT ? st.omega : st.rate;
-    bool rw = cbm__wood_leans(def, cur, st.rest_rate);
+    if (seg >= p->n)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu does not exist (plant has %zu)", seg,
+                         p->n);
+    /* O(1): no visit of the segment's rings (cbm_plant_segment would) */
+    cbm_vec3 cur =
+        def->memory == CBM_MEMORY_JOINT ? p->omega[seg] : cbm__plant_segment_rate(p, seg);
+    bool rw = cbm__wood_leans(def, cur, p->rest[seg]);
     CBM_TRY(growth_ring(p, seg, a, b, def, rw, cur));
     if (reaction)
         *reaction = rw;

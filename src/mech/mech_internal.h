@@ -97,6 +97,11 @@ struct cbm_plant {
     cbm__mech_work work;
 };
 
+/* ---- plant.c ---- */
+
+/// cbm_segment_state.rate of segment i in O(1) (cbm_plant_segment also visits every ring).
+cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i);
+
 /* ---- solve_common.c ---- */
 
 /// Ensures the joint workspace for n segments (allocates only when it grows).

@@ -773,7 +773,7 @@ static cbm_vec3 distal_moment(const cbm_plant *p, size_t i)
     return v3_scale(p->tipm[i], p->load_scale);
 }
 
-static cbm_vec3 segment_rate(const cbm_plant *p, size_t i)
+cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i)
 {
     if (p->disc == CBM_MECH_CHAIN)
         return p->omega[i];
@@ -830,7 +830,7 @@ cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
         a0 = ar;
     }
     o->age = age;
-    o->rate = segment_rate(p, i);
+    o->rate = cbm__plant_segment_rate(p, i);
     o->reaction = a0 > 0.0 ? rw / a0 : 0.0;
     return CBM_OK;
 }
