@@ -2,7 +2,8 @@
  * default 10-year fruit tree end to end, split into equilibrium, rings and ageing, and growth
  * (apices, spring pass, bookkeeping), then a large tree: the fruit tree with the listing's shoot
  * threshold (0.03, which grows far more shoots) grown until it has at least --big N segments,
- * and the next --steps growth steps timed one by one (segments, passes, seconds per phase).
+ * and the next --steps growth steps timed one by one (segments, rings, passes, seconds per phase:
+ * equilibrium, rings and ageing, the rest), then the scene of the large tree (interpretation).
  * Writes a CSV (one row per measured step) and prints a summary.
  *
  * usage: bench_tree [--big N] [--steps K] [--out FILE.csv]
@@ -20,6 +21,14 @@ static double now(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static size_t total_rings(const cbm_plant *p)
+{
+    size_t r = 0;
+    for (size_t i = 0; i < cbm_plant_segment_count(p); i++)
+        r += cbm_plant_ring_count(p, i);
+    return r;
 }
 
 static int fail(cbm_context *ctx, const char *what)
@@ -79,7 +88,8 @@ int main(int argc, char **argv)
         perror(out);
         return 1;
     }
-    fprintf(f, "step,season,segments,passes,seconds,seconds_equilibrium,seconds_rings\n");
+    fprintf(f, "step,season,segments,rings,passes,seconds,seconds_equilibrium,seconds_rings,"
+               "seconds_rest\n");
     d = cbm_tree_def_default();
     d.shoot_vigour = 0.03;
     d.years = 1000;
@@ -89,9 +99,12 @@ int main(int argc, char **argv)
     while (cbm_plant_segment_count(cbm_tree_plant(t)) < (size_t)big)
         if (cbm_tree_step(t, NULL) != CBM_OK)
             return fail(ctx, "growing the big tree");
-    printf("large tree: %zu segments after %d years in %.1f s\n",
-           cbm_plant_segment_count(cbm_tree_plant(t)), cbm_tree_years(t), now() - tg);
-    double sum = 0, sum_solve = 0;
+    printf("large tree: %zu segments, %zu rings after %d years in %.1f s; library memory %.0f MB "
+           "(peak %.0f MB)\n",
+           cbm_plant_segment_count(cbm_tree_plant(t)), total_rings(cbm_tree_plant(t)),
+           cbm_tree_years(t), now() - tg, (double)cbm_context_bytes(ctx) / 1e6,
+           (double)cbm_context_peak_bytes(ctx) / 1e6);
+    double sum = 0, sum_solve = 0, sum_rings = 0;
     for (long k = 0; k < steps; k++) {
         cbm_tree_summary before = *cbm_tree_summary_current(t);
         int y0 = cbm_tree_years(t);
@@ -106,17 +119,27 @@ int main(int argc, char **argv)
         double drings = cbm_tree_years(t) == y0 ? c->seconds_rings - before.seconds_rings : 0;
         sum += dt;
         sum_solve += dsolve;
-        fprintf(f, "%ld,%s,%zu,%zu,%.6f,%.6f,%.6f\n", k,
-                season == CBM_TREE_SUMMER ? "summer" : "winter",
-                cbm_plant_segment_count(cbm_tree_plant(t)), dp, dt, dsolve, drings);
-        printf("  step %ld (%s): %zu segments, %zu passes, %.3f s (equilibrium %.3f s, rings "
-               "%.3f s)\n",
-               k, season == CBM_TREE_SUMMER ? "summer" : "winter",
-               cbm_plant_segment_count(cbm_tree_plant(t)), dp, dt, dsolve, drings);
+        sum_rings += drings;
+        size_t nseg = cbm_plant_segment_count(cbm_tree_plant(t));
+        size_t nring = total_rings(cbm_tree_plant(t));
+        fprintf(f, "%ld,%s,%zu,%zu,%zu,%.6f,%.6f,%.6f,%.6f\n", k,
+                season == CBM_TREE_SUMMER ? "summer" : "winter", nseg, nring, dp, dt, dsolve,
+                drings, dt - dsolve - drings);
+        printf("  step %ld (%s): %zu segments, %zu rings, %zu passes, %.3f s (equilibrium %.3f s, "
+               "rings %.3f s, the rest %.3f s)\n",
+               k, season == CBM_TREE_SUMMER ? "summer" : "winter", nseg, nring, dp, dt, dsolve,
+               drings, dt - dsolve - drings);
     }
-    printf("large tree: %.2f growth steps per second (equilibrium %.0f %% of the time)\n",
-           (double)steps / sum, 100 * sum_solve / sum);
+    printf("large tree: %.2f growth steps per second (equilibrium %.0f %%, rings %.0f %% of the "
+           "time)\n",
+           (double)steps / sum, 100 * sum_solve / sum, 100 * sum_rings / sum);
     fclose(f);
+    ts = now();
+    if (cbm_scene_create(ctx, &sc) != CBM_OK || cbm_tree_to_scene(t, sc, 8, true) != CBM_OK)
+        return fail(ctx, "scene of the large tree");
+    printf("large tree: scene (8 sides) %.3f s, %zu triangles; library peak %.0f MB\n", now() - ts,
+           cbm_scene_triangle_count(sc), (double)cbm_context_peak_bytes(ctx) / 1e6);
+    cbm_scene_destroy(sc);
     cbm_tree_destroy(t);
     cbm_context_destroy(ctx);
     return 0;

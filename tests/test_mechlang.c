@@ -180,6 +180,15 @@ TEST(mechlang_jirasek_s_branch)
     /* pipe model: the base is thicker than the tip, by sqrt(n) */
     CHECK_REL(g[0][1], 0.002 * sqrt(30.0), 1e-9);
     CHECK_REL(g[n - 1][1], 0.002, 1e-9);
+    /* its mechanics time: one Equilibrium() and one AddRings() per step (no time is asserted,
+     * only that each kind was counted); reset starts the count over */
+    cbm_lsys_mech_timing mt = cbm_lsys_mech_time(ls);
+    CHECK_EQ_INT(mt.operations, 2 * cbm_lsys_derivation_length(ls));
+    CHECK(mt.passes >= (size_t)cbm_lsys_derivation_length(ls));
+    CHECK(mt.equilibrium >= mt.solve && mt.solve >= 0.0 && mt.rings >= 0.0 && mt.other == 0.0);
+    CHECK_OK(cbm_lsys_reset(ls));
+    mt = cbm_lsys_mech_time(ls);
+    CHECK(mt.operations == 0 && mt.passes == 0 && mt.equilibrium == 0.0);
     cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
 }

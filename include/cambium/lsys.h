@@ -58,6 +58,22 @@ CBM_API cbm_status cbm_lsys_step(cbm_lsys *ls);
 CBM_API bool cbm_lsys_stopped(const cbm_lsys *ls);
 /// Steps done since reset.
 CBM_API int cbm_lsys_steps_done(const cbm_lsys *ls);
+
+/// Wall-clock time spent in the mechanics operations of the L+C dialect (docs/mechanics.md:
+/// Equilibrium(), AddRings(), AgeWood(), Break(), Stability()) since the last cbm_lsys_reset,
+/// including those called from Start/StartEach/EndEach/End. Every operation builds the plant
+/// from the string and writes its results back; that is counted with the operation.
+typedef struct cbm_lsys_mech_timing {
+    double equilibrium; ///< s, Equilibrium() in all
+    double solve;       ///< s, of which cbm_plant_solve itself
+    double rings;       ///< s, AddRings() and AgeWood()
+    double other;       ///< s, Break() and Stability()
+    size_t operations;  ///< mechanics operations run
+    size_t passes;      ///< solver passes of the Equilibrium() calls
+} cbm_lsys_mech_timing;
+
+/// The mechanics time of the current run (all zero for a model without mechanics).
+CBM_API cbm_lsys_mech_timing cbm_lsys_mech_time(const cbm_lsys *ls);
 /// Modules in the current string.
 CBM_API size_t cbm_lsys_module_count(const cbm_lsys *ls);
 /// Parameters in the current string.

@@ -6,7 +6,8 @@
  * given length with an elliptical section (semi-axes a >= b, U along a) made of a stack of rings
  * (innermost first), each ring with its own Young's modulus, shear modulus, density, outer
  * semi-axes, rest rotation rate, age and reaction-wood fraction. The solver uses per-segment
- * aggregates derived from the rings (recomputed whenever a ring changes):
+ * aggregates derived from the rings (kept as running sums: a new outer ring adds its terms in
+ * O(1), replacing a ring or ageing the wood recomputes them):
  *   rigidities C = (C_H, C_L, C_U) = sum over rings of (G J, E I_L, E I_U), with
  *   I_L = pi a^3 b / 4 (bending about L: U is along a), I_U = pi a b^3 / 4,
  *   J = pi a^3 b^3 / (a^2 + b^2) (ellipse), ring values = outer minus inner;
@@ -115,7 +116,8 @@ CBM_API cbm_quat cbm_mech_clamp_orientation(double elevation);
 /// for a bad parent, length, ring or load; CBM_E_LIMIT beyond limits.max_segments.
 CBM_API cbm_status cbm_plant_add_segment(cbm_plant *plant, const cbm_segment_def *def,
                                          size_t *index);
-/// Adds an outer ring to a segment (it must enclose the current outer ring). Aggregates update.
+/// Adds an outer ring to a segment (it must enclose the current outer ring). Aggregates update
+/// in O(1) whatever the number of rings; no allocation beyond the ring pool's amortised growth.
 CBM_API cbm_status cbm_plant_add_ring(cbm_plant *plant, size_t seg, const cbm_ring *ring);
 /// Replaces ring k (0 = innermost) of a segment; semi-axes must stay nested. Aggregates update.
 CBM_API cbm_status cbm_plant_set_ring(cbm_plant *plant, size_t seg, size_t k, const cbm_ring *ring);

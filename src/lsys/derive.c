@@ -654,6 +654,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
 
 cbm_status cbm_lsys_reset(cbm_lsys *ls)
 {
+    memset(&ls->mech_time, 0, sizeof ls->mech_time);
     if (ls->lp)
         return cbm__lpfg_reset(ls);
     memset(ls->globals, 0, ls->nglobals * sizeof(double));

@@ -2872,7 +2872,8 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
              : n->fn == F_STABILITY ? CBM__ML_STABILITY
                                     : CBM__ML_BREAK;
     double r = 0;
-    cbm_status s = cbm__mechlang_run(ls->ctx, m, &ls->cur, op, a[0], &r, msg, sizeof msg);
+    cbm_status s =
+        cbm__mechlang_run(ls->ctx, m, &ls->cur, op, a[0], &r, msg, sizeof msg, &ls->mech_time);
     if (s != CBM_OK) {
         char full[160];
         snprintf(full, sizeof full, "%s(): %s",

@@ -102,6 +102,7 @@ struct cbm_lsys {
     CBM_ARRAY(float) applp;
     int steps;
     bool homo_valid;
+    cbm_lsys_mech_timing mech_time; /* mechanics operations since the last reset */
     struct lpfg *lp; /* the L+C dialect's model (lpfg.c), NULL for the cpfg dialect */
 };
 

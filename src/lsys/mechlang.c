@@ -37,6 +37,7 @@
  * so the plant's L is minus the turtle's and a turtle rotation maps to the plant's local axes
  * with the signs in rot_of(). The clamp frame is the turtle's initial frame (H = +y, U = -z).
  */
+#define _POSIX_C_SOURCE 200809L
 #include "lsys/mechlang.h"
 
 #include "core/core.h"
@@ -45,6 +46,14 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 enum { TR_NONE, TR_LEFT, TR_RIGHT, TR_DOWN, TR_UP, TR_ROLL_L, TR_ROLL_R, TR_TURN };
 
@@ -377,6 +386,9 @@ static void cut_string(const cbm__mechlang *m, lstr *s, const uint8_t *cut)
     s->npar = ok;
 }
 
+static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+                         double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
+
 /* The plant of the string's segments (create, ground, build, tropism for new segments). */
 static cbm_status make_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
                              view *v, char *err, size_t errn)
@@ -428,7 +440,35 @@ cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s
 }
 
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
-                             double *result, char *err, size_t errn)
+                             double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing)
+{
+    cbm_lsys_mech_timing scratch;
+    if (!timing) {
+        memset(&scratch, 0, sizeof scratch);
+        timing = &scratch;
+    }
+    double t0 = now();
+    cbm_status st = run_op(ctx, m, s, op, arg, result, err, errn, timing);
+    double dt = now() - t0;
+    timing->operations++;
+    if (op == CBM__ML_EQUILIBRIUM)
+        timing->equilibrium += dt;
+    else if (op == CBM__ML_RINGS || op == CBM__ML_AGE)
+        timing->rings += dt;
+    else
+        timing->other += dt;
+    return st;
+}
+
+cbm_lsys_mech_timing cbm_lsys_mech_time(const cbm_lsys *ls)
+{
+    cbm_lsys_mech_timing t;
+    memset(&t, 0, sizeof t);
+    return ls ? ls->mech_time : t;
+}
+
+static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+                         double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing)
 {
     *result = 0;
     err[0] = 0;
@@ -451,7 +491,10 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
         memset(&ss, 0, sizeof ss);
         cbm_solve_def sd = m->solve;
         sd.warm_start = true;
+        double t0 = now();
         st = cbm_plant_solve(pl, &sd, &ss);
+        timing->solve += now() - t0;
+        timing->passes += ss.passes;
         *result = (double)ss.passes;
         if (st == CBM_E_NOT_CONVERGED && m->go_on) { /* the best iterate; the model goes on */
             cbm_context_clear_errors(ctx);

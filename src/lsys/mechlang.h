@@ -54,9 +54,10 @@ void cbm__mechlang_init(cbm__mechlang *m);
  * their branches from the string. *result: passes (equilibrium), rings added, segments aged,
  * segments broken (equilibrium: minus the passes when the solve did not converge and go_on is
  * set; the best state is kept), the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor
- * at the stored omega; the string is not changed). Errors go to err (a message) with the status. */
+ * at the stored omega; the string is not changed). Errors go to err (a message) with the status.
+ * The wall-clock time of the operation is added to *timing (may be NULL). */
 cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
-                             double *result, char *err, size_t errn);
+                             double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
 
 /* A new plant of the string's segments at their stored state (cbm_lsys_mech_plant); *out NULL
  * and a message in err on failure. */

@@ -22,14 +22,14 @@
  * plant stays O(n)). */
 static double joint_stress(const cbm_plant *p, size_t i, double *mor)
 {
-    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    const cbm__outer *r = &p->outer[i];
     cbm_quat q = p->q[i];
     cbm_vec3 m = p->moment[i];
     double ml = v3_dot(m, q_rotate(q, v3(0, 1, 0))), mu = v3_dot(m, q_rotate(q, v3(0, 0, 1)));
     double il, iu;
     cbm_mech_ellipse_moments(r->a, r->b, &il, &iu, NULL);
     double sl = ml * r->a / il, su = mu * r->b / iu;
-    *mor = r->modulus_of_rupture;
+    *mor = r->mor;
     return sqrt(sl * sl + su * su);
 }
 

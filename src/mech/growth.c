@@ -27,13 +27,14 @@
  * deformed segment: its own rest rate is the current rotation rate Omega (6.32/8.24). The
  * segment's rest rate becomes the rigidity-weighted mean per local component,
  *     rest'_c = (C_c rest_c + C'_c Omega_c) / (C_c + C'_c),
- * which the plant computes in closed form over all rings (src/mech/plant.c), C' being the ring's
- * own rigidity (outer minus inner second moments, 8.21-8.22). The current rate used is the
- * segment's material rate (cbm_segment_state.rate, CBM_MEMORY_SEGMENT: rest + C^-1 times the mean
- * of the moments at the segment's two ends) so that, under unchanged load, the new equilibrium
- * is the old shape (exactly for the chain discretisation, where a segment is one joint; to
- * O(h^2) for the staggered one, where a joint spans two half segments). CBM_MEMORY_JOINT
- * memorises the proximal joint's Omega as the listing does (Ring_omega_e = Omega).
+ * which the plant keeps as running sums over the rings (src/mech/plant.c: a new ring adds its
+ * terms in O(1)), C' being the ring's own rigidity (outer minus inner second moments,
+ * 8.21-8.22). The current rate used is the segment's material rate (cbm_segment_state.rate,
+ * CBM_MEMORY_SEGMENT: rest + C^-1 times the mean of the moments at the segment's two ends) so
+ * that, under unchanged load, the new equilibrium is the old shape (exactly for the chain
+ * discretisation, where a segment is one joint; to O(h^2) for the staggered one, where a joint
+ * spans two half segments). CBM_MEMORY_JOINT memorises the proximal joint's Omega as the
+ * listing does (Ring_omega_e = Omega).
  */
 #include "mech/growth_internal.h"
 #include "core/vecmath.h"
@@ -196,10 +197,13 @@ cbm_status cbm_plant_add_growth_ring(cbm_plant *p, size_t seg, double a, double 
     if (!p || !def)
         return CBM_E_INVALID;
     CBM_TRY(cbm__growth_check(p->ctx, def));
-    cbm_segment_state st;
-    CBM_TRY(cbm_plant_segment(p, seg, &st));
-    cbm_vec3 cur = def->memory == CBM_MEMORY_JOINT ? st.omega : st.rate;
-    bool rw = cbm__wood_leans(def, cur, st.rest_rate);
+    if (seg >= p->n)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu does not exist (plant has %zu)", seg,
+                         p->n);
+    /* O(1): no visit of the segment's rings (cbm_plant_segment would) */
+    cbm_vec3 cur =
+        def->memory == CBM_MEMORY_JOINT ? p->omega[seg] : cbm__plant_segment_rate(p, seg);
+    bool rw = cbm__wood_leans(def, cur, p->rest[seg]);
     CBM_TRY(growth_ring(p, seg, a, b, def, rw, cur));
     if (reaction)
         *reaction = rw;
@@ -256,15 +260,13 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
     cbm_vec3 *cur = cbm__alloc(p->ctx, n * sizeof *cur);
     cbm_status s = acc && cur ? cbm__growth_rates(p, def->memory, cur) : CBM_E_NOMEM;
     const double h = 0.5 * def->pipe_exponent;
+    /* pow(x, 1) is x exactly: the area-preserving P = 2 needs no pow */
+    const double leaf = h == 1.0 ? def->leaf_area : pow(def->leaf_area, h);
     for (size_t i = n; s == CBM_OK && i-- > 0;) {
-        cbm_ring outer;
-        s = cbm_plant_get_ring(p, i, p->ring_count[i] - 1, &outer);
-        if (s != CBM_OK)
-            break;
-        double a = outer.a, b = outer.b, zeta = b / a;
+        double a = p->outer[i].a, b = p->outer[i].b, zeta = b / a;
         double na = a;
         {
-            double goal = pow(acc[i] + pow(def->leaf_area, h), 1.0 / h);
+            double goal = h == 1.0 ? acc[i] + leaf : pow(acc[i] + leaf, 1.0 / h);
             double ag = sqrt(goal / (CBM_PI * zeta));
             if (ag > a)
                 na = a + def->pipe_rate * (ag - a);
@@ -290,7 +292,7 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
             nb = b;
         }
         if (p->parent[i] >= 0)
-            acc[p->parent[i]] += pow(CBM_PI * na * nb, h);
+            acc[p->parent[i]] += h == 1.0 ? CBM_PI * na * nb : pow(CBM_PI * na * nb, h);
     }
     if (acc)
         cbm__free(p->ctx, acc, n * sizeof *acc);

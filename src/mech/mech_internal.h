@@ -7,6 +7,12 @@
 #include "cambium/mech.h"
 #include "core/core.h"
 
+/* The outer ring's semi-axes and modulus of rupture, kept per segment so that the passes over
+ * the plant (ring growth, breakage) do not visit the ring pool. */
+typedef struct cbm__outer {
+    double a, b, mor;
+} cbm__outer;
+
 /* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors. */
 typedef struct cbm__mech_work {
     size_t cap;     /* segments the arrays below hold */
@@ -71,10 +77,13 @@ struct cbm_plant {
     cbm_quat *branch; /* B_i */
     /* section: ring pool indices and aggregates */
     size_t *ring_first, *ring_count;
-    cbm_vec3 *rig;  /* (sum GJ, sum EI_L, sum EI_U) */
-    cbm_vec3 *rest; /* rigidity-weighted rest rate */
-    double *mpl;    /* kg/m */
-    double *area;   /* m^2 */
+    size_t *ring_cap;  /* slots of the segment's run in the pool (>= ring_count) */
+    cbm__outer *outer; /* the outer ring's a, b and modulus of rupture */
+    cbm_vec3 *rig;     /* (sum GJ, sum EI_L, sum EI_U) */
+    cbm_vec3 *rigr;    /* sum over rings of the ring's rigidity times its rest rate */
+    cbm_vec3 *rest;    /* rigidity-weighted rest rate = rigr / rig */
+    double *mpl;       /* kg/m */
+    double *area;      /* m^2 */
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;
@@ -88,10 +97,19 @@ struct cbm_plant {
     double *cmass;    /* carried mass */
 
     CBM_ARRAY(cbm_ring) rings;
-    size_t ring_live; /* rings referenced by segments (the rest are holes) */
+    size_t ring_held; /* pool slots held by segments' runs (sum of ring_cap; the rest are holes) */
+    /* free runs (holes) by capacity class (capacity 1, then 4, 8, 16, ...: class log2, 1 -> 0):
+     * 1 + the first slot of a hole of that capacity, 0 = none; each hole's first slot holds
+     * the next hole of its class the same way */
+    size_t ring_free[64];
 
     cbm__mech_work work;
 };
+
+/* ---- plant.c ---- */
+
+/// cbm_segment_state.rate of segment i in O(1) (cbm_plant_segment also visits every ring).
+cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i);
 
 /* ---- solve_common.c ---- */
 

@@ -2,7 +2,7 @@
  * segment, the section aggregates the solvers use, queries, subtree removal and the scene
  * export.
  *
- * Section aggregates (recomputed whenever a ring of the segment changes): for rings k = 0..n-1
+ * Section aggregates: for rings k = 0..n-1
  * (innermost first) with outer semi-axes (a_k, b_k) and inner semi-axes (a_{k-1}, b_{k-1})
  * (0 for the core), the ring's second moments are the differences of the solid-ellipse values
  *   I_L = pi a^3 b / 4 (bending about L; U is along the long semi-axis a: Taylor-Hell 8.9-8.10,
@@ -13,11 +13,20 @@
  *   rest_c = sum_k C_k,c rest_k,c / sum_k C_k,c,
  * which is the closed form of the incremental averaging of Jirasek eq. 24 = Taylor-Hell
  * 6.29-6.31 (adding ring k with rest rate r_k to a core of rigidity C and rest rate R gives
- * (C R + C_k r_k) / (C + C_k)). The mass per length is sum_k density_k * ring area.
+ * (C R + C_k r_k) / (C + C_k)). The mass per length is sum_k density_k * ring area. The plant
+ * keeps the sums C, sum_k C_k rest_k, the mass per length and the outer area per segment, so a
+ * new outer ring (cbm_plant_add_ring, once per segment and growth step) adds its own terms in
+ * O(1); replacing a ring or ageing the wood (which changes E of old rings) recomputes the sums
+ * over all rings. Both paths run the same function in the same order of operations, so the
+ * incremental sums are bit for bit those of a full recompute.
  *
- * Rings live in one pool; each segment owns a contiguous run [first, first + count). Adding a
- * ring to a segment whose run is not at the end of the pool moves the run to the end; the pool
- * is compacted when more than half of it is holes.
+ * Rings live in one pool; each segment owns a run of ring_cap slots starting at ring_first, of
+ * which the first ring_count hold its rings (innermost first). A ring added to a full run grows
+ * the run in place if it ends the pool, else moves it to the end of the pool with twice the
+ * capacity, into a hole of that capacity if there is one (free lists per capacity class) or at
+ * the end of the pool: amortised O(1) copies per ring, no allocation beyond the pool's geometric
+ * growth (by half). The runs of removed segments become holes too. The pool is compacted (runs in
+ * segment order, capacities kept) when more than half of it is holes.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -110,7 +119,7 @@ cbm_plant_def cbm_plant_def_default(void)
 // clang-format off
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
-    X(rig) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
+    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
     X(moment) X(pmass0)                                                                            \
     X(cmass)
 // clang-format on
@@ -229,36 +238,62 @@ static cbm_status check_ring(cbm_plant *p, const cbm_ring *r, const cbm_ring *in
     return CBM_OK;
 }
 
+/* Solid-ellipse values of a ring's outer boundary: (I_L, I_U, J, area). */
+static void ellipse_values(const cbm_ring *r, double v[4])
+{
+    cbm_mech_ellipse_moments(r->a, r->b, &v[0], &v[1], &v[2]);
+    v[3] = CBM_PI * r->a * r->b;
+}
+
+/* Adds ring r, whose inner boundary has the solid-ellipse values in[4] (zeros for the core), to
+ * the running sums of segment i; out[4] receives r's own outer values. The full recompute and
+ * the incremental update of cbm_plant_add_ring both go through here, in the same order of
+ * operations, so the two agree to the last bit. */
+static void section_add(cbm_plant *p, size_t i, const double in[4], const cbm_ring *r,
+                        double out[4])
+{
+    ellipse_values(r, out);
+    cbm_vec3 ck = v3(r->shear_modulus * (out[2] - in[2]), r->youngs_modulus * (out[0] - in[0]),
+                     r->youngs_modulus * (out[1] - in[1]));
+    p->rig[i] = v3_add(p->rig[i], ck);
+    p->rigr[i] = v3_add(p->rigr[i], v3_mul(ck, r->rest_rate));
+    p->mpl[i] += r->density * (out[3] - in[3]);
+    p->area[i] = out[3];
+}
+
+/* The rigidity-weighted rest rate from the sums, and the outer ring's copy. */
+static void section_rest(cbm_plant *p, size_t i)
+{
+    const cbm_ring *o = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    p->outer[i] = (cbm__outer){o->a, o->b, o->modulus_of_rupture};
+    cbm_vec3 c = p->rig[i], cr = p->rigr[i];
+    p->rest[i] =
+        v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0, c.z > 0 ? cr.z / c.z : 0.0);
+}
+
+/* Full recompute of segment i's aggregates over all of its rings (after a ring was replaced or
+ * the wood aged). */
 static void update_section(cbm_plant *p, size_t i)
 {
     const cbm_ring *r = p->rings.data + p->ring_first[i];
     size_t nr = p->ring_count[i];
-    double ai = 0.0, bi = 0.0, il0 = 0.0, iu0 = 0.0, j0 = 0.0, area0 = 0.0;
-    cbm_vec3 c = v3(0, 0, 0), cr = v3(0, 0, 0);
-    double mpl = 0.0;
-    for (size_t k = 0; k < nr; k++) {
-        double il, iu, j;
-        cbm_mech_ellipse_moments(r[k].a, r[k].b, &il, &iu, &j);
-        double ar = CBM_PI * r[k].a * r[k].b;
-        cbm_vec3 ck = v3(r[k].shear_modulus * (j - j0), r[k].youngs_modulus * (il - il0),
-                         r[k].youngs_modulus * (iu - iu0));
-        c = v3_add(c, ck);
-        cr = v3_add(cr, v3_mul(ck, r[k].rest_rate));
-        mpl += r[k].density * (ar - area0);
-        il0 = il;
-        iu0 = iu;
-        j0 = j;
-        area0 = ar;
-        ai = r[k].a;
-        bi = r[k].b;
-    }
-    (void)ai;
-    (void)bi;
-    p->rig[i] = c;
-    p->rest[i] =
-        v3(c.x > 0 ? cr.x / c.x : 0.0, c.y > 0 ? cr.y / c.y : 0.0, c.z > 0 ? cr.z / c.z : 0.0);
-    p->mpl[i] = mpl;
-    p->area[i] = area0;
+    double v[2][4] = {{0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}};
+    p->rig[i] = p->rigr[i] = v3(0, 0, 0);
+    p->mpl[i] = 0.0;
+    p->area[i] = 0.0;
+    for (size_t k = 0; k < nr; k++)
+        section_add(p, i, v[k & 1], &r[k], v[(k + 1) & 1]);
+    section_rest(p, i);
+}
+
+/* Incremental update after ring k = ring_count - 1 was appended: O(1). */
+static void section_append(cbm_plant *p, size_t i)
+{
+    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+    double in[4], out[4];
+    ellipse_values(r - 1, in);
+    section_add(p, i, in, r, out);
+    section_rest(p, i);
 }
 
 static cbm_quat branch_quat(double div, double dev, double roll)
@@ -277,31 +312,118 @@ static cbm_status check_seg(const cbm_plant *p, size_t seg)
     return CBM_OK;
 }
 
-/* Rebuilds the pool in segment order into a fresh array. */
+/* Rebuilds the pool in segment order into a fresh array; every run keeps its capacity. */
 static cbm_status rebuild_rings(cbm_plant *p)
 {
     cbm_context *ctx = p->ctx;
-    cbm_ring *nd = cbm__alloc(ctx, (p->ring_live ? p->ring_live : 1) * sizeof *nd);
+    size_t cap = p->ring_held ? p->ring_held : 1;
+    cbm_ring *nd = cbm__alloc(ctx, cap * sizeof *nd);
     if (!nd)
         return CBM_E_NOMEM;
     size_t w = 0;
     for (size_t i = 0; i < p->n; i++) {
         memcpy(nd + w, p->rings.data + p->ring_first[i], p->ring_count[i] * sizeof *nd);
         p->ring_first[i] = w;
-        w += p->ring_count[i];
+        w += p->ring_cap[i];
     }
     CBM_ARRAY_FREE(ctx, p->rings);
     p->rings.data = nd;
     p->rings.len = w;
-    p->rings.cap = p->ring_live ? p->ring_live : 1;
+    p->rings.cap = cap;
+    memset(p->ring_free, 0, sizeof p->ring_free);
     return CBM_OK;
+}
+
+/* Room for `need` slots in the pool, growing it by half (not doubling: the pool is the largest
+ * array of a grown tree). */
+static cbm_status pool_reserve(cbm_plant *p, size_t need)
+{
+    size_t cap = p->rings.cap;
+    if (need <= cap)
+        return CBM_OK;
+    size_t nc = cap + cap / 2 + 64;
+    if (nc < need)
+        nc = need + need / 4;
+    if (nc > SIZE_MAX / sizeof(cbm_ring))
+        return CBM_E_NOMEM;
+    cbm_ring *nd =
+        cbm__realloc(p->ctx, p->rings.data, cap * sizeof(cbm_ring), nc * sizeof(cbm_ring));
+    if (!nd)
+        return CBM_E_NOMEM;
+    p->rings.data = nd;
+    p->rings.cap = nc;
+    return CBM_OK;
+}
+
+/* Capacity class of a run: capacities are 1 or a power of two >= 4. */
+static int ring_class(size_t cap)
+{
+    int c = 0;
+    while (cap > 1) {
+        cap >>= 1;
+        c++;
+    }
+    return c;
+}
+
+/* The run [start, start + cap) becomes a hole, reusable by a run of the same capacity. */
+static void push_hole(cbm_plant *p, size_t start, size_t cap)
+{
+    int c = ring_class(cap);
+    size_t next = p->ring_free[c];
+    memcpy((void *)&p->rings.data[start], &next, sizeof next);
+    p->ring_free[c] = start + 1;
+}
+
+/* A hole of capacity cap, or SIZE_MAX if there is none. */
+static size_t pop_hole(cbm_plant *p, size_t cap)
+{
+    int c = ring_class(cap);
+    size_t head = p->ring_free[c];
+    if (head == 0)
+        return SIZE_MAX;
+    size_t next;
+    memcpy(&next, (const void *)&p->rings.data[head - 1], sizeof next);
+    p->ring_free[c] = next;
+    return head - 1;
 }
 
 static void maybe_compact(cbm_plant *p)
 {
-    if (p->rings.len > 64 && 2 * p->ring_live < p->rings.len) {
+    if (p->rings.len > 64 && 2 * p->ring_held < p->rings.len) {
         (void)rebuild_rings(p); /* on NOMEM the holes simply stay */
     }
+}
+
+/* Makes room for one more ring in segment seg's run: a full run at the end of the pool grows in
+ * place; any other full run moves, with twice its capacity, into a hole of that capacity or to
+ * the end of the pool, and its old slots become a hole. Each ring is thus copied O(1) times on
+ * average, and holes are reused before the pool grows. */
+static cbm_status ring_room(cbm_plant *p, size_t seg)
+{
+    size_t f = p->ring_first[seg], c = p->ring_count[seg], cap = p->ring_cap[seg];
+    if (c < cap)
+        return CBM_OK;
+    size_t nc = cap < 2 ? 4 : 2 * cap;
+    if (f + cap == p->rings.len) {
+        if (pool_reserve(p, f + nc) != CBM_OK)
+            return CBM_E_NOMEM;
+        p->rings.len = f + nc;
+    } else {
+        size_t start = pop_hole(p, nc);
+        if (start == SIZE_MAX) {
+            if (pool_reserve(p, p->rings.len + nc) != CBM_OK)
+                return CBM_E_NOMEM;
+            start = p->rings.len;
+            p->rings.len += nc;
+        }
+        memcpy(p->rings.data + start, p->rings.data + f, c * sizeof(cbm_ring));
+        push_hole(p, f, cap);
+        p->ring_first[seg] = start;
+    }
+    p->ring_cap[seg] = nc;
+    p->ring_held += nc - cap;
+    return CBM_OK;
 }
 
 /* ---- building ---- */
@@ -345,11 +467,13 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
                          lim);
     if (plant_reserve(p, i + 1) != CBM_OK)
         return CBM_E_NOMEM;
-    if (CBM_ARRAY_PUSH(p->ctx, p->rings, def->core) != CBM_OK)
+    if (pool_reserve(p, p->rings.len + 1) != CBM_OK)
         return CBM_E_NOMEM;
-    p->ring_live++;
+    p->rings.data[p->rings.len++] = def->core;
+    p->ring_held++;
     p->ring_first[i] = p->rings.len - 1;
     p->ring_count[i] = 1;
+    p->ring_cap[i] = 1;
     int64_t par = def->parent;
     p->parent[i] = par;
     p->cont[i] = def->lateral && par >= 0 ? 2 : 0;
@@ -384,21 +508,13 @@ cbm_status cbm_plant_add_ring(cbm_plant *p, size_t seg, const cbm_ring *ring)
     if (!p || !ring)
         return CBM_E_INVALID;
     CBM_TRY(check_seg(p, seg));
-    size_t f = p->ring_first[seg], c = p->ring_count[seg];
-    CBM_TRY(check_ring(p, ring, &p->rings.data[f + c - 1], "new ring", seg));
-    if (f + c != p->rings.len) {
-        /* move the run to the end of the pool */
-        if (CBM_ARRAY_RESERVE(p->ctx, p->rings, p->rings.len + c + 1) != CBM_OK)
-            return CBM_E_NOMEM;
-        memcpy(p->rings.data + p->rings.len, p->rings.data + f, c * sizeof(cbm_ring));
-        p->ring_first[seg] = f = p->rings.len;
-        p->rings.len += c;
-    }
-    if (CBM_ARRAY_PUSH(p->ctx, p->rings, *ring) != CBM_OK)
+    size_t c = p->ring_count[seg];
+    CBM_TRY(check_ring(p, ring, &p->rings.data[p->ring_first[seg] + c - 1], "new ring", seg));
+    if (ring_room(p, seg) != CBM_OK)
         return CBM_E_NOMEM;
+    p->rings.data[p->ring_first[seg] + c] = *ring;
     p->ring_count[seg] = c + 1;
-    p->ring_live++;
-    update_section(p, seg);
+    section_append(p, seg);
     maybe_compact(p);
     return CBM_OK;
 }
@@ -572,7 +688,8 @@ cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
         if (rm) {
             map[i - seg] = -1;
             nrm++;
-            p->ring_live -= p->ring_count[i];
+            p->ring_held -= p->ring_cap[i];
+            push_hole(p, p->ring_first[i], p->ring_cap[i]);
             continue;
         }
         map[i - seg] = (int64_t)w;
@@ -659,7 +776,7 @@ static cbm_vec3 distal_moment(const cbm_plant *p, size_t i)
     return v3_scale(p->tipm[i], p->load_scale);
 }
 
-static cbm_vec3 segment_rate(const cbm_plant *p, size_t i)
+cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i)
 {
     if (p->disc == CBM_MECH_CHAIN)
         return p->omega[i];
@@ -716,7 +833,7 @@ cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
         a0 = ar;
     }
     o->age = age;
-    o->rate = segment_rate(p, i);
+    o->rate = cbm__plant_segment_rate(p, i);
     o->reaction = a0 > 0.0 ? rw / a0 : 0.0;
     return CBM_OK;
 }
@@ -750,8 +867,7 @@ cbm_status cbm_plant_distal_frame(const cbm_plant *p, size_t i, cbm_quat *out)
 static cbm_section node_section(const cbm_plant *p, size_t i, cbm_vec3 centre)
 {
     cbm_quat q = p->q[i];
-    const cbm_ring *r = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
-    double a = r->a, b = r->b;
+    double a = p->outer[i].a, b = p->outer[i].b;
     int64_t c = p->fchild[i];
     if (c >= 0 && p->cont[c]) {
         cbm_quat qc = p->q[c];
@@ -759,9 +875,8 @@ static cbm_section node_section(const cbm_plant *p, size_t i, cbm_vec3 centre)
         double sg = d < 0.0 ? -1.0 : 1.0;
         q = q_normalize(
             (cbm_quat){q.w + sg * qc.w, q.x + sg * qc.x, q.y + sg * qc.y, q.z + sg * qc.z});
-        const cbm_ring *rc = p->rings.data + p->ring_first[c] + p->ring_count[c] - 1;
-        a = 0.5 * (a + rc->a);
-        b = 0.5 * (b + rc->b);
+        a = 0.5 * (a + p->outer[c].a);
+        b = 0.5 * (b + p->outer[c].b);
     }
     cbm_section s = {centre,
                      {q_rotate(q, v3(1, 0, 0)), q_rotate(q, v3(0, 1, 0)), q_rotate(q, v3(0, 0, 1))},

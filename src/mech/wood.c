@@ -76,8 +76,8 @@ static cbm_status merge_core(cbm_plant *p, size_t seg, double dt, const cbm_grow
     c.rest_rate = st.rest_rate;
     c.age = st.age + dt;
     c.reaction = st.reaction;
-    /* drop the outer rings, then write the core (which updates the section) */
-    p->ring_live -= p->ring_count[seg] - 1;
+    /* drop the outer rings (the run keeps its slots), then write the core (which updates the
+     * section) */
     p->ring_count[seg] = 1;
     return cbm_plant_set_ring(p, seg, 0, &c);
 }

@@ -99,6 +99,36 @@ static bool ends_with(const char *s, const char *suf)
     return a >= b && !strcmp(s + a - b, suf);
 }
 
+/* --timing: where the time went. `derive` is the growth itself (the tree's steps: equilibrium,
+ * rings and ageing, growth and bookkeeping), `interpret` the scene building, `write` the
+ * writers. */
+static void print_timing(cbm_context *ctx, const cbm_tree *t, double derive, double interpret,
+                         double write, double total)
+{
+    double solve = 0, rings = 0;
+    size_t passes = 0;
+    for (int y = 1; y <= cbm_tree_years(t); y++) {
+        const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
+        solve += s->seconds_solve;
+        rings += s->seconds_rings;
+        passes += s->passes;
+    }
+    /* the year under way: the spring solve after the last year, or an unfinished summer */
+    const cbm_tree_summary *c = cbm_tree_summary_current(t);
+    if (c) {
+        solve += c->seconds_solve;
+        rings += c->seconds_rings;
+        passes += c->passes;
+    }
+    fprintf(stderr,
+            "grow: %d years, %zu segments: derive %.3f s (equilibrium %.3f s in %zu passes, "
+            "rings and ageing %.3f s, growth and the rest %.3f s), interpret %.3f s, write "
+            "%.3f s, total %.3f s; peak %.1f MB in the library\n",
+            cbm_tree_years(t), cbm_plant_segment_count(cbm_tree_plant(t)), derive, solve, passes,
+            rings, derive - solve - rings, interpret, write, total,
+            (double)cbm_context_peak_bytes(ctx) / 1e6);
+}
+
 int cmd_grow(int argc, char **argv)
 {
     const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
@@ -262,7 +292,9 @@ int cmd_grow(int argc, char **argv)
     }
     cli_progress pr;
     cli_progress_begin(&pr);
-    double t0 = cli_seconds(), t_frames = 0.0;
+    /* --timing: growth (derivation), scene building (interpretation, also for the animation
+     * frames) and writing (animation frames added and files written) */
+    double t0 = cli_seconds(), t_interpret = 0.0, t_write = 0.0;
     size_t step = 0;
     /* with --summer the last year stops at the end of its summer (leaves and fruit on) */
     int full = summer && d.years > 0 ? d.years - 1 : d.years;
@@ -276,10 +308,12 @@ int cmd_grow(int argc, char **argv)
             double tf = cli_seconds();
             cbm_scene_clear(sc);
             st = cbm_tree_to_scene(t, sc, 8, o.ground);
+            double tw = cli_seconds();
+            t_interpret += tw - tf;
             for (int k = 0; k < nout && st == CBM_OK; k++)
                 if (anim[k])
                     st = cbm_animation_add_frame(anim[k], sc);
-            t_frames += cli_seconds() - tf;
+            t_write += cli_seconds() - tw;
         }
         if (st == CBM_OK && done_year) {
             int y = cbm_tree_years(t);
@@ -299,29 +333,14 @@ int cmd_grow(int argc, char **argv)
     }
     cli_progress_end(&pr);
     double grow_time = cli_seconds() - t0;
+    double derive = grow_time - t_interpret - t_write; /* minus the animation frames */
     if (st != CBM_OK) {
         rc = cli_fail(ctx, st, "growing the tree");
         goto done;
     }
-    if (timing) {
-        double solve = 0, rings = 0, all = 0;
-        size_t passes = 0;
-        for (int y = 1; y <= cbm_tree_years(t); y++) {
-            const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
-            solve += s->seconds_solve;
-            rings += s->seconds_rings;
-            all += s->seconds;
-            passes += s->passes;
-        }
-        fprintf(stderr,
-                "grow: %d years, %zu segments in %.3f s: equilibrium %.3f s (%zu passes), rings "
-                "and ageing %.3f s, growth and the rest %.3f s, animation frames %.3f s\n",
-                cbm_tree_years(t), cbm_plant_segment_count(cbm_tree_plant(t)), grow_time, solve,
-                passes, rings, all - solve - rings, t_frames);
-    }
     bool scene_built = false;
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
-        double tw = cli_seconds();
+        double tw = cli_seconds(), ti = 0.0;
         if (kind[k] == 1)
             st = cbm_write_segments_csv(ctx, cbm_tree_plant(t), outs[k]);
         else if (kind[k] == 2)
@@ -335,15 +354,21 @@ int cmd_grow(int argc, char **argv)
                 cbm_scene_clear(sc);
                 st = cbm_tree_to_scene(t, sc, 12, o.ground);
                 scene_built = true;
+                ti = cli_seconds() - tw;
+                t_interpret += ti;
             }
             if (st == CBM_OK)
                 st = cbm_scene_write_as(ctx, sc, targets[k].path, targets[k].format, &o);
         }
+        double dw = cli_seconds() - tw - ti;
+        t_write += dw;
         if (st != CBM_OK)
             rc = cli_fail(ctx, st, outs[k]);
         else if (timing)
-            fprintf(stderr, "grow: wrote %s in %.3f s\n", outs[k], cli_seconds() - tw);
+            fprintf(stderr, "grow: wrote %s in %.3f s\n", outs[k], dw);
     }
+    if (timing && rc == CLI_OK)
+        print_timing(ctx, t, derive, t_interpret, t_write, cli_seconds() - t0);
 done:
     for (int k = 0; k < nout; k++)
         cbm_animation_destroy(anim[k]);
