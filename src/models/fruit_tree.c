@@ -282,12 +282,12 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
     if (!a0)
         return CBM_E_NOMEM;
     for (size_t i = 0; i < n; i++)
-        a0[i] = p->rings.data[p->ring_first[i] + p->ring_count[i] - 1].a;
+        a0[i] = p->outer[i].a; /* the outer ring, kept per segment */
     cbm_growth_stats gs;
     cbm_status s = cbm_plant_grow_rings(p, &t->growth, &gs);
     for (size_t i = 0; s == CBM_OK && i < n; i++) {
-        const cbm_ring *o = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
-        if (o->a > a0[i]) {
+        if (p->outer[i].a > a0[i]) { /* a new ring: read it from the pool */
+            const cbm_ring *o = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
             t->seg.data[i].flags |= SEG_GREW;
             if (o->reaction > 0.0)
                 t->seg.data[i].flags |= SEG_REACT;

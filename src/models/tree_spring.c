@@ -107,7 +107,7 @@ cbm_status cbm__tree_spring(cbm_tree *t)
             ym[j] = ym[cont[j]];
     const double hp = 0.5 * d->pipe_exponent;
     {
-        double a0 = p->rings.data[p->ring_first[0] + p->ring_count[0] - 1].a;
+        double a0 = p->outer[0].a;
         sg[0].vigour = pow(d->vigour_k * a0, d->vigour_d);
         sg[0].sink = 0.0;
         sg[0].share = 0.0;
