@@ -105,6 +105,7 @@ struct cbm_turtle {
     CBM_ARRAY(cbm_vec3) scratch;
     int64_t module_index; /* modules fed so far (the one executing is module_index - 1) */
     int64_t node_module;  /* the module that opened the segment in progress */
+    double turn_deg, turn_sin, turn_cos; /* the last explicit turn angle and its sine, cosine */
     int64_t part_module;  /* >= 0: the module a part being emitted belongs to */
 };
 
@@ -278,6 +279,9 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->module_index = 0;
     t->node_module = -1;
     t->part_module = -1;
+    t->turn_deg = 0.0;
+    t->turn_sin = 0.0;
+    t->turn_cos = 1.0;
 }
 
 /* ---- helpers ---- */
@@ -340,13 +344,20 @@ static cbm_frame section_frame(cbm_vec3 d, cbm_vec3 up)
 
 /* cpfg's "change_dir": v2' = c v2 + s v3, v3' = c v3 - s v2 */
 /* Sine and cosine of a turn: the module's angle in degrees, or the view's angle increment
- * (precomputed) when the module has no parameter. */
-static void turn_angle(const cbm_view *v, const double *params, int nparams, double *sn, double *cs)
+ * (precomputed) when the module has no parameter. The last explicit angle's pair is kept: most
+ * strings turn by a few angles, and sin/cos were the largest cost of a pass over them. */
+static void turn_angle(cbm_turtle *t, const double *params, int nparams, double *sn, double *cs)
 {
+    const cbm_view *v = t->view;
     if (nparams > 0) {
-        double a = params[0] * CBM_PI / 180.0;
-        *sn = sin(a);
-        *cs = cos(a);
+        if (params[0] != t->turn_deg) { /* NaN never matches: recomputed, as before */
+            double a = params[0] * CBM_PI / 180.0;
+            t->turn_deg = params[0];
+            t->turn_sin = sin(a);
+            t->turn_cos = cos(a);
+        }
+        *sn = t->turn_sin;
+        *cs = t->turn_cos;
     } else {
         *sn = v->sin_a;
         *cs = v->cos_a;
@@ -1284,21 +1295,21 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_LEFT:
     case CBM_T_RIGHT: {
         double sn, cs;
-        turn_angle(v, params, nparams, &sn, &cs);
+        turn_angle(t, params, nparams, &sn, &cs);
         rotate_pair(&s->h, &s->l, cmd == CBM_T_LEFT ? sn : -sn, cs);
         return CBM_OK;
     }
     case CBM_T_PITCH_DOWN:
     case CBM_T_PITCH_UP: {
         double sn, cs;
-        turn_angle(v, params, nparams, &sn, &cs);
+        turn_angle(t, params, nparams, &sn, &cs);
         rotate_pair(&s->h, &s->u, cmd == CBM_T_PITCH_DOWN ? sn : -sn, cs);
         return CBM_OK;
     }
     case CBM_T_ROLL_RIGHT:
     case CBM_T_ROLL_LEFT: {
         double sn, cs;
-        turn_angle(v, params, nparams, &sn, &cs);
+        turn_angle(t, params, nparams, &sn, &cs);
         rotate_pair(&s->l, &s->u, cmd == CBM_T_ROLL_RIGHT ? sn : -sn, cs);
         return CBM_OK;
     }
