@@ -233,13 +233,15 @@ typedef enum cbm_mech_precond {
 } cbm_mech_precond;
 
 /// How the fast solver reaches the equilibrium from a warm start (the previous equilibrium under
-/// changed loads or a changed plant) when plain Newton steps do not get there (the first step
-/// would turn a frame by more than 0.5 rad, or the line search stalls).
+/// changed loads or a changed plant) when plain Newton steps do not get there: the first step
+/// would turn a frame by more than 0.5 rad, or the line search stalls (for the transient path
+/// also: a step cut below 1/8, or 8 steps without convergence).
 typedef enum cbm_mech_warm_path {
     /// Default: pseudo-transient continuation, implicit Euler steps of the damped motion
     /// C dOmega/dt = -R from the current state: the plant creeps under its new loads and ends
     /// in the equilibrium an overdamped motion reaches (a twig past a limit point snaps through
-    /// to hanging). Without ground contact; with it, as CBM_MECH_WARM_MASS_PATH.
+    /// to hanging). With the tree preconditioner and without ground contact; otherwise as
+    /// CBM_MECH_WARM_MASS_PATH.
     CBM_MECH_WARM_TRANSIENT,
     /// Quasi-static continuation over the point masses, from those the start state balances to
     /// the new ones, then over all loads from the rest state (the fast solver before the
