@@ -5,6 +5,7 @@
  * out-of-memory behaviour. */
 #include "mech_testlib.h"
 #include "mech/mech_internal.h"
+#include "cambium/tree.h"
 
 /* A random tree: each new segment picks a random existing parent (biased to recent ones), random
  * branching angles, radius shrinking with depth, point masses and tip forces on some. */
@@ -752,15 +753,17 @@ TEST(mech_fast_warm_start_new_masses)
     test_ctx_end(ctx);
 }
 
-/* A stem clamped 20 degrees off the vertical, pointing up, under a tip mass that grows by 35 %
- * per step (Jirasek Fig. 5, with a soft green stem): the stem folds over and snaps through to
- * hanging. Each step is a warm start from the last equilibrium. Every solve must converge in a
- * bounded number of passes, and the last one must agree with the relaxation from rest under the
- * final mass (which descends to a stable state). The pivot test of the tree factorisation
- * fires at these hanging equilibria (it reads the unsymmetric Newton matrix); the solver must
- * find that a push along the soft mode comes back and report them stable. */
-static void snap_through(double E, double r, double len, double alpha, size_t max_step_passes,
-                         double *tip_y)
+/* A stem clamped 20 degrees off the vertical, pointing up, under a tip mass that starts at m0 and
+ * grows by the factor `growth` per step (Jirasek Fig. 5, with a soft green stem): the stem folds
+ * over and snaps through to hanging. Each step is a warm start from the last equilibrium. Every
+ * solve must converge in a bounded number of passes, and the last one must agree with the
+ * relaxation from rest under the final mass (which descends to a stable state). The pivot test of
+ * the tree factorisation fires at these hanging equilibria (it reads the unsymmetric Newton
+ * matrix); the solver must find that a push along the soft mode comes back and report them stable.
+ */
+static void snap_through_path(double E, double r, double len, double alpha, double m0,
+                              double growth, size_t max_step_passes, cbm_mech_warm_path path,
+                              double *tip_y)
 {
     cbm_context *ctx = test_ctx();
     cbm_plant *pl[2];
@@ -782,8 +785,9 @@ static void snap_through(double E, double r, double len, double alpha, size_t ma
         }
     }
     cbm_solve_def sd = cbm_solve_def_default();
-    double m = 0.0005;
-    for (int step = 0; step < 12; step++, m *= 1.35) {
+    sd.warm_path = path;
+    double m = m0;
+    for (int step = 0; step < 12; step++, m *= growth) {
         CHECK_OK(cbm_plant_set_load(pl[0], 7, m, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
         cbm_solve_stats st;
         sd.warm_start = true;
@@ -792,7 +796,7 @@ static void snap_through(double E, double r, double len, double alpha, size_t ma
         total += st.passes;
         worst = st.passes > worst ? st.passes : worst;
     }
-    m /= 1.35;
+    m /= growth;
     CHECK_OK(cbm_plant_set_load(pl[1], 7, m, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
     sd.warm_start = false;
     sd.solver = CBM_MECH_RELAX;
@@ -819,6 +823,28 @@ static void snap_through(double E, double r, double len, double alpha, size_t ma
     test_ctx_end(ctx);
 }
 
+static void snap_through(double E, double r, double len, double alpha, size_t max_step_passes,
+                         double *tip_y)
+{
+    snap_through_path(E, r, len, alpha, 0.0005, 1.35, max_step_passes, CBM_MECH_WARM_TRANSIENT,
+                      tip_y);
+}
+
+/* Fruit appearing at once and growing by 60 % per step (the fruit tree's fruit appears at a third
+ * of its goal mass): larger load steps than above. Both warm paths (the transient, default, and
+ * the quasi-static mass path) must reach the stable hanging state the relaxation reaches from
+ * rest, within a bounded number of passes per step. */
+TEST(mech_fast_snap_through_sudden_fruit)
+{
+    double y[2];
+    for (int path = 0; path < 2; path++) {
+        snap_through_path(3e8, 0.001, 0.02, 0.02, 0.0003, 1.6, 70,
+                          path ? CBM_MECH_WARM_MASS_PATH : CBM_MECH_WARM_TRANSIENT, &y[path]);
+        CHECK(y[path] < 0.0);
+    }
+    CHECK_NEAR(y[0], y[1], 1e-9);
+}
+
 TEST(mech_fast_snap_through_twig)
 {
     double y;
@@ -831,4 +857,35 @@ TEST(mech_fast_soft_hanging_chain)
     double y;
     snap_through(1e8, 0.0004, 0.004, 0.02, 150, &y); /* did not converge before */
     CHECK(y < 0.0);
+}
+
+/* The fruit-fold workload: the first four years of the fruit-tree model (Taylor-Hell 2005, A.1),
+ * whose summer steps put fruit on 2 mm twigs of E = 0.6 MPa that pass a limit point and snap
+ * through to hanging. Every equilibrium must converge, and all of them together within 4,000
+ * passes. The quasi-static mass path (the fast solver's warm path before the transient one)
+ * took 5,601 passes here (3,118 in year 3 alone); the transient path takes 2,178. */
+TEST(mech_fast_fruit_fold_passes)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree_def d;
+    CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree", &d));
+    d.years = 4;
+    cbm_tree *t = NULL;
+    CHECK_OK(cbm_tree_create(ctx, &d, &t));
+    CHECK_OK(cbm_tree_run(t));
+    size_t passes = 0, unconverged = 0, fruit = 0;
+    for (int y = 1; y <= 4; y++) {
+        const cbm_tree_summary *s = cbm_tree_summary_of(t, y);
+        printf("year %d: %zu segments, %zu fruit, %zu passes, %zu unconverged\n", y, s->segments,
+               s->fruit, s->passes, s->unconverged);
+        passes += s->passes;
+        unconverged += s->unconverged;
+        fruit += s->fruit;
+    }
+    printf("fruit fold: %zu passes in four years\n", passes);
+    CHECK(fruit > 0);
+    CHECK_EQ_INT(unconverged, 0);
+    CHECK(passes <= 4000);
+    cbm_tree_destroy(t);
+    test_ctx_end(ctx);
 }

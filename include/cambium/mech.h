@@ -237,6 +237,23 @@ typedef enum cbm_mech_precond {
     CBM_MECH_PRECOND_STIFFNESS
 } cbm_mech_precond;
 
+/// How the fast solver reaches the equilibrium from a warm start (the previous equilibrium under
+/// changed loads or a changed plant) when plain Newton steps do not get there: the first step
+/// would turn a frame by more than 0.5 rad, or the line search stalls (for the transient path
+/// also: a step cut below 1/8, or 8 steps without convergence).
+typedef enum cbm_mech_warm_path {
+    /// Default: pseudo-transient continuation, implicit Euler steps of the damped motion
+    /// C dOmega/dt = -R from the current state: the plant creeps under its new loads and ends
+    /// in the equilibrium an overdamped motion reaches (a twig past a limit point snaps through
+    /// to hanging). With the tree preconditioner and without ground contact; otherwise as
+    /// CBM_MECH_WARM_MASS_PATH.
+    CBM_MECH_WARM_TRANSIENT,
+    /// Quasi-static continuation over the point masses, from those the start state balances to
+    /// the new ones, then over all loads from the rest state (the fast solver before the
+    /// transient path existed; slow where a twig passes a limit point).
+    CBM_MECH_WARM_MASS_PATH
+} cbm_mech_warm_path;
+
 typedef struct cbm_solve_def {
     cbm_mech_solver solver;          ///< default CBM_MECH_NEWTON
     double tolerance;                ///< relative residual to reach, default 1e-8
@@ -244,7 +261,8 @@ typedef struct cbm_solve_def {
     size_t max_passes;               ///< 0 = limits.max_passes of the context
     int krylov_dim;                  ///< GMRES restart length, default 10 (Newton only)
     cbm_mech_precond preconditioner; ///< default CBM_MECH_PRECOND_TREE (Newton only)
-    bool warm_start; ///< start from the current Omega (default true); else from rest
+    bool warm_start;              ///< start from the current Omega (default true); else from rest
+    cbm_mech_warm_path warm_path; ///< default CBM_MECH_WARM_TRANSIENT (Newton only)
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);

@@ -28,6 +28,7 @@ typedef struct cbm__mech_work {
     cbm_vec3 *res;    /* residual C (Omega - rest) - M_local */
     cbm_vec3 *step;   /* Newton step */
     cbm_vec3 *save;   /* Omega at the last accepted continuation level */
+    cbm_vec3 *start;  /* Omega at the start of a warm solve (fallback of the transient path) */
     cbm_vec3 *dth;    /* tangent: world rotation of each frame */
     cbm_vec3 *dm;     /* tangent: world moment */
     cbm_vec3 *dpos;   /* tangent: world displacement of the proximal node (ground contact) */

@@ -77,7 +77,9 @@
 #define WORK_ARRAYS(X)                                                                             \
     X(dual)                                                                                        \
     X(cj)                                                                                          \
-    X(rj) X(wown) X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(dth) X(dm) X(dpos) X(dfc) X(tmp)
+    X(rj)                                                                                          \
+    X(wown)                                                                                        \
+    X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp)
 
 void cbm__mech_work_free(cbm_plant *p)
 {

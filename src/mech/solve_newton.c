@@ -29,10 +29,19 @@
  *      levels solved to 1e-3. This follows the loading path, so the equilibrium reached is the
  *      one the relaxation reaches from rest when several exist (an inclined heavy rod can also
  *      rest curled back over its base);
- *   3a. before that, from a warm start (Omega away from the rest state) whose point masses
- *      changed since the last converged solve: continuation over the point masses only, from
- *      the balanced ones to the new ones (from_masses), which follows the physical loading
- *      path from the current equilibrium (fruit and leaves appearing on a grown tree);
+ *   3a. before that, from a warm start (Omega away from the rest state), by default
+ *      (CBM_MECH_WARM_TRANSIENT, no ground contact): pseudo-transient continuation (Kelley &
+ *      Keyes 1998; see transient() below), implicit Euler steps of the damped motion
+ *      S dOmega/dt = -R from the current state with the O(n) factorisation of J + sigma S.
+ *      It follows the creep of the plant under its new loads and passes limit points (a twig
+ *      snapping through under new fruit) in tens of steps where the line search on the merit
+ *      crawls for hundreds (the merit must rise on the way over the fold). Newton is tried
+ *      first and hands over after a heavily cut step or 8 steps. If the transient stalls, the
+ *      start state is restored and the quasi-static paths below are taken;
+ *   3b. with CBM_MECH_WARM_MASS_PATH, or after a stalled transient, from a warm start whose
+ *      point masses changed since the last converged solve: continuation over the point masses
+ *      only, from the balanced ones to the new ones (from_masses), which follows the
+ *      quasi-static loading path from the current equilibrium;
  *   4. last resort: bursts of 25 relaxation passes (alpha 0.1, halved when a burst does not
  *      help) between Newton attempts at the full load.
  * Stability: where a pivot block of the factorisation is not positive definite, the step is
@@ -44,7 +53,8 @@
  * it descends the total potential energy (slope sum_i d_i R_i . s_i, no tip moments): the pivot
  * test reads the unsymmetric Newton matrix and also fires at stable hanging equilibria of soft
  * stems. After convergence the unmodified factorisation is checked; an equilibrium the solver
- * comes back to after a push along the soft mode is reported stable.
+ * comes back to after a push along the soft mode is reported stable; if no equilibrium is found
+ * from the pushed state, the one found before is kept (with its unstable joints reported).
  * All vectors are in the plant's workspace, allocated before the iteration starts.
  */
 #include "mech/mech_internal.h"
@@ -55,6 +65,12 @@
 #ifndef MAX_TURN
 #define MAX_TURN 0.5
 #endif
+/* pseudo-transient continuation: largest frame rotation of one step (rad), the relative
+ * residual below which the time step may grow without bound (Newton's end game), the step
+ * budget */
+#define PTC_TURN      0.25
+#define PTC_FAR       1e-3
+#define PTC_MAX_STEPS 400
 
 typedef struct nk {
     cbm_plant *p;
@@ -71,6 +87,7 @@ typedef struct nk {
     double mu_hint;    /* the shift the last unstable configuration needed */
     bool plain;        /* take the plain Newton step when a shifted one does not descend */
     bool conservative; /* no tip moments: the loads have a potential energy */
+    bool handover;     /* warm start with the transient path: hand over early when Newton crawls */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -389,6 +406,10 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
         }
         if (ls != NK_DONE)
             return ls;
+        /* the transient path takes over from a crawling Newton (it passes folds in tens of
+         * steps where the line search needs hundreds) */
+        if (k->handover && (lam < 0.125 * lam0 || it >= 8))
+            return NK_STALL;
         /* slow progress (heavily damped steps again and again): let the caller globalise */
         small = lam <= 1.0 / 16.0 ? small + 1 : 0;
         if (small >= 6)
@@ -402,6 +423,93 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
         if (eta < 1e-6)
             eta = 1e-6;
         prev = k->norm;
+    }
+    return NK_STALL;
+}
+
+/* Pseudo-transient continuation (Kelley & Keyes 1998; Coffey, Kelley & Keyes 2003) from the
+ * current state: implicit Euler steps of the damped motion S dOmega/dt = -R (S = diag(C) of the
+ * joints, the metric of the seeds' relaxation, whose passes are explicit Euler steps of the same
+ * motion), (J + sigma S) d = -R with sigma = 1/dt, solved by the tree factorisation of J + sigma S
+ * (solve_tree.c). The motion follows the plant creeping under its new loads: where a twig has
+ * passed a limit point it swings through to the equilibrium an overdamped motion reaches
+ * (hanging), without the merit having to decrease. Step control:
+ *   - sigma starts at 1 (dt of the elastic relaxation time: S^-1 J = I for light loads) and
+ *     falls with the residual (switched evolution relaxation, sigma_k = sigma_k-1 |R_k|/|R_k-1|)
+ *     or with the step's largest frame rotation t, whichever falls faster, sigma *= min(|R_k| /
+ *     |R_k-1|, t / PTC_TURN), so that steps grow to the trust radius; the end game is Newton's,
+ *     quadratic;
+ *   - the step is scaled so that no frame turns by more than PTC_TURN rad, and while a step had
+ *     to be scaled and the relative residual is above PTC_FAR (a large motion) sigma stays >= 1,
+ *     so that such steps are damped-motion steps, not Newton jumps into another basin;
+ *   - where a pivot block of J + sigma S is not positive definite (or singular) sigma is
+ *     raised (x4) before the step is taken, unless the loads are conservative and the step
+ *     descends the potential energy (the pivot test also fires at stable hanging states, see
+ *     newton_level);
+ *   - a step that makes the state non-finite, or the merit more than 4 times larger and above
+ *     PTC_TURN rad, is undone and sigma raised (x4) (near an unstable equilibrium the merit
+ *     grows from tiny values as the motion leaves it; that is no reason to stop it).
+ * The potential energy itself is no merit here: the residual is its gradient only up to the
+ * right Jacobian of each joint rotation (R_i = C (Omega - rest) - M_local, the gradient is
+ * d_i (C (Omega - rest) - J_r^T M_local)); on the fruit tree, states with relative residuals of
+ * 1e-2 exist where -S^-1 R ascends the energy, and an energy test then stalls the motion.
+ * One step costs one factor-and-solve pass and one evaluation pass. */
+static nk_result transient(nk *k, double tol)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n3 = k->n3;
+    double *step = (double *)w->step;
+    double *om = (double *)p->omega;
+    const double *res = (const double *)w->res;
+    if (!evaluate(k))
+        return NK_NONFINITE;
+    double sigma = 1.0;
+    for (int it = 0; it < PTC_MAX_STEPS; it++) {
+        if (k->rel < tol)
+            return NK_DONE;
+        if (k->st->passes + 4 >= k->max_passes)
+            return NK_BUDGET;
+        double s = sigma;
+        for (;;) {
+            for (size_t q = 0; q < n3; q++)
+                step[q] = -res[q];
+            size_t nonpd = 0;
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, s, &nonpd);
+            k->st->passes++;
+            if (sing == 0 &&
+                (nonpd == 0 || (k->conservative && energy_slope(k, (const double *)w->tmp) < 0.0)))
+                break;
+            s = s < 0.01 ? 0.01 : 4.0 * s;
+            if (s > 1e8)
+                return NK_STALL;
+            if (k->st->passes + 4 >= k->max_passes)
+                return NK_BUDGET;
+        }
+        sigma = s;
+        memcpy(step, w->tmp, n3 * sizeof *step);
+        /* the forward sweep of the solve left the frame rotations of the full step in dth */
+        double turn = largest_turn(p);
+        double lam = turn > PTC_TURN ? PTC_TURN / turn : 1.0;
+        double prev = k->norm;
+        for (size_t q = 0; q < n3; q++)
+            om[q] += lam * step[q];
+        bool fin = evaluate(k);
+        k->st->newton_steps++;
+        if (!fin || (k->norm > 4.0 * prev && k->norm > PTC_TURN)) {
+            for (size_t q = 0; q < n3; q++)
+                om[q] -= lam * step[q];
+            if (!evaluate(k))
+                return NK_NONFINITE;
+            sigma = sigma < 0.01 ? 0.01 : 4.0 * sigma;
+            continue;
+        }
+        double f = k->norm / prev, g = turn / PTC_TURN;
+        sigma *= f < g ? f : g;
+        if (k->rel > PTC_FAR && lam < 1.0 && sigma < 1.0)
+            sigma = 1.0;
+        if (sigma < 1e-12)
+            sigma = 0.0;
     }
     return NK_STALL;
 }
@@ -476,7 +584,21 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     for (size_t i = 0; i < p->n && !k.plain; i++)
         k.plain = p->omega[i].x != w->rj[i].x || p->omega[i].y != w->rj[i].y ||
                   p->omega[i].z != w->rj[i].z;
+    /* the transient path from a warm start (the factorisation solves J + sigma S; with ground
+     * contact it lacks the contact stiffness) */
+    bool transient_path =
+        k.plain && k.tree && !p->ground && def->warm_path == CBM_MECH_WARM_TRANSIENT;
+    if (transient_path)
+        memcpy(w->start, p->omega, p->n * sizeof *w->start);
+    k.handover = transient_path;
     nk_result r = newton_level(&k, tol, m, k.tree);
+    k.handover = false;
+    if ((r == NK_LARGE || r == NK_STALL) && transient_path) {
+        st->continuation_steps++;
+        r = transient(&k, tol);
+        if (r == NK_STALL) /* the quasi-static paths below, from the start state */
+            memcpy(p->omega, w->start, p->n * sizeof *p->omega);
+    }
     bool changed = false;
     for (size_t i = 0; i < p->n && !changed; i++)
         changed = p->pmass0[i] != p->pmass[i];
@@ -566,8 +688,12 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
             cbm__mech_tree_perturb_unstable(p, 0.05);
             st->continuation_steps++;
             r = newton_level(&k, tol, m, false);
-            if (r != NK_DONE)
+            if (r != NK_DONE) {
+                /* no equilibrium found from the pushed state: keep the one found before */
+                memcpy(p->omega, w->save, p->n * sizeof *p->omega);
+                r = evaluate(&k) ? NK_DONE : NK_NONFINITE;
                 break;
+            }
             /* back at the same equilibrium (every joint within 1e-6 rad of it) after a push of
              * 0.05 rad along the soft mode: the steps descend the energy there (plain ones only
              * where they do), so this is a minimum along that mode and the pivot test misread

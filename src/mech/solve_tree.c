@@ -36,6 +36,10 @@
  * segments that compute them (work.fact). Cost with contact: about twice the 3x3 products on
  * those paths; none without.
  *
+ * Speed: the factorisation is most of a growth run's time (52 % of the 10-year fruit tree before
+ * the 3x3 loops were unrolled and Q, a and W a D^-1 written in place; 38 % after, same
+ * arithmetic in the same order, so the same results to the bit).
+ *
  * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
  * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
  * positive definite symmetric part (Sylvester's criterion); the count of those that do not is
@@ -60,10 +64,22 @@ static inline m3 skew(cbm_vec3 v)
 static inline m3 mmul(const double *a, const double *b)
 {
     m3 r;
+#pragma GCC unroll 9
     for (int i = 0; i < 3; i++)
+#pragma GCC unroll 9
         for (int j = 0; j < 3; j++)
             r.m[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
     return r;
+}
+
+/* out = a b (out must not alias a or b) */
+static inline void mmul_to(double *restrict out, const double *a, const double *b)
+{
+#pragma GCC unroll 9
+    for (int i = 0; i < 3; i++)
+#pragma GCC unroll 9
+        for (int j = 0; j < 3; j++)
+            out[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
 }
 
 static inline cbm_vec3 mvec(const double *a, cbm_vec3 v)
@@ -127,6 +143,7 @@ static bool sym_pd(const double *d)
 
 static inline void madd(double *a, const double *b)
 {
+#pragma GCC unroll 9
     for (int k = 0; k < 9; k++)
         a[k] += b[k];
 }
@@ -203,7 +220,9 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         double *W = w->fw + 9 * i;
         double vh = v3_dot(V, h);
         const double hv[3] = {h.x, h.y, h.z}, vv[3] = {V.x, V.y, V.z};
+#pragma GCC unroll 9
         for (int r0 = 0; r0 < 3; r0++)
+#pragma GCC unroll 9
             for (int c0 = 0; c0 < 3; c0++)
                 W[3 * r0 + c0] += hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0);
         const bool act = ground && w->fact[i];
@@ -211,9 +230,11 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         if (act)
             contact_pre(p, i, h, W, &Xi, &Z, &Y);
         m3 WM = skew(p->moment[i]);
+#pragma GCC unroll 9
         for (int k = 0; k < 9; k++)
             WM.m[k] += W[k];
-        m3 Q = mmul(Rt.m, WM.m);
+        double *Q = w->fq + 9 * i;
+        mmul_to(Q, Rt.m, WM.m);
         /* a = R J_r(r) d */
         double d = w->dual[i];
         cbm_vec3 r = v3_scale(p->omega[i], d);
@@ -229,16 +250,21 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         /* J = I - c1 [r]x + c2 [r]x^2, with [r]x^2 = r r^T - |r|^2 I */
         m3 sr = skew(r), J;
         const double rv[3] = {r.x, r.y, r.z};
+#pragma GCC unroll 9
         for (int r0 = 0; r0 < 3; r0++)
+#pragma GCC unroll 9
             for (int c0 = 0; c0 < 3; c0++) {
                 double id = r0 == c0 ? 1.0 : 0.0;
                 J.m[3 * r0 + c0] = id - c1 * sr.m[3 * r0 + c0] + c2 * (rv[r0] * rv[c0] - id * t2);
             }
-        m3 A = mmul(R.m, J.m);
+        double *A = w->fa + 9 * i;
+        mmul_to(A, R.m, J.m);
+#pragma GCC unroll 9
         for (int k = 0; k < 9; k++)
-            A.m[k] *= d;
-        m3 QA = mmul(Q.m, A.m), D;
+            A[k] *= d;
+        m3 QA = mmul(Q, A), D;
         cbm_vec3 c = w->cj[i];
+#pragma GCC unroll 9
         for (int k = 0; k < 9; k++)
             D.m[k] = -QA.m[k];
         D.m[0] += (1.0 + mu) * c.x;
@@ -254,22 +280,21 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
             Di[4] = 1.0 / c.y;
             Di[8] = 1.0 / c.z;
         }
-        m3 AD = mmul(A.m, Di);
-        m3 WAD = mmul(W, AD.m);
+        m3 AD = mmul(A, Di);
+        double *WAD = w->fwad + 9 * i;
+        mmul_to(WAD, W, AD.m);
         /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
-        m3 Phi = mmul(WAD.m, Q.m);
+        m3 Phi = mmul(WAD, Q);
+#pragma GCC unroll 9
         for (int k = 0; k < 9; k++)
             Phi.m[k] += W[k];
-        memcpy(w->fq + 9 * i, Q.m, sizeof Q.m);
-        memcpy(w->fa + 9 * i, A.m, sizeof A.m);
-        memcpy(w->fwad + 9 * i, WAD.m, sizeof WAD.m);
         int64_t pa = p->parent[i];
         if (pa >= 0)
             madd(w->fw + 9 * (size_t)pa, Phi.m);
         if (act) {
             /* Gamma = W a D^-1 P + Y, Lambda = Z + (Z a D^-1) Q, Xi = (Z a D^-1) P + Xi' */
             m3 P = mmul(Rt.m, Y.m), ZAD = mmul(Z.m, AD.m);
-            m3 gam = mmul(WAD.m, P.m), lam = mmul(ZAD.m, Q.m), xi = mmul(ZAD.m, P.m);
+            m3 gam = mmul(WAD, P.m), lam = mmul(ZAD.m, Q), xi = mmul(ZAD.m, P.m);
             memcpy(w->fp + 9 * i, P.m, sizeof P.m);
             memcpy(w->fzad + 9 * i, ZAD.m, sizeof ZAD.m);
             if (pa >= 0) {
