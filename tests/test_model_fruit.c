@@ -176,11 +176,12 @@ TEST(model_fruit_deterministic_and_conserving)
 }
 
 /* Fig. 4.1: when the leaves and fruit have fallen the same buds stand higher than at the end of
- * summer (fruit from the first year, a modulus of rupture that breaks nothing). */
+ * summer (fruit from the second year, a modulus of rupture that breaks nothing; fruit on the
+ * first-year whip pulls it to the ground, where it is cropped). */
 TEST(model_fruit_spring_back_after_shedding)
 {
     cbm_context *ctx = test_ctx();
-    const char *d[] = {"YEARS=3", "FIRST_FRUIT_YEAR=1", "MOR=2.9e7"};
+    const char *d[] = {"YEARS=3", "FIRST_FRUIT_YEAR=2", "MOR=2.9e7"};
     tree t;
     CHECK_OK(open_tree(ctx, d, 3, &t));
     int checked = 0;
@@ -195,7 +196,7 @@ TEST(model_fruit_spring_back_after_shedding)
             summer_over = true;
         } else if (summer_over && st.phase == WINTER && st.leaves + st.fruit == 0) {
             summer_over = false;
-            printf("year %d: %zu buds, %zu fruit: mean bud height %.4f m loaded, %.4f m bare\n",
+            printf("year %d: %zu buds, %zu fruit: mean bud height %.7f m loaded, %.7f m bare\n",
                    st.year + 1, st.buds, loaded.fruit, loaded.bud_height, st.bud_height);
             CHECK_EQ_INT((int)st.buds, (int)loaded.buds);
             CHECK_EQ_INT(st.broken, 0);
@@ -203,8 +204,8 @@ TEST(model_fruit_spring_back_after_shedding)
                 CHECK(loaded.fruit > 0);
                 CHECK(st.bud_height > loaded.bud_height + 1e-3);
                 checked++;
-            } else {
-                CHECK(st.bud_height > loaded.bud_height);
+            } else { /* leaves of 2 mg: no spring-back above the solve tolerance (~10 um here) */
+                CHECK(fabs(st.bud_height - loaded.bud_height) < 1e-4);
             }
         }
     }
