@@ -106,7 +106,7 @@ struct cbm_turtle {
     int64_t module_index; /* modules fed so far (the one executing is module_index - 1) */
     int64_t node_module;  /* the module that opened the segment in progress */
     double turn_deg, turn_sin, turn_cos; /* the last explicit turn angle and its sine, cosine */
-    int64_t part_module;  /* >= 0: the module a part being emitted belongs to */
+    int64_t part_module;                 /* >= 0: the module a part being emitted belongs to */
 };
 
 /* ---- lookup ---- */
