@@ -261,8 +261,20 @@ static void parse_production(parser *p)
     prod pr = {.pre = -1, .cond = -1, .post = -1, .prob = -1, .lc = 0, .rc = 0};
     pr.pos = c->pos;
     int32_t f, n;
-    if (!parse_formal(p, &f, &n, names, lens, &nnames))
+    cbm__skip(c, false);
+    size_t star = c->pos;
+    if (p->t[star] == '*') {
+        /* `* < pred`: an empty left context, as cpfg writes it */
+        c->pos++;
+        cbm__skip(c, false);
+        if (p->t[c->pos] != '<') {
+            cbm__cerr(c, star, "expected a predecessor module, found '*'");
+            goto fail;
+        }
+        f = (int32_t)ls->fmods.len, n = 0;
+    } else if (!parse_formal(p, &f, &n, names, lens, &nnames)) {
         goto fail;
+    }
     cbm__skip(c, false);
     if (p->t[c->pos] == '<') {
         c->pos++;
@@ -281,8 +293,13 @@ static void parse_production(parser *p)
     cbm__skip(c, false);
     if (p->t[c->pos] == '>') {
         c->pos++;
-        if (!parse_formal(p, &pr.rc, &pr.nrc, names, lens, &nnames))
+        cbm__skip(c, false);
+        if (p->t[c->pos] == '*') { /* `pred > *`: an empty right context (cpfg) */
+            c->pos++;
+            pr.rc = (int32_t)ls->fmods.len, pr.nrc = 0;
+        } else if (!parse_formal(p, &pr.rc, &pr.nrc, names, lens, &nnames)) {
             goto fail;
+        }
     }
     pr.nformals = nnames;
     if (nnames > ls->max_formals)
@@ -450,11 +467,12 @@ static void select_lsystem(parser *p, sublsys *sub)
     p->ended = false;
 }
 
-/* The checks at the end of an L-system (at the next Lsystem: or the end of the file). */
+/* The checks at the end of an L-system, at the next Lsystem: (pos): its axiom, reported at its
+ * own Lsystem: line, and its endlsystem. */
 static void end_lsystem(parser *p, size_t pos)
 {
     if (!p->have_axiom)
-        cbm__cerr(p->c, pos, "the L-system has no axiom:");
+        cbm__cerr(p->c, p->lsys_pos, "the L-system has no axiom:");
     else if (!p->ended)
         cbm__cerr(p->c, pos, "expected 'endlsystem' at the end of the L-system");
 }
@@ -646,8 +664,11 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
     if (!c->fatal) {
         if (!p.have_lsystem)
             cbm__cerr(c, c->pos, "expected 'Lsystem:'");
-        else
-            end_lsystem(&p, c->pos);
+        else if (!p.have_axiom)
+            cbm__cerr(c, p.lsys_pos, "the L-system has no axiom:");
+        else if (!p.ended)
+            cbm__cerr(c, p.lsys_pos,
+                      "expected 'endlsystem' at the end of the L-system (the file ends first)");
         for (size_t i = 0; i < p.calls.len; i++) {
             int id = p.calls.data[i].id;
             bool found = id == ls->id;
