@@ -50,25 +50,25 @@ TEST(errors_name_the_place)
     cbm_context *ctx = diag_ctx(&g);
     cbm_lsys *ls = NULL;
     cbm_status s = load_text(ctx,
-                             "Lsystem: 1\n"                 /* 1 */
-                             "derivation length: 2\n"       /* 2 */
-                             "Axiom: A?(7,1)B$\n"           /* 3: no L-system 7 */
-                             "A --> ?(2)C$?(1)A$\n"         /* 4: 2 and 1 exist */
-                             "Lsystem: 2\n"                 /* 5: no endlsystem before */
-                             "Axiom: C\n"                   /* 6 */
-                             "endlsystem\n"                 /* 7 */
-                             "Lsystem: 2\n"                 /* 8: a second 2 */
-                             "Axiom: C\n"                   /* 9 */
-                             "endlsystem\n"                 /* 10 */
-                             "Lsystem: leaf\n"              /* 11: not a number */
-                             "C --> D\n"                    /* 12: production before axiom */
-                             "endlsystem\n"                 /* 13: no axiom (11) */
-                             "Lsystem: 3\n"                 /* 14 */
-                             "Axiom: C\n"                   /* 15 */
-                             "C(x) --> ?(4, x)C(x)$\n"      /* 16: no L-system 4 */
-                             "C > * : * --> ?(5 - 2)C$\n"   /* 17: 3 exists; `> *` empty */
-                             "* < C --> D\n"                /* 18: empty left context */
-                             "* C --> D\n",                 /* 19: '*' not a context */
+                             "Lsystem: 1\n"               /* 1 */
+                             "derivation length: 2\n"     /* 2 */
+                             "Axiom: A?(7,1)B$\n"         /* 3: no L-system 7 */
+                             "A --> ?(2)C$?(1)A$\n"       /* 4: 2 and 1 exist */
+                             "Lsystem: 2\n"               /* 5: no endlsystem before */
+                             "Axiom: C\n"                 /* 6 */
+                             "endlsystem\n"               /* 7 */
+                             "Lsystem: 2\n"               /* 8: a second 2 */
+                             "Axiom: C\n"                 /* 9 */
+                             "endlsystem\n"               /* 10 */
+                             "Lsystem: leaf\n"            /* 11: not a number */
+                             "C --> D\n"                  /* 12: production before axiom */
+                             "endlsystem\n"               /* 13: no axiom (11) */
+                             "Lsystem: 3\n"               /* 14 */
+                             "Axiom: C\n"                 /* 15 */
+                             "C(x) --> ?(4, x)C(x)$\n"    /* 16: no L-system 4 */
+                             "C > * : * --> ?(5 - 2)C$\n" /* 17: 3 exists; `> *` empty */
+                             "* < C --> D\n"              /* 18: empty left context */
+                             "* C --> D\n",               /* 19: '*' not a context */
                              &ls);
     CHECK_STATUS(s, CBM_E_SYNTAX);
     CHECK(ls == NULL);
@@ -83,8 +83,7 @@ TEST(errors_name_the_place)
     CHECK_MSG(strstr(g.text, "sub.l:12:1: expected a header item"), "%s", g.text);
     CHECK_MSG(strstr(g.text, "sub.l:11:1: the L-system has no axiom:"), "%s", g.text);
     CHECK_MSG(strstr(g.text, "sub.l:16:10: ?(4, ...) calls a sub-L-system"), "%s", g.text);
-    CHECK_MSG(strstr(g.text, "sub.l:19:1: expected a predecessor module, found '*'"), "%s",
-              g.text);
+    CHECK_MSG(strstr(g.text, "sub.l:19:1: expected a predecessor module, found '*'"), "%s", g.text);
     CHECK_MSG(!strstr(g.text, "sub.l:4:") && !strstr(g.text, "sub.l:17:") &&
                   !strstr(g.text, "sub.l:18:"),
               "%s", g.text);
@@ -240,11 +239,12 @@ TEST(a_call_is_not_a_query)
     /* ?(2,0.5) is followed by B(5), whose image is C(6): neither is a query module; the query
      * ?P after $ receives the position 1 (F(2) at scale 0.5) and B keeps its parameter */
     cbm_context *ctx = test_ctx();
-    cbm_model *m = load_model(ctx,
-                              "Lsystem: 1\nderivation length: 1\nAxiom: ?(2,0.5)B(5)F(2)$?P(0,0,0)\n"
-                              "homomorphism\nB(x) --> C(x+1)\nendlsystem\n"
-                              "Lsystem: 2\nAxiom: B(1)\nhomomorphism\nB(x) --> C(x+1)\nendlsystem\n",
-                              NULL);
+    cbm_model *m =
+        load_model(ctx,
+                   "Lsystem: 1\nderivation length: 1\nAxiom: ?(2,0.5)B(5)F(2)$?P(0,0,0)\n"
+                   "homomorphism\nB(x) --> C(x+1)\nendlsystem\n"
+                   "Lsystem: 2\nAxiom: B(1)\nhomomorphism\nB(x) --> C(x+1)\nendlsystem\n",
+                   NULL);
     if (m) {
         CHECK_OK(cbm_model_reset(m));
         CHECK_OK(cbm_model_step(m));

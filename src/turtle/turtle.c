@@ -171,6 +171,7 @@ static const tname names[] = {
     {"?H", CBM_T_QUERY_H},
     {"?L", CBM_T_QUERY_L},
     {"?U", CBM_T_QUERY_U},
+    {"?Q", CBM_T_QUERY_Q},
 };
 
 /* One-character commands, by character (the common case, looked up per module by
@@ -992,9 +993,56 @@ static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, i
     return cbm_scene_add_polygon(t->scene, t->scratch.data, (size_t)n);
 }
 
+/* cpfg's ?Q: the frame whose rows are H, L, U as a quaternion (x, y, z, w), by the classic
+ * conversion from a rotation matrix M (Shoemake 1985): w^2 =
+ * (1 + trace M) / 4; when w^2 > 1e-10, (x, y, z) = (M12 - M21, M20 - M02, M01 - M10) / 4w;
+ * otherwise w = 0 and, again by the first component whose square is large enough,
+ * x^2 = -(M11 + M22) / 2, y = M01 / 2x, z = M02 / 2x; or x = 0, y^2 = (1 - M22) / 2,
+ * z = M12 / 2y; or (0, 0, 1, 0). These are cpfg's branches, so a half-turn frame gives cpfg's
+ * quaternion. */
+static void frame_quaternion(const tstate *s, double q[4])
+{
+    const double m[3][3] = {
+        {s->h.x, s->h.y, s->h.z}, {s->l.x, s->l.y, s->l.z}, {s->u.x, s->u.y, s->u.z}};
+    const double eps = 1e-10;
+    double w2 = 0.25 * (1.0 + m[0][0] + m[1][1] + m[2][2]);
+    if (w2 > eps) {
+        double w = sqrt(w2), k = 4.0 * w;
+        q[0] = (m[1][2] - m[2][1]) / k;
+        q[1] = (m[2][0] - m[0][2]) / k;
+        q[2] = (m[0][1] - m[1][0]) / k;
+        q[3] = w;
+        return;
+    }
+    q[3] = 0.0;
+    double x2 = -0.5 * (m[1][1] + m[2][2]);
+    if (x2 > eps) {
+        q[0] = sqrt(x2);
+        q[1] = m[0][1] / (2.0 * q[0]);
+        q[2] = m[0][2] / (2.0 * q[0]);
+        return;
+    }
+    q[0] = 0.0;
+    double y2 = 0.5 * (1.0 - m[2][2]);
+    if (y2 > eps) {
+        q[1] = sqrt(y2);
+        q[2] = m[1][2] / (2.0 * q[1]);
+    } else {
+        q[1] = 0.0;
+        q[2] = 1.0;
+    }
+}
+
 static cbm_status query(cbm_turtle *t, int cmd, double *params, int nparams)
 {
     const tstate *s = &t->cur;
+    if (cmd == CBM_T_QUERY_Q) {
+        double q[4];
+        frame_quaternion(s, q);
+        for (int i = 0; i < nparams && i < 4; i++)
+            params[i] = q[i];
+        return CBM_OK;
+    }
     cbm_vec3 v = cmd == CBM_T_QUERY_P   ? s->pos
                  : cmd == CBM_T_QUERY_H ? s->h
                  : cmd == CBM_T_QUERY_L ? s->l
@@ -1292,6 +1340,7 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_QUERY_H:
     case CBM_T_QUERY_L:
     case CBM_T_QUERY_U:
+    case CBM_T_QUERY_Q:
         return query(t, cmd, params, nparams);
     case CBM_T_SCALE_SET:
         if (nparams > 0)
@@ -1315,7 +1364,7 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     tstate *s = &t->cur;
     const cbm_view *v = t->view;
     t->module_index++;
-    if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_U) {
+    if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_Q) {
         for (int i = 0; i < nparams; i++)
             if (!isfinite(params[i]))
                 return cbm__fail(t->ctx, CBM_E_NONFINITE,

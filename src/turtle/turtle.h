@@ -2,9 +2,9 @@
  *
  * The engine resolves each module symbol to a turtle command once, when it compiles a model
  * (cbm__turtle_lookup), and during interpretation calls cbm__turtle_exec for every module of the
- * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U) get their
- * parameters written back through `params`. Modules that are not turtle commands are skipped by
- * the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
+ * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U ?Q) get
+ * their parameters written back through `params`. Modules that are not turtle commands are skipped
+ * by the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
  * An engine whose modules are cpfg's single symbols (`@` `M`(1,2) rather than `@M`(1,2)) calls
  * cbm__turtle_feed for every module instead: it combines `@`, `?` and `~` with what follows.
  *
@@ -56,6 +56,7 @@ typedef enum cbm_tcmd {
     CBM_T_QUERY_H,           /* ?H */
     CBM_T_QUERY_L,           /* ?L */
     CBM_T_QUERY_U,           /* ?U */
+    CBM_T_QUERY_Q,           /* ?Q: the frame as a quaternion */
     CBM_T_USER_FIRST = 1000, /* further commands are the turtle module's own business */
     CBM_T_ELASTICITY = CBM_T_USER_FIRST, /* _  set or increment the ABOP tropism elasticity */
     CBM_T_TROPISM_INC,                   /* @Ti(i, de) */
