@@ -1,7 +1,8 @@
 /* cpfg sub-L-systems (cpfg manual 7.2) beyond the golden models of tests/lsys/sublsys-*.l:
  * errors with their file:line:col, a call to a missing L-system found when deriving, the
  * turtle's scale inside ?(id, s) ... $ (lengths, widths, nesting) and @D @Di @Dd and the view's
- * "initial scale:", query modules that a ?(id) does not shadow, an unmatched $, and allocation
+ * "initial scale:", query modules that a ?(id) does not shadow, an unmatched $, a stochastic
+ * sub-L-system's draws, and allocation
  * failure at every point of a run with sub-L-systems. Geometry is checked against values worked
  * by hand from the rules: a length or a width given as a parameter is multiplied by the product
  * of the scales of the open sub-L-systems. */
@@ -136,6 +137,29 @@ TEST(unmatched_dollar_is_passed_over)
     tbuf b = {0};
     format_string(ls, false, false, &b);
     CHECK_MSG(!strcmp(b.s, "$B?(2)C$$B"), "%s", b.s);
+    tb_free(&b);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+TEST(stochastic_sub_lsystem_draws_for_its_own_modules)
+{
+    /* L-system 2 is stochastic (X : 1, Y : 9: X when 10 d <= 1), 1 is not: one drand48() draw
+     * per module of L-system 2 ($ included), none for L-system 1's. From the default state the
+     * draws are 3.9e-14, 0.00099, 0.0416, 0.177, 0.365, 0.0913, 0.0923: the four B give XXXY,
+     * $ takes 0.365, the next two B give XX. */
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load_text(ctx,
+                       "Lsystem: 1\nderivation length: 1\nAxiom: BA?(2)BBBB$B?(2)BB$\n"
+                       "B --> Z\nendlsystem\n"
+                       "Lsystem: 2\nAxiom: B\nB --> X : 1\nB --> Y : 9\nendlsystem\n",
+                       &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    tbuf b = {0};
+    format_string(ls, false, false, &b);
+    CHECK_MSG(!strcmp(b.s, "ZA?(2)XXXY$Z?(2)XX$"), "%s", b.s);
     tb_free(&b);
     cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
