@@ -60,4 +60,12 @@ printf 'Lsystem: 1\nAxiom: ?(5)A$\nendlsystem\nLsystem: 1\nAxiom: A\nendlsystem\
 grep -q "bad.l:4:10: error: a second L-system labelled 1" "$T/err" || fail "label: $(cat "$T/err")"
 grep -q "bad.l:2:8: error: ?(5, ...) calls a sub-L-system" "$T/err" || fail "call: $(cat "$T/err")"
 [ ! -e "$T/bad.str" ] || fail "output written after an error"
+# the example model: nine leaves (L-system 2) and a flower (L-system 3) on the shoot; the leaf
+# made at step k (1 to 9) has grown min(6, 14 - k) steps: eight are grown (K(6)), one is K(5)
+"$BIN" run "$SRC/models/cpfg-herb-sublsystems.l" -o "$T/herb.str" -o "$T/herb.obj" || fail "herb"
+[ "$(grep -c '^?(2,0.6)$' "$T/herb.str")" -eq 9 ] || fail "herb: nine leaves"
+[ "$(grep -c '^?(3,1.5)$' "$T/herb.str")" -eq 1 ] || fail "herb: one flower"
+[ "$(grep -c '^K(6)$' "$T/herb.str")" -eq 8 ] || fail "herb: eight grown leaves"
+[ "$(grep -c '^K(5)$' "$T/herb.str")" -eq 1 ] || fail "herb: the youngest leaf"
+[ -s "$T/herb.obj" ] || fail "herb: no geometry"
 echo ok
