@@ -395,10 +395,11 @@ static cbm_status follow_markers(cbm_lsys *ls, const lstr *s, lpos a, size_t b, 
                 char where[32] = "homomorphism";
                 if (step > 0)
                     snprintf(where, sizeof where, "step %d", step);
+                double id = v >= -2e9 && v <= 2e9 ? (double)(int)v : v;
                 return cbm__fail(ls->ctx, CBM_E_RUNTIME,
                                  "%s: ?(%g, ...) calls a sub-L-system, but no L-system of the "
-                                 "file is labelled %d",
-                                 where, v, v >= -2e9 && v <= 2e9 ? (int)v : 0);
+                                 "file is labelled %g",
+                                 where, v, id);
             }
             CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, ls->lstack, (uint16_t)*cursys));
             *cursys = k;

@@ -28,7 +28,7 @@
 
 /* A ?(id) with a constant id, checked once every L-system is known. */
 typedef struct callref {
-    int id;
+    double id;
     size_t pos;
 } callref;
 
@@ -218,7 +218,7 @@ static bool parse_succ(parser *p, int32_t *first, int32_t *count)
                     m.args = e;
                     double v;
                     if (m.sym == '?' && cbm__node_const(c, e, &v)) {
-                        callref r = {v >= -2e9 && v <= 2e9 ? (int)v : -1, mpos};
+                        callref r = {v, mpos};
                         if (CBM_ARRAY_PUSH(ls->ctx, p->calls, r) != CBM_OK) {
                             c->status = CBM_E_NOMEM;
                             c->fatal = true;
@@ -670,15 +670,17 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
             cbm__cerr(c, p.lsys_pos,
                       "expected 'endlsystem' at the end of the L-system (the file ends first)");
         for (size_t i = 0; i < p.calls.len; i++) {
-            int id = p.calls.data[i].id;
-            bool found = id == ls->id;
-            for (size_t j = 0; !found && j < ls->subs.len; j++)
+            double v = p.calls.data[i].id;
+            bool in = v >= -2e9 && v <= 2e9; /* a label is an int, as cpfg's (int) of it */
+            int id = in ? (int)v : 0;
+            bool found = in && id == ls->id;
+            for (size_t j = 0; in && !found && j < ls->subs.len; j++)
                 found = ls->subs.data[j].id == id;
             if (!found)
                 cbm__cerr(c, p.calls.data[i].pos,
-                          "?(%d, ...) calls a sub-L-system, but no L-system of the file is "
-                          "labelled %d",
-                          id, id);
+                          "?(%g, ...) calls a sub-L-system, but no L-system of the file is "
+                          "labelled %g",
+                          in ? (double)id : v, in ? (double)id : v);
         }
         cbm__check_globals(c);
     }
