@@ -25,7 +25,8 @@
  *
  * Memory: the peak of a step is the current string plus the one being produced. When nothing
  * can look back into the current string (no left context in the productions, no
- * decomposition) and the step cannot stop on a limit (the current string times the longest
+ * decomposition, no sub-L-systems, whose productions the bounds below do not cover) and the
+ * step cannot stop on a limit (the current string times the longest
  * successor, in modules and in bytes, is within max_modules and max_bytes; failing that, the
  * same bound by symbol, from a count of the current symbols), the pages of the
  * current string that the scan has passed are handed back to the system as it goes (madvise
