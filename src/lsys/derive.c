@@ -25,10 +25,9 @@
  *
  * Memory: the peak of a step is the current string plus the one being produced. When nothing
  * can look back into the current string (no left context in the productions, no
- * decomposition, no sub-L-systems, whose productions the bounds below do not cover) and the
- * step cannot stop on a limit (the current string times the longest
- * successor, in modules and in bytes, is within max_modules and max_bytes; failing that, the
- * same bound by symbol, from a count of the current symbols), the pages of the
+ * decomposition, in any of the model's L-systems) and the step cannot stop on a limit (the current
+ * string times the longest successor, in modules and in bytes, is within max_modules and max_bytes;
+ * failing that, the same bound by symbol, from a count of the current symbols), the pages of the
  * current string that the scan has passed are handed back to the system as it goes (madvise
  * MADV_DONTNEED, Linux), so the peak is close to the final string alone. The buffer keeps its
  * capacity and is refilled as the output of the next step.
@@ -445,9 +444,14 @@ static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
     const cbm_limits *lim = cbm_context_limits(ls->ctx);
     if (nsym > (double)lim->max_modules)
         return false;
+    double nprods = 0;
+    for (int k = 0; k < ls->nsys; k++)
+        nprods += (double)ls->sys[k].main->prods.len;
+    /* with sub-L-systems, the L-system stack: at most one entry per module, doubling */
+    double lstack = ls->subcalls ? 4.0 * (double)ls->cur.n : 0.0;
     double need = (double)cbm_context_bytes(ls->ctx) +
                   2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20) +
-                  16.0 * (double)ls->main.prods.len;
+                  16.0 * nprods + lstack;
     return !lim->max_bytes || need <= (double)lim->max_bytes;
 }
 
@@ -456,27 +460,34 @@ static void release_begin(const cbm_lsys *ls, release *r)
 {
     memset(r, 0, sizeof *r);
 #if defined(__linux__) && defined(MADV_DONTNEED)
-    if (ls->decomp.present || ls->subcalls || ls->cur.n < RELEASE_EVERY)
+    if (ls->cur.n < RELEASE_EVERY)
         return;
+    for (int k = 0; k < ls->nsys; k++)
+        if (ls->sys[k].decomp->present)
+            return;
     /* bounds of the next string: a module becomes at most the longest successor of the
-     * productions that start with its symbol (with at most their most parameters), or itself */
+     * productions (of any L-system) that start with its symbol (with at most their most
+     * parameters), or itself */
     size_t len[128], par[128], longest = 1, most = 0;
     for (int c = 0; c < 128; c++)
         len[c] = 1, par[c] = 0;
-    for (size_t i = 0; i < ls->main.prods.len; i++) {
-        const prod *pr = &ls->main.prods.data[i];
-        if (pr->nlc)
-            return;
-        size_t np = 0;
-        for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
-            np += ls->smods.data[pr->succ + m].np;
-        int c = ls->fmods.data[pr->pred].sym & 0x7f;
-        if ((size_t)pr->nsucc > len[c])
-            len[c] = (size_t)pr->nsucc;
-        if (np > par[c])
-            par[c] = np;
-        longest = len[c] > longest ? len[c] : longest;
-        most = par[c] > most ? par[c] : most;
+    for (int k = 0; k < ls->nsys; k++) {
+        const prodset *set = ls->sys[k].main;
+        for (size_t i = 0; i < set->prods.len; i++) {
+            const prod *pr = &set->prods.data[i];
+            if (pr->nlc)
+                return;
+            size_t np = 0;
+            for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
+                np += ls->smods.data[pr->succ + m].np;
+            int c = ls->fmods.data[pr->pred].sym & 0x7f;
+            if ((size_t)pr->nsucc > len[c])
+                len[c] = (size_t)pr->nsucc;
+            if (np > par[c])
+                par[c] = np;
+            longest = len[c] > longest ? len[c] : longest;
+            most = par[c] > most ? par[c] : most;
+        }
     }
     const lstr *cur = &ls->cur;
     double nsym = (double)cur->n * (double)longest;
