@@ -51,7 +51,7 @@ CBM_API cbm_status cbm_model_step(cbm_model *m);
 CBM_API cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record,
                                        cbm_turtle **turtle);
 
-/// Whether the current string holds query modules (`?` followed by P, H, L or U).
+/// Whether the current string holds query modules (`?` followed by P, H, L, U or Q).
 CBM_API bool cbm_model_has_queries(const cbm_model *m);
 
 /// What a model holds (for `cambium info`).

@@ -188,7 +188,8 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
         }
         s = cbm__turtle_feed(t, c.symbol, buf, n);
         if (s == CBM_OK && after_query && n > 0 &&
-            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U'))
+            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U' ||
+             c.symbol == 'Q'))
             for (int i = 0; i < n && s == CBM_OK; i++)
                 s = cbm_lsys_cursor_set_param(ls, &c, i, buf[i]);
         after_query = c.symbol == '?' && n == 0;
@@ -309,7 +310,7 @@ bool cbm_model_has_queries(const cbm_model *m)
     while (p < end && (p = memchr(p, '?', (size_t)(end - p))) != NULL) {
         p++;
         int next = p < end ? (*p & 0x7f) : 0;
-        if (next == 'P' || next == 'H' || next == 'L' || next == 'U')
+        if (next == 'P' || next == 'H' || next == 'L' || next == 'U' || next == 'Q')
             return true;
     }
     return false;
