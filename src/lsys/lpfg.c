@@ -4063,6 +4063,18 @@ cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const do
     return CBM_OK;
 }
 
+void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
+                        int *decomp_depth, int *interp_depth, size_t *modules)
+{
+    const lpfg *lp = ls->lp;
+    *prods = lp->main.prods.len;
+    *decomp = lp->decomp.present ? lp->decomp.prods.len : 0;
+    *interp = lp->interp.present ? lp->interp.prods.len : 0;
+    *decomp_depth = lp->decomp.present ? lp->decomp.depth : 0;
+    *interp_depth = lp->interp.present ? lp->interp.depth : 0;
+    *modules = lp->mods.len;
+}
+
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
 {
     return ls && ls->lp && ls->lp->mech.seg_code >= 0;

@@ -161,6 +161,10 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
 cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
+/* Counts of an L+C model for cbm_model_describe: productions, decomposition and interpretation
+ * rules with their depths, declared modules (turtle modules included). */
+void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
+                        int *decomp_depth, int *interp_depth, size_t *modules);
 /* Models with mechanics: for each module of the string (or of its interpretation, through the
  * modules they came from) its MechSegment fields (lsys/mechlang.h offsets), NULL for other
  * modules; *out is an array of *n pointers from the context (free with cbm__free), NULL when the
