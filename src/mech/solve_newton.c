@@ -11,7 +11,8 @@
  *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
  *   only when a joint's pivot block was singular and had to be regularised.
  * - Ground contact (solve_common.c): the factorisation carries the contact stiffness too, so
- *   the step is direct with a ground as without.
+ *   the step is direct with a ground as without. Organ-organ contact (contact.c) couples two
+ *   paths, which it cannot carry: while a pair touches, it preconditions FGMRES.
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
@@ -344,7 +345,9 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
-            direct = sing == 0;
+            /* touching organ pairs couple two paths, which the factorisation does not hold:
+             * it then preconditions FGMRES (contact.c) */
+            direct = sing == 0 && !cbm__mech_pairs_active(p);
             shifted = mu > 0.0 && direct;
             if (mu > 0.0)
                 k->mu_hint = mu;
@@ -379,7 +382,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
             memcpy(step, w->tmp, n3 * sizeof *step);
-            if (sing == 0) {
+            if (sing == 0 && !cbm__mech_pairs_active(p)) {
                 double tmax = largest_turn(p);
                 lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             } else if (!gmres(k, eta, m))

@@ -1,0 +1,421 @@
+/* Organ-organ contact by penalty forces: fruits in a bunch pushing each other aside (Jirasek,
+ * Prusinkiewicz and Moulia 2000, §"Secondary growth, tropisms, and collisions" and Fig. 6;
+ * digest §2.8: colliding organs are elastic and push on each other with forces proportional to
+ * the penetration depth, the penalty method of Platt & Barr 1988).
+ *
+ * Geometry. A segment with a contact radius r > 0 carries a sphere of radius r centred at its
+ * distal node X = P + l H (a fruit drawn centred at the end of its stalk; the stalk's last
+ * segment is the pedicel). Two spheres a, b overlap when their distance d = |X_b - X_a| is below
+ * r_a + r_b; the overlap is delta = r_a + r_b - d and n = (X_b - X_a) / d the line of centres.
+ *
+ * Force. The pair pushes b along n and a along -n with f(delta), the law of the ground contact
+ * (solve_common.c): f = k delta^2 / (2 s) for delta < s (smoothing s > 0), k (delta - s/2)
+ * beyond, continuous with its stiffness f' = k delta / s, then k. The forces act at the two
+ * distal nodes (no moment about the node: the sphere is centred there). k is scaled with the
+ * load during the solvers' load continuation, so lambda = 0 stays exact at the rest state even
+ * where fruits overlap there. At equilibrium the overlap is f / k + s / 2 at most: a stiff k
+ * keeps the interpenetration small.
+ *
+ * Detection in O(n) per evaluation: a uniform grid of cell size h = the largest diameter 2 r_max,
+ * hashed into 2^m >= 2 n_spheres buckets (a 64-bit mix of the integer cell coordinates) and
+ * sorted by a stable counting sort; each sphere i visits the distinct buckets of its 27
+ * neighbour cells and tests the spheres j > i found there. Any overlapping pair is within one
+ * cell per axis (d < r_i + r_j <= h), so nothing is missed; the distance test removes the
+ * spheres that share a bucket only by a hash collision, and skipping a bucket already visited
+ * for i removes duplicates. The order of the pairs (by i, then neighbour cell, then j) is
+ * deterministic. The cost is O(n + pairs) for fruits of comparable size.
+ *
+ * Tangent (Newton). With Delta = dX_b - dX_a (the nodes move with their paths: dX = dP +
+ * l dth x H, from the tangent's forward sweep), d delta = -n.Delta and dn = (I - n n^T) Delta / d,
+ * so the force on b changes by
+ *     dF_b = -f' n (n.Delta) + (f / d) (Delta - n (n.Delta)),     dF_a = -dF_b,
+ * which the tangent's backward sweep carries down the two paths like every other node force:
+ * the Jacobian-vector product stays the exact derivative of the residual. A pair couples two
+ * paths of the tree, which the O(n) tree factorisation (solve_tree.c) cannot hold; while any
+ * pair touches, the fast solver uses that factorisation (without the pair terms) as the
+ * preconditioner of its flexible GMRES, whose Krylov space picks up the low-rank pair
+ * stiffness (rank at most three per touching pair).
+ *
+ * Memory: the sphere list, the grid and the pair list live in the plant and are reserved before
+ * a solve (6 pairs per sphere at first). If an evaluation finds more pairs than that room, the
+ * extra pairs are dropped for that evaluation and the solve entry point grows the room and
+ * solves again, so no allocation happens inside the iteration.
+ */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+#include <stdint.h>
+
+/* ---- the grid ---- */
+
+void cbm__sphere_grid_free(cbm_context *ctx, cbm__sphere_grid *g)
+{
+    cbm__free(ctx, g->bucket, g->cap * sizeof *g->bucket);
+    cbm__free(ctx, g->sorted, g->cap * sizeof *g->sorted);
+    if (g->nbuckets)
+        cbm__free(ctx, g->start, (g->nbuckets + 1) * sizeof *g->start);
+    memset(g, 0, sizeof *g);
+}
+
+cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_t n)
+{
+    if (n <= g->cap && g->nbuckets)
+        return CBM_OK;
+    size_t cap = n > 2 * g->cap ? n : 2 * g->cap;
+    if (cap < 8)
+        cap = 8;
+    size_t nb = 16;
+    while (nb < 2 * cap)
+        nb <<= 1;
+    size_t *bucket = cbm__alloc(ctx, cap * sizeof *bucket);
+    size_t *sorted = cbm__alloc(ctx, cap * sizeof *sorted);
+    size_t *start = cbm__alloc(ctx, (nb + 1) * sizeof *start);
+    if (!bucket || !sorted || !start) {
+        if (bucket)
+            cbm__free(ctx, bucket, cap * sizeof *bucket);
+        if (sorted)
+            cbm__free(ctx, sorted, cap * sizeof *sorted);
+        if (start)
+            cbm__free(ctx, start, (nb + 1) * sizeof *start);
+        return CBM_E_NOMEM;
+    }
+    cbm__sphere_grid_free(ctx, g);
+    g->cap = cap;
+    g->nbuckets = nb;
+    g->bucket = bucket;
+    g->sorted = sorted;
+    g->start = start;
+    return CBM_OK;
+}
+
+/* integer cell coordinate, clamped so that far or non-finite points stay representable */
+static inline int64_t cell_of(double x, double inv)
+{
+    double c = floor(x * inv);
+    if (!(c > -4e15))
+        c = -4e15;
+    if (!(c < 4e15))
+        c = 4e15;
+    return (int64_t)c;
+}
+
+static inline size_t hash3(int64_t x, int64_t y, int64_t z, size_t mask)
+{
+    uint64_t h = (uint64_t)x * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t)y * 0xC2B2AE3D27D4EB4Full;
+    h ^= (uint64_t)z * 0x165667B19E3779F9ull;
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 32;
+    return (size_t)(h & mask);
+}
+
+size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const double *r, size_t n,
+                              cbm__mech_pair *out, size_t cap)
+{
+    if (n < 2 || n > g->cap)
+        return 0;
+    double rmax = 0.0;
+    for (size_t i = 0; i < n; i++)
+        if (r[i] > rmax)
+            rmax = r[i];
+    if (!(rmax > 0.0) || !isfinite(rmax))
+        return 0;
+    const double inv = 1.0 / (2.0 * rmax);
+    const size_t nb = g->nbuckets, mask = nb - 1;
+    size_t *start = g->start, *bucket = g->bucket, *sorted = g->sorted;
+    /* stable counting sort of the spheres by bucket */
+    memset(start, 0, (nb + 1) * sizeof *start);
+    for (size_t i = 0; i < n; i++) {
+        size_t b = hash3(cell_of(c[i].x, inv), cell_of(c[i].y, inv), cell_of(c[i].z, inv), mask);
+        bucket[i] = b;
+        start[b + 1]++;
+    }
+    for (size_t b = 0; b < nb; b++)
+        start[b + 1] += start[b];
+    for (size_t i = 0; i < n; i++)
+        sorted[start[bucket[i]]++] = i;
+    for (size_t b = nb; b > 0; b--)
+        start[b] = start[b - 1];
+    start[0] = 0;
+    size_t found = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (!(r[i] > 0.0))
+            continue;
+        int64_t cx = cell_of(c[i].x, inv), cy = cell_of(c[i].y, inv), cz = cell_of(c[i].z, inv);
+        size_t seen[27];
+        int ns = 0;
+        for (int dx = -1; dx <= 1; dx++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dz = -1; dz <= 1; dz++) {
+                    size_t b = hash3(cx + dx, cy + dy, cz + dz, mask);
+                    bool dup = false;
+                    for (int k = 0; k < ns && !dup; k++)
+                        dup = seen[k] == b;
+                    if (dup)
+                        continue;
+                    seen[ns++] = b;
+                    for (size_t k = start[b]; k < start[b + 1]; k++) {
+                        size_t j = sorted[k];
+                        if (j <= i || !(r[j] > 0.0))
+                            continue;
+                        cbm_vec3 d = v3_sub(c[j], c[i]);
+                        double d2 = v3_dot(d, d), rs = r[i] + r[j];
+                        if (!(d2 < rs * rs))
+                            continue;
+                        if (found < cap) {
+                            cbm__mech_pair *pr = &out[found];
+                            double dist = sqrt(d2);
+                            pr->a = i;
+                            pr->b = j;
+                            pr->dist = dist;
+                            pr->over = rs - dist;
+                            /* coincident centres: any direction will do; x keeps it
+                             * deterministic */
+                            pr->n = dist > 1e-12 * rs ? v3_scale(d, 1.0 / dist) : v3(1, 0, 0);
+                            pr->force = pr->stiff = 0.0;
+                        }
+                        found++;
+                    }
+                }
+    }
+    return found;
+}
+
+/* ---- the plant's contacts ---- */
+
+void cbm__mech_pairs_free(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    cbm_context *ctx = p->ctx;
+    cbm__free(ctx, c->sph, c->cap * sizeof *c->sph);
+    cbm__free(ctx, c->centre, c->cap * sizeof *c->centre);
+    cbm__free(ctx, c->rad, c->cap * sizeof *c->rad);
+    cbm__free(ctx, c->fnode, c->cap * sizeof *c->fnode);
+    cbm__free(ctx, c->dx, c->cap * sizeof *c->dx);
+    cbm__free(ctx, c->pairs, c->pcap * sizeof *c->pairs);
+    cbm__sphere_grid_free(ctx, &c->grid);
+    c->sph = NULL;
+    c->centre = NULL;
+    c->rad = NULL;
+    c->fnode = NULL;
+    c->dx = NULL;
+    c->pairs = NULL;
+    c->cap = c->pcap = c->npairs = c->nsph = 0;
+}
+
+/* the per-segment arrays for `cap` segments, all or none */
+static cbm_status segment_arrays(cbm_plant *p, size_t cap)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    cbm_context *ctx = p->ctx;
+    size_t *sph = cbm__alloc(ctx, cap * sizeof *sph);
+    cbm_vec3 *centre = cbm__alloc(ctx, cap * sizeof *centre);
+    double *rad = cbm__alloc(ctx, cap * sizeof *rad);
+    cbm_vec3 *fnode = cbm__calloc(ctx, cap, sizeof *fnode);
+    cbm_vec3 *dx = cbm__alloc(ctx, cap * sizeof *dx);
+    if (!sph || !centre || !rad || !fnode || !dx) {
+        if (sph)
+            cbm__free(ctx, sph, cap * sizeof *sph);
+        if (centre)
+            cbm__free(ctx, centre, cap * sizeof *centre);
+        if (rad)
+            cbm__free(ctx, rad, cap * sizeof *rad);
+        if (fnode)
+            cbm__free(ctx, fnode, cap * sizeof *fnode);
+        if (dx)
+            cbm__free(ctx, dx, cap * sizeof *dx);
+        return CBM_E_NOMEM;
+    }
+    cbm__free(ctx, c->sph, c->cap * sizeof *c->sph);
+    cbm__free(ctx, c->centre, c->cap * sizeof *c->centre);
+    cbm__free(ctx, c->rad, c->cap * sizeof *c->rad);
+    cbm__free(ctx, c->fnode, c->cap * sizeof *c->fnode);
+    cbm__free(ctx, c->dx, c->cap * sizeof *c->dx);
+    c->sph = sph;
+    c->centre = centre;
+    c->rad = rad;
+    c->fnode = fnode;
+    c->dx = dx;
+    c->cap = cap;
+    c->npairs = 0;
+    return CBM_OK;
+}
+
+cbm_status cbm__mech_pairs_reserve(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    if (!c->on)
+        return CBM_OK;
+    if (p->n > c->cap || !c->sph)
+        CBM_TRY(segment_arrays(p, p->n > 16 ? p->n : 16));
+    size_t ns = 0;
+    for (size_t i = 0; i < p->n; i++)
+        ns += p->crad[i] > 0.0;
+    CBM_TRY(cbm__sphere_grid_reserve(p->ctx, &c->grid, ns));
+    size_t want = 6 * ns + 16;
+    if (c->npairs > c->pcap && 2 * c->npairs > want)
+        want = 2 * c->npairs; /* the last evaluation found more than there was room for */
+    if (want > c->pcap) {
+        cbm__mech_pair *np = cbm__alloc(p->ctx, want * sizeof *np);
+        if (!np)
+            return CBM_E_NOMEM;
+        cbm__free(p->ctx, c->pairs, c->pcap * sizeof *c->pairs);
+        c->pairs = np;
+        c->pcap = want;
+        c->npairs = 0;
+    }
+    return CBM_OK;
+}
+
+void cbm__mech_pairs_prepare(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    c->nsph = 0;
+    if (!c->on || c->cap < p->n || !c->sph)
+        return;
+    size_t ns = 0;
+    for (size_t i = 0; i < p->n && ns < c->grid.cap; i++)
+        if (p->crad[i] > 0.0) {
+            c->sph[ns] = i;
+            c->rad[ns] = p->crad[i];
+            ns++;
+        }
+    c->nsph = ns;
+}
+
+static inline cbm_vec3 heading(cbm_quat q)
+{
+    return v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
+              2.0 * (q.x * q.z - q.w * q.y));
+}
+
+void cbm__mech_pairs_eval(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    c->npairs = 0;
+    if (!c->on || c->cap < p->n || !c->sph)
+        return;
+    memset(c->fnode, 0, p->n * sizeof *c->fnode);
+    const size_t ns = c->nsph;
+    for (size_t s = 0; s < ns; s++) {
+        size_t i = c->sph[s];
+        c->centre[s] = v3_madd(p->pos[i], heading(p->q[i]), p->len[i]);
+    }
+    size_t found = cbm__sphere_grid_pairs(&c->grid, c->centre, c->rad, ns, c->pairs, c->pcap);
+    c->npairs = found;
+    size_t stored = found < c->pcap ? found : c->pcap;
+    const double k = c->k * p->load_scale, sm = c->s;
+    for (size_t q = 0; q < stored; q++) {
+        cbm__mech_pair *pr = &c->pairs[q];
+        pr->a = c->sph[pr->a];
+        pr->b = c->sph[pr->b];
+        double d = pr->over;
+        if (d < sm) {
+            pr->force = 0.5 * k * d * d / sm;
+            pr->stiff = k * d / sm;
+        } else {
+            pr->force = k * (d - 0.5 * sm);
+            pr->stiff = k;
+        }
+        cbm_vec3 f = v3_scale(pr->n, pr->force);
+        c->fnode[pr->b] = v3_add(c->fnode[pr->b], f);
+        c->fnode[pr->a] = v3_sub(c->fnode[pr->a], f);
+    }
+}
+
+void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth, cbm_vec3 *dfc)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    if (!cbm__mech_pairs_active(p))
+        return;
+    for (size_t s = 0; s < c->nsph; s++) {
+        size_t i = c->sph[s];
+        c->dx[i] = v3_add(dpos[i], v3_scale(v3_cross(dth[i], heading(p->q[i])), p->len[i]));
+    }
+    size_t stored = c->npairs < c->pcap ? c->npairs : c->pcap;
+    for (size_t q = 0; q < stored; q++) {
+        const cbm__mech_pair *pr = &c->pairs[q];
+        cbm_vec3 del = v3_sub(c->dx[pr->b], c->dx[pr->a]);
+        double nd = v3_dot(pr->n, del);
+        cbm_vec3 df = v3_scale(pr->n, -pr->stiff * nd);
+        if (pr->dist > 1e-12 * (pr->dist + pr->over))
+            df = v3_add(df, v3_scale(v3_sub(del, v3_scale(pr->n, nd)), pr->force / pr->dist));
+        dfc[pr->b] = v3_add(dfc[pr->b], df);
+        dfc[pr->a] = v3_sub(dfc[pr->a], df);
+    }
+}
+
+/* ---- public ---- */
+
+cbm_status cbm_plant_set_contact(cbm_plant *p, double k, double smoothing)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    if (!(isfinite(k) && k >= 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "contact: stiffness k must be finite and >= 0");
+    if (!(isfinite(smoothing) && smoothing >= 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "contact: smoothing must be finite and >= 0 (m)");
+    cbm__mech_contacts *c = &p->contacts;
+    c->on = k > 0.0;
+    c->k = k;
+    c->s = smoothing;
+    c->npairs = 0;
+    c->nsph = 0;
+    return CBM_OK;
+}
+
+bool cbm_plant_contact(const cbm_plant *p, double *k, double *smoothing)
+{
+    if (!p || !p->contacts.on)
+        return false;
+    if (k)
+        *k = p->contacts.k;
+    if (smoothing)
+        *smoothing = p->contacts.s;
+    return true;
+}
+
+cbm_status cbm_plant_set_contact_radius(cbm_plant *p, size_t seg, double radius)
+{
+    if (!p)
+        return CBM_E_INVALID;
+    if (seg >= p->n)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "segment %zu does not exist (plant has %zu)", seg,
+                         p->n);
+    if (!(isfinite(radius) && radius >= 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: contact radius must be finite and >= 0 (m)", seg);
+    p->crad[seg] = radius;
+    return CBM_OK;
+}
+
+cbm_vec3 cbm_plant_organ_contact_force(const cbm_plant *p, size_t seg)
+{
+    if (!p || seg >= p->n || !p->contacts.on || p->contacts.cap < p->n || !p->contacts.fnode)
+        return v3(0, 0, 0);
+    return p->contacts.fnode[seg];
+}
+
+cbm_status cbm_plant_contact_stats(const cbm_plant *p, cbm_contact_stats *out)
+{
+    if (!p || !out)
+        return CBM_E_INVALID;
+    memset(out, 0, sizeof *out);
+    for (size_t i = 0; i < p->n; i++)
+        out->spheres += p->crad[i] > 0.0;
+    const cbm__mech_contacts *c = &p->contacts;
+    if (!c->on)
+        return CBM_OK;
+    size_t stored = c->npairs < c->pcap ? c->npairs : c->pcap;
+    out->pairs = c->npairs;
+    for (size_t q = 0; q < stored; q++) {
+        if (c->pairs[q].over > out->max_overlap)
+            out->max_overlap = c->pairs[q].over;
+        if (c->pairs[q].force > out->max_force)
+            out->max_force = c->pairs[q].force;
+    }
+    return CBM_OK;
+}
