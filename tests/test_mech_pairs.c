@@ -10,6 +10,7 @@
 #include "mech_testlib.h"
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
+#include "cambium/lsys.h"
 
 #include <stdio.h>
 
@@ -182,8 +183,7 @@ TEST(pairs_grid_equals_brute_force)
         for (size_t q = 0; q < found && same; q++) {
             same = out[q].a == ref[q].a && out[q].b == ref[q].b;
             same = same && fabs(out[q].over - (r[out[q].a] + r[out[q].b] -
-                                               v3_norm(v3_sub(c[out[q].b], c[out[q].a])))) <
-                               1e-15;
+                                               v3_norm(v3_sub(c[out[q].b], c[out[q].a])))) < 1e-15;
         }
         CHECK(same);
         /* a short room stores only what fits, and still counts all */
@@ -239,7 +239,8 @@ TEST(pairs_tangent_matches_finite_differences)
     cbm_plant *p = bunch(ctx, 7, 5, 0.25, 0.006, 0.004);
     size_t n = cbm_plant_segment_count(p);
     for (size_t i = 0; i < n; i++)
-        CHECK_OK(cbm_plant_set_omega(p, i, v3(0.3 * sin(1.0 * i), 2.0 * cos(3.0 * i), 1.5 * sin(2.0 * i + 1))));
+        CHECK_OK(cbm_plant_set_omega(
+            p, i, v3(0.3 * sin(1.0 * i), 2.0 * cos(3.0 * i), 1.5 * sin(2.0 * i + 1))));
     CHECK_OK(cbm_plant_set_contact(p, 800.0, 0.0005));
     CHECK_OK(cbm_plant_evaluate(p, NULL));
     cbm_contact_stats cs;
@@ -301,8 +302,8 @@ TEST(pairs_tangent_matches_finite_differences)
 
 /* Tip displacement along y of one weightless stem (deviation +theta) under the tip force (0, F,
  * 0): the discrete lateral stiffness K = F / dy, from a solve without contact. */
-static double lateral_stiffness(cbm_context *ctx, int n, double L, double a, double E,
-                                double theta, double F)
+static double lateral_stiffness(cbm_context *ctx, int n, double L, double a, double E, double theta,
+                                double F)
 {
     cbm_plant *p = pair_of_stems(ctx, n, L, a, E, 0, theta, 0.0, 0.0, false, 1);
     CHECK_OK(cbm_plant_evaluate(p, NULL));
@@ -438,10 +439,11 @@ TEST(pairs_bunch_solvers_agree)
         CHECK_OK(cbm_plant_solve(p, &sd, &st));
         cbm_contact_stats cs;
         CHECK_OK(cbm_plant_contact_stats(p, &cs));
-        printf("k = %g N/m, %s: %zu passes, %zu Newton steps, %zu Krylov iterations, %zu continuation "
-               "steps; %zu pairs, max overlap %.3g m, max force %.3g N\n",
-               k, solver ? "relax" : "fast", st.passes, st.newton_steps, st.krylov_iterations,
-               st.continuation_steps, cs.pairs, cs.max_overlap, cs.max_force);
+        printf(
+            "k = %g N/m, %s: %zu passes, %zu Newton steps, %zu Krylov iterations, %zu continuation "
+            "steps; %zu pairs, max overlap %.3g m, max force %.3g N\n",
+            k, solver ? "relax" : "fast", st.passes, st.newton_steps, st.krylov_iterations,
+            st.continuation_steps, cs.pairs, cs.max_overlap, cs.max_force);
         CHECK(cs.pairs >= 5);
         CHECK(cs.max_overlap <= cs.max_force / k + 0.5 * sm + 1e-12);
         if (solver == 0)
@@ -577,4 +579,193 @@ TEST(pairs_out_of_memory)
 {
     int runs = test_oom_loop(oom_case, NULL);
     CHECK(runs > 5);
+}
+
+/* ---- the L+C dialect and the shipped model ---- */
+
+typedef struct grapes_result {
+    size_t spheres, pairs, max_pairs, segments;
+    double overlap, force; /* largest over the steps, m and N */
+    double geometric;      /* largest overlap of any two berries at the end (brute force), m */
+    double passes;         /* largest Equilibrium() pass count of a step */
+} grapes_result;
+
+/* Runs models/<name> (optional -D override), evaluating the plant of every step. */
+static cbm_status run_grapes(cbm_context *ctx, const char *name, const char *define,
+                             grapes_result *r)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/%s", test_source_dir(), name);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.defines = define ? &define : NULL;
+    def.define_count = define ? 1 : 0;
+    cbm_lsys *ls = NULL;
+    memset(r, 0, sizeof *r);
+    cbm_status st = cbm_lsys_load(ctx, &def, &ls);
+    if (st != CBM_OK)
+        return st;
+    st = cbm_lsys_reset(ls);
+    for (int k = 0; st == CBM_OK && k < cbm_lsys_derivation_length(ls); k++) {
+        st = cbm_lsys_step(ls);
+        cbm_plant *p = NULL;
+        if (st == CBM_OK)
+            st = cbm_lsys_mech_plant(ls, &p);
+        double res = 1;
+        if (st == CBM_OK)
+            st = cbm_plant_evaluate(p, &res);
+        cbm_contact_stats cs;
+        memset(&cs, 0, sizeof cs);
+        if (st == CBM_OK)
+            st = cbm_plant_contact_stats(p, &cs);
+        if (st == CBM_OK && res > 1e-7)
+            st = CBM_E_NOT_CONVERGED; /* the stored state is the equilibrium */
+        r->spheres = cs.spheres;
+        r->pairs = cs.pairs;
+        r->max_pairs = cs.pairs > r->max_pairs ? cs.pairs : r->max_pairs;
+        r->overlap = fmax(r->overlap, cs.max_overlap);
+        r->force = fmax(r->force, cs.max_force);
+        r->segments = p ? cbm_plant_segment_count(p) : 0;
+        r->geometric = 0;
+        for (size_t i = 0; p && i < r->segments; i++) {
+            cbm_segment_state a, b;
+            CHECK_OK(cbm_plant_segment(p, i, &a));
+            for (size_t j = i + 1; a.contact_radius > 0 && j < r->segments; j++) {
+                CHECK_OK(cbm_plant_segment(p, j, &b));
+                if (b.contact_radius > 0)
+                    r->geometric = fmax(r->geometric, a.contact_radius + b.contact_radius -
+                                                          v3_norm(v3_sub(a.distal, b.distal)));
+            }
+        }
+        cbm_plant_destroy(p);
+    }
+    cbm_lsys_destroy(ls);
+    return st;
+}
+
+typedef struct diag_text {
+    char text[2048];
+    int count;
+} diag_text;
+
+static void diag_sink(void *ud, const cbm_diagnostic *d)
+{
+    diag_text *g = ud;
+    size_t n = strlen(g->text);
+    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
+             d->col, d->message);
+    g->count++;
+}
+
+/* Contact(k, smoothing) and `mass: Grape(mass, radius)`; the declaration's errors. */
+TEST(pairs_language)
+{
+    cbm_context *ctx = test_ctx();
+    static const char *src =
+        "#include <lpfgall.h>\n"
+        "derivation length: 1;\n"
+        "module I(MechSegment);\n"
+        "module Fruit(int, double, double);\n"
+        "mechanics: I;\n"
+        "mass: Fruit(_, radius, mass);\n"
+        "MechSegment S() { MechSegment s; s.length = 0.05; s.a = 0.002; s.b = 0.002; s.E = 1e9; "
+        "s.density = 0; return s; }\n"
+        "Start: { Gravity(0, 0, 0); Contact(3000, 0); }\n"
+        "EndEach: { Equilibrium(); }\n"
+        "Axiom: SB Left(3) I(S()) I(S()) Fruit(7, 0.006, 0.01) EB SB Right(3) I(S()) I(S()) "
+        "Fruit(7, 0.006, 0.01) EB;\n";
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.text = src;
+    def.path = "fruit.l";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_lsys_mech_plant(ls, &p));
+    double k = 0;
+    CHECK(cbm_plant_contact(p, &k, NULL) && k == 3000);
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    cbm_contact_stats cs;
+    CHECK_OK(cbm_plant_contact_stats(p, &cs));
+    cbm_segment_state s;
+    CHECK_OK(cbm_plant_segment(p, 1, &s));
+    printf("two fruits from the language: %zu spheres, %zu pairs, overlap %.3g m, force %.3g N, "
+           "mass %g kg\n",
+           cs.spheres, cs.pairs, cs.max_overlap, cs.max_force, s.point_mass);
+    CHECK(cs.spheres == 2 && s.contact_radius == 0.006 && s.point_mass == 0.01);
+    /* 2 sin(3 deg) 0.1 m = 10.5 mm apart at rest: pushed apart to 12 mm less force / k */
+    CHECK(cs.pairs == 1 && cs.max_overlap > 0 && cs.max_overlap <= cs.max_force / 3000 * 1.0001);
+    cbm_plant_destroy(p);
+    cbm_lsys_destroy(ls);
+    const char *bad[] = {"mass: Fruit(_, radius);", "mass: Fruit(weight);",
+                         "mass: Fruit(mass, mass);", "mass: Fruit(mass, _, radius, _);",
+                         "mass: Fruit(mass, radius, _;"};
+    for (int j = 0; j < 5; j++) {
+        char buf[512];
+        snprintf(buf, sizeof buf,
+                 "module Fruit(double, double, double);\nmodule I(MechSegment);\n"
+                 "mechanics: I;\n%s\nmodule A();\nAxiom: A;\n",
+                 bad[j]);
+        diag_text g;
+        memset(&g, 0, sizeof g);
+        cbm_context_def cd = cbm_context_def_default();
+        cd.diag = diag_sink;
+        cd.diag_ud = &g;
+        cbm_context *dc = NULL;
+        CHECK_OK(cbm_context_create(&cd, &dc));
+        def.text = buf;
+        ls = NULL;
+        cbm_status st = cbm_lsys_load(dc, &def, &ls);
+        printf("%-40s -> %s: %s", bad[j], cbm_status_name(st), g.text);
+        CHECK(st == CBM_E_SYNTAX);
+        CHECK(!strncmp(g.text, "fruit.l:4:", 10) && strstr(g.text, "\n?:0:0: 1 error in"));
+        cbm_lsys_destroy(ls);
+        CHECK_EQ_INT(cbm_context_bytes(dc), 0);
+        cbm_context_destroy(dc);
+    }
+    def.text = "module A();\nderivation length: 1;\nStart: { Contact(-1, 0); }\nAxiom: A;\n";
+    ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls)
+        CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_INVALID);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 6 (models/jirasek-grapes.l): the berries touch (several pairs), no two overlap by more
+ * than 0.5 mm at any step, every step converges; without contact they pass through each other;
+ * softer and stiffer contact converge too, the overlap falling as k grows. */
+TEST(pairs_model_grapes)
+{
+    cbm_context *ctx = test_ctx();
+    grapes_result r, r0;
+    CHECK_OK(run_grapes(ctx, "jirasek-grapes.l", NULL, &r));
+    printf("grapes: %zu segments, %zu berries, %zu touching pairs at the end (at most %zu), "
+           "largest overlap %.3g m, largest pair force %.3g N\n",
+           r.segments, r.spheres, r.pairs, r.max_pairs, r.overlap, r.force);
+    CHECK(r.spheres == 15);
+    CHECK(r.max_pairs >= 6);
+    CHECK(r.overlap > 0 && r.overlap < 5e-4);
+    CHECK_REL(r.geometric, r.overlap, 0.5); /* the last step's overlap is near the largest */
+    CHECK(r.geometric <= r.overlap);
+    CHECK_OK(run_grapes(ctx, "jirasek-grapes.l", "K=0", &r0));
+    printf("grapes without contact: berries overlap by up to %.3g m\n", r0.geometric);
+    CHECK(r0.spheres == 15 && r0.pairs == 0);
+    CHECK(r0.geometric > 0.003); /* they pass through each other */
+    const char *sweep[] = {"K=1000", "K=20000", "SMOOTH=0", "SPREAD=45", "RMAX=0.011"};
+    double prev = INFINITY;
+    for (int j = 0; j < 5; j++) {
+        grapes_result rs;
+        cbm_status st = run_grapes(ctx, "jirasek-grapes.l", sweep[j], &rs);
+        printf("grapes %-10s %s: %zu pairs at most, overlap %.3g m\n", sweep[j],
+               cbm_status_name(st), rs.max_pairs, rs.overlap);
+        CHECK_OK(st);
+        CHECK(rs.max_pairs >= 3);
+        if (j < 2) {
+            CHECK(rs.overlap < prev);
+            prev = rs.overlap;
+        }
+    }
+    test_ctx_end(ctx);
 }

@@ -356,8 +356,7 @@ cbm_status cbm_plant_set_contact(cbm_plant *p, double k, double smoothing)
     if (!(isfinite(k) && k >= 0.0))
         return cbm__fail(p->ctx, CBM_E_INVALID, "contact: stiffness k must be finite and >= 0");
     if (!(isfinite(smoothing) && smoothing >= 0.0))
-        return cbm__fail(p->ctx, CBM_E_INVALID,
-                         "contact: smoothing must be finite and >= 0 (m)");
+        return cbm__fail(p->ctx, CBM_E_INVALID, "contact: smoothing must be finite and >= 0 (m)");
     cbm__mech_contacts *c = &p->contacts;
     c->on = k > 0.0;
     c->k = k;

@@ -168,6 +168,11 @@ double cbm__mech_relres(double rmax, double mmax, double *char_moment);
 
 /* ---- contact.c: organ-organ contact ---- */
 
+/* least Krylov dimension of the fast solver with organ contact on */
+#ifndef CBM__CONTACT_KRYLOV
+#define CBM__CONTACT_KRYLOV 60
+#endif
+
 /// Ensures the contact workspace for the plant's spheres (no-op without contact).
 cbm_status cbm__mech_pairs_reserve(cbm_plant *p);
 void cbm__mech_pairs_free(cbm_plant *p);

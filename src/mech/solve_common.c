@@ -608,6 +608,10 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     if (d.solver == CBM_MECH_NEWTON && (d.krylov_dim < 1 || d.krylov_dim > 500))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: krylov_dim must be in 1..500");
     CBM_TRY(check_plant(p));
+    /* touching organ pairs leave a part of rank up to three per pair to FGMRES (contact.c): a
+     * short restart stagnates there */
+    if (p->contacts.on && d.krylov_dim < CBM__CONTACT_KRYLOV)
+        d.krylov_dim = CBM__CONTACT_KRYLOV;
     size_t lim = cbm_context_limits(p->ctx)->max_passes;
     size_t maxp = d.max_passes ? d.max_passes : lim;
     if (lim && maxp > lim)
