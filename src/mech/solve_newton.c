@@ -358,11 +358,23 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
-            if (it == 0 && abort_large && lam0 < 1.0)
+            if (it == 0 && abort_large && lam0 < 1.0 && (direct || !cbm__mech_pairs_active(p)))
                 return NK_LARGE; /* far from equilibrium: follow the load path instead */
         }
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
+        if (!direct && k->tree && cbm__mech_pairs_active(p)) {
+            /* the trust region from the FGMRES step itself: the factorisation's own step
+             * ignores what it lacks (touching organ pairs), one tangent pass */
+            cbm__mech_jvp(p, w->step, w->tmp);
+            k->st->passes++;
+            double tmax = largest_turn(p);
+            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+            if (it == 0)
+                k->first_turn = tmax;
+            if (it == 0 && abort_large && lam0 < 1.0)
+                return NK_LARGE;
+        }
         k->st->newton_steps++;
         double lam = lam0;
         nk_result ls = line_search(k, lam0, &lam);
