@@ -144,7 +144,7 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
         if (!(r[i] > 0.0))
             continue;
         int64_t cx = cell_of(c[i].x, inv), cy = cell_of(c[i].y, inv), cz = cell_of(c[i].z, inv);
-        size_t seen[27];
+        size_t seen[27] = {0};
         int ns = 0;
         for (int dx = -1; dx <= 1; dx++)
             for (int dy = -1; dy <= 1; dy++)
