@@ -185,6 +185,8 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
 
 /* ---- the plant's contacts ---- */
 
+static void lowrank_free(cbm_plant *p);
+
 void cbm__mech_pairs_free(cbm_plant *p)
 {
     cbm__mech_contacts *c = &p->contacts;
@@ -195,6 +197,7 @@ void cbm__mech_pairs_free(cbm_plant *p)
     cbm__free(ctx, c->fnode, c->cap * sizeof *c->fnode);
     cbm__free(ctx, c->dx, c->cap * sizeof *c->dx);
     cbm__free(ctx, c->pairs, c->pcap * sizeof *c->pairs);
+    lowrank_free(p);
     cbm__sphere_grid_free(ctx, &c->grid);
     c->sph = NULL;
     c->centre = NULL;
@@ -203,6 +206,71 @@ void cbm__mech_pairs_free(cbm_plant *p)
     c->dx = NULL;
     c->pairs = NULL;
     c->cap = c->pcap = c->npairs = c->nsph = 0;
+}
+
+/* ---- the low-rank correction's workspace ---- */
+
+enum { RK = CBM__CONTACT_RANK };
+
+static void lowrank_free(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    cbm_context *ctx = p->ctx;
+    size_t n3 = 3 * c->cap;
+    if (c->lr_z) {
+        cbm__free(ctx, c->lr_z, RK * n3 * sizeof(double));
+        cbm__free(ctx, c->lr_g, RK * n3 * sizeof(double));
+        cbm__free(ctx, c->lr_tmp, n3 * sizeof(double));
+        cbm__free(ctx, c->lr_m, RK * RK * sizeof(double));
+        cbm__free(ctx, c->lr_d, RK * sizeof(double));
+        cbm__free(ctx, c->lr_c, RK * sizeof(double));
+        cbm__free(ctx, c->lr_piv, RK * sizeof(int));
+    }
+    c->lr_z = c->lr_g = c->lr_tmp = c->lr_m = c->lr_d = c->lr_c = NULL;
+    c->lr_piv = NULL;
+    c->lr_valid = false;
+    c->lr_rank = 0;
+}
+
+/* for c->cap segments, all or none (after segment_arrays set the new cap) */
+static cbm_status lowrank_alloc(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    cbm_context *ctx = p->ctx;
+    size_t n3 = 3 * c->cap;
+    double *z = cbm__alloc(ctx, RK * n3 * sizeof(double));
+    double *g = cbm__alloc(ctx, RK * n3 * sizeof(double));
+    double *t = cbm__alloc(ctx, n3 * sizeof(double));
+    double *m = cbm__alloc(ctx, RK * RK * sizeof(double));
+    double *d = cbm__alloc(ctx, RK * sizeof(double));
+    double *cc = cbm__alloc(ctx, RK * sizeof(double));
+    int *piv = cbm__alloc(ctx, RK * sizeof(int));
+    if (!z || !g || !t || !m || !d || !cc || !piv) {
+        if (z)
+            cbm__free(ctx, z, RK * n3 * sizeof(double));
+        if (g)
+            cbm__free(ctx, g, RK * n3 * sizeof(double));
+        if (t)
+            cbm__free(ctx, t, n3 * sizeof(double));
+        if (m)
+            cbm__free(ctx, m, RK * RK * sizeof(double));
+        if (d)
+            cbm__free(ctx, d, RK * sizeof(double));
+        if (cc)
+            cbm__free(ctx, cc, RK * sizeof(double));
+        if (piv)
+            cbm__free(ctx, piv, RK * sizeof(int));
+        return CBM_E_NOMEM;
+    }
+    c->lr_z = z;
+    c->lr_g = g;
+    c->lr_tmp = t;
+    c->lr_m = m;
+    c->lr_d = d;
+    c->lr_c = cc;
+    c->lr_piv = piv;
+    c->lr_valid = false;
+    return CBM_OK;
 }
 
 /* the per-segment arrays for `cap` segments, all or none */
@@ -215,7 +283,13 @@ static cbm_status segment_arrays(cbm_plant *p, size_t cap)
     double *rad = cbm__alloc(ctx, cap * sizeof *rad);
     cbm_vec3 *fnode = cbm__calloc(ctx, cap, sizeof *fnode);
     cbm_vec3 *dx = cbm__alloc(ctx, cap * sizeof *dx);
-    if (!sph || !centre || !rad || !fnode || !dx) {
+    /* the correction's workspace at the new size (released first: it holds 2 RK vectors) */
+    lowrank_free(p);
+    size_t oldcap = c->cap;
+    c->cap = cap;
+    bool lr = sph && centre && rad && fnode && dx && lowrank_alloc(p) == CBM_OK;
+    c->cap = oldcap;
+    if (!lr) {
         if (sph)
             cbm__free(ctx, sph, cap * sizeof *sph);
         if (centre)
@@ -295,6 +369,7 @@ void cbm__mech_pairs_eval(cbm_plant *p)
 {
     cbm__mech_contacts *c = &p->contacts;
     c->npairs = 0;
+    c->lr_valid = false; /* a new state: the correction is set up again when used */
     if (!c->on || c->cap < p->n || !c->sph)
         return;
     memset(c->fnode, 0, p->n * sizeof *c->fnode);
@@ -345,6 +420,168 @@ void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth
         dfc[pr->b] = v3_add(dfc[pr->b], df);
         dfc[pr->a] = v3_sub(dfc[pr->a], df);
     }
+}
+
+/* ---- the low-rank correction of the tree preconditioner ----
+ *
+ * With T the Newton matrix the tree factorisation holds (every term but the pair stiffness) and
+ * the normal stiffness of pair p written as u_p d_p g_p^T (u_p: the residual's response to a
+ * unit push along n at b and -n at a, u_p[i] = -R_i^T sum (X - P_i) x (+-n) over the pair's
+ * nodes X carried by joint i; g_p: n . (dX_b - dX_a) = g_p . v, g_p[j] = a_j^T ((X - P_j) x
+ * (+-n)) over the joints j on the nodes' paths, a_j = R_j J_r d_j the joint's rotation map;
+ * d_p = -f'), Woodbury gives
+ *     (T + U D G^T)^-1 = T^-1 - Z (I + D G^T Z)^-1 D G^T T^-1,   Z = T^-1 U.
+ * Set-up: one tree solve per pair (Z), the small matrix and its LU; then each application costs
+ * rank dot products and axpys on top of the tree solve. The tangential part of the pair
+ * stiffness (f/d (I - n n^T): small, but it acts in the soft directions of the stems) is left
+ * to FGMRES, and so is everything when more than CBM__CONTACT_RANK pairs touch. */
+
+/* adds s * (the pair's u or g contributions) along the path of node `x` (segment) into v */
+static void path_terms(const cbm_plant *p, size_t x, cbm_vec3 n, double sg, double *u, double *g)
+{
+    const double *fa = p->work.fa;
+    cbm_vec3 X = v3_madd(p->pos[x], heading(p->q[x]), p->len[x]);
+    for (int64_t j = (int64_t)x; j >= 0; j = p->parent[j]) {
+        cbm_vec3 r = v3_scale(v3_cross(v3_sub(X, p->pos[j]), n), sg);
+        size_t o = 3 * (size_t)j;
+        if (u) {
+            cbm_quat q = p->q[j];
+            cbm_vec3 h = heading(q);
+            cbm_vec3 l = v3(2.0 * (q.x * q.y - q.w * q.z), 1.0 - 2.0 * (q.x * q.x + q.z * q.z),
+                            2.0 * (q.y * q.z + q.w * q.x));
+            cbm_vec3 uu = v3_cross(h, l);
+            u[o] -= v3_dot(r, h);
+            u[o + 1] -= v3_dot(r, l);
+            u[o + 2] -= v3_dot(r, uu);
+        }
+        if (g) {
+            const double *a = fa + 9 * (size_t)j; /* row-major; g += a^T r */
+            g[o] += a[0] * r.x + a[3] * r.y + a[6] * r.z;
+            g[o + 1] += a[1] * r.x + a[4] * r.y + a[7] * r.z;
+            g[o + 2] += a[2] * r.x + a[5] * r.y + a[8] * r.z;
+        }
+    }
+}
+
+static size_t lowrank_setup(cbm_plant *p)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    const size_t n3 = 3 * p->n;
+    size_t stored = c->npairs < c->pcap ? c->npairs : c->pcap;
+    c->lr_valid = true;
+    c->lr_rank = 0;
+    /* more touching pairs than the rank: FGMRES alone (the tree solves of a partial correction
+     * cost more than the Krylov iterations they save) */
+    if (c->lr_off || !c->lr_z || c->cap < p->n || stored > RK)
+        return 0;
+    /* the stiffest pairs: selection by repeated maximum (rank is small) */
+    int sel[RK];
+    int rank = 0;
+    double last = INFINITY;
+    size_t lastq = SIZE_MAX;
+    while (rank < RK) {
+        size_t best = SIZE_MAX;
+        for (size_t q = 0; q < stored; q++) {
+            double s = c->pairs[q].stiff;
+            if (!(s > 0.0) || s > last || (s == last && q <= lastq))
+                continue; /* taken already (ties by index) */
+            if (best == SIZE_MAX || s > c->pairs[best].stiff)
+                best = q;
+        }
+        if (best == SIZE_MAX)
+            break;
+        sel[rank++] = (int)best;
+        last = c->pairs[best].stiff;
+        lastq = best;
+    }
+    size_t passes = 0;
+    for (int k = 0; k < rank; k++) {
+        const cbm__mech_pair *pr = &c->pairs[sel[k]];
+        double *u = c->lr_tmp, *g = c->lr_g + (size_t)k * n3, *z = c->lr_z + (size_t)k * n3;
+        memset(u, 0, n3 * sizeof *u);
+        memset(g, 0, n3 * sizeof *g);
+        path_terms(p, pr->b, pr->n, 1.0, u, g);
+        path_terms(p, pr->a, pr->n, -1.0, u, g);
+        cbm__mech_tree_apply(p, (const cbm_vec3 *)u, (cbm_vec3 *)z);
+        passes++;
+        c->lr_d[k] = -pr->stiff;
+    }
+    /* M = I + D G^T Z, LU with partial pivoting */
+    double *m = c->lr_m;
+    for (int i = 0; i < rank; i++)
+        for (int j = 0; j < rank; j++) {
+            const double *g = c->lr_g + (size_t)i * n3, *z = c->lr_z + (size_t)j * n3;
+            double s = 0.0;
+            for (size_t q = 0; q < n3; q++)
+                s += g[q] * z[q];
+            m[i * rank + j] = (i == j ? 1.0 : 0.0) + c->lr_d[i] * s;
+        }
+    for (int k = 0; k < rank; k++) {
+        int pv = k;
+        for (int i = k + 1; i < rank; i++)
+            if (fabs(m[i * rank + k]) > fabs(m[pv * rank + k]))
+                pv = i;
+        c->lr_piv[k] = pv;
+        if (pv != k)
+            for (int j = 0; j < rank; j++) {
+                double t = m[k * rank + j];
+                m[k * rank + j] = m[pv * rank + j];
+                m[pv * rank + j] = t;
+            }
+        double d = m[k * rank + k];
+        if (!(fabs(d) > 1e-300) || !isfinite(d))
+            return passes; /* singular: leave it to FGMRES (rank 0) */
+        for (int i = k + 1; i < rank; i++) {
+            double f = m[i * rank + k] / d;
+            m[i * rank + k] = f;
+            for (int j = k + 1; j < rank; j++)
+                m[i * rank + j] -= f * m[k * rank + j];
+        }
+    }
+    c->lr_rank = rank;
+    return passes;
+}
+
+size_t cbm__mech_pairs_precond(cbm_plant *p, double *z)
+{
+    cbm__mech_contacts *c = &p->contacts;
+    size_t passes = 0;
+    if (!c->lr_valid)
+        passes = lowrank_setup(p);
+    const int rank = c->lr_rank;
+    if (rank == 0)
+        return passes;
+    const size_t n3 = 3 * p->n;
+    double *e = c->lr_c;
+    /* e = M^-1 D G^T y */
+    for (int i = 0; i < rank; i++) {
+        const double *g = c->lr_g + (size_t)i * n3;
+        double s = 0.0;
+        for (size_t q = 0; q < n3; q++)
+            s += g[q] * z[q];
+        e[i] = c->lr_d[i] * s;
+    }
+    const double *m = c->lr_m;
+    for (int k = 0; k < rank; k++) {
+        int pv = c->lr_piv[k];
+        double t = e[k];
+        e[k] = e[pv];
+        e[pv] = t;
+        for (int i = k + 1; i < rank; i++)
+            e[i] -= m[i * rank + k] * e[k];
+    }
+    for (int i = rank - 1; i >= 0; i--) {
+        double s = e[i];
+        for (int j = i + 1; j < rank; j++)
+            s -= m[i * rank + j] * e[j];
+        e[i] = s / m[i * rank + i];
+    }
+    for (int i = 0; i < rank; i++) {
+        const double *zi = c->lr_z + (size_t)i * n3;
+        for (size_t q = 0; q < n3; q++)
+            z[q] -= e[i] * zi[q];
+    }
+    return passes;
 }
 
 /* ---- public ---- */

@@ -79,6 +79,18 @@ typedef struct cbm__mech_contacts {
     cbm__sphere_grid grid;
     cbm__mech_pair *pairs;
     size_t npairs, pcap; /* found (stored: min(npairs, pcap)) and capacity */
+    /* low-rank correction of the tree preconditioner (contact.c): the normal stiffness of up to
+     * CBM__CONTACT_RANK touching pairs, Woodbury form */
+    bool lr_valid;  /* set up for the current state and factorisation */
+    bool lr_off;    /* no correction (tests compare): FGMRES alone */
+    int lr_rank;    /* pairs in the correction */
+    double *lr_z;   /* rank x 3 cap: T^-1 u_p */
+    double *lr_g;   /* rank x 3 cap: g_p (n . (dX_b - dX_a) = g_p . v) */
+    double *lr_tmp; /* 3 cap */
+    double *lr_m;   /* rank x rank: LU of I + D G^T Z */
+    double *lr_d;   /* rank: -f'_p */
+    double *lr_c;   /* rank: right-hand side */
+    int *lr_piv;    /* rank */
 } cbm__mech_contacts;
 
 struct cbm_plant {
@@ -168,6 +180,10 @@ double cbm__mech_relres(double rmax, double mmax, double *char_moment);
 
 /* ---- contact.c: organ-organ contact ---- */
 
+/* touching pairs held exactly by the preconditioner's low-rank correction */
+#ifndef CBM__CONTACT_RANK
+#define CBM__CONTACT_RANK 32
+#endif
 /* least Krylov dimension of the fast solver with organ contact on */
 #ifndef CBM__CONTACT_KRYLOV
 #define CBM__CONTACT_KRYLOV 60
@@ -184,6 +200,10 @@ void cbm__mech_pairs_eval(cbm_plant *p);
 /// Tangent: adds the pair force changes to dfc (per segment) from the displacements of the
 /// proximal nodes (dpos) and the frame rotations (dth) of the tangent's forward sweep.
 void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth, cbm_vec3 *dfc);
+/// The tree preconditioner's output z = T^-1 v (after cbm__mech_tree_apply) corrected in place
+/// for the normal stiffness of the touching pairs (Woodbury); sets the correction up on first use
+/// after an evaluation (one tree solve per pair). Returns the passes that took.
+size_t cbm__mech_pairs_precond(cbm_plant *p, double *z);
 /// Is any pair in contact at the last evaluation?
 static inline bool cbm__mech_pairs_active(const cbm_plant *p)
 {

@@ -105,6 +105,8 @@ static void precond(nk *k, const double *v, double *z)
     if (k->tree) {
         cbm__mech_tree_apply(p, (const cbm_vec3 *)v, (cbm_vec3 *)z);
         k->st->passes++;
+        if (cbm__mech_pairs_active(p)) /* touching organ pairs: low-rank correction */
+            k->st->passes += cbm__mech_pairs_precond(p, z);
         return;
     }
     const cbm_vec3 *cj = p->work.cj;
