@@ -158,7 +158,9 @@ CBM_API double cbm_plant_contact_force(const cbm_plant *plant, size_t seg);
 /// Pairs are found in O(n) per evaluation by a uniform grid hashed over the spheres; the forces
 /// are part of every evaluation, so the relaxation's fixed point and the Newton residual include
 /// them (the fast solver's tangent holds the pair stiffness; its O(n) tree factorisation, which
-/// cannot, preconditions FGMRES while spheres touch). k = 0 removes the contact (the default).
+/// cannot, preconditions FGMRES while spheres touch, with a low-rank correction for the pairs'
+/// normal stiffness when at most 32 pairs touch; the fast solver then keeps at least 60 Krylov
+/// vectors). k = 0 removes the contact (the default).
 /// CBM_E_INVALID for a negative or non-finite k or smoothing.
 CBM_API cbm_status cbm_plant_set_contact(cbm_plant *plant, double k, double smoothing);
 /// true if organ contact is on; *k and *smoothing (optional) receive it.

@@ -33,8 +33,10 @@
  * the Jacobian-vector product stays the exact derivative of the residual. A pair couples two
  * paths of the tree, which the O(n) tree factorisation (solve_tree.c) cannot hold; while any
  * pair touches, the fast solver uses that factorisation (without the pair terms) as the
- * preconditioner of its flexible GMRES, whose Krylov space picks up the low-rank pair
- * stiffness (rank at most three per touching pair).
+ * preconditioner of its flexible GMRES, corrected for the normal stiffness of the pairs by the
+ * Woodbury formula (below: one tree solve per pair per Newton step, up to CBM__CONTACT_RANK
+ * pairs); the Krylov space picks up the rest (the tangential stiffness f / d, rank two per
+ * pair, or all of the pair stiffness when more pairs touch).
  *
  * Memory: the sphere list, the grid and the pair list live in the plant and are reserved before
  * a solve (6 pairs per sphere at first). If an evaluation finds more pairs than that room, the

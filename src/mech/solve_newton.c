@@ -12,7 +12,8 @@
  *   only when a joint's pivot block was singular and had to be regularised.
  * - Ground contact (solve_common.c): the factorisation carries the contact stiffness too, so
  *   the step is direct with a ground as without. Organ-organ contact (contact.c) couples two
- *   paths, which it cannot carry: while a pair touches, it preconditions FGMRES.
+ *   paths, which it cannot carry: while a pair touches, it preconditions FGMRES, with a
+ *   low-rank correction for the pairs' normal stiffness (cbm__mech_pairs_precond).
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
