@@ -55,6 +55,8 @@ void cbm__sphere_grid_free(cbm_context *ctx, cbm__sphere_grid *g)
 {
     cbm__free(ctx, g->bucket, g->cap * sizeof *g->bucket);
     cbm__free(ctx, g->sorted, g->cap * sizeof *g->sorted);
+    cbm__free(ctx, g->sc, g->cap * sizeof *g->sc);
+    cbm__free(ctx, g->sr, g->cap * sizeof *g->sr);
     if (g->nbuckets)
         cbm__free(ctx, g->start, (g->nbuckets + 1) * sizeof *g->start);
     memset(g, 0, sizeof *g);
@@ -73,7 +75,13 @@ cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_
     size_t *bucket = cbm__alloc(ctx, cap * sizeof *bucket);
     size_t *sorted = cbm__alloc(ctx, cap * sizeof *sorted);
     size_t *start = cbm__alloc(ctx, (nb + 1) * sizeof *start);
-    if (!bucket || !sorted || !start) {
+    cbm_vec3 *sc = cbm__alloc(ctx, cap * sizeof *sc);
+    double *sr = cbm__alloc(ctx, cap * sizeof *sr);
+    if (!bucket || !sorted || !start || !sc || !sr) {
+        if (sc)
+            cbm__free(ctx, sc, cap * sizeof *sc);
+        if (sr)
+            cbm__free(ctx, sr, cap * sizeof *sr);
         if (bucket)
             cbm__free(ctx, bucket, cap * sizeof *bucket);
         if (sorted)
@@ -88,6 +96,8 @@ cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_
     g->bucket = bucket;
     g->sorted = sorted;
     g->start = start;
+    g->sc = sc;
+    g->sr = sr;
     return CBM_OK;
 }
 
@@ -141,11 +151,21 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
     for (size_t b = nb; b > 0; b--)
         start[b] = start[b - 1];
     start[0] = 0;
+    /* centres and radii in bucket order: a bucket's scan reads contiguous memory */
+    cbm_vec3 *sc = g->sc;
+    double *sr = g->sr;
+    for (size_t k = 0; k < n; k++) {
+        sc[k] = c[sorted[k]];
+        sr[k] = r[sorted[k]];
+    }
     size_t found = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (!(r[i] > 0.0))
+    for (size_t k0 = 0; k0 < n; k0++) {
+        const size_t i = sorted[k0];
+        const cbm_vec3 ci = sc[k0];
+        const double ri = sr[k0];
+        if (!(ri > 0.0))
             continue;
-        int64_t cx = cell_of(c[i].x, inv), cy = cell_of(c[i].y, inv), cz = cell_of(c[i].z, inv);
+        int64_t cx = cell_of(ci.x, inv), cy = cell_of(ci.y, inv), cz = cell_of(ci.z, inv);
         size_t seen[27] = {0};
         int ns = 0;
         for (int dx = -1; dx <= 1; dx++)
@@ -160,10 +180,10 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
                     seen[ns++] = b;
                     for (size_t k = start[b]; k < start[b + 1]; k++) {
                         size_t j = sorted[k];
-                        if (j <= i || !(r[j] > 0.0))
+                        if (j <= i)
                             continue;
-                        cbm_vec3 d = v3_sub(c[j], c[i]);
-                        double d2 = v3_dot(d, d), rs = r[i] + r[j];
+                        cbm_vec3 d = v3_sub(sc[k], ci);
+                        double d2 = v3_dot(d, d), rs = ri + sr[k];
                         if (!(d2 < rs * rs))
                             continue;
                         if (found < cap) {

@@ -63,6 +63,8 @@ typedef struct cbm__sphere_grid {
     size_t *bucket;  /* per sphere: its bucket */
     size_t *start;   /* nbuckets + 1 prefix sums */
     size_t *sorted;  /* sphere indices ordered by bucket (stable) */
+    cbm_vec3 *sc;    /* centres in that order (contiguous scans) */
+    double *sr;      /* radii in that order */
 } cbm__sphere_grid;
 
 /* Organ-organ contact state and workspace (contact.c). */
