@@ -180,7 +180,7 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
                     seen[ns++] = b;
                     for (size_t k = start[b]; k < start[b + 1]; k++) {
                         size_t j = sorted[k];
-                        if (j <= i)
+                        if (j <= i || !(sr[k] > 0.0))
                             continue;
                         cbm_vec3 d = v3_sub(sc[k], ci);
                         double d2 = v3_dot(d, d), rs = ri + sr[k];
