@@ -18,12 +18,13 @@
  *
  * Detection in O(n) per evaluation: a uniform grid of cell size h = the largest diameter 2 r_max,
  * hashed into 2^m >= 2 n_spheres buckets (a 64-bit mix of the integer cell coordinates) and
- * sorted by a stable counting sort; each sphere i visits the distinct buckets of its 27
- * neighbour cells and tests the spheres j > i found there. Any overlapping pair is within one
- * cell per axis (d < r_i + r_j <= h), so nothing is missed; the distance test removes the
- * spheres that share a bucket only by a hash collision, and skipping a bucket already visited
- * for i removes duplicates. The order of the pairs (by i, then neighbour cell, then j) is
- * deterministic. The cost is O(n + pairs) for fruits of comparable size.
+ * sorted by a stable counting sort (centres, radii and cells copied in that order); each sphere
+ * tests the later spheres of its own cell and all spheres of the 13 cells of the forward half of
+ * its neighbourhood (offsets after (0, 0, 0) in x-major order), so each pair of cells is visited
+ * once. Any overlapping pair is within one cell per axis (d < r_i + r_j <= h), so nothing is
+ * missed; spheres that share a bucket only by a hash collision are skipped by their cell. The
+ * order of the pairs (by bucket order, then neighbour cell) is deterministic. The cost is
+ * O(n + pairs) for fruits of comparable size (measured: about 0.3 us per sphere up to 1e4).
  *
  * Tangent (Newton). With Delta = dX_b - dX_a (the nodes move with their paths: dX = dP +
  * l dth x H, from the tangent's forward sweep), d delta = -n.Delta and dn = (I - n n^T) Delta / d,
@@ -57,6 +58,7 @@ void cbm__sphere_grid_free(cbm_context *ctx, cbm__sphere_grid *g)
     cbm__free(ctx, g->sorted, g->cap * sizeof *g->sorted);
     cbm__free(ctx, g->sc, g->cap * sizeof *g->sc);
     cbm__free(ctx, g->sr, g->cap * sizeof *g->sr);
+    cbm__free(ctx, g->scell, 3 * g->cap * sizeof *g->scell);
     if (g->nbuckets)
         cbm__free(ctx, g->start, (g->nbuckets + 1) * sizeof *g->start);
     memset(g, 0, sizeof *g);
@@ -77,7 +79,10 @@ cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_
     size_t *start = cbm__alloc(ctx, (nb + 1) * sizeof *start);
     cbm_vec3 *sc = cbm__alloc(ctx, cap * sizeof *sc);
     double *sr = cbm__alloc(ctx, cap * sizeof *sr);
-    if (!bucket || !sorted || !start || !sc || !sr) {
+    int64_t *scell = cbm__alloc(ctx, 3 * cap * sizeof *scell);
+    if (!bucket || !sorted || !start || !sc || !sr || !scell) {
+        if (scell)
+            cbm__free(ctx, scell, 3 * cap * sizeof *scell);
         if (sc)
             cbm__free(ctx, sc, cap * sizeof *sc);
         if (sr)
@@ -98,6 +103,7 @@ cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_
     g->start = start;
     g->sc = sc;
     g->sr = sr;
+    g->scell = scell;
     return CBM_OK;
 }
 
@@ -121,6 +127,35 @@ static inline size_t hash3(int64_t x, int64_t y, int64_t z, size_t mask)
     h *= 0xBF58476D1CE4E5B9ull;
     h ^= h >> 32;
     return (size_t)(h & mask);
+}
+
+/* records the pair of spheres i, j (sorted positions ki, kj) if they overlap */
+static inline size_t test_pair(const cbm__sphere_grid *g, size_t ki, size_t kj, cbm__mech_pair *out,
+                               size_t cap, size_t found)
+{
+    cbm_vec3 d = v3_sub(g->sc[kj], g->sc[ki]);
+    double d2 = v3_dot(d, d), rs = g->sr[ki] + g->sr[kj];
+    if (!(d2 < rs * rs) || !(g->sr[kj] > 0.0))
+        return found;
+    if (found < cap) {
+        size_t i = g->sorted[ki], j = g->sorted[kj];
+        cbm__mech_pair *pr = &out[found];
+        double dist = sqrt(d2);
+        if (i > j) { /* a < b, the line of centres from a to b */
+            size_t t = i;
+            i = j;
+            j = t;
+            d = v3_scale(d, -1.0);
+        }
+        pr->a = i;
+        pr->b = j;
+        pr->dist = dist;
+        pr->over = rs - dist;
+        /* coincident centres: any direction will do; x keeps it deterministic */
+        pr->n = dist > 1e-12 * rs ? v3_scale(d, 1.0 / dist) : v3(1, 0, 0);
+        pr->force = pr->stiff = 0.0;
+    }
+    return found + 1;
 }
 
 size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const double *r, size_t n,
@@ -151,56 +186,35 @@ size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const doub
     for (size_t b = nb; b > 0; b--)
         start[b] = start[b - 1];
     start[0] = 0;
-    /* centres and radii in bucket order: a bucket's scan reads contiguous memory */
-    cbm_vec3 *sc = g->sc;
-    double *sr = g->sr;
+    /* centres, radii and cells in bucket order: a bucket's scan reads contiguous memory */
+    int64_t *cell = g->scell;
     for (size_t k = 0; k < n; k++) {
-        sc[k] = c[sorted[k]];
-        sr[k] = r[sorted[k]];
+        cbm_vec3 ck = c[sorted[k]];
+        g->sc[k] = ck;
+        g->sr[k] = r[sorted[k]];
+        cell[3 * k] = cell_of(ck.x, inv);
+        cell[3 * k + 1] = cell_of(ck.y, inv);
+        cell[3 * k + 2] = cell_of(ck.z, inv);
     }
+    /* each sphere meets the later spheres of its own cell and every sphere of the 13 cells of
+     * the forward half of its neighbourhood; a bucket's spheres of other cells (hash
+     * collisions) are skipped by their cell, so each pair of cells is visited once */
     size_t found = 0;
     for (size_t k0 = 0; k0 < n; k0++) {
-        const size_t i = sorted[k0];
-        const cbm_vec3 ci = sc[k0];
-        const double ri = sr[k0];
-        if (!(ri > 0.0))
+        if (!(g->sr[k0] > 0.0))
             continue;
-        int64_t cx = cell_of(ci.x, inv), cy = cell_of(ci.y, inv), cz = cell_of(ci.z, inv);
-        size_t seen[27] = {0};
-        int ns = 0;
-        for (int dx = -1; dx <= 1; dx++)
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dz = -1; dz <= 1; dz++) {
-                    size_t b = hash3(cx + dx, cy + dy, cz + dz, mask);
-                    bool dup = false;
-                    for (int k = 0; k < ns && !dup; k++)
-                        dup = seen[k] == b;
-                    if (dup)
-                        continue;
-                    seen[ns++] = b;
-                    for (size_t k = start[b]; k < start[b + 1]; k++) {
-                        size_t j = sorted[k];
-                        if (j <= i || !(sr[k] > 0.0))
-                            continue;
-                        cbm_vec3 d = v3_sub(sc[k], ci);
-                        double d2 = v3_dot(d, d), rs = ri + sr[k];
-                        if (!(d2 < rs * rs))
-                            continue;
-                        if (found < cap) {
-                            cbm__mech_pair *pr = &out[found];
-                            double dist = sqrt(d2);
-                            pr->a = i;
-                            pr->b = j;
-                            pr->dist = dist;
-                            pr->over = rs - dist;
-                            /* coincident centres: any direction will do; x keeps it
-                             * deterministic */
-                            pr->n = dist > 1e-12 * rs ? v3_scale(d, 1.0 / dist) : v3(1, 0, 0);
-                            pr->force = pr->stiff = 0.0;
-                        }
-                        found++;
-                    }
-                }
+        const int64_t cx = cell[3 * k0], cy = cell[3 * k0 + 1], cz = cell[3 * k0 + 2];
+        size_t b0 = bucket[sorted[k0]];
+        for (size_t k = k0 + 1; k < start[b0 + 1]; k++)
+            if (cell[3 * k] == cx && cell[3 * k + 1] == cy && cell[3 * k + 2] == cz)
+                found = test_pair(g, k0, k, out, cap, found);
+        for (int o = 14; o < 27; o++) { /* offsets after (0, 0, 0) in x-major order */
+            int64_t nx = cx + o / 9 - 1, ny = cy + (o / 3) % 3 - 1, nz = cz + o % 3 - 1;
+            size_t b = hash3(nx, ny, nz, mask);
+            for (size_t k = start[b]; k < start[b + 1]; k++)
+                if (cell[3 * k] == nx && cell[3 * k + 1] == ny && cell[3 * k + 2] == nz)
+                    found = test_pair(g, k0, k, out, cap, found);
+        }
     }
     return found;
 }

@@ -65,6 +65,7 @@ typedef struct cbm__sphere_grid {
     size_t *sorted;  /* sphere indices ordered by bucket (stable) */
     cbm_vec3 *sc;    /* centres in that order (contiguous scans) */
     double *sr;      /* radii in that order */
+    int64_t *scell;  /* integer cells in that order, 3 per sphere */
 } cbm__sphere_grid;
 
 /* Organ-organ contact state and workspace (contact.c). */
