@@ -4,7 +4,9 @@
  * The string is the plant: one declared module carries a mechanical segment in a MechSegment
  * parameter (inputs: length, semi-axes a >= b, E, G, density, modulus of rupture, rest rotation
  * rate; state and outputs: Omega, proximal position, H, U, stress, stress ratio, carried mass,
- * age), declared point-mass modules carry a mass in kg. One operation:
+ * age), declared point-mass modules carry a mass in kg (and, if declared with a `radius` role,
+ * the radius of the organ's contact sphere at the end of that segment: the largest of a node's
+ * organs; Contact(k, s) turns organ-organ contact on, contact.c). One operation:
  *   1. one left-to-right scan (O(n)) builds an index view: each segment's parent is the last
  *      segment before it on its path from the root (a stack of it at `[`, restored at `]`); the
  *      turtle rotations between the parent and the segment (+ - & ^ \ / |, explicit angles in

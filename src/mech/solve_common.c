@@ -66,6 +66,11 @@
  * carries the same contact stiffness, so the fast solver's step stays exact. During the load
  * continuation (load_scale < 1) k is scaled with the loads: lambda = 0 is then exact at the
  * rest state even where that reaches below the ground.
+ *
+ * Organ-organ contact (contact.c, Jirasek §2.8 and Fig. 6): at the start of the backward pass
+ * the touching pairs of organ spheres (centred at distal nodes) are found on a hashed grid and
+ * their penalty forces added at the two nodes like tip forces; the tangent adds their changes
+ * into the same force accumulators (dfc) from the nodes' displacements, so it stays exact.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
