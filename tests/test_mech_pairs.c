@@ -243,9 +243,26 @@ TEST(pairs_tangent_matches_finite_differences)
             p, i, v3(0.3 * sin(1.0 * i), 2.0 * cos(3.0 * i), 1.5 * sin(2.0 * i + 1))));
     CHECK_OK(cbm_plant_set_contact(p, 800.0, 0.0005));
     CHECK_OK(cbm_plant_evaluate(p, NULL));
+    /* a ground halfway up the fruits too */
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        cbm_segment_state s;
+        CHECK_OK(cbm_plant_segment(p, i, &s));
+        if (s.contact_radius > 0) {
+            lo = fmin(lo, s.distal.y);
+            hi = fmax(hi, s.distal.y);
+        }
+    }
+    CHECK_OK(cbm_plant_set_ground(p, 0.5 * (lo + hi), 500.0, 0.0));
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    size_t below = 0;
+    for (size_t i = 0; i < n; i++)
+        below += cbm_plant_contact_force(p, i) > 0.0;
     cbm_contact_stats cs;
     CHECK_OK(cbm_plant_contact_stats(p, &cs));
-    printf("touching pairs: %zu, max overlap %.3g m\n", cs.pairs, cs.max_overlap);
+    printf("touching pairs: %zu, max overlap %.3g m; %zu nodes below the ground\n", cs.pairs,
+           cs.max_overlap, below);
+    CHECK(below >= 2);
     CHECK(cs.pairs >= 3);
     /* some pairs on the smoothed branch, some beyond it */
     CHECK(cs.max_overlap > 0.0005);
@@ -842,5 +859,47 @@ TEST(pairs_lowrank_correction)
     printf("largest node distance: %.3g m\n", dmax);
     CHECK(dmax < 1e-8);
     CHECK(kry[0] * steps[1] < kry[1] * steps[0]); /* fewer Krylov iterations per Newton step */
+    test_ctx_end(ctx);
+}
+
+/* Fruits that touch each other and rest on the ground: both solvers at the same equilibrium. */
+TEST(pairs_with_ground_solvers_agree)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_vec3 tips[2][64];
+    size_t n = 0;
+    for (int solver = 0; solver < 2; solver++) {
+        cbm_plant *p = bunch(ctx, 6, 5, 0.4, 0.006, 0.004);
+        CHECK_OK(cbm_plant_set_contact(p, 30.0, 2e-4));
+        CHECK_OK(cbm_plant_set_ground(p, -0.05, 30.0, 2e-4));
+        n = cbm_plant_segment_count(p);
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.solver = solver ? CBM_MECH_RELAX : CBM_MECH_NEWTON;
+        sd.tolerance = 1e-10;
+        sd.alpha = 0.05;
+        sd.max_passes = 200000;
+        cbm_solve_stats st;
+        CHECK_OK(cbm_plant_solve(p, &sd, &st));
+        cbm_contact_stats cs;
+        CHECK_OK(cbm_plant_contact_stats(p, &cs));
+        size_t below = 0;
+        for (size_t i = 0; i < n; i++) {
+            below += cbm_plant_contact_force(p, i) > 0.0;
+            cbm_segment_state s;
+            CHECK_OK(cbm_plant_segment(p, i, &s));
+            tips[solver][i] = s.distal;
+        }
+        printf("%s: %zu passes, %zu Newton steps, %zu Krylov; %zu pairs, %zu nodes on the "
+               "ground\n",
+               solver ? "relax" : "fast", st.passes, st.newton_steps, st.krylov_iterations,
+               cs.pairs, below);
+        CHECK(cs.pairs >= 3 && below >= 2);
+        cbm_plant_destroy(p);
+    }
+    double dmax = 0;
+    for (size_t i = 0; i < n; i++)
+        dmax = fmax(dmax, v3_norm(v3_sub(tips[0][i], tips[1][i])));
+    printf("largest node distance between the solvers: %.3g m\n", dmax);
+    CHECK(dmax < 1e-7);
     test_ctx_end(ctx);
 }
