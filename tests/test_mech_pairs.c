@@ -580,14 +580,22 @@ static cbm_status oom_case(cbm_context *ctx, void *ud)
         for (int i = 0; i < 4 && s == CBM_OK; i++) {
             d.parent = i == 0 ? -1 : (int64_t)cbm_plant_segment_count(p) - 1;
             d.deviation = i == 0 ? 0.05 * (j - 1) : 0.0;
-            d.contact_radius = i == 3 ? 0.01 : 0.0;
+            d.contact_radius = i == 3 ? 0.015 : 0.0; /* neighbours overlap at rest */
             d.point_mass = i == 3 ? 0.01 : 0.0;
             s = cbm_plant_add_segment(p, &d, NULL);
         }
     if (s == CBM_OK)
         s = cbm_plant_set_contact(p, 100.0, 1e-4);
+    cbm_solve_stats st;
+    memset(&st, 0, sizeof st);
     if (s == CBM_OK)
-        s = cbm_plant_solve(p, NULL, NULL);
+        s = cbm_plant_solve(p, NULL, &st);
+    cbm_contact_stats cs;
+    memset(&cs, 0, sizeof cs);
+    if (s == CBM_OK)
+        s = cbm_plant_contact_stats(p, &cs);
+    if (s == CBM_OK && (cs.pairs < 2 || st.krylov_iterations == 0))
+        s = CBM_E_INVALID; /* the case must exercise the pairs and the FGMRES path */
     cbm_plant_destroy(p);
     return s;
 }
