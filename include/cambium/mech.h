@@ -70,14 +70,17 @@ CBM_API cbm_ring cbm_ring_default(void);
 
 /// A new segment.
 typedef struct cbm_segment_def {
-    int64_t parent;      ///< index of the parent segment, -1 for a root (clamped at the base)
-    double length;       ///< m (> 0)
-    double divergence;   ///< spin about the parent's H before the deviation, rad (Taylor-Hell 6.2)
-    double deviation;    ///< rotation about the spun U (turns H towards L), rad
-    double roll;         ///< spin about the new H after the deviation, rad
-    cbm_ring core;       ///< the first (innermost) ring; more rings with cbm_plant_add_ring
-    cbm_vec3 omega;      ///< initial current rotation rate, local, rad/m (usually = rest rate)
-    double point_mass;   ///< kg at the distal end (leaves, fruit, any load)
+    int64_t parent;    ///< index of the parent segment, -1 for a root (clamped at the base)
+    double length;     ///< m (> 0)
+    double divergence; ///< spin about the parent's H before the deviation, rad (Taylor-Hell 6.2)
+    double deviation;  ///< rotation about the spun U (turns H towards L), rad
+    double roll;       ///< spin about the new H after the deviation, rad
+    cbm_ring core;     ///< the first (innermost) ring; more rings with cbm_plant_add_ring
+    cbm_vec3 omega;    ///< initial current rotation rate, local, rad/m (usually = rest rate)
+    double point_mass; ///< kg at the distal end (leaves, fruit, any load)
+    /// m: radius of the organ (fruit) centred at the distal node for organ-organ contact
+    /// (cbm_plant_set_contact); 0 = none (the default)
+    double contact_radius;
     cbm_vec3 tip_force;  ///< N, world, at the distal end (dead load)
     cbm_vec3 tip_moment; ///< N m, world, at the distal end (dead load)
     int32_t order;       ///< branch order; -1 = automatic (root 0, the continuation keeps the
@@ -147,6 +150,36 @@ CBM_API bool cbm_plant_ground(const cbm_plant *plant, double *y0, double *k, dou
 /// Upward contact force (N) on the distal node of `seg` at the current state (valid after a
 /// solve or cbm_plant_evaluate); 0 without ground or above it.
 CBM_API double cbm_plant_contact_force(const cbm_plant *plant, size_t seg);
+/// Organ-organ contact by penalty (Jirasek et al. 2000 §2.8, Fig. 6: fruits in a bunch): every
+/// segment with a contact radius r > 0 carries a sphere of radius r centred at its distal node
+/// (a fruit drawn centred at the end of its stalk). Two spheres a, b whose centres are closer
+/// than r_a + r_b push each other apart along the line of centres, at the two distal nodes, with
+/// the force k * overlap (N; k in N/m per metre of overlap, overlap = r_a + r_b - distance),
+/// smoothed over the first `smoothing` m of overlap like the ground (k d^2 / (2 s), then
+/// k (d - s/2)). Spheres on the same segment path are not exempt: every overlapping pair counts.
+/// Pairs are found in O(n) per evaluation by a uniform grid hashed over the spheres; the forces
+/// are part of every evaluation, so the relaxation's fixed point and the Newton residual include
+/// them (the fast solver's tangent holds the pair stiffness; its O(n) tree factorisation, which
+/// cannot, preconditions FGMRES while spheres touch, with a low-rank correction for the pairs'
+/// normal stiffness when at most 32 pairs touch; the fast solver then keeps at least 60 Krylov
+/// vectors). k = 0 removes the contact (the default).
+/// CBM_E_INVALID for a negative or non-finite k or smoothing.
+CBM_API cbm_status cbm_plant_set_contact(cbm_plant *plant, double k, double smoothing);
+/// true if organ contact is on; *k and *smoothing (optional) receive it.
+CBM_API bool cbm_plant_contact(const cbm_plant *plant, double *k, double *smoothing);
+/// Contact radius (m, >= 0; 0 = no sphere) of the organ at the distal node of `seg`.
+CBM_API cbm_status cbm_plant_set_contact_radius(cbm_plant *plant, size_t seg, double radius);
+/// Sum of the organ-contact forces (N, world) on the distal node of `seg` at the current state
+/// (valid after a solve or cbm_plant_evaluate); zero without contact.
+CBM_API cbm_vec3 cbm_plant_organ_contact_force(const cbm_plant *plant, size_t seg);
+/// Organ contacts at the current state (valid after a solve or cbm_plant_evaluate).
+typedef struct cbm_contact_stats {
+    size_t spheres;     ///< segments with a contact radius
+    size_t pairs;       ///< overlapping pairs
+    double max_overlap; ///< m, largest overlap r_a + r_b - distance (0 if none)
+    double max_force;   ///< N, largest pair force
+} cbm_contact_stats;
+CBM_API cbm_status cbm_plant_contact_stats(const cbm_plant *plant, cbm_contact_stats *out);
 CBM_API void cbm_plant_set_base(cbm_plant *plant, cbm_vec3 position, cbm_quat orientation);
 CBM_API void cbm_plant_set_discretization(cbm_plant *plant, cbm_mech_discretization d);
 CBM_API cbm_mech_discretization cbm_plant_discretization(const cbm_plant *plant);
@@ -181,6 +214,7 @@ typedef struct cbm_segment_state {
     /// leaves the shape unchanged up to O(h^2).
     cbm_vec3 rate;
     double point_mass;     ///< kg at the distal end
+    double contact_radius; ///< m, organ sphere at the distal node (0: none)
     cbm_vec3 tip_force;    ///< N, world
     cbm_vec3 tip_moment;   ///< N m, world
     cbm_quat orientation;  ///< frame of the segment (H = q e_x, L = q e_y, U = q e_z)

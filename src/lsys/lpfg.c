@@ -157,6 +157,7 @@ typedef enum {
     F_STABILITY,
     F_GRAVITY,
     F_GROUND,
+    F_CONTACT,
     F_TROPISM,
     F_PIPEMODEL,
     F_WOOD,
@@ -223,6 +224,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"Stability", F_STABILITY, 0},
                                 {"Gravity", F_GRAVITY, 3},
                                 {"Ground", F_GROUND, 3},
+                                {"Contact", F_CONTACT, 2},
                                 {"Tropism", F_TROPISM, 4},
                                 {"PipeModel", F_PIPEMODEL, 2},
                                 {"Wood", F_WOOD, 5},
@@ -1159,8 +1161,9 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             }
             if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
-                b->fn == F_GROUND || b->fn == F_TROPISM || b->fn == F_PIPEMODEL ||
-                b->fn == F_WOOD || b->fn == F_RINGRATE || b->fn == F_SOLVER || b->fn == F_REACTION)
+                b->fn == F_GROUND || b->fn == F_CONTACT || b->fn == F_TROPISM ||
+                b->fn == F_PIPEMODEL || b->fn == F_WOOD || b->fn == F_RINGRATE ||
+                b->fn == F_SOLVER || b->fn == F_REACTION)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2110,8 +2113,63 @@ static void symbol_list(lc *L, bool consider)
         recover(L);
 }
 
+/* The roles of a point-mass module's parameters, `mass: Grape(mass, radius)`: `mass` (kg),
+ * `radius` (m, the organ's contact sphere) or `_` (not used), in parameter order. Offsets (in
+ * doubles) into *moff and *roff (-1: absent). false after an error. */
+static bool mass_roles(lc *L, const lmod *md, int *moff, int *roff)
+{
+    lpfg *lp = L->lp;
+    int off = 0;
+    for (int k = 0;; k++) {
+        size_t n = ident(L), pos = L->c->pos;
+        if (!n) {
+            expected(L, "mass, radius or _");
+            return false;
+        }
+        L->c->pos += n;
+        int *dst = NULL;
+        if (n == 4 && !strncmp(L->t + pos, "mass", 4))
+            dst = moff;
+        else if (n == 6 && !strncmp(L->t + pos, "radius", 6))
+            dst = roff;
+        else if (!(n == 1 && L->t[pos] == '_')) {
+            cbm__cerr(L->c, pos,
+                      "unknown role '%.*s' of a point-mass parameter (mass, radius or _)", (int)n,
+                      L->t + pos);
+            return false;
+        }
+        if (k >= md->np) {
+            cbm__cerr(L->c, pos, "module '%s' has %d parameter%s", md->name, md->np,
+                      md->np == 1 ? "" : "s");
+            return false;
+        }
+        if (dst && *dst >= 0) {
+            cbm__cerr(L->c, pos, "'%.*s' given twice", (int)n, L->t + pos);
+            return false;
+        }
+        if (dst && !is_scalar(md->ptype[k])) {
+            cbm__cerr(L->c, pos, "parameter %d of '%s' must be a number to be its %.*s, not %s",
+                      k + 1, md->name, (int)n, L->t + pos, lp->types.data[md->ptype[k]].name);
+            return false;
+        }
+        if (dst)
+            *dst = off;
+        off += tsize(lp, md->ptype[k]);
+        if (!accept(L, ","))
+            break;
+    }
+    if (!expect(L, ")"))
+        return false;
+    if (*moff < 0) {
+        cbm__cerr(L->c, L->c->pos - 1, "point-mass module '%s' needs a 'mass' parameter", md->name);
+        return false;
+    }
+    return true;
+}
+
 /* `mechanics: Module;` (its MechSegment parameter is the segment) and `mass: A, B;` (the first
- * parameter, a number, is a point mass in kg). */
+ * parameter, a number, is a point mass in kg), or with roles `mass: Grape(mass, radius);` (see
+ * mass_roles). */
 static void mech_decl(lc *L, bool mass)
 {
     lpfg *lp = L->lp;
@@ -2128,7 +2186,19 @@ static void mech_decl(lc *L, bool mass)
             cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
         } else {
             const lmod *md = &lp->mods.data[m];
-            int off = 0, found = -1;
+            int off = 0, found = -1, roff = -1;
+            if (mass && accept(L, "(")) {
+                int moff = -1;
+                if (!mass_roles(L, md, &moff, &roff)) {
+                    recover(L);
+                    return;
+                }
+                lp->mech.mass_off[md->code] = moff;
+                lp->mech.radius_off[md->code] = roff;
+                if (!accept(L, ","))
+                    break;
+                continue;
+            }
             for (int i = 0; i < md->np && found < 0; i++) {
                 if (mass ? i == 0 && is_scalar(md->ptype[i]) : md->ptype[i] == T_MSEG)
                     found = off;
@@ -2145,9 +2215,10 @@ static void mech_decl(lc *L, bool mass)
                           md->name);
             else if (!mass && lp->mech.seg_code >= 0 && lp->mech.seg_code != md->code)
                 cbm__cerr(L->c, pos, "only one module can carry the mechanical segment");
-            else if (mass)
+            else if (mass) {
                 lp->mech.mass_off[md->code] = found;
-            else {
+                lp->mech.radius_off[md->code] = -1;
+            } else {
                 lp->mech.seg_code = md->code;
                 lp->mech.seg_off = found;
             }
@@ -2771,6 +2842,14 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         m->ground_y = a[0];
         m->ground_k = a[1];
         m->ground_s = a[2];
+        return;
+    case F_CONTACT:
+        if (!(a[0] >= 0) || !isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1])) {
+            rt_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
+            return;
+        }
+        m->contact_k = a[0];
+        m->contact_s = a[1];
         return;
     case F_TROPISM:
         m->tropism.direction = (cbm_vec3){a[0], a[1], a[2]};
@@ -3928,6 +4007,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
         lp->mech.seg_code = m.seg_code;
         lp->mech.seg_off = m.seg_off;
         memcpy(lp->mech.mass_off, m.mass_off, sizeof m.mass_off);
+        memcpy(lp->mech.radius_off, m.radius_off, sizeof m.radius_off);
     }
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->gvars.len; g++) {

@@ -4,7 +4,9 @@
  * The string is the plant: one declared module carries a mechanical segment in a MechSegment
  * parameter (inputs: length, semi-axes a >= b, E, G, density, modulus of rupture, rest rotation
  * rate; state and outputs: Omega, proximal position, H, U, stress, stress ratio, carried mass,
- * age), declared point-mass modules carry a mass in kg. One operation:
+ * age), declared point-mass modules carry a mass in kg (and, if declared with a `radius` role,
+ * the radius of the organ's contact sphere at the end of that segment: the largest of a node's
+ * organs; Contact(k, s) turns organ-organ contact on, contact.c). One operation:
  *   1. one left-to-right scan (O(n)) builds an index view: each segment's parent is the last
  *      segment before it on its path from the root (a stack of it at `[`, restored at `]`); the
  *      turtle rotations between the parent and the segment (+ - & ^ \ / |, explicit angles in
@@ -62,7 +64,7 @@ void cbm__mechlang_init(cbm__mechlang *m)
     memset(m, 0, sizeof *m);
     m->seg_code = -1;
     for (int i = 0; i < 128; i++)
-        m->mass_off[i] = -1;
+        m->mass_off[i] = m->radius_off[i] = -1;
     m->turtle['+'] = TR_LEFT;
     m->turtle['-'] = TR_RIGHT;
     m->turtle['&'] = TR_DOWN;
@@ -269,6 +271,18 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
             CBM_TRY(cbm_plant_segment(pl, (size_t)last, &st));
             CBM_TRY(cbm_plant_set_load(pl, (size_t)last, st.point_mass + mass, st.tip_force,
                                        st.tip_moment));
+            int ro = m->radius_off[code];
+            if (ro >= 0 && np > ro) {
+                /* one sphere per node: the largest organ there */
+                double r = p[ro];
+                if (!(r >= 0) || !isfinite(r)) {
+                    snprintf(err, errn, "contact radius %g m after mechanical segment %lld", r,
+                             (long long)last + 1);
+                    return CBM_E_INVALID;
+                }
+                if (r > st.contact_radius)
+                    CBM_TRY(cbm_plant_set_contact_radius(pl, (size_t)last, r));
+            }
         }
     }
     return CBM_OK;
@@ -417,6 +431,8 @@ static cbm_status make_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, 
     cbm_status st = cbm_plant_create(ctx, &pd, out);
     if (st == CBM_OK)
         st = cbm_plant_set_ground(*out, m->ground_y, m->ground_k, m->ground_s);
+    if (st == CBM_OK)
+        st = cbm_plant_set_contact(*out, m->contact_k, m->contact_s);
     if (st == CBM_OK)
         st = build(ctx, m, s, *out, v, err, errn);
     if (st == CBM_OK && v->seg.len)

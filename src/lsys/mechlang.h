@@ -28,13 +28,15 @@ enum {
 };
 
 typedef struct cbm__mechlang {
-    int seg_code;      /* module code carrying the segment, -1: none declared */
-    int seg_off;       /* double offset of its MechSegment parameter */
-    int mass_off[128]; /* per module code: double offset of the mass parameter, -1: not a mass */
-    int turtle[128];   /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
-    int sb, eb;        /* codes of SB and EB */
+    int seg_code;        /* module code carrying the segment, -1: none declared */
+    int seg_off;         /* double offset of its MechSegment parameter */
+    int mass_off[128];   /* per module code: double offset of the mass parameter, -1: not a mass */
+    int radius_off[128]; /* per code: double offset of the contact radius (m), -1: none */
+    int turtle[128];     /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
+    int sb, eb;          /* codes of SB and EB */
     cbm_vec3 gravity;
     double ground_y, ground_k, ground_s; /* ground (m), stiffness (N/m; 0: none), smoothing (m) */
+    double contact_k, contact_s;         /* organ contact stiffness (N/m; 0: none), smoothing (m) */
     cbm_tropism tropism;
     cbm_growth_def growth;
     cbm_solve_def solve;

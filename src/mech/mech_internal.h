@@ -53,6 +53,56 @@ typedef struct cbm__mech_work {
     double *hess;  /* (m + 1) x m Hessenberg matrix and Givens data */
 } cbm__mech_work;
 
+/* One overlapping pair of organ spheres (contact.c), a < b (segment indices). */
+typedef struct cbm__mech_pair {
+    size_t a, b;
+    cbm_vec3 n;   /* unit vector from a's centre to b's, world */
+    double dist;  /* m, distance of the centres */
+    double over;  /* m, overlap r_a + r_b - dist (> 0) */
+    double force; /* N, push on b along n (on a along -n), >= 0 */
+    double stiff; /* N/m, d force / d overlap, >= 0 */
+} cbm__mech_pair;
+
+/* A uniform grid over spheres, hashed into buckets (counting sort, no allocation per query). */
+typedef struct cbm__sphere_grid {
+    size_t cap;      /* spheres the arrays hold */
+    size_t nbuckets; /* power of two >= 2 cap */
+    size_t *bucket;  /* per sphere: its bucket */
+    size_t *start;   /* nbuckets + 1 prefix sums */
+    size_t *sorted;  /* sphere indices ordered by bucket (stable) */
+    cbm_vec3 *sc;    /* centres in that order (contiguous scans) */
+    double *sr;      /* radii in that order */
+    int64_t *scell;  /* integer cells in that order, 3 per sphere */
+} cbm__sphere_grid;
+
+/* Organ-organ contact state and workspace (contact.c). */
+typedef struct cbm__mech_contacts {
+    bool on;
+    double k, s;      /* N/m per metre of overlap; smoothing, m */
+    size_t nsph;      /* spheres (segments with a radius) at the last prepare */
+    size_t cap;       /* segments the per-segment arrays hold */
+    size_t *sph;      /* sphere -> segment */
+    cbm_vec3 *centre; /* per sphere, world */
+    double *rad;      /* per sphere, m */
+    cbm_vec3 *fnode;  /* per segment: sum of pair forces on its distal node, world, N */
+    cbm_vec3 *dx;     /* per segment: tangent displacement of the distal node */
+    cbm__sphere_grid grid;
+    cbm__mech_pair *pairs;
+    size_t npairs, pcap; /* found (stored: min(npairs, pcap)) and capacity */
+    /* low-rank correction of the tree preconditioner (contact.c): the normal stiffness of up to
+     * CBM__CONTACT_RANK touching pairs, Woodbury form */
+    bool lr_valid;  /* set up for the current state and factorisation */
+    bool lr_off;    /* no correction (tests compare): FGMRES alone */
+    int lr_rank;    /* pairs in the correction */
+    double *lr_z;   /* rank x 3 cap: T^-1 u_p */
+    double *lr_g;   /* rank x 3 cap: g_p (n . (dX_b - dX_a) = g_p . v) */
+    double *lr_tmp; /* 3 cap */
+    double *lr_m;   /* rank x rank: LU of I + D G^T Z */
+    double *lr_d;   /* rank: -f'_p */
+    double *lr_c;   /* rank: right-hand side */
+    int *lr_piv;    /* rank */
+} cbm__mech_contacts;
+
 struct cbm_plant {
     cbm_context *ctx;
     cbm_vec3 gravity;
@@ -65,6 +115,7 @@ struct cbm_plant {
     double ground_y;   /* m, height of the ground plane */
     double ground_k;   /* N/m, penalty stiffness per metre of penetration */
     double ground_s;   /* m, smoothing depth (0: none) */
+    cbm__mech_contacts contacts; /* organ-organ contact (contact.c) */
 
     size_t n, cap;
     /* topology and rest geometry */
@@ -89,6 +140,7 @@ struct cbm_plant {
     cbm_vec3 *omega;
     double *pmass;
     double *pmass0; /* point masses the last converged solve balanced (0 for new segments) */
+    double *crad;   /* contact radius of the organ at the distal node, m (0: none) */
     cbm_vec3 *tipf, *tipm;
     /* results */
     cbm_quat *q;
@@ -147,6 +199,47 @@ size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle);
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
 /// Relative residual from the max residual and moments.
 double cbm__mech_relres(double rmax, double mmax, double *char_moment);
+
+/* ---- contact.c: organ-organ contact ---- */
+
+/* touching pairs held exactly by the preconditioner's low-rank correction */
+#ifndef CBM__CONTACT_RANK
+#define CBM__CONTACT_RANK 32
+#endif
+/* least Krylov dimension of the fast solver with organ contact on */
+#ifndef CBM__CONTACT_KRYLOV
+#define CBM__CONTACT_KRYLOV 60
+#endif
+
+/// Ensures the contact workspace for the plant's spheres (no-op without contact).
+cbm_status cbm__mech_pairs_reserve(cbm_plant *p);
+void cbm__mech_pairs_free(cbm_plant *p);
+/// Lists the spheres (segments with a radius); part of cbm__mech_prepare.
+void cbm__mech_pairs_prepare(cbm_plant *p);
+/// Finds the overlapping pairs at the current positions (after a forward sweep) and their forces
+/// into contacts.fnode; part of the backward sweep.
+void cbm__mech_pairs_eval(cbm_plant *p);
+/// Tangent: adds the pair force changes to dfc (per segment) from the displacements of the
+/// proximal nodes (dpos) and the frame rotations (dth) of the tangent's forward sweep.
+void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth, cbm_vec3 *dfc);
+/// The tree preconditioner's output z = T^-1 v (after cbm__mech_tree_apply) corrected in place
+/// for the normal stiffness of the touching pairs (Woodbury); sets the correction up on first use
+/// after an evaluation (one tree solve per pair). Returns the passes that took.
+size_t cbm__mech_pairs_precond(cbm_plant *p, double *z);
+/// Is any pair in contact at the last evaluation?
+static inline bool cbm__mech_pairs_active(const cbm_plant *p)
+{
+    return p->contacts.on && p->contacts.npairs > 0;
+}
+/// Grid: ensures room for n spheres.
+cbm_status cbm__sphere_grid_reserve(cbm_context *ctx, cbm__sphere_grid *g, size_t n);
+void cbm__sphere_grid_free(cbm_context *ctx, cbm__sphere_grid *g);
+/// All pairs (i < j) of the n spheres (n <= the reserved count) whose centres are closer than
+/// r_i + r_j, in a deterministic order; at most cap are stored in out (a = i, b = j, n, dist,
+/// over; force and stiff zero); returns the number found. O(n + pairs) for spheres of comparable
+/// size (cell = the largest diameter).
+size_t cbm__sphere_grid_pairs(cbm__sphere_grid *g, const cbm_vec3 *c, const double *r, size_t n,
+                              cbm__mech_pair *out, size_t cap);
 
 /* ---- solve_relax.c / solve_newton.c ---- */
 cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,

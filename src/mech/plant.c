@@ -121,7 +121,7 @@ cbm_plant_def cbm_plant_def_default(void)
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
     X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
     X(moment) X(pmass0)                                                                            \
-    X(cmass)
+    X(cmass) X(crad)
 // clang-format on
 
 static cbm_status plant_reserve(cbm_plant *p, size_t need)
@@ -206,6 +206,7 @@ void cbm_plant_destroy(cbm_plant *p)
     cbm__free(ctx, p->angles, p->cap * 3 * sizeof(double));
     CBM_ARRAY_FREE(ctx, p->rings);
     cbm__mech_work_free(p);
+    cbm__mech_pairs_free(p);
     cbm__free(ctx, p, sizeof *p);
 }
 
@@ -460,6 +461,9 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
         return cbm__fail(p->ctx, CBM_E_INVALID,
                          "segment %zu: loads and rotation rate must be finite (point mass >= 0)",
                          i);
+    if (!(isfinite(def->contact_radius) && def->contact_radius >= 0.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "segment %zu: contact radius must be finite and >= 0 (m)", i);
     CBM_TRY(check_ring(p, &def->core, NULL, "core ring", i));
     size_t lim = cbm_context_limits(p->ctx)->max_segments;
     if (lim && i + 1 > lim)
@@ -490,6 +494,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->omega[i] = def->omega;
     p->pmass[i] = def->point_mass;
     p->pmass0[i] = 0.0;
+    p->crad[i] = def->contact_radius;
     p->tipf[i] = def->tip_force;
     p->tipm[i] = def->tip_moment;
     p->q[i] = q_identity();
@@ -808,6 +813,7 @@ cbm_status cbm_plant_segment(const cbm_plant *p, size_t i, cbm_segment_state *o)
     o->rest_rate = p->rest[i];
     o->omega = p->omega[i];
     o->point_mass = p->pmass[i];
+    o->contact_radius = p->crad[i];
     o->tip_force = p->tipf[i];
     o->tip_moment = p->tipm[i];
     o->orientation = p->q[i];

@@ -66,6 +66,11 @@
  * carries the same contact stiffness, so the fast solver's step stays exact. During the load
  * continuation (load_scale < 1) k is scaled with the loads: lambda = 0 is then exact at the
  * rest state even where that reaches below the ground.
+ *
+ * Organ-organ contact (contact.c, Jirasek §2.8 and Fig. 6): at the start of the backward pass
+ * the touching pairs of organ spheres (centred at distal nodes) are found on a hashed grid and
+ * their penalty forces added at the two nodes like tip forces; the tangent adds their changes
+ * into the same force accumulators (dfc) from the nodes' displacements, so it stays exact.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -147,6 +152,7 @@ static cbm_status work_reserve(cbm_plant *p, int krylov_dim);
 cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 {
     CBM_TRY(work_reserve(p, krylov_dim));
+    CBM_TRY(cbm__mech_pairs_reserve(p));
     return contact_reserve(p);
 }
 
@@ -252,6 +258,7 @@ void cbm__mech_prepare(cbm_plant *p)
     for (size_t i = p->n; i-- > 0;)
         if (p->parent[i] >= 0)
             p->cmass[p->parent[i]] += p->cmass[i];
+    cbm__mech_pairs_prepare(p);
 }
 
 /* ---- the passes ---- */
@@ -370,12 +377,19 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
     cbm_vec3 *restrict om = p->omega;
     double rmax = 0.0, mmax = 0.0, emax = 0.0, sum = 0.0, ss = 0.0;
     const bool ground = p->ground;
+    /* organ-organ contact (contact.c): the pair forces at the distal nodes of this shape */
+    const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
+    if (pairs)
+        cbm__mech_pairs_eval(p);
+    const cbm_vec3 *restrict fpair = p->contacts.fnode;
     for (size_t i = p->n; i-- > 0;) {
         cbm_vec3 h, l, u;
         q_frame(q[i], &h, &l, &u);
         cbm_vec3 fd = v3_add(f[i], ftip[i]);
         if (ground)
             fd.y += cbm__mech_contact(p, i, h, NULL);
+        if (pairs)
+            fd = v3_add(fd, fpair[i]);
         cbm_vec3 arm = v3_add(v3_scale(fd, len[i]), v3_scale(wown[i], lever[i]));
         cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), mtip[i]);
         cbm_vec3 fi = v3_add(fd, wown[i]);
@@ -464,7 +478,8 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
     cbm_vec3 *restrict dm = w->dm;
     cbm_vec3 *restrict dpos = w->dpos;
     cbm_vec3 *restrict dfc = w->dfc;
-    const bool ground = p->ground;
+    /* node displacements and force changes: for the ground and for organ pairs */
+    const bool ground = p->ground || cbm__mech_pairs_active(p);
     for (size_t i = 0; i < n; i++) {
         cbm_vec3 r = v3_scale(om[i], dual[i]);
         cbm_vec3 x = v3_scale(v[i], dual[i]);
@@ -491,6 +506,8 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
             dfc[i] = v3(0, 0, 0);
         }
     }
+    /* the pair force changes enter dfc at both nodes before the sweep carries them down */
+    cbm__mech_pairs_jvp(p, dpos, dth, dfc);
     const double *restrict len = p->len;
     const double *restrict lever = w->lever;
     const cbm_vec3 *restrict wown = w->wown;
@@ -568,6 +585,13 @@ cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
     cbm__mech_forward(p);
     double mmax;
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
+    if (p->contacts.npairs > p->contacts.pcap) {
+        /* more touching organ pairs than room: grow it (outside any iteration) and redo */
+        CBM_TRY(cbm__mech_work_reserve(p, 0));
+        cbm__mech_prepare(p);
+        cbm__mech_forward(p);
+        r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
+    }
     if (!isfinite(r))
         return cbm__mech_report_nonfinite(p);
     if (residual)
@@ -591,6 +615,10 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     if (d.solver == CBM_MECH_NEWTON && (d.krylov_dim < 1 || d.krylov_dim > 500))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: krylov_dim must be in 1..500");
     CBM_TRY(check_plant(p));
+    /* touching organ pairs leave a part of rank up to three per pair to FGMRES (contact.c): a
+     * short restart stagnates there */
+    if (p->contacts.on && d.krylov_dim < CBM__CONTACT_KRYLOV)
+        d.krylov_dim = CBM__CONTACT_KRYLOV;
     size_t lim = cbm_context_limits(p->ctx)->max_passes;
     size_t maxp = d.max_passes ? d.max_passes : lim;
     if (lim && maxp > lim)
@@ -605,6 +633,20 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
             p->omega[i] = p->work.rj[i];
     cbm_status s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
                                               : cbm__mech_solve_newton(p, &d, maxp, &st);
+    /* an evaluation found more touching organ pairs than the workspace held (contact.c): grow
+     * it and solve again from the state reached (no allocation inside an iteration) */
+    for (int again = 0; again < 4 && p->contacts.on && p->contacts.npairs > p->contacts.pcap;
+         again++) {
+        size_t passes = st.passes;
+        p->load_scale = 1.0;
+        p->mass_path = 1.0;
+        CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 0));
+        cbm__mech_prepare(p);
+        memset(&st, 0, sizeof st);
+        s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
+                                       : cbm__mech_solve_newton(p, &d, maxp, &st);
+        st.passes += passes;
+    }
     p->load_scale = 1.0;
     p->mass_path = 1.0;
     if (s == CBM_OK) /* the point masses this Omega balances */

@@ -11,7 +11,9 @@
  *   solve fused into one pass), and FGMRES with the factorisation as preconditioner is used
  *   only when a joint's pivot block was singular and had to be regularised.
  * - Ground contact (solve_common.c): the factorisation carries the contact stiffness too, so
- *   the step is direct with a ground as without.
+ *   the step is direct with a ground as without. Organ-organ contact (contact.c) couples two
+ *   paths, which it cannot carry: while a pair touches, it preconditions FGMRES, with a
+ *   low-rank correction for the pairs' normal stiffness (cbm__mech_pairs_precond).
  * - Jacobian-vector products: the exact tangent (forward-mode) linearisation of the two passes,
  *   cbm__mech_jvp; each product costs one pass (forward + backward tangent sweep) and is counted.
  * - Forcing terms: Eisenstat & Walker (1996) choice 2 (gamma 0.9, exponent 2), at most 0.1.
@@ -121,6 +123,8 @@ static void precond(nk *k, const double *v, double *z)
     if (k->tree) {
         cbm__mech_tree_apply(p, (const cbm_vec3 *)v, (cbm_vec3 *)z);
         k->st->passes++;
+        if (cbm__mech_pairs_active(p)) /* touching organ pairs: low-rank correction */
+            k->st->passes += cbm__mech_pairs_precond(p, z);
         return;
     }
     const cbm_vec3 *cj = p->work.cj;
@@ -361,7 +365,9 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
                 k->st->passes++;
             }
             memcpy(step, w->tmp, n3 * sizeof *step);
-            direct = sing == 0;
+            /* touching organ pairs couple two paths, which the factorisation does not hold:
+             * it then preconditions FGMRES (contact.c) */
+            direct = sing == 0 && !cbm__mech_pairs_active(p);
             shifted = mu > 0.0 && direct;
             if (mu > 0.0)
                 k->mu_hint = mu;
@@ -372,11 +378,23 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             if (it == 0)
                 k->first_turn = tmax;
-            if (it == 0 && abort_large && lam0 < 1.0)
+            if (it == 0 && abort_large && lam0 < 1.0 && (direct || !cbm__mech_pairs_active(p)))
                 return NK_LARGE; /* far from equilibrium: follow the load path instead */
         }
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
+        if (!direct && k->tree && cbm__mech_pairs_active(p)) {
+            /* the trust region from the FGMRES step itself: the factorisation's own step
+             * ignores what it lacks (touching organ pairs), one tangent pass */
+            cbm__mech_jvp(p, w->step, w->tmp);
+            k->st->passes++;
+            double tmax = largest_turn(p);
+            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+            if (it == 0)
+                k->first_turn = tmax;
+            if (it == 0 && abort_large && lam0 < 1.0)
+                return NK_LARGE;
+        }
         k->st->newton_steps++;
         double lam = lam0;
         nk_result ls = line_search(k, lam0, &lam);
@@ -396,7 +414,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
             k->st->passes++;
             memcpy(step, w->tmp, n3 * sizeof *step);
-            if (sing == 0) {
+            if (sing == 0 && !cbm__mech_pairs_active(p)) {
                 double tmax = largest_turn(p);
                 lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
             } else if (!gmres(k, eta, m))
