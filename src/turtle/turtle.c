@@ -28,6 +28,8 @@
  * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
  * lpfg's frame has U opposite to ours (its L = U x H), which these commands account for.
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
+ * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the start width in
+ * pixels (cpfg's pixel lines) and consecutive lines with equal part data share one part.
  * Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
  */
@@ -320,6 +322,17 @@ static cbm_part make_part(const cbm_turtle *t, cbm_organ organ, int color)
     return p;
 }
 
+/* Whether the part make_part(t, CBM_ORGAN_BRANCH, color) would build equals `last` but for its
+ * segment and parent ids (then a line joins `last`). */
+static bool line_part_reused(const cbm_turtle *t, const cbm_part *last, int color)
+{
+    return last->organ == CBM_ORGAN_BRANCH && last->order == (int32_t)t->stack.len &&
+           last->material == color &&
+           memcmp(last->color, t->view->colors[color & 255], sizeof last->color) == 0 &&
+           isnan(last->stress_ratio) && isnan(last->stress) && isnan(last->age) &&
+           isnan(last->reaction_wood);
+}
+
 static cbm_status push_prim(cbm_turtle *t, const cbm_prim *p)
 {
     if (!t->record)
@@ -393,18 +406,31 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
         return CBM_OK;
     cbm_prim pr;
     memset(&pr, 0, sizeof pr);
-    pr.kind = CBM_PRIM_CYLINDER;
-    pr.color = color;
-    pr.p0 = p0;
-    pr.p1 = p1;
     pr.r0 = w0 / 2.0;
     pr.r1 = w1 / 2.0;
-    pr.frame.h = h;
-    pr.frame.u = u;
-    pr.frame.l = v3_cross(h, u);
-    CBM_TRY(push_prim(t, &pr));
+    if (t->record) {
+        pr.kind = CBM_PRIM_CYLINDER;
+        pr.color = color;
+        pr.p0 = p0;
+        pr.p1 = p1;
+        pr.frame.h = h;
+        pr.frame.u = u;
+        pr.frame.l = v3_cross(h, u);
+        CBM_TRY(push_prim(t, &pr));
+    }
     if (!t->scene)
         return CBM_OK;
+    if (t->view->line_style == CBM__LS_PIXEL && !t->lpfg && cbm_scene_line_mode(t->scene)) {
+        /* a line w0 pixels wide, as cpfg draws pixel lines; a run of segments with the same
+         * part data shares one part (the first segment's id), so a line costs 32 bytes */
+        size_t np = cbm_scene_part_count(t->scene);
+        const cbm_part *last = np ? &cbm_scene_parts(t->scene)[np - 1] : NULL;
+        if (!last || !line_part_reused(t, last, color)) {
+            cbm_part part = make_part(t, CBM_ORGAN_BRANCH, color);
+            CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+        }
+        return cbm_scene_add_line(t->scene, p0, p1, w0 > 0.0 ? w0 : w1);
+    }
     cbm_part part = make_part(t, CBM_ORGAN_BRANCH, color);
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     cbm_vec3 dir = v3_normalize(d);

@@ -13,7 +13,9 @@
  * except .glb, which becomes one animation with a frame per K steps. Without -o it derives,
  * interprets and prints a one-line summary. When a limit stops the derivation, the outputs of
  * the last complete step are written and the exit status is 1; any other error writes nothing
- * more (every file goes through cbm_out: complete or absent).
+ * more (every file goes through cbm_out: complete or absent). When every scene output is a
+ * picture (.png .svg), the scene is in line mode: cpfg's pixel lines are kept as lines, not
+ * tessellated into tubes.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli_output.h"
@@ -508,8 +510,17 @@ int cmd_run(int argc, char **argv)
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");
     }
+    /* pixel lines stay lines (32 bytes each, rasterised) when every scene output is a picture;
+     * any mesh output makes them tubes, which the pictures then show too */
+    bool pictures_only = r.need_scene;
+    for (int k = 0; k < ntargets; k++)
+        if (is_scene_format(targets[k].format) && strcmp(targets[k].format, "png") &&
+            strcmp(targets[k].format, "svg"))
+            pictures_only = false;
     if (r.need_scene)
         s = cbm_scene_create(ctx, &r.scene);
+    if (s == CBM_OK && pictures_only)
+        cbm_scene_set_line_mode(r.scene, true);
     if (s == CBM_OK && r.need_json)
         s = cbm_json_create(ctx, &r.json);
     for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
