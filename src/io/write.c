@@ -1,6 +1,6 @@
 /* Writers' common ground: default options, dispatch by extension, the orthographic camera fitted
- * to a scene (projection of every kept vertex and line end on the view plane, bounding box scaled to a
- * fraction of the picture), colour modes and their maps, and a 5x7 bitmap font for the legends
+ * to a scene (projection of every kept vertex and line end on the view plane, bounding box scaled
+ * to a fraction of the picture), colour modes and their maps, and a 5x7 bitmap font for the legends
  * of pictures.
  *
  * Colour maps: stress ratio goes from blue (0) through yellow to red (1, the modulus of rupture

@@ -28,9 +28,9 @@
  * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
  * lpfg's frame has U opposite to ours (its L = U x H), which these commands account for.
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
- * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the start width in
- * pixels (cpfg's pixel lines) and consecutive lines with equal part data share one part.
- * Interpretation is linear in the number of modules, with no allocation per module beyond the
+ * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the
+ * start width in pixels (cpfg's pixel lines) and consecutive lines with equal part data share one
+ * part. Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
  */
 #include "tint.h"
@@ -108,7 +108,7 @@ struct cbm_turtle {
     int64_t module_index; /* modules fed so far (the one executing is module_index - 1) */
     int64_t node_module;  /* the module that opened the segment in progress */
     double turn_deg, turn_sin, turn_cos; /* the last explicit turn angle and its sine, cosine */
-    int64_t part_module;  /* >= 0: the module a part being emitted belongs to */
+    int64_t part_module;                 /* >= 0: the module a part being emitted belongs to */
 };
 
 /* ---- lookup ---- */

@@ -35,7 +35,7 @@
 #include <stdio.h>
 #include <unistd.h>
 
-#define MAX_THREADS 64
+#define MAX_THREADS  64
 #define LINE_SAMPLES 3 /* least samples per pixel side in a picture of lines alone */
 
 typedef struct render_job {
@@ -295,7 +295,8 @@ static void draw_lines_band(const render_job *j, int r0, int r1)
     double sc = c->scale * n;
     /* sample-grid coordinates, affine in the point: x = p.R + kx, y = ky - p.U, z = p.D + kz;
      * sample (x, y) has its centre at (x + 0.5, y + 0.5) */
-    const float R[3] = {(float)(c->right.x * sc), (float)(c->right.y * sc), (float)(c->right.z * sc)};
+    const float R[3] = {(float)(c->right.x * sc), (float)(c->right.y * sc),
+                        (float)(c->right.z * sc)};
     const float U[3] = {(float)(c->up.x * sc), (float)(c->up.y * sc), (float)(c->up.z * sc)};
     const float D[3] = {(float)c->dir.x, (float)c->dir.y, (float)c->dir.z};
     const float kx = (float)(c->cx * n - v3_dot(c->center, c->right) * sc);
