@@ -228,9 +228,9 @@ TEST(lines_and_triangles_in_one_picture)
             const float red[3] = {1, 0, 0}, blue[3] = {0, 0, 1};
             /* the square spans pixels 5..95 (the lines fit the frame: x in [0, 1]); y = 0.4 is
              * row 5 + 90 * 0.6 = 59, y = 0.6 is row 41 */
-            CHECK(is_color(img, 50, 59, red));  /* in front of the square */
-            CHECK(is_color(img, 10, 59, red));  /* beside it */
-            CHECK(is_color(img, 10, 41, blue)); /* beside it */
+            CHECK(is_color(img, 50, 59, red));   /* in front of the square */
+            CHECK(is_color(img, 10, 59, red));   /* beside it */
+            CHECK(is_color(img, 10, 41, blue));  /* beside it */
             CHECK(!is_color(img, 50, 41, blue)); /* hidden by the square */
             /* there the square's shaded grey: equal channels, neither white nor black */
             const uint8_t *g = px(img, 50, 41);

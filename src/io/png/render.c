@@ -18,7 +18,8 @@
  * Lines (cpfg's pixel lines, kept untessellated in the scene) are rasterised, not ray cast: when
  * the scene has lines, every sample of an n x n grid per pixel keeps a depth and a colour; the
  * triangles' samples are stored there, then each line is drawn into the grid with a depth test
- * (draw_lines_band), and the samples are averaged per pixel. Pictures of lines alone take at
+ * (draw_lines_band; the lines are first sorted into bands of sample rows, which the threads
+ * take in turn), and the samples are averaged per pixel. Pictures of lines alone take at
  * least 3 x 3 samples per pixel (LINE_SAMPLES). The camera, background and legend are the same.
  *
  * Embree's own allocations are watched by its memory monitor, which refuses them when the
@@ -55,10 +56,12 @@ typedef struct render_job {
     atomic_int next_row;
     /* with lines: one sample grid (ss x ss per pixel) of depths and linear colours that the
      * triangles' samples fill first and the lines are depth-tested into */
-    float *sdepth;  /* sw * sh, m along dir from the camera centre; INFINITY: empty */
-    float *scolor;  /* sw * sh * 3 */
-    int sw, sh;     /* sample grid size */
-    int line_bands; /* sample-row bands the lines are drawn in (one per thread) */
+    float *sdepth;              /* sw * sh, m along dir from the camera centre; INFINITY: empty */
+    float *scolor;              /* sw * sh * 3 */
+    int sw, sh;                 /* sample grid size */
+    int line_bands;             /* bands of sample rows the lines are drawn in */
+    const size_t *band_first;   /* line_bands + 1 offsets into band_lines */
+    const uint32_t *band_lines; /* the lines touching each band, in scene order */
     atomic_int next_band;
 } render_job;
 
@@ -238,8 +241,9 @@ static void *render_rows(void *arg)
  * sample of the grid inside it takes its colour when the line is nearer than what the sample
  * holds (a triangle or another line; on equal depth the line wins over a triangle and the
  * earlier line over a later one). Coverage of a pixel is the fraction of its samples covered:
- * anti-aliased edges. Threads take bands of sample rows and each draws every line clipped to its
- * band, so the picture is the same with any thread count. */
+ * anti-aliased edges. The lines are sorted (stably) into bands of sample rows; threads take the
+ * bands in turn and draw each band's lines in scene order clipped to it, so the picture is the
+ * same with any thread count. */
 /* The interval of x (relative to the line's start a) covered on a row at height py (relative to
  * a) by the capsule of radius sqrt(r2) around the segment from a to a + (dx, dy) of squared
  * length dd and length len: the hull of the two end discs' chords and the slab's interval (the
@@ -284,33 +288,57 @@ static bool row_span(float py, float dx, float dy, float dd, float len, float r2
     return l <= h;
 }
 
-static void draw_lines_band(const render_job *j, int r0, int r1)
+/* Sample-grid coordinates, affine in the point: x = p.R + kx, y = ky - p.U, z = p.D + kz;
+ * sample (x, y) has its centre at (x + 0.5, y + 0.5). */
+typedef struct line_xform {
+    float R[3], U[3], D[3], kx, ky, kz;
+} line_xform;
+
+static line_xform line_transform(const render_job *j)
 {
     const cbm__camera *c = &j->cam;
+    int n = j->ss;
+    double sc = c->scale * n;
+    line_xform t = {{(float)(c->right.x * sc), (float)(c->right.y * sc), (float)(c->right.z * sc)},
+                    {(float)(c->up.x * sc), (float)(c->up.y * sc), (float)(c->up.z * sc)},
+                    {(float)c->dir.x, (float)c->dir.y, (float)c->dir.z},
+                    (float)(c->cx * n - v3_dot(c->center, c->right) * sc),
+                    (float)(c->cy * n + v3_dot(c->center, c->up) * sc),
+                    (float)(-v3_dot(c->center, c->dir) - j->eps)}; /* lines win ties */
+    return t;
+}
+
+/* The rows of samples a line may cover (its box, before clipping): false if none or NaN. */
+static bool line_rows(const line_xform *t, const cbm_scene_line *l, int n, float *ay, float *by,
+                      float *r)
+{
+    const float *a = l->p0, *b = l->p1;
+    *ay = t->ky - (a[0] * t->U[0] + a[1] * t->U[1] + a[2] * t->U[2]);
+    *by = t->ky - (b[0] * t->U[0] + b[1] * t->U[1] + b[2] * t->U[2]);
+    *r = 0.5f * (l->width > 1.0f ? l->width : 1.0f) * (float)n;
+    return *ay == *ay && *by == *by;
+}
+
+static void draw_lines_band(const render_job *j, int band)
+{
     const cbm_scene *s = j->scene;
     const cbm_scene_line *ln = cbm_scene_lines(s);
     const cbm_part *parts = cbm_scene_parts(s);
-    size_t nl = cbm_scene_line_count(s);
     int n = j->ss;
-    double sc = c->scale * n;
-    /* sample-grid coordinates, affine in the point: x = p.R + kx, y = ky - p.U, z = p.D + kz;
-     * sample (x, y) has its centre at (x + 0.5, y + 0.5) */
-    const float R[3] = {(float)(c->right.x * sc), (float)(c->right.y * sc),
-                        (float)(c->right.z * sc)};
-    const float U[3] = {(float)(c->up.x * sc), (float)(c->up.y * sc), (float)(c->up.z * sc)};
-    const float D[3] = {(float)c->dir.x, (float)c->dir.y, (float)c->dir.z};
-    const float kx = (float)(c->cx * n - v3_dot(c->center, c->right) * sc);
-    const float ky = (float)(c->cy * n + v3_dot(c->center, c->up) * sc);
-    const float kz = (float)(-v3_dot(c->center, c->dir) - j->eps); /* lines win ties */
+    int r0 = (int)((long long)j->sh * band / j->line_bands);
+    int r1 = (int)((long long)j->sh * (band + 1) / j->line_bands);
+    line_xform tf = line_transform(j);
+    const float *R = tf.R, *D = tf.D, kx = tf.kx, kz = tf.kz;
     const float fr0 = (float)r0, fr1 = (float)r1, fsw = (float)j->sw;
-    for (size_t i = 0; i < nl; i++) {
-        const cbm_scene_line *l = &ln[i];
+    for (size_t k = j->band_first[band]; k < j->band_first[band + 1]; k++) {
+        const cbm_scene_line *l = &ln[j->band_lines[k]];
         const float *a = l->p0, *b = l->p1;
-        float ay = ky - (a[0] * U[0] + a[1] * U[1] + a[2] * U[2]);
-        float by = ky - (b[0] * U[0] + b[1] * U[1] + b[2] * U[2]);
-        float r = 0.5f * (l->width > 1.0f ? l->width : 1.0f) * (float)n, r2 = r * r;
+        float ay, by, r;
+        if (!line_rows(&tf, l, n, &ay, &by, &r))
+            continue;
+        float r2 = r * r;
         float y_lo = (ay < by ? ay : by) - r, y_hi = (ay < by ? by : ay) + r;
-        if (!(y_hi >= fr0 && y_lo <= fr1)) /* outside the band; also skips NaN */
+        if (!(y_hi >= fr0 && y_lo <= fr1)) /* outside the band */
             continue;
         float ax = kx + a[0] * R[0] + a[1] * R[1] + a[2] * R[2];
         float bx = kx + b[0] * R[0] + b[1] * R[1] + b[2] * R[2];
@@ -372,6 +400,77 @@ static void draw_lines_band(const render_job *j, int r0, int r1)
     }
 }
 
+/* The band of sample row y. */
+static int band_of(const render_job *j, int y)
+{
+    int b = (int)((long long)y * j->line_bands / j->sh);
+    while (b + 1 < j->line_bands && (long long)j->sh * (b + 1) / j->line_bands <= y)
+        b++;
+    while (b > 0 && (long long)j->sh * b / j->line_bands > y)
+        b--;
+    return b;
+}
+
+/* Sorts the kept lines into the bands of rows they touch (a counting sort, stable: each band
+ * keeps the scene order), so that each band reads only its own lines. */
+static cbm_status bin_lines(cbm_context *ctx, render_job *j, size_t **first, uint32_t **lines,
+                            size_t *nentries)
+{
+    const cbm_scene *s = j->scene;
+    const cbm_scene_line *ln = cbm_scene_lines(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    size_t nl = cbm_scene_line_count(s), nb = (size_t)j->line_bands;
+    line_xform tf = line_transform(j);
+    size_t *f = cbm__calloc(ctx, nb + 1, sizeof *f);
+    if (!f)
+        return CBM_E_NOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        size_t *pos = f;
+        if (pass == 1) {
+            size_t total = 0;
+            for (size_t b = 0; b < nb; b++) {
+                size_t c = f[b];
+                f[b] = total;
+                total += c;
+            }
+            f[nb] = total;
+            *nentries = total;
+            *lines = cbm__alloc(ctx, (total ? total : 1) * sizeof **lines);
+            if (!*lines) {
+                cbm__free(ctx, f, (nb + 1) * sizeof *f);
+                return CBM_E_NOMEM;
+            }
+            pos = cbm__alloc(ctx, (nb + 1) * sizeof *pos);
+            if (!pos) {
+                cbm__free(ctx, *lines, (total ? total : 1) * sizeof **lines);
+                cbm__free(ctx, f, (nb + 1) * sizeof *f);
+                return CBM_E_NOMEM;
+            }
+            memcpy(pos, f, (nb + 1) * sizeof *pos);
+        }
+        for (size_t i = 0; i < nl; i++) {
+            float ay, by, r;
+            if (!line_rows(&tf, &ln[i], j->ss, &ay, &by, &r) ||
+                !cbm__part_kept(&parts[ln[i].part], j->o))
+                continue;
+            float y_lo = (ay < by ? ay : by) - r, y_hi = (ay < by ? by : ay) + r;
+            if (!(y_hi >= 0.0f && y_lo <= (float)j->sh))
+                continue;
+            int y0 = y_lo < 0.0f ? 0 : (int)y_lo, y1 = y_hi >= (float)j->sh ? j->sh - 1 : (int)y_hi;
+            for (int b = band_of(j, y0), e = band_of(j, y1); b <= e; b++) {
+                if (pass == 0)
+                    f[b]++;
+                else
+                    (*lines)[pos[b]++] = (uint32_t)i;
+            }
+        }
+        if (pass == 1)
+            cbm__free(ctx, pos, (nb + 1) * sizeof *pos);
+    }
+    *first = f;
+    return CBM_OK;
+}
+
 static void *draw_lines(void *arg)
 {
     render_job *j = arg;
@@ -379,9 +478,7 @@ static void *draw_lines(void *arg)
         int b = atomic_fetch_add(&j->next_band, 1);
         if (b >= j->line_bands)
             break;
-        int r0 = (int)((long long)j->sh * b / j->line_bands);
-        int r1 = (int)((long long)j->sh * (b + 1) / j->line_bands);
-        draw_lines_band(j, r0, r1);
+        draw_lines_band(j, b);
     }
     return NULL;
 }
@@ -675,12 +772,20 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         run_threads(render_rows, &j, nthreads);
     }
     if (j.sdepth) {
-        /* one band of sample rows per thread (each reads every line) */
-        j.line_bands = j.sh / 64 < nthreads ? j.sh / 64 : nthreads;
+        /* bands of at least 32 sample rows, 8 per thread, taken in turn by the threads */
+        j.line_bands = j.sh / 32 < 8 * nthreads ? j.sh / 32 : 8 * nthreads;
         if (j.line_bands < 1)
             j.line_bands = 1;
+        size_t *first = NULL, nentries = 0;
+        uint32_t *lines = NULL;
+        if ((st = bin_lines(ctx, &j, &first, &lines, &nentries)) != CBM_OK)
+            goto done;
+        j.band_first = first;
+        j.band_lines = lines;
         atomic_init(&j.next_band, 0);
         run_threads(draw_lines, &j, nthreads < j.line_bands ? nthreads : j.line_bands);
+        cbm__free(ctx, first, ((size_t)j.line_bands + 1) * sizeof *first);
+        cbm__free(ctx, lines, (nentries ? nentries : 1) * sizeof *lines);
         resolve_samples(&j);
     }
     /* compose over the background, linear -> sRGB */
