@@ -1,9 +1,11 @@
 /* Benchmark of the L-system engine: derivation time and memory of the two reference runs of
  * the issue (quadratic Koch curve 8 steps, 31.2 M modules; ABOP fig. 2.8, 13 steps, 14.3 M
- * parametric modules), in double and float32 modes. Writes one CSV row per run to the file
- * given as argument (default bench_lsys.csv) and prints the rows. Not run by the tests.
+ * parametric modules), in double and float32 modes, and the Koch curve again inside a
+ * sub-L-system call ?(1)...$ (kochsub: the same rewriting on the path that follows the L-system
+ * of every module, so the difference to koch is that path's cost). Writes one CSV row per run to
+ * the file given as argument (default bench_lsys.csv) and prints the rows. Not run by the tests.
  *
- *   build/bin/bench_lsys [out.csv [koch|fig28|fig28f]]
+ *   build/bin/bench_lsys [out.csv [koch|fig28|fig28f|kochsub]]
  *
  * With a run named, only that run is made, so that the process's peak RSS is that run's.
  */
@@ -17,6 +19,8 @@
 
 static const char KOCH[] = "Lsystem: 1\nderivation length: 8\nAxiom: -F\n"
                            "F --> F+F-F-FF+F+F-F\nendlsystem\n";
+static const char KOCHSUB[] = "Lsystem: 1\nderivation length: 8\nAxiom: ?(1)-F$\n"
+                              "F --> F+F-F-FF+F+F-F\nendlsystem\n";
 static const char FIG28[] =
     "#define d1 94.74\n#define d2 132.63\n#define a 18.95\n#define lr 1.109\n#define vr 1.732\n"
     "Lsystem: 1\nderivation length: 13\nAxiom: !(1)F(200)/(45)A\n"
@@ -84,6 +88,8 @@ int main(int argc, char **argv)
         rc |= run(csv, "fig28", FIG28, false);
     if (!only || !strcmp(only, "fig28f"))
         rc |= run(csv, "fig28", FIG28, true);
+    if (!only || !strcmp(only, "kochsub"))
+        rc |= run(csv, "kochsub", KOCHSUB, false);
     fclose(csv);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);

@@ -5,6 +5,8 @@
 
 #include "test.h"
 
+#include "cambium/lsys.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -22,6 +24,17 @@ static inline void tb_put(tbuf *b, const char *s, size_t n)
     memcpy(b->s + b->n, s, n);
     b->n += n;
     b->s[b->n] = 0;
+}
+
+/* The symbol of the L+C module called `name`, -1 if none. */
+static inline int lsys_symbol(const cbm_lsys *ls, const char *name)
+{
+    for (int s = 1; s < 128; s++) {
+        const char *m = cbm_lsys_module_name(ls, s);
+        if (m && !strcmp(m, name))
+            return s;
+    }
+    return -1;
 }
 
 static inline void tb_free(tbuf *b)

@@ -408,6 +408,24 @@ TEST(released_pages_leave_the_string_unchanged)
     check_release_same(FIG28, 11, false, (size_t)80 << 20);
 }
 
+/* With sub-L-systems: the bounds take the productions of every L-system */
+static const char KOCHSUB[] = "Lsystem: 1\nderivation length: 7\nAxiom: ?(1)-F$\n"
+                              "F --> F+F-F-FF+F+F-F\nendlsystem\n";
+static const char FIG28SUB[] =
+    "#define d1 94.74\n#define d2 132.63\n#define a 18.95\n#define lr 1.109\n#define vr 1.732\n"
+    "Lsystem: 1\nderivation length: 11\nAxiom: !(1)F(200)/(45)A\n"
+    "A --> !(vr)F(50)?(2,0.5)[&(a)F(50)A]$/(d1)[&(a)F(50)A]/(d2)[&(a)F(50)A]\n"
+    "F(l) --> F(l*lr)\n!(w) --> !(w*vr)\nendlsystem\n"
+    "Lsystem: 2\nAxiom: A\nA --> F(50)[&(a)F(50)A]/(d1)[&(a)F(50)?(1)A$]/(d2)[&(a)F(50)A]\n"
+    "F(l) --> F(l*1.2)\nendlsystem\n";
+
+TEST(released_pages_with_sub_lsystems)
+{
+    check_release_same(KOCHSUB, 7, false, 0);
+    check_release_same(FIG28SUB, 11, false, 0);
+    check_release_same(FIG28SUB, 11, true, (size_t)1 << 30);
+}
+
 /* Derives `text` (its X(a) fails at step 20, after 2^19 F's were passed) under a byte limit;
  * released: the string is emptied by the failure, else the string of step 19 is kept. */
 static void check_runtime_error(const char *text, size_t max_bytes, bool released)

@@ -1,7 +1,7 @@
 /* Mechanics inside the L+C dialect (src/lsys/mechlang.c): the language route against the native
  * cbm_plant route, the shipped Jirasek models (S-shaped branch, cherries), state kept through
  * rewriting, declaration errors, determinism, out-of-memory. */
-#include "test.h"
+#include "lsys_util.h"
 
 #include "cambium/lsys.h"
 #include "cambium/mech.h"
@@ -35,16 +35,6 @@ static size_t segments(const cbm_lsys *ls, int sym, double (*out)[MS], size_t ma
             n++;
         }
     return n;
-}
-
-static int symbol_of(const cbm_lsys *ls, const char *name)
-{
-    for (int s = 1; s < 128; s++) {
-        const char *m = cbm_lsys_module_name(ls, s);
-        if (m && !strcmp(m, name))
-            return s;
-    }
-    return -1;
 }
 
 static const char CHAIN[] =
@@ -125,7 +115,7 @@ TEST(mechlang_language_and_native_agree)
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     double g[8][MS];
-    int sym = symbol_of(ls, "I");
+    int sym = lsys_symbol(ls, "I");
     CHECK(sym > 0);
     CHECK_EQ_INT(segments(ls, sym, g, 8), 4);
     cbm_vec3 tip = {0, 0, 0}, btip = {0, 0, 0};
@@ -164,7 +154,7 @@ TEST(mechlang_jirasek_s_branch)
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
         CHECK_OK(cbm_lsys_step(ls));
     static double g[64][MS];
-    size_t n = segments(ls, symbol_of(ls, "I"), g, 64);
+    size_t n = segments(ls, lsys_symbol(ls, "I"), g, 64);
     CHECK_EQ_INT(n, 30);
     double lowest = 1;
     size_t lo = 0;
@@ -204,7 +194,7 @@ TEST(mechlang_jirasek_cherries)
     static double g[64][MS];
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++) {
         CHECK_OK(cbm_lsys_step(ls));
-        size_t n = segments(ls, symbol_of(ls, "I"), g, 64);
+        size_t n = segments(ls, lsys_symbol(ls, "I"), g, 64);
         CHECK_EQ_INT(n, 24);
         for (int s = 0; s < 3; s++) {
             double hy = g[8 * s + 7][17];
@@ -247,7 +237,7 @@ TEST(mechlang_state_survives_rewriting)
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     double a[4][MS], b[4][MS];
-    int sym = symbol_of(ls, "I");
+    int sym = lsys_symbol(ls, "I");
     CHECK_EQ_INT(segments(ls, sym, a, 4), 3);
     CHECK(a[0][1] > 0.003 * 1.0001); /* thickened by the pipe model */
     CHECK(a[2][25] == 0);            /* new segments got their rest rate and age 0 */
@@ -290,7 +280,7 @@ TEST(mechlang_reaction_wood)
         CHECK_OK(load(ctx, "rw.l", text, &ls));
         CHECK_OK(cbm_lsys_reset(ls));
         CHECK_OK(cbm_lsys_step(ls));
-        CHECK_EQ_INT(segments(ls, symbol_of(ls, "I"), a[k], 4), 3);
+        CHECK_EQ_INT(segments(ls, lsys_symbol(ls, "I"), a[k], 4), 3);
         cbm_lsys_destroy(ls);
         test_ctx_end(ctx);
     }
@@ -316,7 +306,7 @@ TEST(mechlang_age_wood)
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     double g[4][MS];
-    CHECK_EQ_INT(segments(ls, symbol_of(ls, "I"), g, 4), 3);
+    CHECK_EQ_INT(segments(ls, lsys_symbol(ls, "I"), g, 4), 3);
     for (int i = 0; i < 3; i++) {
         CHECK_REL(g[i][3], 1.5e9, 1e-12); /* 1 GPa + 5 years x (2 - 1) GPa / 10 years */
         CHECK_NEAR(g[i][25], 5, 1e-12);
@@ -351,7 +341,7 @@ TEST(mechlang_break)
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     double g[4][MS];
-    int sym = symbol_of(ls, "I");
+    int sym = lsys_symbol(ls, "I");
     CHECK_EQ_INT(segments(ls, sym, g, 4), 2);
     CHECK_EQ_INT(cbm_lsys_module_count(ls), 6); /* I [ Down ] I Fruit */
     CHECK(g[0][24] > 0.2 && g[0][24] < 0.3);    /* the broken branch's load is gone */
@@ -450,7 +440,7 @@ TEST(mechlang_jirasek_hanging)
     CHECK_OK(cbm_lsys_reset(ls));
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
         CHECK_OK(cbm_lsys_step(ls));
-    int sym = symbol_of(ls, "I"), sb = symbol_of(ls, "SB"), eb = symbol_of(ls, "EB");
+    int sym = lsys_symbol(ls, "I"), sb = lsys_symbol(ls, "SB"), eb = lsys_symbol(ls, "EB");
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, false, &c);
     int depth = 0, laterals = 0;

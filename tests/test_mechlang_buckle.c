@@ -5,7 +5,7 @@
  * L_G = (7.837 E I / q)^(1/3)) and equal the native protocol's (cbm_mech_buckle, `cambium
  * buckle`), with the same stability factor. Also: Stability() in a production does not load
  * (the message names file:line:col, checked in the CLI output by hand). */
-#include "test.h"
+#include "lsys_util.h"
 
 #include "cambium/lsys.h"
 #include "cambium/mech.h"
@@ -23,16 +23,6 @@ static const struct wood {
 } WOODS[] = {{"yellow poplar", 10.38e9, 427}, {"apple", 8.77e9, 745},
              {"black willow", 5.03e9, 408},   {"black oak", 11.31e9, 669},
              {"yellow birch", 14.53e9, 668},  {"silver maple", 6.22e9, 506}};
-
-static int symbol_of(const cbm_lsys *ls, const char *name)
-{
-    for (int s = 1; s < 128; s++) {
-        const char *m = cbm_lsys_module_name(ls, s);
-        if (m && !strcmp(m, name))
-            return s;
-    }
-    return -1;
-}
 
 TEST(mechlang_buckle_table_6_1)
 {
@@ -56,7 +46,7 @@ TEST(mechlang_buckle_table_6_1)
             CHECK_OK(cbm_lsys_step(ls));
         CHECK(cbm_lsys_stopped(ls));
         /* the apex: Apex(segments, buckling length, stability factor); the segments below it */
-        int apex = symbol_of(ls, "Apex"), seg = symbol_of(ls, "S");
+        int apex = lsys_symbol(ls, "Apex"), seg = lsys_symbol(ls, "S");
         double ap[3] = {0, 0, 0}, top[MS] = {0}, below[MS] = {0};
         size_t nseg = 0;
         cbm_lsys_cursor c;

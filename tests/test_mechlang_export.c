@@ -3,7 +3,7 @@
  * positions, frames, carried masses and stresses the last Equilibrium() wrote into the
  * parameters), with laterals where the string has brackets; models without mechanics are refused.
  */
-#include "test.h"
+#include "lsys_util.h"
 
 #include "cambium/lsys.h"
 #include "cambium/mech.h"
@@ -23,16 +23,6 @@ static cbm_status load_model(cbm_context *ctx, const char *name, cbm_lsys **ls)
     return cbm_lsys_load(ctx, &def, ls);
 }
 
-static int symbol_of(const cbm_lsys *ls, const char *name)
-{
-    for (int s = 1; s < 128; s++) {
-        const char *m = cbm_lsys_module_name(ls, s);
-        if (m && !strcmp(m, name))
-            return s;
-    }
-    return -1;
-}
-
 TEST(mechlang_export_plant_is_the_stored_state)
 {
     cbm_context *ctx = test_ctx();
@@ -49,7 +39,7 @@ TEST(mechlang_export_plant_is_the_stored_state)
     cbm_plant *pl = NULL;
     CHECK_OK(cbm_lsys_mech_plant(ls, &pl));
     CHECK(pl != NULL);
-    int sym = symbol_of(ls, "I"), sb = symbol_of(ls, "SB"), eb = symbol_of(ls, "EB");
+    int sym = lsys_symbol(ls, "I"), sb = lsys_symbol(ls, "SB"), eb = lsys_symbol(ls, "EB");
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, false, &c);
     size_t k = 0;

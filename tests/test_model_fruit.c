@@ -5,7 +5,7 @@
  * (F = 1, Fig. 4.7), a low modulus of rupture breaks branches that a high one keeps (Fig. 8.9),
  * and the crooked aspen is lower and wider than the wild one (ch. 7). Few years each, so the file
  * also runs quickly under the sanitizers. */
-#include "test.h"
+#include "lsys_util.h"
 
 #include "cambium/lsys.h"
 
@@ -36,16 +36,6 @@ typedef struct stats {
     uint64_t hash;                    /* FNV-1a of every parameter of the string */
 } stats;
 
-static int symbol_of(const cbm_lsys *ls, const char *name)
-{
-    for (int s = 1; s < 128; s++) {
-        const char *m = cbm_lsys_module_name(ls, s);
-        if (m && !strcmp(m, name))
-            return s;
-    }
-    return -1;
-}
-
 static cbm_status open_tree(cbm_context *ctx, const char *const *defines, size_t nd, tree *t)
 {
     char p[2048];
@@ -59,11 +49,11 @@ static cbm_status open_tree(cbm_context *ctx, const char *const *defines, size_t
     if (s == CBM_OK)
         s = cbm_lsys_reset(t->ls);
     if (s == CBM_OK) {
-        t->s_year = symbol_of(t->ls, "Year");
-        t->s_i = symbol_of(t->ls, "I");
-        t->s_apex = symbol_of(t->ls, "Apex");
-        t->s_leaf = symbol_of(t->ls, "Leaf");
-        t->s_fruit = symbol_of(t->ls, "Fruit");
+        t->s_year = lsys_symbol(t->ls, "Year");
+        t->s_i = lsys_symbol(t->ls, "I");
+        t->s_apex = lsys_symbol(t->ls, "Apex");
+        t->s_leaf = lsys_symbol(t->ls, "Leaf");
+        t->s_fruit = lsys_symbol(t->ls, "Fruit");
     }
     return s;
 }

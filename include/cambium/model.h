@@ -51,20 +51,24 @@ CBM_API cbm_status cbm_model_step(cbm_model *m);
 CBM_API cbm_status cbm_model_interpret(cbm_model *m, cbm_scene *scene, bool record,
                                        cbm_turtle **turtle);
 
-/// Whether the current string holds query modules (`?` followed by P, H, L or U).
+/// Whether the current string holds query modules (`?` followed by P, H, L, U or Q).
 CBM_API bool cbm_model_has_queries(const cbm_model *m);
 
 /// What a model holds (for `cambium info`).
 typedef struct cbm_model_summary {
     int derivation_length;   ///< steps
-    size_t productions;      ///< main productions
-    size_t decompositions;   ///< decomposition: productions
-    size_t homomorphisms;    ///< homomorphism: productions
+    size_t productions;      ///< productions of every L-system
+    size_t decompositions;   ///< decomposition: productions (every L-system)
+    size_t homomorphisms;    ///< homomorphism: (L+C: interpretation:) productions
     int decomposition_depth; ///< maximum depth:
     int homomorphism_depth;  ///< maximum depth:
     bool stochastic;         ///< productions with probabilities
     bool has_start_end;      ///< Start:, End:, StartEach: or EndEach: blocks
     int functions;           ///< functions read from the side files
+    int lsystems;            ///< L-systems in the file (1 + sub-L-systems)
+    bool lc_dialect;         ///< an L+C model (else cpfg dialect)
+    bool mechanics;          ///< L+C: a module carries a mechanical segment (`mechanics:`)
+    size_t modules_declared; ///< L+C: declared modules, the turtle's included
 } cbm_model_summary;
 
 /// Fills *out for a loaded model (before or after a derivation).

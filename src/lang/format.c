@@ -87,8 +87,9 @@ static size_t conversion(const char *f, char *conv, char *err, size_t errn)
         return 0;
     }
     long w = 0;
-    while (f[i] >= '0' && f[i] <= '9')
-        w = w * 10 + (f[i++] - '0') * (w < 100000);
+    for (; f[i] >= '0' && f[i] <= '9'; i++)
+        if (w < 100000) /* past that it is too wide anyway; no overflow */
+            w = w * 10 + (f[i] - '0');
     if (f[i] == '.') {
         i++;
         if (f[i] == '*') {
@@ -96,8 +97,9 @@ static size_t conversion(const char *f, char *conv, char *err, size_t errn)
             return 0;
         }
         long p = 0;
-        while (f[i] >= '0' && f[i] <= '9')
-            p = p * 10 + (f[i++] - '0') * (p < 100000);
+        for (; f[i] >= '0' && f[i] <= '9'; i++)
+            if (p < 100000)
+                p = p * 10 + (f[i] - '0');
         if (p > MAX_FIELD)
             w = p;
     }

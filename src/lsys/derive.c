@@ -13,13 +13,21 @@
  * byte copy). With a decomposition section every produced module is rewritten recursively up
  * to `maximum depth`, context taken from the string being derived; the homomorphism is the
  * same recursion applied to the final string for output and interpretation. An unmatched cut
- * `%` removes the rest of its branch.
+ * `%` removes the rest of its branch (up to the `]` that closes it, or the `$` that ends its
+ * sub-L-system, cpfg's SkipCutPart).
+ *
+ * Sub-L-systems (cpfg manual 7.2, cpfg's generate.c): a pass keeps a stack of L-systems; the
+ * module at hand is rewritten by the productions, decomposition, ignore table and stochastic
+ * flag of the L-system on top, and once it is consumed, a `?(id, ...)` among the modules of the
+ * predecessor pushes L-system id and a `$` pops (so `?(id)` itself belongs to the caller and
+ * `$` to the sub-L-system). The homomorphism does the same over the modules it produces. Only
+ * models with sub-L-systems take that path (ls->subcalls).
  *
  * Memory: the peak of a step is the current string plus the one being produced. When nothing
  * can look back into the current string (no left context in the productions, no
- * decomposition) and the step cannot stop on a limit (the current string times the longest
- * successor, in modules and in bytes, is within max_modules and max_bytes; failing that, the
- * same bound by symbol, from a count of the current symbols), the pages of the
+ * decomposition, in any of the model's L-systems) and the step cannot stop on a limit (the current
+ * string times the longest successor, in modules and in bytes, is within max_modules and max_bytes;
+ * failing that, the same bound by symbol, from a count of the current symbols), the pages of the
  * current string that the scan has passed are handed back to the system as it goes (madvise
  * MADV_DONTNEED, Linux), so the peak is close to the final string alone. The buffer keeps its
  * capacity and is refilled as the output of the next step.
@@ -149,7 +157,7 @@ static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int sl
         if (r.i >= s->n)
             return false;
         uint8_t c = s->sym[r.i] & 0x7f;
-        if (ls->ignore[c]) {
+        if (ls->ign[c]) {
             pos_next(s, &r);
         } else if (m[k].sym != '[' && c == '[') {
             pos_next(s, &r);
@@ -203,7 +211,7 @@ static bool match_lc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
                 else if (d == '[' && level-- == 0)
                     break;
             }
-        } else if (c == '[' || ls->ignore[c]) {
+        } else if (c == '[' || ls->ign[c]) {
             pos_prev(s, &l);
         } else {
             pos_prev(s, &l);
@@ -362,14 +370,55 @@ static cbm_status run_block(cbm_lsys *ls, int32_t block, const char *what)
     return CBM_OK;
 }
 
+/* Block `which` (0 Start, 1 StartEach, 2 EndEach, 3 End) of every L-system, in file order
+ * (cpfg's EvaluateStartEach and the like). */
+static cbm_status run_blocks(cbm_lsys *ls, int which, const char *what)
+{
+    for (int i = 0; i < ls->nsys; i++)
+        CBM_TRY(run_block(ls, ls->sys[i].blocks[which], what));
+    return CBM_OK;
+}
+
+/* Follows the sub-L-system markers among the modules of s from a up to module b: `?(id, ...)`
+ * pushes the current L-system and makes L-system id current, `$` returns to the one below (a
+ * `$` with nothing below is passed over). step: the step for messages, 0 in the homomorphism. */
+static cbm_status follow_markers(cbm_lsys *ls, const lstr *s, lpos a, size_t b, int *cursys,
+                                 int step)
+{
+    while (a.i < b) {
+        uint8_t c = s->sym[a.i];
+        if (c == ('?' | LSYS_PARAM_BIT)) {
+            double v;
+            par_load(s, a.k, &v, 1);
+            int k = v >= -2e9 && v <= 2e9 ? cbm__lsys_find(ls, (int)v) : -1;
+            if (k < 0) {
+                char where[32] = "homomorphism";
+                if (step > 0)
+                    snprintf(where, sizeof where, "step %d", step);
+                double id = v >= -2e9 && v <= 2e9 ? (double)(int)v : v;
+                return cbm__fail(ls->ctx, CBM_E_RUNTIME,
+                                 "%s: ?(%g, ...) calls a sub-L-system, but no L-system of the "
+                                 "file is labelled %g",
+                                 where, v, id);
+            }
+            CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, ls->lstack, (uint16_t)*cursys));
+            *cursys = k;
+        } else if (c == '$' && ls->lstack.len > 0) {
+            *cursys = ls->lstack.data[--ls->lstack.len];
+        }
+        pos_next(s, &a);
+    }
+    return CBM_OK;
+}
+
 /* Applies decomposition to the successor held in ls->succ (context: predecessor lc..rc). */
-static cbm_status decompose_succ(cbm_lsys *ls, const lpos *lc, const lpos *rc)
+static cbm_status decompose_succ(cbm_lsys *ls, const prodset *dset, const lpos *lc, const lpos *rc)
 {
     lpos q = {0, 0, 0};
     const lstr *buf = &ls->succ;
     while (q.i < buf->n) {
         bool a;
-        CBM_TRY(rewrite(ls, &ls->decomp, buf, &q, &ls->next, &ls->cur, lc, rc, 0, &a));
+        CBM_TRY(rewrite(ls, dset, buf, &q, &ls->next, &ls->cur, lc, rc, 0, &a));
         if (!a)
             CBM_TRY(copy_module(ls->ctx, buf, &q, &ls->next));
     }
@@ -395,9 +444,14 @@ static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
     const cbm_limits *lim = cbm_context_limits(ls->ctx);
     if (nsym > (double)lim->max_modules)
         return false;
+    double nprods = 0;
+    for (int k = 0; k < ls->nsys; k++)
+        nprods += (double)ls->sys[k].main->prods.len;
+    /* with sub-L-systems, the L-system stack: at most one entry per module, doubling */
+    double lstack = ls->subcalls ? 4.0 * (double)ls->cur.n : 0.0;
     double need = (double)cbm_context_bytes(ls->ctx) +
                   2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20) +
-                  16.0 * (double)ls->main.prods.len;
+                  16.0 * nprods + lstack;
     return !lim->max_bytes || need <= (double)lim->max_bytes;
 }
 
@@ -406,27 +460,34 @@ static void release_begin(const cbm_lsys *ls, release *r)
 {
     memset(r, 0, sizeof *r);
 #if defined(__linux__) && defined(MADV_DONTNEED)
-    if (ls->decomp.present || ls->cur.n < RELEASE_EVERY)
+    if (ls->cur.n < RELEASE_EVERY)
         return;
+    for (int k = 0; k < ls->nsys; k++)
+        if (ls->sys[k].decomp->present)
+            return;
     /* bounds of the next string: a module becomes at most the longest successor of the
-     * productions that start with its symbol (with at most their most parameters), or itself */
+     * productions (of any L-system) that start with its symbol (with at most their most
+     * parameters), or itself */
     size_t len[128], par[128], longest = 1, most = 0;
     for (int c = 0; c < 128; c++)
         len[c] = 1, par[c] = 0;
-    for (size_t i = 0; i < ls->main.prods.len; i++) {
-        const prod *pr = &ls->main.prods.data[i];
-        if (pr->nlc)
-            return;
-        size_t np = 0;
-        for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
-            np += ls->smods.data[pr->succ + m].np;
-        int c = ls->fmods.data[pr->pred].sym & 0x7f;
-        if ((size_t)pr->nsucc > len[c])
-            len[c] = (size_t)pr->nsucc;
-        if (np > par[c])
-            par[c] = np;
-        longest = len[c] > longest ? len[c] : longest;
-        most = par[c] > most ? par[c] : most;
+    for (int k = 0; k < ls->nsys; k++) {
+        const prodset *set = ls->sys[k].main;
+        for (size_t i = 0; i < set->prods.len; i++) {
+            const prod *pr = &set->prods.data[i];
+            if (pr->nlc)
+                return;
+            size_t np = 0;
+            for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
+                np += ls->smods.data[pr->succ + m].np;
+            int c = ls->fmods.data[pr->pred].sym & 0x7f;
+            if ((size_t)pr->nsucc > len[c])
+                len[c] = (size_t)pr->nsucc;
+            if (np > par[c])
+                par[c] = np;
+            longest = len[c] > longest ? len[c] : longest;
+            most = par[c] > most ? par[c] : most;
+        }
     }
     const lstr *cur = &ls->cur;
     double nsym = (double)cur->n * (double)longest;
@@ -505,15 +566,22 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
     const lstr *cur = &ls->cur;
     lstr *next = &ls->next;
     lstr_clear(next);
-    const prodset *set = &ls->main;
-    bool decomp = ls->decomp.present;
+    const prodset *set = &ls->main, *dset = &ls->decomp;
+    bool decomp = ls->decomp.present, stoch = ls->stochastic;
+    /* sub-L-systems: the L-system of the module at hand (index in ls->sys) */
+    const bool sub = ls->subcalls;
+    int cursys = 0;
+    ls->lstack.len = 0;
+    ls->ign = ls->ignore;
     size_t max_modules = cbm_context_limits(ctx)->max_modules;
     lpos p = {0, 0, 0};
     while (p.i < cur->n) {
         uint8_t s = cur->sym[p.i] & 0x7f;
         const prod *pr = NULL;
         lpos end = p;
-        if (ls->stochastic) {
+        const lpos start = p;
+        bool cut = false;
+        if (stoch) {
             float total = 0;
             ls->appl.len = 0;
             ls->applp.len = 0;
@@ -559,7 +627,7 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
                 lstr_clear(&ls->succ);
                 CBM_TRY(append_succ(ls, pr, &ls->succ));
                 lpos lc = p;
-                CBM_TRY(decompose_succ(ls, &lc, &end));
+                CBM_TRY(decompose_succ(ls, dset, &lc, &end));
             } else {
                 CBM_TRY(append_succ(ls, pr, next));
             }
@@ -571,24 +639,43 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
             if (decomp) {
                 lpos lc = p, rc = p;
                 pos_next(cur, &rc);
-                CBM_TRY(rewrite(ls, &ls->decomp, cur, &p, next, cur, &lc, &rc, 0, &done));
+                CBM_TRY(rewrite(ls, dset, cur, &p, next, cur, &lc, &rc, 0, &done));
             }
             if (!done) {
                 if (s == '%' && mod_np(cur, &p) == 0) {
-                    /* cut: skip to the end of the branch (the ']' is kept) */
+                    /* cut: skip to the end of the branch (the ']' is kept), or to the '$'
+                     * that ends the sub-L-system the cut is in (kept too) */
                     pos_next(cur, &p);
-                    int level = 0;
+                    int level = 0, slevel = 0;
                     while (p.i < cur->n) {
-                        uint8_t c = cur->sym[p.i] & 0x7f;
+                        uint8_t b = cur->sym[p.i];
+                        uint8_t c = b & 0x7f;
                         if (c == '[')
                             level++;
                         else if (c == ']' && level-- == 0)
                             break;
+                        else if (b == ('?' | LSYS_PARAM_BIT))
+                            slevel++;
+                        else if (b == '$' && slevel-- == 0)
+                            break;
                         pos_next(cur, &p);
                     }
+                    cut = true;
                 } else {
                     CBM_TRY(copy_module(ctx, cur, &p, next));
                 }
+            }
+        }
+        if (sub && !cut) {
+            int was = cursys;
+            CBM_TRY(follow_markers(ls, cur, start, p.i, &cursys, ls->steps + 1));
+            if (cursys != was) {
+                const lsysv *L = &ls->sys[cursys];
+                set = L->main;
+                dset = L->decomp;
+                decomp = dset->present;
+                stoch = L->stochastic;
+                ls->ign = L->ignore;
             }
         }
         if (next->n > max_modules)
@@ -621,12 +708,11 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
-    CBM_TRY(
-        prepare_scratch(ls, ls->decomp.depth > ls->homo.depth ? ls->decomp.depth : ls->homo.depth));
+    CBM_TRY(prepare_scratch(ls, ls->max_depth));
     if (ls->interp)
         CBM_TRY(cbm_lsys_interpret(ls));
     ls->globals[ls->q_slot] = ls->steps + 1;
-    CBM_TRY(run_block(ls, ls->start_each, "StartEach"));
+    CBM_TRY(run_blocks(ls, 1, "StartEach"));
     ls->ev.while_budget = ls->loop_budget;
     cbm_status s = derive(ls);
     if (s != CBM_OK) {
@@ -646,9 +732,9 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     ls->next = t;
     ls->steps++;
     ls->homo_valid = false;
-    CBM_TRY(run_block(ls, ls->end_each, "EndEach"));
+    CBM_TRY(run_blocks(ls, 2, "EndEach"));
     if (ls->steps == ls->derivation_length)
-        CBM_TRY(run_block(ls, ls->end_block, "End"));
+        CBM_TRY(run_blocks(ls, 3, "End"));
     return CBM_OK;
 }
 
@@ -686,7 +772,7 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
         seed = (uint64_t)cbm__to_ll(cbm__eval_expr(&ls->ev, ls->seed_expr));
     }
     ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
-    CBM_TRY(run_block(ls, ls->start_block, "Start"));
+    CBM_TRY(run_blocks(ls, 0, "Start"));
     lstr_clear(&ls->cur);
     prod ax = {
         .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
@@ -699,6 +785,7 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
 }
 
 static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
+static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out);
 
 cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
 {
@@ -706,8 +793,23 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
         return cbm__lpfg_interpretation(ls);
     lstr *out = &ls->homo_str;
     lstr_clear(out);
-    CBM_TRY(prepare_scratch(ls, ls->homo.depth));
+    CBM_TRY(prepare_scratch(ls, ls->max_depth));
     const lstr *cur = &ls->cur;
+    if (ls->subcalls) {
+        /* each L-system's homomorphism with a seed: has its own stream, restarted here */
+        for (int i = 0; i < ls->nsys; i++) {
+            int32_t e = ls->sys[i].homo->seed_expr;
+            if (e < 0)
+                continue;
+            long long seed = cbm__to_ll(cbm__eval_expr(&ls->ev, e));
+            cbm__rand48_seed16(&ls->hran[i], 0x330E, (uint16_t)(seed & 0xFFFF),
+                               (uint16_t)((seed >> 16) & 0xFFFF));
+        }
+        cbm_status s = homomorphism_sub(ls, cur, out);
+        if (s == CBM_OK)
+            ls->homo_valid = true;
+        return s;
+    }
     /* with its own seed:, the homomorphism draws from its own erand48 stream, restarted at every
      * pass (cpfg), so the image is the same at every interpretation */
     cbm__rand48 saved = ls->ev.ran;
@@ -724,9 +826,50 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
     return s;
 }
 
+/* The homomorphism of a string with sub-L-systems: each module by the homomorphism of its
+ * L-system, followed through the ?(id) and $ that come out (cpfg's interpretation switches on
+ * the modules it interprets). */
+static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out)
+{
+    lpos p = {0, 0, 0};
+    int cursys = 0;
+    ls->lstack.len = 0;
+    while (p.i < cur->n) {
+        const lsysv *L = &ls->sys[cursys];
+        ls->ign = L->ignore;
+        lpos o = {out->n, out->npm, out->npar};
+        bool done = false;
+        if (L->homo->present) {
+            lpos lc = p, rc = p;
+            pos_next(cur, &rc);
+            bool own = L->homo->seed_expr >= 0;
+            cbm__rand48 t = ls->ev.ran;
+            if (own)
+                ls->ev.ran = ls->hran[cursys];
+            cbm_status s = rewrite(ls, L->homo, cur, &p, out, cur, &lc, &rc, 0, &done);
+            if (own) {
+                ls->hran[cursys] = ls->ev.ran;
+                ls->ev.ran = t;
+            }
+            if (s != CBM_OK)
+                return runtime_fail(ls, s, "homomorphism");
+        }
+        if (!done)
+            CBM_TRY(copy_module(ls->ctx, cur, &p, out));
+        if (out->n > cbm_context_limits(ls->ctx)->max_modules)
+            return cbm__fail(ls->ctx, CBM_E_LIMIT,
+                             "the homomorphism would exceed %zu modules (max_modules)",
+                             cbm_context_limits(ls->ctx)->max_modules);
+        CBM_TRY(follow_markers(ls, out, o, out->n, &cursys, 0));
+    }
+    ls->ign = ls->ignore;
+    return CBM_OK;
+}
+
 static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out)
 {
     lpos p = {0, 0, 0};
+    ls->ign = ls->ignore;
     while (p.i < cur->n) {
         bool done = false;
         if (ls->homo.present) {
@@ -849,9 +992,10 @@ static void return_queries(cbm_lsys *ls)
     lstr *str = &ls->cur;
     lpos a = {0, 0, 0}, b = {0, 0, 0};
     for (;;) {
-        while (a.i < img->n && !(a.i > 0 && (img->sym[a.i - 1] & 0x7f) == '?'))
+        /* a '?' with parameters is a sub-L-system call, not a query */
+        while (a.i < img->n && !(a.i > 0 && img->sym[a.i - 1] == '?'))
             pos_next(img, &a);
-        while (b.i < str->n && !(b.i > 0 && (str->sym[b.i - 1] & 0x7f) == '?'))
+        while (b.i < str->n && !(b.i > 0 && str->sym[b.i - 1] == '?'))
             pos_next(str, &b);
         if (a.i >= img->n || b.i >= str->n)
             return;

@@ -714,6 +714,16 @@ static xn mk(int op, int type)
 
 #define ND(i) (L->lp->nodes.data[i])
 
+/* Appends node e to the chain first..last (linked through `next`). */
+static void chain(lc *L, int32_t *first, int32_t *last, int32_t e)
+{
+    if (*last >= 0)
+        ND(*last).next = e;
+    else
+        *first = e;
+    *last = e;
+}
+
 /* ---------------------------------------------------------------- types in declarations */
 /* Parses a type name (with optional `const`/`struct`); -1 if there is none (nothing consumed) */
 static int parse_type(lc *L)
@@ -803,11 +813,7 @@ static int parse_args(lc *L, int32_t *first)
         int32_t e = assign_expr(L);
         if (e < 0)
             return -1;
-        if (last >= 0)
-            ND(last).next = e;
-        else
-            *first = e;
-        last = e;
+        chain(L, first, &last, e);
         n++;
     } while (accept(L, ","));
     if (!expect(L, ")"))
@@ -869,11 +875,7 @@ static int32_t printf_call(lc *L, size_t pos)
                           : "of %s must be a string literal");
             return -1;
         }
-        if (last >= 0)
-            ND(last).next = e;
-        else
-            first = e;
-        last = e;
+        chain(L, &first, &last, e);
         n++;
     }
     if (!expect(L, ")"))
@@ -912,11 +914,7 @@ static int32_t brace_init(lc *L, int t)
         int32_t e = peek(L, "{") ? brace_init(L, ft) : coerce(L, assign_expr(L), ft, p);
         if (e < 0)
             return -1;
-        if (last >= 0)
-            ND(last).next = e;
-        else
-            first = e;
-        last = e;
+        chain(L, &first, &last, e);
     }
     if (!expect(L, "}"))
         return -1;
@@ -995,11 +993,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                 }
                 if (e < 0)
                     return -1;
-                if (last >= 0)
-                    ND(last).next = e;
-                else
-                    first = e;
-                last = e;
+                chain(L, &first, &last, e);
             }
             xn x = mk(N_CTOR, t);
             x.a = first;
@@ -1018,11 +1012,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                 e = coerce(L, e, lp->types.data[t].ftype[i], pos);
                 if (e < 0)
                     return -1;
-                if (last >= 0)
-                    ND(last).next = e;
-                else
-                    first = e;
-                last = e;
+                chain(L, &first, &last, e);
             }
             xn x = mk(N_CTOR, t);
             x.a = first;
@@ -1094,11 +1084,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             e = coerce(L, e, f->ptype[a], pos);
             if (e < 0)
                 return -1;
-            if (last >= 0)
-                ND(last).next = e;
-            else
-                first = e;
-            last = e;
+            chain(L, &first, &last, e);
         }
         xn c = mk(N_CALLU, f->ret);
         c.a = first;
@@ -1631,11 +1617,7 @@ static int succ_list(lc *L, lpat *p)
             e = coerce(L, e, md->ptype[a], pos);
             if (e < 0)
                 return -1;
-            if (last >= 0)
-                ND(last).next = e;
-            else
-                first = e;
-            last = e;
+            chain(L, &first, &last, e);
         }
         lsm sm = {m, first};
         if (CBM_ARRAY_PUSH(L->c->ctx, lp->sms, sm) != CBM_OK) {
@@ -1705,11 +1687,7 @@ static int pattern(lc *L, lpat *p, bool declare)
                     int32_t e = node(L, x);
                     if (e < 0)
                         return -1;
-                    if (last >= 0)
-                        ND(last).next = e;
-                    else
-                        first = e;
-                    last = e;
+                    chain(L, &first, &last, e);
                     na++;
                 } while (accept(L, ","));
                 if (!expect(L, ")"))
@@ -1760,11 +1738,7 @@ static int32_t block(lc *L)
                 L->c->pos++;
             continue;
         }
-        if (last >= 0)
-            ND(last).next = s;
-        else
-            first = s;
-        last = s;
+        chain(L, &first, &last, s);
         while (ND(last).next >= 0)
             last = ND(last).next;
     }
@@ -1810,11 +1784,7 @@ static int32_t declaration(lc *L, int t)
         int32_t s = node(L, d);
         if (s < 0)
             return -1;
-        if (last >= 0)
-            ND(last).next = s;
-        else
-            first = s;
-        last = s;
+        chain(L, &first, &last, s);
     } while (accept(L, ","));
     if (!expect(L, ";")) {
         recover_stmt(L);
@@ -4091,6 +4061,18 @@ cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const do
     *out = img;
     *n = nh;
     return CBM_OK;
+}
+
+void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
+                        int *decomp_depth, int *interp_depth, size_t *modules)
+{
+    const lpfg *lp = ls->lp;
+    *prods = lp->main.prods.len;
+    *decomp = lp->decomp.present ? lp->decomp.prods.len : 0;
+    *interp = lp->interp.present ? lp->interp.prods.len : 0;
+    *decomp_depth = lp->decomp.present ? lp->decomp.depth : 0;
+    *interp_depth = lp->interp.present ? lp->interp.depth : 0;
+    *modules = lp->mods.len;
 }
 
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)

@@ -1,6 +1,7 @@
 /* Loading and releasing an L-system model: preprocess, parse, then index the productions by
  * the first symbol of their predecessor (declaration order kept within a symbol, which is the
- * order cpfg tries them in) and allocate the run state (globals, parameter frame). */
+ * order cpfg tries them in), list the L-systems of the file (the main one and its
+ * sub-L-systems, lsys_internal.h) and allocate the run state (globals, parameter frame). */
 #include "lsys/lsys_internal.h"
 
 #include <stdlib.h>
@@ -32,18 +33,77 @@ static cbm_status index_set(cbm_lsys *ls, prodset *set)
     return CBM_OK;
 }
 
-void cbm_lsys_destroy(cbm_lsys *ls)
+static void free_sets(cbm_context *ctx, prodset *m, prodset *d, prodset *h)
 {
-    if (!ls)
-        return;
-    cbm_context *ctx = ls->ctx;
-    prodset *sets[3] = {&ls->main, &ls->decomp, &ls->homo};
+    prodset *sets[3] = {m, d, h};
     for (int i = 0; i < 3; i++) {
         size_t n = sets[i]->prods.len;
         if (sets[i]->order)
             cbm__free(ctx, sets[i]->order, (n ? n : 1) * sizeof(int32_t));
         CBM_ARRAY_FREE(ctx, sets[i]->prods);
     }
+}
+
+int cbm__lsys_find(const cbm_lsys *ls, int id)
+{
+    for (int i = 0; i < ls->nsys; i++)
+        if (ls->sys[i].id == id)
+            return i;
+    return -1;
+}
+
+/* The view of every L-system (ls->sys), the deepest recursion, the homomorphism streams. */
+static cbm_status list_lsystems(cbm_lsys *ls)
+{
+    int n = 1 + (int)ls->subs.len;
+    ls->sys = cbm__calloc(ls->ctx, (size_t)n, sizeof *ls->sys);
+    if (!ls->sys)
+        return CBM_E_NOMEM;
+    ls->nsys = n;
+    ls->hran = cbm__calloc(ls->ctx, (size_t)n, sizeof *ls->hran);
+    if (!ls->hran)
+        return CBM_E_NOMEM;
+    ls->sys[0] = (lsysv){ls->id,
+                         &ls->main,
+                         &ls->decomp,
+                         &ls->homo,
+                         ls->ignore,
+                         ls->stochastic,
+                         {ls->start_block, ls->start_each, ls->end_each, ls->end_block}};
+    for (int i = 1; i < n; i++) {
+        const sublsys *b = &ls->subs.data[i - 1];
+        ls->sys[i] = (lsysv){b->id,
+                             &b->main,
+                             &b->decomp,
+                             &b->homo,
+                             b->ignore,
+                             b->stochastic,
+                             {b->start_block, b->start_each, b->end_each, b->end_block}};
+    }
+    ls->max_depth = 0;
+    for (int i = 0; i < n; i++) {
+        if (ls->sys[i].decomp->depth > ls->max_depth)
+            ls->max_depth = ls->sys[i].decomp->depth;
+        if (ls->sys[i].homo->depth > ls->max_depth)
+            ls->max_depth = ls->sys[i].homo->depth;
+    }
+    ls->ign = ls->ignore;
+    return CBM_OK;
+}
+
+void cbm_lsys_destroy(cbm_lsys *ls)
+{
+    if (!ls)
+        return;
+    cbm_context *ctx = ls->ctx;
+    free_sets(ctx, &ls->main, &ls->decomp, &ls->homo);
+    for (size_t i = 0; i < ls->subs.len; i++)
+        free_sets(ctx, &ls->subs.data[i].main, &ls->subs.data[i].decomp, &ls->subs.data[i].homo);
+    CBM_ARRAY_FREE(ctx, ls->subs);
+    cbm__free(ctx, ls->sys, (size_t)ls->nsys * sizeof *ls->sys);
+    if (ls->hran)
+        cbm__free(ctx, ls->hran, (size_t)ls->nsys * sizeof *ls->hran);
+    CBM_ARRAY_FREE(ctx, ls->lstack);
     CBM_ARRAY_FREE(ctx, ls->fmods);
     CBM_ARRAY_FREE(ctx, ls->smods);
     CBM_ARRAY_FREE(ctx, ls->const_bytes);
@@ -102,6 +162,15 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
         s = index_set(ls, &ls->decomp);
     if (s == CBM_OK)
         s = index_set(ls, &ls->homo);
+    for (size_t i = 0; s == CBM_OK && i < ls->subs.len; i++) {
+        s = index_set(ls, &ls->subs.data[i].main);
+        if (s == CBM_OK)
+            s = index_set(ls, &ls->subs.data[i].decomp);
+        if (s == CBM_OK)
+            s = index_set(ls, &ls->subs.data[i].homo);
+    }
+    if (s == CBM_OK)
+        s = list_lsystems(ls);
     if (s == CBM_OK) {
         ls->q_slot = (int32_t)ls->comp.globals.len;
         for (size_t i = 0; i < ls->comp.globals.len; i++)

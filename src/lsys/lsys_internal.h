@@ -6,6 +6,13 @@
  *   par[k]  all parameters, in order (double; float in float32 mode, as cpfg stores them).
  * A non-parametric module costs one byte, and walking left or right (context matching) only
  * needs the three running indices (module, parametric module, parameter).
+ *
+ * Sub-L-systems (cpfg manual 7.2): the L-system a module belongs to is not stored per module;
+ * it is given by the string itself, as in cpfg: `?(id, scale)` opens L-system `id` and `$`
+ * returns to the one that opened it, so a left-to-right pass keeps a stack of L-system indices
+ * (lstack) and knows each module's L-system from it. A model without sub-L-systems (no second
+ * `Lsystem:` and no `?(id)` in an axiom or successor) never takes that path, so its string and
+ * its derivation are exactly what they were without the feature.
  */
 #ifndef CBM_LSYS_INTERNAL_H
 #define CBM_LSYS_INTERNAL_H
@@ -65,6 +72,26 @@ typedef struct prodset {
     bool present;
 } prodset;
 
+/* One L-system of the file. The first one's data are the fields of cbm_lsys (main, decomp,
+ * homo, ignore, stochastic, the blocks); the others (sub-L-systems) are kept in `subs`. */
+typedef struct sublsys {
+    int id; /* its label, `Lsystem: id` */
+    prodset main, decomp, homo;
+    bool ignore[128];
+    bool stochastic;
+    int32_t start_block, end_block, start_each, end_each;
+    int32_t axiom, naxiom; /* read and checked; a called sub-L-system does not use it (cpfg) */
+} sublsys;
+
+/* A view of one L-system for the derivation: index 0 is the first (main) L-system. */
+typedef struct lsysv {
+    int id;
+    const prodset *main, *decomp, *homo;
+    const bool *ignore;
+    bool stochastic;
+    int32_t blocks[4]; /* Start, StartEach, EndEach, End */
+} lsysv;
+
 struct cbm_lsys {
     cbm_context *ctx;
     cbm__compiler comp; /* nodes, globals, arrays */
@@ -90,6 +117,14 @@ struct cbm_lsys {
     int derivation_length;
     int max_formals;
     int32_t q_slot; /* global Q: the current step */
+    /* sub-L-systems */
+    int id;                  /* label of the first L-system */
+    CBM_ARRAY(sublsys) subs; /* the L-systems after the first */
+    lsysv *sys;              /* all L-systems, the first at 0 (built after parsing) */
+    int nsys;
+    bool subcalls;   /* several L-systems or a ?(id) anywhere: passes follow the ?(id) and $ */
+    int max_depth;   /* deepest decomposition or homomorphism of all L-systems */
+    const bool *ign; /* the ignore table of the L-system being matched */
     /* run state */
     cbm__eval ev;
     double *globals;
@@ -100,6 +135,8 @@ struct cbm_lsys {
     CBM_ARRAY(lstr) scratch; /* successor buffers per decomposition depth */
     CBM_ARRAY(int32_t) appl; /* applicable productions (stochastic) */
     CBM_ARRAY(float) applp;
+    CBM_ARRAY(uint16_t) lstack; /* L-system stack of a pass over a string with sub-L-systems */
+    cbm__rand48 *hran;          /* per L-system: the homomorphism's own stream (seed:) */
     int steps;
     bool homo_valid;
     cbm_lsys_mech_timing mech_time; /* mechanics operations since the last reset */
@@ -107,6 +144,8 @@ struct cbm_lsys {
 };
 
 void cbm__lstr_free(cbm_context *ctx, lstr *s);
+/* Index in ls->sys of the L-system labelled id, -1 if none. */
+int cbm__lsys_find(const cbm_lsys *ls, int id);
 cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);
 
 /* The L+C (lpfg) dialect, lpfg.c: detection by the file's form, then its own compiler and
@@ -122,6 +161,10 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
 cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
+/* Counts of an L+C model for cbm_model_describe: productions, decomposition and interpretation
+ * rules with their depths, declared modules (turtle modules included). */
+void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
+                        int *decomp_depth, int *interp_depth, size_t *modules);
 /* Models with mechanics: for each module of the string (or of its interpretation, through the
  * modules they came from) its MechSegment fields (lsys/mechlang.h offsets), NULL for other
  * modules; *out is an array of *n pointers from the context (free with cbm__free), NULL when the

@@ -389,6 +389,21 @@ static void cut_string(const cbm__mechlang *m, lstr *s, const uint8_t *cut)
 static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
                          double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
 
+/* A model and string the mechanics can run on; else a message in err. */
+static cbm_status usable(const cbm__mechlang *m, const lstr *s, char *err, size_t errn)
+{
+    err[0] = 0;
+    if (m->seg_code < 0) {
+        snprintf(err, errn, "no `mechanics:` module declared");
+        return CBM_E_INVALID;
+    }
+    if (s->f32) {
+        snprintf(err, errn, "mechanics needs double parameters");
+        return CBM_E_INVALID;
+    }
+    return CBM_OK;
+}
+
 /* The plant of the string's segments (create, ground, build, tropism for new segments). */
 static cbm_status make_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
                              view *v, char *err, size_t errn)
@@ -413,15 +428,7 @@ cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s
                                char *err, size_t errn)
 {
     *out = NULL;
-    err[0] = 0;
-    if (m->seg_code < 0) {
-        snprintf(err, errn, "no `mechanics:` module declared");
-        return CBM_E_INVALID;
-    }
-    if (s->f32) {
-        snprintf(err, errn, "mechanics needs double parameters");
-        return CBM_E_INVALID;
-    }
+    CBM_TRY(usable(m, s, err, errn));
     cbm_plant *pl = NULL;
     view v;
     memset(&v, 0, sizeof v);
@@ -471,15 +478,7 @@ static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int 
                          double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing)
 {
     *result = 0;
-    err[0] = 0;
-    if (m->seg_code < 0) {
-        snprintf(err, errn, "no `mechanics:` module declared");
-        return CBM_E_INVALID;
-    }
-    if (s->f32) {
-        snprintf(err, errn, "mechanics needs double parameters");
-        return CBM_E_INVALID;
-    }
+    CBM_TRY(usable(m, s, err, errn));
     cbm_plant *pl = NULL;
     view v;
     memset(&v, 0, sizeof v);

@@ -11,6 +11,12 @@
  *   lc < pred > rc : {pre} cond {post} --> successor : probability      (`*` = empty successor)
  *   decomposition / homomorphism, each with `maximum depth: EXPR`;  endlsystem
  *
+ * A file may hold several L-systems, each `Lsystem: N ... endlsystem` (cpfg manual 7.2): the
+ * first is the main one; the others are sub-L-systems, called from a string by `?(N, scale)`.
+ * Each has its own productions, decomposition, homomorphism, ignore/consider symbols and
+ * blocks; the derivation length and the seed are the main L-system's, the variables are shared.
+ * Every `?(N)` whose N is a constant must name an L-system of the file.
+ *
  * Errors are reported with file:line:col and what was expected; the parser recovers at the
  * next line, so one run reports several errors.
  */
@@ -18,13 +24,28 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stdlib.h>
+
+/* A ?(id) with a constant id, checked once every L-system is known. */
+typedef struct callref {
+    double id;
+    size_t pos;
+} callref;
 
 typedef struct parser {
     cbm_lsys *ls;
     cbm__compiler *c;
     const char *t; /* text */
     prodset *set;  /* current production set */
+    /* the L-system being read: its sets, ignore table, stochastic flag, blocks and axiom */
+    prodset *pmain, *pdecomp, *phomo;
+    bool *ign, *stoch;
+    int32_t *blk[4]; /* Start, StartEach, EndEach, End */
+    int32_t *axiom, *naxiom;
+    bool sub; /* a sub-L-system (not the first) */
+    size_t lsys_pos;
     bool have_axiom, have_lsystem, ended;
+    CBM_ARRAY(callref) calls;
 } parser;
 
 static bool at_eol(parser *p)
@@ -181,6 +202,8 @@ static bool parse_succ(parser *p, int32_t *first, int32_t *count)
         if (p->t[c->pos] == '(') {
             c->pos++;
             int32_t last = -1;
+            if (m.sym == '?')
+                ls->subcalls = true; /* a sub-L-system call ?(id, scale) */
             for (;;) {
                 int32_t e = cbm__parse_expr(c, false);
                 if (e < 0)
@@ -189,10 +212,20 @@ static bool parse_succ(parser *p, int32_t *first, int32_t *count)
                     cbm__cerr(c, mpos, "too many parameters (at most %d)", LSYS_MAX_PARAMS);
                     return false;
                 }
-                if (last >= 0)
+                if (last >= 0) {
                     c->nodes.data[last].next = e;
-                else
+                } else {
                     m.args = e;
+                    double v;
+                    if (m.sym == '?' && cbm__node_const(c, e, &v)) {
+                        callref r = {v, mpos};
+                        if (CBM_ARRAY_PUSH(ls->ctx, p->calls, r) != CBM_OK) {
+                            c->status = CBM_E_NOMEM;
+                            c->fatal = true;
+                            return false;
+                        }
+                    }
+                }
                 last = e;
                 m.np++;
                 cbm__skip(c, false);
@@ -228,8 +261,20 @@ static void parse_production(parser *p)
     prod pr = {.pre = -1, .cond = -1, .post = -1, .prob = -1, .lc = 0, .rc = 0};
     pr.pos = c->pos;
     int32_t f, n;
-    if (!parse_formal(p, &f, &n, names, lens, &nnames))
+    cbm__skip(c, false);
+    size_t star = c->pos;
+    if (p->t[star] == '*') {
+        /* `* < pred`: an empty left context, as cpfg writes it */
+        c->pos++;
+        cbm__skip(c, false);
+        if (p->t[c->pos] != '<') {
+            cbm__cerr(c, star, "expected a predecessor module, found '*'");
+            goto fail;
+        }
+        f = (int32_t)ls->fmods.len, n = 0;
+    } else if (!parse_formal(p, &f, &n, names, lens, &nnames)) {
         goto fail;
+    }
     cbm__skip(c, false);
     if (p->t[c->pos] == '<') {
         c->pos++;
@@ -248,8 +293,13 @@ static void parse_production(parser *p)
     cbm__skip(c, false);
     if (p->t[c->pos] == '>') {
         c->pos++;
-        if (!parse_formal(p, &pr.rc, &pr.nrc, names, lens, &nnames))
+        cbm__skip(c, false);
+        if (p->t[c->pos] == '*') { /* `pred > *`: an empty right context (cpfg) */
+            c->pos++;
+            pr.rc = (int32_t)ls->fmods.len, pr.nrc = 0;
+        } else if (!parse_formal(p, &pr.rc, &pr.nrc, names, lens, &nnames)) {
             goto fail;
+        }
     }
     pr.nformals = nnames;
     if (nnames > ls->max_formals)
@@ -301,8 +351,8 @@ static void parse_production(parser *p)
         pr.prob = cbm__parse_expr(c, false);
         if (pr.prob < 0)
             goto fail;
-        if (p->set == &ls->main)
-            ls->stochastic = true;
+        if (p->set == p->pmain)
+            *p->stoch = true;
     }
     c->nformals = 0;
     expect_eol(p, "the production");
@@ -334,7 +384,7 @@ static void parse_symbols(parser *p, bool consider)
 {
     cbm__compiler *c = p->c;
     for (int i = 0; i < 128; i++)
-        p->ls->ignore[i] = consider && i != 0;
+        p->ign[i] = consider && i != 0;
     for (;;) {
         cbm__skip(c, false);
         unsigned char ch = (unsigned char)p->t[c->pos];
@@ -343,7 +393,7 @@ static void parse_symbols(parser *p, bool consider)
         if (ch >= 128) {
             cbm__cerr(c, c->pos, "symbols are ASCII characters");
         } else {
-            p->ls->ignore[ch] = !consider;
+            p->ign[ch] = !consider;
         }
         c->pos++;
     }
@@ -395,15 +445,108 @@ static void parse_block_item(parser *p, int32_t *slot, const char *what)
     expect_eol(p, what);
 }
 
+/* Points the parser at the L-system now being read (the first: the fields of ls). */
+static void select_lsystem(parser *p, sublsys *sub)
+{
+    cbm_lsys *ls = p->ls;
+    p->sub = sub != NULL;
+    p->pmain = sub ? &sub->main : &ls->main;
+    p->pdecomp = sub ? &sub->decomp : &ls->decomp;
+    p->phomo = sub ? &sub->homo : &ls->homo;
+    p->ign = sub ? sub->ignore : ls->ignore;
+    p->stoch = sub ? &sub->stochastic : &ls->stochastic;
+    p->blk[0] = sub ? &sub->start_block : &ls->start_block;
+    p->blk[1] = sub ? &sub->start_each : &ls->start_each;
+    p->blk[2] = sub ? &sub->end_each : &ls->end_each;
+    p->blk[3] = sub ? &sub->end_block : &ls->end_block;
+    p->axiom = sub ? &sub->axiom : &ls->axiom;
+    p->naxiom = sub ? &sub->naxiom : &ls->naxiom;
+    p->set = p->pmain;
+    p->pmain->present = true;
+    p->have_axiom = false;
+    p->ended = false;
+}
+
+/* The checks at the end of an L-system, at the next Lsystem: (pos): its axiom, reported at its
+ * own Lsystem: line, and its endlsystem. */
+static void end_lsystem(parser *p, size_t pos)
+{
+    if (!p->have_axiom)
+        cbm__cerr(p->c, p->lsys_pos, "the L-system has no axiom:");
+    else if (!p->ended)
+        cbm__cerr(p->c, pos, "expected 'endlsystem' at the end of the L-system");
+}
+
+/* `Lsystem: LABEL` (the keyword read): the first starts the main L-system, a further one a
+ * sub-L-system, whose label must be a number no other L-system has. */
+static void begin_lsystem(parser *p, size_t at)
+{
+    cbm__compiler *c = p->c;
+    cbm_lsys *ls = p->ls;
+    cbm__skip(c, false);
+    size_t lab = c->pos;
+    while (!at_eol(p))
+        c->pos++;
+    size_t end = c->pos;
+    while (end > lab && (p->t[end - 1] == ' ' || p->t[end - 1] == '\t' || p->t[end - 1] == '\r'))
+        end--;
+    char buf[32] = {0};
+    size_t n = end - lab < sizeof buf - 1 ? end - lab : sizeof buf - 1;
+    memcpy(buf, p->t + lab, n);
+    char *e = NULL;
+    double v = strtod(buf, &e);
+    bool numeric = n > 0 && n == end - lab && e == buf + n && v >= -2e9 && v <= 2e9;
+    int id = numeric ? (int)v : 0;
+    if (!p->have_lsystem) {
+        p->have_lsystem = true;
+        p->lsys_pos = at;
+        ls->id = id;
+        return;
+    }
+    end_lsystem(p, at);
+    if (!numeric)
+        cbm__cerr(c, lab, "the label of a sub-L-system must be a number, found %s",
+                  n ? "text" : "nothing");
+    else if (ls->id == id)
+        cbm__cerr(c, lab, "a second L-system labelled %d", id);
+    for (size_t i = 0; numeric && i < ls->subs.len; i++)
+        if (ls->subs.data[i].id == id) {
+            cbm__cerr(c, lab, "a second L-system labelled %d", id);
+            break;
+        }
+    if (ls->subs.len >= 255) {
+        cbm__cerr(c, at, "more than 256 L-systems in one file");
+        c->fatal = true;
+        return;
+    }
+    sublsys z;
+    memset(&z, 0, sizeof z);
+    z.id = id;
+    z.start_block = z.end_block = z.start_each = z.end_each = -1;
+    z.main.seed_expr = z.decomp.seed_expr = z.homo.seed_expr = -1;
+    if (CBM_ARRAY_PUSH(ls->ctx, ls->subs, z) != CBM_OK) {
+        c->status = CBM_E_NOMEM;
+        c->fatal = true;
+        return;
+    }
+    select_lsystem(p, &ls->subs.data[ls->subs.len - 1]);
+    p->lsys_pos = at;
+    ls->subcalls = true;
+}
+
 cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
 {
     cbm__compiler *c = &ls->comp;
-    parser p = {.ls = ls, .c = c, .t = pp->text.data, .set = &ls->main};
+    parser p;
+    memset(&p, 0, sizeof p);
+    p.ls = ls;
+    p.c = c;
+    p.t = pp->text.data;
+    select_lsystem(&p, NULL);
     const size_t max_steps = cbm_context_limits(ls->ctx)->max_steps;
     int max_depth = cbm_context_limits(ls->ctx)->max_decomp_depth;
-    ls->main.present = true;
     ls->derivation_length = 0;
-    while (c->text[c->pos] && !c->fatal && !p.ended) {
+    while (c->text[c->pos] && !c->fatal) {
         cbm__skip(c, false);
         if (c->text[c->pos] == '\n') {
             c->pos++;
@@ -413,46 +556,48 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
             break;
         size_t at = c->pos, k;
         if ((k = keyword(&p, "Lsystem:"))) {
-            if (p.have_lsystem) {
-                cbm__cerr(c, at, "a second Lsystem: (sub-L-systems) is not supported");
-                c->fatal = true;
-                break;
-            }
-            p.have_lsystem = true;
             c->pos += k;
-            while (!at_eol(&p))
-                c->pos++;
+            begin_lsystem(&p, at);
+            continue;
+        }
+        if (p.ended) {
+            skip_line(&p); /* text after endlsystem that starts no L-system is ignored */
             continue;
         }
         if (!p.have_lsystem) {
             cbm__cerr(c, at, "expected 'Lsystem:' before the L-system");
             skip_line(&p);
             p.have_lsystem = true;
+            p.lsys_pos = at;
             continue;
         }
         if ((k = keyword(&p, "derivation length:"))) {
             c->pos += k;
-            ls->dlength_expr = header_expr(&p, "derivation length:");
-            if (ls->dlength_expr >= 0)
-                ls->derivation_length =
-                    eval_int(&p, ls->dlength_expr, at, "derivation length", 0,
-                             (int)(max_steps < 1000000000 ? max_steps : 1000000000));
+            int32_t e = header_expr(&p, "derivation length:");
+            /* only the main L-system's counts (cpfg) */
+            if (!p.sub) {
+                ls->dlength_expr = e;
+                if (e >= 0)
+                    ls->derivation_length =
+                        eval_int(&p, e, at, "derivation length", 0,
+                                 (int)(max_steps < 1000000000 ? max_steps : 1000000000));
+            }
         } else if ((k = keyword(&p, "maximum depth:"))) {
             c->pos += k;
             int32_t e = header_expr(&p, "maximum depth:");
-            if (p.set == &ls->main)
+            if (p.set == p.pmain)
                 cbm__cerr(c, at, "maximum depth: belongs to decomposition or homomorphism");
             else if (e >= 0)
                 p.set->depth = eval_int(&p, e, at, "maximum depth", 0, max_depth);
         } else if ((k = keyword(&p, "seed:"))) {
             c->pos += k;
             int32_t e = header_expr(&p, "seed:");
-            if (p.set == &ls->homo)
-                ls->homo.seed_expr = e;
-            else if (p.set == &ls->decomp)
+            if (p.set == p.phomo)
+                p.phomo->seed_expr = e;
+            else if (p.set == p.pdecomp)
                 cbm__cerr(c, at, "seed: belongs to the header or to the homomorphism");
-            else
-                ls->seed_expr = e;
+            else if (!p.sub)
+                ls->seed_expr = e; /* a sub-L-system's seed: is not used (cpfg) */
         } else if ((k = keyword(&p, "consider:"))) {
             c->pos += k;
             parse_symbols(&p, true);
@@ -467,22 +612,22 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
                 expect_eol(&p, "define:");
         } else if ((k = keyword(&p, "start each:"))) {
             c->pos += k;
-            parse_block_item(&p, &ls->start_each, "StartEach:");
+            parse_block_item(&p, p.blk[1], "StartEach:");
         } else if ((k = keyword(&p, "end each:"))) {
             c->pos += k;
-            parse_block_item(&p, &ls->end_each, "EndEach:");
+            parse_block_item(&p, p.blk[2], "EndEach:");
         } else if ((k = keyword(&p, "start:"))) {
             c->pos += k;
-            parse_block_item(&p, &ls->start_block, "Start:");
+            parse_block_item(&p, p.blk[0], "Start:");
         } else if ((k = keyword(&p, "end:"))) {
             c->pos += k;
-            parse_block_item(&p, &ls->end_block, "End:");
+            parse_block_item(&p, p.blk[3], "End:");
         } else if ((k = keyword(&p, "axiom:"))) {
             c->pos += k;
             if (p.have_axiom)
                 cbm__cerr(c, at, "a second axiom");
             p.have_axiom = true;
-            if (!parse_succ(&p, &ls->axiom, &ls->naxiom))
+            if (!parse_succ(&p, p.axiom, p.naxiom))
                 skip_line(&p);
             else
                 expect_eol(&p, "the axiom");
@@ -495,8 +640,8 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
             size_t w;
             if ((w = keyword(&p, "no warnings")) || (w = keyword(&p, "warnings")))
                 c->pos += w;
-            prodset *s = homo ? &ls->homo : &ls->decomp;
-            if (s->present || (!homo && ls->homo.present))
+            prodset *s = homo ? p.phomo : p.pdecomp;
+            if (s->present || (!homo && p.phomo->present))
                 cbm__cerr(c, at,
                           homo ? "a second homomorphism section"
                                : "decomposition must come once, before homomorphism");
@@ -520,11 +665,26 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
         if (!p.have_lsystem)
             cbm__cerr(c, c->pos, "expected 'Lsystem:'");
         else if (!p.have_axiom)
-            cbm__cerr(c, c->pos, "the L-system has no axiom:");
+            cbm__cerr(c, p.lsys_pos, "the L-system has no axiom:");
         else if (!p.ended)
-            cbm__cerr(c, c->pos, "expected 'endlsystem' at the end of the L-system");
+            cbm__cerr(c, p.lsys_pos,
+                      "expected 'endlsystem' at the end of the L-system (the file ends first)");
+        for (size_t i = 0; i < p.calls.len; i++) {
+            double v = p.calls.data[i].id;
+            bool in = v >= -2e9 && v <= 2e9; /* a label is an int, as cpfg's (int) of it */
+            int id = in ? (int)v : 0;
+            bool found = in && id == ls->id;
+            for (size_t j = 0; in && !found && j < ls->subs.len; j++)
+                found = ls->subs.data[j].id == id;
+            if (!found)
+                cbm__cerr(c, p.calls.data[i].pos,
+                          "?(%g, ...) calls a sub-L-system, but no L-system of the file is "
+                          "labelled %g",
+                          in ? (double)id : v, in ? (double)id : v);
+        }
         cbm__check_globals(c);
     }
+    CBM_ARRAY_FREE(ls->ctx, p.calls);
     if (c->status != CBM_OK && c->status != CBM_E_SYNTAX)
         return c->status;
     if (c->errors)

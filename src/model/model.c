@@ -188,7 +188,8 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
         }
         s = cbm__turtle_feed(t, c.symbol, buf, n);
         if (s == CBM_OK && after_query && n > 0 &&
-            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U'))
+            (c.symbol == 'P' || c.symbol == 'H' || c.symbol == 'L' || c.symbol == 'U' ||
+             c.symbol == 'Q'))
             for (int i = 0; i < n && s == CBM_OK; i++)
                 s = cbm_lsys_cursor_set_param(ls, &c, i, buf[i]);
         after_query = c.symbol == '?' && n == 0;
@@ -309,7 +310,7 @@ bool cbm_model_has_queries(const cbm_model *m)
     while (p < end && (p = memchr(p, '?', (size_t)(end - p))) != NULL) {
         p++;
         int next = p < end ? (*p & 0x7f) : 0;
-        if (next == 'P' || next == 'H' || next == 'L' || next == 'U')
+        if (next == 'P' || next == 'H' || next == 'L' || next == 'U' || next == 'Q')
             return true;
     }
     return false;
@@ -401,4 +402,23 @@ void cbm_model_describe(const cbm_model *m, cbm_model_summary *out)
     out->has_start_end =
         ls->start_block >= 0 || ls->end_block >= 0 || ls->start_each >= 0 || ls->end_each >= 0;
     out->functions = cbm_funcset_count(cbm_view_functions(m->view));
+    out->lsystems = 1 + (int)ls->subs.len;
+    if (ls->lp) {
+        out->lc_dialect = true;
+        out->mechanics = cbm_lsys_has_mechanics(ls);
+        cbm__lpfg_describe(ls, &out->productions, &out->decompositions, &out->homomorphisms,
+                           &out->decomposition_depth, &out->homomorphism_depth,
+                           &out->modules_declared);
+    }
+    for (size_t i = 0; i < ls->subs.len; i++) {
+        const sublsys *sub = &ls->subs.data[i];
+        out->productions += sub->main.prods.len;
+        out->decompositions += sub->decomp.prods.len;
+        out->homomorphisms += sub->homo.prods.len;
+        out->stochastic |= sub->stochastic;
+        if (sub->decomp.present && sub->decomp.depth > out->decomposition_depth)
+            out->decomposition_depth = sub->decomp.depth;
+        if (sub->homo.present && sub->homo.depth > out->homomorphism_depth)
+            out->homomorphism_depth = sub->homo.depth;
+    }
 }

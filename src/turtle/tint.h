@@ -86,6 +86,8 @@ struct cbm_view {
     int color_inc;       /* colour increment */
     double step;         /* step of F, f without parameter */
     double scale;        /* scale factor of the view (display only; kept) */
+    double init_scale;   /* "initial scale:" the turtle's scale at the start (cpfg) */
+    double scale_mul;    /* "scale multiplier:" of @Di and @Dd without parameter */
     cbm__line_style line_style;
     int sides;             /* contour sides of cylinders */
     bool gc_twist;         /* twist of cylinders */

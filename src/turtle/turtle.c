@@ -27,6 +27,11 @@
  * a cylinder of the current width, and lpfg's commands SetHead, RollToVert, LineTo3d/LineRel3d
  * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
  * lpfg's frame has U opposite to ours (its L = U x H), which these commands account for.
+ * The turtle's scale (cpfg's turtle scale factor: the view's "initial scale:", set by @D, @Di,
+ * @Dd) multiplies the lengths of F f G g, the widths that ! and # set or step, the sizes of @O
+ * @o @c given as parameters and of surfaces. A sub-L-system `?(id, s) ... $` (cpfg manual 7.2)
+ * multiplies it by s on a stack of its own and returns to the caller's scale at `$`, the current
+ * width following the ratio of the two scales (cpfg's UpdateCurrentLsystem).
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the
  * start width in pixels (cpfg's pixel lines) and consecutive lines with equal part data share one
@@ -55,6 +60,7 @@ typedef struct tstate {
     cbm_vec3 prev_h, prev_u;
     double width;
     double width_up; /* lpfg's ScaleContour: the section's width along U (= width otherwise) */
+    double scale;    /* cpfg's turtle scale */
     double elasticity;
     double mov_e[CBM__MAX_MOVEMENTS];
     int color;
@@ -80,6 +86,7 @@ struct cbm_turtle {
     bool lpfg; /* lpfg's turtle: initial colour 1, each F its own cylinder */
     tstate cur;
     CBM_ARRAY(tstate) stack;
+    CBM_ARRAY(double) subscale; /* scales of the open sub-L-systems ?(id, s) ... $ */
     /* the open segment */
     bool node_open;
     cbm_vec3 node_p, node_h, node_u;
@@ -160,10 +167,14 @@ static const tname names[] = {
     {"@Tf", CBM_T_TWIST_KEEP},
     {"@#", CBM_T_CONTOUR_SET},
     {"@!", CBM_T_SIDES_SET},
+    {"@D", CBM_T_SCALE_SET},
+    {"@Di", CBM_T_SCALE_MUL},
+    {"@Dd", CBM_T_SCALE_DIV},
     {"?P", CBM_T_QUERY_P},
     {"?H", CBM_T_QUERY_H},
     {"?L", CBM_T_QUERY_L},
     {"?U", CBM_T_QUERY_U},
+    {"?Q", CBM_T_QUERY_Q},
 };
 
 /* One-character commands, by character (the common case, looked up per module by
@@ -208,6 +219,7 @@ static void init_state(cbm_turtle *t)
     s->prev_u = s->u;
     s->width = v->width;
     s->width_up = v->width;
+    s->scale = v->init_scale;
     s->elasticity = v->elasticity;
     for (int i = 0; i < v->nmov; i++)
         s->mov_e[i] = v->mov[i].elasticity;
@@ -245,6 +257,7 @@ void cbm__turtle_destroy(cbm_turtle *t)
         return;
     cbm_context *ctx = t->ctx;
     CBM_ARRAY_FREE(ctx, t->stack);
+    CBM_ARRAY_FREE(ctx, t->subscale);
     CBM_ARRAY_FREE(ctx, t->polypts);
     CBM_ARRAY_FREE(ctx, t->polycolor);
     CBM_ARRAY_FREE(ctx, t->polystart);
@@ -269,6 +282,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     if (t->lpfg)
         t->cur.color = 1;
     t->stack.len = 0;
+    t->subscale.len = 0;
     t->node_open = false;
     t->polypts.len = 0;
     t->polycolor.len = 0;
@@ -911,6 +925,9 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
         sx = sy = sz = params[0];
     }
     const tstate *s = &t->cur;
+    sx *= s->scale;
+    sy *= s->scale;
+    sz *= s->scale;
     const double k = 1.0;
     /* surface coordinates (already relative to the contact point): X along L, Y along H, Z
      * along U */
@@ -977,7 +994,7 @@ static double param0(const double *p, int n, double dflt)
 static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, int nparams)
 {
     tstate *s = &t->cur;
-    double d = nparams > 0 ? params[0] : s->width;
+    double d = nparams > 0 ? params[0] * s->scale : s->width;
     double r = d / 2.0;
     cbm_prim pr;
     memset(&pr, 0, sizeof pr);
@@ -1013,9 +1030,56 @@ static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, i
     return cbm_scene_add_polygon(t->scene, t->scratch.data, (size_t)n);
 }
 
+/* cpfg's ?Q: the frame whose rows are H, L, U as a quaternion (x, y, z, w), by the classic
+ * conversion from a rotation matrix M (Shoemake 1985): w^2 =
+ * (1 + trace M) / 4; when w^2 > 1e-10, (x, y, z) = (M12 - M21, M20 - M02, M01 - M10) / 4w;
+ * otherwise w = 0 and, again by the first component whose square is large enough,
+ * x^2 = -(M11 + M22) / 2, y = M01 / 2x, z = M02 / 2x; or x = 0, y^2 = (1 - M22) / 2,
+ * z = M12 / 2y; or (0, 0, 1, 0). These are cpfg's branches, so a half-turn frame gives cpfg's
+ * quaternion. */
+static void frame_quaternion(const tstate *s, double q[4])
+{
+    const double m[3][3] = {
+        {s->h.x, s->h.y, s->h.z}, {s->l.x, s->l.y, s->l.z}, {s->u.x, s->u.y, s->u.z}};
+    const double eps = 1e-10;
+    double w2 = 0.25 * (1.0 + m[0][0] + m[1][1] + m[2][2]);
+    if (w2 > eps) {
+        double w = sqrt(w2), k = 4.0 * w;
+        q[0] = (m[1][2] - m[2][1]) / k;
+        q[1] = (m[2][0] - m[0][2]) / k;
+        q[2] = (m[0][1] - m[1][0]) / k;
+        q[3] = w;
+        return;
+    }
+    q[3] = 0.0;
+    double x2 = -0.5 * (m[1][1] + m[2][2]);
+    if (x2 > eps) {
+        q[0] = sqrt(x2);
+        q[1] = m[0][1] / (2.0 * q[0]);
+        q[2] = m[0][2] / (2.0 * q[0]);
+        return;
+    }
+    q[0] = 0.0;
+    double y2 = 0.5 * (1.0 - m[2][2]);
+    if (y2 > eps) {
+        q[1] = sqrt(y2);
+        q[2] = m[1][2] / (2.0 * q[1]);
+    } else {
+        q[1] = 0.0;
+        q[2] = 1.0;
+    }
+}
+
 static cbm_status query(cbm_turtle *t, int cmd, double *params, int nparams)
 {
     const tstate *s = &t->cur;
+    if (cmd == CBM_T_QUERY_Q) {
+        double q[4];
+        frame_quaternion(s, q);
+        for (int i = 0; i < nparams && i < 4; i++)
+            params[i] = q[i];
+        return CBM_OK;
+    }
     cbm_vec3 v = cmd == CBM_T_QUERY_P   ? s->pos
                  : cmd == CBM_T_QUERY_H ? s->h
                  : cmd == CBM_T_QUERY_L ? s->l
@@ -1037,7 +1101,7 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     tstate *s = &t->cur;
     movements(t);
     CBM_TRY(end_node(t));
-    double len = param0(params, nparams, t->view->step);
+    double len = param0(params, nparams, t->view->step) * s->scale;
     bool draw = cmd == CBM_T_F || cmd == CBM_T_G;
     if (draw)
         start_node(t);
@@ -1142,6 +1206,34 @@ static cbm_status line_to(cbm_turtle *t, int cmd, const double *params, int npar
     s->l = l0;
     s->u = u0;
     return st;
+}
+
+/* ?(id, s) and $: the scale of a sub-L-system, on its own stack (cpfg's UpdateCurrentLsystem:
+ * brackets do not restore it); the width follows the ratio of the new scale to the old. An
+ * unmatched $ is passed over. */
+static cbm_status sublsys_scale(cbm_turtle *t, int cmd, const double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    size_t n = t->subscale.len;
+    double old = n ? t->subscale.data[n - 1] : t->view->init_scale, nw;
+    if (cmd == CBM_T_SUBLSYS_BEGIN) {
+        nw = nparams >= 2 ? old * params[1] : old;
+        if (n >= cbm_context_limits(t->ctx)->max_modules)
+            return cbm__fail(t->ctx, CBM_E_LIMIT, "turtle: sub-L-systems nested deeper than %zu",
+                             n);
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->subscale, nw));
+    } else {
+        if (n == 0)
+            return CBM_OK;
+        t->subscale.len--;
+        nw = n > 1 ? t->subscale.data[n - 2] : t->view->init_scale;
+    }
+    s->scale = nw;
+    if (old != 0.0 && isfinite(s->width * nw / old)) {
+        s->width = (float)(s->width * nw / old);
+        s->width_up = s->width;
+    }
+    return CBM_OK;
 }
 
 /* The @ commands (and the queries): they end the current segment first, as in cpfg. */
@@ -1285,7 +1377,20 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_QUERY_H:
     case CBM_T_QUERY_L:
     case CBM_T_QUERY_U:
+    case CBM_T_QUERY_Q:
         return query(t, cmd, params, nparams);
+    case CBM_T_SCALE_SET:
+        if (nparams > 0)
+            s->scale = params[0];
+        return CBM_OK;
+    case CBM_T_SCALE_MUL:
+    case CBM_T_SCALE_DIV: {
+        /* cpfg: a zero parameter leaves the scale */
+        double k = nparams > 0 ? params[0] : v->scale_mul;
+        if (k != 0.0)
+            s->scale = cmd == CBM_T_SCALE_MUL ? s->scale * k : s->scale / k;
+        return CBM_OK;
+    }
     default:
         return CBM_OK;
     }
@@ -1296,7 +1401,7 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     tstate *s = &t->cur;
     const cbm_view *v = t->view;
     t->module_index++;
-    if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_U) {
+    if (cmd < CBM_T_QUERY_P || cmd > CBM_T_QUERY_Q) {
         for (int i = 0; i < nparams; i++)
             if (!isfinite(params[i]))
                 return cbm__fail(t->ctx, CBM_E_NONFINITE,
@@ -1359,11 +1464,11 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_WIDTH:
     case CBM_T_WIDTH_INC: {
         if (nparams > 0)
-            s->width = (float)params[0];
+            s->width = (float)(params[0] * s->scale);
         else if (cmd == CBM_T_WIDTH)
-            s->width -= v->width_inc;
+            s->width -= v->width_inc * s->scale;
         else
-            s->width += v->width_inc;
+            s->width += v->width_inc * s->scale;
         if (s->width < 0.0000001f)
             s->width = 0.0000001f;
         s->width_up = s->width;
@@ -1407,6 +1512,9 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
         if (t->polystart.len > 0)
             return poly_vertex(t);
         return CBM_OK;
+    case CBM_T_SUBLSYS_BEGIN:
+    case CBM_T_SUBLSYS_END:
+        return sublsys_scale(t, cmd, params, nparams);
     default:
         break;
     }
@@ -1437,8 +1545,8 @@ cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int npara
                 return end_node(t);
             return CBM_OK;
         case '?':
-            if (nparams > 0)
-                return CBM_OK; /* cpfg's sub-L-system ?(n): not a query */
+            if (nparams > 0) /* cpfg's sub-L-system ?(id, s): not a query */
+                return cbm__turtle_exec(t, CBM_T_SUBLSYS_BEGIN, params, nparams);
             t->prefix[0] = '?';
             t->nprefix = 1;
             return CBM_OK;
@@ -1446,6 +1554,8 @@ cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int npara
             t->prefix[0] = '~';
             t->nprefix = 1;
             return cbm__turtle_exec(t, CBM_T_SURFACE, params, nparams);
+        case '$':
+            return cbm__turtle_exec(t, CBM_T_SUBLSYS_END, params, nparams);
         default: {
             char c = (char)symbol;
             int cmd = cbm__turtle_lookup(&c, 1);

@@ -2,9 +2,9 @@
  *
  * The engine resolves each module symbol to a turtle command once, when it compiles a model
  * (cbm__turtle_lookup), and during interpretation calls cbm__turtle_exec for every module of the
- * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U) get their
- * parameters written back through `params`. Modules that are not turtle commands are skipped by
- * the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
+ * string in order, with the module's parameters as doubles. Query modules (?P ?H ?L ?U ?Q) get
+ * their parameters written back through `params`. Modules that are not turtle commands are skipped
+ * by the engine (lookup returns CBM_T_NONE). `~` hands the module after it to cbm__turtle_surface.
  * An engine whose modules are cpfg's single symbols (`@` `M`(1,2) rather than `@M`(1,2)) calls
  * cbm__turtle_feed for every module instead: it combines `@`, `?` and `~` with what follows.
  *
@@ -56,6 +56,7 @@ typedef enum cbm_tcmd {
     CBM_T_QUERY_H,           /* ?H */
     CBM_T_QUERY_L,           /* ?L */
     CBM_T_QUERY_U,           /* ?U */
+    CBM_T_QUERY_Q,           /* ?Q: the frame as a quaternion */
     CBM_T_USER_FIRST = 1000, /* further commands are the turtle module's own business */
     CBM_T_ELASTICITY = CBM_T_USER_FIRST, /* _  set or increment the ABOP tropism elasticity */
     CBM_T_TROPISM_INC,                   /* @Ti(i, de) */
@@ -67,12 +68,18 @@ typedef enum cbm_tcmd {
     CBM_T_TWIST_ADJUST, /* @Tp: U follows H from the last drawn segment without twist */
     CBM_T_TWIST_KEEP,   /* @Tf: the current frame becomes the reference of @Tp */
     /* lpfg's commands that cpfg lacks (L+C dialect; no module symbol: the model maps names) */
-    CBM_T_SET_HEAD,     /* SetHead(hx,hy,hz, ux,uy,uz): heading and up in lpfg's frame */
-    CBM_T_LINE_TO,      /* LineTo3d(x,y,z): a segment to the point, the frame kept */
-    CBM_T_LINE_REL,     /* LineRel3d(dx,dy,dz): a segment by the vector, the frame kept */
-    CBM_T_MOVE_REL,     /* MoveRel3d(dx,dy,dz): move by the vector without drawing */
-    CBM_T_ROLL_TO_VERT, /* RollToVert: roll so that L is horizontal (-x if H is vertical) */
-    CBM_T_SCALE_CONTOUR /* ScaleContour(p, q): widths of the section along L and U */
+    CBM_T_SET_HEAD,      /* SetHead(hx,hy,hz, ux,uy,uz): heading and up in lpfg's frame */
+    CBM_T_LINE_TO,       /* LineTo3d(x,y,z): a segment to the point, the frame kept */
+    CBM_T_LINE_REL,      /* LineRel3d(dx,dy,dz): a segment by the vector, the frame kept */
+    CBM_T_MOVE_REL,      /* MoveRel3d(dx,dy,dz): move by the vector without drawing */
+    CBM_T_ROLL_TO_VERT,  /* RollToVert: roll so that L is horizontal (-x if H is vertical) */
+    CBM_T_SCALE_CONTOUR, /* ScaleContour(p, q): widths of the section along L and U */
+    /* the turtle's scale (cpfg manual 6 and 7.2): lengths, widths and sizes are multiplied by it */
+    CBM_T_SUBLSYS_BEGIN, /* ?(id, s): a sub-L-system starts; the scale is multiplied by s */
+    CBM_T_SUBLSYS_END,   /* $: it ends; the scale returns to the caller's */
+    CBM_T_SCALE_SET,     /* @D(s): set the scale */
+    CBM_T_SCALE_MUL,     /* @Di(s): multiply the scale by s (by the view's scale multiplier) */
+    CBM_T_SCALE_DIV      /* @Dd(s): divide the scale by s (by the view's scale multiplier) */
 } cbm_tcmd;
 
 /// The command of a module symbol (name of `len` bytes, e.g. "F", "@Gs", "?P"), or CBM_T_NONE.

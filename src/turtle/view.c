@@ -37,6 +37,8 @@ static void set_defaults(cbm_view *v)
     v->color_inc = 1;
     v->step = 1.0;
     v->scale = 1.0;
+    v->init_scale = 1.0;
+    v->scale_mul = 1.0;
     v->line_style = CBM__LS_PIXEL;
     v->sides = 8;
     v->past_cut = true;
@@ -572,6 +574,12 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
         } else if (KEY("scale factor")) {
             NEED(1);
             v->scale = x[0] == 0.0 ? 1.0 : x[0];
+        } else if (KEY("initial scale")) {
+            NEED(1);
+            v->init_scale = x[0] == 0.0 ? 1.0 : (float)x[0]; /* cpfg: 0 is taken as 1 */
+        } else if (KEY("scale multiplier")) {
+            NEED(1);
+            v->scale_mul = x[0] == 0.0 ? 1.0 : (float)x[0];
         } else if (KEY("tropism direction")) {
             NEED(3);
             cbm_vec3 t = v3(x[0], x[1], x[2]);

@@ -99,14 +99,22 @@ static int info_model(const char *path)
         cbm_model_summary sm;
         cbm_model_describe(m, &sm);
         cbm_lsys *ls = cbm_model_lsys(m);
-        printf("%s: cpfg L-system model\n", path);
+        printf("%s: %s L-system model\n", path, sm.lc_dialect ? "L+C" : "cpfg");
+        if (sm.lsystems > 1)
+            printf("  L-systems: %d (the main one and %d sub-L-system%s)\n", sm.lsystems,
+                   sm.lsystems - 1, sm.lsystems == 2 ? "" : "s");
+        if (sm.lc_dialect)
+            printf("  modules declared: %zu (with the turtle's)\n", sm.modules_declared);
         printf("  productions: %zu%s\n", sm.productions, sm.stochastic ? " (stochastic)" : "");
         if (sm.decompositions)
             printf("  decomposition: %zu productions, maximum depth %d\n", sm.decompositions,
                    sm.decomposition_depth);
         if (sm.homomorphisms)
-            printf("  homomorphism: %zu productions, maximum depth %d\n", sm.homomorphisms,
+            printf("  %s: %zu productions, maximum depth %d\n",
+                   sm.lc_dialect ? "interpretation" : "homomorphism", sm.homomorphisms,
                    sm.homomorphism_depth);
+        if (sm.mechanics)
+            printf("  mechanics: a module carries a mechanical segment (mechanics:)\n");
         printf("  derivation length: %d steps\n", sm.derivation_length);
         printf("  axiom: %zu modules%s\n", cbm_lsys_module_count(ls),
                cbm_model_has_queries(m) ? ", with query modules (?P ?H ?L ?U)" : "");
