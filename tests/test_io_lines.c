@@ -3,7 +3,8 @@
  * background, the width in pixels as asked, anti-aliased edges), the depth order of crossing
  * lines in 3-D, lines and triangles in one picture, the SVG <line> elements and their order,
  * the refusal of the mesh formats, the turtle's line mode (lines instead of tubes, runs of
- * segments sharing a part), no file left by a failed write, and allocation failures. */
+ * segments sharing a part; cylinders stay tubes), the same picture with any thread count, no file
+ * left by a failed write, and allocation failures. */
 #include "io_util.h"
 
 #include "core/vecmath.h"
@@ -315,14 +316,17 @@ TEST(mesh_formats_refuse_lines_and_leave_no_file)
     test_ctx_end(ctx);
 }
 
-/* The quadratic Koch island at 2 steps through the turtle, lines or tubes. */
-static cbm_status koch(cbm_context *ctx, bool lines, cbm_scene **out)
+/* The quadratic Koch island at 2 steps through the turtle, in line mode or not, with pixel
+ * lines 2 pixels wide or (cylinder) tubes of diameter 2. */
+static cbm_status koch_style(cbm_context *ctx, bool lines, bool cylinder, cbm_scene **out)
 {
     const char *view = io_path("koch.v");
     FILE *f = fopen(view, "wb");
     if (!f)
         return CBM_E_IO;
     fputs("angle increment: 90\ninitial line width: 2 pixels\ninitial color: 1\n", f);
+    if (cylinder)
+        fputs("line style: cylinder\n", f);
     fclose(f);
     const char *sides[] = {view};
     cbm_model_def def = {cbm_lsys_def_default(), sides, 1};
@@ -348,6 +352,11 @@ static cbm_status koch(cbm_context *ctx, bool lines, cbm_scene **out)
     }
     *out = s;
     return CBM_OK;
+}
+
+static cbm_status koch(cbm_context *ctx, bool lines, cbm_scene **out)
+{
+    return koch_style(ctx, lines, false, out);
 }
 
 TEST(turtle_line_mode)
@@ -381,6 +390,14 @@ TEST(turtle_line_mode)
         CHECK(cbm_scene_bounds(tubes, &tlo, &thi));
         CHECK_NEAR(hi.x - lo.x + 2.0, thi.x - tlo.x, 1e-4);
         CHECK_NEAR(hi.y - lo.y + 2.0, thi.y - tlo.y, 1e-4);
+        /* `line style: cylinder` keeps its tubes in line mode */
+        cbm_scene *cyl = NULL;
+        CHECK_OK(koch_style(ctx, true, true, &cyl));
+        if (cyl) {
+            CHECK_EQ_INT((int)cbm_scene_line_count(cyl), 0);
+            CHECK_EQ_INT((int)cbm_scene_triangle_count(cyl), (int)(16 * n));
+        }
+        cbm_scene_destroy(cyl);
         /* cleared scenes keep their mode */
         cbm_scene_clear(lines);
         CHECK(cbm_scene_line_mode(lines));
@@ -388,6 +405,34 @@ TEST(turtle_line_mode)
     }
     cbm_scene_destroy(tubes);
     cbm_scene_destroy(lines);
+    test_ctx_end(ctx);
+}
+
+TEST(same_picture_with_any_thread_count)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *k = NULL, *m = NULL;
+    CHECK_OK(koch(ctx, true, &k));
+    CHECK_OK(mixed_scene(ctx, &m));
+    cbm_scene *scenes[2] = {k, m};
+    for (int i = 0; i < 2; i++) {
+        if (!scenes[i])
+            continue;
+        cbm_image *one = NULL, *three = NULL;
+        cbm_write_options o = cbm_write_options_default();
+        o.width = 160;
+        o.height = 120;
+        o.threads = 1;
+        CHECK_OK(cbm_render(ctx, scenes[i], &o, &one));
+        o.threads = 3;
+        CHECK_OK(cbm_render(ctx, scenes[i], &o, &three));
+        if (one && three)
+            CHECK_MSG(!memcmp(one->rgba, three->rgba, 160 * 120 * 4), "scene %d differs", i);
+        cbm_image_destroy(one);
+        cbm_image_destroy(three);
+    }
+    cbm_scene_destroy(k);
+    cbm_scene_destroy(m);
     test_ctx_end(ctx);
 }
 
