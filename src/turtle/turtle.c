@@ -116,6 +116,7 @@ struct cbm_turtle {
     int64_t node_module;  /* the module that opened the segment in progress */
     double turn_deg, turn_sin, turn_cos; /* the last explicit turn angle and its sine, cosine */
     int64_t part_module;                 /* >= 0: the module a part being emitted belongs to */
+    size_t pixel_segments;               /* segments drawn in cpfg's pixel style */
 };
 
 /* ---- lookup ---- */
@@ -292,6 +293,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->prims.len = 0;
     t->pts.len = 0;
     t->box_set = false;
+    t->pixel_segments = 0;
     t->module_index = 0;
     t->node_module = -1;
     t->part_module = -1;
@@ -434,7 +436,9 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
     }
     if (!t->scene)
         return CBM_OK;
-    if (t->view->line_style == CBM__LS_PIXEL && !t->lpfg && cbm_scene_line_mode(t->scene)) {
+    bool pixel = t->view->line_style == CBM__LS_PIXEL && !t->lpfg;
+    t->pixel_segments += pixel;
+    if (pixel && cbm_scene_line_mode(t->scene)) {
         /* a line w0 pixels wide, as cpfg draws pixel lines; a run of segments with the same
          * part data shares one part (the first segment's id), so a line costs 32 bytes */
         size_t np = cbm_scene_part_count(t->scene);
@@ -1627,6 +1631,11 @@ cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cb
 void cbm_turtle_destroy(cbm_turtle *t)
 {
     cbm__turtle_destroy(t);
+}
+
+size_t cbm_turtle_pixel_segments(const cbm_turtle *t)
+{
+    return t ? t->pixel_segments : 0;
 }
 
 size_t cbm_turtle_prim_count(const cbm_turtle *t)

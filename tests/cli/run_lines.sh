@@ -1,7 +1,7 @@
 #!/bin/bash
-# cambium run with cpfg's pixel lines: pictures alone get lines (small files, no tubes in the SVG),
-# a mesh output beside them gets tubes in every output, sizes and widths in pixels, and a failed
-# picture leaves no file.
+# cambium run with cpfg's pixel lines: pictures get lines (no tubes in the SVG, widths in pixels),
+# alone or beside a mesh output (which gets tubes), with --every too; cylinders stay tubes; a
+# failed picture leaves no file.
 set -u
 BIN=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 T=$(mktemp -d)
@@ -27,12 +27,23 @@ grep -q '<path ' "$T/a.svg" && fail "no triangles in a picture of lines"
 grep -q 'stroke-width="2"' "$T/a.svg" || fail "lines 2 pixels wide"
 command -v xmllint > /dev/null && { xmllint --noout "$T/a.svg" || fail "svg not well-formed"; }
 
-# a mesh output beside the pictures: tubes everywhere, as before
-"$BIN" run "$T/k.l" "$T/k.v" --view front --size 200 -o "$T/b.svg" -o "$T/b.obj" \
-  || fail "run with a picture and a mesh"
-grep -q '<line ' "$T/b.svg" && fail "tubes, not lines, when a mesh is asked"
-[ "$(grep -c '<path ' "$T/b.svg")" -gt 256 ] || fail "tubes in the svg"
+# a mesh output beside the pictures: tubes in the mesh, lines in the pictures (the same
+# picture as without the mesh)
+"$BIN" run "$T/k.l" "$T/k.v" --view front --size 200 -o "$T/b.svg" -o "$T/b.obj" -o "$T/b.png" \
+  || fail "run with pictures and a mesh"
 [ "$(grep -c '^f ' "$T/b.obj")" -eq $((256 * 16)) ] || fail "8-sided tubes in the obj"
+cmp -s "$T/a.svg" "$T/b.svg" || fail "the svg beside a mesh differs"
+cmp -s "$T/a.png" "$T/b.png" || fail "the png beside a mesh differs"
+# with --every, the numbered pictures and the animation too
+"$BIN" run "$T/k.l" "$T/k.v" --every 1 --size 64 -o "$T/e.svg" -o "$T/e.glb" || fail "--every"
+[ "$(grep -c '<line ' "$T/e.0002.svg")" -eq 256 ] || fail "lines in e.0002.svg"
+[ "$(grep -c '<line ' "$T/e.0000.svg")" -eq 4 ] || fail "lines in e.0000.svg"
+[ "$(head -c 4 "$T/e.glb")" = "glTF" ] || fail "animation beside numbered pictures"
+# cylinders stay tubes in pictures
+{ cat "$T/k.v"; printf 'line style: cylinder\n'; } > "$T/cyl.v"
+"$BIN" run "$T/k.l" "$T/cyl.v" --size 64 -o "$T/cyl.svg" || fail "cylinders"
+grep -q '<line ' "$T/cyl.svg" && fail "cylinders drawn as lines"
+[ "$(grep -c '<path ' "$T/cyl.svg")" -gt 256 ] || fail "cylinders as tubes"
 
 # a picture that cannot be written leaves nothing and fails with status 1
 "$BIN" run "$T/k.l" "$T/k.v" -o "$T/missing/c.png" 2> "$T/err"
