@@ -269,9 +269,12 @@ TEST(svg_lines_well_formed)
     char *t = io_read_all(path, NULL);
     CHECK(t != NULL);
     if (t) {
+        /* one group with the stroke, holding the four lines (the bottom side first: at equal
+         * depth the scene order) */
         CHECK_EQ_INT((int)io_count(t, "<line "), 4);
-        CHECK(strstr(t, "<line x1=\"5.00\" y1=\"95.00\" x2=\"95.00\" y2=\"95.00\" "
-                        "stroke=\"#000000\" stroke-width=\"2.5\"/>") != NULL);
+        CHECK_EQ_INT((int)io_count(t, "<g stroke=\"#000000\" stroke-width=\"2.5\">\n"), 1);
+        CHECK(strstr(t, "stroke-width=\"2.5\">\n<line x1=\"5.00\" y1=\"95.00\" x2=\"95.00\" "
+                        "y2=\"95.00\"/>\n") != NULL);
         CHECK(strstr(t, "stroke-linecap=\"round\"") != NULL);
         free(t);
     }

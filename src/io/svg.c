@@ -10,7 +10,8 @@
  * abutting polygons. When colouring by a quantity, the legend is an SVG gradient with text
  * labels. Lines (cpfg's pixel lines kept untessellated) are sorted with the triangles by the
  * depth of their midpoint and written as <line> elements of their width in pixels (at least 1),
- * flat-coloured with round caps, as the PNG renderer draws them. Output is well-formed XML
+ * flat-coloured with round caps, as the PNG renderer draws them; consecutive lines with the same
+ * stroke (colour, width, opacity) share a <g> that carries it. Output is well-formed XML
  * (checked with xmllint in the tests). */
 #include "writers.h"
 
@@ -202,9 +203,13 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
                 h, o->background[3]);
     }
     fprintf(f, "<g stroke-width=\"0.35\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n");
+    bool group = false; /* a group of lines with the same stroke is open */
+    char group_hex[8] = "";
+    float group_w = 0.0f, group_a = 0.0f;
     for (size_t k = 0; k < nk; k++) {
         if (keys[k].line) {
-            /* a line: flat-coloured, its width in pixels (at least 1), round ends */
+            /* a line: flat-coloured, its width in pixels (at least 1), round ends; a run of
+             * lines with the same stroke shares one group that holds it */
             const cbm_scene_line *l = &ln[keys[k].idx];
             const float *c = col + 4 * l->part;
             double x0, y0, x1, y1;
@@ -212,14 +217,25 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
             project(&cam, v3(l->p1[0], l->p1[1], l->p1[2]), &x1, &y1);
             char h[8];
             hex(c, 1.0, h);
-            fprintf(f,
-                    "<line x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\" stroke=\"%s\" "
-                    "stroke-width=\"%.3g\"",
-                    x0, y0, x1, y1, h, l->width > 1.0f ? (double)l->width : 1.0);
-            if (c[3] < 1.0f)
-                fprintf(f, " stroke-opacity=\"%.3f\"", c[3]);
-            fprintf(f, "/>\n");
+            float w = l->width > 1.0f ? l->width : 1.0f;
+            if (!group || strcmp(h, group_hex) || w != group_w || c[3] != group_a) {
+                if (group)
+                    fprintf(f, "</g>\n");
+                fprintf(f, "<g stroke=\"%s\" stroke-width=\"%.3g\"", h, (double)w);
+                if (c[3] < 1.0f)
+                    fprintf(f, " stroke-opacity=\"%.3f\"", c[3]);
+                fprintf(f, ">\n");
+                group = true;
+                memcpy(group_hex, h, sizeof h);
+                group_w = w;
+                group_a = c[3];
+            }
+            fprintf(f, "<line x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\"/>\n", x0, y0, x1, y1);
             continue;
+        }
+        if (group) {
+            fprintf(f, "</g>\n");
+            group = false;
         }
         size_t t = keys[k].idx;
         const float *c = col + 4 * tp[t];
@@ -246,6 +262,8 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
         else
             fprintf(f, "Z\" fill=\"%s\" stroke=\"%s\"/>\n", h, h);
     }
+    if (group)
+        fprintf(f, "</g>\n");
     fprintf(f, "</g>\n");
     if (leg)
         legend(f, s, o, W - legend_w, lo, hi);
