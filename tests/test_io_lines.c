@@ -126,6 +126,19 @@ TEST(square_of_four_lines)
         CHECK_NEAR(1.0 - lin(px(img, 50, 5)[0]), 0.5, 0.01);
     }
     cbm_image_destroy(img);
+    /* a line 1e30 pixels wide covers the whole picture (no overflow on the way) */
+    cbm_part red = colored(1, 0, 0);
+    CHECK_OK(cbm_scene_begin_part(s, &red, NULL));
+    CHECK_OK(cbm_scene_add_line(s, v3(0.5, 0.5, 1), v3(0.6, 0.5, 1), 1e30));
+    CHECK_OK(cbm_render(ctx, s, &o, &img));
+    if (img) {
+        CHECK_EQ_INT(px(img, 0, 0)[0], 255);
+        CHECK_EQ_INT(px(img, 0, 0)[1], 0);
+        CHECK_EQ_INT(px(img, 99, 99)[1], 0);
+    }
+    cbm_image_destroy(img);
+    cbm_scene_clear(s);
+    add_square(s, 0.25);
     /* transparent background: coverage goes to alpha */
     o.background[3] = 0.0f;
     CHECK_OK(cbm_render(ctx, s, &o, &img));

@@ -319,6 +319,14 @@ static bool line_rows(const line_xform *t, const cbm_scene_line *l, int n, float
     return *ay == *ay && *by == *by;
 }
 
+/* v clamped to [lo, hi] as an int (NaN gives lo): no float-to-int overflow for far points. */
+static int to_index(float v, int lo, int hi)
+{
+    if (!(v >= (float)lo))
+        return lo;
+    return v > (float)hi ? hi : (int)v;
+}
+
 static void draw_lines_band(const render_job *j, int band)
 {
     const cbm_scene *s = j->scene;
@@ -347,16 +355,17 @@ static void draw_lines_band(const render_job *j, int band)
             continue;
         float az = kz + a[0] * D[0] + a[1] * D[1] + a[2] * D[2];
         float bz = kz + b[0] * D[0] + b[1] * D[1] + b[2] * D[2];
-        int yb = (int)ceilf(y_lo - 0.5f), ye = (int)floorf(y_hi - 0.5f);
-        int xb = (int)ceilf(x_lo - 0.5f), xe = (int)floorf(x_hi - 0.5f);
-        yb = yb < r0 ? r0 : yb;
-        ye = ye > r1 - 1 ? r1 - 1 : ye;
-        xb = xb < 0 ? 0 : xb;
-        xe = xe > j->sw - 1 ? j->sw - 1 : xe;
+        /* first and last rows and columns, clamped so that an empty range stays empty */
+        int yb = to_index(ceilf(y_lo - 0.5f), r0, r1),
+            ye = to_index(floorf(y_hi - 0.5f), r0 - 1, r1 - 1);
+        int xb = to_index(ceilf(x_lo - 0.5f), 0, j->sw);
+        int xe = to_index(floorf(x_hi - 0.5f), -1, j->sw - 1);
+        if (yb > ye || xb > xe)
+            continue;
         float dx = bx - ax, dy = by - ay, dd = dx * dx + dy * dy;
         float inv = dd > 0 ? 1.0f / dd : 0.0f, len = sqrtf(dd), dz = bz - az;
         const float *col = j->colors + 4 * l->part;
-        if ((ye - yb + 1) * (xe - xb + 1) <= 64) {
+        if ((long long)(ye - yb + 1) * (xe - xb + 1) <= 64) {
             /* small: every sample of the box tested against the distance */
             for (int y = yb; y <= ye; y++) {
                 float py = (float)y + 0.5f - ay;
@@ -382,9 +391,8 @@ static void draw_lines_band(const render_job *j, int band)
             float lo, hi;
             if (!row_span(py, dx, dy, dd, len, r2, &lo, &hi))
                 continue;
-            int x0 = (int)ceilf(ax + lo - 0.5f), x1 = (int)floorf(ax + hi - 0.5f);
-            x0 = x0 < xb ? xb : x0;
-            x1 = x1 > xe ? xe : x1;
+            int x0 = to_index(ceilf(ax + lo - 0.5f), xb, xe + 1);
+            int x1 = to_index(floorf(ax + hi - 0.5f), xb - 1, xe);
             float t = (((float)x0 + 0.5f - ax) * dx + py * dy) * inv, dt = dx * inv;
             float *zs = j->sdepth + (size_t)y * (size_t)j->sw;
             for (int x = x0; x <= x1; x++, t += dt) {
@@ -456,7 +464,7 @@ static cbm_status bin_lines(cbm_context *ctx, render_job *j, size_t **first, uin
             float y_lo = (ay < by ? ay : by) - r, y_hi = (ay < by ? by : ay) + r;
             if (!(y_hi >= 0.0f && y_lo <= (float)j->sh))
                 continue;
-            int y0 = y_lo < 0.0f ? 0 : (int)y_lo, y1 = y_hi >= (float)j->sh ? j->sh - 1 : (int)y_hi;
+            int y0 = to_index(y_lo, 0, j->sh - 1), y1 = to_index(y_hi, 0, j->sh - 1);
             for (int b = band_of(j, y0), e = band_of(j, y1); b <= e; b++) {
                 if (pass == 0)
                     f[b]++;
