@@ -34,6 +34,7 @@ done
 "$bin" run tests/lsys/abop-1.24c.l tests/lsys/abop-1.24c.v --view front -o "$out/run-1.24c.glb" -o "$out/run-1.24c.obj" \
   -o "$out/run-1.24c.ply" -o "$out/run-1.24c.svg" -o "$out/run-1.24c.png"
 "$bin" run tests/lsys/abop-1.27.l tests/lsys/abop-1.27.v -o "$out/run-1.27.glb" -o "$out/run-1.27.obj" -o "$out/run-1.27.ply"
+"$bin" run tests/lsys/abop-2.8a.l -n 7 --color-by order -o "$out/run-lines.svg" -o "$out/run-lines.png"
 echo "== glTF validator"
 NODE_PATH="$val/node_modules" node .ci/gltf-validate.js "$out"/*.glb
 echo "== assimp"

@@ -1,10 +1,12 @@
 /* The PNG renderer: pictures of small fixed scenes compared with stored references
  * (PNG files in tests/render, tolerance below), a picture that is not blank with the plant centred
  * and filling the frame, true elliptical sections seen end-on, independence from the thread count,
- * shadows, the legend, and the PNG round trip. Set CBM_UPDATE_REFERENCES=1 to rewrite the
- * references after an intended change (then look at them). */
+ * shadows, the legend, pictures of lines (alone and with triangles), and the PNG round trip. Set
+ * CBM_UPDATE_REFERENCES=1 to rewrite the references after an intended change (then look at them).
+ */
 #include "io_util.h"
 
+#include "core/vecmath.h"
 #include "io/writers.h"
 
 /* Tolerance against a reference: mean absolute difference <= 3 levels of 255 per channel, and
@@ -104,6 +106,66 @@ TEST(reference_tree_front_stress_and_top_order)
         compare_reference(ctx, img, "tree_top_order.png");
         CHECK_EQ_INT(img->rgba[3], 0); /* transparent background */
     }
+    cbm_image_destroy(img);
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* Lines (cpfg's pixel lines): a branching figure of lines of several widths and colours in 3-D
+ * around a leaf (a polygon) and a fruit (a sphere), iso view with the ground, shadows and
+ * occlusion of the triangles; and the lines alone, seen from the front with colours by order. */
+static void add_line_figure(cbm_scene *s, bool triangles)
+{
+    cbm_part p = cbm_part_default();
+    p.order = 0;
+    p.color[0] = 0.25f, p.color[1] = 0.15f, p.color[2] = 0.05f;
+    CHECK_OK(cbm_scene_begin_part(s, &p, NULL));
+    CHECK_OK(cbm_scene_add_line(s, v3(0, 0, 0), v3(0, 0.5, 0), 5));
+    for (int k = 0; k < 5; k++) {
+        double a = 2.0 * CBM_PI * k / 5.0;
+        cbm_vec3 tip = v3(0.4 * cos(a), 0.8 + 0.1 * k, 0.4 * sin(a));
+        p.order = 1 + k % 3;
+        p.color[0] = 0.1f * (float)k, p.color[1] = 0.5f, p.color[2] = 0.2f;
+        CHECK_OK(cbm_scene_begin_part(s, &p, NULL));
+        CHECK_OK(cbm_scene_add_line(s, v3(0, 0.5, 0), tip, 3 - 0.5 * k));
+        CHECK_OK(cbm_scene_add_line(s, tip, v3_add(tip, v3(0, 0.15, 0)), 1));
+    }
+    if (!triangles)
+        return;
+    cbm_part leaf = cbm_part_default();
+    leaf.organ = CBM_ORGAN_LEAF;
+    leaf.color[0] = 0.2f, leaf.color[1] = 0.6f, leaf.color[2] = 0.15f;
+    CHECK_OK(cbm_scene_begin_part(s, &leaf, NULL));
+    cbm_vec3 q[4] = {{0, 0.6, 0}, {0.3, 0.7, 0.1}, {0.35, 0.9, 0.1}, {0.05, 0.8, 0}};
+    CHECK_OK(cbm_scene_add_polygon(s, q, 4));
+    cbm_part fruit = cbm_part_default();
+    fruit.organ = CBM_ORGAN_FRUIT;
+    fruit.color[0] = 0.8f, fruit.color[1] = 0.1f, fruit.color[2] = 0.1f;
+    CHECK_OK(cbm_scene_begin_part(s, &fruit, NULL));
+    CHECK_OK(cbm_scene_add_sphere(s, v3(-0.2, 0.45, 0.1), 0.08, 12));
+}
+
+TEST(reference_lines)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &s));
+    add_line_figure(s, true);
+    cbm_write_options o = small_opts(96, 96);
+    cbm_image *img = NULL;
+    CHECK_OK(cbm_render(ctx, s, &o, &img));
+    if (img)
+        compare_reference(ctx, img, "lines_iso.png");
+    cbm_image_destroy(img);
+    cbm_scene_clear(s);
+    add_line_figure(s, false);
+    o = small_opts(120, 96);
+    o.view = CBM_VIEW_FRONT;
+    o.color_by = CBM_COLOR_ORDER;
+    img = NULL;
+    CHECK_OK(cbm_render(ctx, s, &o, &img));
+    if (img)
+        compare_reference(ctx, img, "lines_front_order.png");
     cbm_image_destroy(img);
     cbm_scene_destroy(s);
     test_ctx_end(ctx);

@@ -5,6 +5,12 @@
  * writers colour by or keep as per-segment attributes (order, stress ratio, age, reaction wood).
  * Producers (the turtle, the built-in tree models) open a part, then add tubes (generalized
  * cylinders with elliptical sections), spheres, polygons or ready meshes to it.
+ *
+ * A scene may also hold lines: segments drawn a given number of pixels wide whatever the zoom
+ * (cpfg's `line style: pixel`), kept as two points, a width and a part (32 bytes) instead of a
+ * tessellated tube. Only the picture writers (.png, .svg) draw them; the mesh writers refuse a
+ * scene with lines. A producer draws lines only when the scene is in line mode
+ * (cbm_scene_set_line_mode), which whoever writes the outputs chooses.
  */
 #ifndef CAMBIUM_GEOM_H
 #define CAMBIUM_GEOM_H
@@ -86,6 +92,22 @@ CBM_API cbm_status cbm_scene_add_polygon(cbm_scene *scene, const cbm_vec3 *pts, 
 CBM_API cbm_status cbm_scene_add_mesh(cbm_scene *scene, const cbm_vec3 *pos, const cbm_vec3 *nrm,
                                       size_t nverts, const uint32_t *tri, size_t ntri);
 
+/// A line: two points, a width in pixels of the picture, its part.
+typedef struct cbm_scene_line {
+    float p0[3], p1[3]; ///< ends, m
+    float width;        ///< pixels (at least 1 when drawn)
+    uint32_t part;      ///< index of the part
+} cbm_scene_line;
+
+/// Line mode: producers draw their pixel lines as lines (true) or as tubes (false, the default).
+/// Set it only when every output of the scene is a picture. Kept by cbm_scene_clear.
+CBM_API void cbm_scene_set_line_mode(cbm_scene *scene, bool lines);
+CBM_API bool cbm_scene_line_mode(const cbm_scene *scene);
+/// Adds a line of `width` pixels between p0 and p1 (m) to the current part.
+CBM_API cbm_status cbm_scene_add_line(cbm_scene *scene, cbm_vec3 p0, cbm_vec3 p1, double width);
+CBM_API size_t cbm_scene_line_count(const cbm_scene *scene);
+CBM_API const cbm_scene_line *cbm_scene_lines(const cbm_scene *scene);
+
 CBM_API size_t cbm_scene_vertex_count(const cbm_scene *scene);
 CBM_API const cbm_scene_vertex *cbm_scene_vertices(const cbm_scene *scene);
 CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
@@ -97,7 +119,7 @@ CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
 CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
 /// Mutable access, e.g. to fill stress after a solve.
 CBM_API cbm_part *cbm_scene_part(cbm_scene *scene, uint32_t id);
-/// Axis-aligned bounds of all vertices; false if the scene is empty.
+/// Axis-aligned bounds of all vertices and line ends; false if the scene is empty.
 CBM_API bool cbm_scene_bounds(const cbm_scene *scene, cbm_vec3 *lo, cbm_vec3 *hi);
 
 #ifdef __cplusplus

@@ -102,6 +102,9 @@ CBM_API cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view,
                                         cbm_scene *scene, cbm_turtle **out);
 CBM_API void cbm_turtle_destroy(cbm_turtle *t);
 CBM_API size_t cbm_turtle_prim_count(const cbm_turtle *t);
+/// Segments drawn into the scene in cpfg's pixel line style (lines in a scene in line mode,
+/// tubes otherwise; lpfg's turtle draws none): when non-zero, a picture in line mode differs.
+CBM_API size_t cbm_turtle_pixel_segments(const cbm_turtle *t);
 CBM_API const cbm_prim *cbm_turtle_prims(const cbm_turtle *t);
 CBM_API const cbm_vec3 *cbm_turtle_points(const cbm_turtle *t);
 /// cpfg's view-volume box: the turtle's positions where segments end, sphere and disc extents,

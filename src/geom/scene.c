@@ -1,7 +1,8 @@
 /* The scene: an indexed triangle mesh with one part per organ instance, and the tessellation of
  * the primitives plants are made of: generalized cylinders with elliptical sections (rings of
  * `sides` vertices joined by quads, normals of the ellipse), UV spheres, polygons (ear clipping
- * after projection on the plane of Newell's normal) and ready meshes. */
+ * after projection on the plane of Newell's normal) and ready meshes. Lines (pixel-wide segments
+ * for pictures) are kept untessellated, 32 bytes each, in their own array. */
 #include "cambium/geom.h"
 
 #include "../core/core.h"
@@ -16,6 +17,8 @@ struct cbm_scene {
     CBM_ARRAY(uint32_t) tris;  /* 3 per triangle */
     CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
     CBM_ARRAY(cbm_part) parts;
+    CBM_ARRAY(cbm_scene_line) lines;
+    bool line_mode;
     /* tube in progress */
     int tube_sides;
     bool tube_caps, tube_open;
@@ -74,12 +77,13 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->tris);
     CBM_ARRAY_FREE(ctx, s->tpart);
     CBM_ARRAY_FREE(ctx, s->parts);
+    CBM_ARRAY_FREE(ctx, s->lines);
     cbm__free(ctx, s, sizeof *s);
 }
 
 void cbm_scene_clear(cbm_scene *s)
 {
-    s->verts.len = s->tris.len = s->tpart.len = s->parts.len = 0;
+    s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = 0;
     s->tube_open = false;
 }
 
@@ -409,19 +413,65 @@ cbm_part *cbm_scene_part(cbm_scene *s, uint32_t id)
     return id < s->parts.len ? &s->parts.data[id] : NULL;
 }
 
+/* ---- lines ---- */
+
+void cbm_scene_set_line_mode(cbm_scene *s, bool lines)
+{
+    if (s)
+        s->line_mode = lines;
+}
+
+bool cbm_scene_line_mode(const cbm_scene *s)
+{
+    return s && s->line_mode;
+}
+
+cbm_status cbm_scene_add_line(cbm_scene *s, cbm_vec3 p0, cbm_vec3 p1, double width)
+{
+    if (!s || !(width >= 0.0) || !isfinite(width))
+        return CBM_E_INVALID;
+    if (s->lines.len >= UINT32_MAX)
+        return CBM_E_LIMIT;
+    CBM_TRY(ensure_part(s));
+    cbm_scene_line l = {{(float)p0.x, (float)p0.y, (float)p0.z},
+                        {(float)p1.x, (float)p1.y, (float)p1.z},
+                        (float)width,
+                        (uint32_t)(s->parts.len - 1)};
+    return CBM_ARRAY_PUSH(s->ctx, s->lines, l);
+}
+
+size_t cbm_scene_line_count(const cbm_scene *s)
+{
+    return s->lines.len;
+}
+
+const cbm_scene_line *cbm_scene_lines(const cbm_scene *s)
+{
+    return s->lines.data;
+}
+
+static void grow_bounds(const float *p, double l[3], double h[3])
+{
+    for (int k = 0; k < 3; k++) {
+        double v = p[k];
+        if (v < l[k])
+            l[k] = v;
+        if (v > h[k])
+            h[k] = v;
+    }
+}
+
 bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
 {
-    if (s->verts.len == 0)
+    if (s->verts.len == 0 && s->lines.len == 0)
         return false;
     double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (size_t i = 0; i < s->verts.len; i++)
-        for (int k = 0; k < 3; k++) {
-            double v = s->verts.data[i].p[k];
-            if (v < l[k])
-                l[k] = v;
-            if (v > h[k])
-                h[k] = v;
-        }
+        grow_bounds(s->verts.data[i].p, l, h);
+    for (size_t i = 0; i < s->lines.len; i++) {
+        grow_bounds(s->lines.data[i].p0, l, h);
+        grow_bounds(s->lines.data[i].p1, l, h);
+    }
     if (lo)
         *lo = v3(l[0], l[1], l[2]);
     if (hi)

@@ -8,7 +8,11 @@
  * with the PNG's sun direction: colour = albedo * (0.38 + 0.7 max(0, n.s)), written as display
  * sRGB; a thin stroke of the same colour hides the hairline seams renderers leave between
  * abutting polygons. When colouring by a quantity, the legend is an SVG gradient with text
- * labels. Output is well-formed XML (checked with xmllint in the tests). */
+ * labels. Lines (cpfg's pixel lines kept untessellated) are sorted with the triangles by the
+ * depth of their midpoint and written as <line> elements of their width in pixels (at least 1),
+ * flat-coloured with round caps, as the PNG renderer draws them; consecutive lines with the same
+ * stroke (colour, width, opacity) share a <g> that carries it. Output is well-formed XML
+ * (checked with xmllint in the tests). */
 #include "writers.h"
 
 #include "cambium/io.h"
@@ -21,7 +25,8 @@
 
 typedef struct sort_key {
     double depth;
-    uint32_t tri;
+    uint32_t idx;  /* triangle or line */
+    uint32_t line; /* 1 for a line */
 } sort_key;
 
 static int far_first(const void *a, const void *b)
@@ -29,7 +34,16 @@ static int far_first(const void *a, const void *b)
     const sort_key *x = a, *y = b;
     if (x->depth != y->depth)
         return x->depth > y->depth ? -1 : 1;
-    return x->tri < y->tri ? -1 : x->tri > y->tri;
+    if (x->line != y->line)
+        return x->line < y->line ? -1 : 1;
+    return x->idx < y->idx ? -1 : x->idx > y->idx;
+}
+
+static void project(const cbm__camera *cam, cbm_vec3 p, double *x, double *y)
+{
+    cbm_vec3 d = v3_sub(p, cam->center);
+    *x = cam->cx + v3_dot(d, cam->right) * cam->scale;
+    *y = cam->cy - v3_dot(d, cam->up) * cam->scale;
 }
 
 static void hex(const float rgb[3], double light, char out[8])
@@ -110,6 +124,8 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
     if (legend_w > W / 2)
         legend_w = 0, leg = false;
     size_t np = cbm_scene_part_count(s), nt = cbm_scene_triangle_count(s);
+    size_t nl = cbm_scene_line_count(s), nkeys = nt + nl;
+    const cbm_scene_line *ln = cbm_scene_lines(s);
     const cbm_part *parts = cbm_scene_parts(s);
     const cbm_scene_vertex *v = cbm_scene_vertices(s);
     const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
@@ -118,7 +134,7 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
     cbm_status st = cbm__part_colors(ctx, s, o, &col, &lo, &hi);
     if (st != CBM_OK)
         return st;
-    sort_key *keys = cbm__alloc(ctx, (nt ? nt : 1) * sizeof *keys);
+    sort_key *keys = cbm__alloc(ctx, (nkeys ? nkeys : 1) * sizeof *keys);
     cbm_out *out = NULL;
     if (!keys) {
         st = CBM_E_NOMEM;
@@ -148,11 +164,24 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
                 }
                 cbm_vec3 m = v3_scale(v3_add(vpos(a), v3_add(vpos(b), vpos(c))), 1.0 / 3.0);
                 keys[nk].depth = v3_dot(m, cam.dir);
-                keys[nk].tri = (uint32_t)t;
+                keys[nk].idx = (uint32_t)t;
+                keys[nk].line = 0;
                 nk++;
                 if (pass == 0)
                     nground++;
             }
+        /* lines, keyed by their midpoint's depth */
+        for (size_t i = 0; i < nl; i++) {
+            if (!cbm__part_kept(&parts[ln[i].part], o))
+                continue;
+            const float *a = ln[i].p0, *b = ln[i].p1;
+            cbm_vec3 m = v3(0.5 * ((double)a[0] + b[0]), 0.5 * ((double)a[1] + b[1]),
+                            0.5 * ((double)a[2] + b[2]));
+            keys[nk].depth = v3_dot(m, cam.dir);
+            keys[nk].idx = (uint32_t)i;
+            keys[nk].line = 1;
+            nk++;
+        }
         qsort(keys + nground, nk - nground, sizeof *keys, far_first);
     }
     if ((st = cbm_out_open(ctx, path, &out)) != CBM_OK)
@@ -173,9 +202,42 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
         fprintf(f, "<rect width=\"100%%\" height=\"100%%\" fill=\"%s\" fill-opacity=\"%.3f\"/>\n",
                 h, o->background[3]);
     }
-    fprintf(f, "<g stroke-width=\"0.35\" stroke-linejoin=\"round\">\n");
+    fprintf(f, "<g stroke-width=\"0.35\" stroke-linejoin=\"round\" stroke-linecap=\"round\">\n");
+    bool group = false; /* a group of lines with the same stroke is open */
+    char group_hex[8] = "";
+    float group_w = 0.0f, group_a = 0.0f;
     for (size_t k = 0; k < nk; k++) {
-        size_t t = keys[k].tri;
+        if (keys[k].line) {
+            /* a line: flat-coloured, its width in pixels (at least 1), round ends; a run of
+             * lines with the same stroke shares one group that holds it */
+            const cbm_scene_line *l = &ln[keys[k].idx];
+            const float *c = col + 4 * l->part;
+            double x0, y0, x1, y1;
+            project(&cam, v3(l->p0[0], l->p0[1], l->p0[2]), &x0, &y0);
+            project(&cam, v3(l->p1[0], l->p1[1], l->p1[2]), &x1, &y1);
+            char h[8];
+            hex(c, 1.0, h);
+            float w = l->width > 1.0f ? l->width : 1.0f;
+            if (!group || strcmp(h, group_hex) || w != group_w || c[3] != group_a) {
+                if (group)
+                    fprintf(f, "</g>\n");
+                fprintf(f, "<g stroke=\"%s\" stroke-width=\"%.3g\"", h, (double)w);
+                if (c[3] < 1.0f)
+                    fprintf(f, " stroke-opacity=\"%.3f\"", c[3]);
+                fprintf(f, ">\n");
+                group = true;
+                memcpy(group_hex, h, sizeof h);
+                group_w = w;
+                group_a = c[3];
+            }
+            fprintf(f, "<line x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\"/>\n", x0, y0, x1, y1);
+            continue;
+        }
+        if (group) {
+            fprintf(f, "</g>\n");
+            group = false;
+        }
+        size_t t = keys[k].idx;
         const float *c = col + 4 * tp[t];
         cbm_vec3 P[3];
         for (int q = 0; q < 3; q++)
@@ -191,9 +253,8 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
         hex(c, light, h);
         fprintf(f, "<path d=\"");
         for (int q = 0; q < 3; q++) {
-            cbm_vec3 d = v3_sub(P[q], cam.center);
-            double x = cam.cx + v3_dot(d, cam.right) * cam.scale;
-            double y = cam.cy - v3_dot(d, cam.up) * cam.scale;
+            double x, y;
+            project(&cam, P[q], &x, &y);
             fprintf(f, "%c%.2f %.2f", q ? 'L' : 'M', x, y);
         }
         if (c[3] < 1.0f)
@@ -201,6 +262,8 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
         else
             fprintf(f, "Z\" fill=\"%s\" stroke=\"%s\"/>\n", h, h);
     }
+    if (group)
+        fprintf(f, "</g>\n");
     fprintf(f, "</g>\n");
     if (leg)
         legend(f, s, o, W - legend_w, lo, hi);
@@ -210,6 +273,6 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
 done:
     cbm_out_abort(out);
     cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
-    cbm__free(ctx, keys, (nt ? nt : 1) * sizeof *keys);
+    cbm__free(ctx, keys, (nkeys ? nkeys : 1) * sizeof *keys);
     return st;
 }

@@ -1,6 +1,6 @@
 /* Writers' common ground: default options, dispatch by extension, the orthographic camera fitted
- * to a scene (projection of every kept vertex on the view plane, bounding box scaled to a
- * fraction of the picture), colour modes and their maps, and a 5x7 bitmap font for the legends
+ * to a scene (projection of every kept vertex and line end on the view plane, bounding box scaled
+ * to a fraction of the picture), colour modes and their maps, and a 5x7 bitmap font for the legends
  * of pictures.
  *
  * Colour maps: stress ratio goes from blue (0) through yellow to red (1, the modulus of rupture
@@ -54,6 +54,12 @@ cbm_status cbm_scene_write_as(cbm_context *ctx, const cbm_scene *scene, const ch
     cbm_write_options def = cbm_write_options_default();
     if (!opts)
         opts = &def;
+    bool picture = same_ci(format, "png") || same_ci(format, "svg");
+    if (scene && !picture && cbm_scene_line_count(scene) > 0)
+        return cbm__fail(ctx, CBM_E_UNSUPPORTED,
+                         "%s: the scene holds %zu pixel lines, which only pictures (.png .svg) "
+                         "draw; interpret the model with line mode off for a mesh",
+                         path, cbm_scene_line_count(scene));
     if (same_ci(format, "glb"))
         return cbm_write_glb(ctx, scene, path, opts);
     if (!scene && opts->frame_count > 0 && opts->frames)
@@ -138,6 +144,18 @@ cbm_vec3 cbm__view_direction(const cbm_write_options *o)
     return v3_normalize(d);
 }
 
+static bool fit_point(const float *q, cbm_vec3 right, cbm_vec3 up, cbm_vec3 d, double lo[3],
+                      double hi[3])
+{
+    cbm_vec3 pt = v3(q[0], q[1], q[2]);
+    double c[3] = {v3_dot(pt, right), v3_dot(pt, up), v3_dot(pt, d)};
+    for (int a = 0; a < 3; a++) {
+        lo[a] = fmin(lo[a], c[a]);
+        hi[a] = fmax(hi[a], c[a]);
+    }
+    return true;
+}
+
 bool cbm__camera_fit(cbm__camera *cam, const cbm_scene *s, const cbm_write_options *o, double w,
                      double h, double cx, double cy, double fill)
 {
@@ -157,22 +175,24 @@ bool cbm__camera_fit(cbm__camera *cam, const cbm_scene *s, const cbm_write_optio
     size_t nt = cbm_scene_triangle_count(s);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     bool any = false;
+    const cbm_scene_line *ln = cbm_scene_lines(s);
+    size_t nl = cbm_scene_line_count(s);
     for (int pass = 0; pass < 2 && !any; pass++) {
+        /* fit on the plant; on the ground only when there is nothing else */
         for (size_t t = 0; t < nt; t++) {
             const cbm_part *p = &parts[tp[t]];
-            /* fit on the plant; on the ground only when there is nothing else */
             if (!cbm__part_kept(p, o) || (pass == 0 && p->organ == CBM_ORGAN_GROUND))
                 continue;
-            for (int k = 0; k < 3; k++) {
-                const float *q = v[tri[3 * t + (size_t)k]].p;
-                cbm_vec3 pt = v3(q[0], q[1], q[2]);
-                double c[3] = {v3_dot(pt, right), v3_dot(pt, up), v3_dot(pt, d)};
-                for (int a = 0; a < 3; a++) {
-                    lo[a] = fmin(lo[a], c[a]);
-                    hi[a] = fmax(hi[a], c[a]);
-                }
-                any = true;
-            }
+            for (int k = 0; k < 3; k++)
+                any |= fit_point(v[tri[3 * t + (size_t)k]].p, right, up, d, lo, hi);
+        }
+        /* lines: their ends (their width in pixels is left to the margin) */
+        for (size_t i = 0; i < nl; i++) {
+            const cbm_part *p = &parts[ln[i].part];
+            if (!cbm__part_kept(p, o) || (pass == 0 && p->organ == CBM_ORGAN_GROUND))
+                continue;
+            any |= fit_point(ln[i].p0, right, up, d, lo, hi);
+            any |= fit_point(ln[i].p1, right, up, d, lo, hi);
         }
     }
     if (!any)

@@ -33,7 +33,9 @@
  * multiplies it by s on a stack of its own and returns to the caller's scale at `$`, the current
  * width following the ratio of the two scales (cpfg's UpdateCurrentLsystem).
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
- * Interpretation is linear in the number of modules, with no allocation per module beyond the
+ * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the
+ * start width in pixels (cpfg's pixel lines) and consecutive lines with equal part data share one
+ * part. Interpretation is linear in the number of modules, with no allocation per module beyond the
  * amortised growth of the output arrays and the branch stack.
  */
 #include "tint.h"
@@ -114,6 +116,7 @@ struct cbm_turtle {
     int64_t node_module;  /* the module that opened the segment in progress */
     double turn_deg, turn_sin, turn_cos; /* the last explicit turn angle and its sine, cosine */
     int64_t part_module;                 /* >= 0: the module a part being emitted belongs to */
+    size_t pixel_segments;               /* segments drawn in cpfg's pixel style */
 };
 
 /* ---- lookup ---- */
@@ -290,6 +293,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->prims.len = 0;
     t->pts.len = 0;
     t->box_set = false;
+    t->pixel_segments = 0;
     t->module_index = 0;
     t->node_module = -1;
     t->part_module = -1;
@@ -332,6 +336,17 @@ static cbm_part make_part(const cbm_turtle *t, cbm_organ organ, int color)
     for (int i = 0; i < 4; i++)
         p.color[i] = t->view->colors[c][i];
     return p;
+}
+
+/* Whether the part make_part(t, CBM_ORGAN_BRANCH, color) would build equals `last` but for its
+ * segment and parent ids (then a line joins `last`). */
+static bool line_part_reused(const cbm_turtle *t, const cbm_part *last, int color)
+{
+    return last->organ == CBM_ORGAN_BRANCH && last->order == (int32_t)t->stack.len &&
+           last->material == color &&
+           memcmp(last->color, t->view->colors[color & 255], sizeof last->color) == 0 &&
+           isnan(last->stress_ratio) && isnan(last->stress) && isnan(last->age) &&
+           isnan(last->reaction_wood);
 }
 
 static cbm_status push_prim(cbm_turtle *t, const cbm_prim *p)
@@ -407,18 +422,33 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
         return CBM_OK;
     cbm_prim pr;
     memset(&pr, 0, sizeof pr);
-    pr.kind = CBM_PRIM_CYLINDER;
-    pr.color = color;
-    pr.p0 = p0;
-    pr.p1 = p1;
     pr.r0 = w0 / 2.0;
     pr.r1 = w1 / 2.0;
-    pr.frame.h = h;
-    pr.frame.u = u;
-    pr.frame.l = v3_cross(h, u);
-    CBM_TRY(push_prim(t, &pr));
+    if (t->record) {
+        pr.kind = CBM_PRIM_CYLINDER;
+        pr.color = color;
+        pr.p0 = p0;
+        pr.p1 = p1;
+        pr.frame.h = h;
+        pr.frame.u = u;
+        pr.frame.l = v3_cross(h, u);
+        CBM_TRY(push_prim(t, &pr));
+    }
     if (!t->scene)
         return CBM_OK;
+    bool pixel = t->view->line_style == CBM__LS_PIXEL && !t->lpfg;
+    t->pixel_segments += pixel;
+    if (pixel && cbm_scene_line_mode(t->scene)) {
+        /* a line w0 pixels wide, as cpfg draws pixel lines; a run of segments with the same
+         * part data shares one part (the first segment's id), so a line costs 32 bytes */
+        size_t np = cbm_scene_part_count(t->scene);
+        const cbm_part *last = np ? &cbm_scene_parts(t->scene)[np - 1] : NULL;
+        if (!last || !line_part_reused(t, last, color)) {
+            cbm_part part = make_part(t, CBM_ORGAN_BRANCH, color);
+            CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+        }
+        return cbm_scene_add_line(t->scene, p0, p1, w0 > 0.0 ? w0 : w1);
+    }
     cbm_part part = make_part(t, CBM_ORGAN_BRANCH, color);
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     cbm_vec3 dir = v3_normalize(d);
@@ -1601,6 +1631,11 @@ cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cb
 void cbm_turtle_destroy(cbm_turtle *t)
 {
     cbm__turtle_destroy(t);
+}
+
+size_t cbm_turtle_pixel_segments(const cbm_turtle *t)
+{
+    return t ? t->pixel_segments : 0;
 }
 
 size_t cbm_turtle_prim_count(const cbm_turtle *t)

@@ -13,7 +13,10 @@
  * except .glb, which becomes one animation with a frame per K steps. Without -o it derives,
  * interprets and prints a one-line summary. When a limit stops the derivation, the outputs of
  * the last complete step are written and the exit status is 1; any other error writes nothing
- * more (every file goes through cbm_out: complete or absent).
+ * more (every file goes through cbm_out: complete or absent). Pictures (.png .svg) draw cpfg's
+ * pixel lines as lines, not tubes: when every scene output is a picture the scene is in line
+ * mode; when meshes are asked too, the scene keeps tubes for them and a step with pixel lines
+ * is interpreted a second time into a scene in line mode for the pictures.
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cli_output.h"
@@ -158,6 +161,10 @@ typedef struct run {
     int ntargets;
     bool need_scene, need_json;
     cbm_scene *scene; /* the scene of the current step, when a scene output asks */
+    /* pictures beside mesh outputs: the same step in line mode when it has pixel lines */
+    bool want_lines;
+    cbm_scene *line_scene;
+    bool line_scene_valid;
     cbm_json *json;
     int interpreted_step; /* step whose interpretation the scene holds, -1: none */
     size_t prims;         /* primitives of the last interpretation (with json) */
@@ -181,7 +188,26 @@ static cbm_status interpret(run *r, int step)
         return s;
     r->prims = cbm_turtle_prim_count(t);
     r->has_box = cbm_turtle_box(t, &r->lo, &r->hi);
+    size_t pixel = cbm_turtle_pixel_segments(t);
     cbm_turtle_destroy(t);
+    /* pictures beside meshes: a second pass in line mode when the step has pixel lines (the
+     * meshes keep the tubes of the first) */
+    r->line_scene_valid = false;
+    if (r->want_lines && pixel > 0) {
+        if (!r->line_scene) {
+            if ((s = cbm_scene_create(r->ctx, &r->line_scene)) != CBM_OK)
+                return s;
+            cbm_scene_set_line_mode(r->line_scene, true);
+        }
+        cbm_scene_clear(r->line_scene);
+        if ((s = cbm_model_interpret(r->model, r->line_scene, false, NULL)) != CBM_OK)
+            return s;
+        r->line_scene_valid = true;
+    } else if (r->line_scene) {
+        /* no lines in this step: release the previous step's */
+        cbm_scene_destroy(r->line_scene);
+        r->line_scene = NULL;
+    }
     r->interpreted_step = step;
     r->t_interpret += cli_seconds() - t0;
     return CBM_OK;
@@ -294,8 +320,11 @@ static int write_outputs(run *r, int what, int done)
             s = write_str(r, path);
         else if (is_plant_format(t->format))
             s = write_plant(r, path, t->format);
-        else
-            s = cbm_scene_write_as(r->ctx, r->scene, path, t->format, &r->wopt);
+        else {
+            bool picture = !strcmp(t->format, "png") || !strcmp(t->format, "svg");
+            const cbm_scene *sc = picture && r->line_scene_valid ? r->line_scene : r->scene;
+            s = cbm_scene_write_as(r->ctx, sc, path, t->format, &r->wopt);
+        }
         if (s != CBM_OK)
             rc = run_fail(r, s, path);
         free(numbered);
@@ -508,8 +537,23 @@ int cmd_run(int argc, char **argv)
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");
     }
+    /* pixel lines stay lines (32 bytes each, rasterised) when every scene output is a picture;
+     * with a mesh output too, the scene has tubes for the meshes and the pictures get a second
+     * scene in line mode (interpret) */
+    bool pictures = false, meshes = false;
+    for (int k = 0; k < ntargets; k++) {
+        if (!is_scene_format(targets[k].format))
+            continue;
+        if (!strcmp(targets[k].format, "png") || !strcmp(targets[k].format, "svg"))
+            pictures = true;
+        else
+            meshes = true;
+    }
+    r.want_lines = pictures && meshes;
     if (r.need_scene)
         s = cbm_scene_create(ctx, &r.scene);
+    if (s == CBM_OK && pictures && !meshes)
+        cbm_scene_set_line_mode(r.scene, true);
     if (s == CBM_OK && r.need_json)
         s = cbm_json_create(ctx, &r.json);
     for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
@@ -595,6 +639,7 @@ done:
         cbm_animation_destroy(targets[k].anim);
     cbm_json_destroy(r.json);
     cbm_scene_destroy(r.scene);
+    cbm_scene_destroy(r.line_scene);
     cbm_model_destroy(r.model);
     cli_context_end(ctx);
     return rc;

@@ -15,6 +15,13 @@
  * atomic counter. The legend (colour bar with its range, or one swatch per branch order) is
  * drawn in a strip on the right with a 5x7 bitmap font.
  *
+ * Lines (cpfg's pixel lines, kept untessellated in the scene) are rasterised, not ray cast: when
+ * the scene has lines, every sample of an n x n grid per pixel keeps a depth and a colour; the
+ * triangles' samples are stored there, then each line is drawn into the grid with a depth test
+ * (draw_lines_band; the lines are first sorted into bands of sample rows, which the threads
+ * take in turn), and the samples are averaged per pixel. Pictures of lines alone take at
+ * least 3 x 3 samples per pixel (LINE_SAMPLES). The camera, background and legend are the same.
+ *
  * Embree's own allocations are watched by its memory monitor, which refuses them when the
  * context's byte limit would be exceeded. */
 #define _POSIX_C_SOURCE 200809L
@@ -29,7 +36,8 @@
 #include <stdio.h>
 #include <unistd.h>
 
-#define MAX_THREADS 64
+#define MAX_THREADS  64
+#define LINE_SAMPLES 3 /* least samples per pixel side in a picture of lines alone */
 
 typedef struct render_job {
     const cbm_scene *scene;
@@ -46,6 +54,15 @@ typedef struct render_job {
     int width, height, ss, ao_rays;
     float *accum; /* width * height * 4, linear premultiplied */
     atomic_int next_row;
+    /* with lines: one sample grid (ss x ss per pixel) of depths and linear colours that the
+     * triangles' samples fill first and the lines are depth-tested into */
+    float *sdepth;              /* sw * sh, m along dir from the camera centre; INFINITY: empty */
+    float *scolor;              /* sw * sh * 3 */
+    int sw, sh;                 /* sample grid size */
+    int line_bands;             /* bands of sample rows the lines are drawn in */
+    const size_t *band_first;   /* line_bands + 1 offsets into band_lines */
+    const uint32_t *band_lines; /* the lines touching each band, in scene order */
+    atomic_int next_band;
 } render_job;
 
 typedef struct mem_watch {
@@ -103,8 +120,10 @@ static bool occluded(const render_job *j, cbm_vec3 org, cbm_vec3 dir, double dis
     return r.tfar < 0.0f;
 }
 
-/* One sample: linear RGB and coverage (1 if something was hit). */
-static void shade_sample(const render_job *j, double px, double py, uint64_t seed, float out[4])
+/* One sample: linear RGB and coverage (1 if something was hit), and its depth along the view
+ * direction from the camera centre (INFINITY when nothing was hit). */
+static void shade_sample(const render_job *j, double px, double py, uint64_t seed, float out[4],
+                         float *depth)
 {
     const cbm__camera *c = &j->cam;
     double x = (px - c->cx) / c->scale, y = (c->cy - py) / c->scale;
@@ -117,10 +136,12 @@ static void shade_sample(const render_job *j, double px, double py, uint64_t see
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(j->rs, &ic, &rh);
+    *depth = INFINITY;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         out[0] = out[1] = out[2] = out[3] = 0.0f;
         return;
     }
+    *depth = (float)(rh.ray.tfar - j->back);
     cbm_vec3 p = v3_madd(org, c->dir, rh.ray.tfar);
     cbm_vec3 ng = v3_normalize(v3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z));
     cbm_vec3 n;
@@ -190,17 +211,322 @@ static void *render_rows(void *arg)
                 for (int sx = 0; sx < ss; sx++) {
                     uint64_t seed = (((uint64_t)y * (uint64_t)j->width + (uint64_t)x) * 16u +
                                      (uint64_t)(sy * ss + sx));
-                    float s[4];
-                    shade_sample(j, x + (sx + 0.5) / ss, y + (sy + 0.5) / ss, seed, s);
+                    float s[4], depth;
+                    shade_sample(j, x + (sx + 0.5) / ss, y + (sy + 0.5) / ss, seed, s, &depth);
+                    if (j->sdepth) {
+                        size_t q = (size_t)(y * ss + sy) * (size_t)j->sw + (size_t)(x * ss + sx);
+                        j->sdepth[q] = depth;
+                        memcpy(j->scolor + 3 * q, s, 3 * sizeof(float));
+                        continue;
+                    }
                     for (int k = 0; k < 4; k++)
                         acc[k] += s[k];
                 }
+            if (j->sdepth)
+                continue;
             float *a = j->accum + 4 * ((size_t)y * (size_t)j->width + (size_t)x);
             for (int k = 0; k < 4; k++)
                 a[k] = acc[k] / (float)(ss * ss);
         }
     }
     return NULL;
+}
+
+/* ---- lines ----
+ * A line is the set of points within width / 2 pixels of its projected segment (round ends, so
+ * the segments of a polyline join without gaps), at least one pixel wide, flat-coloured with its
+ * part's colour as cpfg draws pixel lines. Its depth is interpolated along the segment. It is
+ * scanned row by row of samples over the exact span of the row (row_span); a small one
+ * (at most 64 samples in its box) by testing each sample of its box. Every
+ * sample of the grid inside it takes its colour when the line is nearer than what the sample
+ * holds (a triangle or another line; on equal depth the line wins over a triangle and the
+ * earlier line over a later one). Coverage of a pixel is the fraction of its samples covered:
+ * anti-aliased edges. The lines are sorted (stably) into bands of sample rows; threads take the
+ * bands in turn and draw each band's lines in scene order clipped to it, so the picture is the
+ * same with any thread count. */
+/* The interval of x (relative to the line's start a) covered on a row at height py (relative to
+ * a) by the capsule of radius sqrt(r2) around the segment from a to a + (dx, dy) of squared
+ * length dd and length len: the hull of the two end discs' chords and the slab's interval (the
+ * capsule is convex, so their union is one interval). False if the row misses it. */
+static bool row_span(float py, float dx, float dy, float dd, float len, float r2, float *lo,
+                     float *hi)
+{
+    float l = INFINITY, h = -INFINITY;
+    if (py * py <= r2) {
+        float c = sqrtf(r2 - py * py);
+        l = -c;
+        h = c;
+    }
+    float qy = py - dy;
+    if (qy * qy <= r2) {
+        float c = sqrtf(r2 - qy * qy);
+        l = fminf(l, dx - c);
+        h = fmaxf(h, dx + c);
+    }
+    if (dd > 0) {
+        /* 0 <= (p - a).d <= dd and |d x (p - a)| <= r len, each linear in x */
+        float sl = -INFINITY, sh = INFINITY, rl = sqrtf(r2) * len;
+        const float coef[2] = {dx, -dy};
+        const float bl[2] = {-py * dy, -dx * py - rl}, bh[2] = {dd - py * dy, -dx * py + rl};
+        bool empty = false;
+        for (int k = 0; k < 2 && !empty; k++) {
+            if (coef[k] == 0.0f) {
+                empty = !(bl[k] <= 0.0f && 0.0f <= bh[k]);
+                continue;
+            }
+            float u = bl[k] / coef[k], v = bh[k] / coef[k];
+            sl = fmaxf(sl, fminf(u, v));
+            sh = fminf(sh, fmaxf(u, v));
+        }
+        if (!empty && sl <= sh) {
+            l = fminf(l, sl);
+            h = fmaxf(h, sh);
+        }
+    }
+    *lo = l;
+    *hi = h;
+    return l <= h;
+}
+
+/* Sample-grid coordinates, affine in the point: x = p.R + kx, y = ky - p.U, z = p.D + kz;
+ * sample (x, y) has its centre at (x + 0.5, y + 0.5). */
+typedef struct line_xform {
+    float R[3], U[3], D[3], kx, ky, kz;
+} line_xform;
+
+static line_xform line_transform(const render_job *j)
+{
+    const cbm__camera *c = &j->cam;
+    int n = j->ss;
+    double sc = c->scale * n;
+    line_xform t = {{(float)(c->right.x * sc), (float)(c->right.y * sc), (float)(c->right.z * sc)},
+                    {(float)(c->up.x * sc), (float)(c->up.y * sc), (float)(c->up.z * sc)},
+                    {(float)c->dir.x, (float)c->dir.y, (float)c->dir.z},
+                    (float)(c->cx * n - v3_dot(c->center, c->right) * sc),
+                    (float)(c->cy * n + v3_dot(c->center, c->up) * sc),
+                    (float)(-v3_dot(c->center, c->dir) - j->eps)}; /* lines win ties */
+    return t;
+}
+
+/* The rows of samples a line may cover (its box, before clipping): false if none or NaN. */
+static bool line_rows(const line_xform *t, const cbm_scene_line *l, int n, float *ay, float *by,
+                      float *r)
+{
+    const float *a = l->p0, *b = l->p1;
+    *ay = t->ky - (a[0] * t->U[0] + a[1] * t->U[1] + a[2] * t->U[2]);
+    *by = t->ky - (b[0] * t->U[0] + b[1] * t->U[1] + b[2] * t->U[2]);
+    *r = 0.5f * (l->width > 1.0f ? l->width : 1.0f) * (float)n;
+    return *ay == *ay && *by == *by;
+}
+
+/* v clamped to [lo, hi] as an int (NaN gives lo): no float-to-int overflow for far points. */
+static int to_index(float v, int lo, int hi)
+{
+    if (!(v >= (float)lo))
+        return lo;
+    return v > (float)hi ? hi : (int)v;
+}
+
+static void draw_lines_band(const render_job *j, int band)
+{
+    const cbm_scene *s = j->scene;
+    const cbm_scene_line *ln = cbm_scene_lines(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    int n = j->ss;
+    int r0 = (int)((long long)j->sh * band / j->line_bands);
+    int r1 = (int)((long long)j->sh * (band + 1) / j->line_bands);
+    line_xform tf = line_transform(j);
+    const float *R = tf.R, *D = tf.D, kx = tf.kx, kz = tf.kz;
+    const float fr0 = (float)r0, fr1 = (float)r1, fsw = (float)j->sw;
+    for (size_t k = j->band_first[band]; k < j->band_first[band + 1]; k++) {
+        const cbm_scene_line *l = &ln[j->band_lines[k]];
+        const float *a = l->p0, *b = l->p1;
+        float ay, by, r;
+        if (!line_rows(&tf, l, n, &ay, &by, &r))
+            continue;
+        float r2 = r * r;
+        float y_lo = (ay < by ? ay : by) - r, y_hi = (ay < by ? by : ay) + r;
+        if (!(y_hi >= fr0 && y_lo <= fr1)) /* outside the band */
+            continue;
+        float ax = kx + a[0] * R[0] + a[1] * R[1] + a[2] * R[2];
+        float bx = kx + b[0] * R[0] + b[1] * R[1] + b[2] * R[2];
+        float x_lo = (ax < bx ? ax : bx) - r, x_hi = (ax < bx ? bx : ax) + r;
+        if (!(x_hi >= 0.0f && x_lo <= fsw) || !cbm__part_kept(&parts[l->part], j->o))
+            continue;
+        float az = kz + a[0] * D[0] + a[1] * D[1] + a[2] * D[2];
+        float bz = kz + b[0] * D[0] + b[1] * D[1] + b[2] * D[2];
+        /* first and last rows and columns, clamped so that an empty range stays empty */
+        int yb = to_index(ceilf(y_lo - 0.5f), r0, r1),
+            ye = to_index(floorf(y_hi - 0.5f), r0 - 1, r1 - 1);
+        int xb = to_index(ceilf(x_lo - 0.5f), 0, j->sw);
+        int xe = to_index(floorf(x_hi - 0.5f), -1, j->sw - 1);
+        if (yb > ye || xb > xe)
+            continue;
+        float dx = bx - ax, dy = by - ay, dd = dx * dx + dy * dy;
+        float inv = dd > 0 ? 1.0f / dd : 0.0f, len = sqrtf(dd), dz = bz - az;
+        const float *col = j->colors + 4 * l->part;
+        if ((long long)(ye - yb + 1) * (xe - xb + 1) <= 64) {
+            /* small: every sample of the box tested against the distance */
+            for (int y = yb; y <= ye; y++) {
+                float py = (float)y + 0.5f - ay;
+                for (int x = xb; x <= xe; x++) {
+                    float px = (float)x + 0.5f - ax;
+                    float t = (px * dx + py * dy) * inv;
+                    t = t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
+                    float ex = px - t * dx, ey = py - t * dy;
+                    if (ex * ex + ey * ey > r2)
+                        continue;
+                    size_t q = (size_t)y * (size_t)j->sw + (size_t)x;
+                    float z = az + t * dz;
+                    if (z < j->sdepth[q]) {
+                        j->sdepth[q] = z;
+                        memcpy(j->scolor + 3 * q, col, 3 * sizeof(float));
+                    }
+                }
+            }
+            continue;
+        }
+        for (int y = yb; y <= ye; y++) {
+            float py = (float)y + 0.5f - ay;
+            float lo, hi;
+            if (!row_span(py, dx, dy, dd, len, r2, &lo, &hi))
+                continue;
+            int x0 = to_index(ceilf(ax + lo - 0.5f), xb, xe + 1);
+            int x1 = to_index(floorf(ax + hi - 0.5f), xb - 1, xe);
+            float t = (((float)x0 + 0.5f - ax) * dx + py * dy) * inv, dt = dx * inv;
+            float *zs = j->sdepth + (size_t)y * (size_t)j->sw;
+            for (int x = x0; x <= x1; x++, t += dt) {
+                float tc = t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
+                float z = az + tc * dz;
+                if (z < zs[x]) {
+                    zs[x] = z;
+                    memcpy(j->scolor + 3 * ((size_t)y * (size_t)j->sw + (size_t)x), col,
+                           3 * sizeof(float));
+                }
+            }
+        }
+    }
+}
+
+/* The band of sample row y. */
+static int band_of(const render_job *j, int y)
+{
+    int b = (int)((long long)y * j->line_bands / j->sh);
+    while (b + 1 < j->line_bands && (long long)j->sh * (b + 1) / j->line_bands <= y)
+        b++;
+    while (b > 0 && (long long)j->sh * b / j->line_bands > y)
+        b--;
+    return b;
+}
+
+/* Sorts the kept lines into the bands of rows they touch (a counting sort, stable: each band
+ * keeps the scene order), so that each band reads only its own lines. */
+static cbm_status bin_lines(cbm_context *ctx, render_job *j, size_t **first, uint32_t **lines,
+                            size_t *nentries)
+{
+    const cbm_scene *s = j->scene;
+    const cbm_scene_line *ln = cbm_scene_lines(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    size_t nl = cbm_scene_line_count(s), nb = (size_t)j->line_bands;
+    line_xform tf = line_transform(j);
+    size_t *f = cbm__calloc(ctx, nb + 1, sizeof *f);
+    if (!f)
+        return CBM_E_NOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        size_t *pos = f;
+        if (pass == 1) {
+            size_t total = 0;
+            for (size_t b = 0; b < nb; b++) {
+                size_t c = f[b];
+                f[b] = total;
+                total += c;
+            }
+            f[nb] = total;
+            *nentries = total;
+            *lines = cbm__alloc(ctx, (total ? total : 1) * sizeof **lines);
+            if (!*lines) {
+                cbm__free(ctx, f, (nb + 1) * sizeof *f);
+                return CBM_E_NOMEM;
+            }
+            pos = cbm__alloc(ctx, (nb + 1) * sizeof *pos);
+            if (!pos) {
+                cbm__free(ctx, *lines, (total ? total : 1) * sizeof **lines);
+                cbm__free(ctx, f, (nb + 1) * sizeof *f);
+                return CBM_E_NOMEM;
+            }
+            memcpy(pos, f, (nb + 1) * sizeof *pos);
+        }
+        for (size_t i = 0; i < nl; i++) {
+            float ay, by, r;
+            if (!line_rows(&tf, &ln[i], j->ss, &ay, &by, &r) ||
+                !cbm__part_kept(&parts[ln[i].part], j->o))
+                continue;
+            float y_lo = (ay < by ? ay : by) - r, y_hi = (ay < by ? by : ay) + r;
+            if (!(y_hi >= 0.0f && y_lo <= (float)j->sh))
+                continue;
+            int y0 = to_index(y_lo, 0, j->sh - 1), y1 = to_index(y_hi, 0, j->sh - 1);
+            for (int b = band_of(j, y0), e = band_of(j, y1); b <= e; b++) {
+                if (pass == 0)
+                    f[b]++;
+                else
+                    (*lines)[pos[b]++] = (uint32_t)i;
+            }
+        }
+        if (pass == 1)
+            cbm__free(ctx, pos, (nb + 1) * sizeof *pos);
+    }
+    *first = f;
+    return CBM_OK;
+}
+
+static void *draw_lines(void *arg)
+{
+    render_job *j = arg;
+    for (;;) {
+        int b = atomic_fetch_add(&j->next_band, 1);
+        if (b >= j->line_bands)
+            break;
+        draw_lines_band(j, b);
+    }
+    return NULL;
+}
+
+/* Average of each pixel's samples into accum (linear, premultiplied by coverage). */
+static void resolve_samples(render_job *j)
+{
+    int n = j->ss;
+    float inv = 1.0f / (float)(n * n);
+    for (int y = 0; y < j->height; y++)
+        for (int x = 0; x < j->width; x++) {
+            float acc[4] = {0, 0, 0, 0};
+            for (int sy = 0; sy < n; sy++)
+                for (int sx = 0; sx < n; sx++) {
+                    size_t q = (size_t)(y * n + sy) * (size_t)j->sw + (size_t)(x * n + sx);
+                    if (!(j->sdepth[q] < INFINITY))
+                        continue;
+                    for (int k = 0; k < 3; k++)
+                        acc[k] += j->scolor[3 * q + (size_t)k];
+                    acc[3] += 1.0f;
+                }
+            float *a = j->accum + 4 * ((size_t)y * (size_t)j->width + (size_t)x);
+            for (int k = 0; k < 4; k++)
+                a[k] = acc[k] * inv;
+        }
+}
+
+/* Runs fn on nthreads threads (the caller's included). */
+static void run_threads(void *(*fn)(void *), render_job *j, int nthreads)
+{
+    pthread_t th[MAX_THREADS];
+    int started = 0;
+    for (int k = 1; k < nthreads; k++) {
+        if (pthread_create(&th[started], NULL, fn, j) != 0)
+            break;
+        started++;
+    }
+    fn(j);
+    for (int k = 0; k < started; k++)
+        pthread_join(th[k], NULL);
 }
 
 static void fill_rect(cbm_image *img, int x0, int y0, int x1, int y1, const uint8_t rgb[3])
@@ -320,11 +646,9 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
     j.o = o;
     j.width = W;
     j.height = H;
-    j.ss = o->supersample;
-    int spp = j.ss * j.ss;
-    j.ao_rays = o->ao_samples == 0 ? 0 : (o->ao_samples + spp - 1) / spp;
     size_t np = cbm_scene_part_count(s), nt = cbm_scene_triangle_count(s);
-    size_t pix = (size_t)W * (size_t)H;
+    size_t nl = cbm_scene_line_count(s);
+    size_t pix = (size_t)W * (size_t)H, nsamp = 0;
     float *colors = NULL;
     uint32_t *prim = NULL;
     double lo = 0, hi = 1;
@@ -344,12 +668,9 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         goto done;
     }
     j.prim_tri = prim;
-    bool fitted =
-        cbm__camera_fit(&j.cam, s, o, W - legend_w, H, 0.5 * (W - legend_w), 0.5 * H, 0.9);
-
     const cbm_part *parts = cbm_scene_parts(s);
     const uint32_t *tp = cbm_scene_triangle_parts(s), *tri = cbm_scene_triangles(s);
-    size_t kept = 0;
+    size_t kept = 0, lines_kept = 0;
     bool has_ground = false;
     for (size_t t = 0; t < nt; t++) {
         const cbm_part *p = &parts[tp[t]];
@@ -358,11 +679,41 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         has_ground |= p->organ == CBM_ORGAN_GROUND;
         prim[kept++] = (uint32_t)t;
     }
-    cbm_vec3 blo, bhi;
-    if (fitted && kept > 0 && cbm_scene_bounds(s, &blo, &bhi)) {
-        int nthreads = o->threads ? o->threads : default_threads();
-        if (nthreads > MAX_THREADS)
-            nthreads = MAX_THREADS;
+    for (size_t i = 0; i < nl; i++)
+        lines_kept += cbm__part_kept(&parts[cbm_scene_lines(s)[i].part], o);
+    /* samples per pixel side: the options', at least 3 for a picture of lines alone (no rays
+     * to pay for, and 10 levels of coverage on their edges) */
+    j.ss = o->supersample;
+    if (lines_kept > 0 && kept == 0 && j.ss < LINE_SAMPLES)
+        j.ss = LINE_SAMPLES;
+    int spp = j.ss * j.ss;
+    j.ao_rays = o->ao_samples == 0 ? 0 : (o->ao_samples + spp - 1) / spp;
+    bool fitted =
+        cbm__camera_fit(&j.cam, s, o, W - legend_w, H, 0.5 * (W - legend_w), 0.5 * H, 0.9);
+    int nthreads = o->threads ? o->threads : default_threads();
+    if (nthreads > MAX_THREADS)
+        nthreads = MAX_THREADS;
+    cbm_vec3 blo = v3(0, 0, 0), bhi = v3(0, 0, 0);
+    bool bounded = kept > 0 && cbm_scene_bounds(s, &blo, &bhi);
+    /* the plant's size, for the ground, the offsets and the occlusion distance */
+    double size = bounded ? v3_norm(v3_sub(bhi, blo)) : fitted ? (W + H) / j.cam.scale : 1.0;
+    if (!(size > 0))
+        size = 1.0;
+    j.eps = 1e-5 * size + 1e-7;
+    if (fitted && lines_kept > 0) {
+        j.sw = W * j.ss;
+        j.sh = H * j.ss;
+        nsamp = (size_t)j.sw * (size_t)j.sh;
+        j.sdepth = cbm__alloc(ctx, nsamp * sizeof *j.sdepth);
+        j.scolor = cbm__alloc(ctx, nsamp * 3 * sizeof *j.scolor);
+        if (!j.sdepth || !j.scolor) {
+            st = CBM_E_NOMEM;
+            goto done;
+        }
+        for (size_t q = 0; q < nsamp; q++)
+            j.sdepth[q] = INFINITY;
+    }
+    if (fitted && kept > 0 && bounded) {
         char cfg[64];
         snprintf(cfg, sizeof cfg, "threads=%d,verbose=0", nthreads);
         dev = rtcNewDevice(cfg);
@@ -387,10 +738,6 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         rtcCommitGeometry(g);
         rtcAttachGeometryByID(rs, g, 0);
         rtcReleaseGeometry(g);
-        /* the plant's size, for the ground, the offsets and the occlusion distance */
-        double size = v3_norm(v3_sub(bhi, blo));
-        if (!(size > 0))
-            size = 1.0;
         if (o->ground && !has_ground) {
             cbm_vec3 c = v3_scale(v3_add(blo, bhi), 0.5);
             double half = fmax(bhi.x - blo.x, bhi.z - blo.z);
@@ -430,16 +777,24 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         j.ground_rgb[1] = 0.48f;
         j.ground_rgb[2] = 0.40f;
         atomic_init(&j.next_row, 0);
-        pthread_t th[MAX_THREADS];
-        int started = 0;
-        for (int k = 1; k < nthreads; k++) {
-            if (pthread_create(&th[started], NULL, render_rows, &j) != 0)
-                break;
-            started++;
-        }
-        render_rows(&j);
-        for (int k = 0; k < started; k++)
-            pthread_join(th[k], NULL);
+        run_threads(render_rows, &j, nthreads);
+    }
+    if (j.sdepth) {
+        /* bands of at least 32 sample rows, 8 per thread, taken in turn by the threads */
+        j.line_bands = j.sh / 32 < 8 * nthreads ? j.sh / 32 : 8 * nthreads;
+        if (j.line_bands < 1)
+            j.line_bands = 1;
+        size_t *first = NULL, nentries = 0;
+        uint32_t *lines = NULL;
+        if ((st = bin_lines(ctx, &j, &first, &lines, &nentries)) != CBM_OK)
+            goto done;
+        j.band_first = first;
+        j.band_lines = lines;
+        atomic_init(&j.next_band, 0);
+        run_threads(draw_lines, &j, nthreads < j.line_bands ? nthreads : j.line_bands);
+        cbm__free(ctx, first, ((size_t)j.line_bands + 1) * sizeof *first);
+        cbm__free(ctx, lines, (nentries ? nentries : 1) * sizeof *lines);
+        resolve_samples(&j);
     }
     /* compose over the background, linear -> sRGB */
     for (size_t i = 0; i < pix; i++) {
@@ -464,6 +819,8 @@ done:
     cbm__free(ctx, colors, 4 * (np ? np : 1) * sizeof *colors);
     cbm__free(ctx, prim, (nt ? nt : 1) * sizeof *prim);
     cbm__free(ctx, j.accum, pix * 4 * sizeof(float));
+    cbm__free(ctx, j.sdepth, nsamp * sizeof *j.sdepth);
+    cbm__free(ctx, j.scolor, nsamp * 3 * sizeof *j.scolor);
     if (st != CBM_OK) {
         cbm_image_destroy(img);
         return st;
