@@ -315,6 +315,14 @@ TEST(mesh_formats_refuse_lines_and_leave_no_file)
         struct stat sb;
         CHECK(stat(path, &sb) != 0);
     }
+    /* nor does an animation take a frame of lines */
+    cbm_animation *anim = NULL;
+    CHECK_OK(cbm_animation_create(ctx, NULL, &anim));
+    if (anim) {
+        CHECK_STATUS(cbm_animation_add_frame(anim, s), CBM_E_UNSUPPORTED);
+        CHECK(cbm_animation_frame_count(anim) == 0);
+        cbm_animation_destroy(anim);
+    }
     /* a picture that runs out of memory leaves no file either */
     cbm_limits lim = *cbm_context_limits(ctx);
     cbm_limits tight = lim;

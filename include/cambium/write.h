@@ -100,6 +100,7 @@ CBM_API cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const
 typedef struct cbm_animation cbm_animation;
 CBM_API cbm_status cbm_animation_create(cbm_context *ctx, const cbm_write_options *opts,
                                         cbm_animation **out);
+/// Adds the scene as the next frame; CBM_E_UNSUPPORTED for a scene holding pixel lines.
 CBM_API cbm_status cbm_animation_add_frame(cbm_animation *anim, const cbm_scene *scene);
 CBM_API size_t cbm_animation_frame_count(const cbm_animation *anim);
 /// Writes the .glb; afterwards the animation takes no more frames (CBM_E_INVALID).

@@ -468,6 +468,11 @@ cbm_status cbm_animation_add_frame(cbm_animation *a, const cbm_scene *scene)
 {
     if (!a || !scene || a->finished)
         return CBM_E_INVALID;
+    if (cbm_scene_line_count(scene) > 0) /* a mesh has no pixel lines: refuse, not drop */
+        return cbm__fail(a->g.ctx, CBM_E_UNSUPPORTED,
+                         "animation frame: the scene holds %zu pixel lines, which only pictures "
+                         "draw; interpret the model with line mode off for a mesh",
+                         cbm_scene_line_count(scene));
     size_t first = 0, cnt = 0;
     CBM_TRY(CBM_ARRAY_RESERVE(a->g.ctx, a->frames, a->frames.len + 2));
     CBM_TRY(add_scene_groups(&a->g, scene, &first, &cnt));
