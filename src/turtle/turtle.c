@@ -22,7 +22,11 @@
  * curves whose tangents are the headings scaled by the chord and by the tangent parameters
  * (1.2 by default, as cpfg), n bands each; the rings are contours resampled by arc length,
  * carried along by the minimal rotation of U (cpfg's generalized cylinders, cpfg manual
- * "Generalized cylinders").
+ * "Generalized cylinders"). cpfg's spline cylinders {(n[,r]) ... }(n) (cpfg's InitializeSpline,
+ * SetControlPoint, FinishSpline) take their control points at F, f and `.`: n = 1, 2 join them
+ * with the same Hermite pieces (2 closes back to the first point), n = 3, 4 with the pieces of a
+ * uniform cubic B-spline between the knots (P0 + 4 P1 + P2) / 6 (4 closes by feeding the first
+ * three points again).
  * lpfg's mode (L+C models, cbm__turtle_set_lpfg): colour 1 at the start, each F drawn at once as
  * a cylinder of the current width, and lpfg's commands SetHead, RollToVert, LineTo3d/LineRel3d
  * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
