@@ -223,6 +223,7 @@ TEST(random_spline_programs)
                                         "]", "!", "@Gs", "@Gc", "@Ge", "@Gt", "@Gr", "g", "G"};
     static const double values[] = {0, 1, 2, 3, 4, 5, -1, 0.5, 1e-9, 90, 30, 1e6, 7, 1};
     enum { NN = sizeof names / sizeof names[0], NV = sizeof values / sizeof values[0] };
+    size_t ngcyl = 0; /* cylinder pieces recorded (of splines and of @G cylinders) */
     for (int prog = 0; prog < 200; prog++) {
         cbm_context *ctx = limited_ctx();
         cbm_view *v = NULL;
@@ -252,12 +253,15 @@ TEST(random_spline_programs)
         CHECK_MSG(acceptable(s), "program %d: %s", prog, cbm_status_name(s));
         if (s == CBM_OK)
             CHECK(cbm_turtle_prim_count(t) > 0 || !(prog & 1));
+        for (size_t i = 0; s == CBM_OK && i < cbm_turtle_prim_count(t); i++)
+            ngcyl += cbm_turtle_prims(t)[i].kind == CBM_PRIM_GCYL;
         cbm_turtle_destroy(t);
         cbm_scene_destroy(scene);
         cbm_view_destroy(v);
         cbm_context_clear_errors(ctx);
         test_ctx_end(ctx);
     }
+    CHECK(ngcyl > 100);
 }
 
 /* The corpus of the libFuzzer target fuzz_turtle_side: first byte selects the reader. */
