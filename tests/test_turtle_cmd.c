@@ -828,6 +828,27 @@ TEST(spline_cylinder_bspline_square)
     CHECK_EQ_INT(spine(ctx, v, "{(3) . f(1) +(90) f(1) +(90) f(1) +(90) .(3) }(3)", a, b, 16),
                  4 + 3);
     cbm_view_destroy(v);
+    /* as a cylinder: the first ring sits at the knot (-1/6, 5/6, 0) with P1's U = -z carried to
+     * the heading (-1, 1, 0)/sqrt 2 (a rotation about z keeps it); its first point is P + r U,
+     * r = 0.5; the last ring of the closed curve is back at that knot */
+    char path[1024];
+    snprintf(path, sizeof path, "%s/splb.v", test_tmp_dir());
+    write_file(path, "line style: cylinder\n");
+    CHECK_OK(cbm_view_load(ctx, path, &v));
+    prog p;
+    cbm_turtle *t = run_scene(ctx, v, &p, "{(4,2) " SQUARE " }(4)", NULL);
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    const cbm_vec3 *pts = cbm_turtle_points(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 4);
+    if (cbm_turtle_prim_count(t) == 4) {
+        check_v(pts[pr[0].first + 2], -1.0 / 6, 5.0 / 6, -0.5, 1e-12);
+        check_v(pr[0].p0, -1.0 / 6, 5.0 / 6, 0, 1e-12);
+        check_v(pr[3].p1, -1.0 / 6, 5.0 / 6, 0, 1e-12);
+        for (int i = 0; i < 4; i++)
+            CHECK_EQ_INT(pr[i].count, 3 * 2 * 8 * 2);
+    }
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
     test_ctx_end(ctx);
 }
 
