@@ -737,7 +737,8 @@ static cbm_status oom_body(cbm_context *ctx, void *ud)
     cbm_view *v;
     CBM_TRY(cbm_view_create(ctx, &v));
     prog p;
-    parse(&p, "F [ + F { . f + f + f } ] @Gs f @Gc(3) f @Ge(2) [ @O(1) ] F");
+    parse(&p, "F [ + F { . f + f + f } ] @Gs f @Gc(3) f @Ge(2) [ @O(1) ] F {(4,3) . f [ + f ] "
+              "+ f + f }(4) {(2) . f + f }(2)");
     cbm_scene *scene;
     cbm_status s = cbm_scene_create(ctx, &scene);
     if (s != CBM_OK) {
@@ -756,4 +757,199 @@ static cbm_status oom_body(cbm_context *ctx, void *ud)
 TEST(out_of_memory)
 {
     CHECK(test_oom_loop(oom_body, NULL) > 5);
+}
+
+/* ---- cpfg's spline cylinders {(n) ... }(n) ---- */
+
+/* The spine of the spline cylinders of `src` drawn with pixel lines (the default view): the
+ * segment prims (other prims skipped), whose end points are the ring centres. Returns the number
+ * of segments. */
+static size_t spine(cbm_context *ctx, const cbm_view *v, const char *src, cbm_vec3 *a, cbm_vec3 *b,
+                    size_t max)
+{
+    prog p;
+    cbm_turtle *t = run_scene(ctx, v, &p, src, NULL);
+    size_t n = 0;
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    for (size_t i = 0; i < cbm_turtle_prim_count(t); i++) {
+        if (pr[i].kind != CBM_PRIM_CYLINDER)
+            continue;
+        if (n < max) {
+            a[n] = pr[i].p0;
+            b[n] = pr[i].p1;
+        }
+        n++;
+    }
+    cbm_turtle_destroy(t);
+    return n;
+}
+
+/* Control points of the unit square, (0,0) (0,1) (-1,1) (-1,0) in the x-y plane: `.` at the
+ * origin, then each f a control point. 2 bands per connection: each connection is two
+ * segments, start knot -> curve at t = 1/2 -> end knot. */
+#define SQUARE ". f(1) +(90) f(1) +(90) f(1)"
+
+TEST(spline_cylinder_bspline_square)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    cbm_vec3 a[16], b[16];
+    const cbm_vec3 P[4] = {v3(0, 0, 0), v3(0, 1, 0), v3(-1, 1, 0), v3(-1, 0, 0)};
+    /* closed uniform cubic B-spline (kind 4): 4 connections, knot k at (P[k-1] + 4 P[k] +
+     * P[k+1]) / 6 starting with k = 1, the point at t = 1/2 (P0 + 23 P1 + 23 P2 + P3) / 48 of
+     * the window P[k-1..k+2] */
+    size_t n = spine(ctx, v, "{(4,2) " SQUARE " }(4)", a, b, 16);
+    CHECK_EQ_INT(n, 8);
+    check_v(a[0], -1.0 / 6, 5.0 / 6, 0, 1e-12); /* knot at t = 0 */
+    check_v(b[0], -0.5, 23.0 / 24, 0, 1e-12);   /* t = 1/2 */
+    check_v(b[1], -5.0 / 6, 5.0 / 6, 0, 1e-12); /* knot at t = 1 */
+    for (int k = 0; k < 4 && n == 8; k++) {
+        cbm_vec3 q0 = P[k], q1 = P[(k + 1) % 4], q2 = P[(k + 2) % 4], q3 = P[(k + 3) % 4];
+        cbm_vec3 k0 = v3_scale(v3_add(v3_add(q0, v3_scale(q1, 4)), q2), 1.0 / 6);
+        cbm_vec3 k1 = v3_scale(v3_add(v3_add(q1, v3_scale(q2, 4)), q3), 1.0 / 6);
+        cbm_vec3 m =
+            v3_scale(v3_add(v3_add(q0, v3_scale(q1, 23)), v3_add(v3_scale(q2, 23), q3)), 1.0 / 48);
+        check_v(a[2 * k], k0.x, k0.y, k0.z, 1e-12);
+        check_v(b[2 * k], m.x, m.y, m.z, 1e-12);
+        check_v(a[2 * k + 1], m.x, m.y, m.z, 1e-12);
+        check_v(b[2 * k + 1], k1.x, k1.y, k1.z, 1e-12);
+    }
+    /* the closed curve ends where it started */
+    if (n == 8)
+        check_v(b[7], a[0].x, a[0].y, a[0].z, 1e-12);
+    /* open (kind 3): the one window of four control points */
+    n = spine(ctx, v, "{(3,2) " SQUARE " }(3)", a, b, 16);
+    CHECK_EQ_INT(n, 2);
+    check_v(a[0], -1.0 / 6, 5.0 / 6, 0, 1e-12);
+    check_v(b[1], -5.0 / 6, 5.0 / 6, 0, 1e-12);
+    /* 4 bands by default; .(k) sets the bands of the connection it ends */
+    CHECK_EQ_INT(spine(ctx, v, "{(3) " SQUARE " }(3)", a, b, 16), 4);
+    CHECK_EQ_INT(spine(ctx, v, "{(3) . f(1) +(90) f(1) +(90) f(1) +(90) .(3) }(3)", a, b, 16),
+                 4 + 3);
+    cbm_view_destroy(v);
+    /* as a cylinder: the first ring sits at the knot (-1/6, 5/6, 0) with P1's U = -z carried to
+     * the heading (-1, 1, 0)/sqrt 2 (a rotation about z keeps it); its first point is P + r U,
+     * r = 0.5; the last ring of the closed curve is back at that knot */
+    char path[1024];
+    snprintf(path, sizeof path, "%s/splb.v", test_tmp_dir());
+    write_file(path, "line style: cylinder\n");
+    CHECK_OK(cbm_view_load(ctx, path, &v));
+    prog p;
+    cbm_turtle *t = run_scene(ctx, v, &p, "{(4,2) " SQUARE " }(4)", NULL);
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    const cbm_vec3 *pts = cbm_turtle_points(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 4);
+    if (cbm_turtle_prim_count(t) == 4) {
+        check_v(pts[pr[0].first + 2], -1.0 / 6, 5.0 / 6, -0.5, 1e-12);
+        check_v(pr[0].p0, -1.0 / 6, 5.0 / 6, 0, 1e-12);
+        check_v(pr[3].p1, -1.0 / 6, 5.0 / 6, 0, 1e-12);
+        for (int i = 0; i < 4; i++)
+            CHECK_EQ_INT(pr[i].count, 3 * 2 * 8 * 2);
+    }
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
+TEST(spline_cylinder_hermite_square)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    cbm_vec3 a[16], b[16];
+    /* open Hermite (kind 1): connections P0-P1, P1-P2, P2-P3 with tangents 1.2 |P2 - P1| H
+     * (cpfg's tangent parameter); at t = 1/2 the curve is (P1 + P2) / 2 + (R1 - R2) / 8 */
+    size_t n = spine(ctx, v, "{(1,2) " SQUARE " }(1)", a, b, 16);
+    CHECK_EQ_INT(n, 6);
+    check_v(a[0], 0, 0, 0, 1e-12);
+    check_v(b[0], 0, 0.5, 0, 1e-12);      /* straight: H = +y at both ends */
+    check_v(b[2], -0.35, 1.15, 0, 1e-12); /* H1 = +y, H2 = -x */
+    check_v(b[3], -1, 1, 0, 1e-12);
+    check_v(b[4], -1.15, 0.65, 0, 1e-12); /* H1 = -x, H2 = -y */
+    check_v(b[5], -1, 0, 0, 1e-12);
+    /* closed (kind 2): a fourth connection back to the first control point (H = +y there) */
+    n = spine(ctx, v, "{(2,2) " SQUARE " }(2)", a, b, 16);
+    CHECK_EQ_INT(n, 8);
+    check_v(b[6], -0.5, -0.3, 0, 1e-12); /* H1 = -y, H2 = +y */
+    check_v(b[7], 0, 0, 0, 1e-12);
+    /* as a cylinder: one generalized-cylinder primitive per connection, 2 bands of 8 sides */
+    char path[1024];
+    snprintf(path, sizeof path, "%s/spl.v", test_tmp_dir());
+    write_file(path, "line style: cylinder\n");
+    cbm_view *vc;
+    CHECK_OK(cbm_view_load(ctx, path, &vc));
+    prog p;
+    cbm_scene *scene;
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    cbm_turtle *t = run_scene(ctx, vc, &p, "{(2,2) " SQUARE " }(2)", scene);
+    const cbm_prim *pr = cbm_turtle_prims(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 4);
+    for (size_t i = 0; i < cbm_turtle_prim_count(t); i++) {
+        CHECK_EQ_INT(pr[i].kind, CBM_PRIM_GCYL);
+        CHECK_EQ_INT(pr[i].count, 3 * 2 * 8 * 2);
+    }
+    CHECK_EQ_INT(cbm_scene_triangle_count(scene), 4 * 2 * 8 * 2);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    cbm_view_destroy(vc);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
+TEST(spline_cylinder_degenerate)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    cbm_vec3 a[16], b[16];
+    /* too few control points draw nothing, as cpfg: Hermite needs 2, open B-spline 4 */
+    CHECK_EQ_INT(spine(ctx, v, "{(1) . }(1)", a, b, 16), 0);
+    CHECK_EQ_INT(spine(ctx, v, "{(2) . }(2)", a, b, 16), 0);
+    CHECK_EQ_INT(spine(ctx, v, "{(3) . f +(90) f }(3)", a, b, 16), 0);
+    CHECK_EQ_INT(spine(ctx, v, "{(4) }(4)", a, b, 16), 0);
+    CHECK_EQ_INT(spine(ctx, v, "{(4) . }(4)", a, b, 16), 0); /* all points coincide */
+    /* a closed B-spline of two points is fed P0 P1 P0 P1 P0, as cpfg: two connections between
+     * the knots (2 P0 + 4 P1) / 6 and (4 P0 + 2 P1) / 6 */
+    size_t n = spine(ctx, v, "{(4,1) . f(3) }(4)", a, b, 16);
+    CHECK_EQ_INT(n, 2);
+    check_v(a[0], 0, 2, 0, 1e-12);
+    check_v(b[0], 0, 1, 0, 1e-12);
+    check_v(b[1], 0, 2, 0, 1e-12);
+    /* kinds outside 1..4 are ignored (cpfg warns); } with a parameter and no spline too */
+    CHECK_EQ_INT(spine(ctx, v, "{(5) " SQUARE " }(5) }(1) {(-1) " SQUARE " }(1)", a, b, 16), 0);
+    /* an unfinished spline draws what it has */
+    CHECK_EQ_INT(spine(ctx, v, "{(1,1) " SQUARE, a, b, 16), 3);
+    /* coincident control points: no band */
+    CHECK_EQ_INT(spine(ctx, v, "{(1,1) . . f(1) }(1)", a, b, 16), 1);
+    /* {(0) is a polygon; . inside a polygon is a polygon vertex, not a control point */
+    CHECK_EQ_INT(spine(ctx, v, "{(1,1) {(0) . f(1) +(90) f(1) }(0) }(1)", a, b, 16), 1);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
+TEST(spline_cylinder_branches)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_view *v;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    cbm_vec3 a[16], b[16];
+    /* a branch continues a copy of the spline; after ] the parent continues from its own last
+     * control point (0, 1, 0) */
+    size_t n = spine(ctx, v, "{(1,1) . f(1) [ +(90) f(1) ] f(1) }(1)", a, b, 16);
+    CHECK_EQ_INT(n, 3);
+    if (n == 3) {
+        check_v(b[1], -1, 1, 0, 1e-12);
+        check_v(a[2], 0, 1, 0, 1e-12);
+        check_v(b[2], 0, 2, 0, 1e-12);
+    }
+    /* a spline opened in a branch ends with it */
+    CHECK_EQ_INT(spine(ctx, v, "[ {(1,1) . f(1) ] f(1) f(1)", a, b, 16), 1);
+    /* a B-spline window survives a branch: 4 control points across [ ] */
+    n = spine(ctx, v, "{(3,1) . f(1) [ {(1,1) . f(5) }(1) ] +(90) f(1) +(90) f(1) }(3)", a, b, 16);
+    CHECK_EQ_INT(n, 2);
+    if (n == 2)
+        check_v(a[1], -1.0 / 6, 5.0 / 6, 0, 1e-12);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
 }

@@ -214,6 +214,56 @@ TEST(random_programs)
     }
 }
 
+TEST(random_spline_programs)
+{
+    /* cpfg's spline cylinders {(n, r) ... }(n) of every kind (and invalid ones), with control
+     * points from F, f and .(k), branches, polygons and @G cylinders mixed in, as lines and as
+     * cylinders, with and without twist */
+    static const char *const names[] = {"{", "}", ".",   "F",   "f",   "+",   "&",   "/", "[",
+                                        "]", "!", "@Gs", "@Gc", "@Ge", "@Gt", "@Gr", "g", "G"};
+    static const double values[] = {0, 1, 2, 3, 4, 5, -1, 0.5, 1e-9, 90, 30, 1e6, 7, 1};
+    enum { NN = sizeof names / sizeof names[0], NV = sizeof values / sizeof values[0] };
+    size_t ngcyl = 0; /* cylinder pieces recorded (of splines and of @G cylinders) */
+    for (int prog = 0; prog < 200; prog++) {
+        cbm_context *ctx = limited_ctx();
+        cbm_view *v = NULL;
+        CHECK_OK(cbm_view_create(ctx, &v));
+        if (prog & 2)
+            CHECK_OK(cbm__view_add_text(v, CBM__SIDE_VIEW, "t.v",
+                                        prog & 4 ? "line style: cylinder\ntwist of cylinders: on\n"
+                                                 : "line style: cylinder\n"));
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        enum { LEN = 300 };
+        cbm_tmodule m[LEN];
+        double par[LEN][4];
+        for (int i = 0; i < LEN; i++) {
+            m[i].name = names[next_rand() % NN];
+            m[i].nparams = (int)(next_rand() % 3);
+            m[i].params = par[i];
+            for (int k = 0; k < 4; k++)
+                par[i][k] = values[next_rand() % NV];
+            /* bands of a sane number; the limits cover the rest */
+            for (int k = 0; k < 4 && m[i].name[0] != 'F' && m[i].name[0] != 'f'; k++)
+                par[i][k] = fmod(fabs(par[i][k]), 64.0);
+        }
+        cbm_turtle *t = NULL;
+        cbm_turtle_def def = {prog & 1};
+        cbm_status s = cbm_turtle_interpret(ctx, v, &def, m, LEN, scene, &t);
+        CHECK_MSG(acceptable(s), "program %d: %s", prog, cbm_status_name(s));
+        if (s == CBM_OK)
+            CHECK(cbm_turtle_prim_count(t) > 0 || !(prog & 1));
+        for (size_t i = 0; s == CBM_OK && i < cbm_turtle_prim_count(t); i++)
+            ngcyl += cbm_turtle_prims(t)[i].kind == CBM_PRIM_GCYL;
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+        cbm_view_destroy(v);
+        cbm_context_clear_errors(ctx);
+        test_ctx_end(ctx);
+    }
+    CHECK(ngcyl > 100);
+}
+
 /* The corpus of the libFuzzer target fuzz_turtle_side: first byte selects the reader. */
 TEST(fuzz_corpus_replay)
 {
@@ -285,17 +335,20 @@ static cbm_status oom_side_files(cbm_context *ctx, void *ud)
         s = cbm_scene_create(ctx, &scene);
         if (s == CBM_OK) {
             static const char *const prog[] = {"@#", "@Gs", "F", "~", "l", "+", "F", "@Gc",
-                                               "{",  ".",   "f", "+", "f", ".", "}", "@Ge"};
-            cbm_tmodule m[16];
-            double par[16] = {1, 0, 1, 0, 1, 30, 1, 3, 0, 0, 1, 60, 1, 0, 0, 2};
-            for (int i = 0; i < 16; i++) {
+                                               "{",  ".",   "f", "+", "f", ".", "}", "@Ge",
+                                               "{",  ".",   "f", "+", "f", "+", "f", "}"};
+            enum { NP = sizeof prog / sizeof prog[0] };
+            cbm_tmodule m[NP];
+            double par[NP] = {1, 0, 1, 0, 1, 30, 1, 3,  0, 0,  1, 60,
+                              1, 0, 0, 2, 4, 0,  1, 90, 1, 90, 1, 4};
+            for (int i = 0; i < NP; i++) {
                 m[i].name = prog[i];
                 m[i].params = &par[i];
-                m[i].nparams = (i == 0 || i == 7 || i == 15) ? 1 : 0;
+                m[i].nparams = (i == 0 || i == 7 || i == 15 || i == 16 || i == 23) ? 1 : 0;
             }
             cbm_turtle *t = NULL;
             cbm_turtle_def def = {true};
-            s = cbm_turtle_interpret(ctx, v, &def, m, 16, scene, &t);
+            s = cbm_turtle_interpret(ctx, v, &def, m, NP, scene, &t);
             cbm_turtle_destroy(t);
             cbm_scene_destroy(scene);
         }

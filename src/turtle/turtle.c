@@ -22,7 +22,11 @@
  * curves whose tangents are the headings scaled by the chord and by the tangent parameters
  * (1.2 by default, as cpfg), n bands each; the rings are contours resampled by arc length,
  * carried along by the minimal rotation of U (cpfg's generalized cylinders, cpfg manual
- * "Generalized cylinders").
+ * "Generalized cylinders"). cpfg's spline cylinders {(n[,r]) ... }(n) (cpfg's InitializeSpline,
+ * SetControlPoint, FinishSpline) take their control points at F, f and `.`: n = 1, 2 join them
+ * with the same Hermite pieces (2 closes back to the first point), n = 3, 4 with the pieces of a
+ * uniform cubic B-spline between the knots (P0 + 4 P1 + P2) / 6 (4 closes by feeding the first
+ * three points again).
  * lpfg's mode (L+C models, cbm__turtle_set_lpfg): colour 1 at the start, each F drawn at once as
  * a cylinder of the current width, and lpfg's commands SetHead, RollToVert, LineTo3d/LineRel3d
  * (a segment towards a point, the frame kept), MoveRel3d and ScaleContour (an elliptic section);
@@ -55,6 +59,20 @@ typedef struct gcpt {
     int sides;
 } gcpt;
 
+/* bands per connection of a generalized cylinder at most (cpfg has no bound) */
+#define MAX_RINGS 10000
+
+/* An open spline cylinder {(n) (cpfg's SPLINE and its control points). */
+typedef struct spline {
+    bool closed, bspline;
+    int rings;     /* default bands per connection */
+    int num;       /* control points so far */
+    int nfirst;    /* closed: first control points kept (at most 1 Hermite, 3 B-spline) */
+    gcpt tu;       /* the last ring's state: where the next band starts */
+    gcpt win[3];   /* B-spline: the last three control points */
+    gcpt first[3]; /* closed: the first control points, fed again at }(n) */
+} spline;
+
 typedef struct tstate {
     cbm_vec3 pos, h, l, u;
     cbm_vec3 prev_h, prev_u;
@@ -71,6 +89,8 @@ typedef struct tstate {
     bool rtan_scale;
     bool gc_on; /* a generalized cylinder is open; gc is its last control point */
     gcpt gc;
+    int spl;      /* the open spline cylinder {(n): index in splines, or -1 */
+    int spl_mark; /* in a saved state: splines.len when the branch started */
 } tstate;
 
 typedef struct ccache {
@@ -97,6 +117,7 @@ struct cbm_turtle {
     CBM_ARRAY(cbm_vec3) polypts;
     CBM_ARRAY(int) polycolor; /* colour index at each vertex (cpfg colours by the first) */
     CBM_ARRAY(size_t) polystart;
+    CBM_ARRAY(spline) splines; /* spline cylinders, a stack following the branches */
     /* % */
     int cut_depth; /* > 0 while skipping: bracket depth inside the cut part */
     /* generalized cylinders */
@@ -228,6 +249,7 @@ static void init_state(cbm_turtle *t)
     s->contour = 0;
     s->sides = v->sides;
     s->tan[0] = s->tan[1] = 1.2; /* cpfg's default tangent parameter */
+    s->spl = -1;
 }
 
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
@@ -262,6 +284,7 @@ void cbm__turtle_destroy(cbm_turtle *t)
     CBM_ARRAY_FREE(ctx, t->polypts);
     CBM_ARRAY_FREE(ctx, t->polycolor);
     CBM_ARRAY_FREE(ctx, t->polystart);
+    CBM_ARRAY_FREE(ctx, t->splines);
     CBM_ARRAY_FREE(ctx, t->ccache);
     CBM_ARRAY_FREE(ctx, t->cpts);
     CBM_ARRAY_FREE(ctx, t->ringv);
@@ -288,6 +311,7 @@ void cbm__turtle_reset(cbm_turtle *t)
     t->polypts.len = 0;
     t->polycolor.len = 0;
     t->polystart.len = 0;
+    t->splines.len = 0;
     t->cut_depth = 0;
     t->nprefix = 0;
     t->prims.len = 0;
@@ -772,28 +796,32 @@ static cbm_status push_ring(cbm_turtle *t, cbm_vec3 P, cbm_vec3 h, cbm_vec3 u, c
     return CBM_OK;
 }
 
-/* cpfg's segment from a generalized cylinder's last control point g1 to the turtle: a cubic
- * Hermite spine with tangents H1 |P2-P1| tan1 and H2 |P2-P1| tan0, `rings` bands, radius and
- * contour interpolated linearly, each ring's U carried from g1 by the minimal rotation (and the
- * twist when "twist of cylinders" is on). Then the turtle becomes the last control point. */
-static cbm_status gc_connect(cbm_turtle *t, int rings)
+/* cpfg's band of a generalized cylinder from the ring state g1 to g2 (cpfg's
+ * interpolate_connection): the spine is the cubic a0 + a1 t + a2 t^2 + a3 t^3 given by `bsp`
+ * (a uniform cubic B-spline segment) or, when bsp is NULL, the Hermite cubic with tangents
+ * H1 |P2-P1| tan1 and H2 |P2-P1| tan0; `rings` bands, radius and contour interpolated, each ring's
+ * U carried from g1 by the minimal rotation (and `twist` when "twist of cylinders" is on). */
+static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, int rings,
+                             const cbm_vec3 *bsp, double twist)
 {
     tstate *s = &t->cur;
     const cbm_view *v = t->view;
-    gcpt g1 = s->gc, g2 = gc_snapshot(s);
-    double twist = 0.0;
-    if (v->gc_twist)
-        twist = twist_angle(&g1, &g2);
-    else
-        adjust_frame(g2.h, g1.h, g1.u, 0.0, &g2.u, &g2.l);
-    s->gc = g2;
+    gcpt g1 = *g1p, g2 = *g2p;
     double len = v3_norm(v3_sub(g2.pos, g1.pos));
     if (len < 0.00001)
         return CBM_OK;
-    cbm_vec3 R1 = v3_scale(g1.h, len * g1.tan[1]), R2 = v3_scale(g2.h, len * g2.tan[0]);
-    cbm_vec3 d = v3_sub(g1.pos, g2.pos);
-    cbm_vec3 c2 = v3_sub(v3_sub(v3_scale(d, -3.0), v3_scale(R1, 2.0)), R2);
-    cbm_vec3 c3 = v3_add(v3_add(v3_scale(d, 2.0), R1), R2);
+    cbm_vec3 R1, c2, c3;
+    if (bsp) {
+        R1 = bsp[1];
+        c2 = bsp[2];
+        c3 = bsp[3];
+    } else {
+        R1 = v3_scale(g1.h, len * g1.tan[1]);
+        cbm_vec3 R2 = v3_scale(g2.h, len * g2.tan[0]);
+        cbm_vec3 d = v3_sub(g1.pos, g2.pos);
+        c2 = v3_sub(v3_sub(v3_scale(d, -3.0), v3_scale(R1, 2.0)), R2);
+        c3 = v3_add(v3_add(v3_scale(d, 2.0), R1), R2);
+    }
     double dr = 0.5 * (g2.width - g1.width);
     /* the radius along the segment: a Hermite curve in (t, r) from (0, w1/2) to (1, w2/2) with
      * the radius tangents of the two control points (linear when they are zero) */
@@ -895,6 +923,156 @@ static cbm_status gc_connect(cbm_turtle *t, int rings)
         CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, NULL, t->ringv.len, t->ringt.data,
                                    t->ringt.len / 3));
     }
+    return CBM_OK;
+}
+
+/* cpfg's segment from a generalized cylinder's last control point to the turtle (@Gc, @Ge):
+ * a Hermite band; then the turtle becomes the last control point. */
+static cbm_status gc_connect(cbm_turtle *t, int rings)
+{
+    tstate *s = &t->cur;
+    gcpt g1 = s->gc, g2 = gc_snapshot(s);
+    double twist = 0.0;
+    if (t->view->gc_twist)
+        twist = twist_angle(&g1, &g2);
+    else
+        adjust_frame(g2.h, g1.h, g1.u, 0.0, &g2.u, &g2.l);
+    s->gc = g2;
+    return gc_segment(t, &g1, &g2, rings, NULL, twist);
+}
+
+/* ---- cpfg's spline cylinders {(n) ... }(n) ---- */
+
+/* The index below which the spline records belong to enclosing branches. */
+static size_t spline_level(const cbm_turtle *t)
+{
+    return t->stack.len ? (size_t)t->stack.data[t->stack.len - 1].spl_mark : 0;
+}
+
+/* {(n, r): a spline cylinder of kind n (1 open Hermite, 2 closed Hermite, 3 open B-spline,
+ * 4 closed B-spline) with r rings per band (4 when r <= 0 or absent). Other n are ignored, as
+ * cpfg. A spline already open in this branch is restarted. */
+static cbm_status spline_open(cbm_turtle *t, const double *params, int nparams)
+{
+    tstate *s = &t->cur;
+    int kind = cbm__to_int(params[0]);
+    if (kind < 1 || kind > 4)
+        return CBM_OK; /* cpfg: "Parameter following { is above 4", ignored */
+    spline sp;
+    memset(&sp, 0, sizeof sp);
+    sp.closed = (kind - 1) % 2 == 1;
+    sp.bspline = (kind - 1) / 2 == 1;
+    int rings = nparams > 1 ? cbm__to_int(params[1]) : 0;
+    sp.rings = rings <= 0 ? 4 : rings > MAX_RINGS ? MAX_RINGS : rings;
+    if (s->spl >= 0 && (size_t)s->spl + 1 == t->splines.len && (size_t)s->spl >= spline_level(t)) {
+        t->splines.data[s->spl] = sp;
+        return CBM_OK;
+    }
+    CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->splines, sp));
+    s->spl = (int)t->splines.len - 1;
+    return CBM_OK;
+}
+
+/* Unit vector along d, or `dflt` (with its frame kept) when d is (nearly) null, then U and L
+ * carried from (prev_h, prev_u) by the minimal rotation turned by beta: cpfg's frame of a
+ * B-spline ring at a knot. */
+static void knot_frame(gcpt *g, cbm_vec3 d, double beta)
+{
+    double n = v3_norm(d);
+    if (n > 0.0000001) {
+        cbm_vec3 ph = g->h, pu = g->u;
+        g->h = v3_scale(d, 1.0 / n);
+        adjust_frame(g->h, ph, pu, beta, &g->u, &g->l);
+    }
+}
+
+/* A control point p (F, f, or . outside a polygon) of the open spline; `rings` bands (0: the
+ * spline's default). Hermite: a band from the previous control point (cpfg's generalized
+ * cylinder). B-spline: once four control points P0..P3 are known, the band of the uniform cubic
+ * B-spline between the knots (P0 + 4 P1 + P2) / 6 and (P1 + 4 P2 + P3) / 6, with tangents
+ * (P2 - P0) / 2 and (P3 - P1) / 2, the ring states (width, contour, tangent parameters, frame)
+ * those of P1 and P2 (cpfg's SetControlPoint and interpolate_connection). */
+static cbm_status spline_point(cbm_turtle *t, gcpt p, int rings)
+{
+    tstate *s = &t->cur;
+    spline *sp = &t->splines.data[s->spl];
+    if (rings == 0)
+        rings = sp->rings;
+    else if (rings < 1)
+        rings = 1; /* cpfg: a single band */
+    if (rings > MAX_RINGS)
+        rings = MAX_RINGS;
+    if (!sp->bspline) {
+        if (sp->num++ == 0) {
+            sp->tu = p;
+            if (sp->closed)
+                sp->first[sp->nfirst++] = p;
+            return CBM_OK;
+        }
+        gcpt g1 = sp->tu, g2 = p;
+        double twist = 0.0;
+        if (t->view->gc_twist)
+            twist = twist_angle(&g1, &g2);
+        else
+            adjust_frame(g2.h, g1.h, g1.u, 0.0, &g2.u, &g2.l);
+        sp->tu = g2;
+        return gc_segment(t, &g1, &g2, rings, NULL, twist);
+    }
+    if (sp->num < 3) {
+        sp->win[sp->num] = p;
+        if (sp->closed)
+            sp->first[sp->nfirst++] = p;
+        sp->num++;
+        return CBM_OK;
+    }
+    cbm_vec3 P0 = sp->win[0].pos, P1 = sp->win[1].pos, P2 = sp->win[2].pos, P3 = p.pos;
+    cbm_vec3 a[4];
+    a[0] = v3_scale(v3_add(v3_add(P0, v3_scale(P1, 4.0)), P2), 1.0 / 6.0);
+    a[1] = v3_scale(v3_sub(P2, P0), 0.5);
+    a[2] = v3_scale(v3_add(v3_sub(P0, v3_scale(P1, 2.0)), P2), 0.5);
+    a[3] = v3_scale(v3_add(v3_sub(v3_scale(v3_sub(P1, P2), 3.0), P0), P3), 1.0 / 6.0);
+    gcpt g1 = sp->tu;
+    if (sp->num == 3) {
+        g1 = sp->win[1];
+        g1.pos = a[0];
+        knot_frame(&g1, a[1], 0.0);
+    }
+    gcpt raw = p;
+    double twist = 0.0;
+    if (t->view->gc_twist)
+        twist = twist_angle(&g1, &raw);
+    else
+        adjust_frame(raw.h, g1.h, g1.u, 0.0, &raw.u, &raw.l);
+    gcpt g2 = sp->win[2];
+    g2.pos = v3_scale(v3_add(v3_add(P1, v3_scale(P2, 4.0)), P3), 1.0 / 6.0);
+    knot_frame(&g2, v3_scale(v3_sub(P3, P1), 0.5), twist);
+    sp->win[0] = sp->win[1];
+    sp->win[1] = sp->win[2];
+    sp->win[2] = p;
+    sp->num++;
+    /* cpfg: a band too short to draw leaves the control point itself as the next start */
+    sp->tu = v3_norm(v3_sub(g2.pos, g1.pos)) < 0.00001 ? raw : g2;
+    return gc_segment(t, &g1, &g2, rings, a, twist);
+}
+
+/* }(n), n != 0: the spline ends; a closed one is closed by feeding again its first control
+ * points (1 for Hermite, 3 for B-spline, cyclically when it has fewer), as cpfg. */
+static cbm_status spline_close(cbm_turtle *t)
+{
+    tstate *s = &t->cur;
+    if (s->spl < 0)
+        return CBM_OK; /* cpfg: "Spline is already finished or hasn't been started", ignored */
+    spline *sp = &t->splines.data[s->spl];
+    if (sp->closed && sp->nfirst > 0) {
+        int nfeed = sp->bspline ? 3 : 1, nfirst = sp->nfirst;
+        gcpt first[3];
+        memcpy(first, sp->first, sizeof first);
+        for (int i = 0; i < nfeed; i++)
+            CBM_TRY(spline_point(t, first[i % nfirst], 0));
+    }
+    if ((size_t)s->spl + 1 == t->splines.len && (size_t)s->spl >= spline_level(t))
+        t->splines.len--;
+    s->spl = -1;
     return CBM_OK;
 }
 
@@ -1117,6 +1295,8 @@ static cbm_status move(cbm_turtle *t, int cmd, const double *params, int nparams
     bend(t);
     if (t->polystart.len > 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
         CBM_TRY(poly_vertex(t));
+    if (s->spl >= 0 && (cmd == CBM_T_F || cmd == CBM_T_f))
+        CBM_TRY(spline_point(t, gc_snapshot(s), 0));
     if (draw && t->lpfg) {
         /* lpfg draws each F at once as a cylinder of the current width */
         t->node_open = false;
@@ -1320,7 +1500,7 @@ static cbm_status exec_at(cbm_turtle *t, int cmd, double *params, int nparams)
         int rings = 4; /* cpfg's default */
         if (nparams > 0) {
             double r = params[0];
-            rings = r < 1.0 ? 1 : r > 10000.0 ? 10000 : (int)r;
+            rings = r < 1.0 ? 1 : r > MAX_RINGS ? MAX_RINGS : (int)r;
         }
         if (!s->gc_on) {
             /* cpfg starts a cylinder at a control point without @Gs */
@@ -1456,13 +1636,22 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
         if (t->stack.len >= cbm_context_limits(t->ctx)->max_modules)
             return cbm__fail(t->ctx, CBM_E_LIMIT, "turtle: branches nested deeper than %zu",
                              t->stack.len);
-        return CBM_ARRAY_PUSH(t->ctx, t->stack, *s);
+        s->spl_mark = (int)t->splines.len;
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->stack, *s));
+        if (s->spl >= 0) {
+            /* the branch continues a copy of the open spline cylinder */
+            spline copy = t->splines.data[s->spl];
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->splines, copy));
+            s->spl = (int)t->splines.len - 1;
+        }
+        return CBM_OK;
     }
     case CBM_T_POP: {
         CBM_TRY(end_node(t));
         if (t->stack.len == 0)
             return CBM_OK; /* cpfg: unmatched ] ignored */
         *s = t->stack.data[--t->stack.len];
+        t->splines.len = (size_t)s->spl_mark;
         return CBM_OK;
     }
     case CBM_T_WIDTH:
@@ -1506,15 +1695,17 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
     case CBM_T_POLY_BEGIN:
         CBM_TRY(end_node(t));
         if (nparams > 0 && params[0] != 0.0)
-            return CBM_OK; /* cpfg's spline polygons {(n) are not supported: ignored */
+            return spline_open(t, params, nparams); /* cpfg's spline cylinder {(n) */
         return CBM_ARRAY_PUSH(t->ctx, t->polystart, t->polypts.len);
     case CBM_T_POLY_END:
         if (nparams > 0 && params[0] != 0.0)
-            return CBM_OK;
+            return spline_close(t); /* as cpfg, without ending the segment in progress */
         return poly_end(t);
     case CBM_T_POLY_VERTEX:
         if (t->polystart.len > 0)
             return poly_vertex(t);
+        if (s->spl >= 0)
+            return spline_point(t, gc_snapshot(s), nparams > 0 ? cbm__to_int(params[0]) : 0);
         return CBM_OK;
     case CBM_T_SUBLSYS_BEGIN:
     case CBM_T_SUBLSYS_END:
