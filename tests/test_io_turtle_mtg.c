@@ -224,11 +224,11 @@ TEST(turtle_mtg_random_strings_read_back)
         for (int k = 0; k < 600; k++) {
             g = g * 6364136223846793005ULL + 1442695040888963407ULL;
             int r = (int)(g >> 59); /* 0..31 */
-            const char *m = r < 12 ? (r < 2 ? "F(0.001)" : "F(1)")
-                            : r < 16 ? "+"
-                            : r < 18 ? "&"
-                            : r < 19 ? "f(1)"
-                            : r < 24 ? "["
+            const char *m = r < 12                ? (r < 2 ? "F(0.001)" : "F(1)")
+                            : r < 16              ? "+"
+                            : r < 18              ? "&"
+                            : r < 19              ? "f(1)"
+                            : r < 24              ? "["
                             : r < 30 && depth > 0 ? "]"
                                                   : "/";
             depth += !strcmp(m, "[") - !strcmp(m, "]");
@@ -285,8 +285,7 @@ TEST(turtle_mtg_random_strings_read_back)
         for (size_t i = 0; i < n && lines == (int)n; i++) {
             CHECK_MSG(parent[i] == want_parent[i] && lateral[i] == want_lateral[i],
                       "round %d segment %zu: parent %lld lateral %d, want %lld %d", round, i,
-                      (long long)parent[i], lateral[i], (long long)want_parent[i],
-                      want_lateral[i]);
+                      (long long)parent[i], lateral[i], (long long)want_parent[i], want_lateral[i]);
         }
         free(b);
         cbm_turtle_destroy(t);
@@ -411,4 +410,50 @@ TEST(turtle_mtg_out_of_memory)
     static mstr s;
     parse(&s, KNOWN);
     CHECK(test_oom_loop(write_both, &s) > 5);
+}
+
+/* Generalized cylinders (cylinder line style): each piece is a segment, in the axis of its
+ * branch. */
+TEST(turtle_mtg_generalized_cylinder_pieces)
+{
+    cbm_context *ctx = test_ctx();
+    const char *vpath = io_path("gc.v");
+    FILE *f = fopen(vpath, "w");
+    CHECK(f != NULL);
+    if (!f) {
+        test_ctx_end(ctx);
+        return;
+    }
+    fputs("line style: cylinder\n", f);
+    fclose(f);
+    cbm_view *v;
+    CHECK_OK(cbm_view_load(ctx, vpath, &v));
+    static mstr s;
+    parse(&s, "F(1) [ + @Gs f(1) @Gc(2) f(1) @Ge(2) ] F(1)");
+    cbm_turtle_def def = {true};
+    cbm_turtle *t = NULL;
+    CHECK_OK(cbm_turtle_interpret(ctx, v, &def, s.m, s.n, NULL, &t));
+    const cbm_prim *p = cbm_turtle_prims(t);
+    CHECK_EQ_INT(cbm_turtle_prim_count(t), 4);
+    if (cbm_turtle_prim_count(t) == 4) {
+        CHECK(p[1].kind == CBM_PRIM_GCYL && p[2].kind == CBM_PRIM_GCYL);
+        CHECK(p[1].module == 5 && p[2].module == 7);
+    }
+    CHECK_OK(cbm_write_turtle_segments_csv(ctx, t, io_path("gc.csv")));
+    char *b = io_read_all(io_path("gc.csv"), NULL);
+    CHECK(b != NULL);
+    if (b) {
+        /* id,parent,lateral,order,module: the pieces are a lateral axis of two segments */
+        const char *rows[] = {"0,-1,0,0,0,", "1,0,1,1,5,", "2,1,0,1,7,", "3,0,0,0,9,"};
+        const char *line = strchr(b, '\n');
+        for (int i = 0; i < 4; i++) {
+            CHECK(line && strncmp(line + 1, rows[i], strlen(rows[i])) == 0);
+            line = line ? strchr(line + 1, '\n') : NULL;
+        }
+        CHECK(line && line[1] == '\0');
+        free(b);
+    }
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
 }

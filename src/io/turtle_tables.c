@@ -85,13 +85,18 @@ enum { NFEAT = sizeof features / sizeof features[0] };
 static void row_values(const seg_rows *r, size_t i, double *v)
 {
     const cbm_prim *p = &r->prims[r->prim[i]];
-    const double x[NFEAT] = {(double)i,      (double)r->order[i],
+    const double x[NFEAT] = {(double)i,
+                             (double)r->order[i],
                              (double)p->module,
                              (double)p->color,
-                             p->p0.x,        p->p0.y,
-                             p->p0.z,        p->p1.x,
-                             p->p1.y,        p->p1.z,
-                             2.0 * p->r0,    2.0 * p->r1,
+                             p->p0.x,
+                             p->p0.y,
+                             p->p0.z,
+                             p->p1.x,
+                             p->p1.y,
+                             p->p1.z,
+                             2.0 * p->r0,
+                             2.0 * p->r1,
                              v3_norm(v3_sub(p->p1, p->p0))};
     memcpy(v, x, sizeof x);
 }
