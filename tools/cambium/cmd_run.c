@@ -8,7 +8,9 @@
  * STEPS) with the turtle filling query modules where the string has them, interprets the final
  * string into a scene and writes the requested outputs, chosen by extension (or FORMAT:PATH):
  * .str (the string), .json (a summary per step), and the scene writers of cambium/write.h (.obj
- * .ply .glb .png .svg .csv) with the shared output options of cli_output.h. With --every K the
+ * .ply .glb .png .svg .csv) with the shared output options of cli_output.h; .mtg and
+ * segments:PATH write the plant's segments (the mechanical ones of an L+C model with mechanics,
+ * otherwise those the turtle draws, from a pass with its record on). With --every K the
  * outputs are also written after step 0 and every K-th step as NAME.STEP.EXT (NAME.0003.png),
  * except .glb, which becomes one animation with a frame per K steps. Without -o it derives,
  * interprets and prints a one-line summary. When a limit stops the derivation, the outputs of
