@@ -457,3 +457,46 @@ TEST(turtle_mtg_generalized_cylinder_pieces)
     cbm_view_destroy(v);
     test_ctx_end(ctx);
 }
+
+/* The mechanical plant's MTG through the shared writer: its header, feature list and TOPO codes
+ * as they were before the writer was shared (the feature values are the plant's, checked in
+ * test_io_plant.c). */
+TEST(mechanical_mtg_header_and_codes_pinned)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, NULL, &p));
+    const int64_t parents[] = {-1, 0, 1, 0, 3, -1};
+    for (size_t i = 0; i < 6; i++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = parents[i];
+        d.deviation = i == 3 ? 0.7 : 0.0;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    CHECK_OK(cbm_plant_evaluate(p, NULL));
+    CHECK_OK(cbm_write_mtg(ctx, p, io_path("mech.mtg")));
+    char *b = io_read_all(io_path("mech.mtg"), NULL);
+    CHECK(b != NULL);
+    if (b) {
+        const char *head =
+            "# cambium plant: metres, y up; segments (S) grouped in axes (A) of plants (P)\n"
+            "CODE:\tFORM-A\n";
+        CHECK(strncmp(b, head, strlen(head)) == 0);
+        const char *feat = "FEATURES:\nNAME\tTYPE\nid\tINT\norder\tINT\nx0\tREAL\n";
+        CHECK(strstr(b, feat) != NULL);
+        CHECK(strstr(b, "\nreaction_wood\tREAL\nMTG:\nTOPO\t\tid\torder\tx0\t") != NULL);
+        /* segment 3 is the lateral of 0 (deviated), 1 its continuation */
+        const char *codes[] = {"\n/P1/A1/S1\t\t0\t0\t", "\n\t+A2/S1\t3\t1\t",
+                               "\n\t^<S2\t4\t1\t",      "\n^<S2\t\t1\t0\t",
+                               "\n^<S3\t\t2\t0\t",      "\n/P2/A1/S1\t\t5\t0\t"};
+        const char *at = b;
+        for (size_t i = 0; i < 6; i++) {
+            const char *q = strstr(at, codes[i]);
+            CHECK_MSG(q != NULL, "code %zu", i);
+            at = q ? q + 1 : at;
+        }
+        free(b);
+    }
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
