@@ -489,6 +489,10 @@ TEST(mechanical_mtg_header_and_codes_pinned)
         const char *codes[] = {"\n/P1/A1/S1\t\t0\t0\t", "\n\t+A2/S1\t3\t1\t",
                                "\n\t^<S2\t4\t1\t",      "\n^<S2\t\t1\t0\t",
                                "\n^<S3\t\t2\t0\t",      "\n/P2/A1/S1\t\t5\t0\t"};
+        /* E = 1e10 Pa, written without the exponent's '+' (a branch to openalea.mtg's reader):
+         * no '+' but in the codes */
+        CHECK(strstr(b, "\t1e10\t") != NULL);
+        CHECK_EQ_INT(io_count(b, "+"), 2 + 1); /* DESCRIPTION's two ("A A +", "S S +"), +A2/S1 */
         const char *at = b;
         for (size_t i = 0; i < 6; i++) {
             const char *q = strstr(at, codes[i]);
@@ -498,5 +502,30 @@ TEST(mechanical_mtg_header_and_codes_pinned)
         free(b);
     }
     cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
+/* Large values: exponents without '+' (openalea.mtg's reader would take it for a branch). */
+TEST(turtle_mtg_exponents_without_plus)
+{
+    cbm_context *ctx = test_ctx();
+    static mstr s;
+    parse(&s, "F(2e10) F(3e-9) !(1e-6) F(4)");
+    cbm_view *v;
+    cbm_turtle *t;
+    CHECK_OK(interpret(ctx, &s, &v, &t));
+    CHECK_OK(cbm_write_turtle_mtg(ctx, t, io_path("big.mtg")));
+    char *b = io_read_all(io_path("big.mtg"), NULL);
+    CHECK(b != NULL);
+    if (b) {
+        const char *code = strstr(b, "\nMTG:\n");
+        CHECK(code && strstr(code, "\t0\t0\t0\t0\t2e10\t0\t1\t1\t2e10\n") != NULL);
+        CHECK(code && strchr(code, '+') == NULL); /* a single axis: no '+' at all */
+        /* negative exponents as they are; the width is cpfg's float */
+        CHECK(code && strstr(code, "\t9.99999997e-07\t9.99999997e-07\t4\n") != NULL);
+        free(b);
+    }
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
     test_ctx_end(ctx);
 }

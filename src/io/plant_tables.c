@@ -5,7 +5,8 @@
  * segment's line, then the lateral axes it bears ("+A<n>/S1" one column to the right, relative
  * to the latest code of the column to the left), then its continuation ("^<S<k>" in the same
  * column, relative to the latest code above in that column). Each segment line carries the
- * features in the columns after the TOPO columns; unknown values are empty cells. The traversal
+ * features in the columns after the TOPO columns; unknown values are empty cells, and numbers have
+ * no '+' (1e10: openalea.mtg's reader would take it for a branch). The traversal
  * uses an explicit stack (no recursion, any depth). One writer (cbm__write_mtg_table) takes a
  * generic table of parent / continuation / feature rows: the mechanical plant's here, the turtle's
  * segments in turtle_tables.c. */
@@ -100,6 +101,19 @@ typedef struct mtg_item {
 
 enum { MTG_MAX_FEATURES = 32 };
 
+/* A REAL cell of the MTG: %.9g without the '+' of a positive exponent (1e10, not 1e+10), since
+ * openalea.mtg's reader joins the features into the code and reads a '+' there as a branch. */
+static void mtg_cell(FILE *f, double x)
+{
+    if (!isfinite(x))
+        return;
+    char b[40];
+    int n = snprintf(b, sizeof b, "%.9g", x);
+    for (int k = 0; k < n && k < (int)sizeof b; k++)
+        if (b[k] != '+')
+            fputc(b[k], f);
+}
+
 static cbm_status mtg_row(FILE *f, const cbm__mtg_table *t, size_t i, double *v)
 {
     CBM_TRY(t->row(t->user, i, v));
@@ -109,7 +123,7 @@ static cbm_status mtg_row(FILE *f, const cbm__mtg_table *t, size_t i, double *v)
         if (k < t->nint && isfinite(v[k]))
             fprintf(f, "%lld", (long long)v[k]);
         else if (k >= t->nint)
-            cell(f, v[k]);
+            mtg_cell(f, v[k]);
     }
     fputc('\n', f);
     return CBM_OK;
