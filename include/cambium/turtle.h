@@ -87,6 +87,13 @@ typedef struct cbm_prim {
     size_t first, count; ///< range in cbm_turtle_points
     char id;             ///< surface id
     cbm_frame frame;     ///< the turtle's H, L, U where the primitive starts (cpfg: L = H x U)
+    /// CYLINDER and GCYL (the segments): the segment drawn last before this one on its branch
+    /// path (index in cbm_turtle_prims), -1 for none (a root) and for the other kinds
+    int64_t parent;
+    /// a `[` opened since the parent segment: this segment starts a lateral axis (false: it
+    /// continues the parent's axis, or has no parent)
+    bool lateral;
+    int64_t module; ///< index (0-based) of the module that drew it in the interpreted string
 } cbm_prim;
 
 /// Options of one interpretation.

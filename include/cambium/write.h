@@ -15,6 +15,7 @@
 #include "cambium/base.h"
 #include "cambium/geom.h"
 #include "cambium/mech.h"
+#include "cambium/turtle.h"
 
 #include <stdio.h>
 
@@ -133,6 +134,23 @@ CBM_API cbm_status cbm_write_segments_csv(cbm_context *ctx, const cbm_plant *pla
 /// axis (A), segment (S); '<' joins a segment to its continuation, '+' starts a lateral axis;
 /// per-segment features as in the CSV. Loads with openalea.mtg's read_mtg.
 CBM_API cbm_status cbm_write_mtg(cbm_context *ctx, const cbm_plant *plant, const char *path);
+/* ---- the turtle's segments (plain L-system models) ----
+ * From a turtle interpreted with its record on (cbm_turtle_interpret, cbm_model_interpret). Each
+ * segment (CYLINDER, GCYL primitive) is a row; its parent is the last segment drawn before it on
+ * its branch path, and it starts a lateral axis when a `[` was opened since (cbm_prim.parent,
+ * .lateral). Lengths in the model's units. */
+
+/// The turtle's segments as an OpenAlea MTG coding file (FORM-A, scales P, A, S, as
+/// cbm_write_mtg): features id, order (axis level), module (index in the interpreted string),
+/// color (index), x0 y0 z0 x1 y1 z1 (start and end points), width0 width1 (diameters at the
+/// start and the end), length. No segments: a valid file with no plant.
+CBM_API cbm_status cbm_write_turtle_mtg(cbm_context *ctx, const cbm_turtle *turtle,
+                                        const char *path);
+/// The same rows as a CSV table: id,parent,lateral,order,module,color,x0,y0,z0,x1,y1,z1,width0,
+/// width1,length (parent -1: a root; lateral 1: starts a lateral axis).
+CBM_API cbm_status cbm_write_turtle_segments_csv(cbm_context *ctx, const cbm_turtle *turtle,
+                                                 const char *path);
+
 /// Writes a plant by extension: .csv (segments table), .mtg, or any scene format (the plant
 /// through cbm_plant_to_scene with `sides` sides, then cbm_scene_write).
 CBM_API cbm_status cbm_write_plant(cbm_context *ctx, const cbm_plant *plant, const char *path,

@@ -64,4 +64,22 @@ uint8_t cbm__srgb8(double linear);
 /// 5x7 bitmap glyph of a printable ASCII character: 7 rows of 5 bits (bit 4 leftmost).
 const uint8_t *cbm__glyph(char c);
 
+/// A tree of rows for the MTG writer: each row is one segment (S) with its parent row (-1: a
+/// root, which starts a plant P; parents come before their children), whether it continues the
+/// parent's axis ('<') or starts a lateral axis ('+A'), and its features.
+typedef struct cbm__mtg_table {
+    const char *comment;         ///< the file's first line, after "# "
+    size_t rows;                 ///< segments
+    const int64_t *parent;       ///< per row: the parent row, -1 for a root
+    const uint8_t *continuation; ///< per row: 1 continues the parent's axis, 0 lateral
+    const char *const *features; ///< feature names (at most 32)
+    size_t nfeatures, nint;      ///< features; the first nint are INT, the others REAL
+    /// Fills values[0..nfeatures) for row i (non-finite: an empty cell).
+    cbm_status (*row)(const void *user, size_t i, double *values);
+    const void *user;
+} cbm__mtg_table;
+
+/// Writes the table as an MTG coding file (FORM-A, scales P, A, S) through cbm_out.
+cbm_status cbm__write_mtg_table(cbm_context *ctx, const cbm__mtg_table *t, const char *path);
+
 #endif

@@ -36,6 +36,9 @@
  * @o @c given as parameters and of surfaces. A sub-L-system `?(id, s) ... $` (cpfg manual 7.2)
  * multiplies it by s on a stack of its own and returns to the caller's scale at `$`, the current
  * width following the ratio of the two scales (cpfg's UpdateCurrentLsystem).
+ * The record links each segment (cylinder, generalized-cylinder piece) to its parent, the last
+ * segment recorded on its branch path (kept in the state that `[` and `]` push and pop), and marks
+ * it lateral when a `[` was opened since that parent (the mechanics' rule, docs/language.md).
  * Each segment, polygon, sphere, disc, surface and generalized cylinder is one part of the scene.
  * When the scene is in line mode, cpfg's pixel-style segments (not lpfg's) become lines of the
  * start width in pixels (cpfg's pixel lines) and consecutive lines with equal part data share one
@@ -91,6 +94,8 @@ typedef struct tstate {
     gcpt gc;
     int spl;      /* the open spline cylinder {(n): index in splines, or -1 */
     int spl_mark; /* in a saved state: splines.len when the branch started */
+    int64_t seg_last;  /* the record's last segment on this branch path, -1: none */
+    bool seg_branched; /* a `[` opened since seg_last */
 } tstate;
 
 typedef struct ccache {
@@ -250,6 +255,7 @@ static void init_state(cbm_turtle *t)
     s->sides = v->sides;
     s->tan[0] = s->tan[1] = 1.2; /* cpfg's default tangent parameter */
     s->spl = -1;
+    s->seg_last = -1;
 }
 
 cbm_status cbm__turtle_create(cbm_context *ctx, const cbm_view *view, cbm_scene *scene,
@@ -373,11 +379,26 @@ static bool line_part_reused(const cbm_turtle *t, const cbm_part *last, int colo
            isnan(last->reaction_wood);
 }
 
-static cbm_status push_prim(cbm_turtle *t, const cbm_prim *p)
+/* Records a primitive with its module; a segment (cylinder, generalized-cylinder piece) also
+ * gets its parent, the last segment recorded on the branch path, and becomes that last segment. */
+static cbm_status push_prim(cbm_turtle *t, cbm_prim *p)
 {
     if (!t->record)
         return CBM_OK;
-    return CBM_ARRAY_PUSH(t->ctx, t->prims, *p);
+    p->module = t->part_module >= 0 ? t->part_module : t->module_index - 1;
+    p->parent = -1;
+    p->lateral = false;
+    bool seg = p->kind == CBM_PRIM_CYLINDER || p->kind == CBM_PRIM_GCYL;
+    if (seg) {
+        p->parent = t->cur.seg_last;
+        p->lateral = p->parent >= 0 && t->cur.seg_branched;
+    }
+    CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->prims, *p));
+    if (seg) {
+        t->cur.seg_last = (int64_t)t->prims.len - 1;
+        t->cur.seg_branched = false;
+    }
+    return CBM_OK;
 }
 
 /* A right-handed section frame with H along d, U as close as possible to up. */
@@ -1638,6 +1659,7 @@ cbm_status cbm__turtle_exec(cbm_turtle *t, int cmd, double *params, int nparams)
                              t->stack.len);
         s->spl_mark = (int)t->splines.len;
         CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->stack, *s));
+        s->seg_branched = true; /* the branch's first segment starts a lateral axis */
         if (s->spl >= 0) {
             /* the branch continues a copy of the open spline cylinder */
             spline copy = t->splines.data[s->spl];

@@ -8,7 +8,9 @@
  * STEPS) with the turtle filling query modules where the string has them, interprets the final
  * string into a scene and writes the requested outputs, chosen by extension (or FORMAT:PATH):
  * .str (the string), .json (a summary per step), and the scene writers of cambium/write.h (.obj
- * .ply .glb .png .svg .csv) with the shared output options of cli_output.h. With --every K the
+ * .ply .glb .png .svg .csv) with the shared output options of cli_output.h; .mtg and
+ * segments:PATH write the plant's segments (the mechanical ones of an L+C model with mechanics,
+ * otherwise those the turtle draws, from a pass with its record on). With --every K the
  * outputs are also written after step 0 and every K-th step as NAME.STEP.EXT (NAME.0003.png),
  * except .glb, which becomes one animation with a frame per K steps. Without -o it derives,
  * interprets and prints a one-line summary. When a limit stops the derivation, the outputs of
@@ -36,8 +38,9 @@ static const struct {
 } OTHER_OUTPUTS[] = {
     {"str", "the derived string, one module per line, parameters as %.9g"},
     {"json", "a summary per step: modules, primitives, bounding box, seconds"},
-    {"mtg", "the mechanical segments (L+C models with mechanics:) as an OpenAlea MTG"},
-    {"segments", "(segments:PATH) the mechanical segments as a CSV table, one row each"},
+    {"mtg", "the plant as an OpenAlea MTG: the mechanical segments (L+C models with "
+            "mechanics:), otherwise the segments the turtle draws, linked by its branches"},
+    {"segments", "(segments:PATH) the same segments as a CSV table, one row each"},
 };
 
 static const struct {
@@ -261,9 +264,19 @@ static bool is_plant_format(const char *f)
     return !strcmp(f, "mtg") || !strcmp(f, "segments");
 }
 
-/* The mechanical segments of the string, at their stored state, as an MTG or a CSV table. */
+/* The mechanical segments of the string, at their stored state, as an MTG or a CSV table; for a
+ * model without mechanics, the segments the turtle draws (a pass with the record on). */
 static cbm_status write_plant(run *r, const char *path, const char *format)
 {
+    if (!cbm_lsys_has_mechanics(r->ls)) {
+        cbm_turtle *t = NULL;
+        cbm_status s = cbm_model_interpret(r->model, NULL, true, &t);
+        if (s == CBM_OK)
+            s = !strcmp(format, "mtg") ? cbm_write_turtle_mtg(r->ctx, t, path)
+                                       : cbm_write_turtle_segments_csv(r->ctx, t, path);
+        cbm_turtle_destroy(t);
+        return s;
+    }
     cbm_plant *pl = NULL;
     cbm_status s = cbm_lsys_mech_plant(r->ls, &pl);
     if (s == CBM_OK)
@@ -524,15 +537,6 @@ int cmd_run(int argc, char **argv)
         goto done;
     }
     r.ls = cbm_model_lsys(r.model);
-    for (int k = 0; k < ntargets; k++)
-        if (is_plant_format(targets[k].format) && !cbm_lsys_has_mechanics(r.ls)) {
-            fprintf(stderr,
-                    "cambium run: %s: %s declares no mechanical segments (`mechanics:` in an "
-                    "L+C model); the %s output needs them\n",
-                    targets[k].arg, model, targets[k].format);
-            rc = CLI_USAGE;
-            goto done;
-        }
     for (int k = 0; k < ntargets; k++) {
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");
