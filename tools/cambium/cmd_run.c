@@ -462,8 +462,8 @@ int cmd_run(int argc, char **argv)
                 return cli_usage_error("run", "too many outputs");
             if (!parse_target(argv[i + 1], &targets[ntargets]))
                 return cli_usage_error("run",
-                                       "no writer for '%s' (.str .json .obj .ply .glb .png "
-                                       ".svg .csv, or FORMAT:PATH)",
+                                       "no writer for '%s' (.str .json .mtg .obj .ply .glb "
+                                       ".png .svg .csv, segments:PATH, or FORMAT:PATH)",
                                        argv[i + 1]);
             ntargets++;
             i++;
