@@ -92,8 +92,8 @@ typedef struct tstate {
     bool rtan_scale;
     bool gc_on; /* a generalized cylinder is open; gc is its last control point */
     gcpt gc;
-    int spl;      /* the open spline cylinder {(n): index in splines, or -1 */
-    int spl_mark; /* in a saved state: splines.len when the branch started */
+    int spl;           /* the open spline cylinder {(n): index in splines, or -1 */
+    int spl_mark;      /* in a saved state: splines.len when the branch started */
     int64_t seg_last;  /* the record's last segment on this branch path, -1: none */
     bool seg_branched; /* a `[` opened since seg_last */
 } tstate;
