@@ -1,6 +1,8 @@
 /* Mechanics inside the L+C dialect (src/lsys/mechlang.c): the language route against the native
  * cbm_plant route, the shipped Jirasek models (S-shaped branch, cherries), state kept through
- * rewriting, declaration errors, determinism, out-of-memory. */
+ * rewriting, the plant kept between operations against a new build for each, declaration errors,
+ * determinism, out-of-memory. */
+#include "lsys/lsys_internal.h"
 #include "lsys_util.h"
 
 #include "cambium/lsys.h"
@@ -597,5 +599,140 @@ TEST(mechlang_solver_settings)
     const char *msg = cbm_context_last_error(ctx);
     CHECK_MSG(strstr(msg, "Solver(tolerance > 0") != NULL, "%s", msg);
     cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
+/* Every operation kind several times per step without rewriting in between (the kept plant) and
+ * after rewriting, with settings changed between operations, elliptical sections (the equivalent
+ * ring keeps C_U only for circles), new segments (tropism), ageing and a Break() that cuts. */
+static const char KEEP[] =
+    "#include <lpfgall.h>\n"
+    "derivation length: 6;\n"
+    "module I(MechSegment);\n"
+    "module A(int);\n"
+    "module Fruit(double);\n"
+    "mechanics: I;\n"
+    "mass: Fruit;\n"
+    "double st;\n"
+    "int broken;\n"
+    "MechSegment S(double len, double a, double b, double mor)\n"
+    "{\n"
+    "    MechSegment s;\n"
+    "    s.length = len; s.a = a; s.b = b; s.E = 2e9; s.density = 800; s.mor = mor;\n"
+    "    s.age = -1;\n"
+    "    return s;\n"
+    "}\n"
+    "Start: { Tropism(0.3, 1, 0, 0.02); }\n"
+    "EndEach: {\n"
+    "    Equilibrium(); AddRings(); Equilibrium(); st = Stability(); AgeWood(0.5);\n"
+    "    Gravity(0, -12, 0); Equilibrium(); Gravity(0, -9.81, 0);\n"
+    "    Ground(-0.05, 1e4, 0.001); Equilibrium(); Stability(); Ground(0, 0, 0);\n"
+    "    broken = broken + Break(); Equilibrium(); AddRings(); Break(); Equilibrium();\n"
+    "}\n"
+    "Axiom: I(S(0.2, 0.012, 0.009, 0)) Right(30) I(S(0.15, 0.008, 0.006, 0))\n"
+    "       SB RollR(70) Right(25) I(S(0.1, 0.004, 0.003, 5e6)) Fruit(0.05) EB\n"
+    "       I(S(0.15, 0.006, 0.006, 0)) Fruit(0.02) A(3);\n"
+    "production:\n"
+    "Fruit(m) : { produce Fruit(m * 1.3); }\n"
+    "A(n) : { if (n > 0) produce SB Down(40) I(S(0.05, 0.003, 0.002, 0)) Fruit(0.01) EB A(n - 1); "
+    "}\n";
+
+/* Organ contact: three berries on stems 6.8 mm apart at the tips, radius 4 mm, swelling. */
+static const char KEEPC[] =
+    "#include <lpfgall.h>\n"
+    "derivation length: 4;\n"
+    "module I(MechSegment);\n"
+    "module Grape(double, double);\n"
+    "mechanics: I;\n"
+    "mass: Grape(mass, radius);\n"
+    "MechSegment S(double len, double r)\n"
+    "{\n"
+    "    MechSegment s;\n"
+    "    s.length = len; s.a = r; s.b = r; s.E = 2e8; s.density = 1000;\n"
+    "    return s;\n"
+    "}\n"
+    "Start: { Contact(5000, 0.0002); }\n"
+    "EndEach: {\n"
+    "    Equilibrium(); AddRings(); Equilibrium(); Gravity(0, -11, 0); Equilibrium();\n"
+    "    Gravity(0, -9.81, 0); Equilibrium(); Break(); Equilibrium();\n"
+    "}\n"
+    "Axiom: Down(160) I(S(0.012, 0.0015)) SB Down(20) I(S(0.01, 0.0005)) Grape(0.0003, 0.004) EB\n"
+    "       SB Up(20) I(S(0.01, 0.0005)) Grape(0.0003, 0.004) EB\n"
+    "       I(S(0.01, 0.0005)) Grape(0.0003, 0.004);\n"
+    "production:\n"
+    "Grape(m, r) : { produce Grape(m * 1.4, r * 1.12); }\n";
+
+/* Runs `text` (or the model file `path`) with the plant kept or not; every parameter of the
+ * string after each step into out (n doubles), the timing in *mt. */
+static cbm_status run_keep(cbm_context *ctx, const char *path, const char *text, bool keep,
+                           double *out, size_t max, size_t *n, cbm_lsys_mech_timing *mt,
+                           size_t *modules)
+{
+    cbm_lsys *ls = NULL;
+    cbm_status s = text ? load(ctx, path, text, &ls) : load_model(ctx, path, &ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(ls);
+    if (s == CBM_OK)
+        cbm__lpfg_mech_keep(ls, keep);
+    *n = 0;
+    while (s == CBM_OK && cbm_lsys_steps_done(ls) < cbm_lsys_derivation_length(ls)) {
+        s = cbm_lsys_step(ls);
+        cbm_lsys_cursor c;
+        cbm_lsys_cursor_begin(ls, false, &c);
+        while (s == CBM_OK && cbm_lsys_cursor_next(ls, false, &c))
+            for (int i = 0; i < c.nparams && *n < max; i++)
+                out[(*n)++] = c.params[i];
+    }
+    if (s == CBM_OK) {
+        *mt = cbm_lsys_mech_time(ls);
+        *modules = cbm_lsys_module_count(ls);
+    }
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
+/* A kept plant gives the state a new build gives, bit for bit, after the same calls. */
+static void check_keep(const char *path, const char *text, size_t min_kept)
+{
+    cbm_context *ctx = test_ctx();
+    static double a[200000], b[200000];
+    size_t na = 0, nb = 0, ma = 0, mb = 0;
+    cbm_lsys_mech_timing ta, tb;
+    CHECK_OK(run_keep(ctx, path, text, true, a, 200000, &na, &ta, &ma));
+    CHECK_OK(run_keep(ctx, path, text, false, b, 200000, &nb, &tb, &mb));
+    CHECK(na > 50 && na < 200000);
+    CHECK_EQ_INT(na, nb);
+    CHECK_EQ_INT(ma, mb);
+    CHECK(memcmp(a, b, na * sizeof a[0]) == 0);
+    CHECK_EQ_INT(ta.operations, tb.operations);
+    CHECK_EQ_INT(ta.passes, tb.passes);
+    CHECK(ta.kept >= min_kept);
+    CHECK_EQ_INT(tb.kept, 0);
+    test_ctx_end(ctx);
+}
+
+TEST(mechlang_kept_plant_matches_rebuild)
+{
+    /* 13 operations a step; the ones after an operation that changed only results reuse the
+     * plant; a Gravity/Ground change or a cut rebuilds */
+    check_keep("keep.l", KEEP, 20);
+    check_keep("keepc.l", KEEPC, 12);
+    /* the shipped models: AddRings() then Equilibrium() each step */
+    check_keep("jirasek-hanging.l", NULL, 20);
+}
+
+TEST(mechlang_kept_plant_break_cuts)
+{
+    /* the model above cuts its fruit branch in some step (the kept plant is dropped then) */
+    cbm_context *ctx = test_ctx();
+    cbm_lsys *ls = NULL;
+    CHECK_OK(load(ctx, "keep.l", KEEP, &ls));
+    CHECK_OK(cbm_lsys_reset(ls));
+    while (cbm_lsys_steps_done(ls) < cbm_lsys_derivation_length(ls))
+        CHECK_OK(cbm_lsys_step(ls));
+    double g[8][MS];
+    size_t n = segments(ls, lsys_symbol(ls, "I"), g, 8);
+    CHECK(n >= 4 && n < 7); /* 4 in the axiom, 3 laterals grown */
+    cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
 }

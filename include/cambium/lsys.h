@@ -61,8 +61,9 @@ CBM_API int cbm_lsys_steps_done(const cbm_lsys *ls);
 
 /// Wall-clock time spent in the mechanics operations of the L+C dialect (docs/mechanics.md:
 /// Equilibrium(), AddRings(), AgeWood(), Break(), Stability()) since the last cbm_lsys_reset,
-/// including those called from Start/StartEach/EndEach/End. Every operation builds the plant
-/// from the string and writes its results back; that is counted with the operation.
+/// including those called from Start/StartEach/EndEach/End. An operation builds the plant from
+/// the string unless the string and the settings are unchanged since the previous one (then it
+/// reuses that plant) and writes its results back; that is counted with the operation.
 typedef struct cbm_lsys_mech_timing {
     double equilibrium; ///< s, Equilibrium() in all
     double solve;       ///< s, of which cbm_plant_solve itself
@@ -70,6 +71,7 @@ typedef struct cbm_lsys_mech_timing {
     double other;       ///< s, Break() and Stability()
     size_t operations;  ///< mechanics operations run
     size_t passes;      ///< solver passes of the Equilibrium() calls
+    size_t kept;        ///< operations that reused the previous operation's plant (no build)
 } cbm_lsys_mech_timing;
 
 /// The mechanics time of the current run (all zero for a model without mechanics).

@@ -125,6 +125,9 @@ CBM_API cbm_status cbm_plant_add_ring(cbm_plant *plant, size_t seg, const cbm_ri
 /// Replaces ring k (0 = innermost) of a segment; semi-axes must stay nested. Aggregates update.
 CBM_API cbm_status cbm_plant_set_ring(cbm_plant *plant, size_t seg, size_t k, const cbm_ring *ring);
 /// Copies ring k of a segment into *out.
+/// Replaces all of segment seg's rings by the one ring `ring` (for instance their equivalent
+/// ring): the section, mass and rest rate follow from it as for a new segment with that core.
+CBM_API cbm_status cbm_plant_replace_rings(cbm_plant *plant, size_t seg, const cbm_ring *ring);
 CBM_API cbm_status cbm_plant_get_ring(const cbm_plant *plant, size_t seg, size_t k, cbm_ring *out);
 CBM_API size_t cbm_plant_ring_count(const cbm_plant *plant, size_t seg);
 CBM_API cbm_status cbm_plant_set_length(cbm_plant *plant, size_t seg, double length);

@@ -4002,6 +4002,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->ev.nran_have = 0;
     glibc_srand(lp, 1);
     { /* mechanics settings back to their defaults; the declarations stay */
+        cbm__mechlang_free(ls->ctx, &lp->mech);
         cbm__mechlang m = lp->mech;
         cbm__mechlang_init(&lp->mech);
         lp->mech.seg_code = m.seg_code;
@@ -4196,6 +4197,15 @@ static void free_set(cbm_context *ctx, lset *s)
     CBM_ARRAY_FREE(ctx, s->prods);
 }
 
+void cbm__lpfg_mech_keep(cbm_lsys *ls, bool keep)
+{
+    if (!ls->lp)
+        return;
+    if (!keep)
+        cbm__mechlang_free(ls->ctx, &ls->lp->mech);
+    ls->lp->mech.keep = keep;
+}
+
 void cbm__lpfg_free(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
@@ -4221,6 +4231,7 @@ void cbm__lpfg_free(cbm_lsys *ls)
         cbm__strfree(ctx, lp->funcnames.data[i]);
     CBM_ARRAY_FREE(ctx, lp->funcnames);
     CBM_ARRAY_FREE(ctx, lp->funcids);
+    cbm__mechlang_free(ctx, &lp->mech);
     CBM_ARRAY_FREE(ctx, lp->nodes);
     CBM_ARRAY_FREE(ctx, lp->origin);
     CBM_ARRAY_FREE(ctx, lp->sms);

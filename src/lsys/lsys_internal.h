@@ -153,6 +153,9 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);
 bool cbm__lpfg_detect(const cbm__pp *pp);
 cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp);
 void cbm__lpfg_free(cbm_lsys *ls);
+/* Whether the mechanics keep their plant between operations (default true; false: every
+ * operation builds a new one, as a reference for tests). */
+void cbm__lpfg_mech_keep(cbm_lsys *ls, bool keep);
 cbm_status cbm__lpfg_reset(cbm_lsys *ls);
 cbm_status cbm__lpfg_step(cbm_lsys *ls);
 cbm_status cbm__lpfg_interpretation(cbm_lsys *ls);

@@ -35,6 +35,13 @@
  *      density = mass per length / area, rest = the rigidity-weighted rest rate, age = the oldest
  *      ring's; this keeps C_H, C_L, the mass and the rest rate exactly (C_U too for a circular
  *      section), so state survives any rewriting that copies the parameter.
+ * The plant is kept between operations while the string has not changed (compared byte for byte
+ * with the string as the last operation left it, in the same buffer) and the settings it holds
+ * (gravity, ground, contact, discretization) are the same: then the next operation skips the
+ * build. After rings or ageing each segment's rings are replaced by the one equivalent ring
+ * written back (step 4), so a kept plant is the plant a new build from the string would make,
+ * bit for bit, and keeping changes no result. Its warm start also knows the point masses its
+ * state balances (a new build balances none).
  * Frames: the turtle's (H, L, U) is left-handed (L = H x U, cpfg); the plant's is right-handed,
  * so the plant's L is minus the turtle's and a turtle rotation maps to the plant's local axes
  * with the signs in rot_of(). The clamp frame is the turtle's initial frame (H = +y, U = -z).
@@ -83,6 +90,7 @@ void cbm__mechlang_init(cbm__mechlang *m)
     m->growth.ageing = CBM_AGEING_CORE;
     m->solve = cbm_solve_def_default();
     m->discretization = CBM_MECH_STAGGERED;
+    m->keep = true;
 }
 
 /* The turtle rotation of `tr` by `deg` degrees as a rotation about the plant's local axes
@@ -190,6 +198,29 @@ static cbm_status axes(cbm_context *ctx, const cbm__mechlang *m, const lstr *s, 
     return CBM_OK;
 }
 
+/* The one ring of a segment of parameters g (index ix): the stored equivalent ring. */
+static cbm_status core_of(const double *g, size_t ix, cbm_ring *r, char *err, size_t errn)
+{
+    if (!(g[MS_A] > 0) || !isfinite(g[MS_A]))
+        return seg_error(err, errn, ix, "a must be > 0 (m)");
+    if (!(g[MS_E] > 0) || !isfinite(g[MS_E]))
+        return seg_error(err, errn, ix, "E must be > 0 (Pa)");
+    if (!(g[MS_DENSITY] >= 0))
+        return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
+    *r = cbm_segment_def_default().core;
+    r->youngs_modulus = g[MS_E];
+    r->shear_modulus = g[MS_G] > 0 ? g[MS_G] : g[MS_E] / 16;
+    r->density = g[MS_DENSITY];
+    r->a = g[MS_A];
+    r->b = g[MS_B] > 0 ? g[MS_B] : g[MS_A];
+    if (r->b > r->a)
+        return seg_error(err, errn, ix, "b must be <= a");
+    r->modulus_of_rupture = g[MS_MOR] > 0 ? g[MS_MOR] : 0;
+    r->age = g[MS_AGE] > 0 ? g[MS_AGE] : 0;
+    r->rest_rate = v3(g[MS_REST], g[MS_REST + 1], g[MS_REST + 2]);
+    return CBM_OK;
+}
+
 static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant *pl, view *v,
                         char *err, size_t errn)
 {
@@ -219,13 +250,8 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
             size_t ix = v->seg.len;
             if (!(g[MS_LENGTH] > 0) || !isfinite(g[MS_LENGTH]))
                 return seg_error(err, errn, ix, "length must be > 0 (m)");
-            if (!(g[MS_A] > 0) || !isfinite(g[MS_A]))
-                return seg_error(err, errn, ix, "a must be > 0 (m)");
-            if (!(g[MS_E] > 0) || !isfinite(g[MS_E]))
-                return seg_error(err, errn, ix, "E must be > 0 (Pa)");
-            if (!(g[MS_DENSITY] >= 0))
-                return seg_error(err, errn, ix, "density must be >= 0 (kg/m^3)");
             cbm_segment_def d = cbm_segment_def_default();
+            CBM_TRY(core_of(g, ix, &d.core, err, errn));
             d.parent = last;
             /* a lateral leaves the joint with the parent's distal half to the axis; where the
              * parent has no axial child its first lateral takes that joint (the axis turns into
@@ -235,16 +261,6 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
             d.order = last < 0 ? 0 : v->order.data[last] + (axial ? 0 : 1);
             d.length = g[MS_LENGTH];
             euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
-            d.core.youngs_modulus = g[MS_E];
-            d.core.shear_modulus = g[MS_G] > 0 ? g[MS_G] : g[MS_E] / 16;
-            d.core.density = g[MS_DENSITY];
-            d.core.a = g[MS_A];
-            d.core.b = g[MS_B] > 0 ? g[MS_B] : g[MS_A];
-            if (d.core.b > d.core.a)
-                return seg_error(err, errn, ix, "b must be <= a");
-            d.core.modulus_of_rupture = g[MS_MOR] > 0 ? g[MS_MOR] : 0;
-            d.core.age = g[MS_AGE] > 0 ? g[MS_AGE] : 0;
-            d.core.rest_rate = v3(g[MS_REST], g[MS_REST + 1], g[MS_REST + 2]);
             d.omega = v3(g[MS_OMEGA], g[MS_OMEGA + 1], g[MS_OMEGA + 2]);
             d.point_mass = 0;
             cbm_status st = cbm_plant_add_segment(pl, &d, NULL);
@@ -400,8 +416,136 @@ static void cut_string(const cbm__mechlang *m, lstr *s, const uint8_t *cut)
     s->npar = ok;
 }
 
-static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, double arg,
                          double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
+
+/* The plant kept between operations (see cbm__mechlang.kept): its view, the string's parameter
+ * buffer its view points into, a copy of the string it was built from and written back to, and
+ * the settings the plant holds. */
+struct cbm__mechkept {
+    cbm_plant *pl; /* NULL: none */
+    view v;
+    const void *par;
+    uint8_t *sym, *pc;
+    double *spar;
+    size_t n, npm, npar, capsym, cappc, cappar;
+    cbm_vec3 gravity;
+    double ground[3], contact[2];
+    cbm_mech_discretization discretization;
+};
+
+static void kept_drop(cbm_context *ctx, cbm__mechlang *m)
+{
+    struct cbm__mechkept *k = m->kept;
+    if (!k || !k->pl)
+        return;
+    view_free(ctx, &k->v);
+    cbm_plant_destroy(k->pl);
+    k->pl = NULL;
+}
+
+void cbm__mechlang_free(cbm_context *ctx, cbm__mechlang *m)
+{
+    struct cbm__mechkept *k = m->kept;
+    if (k) {
+        kept_drop(ctx, m);
+        cbm__free(ctx, k->sym, k->capsym);
+        cbm__free(ctx, k->pc, k->cappc);
+        cbm__free(ctx, k->spar, k->cappar * sizeof *k->spar);
+        cbm__free(ctx, k, sizeof *k);
+        m->kept = NULL;
+    }
+}
+
+static bool same_settings(const cbm__mechlang *m, const struct cbm__mechkept *k)
+{
+    return k->gravity.x == m->gravity.x && k->gravity.y == m->gravity.y &&
+           k->gravity.z == m->gravity.z && k->ground[0] == m->ground_y &&
+           k->ground[1] == m->ground_k && k->ground[2] == m->ground_s &&
+           k->contact[0] == m->contact_k && k->contact[1] == m->contact_s &&
+           k->discretization == m->discretization;
+}
+
+/* The kept plant and its view, moved out to the caller, when the string and the settings are
+ * those it was kept with; false otherwise (the caller builds a new plant). */
+static bool kept_take(cbm__mechlang *m, const lstr *s, cbm_plant **pl, view *v)
+{
+    struct cbm__mechkept *k = m->kept;
+    if (!m->keep || !k || !k->pl || k->par != s->par || k->n != s->n || k->npm != s->npm ||
+        k->npar != s->npar || !same_settings(m, k) || memcmp(k->sym, s->sym, s->n) != 0 ||
+        memcmp(k->pc, s->pc, s->npm) != 0 ||
+        memcmp(k->spar, s->par, s->npar * sizeof *k->spar) != 0)
+        return false;
+    *pl = k->pl;
+    *v = k->v;
+    k->pl = NULL;
+    memset(&k->v, 0, sizeof k->v);
+    return true;
+}
+
+static bool grow_buf(cbm_context *ctx, void **buf, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return true;
+    size_t nc = need + need / 2;
+    void *b = cbm__alloc(ctx, nc * size);
+    if (!b)
+        return false;
+    if (*buf)
+        cbm__free(ctx, *buf, *cap * size);
+    *buf = b;
+    *cap = nc;
+    return true;
+}
+
+/* Keeps pl and v with a copy of the string s as written back; false (nothing kept, the caller
+ * still owns pl and v) when out of memory: keeping is only a saving. */
+static bool kept_store(cbm_context *ctx, cbm__mechlang *m, const lstr *s, cbm_plant *pl, view *v)
+{
+    kept_drop(ctx, m);
+    if (!m->kept) {
+        m->kept = cbm__calloc(ctx, 1, sizeof *m->kept);
+        if (!m->kept)
+            return false;
+    }
+    struct cbm__mechkept *k = m->kept;
+    if (!grow_buf(ctx, (void **)&k->sym, &k->capsym, s->n, 1) ||
+        !grow_buf(ctx, (void **)&k->pc, &k->cappc, s->npm, 1) ||
+        !grow_buf(ctx, (void **)&k->spar, &k->cappar, s->npar, sizeof *k->spar))
+        return false;
+    if (s->n)
+        memcpy(k->sym, s->sym, s->n);
+    if (s->npm)
+        memcpy(k->pc, s->pc, s->npm);
+    if (s->npar)
+        memcpy(k->spar, s->par, s->npar * sizeof *k->spar);
+    k->par = s->par;
+    k->n = s->n;
+    k->npm = s->npm;
+    k->npar = s->npar;
+    k->gravity = m->gravity;
+    k->ground[0] = m->ground_y;
+    k->ground[1] = m->ground_k;
+    k->ground[2] = m->ground_s;
+    k->contact[0] = m->contact_k;
+    k->contact[1] = m->contact_s;
+    k->discretization = m->discretization;
+    k->pl = pl;
+    k->v = *v;
+    return true;
+}
+
+/* After rings or ageing: each segment's rings replaced by the one equivalent ring written back,
+ * the plant a new build from the string would make (cbm_plant_replace_rings). */
+static cbm_status collapse(cbm_plant *pl, const view *v, char *err, size_t errn)
+{
+    for (size_t i = 0; i < v->seg.len; i++) {
+        cbm_ring r;
+        CBM_TRY(core_of(v->seg.data[i], i, &r, err, errn));
+        CBM_TRY(cbm_plant_replace_rings(pl, i, &r));
+    }
+    return CBM_OK;
+}
 
 /* A model and string the mechanics can run on; else a message in err. */
 static cbm_status usable(const cbm__mechlang *m, const lstr *s, char *err, size_t errn)
@@ -462,7 +606,7 @@ cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s
     return CBM_OK;
 }
 
-cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+cbm_status cbm__mechlang_run(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing)
 {
     cbm_lsys_mech_timing scratch;
@@ -490,7 +634,7 @@ cbm_lsys_mech_timing cbm_lsys_mech_time(const cbm_lsys *ls)
     return ls ? ls->mech_time : t;
 }
 
-static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, double arg,
                          double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing)
 {
     *result = 0;
@@ -498,7 +642,14 @@ static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int 
     cbm_plant *pl = NULL;
     view v;
     memset(&v, 0, sizeof v);
-    cbm_status st = make_plant(ctx, m, s, &pl, &v, err, errn);
+    cbm_status st = CBM_OK;
+    if (kept_take(m, s, &pl, &v))
+        timing->kept++;
+    else {
+        kept_drop(ctx, m);
+        st = make_plant(ctx, m, s, &pl, &v, err, errn);
+    }
+    bool cut = false;
     if (st == CBM_OK && v.seg.len == 0)
         goto done;
     if (st == CBM_OK && op == CBM__ML_EQUILIBRIUM) {
@@ -528,12 +679,16 @@ static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int 
             st = cbm_plant_evaluate(pl, NULL);
         if (st == CBM_OK)
             st = write_back(pl, &v, true);
+        if (st == CBM_OK)
+            st = collapse(pl, &v, err, errn);
     } else if (st == CBM_OK && op == CBM__ML_AGE) {
         st = cbm_plant_age_wood(pl, &m->growth, arg);
         if (st == CBM_OK)
             st = cbm_plant_evaluate(pl, NULL);
         if (st == CBM_OK)
             st = write_back(pl, &v, true);
+        if (st == CBM_OK)
+            st = collapse(pl, &v, err, errn);
         *result = (double)v.seg.len;
     } else if (st == CBM_OK && op == CBM__ML_STABILITY) {
         st = cbm_plant_stability_factor(pl, result, NULL);
@@ -542,26 +697,31 @@ static cbm_status run_op(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int 
     } else if (st == CBM_OK && op == CBM__ML_BREAK) {
         size_t nb = 0, n = v.seg.len, ns = s->n ? s->n : 1;
         size_t *broken = cbm__alloc(ctx, n * sizeof *broken);
-        uint8_t *cut = cbm__calloc(ctx, ns, 1);
-        st = broken && cut ? cbm_plant_evaluate(pl, NULL) : CBM_E_NOMEM;
+        uint8_t *cutm = cbm__calloc(ctx, ns, 1);
+        st = broken && cutm ? cbm_plant_evaluate(pl, NULL) : CBM_E_NOMEM;
         if (st == CBM_OK)
             st = write_back(pl, &v, false);
         if (st == CBM_OK)
             st = cbm_plant_break(pl, broken, n, &nb, NULL);
         if (st == CBM_OK) {
             for (size_t i = 0; i < nb; i++)
-                cut[v.mod.data[broken[i]]] = 1;
-            cut_string(m, s, cut);
+                cutm[v.mod.data[broken[i]]] = 1;
+            cut_string(m, s, cutm);
             *result = (double)nb;
+            cut = nb > 0;
         }
         if (broken)
             cbm__free(ctx, broken, n * sizeof *broken);
-        if (cut)
-            cbm__free(ctx, cut, ns);
+        if (cutm)
+            cbm__free(ctx, cutm, ns);
     }
     if (st != CBM_OK && !err[0])
         snprintf(err, errn, "%s", cbm_context_last_error(ctx));
 done:
+    /* kept for the next operation unless the string lost segments (a new build is cheap for an
+     * empty plant) */
+    if (st == CBM_OK && !cut && v.seg.len && m->keep && kept_store(ctx, m, s, pl, &v))
+        return st;
     view_free(ctx, &v);
     cbm_plant_destroy(pl);
     return st;

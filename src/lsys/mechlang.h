@@ -42,6 +42,10 @@ typedef struct cbm__mechlang {
     cbm_solve_def solve;
     bool go_on; /* an unconverged equilibrium keeps its best state (result -passes) */
     cbm_mech_discretization discretization;
+    /* The plant of the last operation, kept while the string (compared byte for byte) and the
+     * settings it was built with are unchanged (mechlang.c); keep: whether to keep it. */
+    struct cbm__mechkept *kept;
+    bool keep;
 } cbm__mechlang;
 
 enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK, CBM__ML_STABILITY };
@@ -50,6 +54,9 @@ enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK, CBM__ML_S
  * defaults. */
 void cbm__mechlang_init(cbm__mechlang *m);
 
+/* Frees the kept plant (m stays usable: the next operation builds a new one). */
+void cbm__mechlang_free(cbm_context *ctx, cbm__mechlang *m);
+
 /* Runs one operation over the string s (parameters in double): builds the plant from the
  * segments of the string, does `op` (arg: years for CBM__ML_AGE), writes the results back into
  * the segments' parameters, and for CBM__ML_BREAK removes the broken segments and the rest of
@@ -57,8 +64,10 @@ void cbm__mechlang_init(cbm__mechlang *m);
  * segments broken (equilibrium: minus the passes when the solve did not converge and go_on is
  * set; the best state is kept), the stability factor (CBM__ML_STABILITY: cbm_plant_stability_factor
  * at the stored omega; the string is not changed). Errors go to err (a message) with the status.
- * The wall-clock time of the operation is added to *timing (may be NULL). */
-cbm_status cbm__mechlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int op, double arg,
+ * The wall-clock time of the operation is added to *timing (may be NULL). The plant is kept in m
+ * for the next operation while the string and the settings stay as this one left them (with the
+ * same results as a new build); a Break() that cuts drops it. */
+cbm_status cbm__mechlang_run(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, double arg,
                              double *result, char *err, size_t errn, cbm_lsys_mech_timing *timing);
 
 /* A new plant of the string's segments at their stored state (cbm_lsys_mech_plant); *out NULL

@@ -542,6 +542,19 @@ cbm_status cbm_plant_set_ring(cbm_plant *p, size_t seg, size_t k, const cbm_ring
     return CBM_OK;
 }
 
+cbm_status cbm_plant_replace_rings(cbm_plant *p, size_t seg, const cbm_ring *ring)
+{
+    if (!p || !ring)
+        return CBM_E_INVALID;
+    CBM_TRY(check_seg(p, seg));
+    CBM_TRY(check_ring(p, ring, NULL, "ring", seg));
+    /* the run keeps its capacity: the slots stay the segment's for later rings */
+    p->rings.data[p->ring_first[seg]] = *ring;
+    p->ring_count[seg] = 1;
+    update_section(p, seg);
+    return CBM_OK;
+}
+
 cbm_status cbm_plant_get_ring(const cbm_plant *p, size_t seg, size_t k, cbm_ring *out)
 {
     if (!p || !out)

@@ -358,9 +358,9 @@ static void print_timing(const run *r)
         fprintf(stderr,
                 "run: derive %.4f s (rewriting %.4f s, equilibrium %.4f s of which solver %.4f s "
                 "in %zu passes, rings and ageing %.4f s, other mechanics %.4f s; %zu mechanics "
-                "operations), ",
+                "operations, %zu on a kept plant), ",
                 r->t_derive, r->t_derive - mech, mt.equilibrium, mt.solve, mt.passes, mt.rings,
-                mt.other, mt.operations);
+                mt.other, mt.operations, mt.kept);
     }
     fprintf(stderr, "interpret %.4f s, write %.4f s, total %.4f s; peak %.1f MB in the library\n",
             r->t_interpret, r->t_write, cli_seconds() - r->t_start,
