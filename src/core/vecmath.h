@@ -126,6 +126,13 @@ static inline cbm_quat q_normalize(cbm_quat q)
     cbm_quat r = {q.w / n, q.x / n, q.y / n, q.z / n};
     return r;
 }
+/// The first axis (H) of the frame of a unit quaternion: q e_x q*, written out.
+static inline cbm_vec3 q_h(cbm_quat q)
+{
+    return v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
+              2.0 * (q.x * q.z - q.w * q.y));
+}
+
 /// q v q*
 static inline cbm_vec3 q_rotate(cbm_quat q, cbm_vec3 v)
 {

@@ -395,12 +395,6 @@ void cbm__mech_pairs_prepare(cbm_plant *p)
     c->nsph = ns;
 }
 
-static inline cbm_vec3 heading(cbm_quat q)
-{
-    return v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
-              2.0 * (q.x * q.z - q.w * q.y));
-}
-
 void cbm__mech_pairs_eval(cbm_plant *p)
 {
     cbm__mech_contacts *c = &p->contacts;
@@ -412,7 +406,7 @@ void cbm__mech_pairs_eval(cbm_plant *p)
     const size_t ns = c->nsph;
     for (size_t s = 0; s < ns; s++) {
         size_t i = c->sph[s];
-        c->centre[s] = v3_madd(p->pos[i], heading(p->q[i]), p->len[i]);
+        c->centre[s] = v3_madd(p->pos[i], q_h(p->q[i]), p->len[i]);
     }
     size_t found = cbm__sphere_grid_pairs(&c->grid, c->centre, c->rad, ns, c->pairs, c->pcap);
     c->npairs = found;
@@ -443,7 +437,7 @@ void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth
         return;
     for (size_t s = 0; s < c->nsph; s++) {
         size_t i = c->sph[s];
-        c->dx[i] = v3_add(dpos[i], v3_scale(v3_cross(dth[i], heading(p->q[i])), p->len[i]));
+        c->dx[i] = v3_add(dpos[i], v3_scale(v3_cross(dth[i], q_h(p->q[i])), p->len[i]));
     }
     size_t stored = c->npairs < c->pcap ? c->npairs : c->pcap;
     for (size_t q = 0; q < stored; q++) {
@@ -476,13 +470,13 @@ void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth
 static void path_terms(const cbm_plant *p, size_t x, cbm_vec3 n, double sg, double *u, double *g)
 {
     const double *fa = p->work.fa;
-    cbm_vec3 X = v3_madd(p->pos[x], heading(p->q[x]), p->len[x]);
+    cbm_vec3 X = v3_madd(p->pos[x], q_h(p->q[x]), p->len[x]);
     for (int64_t j = (int64_t)x; j >= 0; j = p->parent[j]) {
         cbm_vec3 r = v3_scale(v3_cross(v3_sub(X, p->pos[j]), n), sg);
         size_t o = 3 * (size_t)j;
         if (u) {
             cbm_quat q = p->q[j];
-            cbm_vec3 h = heading(q);
+            cbm_vec3 h = q_h(q);
             cbm_vec3 l = v3(2.0 * (q.x * q.y - q.w * q.z), 1.0 - 2.0 * (q.x * q.x + q.z * q.z),
                             2.0 * (q.y * q.z + q.w * q.x));
             cbm_vec3 uu = v3_cross(h, l);

@@ -283,12 +283,6 @@ static inline cbm_quat qexp(cbm_vec3 r)
     return q;
 }
 
-static inline cbm_vec3 q_h(cbm_quat q)
-{
-    return v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
-              2.0 * (q.x * q.z - q.w * q.y));
-}
-
 static inline void q_frame(cbm_quat q, cbm_vec3 *h, cbm_vec3 *l, cbm_vec3 *u)
 {
     double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;

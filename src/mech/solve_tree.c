@@ -193,9 +193,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         memset(w->fact, 0, n);
         for (size_t i = 0; i < n; i++) {
             double kc;
-            cbm_vec3 h = v3(1.0 - 2.0 * (p->q[i].y * p->q[i].y + p->q[i].z * p->q[i].z),
-                            2.0 * (p->q[i].x * p->q[i].y + p->q[i].w * p->q[i].z),
-                            2.0 * (p->q[i].x * p->q[i].z - p->q[i].w * p->q[i].y));
+            cbm_vec3 h = q_h(p->q[i]);
             (void)cbm__mech_contact(p, i, h, &kc);
             /* mark the path to the root; only marked segments read or receive the contact
              * accumulators, so only theirs need clearing */
@@ -409,9 +407,7 @@ static void forward_solve(cbm_plant *p, cbm_vec3 *out)
         dth[i] = v3_add(tp, mvec(w->fa + 9 * i, v));
         if (act) {
             /* dX_i = dX_parent + l_i dth_i x H_i */
-            cbm_quat q = p->q[i];
-            cbm_vec3 h = v3(1.0 - 2.0 * (q.y * q.y + q.z * q.z), 2.0 * (q.x * q.y + q.w * q.z),
-                            2.0 * (q.x * q.z - q.w * q.y));
+            cbm_vec3 h = q_h(p->q[i]);
             dx[i] = v3_add(xp, v3_scale(v3_cross(dth[i], h), p->len[i]));
         }
     }
