@@ -72,6 +72,16 @@ void cbm_test_fail(const char *file, int line, const char *fmt, ...)
 
 /// A context for one test; test_ctx_end checks that every byte was returned, then destroys it.
 cbm_context *test_ctx(void);
+/// Diagnostics collected as "file:line:col: message" lines ("?:0:0:" without a file).
+typedef struct test_diags {
+    char text[8192];
+    int count;
+} test_diags;
+/// The diagnostics sink of test_diag_ctx (appends to the test_diags at ud).
+void test_diag_sink(void *ud, const cbm_diagnostic *d);
+/// A context whose diagnostics go to *g (cleared first); NULL if it cannot be made. Release with
+/// test_ctx_end.
+cbm_context *test_diag_ctx(test_diags *g);
 void test_ctx_end_at(cbm_context *ctx, const char *file, int line);
 #define test_ctx_end(ctx) test_ctx_end_at((ctx), __FILE__, __LINE__)
 

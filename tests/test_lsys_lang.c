@@ -9,32 +9,6 @@
 #include <math.h>
 
 /* ---- helpers ---- */
-typedef struct diags {
-    char text[8192];
-    int count;
-} diags;
-
-static void sink(void *ud, const cbm_diagnostic *d)
-{
-    diags *g = ud;
-    size_t n = strlen(g->text);
-    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
-             d->col, d->message);
-    g->count++;
-}
-
-static cbm_context *diag_ctx(diags *g)
-{
-    memset(g, 0, sizeof *g);
-    cbm_context_def def = cbm_context_def_default();
-    def.diag = sink;
-    def.diag_ud = g;
-    cbm_context *ctx = NULL;
-    if (cbm_context_create(&def, &ctx) != CBM_OK)
-        return NULL;
-    return ctx;
-}
-
 static cbm_status load_text(cbm_context *ctx, const char *text, bool float32, cbm_lsys **ls)
 {
     cbm_lsys_def def = cbm_lsys_def_default();
@@ -200,8 +174,8 @@ TEST(stochastic_frequencies)
 /* ---- diagnostics ---- */
 TEST(several_errors_with_locations)
 {
-    diags g;
-    cbm_context *ctx = diag_ctx(&g);
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
     cbm_lsys *ls = NULL;
     cbm_status s = load_text(ctx,
                              "Lsystem: 1\n"
@@ -226,13 +200,13 @@ TEST(several_errors_with_locations)
 
 TEST(errors_in_headers_and_blocks)
 {
-    diags g;
-    cbm_context *ctx = diag_ctx(&g);
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
     cbm_lsys *ls = NULL;
     CHECK_STATUS(load_text(ctx, "A --> B\n", false, &ls), CBM_E_SYNTAX);
     CHECK_MSG(strstr(g.text, "test.l:1:1: expected 'Lsystem:'"), "%s", g.text);
     cbm_context_destroy(ctx);
-    ctx = diag_ctx(&g);
+    ctx = test_diag_ctx(&g);
     CHECK_STATUS(load_text(ctx,
                            "Lsystem: 1\nStart: {x = 1 y = 2;}\nderivation length: 1+\n"
                            "Axiom: A\nA --> B\n",
@@ -242,7 +216,7 @@ TEST(errors_in_headers_and_blocks)
     CHECK_MSG(strstr(g.text, "test.l:3:"), "%s", g.text);
     CHECK_MSG(strstr(g.text, "expected 'endlsystem'"), "%s", g.text);
     cbm_context_destroy(ctx);
-    ctx = diag_ctx(&g);
+    ctx = test_diag_ctx(&g);
     CHECK_STATUS(load_text(ctx,
                            "#define F(x) x\n#bogus\nLsystem: 1\nAxiom: A(F(1,2))\nendlsystem\n",
                            false, &ls),
@@ -289,8 +263,8 @@ TEST(include_and_command_line_defines)
         cbm_lsys_destroy(ls);
     }
     /* an include that is missing is an error at the directive */
-    diags g;
-    cbm_context *c2 = diag_ctx(&g);
+    test_diags g;
+    cbm_context *c2 = test_diag_ctx(&g);
     ls = NULL;
     CHECK_STATUS(
         load_text(c2, "#include \"nope.h\"\nLsystem: 1\nAxiom: A\nendlsystem\n", false, &ls),
@@ -472,8 +446,8 @@ TEST(runtime_error_after_released_pages_empties_the_string)
 
 TEST(expression_depth_and_loops_are_bounded)
 {
-    diags g;
-    cbm_context *ctx = diag_ctx(&g);
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
     char model[4096] = "Lsystem: 1\nAxiom: A(";
     for (int i = 0; i < 300; i++)
         strcat(model, "(");
@@ -511,8 +485,8 @@ TEST(step_limit)
     lim.max_steps = 3;
     cbm_context_set_limits(ctx, &lim);
     cbm_lsys *ls = NULL;
-    diags g;
-    cbm_context *c2 = diag_ctx(&g);
+    test_diags g;
+    cbm_context *c2 = test_diag_ctx(&g);
     cbm_context_set_limits(c2, &lim);
     CHECK_STATUS(
         load_text(c2, "Lsystem: 1\nderivation length: 5\nAxiom: A\nendlsystem\n", false, &ls),

@@ -11,32 +11,6 @@
 #include <math.h>
 #include <stdio.h>
 
-typedef struct diags {
-    char text[8192];
-    int count;
-} diags;
-
-static void sink(void *ud, const cbm_diagnostic *d)
-{
-    diags *g = ud;
-    size_t n = strlen(g->text);
-    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
-             d->col, d->message);
-    g->count++;
-}
-
-static cbm_context *diag_ctx(diags *g)
-{
-    memset(g, 0, sizeof *g);
-    cbm_context_def def = cbm_context_def_default();
-    def.diag = sink;
-    def.diag_ud = g;
-    cbm_context *ctx = NULL;
-    if (cbm_context_create(&def, &ctx) != CBM_OK)
-        return NULL;
-    return ctx;
-}
-
 static cbm_status load_text(cbm_context *ctx, const char *text, cbm_lsys **ls)
 {
     cbm_lsys_def def = cbm_lsys_def_default();
@@ -47,8 +21,8 @@ static cbm_status load_text(cbm_context *ctx, const char *text, cbm_lsys **ls)
 
 TEST(errors_name_the_place)
 {
-    diags g;
-    cbm_context *ctx = diag_ctx(&g);
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
     cbm_lsys *ls = NULL;
     cbm_status s = load_text(ctx,
                              "Lsystem: 1\n"               /* 1 */
@@ -99,8 +73,8 @@ TEST(errors_name_the_place)
 TEST(missing_lsystem_found_when_deriving)
 {
     /* the label is a parameter: known only when the step runs */
-    diags g;
-    cbm_context *ctx = diag_ctx(&g);
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
     cbm_lsys *ls = NULL;
     CHECK_OK(load_text(ctx,
                        "Lsystem: 1\nderivation length: 3\nAxiom: A(2)\n"

@@ -50,6 +50,27 @@ cbm_context *test_ctx(void)
     return ctx;
 }
 
+void test_diag_sink(void *ud, const cbm_diagnostic *d)
+{
+    test_diags *g = ud;
+    size_t n = strlen(g->text);
+    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
+             d->col, d->message);
+    g->count++;
+}
+
+cbm_context *test_diag_ctx(test_diags *g)
+{
+    memset(g, 0, sizeof *g);
+    cbm_context_def def = cbm_context_def_default();
+    def.diag = test_diag_sink;
+    def.diag_ud = g;
+    cbm_context *ctx = NULL;
+    if (cbm_context_create(&def, &ctx) != CBM_OK)
+        return NULL;
+    return ctx;
+}
+
 void test_ctx_end_at(cbm_context *ctx, const char *file, int line)
 {
     if (!ctx)

@@ -668,20 +668,6 @@ static cbm_status run_grapes(cbm_context *ctx, const char *name, const char *def
     return st;
 }
 
-typedef struct diag_text {
-    char text[2048];
-    int count;
-} diag_text;
-
-static void diag_sink(void *ud, const cbm_diagnostic *d)
-{
-    diag_text *g = ud;
-    size_t n = strlen(g->text);
-    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
-             d->col, d->message);
-    g->count++;
-}
-
 /* Contact(k, smoothing) and `mass: Grape(mass, radius)`; the declaration's errors. */
 TEST(pairs_language)
 {
@@ -732,10 +718,10 @@ TEST(pairs_language)
                  "module Fruit(double, double, double);\nmodule I(MechSegment);\n"
                  "mechanics: I;\n%s\nmodule A();\nAxiom: A;\n",
                  bad[j]);
-        diag_text g;
+        test_diags g;
         memset(&g, 0, sizeof g);
         cbm_context_def cd = cbm_context_def_default();
-        cd.diag = diag_sink;
+        cd.diag = test_diag_sink;
         cd.diag_ud = &g;
         cbm_context *dc = NULL;
         CHECK_OK(cbm_context_create(&cd, &dc));

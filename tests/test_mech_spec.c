@@ -9,35 +9,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct sink {
-    char text[4096];
-    int count;
-} sink;
-
-static void collect(void *ud, const cbm_diagnostic *d)
-{
-    sink *s = ud;
-    size_t n = strlen(s->text);
-    snprintf(s->text + n, sizeof s->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "", d->line,
-             d->col, d->message);
-    s->count++;
-}
-
-static cbm_context *sink_ctx(sink *s)
-{
-    memset(s, 0, sizeof *s);
-    cbm_context_def def = cbm_context_def_default();
-    def.diag = collect;
-    def.diag_ud = s;
-    cbm_context *ctx = NULL;
-    CHECK_OK(cbm_context_create(&def, &ctx));
-    return ctx;
-}
-
 TEST(mech_spec_every_key)
 {
-    sink s;
-    cbm_context *ctx = sink_ctx(&s);
+    test_diags s;
+    cbm_context *ctx = test_diag_ctx(&s);
+    CHECK(ctx != NULL);
     const char *text = "# all keys\n"
                        "length = 2.5   # m\n"
                        "segments = 64\n"
@@ -108,8 +84,9 @@ TEST(mech_spec_every_key)
 
 TEST(mech_spec_errors)
 {
-    sink s;
-    cbm_context *ctx = sink_ctx(&s);
+    test_diags s;
+    cbm_context *ctx = test_diag_ctx(&s);
+    CHECK(ctx != NULL);
     const char *text = "length = 1\n"
                        "  colour = red\n"
                        "E = 1e9 2\n"

@@ -351,24 +351,12 @@ TEST(mechlang_break)
     test_ctx_end(ctx);
 }
 
-typedef struct diags {
-    char text[4096];
-} diags;
-
-static void sink(void *ud, const cbm_diagnostic *d)
-{
-    diags *g = ud;
-    size_t n = strlen(g->text);
-    snprintf(g->text + n, sizeof g->text - n, "%s:%d:%d: %s\n", d->file ? d->file : "?", d->line,
-             d->col, d->message);
-}
-
 static void check_error(const char *text, const char *want)
 {
-    diags g;
+    test_diags g;
     memset(&g, 0, sizeof g);
     cbm_context_def cd = cbm_context_def_default();
-    cd.diag = sink;
+    cd.diag = test_diag_sink;
     cd.diag_ud = &g;
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(&cd, &ctx));
