@@ -82,6 +82,9 @@ void test_diag_sink(void *ud, const cbm_diagnostic *d);
 /// A context whose diagnostics go to *g (cleared first); NULL if it cannot be made. Release with
 /// test_ctx_end.
 cbm_context *test_diag_ctx(test_diags *g);
+/// A context whose allocator counts in *calls every allocation and reallocation (not frees);
+/// NULL if it cannot be made. Release with test_ctx_end.
+cbm_context *test_counting_ctx(size_t *calls);
 void test_ctx_end_at(cbm_context *ctx, const char *file, int line);
 #define test_ctx_end(ctx) test_ctx_end_at((ctx), __FILE__, __LINE__)
 

@@ -167,23 +167,6 @@ static cbm_ring tagged(double id, size_t k)
     return r;
 }
 
-/* Counting allocator. */
-typedef struct counter {
-    size_t calls;
-} counter;
-
-static void *counting_alloc(void *ud, void *ptr, size_t old, size_t nsz)
-{
-    (void)old;
-    counter *c = ud;
-    if (nsz == 0) {
-        free(ptr);
-        return NULL;
-    }
-    c->calls++;
-    return realloc(ptr, nsz);
-}
-
 /* 300 segments get 120 rings each, added round-robin (the worst case for a pool of contiguous
  * runs: every run is full in turn while others follow it). The allocations are those of the
  * pool's geometric growth (a few dozen for 36,000 rings, none per ring; a pool that moves a run
@@ -192,12 +175,9 @@ static void *counting_alloc(void *ud, void *ptr, size_t old, size_t nsz)
  * after a subtree removal and after compaction. */
 TEST(growth_rings_pool_amortised)
 {
-    counter cnt = {0};
-    cbm_context_def cd = cbm_context_def_default();
-    cd.alloc = counting_alloc;
-    cd.alloc_ud = &cnt;
-    cbm_context *ctx = NULL;
-    CHECK_OK(cbm_context_create(&cd, &ctx));
+    size_t allocs = 0;
+    cbm_context *ctx = test_counting_ctx(&allocs);
+    CHECK(ctx != NULL);
     cbm_plant_def pd = cbm_plant_def_default();
     pd.capacity = 300;
     cbm_plant *p = NULL;
@@ -209,13 +189,13 @@ TEST(growth_rings_pool_amortised)
         d.core = tagged((double)i, 0);
         CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
     }
-    size_t base = cbm_context_bytes(ctx), c0 = cnt.calls;
+    size_t base = cbm_context_bytes(ctx), c0 = allocs;
     for (size_t k = 1; k < NRING; k++)
         for (size_t i = 0; i < NSEG; i++) {
             cbm_ring r = tagged((double)i, k);
             CHECK_OK(cbm_plant_add_ring(p, i, &r));
         }
-    size_t calls = cnt.calls - c0;
+    size_t calls = allocs - c0;
     CHECK_MSG(calls <= 40, "%zu allocations for %d rings", calls, NSEG * (NRING - 1));
     double ring_bytes = (double)(NSEG * NRING) * (double)sizeof(cbm_ring);
     CHECK((double)(cbm_context_bytes(ctx) - base) <= 4.0 * ring_bytes);

@@ -71,6 +71,29 @@ cbm_context *test_diag_ctx(test_diags *g)
     return ctx;
 }
 
+static void *counting_alloc(void *ud, void *ptr, size_t old_size, size_t new_size)
+{
+    (void)old_size;
+    if (new_size == 0) {
+        free(ptr);
+        return NULL;
+    }
+    ++*(size_t *)ud;
+    return realloc(ptr, new_size);
+}
+
+cbm_context *test_counting_ctx(size_t *calls)
+{
+    *calls = 0;
+    cbm_context_def def = cbm_context_def_default();
+    def.alloc = counting_alloc;
+    def.alloc_ud = calls;
+    cbm_context *ctx = NULL;
+    if (cbm_context_create(&def, &ctx) != CBM_OK)
+        return NULL;
+    return ctx;
+}
+
 void test_ctx_end_at(cbm_context *ctx, const char *file, int line)
 {
     if (!ctx)

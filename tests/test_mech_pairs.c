@@ -490,31 +490,12 @@ TEST(pairs_bunch_solvers_agree)
     test_ctx_end(ctx);
 }
 
-/* Counting allocator: no allocation inside the solver loop with contact. */
-typedef struct counter {
-    size_t calls;
-} counter;
-
-static void *counting_alloc(void *ud, void *ptr, size_t old, size_t nsz)
-{
-    (void)old;
-    counter *c = ud;
-    if (nsz == 0) {
-        free(ptr);
-        return NULL;
-    }
-    c->calls++;
-    return realloc(ptr, nsz);
-}
-
+/* No allocation inside the solver loop with contact (a counting allocator). */
 TEST(pairs_no_allocation_in_solver_loop)
 {
-    counter cnt = {0};
-    cbm_context_def cd = cbm_context_def_default();
-    cd.alloc = counting_alloc;
-    cd.alloc_ud = &cnt;
-    cbm_context *ctx = NULL;
-    CHECK_OK(cbm_context_create(&cd, &ctx));
+    size_t calls = 0;
+    cbm_context *ctx = test_counting_ctx(&calls);
+    CHECK(ctx != NULL);
     cbm_plant *p = bunch(ctx, 6, 5, 0.4, 0.006, 0.004);
     CHECK_OK(cbm_plant_set_contact(p, 30.0, 2e-4));
     for (int solver = 0; solver < 2; solver++) {
@@ -524,10 +505,10 @@ TEST(pairs_no_allocation_in_solver_loop)
         sd.warm_start = false;
         sd.max_passes = 6;
         (void)cbm_plant_solve(p, &sd, NULL); /* may allocate the workspace once */
-        size_t c0 = cnt.calls;
+        size_t c0 = calls;
         sd.max_passes = 200000;
         CHECK_OK(cbm_plant_solve(p, &sd, NULL));
-        CHECK_EQ_INT(cnt.calls - c0, 0);
+        CHECK_EQ_INT(calls - c0, 0);
     }
     cbm_plant_destroy(p);
     CHECK_EQ_INT(cbm_context_bytes(ctx), 0);

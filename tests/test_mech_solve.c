@@ -596,45 +596,26 @@ TEST(mech_errors)
     test_ctx_end(ctx);
 }
 
-/* Counting allocator: no allocation inside the solver loop. */
-typedef struct counter {
-    size_t calls;
-} counter;
-
-static void *counting_alloc(void *ud, void *ptr, size_t old, size_t nsz)
-{
-    (void)old;
-    counter *c = ud;
-    if (nsz == 0) {
-        free(ptr);
-        return NULL;
-    }
-    c->calls++;
-    return realloc(ptr, nsz);
-}
-
+/* No allocation inside the solver loop (a counting allocator). */
 TEST(mech_no_allocation_in_solver_loop)
 {
-    counter cnt = {0};
-    cbm_context_def cd = cbm_context_def_default();
-    cd.alloc = counting_alloc;
-    cd.alloc_ud = &cnt;
-    cbm_context *ctx = NULL;
-    CHECK_OK(cbm_context_create(&cd, &ctx));
+    size_t calls = 0;
+    cbm_context *ctx = test_counting_ctx(&calls);
+    CHECK(ctx != NULL);
     cbm_plant *p = make_rod(ctx, 100, 1.0, radius_uniform, 1e8, 1000, 0, CBM_MECH_STAGGERED);
     for (int solver = 0; solver < 2; solver++) {
         cbm_solve_def sd = cbm_solve_def_default();
         sd.solver = (cbm_mech_solver)solver;
         sd.warm_start = false;
         sd.max_passes = 6;
-        size_t c0 = cnt.calls;
+        size_t c0 = calls;
         (void)cbm_plant_solve(p, &sd, NULL); /* may allocate the workspace once */
-        size_t first = cnt.calls - c0;
+        size_t first = calls - c0;
         CHECK(first <= 40);
-        c0 = cnt.calls;
+        c0 = calls;
         sd.max_passes = 5000;
         CHECK_OK(cbm_plant_solve(p, &sd, NULL)); /* hundreds of passes, no allocation */
-        CHECK_EQ_INT(cnt.calls - c0, 0);
+        CHECK_EQ_INT(calls - c0, 0);
     }
     cbm_plant_destroy(p);
     CHECK_EQ_INT(cbm_context_bytes(ctx), 0);
