@@ -7,6 +7,8 @@
 #include "cambium/mech.h"
 #include "core/core.h"
 
+#include <math.h>
+
 /* The outer ring's semi-axes and modulus of rupture, kept per segment so that the passes over
  * the plant (ring growth, breakage) do not visit the ring pool. */
 typedef struct cbm__outer {
@@ -227,6 +229,21 @@ void cbm__mech_pairs_jvp(cbm_plant *p, const cbm_vec3 *dpos, const cbm_vec3 *dth
 /// after an evaluation (one tree solve per pair). Returns the passes that took.
 size_t cbm__mech_pairs_precond(cbm_plant *p, double *z);
 /// Is any pair in contact at the last evaluation?
+/* Coefficients of the right Jacobian of the rotation vector r (|r|^2 = t2):
+ * J_r = I - c1 [r]x + c2 [r]x^2, c1 = (1 - cos t)/t^2, c2 = (t - sin t)/t^3, by their series
+ * below t^2 = 1e-4 (the tangent pass and the tree factorisation). */
+static inline void cbm__mech_jr_coeffs(double t2, double *c1, double *c2)
+{
+    if (t2 < 1e-4) {
+        *c1 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
+        *c2 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
+    } else {
+        double t = sqrt(t2);
+        *c1 = (1.0 - cos(t)) / t2;
+        *c2 = (t - sin(t)) / (t2 * t);
+    }
+}
+
 static inline bool cbm__mech_pairs_active(const cbm_plant *p)
 {
     return p->contacts.on && p->contacts.npairs > 0;

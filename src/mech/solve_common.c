@@ -478,14 +478,7 @@ void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
         cbm_vec3 r = v3_scale(om[i], dual[i]);
         cbm_vec3 x = v3_scale(v[i], dual[i]);
         double t2 = v3_norm2(r), c1, c2;
-        if (t2 < 1e-4) {
-            c1 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-            c2 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
-        } else {
-            double t = sqrt(t2);
-            c1 = (1.0 - cos(t)) / t2;
-            c2 = (t - sin(t)) / (t2 * t);
-        }
+        cbm__mech_jr_coeffs(t2, &c1, &c2);
         cbm_vec3 rx = v3_cross(r, x);
         cbm_vec3 jx = v3_add(v3_sub(x, v3_scale(rx, c1)), v3_scale(v3_cross(r, rx), c2));
         cbm_vec3 wj = q_rotate(q[i], jx);

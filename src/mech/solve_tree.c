@@ -237,14 +237,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         double d = w->dual[i];
         cbm_vec3 r = v3_scale(p->omega[i], d);
         double t2 = v3_norm2(r), c1, c2;
-        if (t2 < 1e-4) {
-            c1 = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-            c2 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
-        } else {
-            double t = sqrt(t2);
-            c1 = (1.0 - cos(t)) / t2;
-            c2 = (t - sin(t)) / (t2 * t);
-        }
+        cbm__mech_jr_coeffs(t2, &c1, &c2);
         /* J = I - c1 [r]x + c2 [r]x^2, with [r]x^2 = r r^T - |r|^2 I */
         m3 sr = skew(r), J;
         const double rv[3] = {r.x, r.y, r.z};
