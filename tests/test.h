@@ -77,8 +77,6 @@ typedef struct test_diags {
     char text[8192];
     int count;
 } test_diags;
-/// The diagnostics sink of test_diag_ctx (appends to the test_diags at ud).
-void test_diag_sink(void *ud, const cbm_diagnostic *d);
 /// A context whose diagnostics go to *g (cleared first); NULL if it cannot be made. Release with
 /// test_ctx_end.
 cbm_context *test_diag_ctx(test_diags *g);

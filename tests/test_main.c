@@ -50,7 +50,7 @@ cbm_context *test_ctx(void)
     return ctx;
 }
 
-void test_diag_sink(void *ud, const cbm_diagnostic *d)
+static void test_diag_sink(void *ud, const cbm_diagnostic *d)
 {
     test_diags *g = ud;
     size_t n = strlen(g->text);

@@ -700,12 +700,8 @@ TEST(pairs_language)
                  "mechanics: I;\n%s\nmodule A();\nAxiom: A;\n",
                  bad[j]);
         test_diags g;
-        memset(&g, 0, sizeof g);
-        cbm_context_def cd = cbm_context_def_default();
-        cd.diag = test_diag_sink;
-        cd.diag_ud = &g;
-        cbm_context *dc = NULL;
-        CHECK_OK(cbm_context_create(&cd, &dc));
+        cbm_context *dc = test_diag_ctx(&g);
+        CHECK(dc != NULL);
         def.text = buf;
         ls = NULL;
         cbm_status st = cbm_lsys_load(dc, &def, &ls);

@@ -354,12 +354,8 @@ TEST(mechlang_break)
 static void check_error(const char *text, const char *want)
 {
     test_diags g;
-    memset(&g, 0, sizeof g);
-    cbm_context_def cd = cbm_context_def_default();
-    cd.diag = test_diag_sink;
-    cd.diag_ud = &g;
-    cbm_context *ctx = NULL;
-    CHECK_OK(cbm_context_create(&cd, &ctx));
+    cbm_context *ctx = test_diag_ctx(&g);
+    CHECK(ctx != NULL);
     if (!ctx)
         return;
     cbm_lsys *ls = NULL;
