@@ -67,13 +67,7 @@ static void legend(FILE *f, const cbm_scene *s, const cbm_write_options *o, int 
     fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%s</text>\n", W - 6, fs + 4,
             cbm__color_title(o->color_by));
     if (o->color_by == CBM_COLOR_ORDER) {
-        int maxo = 0;
-        for (size_t i = 0; i < cbm_scene_part_count(s); i++)
-            if (cbm_scene_parts(s)[i].organ == CBM_ORGAN_BRANCH &&
-                cbm_scene_parts(s)[i].order > maxo)
-                maxo = cbm_scene_parts(s)[i].order;
-        if (maxo > 15)
-            maxo = 15;
+        int maxo = cbm__legend_max_order(s);
         int step = (bot - top) / (maxo + 1);
         if (step > 2 * fs)
             step = 2 * fs;

@@ -249,6 +249,16 @@ const char *cbm__color_title(cbm_color_by by)
     }
 }
 
+int cbm__legend_max_order(const cbm_scene *s)
+{
+    int maxo = 0;
+    const cbm_part *p = cbm_scene_parts(s);
+    for (size_t i = 0; i < cbm_scene_part_count(s); i++)
+        if (p[i].organ == CBM_ORGAN_BRANCH && p[i].order > maxo)
+            maxo = p[i].order;
+    return maxo > 15 ? 15 : maxo;
+}
+
 void cbm__color_range(const cbm_scene *s, const cbm_write_options *o, double *lo, double *hi)
 {
     double a = INFINITY, b = -INFINITY;

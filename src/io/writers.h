@@ -40,6 +40,8 @@ void cbm__part_color_range(const cbm_part *p, const cbm_write_options *o, double
                            float rgba[4]);
 /// Title of the colour bar of a mode ("stress / MOR", ...).
 const char *cbm__color_title(cbm_color_by by);
+/// The highest branch order among the scene's branch parts, at most 15 (the order legend's rows).
+int cbm__legend_max_order(const cbm_scene *s);
 
 /// Per-part display colours under the options (linear RGBA, 4 floats per part), and the
 /// colour range used. Released with cbm__free(ctx, c, 4 * nparts * sizeof(float)).

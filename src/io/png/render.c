@@ -567,13 +567,7 @@ static void draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_opti
     int top = H / 5, bot = H - H / 5;
     char lab[32];
     if (o->color_by == CBM_COLOR_ORDER) {
-        int maxo = 0;
-        for (size_t i = 0; i < cbm_scene_part_count(s); i++)
-            if (cbm_scene_parts(s)[i].organ == CBM_ORGAN_BRANCH &&
-                cbm_scene_parts(s)[i].order > maxo)
-                maxo = cbm_scene_parts(s)[i].order;
-        if (maxo > 15)
-            maxo = 15;
+        int maxo = cbm__legend_max_order(s);
         int step = (bot - top) / (maxo + 1);
         if (step > 12 * px * 2)
             step = 12 * px * 2;
