@@ -1,5 +1,8 @@
-/* Private pieces shared by the writers: the camera fitted to a scene, colour maps and the colour
- * bar, the vertex-to-part map and the part filter (ground on/off). */
+/* Private pieces shared by the writers, one concept per file: options.c (defaults), write.c
+ * (dispatch by format), camera.c (the camera fitted to a scene), color_by.c (the quantity of each
+ * colour mode, its range and legend title, part colours), colormap.c (the maps, linear to sRGB),
+ * parts.c (the part filter, ground on/off, and the vertex-to-part maps), png/ (the renderer and
+ * the picture files). */
 #ifndef CBM_IO_WRITERS_H
 #define CBM_IO_WRITERS_H
 

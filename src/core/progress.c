@@ -1,7 +1,9 @@
 /* Progress line of long runs: "[#####.....]  42%  step 21/50  1.2e+05 modules  37 passes
  * ETA 1m05s". The time left is extrapolated linearly from the mean time per finished step.
  * The library only formats the line; the tool decides whether to print it (only to a terminal). */
-#include "writers.h"
+#include "core.h"
+
+#include "cambium/write.h"
 
 #include <math.h>
 #include <stdio.h>

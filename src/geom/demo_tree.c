@@ -6,8 +6,9 @@
  * The quantities are smooth made-up fields (stress ratio rising towards branch bases and with
  * horizontality, age from the number of segments above, reaction wood from inclination): they
  * exercise the colour maps, they are not mechanics. */
-#include "writers.h"
+#include "cambium/write.h"
 
+#include "../core/core.h"
 #include "../core/vecmath.h"
 
 #include <math.h>
