@@ -5,4 +5,6 @@ set(CBM_DEP_INCLUDES "")
 find_package(embree 3 REQUIRED) # libembree-dev: ray casting of the PNG renderer (and light)
 find_package(PNG REQUIRED) # libpng-dev: PNG encoding and decoding
 find_package(Threads REQUIRED) # render threads
-list(APPEND CBM_DEP_LIBS embree PNG::PNG Threads::Threads)
+find_package(PkgConfig REQUIRED) # pkg-config: finds cairo
+pkg_check_modules(CAIRO REQUIRED IMPORTED_TARGET cairo) # libcairo2-dev: plots and picture text
+list(APPEND CBM_DEP_LIBS embree PNG::PNG Threads::Threads PkgConfig::CAIRO)

@@ -300,7 +300,7 @@ TEST(svg_well_formed_and_sorted)
         size_t paths = io_count(b, "<path ");
         /* back faces of closed organs culled: fewer paths than triangles, but many */
         CHECK(paths > cbm_scene_triangle_count(s) / 4 && paths < cbm_scene_triangle_count(s));
-        CHECK(strstr(b, "AGE (YEARS)") != NULL && strstr(b, "linearGradient") != NULL);
+        CHECK(strstr(b, ">age (years)</text>") != NULL && strstr(b, "linearGradient") != NULL);
         CHECK_EQ_INT(io_count(b, "<g"), io_count(b, "</g>"));
         free(b);
     }

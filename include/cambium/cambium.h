@@ -9,6 +9,7 @@
 #include "cambium/bend.h"
 #include "cambium/lsys.h"
 #include "cambium/write.h"
+#include "cambium/plot.h"
 #include "cambium/turtle.h"
 #include "cambium/model.h"
 #include "cambium/tree.h"

@@ -167,6 +167,8 @@ typedef struct cbm_image {
 /// Renders the scene as cbm_write_png would, into *out.
 CBM_API cbm_status cbm_render(cbm_context *ctx, const cbm_scene *scene,
                               const cbm_write_options *opts, cbm_image **out);
+/// A new w x h picture (1..32768 each), every pixel transparent black.
+CBM_API cbm_status cbm_image_create(cbm_context *ctx, int w, int h, cbm_image **out);
 CBM_API void cbm_image_destroy(cbm_image *img);
 /// Reads an 8-bit RGB or RGBA PNG (e.g. a stored reference picture) into an RGBA image.
 CBM_API cbm_status cbm_image_read_png(cbm_context *ctx, const char *path, cbm_image **out);

@@ -28,15 +28,15 @@ const char *cbm__color_title(cbm_color_by by)
 {
     switch (by) {
     case CBM_COLOR_STRESS:
-        return "STRESS / MOR";
+        return "stress / MOR";
     case CBM_COLOR_AGE:
-        return "AGE (YEARS)";
+        return "age (years)";
     case CBM_COLOR_REACTION:
-        return "REACTION WOOD";
+        return "reaction wood";
     case CBM_COLOR_ORDER:
-        return "BRANCH ORDER";
+        return "branch order";
     case CBM_COLOR_STRESS_MPA:
-        return "STRESS (MPA)";
+        return "stress (MPa)";
     default:
         return "";
     }

@@ -63,7 +63,8 @@ static void legend(FILE *f, const cbm_scene *s, const cbm_write_options *o, int 
     int W = o->width, H = o->height;
     int bx = x0 + (W - x0) / 6, bw = (W - x0) / 5, top = H / 5, bot = H - H / 5;
     int fs = H >= 600 ? 14 : 10;
-    fprintf(f, "<g font-family=\"sans-serif\" font-size=\"%d\" fill=\"#202020\">\n", fs);
+    fprintf(f, "<g font-family=\"DejaVu Sans, sans-serif\" font-size=\"%d\" fill=\"#202020\">\n",
+            fs);
     fprintf(f, "<text x=\"%d\" y=\"%d\" text-anchor=\"end\">%s</text>\n", W - 6, fs + 4,
             cbm__color_title(o->color_by));
     if (o->color_by == CBM_COLOR_ORDER) {

@@ -58,16 +58,9 @@ const cbm_write_options *cbm__opts(const cbm_write_options *o, cbm_write_options
 
 /// A zeroed w x h picture.
 cbm_status cbm__image_create(cbm_context *ctx, int w, int h, cbm_image **out);
-/// Draws text with the 5x7 font, `px` pixels per font pixel, top-left corner at (x, y).
-void cbm__draw_text(cbm_image *img, int x, int y, int px, const char *text, const uint8_t rgb[3]);
-/// Width in pixels of text drawn at `px`.
-int cbm__text_width(const char *text, int px);
 
 /// linear -> sRGB 8-bit
 uint8_t cbm__srgb8(double linear);
-
-/// 5x7 bitmap glyph of a printable ASCII character: 7 rows of 5 bits (bit 4 leftmost).
-const uint8_t *cbm__glyph(char c);
 
 /// A tree of rows for the MTG writer: each row is one segment (S) with its parent row (-1: a
 /// root, which starts a plant P; parents come before their children), whether it continues the

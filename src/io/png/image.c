@@ -31,6 +31,14 @@ cbm_status cbm__image_create(cbm_context *ctx, int w, int h, cbm_image **out)
     return image_new(ctx, w, h, out);
 }
 
+cbm_status cbm_image_create(cbm_context *ctx, int w, int h, cbm_image **out)
+{
+    if (!ctx || !out)
+        return CBM_E_INVALID;
+    *out = NULL;
+    return image_new(ctx, w, h, out);
+}
+
 void cbm_image_destroy(cbm_image *img)
 {
     if (!img)
@@ -94,33 +102,4 @@ cbm_status cbm_image_read_png(cbm_context *ctx, const char *path, cbm_image **ou
     }
     *out = img;
     return CBM_OK;
-}
-
-int cbm__text_width(const char *text, int px)
-{
-    int n = (int)strlen(text);
-    return n > 0 ? (6 * n - 1) * px : 0;
-}
-
-void cbm__draw_text(cbm_image *img, int x, int y, int px, const char *text, const uint8_t rgb[3])
-{
-    for (const char *c = text; *c; c++, x += 6 * px) {
-        const uint8_t *g = cbm__glyph(*c);
-        for (int r = 0; r < 7; r++)
-            for (int b = 0; b < 5; b++) {
-                if (!(g[r] & (0x10 >> b)))
-                    continue;
-                for (int dy = 0; dy < px; dy++)
-                    for (int dx = 0; dx < px; dx++) {
-                        int X = x + b * px + dx, Y = y + r * px + dy;
-                        if (X < 0 || Y < 0 || X >= img->width || Y >= img->height)
-                            continue;
-                        uint8_t *q = img->rgba + 4 * ((size_t)Y * (size_t)img->width + (size_t)X);
-                        q[0] = rgb[0];
-                        q[1] = rgb[1];
-                        q[2] = rgb[2];
-                        q[3] = 255;
-                    }
-            }
-    }
 }

@@ -13,7 +13,7 @@
  * light illumination model"). Samples use a hash of (pixel, sample, ray) as random numbers, so
  * the picture does not depend on the number of threads. Rows are shared among threads through an
  * atomic counter. The legend (colour bar with its range, or one swatch per branch order) is
- * drawn in a strip on the right with a 5x7 bitmap font.
+ * drawn in a strip on the right, its text in DejaVu Sans through cairo (src/plot/font.h).
  *
  * Lines (cpfg's pixel lines, kept untessellated in the scene) are rasterised, not ray cast: when
  * the scene has lines, every sample of an n x n grid per pixel keeps a depth and a colour; the
@@ -28,6 +28,7 @@
 #include "../writers.h"
 
 #include "../../core/vecmath.h"
+#include "../../plot/font.h"
 
 #include <embree3/rtcore.h>
 #include <math.h>
@@ -550,8 +551,8 @@ static void format_value(double v, char *buf, size_t n)
         snprintf(buf, n, "%.3g", v);
 }
 
-static void draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_options *o, int x0,
-                        double lo, double hi)
+static cbm_status draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_options *o,
+                              int x0, double lo, double hi)
 {
     const float *bg = o->background;
     double lum = 0.2126 * bg[0] + 0.7152 * bg[1] + 0.0722 * bg[2];
@@ -560,9 +561,9 @@ static void draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_opti
         ink[0] = ink[1] = ink[2] = 235;
     int W = img->width, H = img->height;
     int px = H >= 600 ? 2 : 1;
-    const char *title = cbm__color_title(o->color_by);
-    int tw = cbm__text_width(title, px);
-    cbm__draw_text(img, W - tw - 6 * px, 6 * px, px, title, ink);
+    double fs = 10.0 * px; /* capitals 7.3 px high per px, as the 5x7 font's were 7 */
+    cbm_status st = cbm__font_draw(img, W - 6 * px, 13 * px, fs, CBM__TEXT_RIGHT,
+                                   cbm__color_title(o->color_by), ink);
     int bx = x0 + (W - x0) / 6, bw = (W - x0) / 5;
     int top = H / 5, bot = H - H / 5;
     char lab[32];
@@ -578,9 +579,11 @@ static void draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_opti
             int y = top + k * step;
             fill_rect(img, bx, y, bx + bw, y + step - 2 * px, rgb);
             snprintf(lab, sizeof lab, "%d", k);
-            cbm__draw_text(img, bx + bw + 4 * px, y + (step - 2 * px - 7 * px) / 2, px, lab, ink);
+            if (st == CBM_OK)
+                st = cbm__font_draw(img, bx + bw + 4 * px, y + (step - 2 * px + 7 * px) / 2, fs,
+                                    CBM__TEXT_LEFT, lab, ink);
         }
-        return;
+        return st;
     }
     for (int y = top; y < bot; y++) {
         double t = 1.0 - (double)(y - top) / (double)(bot - top - 1);
@@ -594,8 +597,10 @@ static void draw_legend(cbm_image *img, const cbm_scene *s, const cbm_write_opti
         int y = top + (int)lround((bot - top - 1) * k / 4.0);
         fill_rect(img, bx + bw, y, bx + bw + 3 * px, y + px, ink);
         format_value(v, lab, sizeof lab);
-        cbm__draw_text(img, bx + bw + 5 * px, y - 3 * px, px, lab, ink);
+        if (st == CBM_OK)
+            st = cbm__font_draw(img, bx + bw + 5 * px, y + 4 * px, fs, CBM__TEXT_LEFT, lab, ink);
     }
+    return st;
 }
 
 static int default_threads(void)
@@ -804,7 +809,7 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         q[3] = (uint8_t)lroundf(fminf(fmaxf(outa, 0.0f), 1.0f) * 255.0f);
     }
     if (legend)
-        draw_legend(img, s, o, W - legend_w, lo, hi);
+        st = draw_legend(img, s, o, W - legend_w, lo, hi);
 done:
     if (rs)
         rtcReleaseScene(rs);
