@@ -88,8 +88,8 @@ TEST(tick_labels)
     CHECK_MSG(!strcmp(lab[0], "0.00"), "got '%s'", lab[0]);
     double e[] = {1.2e6, 1.22e6, 1.24e6};
     cbm_plot_tick_labels(e, 3, false, &lab[0][0], 32);
-    CHECK_MSG(!strcmp(lab[0], "1.20e+06") && !strcmp(lab[1], "1.22e+06"), "got '%s' '%s'",
-              lab[0], lab[1]);
+    CHECK_MSG(!strcmp(lab[0], "1.20e+06") && !strcmp(lab[1], "1.22e+06"), "got '%s' '%s'", lab[0],
+              lab[1]);
     double f[] = {1e-6, 1e-3, 1, 1e3, 1e6};
     cbm_plot_tick_labels(f, 5, true, &lab[0][0], 32);
     CHECK(!strcmp(lab[0], "1e-6") && !strcmp(lab[1], "0.001") && !strcmp(lab[2], "1") &&

@@ -65,11 +65,11 @@ typedef enum cbm_plot_legend {
 
 /// The figure.
 typedef struct cbm_plot_def {
-    int width, height;  ///< pixels (SVG: user units), 16..16384; default 800 x 600
-    const char *title;  ///< above the panels; NULL or "" for none (copied)
-    double font_size;   ///< pixels; 0: from the figure's size
-    int panels;         ///< 1..CBM_PLOT_MAX_PANELS, stacked top to bottom; default 1
-    bool transparent;   ///< PNG: transparent background instead of white (SVG: no backdrop)
+    int width, height; ///< pixels (SVG: user units), 16..16384; default 800 x 600
+    const char *title; ///< above the panels; NULL or "" for none (copied)
+    double font_size;  ///< pixels; 0: from the figure's size
+    int panels;        ///< 1..CBM_PLOT_MAX_PANELS, stacked top to bottom; default 1
+    bool transparent;  ///< PNG: transparent background instead of white (SVG: no backdrop)
 } cbm_plot_def;
 
 /// One panel's axes.

@@ -160,8 +160,8 @@ static void markers(cbm__canvas *c, const double *xy, size_t n, cbm_plot_marker 
     }
 }
 
-static void text(cbm__canvas *c, double x, double y, const char *t, double size,
-                 cbm__anchor anchor, bool vertical, const cbm__rgb *color)
+static void text(cbm__canvas *c, double x, double y, const char *t, double size, cbm__anchor anchor,
+                 bool vertical, const cbm__rgb *color)
 {
     cairo_t *cr = cr_of(c);
     double w = cbm__font_width(cr, t, size);
@@ -188,8 +188,8 @@ cbm_status cbm__plot_render_cairo(const cbm_plot *p, cbm_image **out)
     cairo_surface_destroy(surf); /* the context keeps it */
     if (cairo_status(cr) != CAIRO_STATUS_SUCCESS) {
         cairo_destroy(cr);
-        return cbm__fail(p->ctx, CBM_E_NOMEM, "plot: cannot create a %d x %d picture",
-                         p->width, p->height);
+        return cbm__fail(p->ctx, CBM_E_NOMEM, "plot: cannot create a %d x %d picture", p->width,
+                         p->height);
     }
     cairo_set_antialias(cr, CAIRO_ANTIALIAS_GRAY);
     if (!p->transparent) {
@@ -209,7 +209,8 @@ cbm_status cbm__plot_render_cairo(const cbm_plot *p, cbm_image **out)
         const unsigned char *data = cairo_image_surface_get_data(surf);
         int stride = cairo_image_surface_get_stride(surf);
         for (int y = 0; y < p->height; y++) {
-            const uint32_t *row = (const uint32_t *)(const void *)(data + (size_t)y * (size_t)stride);
+            const uint32_t *row =
+                (const uint32_t *)(const void *)(data + (size_t)y * (size_t)stride);
             for (int x = 0; x < p->width; x++) {
                 uint32_t v = row[x];
                 unsigned a = v >> 24, rgb[3] = {(v >> 16) & 255u, (v >> 8) & 255u, v & 255u};

@@ -1,8 +1,8 @@
 /* The figure as SVG: the same layout as the picture (text measured by cairo with the same font),
  * written element by element rather than through cairo's SVG surface, so that text stays text
  * (<text>, searchable and editable, font-family DejaVu Sans), the file is small, and the bytes
- * depend only on the figure: no generated ids (the one clip path per panel is numbered in
- * drawing order) and coordinates printed with two decimals. Each series is a <g class="series">
+ * depend only on the figure: no generated ids (the clip paths of the series' lines are numbered
+ * in drawing order) and coordinates printed with two decimals. Each series is a <g class="series">
  * holding its <title> (the legend label), one <path> for its line and one for its markers. */
 #include "plot_internal.h"
 
@@ -87,8 +87,8 @@ static void clip_begin(cbm__canvas *c, double x, double y, double w, double h)
     svg_canvas *s = (svg_canvas *)(void *)c;
     s->clips++;
     fprintf(s->f,
-            "<clipPath id=\"panel%d\"><rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" "
-            "height=\"%.2f\"/></clipPath>\n<g clip-path=\"url(#panel%d)\">\n",
+            "<clipPath id=\"clip%d\"><rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" "
+            "height=\"%.2f\"/></clipPath>\n<g clip-path=\"url(#clip%d)\">\n",
             s->clips, x, y, w, h, s->clips);
 }
 
@@ -187,8 +187,8 @@ static void markers(cbm__canvas *c, const double *xy, size_t n, cbm_plot_marker 
         fprintf(f, "\" fill=\"%s\"/>\n", h);
 }
 
-static void text(cbm__canvas *c, double x, double y, const char *t, double size,
-                 cbm__anchor anchor, bool vertical, const cbm__rgb *color)
+static void text(cbm__canvas *c, double x, double y, const char *t, double size, cbm__anchor anchor,
+                 bool vertical, const cbm__rgb *color)
 {
     FILE *f = out(c);
     static const char *const anchors[] = {"start", "middle", "end"};

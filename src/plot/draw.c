@@ -5,10 +5,11 @@
  * panel decide it) so stacked panels line up. Tick targets follow the plot area's size (about
  * one x label per 6 fs, one y label per 3.5 fs). Ranges come from the data (finite points; on a
  * log axis the positive ones) rounded out to the ticks, unless set. Series are clipped to the
- * plot area (Liang-Barsky, against the area grown by a margin so wide lines end cleanly), which
- * also keeps far-away points from overflowing the rasteriser's fixed-point coordinates; a
- * non-finite point breaks the line. The legend goes in the corner of the plot area that covers
- * the fewest points unless placed. */
+ * plot area (Liang-Barsky, against the area grown by a margin so wide lines end cleanly, then a
+ * clip to the area), which also keeps far-away points from overflowing the rasteriser's
+ * fixed-point coordinates; a non-finite point breaks the line. Markers are drawn whole for the
+ * points inside the area, so points on its edge (common with ranges rounded to ticks) show. The
+ * legend goes in the corner of the plot area that covers the fewest points unless placed. */
 #include "plot_internal.h"
 
 #include <math.h>
@@ -22,9 +23,9 @@ static const cbm__rgb ink = {0.10, 0.10, 0.10}, axis_grey = {0.20, 0.20, 0.20},
                       frame_grey = {0.72, 0.72, 0.72};
 
 typedef struct axis {
-    double lo, hi;   /* data range */
+    double lo, hi; /* data range */
     bool log;
-    double p0, p1;   /* pixels of lo and hi */
+    double p0, p1; /* pixels of lo and hi */
     double ticks[MAX_TICKS];
     char labels[MAX_TICKS][LABEL_LEN];
     size_t nticks;
@@ -65,7 +66,8 @@ int cbm__plot_dashes(cbm_plot_line line, double width, double dash[2])
 static void axis_range(const plot_panel *pl, bool is_x, int target, axis *a)
 {
     bool log = is_x ? pl->axes.xlog : pl->axes.ylog;
-    double set_lo = is_x ? pl->axes.xmin : pl->axes.ymin, set_hi = is_x ? pl->axes.xmax : pl->axes.ymax;
+    double set_lo = is_x ? pl->axes.xmin : pl->axes.ymin,
+           set_hi = is_x ? pl->axes.xmax : pl->axes.ymax;
     double lo = INFINITY, hi = -INFINITY;
     for (size_t k = 0; k < pl->series.len; k++) {
         const plot_series *s = &pl->series.data[k];
@@ -227,8 +229,11 @@ static void draw_series(const cbm_plot *p, cbm__canvas *c, const plot_series *s,
     if (s->line != CBM_PLOT_NO_LINE) {
         path_buf b = {p->ctx, {0}, {0}, false};
         series_path(s, pb, 2.0 * st.width, true, &b);
-        if (!b.nomem && b.runs.len)
+        if (!b.nomem && b.runs.len) {
+            c->ops->clip_begin(c, pb->x0, pb->y0, pb->x1 - pb->x0, pb->y1 - pb->y0);
             c->ops->polylines(c, b.xy.data, b.runs.data, b.runs.len, &st);
+            c->ops->clip_end(c);
+        }
         *nomem |= b.nomem;
         CBM_ARRAY_FREE(p->ctx, b.xy);
         CBM_ARRAY_FREE(p->ctx, b.runs);
@@ -236,10 +241,11 @@ static void draw_series(const cbm_plot *p, cbm__canvas *c, const plot_series *s,
     if (s->marker != CBM_PLOT_MARKER_NONE) {
         path_buf b = {p->ctx, {0}, {0}, false};
         double r = marker_radius(p, s);
-        series_path(s, pb, r, false, &b);
+        series_path(s, pb, 0.5, false, &b); /* whole markers for the points in the area */
         cbm__rgb col = series_rgb(s);
         if (!b.nomem && b.xy.len)
-            c->ops->markers(c, b.xy.data, b.xy.len / 2, s->marker, r, &col, fmax(1.0, st.width * 0.8));
+            c->ops->markers(c, b.xy.data, b.xy.len / 2, s->marker, r, &col,
+                            fmax(1.0, st.width * 0.8));
         *nomem |= b.nomem;
         CBM_ARRAY_FREE(p->ctx, b.xy);
         CBM_ARRAY_FREE(p->ctx, b.runs);
@@ -327,8 +333,7 @@ static void draw_legend(const cbm_plot *p, cbm__canvas *c, const plot_panel *pl,
                             fmax(1.0, 0.8 * series_width(p, s)));
         }
         cbm__font_clean(s->label, label, sizeof label);
-        c->ops->text(c, sx1 + 0.5 * fs, mid + 0.5 * cap, label, fs, CBM__ANCHOR_START, false,
-                     &ink);
+        c->ops->text(c, sx1 + 0.5 * fs, mid + 0.5 * cap, label, fs, CBM__ANCHOR_START, false, &ink);
         r++;
     }
     c->ops->group_end(c);
@@ -375,8 +380,8 @@ static void draw_axes(const cbm_plot *p, cbm__canvas *c, const plot_panel *pl, c
     }
     if (pl->title) {
         cbm__font_clean(pl->title, label, sizeof label);
-        c->ops->text(c, 0.5 * (pb->x0 + pb->x1), pb->y0 - 0.45 * fs, label, fs,
-                     CBM__ANCHOR_MIDDLE, false, &ink);
+        c->ops->text(c, 0.5 * (pb->x0 + pb->x1), pb->y0 - 0.45 * fs, label, fs, CBM__ANCHOR_MIDDLE,
+                     false, &ink);
     }
     c->ops->group_end(c);
 }
@@ -407,7 +412,7 @@ cbm_status cbm__plot_draw(const cbm_plot *p, cbm__canvas *c)
 {
     double W = p->width, H = p->height, fs = p->font_size;
     double cap = cbm__font_cap_height(c->measure, fs);
-    double top = p->title ? 2.2 * fs : 0.8 * fs;
+    double top = p->title ? 2.2 * fs : 1.0 * fs;
     /* per panel: space above (its title) and below (tick labels, x label) the plot area */
     double above[CBM_PLOT_MAX_PANELS] = {0}, below[CBM_PLOT_MAX_PANELS] = {0}, used = top;
     for (int k = 0; k < p->npanels; k++) {
@@ -430,8 +435,11 @@ cbm_status cbm__plot_draw(const cbm_plot *p, cbm__canvas *c)
         axis_range(&p->panel[k], false, yt, &pb[k].y);
         for (size_t i = 0; i < pb[k].y.nticks; i++)
             ylab = fmax(ylab, cbm__font_width(c->measure, pb[k].y.labels[i], fs));
-        if (pb[k].x.nticks > 0 && pb[k].x.ticks[pb[k].x.nticks - 1] >= pb[k].x.hi - 1e-9 * (pb[k].x.hi - pb[k].x.lo))
-            right = fmax(right, 0.5 * cbm__font_width(c->measure, pb[k].x.labels[pb[k].x.nticks - 1], fs) + 0.3 * fs);
+        if (pb[k].x.nticks > 0 &&
+            pb[k].x.ticks[pb[k].x.nticks - 1] >= pb[k].x.hi - 1e-9 * (pb[k].x.hi - pb[k].x.lo))
+            right = fmax(right,
+                         0.5 * cbm__font_width(c->measure, pb[k].x.labels[pb[k].x.nticks - 1], fs) +
+                             0.3 * fs);
         any_ylabel |= p->panel[k].ylabel != NULL;
     }
     double left = 0.6 * fs + (any_ylabel ? cap + 1.0 * fs : 0.0) + ylab + 0.35 * fs + 0.35 * fs;
@@ -454,10 +462,8 @@ cbm_status cbm__plot_draw(const cbm_plot *p, cbm__canvas *c)
         const plot_panel *pl = &p->panel[k];
         if (pl->axes.grid)
             draw_grid(c, &pb[k]);
-        c->ops->clip_begin(c, pb[k].x0, pb[k].y0, pb[k].x1 - pb[k].x0, pb[k].y1 - pb[k].y0);
         for (size_t i = 0; i < pl->series.len; i++)
             draw_series(p, c, &pl->series.data[i], &pb[k], &nomem);
-        c->ops->clip_end(c);
         draw_axes(p, c, pl, &pb[k]);
         draw_legend(p, c, pl, &pb[k]);
     }
@@ -465,8 +471,8 @@ cbm_status cbm__plot_draw(const cbm_plot *p, cbm__canvas *c)
         char t[512];
         cbm__font_clean(p->title, t, sizeof t);
         double tfs = 1.25 * fs;
-        c->ops->text(c, 0.5 * (x0 + x1), 0.5 * top + 0.5 * cbm__font_cap_height(c->measure, tfs),
-                     t, tfs, CBM__ANCHOR_MIDDLE, false, &ink);
+        c->ops->text(c, 0.5 * (x0 + x1), 0.5 * top + 0.5 * cbm__font_cap_height(c->measure, tfs), t,
+                     tfs, CBM__ANCHOR_MIDDLE, false, &ink);
     }
     return nomem ? CBM_E_NOMEM : CBM_OK;
 }

@@ -114,14 +114,13 @@ cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__
     cairo_text_extents_t e;
     cairo_text_extents(m, clean, &e);
     cairo_destroy(m);
-    double x0 = align == CBM__TEXT_CENTER ? x - 0.5 * e.x_advance
+    double x0 = align == CBM__TEXT_CENTER  ? x - 0.5 * e.x_advance
                 : align == CBM__TEXT_RIGHT ? x - e.x_advance
                                            : x;
     /* the mask covers the ink box with a pixel to spare, on the pixel grid */
     int bx = (int)floor(x0 + e.x_bearing) - 1, by = (int)floor(y + e.y_bearing) - 1;
     int bw = (int)ceil(e.width) + 3, bh = (int)ceil(e.height) + 3;
-    if (bw <= 0 || bh <= 0 || bx >= img->width || by >= img->height || bx + bw <= 0 ||
-        by + bh <= 0)
+    if (bw <= 0 || bh <= 0 || bx >= img->width || by >= img->height || bx + bw <= 0 || by + bh <= 0)
         return CBM_OK;
     cairo_surface_t *s = cairo_image_surface_create(CAIRO_FORMAT_A8, bw, bh);
     cairo_t *cr = cairo_create(s);

@@ -10,10 +10,10 @@
 
 /* Okabe & Ito's qualitative palette (sRGB), ordered so the first colours differ most on white;
  * the yellow comes last since it is faint on a white background. */
-static const float palette[8][3] = {
-    {0.000f, 0.447f, 0.698f}, {0.835f, 0.369f, 0.000f}, {0.000f, 0.620f, 0.451f},
-    {0.800f, 0.475f, 0.655f}, {0.902f, 0.624f, 0.000f}, {0.337f, 0.706f, 0.914f},
-    {0.000f, 0.000f, 0.000f}, {0.941f, 0.894f, 0.259f}};
+static const float palette[8][3] = {{0.000f, 0.447f, 0.698f}, {0.835f, 0.369f, 0.000f},
+                                    {0.000f, 0.620f, 0.451f}, {0.800f, 0.475f, 0.655f},
+                                    {0.902f, 0.624f, 0.000f}, {0.337f, 0.706f, 0.914f},
+                                    {0.000f, 0.000f, 0.000f}, {0.941f, 0.894f, 0.259f}};
 
 cbm_plot_def cbm_plot_def_default(void)
 {
@@ -180,8 +180,7 @@ cbm_status cbm_plot_add_series(cbm_plot *p, int panel, const cbm_plot_series_def
         return cbm__fail(ctx, CBM_E_INVALID, "plot: no panel %d (the figure has %d)", panel,
                          p->npanels);
     if (def->n > 0 && !def->y)
-        return cbm__fail(ctx, CBM_E_INVALID, "plot: series of %zu points without y values",
-                         def->n);
+        return cbm__fail(ctx, CBM_E_INVALID, "plot: series of %zu points without y values", def->n);
     if ((unsigned)def->line > CBM_PLOT_NO_LINE || (unsigned)def->marker > CBM_PLOT_MARKER_PLUS)
         return cbm__fail(ctx, CBM_E_INVALID, "plot: unknown line style or marker");
     if (!(def->line_width >= 0 && def->line_width <= 100) ||

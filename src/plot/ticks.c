@@ -137,8 +137,7 @@ static int decimals_for(double step)
     return d < 0 ? 0 : d;
 }
 
-void cbm_plot_tick_labels(const double *ticks, size_t n, bool log, char *labels,
-                          size_t label_size)
+void cbm_plot_tick_labels(const double *ticks, size_t n, bool log, char *labels, size_t label_size)
 {
     if (!ticks || !labels || label_size == 0)
         return;

@@ -9,6 +9,7 @@ int cmd_bend(int argc, char **argv);
 int cmd_buckle(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
+int cmd_plot(int argc, char **argv);
 
 #define CBM_COMMANDS(X)                                                                            \
     X("run", cmd_run, "derive an L-system model and write its outputs")                            \
@@ -16,6 +17,7 @@ int cmd_demo(int argc, char **argv);
     X("bend", cmd_bend, "static equilibrium of one branch or rod from a spec file")                \
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
     X("info", cmd_info, "what a model or output file holds")                                       \
-    X("demo", cmd_demo, "write a synthetic tree in any output format")
+    X("demo", cmd_demo, "write a synthetic tree in any output format")                             \
+    X("plot", cmd_plot, "plot columns of a CSV or JSON table as PNG or SVG")
 
 #endif

@@ -1,0 +1,277 @@
+/* cambium plot: a generic plotter of table files (CSV, or the array of objects of a JSON file)
+ * through the library's plots (cambium/plot.h): one or more y columns against an x column, in
+ * one or more panels, written as PNG or SVG. Made for the files cambium writes (grow's
+ * year-by-year JSON and segment tables, bend's node tables, any CSV). */
+#include "cli.h"
+#include "commands.h"
+#include "table.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_OUTPUTS 8
+#define MAX_Y       16
+
+static void plot_help(void)
+{
+    printf("usage: cambium plot DATA.csv|DATA.json -y COL[,COL...] -o PLOT.png|PLOT.svg [options]\n"
+           "\n"
+           "Plots columns of a table: a CSV file whose first line names the columns (lines\n"
+           "starting with '#' are skipped) or the first array of objects in a JSON file (e.g.\n"
+           "the \"years\" of `cambium grow -o summary.json`). A column is named by its header or\n"
+           "by its number from 1. Empty cells and non-numbers leave gaps.\n"
+           "\n"
+           "  -x COL             the x column (default: the row number from 0)\n"
+           "  -y COL[,COL...]    the y columns of the first panel (required)\n"
+           "  --panel COL[,...]  a further panel below, with these y columns (up to 3 more)\n"
+           "  -o FILE            output, .png or .svg (repeatable; FORMAT:PATH names the format)\n"
+           "  --style S          line (default), points, or both\n"
+           "  --title TEXT       figure title\n"
+           "  --xlabel TEXT      x axis title (default: the x column's name)\n"
+           "  --ylabel TEXT      y axis title of every panel (default: the column's name when\n"
+           "                     a panel has one; a legend names several)\n"
+           "  --logx, --logy     logarithmic axes (points <= 0 are left out)\n"
+           "  --xrange MIN:MAX   x range (either side may be empty: from the data)\n"
+           "  --yrange MIN:MAX   y range of every panel\n"
+           "  --size WxH         picture size in pixels (default 800x600)\n");
+}
+
+/* "a,b,c" into at most max names (pointers into s, which is modified). */
+static int split_names(char *s, char **out, int max)
+{
+    int n = 0;
+    for (char *tok = s; tok && n < max;) {
+        char *c = strchr(tok, ',');
+        if (c)
+            *c++ = '\0';
+        if (*tok)
+            out[n++] = tok;
+        tok = c;
+    }
+    return n;
+}
+
+/* "MIN:MAX" with either side empty (NaN). */
+static bool parse_range(const char *s, double *lo, double *hi)
+{
+    const char *colon = strchr(s, ':');
+    if (!colon)
+        return false;
+    char a[64], b[64];
+    size_t la = (size_t)(colon - s);
+    if (la >= sizeof a || strlen(colon + 1) >= sizeof b)
+        return false;
+    memcpy(a, s, la);
+    a[la] = '\0';
+    strcpy(b, colon + 1);
+    *lo = *hi = NAN;
+    if (*a && !cli_parse_double(a, lo))
+        return false;
+    if (*b && !cli_parse_double(b, hi))
+        return false;
+    return !(isfinite(*lo) && isfinite(*hi) && !(*lo < *hi));
+}
+
+typedef struct plot_args {
+    const char *data, *x, *title, *xlabel, *ylabel;
+    char *panel_cols[CBM_PLOT_MAX_PANELS];
+    int npanels;
+    const char *outputs[MAX_OUTPUTS];
+    int noutputs;
+    int style; /* 0 line, 1 points, 2 both */
+    bool logx, logy;
+    double xr[2], yr[2];
+    int width, height;
+} plot_args;
+
+static int parse_args(int argc, char **argv, plot_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->xr[0] = a->xr[1] = a->yr[0] = a->yr[1] = NAN;
+    a->width = 800, a->height = 600;
+    for (int i = 1; i < argc; i++) {
+        const char *o = argv[i];
+        if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
+            plot_help();
+            return -1;
+        }
+        if (!strcmp(o, "--logx") || !strcmp(o, "--logy")) {
+            *(o[5] == 'x' ? &a->logx : &a->logy) = true;
+            continue;
+        }
+        if (o[0] != '-' || !o[1]) {
+            if (a->data)
+                return cli_usage_error("plot", "one data file, got '%s' and '%s'", a->data, o);
+            a->data = o;
+            continue;
+        }
+        static const char *const with_value[] = {
+            "-x",      "-y",       "--panel",  "-o",     "--style", "--title",
+            "--xlabel", "--ylabel", "--xrange", "--yrange", "--size"};
+        int k = -1;
+        for (int j = 0; j < (int)(sizeof with_value / sizeof *with_value); j++)
+            if (!strcmp(o, with_value[j]))
+                k = j;
+        if (k < 0)
+            return cli_usage_error("plot", "unknown option '%s'", o);
+        if (i + 1 >= argc)
+            return cli_usage_error("plot", "%s needs a value", o);
+        char *v = argv[++i];
+        switch (k) {
+        case 0:
+            a->x = v;
+            break;
+        case 1:
+        case 2:
+            if (k == 1 && a->panel_cols[0])
+                return cli_usage_error("plot", "-y given twice (use --panel for more panels)");
+            if (k == 2 && !a->panel_cols[0])
+                return cli_usage_error("plot", "--panel comes after -y");
+            if (a->npanels >= CBM_PLOT_MAX_PANELS)
+                return cli_usage_error("plot", "at most %d panels", CBM_PLOT_MAX_PANELS);
+            a->panel_cols[a->npanels++] = v;
+            break;
+        case 3:
+            if (a->noutputs >= MAX_OUTPUTS)
+                return cli_usage_error("plot", "at most %d outputs", MAX_OUTPUTS);
+            a->outputs[a->noutputs++] = v;
+            break;
+        case 4:
+            if (!strcmp(v, "line") || !strcmp(v, "lines"))
+                a->style = 0;
+            else if (!strcmp(v, "points"))
+                a->style = 1;
+            else if (!strcmp(v, "both"))
+                a->style = 2;
+            else
+                return cli_usage_error("plot", "--style: '%s' is not line, points or both", v);
+            break;
+        case 5:
+            a->title = v;
+            break;
+        case 6:
+            a->xlabel = v;
+            break;
+        case 7:
+            a->ylabel = v;
+            break;
+        case 8:
+        case 9:
+            if (!parse_range(v, k == 8 ? &a->xr[0] : &a->yr[0], k == 8 ? &a->xr[1] : &a->yr[1]))
+                return cli_usage_error("plot", "%s: '%s' is not MIN:MAX with MIN < MAX", o, v);
+            break;
+        case 10: {
+            char *xpos = strchr(v, 'x');
+            long w, h;
+            if (!xpos)
+                return cli_usage_error("plot", "--size: '%s' is not WxH", v);
+            *xpos = '\0';
+            bool ok = cli_parse_long(v, &w) && cli_parse_long(xpos + 1, &h);
+            *xpos = 'x';
+            if (!ok || w < 16 || h < 16 || w > 16384 || h > 16384)
+                return cli_usage_error("plot", "--size: '%s' is not WxH with 16..16384 pixels", v);
+            a->width = (int)w, a->height = (int)h;
+            break;
+        }
+        default:
+            break;
+        }
+    }
+    if (!a->data)
+        return cli_usage_error("plot", "no data file");
+    if (!a->npanels)
+        return cli_usage_error("plot", "no y column (-y COL)");
+    if (!a->noutputs)
+        return cli_usage_error("plot", "no output (-o PLOT.png or PLOT.svg)");
+    for (int k = 0; k < a->noutputs; k++) {
+        const char *colon = strchr(a->outputs[k], ':');
+        const char *ext = colon && colon - a->outputs[k] <= 4 ? a->outputs[k]
+                                                              : cli_extension(a->outputs[k]);
+        if (strncmp(ext, "png", 3) && strncmp(ext, "svg", 3) && strncmp(ext, "PNG", 3) &&
+            strncmp(ext, "SVG", 3))
+            return cli_usage_error("plot", "-o %s: plots are .png or .svg", a->outputs[k]);
+    }
+    return CLI_OK;
+}
+
+static cbm_status write_output(cbm_plot *p, const char *spec)
+{
+    const char *colon = strchr(spec, ':');
+    if (colon && colon - spec <= 4) {
+        char fmt[8];
+        memcpy(fmt, spec, (size_t)(colon - spec));
+        fmt[colon - spec] = '\0';
+        return cbm_plot_write_as(p, colon + 1, fmt);
+    }
+    return cbm_plot_write(p, spec);
+}
+
+int cmd_plot(int argc, char **argv)
+{
+    plot_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc != CLI_OK)
+        return rc < 0 ? CLI_OK : rc;
+    cli_table t;
+    char err[512];
+    if (!cli_table_read(a.data, &t, err, sizeof err)) {
+        fprintf(stderr, "cambium plot: %s\n", err);
+        return CLI_FAIL;
+    }
+    /* the columns, checked before anything is drawn */
+    long xcol = -1, ycols[CBM_PLOT_MAX_PANELS][MAX_Y];
+    int ny[CBM_PLOT_MAX_PANELS];
+    rc = CLI_OK;
+    if (a.x && (xcol = cli_table_column(&t, a.x)) < 0)
+        rc = cli_usage_error("plot", "%s has no column '%s'", a.data, a.x);
+    for (int k = 0; k < a.npanels && rc == CLI_OK; k++) {
+        char *names[MAX_Y + 1];
+        ny[k] = split_names(a.panel_cols[k], names, MAX_Y + 1);
+        if (ny[k] == 0 || ny[k] > MAX_Y)
+            rc = cli_usage_error("plot", "a panel takes 1 to %d y columns", MAX_Y);
+        for (int c = 0; c < ny[k] && rc == CLI_OK; c++)
+            if ((ycols[k][c] = cli_table_column(&t, names[c])) < 0)
+                rc = cli_usage_error("plot", "%s has no column '%s' (it has %zu: %s%s)", a.data,
+                                     names[c], t.ncols, t.ncols ? t.names[0] : "",
+                                     t.ncols > 1 ? ", ..." : "");
+    }
+    if (rc != CLI_OK) {
+        cli_table_free(&t);
+        return rc;
+    }
+    cbm_context *ctx = cli_context();
+    cbm_plot_def d = cbm_plot_def_default();
+    d.width = a.width, d.height = a.height, d.panels = a.npanels, d.title = a.title;
+    cbm_plot *p = NULL;
+    cbm_status st = cbm_plot_create(ctx, &d, &p);
+    for (int k = 0; k < a.npanels && st == CBM_OK; k++) {
+        cbm_plot_axes_def ax = cbm_plot_axes_def_default();
+        ax.xlog = a.logx, ax.ylog = a.logy;
+        ax.xmin = a.xr[0], ax.xmax = a.xr[1], ax.ymin = a.yr[0], ax.ymax = a.yr[1];
+        if (k == a.npanels - 1)
+            ax.xlabel = a.xlabel ? a.xlabel : xcol >= 0 ? t.names[xcol] : "row";
+        ax.ylabel = a.ylabel ? a.ylabel : ny[k] == 1 ? t.names[ycols[k][0]] : NULL;
+        st = cbm_plot_set_axes(p, k, &ax);
+        for (int c = 0; c < ny[k] && st == CBM_OK; c++) {
+            cbm_plot_series_def s = cbm_plot_series_def_default();
+            s.x = xcol >= 0 ? t.cols[xcol] : NULL;
+            s.y = t.cols[ycols[k][c]];
+            s.n = t.nrows;
+            s.label = ny[k] > 1 ? t.names[ycols[k][c]] : NULL;
+            s.line = a.style == 1 ? CBM_PLOT_NO_LINE : CBM_PLOT_SOLID;
+            s.marker = a.style ? (cbm_plot_marker)(CBM_PLOT_MARKER_CIRCLE + c % 6)
+                               : CBM_PLOT_MARKER_NONE;
+            st = cbm_plot_add_series(p, k, &s);
+        }
+    }
+    for (int k = 0; k < a.noutputs && st == CBM_OK; k++)
+        if ((st = write_output(p, a.outputs[k])) != CBM_OK)
+            rc = cli_fail(ctx, st, a.outputs[k]);
+    if (st != CBM_OK && rc == CLI_OK)
+        rc = cli_fail(ctx, st, "plot");
+    cbm_plot_destroy(p);
+    cli_context_end(ctx);
+    cli_table_free(&t);
+    return rc;
+}
