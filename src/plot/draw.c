@@ -290,14 +290,23 @@ static void draw_legend(const cbm_plot *p, cbm__canvas *c, const plot_panel *pl,
     case CBM_PLOT_LEGEND_AUTO: {
         size_t best = SIZE_MAX;
         for (int k = 0; k < 4; k++) {
+            /* points, and the midpoints of lines between them (sparse lines cross corners) */
             size_t covered = 0;
             for (size_t q = 0; q < pl->series.len; q++) {
                 const plot_series *s = &pl->series.data[q];
+                double px = NAN, py = NAN;
                 for (size_t i = 0; i < s->n; i++) {
-                    if (!usable(s->x[i], pb->x.log) || !usable(s->y[i], pb->y.log))
+                    if (!usable(s->x[i], pb->x.log) || !usable(s->y[i], pb->y.log)) {
+                        px = py = NAN;
                         continue;
+                    }
                     double x = to_px(&pb->x, s->x[i]), y = to_px(&pb->y, s->y[i]);
                     covered += x >= cx[k] && x <= cx[k] + w && y >= cy[k] && y <= cy[k] + h;
+                    if (s->line != CBM_PLOT_NO_LINE && isfinite(px)) {
+                        double mx = 0.5 * (x + px), my = 0.5 * (y + py);
+                        covered += mx >= cx[k] && mx <= cx[k] + w && my >= cy[k] && my <= cy[k] + h;
+                    }
+                    px = x, py = y;
                 }
             }
             if (covered < best)

@@ -1,12 +1,14 @@
 /* The figure as built by the caller: panels, their axes and series (copied, so the caller's
  * arrays need not outlive the calls), checked as they come in; writing by format. The drawing
  * itself is draw.c's, the files canvas_cairo.c's (PNG) and canvas_svg.c's (SVG). */
+#define _POSIX_C_SOURCE 200809L /* strcasecmp */
 #include "plot_internal.h"
 
 #include "cambium/io.h"
 
 #include <math.h>
 #include <string.h>
+#include <strings.h>
 
 /* Okabe & Ito's qualitative palette (sRGB), ordered so the first colours differ most on white;
  * the yellow comes last since it is faint on a white background. */
@@ -225,28 +227,18 @@ cbm_status cbm_plot_add_series(cbm_plot *p, int panel, const cbm_plot_series_def
     return CBM_OK;
 }
 
-static bool same_ci(const char *a, const char *b)
-{
-    for (; *a && *b; a++, b++) {
-        char c = *a >= 'A' && *a <= 'Z' ? (char)(*a - 'A' + 'a') : *a;
-        if (c != *b)
-            return false;
-    }
-    return *a == *b;
-}
-
 cbm_status cbm_plot_write_as(cbm_plot *p, const char *path, const char *format)
 {
     if (!p || !path || !format)
         return CBM_E_INVALID;
-    if (same_ci(format, "png")) {
+    if (!strcasecmp(format, "png")) {
         cbm_image *img = NULL;
         CBM_TRY(cbm__plot_render_cairo(p, &img));
         cbm_status st = cbm_image_write_png(p->ctx, img, path);
         cbm_image_destroy(img);
         return st;
     }
-    if (same_ci(format, "svg")) {
+    if (!strcasecmp(format, "svg")) {
         cbm_out *o = NULL;
         CBM_TRY(cbm_out_open(p->ctx, path, &o));
         cbm_status st = cbm__plot_write_svg(p, cbm_out_stream(o));

@@ -106,9 +106,9 @@ static int parse_args(int argc, char **argv, plot_args *a)
             a->data = o;
             continue;
         }
-        static const char *const with_value[] = {
-            "-x",      "-y",       "--panel",  "-o",     "--style", "--title",
-            "--xlabel", "--ylabel", "--xrange", "--yrange", "--size"};
+        static const char *const with_value[] = {"-x",       "-y",       "--panel",  "-o",
+                                                 "--style",  "--title",  "--xlabel", "--ylabel",
+                                                 "--xrange", "--yrange", "--size"};
         int k = -1;
         for (int j = 0; j < (int)(sizeof with_value / sizeof *with_value); j++)
             if (!strcmp(o, with_value[j]))
@@ -186,8 +186,8 @@ static int parse_args(int argc, char **argv, plot_args *a)
         return cli_usage_error("plot", "no output (-o PLOT.png or PLOT.svg)");
     for (int k = 0; k < a->noutputs; k++) {
         const char *colon = strchr(a->outputs[k], ':');
-        const char *ext = colon && colon - a->outputs[k] <= 4 ? a->outputs[k]
-                                                              : cli_extension(a->outputs[k]);
+        const char *ext =
+            colon && colon - a->outputs[k] <= 4 ? a->outputs[k] : cli_extension(a->outputs[k]);
         if (strncmp(ext, "png", 3) && strncmp(ext, "svg", 3) && strncmp(ext, "PNG", 3) &&
             strncmp(ext, "SVG", 3))
             return cli_usage_error("plot", "-o %s: plots are .png or .svg", a->outputs[k]);
@@ -260,8 +260,8 @@ int cmd_plot(int argc, char **argv)
             s.n = t.nrows;
             s.label = ny[k] > 1 ? t.names[ycols[k][c]] : NULL;
             s.line = a.style == 1 ? CBM_PLOT_NO_LINE : CBM_PLOT_SOLID;
-            s.marker = a.style ? (cbm_plot_marker)(CBM_PLOT_MARKER_CIRCLE + c % 6)
-                               : CBM_PLOT_MARKER_NONE;
+            s.marker =
+                a.style ? (cbm_plot_marker)(CBM_PLOT_MARKER_CIRCLE + c % 6) : CBM_PLOT_MARKER_NONE;
             st = cbm_plot_add_series(p, k, &s);
         }
     }

@@ -179,8 +179,8 @@ static bool read_csv(char *text, const char *path, cli_table *t, char *err, size
             continue;
         }
         if (n != t->ncols) {
-            ok = fail(err, en, "%s:%zu: %zu cells where the header names %zu columns", path,
-                      lineno, n, t->ncols);
+            ok = fail(err, en, "%s:%zu: %zu cells where the header names %zu columns", path, lineno,
+                      n, t->ncols);
             break;
         }
         if (!add_row(t, &cap)) {

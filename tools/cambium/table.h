@@ -8,8 +8,8 @@
 
 typedef struct cli_table {
     size_t ncols, nrows;
-    char **names;   /* ncols */
-    double **cols;  /* ncols arrays of nrows */
+    char **names;  /* ncols */
+    double **cols; /* ncols arrays of nrows */
 } cli_table;
 
 /// Reads path as CSV (a header line of names, then one row per line; lines starting with '#'
