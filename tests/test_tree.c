@@ -542,8 +542,8 @@ TEST(tree_real_insensitive_to_solver_path)
             const char *set[] = {"seed", sd, "solve_tolerance", tol[k], NULL};
             cbm_tree *t = grow(ctx, "fruit-tree", 6, set);
             const cbm_tree_summary *s = cbm_tree_summary_of(t, 6);
-            double dn = fabs((double)s->segments - (double)ref.last.segments) /
-                        (double)ref.last.segments;
+            double dn =
+                fabs((double)s->segments - (double)ref.last.segments) / (double)ref.last.segments;
             double dh = fabs(s->height - ref.last.height) / ref.last.height;
             worst_n = dn > worst_n ? dn : worst_n;
             worst_h = dh > worst_h ? dh : worst_h;
