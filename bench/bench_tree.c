@@ -53,8 +53,11 @@ int main(int argc, char **argv)
     cbm_context *ctx = NULL;
     if (cbm_context_create(&cd, &ctx) != CBM_OK)
         return 1;
-    /* 1. the default fruit tree, 10 years */
-    cbm_tree_def d = cbm_tree_def_default();
+    /* 1. the fruit tree with the thesis' constants, 10 years (the figures of
+     * docs/performance.md; the real-wood default is `cambium grow --timing`) */
+    cbm_tree_def d;
+    if (cbm_tree_def_builtin(ctx, "fruit-tree-thesis", &d) != CBM_OK)
+        return fail(ctx, "fruit-tree-thesis");
     cbm_tree *t = NULL;
     double t0 = now();
     if (cbm_tree_create(ctx, &d, &t) != CBM_OK || cbm_tree_run(t) != CBM_OK)
@@ -90,7 +93,8 @@ int main(int argc, char **argv)
     }
     fprintf(f, "step,season,segments,rings,passes,seconds,seconds_equilibrium,seconds_rings,"
                "seconds_rest\n");
-    d = cbm_tree_def_default();
+    if (cbm_tree_def_builtin(ctx, "fruit-tree-thesis", &d) != CBM_OK)
+        return fail(ctx, "fruit-tree-thesis");
     d.shoot_vigour = 0.03;
     d.years = 1000;
     if (cbm_tree_create(ctx, &d, &t) != CBM_OK)

@@ -849,7 +849,7 @@ TEST(mech_fast_fruit_fold_passes)
 {
     cbm_context *ctx = test_ctx();
     cbm_tree_def d;
-    CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree", &d));
+    CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree-thesis", &d));
     d.years = 4;
     cbm_tree *t = NULL;
     CHECK_OK(cbm_tree_create(ctx, &d, &t));

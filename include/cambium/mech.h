@@ -401,6 +401,10 @@ typedef struct cbm_growth_def {
     double reaction_beta;      ///< beta in [0, 1]: ring rest = (1-beta) Omega + beta rest (8.25)
     double reaction_increment; ///< m added to a after the pipe computation (8.20); default 0.001
     double reaction_youngs;    ///< E_rw, Pa; E_ring = (E_rw + E_juv)/2 (8.23); 0 = youngs_adult
+    /// largest aspect a/b a reaction-wood ring may give the section (>= 1; 0 = no bound, the
+    /// thesis): beyond it the ring's area (a + increment) b is laid at this aspect, so the
+    /// section grows rounder instead of into a ribbon (docs/growth.md); default 0
+    double reaction_max_aspect;
 } cbm_growth_def;
 
 /// Defaults as documented per field.

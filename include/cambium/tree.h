@@ -56,6 +56,7 @@ typedef struct cbm_tree_def {
     double internode_length; ///< m, LEN0 0.055
     double bud_length;       ///< m, lateral bud internode and ground threshold, BUDLENGTH 0.008
     double radius;           ///< m, radius of every new internode, RADIUS0 0.002
+    double bud_radius;       ///< m, radius of a new lateral bud internode (0 = radius, thesis)
     int max_buds;            ///< nodes of the most vigorous annual shoot, MAXBUDS 21
     int first_buds;          ///< nodes of the first trunk shoot (MAXBUDS/2 = 10)
     double phyllotaxis;      ///< rad, divergence between successive buds, SPIRAL 137.5 deg
@@ -71,23 +72,30 @@ typedef struct cbm_tree_def {
     double sink;         ///< zeta of the sink V_parent -= V zeta n (4.16; 1/4)
     double fairness;     ///< F in [0, 1] (4.18-4.19; 1 = fair)
     int years_to_shed;   ///< years without radial growth before a branch is shed (0 = never)
+    /// years a lateral or terminal bud that did not shoot stays dormant (a spur) and is decided
+    /// again each spring (0 = it aborts at once, the thesis); dormant buds regrow a broken axis
+    int dormancy;
     bool relay_bias;     ///< the height/orientation bias Phi of eq. 7.1 on lateral shares
     bool listing_vigour; ///< listing: spring shares = h only (erratum 5), along-shoot budget
+    /// resources go only to children whose subtree holds a bud that can shoot (above the
+    /// ground); 0 = every child but an aborted bud takes its share (the thesis)
+    bool bud_routing;
     /* mechanics and wood */
-    double youngs_juvenile;    ///< Pa, E_JUV 6e5 (crooked and general; wild x stiffness_factor)
-    double youngs_juvenile_sd; ///< relative sd of the per-shoot juvenile E (1/6)
-    double youngs_adult;       ///< Pa, E_ADULT 1.587e8
-    double adult_age;          ///< years from juvenile to adult wood (ADULT - GETS_ADULT = 19/12)
-    double shear_ratio;        ///< G / E (1/16 for wood; the listing's G = 2E is unphysical)
-    double density;            ///< kg/m^3, DENSITY 77.9
-    double modulus_of_rupture; ///< Pa, MOR 2.9e5 (0 = no breakage)
-    double tropism;            ///< N, TROP 8e-4, towards +y
-    double pipe_exponent;      ///< P, PIPE 2
-    double ring_rate;          ///< kappa, RADIUS_GOAL 0.6
-    double min_ring;           ///< m, EPSILON 1e-8: thinner increments are not rings
-    double reaction_threshold; ///< rad/m, xi = DEVIATION_FROM_EP 0.3 (<= 0: no reaction wood)
-    double reaction_beta;      ///< beta = REACT_ALPHA 0.3 (8.25)
-    double reaction_increment; ///< m, RW_INCREMENT 0.001 (8.20)
+    double youngs_juvenile;     ///< Pa, E_JUV 6e5 (crooked and general; wild x stiffness_factor)
+    double youngs_juvenile_sd;  ///< relative sd of the per-shoot juvenile E (1/6)
+    double youngs_adult;        ///< Pa, E_ADULT 1.587e8
+    double adult_age;           ///< years from juvenile to adult wood (ADULT - GETS_ADULT = 19/12)
+    double shear_ratio;         ///< G / E (1/16 for wood; the listing's G = 2E is unphysical)
+    double density;             ///< kg/m^3, DENSITY 77.9
+    double modulus_of_rupture;  ///< Pa, MOR 2.9e5 (0 = no breakage)
+    double tropism;             ///< N, TROP 8e-4, towards +y
+    double pipe_exponent;       ///< P, PIPE 2
+    double ring_rate;           ///< kappa, RADIUS_GOAL 0.6
+    double min_ring;            ///< m, EPSILON 1e-8: thinner increments are not rings
+    double reaction_threshold;  ///< rad/m, xi = DEVIATION_FROM_EP 0.3 (<= 0: no reaction wood)
+    double reaction_beta;       ///< beta = REACT_ALPHA 0.3 (8.25)
+    double reaction_increment;  ///< m, RW_INCREMENT 0.001 (8.20)
+    double reaction_max_aspect; ///< largest a/b reaction wood makes (0 = unbounded, thesis)
     double growth_steps_per_year; ///< growth steps a year of ageing spans (2.8 MAXBUDS = 58.8)
     cbm_mech_discretization discretization; ///< staggered (default) or the listing's chain
     cbm_ring_memory memory;                 ///< segment rate (default) or the listing's joint rate
@@ -103,13 +111,15 @@ typedef struct cbm_tree_def {
     /// drawing only: leaf side = leaf_scale sqrt(m / leaf_density) (the listing scales a
     /// predefined leaf surface of unstated size by sqrt(m / leaf_density)); 8
     double leaf_scale;
-    double fruit_mass;    ///< kg, mean goal mass FRUIT_MASS 0.01 (sd mean/2)
-    double fruit_density; ///< kg/m^3, FRUIT_DENSITY 300
-    double fruit_prob;    ///< FRUIT_PROB 0.27
-    int first_fruit_year; ///< first year with fruit (3; the listing fruits from year 1)
-    double organ_rate;    ///< fraction of the leaf/fruit goal reached per step, 0.9
-    double leaf_drop;     ///< probability a leaf falls per winter step (0.5)
-    double fruit_drop;    ///< probability a fruit falls per winter step (0.5)
+    double fruit_mass;      ///< kg, mean goal mass FRUIT_MASS 0.01 (sd mean/2)
+    double fruit_density;   ///< kg/m^3, FRUIT_DENSITY 300
+    double fruit_prob;      ///< FRUIT_PROB 0.27
+    int spur_leaves;        ///< leaves a dormant bud (spur) bears each summer (0, thesis)
+    double spur_fruit_prob; ///< probability a spur sets a fruit in a summer (0, thesis)
+    int first_fruit_year;   ///< first year with fruit (3; the listing fruits from year 1)
+    double organ_rate;      ///< fraction of the leaf/fruit goal reached per step, 0.9
+    double leaf_drop;       ///< probability a leaf falls per winter step (0.5)
+    double fruit_drop;      ///< probability a fruit falls per winter step (0.5)
     /* crooked / wild switch (ch. 7) */
     double stiffness_factor; ///< wild E = factor x E (3)
     double tropism_factor;   ///< wild tropism = factor x tropism (5)
@@ -120,7 +130,8 @@ typedef struct cbm_tree_def {
     int max_winter_steps; ///< winter steps at most (rings may still be growing) (40)
 } cbm_tree_def;
 
-/// The thesis' values for the general fruit tree (documented in docs/models.md).
+/// The general fruit tree with real apple wood and organs (the built-in `fruit-tree`,
+/// documented in docs/models.md; the thesis' values are the built-in `fruit-tree-thesis`).
 CBM_API cbm_tree_def cbm_tree_def_default(void);
 
 /// Sets one parameter from text (`name`, `value` as in a parameter file; angles in degrees;
@@ -162,7 +173,7 @@ typedef struct cbm_tree_summary {
     /// leaves and fruit have fallen (all tips until then)
     double tip_height_loaded;
     double tip_height_unloaded; ///< m, mean height of the same tips once leaves and fruit fell
-    size_t leaves;              ///< leaves at the end of summer
+    size_t leaves;              ///< leaves at the end of summer (a spur's rosette counts each)
     size_t fruit;               ///< fruit at the end of summer
     size_t breaks;              ///< branches broken this year
     size_t removed;             ///< segments lost this year (breakage, shedding, ground)
@@ -171,6 +182,7 @@ typedef struct cbm_tree_summary {
     size_t shoots;              ///< buds that shot in the spring before this summer
     size_t relay_shoots;        ///< of which from a pendulous parent (parent heading below level)
     double lean;                ///< deg from vertical of the first-year trunk (chord), NaN if lost
+    double base_diameter;       ///< m, 2 sqrt(a b) of the lowest segment at the end of the year
     size_t growth_steps;        ///< growth steps of this year
     size_t passes;              ///< equilibrium passes (solver sweeps) of this year
     size_t newton_steps;
@@ -217,8 +229,10 @@ typedef struct cbm_tree_segment {
     double vigour;        ///< resources received in the last spring pass
     double sink;          ///< resources taken from the continuation at this node (4.16)
     double lateral_share; ///< share of this node's vigour given to the lateral (after F)
-    double leaf_mass;     ///< kg
+    double leaf_mass;     ///< kg (all the leaves of the node)
     double fruit_mass;    ///< kg
+    int leaves;           ///< leaves at the node (a spur's rosette: spur_leaves)
+    bool dormant;         ///< a bud that did not shoot and waits (a spur)
 } cbm_tree_segment;
 
 CBM_API cbm_status cbm_tree_segment_info(const cbm_tree *tree, size_t seg, cbm_tree_segment *out);

@@ -102,6 +102,9 @@ cbm_status cbm__growth_check(cbm_context *ctx, const cbm_growth_def *d)
         bad = "reaction_increment must be >= 0";
     else if (!(isfinite(d->reaction_youngs) && d->reaction_youngs >= 0.0))
         bad = "reaction_youngs must be >= 0";
+    else if (!(isfinite(d->reaction_max_aspect) &&
+               (d->reaction_max_aspect == 0.0 || d->reaction_max_aspect >= 1.0)))
+        bad = "reaction_max_aspect must be 0 (no bound) or >= 1";
     if (bad)
         return cbm__fail(ctx, CBM_E_INVALID, "growth: %s", bad);
     return CBM_OK;
@@ -273,8 +276,16 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
         }
         double nb = zeta * na;
         bool rw = cbm__wood_leans(def, cur[i], p->rest[i]);
-        if (rw)
+        if (rw) {
             na += def->reaction_increment;
+            double k = def->reaction_max_aspect;
+            if (k >= 1.0 && na > k * nb) {
+                /* eccentric growth is bounded in real wood: the reaction ring's area goes round
+                 * the section at the bound's aspect (its rigidity and memory stay) */
+                nb = sqrt(na * nb / k);
+                na = k * nb;
+            }
+        }
         if (nb < b)
             nb = b;
         if (na < nb)

@@ -62,13 +62,13 @@ static cbm_vec3 distal(const cbm_plant *p, size_t i)
     return v3_madd(p->pos[i], q_rotate(p->q[i], v3(1, 0, 0)), p->len[i]);
 }
 
-static cbm_ring core_ring(const cbm_tree *t, double e)
+static cbm_ring core_ring(const cbm_tree *t, double e, double radius)
 {
     cbm_ring r = cbm_ring_default();
     r.youngs_modulus = e;
     r.shear_modulus = t->def.shear_ratio * e;
     r.density = t->def.density;
-    r.a = r.b = t->def.radius;
+    r.a = r.b = radius;
     r.modulus_of_rupture = t->def.modulus_of_rupture;
     return r;
 }
@@ -87,10 +87,31 @@ static cbm_status new_organs(cbm_tree *t, size_t i, int count)
     if (d->leaves && d->leaf_mass > 0.0) {
         s->leaf_goal = normal_pos(t, d->leaf_mass, 0.5 * d->leaf_mass, 0.05);
         s->leaf = s->leaf_goal / 3.0;
+        s->nleaf = 1;
     }
     double x = uniform(t, 0.0, 2.0 * (double)(d->max_buds - count) / (double)d->max_buds);
     if (d->fruit_mass > 0.0 && x < d->fruit_prob && count > 2 &&
         t->year + 1 >= d->first_fruit_year) {
+        s->fruit_goal = normal_pos(t, d->fruit_mass, 0.5 * d->fruit_mass, 0.05);
+        s->fruit = s->fruit_goal / 3.0;
+    }
+    return set_mass(t, i);
+}
+
+/* The rosette of leaves and maybe a fruit of a dormant bud (a spur) for the coming summer. */
+static cbm_status spur_organs(cbm_tree *t, size_t i)
+{
+    tree_seg *s = &t->seg.data[i];
+    const cbm_tree_def *d = &t->def;
+    if (d->leaves && d->leaf_mass > 0.0 && d->spur_leaves > 0) {
+        s->leaf_goal = 0.0;
+        for (int k = 0; k < d->spur_leaves; k++)
+            s->leaf_goal += normal_pos(t, d->leaf_mass, 0.5 * d->leaf_mass, 0.05);
+        s->leaf = s->leaf_goal / 3.0;
+        s->nleaf = d->spur_leaves;
+    }
+    if (d->fruit_mass > 0.0 && d->spur_fruit_prob > 0.0 && t->year + 1 >= d->first_fruit_year &&
+        cbm__rng_uniform(&t->rng) < d->spur_fruit_prob) {
         s->fruit_goal = normal_pos(t, d->fruit_mass, 0.5 * d->fruit_mass, 0.05);
         s->fruit = s->fruit_goal / 3.0;
     }
@@ -103,15 +124,16 @@ static cbm_status push_seg(cbm_tree *t, const tree_seg *s)
 }
 
 /* Adds one segment to the plant and its model state. */
-static cbm_status add_seg(cbm_tree *t, size_t parent, double length, double divergence,
-                          double deviation, double e, double trop, const tree_seg *s, size_t *out)
+static cbm_status add_seg(cbm_tree *t, size_t parent, double length, double radius,
+                          double divergence, double deviation, double e, double trop,
+                          const tree_seg *s, size_t *out)
 {
     cbm_segment_def sd = cbm_segment_def_default();
     sd.parent = (int64_t)parent;
     sd.length = length;
     sd.divergence = divergence;
     sd.deviation = deviation;
-    sd.core = core_ring(t, e);
+    sd.core = core_ring(t, e, radius);
     CBM_TRY(cbm_plant_upright_roll(t->plant, &sd, &sd.roll));
     cbm_tropism tr = cbm_tropism_default();
     tr.strength = trop;
@@ -145,10 +167,11 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     c.nodes = nodes;
     c.h = h;
     c.low_since = -1;
+    c.bud_year = t->year;
     c.phyllo = fmod(ps.phyllo + d->phyllotaxis, 2.0 * CBM_PI);
     c.juv_e = ps.juv_e;
     size_t ci, li;
-    CBM_TRY(add_seg(t, i, d->internode_length, 0.0, 0.0, c.juv_e, trop, &c, &ci));
+    CBM_TRY(add_seg(t, i, d->internode_length, d->radius, 0.0, 0.0, c.juv_e, trop, &c, &ci));
     /* lateral bud: divergence = the parent's phyllotactic angle, deviation from h */
     double lo = cbm_tree_func_eval(&d->angle_min_height, h) * 100.0 * CBM_PI / 180.0;
     double hi = cbm_tree_func_eval(&d->angle_max_height, h) * 100.0 * CBM_PI / 180.0;
@@ -160,8 +183,10 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     l.nodes = nodes;
     l.h = h;
     l.low_since = -1;
+    l.bud_year = t->year;
     l.juv_e = normal_pos(t, t->e_juv, d->youngs_juvenile_sd * t->e_juv, 0.1);
-    CBM_TRY(add_seg(t, i, d->bud_length, ps.phyllo, dev, l.juv_e, trop, &l, &li));
+    double br = d->bud_radius > 0.0 ? d->bud_radius : d->radius;
+    CBM_TRY(add_seg(t, i, d->bud_length, br, ps.phyllo, dev, l.juv_e, trop, &l, &li));
     CBM_TRY(new_organs(t, li, count));
     if (!(c.flags & SEG_APEX))
         CBM_TRY(new_organs(t, ci, count));
@@ -206,6 +231,7 @@ static cbm_status solve(cbm_tree *t)
     t->cur.seconds_solve += now() - t0;
     t->cur.passes += st.passes;
     t->cur.newton_steps += st.newton_steps;
+    t->converged = s != CBM_E_NOT_CONVERGED;
     if (s == CBM_E_NOT_CONVERGED) {
         /* the state is the best iterate; the next step goes on from it */
         t->cur.unconverged++;
@@ -227,7 +253,10 @@ static cbm_status break_and_crop(cbm_tree *t)
     int64_t *par = cbm__alloc(t->ctx, n0 * sizeof *par);
     cbm_status s = gone && broken && par ? CBM_OK : CBM_E_NOMEM;
     size_t nb = 0, nrm = 0, ncrop = 0;
-    if (s == CBM_OK && t->def.modulus_of_rupture > 0.0) {
+    /* breakage is decided on converged equilibria only: an iterate left above the tolerance
+     * (the pass budget spent, e.g. near a fold) may carry stresses of no equilibrium at all,
+     * and one wrong break removes a whole limb; the next step's equilibrium decides */
+    if (s == CBM_OK && t->def.modulus_of_rupture > 0.0 && t->converged) {
         memcpy(par, p->parent, n0 * sizeof *par);
         s = cbm_plant_break(p, broken, n0, &nb, &nrm);
         if (s == CBM_OK && nb) {
@@ -406,6 +435,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
         def->reaction_threshold > 0.0 && !crooked ? def->reaction_threshold : INFINITY;
     g.reaction_beta = crooked ? 0.0 : def->reaction_beta;
     g.reaction_increment = def->reaction_increment;
+    g.reaction_max_aspect = def->reaction_max_aspect;
     t->growth = g;
     t->solve = cbm_solve_def_default();
     t->solve.tolerance = def->solve_tolerance;
@@ -423,10 +453,11 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
         r.nodes = def->first_buds;
         r.low_since = -1;
         r.juv_e = t->e_juv;
+        r.bud_year = 0;
         cbm_segment_def sd = cbm_segment_def_default();
         sd.parent = -1;
         sd.length = def->internode_length;
-        sd.core = core_ring(t, t->e_juv);
+        sd.core = core_ring(t, t->e_juv, def->radius);
         cbm_tropism tr = cbm_tropism_default();
         tr.strength = t->trop;
         s = cbm_plant_grow_segment(t->plant, &sd, &tr, NULL);
@@ -492,20 +523,25 @@ static cbm_status summer_step(cbm_tree *t)
             }
         size_t nl = 0, nf = 0;
         for (size_t i = 0; i < t->seg.len; i++) {
-            nl += t->seg.data[i].leaf > 0.0;
+            nl += t->seg.data[i].leaf > 0.0 ? (size_t)t->seg.data[i].nleaf : 0;
             nf += t->seg.data[i].fruit > 0.0;
         }
         t->cur.leaves = nl;
         t->cur.fruit = nf;
         t->cur.segments = t->seg.len; /* the year's final count replaces it */
         t->cur.lean = trunk_lean(t);
+        t->cur.base_diameter =
+            t->plant->n ? 2.0 * sqrt(t->plant->outer[0].a * t->plant->outer[0].b) : 0.0;
         t->season = CBM_TREE_WINTER;
     }
     return CBM_OK;
 }
 
 /* Shedding of branches that laid no ring for years_to_shed years (§4.3.2); buds, apices and
- * the base are productive by definition. */
+ * the base are productive by definition, and so is every segment that carries something
+ * productive: a branch is shed only when nothing on it has grown (a segment that laid no ring
+ * because its children's pipes already fit it is not dead while they live; shedding it took the
+ * whole tree with it). */
 static cbm_status shed_unproductive(cbm_tree *t)
 {
     int yts = t->def.years_to_shed;
@@ -516,10 +552,20 @@ static cbm_status shed_unproductive(cbm_tree *t)
     if (!gone)
         return CBM_E_NOMEM;
     size_t cnt = 0;
+    /* gone[] first holds the productive flag, propagated from the tips to the base */
+    for (size_t i = 0; i < n; i++) {
+        const tree_seg *s = &t->seg.data[i];
+        gone[i] = (s->flags & (SEG_GREW | SEG_BUD | SEG_APEX)) ||
+                  (t->plant->nchild[i] == 0 && !(s->flags & SEG_ABORTED));
+    }
+    for (size_t i = n; i-- > 1;)
+        if (gone[i] && t->plant->parent[i] >= 0)
+            gone[t->plant->parent[i]] = 1;
+    gone[0] = 0; /* the base is never shed */
     for (size_t i = 1; i < n; i++) {
         tree_seg *s = &t->seg.data[i];
-        bool productive = (s->flags & (SEG_GREW | SEG_BUD | SEG_APEX)) ||
-                          (t->plant->nchild[i] == 0 && !(s->flags & SEG_ABORTED));
+        bool productive = gone[i] != 0;
+        gone[i] = 0;
         if (productive) {
             s->low_since = -1;
             continue;
@@ -558,6 +604,8 @@ static cbm_status end_year(cbm_tree *t)
         spring_back(t);
     t->cur.segments = t->seg.len;
     t->cur.lean = trunk_lean(t);
+    t->cur.base_diameter =
+        t->plant->n ? 2.0 * sqrt(t->plant->outer[0].a * t->plant->outer[0].b) : 0.0;
     for (size_t i = 0; i < t->seg.len; i++)
         t->cur.reaction_segments += (t->seg.data[i].flags & SEG_REACT) != 0;
     CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->years, t->cur));
@@ -565,6 +613,10 @@ static cbm_status end_year(cbm_tree *t)
     begin_year(t);
     t0 = now();
     CBM_TRY(cbm__tree_spring(t));
+    if (t->def.spur_leaves > 0 || t->def.spur_fruit_prob > 0.0)
+        for (size_t i = 0; i < t->seg.len; i++)
+            if ((t->seg.data[i].flags & (SEG_BUD | SEG_APEX)) == SEG_BUD)
+                CBM_TRY(spur_organs(t, i));
     CBM_TRY(solve(t));
     t->cur.seconds += now() - t0;
     return CBM_OK;
@@ -577,7 +629,7 @@ static cbm_status winter_step(cbm_tree *t, bool *done)
         tree_seg *s = &t->seg.data[i];
         bool ch = false;
         if (s->leaf > 0.0 && cbm__rng_uniform(&t->rng) < t->def.leaf_drop)
-            s->leaf = s->leaf_goal = 0.0, ch = true;
+            s->leaf = s->leaf_goal = 0.0, s->nleaf = 0, ch = true;
         if (s->fruit > 0.0 && cbm__rng_uniform(&t->rng) < t->def.fruit_drop)
             s->fruit = s->fruit_goal = 0.0, ch = true;
         if (ch)
@@ -691,5 +743,7 @@ cbm_status cbm_tree_segment_info(const cbm_tree *t, size_t seg, cbm_tree_segment
     out->lateral_share = s->share;
     out->leaf_mass = s->leaf;
     out->fruit_mass = s->fruit;
+    out->leaves = s->leaf > 0.0 ? s->nleaf : 0;
+    out->dormant = (s->flags & (SEG_BUD | SEG_APEX)) == SEG_BUD && s->bud_year < t->year;
     return CBM_OK;
 }

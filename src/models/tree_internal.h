@@ -24,6 +24,8 @@ typedef struct tree_seg {
     int32_t count;     /* node number in its annual shoot */
     int32_t nodes;     /* nodes of that shoot (numBuds) */
     int32_t low_since; /* year since which the segment has not grown, -1 */
+    int32_t bud_year;  /* year (t->year) the bud was made or last decided dormant from */
+    int32_t nleaf;     /* leaves at the node (0 or 1; a spur's rosette spur_leaves) */
     double h;          /* position of the node in its annual shoot, count / nodes (bud height) */
     double phyllo;     /* rad, divergence of the next lateral (listing phyllo) */
     double juv_e;      /* Pa, juvenile modulus of the shoot */
@@ -47,6 +49,7 @@ struct cbm_tree {
     cbm_tree_season season;
     int winter_steps;
     bool unloaded_recorded;
+    bool converged; /* the last equilibrium met the tolerance */
     CBM_ARRAY(cbm_tree_summary) years;
     cbm_tree_summary cur;
 };

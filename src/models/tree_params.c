@@ -46,7 +46,9 @@ static cbm_tree_func func2(double x0, double y0, double x1, double y1)
     return f;
 }
 
-cbm_tree_def cbm_tree_def_default(void)
+/* The thesis' constants (A.1 #defines, digest §3.1, and the calibrated resource values):
+ * the built-in `fruit-tree-thesis` and the base of the chapter 7 thesis aspens. */
+static cbm_tree_def thesis_def(void)
 {
     cbm_tree_def d;
     memset(&d, 0, sizeof d);
@@ -119,6 +121,52 @@ cbm_tree_def cbm_tree_def_default(void)
     return d;
 }
 
+/* The fruit tree with real apple wood and organs (docs/models.md, "Real wood"): sources and the
+ * ranges the growth is calibrated against are in the docs; what is not set here is the thesis'
+ * model (its functions, the Borchert-Honda allocation, the reaction-wood law). */
+cbm_tree_def cbm_tree_def_default(void)
+{
+    cbm_tree_def d = thesis_def();
+    /* architecture of a young apple tree: 3 cm internodes, shoots up to 25 nodes (75 cm), a
+     * 45 cm first-year seedling; new shoots 4 mm thick, buds 2 mm; 2/5 phyllotaxis */
+    d.internode_length = 0.03;
+    d.radius = 0.002;
+    d.bud_radius = 0.001;
+    d.max_buds = 25;
+    d.first_buds = 15;
+    d.phyllotaxis = 144.0 * DEG;
+    /* wood: green apple wood, E 1 GPa young (MAppleT) to 6 GPa adult, MOR 50 MPa, fresh
+     * density 950 kg/m^3 */
+    d.youngs_juvenile = 1.0e9;
+    d.youngs_adult = 6.0e9;
+    d.adult_age = 3.0;
+    d.density = 950.0;
+    d.modulus_of_rupture = 50e6;
+    d.tropism = 0.5;
+    d.reaction_threshold = 0.05;
+    d.reaction_increment = 1e-4;
+    d.reaction_max_aspect = 1.5;
+    d.growth_steps_per_year = 37.0;
+    /* resources */
+    d.vigour_k = 800.0;
+    d.shoot_vigour = 0.2;
+    d.sink = 0.05;
+    d.dormancy = 5;
+    d.bud_routing = true;
+    /* organs: a leaf of 0.6 g fresh and 25 cm^2 (LMA 250 g/m^2 fresh), spurs of 4 leaves, an
+     * apple of 150 g and 7 cm (835 kg/m^3), fruit on spurs from year 4 */
+    d.leaf_mass = 6e-4;
+    d.leaf_density = 0.25;
+    d.leaf_scale = 1.7;
+    d.spur_leaves = 4;
+    d.fruit_mass = 0.15;
+    d.fruit_density = 835.0;
+    d.fruit_prob = 0.0;
+    d.spur_fruit_prob = 0.1;
+    d.first_fruit_year = 4;
+    return d;
+}
+
 /* ---- the table ---- */
 
 typedef enum kind {
@@ -152,6 +200,7 @@ static const param params[] = {
     P(internode_length, K_DOUBLE, 1e-6, 100),
     P(bud_length, K_DOUBLE, 1e-6, 100),
     P(radius, K_DOUBLE, 1e-6, 10),
+    P(bud_radius, K_DOUBLE, 0, 10),
     P(max_buds, K_INT, 1, 1000),
     P(first_buds, K_INT, 1, 1000),
     P(phyllotaxis, K_ANGLE, -360, 360),
@@ -166,8 +215,10 @@ static const param params[] = {
     P(sink, K_DOUBLE, 0, 1e6),
     P(fairness, K_DOUBLE, 0, 1),
     P(years_to_shed, K_INT, 0, 1000000),
+    P(dormancy, K_INT, 0, 1000000),
     P(relay_bias, K_BOOL, 0, 0),
     P(listing_vigour, K_BOOL, 0, 0),
+    P(bud_routing, K_BOOL, 0, 0),
     P(youngs_juvenile, K_DOUBLE, 1e-3, 1e13),
     P(youngs_juvenile_sd, K_DOUBLE, 0, 0.5),
     P(youngs_adult, K_DOUBLE, 1e-3, 1e13),
@@ -182,6 +233,7 @@ static const param params[] = {
     P(reaction_threshold, K_DOUBLE, 0, 1e12),
     P(reaction_beta, K_DOUBLE, 0, 1),
     P(reaction_increment, K_DOUBLE, 0, 1),
+    P(reaction_max_aspect, K_DOUBLE, 0, 100),
     P(growth_steps_per_year, K_DOUBLE, 1, 1e6),
     P(discretization, K_DISC, 0, 0),
     P(memory, K_MEM, 0, 0),
@@ -195,6 +247,8 @@ static const param params[] = {
     P(fruit_mass, K_DOUBLE, 0, 1e3),
     P(fruit_density, K_DOUBLE, 1e-9, 1e6),
     P(fruit_prob, K_DOUBLE, 0, 10),
+    P(spur_leaves, K_INT, 0, 100),
+    P(spur_fruit_prob, K_DOUBLE, 0, 1),
     P(first_fruit_year, K_INT, 1, 1000000),
     P(organ_rate, K_DOUBLE, 0, 1),
     P(leaf_drop, K_DOUBLE, 0, 1),
@@ -408,6 +462,9 @@ cbm_status cbm_tree_def_check(cbm_context *ctx, const cbm_tree_def *d)
     }
     if (bad)
         return cbm__fail(ctx, CBM_E_INVALID, "tree parameter %s is out of range", bad);
+    if (d->reaction_max_aspect > 0.0 && d->reaction_max_aspect < 1.0)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "tree parameter reaction_max_aspect must be 0 (no bound) or >= 1");
     if (d->youngs_adult < d->youngs_juvenile)
         return cbm__fail(ctx, CBM_E_INVALID,
                          "tree parameter youngs_adult must be >= youngs_juvenile");
@@ -620,25 +677,51 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
 
 typedef struct builtin {
     const char *name;
-    const char *text; /* parameter-file text applied over cbm_tree_def_default() */
+    bool thesis;      /* over thesis_def() instead of cbm_tree_def_default() */
+    const char *text; /* parameter-file text applied over the base */
 } builtin;
 
+#define ASPEN "years_to_shed = 3\nrelay_bias = 1\nfruit_prob = 0\n"
+/* real trembling aspen (docs/models.md): green Populus tremuloides wood, the wild form's E; the
+ * chapter 7 switch multiplies the base E by stiffness_factor (3) for the wild form, so the base
+ * here is a third of it (the crooked clone's supple wood, the thesis' hypothesis) */
+#define REAL_ASPEN                                                                                 \
+    ASPEN "youngs_juvenile = 3.3e8\nyoungs_adult = 1.97e9\ndensity = 800\n"                        \
+          "modulus_of_rupture = 35e6\nleaf_mass = 4e-4\nleaf_density = 0.2\nspur_fruit_prob = 0\n" \
+          "tropism = 0.1\n"
 static const builtin builtins[] = {
-    {"fruit-tree", ""},
-    {"fruit-tree-fair", "fairness = 1\n"},
-    {"fruit-tree-unfair", "fairness = 0.2\n"},
-    {"fruit-tree-high-mor", "modulus_of_rupture = 2.9e7\n"},
-    {"fruit-tree-low-mor", "modulus_of_rupture = 1.2e5\n"},
-    {"poplar-wild", "form = wild\nyears_to_shed = 3\nrelay_bias = 1\nfruit_prob = 0\n"},
-    {"poplar-crooked", "form = crooked\nyears_to_shed = 3\nrelay_bias = 1\nfruit_prob = 0\n"},
+    {"fruit-tree", false, ""},
+    {"fruit-tree-fair", false, "fairness = 1\n"},
+    {"fruit-tree-unfair", false, "fairness = 0.2\n"},
+    {"fruit-tree-high-mor", false, "modulus_of_rupture = 100e6\n"},
+    {"fruit-tree-low-mor", false, "modulus_of_rupture = 15e6\n"},
+    {"poplar-wild", false, "form = wild\n" REAL_ASPEN},
+    {"poplar-crooked", false, "form = crooked\n" REAL_ASPEN},
+    {"fruit-tree-thesis", true, ""},
+    {"fruit-tree-thesis-unfair", true, "fairness = 0.2\n"},
+    {"fruit-tree-thesis-high-mor", true, "modulus_of_rupture = 2.9e7\n"},
+    {"fruit-tree-thesis-low-mor", true, "modulus_of_rupture = 1.2e5\n"},
+    {"poplar-wild-thesis", true, "form = wild\n" ASPEN},
+    {"poplar-crooked-thesis", true, "form = crooked\n" ASPEN},
 };
 #define NBUILTINS (sizeof builtins / sizeof builtins[0])
 
 const char *const *cbm_tree_builtin_names(void)
 {
-    static const char *const names[] = {
-        "fruit-tree",         "fruit-tree-fair", "fruit-tree-unfair", "fruit-tree-high-mor",
-        "fruit-tree-low-mor", "poplar-wild",     "poplar-crooked",    NULL};
+    static const char *const names[] = {"fruit-tree",
+                                        "fruit-tree-fair",
+                                        "fruit-tree-unfair",
+                                        "fruit-tree-high-mor",
+                                        "fruit-tree-low-mor",
+                                        "poplar-wild",
+                                        "poplar-crooked",
+                                        "fruit-tree-thesis",
+                                        "fruit-tree-thesis-unfair",
+                                        "fruit-tree-thesis-high-mor",
+                                        "fruit-tree-thesis-low-mor",
+                                        "poplar-wild-thesis",
+                                        "poplar-crooked-thesis",
+                                        NULL};
     _Static_assert(sizeof names / sizeof names[0] == NBUILTINS + 1, "builtin names");
     return names;
 }
@@ -649,7 +732,7 @@ cbm_status cbm_tree_def_builtin(cbm_context *ctx, const char *name, cbm_tree_def
         return CBM_E_INVALID;
     for (size_t i = 0; i < NBUILTINS; i++)
         if (!strcmp(name, builtins[i].name)) {
-            cbm_tree_def d = cbm_tree_def_default();
+            cbm_tree_def d = builtins[i].thesis ? thesis_def() : cbm_tree_def_default();
             CBM_TRY(cbm_tree_def_parse(ctx, &d, builtins[i].text, strlen(builtins[i].text),
                                        builtins[i].name));
             *out = d;

@@ -11,8 +11,9 @@
  *   p' = fairness(p, F), V_l = p' V, V_c = V - V_l    (4.18-4.19 as coded; 4.14)
  * so V_l + V_c = V exactly before sinks. A lateral bud still undecided shoots if V_l exceeds
  * shoot_vigour; it then makes n = max(1, int(f(V_l) max_buds)) nodes (4.15) and becomes a sink:
- * the continuation loses min(V_c, zeta n V_l) (4.16). A bud that does not shoot aborts and its
- * share returns to the continuation (it takes no resources, the listing's takesVigour). A
+ * the continuation loses min(V_c, zeta n V_l) (4.16). A bud that does not shoot stays dormant
+ * for `dormancy` years (decided again each spring), then aborts; either way its share returns to
+ * the continuation (it takes no resources, the listing's takesVigour). A
  * terminal bud is decided on the vigour its shoot passes on to it. This single simultaneous
  * split is the physically consistent form; the listing's spring pass (listing_vigour) instead
  * gives every bud of a shoot the shoot's vigour times f(h) (the girth ratio is 1 there, digest
@@ -63,7 +64,14 @@ static double decide(cbm_tree *t, size_t j, double v, bool relay)
         t->cur.relay_shoots += relay;
         return t->def.sink * (double)n * v;
     }
+    /* a bud that does not shoot waits as a dormant bud (a spur) for `dormancy` years, decided
+     * again each spring (it takes no resources: its share returns to the axis); then it aborts */
+    if (t->year - s->bud_year <= t->def.dormancy) {
+        s->flags |= SEG_BUD;
+        return -1.0;
+    }
     s->flags |= SEG_ABORTED;
+    s->nleaf = 0;
     return -1.0;
 }
 
@@ -78,7 +86,9 @@ cbm_status cbm__tree_spring(cbm_tree *t)
     size_t *cont = cbm__alloc(t->ctx, n * sizeof *cont);
     double *y0 = cbm__alloc(t->ctx, n * sizeof *y0);
     double *ym = cbm__alloc(t->ctx, n * sizeof *ym);
-    if (!lat || !cont || !y0 || !ym) {
+    uint8_t *live = cbm__alloc(t->ctx, n);
+    if (!lat || !cont || !y0 || !ym || !live) {
+        cbm__free(t->ctx, live, n);
         cbm__free(t->ctx, lat, n * sizeof *lat);
         cbm__free(t->ctx, cont, n * sizeof *cont);
         cbm__free(t->ctx, y0, n * sizeof *y0);
@@ -105,6 +115,20 @@ cbm_status cbm__tree_spring(cbm_tree *t)
     for (size_t j = n; j-- > 0;)
         if (cont[j] != SIZE_MAX)
             ym[j] = ym[cont[j]];
+    /* live[j]: the subtree of j holds a bud that can shoot (undecided or dormant, above the
+     * ground). With bud_routing a child whose subtree has none takes no resources, as an
+     * aborted bud: vigour is not poured into dead branches or tips lying on the ground */
+    for (size_t j = n; j-- > 0;) {
+        if (!d->bud_routing) {
+            live[j] = !(sg[j].flags & SEG_ABORTED);
+            continue;
+        }
+        live[j] = (sg[j].flags & (SEG_BUD | SEG_APEX)) && distal(p, j).y >= d->bud_length;
+        if (lat[j] != SIZE_MAX && live[lat[j]])
+            live[j] = 1;
+        if (cont[j] != SIZE_MAX && live[cont[j]])
+            live[j] = 1;
+    }
     const double hp = 0.5 * d->pipe_exponent;
     {
         double a0 = p->outer[0].a;
@@ -118,8 +142,8 @@ cbm_status cbm__tree_spring(cbm_tree *t)
         sg[i].sink = 0.0;
         sg[i].share = 0.0;
         size_t l = lat[i], c = cont[i];
-        bool tl = l != SIZE_MAX && !(sg[l].flags & SEG_ABORTED);
-        bool tc = c != SIZE_MAX && !(sg[c].flags & SEG_ABORTED);
+        bool tl = l != SIZE_MAX && live[l];
+        bool tc = c != SIZE_MAX && live[c];
         double vl = 0.0, vc = 0.0;
         if (tl && tc) {
             double f = cbm_tree_func_eval(&d->vigour_height, sg[l].h);
@@ -174,5 +198,6 @@ cbm_status cbm__tree_spring(cbm_tree *t)
     cbm__free(t->ctx, cont, n * sizeof *cont);
     cbm__free(t->ctx, y0, n * sizeof *y0);
     cbm__free(t->ctx, ym, n * sizeof *ym);
+    cbm__free(t->ctx, live, n);
     return CBM_OK;
 }

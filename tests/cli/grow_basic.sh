@@ -25,6 +25,22 @@ cmp "$tmp/t.csv" "$tmp/u.csv"
 grep -q '^year  2:' "$tmp/out.txt"
 "$bin" grow "$CBM_SOURCE/models/fruit-tree.tree" --params | grep -qx 'fairness = 1'
 "$bin" grow poplar-wild --params | grep -qx 'form = wild'
+# --seeds: the distribution over seeds (3 seeds, 2 years)
+"$bin" grow -y 2 --seeds 1-3 -o "$tmp/stats.json" >"$tmp/seeds.txt"
+grep -q '^year  2, median of 3 seeds:' "$tmp/seeds.txt"
+grep -q '^3 seeds in .* 0 collapsed$' "$tmp/seeds.txt"
+for k in '"seeds":' '"collapsed_seeds":' '"median":' '"q1":' '"q3":' '"min":' '"max":' \
+    '"base_diameter_m":' '"final":' '"breaks_total":'; do
+    grep -q "$k" "$tmp/stats.json" || { echo "stats: missing $k"; exit 1; }
+done
+test "$(grep -o '"seed":' "$tmp/stats.json" | wc -l)" -eq 3
+set +e
+"$bin" grow --seeds 3-1 -o "$tmp/x.json" 2>/dev/null; rs1=$?
+"$bin" grow --seeds 1-2 -o "$tmp/x.png" 2>/dev/null; rs2=$?
+"$bin" grow --seeds 1-2 --seed 4 2>/dev/null; rs3=$?
+set -e
+test $rs1 -eq 2 && test $rs2 -eq 2 && test $rs3 -eq 2
+test ! -e "$tmp/x.json"
 # errors: file:line:col, exit 1; bad usage, exit 2
 printf 'fairness = 0.5\nwobble = 1\n' >"$tmp/bad.tree"
 set +e

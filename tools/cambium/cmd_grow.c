@@ -1,10 +1,12 @@
 /* cambium grow: grows a built-in tree model (cambium/tree.h) from a parameter file or a built-in
  * name for a number of years, and writes the final tree (pictures, meshes), the segments table
  * (.csv), the MTG (.mtg) and the year-by-year summary (.json); with --every K a .glb holds a
- * growth animation of one frame every K growth steps. */
+ * growth animation of one frame every K growth steps. With --seeds A-B it grows the model once
+ * per seed and writes the distribution of the year-by-year figures over the seeds (.json). */
 #include "cli_output.h"
 #include "commands.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,7 +33,10 @@ static void help(void)
            "                    .json then ends with that year, \"complete\": false)\n"
            "  --timing          time spent per phase on stderr\n"
            "  --quiet           no per-year lines on stdout\n"
-           "  --params          print every parameter (parameter-file syntax) and exit\n\n"
+           "  --params          print every parameter (parameter-file syntax) and exit\n"
+           "  --seeds A-B       grow once per seed A..B and write the median, quartiles,\n"
+           "                    minimum and maximum of the year-by-year figures over the\n"
+           "                    seeds (-o FILE.json; stdout: medians per year)\n\n"
            "built-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
@@ -83,6 +88,7 @@ static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete
     cbm_json_number(j, "tip_height_loaded_m", s->tip_height_loaded);
     cbm_json_number(j, "tip_height_unloaded_m", s->tip_height_unloaded);
     cbm_json_number(j, "trunk_lean_deg", s->lean);
+    cbm_json_number(j, "base_diameter_m", s->base_diameter);
     cbm_json_int(j, "growth_steps", (int64_t)s->growth_steps);
     cbm_json_int(j, "equilibrium_passes", (int64_t)s->passes);
     cbm_json_int(j, "newton_steps", (int64_t)s->newton_steps);
@@ -91,6 +97,187 @@ static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete
     cbm_json_number(j, "seconds_equilibrium", s->seconds_solve);
     cbm_json_number(j, "seconds_rings", s->seconds_rings);
     cbm_json_end_object(j);
+}
+
+/* ---- --seeds: the distribution over seeds ---- */
+
+/* The year-by-year figures a --seeds run reports (cbm_tree_summary fields). */
+static const char *const seed_figures[] = {
+    "segments", "height_m", "crown_width_m",          "base_diameter_m", "leaves",     "fruit",
+    "breaks",   "shed",     "reaction_wood_segments", "shoots",          "unconverged"};
+#define NFIG (sizeof seed_figures / sizeof seed_figures[0])
+
+static double seed_figure(const cbm_tree_summary *s, size_t k)
+{
+    switch (k) {
+    case 0:
+        return (double)s->segments;
+    case 1:
+        return s->height;
+    case 2:
+        return s->crown_width;
+    case 3:
+        return s->base_diameter;
+    case 4:
+        return (double)s->leaves;
+    case 5:
+        return (double)s->fruit;
+    case 6:
+        return (double)s->breaks;
+    case 7:
+        return (double)s->shed;
+    case 8:
+        return (double)s->reaction_segments;
+    case 9:
+        return (double)s->shoots;
+    default:
+        return (double)s->unconverged;
+    }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Quantile q of sorted v[0..n) by linear interpolation between order statistics. */
+static double quantile(const double *v, size_t n, double q)
+{
+    double h = q * (double)(n - 1);
+    size_t lo = (size_t)floor(h);
+    if (lo + 1 >= n)
+        return v[n - 1];
+    return v[lo] + (h - (double)lo) * (v[lo + 1] - v[lo]);
+}
+
+/* A seed's tree collapsed: at the end it has less than half of its largest segment count, or
+ * (with leaves) no leaf in its last summer. */
+static bool collapsed(const cbm_tree_summary *s, int years, const cbm_tree_def *d)
+{
+    if (years <= 0)
+        return false;
+    size_t peak = 0;
+    for (int y = 0; y < years; y++)
+        peak = s[y].segments > peak ? s[y].segments : peak;
+    const cbm_tree_summary *last = &s[years - 1];
+    return 2 * last->segments < peak ||
+           (d->leaves && d->leaf_mass > 0.0 && last->leaves == 0 && years > 1);
+}
+
+static int grow_seeds(cbm_context *ctx, const cbm_tree_def *def, const char *model, long first,
+                      long last, const char *const *outs, int nout, bool quiet)
+{
+    size_t ns = (size_t)(last - first + 1), ny = def->years > 0 ? (size_t)def->years : 0;
+    cbm_tree_summary *all = calloc(ns * (ny ? ny : 1), sizeof *all);
+    double *v = malloc(ns * sizeof *v);
+    if (!all || !v) {
+        free(all);
+        free(v);
+        return CLI_FAIL;
+    }
+    double t0 = cli_seconds();
+    int rc = CLI_OK;
+    for (size_t k = 0; k < ns && rc == CLI_OK; k++) {
+        cbm_tree_def d = *def;
+        d.seed = (uint64_t)(first + (long)k);
+        cbm_tree *t = NULL;
+        cbm_status st = cbm_tree_create(ctx, &d, &t);
+        if (st == CBM_OK)
+            st = cbm_tree_run(t);
+        if (st != CBM_OK) {
+            char what[64];
+            snprintf(what, sizeof what, "growing seed %llu", (unsigned long long)d.seed);
+            rc = cli_fail(ctx, st, what);
+        } else {
+            for (size_t y = 0; y < ny; y++)
+                all[k * ny + y] = *cbm_tree_summary_of(t, (int)y + 1);
+        }
+        cbm_tree_destroy(t);
+    }
+    double total = cli_seconds() - t0;
+    size_t ncol = 0;
+    for (size_t k = 0; k < ns && rc == CLI_OK; k++)
+        ncol += collapsed(all + k * ny, (int)ny, def);
+    if (rc == CLI_OK && !quiet) {
+        for (size_t y = 0; y < ny; y++) {
+            double med[NFIG];
+            for (size_t f = 0; f < NFIG; f++) {
+                for (size_t k = 0; k < ns; k++)
+                    v[k] = seed_figure(&all[k * ny + y], f);
+                qsort(v, ns, sizeof *v, cmp_double);
+                med[f] = quantile(v, ns, 0.5);
+            }
+            printf("year %2zu, median of %zu seeds: %7.0f segments, height %.2f m, crown %.2f m, "
+                   "base diameter %.1f cm, %.0f leaves, %.0f fruit, %.0f breaks\n",
+                   y + 1, ns, med[0], med[1], med[2], 100.0 * med[3], med[4], med[5], med[6]);
+        }
+        printf("%zu seeds in %.1f s, %zu collapsed\n", ns, total, ncol);
+    }
+    for (int o = 0; o < nout && rc == CLI_OK; o++) {
+        cbm_json *j = NULL;
+        cbm_status st = cbm_json_create(ctx, &j);
+        if (st != CBM_OK) {
+            rc = cli_fail(ctx, st, outs[o]);
+            break;
+        }
+        cbm_json_begin_object(j, NULL);
+        cbm_json_string(j, "model", model);
+        cbm_json_begin_object(j, "seeds");
+        cbm_json_int(j, "first", first);
+        cbm_json_int(j, "last", last);
+        cbm_json_int(j, "count", (int64_t)ns);
+        cbm_json_end_object(j);
+        cbm_json_int(j, "years_grown", (int64_t)ny);
+        cbm_json_number(j, "seconds", total);
+        cbm_json_begin_array(j, "collapsed_seeds");
+        for (size_t k = 0; k < ns; k++)
+            if (collapsed(all + k * ny, (int)ny, def))
+                cbm_json_int(j, NULL, first + (long)k);
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "years");
+        for (size_t y = 0; y < ny; y++) {
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "year", (int64_t)y + 1);
+            for (size_t f = 0; f < NFIG; f++) {
+                for (size_t k = 0; k < ns; k++)
+                    v[k] = seed_figure(&all[k * ny + y], f);
+                qsort(v, ns, sizeof *v, cmp_double);
+                cbm_json_begin_object(j, seed_figures[f]);
+                cbm_json_number(j, "min", v[0]);
+                cbm_json_number(j, "q1", quantile(v, ns, 0.25));
+                cbm_json_number(j, "median", quantile(v, ns, 0.5));
+                cbm_json_number(j, "q3", quantile(v, ns, 0.75));
+                cbm_json_number(j, "max", v[ns - 1]);
+                cbm_json_end_object(j);
+            }
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "final");
+        for (size_t k = 0; k < ns && ny; k++) {
+            const cbm_tree_summary *s = &all[k * ny + ny - 1];
+            size_t breaks = 0;
+            for (size_t y = 0; y < ny; y++)
+                breaks += all[k * ny + y].breaks;
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "seed", first + (long)k);
+            for (size_t f = 0; f < NFIG; f++)
+                cbm_json_number(j, seed_figures[f], seed_figure(s, f));
+            cbm_json_int(j, "breaks_total", (int64_t)breaks);
+            cbm_json_bool(j, "collapsed", collapsed(all + k * ny, (int)ny, def));
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_end_object(j);
+        st = cbm_json_write_file(j, outs[o]);
+        cbm_json_destroy(j);
+        if (st != CBM_OK)
+            rc = cli_fail(ctx, st, outs[o]);
+    }
+    free(all);
+    free(v);
+    return rc;
 }
 
 static bool ends_with(const char *s, const char *suf)
@@ -102,8 +289,8 @@ static bool ends_with(const char *s, const char *suf)
 /* --timing: where the time went. `derive` is the growth itself (the tree's steps: equilibrium,
  * rings and ageing, growth and bookkeeping), `interpret` the scene building, `write` the
  * writers. */
-static void print_timing(cbm_context *ctx, const cbm_tree *t, double derive, double interpret,
-                         double write, double total)
+static void print_timing(cbm_context *ctx, const cbm_tree *t, bool summer, double derive,
+                         double interpret, double write, double total)
 {
     double solve = 0, rings = 0;
     size_t passes = 0;
@@ -120,20 +307,21 @@ static void print_timing(cbm_context *ctx, const cbm_tree *t, double derive, dou
         rings += c->seconds_rings;
         passes += c->passes;
     }
-    fprintf(stderr,
-            "grow: %d years, %zu segments: derive %.3f s (equilibrium %.3f s in %zu passes, "
-            "rings and ageing %.3f s, growth and the rest %.3f s), interpret %.3f s, write "
-            "%.3f s, total %.3f s; peak %.1f MB in the library\n",
-            cbm_tree_years(t), cbm_plant_segment_count(cbm_tree_plant(t)), derive, solve, passes,
-            rings, derive - solve - rings, interpret, write, total,
-            (double)cbm_context_peak_bytes(ctx) / 1e6);
+    fprintf(
+        stderr,
+        "grow: %d years%s, %zu segments: derive %.3f s (equilibrium %.3f s in %zu passes, "
+        "rings and ageing %.3f s, growth and the rest %.3f s), interpret %.3f s, write "
+        "%.3f s, total %.3f s; peak %.1f MB in the library\n",
+        cbm_tree_years(t) + (summer ? 1 : 0), summer ? " (the last to the end of its summer)" : "",
+        cbm_plant_segment_count(cbm_tree_plant(t)), derive, solve, passes, rings,
+        derive - solve - rings, interpret, write, total, (double)cbm_context_peak_bytes(ctx) / 1e6);
 }
 
 int cmd_grow(int argc, char **argv)
 {
     const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
     int nout = 0, ndef = 0;
-    long years = -1, every = 0;
+    long years = -1, every = 0, seed_first = -1, seed_last = -1;
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false;
     cbm_write_options o = cbm_write_options_default();
@@ -195,12 +383,31 @@ int cmd_grow(int argc, char **argv)
             if (!cli_parse_long(v, &sd) || sd < 0)
                 return cli_usage_error("grow", "--seed must be a non-negative integer");
             seed = v;
+        } else if (!strcmp(a, "--seeds")) {
+            const char *dash = strchr(v, '-');
+            char lo[32];
+            if (!dash || (size_t)(dash - v) >= sizeof lo)
+                return cli_usage_error("grow", "--seeds expects A-B, got '%s'", v);
+            memcpy(lo, v, (size_t)(dash - v));
+            lo[dash - v] = '\0';
+            if (!cli_parse_long(lo, &seed_first) || !cli_parse_long(dash + 1, &seed_last) ||
+                seed_first < 0 || seed_last < seed_first || seed_last - seed_first >= 100000)
+                return cli_usage_error("grow", "--seeds expects A-B with 0 <= A <= B, got '%s'", v);
         } else if (!strcmp(a, "--every")) {
             if (!cli_parse_long(v, &every) || every < 1 || every > 1000000)
                 return cli_usage_error("grow", "--every must be 1..1000000");
         } else {
             return cli_usage_error("grow", "unknown option %s", a);
         }
+    }
+    if (seed_first >= 0) {
+        for (int k = 0; k < nout; k++)
+            if (strcmp(cli_extension(outs[k]), "json"))
+                return cli_usage_error("grow", "--seeds writes statistics: %s is not .json",
+                                       outs[k]);
+        if (summer || every || params || seed)
+            return cli_usage_error("grow",
+                                   "--seeds does not go with --summer, --every, --params, --seed");
     }
     cli_output_target targets[MAX_OUTPUTS];
     int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json */
@@ -276,6 +483,10 @@ int cmd_grow(int argc, char **argv)
         free(buf);
         goto done;
     }
+    if (seed_first >= 0) {
+        rc = grow_seeds(ctx, &d, model, seed_first, seed_last, outs, nout, quiet);
+        goto done;
+    }
     if (nout == 0 && quiet) {
         rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
         goto done;
@@ -332,6 +543,13 @@ int cmd_grow(int argc, char **argv)
         cli_progress_update(&pr, &state);
     }
     cli_progress_end(&pr);
+    if (st == CBM_OK && summer && d.years > 0 && !quiet) {
+        const cbm_tree_summary *s = cbm_tree_summary_current(t);
+        printf("year %2d: %6zu segments, height %.3f m, crown %.3f m, %zu leaves, %zu fruit, %zu "
+               "breaks (to the end of summer), %zu passes, %.3f s\n",
+               s->year, s->segments, s->height, s->crown_width, s->leaves, s->fruit, s->breaks,
+               s->passes, s->seconds);
+    }
     double grow_time = cli_seconds() - t0;
     double derive = grow_time - t_interpret - t_write; /* minus the animation frames */
     if (st != CBM_OK) {
@@ -368,7 +586,7 @@ int cmd_grow(int argc, char **argv)
             fprintf(stderr, "grow: wrote %s in %.3f s\n", outs[k], dw);
     }
     if (timing && rc == CLI_OK)
-        print_timing(ctx, t, derive, t_interpret, t_write, cli_seconds() - t0);
+        print_timing(ctx, t, summer, derive, t_interpret, t_write, cli_seconds() - t0);
 done:
     for (int k = 0; k < nout; k++)
         cbm_animation_destroy(anim[k]);
