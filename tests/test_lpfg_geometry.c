@@ -654,6 +654,56 @@ TEST(lpfg_modules_spheres_colours_widths)
     test_ctx_end(ctx);
 }
 
+/* lpfg's line styles: with a view file, the view's style, pixel by default (lpfg's default, as
+ * cpfg's): in a picture's line-mode scene SetWidth(w) gives lines w pixels wide, as lpfg draws
+ * them on screen (hormone-up: SetWidth(5) and F(1) is a 5-pixel line, not a tube 5 units across);
+ * in a mesh scene, tubes of diameter w, as lpfg's OBJ export. Without a view file (cambium's own
+ * models in metres), tubes. */
+TEST(lpfg_line_widths)
+{
+    cbm_context *ctx = test_ctx();
+    static const struct {
+        const char *view;
+        bool line_mode;
+        size_t lines;
+        bool tubes;
+    } cases[] = {
+        {"corrected rotation: on\n", true, 2, false}, /* pixel by default */
+        {"line style: pixel\n", true, 2, false},
+        {"line style: cylinder\n", true, 0, true},
+        {"corrected rotation: on\n", false, 0, true}, /* a mesh: tubes of diameter w */
+        {NULL, true, 0, true},                        /* no view file */
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        if (!scene)
+            break;
+        cbm_scene_set_line_mode(scene, cases[k].line_mode);
+        cbm_turtle *t =
+            axiom_turtle_scene(ctx, "SetWidth(5) F(1) SetWidth(3) F(1)", cases[k].view, scene);
+        CHECK_MSG(cbm_scene_line_count(scene) == cases[k].lines, "case %zu: %zu lines", k,
+                  cbm_scene_line_count(scene));
+        CHECK_MSG((cbm_scene_triangle_count(scene) > 0) == cases[k].tubes, "case %zu: %zu tris", k,
+                  cbm_scene_triangle_count(scene));
+        if (cbm_scene_line_count(scene) == 2) {
+            CHECK_NEAR(cbm_scene_lines(scene)[0].width, 5.0, 1e-6);
+            CHECK_NEAR(cbm_scene_lines(scene)[1].width, 3.0, 1e-6);
+        }
+        if (cases[k].tubes) {
+            cbm_vec3 lo, hi;
+            CHECK(cbm_scene_bounds(scene, &lo, &hi));
+            CHECK_NEAR(hi.x, 2.5, 1e-6); /* the first tube's radius: half the width */
+        }
+        /* the record is the same whatever the style: cylinders of radius w / 2 */
+        const cbm_prim *p = nth_prim(t, CBM_PRIM_CYLINDER, 0);
+        CHECK(p && p->r0 == 2.5);
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+    }
+    test_ctx_end(ctx);
+}
+
 /* Every allocation of an lpfg run (func names, the function set, spheres) may fail: a clean
  * status and no leak each time. */
 static cbm_status oom_run(cbm_context *ctx, void *ud)

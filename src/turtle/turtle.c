@@ -457,6 +457,17 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
     return emit_segment_e(t, p0, p1, w0, w1, -1.0, color, h, u);
 }
 
+/* The line style segments are drawn in. lpfg's default is pixel, as cpfg's: SetWidth(w) then
+ * gives lines w pixels wide in pictures (tubes of diameter w in meshes, as lpfg's and cpfg's
+ * OBJ export). An L+C model run without a view file (cambium's own models in models/, written
+ * in metres) is drawn with cylinders, as if its view said "line style: cylinder". */
+static cbm__line_style line_style(const cbm_turtle *t)
+{
+    if (t->lpfg && !t->view->view_file)
+        return CBM__LS_CYLINDER;
+    return t->view->line_style;
+}
+
 /* A segment; wu >= 0: an elliptic section of width w0 along L and wu along U (lpfg's
  * ScaleContour; the record keeps w0 / 2). */
 static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
@@ -481,7 +492,8 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
     }
     if (!t->scene)
         return CBM_OK;
-    bool pixel = t->view->line_style == CBM__LS_PIXEL && !t->lpfg;
+    cbm__line_style style = line_style(t);
+    bool pixel = style == CBM__LS_PIXEL;
     t->pixel_segments += pixel;
     if (pixel && cbm_scene_line_mode(t->scene)) {
         /* a line w0 pixels wide, as cpfg draws pixel lines; a run of segments with the same
@@ -498,7 +510,7 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     cbm_vec3 dir = v3_normalize(d);
     cbm_frame f = section_frame(dir, u);
-    if (t->view->line_style == CBM__LS_POLYGON) {
+    if (style == CBM__LS_POLYGON) {
         /* a flat ribbon in the H-L plane, as cpfg's polygon lines */
         cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0), v3_madd(p1, f.l, pr.r1),
                          v3_madd(p1, f.l, -pr.r1)};
@@ -826,7 +838,6 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
                              const cbm_vec3 *bsp, double twist)
 {
     tstate *s = &t->cur;
-    const cbm_view *v = t->view;
     gcpt g1 = *g1p, g2 = *g2p;
     double len = v3_norm(v3_sub(g2.pos, g1.pos));
     if (len < 0.00001)
@@ -862,7 +873,7 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
     double ta = 3 - 2 * rt0[0] - rt1[0], tb = -2 + rt0[0] + rt1[0];
     double ra = 3 * dr - 2 * rt0[1] - rt1[1], rb = -2 * dr + rt0[1] + rt1[1];
     int sides = g1.sides;
-    bool cyl = v->line_style == CBM__LS_CYLINDER;
+    bool cyl = line_style(t) == CBM__LS_CYLINDER;
     const double *k1 = NULL, *k2 = NULL;
     if (cyl) {
         CBM_TRY(contour_points(t, g1.contour, sides, &k1));
