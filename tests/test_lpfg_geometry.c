@@ -704,6 +704,79 @@ TEST(lpfg_line_widths)
     test_ctx_end(ctx);
 }
 
+/* An axis drawn as one generalized cylinder (StartGC, SetWidth PointGC at every node): the
+ * first ring of each connection is the last ring of the one before, point for point and normal
+ * for normal (no gap, no seam), across a branch opened on the way; the radius never reaches 0;
+ * every connection's end is closed by a disc (lpfg's turtle). */
+TEST(lpfg_gc_axis_is_continuous)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *scene = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    if (!scene) {
+        test_ctx_end(ctx);
+        return;
+    }
+    cbm_turtle *t =
+        axiom_turtle_scene(ctx,
+                           "SetWidth(0.4) StartGC() f(1) SetWidth(0.3) PointGC() "
+                           "SB() Left(60) SetWidth(0.1) StartGC() f(0.5) PointGC() EB() "
+                           "RollL(70) Left(30) f(1) SetWidth(0.2) PointGC() Right(40) "
+                           "f(1) SetWidth(0.1) PointGC()",
+                           NULL, scene);
+    /* parts: the axis's three connections and the lateral's one, in the order drawn */
+    CHECK_EQ_INT(cbm_scene_part_count(scene), 4);
+    size_t nt = cbm_scene_triangle_count(scene);
+    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
+    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
+    /* the axis's connections are parts 0, 2, 3: each one's start ring (its vertices on the
+     * plane through its first control point) must be vertices of the previous connection */
+    static const uint32_t axis[3] = {0, 2, 3};
+    for (int c = 1; c < 3; c++) {
+        size_t matched = 0, ring = 0;
+        double rmin = INFINITY;
+        const cbm_prim *pr = nth_prim(t, CBM_PRIM_GCYL, (size_t)(c == 1 ? 2 : 3));
+        if (!pr)
+            break;
+        for (size_t i = 0; i < nt; i++) {
+            if (tp[i] != axis[c])
+                continue;
+            for (int k = 0; k < 3; k++) {
+                const cbm_scene_vertex *a = &v[tri[3 * i + (size_t)k]];
+                cbm_vec3 d = {a->p[0] - pr->p0.x, a->p[1] - pr->p0.y, a->p[2] - pr->p0.z};
+                double r = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+                rmin = fmin(rmin, r);
+                if (fabs(r - pr->r0) > 1e-5)
+                    continue; /* not on the first ring */
+                ring++;
+                bool found = false;
+                for (size_t j = 0; j < nt && !found; j++) {
+                    if (tp[j] != axis[c - 1])
+                        continue;
+                    for (int m = 0; m < 3 && !found; m++) {
+                        const cbm_scene_vertex *b = &v[tri[3 * j + (size_t)m]];
+                        found = !memcmp(a->p, b->p, sizeof a->p) &&
+                                fabs(a->n[0] - b->n[0]) + fabs(a->n[1] - b->n[1]) +
+                                        fabs(a->n[2] - b->n[2]) <
+                                    1e-6;
+                    }
+                }
+                matched += found;
+            }
+        }
+        CHECK_MSG(ring > 0 && matched == ring,
+                  "connection %d: %zu of %zu first-ring vertices shared", c, matched, ring);
+        CHECK_MSG(rmin > 0.04, "connection %d: a vertex %g from its first control point", c, rmin);
+    }
+    /* the lateral starts on the axis inside it: its first ring's radius 0.05 < the axis's 0.15 */
+    const cbm_prim *lat = nth_prim(t, CBM_PRIM_GCYL, 1);
+    CHECK_MSG(lat && fabs(lat->r0 - 0.05) < 1e-7 && fabs(lat->p0.y - 1.0) < 1e-12,
+              "lateral r0 %g y %g", lat ? lat->r0 : -1, lat ? lat->p0.y : -1);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    test_ctx_end(ctx);
+}
+
 /* Every allocation of an lpfg run (func names, the function set, spheres) may fail: a clean
  * status and no leak each time. */
 static cbm_status oom_run(cbm_context *ctx, void *ud)

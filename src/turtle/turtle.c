@@ -129,6 +129,7 @@ struct cbm_turtle {
     CBM_ARRAY(ccache) ccache; /* contours resampled for a number of sides */
     CBM_ARRAY(double) cpts;
     CBM_ARRAY(cbm_vec3) ringv; /* ring vertices of one connection */
+    CBM_ARRAY(cbm_vec3) ringn; /* their normals */
     CBM_ARRAY(uint32_t) ringt;
     char prefix[3]; /* cbm__turtle_feed: '@', '?', '~' or "@T"... waiting for their module */
     int nprefix;
@@ -294,6 +295,7 @@ void cbm__turtle_destroy(cbm_turtle *t)
     CBM_ARRAY_FREE(ctx, t->ccache);
     CBM_ARRAY_FREE(ctx, t->cpts);
     CBM_ARRAY_FREE(ctx, t->ringv);
+    CBM_ARRAY_FREE(ctx, t->ringn);
     CBM_ARRAY_FREE(ctx, t->ringt);
     CBM_ARRAY_FREE(ctx, t->prims);
     CBM_ARRAY_FREE(ctx, t->pts);
@@ -826,6 +828,25 @@ static cbm_status push_ring(cbm_turtle *t, cbm_vec3 P, cbm_vec3 h, cbm_vec3 u, c
             v3_add(v3_add(P, v3_scale(u, x)), v3_add(v3_scale(l, -y), v3_scale(h, z * zscale)));
         CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringv, q));
     }
+    /* normals of the ring's curve (its tangent crossed with the heading, outwards), so that
+     * the rings a control point shares between two connections, and the first and last point
+     * of a closed contour, get the same normal: the cylinder is shaded without seams */
+    const cbm_vec3 *q = t->ringv.data + t->ringv.len - (size_t)(sides + 1);
+    bool closed = v3_norm(v3_sub(q[0], q[sides])) <= 1e-12 * (1.0 + radius);
+    for (int k = 0; k <= sides; k++) {
+        int a = k > 0 ? k - 1 : closed ? sides - 1 : 0;
+        int b = k < sides ? k + 1 : closed ? 1 : sides;
+        cbm_vec3 n = v3_cross(v3_sub(q[b], q[a]), h);
+        cbm_vec3 out = v3_sub(q[k], P);
+        if (v3_dot(n, out) < 0)
+            n = v3_neg(n);
+        double nn = v3_norm(n);
+        if (nn > 1e-300)
+            n = v3_scale(n, 1.0 / nn);
+        else
+            n = v3_norm(out) > 1e-300 ? v3_normalize(out) : u;
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringn, n));
+    }
     return CBM_OK;
 }
 
@@ -880,6 +901,7 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
         CBM_TRY(contour_points(t, g2.contour, sides, &k2));
     }
     t->ringv.len = 0;
+    t->ringn.len = 0;
     cbm_vec3 prev = g1.pos;
     for (int i = 0; i <= rings; i++) {
         double r = (double)i / rings;
@@ -952,8 +974,14 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
     if (t->scene) {
         cbm_part part = make_part(t, CBM_ORGAN_BRANCH, s->color);
         CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
-        CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, NULL, t->ringv.len, t->ringt.data,
-                                   t->ringt.len / 3));
+        CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, t->ringn.data, t->ringv.len,
+                                   t->ringt.data, t->ringt.len / 3));
+        /* lpfg's turtle: each connection closed at its end, so that an axis which stops (a
+         * branch broken off above a node, a leader taken over by a thinner lateral) shows bark,
+         * not the inside of the tube; where the cylinder goes on, the disc lies inside it */
+        if (t->lpfg && sides >= 3)
+            CBM_TRY(cbm_scene_add_polygon(
+                t->scene, t->ringv.data + t->ringv.len - (size_t)(sides + 1), (size_t)sides));
     }
     return CBM_OK;
 }
