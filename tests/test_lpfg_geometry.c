@@ -777,6 +777,82 @@ TEST(lpfg_gc_axis_is_continuous)
     test_ctx_end(ctx);
 }
 
+/* models/jirasek-grapes.l as drawn: 15 berries, spheres where the contact puts them, no two
+ * overlapping by more than 0.3 mm (the contact's penalty lets 0.17 mm; without the contact,
+ * -D K=0, they pass 8 mm into each other). Each berry's centre and radius are recovered from its
+ * sphere's vertices. */
+static double drawn_grapes_overlap(cbm_context *ctx, const char *define, size_t *berries)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/jirasek-grapes.l", test_source_dir());
+    cbm_model_def def = {cbm_lsys_def_default(), NULL, 0};
+    def.lsys.path = path;
+    def.lsys.defines = define ? &define : NULL;
+    def.lsys.define_count = define ? 1 : 0;
+    cbm_model *m = NULL;
+    cbm_scene *scene = NULL;
+    cbm_turtle *t = NULL;
+    double worst = -INFINITY;
+    *berries = 0;
+    CHECK_OK(cbm_model_load(ctx, &def, &m));
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    if (!m || !scene) {
+        cbm_model_destroy(m);
+        cbm_scene_destroy(scene);
+        return worst;
+    }
+    CHECK_OK(cbm_model_reset(m));
+    for (int k = 0; k < cbm_lsys_derivation_length(cbm_model_lsys(m)); k++)
+        CHECK_OK(cbm_model_step(m));
+    CHECK_OK(cbm_model_interpret(m, scene, false, &t));
+    size_t np = cbm_scene_part_count(scene), nt = cbm_scene_triangle_count(scene);
+    const cbm_part *parts = cbm_scene_parts(scene);
+    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
+    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
+    enum { MAXB = 64 };
+    double c[MAXB][3], r[MAXB];
+    size_t nb = 0;
+    for (size_t k = 0; k < np && nb < MAXB; k++) {
+        if (parts[k].organ != CBM_ORGAN_FRUIT)
+            continue;
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t i = 0; i < nt; i++)
+            for (int j = 0; tp[i] == k && j < 3; j++)
+                for (int d = 0; d < 3; d++) {
+                    lo[d] = fmin(lo[d], v[tri[3 * i + (size_t)j]].p[d]);
+                    hi[d] = fmax(hi[d], v[tri[3 * i + (size_t)j]].p[d]);
+                }
+        for (int d = 0; d < 3; d++)
+            c[nb][d] = 0.5 * (lo[d] + hi[d]);
+        r[nb] = 0.5 * (hi[1] - lo[1]); /* poles along y: the full radius */
+        nb++;
+    }
+    for (size_t i = 0; i < nb; i++)
+        for (size_t j = i + 1; j < nb; j++) {
+            double dx = c[i][0] - c[j][0], dy = c[i][1] - c[j][1], dz = c[i][2] - c[j][2];
+            worst = fmax(worst, r[i] + r[j] - sqrt(dx * dx + dy * dy + dz * dz));
+        }
+    *berries = nb;
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    cbm_model_destroy(m);
+    return worst;
+}
+
+TEST(lpfg_grapes_drawn_apart)
+{
+    cbm_context *ctx = test_ctx();
+    size_t n = 0;
+    double ov = drawn_grapes_overlap(ctx, NULL, &n);
+    printf("grapes as drawn: %zu berries, largest overlap %.3g mm\n", n, ov * 1e3);
+    CHECK_EQ_INT(n, 15);
+    CHECK_MSG(ov < 3e-4, "drawn berries overlap by %g m", ov);
+    ov = drawn_grapes_overlap(ctx, "K=0", &n);
+    printf("grapes without contact, as drawn: largest overlap %.3g mm\n", ov * 1e3);
+    CHECK(n == 15 && ov > 3e-3);
+    test_ctx_end(ctx);
+}
+
 /* Every allocation of an lpfg run (func names, the function set, spheres) may fail: a clean
  * status and no leak each time. */
 static cbm_status oom_run(cbm_context *ctx, void *ud)
