@@ -113,7 +113,8 @@ cbm_status cbm_plant_to_scene(const cbm_plant *p, cbm_scene *scene, int sides)
         if (pa >= 0 && (size_t)pa < i && st[i].continuation)
             cont[pa] = (int64_t)i;
     }
-    cbm_vec3 *p0 = ring, *n0 = ring + sides, *p1 = ring + 2 * sides, *n1 = ring + 3 * sides;
+    cbm_vec3 *p0 = ring, *n0 = ring ? ring + sides : NULL, *p1 = ring ? ring + 2 * sides : NULL;
+    cbm_vec3 *n1 = ring ? ring + 3 * sides : NULL;
     for (size_t i = 0; i < n && s == CBM_OK; i++) {
         const cbm_segment_state *g = &st[i];
         int64_t pa = g->parent;
