@@ -310,6 +310,56 @@ TEST(shadows_and_occlusion_darken)
     test_ctx_end(ctx);
 }
 
+/* Root-mean-square difference of two pictures' luma, levels of 255, over the pixels where the
+ * reference b is not the white background. */
+static double rms_luma_diff(const cbm_image *a, const cbm_image *b)
+{
+    double s = 0;
+    size_t n = (size_t)a->width * (size_t)a->height, m = 0;
+    static const double w[3] = {0.2126, 0.7152, 0.0722};
+    for (size_t i = 0; i < n; i++) {
+        double d = 0, lb = 0;
+        for (int k = 0; k < 3; k++) {
+            d += w[k] * ((double)a->rgba[4 * i + (size_t)k] - (double)b->rgba[4 * i + (size_t)k]);
+            lb += w[k] * b->rgba[4 * i + (size_t)k];
+        }
+        if (lb < 250) {
+            s += d * d;
+            m++;
+        }
+    }
+    return m ? sqrt(s / (double)m) : 0.0;
+}
+
+/* No visible grain: the default occlusion rays (16, a stratified set per pixel) give a picture
+ * within 1.8 levels RMS of a 256-ray reference over the plant and ground (measured 1.27; 16
+ * independent random rays gave 1.44, the former default of 4 random rays about 2.9, visible as
+ * grain on the ground under the crown), and closer than 4 rays give. */
+TEST(occlusion_is_smooth)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &s));
+    CHECK_OK(cbm_scene_demo_tree(ctx, s, 400, 6, true, 1));
+    cbm_write_options o = small_opts(160, 160);
+    static const int rays[3] = {256, 16, 4};
+    cbm_image *img[3] = {NULL, NULL, NULL};
+    CHECK_EQ_INT(cbm_write_options_default().ao_samples, 16);
+    for (int k = 0; k < 3; k++) {
+        o.ao_samples = rays[k];
+        CHECK_OK(cbm_render(ctx, s, &o, &img[k]));
+    }
+    if (img[0] && img[1] && img[2]) {
+        double d16 = rms_luma_diff(img[1], img[0]), d4 = rms_luma_diff(img[2], img[0]);
+        CHECK_MSG(d16 < 1.8, "16 rays: %.2f levels RMS from 256 rays", d16);
+        CHECK_MSG(d16 < d4, "16 rays %.2f, 4 rays %.2f levels RMS from 256 rays", d16, d4);
+    }
+    for (int k = 0; k < 3; k++)
+        cbm_image_destroy(img[k]);
+    cbm_scene_destroy(s);
+    test_ctx_end(ctx);
+}
+
 TEST(legend_shows_the_colour_map)
 {
     cbm_context *ctx = test_ctx();

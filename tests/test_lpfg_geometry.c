@@ -654,6 +654,205 @@ TEST(lpfg_modules_spheres_colours_widths)
     test_ctx_end(ctx);
 }
 
+/* lpfg's line styles: with a view file, the view's style, pixel by default (lpfg's default, as
+ * cpfg's): in a picture's line-mode scene SetWidth(w) gives lines w pixels wide, as lpfg draws
+ * them on screen (hormone-up: SetWidth(5) and F(1) is a 5-pixel line, not a tube 5 units across);
+ * in a mesh scene, tubes of diameter w, as lpfg's OBJ export. Without a view file (cambium's own
+ * models in metres), tubes. */
+TEST(lpfg_line_widths)
+{
+    cbm_context *ctx = test_ctx();
+    static const struct {
+        const char *view;
+        bool line_mode;
+        size_t lines;
+        bool tubes;
+    } cases[] = {
+        {"corrected rotation: on\n", true, 2, false}, /* pixel by default */
+        {"line style: pixel\n", true, 2, false},
+        {"line style: cylinder\n", true, 0, true},
+        {"corrected rotation: on\n", false, 0, true}, /* a mesh: tubes of diameter w */
+        {NULL, true, 0, true},                        /* no view file */
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        if (!scene)
+            break;
+        cbm_scene_set_line_mode(scene, cases[k].line_mode);
+        cbm_turtle *t =
+            axiom_turtle_scene(ctx, "SetWidth(5) F(1) SetWidth(3) F(1)", cases[k].view, scene);
+        CHECK_MSG(cbm_scene_line_count(scene) == cases[k].lines, "case %zu: %zu lines", k,
+                  cbm_scene_line_count(scene));
+        CHECK_MSG((cbm_scene_triangle_count(scene) > 0) == cases[k].tubes, "case %zu: %zu tris", k,
+                  cbm_scene_triangle_count(scene));
+        if (cbm_scene_line_count(scene) == 2) {
+            CHECK_NEAR(cbm_scene_lines(scene)[0].width, 5.0, 1e-6);
+            CHECK_NEAR(cbm_scene_lines(scene)[1].width, 3.0, 1e-6);
+        }
+        if (cases[k].tubes) {
+            cbm_vec3 lo, hi;
+            CHECK(cbm_scene_bounds(scene, &lo, &hi));
+            CHECK_NEAR(hi.x, 2.5, 1e-6); /* the first tube's radius: half the width */
+        }
+        /* the record is the same whatever the style: cylinders of radius w / 2 */
+        const cbm_prim *p = nth_prim(t, CBM_PRIM_CYLINDER, 0);
+        CHECK(p && p->r0 == 2.5);
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+    }
+    test_ctx_end(ctx);
+}
+
+/* An axis drawn as one generalized cylinder (StartGC, SetWidth PointGC at every node): the
+ * first ring of each connection is the last ring of the one before, point for point and normal
+ * for normal (no gap, no seam), across a branch opened on the way; the radius never reaches 0;
+ * every connection's end is closed by a disc (lpfg's turtle). */
+TEST(lpfg_gc_axis_is_continuous)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *scene = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    if (!scene) {
+        test_ctx_end(ctx);
+        return;
+    }
+    cbm_turtle *t =
+        axiom_turtle_scene(ctx,
+                           "SetWidth(0.4) StartGC() f(1) SetWidth(0.3) PointGC() "
+                           "SB() Left(60) SetWidth(0.1) StartGC() f(0.5) PointGC() EB() "
+                           "RollL(70) Left(30) f(1) SetWidth(0.2) PointGC() Right(40) "
+                           "f(1) SetWidth(0.1) PointGC()",
+                           NULL, scene);
+    /* parts: the axis's three connections and the lateral's one, in the order drawn */
+    CHECK_EQ_INT(cbm_scene_part_count(scene), 4);
+    size_t nt = cbm_scene_triangle_count(scene);
+    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
+    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
+    /* the axis's connections are parts 0, 2, 3: each one's start ring (its vertices on the
+     * plane through its first control point) must be vertices of the previous connection */
+    static const uint32_t axis[3] = {0, 2, 3};
+    for (int c = 1; c < 3; c++) {
+        size_t matched = 0, ring = 0;
+        double rmin = INFINITY;
+        const cbm_prim *pr = nth_prim(t, CBM_PRIM_GCYL, (size_t)(c == 1 ? 2 : 3));
+        if (!pr)
+            break;
+        for (size_t i = 0; i < nt; i++) {
+            if (tp[i] != axis[c])
+                continue;
+            for (int k = 0; k < 3; k++) {
+                const cbm_scene_vertex *a = &v[tri[3 * i + (size_t)k]];
+                cbm_vec3 d = {a->p[0] - pr->p0.x, a->p[1] - pr->p0.y, a->p[2] - pr->p0.z};
+                double r = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+                rmin = fmin(rmin, r);
+                if (fabs(r - pr->r0) > 1e-5)
+                    continue; /* not on the first ring */
+                ring++;
+                bool found = false;
+                for (size_t j = 0; j < nt && !found; j++) {
+                    if (tp[j] != axis[c - 1])
+                        continue;
+                    for (int m = 0; m < 3 && !found; m++) {
+                        const cbm_scene_vertex *b = &v[tri[3 * j + (size_t)m]];
+                        found = !memcmp(a->p, b->p, sizeof a->p) &&
+                                fabs(a->n[0] - b->n[0]) + fabs(a->n[1] - b->n[1]) +
+                                        fabs(a->n[2] - b->n[2]) <
+                                    1e-6;
+                    }
+                }
+                matched += found;
+            }
+        }
+        CHECK_MSG(ring > 0 && matched == ring,
+                  "connection %d: %zu of %zu first-ring vertices shared", c, matched, ring);
+        CHECK_MSG(rmin > 0.04, "connection %d: a vertex %g from its first control point", c, rmin);
+    }
+    /* the lateral starts on the axis inside it: its first ring's radius 0.05 < the axis's 0.15 */
+    const cbm_prim *lat = nth_prim(t, CBM_PRIM_GCYL, 1);
+    CHECK_MSG(lat && fabs(lat->r0 - 0.05) < 1e-7 && fabs(lat->p0.y - 1.0) < 1e-12,
+              "lateral r0 %g y %g", lat ? lat->r0 : -1, lat ? lat->p0.y : -1);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    test_ctx_end(ctx);
+}
+
+/* models/jirasek-grapes.l as drawn: 15 berries, spheres where the contact puts them, no two
+ * overlapping by more than 0.3 mm (the contact's penalty lets 0.17 mm; without the contact,
+ * -D K=0, they pass 8 mm into each other). Each berry's centre and radius are recovered from its
+ * sphere's vertices. */
+static double drawn_grapes_overlap(cbm_context *ctx, const char *define, size_t *berries)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/jirasek-grapes.l", test_source_dir());
+    cbm_model_def def = {cbm_lsys_def_default(), NULL, 0};
+    def.lsys.path = path;
+    def.lsys.defines = define ? &define : NULL;
+    def.lsys.define_count = define ? 1 : 0;
+    cbm_model *m = NULL;
+    cbm_scene *scene = NULL;
+    cbm_turtle *t = NULL;
+    double worst = -INFINITY;
+    *berries = 0;
+    CHECK_OK(cbm_model_load(ctx, &def, &m));
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    if (!m || !scene) {
+        cbm_model_destroy(m);
+        cbm_scene_destroy(scene);
+        return worst;
+    }
+    CHECK_OK(cbm_model_reset(m));
+    for (int k = 0; k < cbm_lsys_derivation_length(cbm_model_lsys(m)); k++)
+        CHECK_OK(cbm_model_step(m));
+    CHECK_OK(cbm_model_interpret(m, scene, false, &t));
+    size_t np = cbm_scene_part_count(scene), nt = cbm_scene_triangle_count(scene);
+    const cbm_part *parts = cbm_scene_parts(scene);
+    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
+    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
+    enum { MAXB = 64 };
+    double c[MAXB][3], r[MAXB];
+    size_t nb = 0;
+    for (size_t k = 0; k < np && nb < MAXB; k++) {
+        if (parts[k].organ != CBM_ORGAN_FRUIT)
+            continue;
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t i = 0; i < nt; i++)
+            for (int j = 0; tp[i] == k && j < 3; j++)
+                for (int d = 0; d < 3; d++) {
+                    lo[d] = fmin(lo[d], v[tri[3 * i + (size_t)j]].p[d]);
+                    hi[d] = fmax(hi[d], v[tri[3 * i + (size_t)j]].p[d]);
+                }
+        for (int d = 0; d < 3; d++)
+            c[nb][d] = 0.5 * (lo[d] + hi[d]);
+        r[nb] = 0.5 * (hi[1] - lo[1]); /* poles along y: the full radius */
+        nb++;
+    }
+    for (size_t i = 0; i < nb; i++)
+        for (size_t j = i + 1; j < nb; j++) {
+            double dx = c[i][0] - c[j][0], dy = c[i][1] - c[j][1], dz = c[i][2] - c[j][2];
+            worst = fmax(worst, r[i] + r[j] - sqrt(dx * dx + dy * dy + dz * dz));
+        }
+    *berries = nb;
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    cbm_model_destroy(m);
+    return worst;
+}
+
+TEST(lpfg_grapes_drawn_apart)
+{
+    cbm_context *ctx = test_ctx();
+    size_t n = 0;
+    double ov = drawn_grapes_overlap(ctx, NULL, &n);
+    printf("grapes as drawn: %zu berries, largest overlap %.3g mm\n", n, ov * 1e3);
+    CHECK_EQ_INT(n, 15);
+    CHECK_MSG(ov < 3e-4, "drawn berries overlap by %g m", ov);
+    ov = drawn_grapes_overlap(ctx, "K=0", &n);
+    printf("grapes without contact, as drawn: largest overlap %.3g mm\n", ov * 1e3);
+    CHECK(n == 15 && ov > 3e-3);
+    test_ctx_end(ctx);
+}
+
 /* Every allocation of an lpfg run (func names, the function set, spheres) may fail: a clean
  * status and no leak each time. */
 static cbm_status oom_run(cbm_context *ctx, void *ud)

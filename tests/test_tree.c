@@ -555,5 +555,93 @@ TEST(tree_real_insensitive_to_solver_path)
            100 * worst_n, 100 * worst_h);
     CHECK(worst_n <= 0.05);
     CHECK(worst_h <= 0.02);
+
+/* The picture's organs sit where the model puts them: every leaf's petiole starts at its node
+ * (the end of its bud internode: the nearest vertex is the petiole's ring there, radius 0.0125
+ * of the blade's length), and the blade reaches 1.3 blade lengths from it (petiole 0.3 + blade 1),
+ * the blade's length 1.5 leaf_scale sqrt(m / leaf_density); every fruit is a sphere of the fruit's
+ * volume hanging below its node on a stalk. */
+TEST(tree_leaves_on_their_nodes)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_tree_def d;
+    CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree", &d));
+    d.years = 4;
+    cbm_tree *t = NULL;
+    CHECK_OK(cbm_tree_create(ctx, &d, &t));
+    /* three years, then the fourth summer (leaves and fruit on) */
+    for (int y = 0; y < 3 && t; y++)
+        CHECK_OK(cbm_tree_year(t));
+    for (int k = 0; k < 200 && t && cbm_tree_current_season(t) == CBM_TREE_SUMMER; k++)
+        CHECK_OK(cbm_tree_step(t, NULL));
+    cbm_scene *sc = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &sc));
+    if (!t || !sc) {
+        cbm_scene_destroy(sc);
+        cbm_tree_destroy(t);
+        test_ctx_end(ctx);
+        return;
+    }
+    CHECK_OK(cbm_tree_to_scene(t, sc, 6, false));
+    const cbm_plant *p = cbm_tree_plant(t);
+    size_t np = cbm_scene_part_count(sc), nt = cbm_scene_triangle_count(sc);
+    const cbm_part *parts = cbm_scene_parts(sc);
+    const uint32_t *tri = cbm_scene_triangles(sc), *tp = cbm_scene_triangle_parts(sc);
+    const cbm_scene_vertex *v = cbm_scene_vertices(sc);
+    double *dmin = calloc(np, sizeof *dmin), *dmax = calloc(np, sizeof *dmax), *ymin = NULL;
+    ymin = calloc(np, sizeof *ymin);
+    cbm_vec3 *node = calloc(np, sizeof *node);
+    CHECK(dmin && dmax && ymin && node);
+    size_t leaves = 0, fruit = 0;
+    for (size_t k = 0; dmin && dmax && ymin && node && k < np; k++) {
+        dmin[k] = INFINITY;
+        dmax[k] = 0;
+        ymin[k] = INFINITY;
+        if (parts[k].organ == CBM_ORGAN_LEAF || parts[k].organ == CBM_ORGAN_FRUIT) {
+            cbm_segment_state st;
+            CHECK_OK(cbm_plant_segment(p, (size_t)parts[k].segment, &st));
+            node[k] = st.distal;
+        }
+    }
+    for (size_t i = 0; dmin && dmax && ymin && node && i < nt; i++) {
+        uint32_t k = tp[i];
+        for (int m = 0; m < 3; m++) {
+            const float *q = v[tri[3 * i + (size_t)m]].p;
+            double dx = q[0] - node[k].x, dy = q[1] - node[k].y, dz = q[2] - node[k].z;
+            double r = sqrt(dx * dx + dy * dy + dz * dz);
+            dmin[k] = fmin(dmin[k], r);
+            dmax[k] = fmax(dmax[k], r);
+            ymin[k] = fmin(ymin[k], q[1]);
+        }
+    }
+    for (size_t k = 0; dmin && dmax && ymin && node && k < np; k++) {
+        cbm_tree_segment info;
+        if (parts[k].organ == CBM_ORGAN_LEAF) {
+            CHECK_OK(cbm_tree_segment_info(t, (size_t)parts[k].segment, &info));
+            double len = 1.5 * d.leaf_scale * sqrt(info.leaf_mass / d.leaf_density);
+            CHECK_MSG(fabs(dmin[k] - 0.0125 * len) < 1e-3 * len + 1e-6,
+                      "leaf %zu: nearest point %g from its node, petiole radius %g", k, dmin[k],
+                      0.0125 * len);
+            CHECK_MSG(fabs(dmax[k] - 1.3 * len) < 1e-3 * len + 1e-6,
+                      "leaf %zu: reaches %g from its node, not %g", k, dmax[k], 1.3 * len);
+            leaves++;
+        } else if (parts[k].organ == CBM_ORGAN_FRUIT) {
+            CHECK_OK(cbm_tree_segment_info(t, (size_t)parts[k].segment, &info));
+            double r = cbrt(0.75 / 3.141592653589793 * info.fruit_mass / d.fruit_density);
+            CHECK_MSG(dmin[k] < 0.05 * r + 1e-6, "fruit %zu: stalk %g from its node", k, dmin[k]);
+            CHECK_MSG(fabs(node[k].y - ymin[k] - 2.7 * r) < 1e-3 * r + 1e-6,
+                      "fruit %zu: lowest point %g below its node, not %g", k, node[k].y - ymin[k],
+                      2.7 * r);
+            fruit++;
+        }
+    }
+    printf("fourth summer: %zu leaves and %zu fruit checked\n", leaves, fruit);
+    CHECK(leaves > 10);
+    free(dmin);
+    free(dmax);
+    free(ymin);
+    free(node);
+    cbm_scene_destroy(sc);
+    cbm_tree_destroy(t);
     test_ctx_end(ctx);
 }

@@ -81,6 +81,11 @@ CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, 
 CBM_API cbm_status cbm_scene_tube_begin(cbm_scene *scene, int sides, bool caps);
 CBM_API cbm_status cbm_scene_tube_ring(cbm_scene *scene, const cbm_section *sec);
 CBM_API cbm_status cbm_scene_tube_end(cbm_scene *scene);
+/// A ring of `sides` given points and outward normals (any section shape), in the order of
+/// cbm_scene_tube_ring's (from U towards L = U x H, clockwise seen from +axis); centre and axis
+/// place the caps.
+CBM_API cbm_status cbm_scene_tube_ring_points(cbm_scene *scene, cbm_vec3 center, cbm_vec3 axis,
+                                              const cbm_vec3 *pts, const cbm_vec3 *nrm);
 /// One straight piece between two sections (begin, two rings, end).
 CBM_API cbm_status cbm_scene_add_tube(cbm_scene *scene, const cbm_section *s0,
                                       const cbm_section *s1, int sides, bool caps);

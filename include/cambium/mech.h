@@ -331,7 +331,8 @@ CBM_API cbm_status cbm_plant_evaluate(cbm_plant *plant, double *residual);
 
 /// Emits one part per segment into the scene: a tube with elliptical end sections (U along a),
 /// organ branch, order, segment and parent ids, stress, stress/MOR ratio, age, reaction wood.
-/// Point masses are not drawn. `sides` >= 3.
+/// Each axis is one continuous generalized cylinder: a segment and its continuation share the
+/// ring at their node (docs/formats.md). Point masses are not drawn. `sides` 3..1024.
 CBM_API cbm_status cbm_plant_to_scene(const cbm_plant *plant, cbm_scene *scene, int sides);
 
 /* ---- section helpers (exact formulas for a solid ellipse) ---- */

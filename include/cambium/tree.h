@@ -241,8 +241,9 @@ CBM_API cbm_status cbm_tree_segment_info(const cbm_tree *tree, size_t seg, cbm_t
 /// p > 1/2 -> 1 - F (1 - p), p < 1/2 -> F p, clamped to [0, 1].
 CBM_API double cbm_tree_fairness(double p, double fairness);
 
-/// Appends the tree to a scene: branches (cbm_plant_to_scene), leaves (quads rolled to
-/// vertical) and fruit (spheres), and a ground square if `ground`.
+/// Appends the tree to a scene: branches (cbm_plant_to_scene), leaves (ovate blades on
+/// petioles at their nodes) and fruit (spheres on stalks below their nodes), and a ground square
+/// if `ground` (src/models/tree_scene.c gives the shapes).
 CBM_API cbm_status cbm_tree_to_scene(const cbm_tree *tree, cbm_scene *scene, int sides,
                                      bool ground);
 

@@ -56,7 +56,7 @@ typedef struct cbm_write_options {
                            ///< under the plant when the scene has none
     bool legend;           ///< colour bar with its range when colouring by a quantity (PNG/SVG)
     bool shadows;          ///< sun shadows (PNG)
-    int ao_samples;        ///< ambient-occlusion rays per pixel sample, 0 = none (PNG)
+    int ao_samples;        ///< ambient-occlusion rays per pixel, 0 = none (PNG)
     int supersample;       ///< n x n samples per pixel, 1..4 (PNG)
     int threads;           ///< render threads, 0 = one per processor (PNG)
     /// Animation (.glb): frame_count scenes (growth steps), shown frame_time seconds each; one

@@ -3,7 +3,7 @@
  * `sides` vertices joined by quads, normals of the ellipse), UV spheres, polygons (ear clipping
  * after projection on the plane of Newell's normal) and ready meshes. Lines (pixel-wide segments
  * for pictures) are kept untessellated, 32 bytes each, in their own array. */
-#include "cambium/geom.h"
+#include "geom_internal.h"
 
 #include "../core/core.h"
 #include "../core/vecmath.h"
@@ -21,8 +21,8 @@ struct cbm_scene {
     bool line_mode;
     /* tube in progress */
     int tube_sides;
-    bool tube_caps, tube_open;
-    uint32_t tube_prev; /* first vertex of the previous ring */
+    bool tube_cap0, tube_cap1, tube_open; /* caps at the start, at the end */
+    uint32_t tube_prev;                   /* first vertex of the previous ring */
     size_t tube_rings;
     cbm_section tube_last;
 };
@@ -131,11 +131,17 @@ static cbm_status push_tri(cbm_scene *s, uint32_t a, uint32_t b, uint32_t c)
 
 cbm_status cbm_scene_tube_begin(cbm_scene *s, int sides, bool caps)
 {
+    return cbm__scene_tube_begin_caps(s, sides, caps, caps);
+}
+
+cbm_status cbm__scene_tube_begin_caps(cbm_scene *s, int sides, bool cap_start, bool cap_end)
+{
     if (!s || sides < 3 || sides > 1024)
         return CBM_E_INVALID;
     CBM_TRY(ensure_part(s));
     s->tube_sides = sides;
-    s->tube_caps = caps;
+    s->tube_cap0 = cap_start;
+    s->tube_cap1 = cap_end;
     s->tube_open = true;
     s->tube_rings = 0;
     return CBM_OK;
@@ -158,6 +164,52 @@ static cbm_status add_cap(cbm_scene *s, const cbm_section *sec, uint32_t ring, b
     return CBM_OK;
 }
 
+cbm_context *cbm__scene_context(const cbm_scene *s)
+{
+    return s->ctx;
+}
+
+/* Joins the ring just pushed (its first vertex `first`) to the previous one, or caps it. */
+static cbm_status close_ring(cbm_scene *s, const cbm_section *sec, uint32_t first)
+{
+    int n = s->tube_sides;
+    if (s->tube_rings == 0) {
+        if (s->tube_cap0)
+            CBM_TRY(add_cap(s, sec, first, true));
+    } else {
+        uint32_t p = s->tube_prev;
+        for (int i = 0; i < n; i++) {
+            uint32_t i0 = (uint32_t)i, i1 = (uint32_t)((i + 1) % n);
+            /* the ring runs from U towards L, clockwise seen from +H: wind outwards */
+            CBM_TRY(push_tri(s, p + i0, first + i1, p + i1));
+            CBM_TRY(push_tri(s, p + i0, first + i0, first + i1));
+        }
+    }
+    s->tube_prev = first;
+    s->tube_last = *sec;
+    s->tube_rings++;
+    return CBM_OK;
+}
+
+cbm_status cbm_scene_tube_ring_points(cbm_scene *s, cbm_vec3 center, cbm_vec3 axis,
+                                      const cbm_vec3 *pts, const cbm_vec3 *nrm)
+{
+    if (!s || !pts || !nrm || !s->tube_open)
+        return CBM_E_INVALID;
+    if (!v3_isfinite(center) || !v3_isfinite(axis))
+        return CBM_E_NONFINITE;
+    int n = s->tube_sides;
+    for (int i = 0; i < n; i++)
+        if (!v3_isfinite(pts[i]) || !v3_isfinite(nrm[i]))
+            return CBM_E_NONFINITE;
+    uint32_t first = (uint32_t)s->verts.len;
+    for (int i = 0; i < n; i++)
+        CBM_TRY(push_vertex(s, pts[i], nrm[i]));
+    /* the cap needs the centre and the axis only */
+    cbm_section sec = {center, {axis, v3(0, 0, 0), v3(0, 0, 0)}, 0.0, 0.0};
+    return close_ring(s, &sec, first);
+}
+
 cbm_status cbm_scene_tube_ring(cbm_scene *s, const cbm_section *sec)
 {
     if (!s || !sec || !s->tube_open)
@@ -178,22 +230,7 @@ cbm_status cbm_scene_tube_ring(cbm_scene *s, const cbm_section *sec)
             nn = v3_normalize(v3_add(v3_scale(sec->frame.u, c), v3_scale(sec->frame.l, sn)));
         CBM_TRY(push_vertex(s, p, nn));
     }
-    if (s->tube_rings == 0) {
-        if (s->tube_caps)
-            CBM_TRY(add_cap(s, sec, first, true));
-    } else {
-        uint32_t p = s->tube_prev;
-        for (int i = 0; i < n; i++) {
-            uint32_t i0 = (uint32_t)i, i1 = (uint32_t)((i + 1) % n);
-            /* the ring runs from U towards L, clockwise seen from +H: wind outwards */
-            CBM_TRY(push_tri(s, p + i0, first + i1, p + i1));
-            CBM_TRY(push_tri(s, p + i0, first + i0, first + i1));
-        }
-    }
-    s->tube_prev = first;
-    s->tube_last = *sec;
-    s->tube_rings++;
-    return CBM_OK;
+    return close_ring(s, sec, first);
 }
 
 cbm_status cbm_scene_tube_end(cbm_scene *s)
@@ -201,7 +238,7 @@ cbm_status cbm_scene_tube_end(cbm_scene *s)
     if (!s || !s->tube_open)
         return CBM_E_INVALID;
     s->tube_open = false;
-    if (s->tube_caps && s->tube_rings > 0)
+    if (s->tube_cap1 && s->tube_rings > 0)
         CBM_TRY(add_cap(s, &s->tube_last, s->tube_prev, false));
     return CBM_OK;
 }

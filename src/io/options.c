@@ -21,7 +21,7 @@ cbm_write_options cbm_write_options_default(void)
     o.ground = true;
     o.legend = true;
     o.shadows = true;
-    o.ao_samples = 4;
+    o.ao_samples = 16;
     o.supersample = 2;
     o.threads = 0;
     o.frame_time = 0.5;

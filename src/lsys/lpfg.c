@@ -382,6 +382,7 @@ static const char *const TURTLE[][3] = {
     {"Label", "", "i"},        {"IncWidth", "#", ""},
     {"DecWidth", "", ""},      {"CurrentContour", "", "i"},
     {"SetTropism", "", "fff"}, {"Elasticity", "", "f"},
+    {"ContourSides", "", "i"},
 };
 
 /* ---------------------------------------------------------------- small helpers */

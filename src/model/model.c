@@ -80,6 +80,7 @@ static const lpfg_name LPFG_NAMES[] = {
     {"PointGC", C(CBM_T_GC_CONTROL)},
     {"EndGC", C(CBM_T_GC_END)},
     {"CurrentContour", C(CBM_T_CONTOUR_SET)},
+    {"ContourSides", C(CBM_T_SIDES_SET)},
     {"SetHead", C(CBM_T_SET_HEAD)},
     {"RollToVert", C(CBM_T_ROLL_TO_VERT)},
     {"LineTo3d", C(CBM_T_LINE_TO)},

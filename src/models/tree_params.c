@@ -157,7 +157,7 @@ cbm_tree_def cbm_tree_def_default(void)
      * apple of 150 g and 7 cm (835 kg/m^3), fruit on spurs from year 4 */
     d.leaf_mass = 6e-4;
     d.leaf_density = 0.25;
-    d.leaf_scale = 1.7;
+    d.leaf_scale = 1.0;
     d.spur_leaves = 4;
     d.fruit_mass = 0.15;
     d.fruit_density = 835.0;

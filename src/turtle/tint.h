@@ -89,6 +89,7 @@ struct cbm_view {
     double init_scale;   /* "initial scale:" the turtle's scale at the start (cpfg) */
     double scale_mul;    /* "scale multiplier:" of @Di and @Dd without parameter */
     cbm__line_style line_style;
+    bool view_file;        /* a view file (.v) was read: an L+C model then takes its line style */
     int sides;             /* contour sides of cylinders */
     bool gc_twist;         /* twist of cylinders */
     bool past_cut;         /* interpret past % (cpfg's default: the engine cuts when deriving) */

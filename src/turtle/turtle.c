@@ -129,6 +129,7 @@ struct cbm_turtle {
     CBM_ARRAY(ccache) ccache; /* contours resampled for a number of sides */
     CBM_ARRAY(double) cpts;
     CBM_ARRAY(cbm_vec3) ringv; /* ring vertices of one connection */
+    CBM_ARRAY(cbm_vec3) ringn; /* their normals */
     CBM_ARRAY(uint32_t) ringt;
     char prefix[3]; /* cbm__turtle_feed: '@', '?', '~' or "@T"... waiting for their module */
     int nprefix;
@@ -294,6 +295,7 @@ void cbm__turtle_destroy(cbm_turtle *t)
     CBM_ARRAY_FREE(ctx, t->ccache);
     CBM_ARRAY_FREE(ctx, t->cpts);
     CBM_ARRAY_FREE(ctx, t->ringv);
+    CBM_ARRAY_FREE(ctx, t->ringn);
     CBM_ARRAY_FREE(ctx, t->ringt);
     CBM_ARRAY_FREE(ctx, t->prims);
     CBM_ARRAY_FREE(ctx, t->pts);
@@ -457,6 +459,17 @@ static cbm_status emit_segment(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w
     return emit_segment_e(t, p0, p1, w0, w1, -1.0, color, h, u);
 }
 
+/* The line style segments are drawn in. lpfg's default is pixel, as cpfg's: SetWidth(w) then
+ * gives lines w pixels wide in pictures (tubes of diameter w in meshes, as lpfg's and cpfg's
+ * OBJ export). An L+C model run without a view file (cambium's own models in models/, written
+ * in metres) is drawn with cylinders, as if its view said "line style: cylinder". */
+static cbm__line_style line_style(const cbm_turtle *t)
+{
+    if (t->lpfg && !t->view->view_file)
+        return CBM__LS_CYLINDER;
+    return t->view->line_style;
+}
+
 /* A segment; wu >= 0: an elliptic section of width w0 along L and wu along U (lpfg's
  * ScaleContour; the record keeps w0 / 2). */
 static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double w0, double w1,
@@ -481,7 +494,8 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
     }
     if (!t->scene)
         return CBM_OK;
-    bool pixel = t->view->line_style == CBM__LS_PIXEL && !t->lpfg;
+    cbm__line_style style = line_style(t);
+    bool pixel = style == CBM__LS_PIXEL;
     t->pixel_segments += pixel;
     if (pixel && cbm_scene_line_mode(t->scene)) {
         /* a line w0 pixels wide, as cpfg draws pixel lines; a run of segments with the same
@@ -498,7 +512,7 @@ static cbm_status emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, double
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
     cbm_vec3 dir = v3_normalize(d);
     cbm_frame f = section_frame(dir, u);
-    if (t->view->line_style == CBM__LS_POLYGON) {
+    if (style == CBM__LS_POLYGON) {
         /* a flat ribbon in the H-L plane, as cpfg's polygon lines */
         cbm_vec3 q[4] = {v3_madd(p0, f.l, -pr.r0), v3_madd(p0, f.l, pr.r0), v3_madd(p1, f.l, pr.r1),
                          v3_madd(p1, f.l, -pr.r1)};
@@ -814,6 +828,25 @@ static cbm_status push_ring(cbm_turtle *t, cbm_vec3 P, cbm_vec3 h, cbm_vec3 u, c
             v3_add(v3_add(P, v3_scale(u, x)), v3_add(v3_scale(l, -y), v3_scale(h, z * zscale)));
         CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringv, q));
     }
+    /* normals of the ring's curve (its tangent crossed with the heading, outwards), so that
+     * the rings a control point shares between two connections, and the first and last point
+     * of a closed contour, get the same normal: the cylinder is shaded without seams */
+    const cbm_vec3 *q = t->ringv.data + t->ringv.len - (size_t)(sides + 1);
+    bool closed = v3_norm(v3_sub(q[0], q[sides])) <= 1e-12 * (1.0 + radius);
+    for (int k = 0; k <= sides; k++) {
+        int a = k > 0 ? k - 1 : closed ? sides - 1 : 0;
+        int b = k < sides ? k + 1 : closed ? 1 : sides;
+        cbm_vec3 n = v3_cross(v3_sub(q[b], q[a]), h);
+        cbm_vec3 out = v3_sub(q[k], P);
+        if (v3_dot(n, out) < 0)
+            n = v3_neg(n);
+        double nn = v3_norm(n);
+        if (nn > 1e-300)
+            n = v3_scale(n, 1.0 / nn);
+        else
+            n = v3_norm(out) > 1e-300 ? v3_normalize(out) : u;
+        CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->ringn, n));
+    }
     return CBM_OK;
 }
 
@@ -826,7 +859,6 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
                              const cbm_vec3 *bsp, double twist)
 {
     tstate *s = &t->cur;
-    const cbm_view *v = t->view;
     gcpt g1 = *g1p, g2 = *g2p;
     double len = v3_norm(v3_sub(g2.pos, g1.pos));
     if (len < 0.00001)
@@ -862,13 +894,14 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
     double ta = 3 - 2 * rt0[0] - rt1[0], tb = -2 + rt0[0] + rt1[0];
     double ra = 3 * dr - 2 * rt0[1] - rt1[1], rb = -2 * dr + rt0[1] + rt1[1];
     int sides = g1.sides;
-    bool cyl = v->line_style == CBM__LS_CYLINDER;
+    bool cyl = line_style(t) == CBM__LS_CYLINDER;
     const double *k1 = NULL, *k2 = NULL;
     if (cyl) {
         CBM_TRY(contour_points(t, g1.contour, sides, &k1));
         CBM_TRY(contour_points(t, g2.contour, sides, &k2));
     }
     t->ringv.len = 0;
+    t->ringn.len = 0;
     cbm_vec3 prev = g1.pos;
     for (int i = 0; i <= rings; i++) {
         double r = (double)i / rings;
@@ -941,8 +974,14 @@ static cbm_status gc_segment(cbm_turtle *t, const gcpt *g1p, const gcpt *g2p, in
     if (t->scene) {
         cbm_part part = make_part(t, CBM_ORGAN_BRANCH, s->color);
         CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
-        CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, NULL, t->ringv.len, t->ringt.data,
-                                   t->ringt.len / 3));
+        CBM_TRY(cbm_scene_add_mesh(t->scene, t->ringv.data, t->ringn.data, t->ringv.len,
+                                   t->ringt.data, t->ringt.len / 3));
+        /* lpfg's turtle: each connection closed at its end, so that an axis which stops (a
+         * branch broken off above a node, a leader taken over by a thinner lateral) shows bark,
+         * not the inside of the tube; where the cylinder goes on, the disc lies inside it */
+        if (t->lpfg && sides >= 3)
+            CBM_TRY(cbm_scene_add_polygon(
+                t->scene, t->ringv.data + t->ringv.len - (size_t)(sides + 1), (size_t)sides));
     }
     return CBM_OK;
 }

@@ -497,6 +497,7 @@ static bool word_on(const char *s)
 
 static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
 {
+    v->view_file = true;
     const char *p = text;
     int line = 0;
     char buf[1024];

@@ -21,7 +21,7 @@ const char cli_output_help[] =
     "  --no-ground         drop the ground (and do not add one under the plant in PNGs)\n"
     "  --no-legend         no colour bar\n"
     "  --no-shadows        no sun shadows (PNG)\n"
-    "  --ao N              ambient-occlusion rays per pixel, 0..256 (PNG; default 4)\n"
+    "  --ao N              ambient-occlusion rays per pixel, 0..256 (PNG; default 16)\n"
     "  --supersample N     N x N samples per pixel, 1..4 (PNG; default 2)\n"
     "  --threads N         render threads (PNG; default: one per processor)\n";
 

@@ -10,8 +10,9 @@
  * with s a sun direction fixed relative to the camera (above, left, in front), V_sun = 0 or 1
  * from a shadow ray, and A the ambient occlusion: the fraction of cosine-distributed hemisphere
  * rays that travel 0.2 plant sizes without hitting anything (Zhukov et al. 1998, "An ambient
- * light illumination model"). Samples use a hash of (pixel, sample, ray) as random numbers, so
- * the picture does not depend on the number of threads. Rows are shared among threads through an
+ * light illumination model"); a pixel's occlusion rays are one stratified set (a rank-1 lattice
+ * with a random shift from a hash of the pixel: shade_sample), so the picture is smooth and
+ * does not depend on the number of threads. Rows are shared among threads through an
  * atomic counter. The legend (colour bar with its range, or one swatch per branch order) is
  * drawn in a strip on the right, its text in DejaVu Sans through cairo (src/plot/font.h).
  *
@@ -123,8 +124,8 @@ static bool occluded(const render_job *j, cbm_vec3 org, cbm_vec3 dir, double dis
 
 /* One sample: linear RGB and coverage (1 if something was hit), and its depth along the view
  * direction from the camera centre (INFINITY when nothing was hit). */
-static void shade_sample(const render_job *j, double px, double py, uint64_t seed, float out[4],
-                         float *depth)
+static void shade_sample(const render_job *j, double px, double py, uint64_t pixel, int sample,
+                         float out[4], float *depth)
 {
     const cbm__camera *c = &j->cam;
     double x = (px - c->cx) / c->scale, y = (c->cy - py) / c->scale;
@@ -180,9 +181,18 @@ static void shade_sample(const render_job *j, double px, double py, uint64_t see
         t1 = v3_normalize(v3_sub(t1, v3_scale(n, v3_dot(t1, n))));
         cbm_vec3 t2 = v3_cross(n, t1);
         int open = 0;
+        /* the pixel's N = samples x rays directions are one stratified set: a rank-1 lattice
+         * ((m + 1/2) / N, m phi mod 1), m = 0..N-1, shifted by a random offset per pixel
+         * (Cranley-Patterson rotation); sample s takes the rays m = s rays .. s rays + rays - 1.
+         * The pixel's mean of the occlusion then has far less variance than with independent
+         * random rays (no grain), and stays a function of the pixel alone (any thread count). */
+        int nall = j->ss * j->ss * j->ao_rays;
+        double u1 = hash01(pixel * 2u), u2 = hash01(pixel * 2u + 1u);
         for (int k = 0; k < j->ao_rays; k++) {
-            double r1 = hash01(seed * 131 + 2 * (uint64_t)k),
-                   r2 = hash01(seed * 131 + 2 * (uint64_t)k + 1);
+            int m = sample * j->ao_rays + k;
+            double r1 = ((double)m + 0.5) / nall + u1, r2 = (double)m * 0.6180339887498949 + u2;
+            r1 -= floor(r1);
+            r2 -= floor(r2);
             double rad = sqrt(r1), phi = 2.0 * CBM_PI * r2;
             cbm_vec3 d = v3_add(v3_add(v3_scale(t1, rad * cos(phi)), v3_scale(t2, rad * sin(phi))),
                                 v3_scale(n, sqrt(fmax(0.0, 1.0 - r1))));
@@ -210,10 +220,10 @@ static void *render_rows(void *arg)
             float acc[4] = {0, 0, 0, 0};
             for (int sy = 0; sy < ss; sy++)
                 for (int sx = 0; sx < ss; sx++) {
-                    uint64_t seed = (((uint64_t)y * (uint64_t)j->width + (uint64_t)x) * 16u +
-                                     (uint64_t)(sy * ss + sx));
+                    uint64_t pixel = (uint64_t)y * (uint64_t)j->width + (uint64_t)x;
                     float s[4], depth;
-                    shade_sample(j, x + (sx + 0.5) / ss, y + (sy + 0.5) / ss, seed, s, &depth);
+                    shade_sample(j, x + (sx + 0.5) / ss, y + (sy + 0.5) / ss, pixel, sy * ss + sx,
+                                 s, &depth);
                     if (j->sdepth) {
                         size_t q = (size_t)(y * ss + sy) * (size_t)j->sw + (size_t)(x * ss + sx);
                         j->sdepth[q] = depth;
