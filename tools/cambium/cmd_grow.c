@@ -15,7 +15,7 @@ static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--params]\n"
+           "                    [--params] [--report]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
            "wild or crooked aspen, from a parameter file or a built-in model (default\n"
@@ -31,7 +31,10 @@ static void help(void)
            "                    .json then ends with that year, \"complete\": false)\n"
            "  --timing          time spent per phase on stderr\n"
            "  --quiet           no per-year lines on stdout\n"
-           "  --params          print every parameter (parameter-file syntax) and exit\n\n"
+           "  --params          print every parameter (parameter-file syntax) and exit\n"
+           "  --report          the final tree as a forester measures it (height, diameter at\n"
+           "                    breast height, crown, buckling safety, pipe model, branch\n"
+           "                    angles, stress ratios, intersections; cambium info --help)\n\n"
            "built-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
@@ -58,6 +61,9 @@ static cbm_status write_summary(cbm_context *ctx, const cbm_tree *t, const char 
     if (partial) /* --summer: the last year up to the end of its summer */
         summary_object(j, cbm_tree_summary_current(t), false);
     cbm_json_end_array(j);
+    cbm_tree_measures tm; /* the final tree as a forester measures it (cambium info x.json) */
+    if (cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm) == CBM_OK)
+        cli_measures_json(j, "measures", &tm);
     cbm_json_end_object(j);
     cbm_status s = cbm_json_write_file(j, path);
     cbm_json_destroy(j);
@@ -135,7 +141,7 @@ int cmd_grow(int argc, char **argv)
     int nout = 0, ndef = 0;
     long years = -1, every = 0;
     const char *seed = NULL;
-    bool timing = false, quiet = false, params = false, summer = false;
+    bool timing = false, quiet = false, params = false, summer = false, report = false;
     cbm_write_options o = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -162,6 +168,10 @@ int cmd_grow(int argc, char **argv)
         }
         if (!strcmp(a, "--params")) {
             params = true;
+            continue;
+        }
+        if (!strcmp(a, "--report")) {
+            report = true;
             continue;
         }
         if (a[0] != '-') {
@@ -276,7 +286,7 @@ int cmd_grow(int argc, char **argv)
         free(buf);
         goto done;
     }
-    if (nout == 0 && quiet) {
+    if (nout == 0 && quiet && !report) {
         rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
         goto done;
     }
@@ -369,6 +379,16 @@ int cmd_grow(int argc, char **argv)
     }
     if (timing && rc == CLI_OK)
         print_timing(ctx, t, derive, t_interpret, t_write, cli_seconds() - t0);
+    if (report && rc == CLI_OK) {
+        cbm_tree_measures tm;
+        st = cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm);
+        if (st == CBM_OK) {
+            printf("%s after %d years:\n", model, cbm_tree_years(t));
+            cli_measures_print(&tm);
+        } else {
+            rc = cli_fail(ctx, st, "measuring the tree");
+        }
+    }
 done:
     for (int k = 0; k < nout; k++)
         cbm_animation_destroy(anim[k]);
