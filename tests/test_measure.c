@@ -111,9 +111,9 @@ TEST(intersections_loop_through)
     for (int k = 0; k < 10; k++, n++) /* trunk 0..2 m, radius 5 cm */
         s[n] = seg(k - 1, false, V(0, 0.2 * k, 0), V(0, 0.2 * (k + 1), 0), 0.05, 0.05);
     /* limb from the top of s[1] (0.4 m): out to x = 0.6, up to 1.5 m, back across to x = -0.6 */
-    s[n++] = seg(1, true, V(0, 0.4, 0), V(0.6, 0.6, 0), 0.02, 0.02);            /* 10 */
-    s[n++] = seg(10, false, V(0.6, 0.6, 0), V(0.6, 1.5, 0), 0.02, 0.02);      /* 11 */
-    s[n++] = seg(11, false, V(0.6, 1.5, 0), V(-0.6, 1.5, 0.01), 0.02, 0.02);  /* 12 */
+    s[n++] = seg(1, true, V(0, 0.4, 0), V(0.6, 0.6, 0), 0.02, 0.02);         /* 10 */
+    s[n++] = seg(10, false, V(0.6, 0.6, 0), V(0.6, 1.5, 0), 0.02, 0.02);     /* 11 */
+    s[n++] = seg(11, false, V(0.6, 1.5, 0), V(-0.6, 1.5, 0.01), 0.02, 0.02); /* 12 */
     unsigned char fl[16];
     size_t ni = 0;
     CHECK_EQ_INT(count_pairs(ctx, s, n, fl, &ni), 1);
@@ -167,9 +167,9 @@ TEST(intersections_grid_matches_all_pairs)
 }
 
 /* A tree whose every measure is known by hand. Trunk: 4 vertical segments of 0.5 m, radius
- * tapering linearly 0.10 -> 0.06 m (the second from 0.085); at its top a fork into two children of diameter
- * D / sqrt(2) (pipe exponent exactly 2) at +-30 degrees; at 0.5 m a lateral at 45 degrees of
- * diameter 0.05 with D_parent = 0.18: exponent of (0.18; 0.17, 0.05) by bisection. */
+ * tapering linearly 0.10 -> 0.06 m (the second from 0.085); at its top a fork into two children of
+ * diameter D / sqrt(2) (pipe exponent exactly 2) at +-30 degrees; at 0.5 m a lateral at 45 degrees
+ * of diameter 0.05 with D_parent = 0.18: exponent of (0.18; 0.17, 0.05) by bisection. */
 TEST(summary_hand_made_tree)
 {
     cbm_context *ctx = test_ctx();

@@ -52,9 +52,9 @@ typedef struct cbm_measure_quantiles {
 
 typedef struct cbm_tree_measures {
     size_t segments;
-    size_t axes;   ///< roots and laterals (each starts an axis)
-    int max_order; ///< branch order of the deepest axis (0: the trunk alone)
-    double height; ///< m, highest point of any segment above the base (the lowest root point)
+    size_t axes;         ///< roots and laterals (each starts an axis)
+    int max_order;       ///< branch order of the deepest axis (0: the trunk alone)
+    double height;       ///< m, highest point of any segment above the base (the lowest root point)
     double total_length; ///< m, sum of the segment lengths
     /// m: trunk diameter (2 r, interpolated along the segment) at breast height, or at the
     /// base when the trunk does not reach it (then diameter_at_base). The trunk is the first
@@ -72,11 +72,11 @@ typedef struct cbm_tree_measures {
     /// Self-buckling (McMahon 1973): H_cr = 0.79 (E / (rho g))^(1/3) D^(2/3) with D = diameter
     /// and E, rho the medians over the trunk segments up to where D is taken. NaN when the
     /// table has no wood properties.
-    double trunk_modulus;    ///< Pa
-    double trunk_density;    ///< kg/m^3
-    double buckling_height;  ///< m, H_cr
-    double buckling_ratio;   ///< height / H_cr (real trees: about 1/4)
-    size_t forks;            ///< nodes with two or more children
+    double trunk_modulus;   ///< Pa
+    double trunk_density;   ///< kg/m^3
+    double buckling_height; ///< m, H_cr
+    double buckling_ratio;  ///< height / H_cr (real trees: about 1/4)
+    size_t forks;           ///< nodes with two or more children
     /// forks where no exponent exists (a child as thick as its parent, or a zero diameter)
     size_t forks_unsolved;
     cbm_measure_quantiles pipe_exponent; ///< a with D_parent^a = sum D_child^a, per fork
@@ -97,8 +97,9 @@ CBM_API cbm_status cbm_measure_segments(cbm_context *ctx, const cbm_measure_def 
 /// The table of a mechanical plant at its current state (after a solve or cbm_plant_evaluate):
 /// radius (a + b) / 2, E = sqrt(EI_L EI_U) / (pi a^2 b^2 / 4), density = mass per length / area,
 /// the stress ratio; a child whose branch order differs from its parent's is lateral (as the
-/// segments table, which has the orders, says it). *out receives an array of cbm_plant_segment_count rows allocated with the
-/// context's allocator; release it with cbm_measure_table_free.
+/// segments table, which has the orders, says it). *out receives an array of
+/// cbm_plant_segment_count rows allocated with the context's allocator; release it with
+/// cbm_measure_table_free.
 CBM_API cbm_status cbm_measure_plant_table(cbm_context *ctx, const cbm_plant *plant,
                                            cbm_measure_segment **out, size_t *n);
 CBM_API void cbm_measure_table_free(cbm_context *ctx, cbm_measure_segment *table, size_t n);

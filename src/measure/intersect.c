@@ -121,8 +121,8 @@ static bool tubes_meet(const cbm_measure_segment *x, const cbm_measure_segment *
 
 /* Whether i and j meet inside a junction: the tree path between their nearest ends is no longer
  * than JUNCTION_REACH times the sum of their largest radii. */
-static bool adjacent(const cbm_measure_segment *s, const double *len, const double *rmax,
-                     size_t i, size_t j)
+static bool adjacent(const cbm_measure_segment *s, const double *len, const double *rmax, size_t i,
+                     size_t j)
 {
     double bound = JUNCTION_REACH * (rmax[i] + rmax[j]);
     int64_t anc[MAX_WALK];
@@ -220,10 +220,10 @@ cbm_status cbm_measure_intersections(cbm_context *ctx, const cbm_measure_segment
         len[i] = v3_norm(v3_sub(s[i].p1, s[i].p0));
         rmax[i] = fmax(s[i].r0, s[i].r1);
         size[i] = fmax(len[i], 2.0 * rmax[i]);
-        cbm_vec3 lo = v3(fmin(s[i].p0.x, s[i].p1.x), fmin(s[i].p0.y, s[i].p1.y),
-                         fmin(s[i].p0.z, s[i].p1.z));
-        cbm_vec3 hi = v3(fmax(s[i].p0.x, s[i].p1.x), fmax(s[i].p0.y, s[i].p1.y),
-                         fmax(s[i].p0.z, s[i].p1.z));
+        cbm_vec3 lo =
+            v3(fmin(s[i].p0.x, s[i].p1.x), fmin(s[i].p0.y, s[i].p1.y), fmin(s[i].p0.z, s[i].p1.z));
+        cbm_vec3 hi =
+            v3(fmax(s[i].p0.x, s[i].p1.x), fmax(s[i].p0.y, s[i].p1.y), fmax(s[i].p0.z, s[i].p1.z));
         gr.origin = v3(fmin(gr.origin.x, lo.x - rmax[i]), fmin(gr.origin.y, lo.y - rmax[i]),
                        fmin(gr.origin.z, lo.z - rmax[i]));
         top = v3(fmax(top.x, hi.x + rmax[i]), fmax(top.y, hi.y + rmax[i]),

@@ -103,10 +103,10 @@ static cbm_status check_table(cbm_context *ctx, const cbm_measure_segment *s, si
 
 /* Scratch of one measurement, released at once. */
 typedef struct work {
-    size_t *first, *child;  /* children of i: child[first[i] .. first[i+1]) in row order */
-    size_t *cont;           /* the continuing child of i, or SIZE_MAX */
-    double *sub;            /* axis length of the subtree of i, m */
-    double *buf;            /* samples, 2 n */
+    size_t *first, *child; /* children of i: child[first[i] .. first[i+1]) in row order */
+    size_t *cont;          /* the continuing child of i, or SIZE_MAX */
+    double *sub;           /* axis length of the subtree of i, m */
+    double *buf;           /* samples, 2 n */
 } work;
 
 static void summary_axes(const cbm_measure_segment *s, size_t n, const work *w,
@@ -186,7 +186,8 @@ static void summary_trunk(const cbm_measure_def *def, const cbm_measure_segment 
         for (size_t k = w->first[i]; k < w->first[i + 1]; k++) {
             size_t c = w->child[k];
             double y = s[i].p1.y - base;
-            if (c != trunk_next(s, w, i) && w->sub[c] >= def->crown_branch_fraction * m->total_length &&
+            if (c != trunk_next(s, w, i) &&
+                w->sub[c] >= def->crown_branch_fraction * m->total_length &&
                 !(y >= m->crown_base_height))
                 m->crown_base_height = y;
         }
@@ -322,8 +323,8 @@ cbm_status cbm_measure_segments(cbm_context *ctx, const cbm_measure_def *def,
     summary_forks(s, n, &w, &m);
     summary_angles_stress(s, n, &w, &m);
     work_free(ctx, &w, n);
-    cbm_status st = cbm_measure_intersections(ctx, s, n, &m.intersecting, &m.intersecting_pairs,
-                                              NULL);
+    cbm_status st =
+        cbm_measure_intersections(ctx, s, n, &m.intersecting, &m.intersecting_pairs, NULL);
     if (st != CBM_OK)
         return st;
     m.intersecting_fraction = (double)m.intersecting / (double)n;

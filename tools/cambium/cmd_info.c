@@ -714,7 +714,7 @@ static int read_segment_table(const char *path, const char *t, int kind, cbm_mea
                 break;
             q++;
         }
-        double f[NMECH];
+        double f[NMECH] = {0};
         for (size_t k = 0; k < nwant; k++) {
             if (col[k] >= nf || col[k] >= 64) {
                 fprintf(stderr, "%s:%d: error: %d fields, the column %s is missing\n", path,
