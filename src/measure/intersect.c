@@ -249,7 +249,8 @@ cbm_status cbm_measure_intersections(cbm_context *ctx, const cbm_measure_segment
         gr.h *= 2.0;
     }
     if (st == CBM_OK) {
-        qsort(e.data, e.len, sizeof *e.data, cmp_entry);
+        if (e.len)
+            qsort(e.data, e.len, sizeof *e.data, cmp_entry);
         for (size_t a = 0; a < e.len && st == CBM_OK;) {
             size_t b = a;
             while (b < e.len && e.data[b].cell == e.data[a].cell)
@@ -267,7 +268,8 @@ cbm_status cbm_measure_intersections(cbm_context *ctx, const cbm_measure_segment
         }
     }
     if (st == CBM_OK) {
-        qsort(found.data, found.len, sizeof *found.data, cmp_pair);
+        if (found.len) /* qsort's pointer must not be NULL, even for no element */
+            qsort(found.data, found.len, sizeof *found.data, cmp_pair);
         size_t np = 0, ni = 0;
         unsigned char *mark = flags ? flags : cbm__calloc(ctx, n, 1);
         if (!mark) {
