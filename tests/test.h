@@ -95,6 +95,19 @@ int test_oom_loop_at(test_oom_fn fn, void *ud, const char *file, int line);
 
 /// Directory of the repository's test data (tests/data) and of ../shared, set by CMake.
 const char *test_source_dir(void);
+
+/// Exit status of a test program whose selected cases were all skipped (CTest's
+/// SKIP_RETURN_CODE, set in tests/CMakeLists.txt).
+#define TEST_SKIP_STATUS 77
+/// The oracle models of ../shared/oracles/vlab (with a trailing '/'), beside the repository.
+#define TEST_ORACLE_DIR CBM_TEST_SOURCE_DIR "/../shared/oracles/vlab/"
+/// Whether the current case must be skipped for want of the oracle data: true when
+/// TEST_ORACLE_DIR is absent (the case is then reported as skipped and should return at once:
+/// `if (test_skip_without_oracles()) return;`), false when it is there. When the environment
+/// has CBM_REQUIRE_ORACLES=1 (CI, where ../shared exists) an absent directory is a failure.
+bool test_skip_without_oracles(void);
+/// Marks the current case skipped, with the reason printed by the runner.
+void test_skip(const char *reason);
 /// A fresh scratch directory for the current test (under the build tree).
 const char *test_tmp_dir(void);
 

@@ -75,11 +75,12 @@ static void run_oracle(const char *folder)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s/model/lsystem.l", oracle_dir(), folder);
-    char *ref = reference(folder);
-    if (!ref) {
-        printf("SKIP: %s is absent\n", path);
+    if (test_skip_without_oracles())
         return;
-    }
+    char *ref = reference(folder);
+    CHECK_MSG(ref != NULL, "cannot read the reference of %s", path);
+    if (!ref)
+        return;
     cbm_context *ctx = test_ctx();
     cbm_lsys_def def = cbm_lsys_def_default();
     def.path = path;

@@ -165,6 +165,8 @@ typedef struct lmodel {
 
 static void run_model(const lmodel *md)
 {
+    if (test_skip_without_oracles())
+        return;
     char lpath[1024], spath[4][1024], path[1024];
     const char *sides[4];
     cbm_context *ctx = test_ctx();
@@ -461,6 +463,8 @@ TEST(lpfg_geometry_innewcontext)
  * name is an error naming it. */
 TEST(lpfg_func_by_name)
 {
+    if (test_skip_without_oracles())
+        return;
     cbm_context *ctx = test_ctx();
     const char *fset = ORACLE "lpfg-sympodial/model/functions.fset";
     const char *sides[1] = {fset};
@@ -885,5 +889,7 @@ static cbm_status oom_run(cbm_context *ctx, void *ud)
 
 TEST(lpfg_allocation_failures)
 {
+    if (test_skip_without_oracles())
+        return;
     CHECK(test_oom_loop(oom_run, NULL) > 10);
 }

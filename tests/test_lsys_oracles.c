@@ -9,8 +9,6 @@
  * as in cpfg. */
 #include "lsys_util.h"
 
-#include <dirent.h>
-
 static const char *oracle_dir(void)
 {
     static char path[2048];
@@ -94,13 +92,7 @@ static const oracle ORACLES[] = {
 
 static bool oracles_present(void)
 {
-    DIR *d = opendir(oracle_dir());
-    if (!d) {
-        printf("SKIP: %s is absent; the cpfg oracle tests need it\n", oracle_dir());
-        return false;
-    }
-    closedir(d);
-    return true;
+    return !test_skip_without_oracles();
 }
 
 /* The model with its side files: func(id, x) reads the function files and query modules get

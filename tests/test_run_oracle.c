@@ -14,6 +14,8 @@
 
 static void run_model(const oracle_model *md, bool compare_prims)
 {
+    if (test_skip_without_oracles())
+        return;
     char lpath[1024], vpath[1024], cpath[1024];
     cbm_context *ctx = test_ctx();
     snprintf(lpath, sizeof lpath, ORACLE "%s/model/%s", md->dir, md->lfile);

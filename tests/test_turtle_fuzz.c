@@ -140,6 +140,8 @@ static const seedfile seeds[] = {
 
 TEST(mutated_side_files)
 {
+    if (test_skip_without_oracles())
+        return;
     size_t runs = 0;
     for (size_t f = 0; f < sizeof seeds / sizeof seeds[0]; f++) {
         size_t len;

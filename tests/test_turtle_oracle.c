@@ -99,6 +99,8 @@ static void modlist_free(modlist *L)
 
 static void run_model(const oracle_model *md, bool compare_prims)
 {
+    if (test_skip_without_oracles())
+        return;
     char path[1024];
     cbm_context *ctx = test_ctx();
     cbm_view *view = NULL;
@@ -239,6 +241,8 @@ TEST(lilac)
  * final.exact.txt. */
 TEST(function_values_monopodial)
 {
+    if (test_skip_without_oracles())
+        return;
     cbm_context *ctx = test_ctx();
     cbm_view *view = NULL;
     CHECK_OK(cbm_view_load(ctx, ORACLE "cpfg-monopodial/model/leaf.v", &view));
@@ -289,6 +293,8 @@ TEST(function_values_monopodial)
  * require closeness elsewhere). */
 TEST(function_gallery)
 {
+    if (test_skip_without_oracles())
+        return;
     cbm_context *ctx = test_ctx();
     cbm_view *view = NULL;
     CHECK_OK(cbm_view_create(ctx, &view));

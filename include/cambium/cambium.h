@@ -13,5 +13,6 @@
 #include "cambium/turtle.h"
 #include "cambium/model.h"
 #include "cambium/tree.h"
+#include "cambium/measure.h"
 
 #endif

@@ -23,6 +23,7 @@ typedef struct macro {
     int nparams; /* -1: object-like */
     char *body;
     bool locked, active;
+    bool known; /* locked (-D) and defined, tested or used by the model */
 } macro;
 
 typedef CBM_ARRAY(char) sbuf;
@@ -180,6 +181,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
     macro *old = find_macro(st, name, nlen);
     if (old) {
         if (old->locked && !locked) {
+            old->known = true;
             free_macro(ctx, &m);
             return;
         }
@@ -239,6 +241,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
             while (i < n && is_id((unsigned char)s[i]))
                 i++;
             macro *m = find_macro(st, s + a, i - a);
+            if (m)
+                m->known = true;
             if (!m || m->active) {
                 sb_put(st, out, s + a, i - a);
                 continue;
@@ -553,7 +557,10 @@ static void process(pp_state *st, const char *raw, int file)
                     const char *a = q;
                     while (is_id((unsigned char)*q))
                         q++;
-                    v = find_macro(st, a, (size_t)(q - a)) != NULL;
+                    macro *m = find_macro(st, a, (size_t)(q - a));
+                    if (m)
+                        m->known = true;
+                    v = m != NULL;
                     if (IS("ifndef"))
                         v = !v;
                 }
@@ -586,6 +593,8 @@ static void process(pp_state *st, const char *raw, int file)
                 while (is_id((unsigned char)*q))
                     q++;
                 macro *m = find_macro(st, a, (size_t)(q - a));
+                if (m)
+                    m->known = true;
                 if (m && !m->locked) {
                     free_macro(ctx, m);
                     *m = st->macros.data[--st->macros.len];
@@ -669,6 +678,12 @@ cbm_status cbm__pp_run(cbm_context *ctx, const char *path, const char *text,
     }
     if (st.status == CBM_OK)
         process(&st, text, 0);
+    /* a -D name the model never defines, tests nor uses is a mistake (a misspelt parameter
+     * would otherwise be ignored silently) */
+    for (size_t i = 0; i < st.macros.len && st.status == CBM_OK; i++)
+        if (st.macros.data[i].locked && !st.macros.data[i].known)
+            err(&st, 0, 0, 0, "-D %s: the model does not define %s", st.macros.data[i].name,
+                st.macros.data[i].name);
     cbm__strfree(ctx, owned);
     for (size_t i = 0; i < st.macros.len; i++)
         free_macro(ctx, &st.macros.data[i]);

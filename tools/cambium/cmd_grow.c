@@ -17,7 +17,7 @@ static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--params]\n"
+           "                    [--params] [--report]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
            "wild or crooked aspen, from a parameter file or a built-in model (default\n"
@@ -36,7 +36,10 @@ static void help(void)
            "  --params          print every parameter (parameter-file syntax) and exit\n"
            "  --seeds A-B       grow once per seed A..B and write the median, quartiles,\n"
            "                    minimum and maximum of the year-by-year figures over the\n"
-           "                    seeds (-o FILE.json; stdout: medians per year)\n\n"
+           "                    seeds (-o FILE.json; stdout: medians per year)\n"
+           "  --report          the final tree as a forester measures it (height, diameter at\n"
+           "                    breast height, crown, buckling safety, pipe model, branch\n"
+           "                    angles, stress ratios, intersections; cambium info --help)\n\n"
            "built-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
@@ -63,6 +66,9 @@ static cbm_status write_summary(cbm_context *ctx, const cbm_tree *t, const char 
     if (partial) /* --summer: the last year up to the end of its summer */
         summary_object(j, cbm_tree_summary_current(t), false);
     cbm_json_end_array(j);
+    cbm_tree_measures tm; /* the final tree as a forester measures it (cambium info x.json) */
+    if (cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm) == CBM_OK)
+        cli_measures_json(j, "measures", &tm);
     cbm_json_end_object(j);
     cbm_status s = cbm_json_write_file(j, path);
     cbm_json_destroy(j);
@@ -323,7 +329,7 @@ int cmd_grow(int argc, char **argv)
     int nout = 0, ndef = 0;
     long years = -1, every = 0, seed_first = -1, seed_last = -1;
     const char *seed = NULL;
-    bool timing = false, quiet = false, params = false, summer = false;
+    bool timing = false, quiet = false, params = false, summer = false, report = false;
     cbm_write_options o = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -350,6 +356,10 @@ int cmd_grow(int argc, char **argv)
         }
         if (!strcmp(a, "--params")) {
             params = true;
+            continue;
+        }
+        if (!strcmp(a, "--report")) {
+            report = true;
             continue;
         }
         if (a[0] != '-') {
@@ -487,7 +497,7 @@ int cmd_grow(int argc, char **argv)
         rc = grow_seeds(ctx, &d, model, seed_first, seed_last, outs, nout, quiet);
         goto done;
     }
-    if (nout == 0 && quiet) {
+    if (nout == 0 && quiet && !report) {
         rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
         goto done;
     }
@@ -587,6 +597,16 @@ int cmd_grow(int argc, char **argv)
     }
     if (timing && rc == CLI_OK)
         print_timing(ctx, t, summer, derive, t_interpret, t_write, cli_seconds() - t0);
+    if (report && rc == CLI_OK) {
+        cbm_tree_measures tm;
+        st = cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm);
+        if (st == CBM_OK) {
+            printf("%s after %d years:\n", model, cbm_tree_years(t));
+            cli_measures_print(&tm);
+        } else {
+            rc = cli_fail(ctx, st, "measuring the tree");
+        }
+    }
 done:
     for (int k = 0; k < nout; k++)
         cbm_animation_destroy(anim[k]);

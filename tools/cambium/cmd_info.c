@@ -18,6 +18,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#define INFO_PI 3.14159265358979323846
+
 static const char *const SIDE_KINDS[] = {"v", "func", "fset", "s", "con", "map", "mat"};
 
 /* The whole file (NUL-terminated), NULL if unreadable. */
@@ -391,31 +393,520 @@ static void info_json(const char *t)
            steps, step, modules, prims);
 }
 
+/* ---- the forester's summary (cambium/measure.h) ---- */
+
+static void print_quantiles(const cbm_measure_quantiles *q, double scale, const char *unit)
+{
+    printf("median %.3g%s, quartiles %.3g..%.3g, 10-90 %% %.3g..%.3g, range %.3g..%.3g",
+           q->median * scale, unit, q->q25 * scale, q->q75 * scale, q->q10 * scale, q->q90 * scale,
+           q->min * scale, q->max * scale);
+}
+
+void cli_measures_print(const cbm_tree_measures *m)
+{
+    if (m->diameter_at_base)
+        printf(
+            "  height %.3f m; trunk diameter at the base %.2f cm (the trunk stays below 1.3 m)\n",
+            m->height, m->base_diameter * 100.0);
+    else
+        printf("  height %.3f m; trunk diameter at breast height (1.3 m) %.2f cm, at the base "
+               "%.2f cm\n",
+               m->height, m->diameter * 100.0, m->base_diameter * 100.0);
+    printf("  crown width %.3f m, crown base ", m->crown_width);
+    if (isfinite(m->crown_base_height))
+        printf("%.3f m", m->crown_base_height);
+    else
+        printf("none (no branch of 5 %% of the axis length)");
+    printf("; %zu segments, %zu axes, branch orders 0..%d, axis length %.3g m\n", m->segments,
+           m->axes, m->max_order, m->total_length);
+    if (isfinite(m->buckling_height))
+        printf("  self-buckling: trunk E %.3g GPa, density %.0f kg/m^3: H_cr %.3g m, "
+               "H/H_cr %.3f (real trees about 0.25)\n",
+               m->trunk_modulus / 1e9, m->trunk_density, m->buckling_height, m->buckling_ratio);
+    else
+        printf("  self-buckling: unknown (the table has no wood modulus and density)\n");
+    printf("  pipe model at %zu forks", m->forks);
+    if (m->forks_unsolved)
+        printf(" (%zu without an exponent: a child as thick as its parent)", m->forks_unsolved);
+    if (m->pipe_exponent.count) {
+        printf(": exponent ");
+        print_quantiles(&m->pipe_exponent, 1.0, "");
+        printf(" (Leonardo: 2)");
+    }
+    printf("\n  branch angles of %zu laterals", m->branch_angle.count);
+    if (m->branch_angle.count) {
+        printf(": ");
+        print_quantiles(&m->branch_angle, 180.0 / INFO_PI, " deg");
+    }
+    printf("\n");
+    if (m->stress_ratio.count) {
+        printf("  stress ratio (stress / MOR) of %zu segments: ", m->stress_ratio.count);
+        print_quantiles(&m->stress_ratio, 1.0, "");
+        printf("; %.2f %% above 0.5\n", 100.0 * m->stress_above_half);
+    } else {
+        printf("  stress ratio: unknown (no stress or modulus of rupture in the table)\n");
+    }
+    printf("  intersections: %zu segments (%.2f %%) pass through a non-adjacent segment, %zu "
+           "pairs\n",
+           m->intersecting, 100.0 * m->intersecting_fraction, m->intersecting_pairs);
+}
+
+static void quantiles_json(cbm_json *j, const char *key, const cbm_measure_quantiles *q,
+                           double scale)
+{
+    cbm_json_begin_object(j, key);
+    cbm_json_int(j, "count", (int64_t)q->count);
+    cbm_json_number(j, "min", q->min * scale);
+    cbm_json_number(j, "q10", q->q10 * scale);
+    cbm_json_number(j, "q25", q->q25 * scale);
+    cbm_json_number(j, "median", q->median * scale);
+    cbm_json_number(j, "q75", q->q75 * scale);
+    cbm_json_number(j, "q90", q->q90 * scale);
+    cbm_json_number(j, "max", q->max * scale);
+    cbm_json_end_object(j);
+}
+
+void cli_measures_json(cbm_json *j, const char *key, const cbm_tree_measures *m)
+{
+    cbm_json_begin_object(j, key);
+    cbm_json_int(j, "segments", (int64_t)m->segments);
+    cbm_json_int(j, "axes", (int64_t)m->axes);
+    cbm_json_int(j, "max_order", m->max_order);
+    cbm_json_number(j, "height_m", m->height);
+    cbm_json_number(j, "axis_length_m", m->total_length);
+    cbm_json_number(j, "diameter_m", m->diameter);
+    cbm_json_string(j, "diameter_at", m->diameter_at_base ? "base" : "breast height");
+    cbm_json_number(j, "base_diameter_m", m->base_diameter);
+    cbm_json_number(j, "crown_width_m", m->crown_width);
+    cbm_json_number(j, "crown_base_height_m", m->crown_base_height);
+    cbm_json_number(j, "trunk_modulus_Pa", m->trunk_modulus);
+    cbm_json_number(j, "trunk_density_kg_m3", m->trunk_density);
+    cbm_json_number(j, "buckling_height_m", m->buckling_height);
+    cbm_json_number(j, "buckling_ratio", m->buckling_ratio);
+    cbm_json_int(j, "forks", (int64_t)m->forks);
+    cbm_json_int(j, "forks_unsolved", (int64_t)m->forks_unsolved);
+    quantiles_json(j, "pipe_exponent", &m->pipe_exponent, 1.0);
+    quantiles_json(j, "branch_angle_deg", &m->branch_angle, 180.0 / INFO_PI);
+    quantiles_json(j, "stress_ratio", &m->stress_ratio, 1.0);
+    cbm_json_number(j, "stress_above_half", m->stress_above_half);
+    cbm_json_int(j, "intersecting_segments", (int64_t)m->intersecting);
+    cbm_json_number(j, "intersecting_fraction", m->intersecting_fraction);
+    cbm_json_int(j, "intersecting_pairs", (int64_t)m->intersecting_pairs);
+    cbm_json_end_object(j);
+}
+
+/* The number of a top-level-of-obj key "key": inside the object text obj..end; NaN if absent
+ * or null. */
+static double json_number_in(const char *obj, const char *end, const char *key)
+{
+    char pat[64];
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    size_t n = strlen(pat);
+    for (const char *p = obj; p && p + n <= end; p++) {
+        p = strstr(p, pat);
+        if (!p || p + n > end)
+            break;
+        char *e = NULL;
+        double v = strtod(p + n, &e);
+        return e == p + n ? NAN : v;
+    }
+    return NAN;
+}
+
+/* The end of the JSON object or array that starts at p (just after its closing bracket). */
+static const char *json_skip(const char *p)
+{
+    int depth = 0;
+    for (; *p; p++) {
+        if (*p == '"') {
+            for (p++; *p && *p != '"'; p++)
+                if (*p == '\\' && p[1])
+                    p++;
+            if (!*p)
+                break;
+        } else if (*p == '{' || *p == '[') {
+            depth++;
+        } else if (*p == '}' || *p == ']') {
+            if (--depth == 0)
+                return p + 1;
+        }
+    }
+    return p;
+}
+
+static cbm_measure_quantiles quantiles_from_json(const char *obj, const char *end, const char *key)
+{
+    cbm_measure_quantiles q = {0, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+    char pat[64];
+    snprintf(pat, sizeof pat, "\"%s\":{", key);
+    const char *p = strstr(obj, pat);
+    if (!p || p >= end)
+        return q;
+    p += strlen(pat) - 1;
+    const char *e = json_skip(p);
+    double c = json_number_in(p, e, "count");
+    q.count = c > 0 ? (size_t)c : 0;
+    q.min = json_number_in(p, e, "min");
+    q.q10 = json_number_in(p, e, "q10");
+    q.q25 = json_number_in(p, e, "q25");
+    q.median = json_number_in(p, e, "median");
+    q.q75 = json_number_in(p, e, "q75");
+    q.q90 = json_number_in(p, e, "q90");
+    q.max = json_number_in(p, e, "max");
+    return q;
+}
+
+/* The measures written by cli_measures_json, read back from the object at obj (its '{'). */
+static cbm_tree_measures measures_from_json(const char *obj)
+{
+    const char *e = json_skip(obj);
+    cbm_tree_measures m = {0};
+    /* the quantile objects hold no key of the outer object's names */
+    m.segments = (size_t)fmax(0.0, json_number_in(obj, e, "segments"));
+    m.axes = (size_t)fmax(0.0, json_number_in(obj, e, "axes"));
+    m.max_order = (int)fmax(0.0, json_number_in(obj, e, "max_order"));
+    m.height = json_number_in(obj, e, "height_m");
+    m.total_length = json_number_in(obj, e, "axis_length_m");
+    m.diameter = json_number_in(obj, e, "diameter_m");
+    const char *at = strstr(obj, "\"diameter_at\":\"base\"");
+    m.diameter_at_base = at && at < e;
+    m.base_diameter = json_number_in(obj, e, "base_diameter_m");
+    m.crown_width = json_number_in(obj, e, "crown_width_m");
+    m.crown_base_height = json_number_in(obj, e, "crown_base_height_m");
+    m.trunk_modulus = json_number_in(obj, e, "trunk_modulus_Pa");
+    m.trunk_density = json_number_in(obj, e, "trunk_density_kg_m3");
+    m.buckling_height = json_number_in(obj, e, "buckling_height_m");
+    m.buckling_ratio = json_number_in(obj, e, "buckling_ratio");
+    m.forks = (size_t)fmax(0.0, json_number_in(obj, e, "forks"));
+    m.forks_unsolved = (size_t)fmax(0.0, json_number_in(obj, e, "forks_unsolved"));
+    m.pipe_exponent = quantiles_from_json(obj, e, "pipe_exponent");
+    m.branch_angle = quantiles_from_json(obj, e, "branch_angle_deg");
+    m.branch_angle.min *= INFO_PI / 180.0;
+    m.branch_angle.q10 *= INFO_PI / 180.0;
+    m.branch_angle.q25 *= INFO_PI / 180.0;
+    m.branch_angle.median *= INFO_PI / 180.0;
+    m.branch_angle.q75 *= INFO_PI / 180.0;
+    m.branch_angle.q90 *= INFO_PI / 180.0;
+    m.branch_angle.max *= INFO_PI / 180.0;
+    m.stress_ratio = quantiles_from_json(obj, e, "stress_ratio");
+    m.stress_above_half = json_number_in(obj, e, "stress_above_half");
+    m.intersecting = (size_t)fmax(0.0, json_number_in(obj, e, "intersecting_segments"));
+    m.intersecting_fraction = json_number_in(obj, e, "intersecting_fraction");
+    m.intersecting_pairs = (size_t)fmax(0.0, json_number_in(obj, e, "intersecting_pairs"));
+    return m;
+}
+
+/* The measures as a JSON document on stdout: {"file": ..., "table": ..., "measures": {...}}. */
+static int print_measures_json(const char *path, const char *table, const cbm_tree_measures *m)
+{
+    cbm_context *ctx = cli_context();
+    cbm_json *j = NULL;
+    cbm_status s = cbm_json_create(ctx, &j);
+    if (s == CBM_OK) {
+        cbm_json_begin_object(j, NULL);
+        cbm_json_string(j, "file", path);
+        cbm_json_string(j, "table", table);
+        cli_measures_json(j, "measures", m);
+        cbm_json_end_object(j);
+        const char *text = NULL;
+        size_t len = 0;
+        s = cbm_json_text(j, &text, &len);
+        if (s == CBM_OK) {
+            fwrite(text, 1, len, stdout);
+            fputc('\n', stdout);
+        }
+    }
+    cbm_json_destroy(j);
+    int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, path);
+    cli_context_end(ctx);
+    return rc;
+}
+
+/* ---- segment tables (docs/formats.md): the mechanical plant's and the turtle's ---- */
+
+enum { SEG_MECH, SEG_TURTLE };
+
+/* The columns a table needs, by kind; -1 = not needed. */
+static const char *const MECH_COLS[] = {
+    "id",          "parent",   "order",    "x0_m",     "y0_m",
+    "z0_m",        "x1_m",     "y1_m",     "z1_m",     "a_m",
+    "b_m",         "length_m", "EI_L_Nm2", "EI_U_Nm2", "carried_mass_kg",
+    "stress_ratio"};
+static const char *const TURTLE_COLS[] = {"id", "parent", "lateral", "order", "x0",     "y0",
+                                          "z0", "x1",     "y1",      "z1",    "width0", "width1"};
+#define NMECH   (sizeof MECH_COLS / sizeof MECH_COLS[0])
+#define NTURTLE (sizeof TURTLE_COLS / sizeof TURTLE_COLS[0])
+
+/* Index of each wanted column in the header line (which ends at nl); false if one is missing. */
+static bool header_columns(const char *t, const char *nl, const char *const *want, size_t nwant,
+                           int *col)
+{
+    for (size_t k = 0; k < nwant; k++) {
+        col[k] = -1;
+        int c = 0;
+        for (const char *p = t; p < nl; c++) {
+            size_t n = strcspn(p, ",\r\n");
+            if (n == strlen(want[k]) && !strncmp(p, want[k], n))
+                col[k] = c;
+            p += n;
+            if (*p != ',')
+                break;
+            p++;
+        }
+        if (col[k] < 0)
+            return false;
+    }
+    return true;
+}
+
+/* Reads a segments table into *out (n rows); returns CLI_OK, or prints "path:line: error: ..."
+ * and returns CLI_FAIL. */
+static int read_segment_table(const char *path, const char *t, int kind, cbm_measure_segment **out,
+                              size_t *nout)
+{
+    const char *nl = strchr(t, '\n');
+    int col[NMECH];
+    const char *const *want = kind == SEG_MECH ? MECH_COLS : TURTLE_COLS;
+    size_t nwant = kind == SEG_MECH ? NMECH : NTURTLE;
+    header_columns(t, nl, want, nwant, col);
+    size_t rows = 0;
+    for (const char *p = nl + 1; *p; p++)
+        rows += *p == '\n' || !p[1];
+    double *own = NULL, *volume = NULL, *order = NULL; /* in v after the 64 fields */
+    cbm_measure_segment *s = calloc(rows ? rows : 1, sizeof *s);
+    double *v = calloc(64 + 3 * (rows ? rows : 1), sizeof *v);
+    if (!s || !v) {
+        free(s), free(v);
+        fprintf(stderr, "cambium: %s: out of memory\n", path);
+        return CLI_FAIL;
+    }
+    own = v + 64, volume = own + rows, order = volume + rows;
+    size_t n = 0;
+    int line = 1;
+    for (const char *p = nl + 1; *p && n < rows; line++) {
+        const char *end = strchr(p, '\n');
+        if (!end)
+            end = p + strlen(p);
+        if (end == p || (end == p + 1 && *p == '\r')) {
+            p = *end ? end + 1 : end;
+            continue;
+        }
+        /* every field of the row as a number (empty = NaN) */
+        int nf = 0;
+        const char *q = p;
+        for (;;) {
+            char *e = NULL;
+            double x = NAN;
+            if (*q != ',' && *q != '\n' && *q != '\r' && *q) {
+                x = strtod(q, &e);
+                if (e == q || (*e != ',' && *e != '\n' && *e != '\r' && *e)) {
+                    fprintf(stderr, "%s:%d:%d: error: field %d is not a number\n", path, line + 1,
+                            (int)(q - p) + 1, nf + 1);
+                    free(s), free(v);
+                    return CLI_FAIL;
+                }
+                q = e;
+            }
+            if (nf < 64)
+                v[nf] = x;
+            nf++;
+            if (*q != ',')
+                break;
+            q++;
+        }
+        double f[NMECH] = {0};
+        for (size_t k = 0; k < nwant; k++) {
+            if (col[k] >= nf || col[k] >= 64) {
+                fprintf(stderr, "%s:%d: error: %d fields, the column %s is missing\n", path,
+                        line + 1, nf, want[k]);
+                free(s), free(v);
+                return CLI_FAIL;
+            }
+            f[k] = v[col[k]];
+        }
+        cbm_measure_segment *g = &s[n];
+        double parent = f[1];
+        if (f[0] != (double)n || !(parent >= -1.0 && parent < (double)n) ||
+            parent != floor(parent)) {
+            fprintf(stderr,
+                    "%s:%d: error: segment %zu: id %g or parent %g (the rows must be numbered "
+                    "from 0, each parent an earlier row or -1)\n",
+                    path, line + 1, n, f[0], parent);
+            free(s), free(v);
+            return CLI_FAIL;
+        }
+        g->parent = (int64_t)parent;
+        if (kind == SEG_MECH) {
+            g->p0 = (cbm_vec3){f[3], f[4], f[5]};
+            g->p1 = (cbm_vec3){f[6], f[7], f[8]};
+            double a = f[9], b = f[10], len = f[11];
+            g->r0 = g->r1 = 0.5 * (a + b);
+            double im = INFO_PI * a * a * b * b / 4.0;
+            g->youngs_modulus = im > 0.0 ? sqrt(f[12] * f[13]) / im : NAN;
+            own[n] = f[14]; /* carried; the children's carried masses are taken off below */
+            volume[n] = len * INFO_PI * a * b;
+            g->stress_ratio = f[15];
+            /* the continuation keeps its parent's order (the first such child) */
+            order[n] = f[2];
+            g->lateral = g->parent >= 0 && order[n] != order[g->parent];
+        } else {
+            g->lateral = f[2] != 0.0;
+            g->p0 = (cbm_vec3){f[4], f[5], f[6]};
+            g->p1 = (cbm_vec3){f[7], f[8], f[9]};
+            g->r0 = 0.5 * f[10];
+            g->r1 = 0.5 * f[11];
+            g->youngs_modulus = g->density = g->stress_ratio = NAN;
+        }
+        n++;
+        p = *end ? end + 1 : end;
+    }
+    if (kind == SEG_MECH) {
+        /* own mass = carried - the children's carried (wood and the point mass at the tip); in
+         * increasing order own[i] is still i's carried mass when i is taken off its parent */
+        for (size_t i = 0; i < n; i++)
+            if (s[i].parent >= 0)
+                own[s[i].parent] -= own[i];
+        for (size_t i = 0; i < n; i++)
+            s[i].density = volume[i] > 0.0 && own[i] > 0.0 ? own[i] / volume[i] : NAN;
+    }
+    free(v);
+    *out = s;
+    *nout = n;
+    return CLI_OK;
+}
+
+/* The kind of segments table a CSV header names, -1 for any other table. */
+static int segment_table_kind(const char *t)
+{
+    const char *nl = strchr(t, '\n');
+    int col[NMECH];
+    if (!nl)
+        return -1;
+    if (header_columns(t, nl, MECH_COLS, NMECH, col))
+        return SEG_MECH;
+    if (header_columns(t, nl, TURTLE_COLS, NTURTLE, col))
+        return SEG_TURTLE;
+    return -1;
+}
+
+static int info_segments(const char *path, const char *t, int kind, bool json)
+{
+    cbm_measure_segment *s = NULL;
+    size_t n = 0;
+    int rc = read_segment_table(path, t, kind, &s, &n);
+    if (rc != CLI_OK)
+        return rc;
+    cbm_context *ctx = cli_context();
+    cbm_tree_measures m;
+    cbm_status st = cbm_measure_segments(ctx, NULL, s, n, &m);
+    free(s);
+    if (st != CBM_OK) {
+        rc = cli_fail(ctx, st, path);
+        cli_context_end(ctx);
+        return rc;
+    }
+    cli_context_end(ctx);
+    const char *table = kind == SEG_MECH ? "mechanical segments" : "turtle segments";
+    if (json)
+        return print_measures_json(path, table, &m);
+    printf("  %s table: %zu segments%s\n", table, n,
+           kind == SEG_TURTLE ? " (the model's units, read as metres)" : "");
+    cli_measures_print(&m);
+    return CLI_OK;
+}
+
+/* `cambium grow -o x.json`: the last year's figures and the measures of the final tree. */
+static int info_grow_summary(const char *path, const char *t, bool json)
+{
+    const char *mo = strstr(t, "\"measures\":{");
+    cbm_tree_measures m;
+    if (mo)
+        m = measures_from_json(mo + strlen("\"measures\":"));
+    if (json) {
+        if (!mo) {
+            fprintf(stderr,
+                    "cambium: %s: no measures in this summary (written before they were "
+                    "added)\n",
+                    path);
+            return CLI_FAIL;
+        }
+        return print_measures_json(path, "grow summary", &m);
+    }
+    const char *last = NULL;
+    for (const char *p = t; (p = strstr(p, "{\"year\":")) != NULL; p++)
+        last = p;
+    const char *model = strstr(t, "\"model\":\"");
+    printf("  growth summary of %.*s: %zu years recorded\n",
+           model ? (int)strcspn(model + 9, "\"") : 1, model ? model + 9 : "?",
+           count_of(t, "{\"year\":"));
+    if (last) {
+        const char *e = json_skip(last);
+        printf("  last year %g: %g segments, height %.3f m, crown %.3f m, %g leaves, %g fruit\n",
+               json_number_in(last, e, "year"), json_number_in(last, e, "segments"),
+               json_number_in(last, e, "height_m"), json_number_in(last, e, "crown_width_m"),
+               json_number_in(last, e, "leaves"), json_number_in(last, e, "fruit"));
+    }
+    if (mo) {
+        printf("  the final tree:\n");
+        cli_measures_print(&m);
+    }
+    return CLI_OK;
+}
+
 int cmd_info(int argc, char **argv)
 {
-    if (argc != 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")) {
-        if (argc == 2) {
-            printf("usage: cambium info FILE\n\n"
+    const char *path = NULL;
+    bool json = false;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            printf("usage: cambium info [--json] FILE\n\n"
                    "Says what a model (.l) or an output file (.str .obj .ply .glb .png .svg\n"
-                   ".csv .json) holds.\n");
+                   ".csv .json) holds. A segments table (cambium grow -o x.csv, cambium run\n"
+                   "-o segments:x.csv) and the summary of cambium grow (-o x.json) get the\n"
+                   "forester's measures of the tree: height, trunk diameter at breast height,\n"
+                   "crown width and base, safety against self-buckling, pipe-model exponent,\n"
+                   "branch angles, stress ratios, branch intersections (docs/models.md).\n\n"
+                   "  --json   the measures as JSON on stdout (segments tables, grow summaries)\n");
             return CLI_OK;
         }
-        return cli_usage_error("info", "expected one FILE");
+        if (!strcmp(argv[i], "--json"))
+            json = true;
+        else if (argv[i][0] == '-' && argv[i][1])
+            return cli_usage_error("info", "unknown option %s", argv[i]);
+        else if (path)
+            return cli_usage_error("info", "expected one FILE, got '%s' and '%s'", path, argv[i]);
+        else
+            path = argv[i];
     }
-    const char *path = argv[1];
+    if (!path)
+        return cli_usage_error("info", "expected one FILE");
     struct stat st;
     if (stat(path, &st) != 0 || !S_ISREG(st.st_mode)) {
         fprintf(stderr, "cambium: %s: cannot open\n", path);
         return CLI_FAIL;
     }
     const char *ext = cli_extension(path);
-    if (!strcmp(ext, "l"))
+    if (!strcmp(ext, "l") && !json)
         return info_model(path);
     size_t n = 0;
     char *t = slurp(path, &n);
     if (!t) {
         fprintf(stderr, "cambium: %s: cannot read\n", path);
         return CLI_FAIL;
+    }
+    int kind = !strcmp(ext, "csv") ? segment_table_kind(t) : -1;
+    bool grow_json = !strcmp(ext, "json") && strstr(t, "\"years\":[") != NULL;
+    if (json) {
+        int r = CLI_FAIL;
+        if (kind >= 0)
+            r = info_segments(path, t, kind, true);
+        else if (grow_json)
+            r = info_grow_summary(path, t, true);
+        else
+            fprintf(stderr, "cambium info: --json takes a segments table (.csv) or a grow "
+                            "summary (.json)\n");
+        free(t);
+        return r;
     }
     printf("%s: %.1f kB\n", path, (double)n / 1e3);
     int rc = CLI_OK;
@@ -431,8 +922,12 @@ int cmd_info(int argc, char **argv)
         rc = info_png((const unsigned char *)t, n);
     else if (!strcmp(ext, "svg"))
         info_svg(t);
+    else if (kind >= 0)
+        rc = info_segments(path, t, kind, false);
     else if (!strcmp(ext, "csv"))
         info_csv(t);
+    else if (grow_json)
+        rc = info_grow_summary(path, t, false);
     else if (!strcmp(ext, "json"))
         info_json(t);
     else

@@ -11,6 +11,13 @@ int cmd_info(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
 
+/* The forester's summary of a tree (cmd_info.c), also printed by `grow --report` and written in
+ * the year-by-year summary of `grow`. */
+struct cbm_tree_measures;
+struct cbm_json;
+void cli_measures_print(const struct cbm_tree_measures *m);
+void cli_measures_json(struct cbm_json *j, const char *key, const struct cbm_tree_measures *m);
+
 #define CBM_COMMANDS(X)                                                                            \
     X("run", cmd_run, "derive an L-system model and write its outputs")                            \
     X("grow", cmd_grow, "grow a built-in tree model (fruit tree, aspen) with mechanics")           \
