@@ -545,6 +545,25 @@ cbm_solve_def cbm_solve_def_default(void)
     return d;
 }
 
+const char *cbm_solve_stage_name(cbm_solve_stage stage)
+{
+    static const char *const names[CBM_SOLVE_STAGE_COUNT] = {
+        [CBM_SOLVE_STAGE_NONE] = "none",           [CBM_SOLVE_STAGE_NEWTON] = "newton",
+        [CBM_SOLVE_STAGE_TRANSIENT] = "transient", [CBM_SOLVE_STAGE_MASS_PATH] = "mass-path",
+        [CBM_SOLVE_STAGE_LOAD_PATH] = "load-path", [CBM_SOLVE_STAGE_RELAX_BURSTS] = "relax-bursts",
+        [CBM_SOLVE_STAGE_STABILITY] = "stability", [CBM_SOLVE_STAGE_RELAX] = "relax",
+    };
+    if ((unsigned)stage >= (unsigned)CBM_SOLVE_STAGE_COUNT)
+        return "unknown";
+    return names[stage];
+}
+
+void cbm_solve_stage_counts(const cbm_context *ctx, size_t counts[CBM_SOLVE_STAGE_COUNT])
+{
+    _Static_assert(CBM_SOLVE_STAGE_COUNT <= CBM__CONTEXT_COUNTERS, "room for the stage counts");
+    memcpy(counts, cbm__context_counters_read(ctx), CBM_SOLVE_STAGE_COUNT * sizeof *counts);
+}
+
 cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
 {
     if (!p)
@@ -622,6 +641,7 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     p->mass_path = 1.0;
     if (s == CBM_OK) /* the point masses this Omega balances */
         memcpy(p->pmass0, p->pmass, p->n * sizeof *p->pmass0);
+    cbm__context_counters(p->ctx)[s == CBM_OK ? st.stage : CBM_SOLVE_STAGE_NONE]++;
     if (stats)
         *stats = st;
     return s;
