@@ -1,7 +1,10 @@
 # Thin wrapper over CMake presets. `make` builds build/bin/cambium; `make run` runs the main job
 # on the built-in default; `make test` builds and runs every test. Each installs the Debian
 # packages the project needs first (cmake/debian-packages.txt).
-.PHONY: all deps configure build run test asan fuzz format format-check check bench clean
+.PHONY: all deps configure build run test asan fuzz format format-check check tidy bench install \
+        clean
+# `make install PREFIX=/opt/cambium DESTDIR=/tmp/stage` (docs: README, "Installing and linking")
+PREFIX ?= /usr/local
 
 all: build
 
@@ -41,6 +44,9 @@ check: format-check
 
 bench: build
 	@echo "benchmark programs are in build/bin (see docs/performance.md)"
+
+install: build
+	@DESTDIR="$(DESTDIR)" cmake --install build --prefix "$(PREFIX)"
 
 clean:
 	@rm -rf build build-asan build-fuzz
