@@ -14,7 +14,7 @@
 int main(void)
 {
     const double pi = 3.14159265358979323846;
-    const int n = 50;                                   /* segments */
+    const int n = 50;                                      /* segments */
     const double len = 1.0, r = 0.01, E = 1e13, rho = 700; /* m, m, Pa, kg/m^3 */
     cbm_context *ctx = NULL;
     if (cbm_context_create(NULL, &ctx) != CBM_OK)

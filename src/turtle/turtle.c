@@ -1810,6 +1810,14 @@ cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int npara
 
 /* ---- public API ---- */
 
+cbm_turtle_def cbm_turtle_def_default(void)
+{
+    cbm_turtle_def d;
+    memset(&d, 0, sizeof d);
+    d.record = true;
+    return d;
+}
+
 cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cbm_turtle_def *def,
                                 cbm_tmodule *mods, size_t n, cbm_scene *scene, cbm_turtle **out)
 {
