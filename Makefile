@@ -45,6 +45,12 @@ check: format-check
 bench: build
 	@echo "benchmark programs are in build/bin (see docs/performance.md)"
 
+# clang-tidy over the library and the tool with the checks of .clang-tidy (findings are errors)
+tidy: configure
+	@run-clang-tidy-14 -p build -j 2 -quiet '$(CURDIR)/(src|tools)/' >build/tidy.log 2>&1 || \
+	  { grep -E '(warning|error):' build/tidy.log | sort -u; echo "make tidy: findings above"; exit 1; }
+	@echo "make tidy: clean"
+
 install: build
 	@DESTDIR="$(DESTDIR)" cmake --install build --prefix "$(PREFIX)"
 

@@ -69,8 +69,8 @@ static bool check_golden(const char *name, uint64_t got, uint64_t expected)
 {
     printf("golden %s: 0x%016" PRIx64 "\n", name, got);
     if (got != expected)
-        printf("golden %s: expected 0x%016" PRIx64 " (see the top of %s before updating)\n",
-               name, expected, __FILE__);
+        printf("golden %s: expected 0x%016" PRIx64 " (see the top of %s before updating)\n", name,
+               expected, __FILE__);
     return got == expected;
 }
 
@@ -120,8 +120,8 @@ static void hash_string(hasher *s, const cbm_lsys *ls)
 TEST(golden_cpfg_abop_2_8a)
 {
     cbm_context *ctx = test_ctx();
-    cbm_model *m =
-        run_model(ctx, source_path("tests/lsys/abop-2.8a.l"), source_path("tests/lsys/abop-2.8a.v"));
+    cbm_model *m = run_model(ctx, source_path("tests/lsys/abop-2.8a.l"),
+                             source_path("tests/lsys/abop-2.8a.v"));
     CHECK(m != NULL);
     if (!m) {
         test_ctx_end(ctx);

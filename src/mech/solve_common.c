@@ -573,7 +573,7 @@ cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     cbm__mech_forward(p);
-    double mmax;
+    double mmax = 0.0;
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     if (p->contacts.npairs > p->contacts.pcap) {
         /* more touching organ pairs than room: grow it (outside any iteration) and redo */

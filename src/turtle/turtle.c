@@ -374,6 +374,8 @@ static bool line_part_reused(const cbm_turtle *t, const cbm_part *last, int colo
 {
     return last->organ == CBM_ORGAN_BRANCH && last->order == (int32_t)t->stack.len &&
            last->material == color &&
+           /* the same colour, bit for bit (identity, not value) */
+           // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
            memcmp(last->color, t->view->colors[color & 255], sizeof last->color) == 0 &&
            isnan(last->stress_ratio) && isnan(last->stress) && isnan(last->age) &&
            isnan(last->reaction_wood);
@@ -676,6 +678,8 @@ static void contour_eval(const cbm__contour *c, float tt, float out[3])
     float b[4] = {(1 - u) * (1 - u) * (1 - u) / 6.0f, (3 * u * u * u - 6 * u * u + 4) / 6.0f,
                   (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6.0f, u * u * u / 6.0f};
     out[0] = out[1] = out[2] = 0.0f;
+    if (num == 0) /* no control points: the origin */
+        return;
     for (int i = 0; i < 4; i++) {
         int k = ((first + i) % num + num) % num;
         for (int d = 0; d < 3; d++)
