@@ -49,7 +49,9 @@ ex=$root/share/doc/cambium/examples/linking/bend_rod.c
 # shellcheck disable=SC2046
 cc -std=c17 -Wall -Wextra -Werror $san "$ex" -o "$tmp/bend_shared" $(pkg-config --cflags --libs cambium) -lm
 LD_LIBRARY_PATH=$root/lib "$tmp/bend_shared" >"$tmp/shared.out" || fail "shared example: $(cat "$tmp/shared.out")"
-LD_LIBRARY_PATH=$root/lib ldd "$tmp/bend_shared" | grep -q "libcambium.so.0 => $root/lib/" ||
+# (ldd into a file: `ldd | grep -q` under pipefail fails when grep stops reading early)
+LD_LIBRARY_PATH=$root/lib ldd "$tmp/bend_shared" >"$tmp/ldd.out"
+grep -q "libcambium.so.0 => $root/lib/" "$tmp/ldd.out" ||
     fail "the shared example does not use the installed libcambium.so"
 # static: the archive by path, the rest from `pkg-config --static`
 # shellcheck disable=SC2046
