@@ -1,7 +1,10 @@
 # Thin wrapper over CMake presets. `make` builds build/bin/cambium; `make run` runs the main job
 # on the built-in default; `make test` builds and runs every test. Each installs the Debian
 # packages the project needs first (cmake/debian-packages.txt).
-.PHONY: all deps configure build run test asan fuzz format format-check check bench clean
+.PHONY: all deps configure build run test asan fuzz format format-check check tidy bench install \
+        clean
+# `make install PREFIX=/opt/cambium DESTDIR=/tmp/stage` (docs: README, "Installing and linking")
+PREFIX ?= /usr/local
 
 all: build
 
@@ -41,6 +44,15 @@ check: format-check
 
 bench: build
 	@echo "benchmark programs are in build/bin (see docs/performance.md)"
+
+# clang-tidy over the library and the tool with the checks of .clang-tidy (findings are errors)
+tidy: configure
+	@run-clang-tidy-14 -p build -j 2 -quiet '$(CURDIR)/(src|tools)/' >build/tidy.log 2>&1 || \
+	  { grep -E '(warning|error):' build/tidy.log | sort -u; echo "make tidy: findings above"; exit 1; }
+	@echo "make tidy: clean"
+
+install: build
+	@DESTDIR="$(DESTDIR)" cmake --install build --prefix "$(PREFIX)"
 
 clean:
 	@rm -rf build build-asan build-fuzz

@@ -304,6 +304,29 @@ typedef struct cbm_solve_def {
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);
 
+/// The stage of the statics solver that reached the tolerance (docs/design.md, "The fast solver's
+/// stages"): the fast solver runs its stages in this order, each only when the ones before it
+/// did not converge.
+typedef enum cbm_solve_stage {
+    CBM_SOLVE_STAGE_NONE = 0,     ///< "none": not converged
+    CBM_SOLVE_STAGE_NEWTON,       ///< "newton": Newton at the full load from the start state
+    CBM_SOLVE_STAGE_TRANSIENT,    ///< "transient": pseudo-transient continuation (warm start)
+    CBM_SOLVE_STAGE_MASS_PATH,    ///< "mass-path": continuation over the point masses (warm)
+    CBM_SOLVE_STAGE_LOAD_PATH,    ///< "load-path": load continuation from the rest state
+    CBM_SOLVE_STAGE_RELAX_BURSTS, ///< "relax-bursts": relaxation bursts between Newton attempts
+    CBM_SOLVE_STAGE_STABILITY,    ///< "stability": re-solved after a push off an unstable state
+    CBM_SOLVE_STAGE_RELAX,        ///< "relax": the relaxation solver (CBM_MECH_RELAX)
+    CBM_SOLVE_STAGE_COUNT
+} cbm_solve_stage;
+
+/// The stage's name as in the enum's comments ("newton", "load-path", ...); "unknown" if out of
+/// range.
+CBM_API const char *cbm_solve_stage_name(cbm_solve_stage stage);
+
+/// Solves through the context so far, by the stage that converged (counts[CBM_SOLVE_STAGE_NONE]:
+/// the solves that did not converge); for --timing-style reports over many solves.
+CBM_API void cbm_solve_stage_counts(const cbm_context *ctx, size_t counts[CBM_SOLVE_STAGE_COUNT]);
+
 /// What a solve did.
 typedef struct cbm_solve_stats {
     size_t passes;             ///< forward + backward sweeps (also the tangent sweeps of Newton)
@@ -315,6 +338,7 @@ typedef struct cbm_solve_stats {
     /// joints where the final equilibrium is unstable (pivot block of the tree factorisation
     /// not positive definite); fast solver with the tree preconditioner only, else 0
     size_t unstable_joints;
+    cbm_solve_stage stage; ///< the stage that reached the tolerance; CBM_SOLVE_STAGE_NONE if none
 } cbm_solve_stats;
 
 /// Brings the plant to static equilibrium. Results (frames, positions, moments, stresses) are

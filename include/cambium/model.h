@@ -29,6 +29,10 @@ typedef struct cbm_model_def {
     size_t side_count;
 } cbm_model_def;
 
+/// Defaults: the L-system defaults (cbm_lsys_def_default; no model yet: set lsys.path or
+/// lsys.text), no side files.
+CBM_API cbm_model_def cbm_model_def_default(void);
+
 /// Loads the model and its side files (a view with cpfg's defaults when no .v is given).
 /// Errors name the file (and line for syntax errors).
 CBM_API cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model **out);

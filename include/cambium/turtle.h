@@ -101,6 +101,9 @@ typedef struct cbm_turtle_def {
     bool record; ///< keep the primitive record (cbm_turtle_prims)
 } cbm_turtle_def;
 
+/// Defaults: record on (what a NULL def means).
+CBM_API cbm_turtle_def cbm_turtle_def_default(void);
+
 /// Interprets modules[0..n) with the view into scene (may be NULL). def may be NULL (record on).
 /// *out receives the turtle with its record, to read with the accessors below and release with
 /// cbm_turtle_destroy. On failure *out is NULL and the context holds the message.

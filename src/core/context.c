@@ -16,6 +16,7 @@ struct cbm_context {
     cbm_limits limits;
     size_t bytes, peak;
     size_t errors;
+    size_t counters[CBM__CONTEXT_COUNTERS]; /* library statistics (cbm__context_counters) */
     char last_error[1024];
     cbm_rng rng;
 };
@@ -117,6 +118,16 @@ size_t cbm_context_bytes(const cbm_context *ctx)
 size_t cbm_context_peak_bytes(const cbm_context *ctx)
 {
     return ctx->peak;
+}
+
+size_t *cbm__context_counters(cbm_context *ctx)
+{
+    return ctx->counters;
+}
+
+const size_t *cbm__context_counters_read(const cbm_context *ctx)
+{
+    return ctx->counters;
 }
 
 const cbm_limits *cbm_context_limits(const cbm_context *ctx)

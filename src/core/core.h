@@ -61,6 +61,13 @@ cbm_status cbm__grow(cbm_context *ctx, void **data, size_t *cap, size_t elem_siz
     (cbm__free((ctx), (arr).data, (arr).cap * sizeof(*(arr).data)), (arr).data = NULL,             \
      (arr).len = (arr).cap = 0)
 
+/* ---- statistics over a context's life ---- */
+/* Counters the library's areas keep in the context (zero at creation); each area owns a range
+ * (mech: [0, CBM_SOLVE_STAGE_COUNT), solves by converged stage). */
+#define CBM__CONTEXT_COUNTERS 16
+size_t *cbm__context_counters(cbm_context *ctx);
+const size_t *cbm__context_counters_read(const cbm_context *ctx);
+
 /* ---- arena: scratch memory released all at once ---- */
 typedef struct cbm__arena_block cbm__arena_block;
 typedef struct cbm__arena {

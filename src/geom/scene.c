@@ -395,6 +395,8 @@ cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 
     if (!nrm) {
         /* area-weighted vertex normals */
         for (size_t t = 0; t < ntri; t++) {
+            /* ntri > 0 implies nverts > 0 and pos set (checked above) */
+            // NOLINTNEXTLINE(clang-analyzer-core.NullDereference)
             cbm_vec3 a = pos[tri[3 * t]], b = pos[tri[3 * t + 1]], c = pos[tri[3 * t + 2]];
             cbm_vec3 fn = v3_cross(v3_sub(b, a), v3_sub(c, a));
             for (int k = 0; k < 3; k++) {

@@ -535,7 +535,7 @@ static cbm_status finish(cbm_animation *a, size_t *root, long *anim_input, size_
     float *buf = cbm__alloc(ctx, 3 * nf * sizeof *buf);
     if (!buf)
         return CBM_E_NOMEM;
-    size_t id;
+    size_t id = 0;
     for (size_t f = 0; f < nf; f++)
         buf[f] = (float)(a->o.frame_time * (double)f);
     st = add_accessor(g, buf, nf, 1, GL_FLOAT, 0, true, &id);
@@ -580,17 +580,23 @@ cbm_status cbm_animation_write(cbm_animation *a, const char *path)
             st = cbm_out_open(ctx, path, &out);
             if (st == CBM_OK) {
                 uint8_t h[12];
+                /* the 4-byte magic, not a string */
+                // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
                 memcpy(h, "glTF", 4);
                 le32(h + 4, 2);
                 le32(h + 8, (uint32_t)total);
                 cbm_out_write(out, h, 12);
                 le32(h, (uint32_t)jpad);
+                /* a 4-byte chunk type, not a string */
+                // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
                 memcpy(h + 4, "JSON", 4);
                 cbm_out_write(out, h, 8);
                 cbm_out_write(out, text, tlen);
                 cbm_out_write(out, "   ", jpad - tlen);
                 if (bpad) {
                     le32(h, (uint32_t)bpad);
+                    /* a 4-byte chunk type, not a string */
+                    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
                     memcpy(h + 4, "BIN\0", 4);
                     cbm_out_write(out, h, 8);
                     cbm_out_write(out, g->bin.data, g->bin.len);
@@ -620,6 +626,8 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
         copy.frame_time = 1.0; /* unused without animation */
     cbm_animation *a;
     CBM_TRY(cbm_animation_create(ctx, &copy, &a));
+    /* cbm_animation_create set a (CBM_TRY returned otherwise) */
+    // NOLINTNEXTLINE(clang-analyzer-core.NullDereference)
     a->animated = anim;
     cbm_status st = CBM_OK;
     size_t nf = anim ? o->frame_count : 1;

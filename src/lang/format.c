@@ -207,7 +207,7 @@ void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args,
         for (size_t i = 0; i + 1 < len && sl < sizeof spec - 4; i++)
             if (!strchr("hlLzjt", q[1 + i]))
                 spec[sl++] = q[1 + i];
-        int kind = kind_of(conv);
+        int kind = (unsigned char)kind_of(conv); /* a small kind code, never negative */
         if (kind == CBM__FMT_INT || kind == CBM__FMT_UINT) {
             spec[sl++] = 'l';
             spec[sl++] = 'l';

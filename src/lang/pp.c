@@ -52,7 +52,11 @@ static void sb_put(pp_state *st, sbuf *b, const char *s, size_t n)
         st->status = CBM_E_NOMEM;
         return;
     }
-    memcpy(b->data + b->len, s, n);
+    if (n > 0) { /* s may be NULL then (memcpy wants valid pointers even for 0 bytes) */
+        /* reserved above: b->data is set */
+        // NOLINTNEXTLINE(clang-analyzer-core.NonNullParamChecker)
+        memcpy(b->data + b->len, s, n);
+    }
     b->len += n;
     b->data[b->len] = 0;
 }

@@ -528,6 +528,8 @@ static void release_range(const release *r, void *base, size_t used, size_t *don
     uintptr_t end = (b + used) / r->page * r->page;
     if (base == NULL || end <= start)
         return;
+    /* page-aligned address computed as an integer */
+    // NOLINTNEXTLINE(performance-no-int-to-ptr)
     if (madvise((void *)start, end - start, MADV_DONTNEED) == 0)
         *done = end - b;
 #else

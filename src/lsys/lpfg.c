@@ -1589,11 +1589,10 @@ static int succ_list(lc *L, lpat *p)
     p->first = (int32_t)lp->sms.len;
     p->n = 0;
     for (;;) {
-        size_t pos = L->c->pos;
         size_t n = ident(L);
         if (!n)
             break;
-        pos = L->c->pos;
+        size_t pos = L->c->pos;
         int m = find_mod(lp, L->t + pos, n);
         if (m < 0) {
             cbm__cerr(L->c, pos, "unknown module '%.*s' (declare it with `module`)", (int)n,
@@ -2737,6 +2736,8 @@ static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
                 rt_error(lp, CBM_E_RUNTIME, "integer division by zero");
                 return 0;
             }
+            /* C integer division, as the L+C dialect means it */
+            // NOLINTNEXTLINE(bugprone-integer-division)
             return (double)(cbm__to_ll(a) / d);
         }
         r = a / b;

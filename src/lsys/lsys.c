@@ -197,6 +197,10 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     size_t off = 0;
     for (size_t i = 0; i < ls->comp.arrays.len; i++) {
         cbm__array *a = &ls->comp.arrays.data[i];
+        if (a->count == 0) /* array_init may be NULL (nothing to hold) */
+            continue;
+        /* count > 0 here, so array_init (checked above) is set */
+        // NOLINTNEXTLINE(clang-analyzer-core.NonNullParamChecker)
         memcpy(ls->array_init + off, a->data, a->count * sizeof(double));
         off += a->count;
     }

@@ -15,17 +15,19 @@ typedef struct cbm__outer {
     double a, b, mor;
 } cbm__outer;
 
-/* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors. */
+/* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors, all
+ * carved from one arena block (solve_common.c, "workspace"). */
 typedef struct cbm__mech_work {
-    size_t cap;     /* segments the arrays below hold */
-    int krylov_cap; /* Krylov basis vectors allocated (m + 1), 0 = none */
-    double *dual;   /* length over which joint i bends, m */
-    cbm_vec3 *cj;   /* joint rigidity (C_H, C_L, C_U), N m^2 */
-    cbm_vec3 *rj;   /* joint rest rotation rate, local, rad/m */
-    cbm_vec3 *wown; /* own weight of the segment (world, N), times the load scale */
-    double *lever;  /* distance from the proximal node to where wown acts, m */
-    cbm_vec3 *ftip; /* point-mass weight + tip force, world, N (scaled) */
-    cbm_vec3 *mtip; /* tip moment, world, N m (scaled) */
+    cbm__arena arena; /* holds every array below in its one block */
+    size_t cap;       /* segments the arrays below hold */
+    int krylov_cap;   /* Krylov basis vectors allocated (m + 1), 0 = none */
+    double *dual;     /* length over which joint i bends, m */
+    cbm_vec3 *cj;     /* joint rigidity (C_H, C_L, C_U), N m^2 */
+    cbm_vec3 *rj;     /* joint rest rotation rate, local, rad/m */
+    cbm_vec3 *wown;   /* own weight of the segment (world, N), times the load scale */
+    double *lever;    /* distance from the proximal node to where wown acts, m */
+    cbm_vec3 *ftip;   /* point-mass weight + tip force, world, N (scaled) */
+    cbm_vec3 *mtip;   /* tip moment, world, N m (scaled) */
     /* Newton-Krylov */
     cbm_vec3 *res;    /* residual C (Omega - rest) - M_local */
     cbm_vec3 *step;   /* Newton step */

@@ -77,139 +77,123 @@
 
 #include <math.h>
 
-/* ---- workspace ---- */
+/* ---- workspace ----
+ * Every array of cbm__mech_work lives in one block of the plant's arena (core/arena.c): the
+ * layout below computes the block's size, one allocation takes it, and the arrays are carved
+ * from it in a fixed order. The block is replaced only when the plant outgrows it (more
+ * segments, a larger Krylov dimension, a ground appearing under a fast solve), never inside a
+ * solve's iteration; its contents do not outlive a solve (the state is Omega, in the plant). */
 
+/* the joint arrays: one element per segment */
 #define WORK_ARRAYS(X)                                                                             \
     X(dual)                                                                                        \
     X(cj)                                                                                          \
     X(rj)                                                                                          \
     X(wown)                                                                                        \
     X(lever) X(ftip) X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp)
+/* the tree factorisation: 9 doubles per segment each (with a Krylov workspace) */
+#define TREE_ARRAYS(X) X(fdinv) X(fq) X(fa) X(fwad) X(fw)
+/* the tree factorisation with ground contact: 9 doubles per segment each (fcap segments) */
+#define GROUND_ARRAYS(X) X(fgam) X(flam) X(fxi) X(fp) X(fzad)
+
+static size_t round16(size_t n)
+{
+    n = (n + 15u) & ~(size_t)15u;
+    return n ? n : 16; /* the arena's rounding (an empty request takes 16 bytes) */
+}
+
+/* Sizes of the arrays for cap segments, kc Krylov vectors (0 = none) and fcap segments with
+ * ground contact (0 = none), in carving order; *count receives their number. The arena rounds
+ * each to 16 bytes; the sum is the block. */
+typedef struct work_shape {
+    size_t cap, fcap;
+    int kc;
+} work_shape;
+
+static size_t work_bytes(work_shape sh)
+{
+    const cbm__mech_work *w = NULL;
+    size_t total = 0;
+#define SIZE(f) total += round16(sh.cap * sizeof *w->f);
+    WORK_ARRAYS(SIZE)
+#undef SIZE
+    if (sh.kc > 0) {
+        total += 2 * round16((size_t)sh.kc * sh.cap * sizeof(cbm_vec3));        /* basis, zbasis */
+        total += round16((size_t)sh.kc * (size_t)(sh.kc + 3) * sizeof(double)); /* hess */
+        total += 5 * round16(9 * sh.cap * sizeof(double));                      /* TREE_ARRAYS */
+    }
+    if (sh.fcap > 0)
+        total += 5 * round16(9 * sh.fcap * sizeof(double)) + round16(sh.fcap); /* + fact */
+    return total;
+}
+
+/* Carves the arrays from the arena, whose first block holds work_bytes(sh): no allocation
+ * beyond that block. */
+static void work_carve(cbm__mech_work *w, work_shape sh)
+{
+    cbm__arena *a = &w->arena;
+#define CARVE(f) w->f = cbm__arena_alloc(a, sh.cap * sizeof *w->f);
+    WORK_ARRAYS(CARVE)
+#undef CARVE
+    if (sh.kc > 0) {
+        w->basis = cbm__arena_alloc(a, (size_t)sh.kc * sh.cap * sizeof(cbm_vec3));
+        w->zbasis = cbm__arena_alloc(a, (size_t)sh.kc * sh.cap * sizeof(cbm_vec3));
+        w->hess = cbm__arena_alloc(a, (size_t)sh.kc * (size_t)(sh.kc + 3) * sizeof(double));
+#define CARVE9(f) w->f = cbm__arena_alloc(a, 9 * sh.cap * sizeof(double));
+        TREE_ARRAYS(CARVE9)
+#undef CARVE9
+    }
+    if (sh.fcap > 0) {
+#define CARVE9(f) w->f = cbm__arena_alloc(a, 9 * sh.fcap * sizeof(double));
+        GROUND_ARRAYS(CARVE9)
+#undef CARVE9
+        w->fact = cbm__arena_alloc(a, sh.fcap);
+    }
+    w->cap = sh.cap;
+    w->krylov_cap = sh.kc;
+    w->fcap = sh.fcap;
+}
 
 void cbm__mech_work_free(cbm_plant *p)
 {
-    cbm__mech_work *w = &p->work;
-#define FREE(f) cbm__free(p->ctx, w->f, w->cap * sizeof *w->f);
-    WORK_ARRAYS(FREE)
-#undef FREE
-    cbm__free(p->ctx, w->basis, (size_t)w->krylov_cap * w->cap * sizeof(cbm_vec3));
-    cbm__free(p->ctx, w->zbasis, (size_t)w->krylov_cap * w->cap * sizeof(cbm_vec3));
-    if (w->krylov_cap > 0) {
-        cbm__free(p->ctx, w->fdinv, 9 * w->cap * sizeof(double));
-        cbm__free(p->ctx, w->fq, 9 * w->cap * sizeof(double));
-        cbm__free(p->ctx, w->fa, 9 * w->cap * sizeof(double));
-        cbm__free(p->ctx, w->fwad, 9 * w->cap * sizeof(double));
-        cbm__free(p->ctx, w->fw, 9 * w->cap * sizeof(double));
-    }
-    double *fc[5] = {w->fgam, w->flam, w->fxi, w->fp, w->fzad};
-    for (int k = 0; k < 5; k++)
-        cbm__free(p->ctx, fc[k], 9 * w->fcap * sizeof(double));
-    cbm__free(p->ctx, w->fact, w->fcap);
-    int m = w->krylov_cap > 0 ? w->krylov_cap - 1 : 0;
-    cbm__free(p->ctx, w->hess, (size_t)(m + 1) * (size_t)(m + 4) * sizeof(double));
-    memset(w, 0, sizeof *w);
+    cbm__arena_destroy(&p->work.arena);
+    memset(&p->work, 0, sizeof p->work);
 }
 
-/* The arrays of the tree factorisation with ground contact, for a plant with a ground and a
- * Krylov workspace (all or none). */
-static cbm_status contact_reserve(cbm_plant *p)
+/* Ensures room for the plant's segments and krylov_dim (0: keep what is held); the tree
+ * factorisation's ground arrays come with a Krylov workspace once the plant has a ground. */
+static cbm_status work_reserve(cbm_plant *p, int krylov_dim)
 {
     cbm__mech_work *w = &p->work;
-    if (!p->ground || w->krylov_cap == 0 || w->fcap >= w->cap)
+    work_shape sh = {w->cap, w->fcap, w->krylov_cap};
+    int kc = krylov_dim > 0 ? krylov_dim + 1 : 0;
+    if (p->n > sh.cap)
+        sh.cap = p->n;
+    if (kc > sh.kc)
+        sh.kc = kc;
+    if (p->ground && sh.kc > 0)
+        sh.fcap = sh.cap;
+    else if (sh.fcap > 0)
+        sh.fcap = sh.cap;
+    if (sh.cap == w->cap && sh.kc == w->krylov_cap && sh.fcap == w->fcap && w->arena.head)
         return CBM_OK;
-    size_t cap = w->cap, sz = 9 * cap * sizeof(double);
-    double *fc[5];
-    uint8_t *act = cbm__alloc(p->ctx, cap);
-    bool ok = act != NULL;
-    for (int k = 0; k < 5; k++) {
-        fc[k] = cbm__alloc(p->ctx, sz);
-        ok = ok && fc[k];
-    }
-    if (!ok) {
-        for (int k = 0; k < 5; k++)
-            if (fc[k])
-                cbm__free(p->ctx, fc[k], sz);
-        if (act)
-            cbm__free(p->ctx, act, cap);
+    cbm_context *ctx = p->ctx;
+    cbm__mech_work_free(p);
+    size_t bytes = work_bytes(sh);
+    cbm__arena_init(&w->arena, ctx, bytes);
+    if (!cbm__arena_alloc(&w->arena, bytes)) { /* the one allocation: the whole block */
+        memset(w, 0, sizeof *w);
         return CBM_E_NOMEM;
     }
-    double *old[5] = {w->fgam, w->flam, w->fxi, w->fp, w->fzad};
-    for (int k = 0; k < 5; k++)
-        cbm__free(p->ctx, old[k], 9 * w->fcap * sizeof(double));
-    cbm__free(p->ctx, w->fact, w->fcap);
-    w->fgam = fc[0];
-    w->flam = fc[1];
-    w->fxi = fc[2];
-    w->fp = fc[3];
-    w->fzad = fc[4];
-    w->fact = act;
-    w->fcap = cap;
+    cbm__arena_reset(&w->arena); /* keeps the block, empty, for the carving */
+    work_carve(w, sh);
     return CBM_OK;
 }
-
-static cbm_status work_reserve(cbm_plant *p, int krylov_dim);
 
 cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 {
     CBM_TRY(work_reserve(p, krylov_dim));
-    CBM_TRY(cbm__mech_pairs_reserve(p));
-    return contact_reserve(p);
-}
-
-static cbm_status work_reserve(cbm_plant *p, int krylov_dim)
-{
-    cbm__mech_work *w = &p->work;
-    int kc = krylov_dim > 0 ? krylov_dim + 1 : 0;
-    if (p->n <= w->cap && kc <= w->krylov_cap)
-        return CBM_OK;
-    size_t cap = p->n > w->cap ? p->n : w->cap;
-    if (kc < w->krylov_cap)
-        kc = w->krylov_cap;
-    cbm__mech_work_free(p);
-    cbm__mech_work nw;
-    memset(&nw, 0, sizeof nw);
-    bool ok = true;
-#define ALLOC(f)                                                                                   \
-    nw.f = cbm__alloc(p->ctx, cap * sizeof *nw.f);                                                 \
-    ok = ok && nw.f;
-    WORK_ARRAYS(ALLOC)
-#undef ALLOC
-    if (kc > 0) {
-        nw.basis = cbm__alloc(p->ctx, (size_t)kc * cap * sizeof(cbm_vec3));
-        nw.zbasis = cbm__alloc(p->ctx, (size_t)kc * cap * sizeof(cbm_vec3));
-        nw.hess = cbm__alloc(p->ctx, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
-        nw.fdinv = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
-        nw.fq = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
-        nw.fa = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
-        nw.fwad = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
-        nw.fw = cbm__alloc(p->ctx, 9 * cap * sizeof(double));
-        ok = ok && nw.basis && nw.zbasis && nw.hess && nw.fdinv && nw.fq && nw.fa && nw.fwad &&
-             nw.fw;
-    }
-    nw.cap = cap;
-    nw.krylov_cap = kc;
-    p->work = nw;
-    if (!ok) {
-        /* free what was obtained (NULL entries free nothing) */
-#define FREE(f)                                                                                    \
-    if (nw.f)                                                                                      \
-        cbm__free(p->ctx, nw.f, cap * sizeof *nw.f);
-        WORK_ARRAYS(FREE)
-#undef FREE
-        if (nw.basis)
-            cbm__free(p->ctx, nw.basis, (size_t)kc * cap * sizeof(cbm_vec3));
-        if (nw.zbasis)
-            cbm__free(p->ctx, nw.zbasis, (size_t)kc * cap * sizeof(cbm_vec3));
-        double *fs[5] = {nw.fdinv, nw.fq, nw.fa, nw.fwad, nw.fw};
-        for (int k = 0; k < 5; k++)
-            if (fs[k])
-                cbm__free(p->ctx, fs[k], 9 * cap * sizeof(double));
-        if (nw.hess)
-            cbm__free(p->ctx, nw.hess, (size_t)kc * (size_t)(kc + 3) * sizeof(double));
-        memset(&p->work, 0, sizeof p->work);
-        return CBM_E_NOMEM;
-    }
-    return CBM_OK;
+    return cbm__mech_pairs_reserve(p);
 }
 
 /* ---- prepare ---- */
@@ -561,6 +545,25 @@ cbm_solve_def cbm_solve_def_default(void)
     return d;
 }
 
+const char *cbm_solve_stage_name(cbm_solve_stage stage)
+{
+    static const char *const names[CBM_SOLVE_STAGE_COUNT] = {
+        [CBM_SOLVE_STAGE_NONE] = "none",           [CBM_SOLVE_STAGE_NEWTON] = "newton",
+        [CBM_SOLVE_STAGE_TRANSIENT] = "transient", [CBM_SOLVE_STAGE_MASS_PATH] = "mass-path",
+        [CBM_SOLVE_STAGE_LOAD_PATH] = "load-path", [CBM_SOLVE_STAGE_RELAX_BURSTS] = "relax-bursts",
+        [CBM_SOLVE_STAGE_STABILITY] = "stability", [CBM_SOLVE_STAGE_RELAX] = "relax",
+    };
+    if ((unsigned)stage >= (unsigned)CBM_SOLVE_STAGE_COUNT)
+        return "unknown";
+    return names[stage];
+}
+
+void cbm_solve_stage_counts(const cbm_context *ctx, size_t counts[CBM_SOLVE_STAGE_COUNT])
+{
+    _Static_assert(CBM_SOLVE_STAGE_COUNT <= CBM__CONTEXT_COUNTERS, "room for the stage counts");
+    memcpy(counts, cbm__context_counters_read(ctx), CBM_SOLVE_STAGE_COUNT * sizeof *counts);
+}
+
 cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
 {
     if (!p)
@@ -570,7 +573,7 @@ cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     cbm__mech_forward(p);
-    double mmax;
+    double mmax = 0.0;
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     if (p->contacts.npairs > p->contacts.pcap) {
         /* more touching organ pairs than room: grow it (outside any iteration) and redo */
@@ -638,6 +641,7 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     p->mass_path = 1.0;
     if (s == CBM_OK) /* the point masses this Omega balances */
         memcpy(p->pmass0, p->pmass, p->n * sizeof *p->pmass0);
+    cbm__context_counters(p->ctx)[s == CBM_OK ? st.stage : CBM_SOLVE_STAGE_NONE]++;
     if (stats)
         *stats = st;
     return s;

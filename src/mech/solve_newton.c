@@ -2,6 +2,43 @@
  *     R(Omega) = C (Omega - rest) - M_local(Omega) = 0      (3 unknowns per segment),
  * with the same forward and backward passes as the relaxation (solve_common.c).
  *
+ * THE PIPELINE. cbm__mech_solve_newton runs named stages over one workspace (the plant's
+ * cbm__mech_work, one arena block, reserved before the solve: no stage allocates). Each stage
+ * starts from the state the one before left and returns DONE (converged at the full load),
+ * LARGE (the first Newton step was beyond the trust radius: far from equilibrium), STALL,
+ * BUDGET (the pass budget ran out) or NONFINITE. A stage runs only while the result is LARGE or
+ * STALL; the one that returns DONE is reported in cbm_solve_stats.stage (enum cbm_solve_stage,
+ * named by cbm_solve_stage_name), and the context counts solves by that stage.
+ *
+ *   stage           runs when                              why
+ *   newton          always                                 near equilibrium (small loads, or a
+ *                                                          warm start under small changes)
+ *                                                          Newton converges quadratically
+ *   transient       warm start, tree preconditioner, no    follows the creep of the plant under
+ *                   ground, warm_path TRANSIENT (default)  its new loads and passes limit points
+ *                                                          (snap-through) in tens of steps
+ *   mass-path       warm start whose point masses changed  the quasi-static loading path from
+ *                   (warm_path MASS_PATH, or after a       the current equilibrium, point
+ *                   stalled transient, which restores the  masses from the balanced ones to the
+ *                   start state)                           new ones
+ *   load-path       still unresolved (cold starts far      continuation of every load from the
+ *                   from equilibrium, stalls above)        rest state (exact at lambda = 0): the
+ *                                                          equilibrium on the loading path
+ *   relax-bursts    the load path stalled at small         the seeds' relaxation passes between
+ *                   increments                             Newton attempts, last resort
+ *   (leave_consistent: after a failure, a state evaluated at the full load for the caller)
+ *   stability       converged, tree preconditioner         Newton also converges to unstable
+ *                                                          equilibria; push off them along the
+ *                                                          soft mode and solve again
+ *
+ * The stages share newton_level (Newton iterations at one load level: tree_step,
+ * fgmres_trust, line_search, plain_step_retry), transient() and from_masses(). The order is
+ * that of the cost and of the physics: a stage that follows a loading path is taken only when
+ * the direct one failed, and the paths from the current state (transient, masses) before the
+ * one from rest (which forgets the plant's history, e.g. a snapped-through twig).
+ *
+ * THE METHODS.
+ *
  * - Linear solves: restarted flexible GMRES (Saad & Schultz 1986; Saad 1993), modified
  *   Gram-Schmidt, Givens rotations, RIGHT-preconditioned, either by the elastic stiffness
  *   S = diag(C) (J S^-1 = I - K S^-1, K the load stiffness: close to the identity for moderate
@@ -90,6 +127,12 @@ typedef struct nk {
     bool plain;        /* take the plain Newton step when a shifted one does not descend */
     bool conservative; /* no tip moments: the loads have a potential energy */
     bool handover;     /* warm start with the transient path: hand over early when Newton crawls */
+    /* the pipeline (see the top of the file) */
+    double tol;            /* the tolerance of the solve */
+    int m;                 /* Krylov dimension */
+    bool transient_path;   /* the pseudo-transient stage is on the pipeline */
+    cbm_solve_stage stage; /* the stage running (the one that converged once r is NK_DONE) */
+    const char *why;       /* why the solve failed, where a stage knows it */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -233,7 +276,10 @@ static bool gmres(nk *k, double eta, int m)
     return true;
 }
 
-typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE } nk_result;
+/* What an iteration or a stage ended with. NK_LARGE: the first Newton step was larger than the
+ * trust radius (far from equilibrium: a continuation stage follows); NK_CONTINUE (internal to
+ * one Newton iteration): the step is ready, go on. */
+typedef enum { NK_DONE, NK_STALL, NK_BUDGET, NK_NONFINITE, NK_LARGE, NK_CONTINUE } nk_result;
 
 /* The largest world rotation of a frame under the full step of the last tree solve (its
  * forward sweep left the rotations in work.dth), rad. */
@@ -312,13 +358,124 @@ static nk_result line_search(nk *k, double lam, double *out)
     return NK_STALL;
 }
 
-/* Newton iterations at the current load level until rel < tol. */
-static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
+/* The trust region on rotations: the step length that limits the largest frame rotation of the
+ * full step (the forward sweep of the last tree solve or tangent pass left it in work.dth) to
+ * max_turn radians (the linearisation of a large rotation overshoots). */
+static double trust_length(nk *k, int it)
+{
+    double tmax = largest_turn(k->p);
+    if (it == 0)
+        k->first_turn = tmax;
+    return tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+}
+
+/* The step of one Newton iteration by the tree factorisation (work.step), with the
+ * Levenberg-Marquardt shift where the configuration is unstable. *direct: the factorisation was
+ * exact (no singular pivot, no touching organ pairs), so the step is the Newton step and needs
+ * no FGMRES; *shifted: it is the step of J + mu S; *lam0: the trust region's length.
+ * NK_CONTINUE, or NK_BUDGET, or NK_LARGE (first step beyond the trust radius, abort_large). */
+static nk_result tree_step(nk *k, int it, bool abort_large, bool *direct, bool *shifted,
+                           double *lam0)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
     size_t n3 = k->n3;
     double *step = (double *)w->step;
+    /* factor and solve J step = -res in one pass; trusted when no pivot was singular (the
+     * factorisation is then exact and GMRES would stop after one iteration with this very
+     * step); otherwise the factorisation preconditions FGMRES */
+    for (size_t q = 0; q < n3; q++)
+        step[q] = -((const double *)w->res)[q];
+    size_t nonpd = 0;
+    size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+    k->st->passes++;
+    /* from a warm start, a plain Newton step that descends the potential energy is taken even
+     * where the pivot test fires: the test reads the symmetric part of pivots of the
+     * unsymmetric Newton matrix (dead loads, large joint rotations), and it also fires at the
+     * stable equilibrium of a soft hanging chain or a twig that snapped through, where the
+     * shifted steps converge only linearly (a rate of about 0.8 per step). A step that descends
+     * the energy heads for a minimum, not for a balanced unstable state; the check after
+     * convergence still applies. */
+    if (nonpd > 0 && sing == 0 && k->plain && k->conservative &&
+        energy_slope(k, (const double *)w->tmp) < 0.0)
+        nonpd = 0;
+    /* an unstable configuration: Newton would head for the unstable equilibrium; shift by mu S
+     * (Levenberg-Marquardt) until every pivot is positive definite, which gives a descent
+     * towards a stable one */
+    double mu = 0.0;
+    /* start a quarter below the shift the last step needed (Levenberg-Marquardt memory: an
+     * unstable region usually persists over several steps) */
+    double m0 = k->mu_hint > 0.4 ? 0.25 * k->mu_hint : 0.1;
+    for (double m1 = m0; nonpd > 0 && m1 < 1e8; m1 *= 4.0) {
+        if (k->st->passes + 3 >= k->max_passes)
+            return NK_BUDGET;
+        mu = m1;
+        k->mu = mu;
+        sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
+        k->st->passes++;
+    }
+    memcpy(step, w->tmp, n3 * sizeof *step);
+    /* touching organ pairs couple two paths, which the factorisation does not hold: it then
+     * preconditions FGMRES (contact.c) */
+    *direct = sing == 0 && !cbm__mech_pairs_active(p);
+    *shifted = mu > 0.0 && *direct;
+    if (mu > 0.0)
+        k->mu_hint = mu;
+    *lam0 = trust_length(k, it);
+    if (it == 0 && abort_large && *lam0 < 1.0 && (*direct || !cbm__mech_pairs_active(p)))
+        return NK_LARGE; /* far from equilibrium: follow the load path instead */
+    return NK_CONTINUE;
+}
+
+/* The trust region from an FGMRES step with touching organ pairs (the factorisation's own step
+ * ignores what it lacks): one tangent pass. NK_CONTINUE or NK_LARGE as in tree_step. */
+static nk_result fgmres_trust(nk *k, int it, bool abort_large, double *lam0)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_jvp(p, p->work.step, p->work.tmp);
+    k->st->passes++;
+    *lam0 = trust_length(k, it);
+    if (it == 0 && abort_large && *lam0 < 1.0)
+        return NK_LARGE;
+    return NK_CONTINUE;
+}
+
+/* The plain-step retry after a shifted step found no decrease from a warm start. The pivot test
+ * is a sign of instability at an equilibrium only: away from one (a warm start under new loads)
+ * the load stiffness of dead loads is not symmetric, the test also fires where a stable
+ * equilibrium is near, and the shifted step need not descend the merit (its slope is known:
+ * J d = -R - mu C d). The plain Newton step is tried instead; the stability check after
+ * convergence handles an unstable equilibrium. (From rest the stall hands over to the load
+ * continuation, the loading path.) Returns the line search's result, *lam0 and *lam updated. */
+static nk_result plain_step_retry(nk *k, double eta, int m, double *lam0, double *lam)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n3 = k->n3;
+    double *step = (double *)w->step;
+    if (k->st->passes + 3 >= k->max_passes)
+        return NK_BUDGET;
+    for (size_t q = 0; q < n3; q++)
+        step[q] = -((const double *)w->res)[q];
+    size_t nonpd = 0;
+    size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+    k->st->passes++;
+    memcpy(step, w->tmp, n3 * sizeof *step);
+    if (sing == 0 && !cbm__mech_pairs_active(p)) {
+        double tmax = largest_turn(p);
+        *lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+    } else if (!gmres(k, eta, m))
+        return NK_BUDGET;
+    *lam = *lam0;
+    return line_search(k, *lam0, lam);
+}
+
+/* Newton iterations at the current load level until rel < tol: the step (tree_step, or FGMRES),
+ * the trust region, the line search (with plain_step_retry), the forcing term. */
+static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
+{
+    cbm_plant *p = k->p;
+    const double *step = (const double *)p->work.step;
     if (!evaluate(k))
         return NK_NONFINITE;
     double eta = 0.1, prev = k->norm;
@@ -330,98 +487,22 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
             return NK_BUDGET;
         bool direct = false, shifted = false;
         double lam0 = 1.0;
-        if (k->tree) {
-            /* factor and solve J step = -res in one pass; trusted when no pivot was singular
-             * (the factorisation is then exact and GMRES would stop after one iteration with
-             * this very step); otherwise the factorisation preconditions FGMRES */
-            for (size_t q = 0; q < n3; q++)
-                step[q] = -((const double *)w->res)[q];
-            size_t nonpd = 0;
-            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
-            k->st->passes++;
-            /* from a warm start, a plain Newton step that descends the potential energy is
-             * taken even where the pivot test fires: the test reads the symmetric part of
-             * pivots of the unsymmetric Newton matrix (dead loads, large joint rotations), and
-             * it also fires at the stable equilibrium of a soft hanging chain or a twig that
-             * snapped through, where the shifted steps converge only linearly (a rate of
-             * about 0.8 per step). A step that descends the energy heads for a minimum, not
-             * for a balanced unstable state; the check after convergence still applies. */
-            if (nonpd > 0 && sing == 0 && k->plain && k->conservative &&
-                energy_slope(k, (const double *)w->tmp) < 0.0)
-                nonpd = 0;
-            /* an unstable configuration: Newton would head for the unstable equilibrium;
-             * shift by mu S (Levenberg-Marquardt) until every pivot is positive definite,
-             * which gives a descent towards a stable one */
-            double mu = 0.0;
-            /* start a quarter below the shift the last step needed (Levenberg-Marquardt
-             * memory: an unstable region usually persists over several steps) */
-            double m0 = k->mu_hint > 0.4 ? 0.25 * k->mu_hint : 0.1;
-            for (double m1 = m0; nonpd > 0 && m1 < 1e8; m1 *= 4.0) {
-                if (k->st->passes + 3 >= k->max_passes)
-                    return NK_BUDGET;
-                mu = m1;
-                k->mu = mu;
-                sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
-                k->st->passes++;
-            }
-            memcpy(step, w->tmp, n3 * sizeof *step);
-            /* touching organ pairs couple two paths, which the factorisation does not hold:
-             * it then preconditions FGMRES (contact.c) */
-            direct = sing == 0 && !cbm__mech_pairs_active(p);
-            shifted = mu > 0.0 && direct;
-            if (mu > 0.0)
-                k->mu_hint = mu;
-            /* trust region on rotations: the forward sweep of the solve left the world
-             * rotation of every frame under the full step in work.dth; limit the largest to
-             * max_turn radians (the linearisation of a large rotation overshoots) */
-            double tmax = largest_turn(p);
-            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
-            if (it == 0)
-                k->first_turn = tmax;
-            if (it == 0 && abort_large && lam0 < 1.0 && (direct || !cbm__mech_pairs_active(p)))
-                return NK_LARGE; /* far from equilibrium: follow the load path instead */
-        }
+        nk_result r = NK_CONTINUE;
+        if (k->tree)
+            r = tree_step(k, it, abort_large, &direct, &shifted, &lam0);
+        if (r != NK_CONTINUE)
+            return r;
         if (!direct && !gmres(k, eta, m))
             return NK_BUDGET;
-        if (!direct && k->tree && cbm__mech_pairs_active(p)) {
-            /* the trust region from the FGMRES step itself: the factorisation's own step
-             * ignores what it lacks (touching organ pairs), one tangent pass */
-            cbm__mech_jvp(p, w->step, w->tmp);
-            k->st->passes++;
-            double tmax = largest_turn(p);
-            lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
-            if (it == 0)
-                k->first_turn = tmax;
-            if (it == 0 && abort_large && lam0 < 1.0)
-                return NK_LARGE;
-        }
+        if (!direct && k->tree && cbm__mech_pairs_active(p))
+            r = fgmres_trust(k, it, abort_large, &lam0);
+        if (r != NK_CONTINUE)
+            return r;
         k->st->newton_steps++;
         double lam = lam0;
         nk_result ls = line_search(k, lam0, &lam);
-        if (ls == NK_STALL && shifted && k->plain && !shifted_descends(k, step, k->mu)) {
-            /* the pivot test is a sign of instability at an equilibrium only: away from one
-             * (a warm start under new loads) the load stiffness of dead loads is not
-             * symmetric, the test also fires where a stable equilibrium is near, and the
-             * shifted step need not descend the merit (its slope is known: J d = -R - mu C d).
-             * When such a step finds no decrease from a warm start, the plain Newton step is
-             * tried; the stability check after convergence handles an unstable equilibrium.
-             * From rest the stall hands over to the load continuation (the loading path). */
-            if (k->st->passes + 3 >= k->max_passes)
-                return NK_BUDGET;
-            for (size_t q = 0; q < n3; q++)
-                step[q] = -((const double *)w->res)[q];
-            size_t nonpd = 0;
-            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
-            k->st->passes++;
-            memcpy(step, w->tmp, n3 * sizeof *step);
-            if (sing == 0 && !cbm__mech_pairs_active(p)) {
-                double tmax = largest_turn(p);
-                lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
-            } else if (!gmres(k, eta, m))
-                return NK_BUDGET;
-            lam = lam0;
-            ls = line_search(k, lam0, &lam);
-        }
+        if (ls == NK_STALL && shifted && k->plain && !shifted_descends(k, step, k->mu))
+            ls = plain_step_retry(k, eta, m, &lam0, &lam);
         if (ls != NK_DONE)
             return ls;
         /* the transient path takes over from a crawling Newton (it passes folds in tens of
@@ -573,6 +654,228 @@ static nk_result from_masses(nk *k, double tol, int m, double dl)
     return r;
 }
 
+/* ---- the stages (see the pipeline at the top of the file) ---- */
+
+static bool unresolved(nk_result r)
+{
+    return r == NK_LARGE || r == NK_STALL;
+}
+
+/* The first load increment of a continuation: the one that turns the largest frame by about
+ * max_turn when the full step was too large (NK_LARGE), else a quarter; in [1/64, 1/2]. */
+static double first_increment(const nk *k, nk_result r)
+{
+    double dl = r == NK_LARGE && k->first_turn > 0 ? k->max_turn / k->first_turn : 0.25;
+    return dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
+}
+
+/* Stage "newton": Newton at the full load from the start state (the rest state, or the last
+ * equilibrium on a warm start). With the tree factorisation it gives up at once when the first
+ * step is beyond the trust radius (NK_LARGE), and on the transient path it hands over early
+ * when the steps crawl. */
+static nk_result stage_newton(nk *k)
+{
+    cbm_plant *p = k->p;
+    k->stage = CBM_SOLVE_STAGE_NEWTON;
+    if (k->transient_path)
+        memcpy(p->work.start, p->omega, p->n * sizeof *p->work.start);
+    k->handover = k->transient_path;
+    nk_result r = newton_level(k, k->tol, k->m, k->tree);
+    k->handover = false;
+    return r;
+}
+
+/* Stage "transient": pseudo-transient continuation from the warm start (transient()). A stall
+ * restores the start state for the quasi-static stages. */
+static nk_result stage_transient(nk *k)
+{
+    cbm_plant *p = k->p;
+    k->stage = CBM_SOLVE_STAGE_TRANSIENT;
+    k->st->continuation_steps++;
+    nk_result r = transient(k, k->tol);
+    if (r == NK_STALL) /* the quasi-static paths below, from the start state */
+        memcpy(p->omega, p->work.start, p->n * sizeof *p->omega);
+    return r;
+}
+
+/* Stage "mass-path": continuation over the point masses from the warm start (from_masses()).
+ * A budget that ran out with passes to spare (the steps of one level) counts as a stall, so
+ * the load path may still try. */
+static nk_result stage_mass_path(nk *k, nk_result r)
+{
+    k->stage = CBM_SOLVE_STAGE_MASS_PATH;
+    r = from_masses(k, k->tol, k->m, first_increment(k, r));
+    if (r == NK_BUDGET && k->st->passes + 3 < k->max_passes)
+        r = NK_STALL;
+    return r;
+}
+
+/* Stage "load-path": load continuation from the rest state (lambda = 0 is exact there): the
+ * loads are scaled by lambda, the increment doubled after an easy level (<= 4 Newton steps) and
+ * halved after a stall; intermediate levels are solved to 1e-3. The equilibrium reached is the
+ * one on the loading path, as with the relaxation. */
+static nk_result stage_load_path(nk *k, nk_result r)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    cbm_solve_stats *st = k->st;
+    double tol = k->tol;
+    k->stage = CBM_SOLVE_STAGE_LOAD_PATH;
+    double done = 0.0;
+    double dl = first_increment(k, r);
+    for (size_t i = 0; i < p->n; i++)
+        w->save[i] = w->rj[i];
+    for (;;) {
+        double lam = done + dl < 1.0 ? done + dl : 1.0;
+        memcpy(p->omega, w->save, p->n * sizeof *p->omega);
+        p->load_scale = lam;
+        cbm__mech_prepare(p);
+        st->continuation_steps++;
+        size_t ns = st->newton_steps;
+        r = newton_level(k, lam < 1.0 ? (tol > 1e-3 ? tol : 1e-3) : tol, k->m, false);
+        if (r == NK_DONE) {
+            if (lam >= 1.0)
+                break;
+            done = lam;
+            memcpy(w->save, p->omega, p->n * sizeof *p->omega);
+            if (st->newton_steps - ns <= 4)
+                dl *= 2.0;
+        } else if (r == NK_STALL) {
+            dl *= 0.5;
+            if (dl < 1e-4) {
+                k->why = "Newton stalled even with small load steps";
+                break;
+            }
+        } else
+            break;
+    }
+    return r;
+}
+
+/* Stage "relax-bursts", the last resort: bursts of 25 relaxation passes (the seeds' iteration,
+ * alpha 0.1, halved when a burst does not help) between Newton attempts at the full load, from
+ * the furthest state the load path reached; at most 8 bursts. */
+static nk_result stage_relax_bursts(nk *k)
+{
+    cbm_plant *p = k->p;
+    cbm_solve_stats *st = k->st;
+    k->stage = CBM_SOLVE_STAGE_RELAX_BURSTS;
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    double ra = 0.1;
+    nk_result r = NK_STALL;
+    for (int burst = 0; r == NK_STALL && burst < 8; burst++) {
+        double before = k->norm;
+        for (int it = 0; it < 25 && st->passes + 2 < k->max_passes; it++) {
+            cbm__mech_forward(p);
+            double mm;
+            double rr = cbm__mech_backward(p, ra, NULL, &mm, NULL);
+            st->passes++;
+            if (!isfinite(rr))
+                break;
+        }
+        r = newton_level(k, k->tol, k->m, false);
+        if (r == NK_STALL && !(k->norm < before))
+            ra *= 0.5;
+        st->continuation_steps++;
+    }
+    return r;
+}
+
+/* After the quasi-static stages failed: a consistent state at the full load for the caller to
+ * read. */
+static nk_result leave_consistent(nk *k, nk_result r)
+{
+    k->p->load_scale = 1.0;
+    cbm__mech_prepare(k->p);
+    if (r != NK_NONFINITE && !evaluate(k))
+        r = NK_NONFINITE;
+    return r;
+}
+
+/* Stage "stability", after convergence with the tree factorisation: Newton converges to
+ * unstable equilibria too (a branch balanced upright). The unmodified factorisation is checked
+ * at the solution; where a pivot block is not positive definite, the joint is pushed along its
+ * soft mode and the level solved again with the modified factorisation, which descends to a
+ * stable equilibrium (up to 3 pushes). The converged stage becomes "stability" when a push
+ * ends at another equilibrium. */
+static nk_result stage_stability(nk *k)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    cbm_solve_stats *st = k->st;
+    nk_result r = NK_DONE;
+    for (int attempt = 0; attempt < 4; attempt++) {
+        size_t nonpd = 0;
+        cbm__mech_tree_factor(p, 0.0, &nonpd);
+        st->passes++;
+        st->unstable_joints = nonpd;
+        if (nonpd == 0 || attempt == 3 || st->passes + 4 >= k->max_passes)
+            break;
+        memcpy(w->save, p->omega, p->n * sizeof *w->save);
+        cbm__mech_tree_perturb_unstable(p, 0.05);
+        st->continuation_steps++;
+        r = newton_level(k, k->tol, k->m, false);
+        if (r != NK_DONE) {
+            /* no equilibrium found from the pushed state: keep the one found before */
+            memcpy(p->omega, w->save, p->n * sizeof *p->omega);
+            r = evaluate(k) ? NK_DONE : NK_NONFINITE;
+            break;
+        }
+        /* back at the same equilibrium (every joint within 1e-6 rad of it) after a push of
+         * 0.05 rad along the soft mode: the steps descend the energy there (plain ones only
+         * where they do), so this is a minimum along that mode and the pivot test misread the
+         * unsymmetric Newton matrix (large joint rotations under heavy dead loads) */
+        double back = 0.0;
+        for (size_t i = 0; i < p->n; i++) {
+            cbm_vec3 dv = v3_sub(p->omega[i], w->save[i]);
+            double a = w->dual[i] * fmax(fabs(dv.x), fmax(fabs(dv.y), fabs(dv.z)));
+            back = a > back ? a : back;
+        }
+        if (back < 1e-6) {
+            st->unstable_joints = 0;
+            break;
+        }
+        k->stage = CBM_SOLVE_STAGE_STABILITY;
+    }
+    return r;
+}
+
+/* The solve's status from the pipeline's result, with the reason of a failure. */
+static cbm_status finish(nk *k, nk_result r)
+{
+    cbm_plant *p = k->p;
+    cbm_solve_stats *st = k->st;
+    if (r == NK_NONFINITE)
+        return cbm__mech_report_nonfinite(p);
+    st->residual = k->rel;
+    if (r == NK_DONE) {
+        st->stage = k->stage;
+        return CBM_OK;
+    }
+    const char *why = k->why;
+    if (r == NK_BUDGET || st->passes + 4 >= k->max_passes)
+        why = "the pass budget ran out";
+    else if (!why && r == NK_STALL && st->continuation_steps == 1)
+        why = "Newton stalled";
+    else if (!why)
+        why = "Newton stalled; neither load continuation nor relaxation bursts reached the "
+              "tolerance";
+    return cbm__fail(p->ctx, CBM_E_NOT_CONVERGED,
+                     "fast solver: relative residual %.3g after %zu passes (tolerance %.3g): %s",
+                     k->rel, st->passes, k->tol, why);
+}
+
+/* Have the point masses changed since the last converged solve? */
+static bool masses_changed(const cbm_plant *p)
+{
+    for (size_t i = 0; i < p->n; i++)
+        if (p->pmass0[i] != p->pmass[i])
+            return true;
+    return false;
+}
+
+/* The pipeline (see the top of the file). */
 cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
                                   cbm_solve_stats *st)
 {
@@ -587,12 +890,11 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.conservative = true;
     for (size_t i = 0; i < p->n && k.conservative; i++)
         k.conservative = p->tipm[i].x == 0.0 && p->tipm[i].y == 0.0 && p->tipm[i].z == 0.0;
-    int m = def->krylov_dim;
-    double tol = def->tolerance;
+    k.m = def->krylov_dim;
+    k.tol = def->tolerance;
+    k.stage = CBM_SOLVE_STAGE_NONE;
     cbm__mech_work *w = &p->work;
-    const char *why = NULL; /* set where the cause is known; else decided at the end */
 
-    /* first try the full load from the starting Omega */
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     st->continuation_steps = 1;
@@ -604,143 +906,22 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
                   p->omega[i].z != w->rj[i].z;
     /* the transient path from a warm start (the factorisation solves J + sigma S; with ground
      * contact it lacks the contact stiffness) */
-    bool transient_path =
-        k.plain && k.tree && !p->ground && def->warm_path == CBM_MECH_WARM_TRANSIENT;
-    if (transient_path)
-        memcpy(w->start, p->omega, p->n * sizeof *w->start);
-    k.handover = transient_path;
-    nk_result r = newton_level(&k, tol, m, k.tree);
-    k.handover = false;
-    if ((r == NK_LARGE || r == NK_STALL) && transient_path) {
-        st->continuation_steps++;
-        r = transient(&k, tol);
-        if (r == NK_STALL) /* the quasi-static paths below, from the start state */
-            memcpy(p->omega, w->start, p->n * sizeof *p->omega);
-    }
-    bool changed = false;
-    for (size_t i = 0; i < p->n && !changed; i++)
-        changed = p->pmass0[i] != p->pmass[i];
-    if ((r == NK_LARGE || r == NK_STALL) && k.plain && changed) {
-        double dl = r == NK_LARGE && k.first_turn > 0 ? k.max_turn / k.first_turn : 0.25;
-        dl = dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
-        r = from_masses(&k, tol, m, dl);
-        if (r == NK_BUDGET && st->passes + 3 < max_passes)
-            r = NK_STALL;
-    }
-    if (r == NK_LARGE || r == NK_STALL) {
-        /* load continuation from the rest state (lambda = 0 is exact there): the equilibrium
-         * reached is the one on the loading path, as with the relaxation */
-        double done = 0.0;
-        double dl = r == NK_LARGE && k.first_turn > 0 ? k.max_turn / k.first_turn : 0.25;
-        dl = dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
-        for (size_t i = 0; i < p->n; i++)
-            w->save[i] = w->rj[i];
-        for (;;) {
-            double lam = done + dl < 1.0 ? done + dl : 1.0;
-            memcpy(p->omega, w->save, p->n * sizeof *p->omega);
-            p->load_scale = lam;
-            cbm__mech_prepare(p);
-            st->continuation_steps++;
-            size_t ns = st->newton_steps;
-            r = newton_level(&k, lam < 1.0 ? (tol > 1e-3 ? tol : 1e-3) : tol, m, false);
-            if (r == NK_DONE) {
-                if (lam >= 1.0)
-                    break;
-                done = lam;
-                memcpy(w->save, p->omega, p->n * sizeof *p->omega);
-                if (st->newton_steps - ns <= 4)
-                    dl *= 2.0;
-            } else if (r == NK_STALL) {
-                dl *= 0.5;
-                if (dl < 1e-4) {
-                    why = "Newton stalled even with small load steps";
-                    break;
-                }
-            } else
-                break;
-        }
-        if (r == NK_STALL) {
-            /* last resort: relaxation bursts (the seeds' iteration) between Newton attempts at
-             * the full load, from the furthest state reached */
-            p->load_scale = 1.0;
-            cbm__mech_prepare(p);
-            double ra = 0.1;
-            for (int burst = 0; r == NK_STALL && burst < 8; burst++) {
-                double before = k.norm;
-                for (int it = 0; it < 25 && st->passes + 2 < max_passes; it++) {
-                    cbm__mech_forward(p);
-                    double mm;
-                    double rr = cbm__mech_backward(p, ra, NULL, &mm, NULL);
-                    st->passes++;
-                    if (!isfinite(rr))
-                        break;
-                }
-                r = newton_level(&k, tol, m, false);
-                if (r == NK_STALL && !(k.norm < before))
-                    ra *= 0.5;
-                st->continuation_steps++;
-            }
-        }
-        if (r != NK_DONE) {
-            /* leave a consistent state at full load for the caller to read */
-            p->load_scale = 1.0;
-            cbm__mech_prepare(p);
-            if (r != NK_NONFINITE && !evaluate(&k))
-                r = NK_NONFINITE;
-        }
+    k.transient_path = k.plain && k.tree && !p->ground && def->warm_path == CBM_MECH_WARM_TRANSIENT;
+
+    nk_result r = stage_newton(&k);
+    if (unresolved(r) && k.transient_path)
+        r = stage_transient(&k);
+    if (unresolved(r) && k.plain && masses_changed(p))
+        r = stage_mass_path(&k, r);
+    if (unresolved(r)) {
+        r = stage_load_path(&k, r);
+        if (r == NK_STALL)
+            r = stage_relax_bursts(&k);
+        if (r != NK_DONE)
+            r = leave_consistent(&k, r);
     }
     p->load_scale = 1.0;
-    /* stability: Newton converges to unstable equilibria too (a branch balanced upright). Check
-     * the unmodified factorisation at the solution; where a pivot block is not positive
-     * definite, push the joint along its soft mode and solve again with the modified
-     * factorisation, which descends to a stable equilibrium. */
-    if (r == NK_DONE && k.tree) {
-        for (int attempt = 0; attempt < 4; attempt++) {
-            size_t nonpd = 0;
-            cbm__mech_tree_factor(p, 0.0, &nonpd);
-            st->passes++;
-            st->unstable_joints = nonpd;
-            if (nonpd == 0 || attempt == 3 || st->passes + 4 >= max_passes)
-                break;
-            memcpy(w->save, p->omega, p->n * sizeof *w->save);
-            cbm__mech_tree_perturb_unstable(p, 0.05);
-            st->continuation_steps++;
-            r = newton_level(&k, tol, m, false);
-            if (r != NK_DONE) {
-                /* no equilibrium found from the pushed state: keep the one found before */
-                memcpy(p->omega, w->save, p->n * sizeof *p->omega);
-                r = evaluate(&k) ? NK_DONE : NK_NONFINITE;
-                break;
-            }
-            /* back at the same equilibrium (every joint within 1e-6 rad of it) after a push of
-             * 0.05 rad along the soft mode: the steps descend the energy there (plain ones only
-             * where they do), so this is a minimum along that mode and the pivot test misread
-             * the unsymmetric Newton matrix (large joint rotations under heavy dead loads) */
-            double back = 0.0;
-            for (size_t i = 0; i < p->n; i++) {
-                cbm_vec3 dv = v3_sub(p->omega[i], w->save[i]);
-                double a = w->dual[i] * fmax(fabs(dv.x), fmax(fabs(dv.y), fabs(dv.z)));
-                back = a > back ? a : back;
-            }
-            if (back < 1e-6) {
-                st->unstable_joints = 0;
-                break;
-            }
-        }
-    }
-    if (r == NK_NONFINITE)
-        return cbm__mech_report_nonfinite(p);
-    st->residual = k.rel;
-    if (r == NK_DONE)
-        return CBM_OK;
-    if (r == NK_BUDGET || st->passes + 4 >= max_passes)
-        why = "the pass budget ran out";
-    else if (!why && r == NK_STALL && st->continuation_steps == 1)
-        why = "Newton stalled";
-    else if (!why)
-        why = "Newton stalled; neither load continuation nor relaxation bursts reached the "
-              "tolerance";
-    return cbm__fail(p->ctx, CBM_E_NOT_CONVERGED,
-                     "fast solver: relative residual %.3g after %zu passes (tolerance %.3g): %s",
-                     k.rel, st->passes, tol, why);
+    if (r == NK_DONE && k.tree)
+        r = stage_stability(&k);
+    return finish(&k, r);
 }

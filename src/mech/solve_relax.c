@@ -38,8 +38,10 @@ cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t 
         return cbm__mech_report_nonfinite(p);
     rel = cbm__mech_relres(r, mmax, &st->char_moment);
     st->residual = rel;
-    if (rel < tol)
+    if (rel < tol) {
+        st->stage = CBM_SOLVE_STAGE_RELAX;
         return CBM_OK;
+    }
     return cbm__fail(p->ctx, CBM_E_NOT_CONVERGED,
                      "relax: relative residual %.3g after %zu passes (tolerance %.3g, alpha %g)",
                      rel, st->passes, tol, alpha);

@@ -224,6 +224,14 @@ static cbm_status set_func_ids(cbm_model *m)
     return s;
 }
 
+cbm_model_def cbm_model_def_default(void)
+{
+    cbm_model_def d;
+    memset(&d, 0, sizeof d);
+    d.lsys = cbm_lsys_def_default();
+    return d;
+}
+
 cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model **out)
 {
     if (!ctx || !def || !out || (def->side_count && !def->side_files))

@@ -376,6 +376,8 @@ static bool line_part_reused(const cbm_turtle *t, const cbm_part *last, int colo
 {
     return last->organ == CBM_ORGAN_BRANCH && last->order == (int32_t)t->stack.len &&
            last->material == color &&
+           /* the same colour, bit for bit (identity, not value) */
+           // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
            memcmp(last->color, t->view->colors[color & 255], sizeof last->color) == 0 &&
            isnan(last->stress_ratio) && isnan(last->stress) && isnan(last->age) &&
            isnan(last->reaction_wood);
@@ -690,6 +692,8 @@ static void contour_eval(const cbm__contour *c, float tt, float out[3])
     float b[4] = {(1 - u) * (1 - u) * (1 - u) / 6.0f, (3 * u * u * u - 6 * u * u + 4) / 6.0f,
                   (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6.0f, u * u * u / 6.0f};
     out[0] = out[1] = out[2] = 0.0f;
+    if (num == 0) /* no control points: the origin */
+        return;
     for (int i = 0; i < 4; i++) {
         int k = ((first + i) % num + num) % num;
         for (int d = 0; d < 3; d++)
@@ -1848,6 +1852,14 @@ cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int npara
 }
 
 /* ---- public API ---- */
+
+cbm_turtle_def cbm_turtle_def_default(void)
+{
+    cbm_turtle_def d;
+    memset(&d, 0, sizeof d);
+    d.record = true;
+    return d;
+}
 
 cbm_status cbm_turtle_interpret(cbm_context *ctx, const cbm_view *view, const cbm_turtle_def *def,
                                 cbm_tmodule *mods, size_t n, cbm_scene *scene, cbm_turtle **out)

@@ -526,15 +526,16 @@ static cbm_status parse_view(cbm_view *v, const char *path, const char *text)
         double x[4];
         int k;
 #define KEY(str) (klen == sizeof(str) - 1 && strncmp(s, str, klen) == 0)
+/* too few numbers: report and go on with the next line (no do-while wrapper: its `continue`
+ * would leave only the wrapper, and the key's code would then read the numbers not given) */
 #define NEED(cnt)                                                                                  \
-    do {                                                                                           \
-        if (k < (cnt)) {                                                                           \
-            cbm__diag(v->ctx, CBM_ERROR, path, line, (int)(a - buf) + 1,                           \
-                      "'%.*s:' expects %d number%s", (int)klen, s, (cnt), (cnt) > 1 ? "s" : "");   \
-            result = CBM_E_FORMAT;                                                                 \
-            continue;                                                                              \
-        }                                                                                          \
-    } while (0)
+    if (k < (cnt)) {                                                                               \
+        cbm__diag(v->ctx, CBM_ERROR, path, line, (int)(a - buf) + 1,                               \
+                  "'%.*s:' expects %d number%s", (int)klen, s, (cnt), (cnt) > 1 ? "s" : "");       \
+        result = CBM_E_FORMAT;                                                                     \
+        continue;                                                                                  \
+    } else                                                                                         \
+        (void)0
         k = numbers(a, x, 4);
         if (KEY("angle factor")) {
             NEED(1);

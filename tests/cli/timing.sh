@@ -14,3 +14,7 @@ grep -q '^run: derive [0-9.]* s, interpret' "$tmp/plain.err"
 "$bin" grow -y 1 --quiet --timing -o "$tmp/t.svg" -o "$tmp/t.json" --size 100 2>"$tmp/grow.err"
 grep -q '^grow: wrote .*t.svg in [0-9.]* s' "$tmp/grow.err"
 grep -q '^grow: 1 years, [0-9]* segments: derive [0-9.]* s (equilibrium [0-9.]* s in [0-9]* passes, rings and ageing [0-9.]* s, growth and the rest [-0-9.]* s), interpret [0-9.]* s, write [0-9.]* s, total [0-9.]* s; peak' "$tmp/grow.err"
+# the statics solves counted by the solver stage that converged
+grep -q '^run: solves by converged stage: newton [1-9][0-9]*' "$tmp/run.err"
+grep -q '^grow: solves by converged stage: newton [1-9][0-9]*' "$tmp/grow.err"
+if grep -q 'solves by converged stage' "$tmp/plain.err"; then exit 1; fi

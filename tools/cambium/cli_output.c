@@ -183,6 +183,30 @@ double cli_seconds(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+void cli_print_solve_stages(const char *cmd, const cbm_context *ctx)
+{
+    size_t counts[CBM_SOLVE_STAGE_COUNT];
+    cbm_solve_stage_counts(ctx, counts);
+    const char *sep = ": solves by converged stage: ";
+    bool any = false;
+    /* the stages in pipeline order, then the relaxation solver, then the failures */
+    for (int s = CBM_SOLVE_STAGE_NONE + 1; s <= CBM_SOLVE_STAGE_COUNT; s++) {
+        int stage = s == CBM_SOLVE_STAGE_COUNT ? CBM_SOLVE_STAGE_NONE : s;
+        if (counts[stage] == 0)
+            continue;
+        if (!any)
+            fputs(cmd, stderr);
+        fprintf(stderr, "%s%s %zu", sep,
+                stage == CBM_SOLVE_STAGE_NONE ? "not converged"
+                                              : cbm_solve_stage_name((cbm_solve_stage)stage),
+                counts[stage]);
+        sep = ", ";
+        any = true;
+    }
+    if (any)
+        fputc('\n', stderr);
+}
+
 void cli_progress_begin(cli_progress *p)
 {
     const char *force = getenv("CBM_PROGRESS");

@@ -34,5 +34,8 @@ void cli_progress_update(cli_progress *p, cbm_progress *state);
 void cli_progress_end(cli_progress *p);
 /// Seconds on a monotonic clock.
 double cli_seconds(void);
+/// --timing: the statics solves through ctx by the stage that converged, one line on stderr
+/// ("CMD: solves by converged stage: newton 120, transient 3"); nothing without solves.
+void cli_print_solve_stages(const char *cmd, const cbm_context *ctx);
 
 #endif

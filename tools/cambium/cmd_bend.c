@@ -62,11 +62,12 @@ static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *
             "\"base_moment\": %.12g, \"passes\": %zu, \"residual\": %.6g, \"seconds\": %.6g, "
             "\"solver\": \"%s\", \"discretization\": \"%s\", \"segments\": %zu, "
             "\"newton_steps\": %zu, \"krylov_iterations\": %zu, \"base_stress\": %.12g, "
-            "\"steps\": %ld, \"broken_segments\": %zu}\n",
+            "\"steps\": %ld, \"broken_segments\": %zu, \"stage\": \"%s\"}\n",
             tip->x, tip->y, tip->z, tip->angle_deg, base->moment, r->stats.passes,
             r->stats.residual, secs, cbm_mech_solver_name(spec->solver),
             cbm_mech_discretization_name(spec->discretization), n, r->stats.newton_steps,
-            r->stats.krylov_iterations, base->stress, r->steps_done, r->broken_segments);
+            r->stats.krylov_iterations, base->stress, r->steps_done, r->broken_segments,
+            cbm_solve_stage_name(r->stats.stage));
 }
 
 int cmd_bend(int argc, char **argv)
@@ -170,9 +171,9 @@ int cmd_bend(int argc, char **argv)
         write_json(stdout, &spec, &nodes[n], &nodes[0], &res, secs, n);
     if (rc == CLI_OK && !json && nout == 0)
         printf("tip (%.6g, %.6g, %.6g) m, tip angle %.6g deg, base moment %.6g N m, %zu passes, "
-               "residual %.3g, %.3g s\n",
+               "residual %.3g (stage %s), %.3g s\n",
                nodes[n].x, nodes[n].y, nodes[n].z, nodes[n].angle_deg, nodes[0].moment,
-               res.stats.passes, res.stats.residual, secs);
+               res.stats.passes, res.stats.residual, cbm_solve_stage_name(res.stats.stage), secs);
     free(nodes);
     cbm_plant_destroy(plant);
     cli_context_end(ctx);

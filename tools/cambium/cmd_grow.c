@@ -321,6 +321,7 @@ static void print_timing(cbm_context *ctx, const cbm_tree *t, bool summer, doubl
         cbm_tree_years(t) + (summer ? 1 : 0), summer ? " (the last to the end of its summer)" : "",
         cbm_plant_segment_count(cbm_tree_plant(t)), derive, solve, passes, rings,
         derive - solve - rings, interpret, write, total, (double)cbm_context_peak_bytes(ctx) / 1e6);
+    cli_print_solve_stages("grow", ctx);
 }
 
 int cmd_grow(int argc, char **argv)

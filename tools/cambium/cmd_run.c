@@ -365,6 +365,7 @@ static void print_timing(const run *r)
     fprintf(stderr, "interpret %.4f s, write %.4f s, total %.4f s; peak %.1f MB in the library\n",
             r->t_interpret, r->t_write, cli_seconds() - r->t_start,
             (double)cbm_context_peak_bytes(r->ctx) / 1e6);
+    cli_print_solve_stages("run", r->ctx);
 }
 
 /* Closes the json document (its rows are complete). */

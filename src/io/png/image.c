@@ -96,6 +96,8 @@ cbm_status cbm_image_read_png(cbm_context *ctx, const char *path, cbm_image **ou
         png_image_free(&pi);
         return st;
     }
+    /* image_new returned CBM_OK, so img is set */
+    // NOLINTNEXTLINE(clang-analyzer-core.NullDereference)
     if (!png_image_finish_read(&pi, NULL, img->rgba, 0, NULL)) {
         cbm_image_destroy(img);
         return cbm__fail(ctx, CBM_E_FORMAT, "%s: bad PNG: %s", path, pi.message);
