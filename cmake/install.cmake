@@ -20,7 +20,8 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/linking
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 
 # cambium.pc: the shared library by default; `pkg-config --static` adds what libcambium.a needs
-# (the libraries of the Debian packages of cmake/dependencies.cmake). No Requires: the public
+# (the libraries of the Debian packages of cmake/dependencies.cmake; cairo through its own .pc,
+# Requires.private). No public Requires: the public
 # headers include only the C library's, so a program needs no other package's flags. The prefix is the one given at install time (`cmake --install
 # --prefix`, `make install PREFIX=...`), so the file is finished by the install step itself.
 set(CBM_PC_PREFIX "%PREFIX%")
