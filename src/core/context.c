@@ -74,6 +74,11 @@ cbm_context_def cbm_context_def_default(void)
     d.limits.max_expr_depth = 200;
     d.limits.max_decomp_depth = 1000;
     d.limits.max_diagnostics = 50;
+    d.limits.max_call_depth = 256;
+    d.limits.max_loop_iterations = 100000000;
+    d.limits.max_operations = 100000000;
+    d.limits.max_pp_bytes = (size_t)256 << 20;
+    d.limits.allow_nonfinite = false;
     d.seed = 1;
     return d;
 }

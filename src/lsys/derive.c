@@ -256,6 +256,32 @@ static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *e
     return true;
 }
 
+/* A module parameter is infinite or NaN (division by zero, overflow, beyond float's range in
+ * float32 mode): a runtime error at the expression, or with limits.allow_nonfinite a warning
+ * (once per run) and the value is kept. Returns whether to go on. */
+static bool nonfinite(cbm_lsys *ls, int32_t expr)
+{
+    if (!cbm_context_limits(ls->ctx)->allow_nonfinite) {
+        if (ls->ev.error == CBM_OK) {
+            ls->ev.error = CBM_E_RUNTIME;
+            ls->ev.error_msg = "a module parameter is not a finite number (--allow-nonfinite "
+                               "keeps it)";
+            ls->ev.error_node = expr;
+        }
+        return false;
+    }
+    if (!ls->nonfinite_warned) {
+        ls->nonfinite_warned = true;
+        const char *file;
+        int line, col;
+        cbm__compiler_locate(&ls->comp, cbm__node_pos(&ls->comp, expr), &file, &line, &col);
+        cbm__diag(ls->ctx, CBM_WARNING, file, line, col,
+                  "a module parameter is not a finite number (kept: --allow-nonfinite; further "
+                  "ones are not reported)");
+    }
+    return true;
+}
+
 /* Appends the successor of pr (parameters evaluated with the bound frame). */
 static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
 {
@@ -281,12 +307,18 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
         int k = 0;
         if (dst->f32) {
             float *out = (float *)dst->par + dst->npar;
-            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
-                out[k++] = (float)cbm__eval_expr(&ls->ev, a);
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next) {
+                out[k] = (float)cbm__eval_expr(&ls->ev, a);
+                if (!isfinite(out[k++]) && !nonfinite(ls, a))
+                    return ls->ev.error;
+            }
         } else {
             double *out = (double *)dst->par + dst->npar;
-            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
-                out[k++] = cbm__eval_expr(&ls->ev, a);
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next) {
+                out[k] = cbm__eval_expr(&ls->ev, a);
+                if (!isfinite(out[k++]) && !nonfinite(ls, a))
+                    return ls->ev.error;
+            }
         }
         dst->npar += m[i].np;
     }
@@ -359,15 +391,40 @@ static cbm_status prepare_scratch(cbm_lsys *ls, int depth)
     return CBM_OK;
 }
 
+/* The loop budget of a step or block: the model's max_loop_iterations or the context's limit,
+ * and no more than the operations limit (the cpfg dialect has no functions: its operations are
+ * its loop iterations). */
+static long loop_budget(const cbm_lsys *ls)
+{
+    const cbm_limits *lim = cbm_context_limits(ls->ctx);
+    long b = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
+    return lim->max_operations < b ? lim->max_operations : b;
+}
+
+/* A runtime error of the expressions becomes a failure with its message, at the expression
+ * where it happened when known; the evaluator is cleared for the next call. */
+static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
+{
+    if (ls->ev.error != CBM_OK) {
+        cbm_status e = ls->ev.error;
+        int32_t node = ls->ev.error_node;
+        ls->ev.error = CBM_OK;
+        ls->ev.error_node = -1;
+        if (node >= 0)
+            return cbm__compiler_fail(&ls->comp, e, cbm__node_pos(&ls->comp, node), "%s: %s", what,
+                                      ls->ev.error_msg);
+        return cbm__fail(ls->ctx, e, "%s: %s", what, ls->ev.error_msg);
+    }
+    return s;
+}
+
 static cbm_status run_block(cbm_lsys *ls, int32_t block, const char *what)
 {
     if (block < 0)
         return CBM_OK;
-    ls->ev.while_budget = ls->loop_budget;
+    ls->ev.while_budget = loop_budget(ls);
     cbm__eval_stmt(&ls->ev, block);
-    if (ls->ev.error != CBM_OK)
-        return cbm__fail(ls->ctx, ls->ev.error, "%s: %s", what, ls->ev.error_msg);
-    return CBM_OK;
+    return runtime_fail(ls, CBM_OK, what);
 }
 
 /* Block `which` (0 Start, 1 StartEach, 2 EndEach, 3 End) of every L-system, in file order
@@ -689,18 +746,6 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
     return CBM_OK;
 }
 
-/* A runtime error of the expressions becomes a failure with its message; the evaluator is
- * cleared for the next call. */
-static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
-{
-    if (ls->ev.error != CBM_OK) {
-        cbm_status e = ls->ev.error;
-        ls->ev.error = CBM_OK;
-        return cbm__fail(ls->ctx, e, "%s: %s", what, ls->ev.error_msg);
-    }
-    return s;
-}
-
 cbm_status cbm_lsys_step(cbm_lsys *ls)
 {
     if (ls->lp)
@@ -713,7 +758,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
         CBM_TRY(cbm_lsys_interpret(ls));
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_blocks(ls, 1, "StartEach"));
-    ls->ev.while_budget = ls->loop_budget;
+    ls->ev.while_budget = loop_budget(ls);
     cbm_status s = derive(ls);
     if (s != CBM_OK) {
         char what[64];
@@ -758,6 +803,8 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ls->ev.nran_have = 1;
     ls->ev.nran_cached = 0;
     ls->ev.error = CBM_OK;
+    ls->ev.error_node = -1;
+    ls->nonfinite_warned = false;
     ls->ev.stopped = false;
     ls->ev.func = ls->func;
     ls->ev.func_ud = ls->func_ud;
@@ -778,10 +825,9 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
         .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
     ax.const_succ = false;
     ls->ev.params = ls->frame;
-    CBM_TRY(append_succ(ls, &ax, &ls->cur));
-    if (!runtime_ok(ls))
-        return cbm__fail(ls->ctx, ls->ev.error, "axiom: %s", ls->ev.error_msg);
-    return CBM_OK;
+    ls->ev.while_budget = loop_budget(ls);
+    cbm_status s = append_succ(ls, &ax, &ls->cur);
+    return runtime_fail(ls, s, "axiom");
 }
 
 static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);

@@ -104,7 +104,8 @@ struct cbm_lsys {
     bool float32;
     bool ignore_seed;
     int64_t seed_override; /* -1: none */
-    long loop_budget;
+    long loop_budget;      /* the model's max_loop_iterations, 0: the context's limit */
+    bool nonfinite_warned; /* the warning of limits.allow_nonfinite was given */
     double (*func)(void *ud, int id, double x);
     void *func_ud;
     cbm_lsys_interpret_fn interp;
