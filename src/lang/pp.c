@@ -27,11 +27,17 @@ typedef struct macro {
 
 typedef CBM_ARRAY(char) sbuf;
 
+/* What one macro expansion counts toward max_pp_bytes besides the text it makes: macros that
+ * expand to little but many times (#define A1 A0 A0, A0 empty) are bounded in time too. */
+#define EXPANSION_COST 64
+
 typedef struct pp_state {
     cbm__pp *pp;
     CBM_ARRAY(macro) macros;
     int include_depth;
     cbm_status status;
+    bool limit_reported; /* the expansion limit's error was given */
+    size_t work;         /* macro expansions so far, times EXPANSION_COST bytes */
 } pp_state;
 
 static bool is_id0(int c)
@@ -47,6 +53,12 @@ static void sb_put(pp_state *st, sbuf *b, const char *s, size_t n)
 {
     if (st->status != CBM_OK)
         return;
+    /* any buffer of the expansion (the text, a macro's replacement or argument) stays within
+     * max_pp_bytes: macros that double (#define A1 A0 A0 ...) stop here, not at the memory */
+    if (b->len + n + 1 > cbm_context_limits(st->pp->ctx)->max_pp_bytes) {
+        st->status = CBM_E_LIMIT;
+        return;
+    }
     if (CBM_ARRAY_RESERVE(st->pp->ctx, *b, b->len + n + 1) != CBM_OK) {
         st->status = CBM_E_NOMEM;
         return;
@@ -224,6 +236,20 @@ static void substitute(pp_state *st, const macro *m, sbuf *args, sbuf *out)
     }
 }
 
+/* The expansion exceeded max_pp_bytes: one error, at the outermost macro when known. */
+static void limit_error(pp_state *st, int file, int line, int col, const char *macro_name)
+{
+    st->limit_reported = true;
+    size_t mb = cbm_context_limits(st->pp->ctx)->max_pp_bytes >> 20;
+    if (macro_name)
+        err(st, file, line, col,
+            "the expansion of macro '%s' makes the model larger than %zu MB (--max-expansion)",
+            macro_name, mb);
+    else
+        err(st, file, line, col, "the preprocessed model is larger than %zu MB (--max-expansion)",
+            mb);
+}
+
 static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, int file, int line)
 {
     cbm_context *ctx = st->pp->ctx;
@@ -242,6 +268,13 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
             if (!m || m->active) {
                 sb_put(st, out, s + a, i - a);
                 continue;
+            }
+            st->work += EXPANSION_COST;
+            if (st->work > cbm_context_limits(ctx)->max_pp_bytes) {
+                st->status = CBM_E_LIMIT;
+                if (depth == 0 && !st->limit_reported)
+                    limit_error(st, file, line, (int)a + 1, m->name);
+                return;
             }
             sbuf rep = {0};
             if (m->nparams < 0) {
@@ -317,6 +350,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                 expand(st, rep.data, rep.len, out, depth + 1, file, line);
             m->active = false;
             CBM_ARRAY_FREE(ctx, rep);
+            if (st->status == CBM_E_LIMIT && depth == 0 && !st->limit_reported)
+                limit_error(st, file, line, (int)a + 1, m->name);
         } else if (isdigit(c) || (c == '.' && i + 1 < n && isdigit((unsigned char)s[i + 1]))) {
             size_t a = i;
             while (i < n &&
@@ -424,6 +459,8 @@ static void emit_line(pp_state *st, const char *s, size_t n, int file, int line)
     cbm__pp_line l = {file, line};
     if (st->status == CBM_OK && CBM_ARRAY_PUSH(pp->ctx, pp->lines, l) != CBM_OK)
         st->status = CBM_E_NOMEM;
+    if (st->status == CBM_E_LIMIT && !st->limit_reported)
+        limit_error(st, file, line, 1, NULL);
 }
 
 static void process(pp_state *st, const char *src, int file);

@@ -363,6 +363,12 @@ static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpo
         return depth > 0 ? copy_module(ls->ctx, src, p, dst) : CBM_OK;
     }
     *applied = true;
+    /* a production applied in a decomposition or homomorphism is an operation: one that
+     * doubles to its maximum depth stops at the budget, not at the memory */
+    if (--ls->ops < 0)
+        return cbm__compiler_fail(&ls->comp, CBM_E_LIMIT, pr->pos,
+                                  "more productions applied in one step than the limit "
+                                  "(--max-operations)");
     lstr *buf = &ls->scratch.data[depth];
     lstr_clear(buf);
     CBM_TRY(append_succ(ls, pr, buf));
@@ -759,6 +765,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_blocks(ls, 1, "StartEach"));
     ls->ev.while_budget = loop_budget(ls);
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     cbm_status s = derive(ls);
     if (s != CBM_OK) {
         char what[64];
@@ -826,6 +833,7 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ax.const_succ = false;
     ls->ev.params = ls->frame;
     ls->ev.while_budget = loop_budget(ls);
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     cbm_status s = append_succ(ls, &ax, &ls->cur);
     return runtime_fail(ls, s, "axiom");
 }
@@ -840,6 +848,7 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
     lstr *out = &ls->homo_str;
     lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->max_depth));
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     const lstr *cur = &ls->cur;
     if (ls->subcalls) {
         /* each L-system's homomorphism with a seed: has its own stream, restarted here */

@@ -2738,8 +2738,8 @@ static bool spend(lpfg *lp, bool loop)
 {
     if (--lp->ops < 0) {
         rt_error(lp, CBM_E_LIMIT,
-                 "more function calls and loop iterations in one step than the limit "
-                 "(--max-operations)");
+                 "more productions applied, function calls and loop iterations in one step "
+                 "than the limit (--max-operations)");
         return false;
     }
     if (loop && --lp->budget < 0) {
@@ -3927,6 +3927,11 @@ static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i,
             size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
             lp->out = out;
             lp->produced = false;
+            /* a production applied is an operation: a decomposition that doubles to its
+             * maximum depth stops at the budget */
+            lp->at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
+            if (!spend(lp, false))
+                return 0;
             exec(ls, pr->body, fr);
             if (lp->err != CBM_OK)
                 return 0;
@@ -4156,6 +4161,7 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     ls->homo_str.n = ls->homo_str.npm = ls->homo_str.npar = 0;
     lp->origin.len = 0;
+    budgets(ls);
     cbm_status s;
     if (!lp->interp.present || !lp->interp.prods.len)
         s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);

@@ -106,6 +106,7 @@ struct cbm_lsys {
     int64_t seed_override; /* -1: none */
     long loop_budget;      /* the model's max_loop_iterations, 0: the context's limit */
     bool nonfinite_warned; /* the warning of limits.allow_nonfinite was given */
+    long ops;              /* productions applied in decomposition / homomorphism: budget left */
     double (*func)(void *ud, int id, double x);
     void *func_ud;
     cbm_lsys_interpret_fn interp;

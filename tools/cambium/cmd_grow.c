@@ -15,8 +15,7 @@ static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--params]\n"
-           "                    [output options]\n\n"
+           "                    [--params] [limits] [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
            "wild or crooked aspen, from a parameter file or a built-in model (default\n"
            "fruit-tree; see docs/models.md). Outputs by extension: .png .svg .glb .obj .ply\n"
@@ -35,7 +34,7 @@ static void help(void)
            "built-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
-    printf("\n\n%s", cli_output_help);
+    printf("\n\n%s\n%s", cli_limits_help, cli_output_help);
 }
 
 static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete);
@@ -144,6 +143,8 @@ int cmd_grow(int argc, char **argv)
             return CLI_OK;
         }
         int r = cli_output_option("grow", argc, argv, &i, &o);
+        if (r == 0)
+            r = cli_limit_option("grow", argc, argv, &i);
         if (r < 0)
             return CLI_USAGE;
         if (r > 0)
