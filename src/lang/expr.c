@@ -121,6 +121,12 @@ void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file,
     if (lo < c->map.len) {
         *file = c->files.data[c->map.data[lo].file];
         *line = c->map.data[lo].line;
+    } else if (c->map.len) { /* the end of the text: after the last line */
+        *file = c->files.data[c->map.data[c->map.len - 1].file];
+        *line = c->map.data[c->map.len - 1].line;
+    } else if (c->files.len) { /* an empty file */
+        *file = c->files.data[0];
+        *line = 1;
     }
     *col = (int)(pos - c->line_start.data[lo]) + 1;
 }
