@@ -2665,7 +2665,9 @@ static void parse_top(lc *L)
         } else if (accept_kw(L, "group")) {
             size_t p2 = L->c->pos;
             int32_t e = const_int(L, "group");
-            if (e >= 0 && ND(e).op == N_NUM)
+            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
+                cbm__cerr(L->c, p2, "group %g is out of range (an int)", ND(e).v);
+            else if (e >= 0 && ND(e).op == N_NUM)
                 group = (int)ND(e).v;
             else if (e >= 0)
                 cbm__cerr(L->c, p2, "group needs a number");
@@ -4379,7 +4381,7 @@ static int eval_depth(cbm_lsys *ls, lset *s, int dflt)
         int32_t e = -2 - s->depth;
         ls->lp->sp = 0;
         double v = evs(ls, e, ls->lp->stack);
-        return v < 0 ? 0 : v > 1e6 ? 1000000 : (int)v;
+        return !(v >= 0) ? 0 : v > 1e6 ? 1000000 : (int)v; /* NaN: 0 */
     }
     return dflt;
 }

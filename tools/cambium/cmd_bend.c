@@ -113,6 +113,8 @@ int cmd_bend(int argc, char **argv)
     }
     if (!spec_path)
         return cli_usage_error("bend", "expected a SPEC file (see cambium bend --help)");
+    if (cli_check_outputs(outs, nout) != CLI_OK)
+        return CLI_FAIL;
 
     size_t len = 0;
     char *text = read_spec(spec_path, &len);

@@ -214,6 +214,13 @@ int cmd_grow(int argc, char **argv)
                                    ".json, or FORMAT:PATH)",
                                    outs[k]);
     }
+    {
+        const char *paths[MAX_OUTPUTS];
+        for (int k = 0; k < nout; k++)
+            paths[k] = kind[k] == 0 ? targets[k].path : outs[k];
+        if (cli_check_outputs(paths, nout) != CLI_OK)
+            return CLI_FAIL;
+    }
     if (!model)
         model = "fruit-tree";
     cbm_context *ctx = cli_context();

@@ -24,6 +24,7 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -187,6 +188,24 @@ static cbm_status interpret(run *r, int step)
         return s;
     r->prims = cbm_turtle_prim_count(t);
     r->has_box = cbm_turtle_box(t, &r->lo, &r->hi);
+    /* the scene and its writers hold single-precision coordinates: a drawing beyond float's
+     * range (F(1e39)) would write inf vertices and a glTF with null bounds */
+    double far = 0;
+    if (r->has_box) {
+        const double c[6] = {r->lo.x, r->lo.y, r->lo.z, r->hi.x, r->hi.y, r->hi.z};
+        for (int q = 0; q < 6; q++)
+            far = isfinite(c[q]) && fabs(c[q]) <= far ? far
+                  : isfinite(c[q])                    ? fabs(c[q])
+                                                      : INFINITY;
+    }
+    if (far > FLT_MAX) {
+        cbm_turtle_destroy(t);
+        fprintf(stderr,
+                "cambium: step %d: the turtle drew beyond single precision (a coordinate of %g "
+                "m; the outputs store floats)\n",
+                step, far);
+        return CBM_E_NONFINITE;
+    }
     size_t pixel = cbm_turtle_pixel_segments(t);
     cbm_turtle_destroy(t);
     /* pictures beside meshes: a second pass in line mode when the step has pixel lines (the
@@ -482,6 +501,13 @@ int cmd_run(int argc, char **argv)
     }
     if (!model)
         return cli_usage_error("run", "expected a MODEL.l");
+    {
+        const char *paths[MAX_OUTPUTS];
+        for (int k = 0; k < ntargets; k++)
+            paths[k] = targets[k].path;
+        if (cli_check_outputs(paths, ntargets) != CLI_OK)
+            return CLI_FAIL;
+    }
     for (int k = 0; k < ntargets; k++)
         if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
             strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))

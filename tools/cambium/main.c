@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -241,8 +242,36 @@ static void usage(FILE *f)
     fprintf(f, "\n'cambium COMMAND --help' describes a command. Units are SI.\n");
 }
 
+/* SIGINT, SIGTERM, SIGHUP: remove the temporary files of the outputs being written, then die
+ * of the signal as before. */
+static void on_signal(int sig)
+{
+    cbm_out_remove_temporaries();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+int cli_check_outputs(const char *const *paths, int n)
+{
+    cbm_context *ctx = NULL;
+    int rc = CLI_OK;
+    for (int k = 0; k < n && rc == CLI_OK; k++) {
+        if (!ctx)
+            ctx = cli_context();
+        cbm_status s = cbm_out_check(ctx, paths[k]);
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, "output");
+    }
+    if (ctx)
+        cli_context_end(ctx);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    signal(SIGHUP, on_signal);
     if (argc < 2) {
         usage(stderr);
         return CLI_USAGE;
