@@ -71,7 +71,7 @@ const char cli_limits_help[] =
     "  --max-loop-iterations N  loop iterations in one step (10^8)\n"
     "  --max-call-depth N     nested function calls (256)\n"
     "  --max-expr-depth N     nesting of expressions and statements, operator chains\n"
-    "                         included (200)\n"
+    "                         included (200, at most 1000)\n"
     "  --max-decomp-depth N   maximum depth of decomposition and interpretation (1000)\n"
     "  --max-expansion MB     size of the preprocessed model text, each macro\n"
     "                         expansion counting 64 bytes (64)\n"
@@ -101,9 +101,12 @@ int cli_limit_option(const char *cmd, int argc, char **argv, int *i)
         cli_usage_error(cmd, "%s expects a non-negative integer", a);
         return -1;
     }
-    /* the depths are ints, the megabytes become bytes */
+    /* the megabytes become bytes */
+    /* the depths are ints; nesting recurses on the stack, so its limit stays where the
+     * default 8 MB stack holds (parsing and evaluation take up to ~3 kB a level) */
     bool is_int = k >= 5 && k <= 7;
-    if ((is_int && v > 1000000) || ((k == 0 || k == 8) && (unsigned long)v > (SIZE_MAX >> 21))) {
+    if ((is_int && v > (k == 6 ? 1000 : 1000000)) ||
+        ((k == 0 || k == 8) && (unsigned long)v > (SIZE_MAX >> 21))) {
         cli_usage_error(cmd, "%s: %ld is too large", a, v);
         return -1;
     }
