@@ -3948,7 +3948,8 @@ static cbm_status copy_at(cbm_context *ctx, const lstr *src, size_t i, size_t j,
                           lstr *dst)
 {
     int np = (src->sym[i] & LSYS_PARAM_BIT) ? src->pc[j] : 0;
-    return push_mod(ctx, dst, src->sym[i] & 0x7f, (const double *)src->par + k, np);
+    /* a string without parameters has no parameter array (NULL + 0 is undefined) */
+    return push_mod(ctx, dst, src->sym[i] & 0x7f, np ? (const double *)src->par + k : NULL, np);
 }
 
 static cbm_status check_size(cbm_lsys *ls, const lstr *s)
