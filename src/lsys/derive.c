@@ -136,20 +136,79 @@ static bool match_pred(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos
 }
 
 /* Right context from r (the module after the predecessor). */
+/* Builds the bracket matching of the current string; false when memory refuses (the caller
+ * then scans). */
+static bool build_brackets(cbm_lsys *ls)
+{
+    const lstr *s = &ls->cur;
+    ls->brk_open.len = ls->brk_close.len = ls->brk_stack.len = 0;
+    lpos p = {0, 0, 0};
+    while (p.i < s->n) {
+        uint8_t c = s->sym[p.i] & 0x7f;
+        if (c == '[') {
+            size_t ord = ls->brk_open.len;
+            lpos none = {0, 0, 0};
+            if (CBM_ARRAY_PUSH(ls->ctx, ls->brk_open, p.i) != CBM_OK ||
+                CBM_ARRAY_PUSH(ls->ctx, ls->brk_close, none) != CBM_OK ||
+                CBM_ARRAY_PUSH(ls->ctx, ls->brk_stack, ord) != CBM_OK)
+                return false;
+        }
+        pos_next(s, &p);
+        if (c == ']' && ls->brk_stack.len)
+            ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
+    }
+    while (ls->brk_stack.len) /* unmatched: the branch runs to the end */
+        ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
+    ls->brk_gen = ls->cur_gen;
+    return true;
+}
+
+/* r is at a '[' of s: moves it after the matching ']' (or to the end). A jump through the
+ * bracket table for the current string, a scan otherwise. */
+static void skip_branch(cbm_lsys *ls, const lstr *s, lpos *r)
+{
+    if (s == &ls->cur && (ls->brk_gen == ls->cur_gen || build_brackets(ls))) {
+        size_t lo = 0, hi = ls->brk_open.len;
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (ls->brk_open.data[mid] < r->i)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        if (lo < ls->brk_open.len && ls->brk_open.data[lo] == r->i) {
+            *r = ls->brk_close.data[lo];
+            return;
+        }
+    }
+    pos_next(s, r);
+    int level = 0;
+    while (r->i < s->n) {
+        uint8_t d = s->sym[r->i] & 0x7f;
+        if (d == '[')
+            level++;
+        else if (d == ']' && level-- == 0)
+            break;
+        pos_next(s, r);
+    }
+    if (r->i < s->n)
+        pos_next(s, r);
+}
+
 static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
 {
     const fmodule *m = ls->fmods.data + pr->rc;
     int32_t k = 0;
     while (k < pr->nrc) {
-        if (m[k].sym == '=') { /* skip to the end of the branch */
-            int level = 0;
+        if (m[k].sym == '=') { /* skip to the end of the branch, over the branches in it */
             while (r.i < s->n) {
                 uint8_t c = s->sym[r.i] & 0x7f;
-                if (c == '[')
-                    level++;
-                else if (c == ']' && level-- == 0)
+                if (c == ']')
                     break;
-                pos_next(s, &r);
+                if (c == '[')
+                    skip_branch(ls, s, &r);
+                else
+                    pos_next(s, &r);
             }
             k++;
             continue;
@@ -160,18 +219,7 @@ static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int sl
         if (ls->ign[c]) {
             pos_next(s, &r);
         } else if (m[k].sym != '[' && c == '[') {
-            pos_next(s, &r);
-            int level = 0;
-            while (r.i < s->n) {
-                uint8_t d = s->sym[r.i] & 0x7f;
-                if (d == '[')
-                    level++;
-                else if (d == ']' && level-- == 0)
-                    break;
-                pos_next(s, &r);
-            }
-            if (r.i < s->n)
-                pos_next(s, &r);
+            skip_branch(ls, s, &r);
         } else {
             if (c != m[k].sym || mod_np(s, &r) != m[k].np)
                 return false;
@@ -618,6 +666,7 @@ static cbm_status derive(cbm_lsys *ls)
     cbm_status s = derive_scan(ls, &rel);
     if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
         lstr_clear(&ls->cur);
+        ls->cur_gen++;
         ls->homo_valid = false;
     }
     return s;
@@ -782,6 +831,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     lstr t = ls->cur;
     ls->cur = ls->next;
     ls->next = t;
+    ls->cur_gen++;
     ls->steps++;
     ls->homo_valid = false;
     CBM_TRY(run_blocks(ls, 2, "EndEach"));
@@ -828,6 +878,7 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
     CBM_TRY(run_blocks(ls, 0, "Start"));
     lstr_clear(&ls->cur);
+    ls->cur_gen++;
     prod ax = {
         .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
     ax.const_succ = false;

@@ -118,6 +118,9 @@ void cbm_lsys_destroy(cbm_lsys *ls)
         cbm__lstr_free(ctx, &ls->scratch.data[i]);
     CBM_ARRAY_FREE(ctx, ls->scratch);
     cbm__lpfg_free(ls);
+    CBM_ARRAY_FREE(ctx, ls->brk_open);
+    CBM_ARRAY_FREE(ctx, ls->brk_close);
+    CBM_ARRAY_FREE(ctx, ls->brk_stack);
     CBM_ARRAY_FREE(ctx, ls->appl);
     CBM_ARRAY_FREE(ctx, ls->applp);
     cbm__compiler_free(&ls->comp);
@@ -207,6 +210,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->ev.arrays = ls->comp.arrays.data;
     ls->ev.params = ls->frame;
     ls->ev.error_node = -1;
+    ls->cur_gen = 1;
     *out = ls;
     return CBM_OK;
 }

@@ -61,6 +61,9 @@ printf '#include <lpfgall.h>\nderivation length: 1;\nmodule A(float);\nAxiom: A(
     "$(chain 3000 '' 'if (a > 1) b = 1; else ')" >"$T/lpfg-elseif.l"
 printf 'Lsystem: 1\nderivation length: 1\nAxiom: A(1)\nA(a) : 1 { %s b = 0; } --> A(b)\nendlsystem\n' \
     "$(chain 3000 '' 'if (a > 1) b = 1; else ')" >"$T/cpfg-elseif.l"
+# right context across 10^5 nested branches: linear (was quadratic, 20 s)
+printf 'Lsystem: 1\nderivation length: 1\nAxiom: %s%s\nA > B --> C\nendlsystem\n' \
+    "$(chain 100000 '' 'A[')" "$(chain 100000 '' ']B')" >"$T/cpfg-deep-rc.l"
 : >"$T/empty.l"
 printf 'Lsystem: 1\nderivation length: 1\nAxiom: A\0B\nendlsystem\n' >"$T/nul.l"
 mkfifo "$T/fifo.l"
@@ -111,6 +114,7 @@ case_ cpfg-div0-str 1 "not a finite number" run "$H/cpfg-div0.l" -o "$T/div0.str
 case_ cpfg-F1e39-obj 1 "beyond single precision" run "$H/cpfg-F1e39.l" -o "$T/big.obj"
 case_ cpfg-F1e39-glb 1 "not a finite number" run "$H/cpfg-F1e39.l" --float32 -o "$T/big.glb"
 [ -e "$T/big.obj" ] || [ -e "$T/big.glb" ] && { echo "FAIL cpfg-F1e39: output written"; failed=1; }
+case_ cpfg-deep-rc 0 "400000 modules" run "$T/cpfg-deep-rc.l"
 case_ cpfg-define-chain 1 "nested too deeply" run "$H/cpfg-define.l" -D "N=$X5000"
 
 # ---- files ----
