@@ -101,6 +101,18 @@ void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
     va_start(ap, fmt);
     cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
     va_end(ap);
+    /* the line expands a value given on the command line: say so, the error may be there */
+    size_t lo = 0, hi = c->line_start.len;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (c->line_start.data[mid] <= pos)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (lo < c->map.len && c->map.data[lo].define >= 0)
+        cbm__diag(c->ctx, CBM_NOTE, file, line, col, "the line uses the command line's %s",
+                  c->files.data[c->map.data[lo].define]);
 }
 
 void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file, int *line,

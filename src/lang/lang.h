@@ -11,8 +11,9 @@
 
 /* ---- preprocessor ---- */
 typedef struct cbm__pp_line {
-    int file; /* index into files */
-    int line; /* 1-based line in that file */
+    int file;   /* index into files */
+    int line;   /* 1-based line in that file */
+    int define; /* the line expands a -D NAME=VALUE: its text's index in files, else -1 */
 } cbm__pp_line;
 
 typedef struct cbm__pp {

@@ -39,8 +39,9 @@ typedef struct pp_state {
     CBM_ARRAY(macro) macros;
     int include_depth;
     cbm_status status;
-    bool limit_reported; /* the expansion limit's error was given */
-    size_t work;         /* macro expansions so far, times EXPANSION_COST bytes */
+    bool limit_reported;      /* the expansion limit's error was given */
+    size_t work;              /* macro expansions so far, times EXPANSION_COST bytes */
+    const macro *used_define; /* a -D macro expanded in the line being processed */
 } pp_state;
 
 static bool is_id0(int c)
@@ -272,6 +273,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                 sb_put(st, out, s + a, i - a);
                 continue;
             }
+            if (m->locked && !st->used_define)
+                st->used_define = m;
             st->work += EXPANSION_COST;
             if (st->work > cbm_context_limits(ctx)->max_pp_bytes) {
                 st->status = CBM_E_LIMIT;
@@ -527,7 +530,22 @@ static void emit_line(pp_state *st, const char *s, size_t n, int file, int line)
     cbm__pp *pp = st->pp;
     sb_put(st, (sbuf *)&pp->text, s, n);
     sb_put(st, (sbuf *)&pp->text, "\n", 1);
-    cbm__pp_line l = {file, line};
+    cbm__pp_line l = {file, line, -1};
+    if (st->used_define && st->status == CBM_OK) {
+        /* errors on this line will say which -D it expands (kept with the file names) */
+        const macro *m = st->used_define;
+        size_t dn = strlen(m->name) + strlen(m->body) + 5;
+        char *d = cbm__alloc(pp->ctx, dn);
+        if (d)
+            snprintf(d, dn, "-D %s=%s", m->name, m->body);
+        if (!d || CBM_ARRAY_PUSH(pp->ctx, pp->files, d) != CBM_OK) {
+            cbm__free(pp->ctx, d, dn);
+            st->status = CBM_E_NOMEM;
+        } else {
+            l.define = (int)pp->files.len - 1;
+        }
+        st->used_define = NULL;
+    }
     if (st->status == CBM_OK && CBM_ARRAY_PUSH(pp->ctx, pp->lines, l) != CBM_OK)
         st->status = CBM_E_NOMEM;
     if (st->status == CBM_E_LIMIT && !st->limit_reported)

@@ -115,6 +115,7 @@ case_ cpfg-F1e39-obj 1 "beyond single precision" run "$H/cpfg-F1e39.l" -o "$T/bi
 case_ cpfg-F1e39-glb 1 "not a finite number" run "$H/cpfg-F1e39.l" --float32 -o "$T/big.glb"
 [ -e "$T/big.obj" ] || [ -e "$T/big.glb" ] && { echo "FAIL cpfg-F1e39: output written"; failed=1; }
 case_ cpfg-deep-rc 0 "400000 modules" run "$T/cpfg-deep-rc.l"
+case_ cpfg-define-bad 1 "note: the line uses the command line's -D N=1+" run "$H/cpfg-define.l" -D "N=1+"
 case_ cpfg-define-chain 1 "nested too deeply" run "$H/cpfg-define.l" -D "N=$X5000"
 
 # ---- files ----
