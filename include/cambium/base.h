@@ -97,14 +97,19 @@ typedef void (*cbm_output_fn)(void *ud, const char *text, size_t n);
 
 /// Limits that keep any input from running away. 0 means "no limit" only where noted.
 typedef struct cbm_limits {
-    size_t max_bytes;       ///< live bytes through the allocator (0 = unlimited)
-    size_t max_modules;     ///< modules in an L-system string
-    size_t max_steps;       ///< derivation steps in one run
-    size_t max_segments;    ///< mechanical segments in one plant
-    size_t max_passes;      ///< solver passes in one equilibrium solve
-    int max_expr_depth;     ///< nesting depth of expressions and statements
-    int max_decomp_depth;   ///< decomposition / homomorphism recursion depth
-    size_t max_diagnostics; ///< errors reported before giving up
+    size_t max_bytes;         ///< live bytes through the allocator (0 = unlimited)
+    size_t max_modules;       ///< modules in an L-system string
+    size_t max_steps;         ///< derivation steps in one run
+    size_t max_segments;      ///< mechanical segments in one plant
+    size_t max_passes;        ///< solver passes in one equilibrium solve
+    int max_expr_depth;       ///< nesting depth of expressions and statements
+    int max_decomp_depth;     ///< decomposition / homomorphism recursion depth
+    size_t max_diagnostics;   ///< errors reported before giving up
+    int max_call_depth;       ///< nested function calls of an L+C model
+    long max_loop_iterations; ///< loop iterations in one step (while, do, for; both dialects)
+    long max_operations;      ///< function calls and loop iterations in one step (both dialects)
+    size_t max_pp_bytes;      ///< size of a model's preprocessed text (#define, #include expansion)
+    bool allow_nonfinite;     ///< a module parameter that is inf or NaN is a warning, not an error
 } cbm_limits;
 
 typedef struct cbm_context_def {

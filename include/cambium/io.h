@@ -30,6 +30,13 @@ CBM_API FILE *cbm_out_stream(cbm_out *o);
 CBM_API cbm_status cbm_out_commit(cbm_out *o);
 /// Discards the temporary file; releases o. NULL is allowed.
 CBM_API void cbm_out_abort(cbm_out *o);
+/// Removes the temporary files of the outputs being written (async-signal-safe: for a
+/// SIGINT/SIGTERM handler, so a killed run leaves no hidden temporary file behind).
+CBM_API void cbm_out_remove_temporaries(void);
+/// Whether `path` can be written as an output (its folder exists and is writable; an existing
+/// file is writable and no dangling link): CBM_OK, else CBM_E_IO with a message. Lets a tool
+/// refuse a bad output before a long computation.
+CBM_API cbm_status cbm_out_check(cbm_context *ctx, const char *path);
 /// The final path this output will have.
 CBM_API const char *cbm_out_path(const cbm_out *o);
 

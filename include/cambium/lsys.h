@@ -27,7 +27,7 @@ typedef struct cbm_lsys_def {
     bool float32;             ///< keep parameters in float32 as cpfg does (compatibility)
     bool ignore_seed;         ///< ignore `seed:` as cpfg does in batch mode
     int64_t seed;             ///< >= 0: seed of stochastic choice (srand48); -1: the model's
-    long max_loop_iterations; ///< while/do iterations per step or block (0: 10^8)
+    long max_loop_iterations; ///< loop iterations per step (0: limits.max_loop_iterations)
 } cbm_lsys_def;
 
 /// Function of the function files: value of function `id` (1-based) at x.

@@ -75,6 +75,11 @@ cbm_context_def cbm_context_def_default(void)
     d.limits.max_expr_depth = 200;
     d.limits.max_decomp_depth = 1000;
     d.limits.max_diagnostics = 50;
+    d.limits.max_call_depth = 256;
+    d.limits.max_loop_iterations = 100000000;
+    d.limits.max_operations = 100000000;
+    d.limits.max_pp_bytes = (size_t)64 << 20;
+    d.limits.allow_nonfinite = false;
     d.seed = 1;
     return d;
 }
@@ -180,11 +185,22 @@ void *cbm__realloc(cbm_context *ctx, void *ptr, size_t old_size, size_t new_size
         return NULL;
     }
     if (new_size > old_size && ctx->limits.max_bytes &&
-        ctx->bytes - old_size + new_size > ctx->limits.max_bytes)
+        ctx->bytes - old_size + new_size > ctx->limits.max_bytes) {
+        /* the caller sees CBM_E_NOMEM; the message says how much was asked (not counted as a
+         * diagnostic: the caller reports the failure) */
+        snprintf(ctx->last_error, sizeof ctx->last_error,
+                 "out of memory: the limit of %zu MB (--max-memory) would be exceeded: %zu "
+                 "bytes asked "
+                 "while %zu are held",
+                 ctx->limits.max_bytes >> 20, new_size, ctx->bytes);
         return NULL;
+    }
     void *p = ctx->alloc(ctx->alloc_ud, ptr, ptr ? old_size : 0, new_size);
-    if (!p)
+    if (!p) {
+        snprintf(ctx->last_error, sizeof ctx->last_error,
+                 "out of memory: %zu bytes asked while %zu are held", new_size, ctx->bytes);
         return NULL;
+    }
     ctx->bytes = ctx->bytes - (ptr ? old_size : 0) + new_size;
     if (ctx->bytes > ctx->peak)
         ctx->peak = ctx->bytes;

@@ -10,6 +10,8 @@
 #include "../core/core.h"
 
 #include <errno.h>
+#include <limits.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,10 +26,45 @@ struct cbm_out {
     char *tmp;
     char *target; /* rename destination when path is a link to a regular file, else NULL */
     int err;      /* first errno seen, 0 if none */
+    int slot;     /* in tmp_names, -1: none */
 };
+
+/* The temporary files being written, for cbm_out_remove_temporaries (a signal handler): fixed
+ * slots, claimed and released with sig_atomic_t flags so the handler never reads a half-written
+ * name. A name too long or a run with more files open than slots is simply not registered. */
+#define TMP_SLOTS 32
+static char tmp_names[TMP_SLOTS][512];
+static volatile sig_atomic_t tmp_used[TMP_SLOTS];
+
+static int tmp_register(const char *name)
+{
+    if (strlen(name) >= sizeof tmp_names[0])
+        return -1;
+    for (int i = 0; i < TMP_SLOTS; i++)
+        if (!tmp_used[i]) {
+            memcpy(tmp_names[i], name, strlen(name) + 1);
+            tmp_used[i] = 1;
+            return i;
+        }
+    return -1;
+}
+
+static void tmp_unregister(int slot)
+{
+    if (slot >= 0)
+        tmp_used[slot] = 0;
+}
+
+void cbm_out_remove_temporaries(void)
+{
+    for (int i = 0; i < TMP_SLOTS; i++)
+        if (tmp_used[i])
+            unlink(tmp_names[i]);
+}
 
 static void release(cbm_out *o)
 {
+    tmp_unregister(o->slot);
     cbm__strfree(o->ctx, o->path);
     cbm__strfree(o->ctx, o->tmp);
     cbm__strfree(o->ctx, o->target);
@@ -43,6 +80,7 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
     if (!o)
         return CBM_E_NOMEM;
     o->ctx = ctx;
+    o->slot = -1;
     o->path = cbm__strdup(ctx, path);
     /* Write in place, never replace: the standard streams (/dev/stdout, /dev/fd/N,
      * /proc/self/fd/N: the user means the stream), and targets that are neither regular files
@@ -62,18 +100,29 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         *out = o;
         return CBM_OK;
     }
-    /* A symbolic link to a regular file: replace the file it points to, keep the link. */
+    /* A symbolic link to a regular file: replace the file it points to, keep the link. A
+     * dangling link is refused (replacing it by a file would lose the link silently). */
     if (o->path && lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode)) {
         char *real = realpath(path, NULL); /* malloc'd by the C library */
-        if (real) {
-            o->target = cbm__strdup(ctx, real);
-            free(real);
-            if (!o->target) {
-                release(o);
-                return CBM_E_NOMEM;
-            }
-            path = o->target;
+        if (!real) {
+            release(o);
+            return cbm__fail(ctx, CBM_E_IO,
+                             "%s: a symbolic link to nothing (dangling); not replaced", path);
         }
+        o->target = cbm__strdup(ctx, real);
+        free(real);
+        if (!o->target) {
+            release(o);
+            return CBM_E_NOMEM;
+        }
+        path = o->target;
+    }
+    /* An existing file keeps its permissions; a read-only one is not replaced (rename could,
+     * as the folder is writable, but the user protected the file). */
+    bool exists = o->path && stat(path, &sb) == 0 && S_ISREG(sb.st_mode);
+    if (exists && ((sb.st_mode & 0222) == 0 || access(path, W_OK) != 0)) {
+        release(o);
+        return cbm__fail(ctx, CBM_E_IO, "%s: the file is read-only; not replaced", o->path);
     }
     const char *slash = strrchr(path, '/');
     size_t dirlen = slash ? (size_t)(slash - path) + 1 : 0;
@@ -85,6 +134,7 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         release(o);
         return CBM_E_NOMEM;
     }
+    /* hidden and named after the target: recognisable if a crash ever leaves one behind */
     snprintf(tmp, n, "%.*s.%s.tmpXXXXXX", (int)dirlen, path, base);
     int fd = mkstemp(tmp);
     if (fd < 0) {
@@ -93,10 +143,16 @@ cbm_status cbm_out_open(cbm_context *ctx, const char *path, cbm_out **out)
         release(o);
         return cbm__fail(ctx, CBM_E_IO, "%s: cannot create output file: %s", path, strerror(e));
     }
-    /* mkstemp creates mode 0600: give the file the usual permissions (0666 less the umask) */
-    mode_t mask = umask(0);
-    umask(mask);
-    (void)fchmod(fd, 0666 & ~mask);
+    o->slot = tmp_register(tmp);
+    /* mkstemp creates mode 0600: give the file the permissions of the file it replaces, or the
+     * usual ones (0666 less the umask) */
+    if (exists) {
+        (void)fchmod(fd, sb.st_mode & 07777);
+    } else {
+        mode_t mask = umask(0);
+        umask(mask);
+        (void)fchmod(fd, 0666 & ~mask);
+    }
     o->tmp = cbm__strdup(ctx, tmp);
     cbm__free(ctx, tmp, n);
     o->f = o->tmp ? fdopen(fd, "wb") : NULL;
@@ -171,6 +227,36 @@ cbm_status cbm_out_commit(cbm_out *o)
         return s;
     }
     release(o);
+    return CBM_OK;
+}
+
+cbm_status cbm_out_check(cbm_context *ctx, const char *path)
+{
+    if (!ctx || !path || !*path)
+        return CBM_E_INVALID;
+    if (!strncmp(path, "/dev/", 5) || !strncmp(path, "/proc/self/fd/", 14))
+        return CBM_OK; /* streams and devices are opened when written */
+    struct stat sb;
+    if (lstat(path, &sb) == 0 && S_ISLNK(sb.st_mode) && stat(path, &sb) != 0)
+        return cbm__fail(ctx, CBM_E_IO, "%s: a symbolic link to nothing (dangling)", path);
+    if (stat(path, &sb) == 0) {
+        if (S_ISDIR(sb.st_mode))
+            return cbm__fail(ctx, CBM_E_IO, "%s: is a folder", path);
+        if (S_ISREG(sb.st_mode) && ((sb.st_mode & 0222) == 0 || access(path, W_OK) != 0))
+            return cbm__fail(ctx, CBM_E_IO, "%s: the file is read-only", path);
+    }
+    const char *slash = strrchr(path, '/');
+    char dir[PATH_MAX];
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode))
+        return cbm__fail(ctx, CBM_E_IO, "%s: the folder %s does not exist", path, dir);
+    if (access(dir, W_OK | X_OK) != 0)
+        return cbm__fail(ctx, CBM_E_IO, "%s: the folder %s is not writable", path, dir);
     return CBM_OK;
 }
 

@@ -39,13 +39,21 @@ double cbm__rand48_next(cbm__rand48 *r)
 }
 
 /* ---- compiler infrastructure ---- */
-cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, const cbm__pp *pp)
+cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, cbm__pp *pp)
 {
     memset(c, 0, sizeof *c);
     c->ctx = ctx;
     c->pp = pp;
     c->text = pp->text.data;
     c->status = CBM_OK;
+    c->map.data = pp->lines.data;
+    c->map.len = pp->lines.len;
+    c->map.cap = pp->lines.cap;
+    c->files.data = pp->files.data;
+    c->files.len = pp->files.len;
+    c->files.cap = pp->files.cap;
+    memset(&pp->lines, 0, sizeof pp->lines);
+    memset(&pp->files, 0, sizeof pp->files);
     size_t zero = 0;
     CBM_TRY(CBM_ARRAY_PUSH(ctx, c->line_start, zero));
     for (size_t i = 0; c->text[i]; i++)
@@ -58,6 +66,11 @@ cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, const cbm__pp 
 
 void cbm__compiler_free(cbm__compiler *c)
 {
+    for (size_t i = 0; i < c->files.len; i++)
+        cbm__strfree(c->ctx, c->files.data[i]);
+    CBM_ARRAY_FREE(c->ctx, c->files);
+    CBM_ARRAY_FREE(c->ctx, c->map);
+    CBM_ARRAY_FREE(c->ctx, c->node_pos);
     for (size_t i = 0; i < c->globals.len; i++)
         cbm__strfree(c->ctx, c->globals.data[i]);
     CBM_ARRAY_FREE(c->ctx, c->globals);
@@ -81,6 +94,14 @@ void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
         if (c->status == CBM_OK)
             c->status = CBM_E_SYNTAX;
     }
+    const char *file;
+    int line, col;
+    cbm__compiler_locate(c, pos, &file, &line, &col);
+    va_list ap;
+    va_start(ap, fmt);
+    cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
+    va_end(ap);
+    /* the line expands a value given on the command line: say so, the error may be there */
     size_t lo = 0, hi = c->line_start.len;
     while (hi - lo > 1) {
         size_t mid = (lo + hi) / 2;
@@ -89,17 +110,55 @@ void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
         else
             hi = mid;
     }
-    const char *file = NULL;
-    int line = 0;
-    if (lo < c->pp->lines.len) {
-        file = c->pp->files.data[c->pp->lines.data[lo].file];
-        line = c->pp->lines.data[lo].line;
+    if (lo < c->map.len && c->map.data[lo].define >= 0)
+        cbm__diag(c->ctx, CBM_NOTE, file, line, col, "the line uses the command line's %s",
+                  c->files.data[c->map.data[lo].define]);
+}
+
+void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file, int *line,
+                          int *col)
+{
+    *file = NULL;
+    *line = *col = 0;
+    if (!c->line_start.len)
+        return;
+    size_t lo = 0, hi = c->line_start.len;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (c->line_start.data[mid] <= pos)
+            lo = mid;
+        else
+            hi = mid;
     }
-    int col = (int)(pos - c->line_start.data[lo]) + 1;
+    if (lo < c->map.len) {
+        *file = c->files.data[c->map.data[lo].file];
+        *line = c->map.data[lo].line;
+    } else if (c->map.len) { /* the end of the text: after the last line */
+        *file = c->files.data[c->map.data[c->map.len - 1].file];
+        *line = c->map.data[c->map.len - 1].line;
+    } else if (c->files.len) { /* an empty file */
+        *file = c->files.data[0];
+        *line = 1;
+    }
+    *col = (int)(pos - c->line_start.data[lo]) + 1;
+}
+
+size_t cbm__node_pos(const cbm__compiler *c, int32_t node)
+{
+    return node >= 0 && (size_t)node < c->node_pos.len ? (size_t)c->node_pos.data[node] : 0;
+}
+
+cbm_status cbm__compiler_fail(const cbm__compiler *c, cbm_status s, size_t pos, const char *fmt,
+                              ...)
+{
+    const char *file;
+    int line, col;
+    cbm__compiler_locate(c, pos, &file, &line, &col);
     va_list ap;
     va_start(ap, fmt);
     cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
     va_end(ap);
+    return s;
 }
 
 void cbm__skip(cbm__compiler *c, bool nl)
@@ -141,7 +200,9 @@ static int32_t add_node(cbm__compiler *c, cbm__node n)
 {
     if (c->status != CBM_OK && c->status != CBM_E_SYNTAX)
         return -1;
-    if (CBM_ARRAY_PUSH(c->ctx, c->nodes, n) != CBM_OK) {
+    int32_t at = (int32_t)(c->pos < INT32_MAX ? c->pos : INT32_MAX);
+    if (CBM_ARRAY_PUSH(c->ctx, c->nodes, n) != CBM_OK ||
+        CBM_ARRAY_PUSH(c->ctx, c->node_pos, at) != CBM_OK) {
         c->status = CBM_E_NOMEM;
         c->fatal = true;
         return -1;
@@ -456,16 +517,27 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
     return -1;
 }
 
-static int32_t parse_unary(cbm__compiler *c, bool nl)
+/* One more level of nesting (parentheses, operators of a chain, ?:, else if, blocks): false
+ * after reporting that the limit is exceeded (the depth is then unchanged). Parsing and
+ * evaluation recurse once per level, so this bounds both. */
+static bool deeper(cbm__compiler *c)
 {
-    cbm__skip(c, nl);
     if (++c->depth > cbm_context_limits(c->ctx)->max_expr_depth) {
-        cbm__cerr(c, c->pos, "expression nested too deeply (limit %d)",
+        cbm__cerr(c, c->pos,
+                  "expression or statement nested too deeply (limit %d, --max-expr-depth)",
                   cbm_context_limits(c->ctx)->max_expr_depth);
         c->fatal = true;
         c->depth--;
-        return -1;
+        return false;
     }
+    return true;
+}
+
+static int32_t parse_unary(cbm__compiler *c, bool nl)
+{
+    cbm__skip(c, nl);
+    if (!deeper(c))
+        return -1;
     int32_t r;
     char ch = c->text[c->pos];
     if (ch == '-' && c->text[c->pos + 1] != '-') {
@@ -498,13 +570,18 @@ static int32_t parse_binary(cbm__compiler *c, bool nl, int level)
     if (level > 6)
         return parse_unary(c, nl);
     int32_t left = parse_binary(c, nl, level + 1);
+    int chain = 0;
     for (;;) {
-        if (left < 0)
+        if (left < 0) {
+            c->depth -= chain;
             return -1;
+        }
         cbm__skip(c, nl);
         const char *t = c->text + c->pos;
-        if (t[0] == '-' && t[1] == '-' && t[2] == '>')
+        if (t[0] == '-' && t[1] == '-' && t[2] == '>') {
+            c->depth -= chain;
             return left; /* the arrow of a production */
+        }
         int op = -1;
         size_t n = 0;
         for (size_t i = 0; i < sizeof OPS / sizeof OPS[0]; i++)
@@ -513,16 +590,23 @@ static int32_t parse_binary(cbm__compiler *c, bool nl, int level)
                 n = strlen(OPS[i].tok);
                 break;
             }
-        if (op < 0)
+        if (op < 0 ||
+            ((op == OP_LT || op == OP_GT) && (t[1] == '=' || (op == OP_LT && t[1] == '>')))) {
+            c->depth -= chain;
             return left;
-        if ((op == OP_LT || op == OP_GT) && (t[1] == '=' || (op == OP_LT && t[1] == '>')))
-            return left;
+        }
+        /* a chain a+b+c... is a left-deep tree evaluated recursively: each operator nests */
+        if (!deeper(c)) {
+            c->depth -= chain;
+            return -1;
+        }
+        chain++;
         c->pos += n;
         left = node2(c, op, left, parse_binary(c, nl, level + 1));
     }
 }
 
-static int32_t parse_ternary(cbm__compiler *c, bool nl)
+static int32_t parse_cond(cbm__compiler *c, bool nl)
 {
     int32_t cond = parse_binary(c, nl, 0);
     if (cond < 0)
@@ -543,6 +627,21 @@ static int32_t parse_ternary(cbm__compiler *c, bool nl)
         return n;
     }
     return -1;
+}
+
+/* An expression: `?:` chains (a ? b : c ? d : ...) nest like parentheses. The node gets the
+ * position where the expression starts, for runtime messages about its value. */
+static int32_t parse_ternary(cbm__compiler *c, bool nl)
+{
+    cbm__skip(c, nl);
+    size_t start = c->pos;
+    if (!deeper(c))
+        return -1;
+    int32_t r = parse_cond(c, nl);
+    c->depth--;
+    if (r >= 0 && (size_t)r < c->node_pos.len)
+        c->node_pos.data[r] = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
+    return r;
 }
 
 int32_t cbm__parse_expr(cbm__compiler *c, bool nl)
@@ -600,7 +699,21 @@ static int32_t parse_paren_cond(cbm__compiler *c, bool *ok, const char *open_wha
     return cond;
 }
 
+static int32_t parse_statement1(cbm__compiler *c, bool *ok);
+
+/* A statement; if, while and do nest (an else-if chain is as deep as it is long). */
 static int32_t parse_statement(cbm__compiler *c, bool *ok)
+{
+    if (!deeper(c)) {
+        *ok = false;
+        return -1;
+    }
+    int32_t r = parse_statement1(c, ok);
+    c->depth--;
+    return r;
+}
+
+static int32_t parse_statement1(cbm__compiler *c, bool *ok)
 {
     cbm__skip(c, true);
     size_t start = c->pos;
@@ -736,11 +849,8 @@ int32_t cbm__parse_block(cbm__compiler *c, bool *ok)
         *ok = false;
         return -1;
     }
-    if (++c->depth > cbm_context_limits(c->ctx)->max_expr_depth) {
-        cbm__cerr(c, c->pos, "blocks nested too deeply");
-        c->fatal = true;
+    if (!deeper(c)) {
         *ok = false;
-        c->depth--;
         return -1;
     }
     int32_t first = -1, last = -1;
@@ -1036,6 +1146,13 @@ static double call(cbm__eval *e, const cbm__node *n)
             e->error_msg = "biran(n, p): n is too large";
             return 0;
         }
+        /* n draws: operations of the step's budget like loop iterations */
+        if (n2 > 0 && (e->while_budget -= (long)n2) < 0) {
+            e->error = CBM_E_LIMIT;
+            e->error_msg = "biran(n, p) draws more than the step's limit of operations "
+                           "(--max-loop-iterations, --max-operations)";
+            return 0;
+        }
         int j = 0;
         for (int i = 1; i <= (int)n2; i++)
             j += cbm__rand48_next(&e->ran) <= a[1];
@@ -1074,8 +1191,11 @@ static double *array_elem(cbm__eval *e, const cbm__node *n, int32_t idx)
     for (int32_t i = idx; i >= 0; i = e->nodes[i].next, d++) {
         double v = cbm__eval_expr(e, i);
         if (!(v >= 0 && v < ar->dims[d])) {
-            e->error = CBM_E_RUNTIME;
-            e->error_msg = "array index out of range";
+            if (e->error == CBM_OK) {
+                e->error = CBM_E_RUNTIME;
+                e->error_msg = "array index out of range";
+                e->error_node = (int32_t)(n - e->nodes);
+            }
             return NULL;
         }
         off = off * (size_t)ar->dims[d] + (size_t)v;
@@ -1131,8 +1251,12 @@ double cbm__eval_expr(cbm__eval *e, int32_t i)
         return cbm__eval_expr(e, n->a) || cbm__eval_expr(e, n->b);
     case OP_COND:
         return cbm__eval_expr(e, n->a) ? cbm__eval_expr(e, n->b) : cbm__eval_expr(e, n->c);
-    case OP_CALL:
-        return call(e, n);
+    case OP_CALL: {
+        double r = call(e, n);
+        if (e->error != CBM_OK && e->error_node < 0)
+            e->error_node = i;
+        return r;
+    }
     default:
         cbm__eval_stmt(e, i);
         return 0;
@@ -1173,8 +1297,9 @@ void cbm__eval_stmt(cbm__eval *e, int32_t i)
             while (e->error == CBM_OK && cbm__eval_expr(e, n->a)) {
                 if (--e->while_budget < 0) {
                     e->error = CBM_E_LIMIT;
-                    e->error_msg =
-                        "while loops ran for more iterations than the limit (max_loop_iterations)";
+                    e->error_msg = "while loops ran for more iterations in one step than the "
+                                   "limit (--max-loop-iterations, --max-operations)";
+                    e->error_node = i;
                     return;
                 }
                 cbm__eval_stmt(e, n->b);

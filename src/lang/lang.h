@@ -11,8 +11,9 @@
 
 /* ---- preprocessor ---- */
 typedef struct cbm__pp_line {
-    int file; /* index into files */
-    int line; /* 1-based line in that file */
+    int file;   /* index into files */
+    int line;   /* 1-based line in that file */
+    int define; /* the line expands a -D NAME=VALUE: its text's index in files, else -1 */
 } cbm__pp_line;
 
 typedef struct cbm__pp {
@@ -136,6 +137,7 @@ typedef struct cbm__eval {
     void *func_ud;
     cbm_status error; /* first runtime error */
     const char *error_msg;
+    int32_t error_node; /* node of the first runtime error, -1: none known */
     bool stopped;
 } cbm__eval;
 
@@ -146,7 +148,12 @@ typedef struct cbm__compiler {
     const char *text;
     size_t pos;
     CBM_ARRAY(size_t) line_start; /* offset of each line of text */
+    /* the preprocessor's map back to the files, taken over from it so that runtime errors
+     * (after the preprocessed text is gone) still name file:line:col */
+    CBM_ARRAY(cbm__pp_line) map;
+    CBM_ARRAY(char *) files;
     CBM_ARRAY(cbm__node) nodes;
+    CBM_ARRAY(int32_t) node_pos;   /* text offset of each node (where it starts), for messages */
     CBM_ARRAY(char *) globals;     /* global variable names */
     CBM_ARRAY(int32_t) global_use; /* first use (a position) of a global that is only read */
     CBM_ARRAY(uint8_t) global_set; /* the global is assigned somewhere */
@@ -161,8 +168,17 @@ typedef struct cbm__compiler {
     cbm_status status;
 } cbm__compiler;
 
-cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, const cbm__pp *pp);
+/// Takes over the preprocessor's line map and file names (pp keeps its text).
+cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, cbm__pp *pp);
 void cbm__compiler_free(cbm__compiler *c);
+/// File, line and column of a text offset (file NULL when unknown).
+void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file, int *line,
+                          int *col);
+/// Text offset of a node, 0 when unknown.
+size_t cbm__node_pos(const cbm__compiler *c, int32_t node);
+/// Reports a runtime error at a text offset ("file:line:col: error: what: msg") and returns s.
+cbm_status cbm__compiler_fail(const cbm__compiler *c, cbm_status s, size_t pos, const char *fmt,
+                              ...) CBM_PRINTF(4, 5);
 /// Error at a text offset, "file:line:col: error: ...".
 void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...) CBM_PRINTF(3, 4);
 /// Skips blanks; newlines too when `nl` (inside parentheses or braces), and always a newline

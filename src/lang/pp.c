@@ -11,11 +11,14 @@
  * (-D NAME=VALUE) are locked: the file's own #define of that name is ignored, which is how
  * parameter studies override a model's constants.
  */
+#define _XOPEN_SOURCE 700
 #include "lang/lang.h"
 
 #include <ctype.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 typedef struct macro {
     char *name;
@@ -28,11 +31,18 @@ typedef struct macro {
 
 typedef CBM_ARRAY(char) sbuf;
 
+/* What one macro expansion counts toward max_pp_bytes besides the text it makes: macros that
+ * expand to little but many times (#define A1 A0 A0, A0 empty) are bounded in time too. */
+#define EXPANSION_COST 64
+
 typedef struct pp_state {
     cbm__pp *pp;
     CBM_ARRAY(macro) macros;
     int include_depth;
     cbm_status status;
+    bool limit_reported;      /* the expansion limit's error was given */
+    size_t work;              /* macro expansions so far, times EXPANSION_COST bytes */
+    const macro *used_define; /* a -D macro expanded in the line being processed */
 } pp_state;
 
 static bool is_id0(int c)
@@ -48,6 +58,12 @@ static void sb_put(pp_state *st, sbuf *b, const char *s, size_t n)
 {
     if (st->status != CBM_OK)
         return;
+    /* any buffer of the expansion (the text, a macro's replacement or argument) stays within
+     * max_pp_bytes: macros that double (#define A1 A0 A0 ...) stop here, not at the memory */
+    if (b->len + n + 1 > cbm_context_limits(st->pp->ctx)->max_pp_bytes) {
+        st->status = CBM_E_LIMIT;
+        return;
+    }
     if (CBM_ARRAY_RESERVE(st->pp->ctx, *b, b->len + n + 1) != CBM_OK) {
         st->status = CBM_E_NOMEM;
         return;
@@ -131,7 +147,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                 break;
             }
             if (!is_id0((unsigned char)*p)) {
-                err(st, file, line, 0, "%s", "expected a parameter name in the #define");
+                err(st, file, line, 1, "%s", "expected a parameter name in the #define");
                 free_macro(ctx, &m);
                 return;
             }
@@ -165,7 +181,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                 p++;
                 break;
             }
-            err(st, file, line, 0, "%s", "expected ',' or ')' in the #define parameters");
+            err(st, file, line, 1, "%s", "expected ',' or ')' in the #define parameters");
             free_macro(ctx, &m);
             return;
         }
@@ -230,11 +246,25 @@ static void substitute(pp_state *st, const macro *m, sbuf *args, sbuf *out)
     }
 }
 
+/* The expansion exceeded max_pp_bytes: one error, at the outermost macro when known. */
+static void limit_error(pp_state *st, int file, int line, int col, const char *macro_name)
+{
+    st->limit_reported = true;
+    size_t mb = cbm_context_limits(st->pp->ctx)->max_pp_bytes >> 20;
+    if (macro_name)
+        err(st, file, line, col,
+            "the expansion of macro '%s' makes the model larger than %zu MB (--max-expansion)",
+            macro_name, mb);
+    else
+        err(st, file, line, col, "the preprocessed model is larger than %zu MB (--max-expansion)",
+            mb);
+}
+
 static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, int file, int line)
 {
     cbm_context *ctx = st->pp->ctx;
     if (depth > cbm_context_limits(ctx)->max_expr_depth) {
-        err(st, file, line, 0, "%s", "macro expansion nested too deeply");
+        err(st, file, line, 1, "%s", "macro expansion nested too deeply");
         return;
     }
     size_t i = 0;
@@ -250,6 +280,15 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
             if (!m || m->active) {
                 sb_put(st, out, s + a, i - a);
                 continue;
+            }
+            if (m->locked && !st->used_define)
+                st->used_define = m;
+            st->work += EXPANSION_COST;
+            if (st->work > cbm_context_limits(ctx)->max_pp_bytes) {
+                st->status = CBM_E_LIMIT;
+                if (depth == 0 && !st->limit_reported)
+                    limit_error(st, file, line, (int)a + 1, m->name);
+                return;
             }
             sbuf rep = {0};
             if (m->nparams < 0) {
@@ -325,6 +364,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                 expand(st, rep.data, rep.len, out, depth + 1, file, line);
             m->active = false;
             CBM_ARRAY_FREE(ctx, rep);
+            if (st->status == CBM_E_LIMIT && depth == 0 && !st->limit_reported)
+                limit_error(st, file, line, (int)a + 1, m->name);
         } else if (isdigit(c) || (c == '.' && i + 1 < n && isdigit((unsigned char)s[i + 1]))) {
             size_t a = i;
             while (i < n &&
@@ -347,8 +388,12 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
 }
 
 /* Removes comments, keeping newlines and string literals. */
-static cbm_status strip_comments(cbm_context *ctx, const char *src, char **out, size_t *size)
+static cbm_status strip_comments(cbm_context *ctx, const char *src, char **out, size_t *size,
+                                 int *open_line, int *open_col)
 {
+    *open_line = 0;
+    int line = 1;
+    size_t line_start = 0;
     size_t n = strlen(src);
     *size = n + 1;
     char *d = cbm__alloc(ctx, n + 1);
@@ -357,12 +402,20 @@ static cbm_status strip_comments(cbm_context *ctx, const char *src, char **out, 
     size_t o = 0;
     for (size_t i = 0; i < n;) {
         if (src[i] == '/' && src[i + 1] == '*') {
+            int l0 = line, c0 = (int)(i - line_start) + 1;
             d[o++] = ' ';
             i += 2;
             while (i < n && !(src[i] == '*' && src[i + 1] == '/')) {
-                if (src[i] == '\n')
+                if (src[i] == '\n') {
                     d[o++] = '\n';
+                    line++;
+                    line_start = i + 1;
+                }
                 i++;
+            }
+            if (i >= n) { /* the rest of the file would silently vanish */
+                *open_line = l0;
+                *open_col = c0;
             }
             i = i < n ? i + 2 : n;
         } else if (src[i] == '/' && src[i + 1] == '/') {
@@ -380,6 +433,10 @@ static cbm_status strip_comments(cbm_context *ctx, const char *src, char **out, 
         } else if (src[i] == '\r') {
             i++;
         } else {
+            if (src[i] == '\n') {
+                line++;
+                line_start = i + 1;
+            }
             d[o++] = src[i++];
         }
     }
@@ -388,11 +445,31 @@ static cbm_status strip_comments(cbm_context *ctx, const char *src, char **out, 
     return CBM_OK;
 }
 
-static cbm_status read_file(cbm_context *ctx, const char *path, char **out)
+/* Why a file could not be read: what read_file found. */
+typedef struct read_err {
+    const char *why; /* "not a regular file", ... (CBM_E_IO) */
+    int line, col;   /* of a NUL byte (CBM_E_SYNTAX) */
+} read_err;
+
+/* Reads a model or included file. Only a regular file: a FIFO or a device would block or never
+ * end. A NUL byte is an error at its line and column (the text is a C string). */
+static cbm_status read_file(cbm_context *ctx, const char *path, char **out, read_err *re)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    memset(re, 0, sizeof *re);
+    struct stat stt;
+    if (stat(path, &stt) != 0) {
+        re->why = "cannot open it";
         return CBM_E_IO;
+    }
+    if (!S_ISREG(stt.st_mode)) {
+        re->why = "not a regular file";
+        return CBM_E_IO;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        re->why = "cannot open it";
+        return CBM_E_IO;
+    }
     sbuf b = {0};
     char tmp[65536];
     size_t k;
@@ -405,11 +482,22 @@ static cbm_status read_file(cbm_context *ctx, const char *path, char **out)
         memcpy(b.data + b.len, tmp, k);
         b.len += k;
     }
-    if (ferror(f) && s == CBM_OK)
+    if (ferror(f) && s == CBM_OK) {
+        re->why = "read error";
         s = CBM_E_IO;
+    }
     fclose(f);
     if (s == CBM_OK && CBM_ARRAY_RESERVE(ctx, b, b.len + 1) != CBM_OK)
         s = CBM_E_NOMEM;
+    const char *nul = s == CBM_OK && b.len ? memchr(b.data, 0, b.len) : NULL;
+    if (nul) {
+        re->line = re->col = 1;
+        for (const char *q = b.data; q < nul; q++) {
+            re->col = *q == '\n' ? 1 : re->col + 1;
+            re->line += *q == '\n';
+        }
+        s = CBM_E_SYNTAX;
+    }
     if (s != CBM_OK) {
         CBM_ARRAY_FREE(ctx, b);
         return s;
@@ -424,14 +512,52 @@ static cbm_status read_file(cbm_context *ctx, const char *path, char **out)
     return CBM_OK;
 }
 
+/* Whether path is inside the folder of the model (the first file) once links and ".." are
+ * resolved: #include reads the model's own files, not any file of the machine. */
+static bool include_allowed(const cbm__pp *pp, const char *path)
+{
+    char root[PATH_MAX], real[PATH_MAX], dir[PATH_MAX];
+    const char *model = pp->files.data[0];
+    const char *slash = strrchr(model, '/');
+    if (!slash || !strcmp(model, "<model>"))
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == model)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - model), model);
+    if (!realpath(dir, root) || !realpath(path, real))
+        return false;
+    size_t n = strlen(root);
+    if (n == 1) /* the model is in / */
+        return true;
+    return !strncmp(real, root, n) && real[n] == '/';
+}
+
 static void emit_line(pp_state *st, const char *s, size_t n, int file, int line)
 {
     cbm__pp *pp = st->pp;
     sb_put(st, (sbuf *)&pp->text, s, n);
     sb_put(st, (sbuf *)&pp->text, "\n", 1);
-    cbm__pp_line l = {file, line};
+    cbm__pp_line l = {file, line, -1};
+    if (st->used_define && st->status == CBM_OK) {
+        /* errors on this line will say which -D it expands (kept with the file names) */
+        const macro *m = st->used_define;
+        size_t dn = strlen(m->name) + strlen(m->body) + 5;
+        char *d = cbm__alloc(pp->ctx, dn);
+        if (d)
+            snprintf(d, dn, "-D %s=%s", m->name, m->body);
+        if (!d || CBM_ARRAY_PUSH(pp->ctx, pp->files, d) != CBM_OK) {
+            cbm__free(pp->ctx, d, dn);
+            st->status = CBM_E_NOMEM;
+        } else {
+            l.define = (int)pp->files.len - 1;
+        }
+        st->used_define = NULL;
+    }
     if (st->status == CBM_OK && CBM_ARRAY_PUSH(pp->ctx, pp->lines, l) != CBM_OK)
         st->status = CBM_E_NOMEM;
+    if (st->status == CBM_E_LIMIT && !st->limit_reported)
+        limit_error(st, file, line, 1, NULL);
 }
 
 static void process(pp_state *st, const char *src, int file);
@@ -444,7 +570,7 @@ static void include(pp_state *st, const char *arg, int file, int line)
     char close = *arg == '"' ? '"' : *arg == '<' ? '>' : 0;
     const char *e = close ? strchr(arg + 1, close) : NULL;
     if (!e) {
-        err(st, file, line, 0, "%s", "expected \"file\" after #include");
+        err(st, file, line, 1, "%s", "expected \"file\" after #include");
         return;
     }
     /* the built-in library of the L+C dialect and the C headers its models include */
@@ -458,7 +584,7 @@ static void include(pp_state *st, const char *arg, int file, int line)
             return;
         }
     if (st->include_depth >= 16) {
-        err(st, file, line, 0, "%s", "#include nested too deeply");
+        err(st, file, line, 1, "%s", "#include nested too deeply");
         return;
     }
     const char *cur = st->pp->files.data[file];
@@ -474,12 +600,24 @@ static void include(pp_state *st, const char *arg, int file, int line)
     memcpy(path + dl, arg + 1, fl);
     path[dl + fl] = 0;
     char *text = NULL;
-    cbm_status s = read_file(ctx, path, &text);
+    read_err re;
+    struct stat stt;
+    cbm_status s = CBM_E_IO;
+    if (stat(path, &stt) == 0 && !include_allowed(st->pp, path)) {
+        err(st, file, line, 1,
+            "#include \"%s\": outside the model's folder (a model includes its own files)", path);
+        cbm__strfree(ctx, path);
+        return;
+    }
+    s = read_file(ctx, path, &text, &re);
     if (s != CBM_OK) {
         if (s == CBM_E_NOMEM)
             st->status = s;
+        else if (s == CBM_E_SYNTAX)
+            err(st, file, line, 1, "included file '%s' has a NUL byte at line %d, column %d", path,
+                re.line, re.col);
         else
-            err(st, file, line, 0, "cannot read included file '%s'", path);
+            err(st, file, line, 1, "cannot read included file '%s': %s", path, re.why);
         cbm__strfree(ctx, path);
         return;
     }
@@ -500,10 +638,13 @@ static void process(pp_state *st, const char *raw, int file)
     cbm_context *ctx = st->pp->ctx;
     char *src = NULL;
     size_t src_size = 0;
-    if (strip_comments(ctx, raw, &src, &src_size) != CBM_OK) {
+    int open_line, open_col;
+    if (strip_comments(ctx, raw, &src, &src_size, &open_line, &open_col) != CBM_OK) {
         st->status = CBM_E_NOMEM;
         return;
     }
+    if (open_line)
+        err(st, file, open_line, open_col, "%s", "unterminated comment: '/*' without '*/'");
     /* conditional stack: each level is "taking lines" or not */
     bool take[64];
     bool seen_else[64];
@@ -554,7 +695,7 @@ static void process(pp_state *st, const char *raw, int file)
                     char *endp = NULL;
                     long val = ex.data ? strtol(ex.data, &endp, 0) : 0;
                     if (!ex.data || endp == ex.data)
-                        err(st, file, first, 0, "%s", "#if expects an integer constant");
+                        err(st, file, first, 1, "%s", "#if expects an integer constant");
                     v = val != 0;
                     CBM_ARRAY_FREE(ctx, ex);
                 } else {
@@ -569,7 +710,7 @@ static void process(pp_state *st, const char *raw, int file)
                         v = !v;
                 }
                 if (level >= 63) {
-                    err(st, file, first, 0, "%s", "conditionals nested too deeply");
+                    err(st, file, first, 1, "%s", "conditionals nested too deeply");
                 } else {
                     level++;
                     take[level] = active && v;
@@ -577,14 +718,14 @@ static void process(pp_state *st, const char *raw, int file)
                 }
             } else if (IS("else")) {
                 if (level == 0 || seen_else[level])
-                    err(st, file, first, 0, "%s", "#else without #if");
+                    err(st, file, first, 1, "%s", "#else without #if");
                 else {
                     seen_else[level] = true;
                     take[level] = take[level - 1] && !take[level];
                 }
             } else if (IS("endif")) {
                 if (level == 0)
-                    err(st, file, first, 0, "%s", "#endif without #if");
+                    err(st, file, first, 1, "%s", "#endif without #if");
                 else
                     level--;
             } else if (!active) {
@@ -630,7 +771,7 @@ static void process(pp_state *st, const char *raw, int file)
             emit_line(st, "", 0, file, first + k + 1);
     }
     if (level != 0 && st->status == CBM_OK)
-        err(st, file, line, 0, "%s", "missing #endif");
+        err(st, file, line, 1, "%s", "missing #endif");
     CBM_ARRAY_FREE(ctx, logical);
     cbm__free(ctx, src, src_size);
 }
@@ -668,14 +809,18 @@ cbm_status cbm__pp_run(cbm_context *ctx, const char *path, const char *text,
     }
     char *owned = NULL;
     if (st.status == CBM_OK && !text) {
-        cbm_status s = read_file(ctx, path, &owned);
+        read_err re;
+        cbm_status s = read_file(ctx, path, &owned, &re);
         if (s != CBM_OK) {
             for (size_t i = 0; i < st.macros.len; i++)
                 free_macro(ctx, &st.macros.data[i]);
             CBM_ARRAY_FREE(ctx, st.macros);
+            if (s == CBM_E_SYNTAX)
+                cbm__diag(ctx, CBM_ERROR, path, re.line, re.col,
+                          "a NUL byte (the model is a text file)");
             cbm__pp_free(pp);
             if (s == CBM_E_IO)
-                return cbm__fail(ctx, s, "%s: cannot read the model file", path);
+                return cbm__fail(ctx, s, "%s: cannot read the model file: %s", path, re.why);
             return s;
         }
         text = owned;

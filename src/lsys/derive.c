@@ -136,20 +136,79 @@ static bool match_pred(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos
 }
 
 /* Right context from r (the module after the predecessor). */
+/* Builds the bracket matching of the current string; false when memory refuses (the caller
+ * then scans). */
+static bool build_brackets(cbm_lsys *ls)
+{
+    const lstr *s = &ls->cur;
+    ls->brk_open.len = ls->brk_close.len = ls->brk_stack.len = 0;
+    lpos p = {0, 0, 0};
+    while (p.i < s->n) {
+        uint8_t c = s->sym[p.i] & 0x7f;
+        if (c == '[') {
+            size_t ord = ls->brk_open.len;
+            lpos none = {0, 0, 0};
+            if (CBM_ARRAY_PUSH(ls->ctx, ls->brk_open, p.i) != CBM_OK ||
+                CBM_ARRAY_PUSH(ls->ctx, ls->brk_close, none) != CBM_OK ||
+                CBM_ARRAY_PUSH(ls->ctx, ls->brk_stack, ord) != CBM_OK)
+                return false;
+        }
+        pos_next(s, &p);
+        if (c == ']' && ls->brk_stack.len)
+            ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
+    }
+    while (ls->brk_stack.len) /* unmatched: the branch runs to the end */
+        ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
+    ls->brk_gen = ls->cur_gen;
+    return true;
+}
+
+/* r is at a '[' of s: moves it after the matching ']' (or to the end). A jump through the
+ * bracket table for the current string, a scan otherwise. */
+static void skip_branch(cbm_lsys *ls, const lstr *s, lpos *r)
+{
+    if (s == &ls->cur && (ls->brk_gen == ls->cur_gen || build_brackets(ls))) {
+        size_t lo = 0, hi = ls->brk_open.len;
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (ls->brk_open.data[mid] < r->i)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        if (lo < ls->brk_open.len && ls->brk_open.data[lo] == r->i) {
+            *r = ls->brk_close.data[lo];
+            return;
+        }
+    }
+    pos_next(s, r);
+    int level = 0;
+    while (r->i < s->n) {
+        uint8_t d = s->sym[r->i] & 0x7f;
+        if (d == '[')
+            level++;
+        else if (d == ']' && level-- == 0)
+            break;
+        pos_next(s, r);
+    }
+    if (r->i < s->n)
+        pos_next(s, r);
+}
+
 static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
 {
     const fmodule *m = ls->fmods.data + pr->rc;
     int32_t k = 0;
     while (k < pr->nrc) {
-        if (m[k].sym == '=') { /* skip to the end of the branch */
-            int level = 0;
+        if (m[k].sym == '=') { /* skip to the end of the branch, over the branches in it */
             while (r.i < s->n) {
                 uint8_t c = s->sym[r.i] & 0x7f;
-                if (c == '[')
-                    level++;
-                else if (c == ']' && level-- == 0)
+                if (c == ']')
                     break;
-                pos_next(s, &r);
+                if (c == '[')
+                    skip_branch(ls, s, &r);
+                else
+                    pos_next(s, &r);
             }
             k++;
             continue;
@@ -160,18 +219,7 @@ static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int sl
         if (ls->ign[c]) {
             pos_next(s, &r);
         } else if (m[k].sym != '[' && c == '[') {
-            pos_next(s, &r);
-            int level = 0;
-            while (r.i < s->n) {
-                uint8_t d = s->sym[r.i] & 0x7f;
-                if (d == '[')
-                    level++;
-                else if (d == ']' && level-- == 0)
-                    break;
-                pos_next(s, &r);
-            }
-            if (r.i < s->n)
-                pos_next(s, &r);
+            skip_branch(ls, s, &r);
         } else {
             if (c != m[k].sym || mod_np(s, &r) != m[k].np)
                 return false;
@@ -256,6 +304,32 @@ static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *e
     return true;
 }
 
+/* A module parameter is infinite or NaN (division by zero, overflow, beyond float's range in
+ * float32 mode): a runtime error at the expression, or with limits.allow_nonfinite a warning
+ * (once per run) and the value is kept. Returns whether to go on. */
+static bool nonfinite(cbm_lsys *ls, int32_t expr)
+{
+    if (!cbm_context_limits(ls->ctx)->allow_nonfinite) {
+        if (ls->ev.error == CBM_OK) {
+            ls->ev.error = CBM_E_RUNTIME;
+            ls->ev.error_msg = "a module parameter is not a finite number (--allow-nonfinite "
+                               "keeps it)";
+            ls->ev.error_node = expr;
+        }
+        return false;
+    }
+    if (!ls->nonfinite_warned) {
+        ls->nonfinite_warned = true;
+        const char *file;
+        int line, col;
+        cbm__compiler_locate(&ls->comp, cbm__node_pos(&ls->comp, expr), &file, &line, &col);
+        cbm__diag(ls->ctx, CBM_WARNING, file, line, col,
+                  "a module parameter is not a finite number (kept: --allow-nonfinite; further "
+                  "ones are not reported)");
+    }
+    return true;
+}
+
 /* Appends the successor of pr (parameters evaluated with the bound frame). */
 static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
 {
@@ -281,12 +355,18 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
         int k = 0;
         if (dst->f32) {
             float *out = (float *)dst->par + dst->npar;
-            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
-                out[k++] = (float)cbm__eval_expr(&ls->ev, a);
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next) {
+                out[k] = (float)cbm__eval_expr(&ls->ev, a);
+                if (!isfinite(out[k++]) && !nonfinite(ls, a))
+                    return ls->ev.error;
+            }
         } else {
             double *out = (double *)dst->par + dst->npar;
-            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next)
-                out[k++] = cbm__eval_expr(&ls->ev, a);
+            for (int32_t a = m[i].args; a >= 0; a = ls->comp.nodes.data[a].next) {
+                out[k] = cbm__eval_expr(&ls->ev, a);
+                if (!isfinite(out[k++]) && !nonfinite(ls, a))
+                    return ls->ev.error;
+            }
         }
         dst->npar += m[i].np;
     }
@@ -331,6 +411,12 @@ static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpo
         return depth > 0 ? copy_module(ls->ctx, src, p, dst) : CBM_OK;
     }
     *applied = true;
+    /* a production applied in a decomposition or homomorphism is an operation: one that
+     * doubles to its maximum depth stops at the budget, not at the memory */
+    if (--ls->ops < 0)
+        return cbm__compiler_fail(&ls->comp, CBM_E_LIMIT, pr->pos,
+                                  "more productions applied in one step than the limit "
+                                  "(--max-operations)");
     lstr *buf = &ls->scratch.data[depth];
     lstr_clear(buf);
     CBM_TRY(append_succ(ls, pr, buf));
@@ -359,15 +445,40 @@ static cbm_status prepare_scratch(cbm_lsys *ls, int depth)
     return CBM_OK;
 }
 
+/* The loop budget of a step or block: the model's max_loop_iterations or the context's limit,
+ * and no more than the operations limit (the cpfg dialect has no functions: its operations are
+ * its loop iterations). */
+static long loop_budget(const cbm_lsys *ls)
+{
+    const cbm_limits *lim = cbm_context_limits(ls->ctx);
+    long b = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
+    return lim->max_operations < b ? lim->max_operations : b;
+}
+
+/* A runtime error of the expressions becomes a failure with its message, at the expression
+ * where it happened when known; the evaluator is cleared for the next call. */
+static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
+{
+    if (ls->ev.error != CBM_OK) {
+        cbm_status e = ls->ev.error;
+        int32_t node = ls->ev.error_node;
+        ls->ev.error = CBM_OK;
+        ls->ev.error_node = -1;
+        if (node >= 0)
+            return cbm__compiler_fail(&ls->comp, e, cbm__node_pos(&ls->comp, node), "%s: %s", what,
+                                      ls->ev.error_msg);
+        return cbm__fail(ls->ctx, e, "%s: %s", what, ls->ev.error_msg);
+    }
+    return s;
+}
+
 static cbm_status run_block(cbm_lsys *ls, int32_t block, const char *what)
 {
     if (block < 0)
         return CBM_OK;
-    ls->ev.while_budget = ls->loop_budget;
+    ls->ev.while_budget = loop_budget(ls);
     cbm__eval_stmt(&ls->ev, block);
-    if (ls->ev.error != CBM_OK)
-        return cbm__fail(ls->ctx, ls->ev.error, "%s: %s", what, ls->ev.error_msg);
-    return CBM_OK;
+    return runtime_fail(ls, CBM_OK, what);
 }
 
 /* Block `which` (0 Start, 1 StartEach, 2 EndEach, 3 End) of every L-system, in file order
@@ -557,6 +668,7 @@ static cbm_status derive(cbm_lsys *ls)
     cbm_status s = derive_scan(ls, &rel);
     if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
         lstr_clear(&ls->cur);
+        ls->cur_gen++;
         ls->homo_valid = false;
     }
     return s;
@@ -691,18 +803,6 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
     return CBM_OK;
 }
 
-/* A runtime error of the expressions becomes a failure with its message; the evaluator is
- * cleared for the next call. */
-static cbm_status runtime_fail(cbm_lsys *ls, cbm_status s, const char *what)
-{
-    if (ls->ev.error != CBM_OK) {
-        cbm_status e = ls->ev.error;
-        ls->ev.error = CBM_OK;
-        return cbm__fail(ls->ctx, e, "%s: %s", what, ls->ev.error_msg);
-    }
-    return s;
-}
-
 cbm_status cbm_lsys_step(cbm_lsys *ls)
 {
     if (ls->lp)
@@ -715,7 +815,8 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
         CBM_TRY(cbm_lsys_interpret(ls));
     ls->globals[ls->q_slot] = ls->steps + 1;
     CBM_TRY(run_blocks(ls, 1, "StartEach"));
-    ls->ev.while_budget = ls->loop_budget;
+    ls->ev.while_budget = loop_budget(ls);
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     cbm_status s = derive(ls);
     if (s != CBM_OK) {
         char what[64];
@@ -732,6 +833,7 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     lstr t = ls->cur;
     ls->cur = ls->next;
     ls->next = t;
+    ls->cur_gen++;
     ls->steps++;
     ls->homo_valid = false;
     CBM_TRY(run_blocks(ls, 2, "EndEach"));
@@ -760,6 +862,8 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ls->ev.nran_have = 1;
     ls->ev.nran_cached = 0;
     ls->ev.error = CBM_OK;
+    ls->ev.error_node = -1;
+    ls->nonfinite_warned = false;
     ls->ev.stopped = false;
     ls->ev.func = ls->func;
     ls->ev.func_ud = ls->func_ud;
@@ -776,14 +880,15 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
     CBM_TRY(run_blocks(ls, 0, "Start"));
     lstr_clear(&ls->cur);
+    ls->cur_gen++;
     prod ax = {
         .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
     ax.const_succ = false;
     ls->ev.params = ls->frame;
-    CBM_TRY(append_succ(ls, &ax, &ls->cur));
-    if (!runtime_ok(ls))
-        return cbm__fail(ls->ctx, ls->ev.error, "axiom: %s", ls->ev.error_msg);
-    return CBM_OK;
+    ls->ev.while_budget = loop_budget(ls);
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
+    cbm_status s = append_succ(ls, &ax, &ls->cur);
+    return runtime_fail(ls, s, "axiom");
 }
 
 static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
@@ -796,6 +901,7 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
     lstr *out = &ls->homo_str;
     lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->max_depth));
+    ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     const lstr *cur = &ls->cur;
     if (ls->subcalls) {
         /* each L-system's homomorphism with a seed: has its own stream, restarted here */

@@ -238,6 +238,7 @@ typedef struct xn {
     int16_t type;
     int32_t a, b, c, d, next;
     int32_t slot;
+    int32_t pos; /* text offset where the parser made it, for runtime messages */
     double v;
 } xn;
 
@@ -331,7 +332,11 @@ struct lpfg {
     CBM_ARRAY(lstr) scratch;
     cbm_status err;
     char errmsg[160];
-    long budget;
+    int32_t at;      /* text offset of the statement being executed (runtime messages) */
+    int32_t err_pos; /* where the first runtime error happened, -1: unknown */
+    long budget;     /* loop iterations left in this step (limits.max_loop_iterations) */
+    long ops;        /* calls and loop iterations left in this step (limits.max_operations) */
+    bool nonfinite_warned;
     cbm__mechlang mech; /* mechanics: declarations and settings */
     /* models with mechanics: the module of the string each module of the interpretation came
      * from (empty: the interpretation is the string itself) */
@@ -697,6 +702,7 @@ static int32_t node(lc *L, xn n)
 {
     if (fatal(L))
         return -1;
+    n.pos = (int32_t)(L->c->pos < INT32_MAX ? L->c->pos : INT32_MAX);
     if (CBM_ARRAY_PUSH(L->c->ctx, L->lp->nodes, n) != CBM_OK) {
         L->c->status = CBM_E_NOMEM;
         L->c->fatal = true;
@@ -761,6 +767,7 @@ static int declare_local(lc *L, const char *name, size_t len, int type)
 
 /* ---------------------------------------------------------------- expressions */
 static int32_t expr(lc *L);
+static int32_t expr1(lc *L);
 static int32_t assign_expr(lc *L);
 
 static int arith_type(int a, int b)
@@ -1185,16 +1192,28 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
     return -1;
 }
 
+/* One more level of nesting (operators of a chain, ?:, assignments): false after reporting that
+ * the limit is exceeded. Parsing and evaluation recurse once per level. */
+static bool deeper(lc *L)
+{
+    if (++L->depth > cbm_context_limits(L->c->ctx)->max_expr_depth) {
+        L->depth--;
+        cbm__cerr(L->c, L->c->pos,
+                  "expression or statement nested too deeply (limit %d, --max-expr-depth)",
+                  cbm_context_limits(L->c->ctx)->max_expr_depth);
+        L->c->fatal = true;
+        return false;
+    }
+    return true;
+}
+
 static int32_t primary(lc *L)
 {
     skip(L);
     size_t pos = L->c->pos;
     const char *s = L->t + pos;
-    if (++L->depth > cbm_context_limits(L->c->ctx)->max_expr_depth) {
-        L->depth--;
-        cbm__cerr(L->c, pos, "expression nested too deeply");
+    if (!deeper(L))
         return -1;
-    }
     int32_t r = -1;
     if (isdigit((unsigned char)s[0]) || (s[0] == '.' && isdigit((unsigned char)s[1]))) {
         char *end;
@@ -1479,10 +1498,18 @@ static int32_t binary(lc *L, int32_t a, const binop *op, int32_t b, size_t pos)
 static int32_t binexpr(lc *L, int minprec)
 {
     int32_t a = primary(L);
+    int chain = 0; /* a+b+c... is a left-deep tree: each operator nests */
     for (;;) {
         const binop *op = peek_binop(L);
-        if (!op || op->prec < minprec || a < 0)
+        if (!op || op->prec < minprec || a < 0) {
+            L->depth -= chain;
             return a;
+        }
+        if (!deeper(L)) {
+            L->depth -= chain;
+            return -1;
+        }
+        chain++;
         size_t pos = L->c->pos;
         L->c->pos += strlen(op->s);
         int32_t b = binexpr(L, op->prec + 1);
@@ -1490,7 +1517,18 @@ static int32_t binexpr(lc *L, int minprec)
     }
 }
 
+static int32_t ternary1(lc *L);
+
 static int32_t ternary(lc *L)
+{
+    if (!deeper(L))
+        return -1;
+    int32_t r = ternary1(L);
+    L->depth--;
+    return r;
+}
+
+static int32_t ternary1(lc *L)
 {
     int32_t c = binexpr(L, 1);
     if (c < 0 || !accept(L, "?"))
@@ -1541,7 +1579,10 @@ static int32_t assign_expr(lc *L)
         }
         L->c->pos += n;
         size_t p2 = L->c->pos;
+        if (!deeper(L))
+            return -1;
         int32_t r = assign_expr(L);
+        L->depth--;
         if (r < 0)
             return -1;
         int lt = ND(l).type;
@@ -1567,6 +1608,16 @@ static int32_t assign_expr(lc *L)
 }
 
 static int32_t expr(lc *L)
+{
+    skip(L);
+    size_t start = L->c->pos;
+    int32_t a = expr1(L);
+    if (a >= 0)
+        ND(a).pos = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
+    return a;
+}
+
+static int32_t expr1(lc *L)
 {
     int32_t a = assign_expr(L);
     while (a >= 0 && accept(L, ",")) {
@@ -1800,12 +1851,8 @@ static int32_t statement(lc *L)
 {
     skip(L);
     size_t pos = L->c->pos;
-    if (++L->depth > cbm_context_limits(L->c->ctx)->max_expr_depth) {
-        L->depth--;
-        cbm__cerr(L->c, pos, "statements nested too deeply");
-        L->c->fatal = true;
+    if (!deeper(L))
         return -1;
-    }
     int32_t r = -1;
     int t;
     if (peek(L, "{")) {
@@ -1948,6 +1995,8 @@ static int32_t statement(lc *L)
             recover_stmt(L);
     }
     L->depth--;
+    if (r >= 0)
+        ND(r).pos = (int32_t)(pos < INT32_MAX ? pos : INT32_MAX);
     return r;
 }
 
@@ -2616,7 +2665,9 @@ static void parse_top(lc *L)
         } else if (accept_kw(L, "group")) {
             size_t p2 = L->c->pos;
             int32_t e = const_int(L, "group");
-            if (e >= 0 && ND(e).op == N_NUM)
+            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
+                cbm__cerr(L->c, p2, "group %g is out of range (an int)", ND(e).v);
+            else if (e >= 0 && ND(e).op == N_NUM)
                 group = (int)ND(e).v;
             else if (e >= 0)
                 cbm__cerr(L->c, p2, "group needs a number");
@@ -2678,8 +2729,27 @@ static void rt_error(lpfg *lp, cbm_status s, const char *msg)
 {
     if (lp->err == CBM_OK) {
         lp->err = s;
+        lp->err_pos = lp->at;
         snprintf(lp->errmsg, sizeof lp->errmsg, "%s", msg);
     }
+}
+
+/* Takes one operation (a call or a loop iteration) from the step's budgets; false after
+ * reporting the limit. */
+static bool spend(lpfg *lp, bool loop)
+{
+    if (--lp->ops < 0) {
+        rt_error(lp, CBM_E_LIMIT,
+                 "more productions applied, function calls and loop iterations in one step "
+                 "than the limit (--max-operations)");
+        return false;
+    }
+    if (loop && --lp->budget < 0) {
+        rt_error(lp, CBM_E_LIMIT,
+                 "more loop iterations in one step than the limit (--max-loop-iterations)");
+        return false;
+    }
+    return true;
 }
 
 static double *lv_ptr(lpfg *lp, const xn *n, double *fr)
@@ -3148,8 +3218,13 @@ static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     const lfunc *f = &lp->funcs.data[n->slot];
-    if (lp->call_depth >= 256 || lp->sp + (size_t)f->fsize + 1 > lp->stack_cap) {
-        rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply");
+    if (lp->call_depth >= cbm_context_limits(ls->ctx)->max_call_depth ||
+        lp->sp + (size_t)f->fsize + 1 > lp->stack_cap) {
+        rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
+        memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
+        return;
+    }
+    if (!spend(lp, false)) {
         memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
         return;
     }
@@ -3164,9 +3239,11 @@ static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
     }
     lp->call_depth++;
     double *saved = lp->ret;
+    int32_t at = lp->at;
     memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
     lp->ret = out;
     exec(ls, f->body, nf);
+    lp->at = at;
     off = 0;
     i = 0;
     for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next, i++) {
@@ -3598,6 +3675,34 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
     return true;
 }
 
+/* A parameter of a produced module is infinite or NaN (division by zero, overflow): an error
+ * at the argument's expression, or with limits.allow_nonfinite a warning (once per run) and
+ * the value is kept. Returns whether to go on. */
+static bool nonfinite(cbm_lsys *ls, int32_t pos, const char *module)
+{
+    lpfg *lp = ls->lp;
+    if (!cbm_context_limits(ls->ctx)->allow_nonfinite) {
+        char msg[160];
+        snprintf(msg, sizeof msg,
+                 "a parameter of %.60s is not a finite number (--allow-nonfinite keeps it)",
+                 module);
+        rt_error(lp, CBM_E_RUNTIME, msg);
+        lp->err_pos = pos;
+        return false;
+    }
+    if (!lp->nonfinite_warned) {
+        lp->nonfinite_warned = true;
+        const char *file;
+        int line, col;
+        cbm__compiler_locate(&ls->comp, (size_t)pos, &file, &line, &col);
+        cbm__diag(ls->ctx, CBM_WARNING, file, line, col,
+                  "a parameter of %s is not a finite number (kept: --allow-nonfinite; further "
+                  "ones are not reported)",
+                  module);
+    }
+    return true;
+}
+
 static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
 {
     lpfg *lp = ls->lp;
@@ -3611,7 +3716,11 @@ static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
          * of a static type is representable in it (results are rounded where computed) */
         for (int32_t x = sm->args; x >= 0; x = lp->nodes.data[x].next, a++) {
             ev(ls, x, fr, v + off);
-            off += tsize(lp, m->ptype[a]);
+            int sz = tsize(lp, m->ptype[a]);
+            for (int q = 0; q < sz; q++)
+                if (!isfinite(v[off + q]) && !nonfinite(ls, lp->nodes.data[x].pos, m->name))
+                    return lp->err;
+            off += sz;
         }
         CBM_TRY(push_mod(ls->ctx, out, m->code, v, m->size));
     }
@@ -3627,6 +3736,7 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
         if (lp->err != CBM_OK)
             return X_RETURN;
         const xn *n = &lp->nodes.data[ni];
+        lp->at = n->pos;
         double tmp[MAXSZ + 1];
         int r;
         switch (n->op) {
@@ -3666,10 +3776,8 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
                         break;
                 }
                 first = false;
-                if (--lp->budget < 0) {
-                    rt_error(lp, CBM_E_LIMIT, "loop iterations exceed the limit");
+                if (!spend(lp, true))
                     return X_RETURN;
-                }
                 r = exec(ls, n->op == S_FOR ? n->d : n->b, fr);
                 if (r == X_BREAK)
                     break;
@@ -3735,11 +3843,21 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
 }
 
 /* ---------------------------------------------------------------- derivation */
+/* The execution budgets of a step (and of the Start block, global initialisers and axiom). */
+static void budgets(cbm_lsys *ls)
+{
+    const cbm_limits *lim = cbm_context_limits(ls->ctx);
+    ls->lp->budget = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
+    ls->lp->ops = lim->max_operations;
+}
+
 static cbm_status run_error(cbm_lsys *ls, const char *what)
 {
     lpfg *lp = ls->lp;
     cbm_status s = lp->err;
     lp->err = CBM_OK;
+    if (lp->err_pos >= 0)
+        return cbm__compiler_fail(&ls->comp, s, (size_t)lp->err_pos, "%s: %s", what, lp->errmsg);
     return cbm__fail(ls->ctx, s, "%s: %s", what, lp->errmsg);
 }
 
@@ -3813,6 +3931,11 @@ static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i,
             size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
             lp->out = out;
             lp->produced = false;
+            /* a production applied is an operation: a decomposition that doubles to its
+             * maximum depth stops at the budget */
+            lp->at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
+            if (!spend(lp, false))
+                return 0;
             exec(ls, pr->body, fr);
             if (lp->err != CBM_OK)
                 return 0;
@@ -3827,7 +3950,8 @@ static cbm_status copy_at(cbm_context *ctx, const lstr *src, size_t i, size_t j,
                           lstr *dst)
 {
     int np = (src->sym[i] & LSYS_PARAM_BIT) ? src->pc[j] : 0;
-    return push_mod(ctx, dst, src->sym[i] & 0x7f, (const double *)src->par + k, np);
+    /* a string without parameters has no parameter array (NULL + 0 is undefined) */
+    return push_mod(ctx, dst, src->sym[i] & 0x7f, np ? (const double *)src->par + k : NULL, np);
 }
 
 static cbm_status check_size(cbm_lsys *ls, const lstr *s)
@@ -3962,7 +4086,7 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
-    lp->budget = ls->loop_budget;
+    budgets(ls);
     CBM_TRY(run_block(ls, 1));
     lp->rewriting = true;
     cbm_status s = generate(ls);
@@ -3993,7 +4117,9 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     memset(lp->glob, 0, (size_t)(lp->nglobal + 1) * sizeof(double));
     lp->err = CBM_OK;
-    lp->budget = ls->loop_budget;
+    lp->at = lp->err_pos = -1;
+    lp->nonfinite_warned = false;
+    budgets(ls);
     lp->backward = false;
     lp->group = 0;
     lp->call_depth = 0;
@@ -4028,9 +4154,10 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     lp->sp = 0;
     lp->out = &ls->cur;
-    CBM_TRY(produce(ls, lp->axiom.first, lp->axiom.n, lp->stack));
+    cbm_status ps = produce(ls, lp->axiom.first, lp->axiom.n, lp->stack);
     if (lp->err != CBM_OK)
         return run_error(ls, "axiom");
+    CBM_TRY(ps);
     return decompose_cur(ls);
 }
 
@@ -4039,6 +4166,7 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     ls->homo_str.n = ls->homo_str.npm = ls->homo_str.npar = 0;
     lp->origin.len = 0;
+    budgets(ls);
     cbm_status s;
     if (!lp->interp.present || !lp->interp.prods.len)
         s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
@@ -4256,7 +4384,7 @@ static int eval_depth(cbm_lsys *ls, lset *s, int dflt)
         int32_t e = -2 - s->depth;
         ls->lp->sp = 0;
         double v = evs(ls, e, ls->lp->stack);
-        return v < 0 ? 0 : v > 1e6 ? 1000000 : (int)v;
+        return !(v >= 0) ? 0 : v > 1e6 ? 1000000 : (int)v; /* NaN: 0 */
     }
     return dflt;
 }

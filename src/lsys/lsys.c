@@ -118,6 +118,9 @@ void cbm_lsys_destroy(cbm_lsys *ls)
         cbm__lstr_free(ctx, &ls->scratch.data[i]);
     CBM_ARRAY_FREE(ctx, ls->scratch);
     cbm__lpfg_free(ls);
+    CBM_ARRAY_FREE(ctx, ls->brk_open);
+    CBM_ARRAY_FREE(ctx, ls->brk_close);
+    CBM_ARRAY_FREE(ctx, ls->brk_stack);
     CBM_ARRAY_FREE(ctx, ls->appl);
     CBM_ARRAY_FREE(ctx, ls->applp);
     cbm__compiler_free(&ls->comp);
@@ -146,7 +149,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->ignore_seed = def->ignore_seed;
     ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = def->float32;
     ls->seed_override = def->seed;
-    ls->loop_budget = def->max_loop_iterations > 0 ? def->max_loop_iterations : 100000000;
+    ls->loop_budget = def->max_loop_iterations; /* 0: the context's limit */
     ls->start_block = ls->end_block = ls->start_each = ls->end_each = -1;
     ls->dlength_expr = ls->seed_expr = -1;
     ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
@@ -210,6 +213,8 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->ev.globals = ls->globals;
     ls->ev.arrays = ls->comp.arrays.data;
     ls->ev.params = ls->frame;
+    ls->ev.error_node = -1;
+    ls->cur_gen = 1;
     *out = ls;
     return CBM_OK;
 }

@@ -104,7 +104,16 @@ struct cbm_lsys {
     bool float32;
     bool ignore_seed;
     int64_t seed_override; /* -1: none */
-    long loop_budget;
+    long loop_budget;      /* the model's max_loop_iterations, 0: the context's limit */
+    bool nonfinite_warned; /* the warning of limits.allow_nonfinite was given */
+    long ops;              /* productions applied in decomposition / homomorphism: budget left */
+    /* bracket matching of the current string, built on the first right-context match that
+     * skips a branch in it (brk_gen == cur_gen): skipping a branch is then a jump, not a scan,
+     * so right contexts stay linear in the bracket depth */
+    CBM_ARRAY(size_t) brk_open; /* module index of every '[', in order */
+    CBM_ARRAY(lpos) brk_close;  /* the position after its ']' (the end when unmatched) */
+    CBM_ARRAY(size_t) brk_stack;
+    unsigned cur_gen, brk_gen; /* cur_gen changes whenever the current string does */
     double (*func)(void *ud, int id, double x);
     void *func_ud;
     cbm_lsys_interpret_fn interp;

@@ -662,7 +662,12 @@ cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp)
         }
     }
     if (!c->fatal) {
-        if (!p.have_lsystem)
+        size_t blank = 0;
+        while (pp->text.data[blank] && isspace((unsigned char)pp->text.data[blank]))
+            blank++;
+        if (!p.have_lsystem && !pp->text.data[blank])
+            cbm__cerr(c, c->pos, "the model is empty (expected 'Lsystem:')");
+        else if (!p.have_lsystem)
             cbm__cerr(c, c->pos, "expected 'Lsystem:'");
         else if (!p.have_axiom)
             cbm__cerr(c, p.lsys_pos, "the L-system has no axiom:");

@@ -34,6 +34,10 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
     cd.limits.max_steps = 50;
     cd.limits.max_decomp_depth = 20;
     cd.limits.max_expr_depth = 64;
+    /* every input ends quickly: a step's calls, loops and productions, and the expansion */
+    cd.limits.max_operations = 200000;
+    cd.limits.max_loop_iterations = 100000;
+    cd.limits.max_pp_bytes = 4u << 20;
     cbm_context *ctx = NULL;
     if (cbm_context_create(&cd, &ctx) != CBM_OK) {
         free(text);

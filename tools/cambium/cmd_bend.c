@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #define MAX_SPEC_BYTES (1u << 20)
@@ -18,12 +19,13 @@
 
 static void help(void)
 {
-    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json]\n\n"
+    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [limits]\n\n"
            "Solves one branch or rod described by SPEC (key = value lines; see docs/bend.md)\n"
            "for static equilibrium. -o writes the node table (.csv: s,x,y,z,angle_deg,\n"
            "curvature,moment,stress; SI units, degrees) or the summary (.json); --json prints\n"
            "the summary (tip_x, tip_y, tip_z, tip_angle_deg, base_moment, passes, residual,\n"
-           "seconds, ...) on stdout.\n");
+           "seconds, ...) on stdout.\n\n%s",
+           cli_limits_help);
 }
 
 static double now(void)
@@ -35,6 +37,10 @@ static double now(void)
 
 static char *read_spec(const char *path, size_t *len)
 {
+    /* only a regular file: a FIFO or a device would block or never end */
+    struct stat st;
+    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return NULL;
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
@@ -77,6 +83,11 @@ int cmd_bend(int argc, char **argv)
     int nout = 0;
     bool json = false;
     for (int i = 1; i < argc; i++) {
+        int lr = cli_limit_option("bend", argc, argv, &i);
+        if (lr < 0)
+            return CLI_USAGE;
+        if (lr > 0)
+            continue;
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             help();
             return CLI_OK;
@@ -103,6 +114,8 @@ int cmd_bend(int argc, char **argv)
     }
     if (!spec_path)
         return cli_usage_error("bend", "expected a SPEC file (see cambium bend --help)");
+    if (cli_check_outputs(outs, nout) != CLI_OK)
+        return CLI_FAIL;
 
     size_t len = 0;
     char *text = read_spec(spec_path, &len);

@@ -17,7 +17,7 @@ static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--params] [--report]\n"
+           "                    [--params] [--report] [--seeds A-B] [limits]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
            "wild or crooked aspen, from a parameter file or a built-in model (default\n"
@@ -43,7 +43,7 @@ static void help(void)
            "built-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
-    printf("\n\n%s", cli_output_help);
+    printf("\n\n%s\n%s", cli_limits_help, cli_output_help);
 }
 
 static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete);
@@ -339,6 +339,8 @@ int cmd_grow(int argc, char **argv)
             return CLI_OK;
         }
         int r = cli_output_option("grow", argc, argv, &i, &o);
+        if (r == 0)
+            r = cli_limit_option("grow", argc, argv, &i);
         if (r < 0)
             return CLI_USAGE;
         if (r > 0)
@@ -430,6 +432,13 @@ int cmd_grow(int argc, char **argv)
                                    "%s: unknown format (.png .svg .glb .obj .ply .csv .mtg "
                                    ".json, or FORMAT:PATH)",
                                    outs[k]);
+    }
+    {
+        const char *paths[MAX_OUTPUTS];
+        for (int k = 0; k < nout; k++)
+            paths[k] = kind[k] == 0 ? targets[k].path : outs[k];
+        if (cli_check_outputs(paths, nout) != CLI_OK)
+            return CLI_FAIL;
     }
     if (!model)
         model = "fruit-tree";

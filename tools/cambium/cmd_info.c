@@ -13,6 +13,7 @@
 #include "commands.h"
 
 #include <dirent.h>
+#include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -275,17 +276,95 @@ static size_t json_array_count(const char *js, size_t n, const char *key)
     return any ? count + 1 : 0;
 }
 
-static int info_glb(const unsigned char *b, size_t n)
+/* Whether js[0..n) is one JSON object: brackets and braces nest and match, strings close,
+ * and nothing but blanks follows (a structural check, enough to refuse a broken file). */
+static bool json_object_ok(const char *js, size_t n)
 {
-    if (n < 20 || memcmp(b, "glTF", 4) || le32(b + 16) != 0x4E4F534A) {
-        printf("  not a glTF binary file\n");
+    char stack[256];
+    int depth = 0;
+    size_t i = 0;
+    while (i < n && isspace((unsigned char)js[i]))
+        i++;
+    if (i >= n || js[i] != '{')
+        return false;
+    for (; i < n; i++) {
+        char c = js[i];
+        if (c == '"') {
+            for (i++; i < n && js[i] != '"'; i++)
+                if (js[i] == '\\')
+                    i++;
+            if (i >= n)
+                return false;
+        } else if (c == '{' || c == '[') {
+            if (depth == (int)sizeof stack)
+                return false;
+            stack[depth++] = c == '{' ? '}' : ']';
+        } else if (c == '}' || c == ']') {
+            if (depth == 0 || stack[--depth] != c)
+                return false;
+            if (depth == 0)
+                break;
+        } else if (c == 0) {
+            return false;
+        }
+    }
+    if (depth != 0 || i >= n)
+        return false;
+    for (i++; i < n; i++)
+        if (!isspace((unsigned char)js[i]) && js[i] != 0)
+            return false;
+    return true;
+}
+
+/* The layout of a binary glTF: header (magic, version 2, total length = file size), a JSON
+ * chunk holding one object with "asset", then chunks that fit exactly. NULL when it is sound,
+ * else what is wrong. */
+static const char *glb_problem(const unsigned char *b, size_t n)
+{
+    if (n < 20 || memcmp(b, "glTF", 4))
+        return "not a glTF binary file";
+    if (le32(b + 4) != 2)
+        return "not glTF version 2";
+    if (le32(b + 8) != n)
+        return "the length in its header is not the file's length";
+    if (le32(b + 16) != 0x4E4F534A)
+        return "the first chunk is not JSON";
+    size_t off = 12;
+    while (off < n) {
+        if (n - off < 8)
+            return "truncated chunk header";
+        size_t len = le32(b + off);
+        if (len % 4 || len > n - off - 8)
+            return "a chunk runs past the end of the file";
+        off += 8 + len;
+    }
+    size_t jl = le32(b + 12);
+    if (!json_object_ok((const char *)b + 20, jl))
+        return "its JSON chunk is not a well-formed JSON object";
+    bool asset = false, null_bound = false;
+    const char *js = (const char *)b + 20;
+    for (size_t i = 0; i + 7 <= jl; i++) {
+        if (!memcmp(js + i, "\"asset\"", 7))
+            asset = true;
+        if (i + 12 <= jl &&
+            (!memcmp(js + i, "\"max\":[null", 12) || !memcmp(js + i, "\"min\":[null", 12)))
+            null_bound = true;
+    }
+    if (!asset)
+        return "its JSON has no \"asset\"";
+    if (null_bound)
+        return "an accessor has a null (non-finite) min or max";
+    return NULL;
+}
+
+static int info_glb(const char *path, const unsigned char *b, size_t n)
+{
+    const char *problem = glb_problem(b, n);
+    if (problem) {
+        fprintf(stderr, "cambium: %s: malformed glTF: %s\n", path, problem);
         return CLI_FAIL;
     }
     size_t jl = le32(b + 12);
-    if (20 + jl > n) {
-        printf("  truncated glTF file\n");
-        return CLI_FAIL;
-    }
     char *js = malloc(jl + 1);
     if (!js)
         return CLI_FAIL;
@@ -917,7 +996,7 @@ int cmd_info(int argc, char **argv)
     else if (!strcmp(ext, "ply"))
         info_ply(t);
     else if (!strcmp(ext, "glb"))
-        rc = info_glb((const unsigned char *)t, n);
+        rc = info_glb(path, (const unsigned char *)t, n);
     else if (!strcmp(ext, "png"))
         rc = info_png((const unsigned char *)t, n);
     else if (!strcmp(ext, "svg"))

@@ -24,6 +24,7 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -110,8 +111,7 @@ static void usage(void)
 {
     printf("usage: cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N]\n"
            "                  [-o OUT]... [--every K] [--homomorphism] [--float32]\n"
-           "                  [--max-modules N] [--max-memory MB] [--timing]\n"
-           "                  [output options]\n\n"
+           "                  [--timing] [limits] [output options]\n\n"
            "Derives an L-system (cpfg or L+C dialect), interprets it with the turtle and\n"
            "writes the outputs. Without -o prints a one-line summary.\n"
            "  SIDE FILES        by extension: .v view file, .func/.fset functions, .s surface,\n"
@@ -131,13 +131,10 @@ static void usage(void)
            "  --homomorphism    write the string after the homomorphism\n"
            "  --float32         follow cpfg exactly: float32 parameters, seed: ignored as in\n"
            "                    cpfg's batch mode\n"
-           "  --max-modules N   stop when the string would exceed N modules\n"
-           "  --max-memory MB   stop when the library would hold more than MB megabytes\n"
-           "                    (default: 3/4 of the physical memory; 0: no limit)\n"
            "  --timing          print the time and memory of each phase to stderr\n"
            "  --no-print        discard what the model prints (printf); it goes to stdout,\n"
-           "                    or to stderr when an output is written to stdout\n\n%s",
-           cli_output_help);
+           "                    or to stderr when an output is written to stdout\n\n%s\n%s",
+           cli_limits_help, cli_output_help);
 }
 
 /* NAME.EXT -> NAME.0003.EXT */
@@ -191,6 +188,24 @@ static cbm_status interpret(run *r, int step)
         return s;
     r->prims = cbm_turtle_prim_count(t);
     r->has_box = cbm_turtle_box(t, &r->lo, &r->hi);
+    /* the scene and its writers hold single-precision coordinates: a drawing beyond float's
+     * range (F(1e39)) would write inf vertices and a glTF with null bounds */
+    double far = 0;
+    if (r->has_box) {
+        const double c[6] = {r->lo.x, r->lo.y, r->lo.z, r->hi.x, r->hi.y, r->hi.z};
+        for (int q = 0; q < 6; q++)
+            far = isfinite(c[q]) && fabs(c[q]) <= far ? far
+                  : isfinite(c[q])                    ? fabs(c[q])
+                                                      : INFINITY;
+    }
+    if (far > FLT_MAX) {
+        cbm_turtle_destroy(t);
+        fprintf(stderr,
+                "cambium: step %d: the turtle drew beyond single precision (a coordinate of %g "
+                "m; the outputs store floats)\n",
+                step, far);
+        return CBM_E_NONFINITE;
+    }
     size_t pixel = cbm_turtle_pixel_segments(t);
     cbm_turtle_destroy(t);
     /* pictures beside meshes: a second pass in line mode when the step has pixel lines (the
@@ -415,7 +430,7 @@ int cmd_run(int argc, char **argv)
     size_t nside = 0;
     target targets[MAX_OUTPUTS];
     int ntargets = 0;
-    long steps = -1, every = 0, seed = -1, max_modules = 0, max_memory = -1;
+    long steps = -1, every = 0, seed = -1;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
     cbm_write_options wopt = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
@@ -426,12 +441,13 @@ int cmd_run(int argc, char **argv)
             return CLI_OK;
         }
         int r = cli_output_option("run", argc, argv, &i, &wopt);
+        if (r == 0)
+            r = cli_limit_option("run", argc, argv, &i);
         if (r < 0)
             return CLI_USAGE;
         if (r > 0)
             continue;
-        if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed") ||
-            !strcmp(a, "--max-modules") || !strcmp(a, "--max-memory")) {
+        if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed")) {
             long v;
             if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0 ||
                 ((!strcmp(a, "-n") || !strcmp(a, "--every")) && v > 100000000))
@@ -443,14 +459,8 @@ int cmd_run(int argc, char **argv)
                 steps = v;
             else if (!strcmp(a, "--every"))
                 every = v;
-            else if (!strcmp(a, "--seed"))
-                seed = v;
-            else if (!strcmp(a, "--max-memory") && (unsigned long)v > (SIZE_MAX >> 21))
-                return cli_usage_error("run", "--max-memory: %ld MB is too large", v);
-            else if (!strcmp(a, "--max-memory"))
-                max_memory = v;
             else
-                max_modules = v;
+                seed = v;
         } else if (!strncmp(a, "-D", 2)) {
             const char *d = a[2] ? a + 2 : (has_next ? argv[++i] : NULL);
             if (!d || !*d || *d == '=' || ndefines >= 256)
@@ -492,6 +502,13 @@ int cmd_run(int argc, char **argv)
     }
     if (!model)
         return cli_usage_error("run", "expected a MODEL.l");
+    {
+        const char *paths[MAX_OUTPUTS];
+        for (int k = 0; k < ntargets; k++)
+            paths[k] = targets[k].path;
+        if (cli_check_outputs(paths, ntargets) != CLI_OK)
+            return CLI_FAIL;
+    }
     for (int k = 0; k < ntargets; k++)
         if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
             strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))
@@ -504,18 +521,9 @@ int cmd_run(int argc, char **argv)
             cli_set_model_output(stderr);
     if (no_print)
         cli_set_model_output(NULL);
+    /* the limits of the command line (a run that would exhaust the machine stops with a
+     * message: the strings, the scene and the writers' buffers count) */
     cbm_context *ctx = cli_context();
-    cbm_limits lim = *cbm_context_limits(ctx);
-    if (max_modules > 0)
-        lim.max_modules = (size_t)max_modules;
-    /* a run that would exhaust the machine stops with a message instead: by default at 3/4 of
-     * the physical memory (the strings, the scene and the writers' buffers count) */
-    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-    if (max_memory < 0 && pages > 0 && page > 0)
-        lim.max_bytes = (size_t)pages / 4 * 3 * (size_t)page;
-    else if (max_memory > 0)
-        lim.max_bytes = (size_t)max_memory << 20;
-    cbm_context_set_limits(ctx, &lim);
     run r = {0};
     r.ctx = ctx;
     r.wopt = wopt;

@@ -4,9 +4,12 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "commands.h"
 
@@ -38,9 +41,119 @@ void cli_set_model_output(FILE *f)
     model_output = f;
 }
 
+/* The limits of the command line: the library's defaults, a memory limit that keeps a run well
+ * below the machine's memory, and what the options asked. */
+static cbm_limits limits;
+static bool limits_ready;
+
+static cbm_limits *cli_limits(void)
+{
+    if (!limits_ready) {
+        limits = cbm_context_def_default().limits;
+        /* 4 GiB, or half the physical memory on a smaller machine */
+        size_t lim = (size_t)4 << 30;
+        long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+        if (pages > 0 && page > 0 && (size_t)pages / 2 < lim / (size_t)page)
+            lim = (size_t)pages / 2 * (size_t)page;
+        limits.max_bytes = lim;
+        limits_ready = true;
+    }
+    return &limits;
+}
+
+const char cli_limits_help[] =
+    "limits (per run; docs/cli.md):\n"
+    "  --max-memory MB        memory the library may hold (default 4096 or half the\n"
+    "                         physical memory; 0: no limit)\n"
+    "  --max-modules N        modules in the L-system string (default 2^31)\n"
+    "  --max-steps N          derivation steps (default 10^6)\n"
+    "  --max-operations N     function calls and loop iterations in one step (10^8)\n"
+    "  --max-loop-iterations N  loop iterations in one step (10^8)\n"
+    "  --max-call-depth N     nested function calls (256)\n"
+    "  --max-expr-depth N     nesting of expressions and statements, operator chains\n"
+    "                         included (200, at most 1000)\n"
+    "  --max-decomp-depth N   maximum depth of decomposition and interpretation (1000)\n"
+    "  --max-expansion MB     size of the preprocessed model text, each macro\n"
+    "                         expansion counting 64 bytes (64)\n"
+    "  --max-segments N       mechanical segments of one plant (2^28)\n"
+    "  --allow-nonfinite      a module parameter that is inf or NaN is a warning (kept),\n"
+    "                         not an error\n";
+
+int cli_limit_option(const char *cmd, int argc, char **argv, int *i)
+{
+    static const char *const NAMES[] = {
+        "--max-memory",          "--max-modules",    "--max-steps",      "--max-operations",
+        "--max-loop-iterations", "--max-call-depth", "--max-expr-depth", "--max-decomp-depth",
+        "--max-expansion",       "--max-segments"};
+    const char *a = argv[*i];
+    cbm_limits *l = cli_limits();
+    if (!strcmp(a, "--allow-nonfinite")) {
+        l->allow_nonfinite = true;
+        return 1;
+    }
+    size_t k = 0;
+    while (k < sizeof NAMES / sizeof NAMES[0] && strcmp(a, NAMES[k]))
+        k++;
+    if (k == sizeof NAMES / sizeof NAMES[0])
+        return 0;
+    long v;
+    if (*i + 1 >= argc || !cli_parse_long(argv[*i + 1], &v) || v < 0) {
+        cli_usage_error(cmd, "%s expects a non-negative integer", a);
+        return -1;
+    }
+    /* the megabytes become bytes */
+    /* the depths are ints; nesting recurses on the stack, so its limit stays where the
+     * default 8 MB stack holds (parsing and evaluation take up to ~3 kB a level) */
+    bool is_int = k >= 5 && k <= 7;
+    if ((is_int && v > (k == 6 ? 1000 : 1000000)) ||
+        ((k == 0 || k == 8) && (unsigned long)v > (SIZE_MAX >> 21))) {
+        cli_usage_error(cmd, "%s: %ld is too large", a, v);
+        return -1;
+    }
+    if (v == 0 && k != 0) {
+        cli_usage_error(cmd, "%s must be at least 1", a);
+        return -1;
+    }
+    (*i)++;
+    switch (k) {
+    case 0:
+        l->max_bytes = (size_t)v << 20;
+        break;
+    case 1:
+        l->max_modules = (size_t)v;
+        break;
+    case 2:
+        l->max_steps = (size_t)v;
+        break;
+    case 3:
+        l->max_operations = v;
+        break;
+    case 4:
+        l->max_loop_iterations = v;
+        break;
+    case 5:
+        l->max_call_depth = (int)v;
+        break;
+    case 6:
+        l->max_expr_depth = (int)v;
+        break;
+    case 7:
+        l->max_decomp_depth = (int)v;
+        break;
+    case 8:
+        l->max_pp_bytes = (size_t)v << 20;
+        break;
+    default:
+        l->max_segments = (size_t)v;
+        break;
+    }
+    return 1;
+}
+
 cbm_context *cli_context(void)
 {
     cbm_context_def def = cbm_context_def_default();
+    def.limits = *cli_limits();
     def.diag = print_diag;
     def.output = print_output;
     cbm_context *ctx = NULL;
@@ -132,8 +245,36 @@ static void usage(FILE *f)
     fprintf(f, "\n'cambium COMMAND --help' describes a command. Units are SI.\n");
 }
 
+/* SIGINT, SIGTERM, SIGHUP: remove the temporary files of the outputs being written, then die
+ * of the signal as before. */
+static void on_signal(int sig)
+{
+    cbm_out_remove_temporaries();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+int cli_check_outputs(const char *const *paths, int n)
+{
+    cbm_context *ctx = NULL;
+    int rc = CLI_OK;
+    for (int k = 0; k < n && rc == CLI_OK; k++) {
+        if (!ctx)
+            ctx = cli_context();
+        cbm_status s = cbm_out_check(ctx, paths[k]);
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, "output");
+    }
+    if (ctx)
+        cli_context_end(ctx);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    signal(SIGHUP, on_signal);
     if (argc < 2) {
         usage(stderr);
         return CLI_USAGE;
