@@ -95,7 +95,9 @@ shorten() {
             why="$why 3 years;"
         fi
     fi
-    if grep -qE -- '-o ([^ ]*\.png|png:)' <<<"$c" && ! grep -q -- '--size' <<<"$c"; then
+    # (cambium plot's pictures are cheap and take --size WxH: left as printed)
+    if grep -qE -- '-o ([^ ]*\.png|png:)' <<<"$c" && ! grep -q -- '--size' <<<"$c" &&
+        ! grep -qE '^(build/bin/)?cambium plot ' <<<"$c"; then
         c="$c --size 200 --ao 1 --supersample 1"
         why="$why 200-pixel pictures;"
     fi
