@@ -708,6 +708,46 @@ TEST(lpfg_line_widths)
     test_ctx_end(ctx);
 }
 
+/* How many vertices of scene part `cur` lie on its first ring (at distance r0 from p0, the
+ * connection's first control point) and how many of those are vertices of part `prev` too, at
+ * the same point with the same normal (no gap, no seam); *rmin: the nearest of `cur`'s vertices
+ * to p0 (a pinched cylinder would come close to its spine). */
+static void first_ring_shared(const cbm_scene *scene, size_t prev, size_t cur, cbm_vec3 p0,
+                              double r0, size_t *ring, size_t *matched, double *rmin)
+{
+    size_t nt = cbm_scene_triangle_count(scene);
+    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
+    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
+    *ring = *matched = 0;
+    *rmin = INFINITY;
+    for (size_t i = 0; i < nt; i++) {
+        if (tp[i] != cur)
+            continue;
+        for (int k = 0; k < 3; k++) {
+            const cbm_scene_vertex *a = &v[tri[3 * i + (size_t)k]];
+            cbm_vec3 d = {a->p[0] - p0.x, a->p[1] - p0.y, a->p[2] - p0.z};
+            double r = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+            *rmin = fmin(*rmin, r);
+            if (fabs(r - r0) > 1e-5 * fmax(1, r0))
+                continue; /* not on the first ring */
+            (*ring)++;
+            bool found = false;
+            for (size_t j = 0; j < nt && !found; j++) {
+                if (tp[j] != prev)
+                    continue;
+                for (int m = 0; m < 3 && !found; m++) {
+                    const cbm_scene_vertex *b = &v[tri[3 * j + (size_t)m]];
+                    found = !memcmp(a->p, b->p, sizeof a->p) && fabs(a->n[0] - b->n[0]) +
+                                                                        fabs(a->n[1] - b->n[1]) +
+                                                                        fabs(a->n[2] - b->n[2]) <
+                                                                    1e-6;
+                }
+            }
+            *matched += found;
+        }
+    }
+}
+
 /* An axis drawn as one generalized cylinder (StartGC, SetWidth PointGC at every node): the
  * first ring of each connection is the last ring of the one before, point for point and normal
  * for normal (no gap, no seam), across a branch opened on the way; the radius never reaches 0;
@@ -730,9 +770,6 @@ TEST(lpfg_gc_axis_is_continuous)
                            NULL, scene);
     /* parts: the axis's three connections and the lateral's one, in the order drawn */
     CHECK_EQ_INT(cbm_scene_part_count(scene), 4);
-    size_t nt = cbm_scene_triangle_count(scene);
-    const uint32_t *tri = cbm_scene_triangles(scene), *tp = cbm_scene_triangle_parts(scene);
-    const cbm_scene_vertex *v = cbm_scene_vertices(scene);
     /* the axis's connections are parts 0, 2, 3: each one's start ring (its vertices on the
      * plane through its first control point) must be vertices of the previous connection */
     static const uint32_t axis[3] = {0, 2, 3};
@@ -742,32 +779,7 @@ TEST(lpfg_gc_axis_is_continuous)
         const cbm_prim *pr = nth_prim(t, CBM_PRIM_GCYL, (size_t)(c == 1 ? 2 : 3));
         if (!pr)
             break;
-        for (size_t i = 0; i < nt; i++) {
-            if (tp[i] != axis[c])
-                continue;
-            for (int k = 0; k < 3; k++) {
-                const cbm_scene_vertex *a = &v[tri[3 * i + (size_t)k]];
-                cbm_vec3 d = {a->p[0] - pr->p0.x, a->p[1] - pr->p0.y, a->p[2] - pr->p0.z};
-                double r = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-                rmin = fmin(rmin, r);
-                if (fabs(r - pr->r0) > 1e-5)
-                    continue; /* not on the first ring */
-                ring++;
-                bool found = false;
-                for (size_t j = 0; j < nt && !found; j++) {
-                    if (tp[j] != axis[c - 1])
-                        continue;
-                    for (int m = 0; m < 3 && !found; m++) {
-                        const cbm_scene_vertex *b = &v[tri[3 * j + (size_t)m]];
-                        found = !memcmp(a->p, b->p, sizeof a->p) &&
-                                fabs(a->n[0] - b->n[0]) + fabs(a->n[1] - b->n[1]) +
-                                        fabs(a->n[2] - b->n[2]) <
-                                    1e-6;
-                    }
-                }
-                matched += found;
-            }
-        }
+        first_ring_shared(scene, axis[c - 1], axis[c], pr->p0, pr->r0, &ring, &matched, &rmin);
         CHECK_MSG(ring > 0 && matched == ring,
                   "connection %d: %zu of %zu first-ring vertices shared", c, matched, ring);
         CHECK_MSG(rmin > 0.04, "connection %d: a vertex %g from its first control point", c, rmin);
@@ -778,6 +790,89 @@ TEST(lpfg_gc_axis_is_continuous)
               "lateral r0 %g y %g", lat ? lat->r0 : -1, lat ? lat->p0.y : -1);
     cbm_turtle_destroy(t);
     cbm_scene_destroy(scene);
+    test_ctx_end(ctx);
+}
+
+/* The shipped L+C models draw each axis as one generalized cylinder (issue 9): the S-shaped
+ * branch (one axis) and the cherries (three stems) as drawn, at the end of their runs. No
+ * internode is a cylinder of its own: every mechanical segment is one connection of its axis's
+ * cylinder, from its proximal to its distal node (the segment table's positions) with the
+ * diameters 2a at its ends, and every connection after an axis's first starts on the last ring
+ * of the one before, point for point and normal for normal, never pinched (no vertex nearer
+ * its spine than half its radius). */
+static void check_model_axes(cbm_context *ctx, const char *model, size_t axes, size_t segs)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/%s", test_source_dir(), model);
+    cbm_model_def def = {cbm_lsys_def_default(), NULL, 0};
+    def.lsys.path = path;
+    cbm_model *m = NULL;
+    cbm_scene *scene = NULL;
+    cbm_turtle *t = NULL;
+    cbm_plant *pl = NULL;
+    CHECK_OK(cbm_model_load(ctx, &def, &m));
+    CHECK_OK(cbm_scene_create(ctx, &scene));
+    if (!m || !scene) {
+        cbm_model_destroy(m);
+        cbm_scene_destroy(scene);
+        return;
+    }
+    CHECK_OK(cbm_model_reset(m));
+    for (int k = 0; k < cbm_lsys_derivation_length(cbm_model_lsys(m)); k++)
+        CHECK_OK(cbm_model_step(m));
+    CHECK_OK(cbm_model_interpret(m, scene, true, &t));
+    CHECK_OK(cbm_lsys_mech_plant(cbm_model_lsys(m), &pl));
+    size_t n = pl ? cbm_plant_segment_count(pl) : 0;
+    CHECK_EQ_INT(n, segs);
+    CHECK_MSG(!nth_prim(t, CBM_PRIM_CYLINDER, 0), "%s: an internode drawn as a cylinder", model);
+    /* the connections in string order, one per segment, their parts (the branch parts: the
+     * cherries are parts too) in the same order */
+    const cbm_part *parts = cbm_scene_parts(scene);
+    size_t starts = 0, np = cbm_scene_part_count(scene), nb = 0;
+    enum { MAXP = 64 };
+    size_t branch[MAXP];
+    for (size_t k = 0; k < np && nb < MAXP; k++)
+        if (parts[k].organ == CBM_ORGAN_BRANCH)
+            branch[nb++] = k;
+    CHECK_EQ_INT(nb, n);
+    for (size_t i = 0; i < n; i++) {
+        const cbm_prim *pr = nth_prim(t, CBM_PRIM_GCYL, i);
+        cbm_segment_state x;
+        CHECK_OK(cbm_plant_segment(pl, i, &x));
+        if (!pr)
+            break;
+        double e = fabs(pr->p0.x - x.proximal.x) + fabs(pr->p0.y - x.proximal.y) +
+                   fabs(pr->p0.z - x.proximal.z) + fabs(pr->p1.x - x.distal.x) +
+                   fabs(pr->p1.y - x.distal.y) + fabs(pr->p1.z - x.distal.z);
+        CHECK_MSG(e < 1e-5 * x.length && fabs(pr->r1 - x.a) < 1e-6 * x.a,
+                  "%s: connection %zu off its segment by %g (r1 %.17g, a %.17g, length %g)", model,
+                  i, e, pr->r1, x.a, x.length);
+        bool first = i == 0 || x.parent < 0 || (size_t)x.parent != i - 1;
+        starts += first;
+        if (first || i >= nb)
+            continue;
+        size_t ring = 0, matched = 0;
+        double rmin = INFINITY;
+        first_ring_shared(scene, branch[i - 1], branch[i], pr->p0, pr->r0, &ring, &matched, &rmin);
+        CHECK_MSG(ring > 0 && matched == ring,
+                  "%s: connection %zu: %zu of %zu first-ring vertices shared", model, i, matched,
+                  ring);
+        CHECK_MSG(rmin > 0.5 * pr->r0, "%s: connection %zu pinched: a vertex %g from its start",
+                  model, i, rmin);
+    }
+    CHECK_EQ_INT(starts, axes);
+    CHECK(!nth_prim(t, CBM_PRIM_GCYL, n)); /* no connection beyond the segments */
+    cbm_plant_destroy(pl);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(scene);
+    cbm_model_destroy(m);
+}
+
+TEST(lpfg_model_axes_are_continuous)
+{
+    cbm_context *ctx = test_ctx();
+    check_model_axes(ctx, "jirasek-s-branch.l", 1, 30);
+    check_model_axes(ctx, "jirasek-cherries.l", 3, 24);
     test_ctx_end(ctx);
 }
 
