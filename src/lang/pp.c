@@ -457,7 +457,7 @@ static cbm_status read_file(cbm_context *ctx, const char *path, char **out, read
 {
     memset(re, 0, sizeof *re);
     struct stat stt;
-    if (stat(path, &stt) != 0) {
+    if (!path || stat(path, &stt) != 0) {
         re->why = "cannot open it";
         return CBM_E_IO;
     }

@@ -64,7 +64,7 @@ static bool parse_range(const char *s, double *lo, double *hi)
         return false;
     memcpy(a, s, la);
     a[la] = '\0';
-    strcpy(b, colon + 1);
+    memcpy(b, colon + 1, strlen(colon + 1) + 1);
     *lo = *hi = NAN;
     if (*a && !cli_parse_double(a, lo))
         return false;

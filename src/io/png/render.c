@@ -589,9 +589,9 @@ static cbm_status draw_legend(cbm_image *img, const cbm_scene *s, const cbm_writ
             int y = top + k * step;
             fill_rect(img, bx, y, bx + bw, y + step - 2 * px, rgb);
             snprintf(lab, sizeof lab, "%d", k);
+            int ty = y + (step - 2 * px + 7 * px) / 2; /* the label's baseline, whole pixels */
             if (st == CBM_OK)
-                st = cbm__font_draw(img, bx + bw + 4 * px, y + (step - 2 * px + 7 * px) / 2, fs,
-                                    CBM__TEXT_LEFT, lab, ink);
+                st = cbm__font_draw(img, bx + bw + 4 * px, ty, fs, CBM__TEXT_LEFT, lab, ink);
         }
         return st;
     }
