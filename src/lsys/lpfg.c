@@ -295,6 +295,19 @@ typedef struct walk {
     int dir;
 } walk;
 
+/* The bracket matching of a string walked by a right context: for every SB (in the order of the
+ * string) the walk position of its EB, so that skipping a branch is a jump, not a scan, and
+ * right contexts stay linear in the bracket depth. Extended lazily up to the string's end: the
+ * current string is fixed during a step, the new string only grows. */
+typedef struct brtab {
+    const lstr *s; /* the string it describes, NULL: none */
+    int dir;       /* the walks it serves: +1 the current string, -1 the new (reversed) one */
+    walk at;       /* the scan: modules before it.i are in the table */
+    CBM_ARRAY(size_t) open; /* index of every SB, increasing */
+    CBM_ARRAY(walk) close;  /* the EB matching it; i = -1: none */
+    CBM_ARRAY(walk) stack;  /* the brackets waiting for their match */
+} brtab;
+
 typedef struct lpfg lpfg;
 struct lpfg {
     CBM_ARRAY(ltype) types;
@@ -328,6 +341,7 @@ struct lpfg {
     bool produced; /* produce executed */
     int prod_ix;
     walk scan[CX_N];
+    brtab brk[2]; /* during generate: [0] the current string, [1] the new one going Backward */
     lstr succ;
     CBM_ARRAY(lstr) scratch;
     cbm_status err;
@@ -3570,9 +3584,104 @@ static bool find_closing(walk *w, int opener, int closer, bool forward)
     return false;
 }
 
-static bool find_eob(walk *w, int sbc, int ebc)
+/* Scans t's string up to its end; false when memory refuses (the table is then dropped and
+ * the walks scan). Going forward an SB waits for its EB; in the reversed new string an EB comes
+ * first and waits for the SB appended later. */
+static bool brtab_extend(cbm_context *ctx, brtab *t, int sbc, int ebc)
 {
+    walk *p = &t->at;
+    while ((size_t)p->i < t->s->n) {
+        int c = w_code(p);
+        walk none = *p;
+        none.i = -1;
+        bool ok = true;
+        if (c == sbc) {
+            walk m = none;
+            if (t->dir < 0 && t->stack.len)
+                m = t->stack.data[--t->stack.len];
+            ok = CBM_ARRAY_PUSH(ctx, t->open, (size_t)p->i) == CBM_OK &&
+                 CBM_ARRAY_PUSH(ctx, t->close, m) == CBM_OK;
+            if (ok && t->dir > 0) {
+                walk ord = none; /* the SB's order in `open` */
+                ord.i = (ptrdiff_t)t->open.len - 1;
+                ok = CBM_ARRAY_PUSH(ctx, t->stack, ord) == CBM_OK;
+            }
+        } else if (c == ebc) {
+            if (t->dir < 0)
+                ok = CBM_ARRAY_PUSH(ctx, t->stack, *p) == CBM_OK;
+            else if (t->stack.len)
+                t->close.data[t->stack.data[--t->stack.len].i] = *p;
+        }
+        if (!ok) {
+            t->s = NULL;
+            return false;
+        }
+        w_phys_next(p);
+    }
+    return true;
+}
+
+/* w is at an SB: the EB that matches it, through the table; false: no table for this walk. */
+static bool brtab_jump(lpfg *lp, cbm_context *ctx, walk *w, int sbc, int ebc)
+{
+    brtab *t = &lp->brk[w->dir > 0 ? 0 : 1];
+    if (!t->s || t->s != w->s || t->dir != w->dir || !brtab_extend(ctx, t, sbc, ebc))
+        return false;
+    size_t lo = 0, hi = t->open.len;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (t->open.data[mid] < (size_t)w->i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    if (lo == t->open.len || t->open.data[lo] != (size_t)w->i)
+        return false;
+    *w = t->close.data[lo];
+    return true;
+}
+
+static void brtab_start(lpfg *lp, int k, const lstr *s, int dir)
+{
+    brtab *t = &lp->brk[k];
+    t->s = s;
+    t->dir = dir;
+    t->at = walk_at(s, 0, 0, 0, dir);
+    t->open.len = t->close.len = t->stack.len = 0;
+}
+
+static void brtab_free(cbm_context *ctx, brtab *t)
+{
+    CBM_ARRAY_FREE(ctx, t->open);
+    CBM_ARRAY_FREE(ctx, t->close);
+    CBM_ARRAY_FREE(ctx, t->stack);
+    t->s = NULL;
+}
+
+/* w is at an SB: moves it to the EB that closes the branch; false when there is none */
+static bool skip_branch(const cbm_lsys *ls, walk *w, int sbc, int ebc)
+{
+    walk at = *w;
+    if (brtab_jump(ls->lp, ls->ctx, w, sbc, ebc))
+        return w->i >= 0; /* i = -1: unmatched, the walk leaves the string */
+    *w = at;
+    w_adv(w);
     return find_closing(w, sbc, ebc, true);
+}
+
+/* find_closing forward, jumping over the branches inside through the bracket table */
+static bool find_eob(const cbm_lsys *ls, walk *w, int sbc, int ebc)
+{
+    while (w_ok(w)) {
+        int c = w_code(w);
+        if (c == ebc)
+            return true;
+        if (c == sbc && !skip_branch(ls, w, sbc, ebc))
+            return false;
+        if (!w_adv(w))
+            return false;
+    }
+    return false;
 }
 
 static bool find_bob(walk *w, int sbc, int ebc)
@@ -3580,20 +3689,20 @@ static bool find_bob(walk *w, int sbc, int ebc)
     return find_closing(w, ebc, sbc, false);
 }
 
-static bool accept_right(const lpfg *lp, walk *w, int code)
+static bool accept_right(const cbm_lsys *ls, walk *w, int code)
 {
+    const lpfg *lp = ls->lp;
     int sbc = lp->mods.data[lp->sb].code, ebc = lp->mods.data[lp->eb].code;
     if (!w_ok(w))
         return false;
-    if (code == ebc && !find_eob(w, sbc, ebc))
+    if (code == ebc && !find_eob(ls, w, sbc, ebc))
         return false;
     while (w_ok(w) && w_code(w) != code) {
         int c = w_code(w);
         if (!lp->considered[c])
             w_adv(w);
         else if (c == sbc) {
-            w_adv(w);
-            if (!find_eob(w, sbc, ebc))
+            if (!skip_branch(ls, w, sbc, ebc))
                 return false;
             w_adv(w);
         } else
@@ -3646,7 +3755,7 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
     if (k == CX_RC || k == CX_NRC) {
         for (int32_t i = 0; i < n; i++) {
             const lsm *m = &lp->sms.data[first + i];
-            if (!accept_right(lp, &w, lp->mods.data[m->mod].code))
+            if (!accept_right(ls, &w, lp->mods.data[m->mod].code))
                 return false;
             w_adv(&w);
         }
@@ -3654,7 +3763,7 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
         walk b = lp->scan[k];
         for (int32_t i = 0; i < n; i++) {
             const lsm *m = &lp->sms.data[first + i];
-            accept_right(lp, &b, lp->mods.data[m->mod].code);
+            accept_right(ls, &b, lp->mods.data[m->mod].code);
             bind(ls, &b, m->args, fr);
             w_adv(&b);
         }
@@ -4012,7 +4121,7 @@ static cbm_status decompose_cur(cbm_lsys *ls)
     return CBM_OK;
 }
 
-static cbm_status generate(cbm_lsys *ls)
+static cbm_status generate_pass(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
     const lstr *src = &ls->cur;
@@ -4078,6 +4187,17 @@ static cbm_status generate(cbm_lsys *ls)
     ls->cur = ls->next;
     ls->next = t;
     return CBM_OK;
+}
+
+/* The derivation pass, with the bracket tables of the strings its right contexts walk */
+static cbm_status generate(cbm_lsys *ls)
+{
+    lpfg *lp = ls->lp;
+    brtab_start(lp, 0, &ls->cur, 1);
+    brtab_start(lp, 1, &ls->next, -1);
+    cbm_status s = generate_pass(ls);
+    lp->brk[0].s = lp->brk[1].s = NULL;
+    return s;
 }
 
 cbm_status cbm__lpfg_step(cbm_lsys *ls)
@@ -4342,6 +4462,8 @@ void cbm__lpfg_free(cbm_lsys *ls)
     if (!lp)
         return;
     cbm_context *ctx = ls->ctx;
+    brtab_free(ctx, &lp->brk[0]);
+    brtab_free(ctx, &lp->brk[1]);
     for (size_t i = 0; i < lp->types.len; i++) {
         cbm__strfree(ctx, lp->types.data[i].name);
         for (int f = 0; f < lp->types.data[i].nf; f++)

@@ -64,6 +64,11 @@ printf 'Lsystem: 1\nderivation length: 1\nAxiom: A(1)\nA(a) : 1 { %s b = 0; } --
 # right context across 10^5 nested branches: linear (was quadratic, 20 s)
 printf 'Lsystem: 1\nderivation length: 1\nAxiom: %s%s\nA > B --> C\nendlsystem\n' \
     "$(chain 100000 '' 'A[')" "$(chain 100000 '' ']B')" >"$T/cpfg-deep-rc.l"
+# the same in the L+C dialect, right context and (going Backward) new right context
+printf '#include <lpfgall.h>\nderivation length: 1;\nmodule A(); module B(); module C();\nAxiom: %s%s;\nA() > B() : { produce C(); }\n' \
+    "$(chain 100000 '' 'A()SB()')" "$(chain 100000 '' 'EB()B()')" >"$T/lpfg-deep-rc.l"
+printf '#include <lpfgall.h>\nderivation length: 1;\nmodule A(); module B(); module C();\nAxiom: %s%s;\nStartEach: { Backward(); }\nA() >> B() : { produce C(); }\n' \
+    "$(chain 100000 '' 'A()SB()')" "$(chain 100000 '' 'EB()B()')" >"$T/lpfg-deep-nrc.l"
 : >"$T/empty.l"
 printf 'Lsystem: 1\nderivation length: 1\nAxiom: A\0B\nendlsystem\n' >"$T/nul.l"
 mkfifo "$T/fifo.l"
@@ -115,6 +120,8 @@ case_ cpfg-F1e39-obj 1 "beyond single precision" run "$H/cpfg-F1e39.l" -o "$T/bi
 case_ cpfg-F1e39-glb 1 "not a finite number" run "$H/cpfg-F1e39.l" --float32 -o "$T/big.glb"
 [ -e "$T/big.obj" ] || [ -e "$T/big.glb" ] && { echo "FAIL cpfg-F1e39: output written"; failed=1; }
 case_ cpfg-deep-rc 0 "400000 modules" run "$T/cpfg-deep-rc.l"
+case_ lpfg-deep-rc 0 "400000 modules" run "$T/lpfg-deep-rc.l"
+case_ lpfg-deep-nrc 0 "400000 modules" run "$T/lpfg-deep-nrc.l"
 case_ cpfg-define-bad 1 "note: the line uses the command line's -D N=1+" run "$H/cpfg-define.l" -D "N=1+"
 case_ cpfg-define-chain 1 "nested too deeply" run "$H/cpfg-define.l" -D "N=$X5000"
 
