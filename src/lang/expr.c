@@ -86,6 +86,21 @@ void cbm__compiler_free(cbm__compiler *c)
     CBM_ARRAY_FREE(c->ctx, c->strings);
 }
 
+/* The index of the preprocessed line holding text position pos (binary search of line_start;
+ * 0 when there are no lines). */
+static size_t line_index(const cbm__compiler *c, size_t pos)
+{
+    size_t lo = 0, hi = c->line_start.len;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (c->line_start.data[mid] <= pos)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
 {
     c->errors++;
@@ -102,14 +117,7 @@ void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
     cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
     va_end(ap);
     /* the line expands a value given on the command line: say so, the error may be there */
-    size_t lo = 0, hi = c->line_start.len;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (c->line_start.data[mid] <= pos)
-            lo = mid;
-        else
-            hi = mid;
-    }
+    size_t lo = line_index(c, pos);
     if (lo < c->map.len && c->map.data[lo].define >= 0)
         cbm__diag(c->ctx, CBM_NOTE, file, line, col, "the line uses the command line's %s",
                   c->files.data[c->map.data[lo].define]);
@@ -122,14 +130,7 @@ void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file,
     *line = *col = 0;
     if (!c->line_start.len)
         return;
-    size_t lo = 0, hi = c->line_start.len;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (c->line_start.data[mid] <= pos)
-            lo = mid;
-        else
-            hi = mid;
-    }
+    size_t lo = line_index(c, pos);
     if (lo < c->map.len) {
         *file = c->files.data[c->map.data[lo].file];
         *line = c->map.data[lo].line;
