@@ -1,19 +1,5 @@
-/* The L+C-style (lpfg) dialect of the L-system engine: parser, typed compiler, evaluator and
- * derivation.
- *
- * A model in this dialect declares its modules with typed parameters (`module A(int, float);`),
- * may declare structs, globals and functions, and writes productions whose successors are
- * produced by C-like bodies (`A(t) : { if (t > 0) produce B(t - 1); }`), after Karwowski and
- * Prusinkiewicz's L+C (2003) as implemented by lpfg. It compiles into the same engine as the
- * cpfg dialect: module names are mapped to the one-byte symbols of the packed module string
- * (turtle modules to the cpfg turtle characters, `SB`/`EB` to `[`/`]`), and every parameter,
- * including struct and vector fields, is one packed double, so a struct parameter costs no
- * allocation.
- *
- * Values are typed at compile time (int, float, double, bool, V3f, V3d, structs); a value of
- * any type is a run of doubles (its scalar fields in declaration order). Arithmetic follows C's
- * usual conversions: int operations truncate, float results are rounded to float32 after each
- * operation (as C does with FLT_EVAL_METHOD 0), so parameters match lpfg's float32 bit for bit.
+/* The L+C-style (lpfg) dialect of the L-system engine: the evaluator of a compiled model
+ * (lang/lc.h, compiled by lang/lc_parse.c) and its derivation over the packed module string.
  *
  * Derivation (one step): StartEach; the string is scanned left to right (Forward(), default) or
  * right to left (Backward()); for each module the productions of the active group whose
@@ -29,6 +15,7 @@
  * current branch; going left, `[` is climbed out of and whole branches are skipped;
  * `ignore:`/`consider:` modules are passed over.
  */
+#include "lang/lc.h"
 #include "lsys/lsys_internal.h"
 #include "lsys/mechlang.h"
 
@@ -36,256 +23,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-
-/* ---- types ---- */
-enum {
-    T_VOID,
-    T_INT,
-    T_FLOAT,
-    T_DOUBLE,
-    T_BOOL,
-    T_V3F,
-    T_V3D,
-    T_QUAT,
-    T_TVEC,
-    T_LOCVEC,
-    T_MSEG, /* MechSegment (lsys/mechlang.h) */
-    T_NBUILTIN
-};
-#define MAXF   16 /* parameters per module or function */
-#define MAXFLD 64 /* fields per struct (the listing's InternodeData has 35) */
-#define MAXSZ  255
-
-typedef struct ltype {
-    char *name;
-    int size;
-    int nf;
-    int ftype[MAXFLD];
-    int foff[MAXFLD];
-    char *fname[MAXFLD];
-} ltype;
-
-typedef struct lmod {
-    char *name;
-    uint8_t code;
-    int np, size;
-    int ptype[MAXF];
-} lmod;
-
-/* nodes */
-enum {
-    N_NUM,
-    N_LOCAL,
-    N_GLOBAL,
-    N_FIELD, /* a: base value, slot: offset */
-    N_NEG,
-    N_NOT,
-    N_CAST,
-    N_BIN,
-    N_AND,
-    N_OR,
-    N_COND,
-    N_ASSIGN, /* a: lvalue, b: value, fn: operator (0 for =) */
-    N_INCDEC, /* a: lvalue, fn: 0 ++x, 1 --x, 2 x++, 3 x-- */
-    N_CALLB,
-    N_CALLU,
-    N_CTOR, /* args a: fields of type */
-    N_INCTX,
-    N_COMMA,
-    N_STR, /* a string literal, printf's arguments only: slot is its offset in the strings */
-    S_EXPR,
-    S_DECL,
-    S_IF,
-    S_WHILE,
-    S_DO,
-    S_FOR,
-    S_RETURN,
-    S_BREAK,
-    S_CONTINUE,
-    S_PRODUCE,
-    S_BLOCK,
-    S_SWITCH, /* a: value, b: body */
-    S_CASE,   /* a: label value, -1 for default */
-    S_NOP
-};
-
-enum { B_ADD, B_SUB, B_MUL, B_DIV, B_REM, B_LT, B_GT, B_LE, B_GE, B_EQ, B_NE };
-
-typedef enum {
-    F_SIN,
-    F_COS,
-    F_TAN,
-    F_ASIN,
-    F_ACOS,
-    F_ATAN,
-    F_ATAN2,
-    F_EXP,
-    F_LOG,
-    F_LOG10,
-    F_POW,
-    F_SQRT,
-    F_FABS,
-    F_FLOOR,
-    F_CEIL,
-    F_FMOD,
-    F_MIN,
-    F_MAX,
-    F_RAN,
-    F_NRAN,
-    F_SRAND,
-    F_RAND,
-    F_DRAND,
-    F_FUNC,
-    F_PRINTF,
-    F_FORWARD,
-    F_BACKWARD,
-    F_USEGROUP,
-    F_LENGTH,
-    F_NORMALIZE,
-    F_STOP,
-    F_CURGROUP,
-    F_DOT,
-    F_CROSS,
-    F_MAKEQ,
-    F_VECROT,
-    F_TOLOCAL,
-    F_TOWORLD,
-    F_EQUILIBRIUM,
-    F_ADDRINGS,
-    F_AGEWOOD,
-    F_BREAK,
-    F_STABILITY,
-    F_GRAVITY,
-    F_GROUND,
-    F_CONTACT,
-    F_TROPISM,
-    F_PIPEMODEL,
-    F_WOOD,
-    F_RINGRATE,
-    F_SOLVER,
-    F_REACTION,
-    F_NONE
-} bfn;
-
-typedef struct bdef {
-    const char *name;
-    bfn fn;
-    int arity; /* -1: any */
-} bdef;
-
-static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
-                                {"cos", F_COS, 1},
-                                {"tan", F_TAN, 1},
-                                {"asin", F_ASIN, 1},
-                                {"acos", F_ACOS, 1},
-                                {"atan", F_ATAN, 1},
-                                {"atan2", F_ATAN2, 2},
-                                {"exp", F_EXP, 1},
-                                {"log", F_LOG, 1},
-                                {"log10", F_LOG10, 1},
-                                {"pow", F_POW, 2},
-                                {"sqrt", F_SQRT, 1},
-                                {"fabs", F_FABS, 1},
-                                {"abs", F_FABS, 1},
-                                {"floor", F_FLOOR, 1},
-                                {"ceil", F_CEIL, 1},
-                                {"fmod", F_FMOD, 2},
-                                {"min", F_MIN, 2},
-                                {"max", F_MAX, 2},
-                                {"ran", F_RAN, 1},
-                                {"nrand", F_NRAN, 2},
-                                {"nran", F_NRAN, 2},
-                                {"srand", F_SRAND, 1},
-                                {"rand", F_RAND, 0},
-                                {"drand48", F_DRAND, 0},
-                                {"func", F_FUNC, 2},
-                                {"printf", F_PRINTF, -1},
-                                {"Printf", F_PRINTF, -1},
-                                {"Forward", F_FORWARD, 0},
-                                {"Backward", F_BACKWARD, 0},
-                                {"UseGroup", F_USEGROUP, 1},
-                                {"Length", F_LENGTH, 1},
-                                {"Magnitude", F_LENGTH, 1},
-                                {"Normalize", F_NORMALIZE, 1},
-                                {"Normalized", F_NORMALIZE, 1},
-                                {"Stop", F_STOP, 0},
-                                {"stop", F_STOP, 0},
-                                {"CurrentGroup", F_CURGROUP, 0},
-                                {"DotProd", F_DOT, 2},
-                                {"CrossProd", F_CROSS, 2},
-                                {"MakeQuaternion", F_MAKEQ, 2},
-                                {"VecRotate", F_VECROT, 3},
-                                {"ToLocal", F_TOLOCAL, 2},
-                                {"ToWorld", F_TOWORLD, 2},
-                                {"Equilibrium", F_EQUILIBRIUM, 0},
-                                {"AddRings", F_ADDRINGS, 0},
-                                {"AgeWood", F_AGEWOOD, 1},
-                                {"Break", F_BREAK, 0},
-                                {"Stability", F_STABILITY, 0},
-                                {"Gravity", F_GRAVITY, 3},
-                                {"Ground", F_GROUND, 3},
-                                {"Contact", F_CONTACT, 2},
-                                {"Tropism", F_TROPISM, 4},
-                                {"PipeModel", F_PIPEMODEL, 2},
-                                {"Wood", F_WOOD, 5},
-                                {"RingRate", F_RINGRATE, 2},
-                                {"Solver", F_SOLVER, 3},
-                                {"ReactionWood", F_REACTION, 4},
-                                {"RAND_MAX", F_NONE, 0}};
-
-typedef struct xn {
-    uint8_t op, fn;
-    int16_t type;
-    int32_t a, b, c, d, next;
-    int32_t slot;
-    int32_t pos; /* text offset where the parser made it, for runtime messages */
-    double v;
-} xn;
-
-/* a successor or context pattern: modules with their argument chains */
-typedef struct lsm {
-    int mod;
-    int32_t args; /* chain of expressions (successor) or of lvalues (pattern) */
-} lsm;
-
-typedef struct lpat {
-    int32_t first, n; /* in lp->sms */
-} lpat;
-
-enum { CX_LC, CX_NLC, CX_NRC, CX_RC, CX_N };
-
-typedef struct lprod {
-    int mod;       /* predecessor */
-    lpat pred;     /* strict predecessor: one module or several adjacent ones */
-    lpat cx[CX_N]; /* contexts (n = 0: none); formals in args */
-    int32_t body;
-    int fsize; /* frame doubles */
-    int group;
-    size_t pos;
-} lprod;
-
-typedef struct lfunc {
-    char *name;
-    int ret;
-    int np;
-    int ptype[MAXF];
-    bool pref[MAXF]; /* reference parameter (T& x): copied back to the argument */
-    int32_t body;
-    int fsize;
-    size_t pos;
-} lfunc;
-
-typedef struct lset {
-    CBM_ARRAY(lprod) prods;
-    int depth;
-    bool present;
-} lset;
-
-typedef struct lgvar {
-    char *name;
-    int type, slot;
-    int32_t init;
-} lgvar;
 
 /* a walker over a packed string: dir +1 reads it left to right, -1 right to left */
 typedef struct walk {
@@ -310,24 +47,7 @@ typedef struct brtab {
 
 typedef struct lpfg lpfg;
 struct lpfg {
-    CBM_ARRAY(ltype) types;
-    CBM_ARRAY(lmod) mods;
-    int16_t bycode[128];
-    CBM_ARRAY(xn) nodes;
-    CBM_ARRAY(lsm) sms;
-    CBM_ARRAY(lfunc) funcs;
-    CBM_ARRAY(lgvar) gvars;
-    CBM_ARRAY(char *) funcnames;
-    CBM_ARRAY(int) funcids; /* the function-set id of each name (cbm_lsys_set_func_ids) */
-    int nglobal;            /* doubles */
-    lset main, decomp, interp;
-    lpat axiom;
-    int32_t blocks[4]; /* Start, StartEach, EndEach, End */
-    int block_fsize[4];
-    int32_t dlen_expr;
-    bool considered[128];
-    int sb, eb; /* module indices of SB, EB */
-    /* run state */
+    lc_model m; /* the compiled model (lang/lc.h) */
     double *glob;
     double *stack;
     size_t stack_cap, sp;
@@ -358,2386 +78,6 @@ struct lpfg {
     bool rewriting; /* inside a derivation pass: mechanics calls are refused */
 };
 
-/* ---- compiler state ---- */
-typedef struct lvar {
-    const char *name;
-    size_t len;
-    int type, slot;
-} lvar;
-
-typedef struct lc {
-    cbm_lsys *ls;
-    lpfg *lp;
-    cbm__compiler *c;
-    const char *t;
-    CBM_ARRAY(lvar) vars;
-    int fsize, fmax;
-    int ret_type; /* in a function */
-    bool in_prod; /* produce allowed */
-    int in_switch;
-    int depth;
-} lc;
-
-static const char *const TURTLE[][3] = {
-    /* lpfg name, cpfg symbol, parameter types ("f" float, "i" int, "" none) */
-    {"F", "F", "f"},           {"f", "f", "f"},
-    {"G", "G", "f"},           {"g", "g", "f"},
-    {"Left", "+", "f"},        {"Right", "-", "f"},
-    {"Up", "^", "f"},          {"Down", "&", "f"},
-    {"RollL", "\\", "f"},      {"RollR", "/", "f"},
-    {"TurnAround", "|", ""},   {"SB", "[", ""},
-    {"EB", "]", ""},           {"SetWidth", "!", "f"},
-    {"IncColor", "'", ""},     {"DecColor", ",", ""},
-    {"SetColor", "", "i"},     {"Cut", "%", ""},
-    {"SP", "{", ""},           {"EP", "}", ""},
-    {"PP", ".", ""},           {"Sphere", "", "f"},
-    {"Sphere0", "", ""},       {"Circle", "", "f"},
-    {"Circle0", "", ""},       {"Surface", "", "if"},
-    {"StartGC", "", ""},       {"PointGC", "", ""},
-    {"EndGC", "", ""},         {"SetHead", "", "ffffff"},
-    {"RollToVert", "", ""},    {"ScaleContour", "", "ff"},
-    {"LineRel3d", "", "v"},    {"LineTo3d", "", "v"},
-    {"MoveRel3d", "", "v"},    {"MoveTo3d", "", "v"},
-    {"Label", "", "i"},        {"IncWidth", "#", ""},
-    {"DecWidth", "", ""},      {"CurrentContour", "", "i"},
-    {"SetTropism", "", "fff"}, {"Elasticity", "", "f"},
-    {"ContourSides", "", "i"},
-};
-
-/* ---------------------------------------------------------------- small helpers */
-static int tsize(const lpfg *lp, int t)
-{
-    return lp->types.data[t].size;
-}
-
-static bool is_scalar(int t)
-{
-    return t >= T_INT && t <= T_BOOL;
-}
-
-static bool is_vec(int t)
-{
-    return t == T_V3F || t == T_V3D;
-}
-
-/* A value converted to a C int as lpfg's compiled C does on x86-64: truncated toward zero, and
- * the "integer indefinite" INT_MIN for NaN and values outside the 32-bit range (cvttsd2si). */
-static double c_int(double v)
-{
-    if (!(v > -2147483649.0 && v < 2147483648.0))
-        return -2147483648.0;
-    return (double)(int32_t)v;
-}
-
-/* The 32-bit two's-complement wrap of an exact integer result (int arithmetic that overflows). */
-static double wrap_int(long long r)
-{
-    return (double)(int32_t)(uint32_t)(unsigned long long)r;
-}
-
-static double conv_scalar(int t, double v)
-{
-    switch (t) {
-    case T_INT:
-        return c_int(v);
-    case T_FLOAT:
-        return (double)(float)v;
-    case T_BOOL:
-        return v != 0;
-    default:
-        return v;
-    }
-}
-
-/* Rounds a value of type t in place (float fields to float32, ints truncated). */
-static void conv_value(const lpfg *lp, int t, double *v)
-{
-    if (is_scalar(t)) {
-        v[0] = conv_scalar(t, v[0]);
-        return;
-    }
-    if (t == T_V3F) {
-        /* through a volatile: GCC 12's SLP vectorizer drops pairs of adjacent
-         * double -> float -> double round trips at -O2 (the components lost their rounding) */
-        for (int i = 0; i < 3; i++) {
-            volatile float f = (float)v[i];
-            v[i] = (double)f;
-        }
-        return;
-    }
-    if (t == T_V3D)
-        return;
-    const ltype *ty = &lp->types.data[t];
-    for (int f = 0; f < ty->nf; f++)
-        conv_value(lp, ty->ftype[f], v + ty->foff[f]);
-}
-
-/* ---------------------------------------------------------------- lexing */
-static void skip(lc *L)
-{
-    const char *t = L->t;
-    size_t p = L->c->pos;
-    while (t[p] && isspace((unsigned char)t[p]))
-        p++;
-    L->c->pos = p;
-}
-
-static bool peek(lc *L, const char *s)
-{
-    skip(L);
-    return !strncmp(L->t + L->c->pos, s, strlen(s));
-}
-
-static bool accept(lc *L, const char *s)
-{
-    if (!peek(L, s))
-        return false;
-    L->c->pos += strlen(s);
-    return true;
-}
-
-static bool isid0(int ch)
-{
-    return isalpha(ch) || ch == '_';
-}
-
-static bool isid(int ch)
-{
-    return isalnum(ch) || ch == '_';
-}
-
-/* identifier at the position (not consumed): its length, 0 if none */
-static size_t ident(lc *L)
-{
-    skip(L);
-    const char *s = L->t + L->c->pos;
-    if (!isid0((unsigned char)s[0]))
-        return 0;
-    size_t n = 1;
-    while (isid((unsigned char)s[n]))
-        n++;
-    return n;
-}
-
-static bool accept_kw(lc *L, const char *kw)
-{
-    size_t n = ident(L);
-    if (n != strlen(kw) || strncmp(L->t + L->c->pos, kw, n))
-        return false;
-    L->c->pos += n;
-    return true;
-}
-
-static void describe(lc *L, char *buf, size_t n)
-{
-    const char *s = L->t + L->c->pos;
-    if (!*s) {
-        snprintf(buf, n, "end of file");
-        return;
-    }
-    size_t k = ident(L);
-    if (k)
-        snprintf(buf, n, "'%.*s'", (int)(k > 40 ? 40 : k), s);
-    else
-        snprintf(buf, n, "'%c'", *s);
-}
-
-static bool fatal(lc *L)
-{
-    return L->c->fatal || (L->c->status != CBM_OK && L->c->status != CBM_E_SYNTAX);
-}
-
-static void expected(lc *L, const char *what)
-{
-    char buf[64];
-    skip(L);
-    describe(L, buf, sizeof buf);
-    size_t pos = L->c->pos;
-    while (pos > 0 && !L->t[pos]) /* at the end: point at the last character */
-        pos--;
-    cbm__cerr(L->c, pos, "expected %s, found %s", what, buf);
-}
-
-static bool expect(lc *L, const char *s)
-{
-    if (accept(L, s))
-        return true;
-    char what[16];
-    snprintf(what, sizeof what, "'%s'", s);
-    expected(L, what);
-    return false;
-}
-
-/* Skips to after the next `;` or the end of the next balanced `{...}` at this level. */
-static void recover(lc *L)
-{
-    const char *t = L->t;
-    size_t p = L->c->pos;
-    int level = 0;
-    while (t[p]) {
-        char ch = t[p++];
-        if (ch == '{' || ch == '(')
-            level++;
-        else if (ch == '}' || ch == ')') {
-            if (--level <= 0 && ch == '}')
-                break;
-            if (level < 0)
-                level = 0;
-        } else if (ch == ';' && level == 0)
-            break;
-    }
-    L->c->pos = p;
-}
-
-/* Statement-level recovery: skips to after the next `;` or balanced block, but stops before a
- * `}` that closes the enclosing block. */
-static void recover_stmt(lc *L)
-{
-    const char *t = L->t;
-    size_t p = L->c->pos;
-    int level = 0;
-    while (t[p]) {
-        char ch = t[p];
-        if (ch == '}' && level == 0)
-            break;
-        p++;
-        if (ch == '{' || ch == '(')
-            level++;
-        else if (ch == '}' || ch == ')') {
-            if (level > 0)
-                level--;
-            if (level == 0 && ch == '}')
-                break;
-        } else if (ch == ';' && level == 0)
-            break;
-    }
-    L->c->pos = p;
-}
-
-/* ---------------------------------------------------------------- tables */
-static int find_type(lc *L, const char *s, size_t n)
-{
-    for (size_t i = 1; i < L->lp->types.len; i++) {
-        const char *nm = L->lp->types.data[i].name;
-        if (strlen(nm) == n && !strncmp(nm, s, n))
-            return (int)i;
-    }
-    if (n == 6 && !strncmp(s, "double", 6))
-        return T_DOUBLE;
-    return -1;
-}
-
-static int find_mod(const lpfg *lp, const char *s, size_t n)
-{
-    for (size_t i = 0; i < lp->mods.len; i++) {
-        const char *nm = lp->mods.data[i].name;
-        if (strlen(nm) == n && !strncmp(nm, s, n))
-            return (int)i;
-    }
-    return -1;
-}
-
-static cbm_status add_type(lpfg *lp, cbm_context *ctx, const char *name, int size)
-{
-    ltype t;
-    memset(&t, 0, sizeof t);
-    t.name = cbm__strdup(ctx, name);
-    t.size = size;
-    if (!t.name)
-        return CBM_E_NOMEM;
-    if (CBM_ARRAY_PUSH(ctx, lp->types, t) != CBM_OK) {
-        cbm__strfree(ctx, t.name);
-        return CBM_E_NOMEM;
-    }
-    return CBM_OK;
-}
-
-/* Allocates a symbol code for a module name: its cpfg turtle character, its own character for
- * one-character names, else a free code. */
-static int alloc_code(lpfg *lp, const char *name, const char *want)
-{
-    if (want && want[0] && lp->bycode[(unsigned char)want[0]] < 0)
-        return (unsigned char)want[0];
-    static const char RESERVED[] = "FfGg+-^&\\/|[]!';%{}.#@~?$";
-    if (!name[1] && isalnum((unsigned char)name[0]) && !strchr(RESERVED, name[0]) &&
-        lp->bycode[(unsigned char)name[0]] < 0)
-        return (unsigned char)name[0];
-    for (int pass = 0; pass < 2; pass++)
-        for (int c = pass ? 1 : 33; c < (pass ? 33 : 127); c++)
-            if (lp->bycode[c] < 0 && !strchr(RESERVED, c) && !(c == ' ') &&
-                !(isalnum(c) && lp->mods.len < 40))
-                return c;
-    for (int c = 1; c < 127; c++)
-        if (lp->bycode[c] < 0)
-            return c;
-    return -1;
-}
-
-static int add_mod(lc *L, const char *name, size_t len, const int *ptypes, int np, const char *want,
-                   size_t pos)
-{
-    lpfg *lp = L->lp;
-    lmod m;
-    memset(&m, 0, sizeof m);
-    int code = alloc_code(lp, len == 1 ? (char[2]){name[0], 0} : "xx", want);
-    if (code < 0) {
-        cbm__cerr(L->c, pos, "too many module types (at most 126)");
-        return -1;
-    }
-    m.name = cbm__alloc(L->c->ctx, len + 1);
-    if (!m.name) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        return -1;
-    }
-    memcpy(m.name, name, len);
-    m.name[len] = 0;
-    m.code = (uint8_t)code;
-    m.np = np;
-    for (int i = 0; i < np; i++) {
-        m.ptype[i] = ptypes[i];
-        m.size += tsize(lp, ptypes[i]);
-    }
-    if (m.size > MAXSZ) {
-        cbm__cerr(L->c, pos, "module '%s' has more than %d scalar parameters", m.name, MAXSZ);
-        m.size = MAXSZ;
-    }
-    if (CBM_ARRAY_PUSH(L->c->ctx, lp->mods, m) != CBM_OK) {
-        cbm__strfree(L->c->ctx, m.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        return -1;
-    }
-    lp->bycode[code] = (int16_t)(lp->mods.len - 1);
-    return (int)lp->mods.len - 1;
-}
-
-static int32_t node(lc *L, xn n)
-{
-    if (fatal(L))
-        return -1;
-    n.pos = (int32_t)(L->c->pos < INT32_MAX ? L->c->pos : INT32_MAX);
-    if (CBM_ARRAY_PUSH(L->c->ctx, L->lp->nodes, n) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        return -1;
-    }
-    return (int32_t)L->lp->nodes.len - 1;
-}
-
-static xn mk(int op, int type)
-{
-    xn n;
-    memset(&n, 0, sizeof n);
-    n.op = (uint8_t)op;
-    n.type = (int16_t)type;
-    n.a = n.b = n.c = n.d = n.next = -1;
-    return n;
-}
-
-#define ND(i) (L->lp->nodes.data[i])
-
-/* Appends node e to the chain first..last (linked through `next`). */
-static void chain(lc *L, int32_t *first, int32_t *last, int32_t e)
-{
-    if (*last >= 0)
-        ND(*last).next = e;
-    else
-        *first = e;
-    *last = e;
-}
-
-/* ---------------------------------------------------------------- types in declarations */
-/* Parses a type name (with optional `const`/`struct`); -1 if there is none (nothing consumed) */
-static int parse_type(lc *L)
-{
-    size_t save = L->c->pos;
-    accept_kw(L, "const");
-    accept_kw(L, "struct");
-    size_t n = ident(L);
-    if (n) {
-        int t = find_type(L, L->t + L->c->pos, n);
-        if (t >= 0) {
-            L->c->pos += n;
-            return t;
-        }
-    }
-    L->c->pos = save;
-    return -1;
-}
-
-static int declare_local(lc *L, const char *name, size_t len, int type)
-{
-    lvar v = {name, len, type, L->fsize};
-    L->fsize += tsize(L->lp, type);
-    if (L->fsize > L->fmax)
-        L->fmax = L->fsize;
-    if (CBM_ARRAY_PUSH(L->c->ctx, L->vars, v) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-    }
-    return v.slot;
-}
-
-/* ---------------------------------------------------------------- expressions */
-static int32_t expr(lc *L);
-static int32_t expr1(lc *L);
-static int32_t assign_expr(lc *L);
-
-static int arith_type(int a, int b)
-{
-    if (a == T_DOUBLE || b == T_DOUBLE)
-        return T_DOUBLE;
-    if (a == T_FLOAT || b == T_FLOAT)
-        return T_FLOAT;
-    return T_INT;
-}
-
-static int32_t num(lc *L, double v, int type)
-{
-    xn n = mk(N_NUM, type);
-    n.v = v;
-    return node(L, n);
-}
-
-/* Converts expression e to type t (implicit conversion), reporting a mismatch at pos. */
-static int32_t coerce(lc *L, int32_t e, int t, size_t pos)
-{
-    if (e < 0)
-        return -1;
-    int et = ND(e).type;
-    if (et == t)
-        return e;
-    if (is_scalar(et) && is_scalar(t)) {
-        xn n = mk(N_CAST, t);
-        n.a = e;
-        return node(L, n);
-    }
-    if (is_vec(et) && is_vec(t)) {
-        xn n = mk(N_CAST, t);
-        n.a = e;
-        return node(L, n);
-    }
-    cbm__cerr(L->c, pos, "cannot convert %s to %s", L->lp->types.data[et].name,
-              L->lp->types.data[t].name);
-    return -1;
-}
-
-/* Parses `(args)` after a callee at '(' into a chain; returns count (-1 on error). */
-static int parse_args(lc *L, int32_t *first)
-{
-    *first = -1;
-    int32_t last = -1;
-    int n = 0;
-    if (!expect(L, "("))
-        return -1;
-    if (accept(L, ")"))
-        return 0;
-    do {
-        int32_t e = assign_expr(L);
-        if (e < 0)
-            return -1;
-        chain(L, first, &last, e);
-        n++;
-    } while (accept(L, ","));
-    if (!expect(L, ")"))
-        return -1;
-    return n;
-}
-
-/* printf(format, args...): the format is a string literal checked against its arguments, which
- * are numbers or string literals (for %s). */
-static int32_t printf_call(lc *L, size_t pos)
-{
-    cbm__compiler *c = L->c;
-    if (!expect(L, "("))
-        return -1;
-    skip(L);
-    size_t fmt;
-    if (L->t[c->pos] != '"') {
-        cbm__cerr(c, pos, "printf needs a format string as its first argument");
-        return -1;
-    }
-    if (!cbm__string_lit(c, &fmt))
-        return -1;
-    uint8_t kinds[CBM__FMT_MAX_ARGS];
-    char err[128];
-    int nconv = cbm__fmt_scan(c->strings.data + fmt, kinds, CBM__FMT_MAX_ARGS, err, sizeof err);
-    if (nconv < 0) {
-        cbm__cerr(c, pos, "%s", err);
-        return -1;
-    }
-    int32_t first = -1, last = -1;
-    int n = 0;
-    while (accept(L, ",")) {
-        skip(L);
-        size_t apos = c->pos;
-        int32_t e;
-        bool str = L->t[c->pos] == '"';
-        if (str) {
-            size_t off;
-            if (!cbm__string_lit(c, &off))
-                return -1;
-            xn x = mk(N_STR, T_VOID);
-            x.slot = (int32_t)off;
-            e = node(L, x);
-        } else {
-            e = assign_expr(L);
-        }
-        if (e < 0)
-            return -1;
-        if (!str && !is_scalar(ND(e).type)) {
-            cbm__cerr(
-                c, apos,
-                "printf: argument %d is not a number (print a vector or struct by its fields)",
-                n + 2);
-            return -1;
-        }
-        if (n < nconv && str != (kinds[n] == CBM__FMT_STR)) {
-            cbm__cerr(c, apos, "printf: argument %d %s", n + 2,
-                      str ? "is a string; only %s prints a string"
-                          : "of %s must be a string literal");
-            return -1;
-        }
-        chain(L, &first, &last, e);
-        n++;
-    }
-    if (!expect(L, ")"))
-        return -1;
-    if (n != nconv) {
-        cbm__cerr(c, pos, "printf: the format has %d conversion%s, %d argument%s given", nconv,
-                  nconv == 1 ? "" : "s", n, n == 1 ? "" : "s");
-        return -1;
-    }
-    xn x = mk(N_CALLB, T_INT);
-    x.fn = F_PRINTF;
-    x.slot = (int32_t)fmt;
-    x.a = first;
-    return node(L, x);
-}
-
-/* brace initializer `{a, b, ...}` for a value of type t */
-static int32_t brace_init(lc *L, int t)
-{
-    size_t pos = L->c->pos;
-    if (!expect(L, "{"))
-        return -1;
-    const ltype *ty = &L->lp->types.data[t];
-    int nf = is_vec(t) ? 3 : ty->nf;
-    if (is_scalar(t)) {
-        int32_t e = coerce(L, assign_expr(L), t, pos);
-        expect(L, "}");
-        return e;
-    }
-    int32_t first = -1, last = -1;
-    for (int f = 0; f < nf; f++) {
-        if (f && !expect(L, ","))
-            return -1;
-        int ft = is_vec(t) ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : ty->ftype[f];
-        size_t p = L->c->pos;
-        int32_t e = peek(L, "{") ? brace_init(L, ft) : coerce(L, assign_expr(L), ft, p);
-        if (e < 0)
-            return -1;
-        chain(L, &first, &last, e);
-    }
-    if (!expect(L, "}"))
-        return -1;
-    xn n = mk(N_CTOR, t);
-    n.a = first;
-    return node(L, n);
-}
-
-static lvar *find_var(lc *L, const char *s, size_t n)
-{
-    for (size_t i = L->vars.len; i-- > 0;)
-        if (L->vars.data[i].len == n && !strncmp(L->vars.data[i].name, s, n))
-            return &L->vars.data[i];
-    return NULL;
-}
-
-static lgvar *find_gvar(lc *L, const char *s, size_t n)
-{
-    for (size_t i = 0; i < L->lp->gvars.len; i++) {
-        lgvar *g = &L->lp->gvars.data[i];
-        if (strlen(g->name) == n && !strncmp(g->name, s, n))
-            return g;
-    }
-    return NULL;
-}
-
-static int pattern(lc *L, lpat *p, bool declare);
-static bool is_lvalue(lc *L, int32_t e);
-
-static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
-{
-    lpfg *lp = L->lp;
-    /* In*Context(pattern) */
-    static const char *const CTXF[] = {"InLeftContext", "InNewLeftContext", "InNewRightContext",
-                                       "InRightContext"};
-    for (int k = 0; k < CX_N; k++)
-        if (strlen(CTXF[k]) == n && !strncmp(s, CTXF[k], n)) {
-            lpat p = {0, 0};
-            if (!expect(L, "("))
-                return -1;
-            if (pattern(L, &p, false) < 0)
-                return -1;
-            if (!expect(L, ")"))
-                return -1;
-            if (!L->in_prod) {
-                cbm__cerr(L->c, pos, "%s is only allowed in a production", CTXF[k]);
-                return -1;
-            }
-            xn x = mk(N_INCTX, T_BOOL);
-            x.fn = (uint8_t)k;
-            x.a = p.first;
-            x.b = p.n;
-            return node(L, x);
-        }
-    /* vector and struct constructors */
-    int t = find_type(L, s, n);
-    if (t >= 0) {
-        int32_t args;
-        int na = parse_args(L, &args);
-        if (na < 0)
-            return -1;
-        if (is_scalar(t) && na == 1)
-            return coerce(L, args, t, pos);
-        if (is_vec(t) && (na == 3 || na == 0)) {
-            int ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
-            int32_t first = -1, last = -1;
-            for (int i = 0; i < 3; i++) {
-                int32_t e;
-                if (na == 0)
-                    e = num(L, 0, ft);
-                else {
-                    e = args;
-                    args = ND(args).next;
-                    ND(e).next = -1;
-                    e = coerce(L, e, ft, pos);
-                }
-                if (e < 0)
-                    return -1;
-                chain(L, &first, &last, e);
-            }
-            xn x = mk(N_CTOR, t);
-            x.a = first;
-            return node(L, x);
-        }
-        if (lp->types.data[t].nf > 0 && na == 0) { /* Name(): a zero value */
-            xn x = mk(N_CTOR, t);
-            return node(L, x);
-        }
-        if (lp->types.data[t].nf > 0 && na == lp->types.data[t].nf) { /* Name(f1, f2, ...) */
-            int32_t first = -1, last = -1;
-            for (int i = 0; i < na; i++) {
-                int32_t e = args;
-                args = ND(args).next;
-                ND(e).next = -1;
-                e = coerce(L, e, lp->types.data[t].ftype[i], pos);
-                if (e < 0)
-                    return -1;
-                chain(L, &first, &last, e);
-            }
-            xn x = mk(N_CTOR, t);
-            x.a = first;
-            return node(L, x);
-        }
-        cbm__cerr(L->c, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
-        return -1;
-    }
-    if (n == 4 && !strncmp(s, "func", 4)) { /* func(name, x) */
-        if (!expect(L, "("))
-            return -1;
-        size_t k = ident(L);
-        if (!k) {
-            expected(L, "a function name");
-            return -1;
-        }
-        const char *fname = L->t + L->c->pos;
-        L->c->pos += k;
-        size_t id = 0;
-        for (; id < lp->funcnames.len; id++)
-            if (strlen(lp->funcnames.data[id]) == k && !strncmp(lp->funcnames.data[id], fname, k))
-                break;
-        if (id == lp->funcnames.len) {
-            char *nm = cbm__alloc(L->c->ctx, k + 1);
-            if (!nm || CBM_ARRAY_PUSH(L->c->ctx, lp->funcnames, nm) != CBM_OK) {
-                if (nm)
-                    cbm__free(L->c->ctx, nm, k + 1);
-                L->c->status = CBM_E_NOMEM;
-                L->c->fatal = true;
-                return -1;
-            }
-            memcpy(nm, fname, k);
-            nm[k] = 0;
-        }
-        if (!expect(L, ","))
-            return -1;
-        int32_t x = coerce(L, assign_expr(L), T_DOUBLE, L->c->pos);
-        if (x < 0 || !expect(L, ")"))
-            return -1;
-        xn c = mk(N_CALLB, T_DOUBLE);
-        c.fn = F_FUNC;
-        c.a = x;
-        c.slot = (int32_t)id + 1;
-        return node(L, c);
-    }
-    for (size_t i = 0; i < lp->funcs.len; i++) {
-        lfunc *f = &lp->funcs.data[i];
-        if (strlen(f->name) != n || strncmp(f->name, s, n))
-            continue;
-        int32_t args;
-        int na = parse_args(L, &args);
-        if (na < 0)
-            return -1;
-        if (na != f->np) {
-            cbm__cerr(L->c, pos, "%s() takes %d argument%s, %d given", f->name, f->np,
-                      f->np == 1 ? "" : "s", na);
-            return -1;
-        }
-        int32_t first = -1, last = -1;
-        for (int a = 0; a < na; a++) {
-            int32_t e = args;
-            args = ND(e).next;
-            ND(e).next = -1;
-            if (f->pref[a] && (!is_lvalue(L, e) || ND(e).type != f->ptype[a])) {
-                cbm__cerr(L->c, pos, "argument %d of %s() must be a variable of type %s", a + 1,
-                          f->name, lp->types.data[f->ptype[a]].name);
-                return -1;
-            }
-            e = coerce(L, e, f->ptype[a], pos);
-            if (e < 0)
-                return -1;
-            chain(L, &first, &last, e);
-        }
-        xn c = mk(N_CALLU, f->ret);
-        c.a = first;
-        c.slot = (int32_t)i;
-        return node(L, c);
-    }
-    for (size_t i = 0; i < sizeof BUILTINS / sizeof BUILTINS[0]; i++) {
-        const bdef *b = &BUILTINS[i];
-        if (strlen(b->name) != n || strncmp(b->name, s, n))
-            continue;
-        int32_t args = -1;
-        int na;
-        if (b->fn == F_PRINTF)
-            return printf_call(L, pos);
-        na = parse_args(L, &args);
-        if (na < 0)
-            return -1;
-        if (b->arity >= 0 && na != b->arity) {
-            cbm__cerr(L->c, pos, "%s() takes %d argument%s, %d given", b->name, b->arity,
-                      b->arity == 1 ? "" : "s", na);
-            return -1;
-        }
-        int rt = T_DOUBLE;
-        if (b->fn == F_TOLOCAL || b->fn == F_TOWORLD) {
-            int t0 = ND(args).type, t1 = ND(ND(args).next).type;
-            if (t1 != T_TVEC || (b->fn == F_TOLOCAL ? !is_vec(t0) : t0 != T_LOCVEC)) {
-                cbm__cerr(L->c, pos, "%s() takes a %s and a TurtleVec", b->name,
-                          b->fn == F_TOLOCAL ? "vector" : "LocVec");
-                return -1;
-            }
-            rt = b->fn == F_TOLOCAL ? T_LOCVEC : T_V3F;
-        } else if (b->fn == F_DOT || b->fn == F_CROSS || b->fn == F_MAKEQ || b->fn == F_VECROT) {
-            int t0 = ND(args).type, t1 = ND(ND(args).next).type;
-            bool ok = is_vec(t1);
-            if (b->fn == F_VECROT) {
-                ok = ok && (is_vec(t0) || t0 == T_TVEC) && is_lvalue(L, args) &&
-                     is_scalar(ND(ND(ND(args).next).next).type);
-                rt = t0;
-            } else if (b->fn == F_MAKEQ) {
-                ok = is_vec(t0) && is_scalar(t1);
-                rt = T_QUAT;
-            } else {
-                ok = ok && is_vec(t0);
-                rt = b->fn == F_DOT ? (t0 == T_V3D || t1 == T_V3D ? T_DOUBLE : T_FLOAT)
-                                    : (t0 == T_V3D || t1 == T_V3D ? T_V3D : T_V3F);
-            }
-            if (!ok) {
-                cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
-                          b->fn == F_VECROT ? " (a vector or TurtleVec variable, an axis, an angle)"
-                                            : "");
-                return -1;
-            }
-        } else if (b->fn == F_LENGTH || b->fn == F_NORMALIZE) {
-            int at = ND(args).type;
-            if (!is_vec(at) && !(b->fn == F_NORMALIZE && at == T_TVEC)) {
-                cbm__cerr(L->c, pos, "%s() needs a vector", b->name);
-                return -1;
-            }
-            rt = b->fn == F_NORMALIZE ? at : (at == T_V3F ? T_FLOAT : T_DOUBLE);
-        } else {
-            for (int32_t a = args; a >= 0; a = ND(a).next)
-                if (!is_scalar(ND(a).type)) {
-                    cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
-                    return -1;
-                }
-            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTION && L->in_prod) {
-                cbm__cerr(L->c, pos,
-                          "%s() changes the whole string: call it in Start, StartEach, EndEach "
-                          "or End",
-                          b->name);
-                return -1;
-            }
-            if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
-                b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
-                b->fn == F_GROUND || b->fn == F_CONTACT || b->fn == F_TROPISM ||
-                b->fn == F_PIPEMODEL || b->fn == F_WOOD || b->fn == F_RINGRATE ||
-                b->fn == F_SOLVER || b->fn == F_REACTION)
-                rt = T_VOID;
-            else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
-                rt = T_INT;
-            else if (b->fn == F_STABILITY)
-                rt = T_DOUBLE;
-            else if (b->fn == F_CURGROUP || b->fn == F_RAND)
-                rt = T_INT;
-            else if ((b->fn == F_MIN || b->fn == F_MAX || b->fn == F_FABS) && args >= 0)
-                rt = b->arity == 2 ? arith_type(ND(args).type, ND(ND(args).next).type)
-                                   : (ND(args).type == T_BOOL ? T_INT : ND(args).type);
-        }
-        xn c = mk(N_CALLB, rt);
-        c.fn = (uint8_t)b->fn;
-        c.a = args;
-        return node(L, c);
-    }
-    cbm__cerr(L->c, pos, "unknown function '%.*s'", (int)n, s);
-    return -1;
-}
-
-/* One more level of nesting (operators of a chain, ?:, assignments): false after reporting that
- * the limit is exceeded. Parsing and evaluation recurse once per level. */
-static bool deeper(lc *L)
-{
-    if (++L->depth > cbm_context_limits(L->c->ctx)->max_expr_depth) {
-        L->depth--;
-        cbm__cerr(L->c, L->c->pos,
-                  "expression or statement nested too deeply (limit %d, --max-expr-depth)",
-                  cbm_context_limits(L->c->ctx)->max_expr_depth);
-        L->c->fatal = true;
-        return false;
-    }
-    return true;
-}
-
-static int32_t primary(lc *L)
-{
-    skip(L);
-    size_t pos = L->c->pos;
-    const char *s = L->t + pos;
-    if (!deeper(L))
-        return -1;
-    int32_t r = -1;
-    if (isdigit((unsigned char)s[0]) || (s[0] == '.' && isdigit((unsigned char)s[1]))) {
-        char *end;
-        double v = strtod(s, &end);
-        bool isf = false;
-        for (const char *q = s; q < end; q++)
-            if (*q == '.' || *q == 'e' || *q == 'E')
-                isf = true;
-        int t = isf ? T_DOUBLE : T_INT;
-        if (*end == 'f' || *end == 'F') {
-            t = T_FLOAT;
-            v = (float)v;
-            end++;
-        }
-        L->c->pos = (size_t)(end - L->t);
-        r = num(L, v, t);
-    } else if (s[0] == '(') {
-        L->c->pos++;
-        size_t save = L->c->pos;
-        int t = parse_type(L);
-        if (t >= 0 && accept(L, ")")) { /* cast */
-            int32_t e = primary(L);
-            if (e >= 0) {
-                xn n = mk(N_CAST, t);
-                n.a = e;
-                if (!(is_scalar(t) && is_scalar(ND(e).type)) && ND(e).type != t) {
-                    cbm__cerr(L->c, pos, "invalid cast");
-                    r = -1;
-                } else
-                    r = node(L, n);
-            }
-        } else {
-            L->c->pos = save;
-            r = expr(L);
-            if (r >= 0 && !expect(L, ")"))
-                r = -1;
-        }
-    } else if (s[0] == '-' || s[0] == '!' || s[0] == '+') {
-        L->c->pos++;
-        if (s[0] == '-' && s[1] == '-') {
-            L->c->pos++;
-            int32_t e = primary(L);
-            xn n = mk(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
-            n.fn = 1;
-            r = e >= 0 ? node(L, n) : -1;
-        } else if (s[0] == '+' && s[1] == '+') {
-            L->c->pos++;
-            int32_t e = primary(L);
-            xn n = mk(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
-            n.fn = 0;
-            r = e >= 0 ? node(L, n) : -1;
-        } else {
-            int32_t e = primary(L);
-            if (e >= 0 && s[0] == '+')
-                r = e;
-            else if (e >= 0) {
-                int et = ND(e).type;
-                if (s[0] == '!' && !is_scalar(et))
-                    cbm__cerr(L->c, pos, "'!' needs a number");
-                else if (s[0] == '-' && !is_scalar(et) && !is_vec(et))
-                    cbm__cerr(L->c, pos, "'-' needs a number or a vector");
-                else {
-                    xn n = mk(s[0] == '-' ? N_NEG : N_NOT,
-                              s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
-                    n.a = e;
-                    r = node(L, n);
-                }
-            }
-        }
-        L->depth--;
-        return r;
-    } else if (isid0((unsigned char)s[0])) {
-        size_t n = ident(L);
-        L->c->pos += n;
-        skip(L);
-        if (n == 4 && !strncmp(s, "true", 4))
-            r = num(L, 1, T_BOOL);
-        else if (n == 5 && !strncmp(s, "false", 5))
-            r = num(L, 0, T_BOOL);
-        else if (n == 8 && !strncmp(s, "RAND_MAX", 8))
-            r = num(L, 2147483647, T_INT);
-        else if ((n == 4 && !strncmp(s, "M_PI", 4)))
-            r = num(L, 3.14159265358979323846, T_DOUBLE);
-        else if (L->t[L->c->pos] == '(')
-            r = call_expr(L, s, n, pos);
-        else {
-            lvar *v = find_var(L, s, n);
-            lgvar *g = v ? NULL : find_gvar(L, s, n);
-            if (v) {
-                xn x = mk(N_LOCAL, v->type);
-                x.slot = v->slot;
-                r = node(L, x);
-            } else if (g) {
-                xn x = mk(N_GLOBAL, g->type);
-                x.slot = g->slot;
-                r = node(L, x);
-            } else
-                cbm__cerr(L->c, pos, "unknown name '%.*s'", (int)n, s);
-        }
-    } else {
-        expected(L, "an expression");
-    }
-    /* postfix: .field, .method(), ++, -- */
-    for (;;) {
-        if (r < 0)
-            break;
-        skip(L);
-        size_t p2 = L->c->pos;
-        if (L->t[p2] == '.' && !isdigit((unsigned char)L->t[p2 + 1])) {
-            L->c->pos++;
-            size_t n = ident(L);
-            const char *f = L->t + L->c->pos;
-            if (!n) {
-                expected(L, "a field name");
-                r = -1;
-                break;
-            }
-            L->c->pos += n;
-            int t = ND(r).type;
-            if (peek(L, "(") && is_vec(t)) { /* v.Length(), v.Normalize() */
-                int32_t none;
-                if (parse_args(L, &none) != 0) {
-                    r = -1;
-                    break;
-                }
-                bool len =
-                    (n == 6 && !strncmp(f, "Length", 6)) || (n == 9 && !strncmp(f, "Magnitude", 9));
-                bool nor = (n == 9 && !strncmp(f, "Normalize", 9)) ||
-                           (n == 10 && !strncmp(f, "Normalized", 10));
-                if (!len && !nor) {
-                    cbm__cerr(L->c, p2, "unknown vector method '%.*s'", (int)n, f);
-                    r = -1;
-                    break;
-                }
-                xn c = mk(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
-                c.fn = (uint8_t)(len ? F_LENGTH : F_NORMALIZE);
-                c.a = r;
-                if (nor && n == 9 && (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL)) {
-                    /* v.Normalize() normalizes v in place */
-                    int32_t cn = node(L, c);
-                    xn as = mk(N_ASSIGN, t);
-                    xn lv = ND(r);
-                    int32_t l2 = node(L, lv);
-                    as.a = l2;
-                    as.b = cn;
-                    r = node(L, as);
-                } else
-                    r = node(L, c);
-                continue;
-            }
-            int off = -1, ft = -1;
-            if (is_vec(t)) {
-                if (n == 1 && (f[0] == 'x' || f[0] == 'y' || f[0] == 'z')) {
-                    off = f[0] - 'x';
-                    ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
-                }
-            } else if (L->lp->types.data[t].nf > 0) {
-                const ltype *ty = &L->lp->types.data[t];
-                for (int k = 0; k < ty->nf; k++)
-                    if (strlen(ty->fname[k]) == n && !strncmp(ty->fname[k], f, n)) {
-                        off = ty->foff[k];
-                        ft = ty->ftype[k];
-                    }
-            }
-            if (off < 0) {
-                cbm__cerr(L->c, p2, "no field '%.*s' in %s", (int)n, f, L->lp->types.data[t].name);
-                r = -1;
-                break;
-            }
-            if (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL) {
-                ND(r).slot += off;
-                ND(r).type = (int16_t)ft;
-            } else {
-                xn x = mk(N_FIELD, ft);
-                x.a = r;
-                x.slot = off;
-                r = node(L, x);
-            }
-        } else if (!strncmp(L->t + p2, "++", 2) || !strncmp(L->t + p2, "--", 2)) {
-            L->c->pos += 2;
-            xn x = mk(N_INCDEC, ND(r).type);
-            x.a = r;
-            x.fn = L->t[p2] == '+' ? 2 : 3;
-            r = node(L, x);
-        } else
-            break;
-    }
-    L->depth--;
-    return r;
-}
-
-typedef struct binop {
-    const char *s;
-    int prec, op;
-} binop;
-
-static const binop BINOPS[] = {{"||", 1, -2},   {"&&", 2, -1},   {"==", 3, B_EQ}, {"!=", 3, B_NE},
-                               {"<=", 4, B_LE}, {">=", 4, B_GE}, {"<", 4, B_LT},  {">", 4, B_GT},
-                               {"+", 5, B_ADD}, {"-", 5, B_SUB}, {"*", 6, B_MUL}, {"/", 6, B_DIV},
-                               {"%", 6, B_REM}};
-
-static const binop *peek_binop(lc *L)
-{
-    skip(L);
-    const char *s = L->t + L->c->pos;
-    for (size_t i = 0; i < sizeof BINOPS / sizeof BINOPS[0]; i++) {
-        size_t n = strlen(BINOPS[i].s);
-        if (strncmp(s, BINOPS[i].s, n))
-            continue;
-        /* not an assignment operator, not >>, <<, ++, -- */
-        if (s[n] == '=' && n == 1 && !strchr("<>", s[0]))
-            return NULL;
-        if (n == 1 && (s[1] == s[0]) && strchr("<>+-", s[0]))
-            return NULL;
-        if ((s[0] == '<' || s[0] == '>') && n == 2 && s[1] == s[0])
-            return NULL;
-        return &BINOPS[i];
-    }
-    return NULL;
-}
-
-static int32_t binary(lc *L, int32_t a, const binop *op, int32_t b, size_t pos)
-{
-    if (a < 0 || b < 0)
-        return -1;
-    int ta = ND(a).type, tb = ND(b).type;
-    xn n = mk(N_BIN, 0);
-    n.a = a;
-    n.b = b;
-    n.fn = (uint8_t)op->op;
-    if (op->op < 0) {
-        if (!is_scalar(ta) || !is_scalar(tb)) {
-            cbm__cerr(L->c, pos, "'%s' needs numbers", op->s);
-            return -1;
-        }
-        n.op = op->op == -2 ? N_OR : N_AND;
-        n.type = T_BOOL;
-        return node(L, n);
-    }
-    if (is_scalar(ta) && is_scalar(tb)) {
-        n.type = (int16_t)(op->op >= B_LT ? T_BOOL : arith_type(ta, tb));
-        if (op->op == B_REM && n.type != T_INT) {
-            cbm__cerr(L->c, pos, "'%%' needs integers (use fmod)");
-            return -1;
-        }
-        return node(L, n);
-    }
-    int vt = is_vec(ta) ? ta : tb;
-    if (is_vec(ta) && is_vec(tb)) {
-        vt = (ta == T_V3D || tb == T_V3D) ? T_V3D : T_V3F;
-        if (op->op == B_ADD || op->op == B_SUB || op->op == B_REM) {
-            n.type = (int16_t)vt;
-            return node(L, n);
-        }
-        if (op->op == B_MUL) { /* dot product */
-            n.type = vt == T_V3F ? T_FLOAT : T_DOUBLE;
-            return node(L, n);
-        }
-    } else if (is_vec(ta) && is_scalar(tb) && (op->op == B_MUL || op->op == B_DIV)) {
-        n.type = (int16_t)vt;
-        return node(L, n);
-    } else if (is_scalar(ta) && is_vec(tb) && op->op == B_MUL) {
-        n.type = (int16_t)vt;
-        return node(L, n);
-    }
-    if ((ta == T_LOCVEC || tb == T_LOCVEC) && op->op <= B_DIV &&
-        (ta == tb || is_scalar(ta) || is_scalar(tb)) && !(is_scalar(ta) && op->op != B_MUL)) {
-        n.type = T_LOCVEC; /* componentwise, numbers broadcast */
-        return node(L, n);
-    }
-    if (ta == T_QUAT && op->op == B_MUL && (tb == T_QUAT || is_vec(tb) || tb == T_TVEC)) {
-        n.type = (int16_t)tb; /* composition, or rotation of a vector or a frame */
-        return node(L, n);
-    }
-    cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s, L->lp->types.data[ta].name,
-              L->lp->types.data[tb].name);
-    return -1;
-}
-
-static int32_t binexpr(lc *L, int minprec)
-{
-    int32_t a = primary(L);
-    int chain = 0; /* a+b+c... is a left-deep tree: each operator nests */
-    for (;;) {
-        const binop *op = peek_binop(L);
-        if (!op || op->prec < minprec || a < 0) {
-            L->depth -= chain;
-            return a;
-        }
-        if (!deeper(L)) {
-            L->depth -= chain;
-            return -1;
-        }
-        chain++;
-        size_t pos = L->c->pos;
-        L->c->pos += strlen(op->s);
-        int32_t b = binexpr(L, op->prec + 1);
-        a = binary(L, a, op, b, pos);
-    }
-}
-
-static int32_t ternary1(lc *L);
-
-static int32_t ternary(lc *L)
-{
-    if (!deeper(L))
-        return -1;
-    int32_t r = ternary1(L);
-    L->depth--;
-    return r;
-}
-
-static int32_t ternary1(lc *L)
-{
-    int32_t c = binexpr(L, 1);
-    if (c < 0 || !accept(L, "?"))
-        return c;
-    size_t pos = L->c->pos;
-    int32_t a = assign_expr(L);
-    if (a < 0 || !expect(L, ":"))
-        return -1;
-    int32_t b = ternary(L);
-    if (b < 0)
-        return -1;
-    int ta = ND(a).type, tb = ND(b).type;
-    int t = ta;
-    if (is_scalar(ta) && is_scalar(tb))
-        t = arith_type(ta, tb);
-    else if (ta != tb) {
-        cbm__cerr(L->c, pos, "the branches of '?:' have different types");
-        return -1;
-    }
-    xn n = mk(N_COND, t);
-    n.a = c;
-    n.b = coerce(L, a, t, pos);
-    n.c = coerce(L, b, t, pos);
-    return node(L, n);
-}
-
-static bool is_lvalue(lc *L, int32_t e)
-{
-    return e >= 0 && (ND(e).op == N_LOCAL || ND(e).op == N_GLOBAL);
-}
-
-static int32_t assign_expr(lc *L)
-{
-    size_t pos = L->c->pos;
-    int32_t l = ternary(L);
-    if (l < 0)
-        return -1;
-    skip(L);
-    static const char *const AOPS[] = {"=", "+=", "-=", "*=", "/=", "%="};
-    static const int ABIN[] = {-1, B_ADD, B_SUB, B_MUL, B_DIV, B_REM};
-    for (int k = 5; k >= 0; k--) {
-        size_t n = strlen(AOPS[k]);
-        if (strncmp(L->t + L->c->pos, AOPS[k], n) || (k == 0 && L->t[L->c->pos + 1] == '='))
-            continue;
-        if (!is_lvalue(L, l)) {
-            cbm__cerr(L->c, pos, "the left side of '%s' is not assignable", AOPS[k]);
-            return -1;
-        }
-        L->c->pos += n;
-        size_t p2 = L->c->pos;
-        if (!deeper(L))
-            return -1;
-        int32_t r = assign_expr(L);
-        L->depth--;
-        if (r < 0)
-            return -1;
-        int lt = ND(l).type;
-        if (k > 0) { /* l op= r  is  l = l op r */
-            xn cp = ND(l);
-            int32_t l2 = node(L, cp);
-            binop bo = {AOPS[k], 0, ABIN[k]};
-            r = binary(L, l2, &bo, r, p2);
-            if (r < 0)
-                return -1;
-        }
-        xn x = mk(N_ASSIGN, lt);
-        x.a = l;
-        x.b = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
-        if (x.b >= 0 && ND(x.b).type != lt) {
-            cbm__cerr(L->c, p2, "cannot assign %s to %s", L->lp->types.data[ND(x.b).type].name,
-                      L->lp->types.data[lt].name);
-            return -1;
-        }
-        return x.b >= 0 ? node(L, x) : -1;
-    }
-    return l;
-}
-
-static int32_t expr(lc *L)
-{
-    skip(L);
-    size_t start = L->c->pos;
-    int32_t a = expr1(L);
-    if (a >= 0)
-        ND(a).pos = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
-    return a;
-}
-
-static int32_t expr1(lc *L)
-{
-    int32_t a = assign_expr(L);
-    while (a >= 0 && accept(L, ",")) {
-        int32_t b = assign_expr(L);
-        if (b < 0)
-            return -1;
-        xn n = mk(N_COMMA, ND(b).type);
-        n.a = a;
-        n.b = b;
-        a = node(L, n);
-    }
-    return a;
-}
-
-/* ---------------------------------------------------------------- modules, patterns */
-/* `Name(args) Name(args) ...` up to `;` (successor) */
-static int succ_list(lc *L, lpat *p)
-{
-    lpfg *lp = L->lp;
-    p->first = (int32_t)lp->sms.len;
-    p->n = 0;
-    for (;;) {
-        size_t n = ident(L);
-        if (!n)
-            break;
-        size_t pos = L->c->pos;
-        int m = find_mod(lp, L->t + pos, n);
-        if (m < 0) {
-            cbm__cerr(L->c, pos, "unknown module '%.*s' (declare it with `module`)", (int)n,
-                      L->t + pos);
-            return -1;
-        }
-        L->c->pos += n;
-        int32_t args = -1;
-        int na = 0;
-        if (peek(L, "("))
-            na = parse_args(L, &args);
-        if (na < 0)
-            return -1;
-        const lmod *md = &lp->mods.data[m];
-        if (na != md->np) {
-            cbm__cerr(L->c, pos, "module %s has %d parameter%s, %d given", md->name, md->np,
-                      md->np == 1 ? "" : "s", na);
-            return -1;
-        }
-        int32_t first = -1, last = -1;
-        for (int a = 0; a < na; a++) {
-            int32_t e = args;
-            args = ND(e).next;
-            ND(e).next = -1;
-            e = coerce(L, e, md->ptype[a], pos);
-            if (e < 0)
-                return -1;
-            chain(L, &first, &last, e);
-        }
-        lsm sm = {m, first};
-        if (CBM_ARRAY_PUSH(L->c->ctx, lp->sms, sm) != CBM_OK) {
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
-            return -1;
-        }
-        p->n++;
-    }
-    return 0;
-}
-
-/* A context or predecessor pattern: `Name(f1, f2) ...`; declare: formal names become new
- * locals; else they name existing variables (In*Context). */
-static int pattern(lc *L, lpat *p, bool declare)
-{
-    lpfg *lp = L->lp;
-    p->first = (int32_t)lp->sms.len;
-    p->n = 0;
-    for (;;) {
-        size_t n = ident(L);
-        if (!n)
-            break;
-        size_t pos = L->c->pos;
-        int m = find_mod(lp, L->t + pos, n);
-        if (m < 0) {
-            if (p->n && declare)
-                break;
-            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
-            return -1;
-        }
-        L->c->pos += n;
-        const lmod *md = &lp->mods.data[m];
-        int32_t first = -1, last = -1;
-        int na = 0;
-        if (accept(L, "(")) {
-            if (!accept(L, ")")) {
-                do {
-                    size_t k = ident(L);
-                    size_t fp = L->c->pos;
-                    if (!k) {
-                        expected(L, "a parameter name");
-                        return -1;
-                    }
-                    L->c->pos += k;
-                    if (na >= md->np) {
-                        na++;
-                        continue;
-                    }
-                    xn x = mk(N_LOCAL, md->ptype[na]);
-                    if (declare)
-                        x.slot = declare_local(L, L->t + fp, k, md->ptype[na]);
-                    else {
-                        lvar *v = find_var(L, L->t + fp, k);
-                        if (!v) {
-                            cbm__cerr(L->c, fp, "unknown variable '%.*s'", (int)k, L->t + fp);
-                            return -1;
-                        }
-                        if (v->type != md->ptype[na]) {
-                            cbm__cerr(L->c, fp, "'%.*s' has type %s, module %s wants %s", (int)k,
-                                      L->t + fp, lp->types.data[v->type].name, md->name,
-                                      lp->types.data[md->ptype[na]].name);
-                            return -1;
-                        }
-                        x.slot = v->slot;
-                    }
-                    int32_t e = node(L, x);
-                    if (e < 0)
-                        return -1;
-                    chain(L, &first, &last, e);
-                    na++;
-                } while (accept(L, ","));
-                if (!expect(L, ")"))
-                    return -1;
-            }
-        }
-        if (na != md->np) {
-            cbm__cerr(L->c, pos, "module %s has %d parameter%s, the pattern names %d", md->name,
-                      md->np, md->np == 1 ? "" : "s", na);
-            return -1;
-        }
-        lsm sm = {m, first};
-        if (CBM_ARRAY_PUSH(L->c->ctx, lp->sms, sm) != CBM_OK) {
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
-            return -1;
-        }
-        p->n++;
-    }
-    return 0;
-}
-
-/* ---------------------------------------------------------------- statements */
-static int32_t statement(lc *L);
-
-static int32_t block(lc *L)
-{
-    if (!expect(L, "{"))
-        return -1;
-    size_t nvars = L->vars.len;
-    int fs = L->fsize;
-    int32_t first = -1, last = -1;
-    bool ok = true;
-    while (!accept(L, "}")) {
-        if (!L->t[L->c->pos] || fatal(L)) {
-            expected(L, "'}'");
-            return -1;
-        }
-        size_t before = L->c->pos;
-        int32_t s = statement(L);
-        if (s < 0) {
-            ok = false;
-            if (fatal(L))
-                return -1;
-            if (L->c->pos == before) /* always make progress */
-                recover_stmt(L);
-            if (L->c->pos == before && L->t[L->c->pos] != '}')
-                L->c->pos++;
-            continue;
-        }
-        chain(L, &first, &last, s);
-        while (ND(last).next >= 0)
-            last = ND(last).next;
-    }
-    L->vars.len = nvars;
-    L->fsize = fs;
-    xn b = mk(S_BLOCK, 0);
-    b.a = first;
-    return ok ? node(L, b) : -1;
-}
-
-/* declaration statement after its type: `a = 1, b, c = {..};` */
-static int32_t declaration(lc *L, int t)
-{
-    int32_t first = -1, last = -1;
-    do {
-        size_t n = ident(L);
-        size_t pos = L->c->pos;
-        if (!n) {
-            expected(L, "a variable name");
-            recover_stmt(L);
-            return -1;
-        }
-        L->c->pos += n;
-        int32_t init = -1;
-        if (accept(L, "=")) {
-            size_t p2 = L->c->pos;
-            init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
-            if (init >= 0 && t < T_NBUILTIN)
-                init = coerce(L, init, t, p2);
-            if (init >= 0 && ND(init).type != t) {
-                cbm__cerr(L->c, p2, "cannot initialize %s with %s", L->lp->types.data[t].name,
-                          L->lp->types.data[ND(init).type].name);
-                init = -1;
-            }
-            if (init < 0) {
-                recover_stmt(L);
-                return -1;
-            }
-        }
-        xn d = mk(S_DECL, t);
-        d.slot = declare_local(L, L->t + pos, n, t);
-        d.a = init;
-        int32_t s = node(L, d);
-        if (s < 0)
-            return -1;
-        chain(L, &first, &last, s);
-    } while (accept(L, ","));
-    if (!expect(L, ";")) {
-        recover_stmt(L);
-        return -1;
-    }
-    return first;
-}
-
-static int32_t statement(lc *L)
-{
-    skip(L);
-    size_t pos = L->c->pos;
-    if (!deeper(L))
-        return -1;
-    int32_t r = -1;
-    int t;
-    if (peek(L, "{")) {
-        r = block(L);
-    } else if (accept(L, ";")) {
-        r = node(L, mk(S_NOP, 0));
-    } else if (accept_kw(L, "if")) {
-        xn n = mk(S_IF, 0);
-        if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
-                if (accept_kw(L, "else"))
-                    n.c = statement(L);
-                if (n.b >= 0)
-                    r = node(L, n);
-            }
-        }
-    } else if (accept_kw(L, "while")) {
-        xn n = mk(S_WHILE, 0);
-        if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
-                if (n.b >= 0)
-                    r = node(L, n);
-            }
-        }
-    } else if (accept_kw(L, "do")) {
-        xn n = mk(S_DO, 0);
-        n.b = statement(L);
-        if (n.b >= 0 && accept_kw(L, "while") && expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")") && expect(L, ";"))
-                r = node(L, n);
-        } else if (n.b >= 0)
-            expected(L, "'while'");
-    } else if (accept_kw(L, "for")) {
-        size_t nvars = L->vars.len;
-        int fs = L->fsize;
-        xn n = mk(S_FOR, 0);
-        bool ok = expect(L, "(");
-        if (ok && !accept(L, ";")) {
-            int ty = parse_type(L);
-            if (ty >= 0)
-                n.a = declaration(L, ty);
-            else {
-                int32_t e = expr(L);
-                if (e >= 0) {
-                    xn s = mk(S_EXPR, 0);
-                    s.a = e;
-                    n.a = node(L, s);
-                }
-                ok = e >= 0 && expect(L, ";");
-            }
-            ok = ok && n.a >= 0;
-        }
-        if (ok && !accept(L, ";")) {
-            n.b = coerce(L, expr(L), T_BOOL, pos);
-            ok = n.b >= 0 && expect(L, ";");
-        }
-        if (ok && !accept(L, ")")) {
-            n.c = expr(L);
-            ok = n.c >= 0 && expect(L, ")");
-        }
-        if (ok) {
-            n.d = statement(L);
-            if (n.d >= 0)
-                r = node(L, n);
-        }
-        L->vars.len = nvars;
-        L->fsize = fs;
-    } else if (accept_kw(L, "return")) {
-        xn n = mk(S_RETURN, L->in_prod ? T_VOID : L->ret_type);
-        if (!peek(L, ";")) {
-            if (L->ret_type == T_VOID || L->in_prod) {
-                cbm__cerr(L->c, pos, "return with a value here");
-                recover_stmt(L);
-                L->depth--;
-                return -1;
-            }
-            n.a = coerce(L, expr(L), L->ret_type, pos);
-            if (n.a < 0 && L->ret_type >= T_NBUILTIN)
-                n.a = -1;
-        } else if (L->ret_type != T_VOID && !L->in_prod) {
-            cbm__cerr(L->c, pos, "return needs a value");
-        }
-        if (expect(L, ";"))
-            r = node(L, n);
-    } else if (accept_kw(L, "switch")) {
-        xn n = mk(S_SWITCH, 0);
-        if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                L->in_switch++;
-                n.b = statement(L);
-                L->in_switch--;
-                if (n.b >= 0)
-                    r = node(L, n);
-            }
-        }
-    } else if (L->in_switch && (accept_kw(L, "case") || accept_kw(L, "default"))) {
-        xn n = mk(S_CASE, 0);
-        bool dflt = L->t[pos] == 'd';
-        if (!dflt)
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-        if ((dflt || n.a >= 0) && expect(L, ":"))
-            r = node(L, n);
-    } else if (accept_kw(L, "break")) {
-        if (expect(L, ";"))
-            r = node(L, mk(S_BREAK, 0));
-    } else if (accept_kw(L, "continue")) {
-        if (expect(L, ";"))
-            r = node(L, mk(S_CONTINUE, 0));
-    } else if (peek(L, "nproduce") || accept_kw(L, "produce")) {
-        bool partial = accept_kw(L, "nproduce");
-        if (!L->in_prod) {
-            cbm__cerr(L->c, pos, "produce outside a production");
-            recover_stmt(L);
-        } else {
-            lpat p;
-            if (succ_list(L, &p) == 0 && expect(L, ";")) {
-                xn n = mk(S_PRODUCE, 0);
-                n.a = p.first;
-                n.b = p.n;
-                n.fn = partial;
-                r = node(L, n);
-            } else
-                recover_stmt(L);
-        }
-    } else if ((t = parse_type(L)) >= 0) {
-        r = declaration(L, t);
-    } else {
-        int32_t e = expr(L);
-        if (e >= 0 && expect(L, ";")) {
-            xn s = mk(S_EXPR, 0);
-            s.a = e;
-            r = node(L, s);
-        } else if (!fatal(L))
-            recover_stmt(L);
-    }
-    L->depth--;
-    if (r >= 0)
-        ND(r).pos = (int32_t)(pos < INT32_MAX ? pos : INT32_MAX);
-    return r;
-}
-
-/* ---------------------------------------------------------------- top level */
-static int32_t const_int(lc *L, const char *what)
-{
-    size_t pos = L->c->pos;
-    int32_t e = expr(L);
-    if (e < 0)
-        return -1;
-    if (!is_scalar(ND(e).type)) {
-        cbm__cerr(L->c, pos, "%s must be a number", what);
-        return -1;
-    }
-    return e;
-}
-
-static void parse_struct(lc *L, size_t pos)
-{
-    lpfg *lp = L->lp;
-    size_t n = ident(L);
-    if (!n) {
-        expected(L, "a struct name");
-        recover(L);
-        return;
-    }
-    char name[64];
-    snprintf(name, sizeof name, "%.*s", (int)(n < 63 ? n : 63), L->t + L->c->pos);
-    if (find_type(L, L->t + L->c->pos, n) >= 0) {
-        cbm__cerr(L->c, L->c->pos, "type '%s' is already defined", name);
-        recover(L);
-        return;
-    }
-    L->c->pos += n;
-    ltype ty;
-    memset(&ty, 0, sizeof ty);
-    if (!expect(L, "{")) {
-        recover(L);
-        return;
-    }
-    while (!accept(L, "}")) {
-        int ft = parse_type(L);
-        if (ft < 0) {
-            expected(L, "a field type");
-            recover(L);
-            goto fail;
-        }
-        do {
-            size_t k = ident(L);
-            if (!k) {
-                expected(L, "a field name");
-                recover(L);
-                goto fail;
-            }
-            if (ty.nf >= MAXFLD) {
-                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXFLD, name);
-                recover(L);
-                goto fail;
-            }
-            char *fn = cbm__alloc(L->c->ctx, k + 1);
-            if (!fn) {
-                L->c->status = CBM_E_NOMEM;
-                L->c->fatal = true;
-                goto fail;
-            }
-            memcpy(fn, L->t + L->c->pos, k);
-            fn[k] = 0;
-            L->c->pos += k;
-            ty.fname[ty.nf] = fn;
-            ty.ftype[ty.nf] = ft;
-            ty.foff[ty.nf] = ty.size;
-            ty.size += tsize(lp, ft);
-            ty.nf++;
-        } while (accept(L, ","));
-        if (!expect(L, ";")) {
-            recover(L);
-            goto fail;
-        }
-    }
-    accept(L, ";");
-    if (ty.size > MAXSZ) {
-        cbm__cerr(L->c, pos, "struct %s is too large (more than %d numbers)", name, MAXSZ);
-        goto fail;
-    }
-    ty.name = cbm__strdup(L->c->ctx, name);
-    if (!ty.name || CBM_ARRAY_PUSH(L->c->ctx, lp->types, ty) != CBM_OK) {
-        cbm__strfree(L->c->ctx, ty.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        goto fail;
-    }
-    return;
-fail:
-    for (int i = 0; i < ty.nf; i++)
-        cbm__strfree(L->c->ctx, ty.fname[i]);
-}
-
-static void parse_module_decl(lc *L)
-{
-    do {
-        size_t n = ident(L);
-        size_t pos = L->c->pos;
-        if (!n) {
-            expected(L, "a module name");
-            recover(L);
-            return;
-        }
-        L->c->pos += n;
-        int pt[MAXF], np = 0;
-        if (expect(L, "(") && !accept(L, ")")) {
-            do {
-                int t = parse_type(L);
-                if (t < 0) {
-                    expected(L, "a parameter type");
-                    recover(L);
-                    return;
-                }
-                if (np >= MAXF) {
-                    cbm__cerr(L->c, pos, "more than %d parameters", MAXF);
-                    recover(L);
-                    return;
-                }
-                pt[np++] = t;
-                size_t k = ident(L); /* optional parameter name */
-                if (k && find_type(L, L->t + L->c->pos, k) < 0)
-                    L->c->pos += k;
-            } while (accept(L, ","));
-            if (!expect(L, ")")) {
-                recover(L);
-                return;
-            }
-        }
-        int m = find_mod(L->lp, L->t + pos, n);
-        if (m >= 0) {
-            cbm__cerr(L->c, pos, "module '%.*s' is already declared", (int)n, L->t + pos);
-            continue;
-        }
-        add_mod(L, L->t + pos, n, pt, np, NULL, pos);
-    } while (accept(L, ","));
-    if (!expect(L, ";"))
-        recover(L);
-}
-
-static void symbol_list(lc *L, bool consider)
-{
-    lpfg *lp = L->lp;
-    if (consider)
-        for (int i = 0; i < 128; i++)
-            lp->considered[i] = false;
-    for (;;) {
-        size_t n = ident(L);
-        if (!n)
-            break;
-        int m = find_mod(lp, L->t + L->c->pos, n);
-        if (m < 0)
-            cbm__cerr(L->c, L->c->pos, "unknown module '%.*s'", (int)n, L->t + L->c->pos);
-        else
-            lp->considered[lp->mods.data[m].code] = consider;
-        L->c->pos += n;
-        accept(L, ",");
-    }
-    if (!expect(L, ";"))
-        recover(L);
-}
-
-/* The roles of a point-mass module's parameters, `mass: Grape(mass, radius)`: `mass` (kg),
- * `radius` (m, the organ's contact sphere) or `_` (not used), in parameter order. Offsets (in
- * doubles) into *moff and *roff (-1: absent). false after an error. */
-static bool mass_roles(lc *L, const lmod *md, int *moff, int *roff)
-{
-    lpfg *lp = L->lp;
-    int off = 0;
-    for (int k = 0;; k++) {
-        size_t n = ident(L), pos = L->c->pos;
-        if (!n) {
-            expected(L, "mass, radius or _");
-            return false;
-        }
-        L->c->pos += n;
-        int *dst = NULL;
-        if (n == 4 && !strncmp(L->t + pos, "mass", 4))
-            dst = moff;
-        else if (n == 6 && !strncmp(L->t + pos, "radius", 6))
-            dst = roff;
-        else if (!(n == 1 && L->t[pos] == '_')) {
-            cbm__cerr(L->c, pos,
-                      "unknown role '%.*s' of a point-mass parameter (mass, radius or _)", (int)n,
-                      L->t + pos);
-            return false;
-        }
-        if (k >= md->np) {
-            cbm__cerr(L->c, pos, "module '%s' has %d parameter%s", md->name, md->np,
-                      md->np == 1 ? "" : "s");
-            return false;
-        }
-        if (dst && *dst >= 0) {
-            cbm__cerr(L->c, pos, "'%.*s' given twice", (int)n, L->t + pos);
-            return false;
-        }
-        if (dst && !is_scalar(md->ptype[k])) {
-            cbm__cerr(L->c, pos, "parameter %d of '%s' must be a number to be its %.*s, not %s",
-                      k + 1, md->name, (int)n, L->t + pos, lp->types.data[md->ptype[k]].name);
-            return false;
-        }
-        if (dst)
-            *dst = off;
-        off += tsize(lp, md->ptype[k]);
-        if (!accept(L, ","))
-            break;
-    }
-    if (!expect(L, ")"))
-        return false;
-    if (*moff < 0) {
-        cbm__cerr(L->c, L->c->pos - 1, "point-mass module '%s' needs a 'mass' parameter", md->name);
-        return false;
-    }
-    return true;
-}
-
-/* `mechanics: Module;` (its MechSegment parameter is the segment) and `mass: A, B;` (the first
- * parameter, a number, is a point mass in kg), or with roles `mass: Grape(mass, radius);` (see
- * mass_roles). */
-static void mech_decl(lc *L, bool mass)
-{
-    lpfg *lp = L->lp;
-    for (;;) {
-        size_t n = ident(L), pos = L->c->pos;
-        if (!n) {
-            expected(L, "a module name");
-            recover(L);
-            return;
-        }
-        int m = find_mod(lp, L->t + pos, n);
-        L->c->pos += n;
-        if (m < 0) {
-            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
-        } else {
-            const lmod *md = &lp->mods.data[m];
-            int off = 0, found = -1, roff = -1;
-            if (mass && accept(L, "(")) {
-                int moff = -1;
-                if (!mass_roles(L, md, &moff, &roff)) {
-                    recover(L);
-                    return;
-                }
-                lp->mech.mass_off[md->code] = moff;
-                lp->mech.radius_off[md->code] = roff;
-                if (!accept(L, ","))
-                    break;
-                continue;
-            }
-            for (int i = 0; i < md->np && found < 0; i++) {
-                if (mass ? i == 0 && is_scalar(md->ptype[i]) : md->ptype[i] == T_MSEG)
-                    found = off;
-                off += tsize(lp, md->ptype[i]);
-            }
-            if (found < 0 && mass)
-                cbm__cerr(L->c, pos,
-                          "the first parameter of point-mass module '%s' must be a number "
-                          "(its mass, kg)%s%s",
-                          md->name, md->np ? ", not " : "",
-                          md->np ? lp->types.data[md->ptype[0]].name : "");
-            else if (found < 0)
-                cbm__cerr(L->c, pos, "mechanical module '%s' needs a MechSegment parameter",
-                          md->name);
-            else if (!mass && lp->mech.seg_code >= 0 && lp->mech.seg_code != md->code)
-                cbm__cerr(L->c, pos, "only one module can carry the mechanical segment");
-            else if (mass) {
-                lp->mech.mass_off[md->code] = found;
-                lp->mech.radius_off[md->code] = -1;
-            } else {
-                lp->mech.seg_code = md->code;
-                lp->mech.seg_off = found;
-            }
-        }
-        if (!accept(L, ","))
-            break;
-    }
-    if (!expect(L, ";"))
-        recover(L);
-}
-
-/* `pred-with-contexts : { body }` */
-static void parse_production(lc *L, lset *set, int group)
-{
-    lpfg *lp = L->lp;
-    size_t pos = L->c->pos;
-    lprod pr;
-    memset(&pr, 0, sizeof pr);
-    pr.pos = pos;
-    pr.group = group;
-    L->vars.len = 0;
-    L->fsize = L->fmax = 0;
-    L->in_prod = true;
-    L->ret_type = T_VOID;
-    lpat pats[5];
-    int npats = 0;
-    int ops[5];
-    for (;;) {
-        if (npats == 5) {
-            cbm__cerr(L->c, L->c->pos, "too many context parts");
-            recover(L);
-            return;
-        }
-        if (pattern(L, &pats[npats], true) < 0) {
-            recover(L);
-            return;
-        }
-        if (pats[npats].n == 0) {
-            expected(L, "a module");
-            recover(L);
-            return;
-        }
-        npats++;
-        skip(L);
-        const char *s = L->t + L->c->pos;
-        if (s[0] == '<' && s[1] == '<')
-            ops[npats - 1] = 1, L->c->pos += 2;
-        else if (s[0] == '<')
-            ops[npats - 1] = 0, L->c->pos += 1;
-        else if (s[0] == '>' && s[1] == '>')
-            ops[npats - 1] = 2, L->c->pos += 2;
-        else if (s[0] == '>')
-            ops[npats - 1] = 3, L->c->pos += 1;
-        else if (s[0] == ':') {
-            ops[npats - 1] = -1;
-            L->c->pos++;
-            break;
-        } else {
-            expected(L, "'<', '<<', '>>', '>' or ':'");
-            recover(L);
-            return;
-        }
-    }
-    /* pattern k is followed by operator ops[k]: left contexts precede the predecessor */
-    int ip = 0;
-    while (ip < npats && (ops[ip] == 0 || ops[ip] == 1)) {
-        int k = ops[ip] == 0 ? CX_LC : CX_NLC;
-        if (pr.cx[k].n) {
-            cbm__cerr(L->c, pos, "two %s contexts", k == CX_LC ? "left" : "new left");
-            recover(L);
-            return;
-        }
-        pr.cx[k] = pats[ip++];
-    }
-    if (ip >= npats) {
-        cbm__cerr(L->c, pos, "production without a predecessor");
-        recover(L);
-        return;
-    }
-    pr.mod = lp->sms.data[pats[ip].first].mod;
-    pr.pred = pats[ip];
-    int prev = ops[ip];
-    for (int k = ip + 1; k < npats; k++) {
-        int cx = prev == 2 ? CX_NRC : prev == 3 ? CX_RC : -1;
-        if (cx < 0 || pr.cx[cx].n) {
-            cbm__cerr(L->c, pos, "misplaced context");
-            recover(L);
-            return;
-        }
-        pr.cx[cx] = pats[k];
-        prev = ops[k];
-    }
-    if (pr.cx[CX_NLC].n && pr.cx[CX_NRC].n) {
-        cbm__cerr(L->c, pos, "a production cannot have both new left and new right context");
-        recover(L);
-        return;
-    }
-    skip(L);
-    if (!peek(L, "{")) {
-        expected(L, "'{' (the production's body)");
-        recover(L);
-        return;
-    }
-    pr.body = block(L);
-    pr.fsize = L->fmax;
-    L->in_prod = false;
-    if (pr.body < 0)
-        return;
-    if (CBM_ARRAY_PUSH(L->c->ctx, set->prods, pr) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-    }
-}
-
-static void parse_function(lc *L, int rt, size_t pos)
-{
-    lpfg *lp = L->lp;
-    size_t n = ident(L);
-    lfunc f;
-    memset(&f, 0, sizeof f);
-    f.ret = rt;
-    f.pos = pos;
-    f.name = cbm__alloc(L->c->ctx, n + 1);
-    if (!f.name) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        return;
-    }
-    memcpy(f.name, L->t + L->c->pos, n);
-    f.name[n] = 0;
-    L->c->pos += n;
-    L->vars.len = 0;
-    L->fsize = L->fmax = 0;
-    expect(L, "(");
-    if (!accept(L, ")") && !accept_kw(L, "void")) {
-        do {
-            int t = parse_type(L);
-            bool ref = t >= 0 && accept(L, "&");
-            size_t k = t >= 0 ? ident(L) : 0;
-            if (t < 0 || !k || f.np >= MAXF) {
-                expected(L, "a parameter (type and name)");
-                recover(L);
-                cbm__strfree(L->c->ctx, f.name);
-                return;
-            }
-            f.pref[f.np] = ref;
-            f.ptype[f.np++] = t;
-            declare_local(L, L->t + L->c->pos, k, t);
-            L->c->pos += k;
-        } while (accept(L, ","));
-        expect(L, ")");
-    } else
-        accept(L, ")");
-    /* register before the body: recursion */
-    f.body = -1;
-    if (CBM_ARRAY_PUSH(L->c->ctx, lp->funcs, f) != CBM_OK) {
-        cbm__strfree(L->c->ctx, f.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
-        return;
-    }
-    size_t fi = lp->funcs.len - 1;
-    L->ret_type = rt;
-    L->in_prod = false;
-    int32_t b = block(L);
-    lp->funcs.data[fi].body = b;
-    lp->funcs.data[fi].fsize = L->fmax;
-    L->ret_type = T_VOID;
-}
-
-static void parse_global(lc *L, int t)
-{
-    lpfg *lp = L->lp;
-    L->vars.len = 0;
-    L->fsize = L->fmax = 0;
-    do {
-        size_t n = ident(L);
-        if (!n) {
-            expected(L, "a name");
-            recover(L);
-            return;
-        }
-        size_t pos = L->c->pos;
-        if (find_gvar(L, L->t + pos, n)) {
-            cbm__cerr(L->c, pos, "'%.*s' is already defined", (int)n, L->t + pos);
-            recover(L);
-            return;
-        }
-        L->c->pos += n;
-        int32_t init = -1;
-        if (accept(L, "=")) {
-            size_t p2 = L->c->pos;
-            init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
-            if (init >= 0 && t < T_NBUILTIN)
-                init = coerce(L, init, t, p2);
-            if (init < 0) {
-                recover(L);
-                return;
-            }
-        }
-        lgvar g = {NULL, t, lp->nglobal, init};
-        g.name = cbm__alloc(L->c->ctx, n + 1);
-        if (!g.name || CBM_ARRAY_PUSH(L->c->ctx, lp->gvars, g) != CBM_OK) {
-            if (g.name)
-                cbm__free(L->c->ctx, g.name, n + 1);
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
-            return;
-        }
-        memcpy(g.name, L->t + pos, n);
-        g.name[n] = 0;
-        lp->nglobal += tsize(lp, t);
-    } while (accept(L, ","));
-    if (!expect(L, ";"))
-        recover(L);
-}
-
-static bool label(lc *L, const char *kw)
-{
-    size_t save = L->c->pos;
-    skip(L);
-    const char *s = L->t + L->c->pos;
-    size_t i = 0, k = 0;
-    while (kw[k] != '\0') {
-        if (kw[k] == ' ') {
-            while (s[i] == ' ' || s[i] == '\t')
-                i++;
-            k++;
-            continue;
-        }
-        char a = s[i], b = kw[k];
-        if (k == 0 ? tolower((unsigned char)a) != tolower((unsigned char)b) : a != b) {
-            L->c->pos = save;
-            return false;
-        }
-        i++, k++;
-    }
-    if (isid((unsigned char)s[i])) {
-        L->c->pos = save;
-        return false;
-    }
-    L->c->pos += i;
-    skip(L);
-    if (L->t[L->c->pos] != ':') {
-        L->c->pos = save;
-        return false;
-    }
-    L->c->pos++;
-    return true;
-}
-
-static cbm_status setup_builtins(lc *L)
-{
-    lpfg *lp = L->lp;
-    cbm_context *ctx = L->c->ctx;
-    static const char *const TN[] = {"void",      "int",    "float",      "double",
-                                     "bool",      "V3f",    "V3d",        "Quaternion",
-                                     "TurtleVec", "LocVec", "MechSegment"};
-    static const int TS[] = {0, 1, 1, 1, 1, 3, 3, 4, 9, 3, MS_SIZE};
-    for (int i = 0; i < T_NBUILTIN; i++)
-        CBM_TRY(add_type(lp, ctx, TN[i], TS[i]));
-    /* Quaternion {w, x, y, z} (double), TurtleVec {H, L, U} (V3f): built-in structs */
-    static const char *const QF[] = {"w", "x", "y", "z"}, *const TF[] = {"H", "L", "U"};
-    ltype *q = &lp->types.data[T_QUAT], *tv = &lp->types.data[T_TVEC];
-    for (int i = 0; i < 4; i++) {
-        q->fname[i] = cbm__strdup(ctx, QF[i]);
-        q->ftype[i] = T_DOUBLE;
-        q->foff[i] = i;
-        q->nf++;
-        if (!q->fname[i])
-            return CBM_E_NOMEM;
-    }
-    ltype *lv = &lp->types.data[T_LOCVEC];
-    static const char *const LF[] = {"h", "l", "u"};
-    for (int i = 0; i < 3; i++) {
-        lv->fname[i] = cbm__strdup(ctx, LF[i]);
-        lv->ftype[i] = T_FLOAT;
-        lv->foff[i] = i;
-        lv->nf++;
-        if (!lv->fname[i])
-            return CBM_E_NOMEM;
-    }
-    for (int i = 0; i < 3; i++) {
-        tv->fname[i] = cbm__strdup(ctx, TF[i]);
-        tv->ftype[i] = T_V3F;
-        tv->foff[i] = 3 * i;
-        tv->nf++;
-        if (!tv->fname[i])
-            return CBM_E_NOMEM;
-    }
-    /* MechSegment: the fields at the offsets of lsys/mechlang.h */
-    static const char *const MF[] = {
-        "length", "a",   "b", "E", "G",      "density",      "mor",          "rest",
-        "omega",  "pos", "H", "U", "stress", "stress_ratio", "carried_mass", "age"};
-    static const int MO[] = {MS_LENGTH, MS_A,     MS_B,       MS_E,   MS_G, MS_DENSITY,
-                             MS_MOR,    MS_REST,  MS_OMEGA,   MS_POS, MS_H, MS_U,
-                             MS_STRESS, MS_RATIO, MS_CARRIED, MS_AGE};
-    ltype *ms = &lp->types.data[T_MSEG];
-    for (int i = 0; i < 16; i++) {
-        ms->fname[i] = cbm__strdup(ctx, MF[i]);
-        ms->ftype[i] = (MO[i] == MS_REST || MO[i] == MS_OMEGA || MO[i] == MS_POS || MO[i] == MS_H ||
-                        MO[i] == MS_U)
-                           ? T_V3D
-                           : T_DOUBLE;
-        ms->foff[i] = MO[i];
-        ms->nf++;
-        if (!ms->fname[i])
-            return CBM_E_NOMEM;
-    }
-    cbm__mechlang_init(&lp->mech);
-    for (int i = 0; i < 128; i++) {
-        lp->bycode[i] = -1;
-        lp->considered[i] = true;
-    }
-    for (size_t i = 0; i < sizeof TURTLE / sizeof TURTLE[0]; i++) {
-        int pt[MAXF], np = 0;
-        for (const char *p = TURTLE[i][2]; *p; p++)
-            pt[np++] = *p == 'i' ? T_INT : *p == 'v' ? T_V3F : T_FLOAT;
-        if (add_mod(L, TURTLE[i][0], strlen(TURTLE[i][0]), pt, np, TURTLE[i][1], 0) < 0)
-            return L->c->status != CBM_OK ? L->c->status : CBM_E_NOMEM;
-    }
-    /* V3f and its synonyms */
-    lp->sb = find_mod(lp, "SB", 2);
-    lp->eb = find_mod(lp, "EB", 2);
-    return CBM_OK;
-}
-
-static void parse_block_item(lc *L, int which)
-{
-    L->vars.len = 0;
-    L->fsize = L->fmax = 0;
-    L->in_prod = false;
-    L->ret_type = T_VOID;
-    int32_t b = block(L);
-    if (b >= 0) {
-        L->lp->blocks[which] = b;
-        L->lp->block_fsize[which] = L->fmax;
-    }
-}
-
-static void parse_top(lc *L)
-{
-    lpfg *lp = L->lp;
-    lset *set = &lp->main;
-    int group = 0;
-    for (;;) {
-        skip(L);
-        if (fatal(L) || !L->t[L->c->pos])
-            return;
-        size_t pos = L->c->pos;
-        int t;
-        if (label(L, "derivation length")) {
-            lp->dlen_expr = const_int(L, "derivation length");
-            if (!expect(L, ";"))
-                recover(L);
-        } else if (label(L, "Axiom")) {
-            L->vars.len = 0;
-            L->fsize = L->fmax = 0;
-            if (succ_list(L, &lp->axiom) < 0 || !expect(L, ";"))
-                recover(L);
-        } else if (label(L, "ignore")) {
-            symbol_list(L, false);
-        } else if (label(L, "consider")) {
-            symbol_list(L, true);
-        } else if (label(L, "mechanics")) {
-            mech_decl(L, false);
-        } else if (label(L, "mass")) {
-            mech_decl(L, true);
-        } else if (label(L, "Start")) {
-            parse_block_item(L, 0);
-        } else if (label(L, "StartEach")) {
-            parse_block_item(L, 1);
-        } else if (label(L, "EndEach")) {
-            parse_block_item(L, 2);
-        } else if (label(L, "End")) {
-            parse_block_item(L, 3);
-        } else if (label(L, "decomposition")) {
-            set = &lp->decomp;
-            set->present = true;
-            group = 0;
-        } else if (label(L, "interpretation")) {
-            set = &lp->interp;
-            set->present = true;
-            group = 0;
-        } else if (label(L, "production") || label(L, "productions")) {
-            set = &lp->main;
-            group = 0;
-        } else if (label(L, "maximum depth")) {
-            int32_t e = const_int(L, "maximum depth");
-            if (e >= 0) {
-                set->depth = -2 - e; /* evaluated at load */
-            }
-            if (!expect(L, ";"))
-                recover(L);
-        } else if (accept_kw(L, "group")) {
-            size_t p2 = L->c->pos;
-            int32_t e = const_int(L, "group");
-            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
-                cbm__cerr(L->c, p2, "group %g is out of range (an int)", ND(e).v);
-            else if (e >= 0 && ND(e).op == N_NUM)
-                group = (int)ND(e).v;
-            else if (e >= 0)
-                cbm__cerr(L->c, p2, "group needs a number");
-            expect(L, ":");
-        } else if (accept_kw(L, "endgroup")) {
-            group = 0;
-            accept(L, ";");
-        } else if (accept_kw(L, "module")) {
-            parse_module_decl(L);
-        } else if (accept_kw(L, "struct") && !peek(L, "{")) {
-            size_t save = L->c->pos;
-            size_t n = ident(L);
-            L->c->pos += n;
-            bool def = peek(L, "{");
-            L->c->pos = save;
-            if (def)
-                parse_struct(L, pos);
-            else {
-                L->c->pos = pos;
-                t = parse_type(L);
-                if (t < 0) {
-                    expected(L, "a struct name");
-                    recover(L);
-                } else
-                    parse_global(L, t);
-            }
-        } else if (accept_kw(L, "typedef")) {
-            cbm__cerr(L->c, pos, "typedef is not supported; declare `struct Name { ... };`");
-            recover(L);
-        } else if ((t = parse_type(L)) >= 0 || accept_kw(L, "void")) {
-            if (t < 0)
-                t = T_VOID;
-            size_t n = ident(L);
-            size_t save = L->c->pos;
-            L->c->pos += n;
-            bool fn = n && peek(L, "(");
-            L->c->pos = save;
-            if (fn)
-                parse_function(L, t, pos);
-            else if (t == T_VOID) {
-                expected(L, "a function");
-                recover(L);
-            } else
-                parse_global(L, t);
-        } else {
-            size_t n = ident(L);
-            if (n && find_mod(lp, L->t + L->c->pos, n) >= 0)
-                parse_production(L, set, group);
-            else {
-                expected(L, "a module declaration, a production or a section");
-                recover(L);
-            }
-        }
-    }
-}
-
 /* ---------------------------------------------------------------- evaluation */
 static void rt_error(lpfg *lp, cbm_status s, const char *msg)
 {
@@ -2766,7 +106,7 @@ static bool spend(lpfg *lp, bool loop)
     return true;
 }
 
-static double *lv_ptr(lpfg *lp, const xn *n, double *fr)
+static double *lv_ptr(lpfg *lp, const lc_node *n, double *fr)
 {
     return n->op == N_LOCAL ? fr + n->slot : lp->glob + n->slot;
 }
@@ -2786,21 +126,21 @@ static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
 {
     double r;
     if (t == T_INT && op <= B_REM) { /* C int arithmetic: 32 bits, wrapping on overflow */
-        long long x = (long long)c_int(a), y = (long long)c_int(b);
+        long long x = (long long)lc_c_int(a), y = (long long)lc_c_int(b);
         switch (op) {
         case B_ADD:
-            return wrap_int(x + y);
+            return lc_wrap_int(x + y);
         case B_SUB:
-            return wrap_int(x - y);
+            return lc_wrap_int(x - y);
         case B_MUL:
-            return wrap_int(x * y);
+            return lc_wrap_int(x * y);
         default:
             if (y == 0) {
                 rt_error(lp, CBM_E_RUNTIME,
                          op == B_DIV ? "integer division by zero" : "integer remainder by zero");
                 return 0;
             }
-            return wrap_int(op == B_DIV ? x / y : x % y);
+            return lc_wrap_int(op == B_DIV ? x / y : x % y);
         }
     }
     switch (op) {
@@ -2847,7 +187,7 @@ static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
     default:
         return a != b;
     }
-    return conv_scalar(t, r);
+    return lc_conv_scalar(t, r);
 }
 
 /* rand()/srand() as the C library lpfg models are compiled with (glibc's random(): additive
@@ -2904,18 +244,18 @@ static double nrand(cbm__eval *e, double m, double s)
 }
 
 /* The mechanics built-ins (lsys/mechlang.c) over the current string. */
-static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
+static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     double a[5] = {0, 0, 0, 0, 0};
     int na = 0;
-    for (int32_t x = n->a; x >= 0 && na < 5; x = lp->nodes.data[x].next)
+    for (int32_t x = n->a; x >= 0 && na < 5; x = lp->m.nodes.data[x].next)
         a[na++] = evs(ls, x, fr);
     if (lp->err != CBM_OK)
         return;
     cbm__mechlang *m = &lp->mech;
     char msg[128];
-    switch ((bfn)n->fn) {
+    switch ((lc_builtin_fn)n->fn) {
     case F_GRAVITY:
         m->gravity = (cbm_vec3){a[0], a[1], a[2]};
         return;
@@ -3025,15 +365,15 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
     out[0] = r;
 }
 
-static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
+static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     if (n->fn == F_PRINTF) {
         cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
         int k = 0;
         const char *strings = ls->comp.strings.data;
-        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->nodes.data[x].next, k++) {
-            const xn *an = &lp->nodes.data[x];
+        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
+            const lc_node *an = &lp->m.nodes.data[x];
             args[k].s = an->op == N_STR ? strings + an->slot : NULL;
             args[k].v = an->op == N_STR ? 0 : evs(ls, x, fr);
         }
@@ -3045,11 +385,11 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
     int32_t x = n->a;
     if (n->fn == F_DOT || n->fn == F_CROSS || n->fn == F_MAKEQ || n->fn == F_VECROT) {
         double u[9], w[3], ang = 0;
-        int32_t x1 = lp->nodes.data[x].next;
+        int32_t x1 = lp->m.nodes.data[x].next;
         ev(ls, x, fr, u);
         ev(ls, x1, fr, w);
         if (n->fn == F_VECROT)
-            ang = evs(ls, lp->nodes.data[x1].next, fr);
+            ang = evs(ls, lp->m.nodes.data[x1].next, fr);
         else if (n->fn == F_MAKEQ)
             ang = w[0];
         if (n->fn == F_DOT)
@@ -3076,23 +416,23 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
                 for (int i = 0; i < 3; i++)
                     out[3 * v + i] = p[i] * c + cr[i] * sn + ax[i] * d * (1 - c);
             }
-            conv_value(lp, n->type, out);
-            memcpy(lv_ptr(lp, &lp->nodes.data[x], fr), out,
-                   (size_t)tsize(lp, n->type) * sizeof(double));
+            lc_conv_value(&lp->m, n->type, out);
+            memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), out,
+                   (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
             return;
         }
-        conv_value(lp, n->type, out);
+        lc_conv_value(&lp->m, n->type, out);
         return;
     }
     if (n->fn == F_TOLOCAL || n->fn == F_TOWORLD) {
         double v[3], f[9];
         ev(ls, x, fr, v);
-        ev(ls, lp->nodes.data[x].next, fr, f);
+        ev(ls, lp->m.nodes.data[x].next, fr, f);
         for (int i = 0; i < 3; i++)
             out[i] = n->fn == F_TOLOCAL
                          ? v[0] * f[3 * i] + v[1] * f[3 * i + 1] + v[2] * f[3 * i + 2]
                          : v[0] * f[i] + v[1] * f[3 + i] + v[2] * f[6 + i];
-        conv_value(lp, n->type, out);
+        lc_conv_value(&lp->m, n->type, out);
         return;
     }
     if (n->fn == F_NORMALIZE && n->type == T_TVEC) {
@@ -3102,7 +442,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
             for (int i = 0; i < 3; i++)
                 p[i] = l > 0 ? p[i] / l : 0;
         }
-        conv_value(lp, n->type, out);
+        lc_conv_value(&lp->m, n->type, out);
         return;
     }
     if (n->fn == F_LENGTH || n->fn == F_NORMALIZE) {
@@ -3110,11 +450,11 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         ev(ls, x, fr, v);
         double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
         if (n->fn == F_LENGTH)
-            out[0] = conv_scalar(n->type, l);
+            out[0] = lc_conv_scalar(n->type, l);
         else {
             for (int i = 0; i < 3; i++)
                 out[i] = l > 0 ? v[i] / l : 0;
-            conv_value(lp, n->type, out);
+            lc_conv_value(&lp->m, n->type, out);
         }
         return;
     }
@@ -3122,10 +462,10 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         call_mech(ls, n, fr, out);
         return;
     }
-    for (int i = 0; i < 2 && x >= 0; i++, x = lp->nodes.data[x].next)
+    for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
         a[i] = evs(ls, x, fr);
     double r = 0;
-    switch ((bfn)n->fn) {
+    switch ((lc_builtin_fn)n->fn) {
     case F_SIN:
         r = sin(a[0]);
         break;
@@ -3205,7 +545,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
             rt_error(lp, CBM_E_RUNTIME,
                      "func(name, x) needs function files (.func or .fset) on the command line");
         else
-            r = ls->func(ls->func_ud, lp->funcids.data[n->slot - 1], a[0]);
+            r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
         break;
     case F_FORWARD:
         lp->backward = false;
@@ -3225,21 +565,21 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
     default:
         break;
     }
-    out[0] = conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type, r);
+    out[0] = lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type, r);
 }
 
-static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
+static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
-    const lfunc *f = &lp->funcs.data[n->slot];
+    const lc_function *f = &lp->m.funcs.data[n->slot];
     if (lp->call_depth >= cbm_context_limits(ls->ctx)->max_call_depth ||
         lp->sp + (size_t)f->fsize + 1 > lp->stack_cap) {
         rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
-        memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
+        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
         return;
     }
     if (!spend(lp, false)) {
-        memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
+        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
         return;
     }
     double *nf = lp->stack + lp->sp;
@@ -3247,23 +587,23 @@ static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
     lp->sp += (size_t)f->fsize;
     int off = 0;
     int i = 0;
-    for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next, i++) {
+    for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
         ev(ls, x, fr, nf + off);
-        off += tsize(lp, f->ptype[i]);
+        off += lc_type_size(&lp->m, f->ptype[i]);
     }
     lp->call_depth++;
     double *saved = lp->ret;
     int32_t at = lp->at;
-    memset(out, 0, (size_t)tsize(lp, f->ret) * sizeof(double));
+    memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
     lp->ret = out;
     exec(ls, f->body, nf);
     lp->at = at;
     off = 0;
     i = 0;
-    for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next, i++) {
-        int sz = tsize(lp, f->ptype[i]);
+    for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
+        int sz = lc_type_size(&lp->m, f->ptype[i]);
         if (f->pref[i])
-            memcpy(lv_ptr(lp, &lp->nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
+            memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
         off += sz;
     }
     lp->ret = saved;
@@ -3274,24 +614,24 @@ static void call_user(cbm_lsys *ls, const xn *n, double *fr, double *out)
 static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
-    const xn *n = &lp->nodes.data[ni];
+    const lc_node *n = &lp->m.nodes.data[ni];
     switch (n->op) {
     case N_NUM:
         out[0] = n->v;
         return;
     case N_LOCAL:
     case N_GLOBAL:
-        memcpy(out, lv_ptr(lp, n, fr), (size_t)tsize(lp, n->type) * sizeof(double));
+        memcpy(out, lv_ptr(lp, n, fr), (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
         return;
     case N_FIELD: {
         double tmp[MAXSZ + 1];
         ev(ls, n->a, fr, tmp);
-        memcpy(out, tmp + n->slot, (size_t)tsize(lp, n->type) * sizeof(double));
+        memcpy(out, tmp + n->slot, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
         return;
     }
     case N_NEG: {
         ev(ls, n->a, fr, out);
-        for (int i = 0; i < tsize(lp, n->type); i++)
+        for (int i = 0; i < lc_type_size(&lp->m, n->type); i++)
             out[i] = -out[i];
         return;
     }
@@ -3300,13 +640,13 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
         return;
     case N_CAST:
         ev(ls, n->a, fr, out);
-        conv_value(lp, n->type, out);
+        lc_conv_value(&lp->m, n->type, out);
         return;
     case N_BIN: {
-        int ta = lp->nodes.data[n->a].type, tb = lp->nodes.data[n->b].type;
-        if (is_scalar(ta) && is_scalar(tb)) {
+        int ta = lp->m.nodes.data[n->a].type, tb = lp->m.nodes.data[n->b].type;
+        if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
             double a = evs(ls, n->a, fr), b = evs(ls, n->b, fr);
-            int ct = n->type == T_BOOL ? arith_type(ta, tb) : n->type;
+            int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
             if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
                 ct = T_DOUBLE;
             out[0] = bin_scalar(n->fn, ct, a, b, lp);
@@ -3317,13 +657,13 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
             ev(ls, n->a, fr, a);
             ev(ls, n->b, fr, b);
             for (int i = 0; i < 3; i++) {
-                double x = a[is_scalar(ta) ? 0 : i], y = b[is_scalar(tb) ? 0 : i];
+                double x = a[lc_is_scalar(ta) ? 0 : i], y = b[lc_is_scalar(tb) ? 0 : i];
                 out[i] = n->fn == B_ADD   ? x + y
                          : n->fn == B_SUB ? x - y
                          : n->fn == B_MUL ? x * y
                                           : x / y;
             }
-            conv_value(lp, n->type, out);
+            lc_conv_value(&lp->m, n->type, out);
             return;
         }
         if (ta == T_QUAT) {
@@ -3347,13 +687,13 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
                         out[3 * v + i] = p[i] + q[0] * t[i] + c[i];
                 }
             }
-            conv_value(lp, n->type, out);
+            lc_conv_value(&lp->m, n->type, out);
             return;
         }
         double a[3], b[3];
         ev(ls, n->a, fr, a);
         ev(ls, n->b, fr, b);
-        if (is_vec(ta) && is_vec(tb)) {
+        if (lc_is_vec(ta) && lc_is_vec(tb)) {
             if (n->fn == B_ADD)
                 for (int i = 0; i < 3; i++)
                     out[i] = a[i] + b[i];
@@ -3366,14 +706,14 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
                 out[2] = a[0] * b[1] - a[1] * b[0];
             } else
                 out[0] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        } else if (is_vec(ta)) {
+        } else if (lc_is_vec(ta)) {
             for (int i = 0; i < 3; i++)
                 out[i] = n->fn == B_MUL ? a[i] * b[0] : a[i] / b[0];
         } else {
             for (int i = 0; i < 3; i++)
                 out[i] = a[0] * b[i];
         }
-        conv_value(lp, n->type, out);
+        lc_conv_value(&lp->m, n->type, out);
         return;
     }
     case N_AND:
@@ -3390,16 +730,16 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
         ev(ls, n->b, fr, out);
         return;
     case N_ASSIGN: {
-        const xn *l = &lp->nodes.data[n->a];
-        int sz = tsize(lp, n->type);
+        const lc_node *l = &lp->m.nodes.data[n->a];
+        int sz = lc_type_size(&lp->m, n->type);
         ev(ls, n->b, fr, out); /* of the lvalue's type (coerced at compile time) */
         memcpy(lv_ptr(lp, l, fr), out, (size_t)sz * sizeof(double));
         return;
     }
     case N_INCDEC: {
-        double *p = lv_ptr(lp, &lp->nodes.data[n->a], fr);
+        double *p = lv_ptr(lp, &lp->m.nodes.data[n->a], fr);
         double old = *p;
-        *p = conv_scalar(n->type, *p + ((n->fn & 1) ? -1 : 1));
+        *p = lc_conv_scalar(n->type, *p + ((n->fn & 1) ? -1 : 1));
         out[0] = n->fn >= 2 ? old : *p;
         return;
     }
@@ -3412,10 +752,10 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
     case N_CTOR: {
         int off = 0;
         if (n->a < 0)
-            memset(out, 0, (size_t)tsize(lp, n->type) * sizeof(double));
-        for (int32_t x = n->a; x >= 0; x = lp->nodes.data[x].next) {
+            memset(out, 0, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
+        for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next) {
             ev(ls, x, fr, out + off);
-            off += tsize(lp, lp->nodes.data[x].type);
+            off += lc_type_size(&lp->m, lp->m.nodes.data[x].type);
         }
         return;
     }
@@ -3692,14 +1032,14 @@ static bool find_bob(walk *w, int sbc, int ebc)
 static bool accept_right(const cbm_lsys *ls, walk *w, int code)
 {
     const lpfg *lp = ls->lp;
-    int sbc = lp->mods.data[lp->sb].code, ebc = lp->mods.data[lp->eb].code;
+    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
     if (!w_ok(w))
         return false;
     if (code == ebc && !find_eob(ls, w, sbc, ebc))
         return false;
     while (w_ok(w) && w_code(w) != code) {
         int c = w_code(w);
-        if (!lp->considered[c])
+        if (!lp->m.considered[c])
             w_adv(w);
         else if (c == sbc) {
             if (!skip_branch(ls, w, sbc, ebc))
@@ -3713,12 +1053,12 @@ static bool accept_right(const cbm_lsys *ls, walk *w, int code)
 
 static bool accept_left(const lpfg *lp, walk *w, int code)
 {
-    int sbc = lp->mods.data[lp->sb].code, ebc = lp->mods.data[lp->eb].code;
+    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
     if (!w_back(w))
         return false;
     while (w_ok(w) && w_code(w) != code) {
         int c = w_code(w);
-        if (!lp->considered[c] || c == sbc) {
+        if (!lp->m.considered[c] || c == sbc) {
             if (!w_back(w))
                 return false;
         } else if (c == ebc) {
@@ -3736,9 +1076,9 @@ static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
     if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
         return;
     const double *p = (const double *)w->s->par + w->k;
-    for (int32_t f = formals; f >= 0; f = lp->nodes.data[f].next) {
-        const xn *x = &lp->nodes.data[f];
-        int sz = tsize(lp, x->type);
+    for (int32_t f = formals; f >= 0; f = lp->m.nodes.data[f].next) {
+        const lc_node *x = &lp->m.nodes.data[f];
+        int sz = lc_type_size(&lp->m, x->type);
         memcpy(fr + x->slot, p, (size_t)sz * sizeof(double));
         p += sz;
     }
@@ -3754,29 +1094,29 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
         return false;
     if (k == CX_RC || k == CX_NRC) {
         for (int32_t i = 0; i < n; i++) {
-            const lsm *m = &lp->sms.data[first + i];
-            if (!accept_right(ls, &w, lp->mods.data[m->mod].code))
+            const lc_modref *m = &lp->m.sms.data[first + i];
+            if (!accept_right(ls, &w, lp->m.mods.data[m->mod].code))
                 return false;
             w_adv(&w);
         }
         /* bind after the whole pattern matched */
         walk b = lp->scan[k];
         for (int32_t i = 0; i < n; i++) {
-            const lsm *m = &lp->sms.data[first + i];
-            accept_right(ls, &b, lp->mods.data[m->mod].code);
+            const lc_modref *m = &lp->m.sms.data[first + i];
+            accept_right(ls, &b, lp->m.mods.data[m->mod].code);
             bind(ls, &b, m->args, fr);
             w_adv(&b);
         }
     } else {
         for (int32_t i = n; i-- > 0;) {
-            const lsm *m = &lp->sms.data[first + i];
-            if (!accept_left(lp, &w, lp->mods.data[m->mod].code))
+            const lc_modref *m = &lp->m.sms.data[first + i];
+            if (!accept_left(lp, &w, lp->m.mods.data[m->mod].code))
                 return false;
         }
         walk b = lp->scan[k];
         for (int32_t i = n; i-- > 0;) {
-            const lsm *m = &lp->sms.data[first + i];
-            accept_left(lp, &b, lp->mods.data[m->mod].code);
+            const lc_modref *m = &lp->m.sms.data[first + i];
+            accept_left(lp, &b, lp->m.mods.data[m->mod].code);
             bind(ls, &b, m->args, fr);
         }
     }
@@ -3817,17 +1157,17 @@ static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
     lpfg *lp = ls->lp;
     lstr *out = lp->out;
     for (int32_t i = 0; i < n; i++) {
-        const lsm *sm = &lp->sms.data[first + i];
-        const lmod *m = &lp->mods.data[sm->mod];
+        const lc_modref *sm = &lp->m.sms.data[first + i];
+        const lc_module *m = &lp->m.mods.data[sm->mod];
         double v[MAXSZ + 1];
         int off = 0, a = 0;
         /* the arguments were converted to the parameter types at compile time, and every value
          * of a static type is representable in it (results are rounded where computed) */
-        for (int32_t x = sm->args; x >= 0; x = lp->nodes.data[x].next, a++) {
+        for (int32_t x = sm->args; x >= 0; x = lp->m.nodes.data[x].next, a++) {
             ev(ls, x, fr, v + off);
-            int sz = tsize(lp, m->ptype[a]);
+            int sz = lc_type_size(&lp->m, m->ptype[a]);
             for (int q = 0; q < sz; q++)
-                if (!isfinite(v[off + q]) && !nonfinite(ls, lp->nodes.data[x].pos, m->name))
+                if (!isfinite(v[off + q]) && !nonfinite(ls, lp->m.nodes.data[x].pos, m->name))
                     return lp->err;
             off += sz;
         }
@@ -3841,10 +1181,10 @@ enum { X_NORMAL, X_BREAK, X_CONTINUE, X_RETURN };
 static int exec(cbm_lsys *ls, int32_t ni, double *fr)
 {
     lpfg *lp = ls->lp;
-    for (; ni >= 0; ni = lp->nodes.data[ni].next) {
+    for (; ni >= 0; ni = lp->m.nodes.data[ni].next) {
         if (lp->err != CBM_OK)
             return X_RETURN;
-        const xn *n = &lp->nodes.data[ni];
+        const lc_node *n = &lp->m.nodes.data[ni];
         lp->at = n->pos;
         double tmp[MAXSZ + 1];
         int r;
@@ -3855,9 +1195,9 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
         case S_DECL:
             if (n->a >= 0) {
                 ev(ls, n->a, fr, fr + n->slot);
-                conv_value(lp, n->type, fr + n->slot);
+                lc_conv_value(&lp->m, n->type, fr + n->slot);
             } else
-                memset(fr + n->slot, 0, (size_t)tsize(lp, n->type) * sizeof(double));
+                memset(fr + n->slot, 0, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
             break;
         case S_BLOCK:
             r = exec(ls, n->a, fr);
@@ -3906,17 +1246,17 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
         case S_RETURN:
             if (n->a >= 0) {
                 ev(ls, n->a, fr, tmp);
-                conv_value(lp, n->type, tmp);
+                lc_conv_value(&lp->m, n->type, tmp);
                 if (lp->ret)
-                    memcpy(lp->ret, tmp, (size_t)tsize(lp, n->type) * sizeof(double));
+                    memcpy(lp->ret, tmp, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
             }
             return X_RETURN;
         case S_SWITCH: {
             double v = evs(ls, n->a, fr);
-            int32_t body = lp->nodes.data[n->b].op == S_BLOCK ? lp->nodes.data[n->b].a : n->b;
+            int32_t body = lp->m.nodes.data[n->b].op == S_BLOCK ? lp->m.nodes.data[n->b].a : n->b;
             int32_t hit = -1, dflt = -1;
-            for (int32_t c = body; c >= 0 && hit < 0; c = lp->nodes.data[c].next) {
-                const xn *cn = &lp->nodes.data[c];
+            for (int32_t c = body; c >= 0 && hit < 0; c = lp->m.nodes.data[c].next) {
+                const lc_node *cn = &lp->m.nodes.data[c];
                 if (cn->op != S_CASE)
                     continue;
                 if (cn->a < 0)
@@ -3974,11 +1314,11 @@ static cbm_status run_block(cbm_lsys *ls, int which)
 {
     static const char *const NAMES[] = {"Start", "StartEach", "EndEach", "End"};
     lpfg *lp = ls->lp;
-    if (lp->blocks[which] < 0)
+    if (lp->m.blocks[which] < 0)
         return CBM_OK;
-    lp->sp = (size_t)lp->block_fsize[which];
+    lp->sp = (size_t)lp->m.block_fsize[which];
     lp->ret = NULL;
-    exec(ls, lp->blocks[which], lp->stack);
+    exec(ls, lp->m.blocks[which], lp->stack);
     return lp->err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
 }
 
@@ -3986,19 +1326,19 @@ static cbm_status run_block(cbm_lsys *ls, int which)
  * out. nxt: the partial new string (new context), NULL outside the generative pass. Returns the
  * number of modules the predecessor covers (0: none applied); going Backward the module at i is
  * the last of them, else the first. */
-static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i, size_t j, size_t k,
-                       const lstr *nxt, lstr *out)
+static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_t i, size_t j,
+                       size_t k, const lstr *nxt, lstr *out)
 {
     lpfg *lp = ls->lp;
-    int m = lp->bycode[src->sym[i] & 0x7f];
+    int m = lp->m.bycode[src->sym[i] & 0x7f];
     bool back = nxt && lp->backward;
     /* the productions of the active group first, then those of group 0 (as lpfg) */
     for (int pass = lp->group != 0 ? 0 : 1; pass < 2; pass++)
         for (size_t p = 0; p < set->prods.len; p++) {
-            const lprod *pr = &set->prods.data[p];
+            const lc_production *pr = &set->prods.data[p];
             int32_t np = pr->pred.n;
             int32_t anchor = back ? np - 1 : 0;
-            if (lp->sms.data[pr->pred.first + anchor].mod != m ||
+            if (lp->m.sms.data[pr->pred.first + anchor].mod != m ||
                 pr->group != (pass == 0 ? lp->group : 0))
                 continue;
             double *fr = lp->stack;
@@ -4014,8 +1354,8 @@ static int try_rewrite(cbm_lsys *ls, const lset *set, const lstr *src, size_t i,
             }
             walk w = first;
             for (int32_t a = 0; a < np && ok; a++) {
-                const lsm *pm = &lp->sms.data[pr->pred.first + a];
-                if (!w_ok(&w) || w_code(&w) != lp->mods.data[pm->mod].code) {
+                const lc_modref *pm = &lp->m.sms.data[pr->pred.first + a];
+                if (!w_ok(&w) || w_code(&w) != lp->m.mods.data[pm->mod].code) {
                     ok = false;
                     break;
                 }
@@ -4072,13 +1412,14 @@ static cbm_status check_size(cbm_lsys *ls, const lstr *s)
 }
 
 /* Rewrites src into out with a decomposition-like set, recursively to set->depth. */
-static cbm_status decompose(cbm_lsys *ls, const lset *set, const lstr *src, lstr *out, int level)
+static cbm_status decompose(cbm_lsys *ls, const lc_rules *set, const lstr *src, lstr *out,
+                            int level)
 {
     lpfg *lp = ls->lp;
     lstr *tmp = &lp->scratch.data[level];
     size_t j = 0, k = 0;
     /* the interpretation of a model with mechanics records where its modules came from */
-    bool track = level == 0 && set == &lp->interp && lp->mech.seg_code >= 0;
+    bool track = level == 0 && set == &lp->m.interp && lp->mech.seg_code >= 0;
     for (size_t i = 0; i < src->n; i++) {
         size_t from = out->n, source = i;
         tmp->n = tmp->npm = tmp->npar = 0;
@@ -4109,10 +1450,10 @@ static cbm_status decompose(cbm_lsys *ls, const lset *set, const lstr *src, lstr
 static cbm_status decompose_cur(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
-    if (!lp->decomp.present || !lp->decomp.prods.len)
+    if (!lp->m.decomp.present || !lp->m.decomp.prods.len)
         return CBM_OK;
     ls->next.n = ls->next.npm = ls->next.npar = 0;
-    cbm_status s = decompose(ls, &lp->decomp, &ls->cur, &ls->next, 0);
+    cbm_status s = decompose(ls, &lp->m.decomp, &ls->cur, &ls->next, 0);
     if (s != CBM_OK)
         return lp->err != CBM_OK ? run_error(ls, "decomposition") : s;
     lstr t = ls->cur;
@@ -4131,8 +1472,8 @@ static cbm_status generate_pass(cbm_lsys *ls)
     bool back = lp->backward;
     size_t n = src->n;
     size_t j = back ? src->npm : 0, k = back ? src->npar : 0;
-    int cutc = lp->mods.data[find_mod(lp, "Cut", 3)].code;
-    int sbc = lp->mods.data[lp->sb].code, ebc = lp->mods.data[lp->eb].code;
+    int cutc = lp->m.mods.data[cbm__lc_find_module(&lp->m, "Cut", 3)].code;
+    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
     for (size_t c = 0; c < n; c++) {
         size_t i = back ? n - 1 - c : c;
         if (back && (src->sym[i] & LSYS_PARAM_BIT))
@@ -4153,7 +1494,7 @@ static cbm_status generate_pass(cbm_lsys *ls)
             continue;
         }
         succ->n = succ->npm = succ->npar = 0;
-        int done = try_rewrite(ls, &lp->main, src, i, j, k, nxt, succ);
+        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, succ);
         if (lp->err != CBM_OK)
             return lp->err;
         for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
@@ -4232,10 +1573,22 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
     return CBM_OK;
 }
 
+/* The mechanics settings at their defaults with the model's declarations (the kept plant, if
+ * any, freed first by the caller). */
+static void mech_declare(lpfg *lp)
+{
+    const lc_mech_decl *d = &lp->m.mech_decl;
+    cbm__mechlang_init(&lp->mech);
+    lp->mech.seg_code = d->seg_code;
+    lp->mech.seg_off = d->seg_off;
+    memcpy(lp->mech.mass_off, d->mass_off, sizeof d->mass_off);
+    memcpy(lp->mech.radius_off, d->radius_off, sizeof d->radius_off);
+}
+
 cbm_status cbm__lpfg_reset(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
-    memset(lp->glob, 0, (size_t)(lp->nglobal + 1) * sizeof(double));
+    memset(lp->glob, 0, (size_t)(lp->m.nglobal + 1) * sizeof(double));
     lp->err = CBM_OK;
     lp->at = lp->err_pos = -1;
     lp->nonfinite_warned = false;
@@ -4249,32 +1602,26 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
     ls->ev.nran_have = 0;
     glibc_srand(lp, 1);
-    { /* mechanics settings back to their defaults; the declarations stay */
-        cbm__mechlang_free(ls->ctx, &lp->mech);
-        cbm__mechlang m = lp->mech;
-        cbm__mechlang_init(&lp->mech);
-        lp->mech.seg_code = m.seg_code;
-        lp->mech.seg_off = m.seg_off;
-        memcpy(lp->mech.mass_off, m.mass_off, sizeof m.mass_off);
-        memcpy(lp->mech.radius_off, m.radius_off, sizeof m.radius_off);
-    }
+    /* mechanics settings back to their defaults; the declarations stay */
+    cbm__mechlang_free(ls->ctx, &lp->mech);
+    mech_declare(lp);
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
-    for (size_t g = 0; g < lp->gvars.len; g++) {
-        const lgvar *v = &lp->gvars.data[g];
+    for (size_t g = 0; g < lp->m.gvars.len; g++) {
+        const lc_global *v = &lp->m.gvars.data[g];
         lp->sp = 0;
         lp->ret = NULL;
         if (v->init >= 0) {
             ev(ls, v->init, lp->stack, lp->glob + v->slot);
-            conv_value(lp, v->type, lp->glob + v->slot);
+            lc_conv_value(&lp->m, v->type, lp->glob + v->slot);
         }
         if (lp->err != CBM_OK)
-            return run_error(ls, lp->gvars.data[g].name);
+            return run_error(ls, lp->m.gvars.data[g].name);
     }
     CBM_TRY(run_block(ls, 0));
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     lp->sp = 0;
     lp->out = &ls->cur;
-    cbm_status ps = produce(ls, lp->axiom.first, lp->axiom.n, lp->stack);
+    cbm_status ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->stack);
     if (lp->err != CBM_OK)
         return run_error(ls, "axiom");
     CBM_TRY(ps);
@@ -4288,11 +1635,11 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     lp->origin.len = 0;
     budgets(ls);
     cbm_status s;
-    if (!lp->interp.present || !lp->interp.prods.len)
+    if (!lp->m.interp.present || !lp->m.interp.prods.len)
         s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
     else {
         lp->rewriting = true;
-        s = decompose(ls, &lp->interp, &ls->cur, &ls->homo_str, 0);
+        s = decompose(ls, &lp->m.interp, &ls->cur, &ls->homo_str, 0);
         lp->rewriting = false;
     }
     if (s != CBM_OK && lp->err != CBM_OK)
@@ -4309,16 +1656,16 @@ static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v
         fprintf(f, "%lld", cbm__to_ll(v[0]));
         return v + 1;
     }
-    if (is_scalar(t)) {
+    if (lc_is_scalar(t)) {
         fprintf(f, "%.9g", v[0]);
         return v + 1;
     }
     putc('{', f);
-    int nf = is_vec(t) ? 3 : lp->types.data[t].nf;
+    int nf = lc_is_vec(t) ? 3 : lp->m.types.data[t].nf;
     for (int i = 0; i < nf; i++) {
         if (i)
             putc(',', f);
-        v = write_value(f, lp, is_vec(t) ? T_DOUBLE : lp->types.data[t].ftype[i], v);
+        v = write_value(f, lp, lc_is_vec(t) ? T_DOUBLE : lp->m.types.data[t].ftype[i], v);
     }
     putc('}', f);
     return v;
@@ -4331,7 +1678,7 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
     FILE *f = cbm_out_stream(o);
     while (cbm_lsys_cursor_next(ls, homomorphism, &c)) {
-        const lmod *m = &lp->mods.data[lp->bycode[c.symbol & 0x7f]];
+        const lc_module *m = &lp->m.mods.data[lp->m.bycode[c.symbol & 0x7f]];
         fputs(m->name, f);
         if (m->np) {
             const double *v = c.params;
@@ -4348,9 +1695,9 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
 
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol)
 {
-    if (!ls->lp || symbol <= 0 || symbol > 127 || ls->lp->bycode[symbol] < 0)
+    if (!ls->lp || symbol <= 0 || symbol > 127 || ls->lp->m.bycode[symbol] < 0)
         return NULL;
-    return ls->lp->mods.data[ls->lp->bycode[symbol]].name;
+    return ls->lp->m.mods.data[ls->lp->m.bycode[symbol]].name;
 }
 
 cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const double ***out,
@@ -4398,12 +1745,12 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
                         int *decomp_depth, int *interp_depth, size_t *modules)
 {
     const lpfg *lp = ls->lp;
-    *prods = lp->main.prods.len;
-    *decomp = lp->decomp.present ? lp->decomp.prods.len : 0;
-    *interp = lp->interp.present ? lp->interp.prods.len : 0;
-    *decomp_depth = lp->decomp.present ? lp->decomp.depth : 0;
-    *interp_depth = lp->interp.present ? lp->interp.depth : 0;
-    *modules = lp->mods.len;
+    *prods = lp->m.main.prods.len;
+    *decomp = lp->m.decomp.present ? lp->m.decomp.prods.len : 0;
+    *interp = lp->m.interp.present ? lp->m.interp.prods.len : 0;
+    *decomp_depth = lp->m.decomp.present ? lp->m.decomp.depth : 0;
+    *interp_depth = lp->m.interp.present ? lp->m.interp.depth : 0;
+    *modules = lp->m.mods.len;
 }
 
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
@@ -4428,25 +1775,6 @@ cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out)
 }
 
 /* ---------------------------------------------------------------- load / free */
-bool cbm__lpfg_detect(const cbm__pp *pp)
-{
-    if (pp->lpfg_lib)
-        return true;
-    const char *t = pp->text.data;
-    for (const char *p = t; (p = strstr(p, "produce")) != NULL; p += 7)
-        if ((p == t || !isid((unsigned char)p[-1])) && !isid((unsigned char)p[7]))
-            return true;
-    for (const char *p = t; (p = strstr(p, "module")) != NULL; p += 6)
-        if ((p == t || p[-1] == '\n') && (p[6] == ' ' || p[6] == '\t'))
-            return true;
-    return false;
-}
-
-static void free_set(cbm_context *ctx, lset *s)
-{
-    CBM_ARRAY_FREE(ctx, s->prods);
-}
-
 void cbm__lpfg_mech_keep(cbm_lsys *ls, bool keep)
 {
     if (!ls->lp)
@@ -4464,33 +1792,10 @@ void cbm__lpfg_free(cbm_lsys *ls)
     cbm_context *ctx = ls->ctx;
     brtab_free(ctx, &lp->brk[0]);
     brtab_free(ctx, &lp->brk[1]);
-    for (size_t i = 0; i < lp->types.len; i++) {
-        cbm__strfree(ctx, lp->types.data[i].name);
-        for (int f = 0; f < lp->types.data[i].nf; f++)
-            cbm__strfree(ctx, lp->types.data[i].fname[f]);
-    }
-    CBM_ARRAY_FREE(ctx, lp->types);
-    for (size_t i = 0; i < lp->mods.len; i++)
-        cbm__strfree(ctx, lp->mods.data[i].name);
-    CBM_ARRAY_FREE(ctx, lp->mods);
-    for (size_t i = 0; i < lp->funcs.len; i++)
-        cbm__strfree(ctx, lp->funcs.data[i].name);
-    CBM_ARRAY_FREE(ctx, lp->funcs);
-    for (size_t i = 0; i < lp->gvars.len; i++)
-        cbm__strfree(ctx, lp->gvars.data[i].name);
-    CBM_ARRAY_FREE(ctx, lp->gvars);
-    for (size_t i = 0; i < lp->funcnames.len; i++)
-        cbm__strfree(ctx, lp->funcnames.data[i]);
-    CBM_ARRAY_FREE(ctx, lp->funcnames);
-    CBM_ARRAY_FREE(ctx, lp->funcids);
     cbm__mechlang_free(ctx, &lp->mech);
-    CBM_ARRAY_FREE(ctx, lp->nodes);
     CBM_ARRAY_FREE(ctx, lp->origin);
-    CBM_ARRAY_FREE(ctx, lp->sms);
-    free_set(ctx, &lp->main);
-    free_set(ctx, &lp->decomp);
-    free_set(ctx, &lp->interp);
-    cbm__free(ctx, lp->glob, (size_t)(lp->nglobal + 1) * sizeof(double));
+    cbm__free(ctx, lp->glob, (size_t)(lp->m.nglobal + 1) * sizeof(double));
+    cbm__lc_model_free(ctx, &lp->m);
     cbm__free(ctx, lp->stack, lp->stack_cap * sizeof(double));
     cbm__lstr_free(ctx, &lp->succ);
     for (size_t i = 0; i < lp->scratch.len; i++)
@@ -4500,7 +1805,7 @@ void cbm__lpfg_free(cbm_lsys *ls)
     ls->lp = NULL;
 }
 
-static int eval_depth(cbm_lsys *ls, lset *s, int dflt)
+static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt)
 {
     if (s->depth <= -2) {
         int32_t e = -2 - s->depth;
@@ -4521,21 +1826,8 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     /* parameters are stored as doubles; float parameters are rounded to float32 by their type */
     ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = false;
     ls->float32 = false;
-    for (int i = 0; i < 4; i++)
-        lp->blocks[i] = -1;
-    lp->dlen_expr = -1;
-    lc L;
-    memset(&L, 0, sizeof L);
-    L.ls = ls;
-    L.lp = lp;
-    L.c = &ls->comp;
-    L.t = pp->text.data;
-    cbm_status s = setup_builtins(&L);
-    if (s == CBM_OK) {
-        parse_top(&L);
-        s = ls->comp.status;
-    }
-    CBM_ARRAY_FREE(ctx, L.vars);
+    cbm_status s = cbm__lc_compile(&ls->comp, pp->text.data, &lp->m);
+    mech_declare(lp);
     if (s == CBM_OK && ls->comp.errors)
         s = CBM_E_SYNTAX;
     if (s == CBM_E_SYNTAX)
@@ -4543,33 +1835,33 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
                          ls->comp.errors == 1 ? "" : "s");
     if (s != CBM_OK)
         return s;
-    for (size_t i = 0; i < lp->funcnames.len; i++) { /* by default the order of first use */
+    for (size_t i = 0; i < lp->m.funcnames.len; i++) { /* by default the order of first use */
         int id = (int)i + 1;
-        CBM_TRY(CBM_ARRAY_PUSH(ctx, lp->funcids, id));
+        CBM_TRY(CBM_ARRAY_PUSH(ctx, lp->m.funcids, id));
     }
     lp->stack_cap = 1u << 16;
     lp->stack = cbm__calloc(ctx, lp->stack_cap, sizeof(double));
-    lp->glob = cbm__calloc(ctx, (size_t)lp->nglobal + 1, sizeof(double));
+    lp->glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
     if (!lp->stack || !lp->glob)
         return CBM_E_NOMEM;
-    for (size_t i = 0; i < lp->main.prods.len; i++)
-        if ((size_t)lp->main.prods.data[i].fsize + 1 > lp->stack_cap)
+    for (size_t i = 0; i < lp->m.main.prods.len; i++)
+        if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->stack_cap)
             return cbm__fail(ctx, CBM_E_LIMIT, "a production has too many local variables");
     int maxd = cbm_context_limits(ctx)->max_decomp_depth;
-    lp->decomp.depth = eval_depth(ls, &lp->decomp, 1);
-    lp->interp.depth = eval_depth(ls, &lp->interp, 1);
-    if (lp->decomp.depth > maxd || lp->interp.depth > maxd)
+    lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1);
+    lp->m.interp.depth = eval_depth(ls, &lp->m.interp, 1);
+    if (lp->m.decomp.depth > maxd || lp->m.interp.depth > maxd)
         return cbm__fail(ctx, CBM_E_LIMIT, "maximum depth exceeds the limit of %d", maxd);
-    int depth = lp->decomp.depth > lp->interp.depth ? lp->decomp.depth : lp->interp.depth;
+    int depth = lp->m.decomp.depth > lp->m.interp.depth ? lp->m.decomp.depth : lp->m.interp.depth;
     for (int i = 0; i <= depth; i++) {
         lstr z;
         memset(&z, 0, sizeof z);
         CBM_TRY(CBM_ARRAY_PUSH(ctx, lp->scratch, z));
     }
     ls->derivation_length = 0;
-    if (lp->dlen_expr >= 0) {
+    if (lp->m.dlen_expr >= 0) {
         lp->sp = 0;
-        double v = evs(ls, lp->dlen_expr, lp->stack);
+        double v = evs(ls, lp->m.dlen_expr, lp->stack);
         ls->derivation_length = v < 0 ? 0 : v > 1e9 ? 1000000000 : (int)v;
     }
     return CBM_OK;
@@ -4577,21 +1869,21 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
 
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names)
 {
-    *names = (const char *const *)ls->lp->funcnames.data;
-    return ls->lp->funcnames.len;
+    *names = (const char *const *)ls->lp->m.funcnames.data;
+    return ls->lp->m.funcnames.len;
 }
 
 cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
 {
     lpfg *lp = ls->lp;
-    if (n != lp->funcnames.len || (n && !ids))
+    if (n != lp->m.funcnames.len || (n && !ids))
         return CBM_E_INVALID;
     for (size_t i = 0; i < n; i++)
-        lp->funcids.data[i] = ids[i];
+        lp->m.funcids.data[i] = ids[i];
     return CBM_OK;
 }
 
 bool cbm__lpfg_has_interpretation(const cbm_lsys *ls)
 {
-    return ls->lp->interp.present && ls->lp->interp.prods.len > 0;
+    return ls->lp->m.interp.present && ls->lp->m.interp.prods.len > 0;
 }

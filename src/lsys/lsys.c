@@ -2,6 +2,7 @@
  * the first symbol of their predecessor (declaration order kept within a symbol, which is the
  * order cpfg tries them in), list the L-systems of the file (the main one and its
  * sub-L-systems, lsys_internal.h) and allocate the run state (globals, parameter frame). */
+#include "lang/lc.h"
 #include "lsys/lsys_internal.h"
 
 #include <stdlib.h>
@@ -155,7 +156,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
     cbm_status s = cbm__compiler_init(&ls->comp, ctx, &pp);
     if (s == CBM_OK)
-        s = cbm__lpfg_detect(&pp) ? cbm__lpfg_parse(ls, &pp) : cbm__lsys_parse(ls, &pp);
+        s = cbm__lc_detect(&pp) ? cbm__lpfg_parse(ls, &pp) : cbm__lsys_parse(ls, &pp);
     cbm__pp_free(&pp);
     ls->comp.pp = NULL;
     ls->comp.text = NULL;

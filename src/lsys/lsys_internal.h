@@ -157,9 +157,8 @@ void cbm__lstr_free(cbm_context *ctx, lstr *s);
 int cbm__lsys_find(const cbm_lsys *ls, int id);
 cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);
 
-/* The L+C (lpfg) dialect, lpfg.c: detection by the file's form, then its own compiler and
- * derivation over the same packed string. */
-bool cbm__lpfg_detect(const cbm__pp *pp);
+/* The L+C (lpfg) dialect, lpfg.c: compiled by lang/lc_parse.c (detected there by the file's
+ * form, cbm__lc_detect), derived over the same packed string. */
 cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp);
 void cbm__lpfg_free(cbm_lsys *ls);
 /* Whether the mechanics keep their plant between operations (default true; false: every
