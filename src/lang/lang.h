@@ -1,13 +1,23 @@
-/* The cpfg-dialect language front end: preprocessor, expressions and statements.
+/* The language of the models, both dialects (src/lang/):
  *
- * pp.c turns a model file into one text with C comments removed, #include files inserted and
- * #define macros (with arguments) expanded, plus a line map back to the original files. expr.c
- * compiles expressions and statement blocks into a flat node array and evaluates them.
+ *   pp.c          the preprocessor: a model file becomes one text with C comments removed,
+ *                 #include files inserted and #define macros (with arguments) expanded, plus a
+ *                 line map back to the original files;
+ *   compiler.c    the cursor over that text shared by both parsers, and file:line:col messages;
+ *   expr_parse.c  cpfg-dialect expressions and statement blocks into a flat node array;
+ *   expr_eval.c   their evaluation;
+ *   lc.h, lc_parse.c  the L+C dialect's typed front end and its compiled model (run by
+ *                 lsys/lpfg.c);
+ *   builtins.c    the one table of built-in functions of both dialects, and the math ones;
+ *   random.c      the random generators and distributions of both dialects;
+ *   format.c      printf of models.
  */
 #ifndef CBM_LANG_H
 #define CBM_LANG_H
 
 #include "core/core.h"
+#include "lang/builtins.h"
+#include "lang/random.h"
 
 /* ---- preprocessor ---- */
 typedef struct cbm__pp_line {
@@ -69,33 +79,6 @@ typedef enum cbm__op {
     OP_STR /* a string literal (printf's arguments only): slot is its offset in strings */
 } cbm__op;
 
-typedef enum cbm__fn {
-    FN_SIN,
-    FN_COS,
-    FN_TAN,
-    FN_ASIN,
-    FN_ACOS,
-    FN_ATAN,
-    FN_ATAN2,
-    FN_EXP,
-    FN_LOG,
-    FN_FLOOR,
-    FN_CEIL,
-    FN_SIGN,
-    FN_SQRT,
-    FN_TRUNC,
-    FN_FABS,
-    FN_RAN,
-    FN_NRAN,
-    FN_BRAN,
-    FN_BIRAN,
-    FN_SRAND,
-    FN_FUNC,
-    FN_PRINTF,
-    FN_STOP,
-    FN_COUNT
-} cbm__fn;
-
 /* One node. Children are indices into the node array (-1: none); OP_CALL and OP_ARRAY keep
  * their arguments as a chain through `next`. */
 typedef struct cbm__node {
@@ -114,13 +97,6 @@ typedef struct cbm__array {
     size_t count;
 } cbm__array;
 
-/* Random generator of cpfg: the POSIX 48-bit LCG of drand48/erand48. */
-typedef struct cbm__rand48 {
-    uint64_t x; /* 48-bit state */
-} cbm__rand48;
-void cbm__rand48_seed16(cbm__rand48 *r, uint16_t x0, uint16_t x1, uint16_t x2);
-double cbm__rand48_next(cbm__rand48 *r);
-
 /* The evaluation environment shared by a model. */
 typedef struct cbm__eval {
     cbm_context *ctx;
@@ -128,10 +104,8 @@ typedef struct cbm__eval {
     const char *strings; /* the compiler's string literals (printf) */
     double *globals;
     cbm__array *arrays;
-    double *params;  /* formal parameters of the production being applied (assignable) */
-    cbm__rand48 ran; /* erand48 stream of ran, nran, bran, biran (cpfg main_xsubi) */
-    int nran_have;   /* cpfg's iset: 0 draw a pair, else return the cached value */
-    double nran_cached;
+    double *params;    /* formal parameters of the production being applied (assignable) */
+    cbm__random rnd;   /* erand48 stream of ran, nran, bran, biran (cpfg main_xsubi) */
     long while_budget; /* iterations left for while loops in this evaluation */
     double (*func)(void *ud, int id, double x);
     void *func_ud;

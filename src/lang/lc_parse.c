@@ -9,72 +9,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-typedef struct lc_builtin {
-    const char *name;
-    lc_builtin_fn fn;
-    int arity; /* -1: any */
-} lc_builtin;
-
-static const lc_builtin BUILTINS[] = {{"sin", F_SIN, 1},
-                                      {"cos", F_COS, 1},
-                                      {"tan", F_TAN, 1},
-                                      {"asin", F_ASIN, 1},
-                                      {"acos", F_ACOS, 1},
-                                      {"atan", F_ATAN, 1},
-                                      {"atan2", F_ATAN2, 2},
-                                      {"exp", F_EXP, 1},
-                                      {"log", F_LOG, 1},
-                                      {"log10", F_LOG10, 1},
-                                      {"pow", F_POW, 2},
-                                      {"sqrt", F_SQRT, 1},
-                                      {"fabs", F_FABS, 1},
-                                      {"abs", F_FABS, 1},
-                                      {"floor", F_FLOOR, 1},
-                                      {"ceil", F_CEIL, 1},
-                                      {"fmod", F_FMOD, 2},
-                                      {"min", F_MIN, 2},
-                                      {"max", F_MAX, 2},
-                                      {"ran", F_RAN, 1},
-                                      {"nrand", F_NRAN, 2},
-                                      {"nran", F_NRAN, 2},
-                                      {"srand", F_SRAND, 1},
-                                      {"rand", F_RAND, 0},
-                                      {"drand48", F_DRAND, 0},
-                                      {"func", F_FUNC, 2},
-                                      {"printf", F_PRINTF, -1},
-                                      {"Printf", F_PRINTF, -1},
-                                      {"Forward", F_FORWARD, 0},
-                                      {"Backward", F_BACKWARD, 0},
-                                      {"UseGroup", F_USEGROUP, 1},
-                                      {"Length", F_LENGTH, 1},
-                                      {"Magnitude", F_LENGTH, 1},
-                                      {"Normalize", F_NORMALIZE, 1},
-                                      {"Normalized", F_NORMALIZE, 1},
-                                      {"Stop", F_STOP, 0},
-                                      {"stop", F_STOP, 0},
-                                      {"CurrentGroup", F_CURGROUP, 0},
-                                      {"DotProd", F_DOT, 2},
-                                      {"CrossProd", F_CROSS, 2},
-                                      {"MakeQuaternion", F_MAKEQ, 2},
-                                      {"VecRotate", F_VECROT, 3},
-                                      {"ToLocal", F_TOLOCAL, 2},
-                                      {"ToWorld", F_TOWORLD, 2},
-                                      {"Equilibrium", F_EQUILIBRIUM, 0},
-                                      {"AddRings", F_ADDRINGS, 0},
-                                      {"AgeWood", F_AGEWOOD, 1},
-                                      {"Break", F_BREAK, 0},
-                                      {"Stability", F_STABILITY, 0},
-                                      {"Gravity", F_GRAVITY, 3},
-                                      {"Ground", F_GROUND, 3},
-                                      {"Contact", F_CONTACT, 2},
-                                      {"Tropism", F_TROPISM, 4},
-                                      {"PipeModel", F_PIPEMODEL, 2},
-                                      {"Wood", F_WOOD, 5},
-                                      {"RingRate", F_RINGRATE, 2},
-                                      {"Solver", F_SOLVER, 3},
-                                      {"ReactionWood", F_REACTION, 4},
-                                      {"RAND_MAX", F_NONE, 0}};
-
 /* ---- compiler state ---- */
 typedef struct lc_local {
     const char *name;
@@ -549,7 +483,7 @@ static int32_t printf_call(lc_parser *L, size_t pos)
         return -1;
     }
     lc_node x = mk(N_CALLB, T_INT);
-    x.fn = F_PRINTF;
+    x.fn = FN_PRINTF;
     x.slot = (int32_t)fmt;
     x.a = first;
     return node(L, x);
@@ -716,7 +650,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         if (x < 0 || !expect(L, ")"))
             return -1;
         lc_node c = mk(N_CALLB, T_DOUBLE);
-        c.fn = F_FUNC;
+        c.fn = FN_FUNC;
         c.a = x;
         c.slot = (int32_t)id + 1;
         return node(L, c);
@@ -754,13 +688,11 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         c.slot = (int32_t)i;
         return node(L, c);
     }
-    for (size_t i = 0; i < sizeof BUILTINS / sizeof BUILTINS[0]; i++) {
-        const lc_builtin *b = &BUILTINS[i];
-        if (strlen(b->name) != n || strncmp(b->name, s, n))
-            continue;
+    const cbm__builtin *b = cbm__builtin_find(s, n, CBM__LC);
+    if (b) {
         int32_t args = -1;
         int na;
-        if (b->fn == F_PRINTF)
+        if (b->fn == FN_PRINTF)
             return printf_call(L, pos);
         na = parse_args(L, &args);
         if (na < 0)
@@ -771,68 +703,70 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             return -1;
         }
         int rt = T_DOUBLE;
-        if (b->fn == F_TOLOCAL || b->fn == F_TOWORLD) {
+        if (b->fn == FN_TOLOCAL || b->fn == FN_TOWORLD) {
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
-            if (t1 != T_TVEC || (b->fn == F_TOLOCAL ? !lc_is_vec(t0) : t0 != T_LOCVEC)) {
+            if (t1 != T_TVEC || (b->fn == FN_TOLOCAL ? !lc_is_vec(t0) : t0 != T_LOCVEC)) {
                 cbm__cerr(L->c, pos, "%s() takes a %s and a TurtleVec", b->name,
-                          b->fn == F_TOLOCAL ? "vector" : "LocVec");
+                          b->fn == FN_TOLOCAL ? "vector" : "LocVec");
                 return -1;
             }
-            rt = b->fn == F_TOLOCAL ? T_LOCVEC : T_V3F;
-        } else if (b->fn == F_DOT || b->fn == F_CROSS || b->fn == F_MAKEQ || b->fn == F_VECROT) {
+            rt = b->fn == FN_TOLOCAL ? T_LOCVEC : T_V3F;
+        } else if (b->fn == FN_DOT || b->fn == FN_CROSS || b->fn == FN_MAKEQ ||
+                   b->fn == FN_VECROT) {
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
             bool ok = lc_is_vec(t1);
-            if (b->fn == F_VECROT) {
+            if (b->fn == FN_VECROT) {
                 ok = ok && (lc_is_vec(t0) || t0 == T_TVEC) && is_lvalue(L, args) &&
                      lc_is_scalar(ND(ND(ND(args).next).next).type);
                 rt = t0;
-            } else if (b->fn == F_MAKEQ) {
+            } else if (b->fn == FN_MAKEQ) {
                 ok = lc_is_vec(t0) && lc_is_scalar(t1);
                 rt = T_QUAT;
             } else {
                 ok = ok && lc_is_vec(t0);
-                rt = b->fn == F_DOT ? (t0 == T_V3D || t1 == T_V3D ? T_DOUBLE : T_FLOAT)
-                                    : (t0 == T_V3D || t1 == T_V3D ? T_V3D : T_V3F);
+                rt = b->fn == FN_DOT ? (t0 == T_V3D || t1 == T_V3D ? T_DOUBLE : T_FLOAT)
+                                     : (t0 == T_V3D || t1 == T_V3D ? T_V3D : T_V3F);
             }
             if (!ok) {
                 cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
-                          b->fn == F_VECROT ? " (a vector or TurtleVec variable, an axis, an angle)"
-                                            : "");
+                          b->fn == FN_VECROT
+                              ? " (a vector or TurtleVec variable, an axis, an angle)"
+                              : "");
                 return -1;
             }
-        } else if (b->fn == F_LENGTH || b->fn == F_NORMALIZE) {
+        } else if (b->fn == FN_LENGTH || b->fn == FN_NORMALIZE) {
             int at = ND(args).type;
-            if (!lc_is_vec(at) && !(b->fn == F_NORMALIZE && at == T_TVEC)) {
+            if (!lc_is_vec(at) && !(b->fn == FN_NORMALIZE && at == T_TVEC)) {
                 cbm__cerr(L->c, pos, "%s() needs a vector", b->name);
                 return -1;
             }
-            rt = b->fn == F_NORMALIZE ? at : (at == T_V3F ? T_FLOAT : T_DOUBLE);
+            rt = b->fn == FN_NORMALIZE ? at : (at == T_V3F ? T_FLOAT : T_DOUBLE);
         } else {
             for (int32_t a = args; a >= 0; a = ND(a).next)
                 if (!lc_is_scalar(ND(a).type)) {
                     cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
                     return -1;
                 }
-            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTION && L->in_prod) {
+            if (b->fn >= FN_EQUILIBRIUM && b->fn <= FN_REACTION && L->in_prod) {
                 cbm__cerr(L->c, pos,
                           "%s() changes the whole string: call it in Start, StartEach, EndEach "
                           "or End",
                           b->name);
                 return -1;
             }
-            if (b->fn == F_FORWARD || b->fn == F_BACKWARD || b->fn == F_USEGROUP ||
-                b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
-                b->fn == F_GROUND || b->fn == F_CONTACT || b->fn == F_TROPISM ||
-                b->fn == F_PIPEMODEL || b->fn == F_WOOD || b->fn == F_RINGRATE ||
-                b->fn == F_SOLVER || b->fn == F_REACTION)
+            if (b->fn == FN_FORWARD || b->fn == FN_BACKWARD || b->fn == FN_USEGROUP ||
+                b->fn == FN_SRAND || b->fn == FN_STOP || b->fn == FN_AGEWOOD ||
+                b->fn == FN_GRAVITY || b->fn == FN_GROUND || b->fn == FN_CONTACT ||
+                b->fn == FN_TROPISM || b->fn == FN_PIPEMODEL || b->fn == FN_WOOD ||
+                b->fn == FN_RINGRATE || b->fn == FN_SOLVER || b->fn == FN_REACTION)
                 rt = T_VOID;
-            else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
+            else if (b->fn == FN_EQUILIBRIUM || b->fn == FN_ADDRINGS || b->fn == FN_BREAK)
                 rt = T_INT;
-            else if (b->fn == F_STABILITY)
+            else if (b->fn == FN_STABILITY)
                 rt = T_DOUBLE;
-            else if (b->fn == F_CURGROUP || b->fn == F_RAND)
+            else if (b->fn == FN_CURGROUP || b->fn == FN_RAND)
                 rt = T_INT;
-            else if ((b->fn == F_MIN || b->fn == F_MAX || b->fn == F_FABS) && args >= 0)
+            else if ((b->fn == FN_MIN || b->fn == FN_MAX || b->fn == FN_FABS) && args >= 0)
                 rt = b->arity == 2 ? lc_arith_type(ND(args).type, ND(ND(args).next).type)
                                    : (ND(args).type == T_BOOL ? T_INT : ND(args).type);
         }
@@ -1004,7 +938,7 @@ static int32_t primary(lc_parser *L)
                     break;
                 }
                 lc_node c = mk(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
-                c.fn = (uint8_t)(len ? F_LENGTH : F_NORMALIZE);
+                c.fn = (uint8_t)(len ? FN_LENGTH : FN_NORMALIZE);
                 c.a = r;
                 if (nor && n == 9 && (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL)) {
                     /* v.Normalize() normalizes v in place */

@@ -856,11 +856,11 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
     }
     ls->steps = 0;
     ls->homo_valid = false;
-    cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
+    cbm__rand48_seed16(&ls->ev.rnd.r48, 0x330E, 0, 0);
     /* cpfg starts nran with its pair cache marked full of a zero: the first nran(m, s) before
      * any srand returns m */
-    ls->ev.nran_have = 1;
-    ls->ev.nran_cached = 0;
+    ls->ev.rnd.normal_have = 1;
+    ls->ev.rnd.normal_cached = 0;
     ls->ev.error = CBM_OK;
     ls->ev.error_node = -1;
     ls->nonfinite_warned = false;
@@ -920,15 +920,15 @@ cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
     }
     /* with its own seed:, the homomorphism draws from its own erand48 stream, restarted at every
      * pass (cpfg), so the image is the same at every interpretation */
-    cbm__rand48 saved = ls->ev.ran;
+    cbm__rand48 saved = ls->ev.rnd.r48;
     if (ls->homo.seed_expr >= 0) {
         long long seed = cbm__to_ll(cbm__eval_expr(&ls->ev, ls->homo.seed_expr));
-        cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(seed & 0xFFFF),
+        cbm__rand48_seed16(&ls->ev.rnd.r48, 0x330E, (uint16_t)(seed & 0xFFFF),
                            (uint16_t)((seed >> 16) & 0xFFFF));
     }
     cbm_status s = homomorphism(ls, cur, out);
     if (ls->homo.seed_expr >= 0)
-        ls->ev.ran = saved;
+        ls->ev.rnd.r48 = saved;
     if (s == CBM_OK)
         ls->homo_valid = true;
     return s;
@@ -951,13 +951,13 @@ static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out)
             lpos lc = p, rc = p;
             pos_next(cur, &rc);
             bool own = L->homo->seed_expr >= 0;
-            cbm__rand48 t = ls->ev.ran;
+            cbm__rand48 t = ls->ev.rnd.r48;
             if (own)
-                ls->ev.ran = ls->hran[cursys];
+                ls->ev.rnd.r48 = ls->hran[cursys];
             cbm_status s = rewrite(ls, L->homo, cur, &p, out, cur, &lc, &rc, 0, &done);
             if (own) {
-                ls->hran[cursys] = ls->ev.ran;
-                ls->ev.ran = t;
+                ls->hran[cursys] = ls->ev.rnd.r48;
+                ls->ev.rnd.r48 = t;
             }
             if (s != CBM_OK)
                 return runtime_fail(ls, s, "homomorphism");

@@ -52,9 +52,8 @@ struct lpfg {
     double *stack;
     size_t stack_cap, sp;
     int call_depth;
-    double *ret;     /* where `return v;` writes v (in a function) */
-    uint32_t gr[34]; /* rand(): the state of the C library's random() (glibc TYPE_3) */
-    int gpos;
+    double *ret;      /* where `return v;` writes v (in a function) */
+    cbm__crand crand; /* rand(): the C library's random() */
     bool backward;
     int group;
     lstr *out;     /* where produce appends */
@@ -190,59 +189,6 @@ static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
     return lc_conv_scalar(t, r);
 }
 
-/* rand()/srand() as the C library lpfg models are compiled with (glibc's random(): additive
- * feedback r[i] = r[i-3] + r[i-31] after a Lehmer initialisation, 310 values discarded), so a
- * model that draws with rand() % 100 makes the same choices as under lpfg. */
-static uint32_t glibc_next(lpfg *lp)
-{
-    uint32_t v = lp->gr[(lp->gpos + 34 - 31) % 34] + lp->gr[(lp->gpos + 34 - 3) % 34];
-    lp->gr[lp->gpos] = v;
-    lp->gpos = (lp->gpos + 1) % 34;
-    return v;
-}
-
-static void glibc_srand(lpfg *lp, uint32_t seed)
-{
-    int32_t r = (int32_t)(seed ? seed : 1);
-    lp->gr[0] = (uint32_t)r;
-    for (int i = 1; i < 31; i++) {
-        int32_t hi = r / 127773, lo = r % 127773;
-        r = 16807 * lo - 2836 * hi;
-        if (r < 0)
-            r += 2147483647;
-        lp->gr[i] = (uint32_t)r;
-    }
-    for (int i = 31; i < 34; i++)
-        lp->gr[i] = lp->gr[i - 31];
-    lp->gpos = 0;
-    for (int i = 34; i < 344; i++)
-        glibc_next(lp);
-}
-
-static double glibc_rand(lpfg *lp)
-{
-    return (double)(glibc_next(lp) >> 1);
-}
-
-/* nrand: the polar method with values in pairs, from the erand48 stream */
-static double nrand(cbm__eval *e, double m, double s)
-{
-    if (e->nran_have) {
-        e->nran_have = 0;
-        return m + s * e->nran_cached;
-    }
-    double v1, v2, r;
-    do {
-        v1 = 2 * cbm__rand48_next(&e->ran) - 1;
-        v2 = 2 * cbm__rand48_next(&e->ran) - 1;
-        r = v1 * v1 + v2 * v2;
-    } while (r >= 1 || r == 0);
-    double f = sqrt(-2 * log(r) / r);
-    e->nran_cached = v1 * f;
-    e->nran_have = 1;
-    return m + s * v2 * f;
-}
-
 /* The mechanics built-ins (lsys/mechlang.c) over the current string. */
 static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
@@ -255,11 +201,11 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         return;
     cbm__mechlang *m = &lp->mech;
     char msg[128];
-    switch ((lc_builtin_fn)n->fn) {
-    case F_GRAVITY:
+    switch ((cbm__fn)n->fn) {
+    case FN_GRAVITY:
         m->gravity = (cbm_vec3){a[0], a[1], a[2]};
         return;
-    case F_GROUND:
+    case FN_GROUND:
         if (!isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1]) || !(a[2] >= 0) || !isfinite(a[2])) {
             rt_error(lp, CBM_E_INVALID,
                      "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
@@ -269,7 +215,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->ground_k = a[1];
         m->ground_s = a[2];
         return;
-    case F_CONTACT:
+    case FN_CONTACT:
         if (!(a[0] >= 0) || !isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1])) {
             rt_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
             return;
@@ -277,17 +223,17 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->contact_k = a[0];
         m->contact_s = a[1];
         return;
-    case F_TROPISM:
+    case FN_TROPISM:
         m->tropism.direction = (cbm_vec3){a[0], a[1], a[2]};
         m->tropism.strength = a[3];
         return;
-    case F_PIPEMODEL:
+    case FN_PIPEMODEL:
         if (!(a[0] > 0) || !(a[1] >= 0))
             rt_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
         m->growth.pipe_exponent = a[0];
         m->growth.leaf_area = a[1];
         return;
-    case F_WOOD:
+    case FN_WOOD:
         if (!(a[0] > 0) || !(a[1] >= a[0]) || !(a[2] >= 0) || !(a[3] >= 0) || !(a[4] >= 0)) {
             rt_error(lp, CBM_E_INVALID,
                      "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
@@ -300,7 +246,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->growth.density = a[3];
         m->growth.modulus_of_rupture = a[4];
         return;
-    case F_RINGRATE:
+    case FN_RINGRATE:
         if (!(a[0] > 0 && a[0] <= 1) || !(a[1] >= 0) || !isfinite(a[1])) {
             rt_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
             return;
@@ -308,7 +254,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->growth.pipe_rate = a[0];
         m->growth.min_ring = a[1];
         return;
-    case F_SOLVER:
+    case FN_SOLVER:
         if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
             !(a[2] == 0 || a[2] == 1)) {
             rt_error(lp, CBM_E_INVALID,
@@ -320,7 +266,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->solve.max_passes = (size_t)a[1];
         m->go_on = a[2] == 1;
         return;
-    case F_REACTION:
+    case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
             rt_error(lp, CBM_E_INVALID,
                      "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
@@ -341,22 +287,22 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                  "Start, StartEach, EndEach or End");
         return;
     }
-    int op = n->fn == F_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
-             : n->fn == F_ADDRINGS  ? CBM__ML_RINGS
-             : n->fn == F_AGEWOOD   ? CBM__ML_AGE
-             : n->fn == F_STABILITY ? CBM__ML_STABILITY
-                                    : CBM__ML_BREAK;
+    int op = n->fn == FN_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
+             : n->fn == FN_ADDRINGS  ? CBM__ML_RINGS
+             : n->fn == FN_AGEWOOD   ? CBM__ML_AGE
+             : n->fn == FN_STABILITY ? CBM__ML_STABILITY
+                                     : CBM__ML_BREAK;
     double r = 0;
     cbm_status s =
         cbm__mechlang_run(ls->ctx, m, &ls->cur, op, a[0], &r, msg, sizeof msg, &ls->mech_time);
     if (s != CBM_OK) {
         char full[160];
         snprintf(full, sizeof full, "%s(): %s",
-                 n->fn == F_EQUILIBRIUM ? "Equilibrium"
-                 : n->fn == F_ADDRINGS  ? "AddRings"
-                 : n->fn == F_AGEWOOD   ? "AgeWood"
-                 : n->fn == F_STABILITY ? "Stability"
-                                        : "Break",
+                 n->fn == FN_EQUILIBRIUM ? "Equilibrium"
+                 : n->fn == FN_ADDRINGS  ? "AddRings"
+                 : n->fn == FN_AGEWOOD   ? "AgeWood"
+                 : n->fn == FN_STABILITY ? "Stability"
+                                         : "Break",
                  msg);
         rt_error(lp, s, full);
         return;
@@ -368,7 +314,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
-    if (n->fn == F_PRINTF) {
+    if (n->fn == FN_PRINTF) {
         cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
         int k = 0;
         const char *strings = ls->comp.strings.data;
@@ -383,22 +329,22 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
     }
     double a[2] = {0, 0};
     int32_t x = n->a;
-    if (n->fn == F_DOT || n->fn == F_CROSS || n->fn == F_MAKEQ || n->fn == F_VECROT) {
+    if (n->fn == FN_DOT || n->fn == FN_CROSS || n->fn == FN_MAKEQ || n->fn == FN_VECROT) {
         double u[9], w[3], ang = 0;
         int32_t x1 = lp->m.nodes.data[x].next;
         ev(ls, x, fr, u);
         ev(ls, x1, fr, w);
-        if (n->fn == F_VECROT)
+        if (n->fn == FN_VECROT)
             ang = evs(ls, lp->m.nodes.data[x1].next, fr);
-        else if (n->fn == F_MAKEQ)
+        else if (n->fn == FN_MAKEQ)
             ang = w[0];
-        if (n->fn == F_DOT)
+        if (n->fn == FN_DOT)
             out[0] = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
-        else if (n->fn == F_CROSS) {
+        else if (n->fn == FN_CROSS) {
             out[0] = u[1] * w[2] - u[2] * w[1];
             out[1] = u[2] * w[0] - u[0] * w[2];
             out[2] = u[0] * w[1] - u[1] * w[0];
-        } else if (n->fn == F_MAKEQ) {
+        } else if (n->fn == FN_MAKEQ) {
             double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
             double sn = sin(ang / 2) / (l > 0 ? l : 1);
             out[0] = cos(ang / 2);
@@ -424,18 +370,18 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
         lc_conv_value(&lp->m, n->type, out);
         return;
     }
-    if (n->fn == F_TOLOCAL || n->fn == F_TOWORLD) {
+    if (n->fn == FN_TOLOCAL || n->fn == FN_TOWORLD) {
         double v[3], f[9];
         ev(ls, x, fr, v);
         ev(ls, lp->m.nodes.data[x].next, fr, f);
         for (int i = 0; i < 3; i++)
-            out[i] = n->fn == F_TOLOCAL
+            out[i] = n->fn == FN_TOLOCAL
                          ? v[0] * f[3 * i] + v[1] * f[3 * i + 1] + v[2] * f[3 * i + 2]
                          : v[0] * f[i] + v[1] * f[3 + i] + v[2] * f[6 + i];
         lc_conv_value(&lp->m, n->type, out);
         return;
     }
-    if (n->fn == F_NORMALIZE && n->type == T_TVEC) {
+    if (n->fn == FN_NORMALIZE && n->type == T_TVEC) {
         ev(ls, x, fr, out);
         for (int v = 0; v < 3; v++) {
             double *p = out + 3 * v, l = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
@@ -445,11 +391,11 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
         lc_conv_value(&lp->m, n->type, out);
         return;
     }
-    if (n->fn == F_LENGTH || n->fn == F_NORMALIZE) {
+    if (n->fn == FN_LENGTH || n->fn == FN_NORMALIZE) {
         double v[3];
         ev(ls, x, fr, v);
         double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (n->fn == F_LENGTH)
+        if (n->fn == FN_LENGTH)
             out[0] = lc_conv_scalar(n->type, l);
         else {
             for (int i = 0; i < 3; i++)
@@ -458,108 +404,60 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
         }
         return;
     }
-    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_REACTION) {
+    if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTION) {
         call_mech(ls, n, fr, out);
         return;
     }
     for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
         a[i] = evs(ls, x, fr);
+    if (n->fn < FN_MATH_END) {
+        out[0] = lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type,
+                                cbm__builtin_math(n->fn, a[0], a[1], false));
+        return;
+    }
     double r = 0;
-    switch ((lc_builtin_fn)n->fn) {
-    case F_SIN:
-        r = sin(a[0]);
+    switch ((cbm__fn)n->fn) {
+    case FN_RAN:
+        r = cbm__rand48_next(&ls->ev.rnd.r48) * a[0];
         break;
-    case F_COS:
-        r = cos(a[0]);
-        break;
-    case F_TAN:
-        r = tan(a[0]);
-        break;
-    case F_ASIN:
-        r = asin(a[0]);
-        break;
-    case F_ACOS:
-        r = acos(a[0]);
-        break;
-    case F_ATAN:
-        r = atan(a[0]);
-        break;
-    case F_ATAN2:
-        r = atan2(a[0], a[1]);
-        break;
-    case F_EXP:
-        r = exp(a[0]);
-        break;
-    case F_LOG:
-        r = log(a[0]);
-        break;
-    case F_LOG10:
-        r = log10(a[0]);
-        break;
-    case F_POW:
-        r = pow(a[0], a[1]);
-        break;
-    case F_SQRT:
-        r = sqrt(a[0]);
-        break;
-    case F_FABS:
-        r = fabs(a[0]);
-        break;
-    case F_FLOOR:
-        r = floor(a[0]);
-        break;
-    case F_CEIL:
-        r = ceil(a[0]);
-        break;
-    case F_FMOD:
-        r = fmod(a[0], a[1]);
-        break;
-    case F_MIN:
-        r = a[0] < a[1] ? a[0] : a[1];
-        break;
-    case F_MAX:
-        r = a[0] > a[1] ? a[0] : a[1];
-        break;
-    case F_RAN:
-        r = cbm__rand48_next(&ls->ev.ran) * a[0];
-        break;
-    case F_NRAN:
-        r = nrand(&ls->ev, a[0], a[1]);
-        break;
-    case F_DRAND:
-        r = cbm__rand48_next(&ls->ev.ran);
-        break;
-    case F_RAND:
-        r = glibc_rand(lp);
-        break;
-    case F_SRAND: {
-        long long s = cbm__to_ll(a[0]);
-        glibc_srand(lp, (uint32_t)s);
-        cbm__rand48_seed16(&ls->ev.ran, 0x330E, (uint16_t)(s & 0xFFFF),
-                           (uint16_t)((s >> 16) & 0xFFFF));
-        ls->ev.nran_have = 0;
+    case FN_NRAN: {
+        double v, f;
+        cbm__random_normal(&ls->ev.rnd, &v, &f);
+        r = a[0] + a[1] * v * f;
         break;
     }
-    case F_FUNC:
+    case FN_DRAND:
+        r = cbm__rand48_next(&ls->ev.rnd.r48);
+        break;
+    case FN_RAND:
+        r = cbm__crand_next(&lp->crand);
+        break;
+    case FN_SRAND: {
+        long long s = cbm__to_ll(a[0]);
+        cbm__crand_seed(&lp->crand, (uint32_t)s);
+        cbm__random_seed(&ls->ev.rnd, s);
+        break;
+    }
+    case FN_FUNC:
         if (!ls->func)
             rt_error(lp, CBM_E_RUNTIME,
                      "func(name, x) needs function files (.func or .fset) on the command line");
         else
             r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
         break;
-    case F_FORWARD:
+    case FN_FORWARD:
         lp->backward = false;
         break;
-    case F_BACKWARD:
+    case FN_BACKWARD:
         lp->backward = true;
         break;
-    case F_USEGROUP:
+    case FN_USEGROUP:
         lp->group = (int)cbm__to_ll(a[0]);
         break;
-    case F_CURGROUP:
+    case FN_CURGROUP:
         r = lp->group;
         break;
-    case F_STOP:
+    case FN_STOP:
         ls->ev.stopped = true;
         break;
     default:
@@ -1599,9 +1497,9 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->steps = 0;
     ls->homo_valid = false;
     ls->ev.stopped = false;
-    cbm__rand48_seed16(&ls->ev.ran, 0x330E, 0, 0);
-    ls->ev.nran_have = 0;
-    glibc_srand(lp, 1);
+    cbm__rand48_seed16(&ls->ev.rnd.r48, 0x330E, 0, 0);
+    ls->ev.rnd.normal_have = 0;
+    cbm__crand_seed(&lp->crand, 1);
     /* mechanics settings back to their defaults; the declarations stay */
     cbm__mechlang_free(ls->ctx, &lp->mech);
     mech_declare(lp);

@@ -1,5 +1,5 @@
-/* Expressions and statements of the cpfg dialect: parsing into a flat node array, and
- * evaluation.
+/* Expressions and statements of the cpfg dialect, parsed into a flat node array (evaluated by
+ * expr_eval.c).
  *
  * The grammar follows cpfg's (lsys_input.y): from lowest to highest precedence `?:` (right),
  * `||`, `&&`, `== !=` (also `<>`), `< <= > >=`, `+ -`, `* / %`, `^` (power, left-associative
@@ -8,14 +8,8 @@
  * while`, calls, blocks. A name is a formal parameter of the production being compiled or
  * else a global variable of the model (cpfg keeps one symbol table per L-system); reading a
  * global that is never assigned anywhere is an error. Nodes refer to their children by index,
- * so a compiled model is a few contiguous arrays; evaluation is a recursive walk whose depth
- * is bounded by the parser's max_expr_depth. `while` loops share an iteration budget so that
- * no model can hang the derivation.
- *
- * Random functions follow cpfg (utility.c): ran(x) = x * erand48, nran(m, s) the polar
- * Box-Muller method of Numerical Recipes producing values in pairs, bran(a, b) Cheng's beta
- * generator, biran(n, p) n coin flips, srand(s) resets the erand48 state to
- * {0x330E, s & 0xFFFF, s >> 16} and the pair cache.
+ * so a compiled model is a few contiguous arrays. Built-in functions come from the one table
+ * of both dialects (lang/builtins.h).
  */
 #include "lang/lang.h"
 
@@ -23,157 +17,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-
-#define DEG (3.14159265358979323846 / 180.0)
-
-/* ---- rand48: X' = (a X + c) mod 2^48, a = 0x5DEECE66D, c = 0xB (POSIX) ---- */
-void cbm__rand48_seed16(cbm__rand48 *r, uint16_t x0, uint16_t x1, uint16_t x2)
-{
-    r->x = (uint64_t)x0 | ((uint64_t)x1 << 16) | ((uint64_t)x2 << 32);
-}
-
-double cbm__rand48_next(cbm__rand48 *r)
-{
-    r->x = (r->x * 0x5DEECE66Dull + 0xBull) & 0xFFFFFFFFFFFFull;
-    return ldexp((double)r->x, -48);
-}
-
-/* ---- compiler infrastructure ---- */
-cbm_status cbm__compiler_init(cbm__compiler *c, cbm_context *ctx, cbm__pp *pp)
-{
-    memset(c, 0, sizeof *c);
-    c->ctx = ctx;
-    c->pp = pp;
-    c->text = pp->text.data;
-    c->status = CBM_OK;
-    c->map.data = pp->lines.data;
-    c->map.len = pp->lines.len;
-    c->map.cap = pp->lines.cap;
-    c->files.data = pp->files.data;
-    c->files.len = pp->files.len;
-    c->files.cap = pp->files.cap;
-    memset(&pp->lines, 0, sizeof pp->lines);
-    memset(&pp->files, 0, sizeof pp->files);
-    size_t zero = 0;
-    CBM_TRY(CBM_ARRAY_PUSH(ctx, c->line_start, zero));
-    for (size_t i = 0; c->text[i]; i++)
-        if (c->text[i] == '\n') {
-            size_t s = i + 1;
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, c->line_start, s));
-        }
-    return CBM_OK;
-}
-
-void cbm__compiler_free(cbm__compiler *c)
-{
-    for (size_t i = 0; i < c->files.len; i++)
-        cbm__strfree(c->ctx, c->files.data[i]);
-    CBM_ARRAY_FREE(c->ctx, c->files);
-    CBM_ARRAY_FREE(c->ctx, c->map);
-    CBM_ARRAY_FREE(c->ctx, c->node_pos);
-    for (size_t i = 0; i < c->globals.len; i++)
-        cbm__strfree(c->ctx, c->globals.data[i]);
-    CBM_ARRAY_FREE(c->ctx, c->globals);
-    CBM_ARRAY_FREE(c->ctx, c->global_use);
-    CBM_ARRAY_FREE(c->ctx, c->global_set);
-    CBM_ARRAY_FREE(c->ctx, c->line_start);
-    CBM_ARRAY_FREE(c->ctx, c->nodes);
-    for (size_t i = 0; i < c->arrays.len; i++) {
-        cbm__strfree(c->ctx, c->arrays.data[i].name);
-        cbm__free(c->ctx, c->arrays.data[i].data, c->arrays.data[i].count * sizeof(double));
-    }
-    CBM_ARRAY_FREE(c->ctx, c->arrays);
-    CBM_ARRAY_FREE(c->ctx, c->strings);
-}
-
-/* The index of the preprocessed line holding text position pos (binary search of line_start;
- * 0 when there are no lines). */
-static size_t line_index(const cbm__compiler *c, size_t pos)
-{
-    size_t lo = 0, hi = c->line_start.len;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (c->line_start.data[mid] <= pos)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
-void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
-{
-    c->errors++;
-    if (c->errors >= cbm_context_limits(c->ctx)->max_diagnostics) {
-        c->fatal = true;
-        if (c->status == CBM_OK)
-            c->status = CBM_E_SYNTAX;
-    }
-    const char *file;
-    int line, col;
-    cbm__compiler_locate(c, pos, &file, &line, &col);
-    va_list ap;
-    va_start(ap, fmt);
-    cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
-    va_end(ap);
-    /* the line expands a value given on the command line: say so, the error may be there */
-    size_t lo = line_index(c, pos);
-    if (lo < c->map.len && c->map.data[lo].define >= 0)
-        cbm__diag(c->ctx, CBM_NOTE, file, line, col, "the line uses the command line's %s",
-                  c->files.data[c->map.data[lo].define]);
-}
-
-void cbm__compiler_locate(const cbm__compiler *c, size_t pos, const char **file, int *line,
-                          int *col)
-{
-    *file = NULL;
-    *line = *col = 0;
-    if (!c->line_start.len)
-        return;
-    size_t lo = line_index(c, pos);
-    if (lo < c->map.len) {
-        *file = c->files.data[c->map.data[lo].file];
-        *line = c->map.data[lo].line;
-    } else if (c->map.len) { /* the end of the text: after the last line */
-        *file = c->files.data[c->map.data[c->map.len - 1].file];
-        *line = c->map.data[c->map.len - 1].line;
-    } else if (c->files.len) { /* an empty file */
-        *file = c->files.data[0];
-        *line = 1;
-    }
-    *col = (int)(pos - c->line_start.data[lo]) + 1;
-}
-
-size_t cbm__node_pos(const cbm__compiler *c, int32_t node)
-{
-    return node >= 0 && (size_t)node < c->node_pos.len ? (size_t)c->node_pos.data[node] : 0;
-}
-
-cbm_status cbm__compiler_fail(const cbm__compiler *c, cbm_status s, size_t pos, const char *fmt,
-                              ...)
-{
-    const char *file;
-    int line, col;
-    cbm__compiler_locate(c, pos, &file, &line, &col);
-    va_list ap;
-    va_start(ap, fmt);
-    cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
-    va_end(ap);
-    return s;
-}
-
-void cbm__skip(cbm__compiler *c, bool nl)
-{
-    for (;;) {
-        char ch = c->text[c->pos];
-        if (ch == ' ' || ch == '\t' || ch == '\r')
-            c->pos++;
-        else if (ch == '\n' && (nl || c->text[c->pos + 1] == '\t'))
-            c->pos++;
-        else
-            return;
-    }
-}
 
 static const char *describe(const cbm__compiler *c, char *buf)
 {
@@ -377,17 +220,6 @@ static int find_array(const cbm__compiler *c, const char *name, size_t len)
     return -1;
 }
 
-static const struct {
-    const char *name;
-    int fn, nargs;
-} FUNCS[] = {
-    {"sin", FN_SIN, 1},   {"cos", FN_COS, 1},        {"tan", FN_TAN, 1},     {"asin", FN_ASIN, 1},
-    {"acos", FN_ACOS, 1}, {"atan", FN_ATAN, 1},      {"atan2", FN_ATAN2, 2}, {"exp", FN_EXP, 1},
-    {"log", FN_LOG, 1},   {"floor", FN_FLOOR, 1},    {"ceil", FN_CEIL, 1},   {"sign", FN_SIGN, 1},
-    {"sqrt", FN_SQRT, 1}, {"trunc", FN_TRUNC, 1},    {"fabs", FN_FABS, 1},   {"ran", FN_RAN, 1},
-    {"nran", FN_NRAN, 2}, {"bran", FN_BRAN, 2},      {"biran", FN_BIRAN, 2}, {"srand", FN_SRAND, 1},
-    {"func", FN_FUNC, 2}, {"printf", FN_PRINTF, -1}, {"stop", FN_STOP, -1}};
-
 static int32_t parse_ternary(cbm__compiler *c, bool nl);
 
 /* Parses `[e1][e2]...` indices (at '['), returns the chain. */
@@ -439,9 +271,8 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
         while (isalnum((unsigned char)c->text[c->pos]) || c->text[c->pos] == '_')
             c->pos++;
         size_t len = c->pos - start;
-        for (size_t i = 0; i < sizeof FUNCS / sizeof FUNCS[0]; i++) {
-            if (strlen(FUNCS[i].name) != len || memcmp(FUNCS[i].name, t, len))
-                continue;
+        const cbm__builtin *fn = cbm__builtin_find(t, len, CBM__CPFG);
+        if (fn) {
             if (!match(c, "(", nl)) {
                 expected(c, "'(' after a function name");
                 return -1;
@@ -473,16 +304,15 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                 expected(c, "')' or ',' in the arguments");
                 return -1;
             }
-            if (FUNCS[i].fn == FN_PRINTF ? !check_printf(c, start, first, n)
-                                         : !no_strings(c, first))
+            if (fn->fn == FN_PRINTF ? !check_printf(c, start, first, n) : !no_strings(c, first))
                 return -1;
-            if (FUNCS[i].nargs >= 0 && n != FUNCS[i].nargs) {
-                cbm__cerr(c, start, "%s() takes %d argument%s, %d given", FUNCS[i].name,
-                          FUNCS[i].nargs, FUNCS[i].nargs == 1 ? "" : "s", n);
+            if (fn->arity >= 0 && n != fn->arity) {
+                cbm__cerr(c, start, "%s() takes %d argument%s, %d given", fn->name, fn->arity,
+                          fn->arity == 1 ? "" : "s", n);
                 return -1;
             }
             cbm__node nd = {.op = OP_CALL,
-                            .fn = (uint8_t)FUNCS[i].fn,
+                            .fn = (uint8_t)fn->fn,
                             .a = first,
                             .b = -1,
                             .c = -1,
@@ -1029,288 +859,5 @@ bool cbm__parse_define_block(cbm__compiler *c)
             }
             break;
         }
-    }
-}
-
-/* ---- evaluation ---- */
-static double nran(cbm__eval *e, double mean, double sd)
-{
-    if (e->nran_have == 0) {
-        double v1, v2, rsq;
-        do {
-            v1 = 2.0 * cbm__rand48_next(&e->ran) - 1.0;
-            v2 = 2.0 * cbm__rand48_next(&e->ran) - 1.0;
-            rsq = v1 * v1 + v2 * v2;
-        } while (rsq >= 1.0 || rsq == 0.0);
-        double fac = sqrt(-2.0 * log(rsq) / rsq);
-        e->nran_cached = v1 * fac;
-        e->nran_have = 1;
-        return v2 * fac * sd + mean;
-    }
-    e->nran_have = 0;
-    return e->nran_cached * sd + mean;
-}
-
-static double bran(cbm__eval *e, double a, double b)
-{
-    double s = a + b, lambda;
-    double mn = a < b ? a : b;
-    if (mn <= 1)
-        lambda = mn;
-    else
-        lambda = sqrt((2 * a * b - s) / (s - 2));
-    double u = a + lambda, U1, U2, V, Ym;
-    long guard = 0;
-    do {
-        do {
-            U1 = cbm__rand48_next(&e->ran);
-        } while (U1 == 0);
-        do {
-            U2 = cbm__rand48_next(&e->ran);
-        } while (U2 == 0);
-        V = (1 / lambda) * log(U1 / (1 - U1));
-        Ym = a * exp(V);
-        if (++guard > 1000000 || !(lambda > 0)) {
-            e->error = CBM_E_RUNTIME;
-            e->error_msg = "bran(a, b): the parameters must be positive";
-            return 0;
-        }
-    } while (s * log(s / (b + Ym)) + u * V - log(4) < log(U1 * U1 * U2));
-    return Ym / (b + Ym);
-}
-
-static void print(cbm__eval *e, const cbm__node *n)
-{
-    cbm__fmt_arg a[CBM__FMT_MAX_ARGS];
-    int k = 0;
-    const char *fmt = e->strings ? e->strings + e->nodes[n->a].slot : "";
-    for (int32_t i = e->nodes[n->a].next; i >= 0 && k < CBM__FMT_MAX_ARGS;
-         i = e->nodes[i].next, k++) {
-        const cbm__node *x = &e->nodes[i];
-        a[k].s = x->op == OP_STR && e->strings ? e->strings + x->slot : NULL;
-        a[k].v = x->op == OP_STR ? 0 : cbm__eval_expr(e, i);
-    }
-    cbm__fmt_print(e->ctx, fmt, a, k);
-}
-
-static double call(cbm__eval *e, const cbm__node *n)
-{
-    if (n->fn == FN_PRINTF) {
-        print(e, n);
-        return 0;
-    }
-    double a[8] = {0};
-    int k = 0;
-    for (int32_t i = n->a; i >= 0 && k < 8; i = e->nodes[i].next)
-        a[k++] = cbm__eval_expr(e, i);
-    switch (n->fn) {
-    case FN_SIN:
-        return sin(a[0] * DEG);
-    case FN_COS:
-        return cos(a[0] * DEG);
-    case FN_TAN:
-        return tan(a[0] * DEG);
-    case FN_ASIN:
-        return asin(a[0]) / DEG;
-    case FN_ACOS:
-        return acos(a[0]) / DEG;
-    case FN_ATAN:
-        return atan(a[0]) / DEG;
-    case FN_ATAN2:
-        return atan2(a[0], a[1]) / DEG;
-    case FN_EXP:
-        return exp(a[0]);
-    case FN_LOG:
-        return log(a[0]);
-    case FN_FLOOR:
-        return floor(a[0]);
-    case FN_CEIL:
-        return ceil(a[0]);
-    case FN_SIGN:
-        return a[0] > 0 ? 1 : a[0] < 0 ? -1 : 0;
-    case FN_SQRT:
-        return sqrt(a[0]);
-    case FN_TRUNC:
-        return trunc(a[0]);
-    case FN_FABS:
-        return fabs(a[0]);
-    case FN_RAN:
-        return cbm__rand48_next(&e->ran) * a[0];
-    case FN_NRAN:
-        return nran(e, a[0], a[1]);
-    case FN_BRAN:
-        return bran(e, a[0], a[1]);
-    case FN_BIRAN: {
-        double n2 = a[0];
-        if (!(n2 < 1e8) || !(n2 > -1e8)) {
-            e->error = CBM_E_RUNTIME;
-            e->error_msg = "biran(n, p): n is too large";
-            return 0;
-        }
-        /* n draws: operations of the step's budget like loop iterations */
-        if (n2 > 0 && (e->while_budget -= (long)n2) < 0) {
-            e->error = CBM_E_LIMIT;
-            e->error_msg = "biran(n, p) draws more than the step's limit of operations "
-                           "(--max-loop-iterations, --max-operations)";
-            return 0;
-        }
-        int j = 0;
-        for (int i = 1; i <= (int)n2; i++)
-            j += cbm__rand48_next(&e->ran) <= a[1];
-        return j;
-    }
-    case FN_SRAND: {
-        long long s = cbm__to_ll(a[0]);
-        cbm__rand48_seed16(&e->ran, 0x330E, (uint16_t)(s & 0xFFFF), (uint16_t)((s >> 16) & 0xFFFF));
-        e->nran_have = 0;
-        return 0;
-    }
-    case FN_FUNC:
-        if (!e->func) {
-            e->error = CBM_E_RUNTIME;
-            e->error_msg = "func(id, x) needs function files (.func or .fset) on the command line";
-            return 0;
-        }
-        return e->func(e->func_ud,
-                       (int)cbm__to_ll(a[0] > 1e9    ? 1e9
-                                       : a[0] < -1e9 ? -1e9
-                                                     : a[0]),
-                       a[1]);
-    case FN_STOP:
-        e->stopped = true;
-        return 0;
-    default:
-        return 0; /* printf: the library does not print */
-    }
-}
-
-static double *array_elem(cbm__eval *e, const cbm__node *n, int32_t idx)
-{
-    cbm__array *ar = &e->arrays[n->slot];
-    size_t off = 0;
-    int d = 0;
-    for (int32_t i = idx; i >= 0; i = e->nodes[i].next, d++) {
-        double v = cbm__eval_expr(e, i);
-        if (!(v >= 0 && v < ar->dims[d])) {
-            if (e->error == CBM_OK) {
-                e->error = CBM_E_RUNTIME;
-                e->error_msg = "array index out of range";
-                e->error_node = (int32_t)(n - e->nodes);
-            }
-            return NULL;
-        }
-        off = off * (size_t)ar->dims[d] + (size_t)v;
-    }
-    return &ar->data[off];
-}
-
-double cbm__eval_expr(cbm__eval *e, int32_t i)
-{
-    const cbm__node *n = &e->nodes[i];
-    switch ((cbm__op)n->op) {
-    case OP_NUM:
-        return n->v;
-    case OP_PARAM:
-        return e->params[n->slot];
-    case OP_GLOBAL:
-        return e->globals[n->slot];
-    case OP_ARRAY: {
-        double *p = array_elem(e, n, n->a);
-        return p ? *p : 0;
-    }
-    case OP_NEG:
-        return -cbm__eval_expr(e, n->a);
-    case OP_NOT:
-        return !cbm__eval_expr(e, n->a);
-    case OP_ADD:
-        return cbm__eval_expr(e, n->a) + cbm__eval_expr(e, n->b);
-    case OP_SUB:
-        return cbm__eval_expr(e, n->a) - cbm__eval_expr(e, n->b);
-    case OP_MUL:
-        return cbm__eval_expr(e, n->a) * cbm__eval_expr(e, n->b);
-    case OP_DIV:
-        return cbm__eval_expr(e, n->a) / cbm__eval_expr(e, n->b);
-    case OP_REM:
-        return fmod(cbm__eval_expr(e, n->a), cbm__eval_expr(e, n->b));
-    case OP_POW:
-        return pow(cbm__eval_expr(e, n->a), cbm__eval_expr(e, n->b));
-    case OP_LT:
-        return cbm__eval_expr(e, n->a) < cbm__eval_expr(e, n->b);
-    case OP_GT:
-        return cbm__eval_expr(e, n->a) > cbm__eval_expr(e, n->b);
-    case OP_LE:
-        return cbm__eval_expr(e, n->a) <= cbm__eval_expr(e, n->b);
-    case OP_GE:
-        return cbm__eval_expr(e, n->a) >= cbm__eval_expr(e, n->b);
-    case OP_EQ:
-        return cbm__eval_expr(e, n->a) == cbm__eval_expr(e, n->b);
-    case OP_NE:
-        return cbm__eval_expr(e, n->a) != cbm__eval_expr(e, n->b);
-    case OP_AND:
-        return cbm__eval_expr(e, n->a) && cbm__eval_expr(e, n->b);
-    case OP_OR:
-        return cbm__eval_expr(e, n->a) || cbm__eval_expr(e, n->b);
-    case OP_COND:
-        return cbm__eval_expr(e, n->a) ? cbm__eval_expr(e, n->b) : cbm__eval_expr(e, n->c);
-    case OP_CALL: {
-        double r = call(e, n);
-        if (e->error != CBM_OK && e->error_node < 0)
-            e->error_node = i;
-        return r;
-    }
-    default:
-        cbm__eval_stmt(e, i);
-        return 0;
-    }
-}
-
-void cbm__eval_stmt(cbm__eval *e, int32_t i)
-{
-    for (; i >= 0 && e->error == CBM_OK; i = e->nodes[i].next) {
-        const cbm__node *n = &e->nodes[i];
-        switch ((cbm__op)n->op) {
-        case OP_SEQ:
-            cbm__eval_stmt(e, n->a);
-            break;
-        case OP_ASSIGN:
-            e->globals[n->slot] = cbm__eval_expr(e, n->a);
-            break;
-        case OP_ASSIGN_PARAM:
-            e->params[n->slot] = cbm__eval_expr(e, n->a);
-            break;
-        case OP_ASSIGN_ARRAY: {
-            double v = cbm__eval_expr(e, n->a);
-            double *p = array_elem(e, n, n->b);
-            if (p)
-                *p = v;
-            break;
-        }
-        case OP_IF:
-            if (cbm__eval_expr(e, n->a))
-                cbm__eval_stmt(e, n->b);
-            else if (n->c >= 0)
-                cbm__eval_stmt(e, n->c);
-            break;
-        case OP_WHILE:
-        case OP_DO:
-            if (n->op == OP_DO)
-                cbm__eval_stmt(e, n->b);
-            while (e->error == CBM_OK && cbm__eval_expr(e, n->a)) {
-                if (--e->while_budget < 0) {
-                    e->error = CBM_E_LIMIT;
-                    e->error_msg = "while loops ran for more iterations in one step than the "
-                                   "limit (--max-loop-iterations, --max-operations)";
-                    e->error_node = i;
-                    return;
-                }
-                cbm__eval_stmt(e, n->b);
-            }
-            break;
-        default:
-            (void)cbm__eval_expr(e, i);
-            break;
-        }
-        if (n->op != OP_SEQ && n->op < OP_ASSIGN)
-            return; /* a bare expression is not part of a chain */
     }
 }
