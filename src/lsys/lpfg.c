@@ -114,8 +114,58 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out);
 static int exec(cbm_lsys *ls, int32_t ni, double *fr);
 static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
 
+static double bin_scalar(int op, int t, double a, double b, lpfg *lp);
+
+/* The value of an expression's first double: the scalar nodes (and fields of variables) read
+ * directly, as ev would give them, without ev's buffer; the rest through ev into a buffer large
+ * enough for any value. */
 static double evs(cbm_lsys *ls, int32_t ni, double *fr)
 {
+    lpfg *lp = ls->lp;
+    const lc_node *n = &lp->m.nodes.data[ni];
+    switch (n->op) {
+    case N_NUM:
+        return n->v;
+    case N_LOCAL:
+        return fr[n->slot];
+    case N_GLOBAL:
+        return lp->glob[n->slot];
+    case N_FIELD: {
+        const lc_node *base = &lp->m.nodes.data[n->a];
+        if (base->op == N_LOCAL || base->op == N_GLOBAL)
+            return lv_ptr(lp, base, fr)[n->slot];
+        break;
+    }
+    case N_NEG:
+        if (lc_is_scalar(n->type))
+            return -evs(ls, n->a, fr);
+        break;
+    case N_NOT:
+        return evs(ls, n->a, fr) == 0;
+    case N_CAST:
+        if (lc_is_scalar(n->type))
+            return lc_conv_scalar(n->type, evs(ls, n->a, fr));
+        break;
+    case N_BIN: {
+        int ta = lp->m.nodes.data[n->a].type, tb = lp->m.nodes.data[n->b].type;
+        if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
+            double a = evs(ls, n->a, fr), b = evs(ls, n->b, fr);
+            int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
+            if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
+                ct = T_DOUBLE;
+            return bin_scalar(n->fn, ct, a, b, lp);
+        }
+        break;
+    }
+    case N_AND:
+        return evs(ls, n->a, fr) != 0 && evs(ls, n->b, fr) != 0;
+    case N_OR:
+        return evs(ls, n->a, fr) != 0 || evs(ls, n->b, fr) != 0;
+    case N_COND:
+        return evs(ls, evs(ls, n->a, fr) != 0 ? n->b : n->c, fr);
+    default:
+        break;
+    }
     double v[MAXSZ + 1];
     ev(ls, ni, fr, v);
     return v[0];
@@ -522,6 +572,12 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
         memcpy(out, lv_ptr(lp, n, fr), (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
         return;
     case N_FIELD: {
+        const lc_node *base = &lp->m.nodes.data[n->a];
+        if (base->op == N_LOCAL || base->op == N_GLOBAL) { /* no copy of the whole value */
+            memcpy(out, lv_ptr(lp, base, fr) + n->slot,
+                   (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
+            return;
+        }
         double tmp[MAXSZ + 1];
         ev(ls, n->a, fr, tmp);
         memcpy(out, tmp + n->slot, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
