@@ -163,12 +163,45 @@ static double evs(cbm_lsys *ls, int32_t ni, double *fr)
         return evs(ls, n->a, fr) != 0 || evs(ls, n->b, fr) != 0;
     case N_COND:
         return evs(ls, evs(ls, n->a, fr) != 0 ? n->b : n->c, fr);
+    case N_ASSIGN:
+        if (lc_is_scalar(n->type)) {
+            double v = evs(ls, n->b, fr); /* of the lvalue's type (coerced at compile time) */
+            *lv_ptr(lp, &lp->m.nodes.data[n->a], fr) = v;
+            return v;
+        }
+        break;
+    case N_INCDEC: {
+        double *p = lv_ptr(lp, &lp->m.nodes.data[n->a], fr);
+        double old = *p;
+        *p = lc_conv_scalar(n->type, *p + ((n->fn & 1) ? -1 : 1));
+        return n->fn >= 2 ? old : *p;
+    }
+    case N_CALLB:
+        if (n->fn < FN_MATH_END) { /* as call_builtin computes them */
+            double a[2] = {0, 0};
+            int32_t x = n->a;
+            for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
+                a[i] = evs(ls, x, fr);
+            return lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type,
+                                  cbm__builtin_math(n->fn, a[0], a[1], false));
+        }
+        break;
     default:
         break;
     }
     double v[MAXSZ + 1];
     ev(ls, ni, fr, v);
     return v[0];
+}
+
+/* Evaluates an expression for its effects (a statement, a for loop's step): a scalar one
+ * through evs, without the buffer. */
+static void eval_discard(cbm_lsys *ls, int32_t ni, double *fr, double *buf)
+{
+    if (lc_is_scalar(ls->lp->m.nodes.data[ni].type))
+        (void)evs(ls, ni, fr);
+    else
+        ev(ls, ni, fr, buf);
 }
 
 static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
@@ -1144,7 +1177,7 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
         int r;
         switch (n->op) {
         case S_EXPR:
-            ev(ls, n->a, fr, tmp);
+            eval_discard(ls, n->a, fr, tmp);
             break;
         case S_DECL:
             if (n->a >= 0) {
@@ -1189,7 +1222,7 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
                 if (lp->err != CBM_OK)
                     return X_RETURN;
                 if (n->op == S_FOR && n->c >= 0)
-                    ev(ls, n->c, fr, tmp);
+                    eval_discard(ls, n->c, fr, tmp);
                 if (n->op == S_DO && evs(ls, n->a, fr) == 0)
                     break;
                 if (n->op == S_DO)
@@ -1604,14 +1637,35 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
 }
 
 /* ---------------------------------------------------------------- output */
+/* Writes an integer in decimal, as "%lld" does. */
+static void write_integer(FILE *f, long long x)
+{
+    char buf[24], *p = buf + sizeof buf;
+    unsigned long long u = x < 0 ? 0 - (unsigned long long)x : (unsigned long long)x;
+    *--p = '\0';
+    do {
+        *--p = (char)('0' + u % 10);
+        u /= 10;
+    } while (u);
+    if (x < 0)
+        *--p = '-';
+    fputs(p, f);
+}
+
 static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v)
 {
     if (t == T_INT || t == T_BOOL) {
-        fprintf(f, "%lld", cbm__to_ll(v[0]));
+        write_integer(f, cbm__to_ll(v[0]));
         return v + 1;
     }
     if (lc_is_scalar(t)) {
-        fprintf(f, "%.9g", v[0]);
+        /* a whole number below 10^9 (the parameters of most strings) is what "%.9g" prints of
+         * it, its digits; -0 keeps its sign through printf */
+        if (v[0] == (double)(long long)(v[0] < 1e9 && v[0] > -1e9 ? v[0] : 0.5) &&
+            !(v[0] == 0 && signbit(v[0])))
+            write_integer(f, (long long)v[0]);
+        else
+            fprintf(f, "%.9g", v[0]);
         return v + 1;
     }
     putc('{', f);
