@@ -164,6 +164,7 @@ typedef enum {
     F_RINGRATE,
     F_SOLVER,
     F_REACTION,
+    F_REACTIONBOUND,
     F_NONE
 } bfn;
 
@@ -231,6 +232,7 @@ static const bdef BUILTINS[] = {{"sin", F_SIN, 1},
                                 {"RingRate", F_RINGRATE, 2},
                                 {"Solver", F_SOLVER, 3},
                                 {"ReactionWood", F_REACTION, 4},
+                                {"ReactionBound", F_REACTIONBOUND, 1},
                                 {"RAND_MAX", F_NONE, 0}};
 
 typedef struct xn {
@@ -1174,7 +1176,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                     cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
                     return -1;
                 }
-            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTION && L->in_prod) {
+            if (b->fn >= F_EQUILIBRIUM && b->fn <= F_REACTIONBOUND && L->in_prod) {
                 cbm__cerr(L->c, pos,
                           "%s() changes the whole string: call it in Start, StartEach, EndEach "
                           "or End",
@@ -1185,7 +1187,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
                 b->fn == F_SRAND || b->fn == F_STOP || b->fn == F_AGEWOOD || b->fn == F_GRAVITY ||
                 b->fn == F_GROUND || b->fn == F_CONTACT || b->fn == F_TROPISM ||
                 b->fn == F_PIPEMODEL || b->fn == F_WOOD || b->fn == F_RINGRATE ||
-                b->fn == F_SOLVER || b->fn == F_REACTION)
+                b->fn == F_SOLVER || b->fn == F_REACTION || b->fn == F_REACTIONBOUND)
                 rt = T_VOID;
             else if (b->fn == F_EQUILIBRIUM || b->fn == F_ADDRINGS || b->fn == F_BREAK)
                 rt = T_INT;
@@ -2992,6 +2994,14 @@ static void call_mech(cbm_lsys *ls, const xn *n, double *fr, double *out)
         m->growth.reaction_increment = a[2];
         m->growth.reaction_youngs = a[3];
         return;
+    case F_REACTIONBOUND:
+        /* the largest a/b reaction wood makes (docs/growth.md): real stems stay within 1.5 */
+        if (!(isfinite(a[0]) && (a[0] == 0 || a[0] >= 1))) {
+            rt_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
+            return;
+        }
+        m->growth.reaction_max_aspect = a[0];
+        return;
     default:
         break;
     }
@@ -3118,7 +3128,7 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
         }
         return;
     }
-    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_REACTION) {
+    if (n->fn >= F_EQUILIBRIUM && n->fn <= F_REACTIONBOUND) {
         call_mech(ls, n, fr, out);
         return;
     }
