@@ -1,6 +1,7 @@
-/* Taylor-Hell's general fruit tree in the L+C dialect (models/taylor-hell-fruit-tree.l): the
- * model runs years deterministically, its resources are conserved at every node, and the
- * behaviours of the thesis' figures hold: the branches spring back when the leaves and fruit
+/* Taylor-Hell's general fruit tree in the L+C dialect with the thesis' constants
+ * (models/taylor-hell-fruit-tree-thesis.l; the real-wood default is tests/cli/mechlang_fruit.sh's
+ * seeds): the model runs years deterministically, its resources are conserved at every node, and
+ * the behaviours of the thesis' figures hold: the branches spring back when the leaves and fruit
  * fall (Fig. 4.1), an unfair allocation (F = 0.2) grows a taller, sparser tree than a fair one
  * (F = 1, Fig. 4.7), a low modulus of rupture breaks branches that a high one keeps (Fig. 8.9),
  * and the crooked aspen is lower and wider than the wild one (ch. 7). Few years each, so the file
@@ -20,7 +21,7 @@ enum { N_LATERAL = MS, N_BUD, N_ABORTED, N_NODE_COUNT };
 #define N_VL      (MS + 23)
 #define N_VC      (MS + 24)
 #define N_LATFATE (MS + 25)
-#define N_SIZE    (MS + 27)
+#define N_SIZE    (MS + 31)
 
 enum { GROW = 1, WINTER = 2, BASIPETAL = 3, ACROPETAL = 4 };
 
@@ -39,7 +40,7 @@ typedef struct stats {
 static cbm_status open_tree(cbm_context *ctx, const char *const *defines, size_t nd, tree *t)
 {
     char p[2048];
-    snprintf(p, sizeof p, "%s/models/taylor-hell-fruit-tree.l", test_source_dir());
+    snprintf(p, sizeof p, "%s/models/taylor-hell-fruit-tree-thesis.l", test_source_dir());
     cbm_lsys_def def = cbm_lsys_def_default();
     def.path = p;
     def.defines = defines;

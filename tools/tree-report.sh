@@ -3,7 +3,11 @@
 # `cambium grow` for its own years (its default seed), measures the final tree as a forester
 # would (`cambium info --json` on the summary, docs/models.md "Measured realism") and writes the
 # table into docs/models.md between the lines `<!-- tree-report: begin -->` and
-# `<!-- tree-report: end -->`, so the figures there always come from the code.
+# `<!-- tree-report: end -->`, so the figures there always come from the code. Branch
+# intersections are also measured over seeds 1-SEEDS (default 5; 0: not) for every model (the
+# real-wood ones also with the thesis' upright roll, stem_frame = 0, to show what it does), and
+# for the models/*.l whose segments table is mechanical (one run each), a second table between
+# `<!-- tree-report-lc: begin -->` and `<!-- tree-report-lc: end -->`.
 #
 # Usage (from the repository root, after `make`):
 #   tools/tree-report.sh            rewrite the table in docs/models.md
@@ -12,6 +16,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CAMBIUM:-build/bin/cambium}
+nseeds=${SEEDS:-5}
 doc=docs/models.md
 [ -x "$bin" ] || { echo "tree-report: $bin not found (run make first)" >&2; exit 1; }
 tmp=$(mktemp -d)
@@ -42,8 +47,28 @@ fmt() {
 
 models=$("$bin" grow --help | sed -n 's/^built-in models: *//p')
 [ -n "$models" ] || { echo "tree-report: no built-in models listed by grow --help" >&2; exit 1; }
-table="| model | years | segments | height (m) | trunk ⌀ (cm) | crown width (m) | H / H_cr | pipe exponent: median (quartiles) | branch angle (°): median (quartiles) | stress ratio: median, 90 %, share > 0.5 | segments intersecting |
-|---|---|---|---|---|---|---|---|---|---|---|"
+# intersecting fraction (%) of model $1 over seeds 1-nseeds, extra grow options after it:
+# "median (min–max)"
+over_seeds() {
+    local m=$1
+    shift
+    local fr=()
+    for s in $(seq 1 "$nseeds"); do
+        "$bin" grow "$m" -D seed="$s" "$@" --quiet -o "$tmp/s.json"
+        fr+=("$(num "$("$bin" info --json "$tmp/s.json")" intersecting_fraction)")
+    done
+    printf '%s\n' "${fr[@]}" | sort -g | awk '{ v[NR] = 100 * $1 }
+        END { md = NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
+              printf "%.2f (%.2f–%.2f)", md, v[1], v[NR] }'
+}
+seeds_head=""
+seeds_sep=""
+if [ "$nseeds" -gt 0 ]; then
+    seeds_head=" segments intersecting (%), seeds 1–$nseeds: median (range) | the same with the thesis' upright roll (stem_frame = 0) |"
+    seeds_sep="---|---|"
+fi
+table="| model | years | segments | height (m) | trunk ⌀ (cm) | crown width (m) | H / H_cr | pipe exponent: median (quartiles) | branch angle (°): median (quartiles) | stress ratio: median, 90 %, share > 0.5 | segments intersecting |$seeds_head
+|---|---|---|---|---|---|---|---|---|---|---|$seeds_sep"
 for m in $models; do
     "$bin" grow "$m" --quiet -o "$tmp/$m.json"
     j=$("$bin" info --json "$tmp/$m.json")
@@ -58,20 +83,51 @@ for m in $models; do
     row="$row | $(fmt '%.3f' "$(num "$j" stress_ratio.median)"), $(fmt '%.3f' "$(num "$j" stress_ratio.q90)"), $(fmt '%.1f %%' "$(awk -v s="$share" 'BEGIN{print s*100}')")"
     frac=$(num "$j" intersecting_fraction)
     row="$row | $(fmt '%.1f %%' "$(awk -v s="$frac" 'BEGIN{print s*100}')") |"
+    if [ "$nseeds" -gt 0 ]; then
+        if [ "$m" = fruit-tree-thesis-high-mor ]; then
+            row="$row – (23,000 segments, 30 s a seed) | – |" # as tools/models-figures.sh
+        else
+            row="$row $(over_seeds "$m") |"
+            if grep -q '^stem_frame *= *1' <<<"$("$bin" grow "$m" --params)"; then
+                row="$row $(over_seeds "$m" -D stem_frame=0) |"
+            else
+                row="$row (it is) |"
+            fi
+        fi
+    fi
     table="$table
 $row"
 done
 
+# the models in the language whose segments table is mechanical, one run each
+lc="| model (\`cambium run\`) | segments | segments intersecting |
+|---|---|---|"
+for f in models/*.l; do
+    "$bin" run "$f" -o "segments:$tmp/lc.csv" >/dev/null
+    j=$("$bin" info --json "$tmp/lc.csv")
+    grep -q '"table":"mechanical segments"' <<<"$j" || continue
+    frac=$(num "$j" intersecting_fraction)
+    lc="$lc
+| \`$f\` | $(num "$j" segments) | $(fmt '%.1f %%' "$(awk -v s="$frac" 'BEGIN{print s*100}')") ($(num "$j" intersecting_segments)) |"
+done
+
 if [ "${1:-}" = --print ]; then
-    printf '%s\n' "$table"
+    printf '%s\n\n%s\n' "$table" "$lc"
     exit 0
 fi
-grep -q '^<!-- tree-report: begin -->$' "$doc" && grep -q '^<!-- tree-report: end -->$' "$doc" ||
-    { echo "tree-report: $doc lacks the tree-report markers" >&2; exit 1; }
+# replaces the lines between <!-- NAME: begin --> and <!-- NAME: end --> with a file
+put() {
+    local name=$1 file=$2
+    grep -q "^<!-- $name: begin -->\$" "$doc" && grep -q "^<!-- $name: end -->\$" "$doc" ||
+        { echo "tree-report: $doc lacks the $name markers" >&2; exit 1; }
+    awk -v tf="$file" -v b="<!-- $name: begin -->" -v e="<!-- $name: end -->" '
+        $0 == b { print; while ((getline l < tf) > 0) print l; skip = 1; next }
+        $0 == e { skip = 0 }
+        !skip { print }' "$doc" >"$tmp/doc"
+    cp "$tmp/doc" "$doc"
+}
 printf '%s\n' "$table" >"$tmp/table"
-awk -v tf="$tmp/table" '
-    /^<!-- tree-report: begin -->$/ { print; while ((getline l < tf) > 0) print l; skip = 1; next }
-    /^<!-- tree-report: end -->$/ { skip = 0 }
-    !skip { print }' "$doc" >"$tmp/doc"
-cp "$tmp/doc" "$doc"
+printf '%s\n' "$lc" >"$tmp/lc"
+put tree-report "$tmp/table"
+put tree-report-lc "$tmp/lc"
 echo "tree-report: $doc updated ($(wc -w <<<"$models") models)"

@@ -80,6 +80,11 @@ typedef struct cbm_tree_def {
     /// resources go only to children whose subtree holds a bud that can shoot (above the
     /// ground); 0 = every child but an aborted bud takes its share (the thesis)
     bool bud_routing;
+    /// continuations keep the frame of their stem (the stem does not twist, so the phyllotactic
+    /// spiral goes on round it) and only laterals are rolled U up (Fig. 8.4); 0 = every new
+    /// segment rolled U up (the thesis), which on a nearly vertical shoot makes the divergence's
+    /// reference flip with the shoot's slight lean, putting every other bud on one side
+    bool stem_frame;
     /* mechanics and wood */
     double youngs_juvenile;     ///< Pa, E_JUV 6e5 (crooked and general; wild x stiffness_factor)
     double youngs_juvenile_sd;  ///< relative sd of the per-shoot juvenile E (1/6)

@@ -72,6 +72,7 @@ static const cbm__builtin BUILTINS[] = {
     {"RingRate", FN_RINGRATE, 2, LC},
     {"Solver", FN_SOLVER, 3, LC},
     {"ReactionWood", FN_REACTION, 4, LC},
+    {"ReactionBound", FN_REACTIONBOUND, 1, LC},
     {"RAND_MAX", FN_NONE, 0, LC},
 };
 

@@ -1,7 +1,7 @@
 /* The built-in functions of both dialects: one table (builtins.c) of names, arities and the
  * dialects that know them, and the evaluation of the pure math functions.
  *
- * To add a built-in: an FN_ value here (mechanics ones between FN_EQUILIBRIUM and FN_REACTION),
+ * To add a built-in: an FN_ value here (mechanics ones between FN_EQUILIBRIUM and FN_REACTIONBOUND),
  * a row of the table, and its evaluation: in cbm__builtin_math when it is a function of its
  * numbers alone, else in the evaluator of the dialect (lang/expr_eval.c, lsys/lpfg.c) and, for
  * the L+C dialect, its argument and result types in lang/lc_parse.c (call_expr).
@@ -61,7 +61,7 @@ typedef enum cbm__fn {
     FN_VECROT,
     FN_TOLOCAL,
     FN_TOWORLD,
-    /* L+C: mechanics (lsys/mechlang.c), FN_EQUILIBRIUM .. FN_REACTION */
+    /* L+C: mechanics (lsys/mechlang.c), FN_EQUILIBRIUM .. FN_REACTIONBOUND */
     FN_EQUILIBRIUM,
     FN_ADDRINGS,
     FN_AGEWOOD,
@@ -76,6 +76,7 @@ typedef enum cbm__fn {
     FN_RINGRATE,
     FN_SOLVER,
     FN_REACTION,
+    FN_REACTIONBOUND,
     FN_NONE, /* a reserved name (RAND_MAX is a constant) */
     FN_COUNT
 } cbm__fn;

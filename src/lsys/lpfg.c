@@ -361,6 +361,14 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->growth.reaction_increment = a[2];
         m->growth.reaction_youngs = a[3];
         return;
+    case FN_REACTIONBOUND:
+        /* the largest a/b reaction wood makes (docs/growth.md): real stems stay within 1.5 */
+        if (!(isfinite(a[0]) && (a[0] == 0 || a[0] >= 1))) {
+            rt_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
+            return;
+        }
+        m->growth.reaction_max_aspect = a[0];
+        return;
     default:
         break;
     }
@@ -487,7 +495,7 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
         }
         return;
     }
-    if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTION) {
+    if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTIONBOUND) {
         call_mech(ls, n, fr, out);
         return;
     }

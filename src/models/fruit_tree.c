@@ -126,7 +126,7 @@ static cbm_status push_seg(cbm_tree *t, const tree_seg *s)
 /* Adds one segment to the plant and its model state. */
 static cbm_status add_seg(cbm_tree *t, size_t parent, double length, double radius,
                           double divergence, double deviation, double e, double trop,
-                          const tree_seg *s, size_t *out)
+                          const tree_seg *s, bool continuation, size_t *out)
 {
     cbm_segment_def sd = cbm_segment_def_default();
     sd.parent = (int64_t)parent;
@@ -134,7 +134,11 @@ static cbm_status add_seg(cbm_tree *t, size_t parent, double length, double radi
     sd.divergence = divergence;
     sd.deviation = deviation;
     sd.core = core_ring(t, e, radius);
-    CBM_TRY(cbm_plant_upright_roll(t->plant, &sd, &sd.roll));
+    /* the upright roll (Fig. 8.4); with stem_frame a continuation keeps its stem's frame, so the
+     * divergence of the next lateral is measured round the stem, not from a U that flips with
+     * the slight lean of a nearly vertical shoot */
+    if (!(continuation && t->def.stem_frame))
+        CBM_TRY(cbm_plant_upright_roll(t->plant, &sd, &sd.roll));
     cbm_tropism tr = cbm_tropism_default();
     tr.strength = trop;
     CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->seg, t->seg.len + 1));
@@ -171,7 +175,7 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     c.phyllo = fmod(ps.phyllo + d->phyllotaxis, 2.0 * CBM_PI);
     c.juv_e = ps.juv_e;
     size_t ci, li;
-    CBM_TRY(add_seg(t, i, d->internode_length, d->radius, 0.0, 0.0, c.juv_e, trop, &c, &ci));
+    CBM_TRY(add_seg(t, i, d->internode_length, d->radius, 0.0, 0.0, c.juv_e, trop, &c, true, &ci));
     /* lateral bud: divergence = the parent's phyllotactic angle, deviation from h */
     double lo = cbm_tree_func_eval(&d->angle_min_height, h) * 100.0 * CBM_PI / 180.0;
     double hi = cbm_tree_func_eval(&d->angle_max_height, h) * 100.0 * CBM_PI / 180.0;
@@ -186,7 +190,7 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     l.bud_year = t->year;
     l.juv_e = normal_pos(t, t->e_juv, d->youngs_juvenile_sd * t->e_juv, 0.1);
     double br = d->bud_radius > 0.0 ? d->bud_radius : d->radius;
-    CBM_TRY(add_seg(t, i, d->bud_length, br, ps.phyllo, dev, l.juv_e, trop, &l, &li));
+    CBM_TRY(add_seg(t, i, d->bud_length, br, ps.phyllo, dev, l.juv_e, trop, &l, false, &li));
     CBM_TRY(new_organs(t, li, count));
     if (!(c.flags & SEG_APEX))
         CBM_TRY(new_organs(t, ci, count));

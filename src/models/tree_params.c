@@ -153,6 +153,7 @@ cbm_tree_def cbm_tree_def_default(void)
     d.sink = 0.05;
     d.dormancy = 5;
     d.bud_routing = true;
+    d.stem_frame = true;
     /* organs: a leaf of 0.6 g fresh and 25 cm^2 (LMA 250 g/m^2 fresh), spurs of 4 leaves, an
      * apple of 150 g and 7 cm (835 kg/m^3), fruit on spurs from year 4 */
     d.leaf_mass = 6e-4;
@@ -219,6 +220,7 @@ static const param params[] = {
     P(relay_bias, K_BOOL, 0, 0),
     P(listing_vigour, K_BOOL, 0, 0),
     P(bud_routing, K_BOOL, 0, 0),
+    P(stem_frame, K_BOOL, 0, 0),
     P(youngs_juvenile, K_DOUBLE, 1e-3, 1e13),
     P(youngs_juvenile_sd, K_DOUBLE, 0, 0.5),
     P(youngs_adult, K_DOUBLE, 1e-3, 1e13),

@@ -85,13 +85,13 @@ shorten() {
             why="$why 3 years;"
         fi
     fi
-    if grep -q 'taylor-hell-fruit-tree\.l' <<<"$c"; then
+    if grep -qE 'taylor-hell-fruit-tree(-thesis)?\.l' <<<"$c"; then
         if grep -qE -- '-D YEARS=[0-9]+' <<<"$c"; then
             local y
             y=$(grep -oE -- '-D YEARS=[0-9]+' <<<"$c" | head -1 | grep -oE '[0-9]+$')
             [ "$y" -gt 3 ] && c=$(sed -E 's/-D YEARS=[0-9]+/-D YEARS=3/' <<<"$c") && why="$why 3 years;"
         else
-            c=$(sed -E 's/(taylor-hell-fruit-tree\.l)/\1 -D YEARS=3/' <<<"$c")
+            c=$(sed -E 's/(taylor-hell-fruit-tree(-thesis)?\.l)/\1 -D YEARS=3/' <<<"$c")
             why="$why 3 years;"
         fi
     fi
