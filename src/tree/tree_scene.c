@@ -10,7 +10,7 @@
  * round at the base, pointed at the tip (an apple leaf: ovate-elliptic); each fruit a sphere of
  * volume m / fruit_density on a stalk of 0.7 of its radius hanging from its node; and
  * optionally a ground square. */
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>

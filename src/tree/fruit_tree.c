@@ -32,7 +32,7 @@
  * per node without mutating a global). Juvenile E is drawn per shoot, N(E_juv, sd E_juv).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>

@@ -24,7 +24,7 @@
  * and y_max the highest point along it (a forward max then a backward broadcast, as A.2 does).
  * It favours upward buds high on a bent parent: relay shoots.
  */
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
