@@ -6,8 +6,7 @@
 #include <string.h>
 
 /* A template with {opt}, {value} and {max} filled in. */
-static void fill(char *out, size_t n, const char *tmpl, const char *opt, const char *value,
-                 int max)
+static void fill(char *out, size_t n, const char *tmpl, const char *opt, const char *value, int max)
 {
     size_t k = 0;
     for (const char *p = tmpl; *p && k + 1 < n;) {
@@ -88,7 +87,8 @@ static cli_opt *positional(cli_opts *t)
 }
 
 /* Stores value through row o of table t: CLI_OK or the usage error (printed for cmd). */
-static int store(const char *cmd, const cli_opts *t, cli_opt *o, const char *word, const char *value)
+static int store(const char *cmd, const cli_opts *t, cli_opt *o, const char *word,
+                 const char *value)
 {
     const char *bad = o->bad ? o->bad : t->missing ? t->missing : t->unknown;
     switch (o->kind) {
@@ -144,8 +144,9 @@ int cli_options_parse(cli_opts *t, int argc, char **argv)
         if (word[0] != '-' || !word[1]) {
             cli_opt *p = positional(t);
             if (!p)
-                return usage(t->cmd, i + 1 >= argc && t->unknown_last ? t->unknown_last : t->unknown,
-                             word, NULL, 0);
+                return usage(t->cmd,
+                             i + 1 >= argc && t->unknown_last ? t->unknown_last : t->unknown, word,
+                             NULL, 0);
             int rc = store(t->cmd, t, p, word, word);
             if (rc != CLI_OK)
                 return rc;
@@ -168,9 +169,7 @@ int cli_options_parse(cli_opts *t, int argc, char **argv)
         }
         if (!value) {
             if (i + 1 >= argc) {
-                const char *m = owner->missing ? owner->missing
-                                : o->bad       ? o->bad
-                                               : owner->unknown;
+                const char *m = owner->missing ? owner->missing : o->bad ? o->bad : owner->unknown;
                 return usage(t->cmd, m, word, NULL, 0);
             }
             value = argv[++i];

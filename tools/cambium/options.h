@@ -38,20 +38,20 @@ typedef struct cli_opt {
     const char *name; ///< "--seed"; aliases with '|': "-y|-n|--years"
     cli_kind kind;
     void *target;
-    const char *arg;  ///< the value's placeholder in the help ("N"), NULL for a flag
-    const char *help; ///< the help text ('\n' continues it), NULL: not in the help
-    const char *bad;  ///< a bad value (template), a missing one too when the table has no missing
-    long min, max;    ///< CLI_LONG, CLI_INT
-    cli_parse_fn parse;    ///< CLI_CUSTOM, CLI_POSITIONAL
-    bool attached;         ///< "-DNAME=VALUE" as well as "-D NAME=VALUE"
-    bool required;         ///< must be given (the table's `required` message otherwise)
-    bool seen;             ///< set by the parser
+    const char *arg;    ///< the value's placeholder in the help ("N"), NULL for a flag
+    const char *help;   ///< the help text ('\n' continues it), NULL: not in the help
+    const char *bad;    ///< a bad value (template), a missing one too when the table has no missing
+    long min, max;      ///< CLI_LONG, CLI_INT
+    cli_parse_fn parse; ///< CLI_CUSTOM, CLI_POSITIONAL
+    bool attached;      ///< "-DNAME=VALUE" as well as "-D NAME=VALUE"
+    bool required;      ///< must be given (the table's `required` message otherwise)
+    bool seen;          ///< set by the parser
 } cli_opt;
 
 /// A command's table and its messages.
 typedef struct cli_opts {
-    const char *cmd;          ///< "run": messages read "cambium run: ..."
-    cli_opt *opts;            ///< the rows, ended by a CLI_END row
+    const char *cmd;                        ///< "run": messages read "cambium run: ..."
+    cli_opt *opts;                          ///< the rows, ended by a CLI_END row
     void (*help)(const struct cli_opts *t); ///< what CLI_HELP prints
     const char *title;        ///< heading of a group's section in the help ("limits ...:")
     int width;                ///< help column of the texts
