@@ -10,7 +10,7 @@
  * the leaves and fruit are gone and the rings have caught up, the ageing of the wood, the
  * shedding of unproductive branches, and one spring pass that decides the fate of every bud by
  * resource allocation. docs/models.md describes the
- * model, every parameter and the options; src/models/fruit_tree.c the algorithm.
+ * model, every parameter and the options; src/tree/fruit_tree.c the algorithm.
  *
  * Units: SI; angles are radians in cbm_tree_def and degrees in parameter files. All randomness
  * comes from one generator seeded by cbm_tree_def.seed.
@@ -248,7 +248,7 @@ CBM_API double cbm_tree_fairness(double p, double fairness);
 
 /// Appends the tree to a scene: branches (cbm_plant_to_scene), leaves (ovate blades on
 /// petioles at their nodes) and fruit (spheres on stalks below their nodes), and a ground square
-/// if `ground` (src/models/tree_scene.c gives the shapes).
+/// if `ground` (src/tree/tree_scene.c gives the shapes).
 CBM_API cbm_status cbm_tree_to_scene(const cbm_tree *tree, cbm_scene *scene, int sides,
                                      bool ground);
 

@@ -6,14 +6,9 @@
 
 #include "cambium/mech.h"
 #include "core/core.h"
+#include "mech/mech.h" /* the package header: cbm__outer */
 
 #include <math.h>
-
-/* The outer ring's semi-axes and modulus of rupture, kept per segment so that the passes over
- * the plant (ring growth, breakage) do not visit the ring pool. */
-typedef struct cbm__outer {
-    double a, b, mor;
-} cbm__outer;
 
 /* Solver workspace: joint arrays prepared once per solve, and the Newton-Krylov vectors, all
  * carved from one arena block (solve_common.c, "workspace"). */

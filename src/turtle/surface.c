@@ -13,7 +13,7 @@
  * lines "x y z multiplicity"; or the old "N dim open|closed" then N points) gives the control
  * points of a uniform cubic B-spline cross-section, open or closed; the turtle resamples it.
  */
-#include "tint.h"
+#include "turtle_internal.h"
 
 #include "../core/vecmath.h"
 
@@ -293,5 +293,96 @@ cbm_status cbm__contour_read(cbm_context *ctx, const char *path, const char *tex
     }
     if (c->pts.len / 3 < 4)
         return fmt_err(ctx, path, line, "a contour needs at least 4 control points");
+    return CBM_OK;
+}
+
+/* ---- surfaces ---- */
+
+static const cbm__surface *find_surface(const cbm_view *v, char id)
+{
+    for (size_t i = 0; i < v->surfaces.len; i++)
+        if (v->surfaces.data[i].id == id)
+            return &v->surfaces.data[i];
+    return NULL;
+}
+
+cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, const double *params,
+                               int nparams)
+{
+    if (t->cut_depth > 0)
+        return CBM_OK;
+    if (len != 1)
+        return cbm__fail(t->ctx, CBM_E_RUNTIME,
+                         "~ must be followed by a one-letter surface name, found '%.*s'", (int)len,
+                         name);
+    const cbm__surface *sf = find_surface(t->view, name[0]);
+    if (!sf)
+        return CBM_OK; /* cpfg draws nothing for an unknown surface */
+    double sx = 1, sy = 1, sz = 1;
+    if (nparams >= 3) {
+        sx = params[0];
+        sy = params[1];
+        sz = params[2];
+    } else if (nparams >= 1) {
+        sx = sy = sz = params[0];
+    }
+    const tstate *s = &t->cur;
+    sx *= s->scale;
+    sy *= s->scale;
+    sz *= s->scale;
+    const double k = 1.0;
+    /* surface coordinates (already relative to the contact point): X along L, Y along H, Z
+     * along U */
+    size_t nv = sf->pos.len;
+    t->scratch.len = 0;
+    CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, nv * 2));
+    for (size_t i = 0; i < nv; i++) {
+        cbm_vec3 q = sf->pos.data[i];
+        cbm_vec3 w = v3_add(
+            s->pos, v3_add(v3_add(v3_scale(s->l, q.x * k * sx), v3_scale(s->h, q.y * k * sy)),
+                           v3_scale(s->u, q.z * k * sz)));
+        cbm_vec3 nq = sf->nrm.data[i];
+        cbm_vec3 nw =
+            v3_normalize(v3_add(v3_add(v3_scale(s->l, nq.x / sx), v3_scale(s->h, nq.y / sy)),
+                                v3_scale(s->u, nq.z / sz)));
+        t->scratch.data[i] = w;
+        t->scratch.data[nv + i] = nw;
+    }
+    /* cpfg's box holds the control points of the patches */
+    for (size_t i = 0; i < sf->ctrl.len; i++) {
+        cbm_vec3 q = sf->ctrl.data[i];
+        cbm__turtle_box_add(
+            t, v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, q.x * sx), v3_scale(s->h, q.y * sy)),
+                                     v3_scale(s->u, q.z * sz))));
+    }
+    t->scratch.len = 2 * nv;
+    if (t->record) {
+        cbm_prim pr;
+        memset(&pr, 0, sizeof pr);
+        pr.kind = CBM_PRIM_SURFACE;
+        pr.id = sf->id;
+        pr.frame.h = s->h;
+        pr.frame.l = s->l;
+        pr.frame.u = s->u;
+        pr.color = s->color;
+        pr.p0 = s->pos;
+        pr.r0 = sx;
+        pr.first = t->pts.len;
+        pr.count = nv;
+        for (size_t i = 0; i < nv; i++)
+            CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->pts, t->scratch.data[i]));
+        CBM_TRY(cbm__turtle_push_prim(t, &pr));
+    }
+    if (t->scene) {
+        cbm_part part = cbm__turtle_make_part(t, CBM_ORGAN_LEAF, s->color);
+        CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+        CBM_TRY(cbm_scene_add_mesh(t->scene, t->scratch.data, t->scratch.data + nv, nv,
+                                   sf->tri.data, sf->tri.len / 3));
+    }
+    /* the turtle moves to the surface's end point (cpfg: x, z scaled as y when not index 0) */
+    cbm_vec3 e = sf->end;
+    t->cur.pos =
+        v3_add(s->pos, v3_add(v3_add(v3_scale(s->l, e.x * k * sx), v3_scale(s->h, e.y * k * sx)),
+                              v3_scale(s->u, e.z * k * sx)));
     return CBM_OK;
 }

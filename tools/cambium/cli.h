@@ -13,17 +13,11 @@ enum { CLI_OK = 0, CLI_FAIL = 1, CLI_USAGE = 2 };
 typedef int (*cli_command_fn)(int argc, char **argv);
 
 /// A context whose diagnostics print to stderr as "file:line:col: error: message", with the
-/// limits of the command line (cli_limit_option) or their defaults.
+/// limits of the command line (cli_limit_options, options.h) or their defaults.
 cbm_context *cli_context(void);
-/// The limit options shared by run, grow and bend (--max-memory MB, --max-operations N, ...,
-/// --allow-nonfinite): 1 when argv[*i] was one (*i then points at its last word), 0 when it is
-/// not, -1 after a usage error (printed).
-int cli_limit_option(const char *cmd, int argc, char **argv, int *i);
 /// Checks that the output paths can be written (folder exists and is writable, no read-only
 /// file or dangling link) before a long computation: CLI_OK, else prints why and CLI_FAIL.
 int cli_check_outputs(const char *const *paths, int n);
-/// Help text of the limit options.
-extern const char cli_limits_help[];
 /// Where the text a model prints (printf) goes: stdout by default, NULL discards it.
 void cli_set_model_output(FILE *f);
 /// Destroys the context made by cli_context.

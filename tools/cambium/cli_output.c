@@ -1,5 +1,6 @@
 /* The output options of the tool (picture size, view, background, colouring, ground, legend,
- * lighting, threads) and the progress line, shared by every command that writes scenes. */
+ * lighting, threads) as a table of options.h, the output targets and the progress line, shared by
+ * every command that writes scenes. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli_output.h"
 
@@ -9,27 +10,6 @@
 #include <sys/ioctl.h>
 #include <time.h>
 #include <unistd.h>
-
-const char cli_output_help[] =
-    "output options (pictures: .png .svg; colours apply to every format):\n"
-    "  --size W[xH]        picture size in pixels (default 800x800)\n"
-    "  --view V            front | side | top | iso | X,Y,Z (direction looked along; default iso)\n"
-    "  --background C      white | black | grey | transparent | #rrggbb (default white)\n"
-    "  --color-by M        material | stress (/ MOR) | stress-mpa | age | reaction |\n"
-    "                      order (default material)\n"
-    "  --range LO:HI       colour-bar range of the quantity (default: 0:1, or from the data)\n"
-    "  --no-ground         drop the ground (and do not add one under the plant in PNGs)\n"
-    "  --no-legend         no colour bar\n"
-    "  --no-shadows        no sun shadows (PNG)\n"
-    "  --ao N              ambient-occlusion rays per pixel, 0..256 (PNG; default 16)\n"
-    "  --supersample N     N x N samples per pixel, 1..4 (PNG; default 2)\n"
-    "  --threads N         render threads (PNG; default: one per processor)\n";
-
-static int bad(const char *cmd, const char *opt, const char *val)
-{
-    cli_usage_error(cmd, "bad value '%s' for %s", val ? val : "", opt);
-    return -1;
-}
 
 static bool parse_color(const char *s, float rgba[4])
 {
@@ -60,88 +40,161 @@ static bool parse_color(const char *s, float rgba[4])
     return true;
 }
 
-int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_options *o)
+/* The value parsers of the output options (target: the cbm_write_options). */
+
+static bool parse_size(const char *v, void *target, char *why, size_t n)
 {
-    const char *a = argv[*i];
-    static const char *const with_value[] = {"--size",  "--view", "--background",  "--color-by",
-                                             "--range", "--ao",   "--supersample", "--threads"};
-    bool takes = false;
-    for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
-        takes |= !strcmp(a, with_value[k]);
-    if (!takes) {
-        if (!strcmp(a, "--no-ground"))
-            o->ground = false;
-        else if (!strcmp(a, "--no-legend"))
-            o->legend = false;
-        else if (!strcmp(a, "--no-shadows"))
-            o->shadows = false;
-        else
-            return 0;
-        return 1;
-    }
-    if (*i + 1 >= argc) {
-        cli_usage_error(cmd, "%s needs a value", a);
-        return -1;
-    }
-    const char *v = argv[++*i];
-    long n;
-    if (!strcmp(a, "--size")) {
-        char *end;
-        long w = strtol(v, &end, 10), h = w;
-        if (*end == 'x')
-            h = strtol(end + 1, &end, 10);
-        if (*end || w < 16 || h < 16 || w > 16384 || h > 16384)
-            return bad(cmd, a, v);
-        o->width = (int)w;
-        o->height = (int)h;
-    } else if (!strcmp(a, "--view")) {
-        static const char *const names[] = {"front", "side", "top", "iso"};
-        for (int k = 0; k < 4; k++)
-            if (!strcmp(v, names[k])) {
-                o->view = (cbm_camera_view)k;
-                return 1;
-            }
-        double x, y, z;
-        char tail;
-        if (sscanf(v, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !isfinite(x) || !isfinite(y) ||
-            !isfinite(z) || (x == 0 && y == 0 && z == 0))
-            return bad(cmd, a, v);
-        o->view = CBM_VIEW_VECTOR;
-        o->view_dir = (cbm_vec3){x, y, z};
-    } else if (!strcmp(a, "--background")) {
-        if (!parse_color(v, o->background))
-            return bad(cmd, a, v);
-    } else if (!strcmp(a, "--color-by")) {
-        static const char *const names[] = {"material", "stress", "age",
-                                            "reaction", "order",  "stress-mpa"};
-        for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
-            if (!strcmp(v, names[k])) {
-                o->color_by = (cbm_color_by)k;
-                return 1;
-            }
-        return bad(cmd, a, v);
-    } else if (!strcmp(a, "--range")) {
-        double lo, hi;
-        char tail;
-        if (sscanf(v, "%lf:%lf%c", &lo, &hi, &tail) != 2 || !isfinite(lo) || !isfinite(hi) ||
-            !(hi > lo))
-            return bad(cmd, a, v);
-        o->range_min = lo;
-        o->range_max = hi;
-    } else if (!strcmp(a, "--ao")) {
-        if (!cli_parse_long(v, &n) || n < 0 || n > 256)
-            return bad(cmd, a, v);
-        o->ao_samples = (int)n;
-    } else if (!strcmp(a, "--supersample")) {
-        if (!cli_parse_long(v, &n) || n < 1 || n > 4)
-            return bad(cmd, a, v);
-        o->supersample = (int)n;
-    } else {
-        if (!cli_parse_long(v, &n) || n < 0 || n > 64)
-            return bad(cmd, a, v);
-        o->threads = (int)n;
-    }
-    return 1;
+    (void)why, (void)n;
+    cbm_write_options *o = target;
+    char *end;
+    long w = strtol(v, &end, 10), h = w;
+    if (*end == 'x')
+        h = strtol(end + 1, &end, 10);
+    if (*end || w < 16 || h < 16 || w > 16384 || h > 16384)
+        return false;
+    o->width = (int)w;
+    o->height = (int)h;
+    return true;
+}
+
+static bool parse_view(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    cbm_write_options *o = target;
+    static const char *const names[] = {"front", "side", "top", "iso"};
+    for (int k = 0; k < 4; k++)
+        if (!strcmp(v, names[k])) {
+            o->view = (cbm_camera_view)k;
+            return true;
+        }
+    double x, y, z;
+    char tail;
+    if (sscanf(v, "%lf,%lf,%lf%c", &x, &y, &z, &tail) != 3 || !isfinite(x) || !isfinite(y) ||
+        !isfinite(z) || (x == 0 && y == 0 && z == 0))
+        return false;
+    o->view = CBM_VIEW_VECTOR;
+    o->view_dir = (cbm_vec3){x, y, z};
+    return true;
+}
+
+static bool parse_background(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    cbm_write_options *o = target;
+    return parse_color(v, o->background);
+}
+
+static bool parse_color_by(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    cbm_write_options *o = target;
+    static const char *const names[] = {"material", "stress", "age",
+                                        "reaction", "order",  "stress-mpa"};
+    for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
+        if (!strcmp(v, names[k])) {
+            o->color_by = (cbm_color_by)k;
+            return true;
+        }
+    return false;
+}
+
+static bool parse_range(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    cbm_write_options *o = target;
+    double lo, hi;
+    char tail;
+    if (sscanf(v, "%lf:%lf%c", &lo, &hi, &tail) != 2 || !isfinite(lo) || !isfinite(hi) ||
+        !(hi > lo))
+        return false;
+    o->range_min = lo;
+    o->range_max = hi;
+    return true;
+}
+
+cli_opts *cli_output_options(cbm_write_options *o)
+{
+    static cli_opt rows[14];
+    static cli_opts table = {
+        .title = "output options (pictures: .png .svg; colours apply to every format):",
+        .opts = rows,
+        .width = 20,
+        .missing = "{opt} needs a value"};
+    const char *bad = "bad value '{value}' for {opt}";
+    cli_opt r[] = {
+        {.name = "--size",
+         .kind = CLI_CUSTOM,
+         .target = o,
+         .parse = parse_size,
+         .bad = bad,
+         .arg = "W[xH]",
+         .help = "picture size in pixels (default 800x800)"},
+        {.name = "--view",
+         .kind = CLI_CUSTOM,
+         .target = o,
+         .parse = parse_view,
+         .bad = bad,
+         .arg = "V",
+         .help = "front | side | top | iso | X,Y,Z (direction looked along; default iso)"},
+        {.name = "--background",
+         .kind = CLI_CUSTOM,
+         .target = o,
+         .parse = parse_background,
+         .bad = bad,
+         .arg = "C",
+         .help = "white | black | grey | transparent | #rrggbb (default white)"},
+        {.name = "--color-by",
+         .kind = CLI_CUSTOM,
+         .target = o,
+         .parse = parse_color_by,
+         .bad = bad,
+         .arg = "M",
+         .help = "material | stress (/ MOR) | stress-mpa | age | reaction |\n"
+                 "order (default material)"},
+        {.name = "--range",
+         .kind = CLI_CUSTOM,
+         .target = o,
+         .parse = parse_range,
+         .bad = bad,
+         .arg = "LO:HI",
+         .help = "colour-bar range of the quantity (default: 0:1, or from the data)"},
+        {.name = "--no-ground",
+         .kind = CLI_CLEAR,
+         .target = &o->ground,
+         .help = "drop the ground (and do not add one under the plant in PNGs)"},
+        {.name = "--no-legend", .kind = CLI_CLEAR, .target = &o->legend, .help = "no colour bar"},
+        {.name = "--no-shadows",
+         .kind = CLI_CLEAR,
+         .target = &o->shadows,
+         .help = "no sun shadows (PNG)"},
+        {.name = "--ao",
+         .kind = CLI_INT,
+         .target = &o->ao_samples,
+         .min = 0,
+         .max = 256,
+         .bad = bad,
+         .arg = "N",
+         .help = "ambient-occlusion rays per pixel, 0..256 (PNG; default 16)"},
+        {.name = "--supersample",
+         .kind = CLI_INT,
+         .target = &o->supersample,
+         .min = 1,
+         .max = 4,
+         .bad = bad,
+         .arg = "N",
+         .help = "N x N samples per pixel, 1..4 (PNG; default 2)"},
+        {.name = "--threads",
+         .kind = CLI_INT,
+         .target = &o->threads,
+         .min = 0,
+         .max = 64,
+         .bad = bad,
+         .arg = "N",
+         .help = "render threads (PNG; default: one per processor)"},
+        {0}};
+    _Static_assert(sizeof r <= sizeof rows, "rows holds the output options");
+    memcpy(rows, r, sizeof r);
+    return &table;
 }
 
 bool cli_output_target_parse(const char *arg, cli_output_target *out)

@@ -1,16 +1,10 @@
-/* Output options and progress shared by the commands that write scenes (demo, run): parsing of
- * the picture and colour options into cbm_write_options, and the progress line on stderr. */
+/* Output targets and progress shared by the commands that write scenes (demo, run, grow); their
+ * picture and colour options are the table cli_output_options (options.h). */
 #ifndef CBM_CLI_OUTPUT_H
 #define CBM_CLI_OUTPUT_H
 
 #include "cli.h"
-
-/// The help text of the output options (for a command's --help).
-extern const char cli_output_help[];
-
-/// If argv[*i] is an output option, parses it (and its value, advancing *i) into o and returns 1;
-/// returns 0 if it is not one; on a bad value prints a usage error for `cmd` and returns -1.
-int cli_output_option(const char *cmd, int argc, char **argv, int *i, cbm_write_options *o);
+#include "options.h"
 
 /// An output: "FILE.ext" (format from the extension), or "FORMAT:PATH" with "-" for stdout.
 typedef struct cli_output_target {

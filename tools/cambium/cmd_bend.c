@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "commands.h"
+#include "options.h"
 
 #include "cambium/bend.h"
 
@@ -17,15 +18,40 @@
 #define MAX_SPEC_BYTES (1u << 20)
 #define MAX_OUTPUTS    8
 
-static void help(void)
+static void help(const cli_opts *t)
 {
     printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [limits]\n\n"
            "Solves one branch or rod described by SPEC (key = value lines; see docs/bend.md)\n"
            "for static equilibrium. -o writes the node table (.csv: s,x,y,z,angle_deg,\n"
            "curvature,moment,stress; SI units, degrees) or the summary (.json); --json prints\n"
            "the summary (tip_x, tip_y, tip_z, tip_angle_deg, base_moment, passes, residual,\n"
-           "seconds, ...) on stdout.\n\n%s",
-           cli_limits_help);
+           "seconds, ...) on stdout.\n");
+    cli_options_help(stdout, t);
+}
+
+/* The spec: one file ("-" included). */
+static bool parse_spec(const char *a, void *target, char *why, size_t n)
+{
+    const char **spec = target;
+    if (*spec)
+        snprintf(why, n, "expected one SPEC, found '{value}' too");
+    else
+        *spec = a;
+    return !*why;
+}
+
+/* An output: .csv or .json. */
+static bool parse_output(const char *v, void *target, char *why, size_t n)
+{
+    cli_list *outs = target;
+    const char *ext = cli_extension(v);
+    if (outs->count == outs->max)
+        snprintf(why, n, "at most %d outputs", outs->max);
+    else if (strcmp(ext, "csv") && strcmp(ext, "json"))
+        snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv or .json)", ext);
+    else
+        cli_list_add(outs, v);
+    return !*why;
 }
 
 static double now(void)
@@ -80,38 +106,28 @@ int cmd_bend(int argc, char **argv)
 {
     const char *spec_path = NULL;
     const char *outs[MAX_OUTPUTS];
-    int nout = 0;
+    cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
     bool json = false;
-    for (int i = 1; i < argc; i++) {
-        int lr = cli_limit_option("bend", argc, argv, &i);
-        if (lr < 0)
-            return CLI_USAGE;
-        if (lr > 0)
-            continue;
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            help();
-            return CLI_OK;
-        } else if (!strcmp(argv[i], "--json"))
-            json = true;
-        else if (!strcmp(argv[i], "-o")) {
-            if (i + 1 >= argc)
-                return cli_usage_error("bend", "-o needs a file name");
-            if (nout == MAX_OUTPUTS)
-                return cli_usage_error("bend", "at most %d outputs", MAX_OUTPUTS);
-            const char *ext = cli_extension(argv[i + 1]);
-            if (strcmp(ext, "csv") && strcmp(ext, "json"))
-                return cli_usage_error("bend",
-                                       "%s: unsupported output format '.%s' (use .csv or "
-                                       ".json)",
-                                       argv[i + 1], ext);
-            outs[nout++] = argv[++i];
-        } else if (argv[i][0] == '-' && argv[i][1])
-            return cli_usage_error("bend", "unknown option '%s'", argv[i]);
-        else if (spec_path)
-            return cli_usage_error("bend", "expected one SPEC, found '%s' too", argv[i]);
-        else
-            spec_path = argv[i];
-    }
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = parse_spec},
+        {.name = "--json", .kind = CLI_SET, .target = &json},
+        {.name = "-o",
+         .kind = CLI_CUSTOM,
+         .target = &out_list,
+         .parse = parse_output,
+         .bad = "-o needs a file name"},
+        {.kind = CLI_GROUP, .target = cli_limit_options()},
+        {0}};
+    cli_opts table = {.cmd = "bend",
+                      .opts = rows,
+                      .help = help,
+                      .width = 18,
+                      .unknown = "unknown option '{opt}'"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    int nout = out_list.count;
     if (!spec_path)
         return cli_usage_error("bend", "expected a SPEC file (see cambium bend --help)");
     if (cli_check_outputs(outs, nout) != CLI_OK)

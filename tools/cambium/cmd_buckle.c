@@ -3,99 +3,110 @@
  * method is described in src/mech/buckle.c and docs/buckle.md. */
 #include "cli.h"
 #include "commands.h"
+#include "options.h"
 
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
-static void buckle_help(void)
+static void buckle_help(const cli_opts *t)
 {
     printf("usage: cambium buckle --E PA --density KG_M3 --radius M --segment M [options]\n"
            "\n"
            "Grows a vertical column clamped at its base segment by segment, pushes it, and\n"
            "reports the first length at which it no longer returns upright (Taylor-Hell 2005,\n"
            "section 6.3), with Greenhill's critical length (7.837 E I / q)^(1/3).\n"
-           "\n"
-           "  --E PA            Young's modulus (required)\n"
-           "  --density KG_M3   wood density (required)\n"
-           "  --radius M        radius of the column (required)\n"
-           "  --segment M       segment length (required)\n"
-           "  --G PA            shear modulus (default E/16)\n"
-           "  --gravity M_S2    gravitational acceleration (default 9.81)\n"
-           "  --max-segments N  give up beyond N segments (default 100000)\n"
-           "  --chain           the seeds' first-order discretisation (default staggered)\n"
-           "  --json            print one JSON object\n");
+           "\n");
+    cli_options_help(stdout, t);
+}
+
+/* A positive number. */
+static bool parse_positive(const char *v, void *target, char *why, size_t n)
+{
+    double x;
+    if (!cli_parse_double(v, &x))
+        snprintf(why, n, "{opt}: '{value}' is not a number");
+    else if (!(x > 0.0))
+        snprintf(why, n, "{opt} must be positive (got {value})");
+    else
+        *(double *)target = x;
+    return !*why;
 }
 
 int cmd_buckle(int argc, char **argv)
 {
     cbm_buckle_def d = cbm_buckle_def_default();
-    bool json = false, have[4] = {false, false, false, false};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            buckle_help();
-            return CLI_OK;
-        }
-        if (!strcmp(a, "--json")) {
-            json = true;
-            continue;
-        }
-        if (!strcmp(a, "--chain")) {
-            d.discretization = CBM_MECH_CHAIN;
-            continue;
-        }
-        static const char *const opts[] = {"--E", "--density", "--radius",      "--segment",
-                                           "--G", "--gravity", "--max-segments"};
-        int k = -1;
-        for (int j = 0; j < 7; j++)
-            if (!strcmp(a, opts[j]))
-                k = j;
-        if (k < 0)
-            return cli_usage_error("buckle", "unknown option '%s' (see --help)", a);
-        if (i + 1 >= argc)
-            return cli_usage_error("buckle", "%s needs a value", a);
-        const char *v = argv[++i];
-        if (k == 6) {
-            long n;
-            if (!cli_parse_long(v, &n) || n < 1)
-                return cli_usage_error("buckle", "--max-segments: '%s' is not a positive integer",
-                                       v);
-            d.max_segments = (size_t)n;
-            continue;
-        }
-        double x;
-        if (!cli_parse_double(v, &x))
-            return cli_usage_error("buckle", "%s: '%s' is not a number", a, v);
-        bool pos = x > 0.0;
-        switch (k) {
-        case 0:
-            d.youngs_modulus = x;
-            break;
-        case 1:
-            d.density = x;
-            break;
-        case 2:
-            d.radius = x;
-            break;
-        case 3:
-            d.segment = x;
-            break;
-        case 4:
-            d.shear_modulus = x;
-            break;
-        default:
-            d.gravity = x;
-            break;
-        }
-        if (!pos)
-            return cli_usage_error("buckle", "%s must be positive (got %s)", a, v);
-        if (k < 4)
-            have[k] = true;
-    }
-    static const char *const req[] = {"--E", "--density", "--radius", "--segment"};
-    for (int k = 0; k < 4; k++)
-        if (!have[k])
-            return cli_usage_error("buckle", "%s is required (see --help)", req[k]);
+    bool json = false, chain = false;
+    long max_segments = (long)d.max_segments;
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "--E",
+         .kind = CLI_CUSTOM,
+         .target = &d.youngs_modulus,
+         .parse = parse_positive,
+         .required = true,
+         .arg = "PA",
+         .help = "Young's modulus (required)"},
+        {.name = "--density",
+         .kind = CLI_CUSTOM,
+         .target = &d.density,
+         .parse = parse_positive,
+         .required = true,
+         .arg = "KG_M3",
+         .help = "wood density (required)"},
+        {.name = "--radius",
+         .kind = CLI_CUSTOM,
+         .target = &d.radius,
+         .parse = parse_positive,
+         .required = true,
+         .arg = "M",
+         .help = "radius of the column (required)"},
+        {.name = "--segment",
+         .kind = CLI_CUSTOM,
+         .target = &d.segment,
+         .parse = parse_positive,
+         .required = true,
+         .arg = "M",
+         .help = "segment length (required)"},
+        {.name = "--G",
+         .kind = CLI_CUSTOM,
+         .target = &d.shear_modulus,
+         .parse = parse_positive,
+         .arg = "PA",
+         .help = "shear modulus (default E/16)"},
+        {.name = "--gravity",
+         .kind = CLI_CUSTOM,
+         .target = &d.gravity,
+         .parse = parse_positive,
+         .arg = "M_S2",
+         .help = "gravitational acceleration (default 9.81)"},
+        {.name = "--max-segments",
+         .kind = CLI_LONG,
+         .target = &max_segments,
+         .min = 1,
+         .max = LONG_MAX,
+         .bad = "--max-segments: '{value}' is not a positive integer",
+         .arg = "N",
+         .help = "give up beyond N segments (default 100000)"},
+        {.name = "--chain",
+         .kind = CLI_SET,
+         .target = &chain,
+         .help = "the seeds' first-order discretisation (default staggered)"},
+        {.name = "--json", .kind = CLI_SET, .target = &json, .help = "print one JSON object"},
+        {0}};
+    cli_opts table = {.cmd = "buckle",
+                      .opts = rows,
+                      .help = buckle_help,
+                      .width = 18,
+                      .unknown = "unknown option '{opt}' (see --help)",
+                      .missing = "{opt} needs a value",
+                      .required = "{opt} is required (see --help)"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    d.max_segments = (size_t)max_segments;
+    if (chain)
+        d.discretization = CBM_MECH_CHAIN;
     cbm_context *ctx = cli_context();
     cbm_buckle_result r;
     cbm_status s = cbm_mech_buckle(ctx, &d, &r);

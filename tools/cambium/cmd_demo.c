@@ -6,11 +6,12 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include <limits.h>
 #include <string.h>
 
 #define MAX_OUTPUTS 16
 
-static void help(void)
+static void help(const cli_opts *t)
 {
     printf("usage: cambium demo [--segments N] [--sides N] [--seed N] [--frames F] [--timing]\n"
            "                    -o FILE [-o FILE]... [output options]\n\n"
@@ -18,8 +19,8 @@ static void help(void)
            "ground, in the formats named by the extensions (.obj .ply .glb .png .svg .csv);\n"
            "FORMAT:PATH names the format explicitly (png:- writes a PNG to stdout).\n"
            "--frames F makes .glb files a growth animation of F frames. --timing prints the\n"
-           "time each step takes to stderr.\n\n%s",
-           cli_output_help);
+           "time each step takes to stderr.\n");
+    cli_options_help(stdout, t);
 }
 
 int cmd_demo(int argc, char **argv)
@@ -27,46 +28,48 @@ int cmd_demo(int argc, char **argv)
     long segments = 2000, sides = 8, seed = 1, frames = 0;
     bool timing = false;
     const char *outs[MAX_OUTPUTS];
-    int nout = 0;
+    cli_list out_list = {outs, 0, MAX_OUTPUTS, "at most {max} outputs"};
     cbm_write_options o = cbm_write_options_default();
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return CLI_OK;
-        }
-        int r = cli_output_option("demo", argc, argv, &i, &o);
-        if (r < 0)
-            return CLI_USAGE;
-        if (r > 0)
-            continue;
-        if (!strcmp(a, "--timing")) {
-            timing = true;
-            continue;
-        }
-        if (i + 1 >= argc)
-            return cli_usage_error("demo", "unknown option or missing value: %s", a);
-        const char *v = argv[++i];
-        if (!strcmp(a, "-o")) {
-            if (nout == MAX_OUTPUTS)
-                return cli_usage_error("demo", "at most %d outputs", MAX_OUTPUTS);
-            outs[nout++] = v;
-        } else if (!strcmp(a, "--segments")) {
-            if (!cli_parse_long(v, &segments) || segments < 1 || segments > 10000000)
-                return cli_usage_error("demo", "--segments must be 1..10000000");
-        } else if (!strcmp(a, "--sides")) {
-            if (!cli_parse_long(v, &sides) || sides < 3 || sides > 64)
-                return cli_usage_error("demo", "--sides must be 3..64");
-        } else if (!strcmp(a, "--seed")) {
-            if (!cli_parse_long(v, &seed) || seed < 0)
-                return cli_usage_error("demo", "--seed must be a non-negative integer");
-        } else if (!strcmp(a, "--frames")) {
-            if (!cli_parse_long(v, &frames) || frames < 1 || frames > 1000)
-                return cli_usage_error("demo", "--frames must be 1..1000");
-        } else {
-            return cli_usage_error("demo", "unknown option %s", a);
-        }
-    }
+    cli_opt rows[] = {{.name = "--help|-h", .kind = CLI_HELP},
+                      {.name = "--timing", .kind = CLI_SET, .target = &timing},
+                      {.name = "-o", .kind = CLI_LIST, .target = &out_list},
+                      {.name = "--segments",
+                       .kind = CLI_LONG,
+                       .target = &segments,
+                       .min = 1,
+                       .max = 10000000,
+                       .bad = "--segments must be 1..10000000"},
+                      {.name = "--sides",
+                       .kind = CLI_LONG,
+                       .target = &sides,
+                       .min = 3,
+                       .max = 64,
+                       .bad = "--sides must be 3..64"},
+                      {.name = "--seed",
+                       .kind = CLI_LONG,
+                       .target = &seed,
+                       .min = 0,
+                       .max = LONG_MAX,
+                       .bad = "--seed must be a non-negative integer"},
+                      {.name = "--frames",
+                       .kind = CLI_LONG,
+                       .target = &frames,
+                       .min = 1,
+                       .max = 1000,
+                       .bad = "--frames must be 1..1000"},
+                      {.kind = CLI_GROUP, .target = cli_output_options(&o)},
+                      {0}};
+    cli_opts table = {.cmd = "demo",
+                      .opts = rows,
+                      .help = help,
+                      .width = 18,
+                      .unknown = "unknown option {opt}",
+                      .unknown_last = "unknown option or missing value: {opt}",
+                      .missing = "unknown option or missing value: {opt}"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    int nout = out_list.count;
     if (nout == 0)
         return cli_usage_error("demo", "no output: give at least one -o FILE");
     cli_output_target targets[MAX_OUTPUTS];

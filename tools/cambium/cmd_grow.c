@@ -13,7 +13,7 @@
 #define MAX_OUTPUTS 16
 #define MAX_DEFS    128
 
-static void help(void)
+static void help(const cli_opts *t)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
@@ -24,26 +24,56 @@ static void help(void)
            "fruit-tree; see docs/models.md). Outputs by extension: .png .svg .glb .obj .ply\n"
            "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
            "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
-           "summary). FORMAT:PATH names a scene format explicitly.\n\n"
-           "  -y, -n, --years N years to grow (default: the model's 'years')\n"
-           "  -D NAME=VALUE     set a parameter (as in a parameter file; angles in degrees)\n"
-           "  --seed N          generator seed (same as -D seed=N)\n"
-           "  --every K         animation frame every K growth steps (.glb outputs)\n"
-           "  --summer          stop at the end of the last summer (leaves and fruit on; the\n"
-           "                    .json then ends with that year, \"complete\": false)\n"
-           "  --timing          time spent per phase on stderr\n"
-           "  --quiet           no per-year lines on stdout\n"
-           "  --params          print every parameter (parameter-file syntax) and exit\n"
-           "  --seeds A-B       grow once per seed A..B and write the median, quartiles,\n"
-           "                    minimum and maximum of the year-by-year figures over the\n"
-           "                    seeds (-o FILE.json; stdout: medians per year)\n"
-           "  --report          the final tree as a forester measures it (height, diameter at\n"
-           "                    breast height, crown, buckling safety, pipe model, branch\n"
-           "                    angles, stress ratios, intersections; cambium info --help)\n\n"
-           "built-in models:");
+           "summary). FORMAT:PATH names a scene format explicitly.\n\n");
+    cli_options_rows(stdout, t);
+    printf("\nbuilt-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
         printf(" %s", *n);
-    printf("\n\n%s\n%s", cli_limits_help, cli_output_help);
+    printf("\n");
+    cli_options_groups(stdout, t);
+}
+
+/* The model: one parameter file or built-in name. */
+static bool parse_model(const char *a, void *target, char *why, size_t n)
+{
+    const char **model = target;
+    if (!strcmp(a, "-"))
+        snprintf(why, n, "unknown option {value}");
+    else if (*model)
+        snprintf(why, n, "more than one model: '%s' and '{value}'", *model);
+    else
+        *model = a;
+    return !*why;
+}
+
+static bool parse_seed(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    long sd;
+    if (!cli_parse_long(v, &sd) || sd < 0)
+        return false;
+    *(const char **)target = v;
+    return true;
+}
+
+/* --seeds A-B */
+static bool parse_seeds(const char *v, void *target, char *why, size_t n)
+{
+    long *range = target;
+    const char *dash = strchr(v, '-');
+    char lo[32];
+    if (!dash || (size_t)(dash - v) >= sizeof lo) {
+        snprintf(why, n, "--seeds expects A-B, got '{value}'");
+        return false;
+    }
+    memcpy(lo, v, (size_t)(dash - v));
+    lo[dash - v] = '\0';
+    if (!cli_parse_long(lo, &range[0]) || !cli_parse_long(dash + 1, &range[1]) || range[0] < 0 ||
+        range[1] < range[0] || range[1] - range[0] >= 100000) {
+        snprintf(why, n, "--seeds expects A-B with 0 <= A <= B, got '{value}'");
+        return false;
+    }
+    return true;
 }
 
 static void summary_object(cbm_json *j, const cbm_tree_summary *s, bool complete);
@@ -327,92 +357,91 @@ static void print_timing(cbm_context *ctx, const cbm_tree *t, bool summer, doubl
 int cmd_grow(int argc, char **argv)
 {
     const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
-    int nout = 0, ndef = 0;
-    long years = -1, every = 0, seed_first = -1, seed_last = -1;
+    cli_list out_list = {outs, 0, MAX_OUTPUTS, "at most {max} outputs"};
+    cli_list def_list = {defs, 0, MAX_DEFS, "at most {max} -D options"};
+    long years = -1, every = 0, seeds[2] = {-1, -1};
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false, report = false;
     cbm_write_options o = cbm_write_options_default();
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            help();
-            return CLI_OK;
-        }
-        int r = cli_output_option("grow", argc, argv, &i, &o);
-        if (r == 0)
-            r = cli_limit_option("grow", argc, argv, &i);
-        if (r < 0)
-            return CLI_USAGE;
-        if (r > 0)
-            continue;
-        if (!strcmp(a, "--timing")) {
-            timing = true;
-            continue;
-        }
-        if (!strcmp(a, "--quiet")) {
-            quiet = true;
-            continue;
-        }
-        if (!strcmp(a, "--summer")) {
-            summer = true;
-            continue;
-        }
-        if (!strcmp(a, "--params")) {
-            params = true;
-            continue;
-        }
-        if (!strcmp(a, "--report")) {
-            report = true;
-            continue;
-        }
-        if (a[0] != '-') {
-            if (model)
-                return cli_usage_error("grow", "more than one model: '%s' and '%s'", model, a);
-            model = a;
-            continue;
-        }
-        if (!strncmp(a, "-D", 2) && a[2]) { /* -DNAME=VALUE */
-            if (ndef == MAX_DEFS)
-                return cli_usage_error("grow", "at most %d -D options", MAX_DEFS);
-            defs[ndef++] = a + 2;
-            continue;
-        }
-        if (i + 1 >= argc)
-            return cli_usage_error("grow", "unknown option or missing value: %s", a);
-        const char *v = argv[++i];
-        if (!strcmp(a, "-o")) {
-            if (nout == MAX_OUTPUTS)
-                return cli_usage_error("grow", "at most %d outputs", MAX_OUTPUTS);
-            outs[nout++] = v;
-        } else if (!strcmp(a, "-D")) {
-            if (ndef == MAX_DEFS)
-                return cli_usage_error("grow", "at most %d -D options", MAX_DEFS);
-            defs[ndef++] = v;
-        } else if (!strcmp(a, "-y") || !strcmp(a, "--years") || !strcmp(a, "-n")) {
-            if (!cli_parse_long(v, &years) || years < 0 || years > 1000)
-                return cli_usage_error("grow", "%s must be 0..1000", a);
-        } else if (!strcmp(a, "--seed")) {
-            long sd;
-            if (!cli_parse_long(v, &sd) || sd < 0)
-                return cli_usage_error("grow", "--seed must be a non-negative integer");
-            seed = v;
-        } else if (!strcmp(a, "--seeds")) {
-            const char *dash = strchr(v, '-');
-            char lo[32];
-            if (!dash || (size_t)(dash - v) >= sizeof lo)
-                return cli_usage_error("grow", "--seeds expects A-B, got '%s'", v);
-            memcpy(lo, v, (size_t)(dash - v));
-            lo[dash - v] = '\0';
-            if (!cli_parse_long(lo, &seed_first) || !cli_parse_long(dash + 1, &seed_last) ||
-                seed_first < 0 || seed_last < seed_first || seed_last - seed_first >= 100000)
-                return cli_usage_error("grow", "--seeds expects A-B with 0 <= A <= B, got '%s'", v);
-        } else if (!strcmp(a, "--every")) {
-            if (!cli_parse_long(v, &every) || every < 1 || every > 1000000)
-                return cli_usage_error("grow", "--every must be 1..1000000");
-        } else {
-            return cli_usage_error("grow", "unknown option %s", a);
-        }
-    }
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "MODEL", .kind = CLI_POSITIONAL, .target = &model, .parse = parse_model},
+        {.name = "-y|-n|--years",
+         .kind = CLI_LONG,
+         .target = &years,
+         .min = 0,
+         .max = 1000,
+         .bad = "{opt} must be 0..1000",
+         .arg = "N",
+         .help = "years to grow (default: the model's 'years')"},
+        {.name = "-D",
+         .kind = CLI_LIST,
+         .target = &def_list,
+         .attached = true,
+         .arg = "NAME=VALUE",
+         .help = "set a parameter (as in a parameter file; angles in degrees)"},
+        {.name = "--seed",
+         .kind = CLI_CUSTOM,
+         .target = &seed,
+         .parse = parse_seed,
+         .bad = "--seed must be a non-negative integer",
+         .arg = "N",
+         .help = "generator seed (same as -D seed=N)"},
+        {.name = "-o", .kind = CLI_LIST, .target = &out_list},
+        {.name = "--every",
+         .kind = CLI_LONG,
+         .target = &every,
+         .min = 1,
+         .max = 1000000,
+         .bad = "--every must be 1..1000000",
+         .arg = "K",
+         .help = "animation frame every K growth steps (.glb outputs)"},
+        {.name = "--summer",
+         .kind = CLI_SET,
+         .target = &summer,
+         .help = "stop at the end of the last summer (leaves and fruit on; the\n"
+                 ".json then ends with that year, \"complete\": false)"},
+        {.name = "--timing",
+         .kind = CLI_SET,
+         .target = &timing,
+         .help = "time spent per phase on stderr"},
+        {.name = "--quiet",
+         .kind = CLI_SET,
+         .target = &quiet,
+         .help = "no per-year lines on stdout"},
+        {.name = "--params",
+         .kind = CLI_SET,
+         .target = &params,
+         .help = "print every parameter (parameter-file syntax) and exit"},
+        {.name = "--seeds",
+         .kind = CLI_CUSTOM,
+         .target = seeds,
+         .parse = parse_seeds,
+         .arg = "A-B",
+         .help = "grow once per seed A..B and write the median, quartiles,\n"
+                 "minimum and maximum of the year-by-year figures over the\n"
+                 "seeds (-o FILE.json; stdout: medians per year)"},
+        {.name = "--report",
+         .kind = CLI_SET,
+         .target = &report,
+         .help = "the final tree as a forester measures it (height, diameter at\n"
+                 "breast height, crown, buckling safety, pipe model, branch\n"
+                 "angles, stress ratios, intersections; cambium info --help)"},
+        {.kind = CLI_GROUP, .target = cli_limit_options()},
+        {.kind = CLI_GROUP, .target = cli_output_options(&o)},
+        {0}};
+    cli_opts table = {.cmd = "grow",
+                      .opts = rows,
+                      .help = help,
+                      .width = 18,
+                      .unknown = "unknown option {opt}",
+                      .unknown_last = "unknown option or missing value: {opt}",
+                      .missing = "unknown option or missing value: {opt}"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    int nout = out_list.count, ndef = def_list.count;
+    long seed_first = seeds[0], seed_last = seeds[1];
     if (seed_first >= 0) {
         for (int k = 0; k < nout; k++)
             if (strcmp(cli_extension(outs[k]), "json"))

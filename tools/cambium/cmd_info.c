@@ -11,6 +11,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "commands.h"
+#include "options.h"
 
 #include <dirent.h>
 #include <ctype.h>
@@ -932,31 +933,49 @@ static int info_grow_summary(const char *path, const char *t, bool json)
     return CLI_OK;
 }
 
+static void info_help(const cli_opts *t)
+{
+    printf("usage: cambium info [--json] FILE\n\n"
+           "Says what a model (.l) or an output file (.str .obj .ply .glb .png .svg\n"
+           ".csv .json) holds. A segments table (cambium grow -o x.csv, cambium run\n"
+           "-o segments:x.csv) and the summary of cambium grow (-o x.json) get the\n"
+           "forester's measures of the tree: height, trunk diameter at breast height,\n"
+           "crown width and base, safety against self-buckling, pipe-model exponent,\n"
+           "branch angles, stress ratios, branch intersections (docs/models.md).\n\n");
+    cli_options_help(stdout, t);
+}
+
+/* The file: one. */
+static bool parse_file(const char *a, void *target, char *why, size_t n)
+{
+    const char **path = target;
+    if (*path)
+        snprintf(why, n, "expected one FILE, got '%s' and '{value}'", *path);
+    else
+        *path = a;
+    return !*why;
+}
+
 int cmd_info(int argc, char **argv)
 {
     const char *path = NULL;
     bool json = false;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            printf("usage: cambium info [--json] FILE\n\n"
-                   "Says what a model (.l) or an output file (.str .obj .ply .glb .png .svg\n"
-                   ".csv .json) holds. A segments table (cambium grow -o x.csv, cambium run\n"
-                   "-o segments:x.csv) and the summary of cambium grow (-o x.json) get the\n"
-                   "forester's measures of the tree: height, trunk diameter at breast height,\n"
-                   "crown width and base, safety against self-buckling, pipe-model exponent,\n"
-                   "branch angles, stress ratios, branch intersections (docs/models.md).\n\n"
-                   "  --json   the measures as JSON on stdout (segments tables, grow summaries)\n");
-            return CLI_OK;
-        }
-        if (!strcmp(argv[i], "--json"))
-            json = true;
-        else if (argv[i][0] == '-' && argv[i][1])
-            return cli_usage_error("info", "unknown option %s", argv[i]);
-        else if (path)
-            return cli_usage_error("info", "expected one FILE, got '%s' and '%s'", path, argv[i]);
-        else
-            path = argv[i];
-    }
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "FILE", .kind = CLI_POSITIONAL, .target = &path, .parse = parse_file},
+        {.name = "--json",
+         .kind = CLI_SET,
+         .target = &json,
+         .help = "the measures as JSON on stdout (segments tables, grow summaries)"},
+        {0}};
+    cli_opts table = {.cmd = "info",
+                      .opts = rows,
+                      .help = info_help,
+                      .width = 9,
+                      .unknown = "unknown option {opt}"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
     if (!path)
         return cli_usage_error("info", "expected one FILE");
     struct stat st;

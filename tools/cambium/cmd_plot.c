@@ -4,6 +4,7 @@
  * year-by-year JSON and segment tables, bend's node tables, any CSV). */
 #include "cli.h"
 #include "commands.h"
+#include "options.h"
 #include "table.h"
 
 #include <math.h>
@@ -13,7 +14,7 @@
 #define MAX_OUTPUTS 8
 #define MAX_Y       16
 
-static void plot_help(void)
+static void plot_help(const cli_opts *t)
 {
     printf("usage: cambium plot DATA.csv|DATA.json -y COL[,COL...] -o PLOT.png|PLOT.svg [options]\n"
            "\n"
@@ -21,20 +22,8 @@ static void plot_help(void)
            "starting with '#' are skipped) or the first array of objects in a JSON file (e.g.\n"
            "the \"years\" of `cambium grow -o summary.json`). A column is named by its header or\n"
            "by its number from 1. Empty cells and non-numbers leave gaps.\n"
-           "\n"
-           "  -x COL             the x column (default: the row number from 0)\n"
-           "  -y COL[,COL...]    the y columns of the first panel (required)\n"
-           "  --panel COL[,...]  a further panel below, with these y columns (up to 3 more)\n"
-           "  -o FILE            output, .png or .svg (repeatable; FORMAT:PATH names the format)\n"
-           "  --style S          line (default), points, or both\n"
-           "  --title TEXT       figure title\n"
-           "  --xlabel TEXT      x axis title (default: the x column's name)\n"
-           "  --ylabel TEXT      y axis title of every panel (default: the column's name when\n"
-           "                     a panel has one; a legend names several)\n"
-           "  --logx, --logy     logarithmic axes (points <= 0 are left out)\n"
-           "  --xrange MIN:MAX   x range (either side may be empty: from the data)\n"
-           "  --yrange MIN:MAX   y range of every panel\n"
-           "  --size WxH         picture size in pixels (default 800x600)\n");
+           "\n");
+    cli_options_help(stdout, t);
 }
 
 /* "a,b,c" into at most max names (pointers into s, which is modified). */
@@ -75,7 +64,7 @@ static bool parse_range(const char *s, double *lo, double *hi)
 
 typedef struct plot_args {
     const char *data, *x, *title, *xlabel, *ylabel;
-    char *panel_cols[CBM_PLOT_MAX_PANELS];
+    const char *panel_cols[CBM_PLOT_MAX_PANELS];
     int npanels;
     const char *outputs[MAX_OUTPUTS];
     int noutputs;
@@ -85,99 +74,174 @@ typedef struct plot_args {
     int width, height;
 } plot_args;
 
+/* The value parsers of the options (target: the plot_args, or the field named). */
+
+static bool parse_data(const char *v, void *target, char *why, size_t n)
+{
+    plot_args *a = target;
+    if (a->data)
+        snprintf(why, n, "one data file, got '%s' and '{value}'", a->data);
+    else
+        a->data = v;
+    return !*why;
+}
+
+/* -y COLS, then --panel COLS for each further panel */
+static bool add_panel(plot_args *a, const char *v, bool first, char *why, size_t n)
+{
+    if (first && a->panel_cols[0])
+        snprintf(why, n, "-y given twice (use --panel for more panels)");
+    else if (!first && !a->panel_cols[0])
+        snprintf(why, n, "--panel comes after -y");
+    else if (a->npanels >= CBM_PLOT_MAX_PANELS)
+        snprintf(why, n, "at most %d panels", CBM_PLOT_MAX_PANELS);
+    else
+        a->panel_cols[a->npanels++] = v;
+    return !*why;
+}
+
+static bool parse_y(const char *v, void *target, char *why, size_t n)
+{
+    return add_panel(target, v, true, why, n);
+}
+
+static bool parse_panel(const char *v, void *target, char *why, size_t n)
+{
+    return add_panel(target, v, false, why, n);
+}
+
+static bool parse_style(const char *v, void *target, char *why, size_t n)
+{
+    int *style = target;
+    if (!strcmp(v, "line") || !strcmp(v, "lines"))
+        *style = 0;
+    else if (!strcmp(v, "points"))
+        *style = 1;
+    else if (!strcmp(v, "both"))
+        *style = 2;
+    else
+        snprintf(why, n, "--style: '{value}' is not line, points or both");
+    return !*why;
+}
+
+static bool parse_axis_range(const char *v, void *target, char *why, size_t n)
+{
+    double *r = target;
+    if (!parse_range(v, &r[0], &r[1]))
+        snprintf(why, n, "{opt}: '{value}' is not MIN:MAX with MIN < MAX");
+    return !*why;
+}
+
+static bool parse_size(const char *v, void *target, char *why, size_t n)
+{
+    plot_args *a = target;
+    const char *xpos = strchr(v, 'x');
+    char w_text[32];
+    long w, h;
+    if (!xpos) {
+        snprintf(why, n, "--size: '{value}' is not WxH");
+        return false;
+    }
+    bool ok = (size_t)(xpos - v) < sizeof w_text;
+    if (ok) {
+        memcpy(w_text, v, (size_t)(xpos - v));
+        w_text[xpos - v] = '\0';
+    }
+    ok = ok && cli_parse_long(w_text, &w) && cli_parse_long(xpos + 1, &h);
+    if (!ok || w < 16 || h < 16 || w > 16384 || h > 16384) {
+        snprintf(why, n, "--size: '{value}' is not WxH with 16..16384 pixels");
+        return false;
+    }
+    a->width = (int)w, a->height = (int)h;
+    return true;
+}
+
 static int parse_args(int argc, char **argv, plot_args *a)
 {
     memset(a, 0, sizeof *a);
     a->xr[0] = a->xr[1] = a->yr[0] = a->yr[1] = NAN;
     a->width = 800, a->height = 600;
-    for (int i = 1; i < argc; i++) {
-        const char *o = argv[i];
-        if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
-            plot_help();
-            return -1;
-        }
-        if (!strcmp(o, "--logx") || !strcmp(o, "--logy")) {
-            *(o[5] == 'x' ? &a->logx : &a->logy) = true;
-            continue;
-        }
-        if (o[0] != '-' || !o[1]) {
-            if (a->data)
-                return cli_usage_error("plot", "one data file, got '%s' and '%s'", a->data, o);
-            a->data = o;
-            continue;
-        }
-        static const char *const with_value[] = {"-x",       "-y",       "--panel",  "-o",
-                                                 "--style",  "--title",  "--xlabel", "--ylabel",
-                                                 "--xrange", "--yrange", "--size"};
-        int k = -1;
-        for (int j = 0; j < (int)(sizeof with_value / sizeof *with_value); j++)
-            if (!strcmp(o, with_value[j]))
-                k = j;
-        if (k < 0)
-            return cli_usage_error("plot", "unknown option '%s'", o);
-        if (i + 1 >= argc)
-            return cli_usage_error("plot", "%s needs a value", o);
-        char *v = argv[++i];
-        switch (k) {
-        case 0:
-            a->x = v;
-            break;
-        case 1:
-        case 2:
-            if (k == 1 && a->panel_cols[0])
-                return cli_usage_error("plot", "-y given twice (use --panel for more panels)");
-            if (k == 2 && !a->panel_cols[0])
-                return cli_usage_error("plot", "--panel comes after -y");
-            if (a->npanels >= CBM_PLOT_MAX_PANELS)
-                return cli_usage_error("plot", "at most %d panels", CBM_PLOT_MAX_PANELS);
-            a->panel_cols[a->npanels++] = v;
-            break;
-        case 3:
-            if (a->noutputs >= MAX_OUTPUTS)
-                return cli_usage_error("plot", "at most %d outputs", MAX_OUTPUTS);
-            a->outputs[a->noutputs++] = v;
-            break;
-        case 4:
-            if (!strcmp(v, "line") || !strcmp(v, "lines"))
-                a->style = 0;
-            else if (!strcmp(v, "points"))
-                a->style = 1;
-            else if (!strcmp(v, "both"))
-                a->style = 2;
-            else
-                return cli_usage_error("plot", "--style: '%s' is not line, points or both", v);
-            break;
-        case 5:
-            a->title = v;
-            break;
-        case 6:
-            a->xlabel = v;
-            break;
-        case 7:
-            a->ylabel = v;
-            break;
-        case 8:
-        case 9:
-            if (!parse_range(v, k == 8 ? &a->xr[0] : &a->yr[0], k == 8 ? &a->xr[1] : &a->yr[1]))
-                return cli_usage_error("plot", "%s: '%s' is not MIN:MAX with MIN < MAX", o, v);
-            break;
-        case 10: {
-            char *xpos = strchr(v, 'x');
-            long w, h;
-            if (!xpos)
-                return cli_usage_error("plot", "--size: '%s' is not WxH", v);
-            *xpos = '\0';
-            bool ok = cli_parse_long(v, &w) && cli_parse_long(xpos + 1, &h);
-            *xpos = 'x';
-            if (!ok || w < 16 || h < 16 || w > 16384 || h > 16384)
-                return cli_usage_error("plot", "--size: '%s' is not WxH with 16..16384 pixels", v);
-            a->width = (int)w, a->height = (int)h;
-            break;
-        }
-        default:
-            break;
-        }
-    }
+    cli_list outs = {a->outputs, 0, MAX_OUTPUTS, "at most {max} outputs"};
+    cli_opt rows[] = {{.name = "--help|-h", .kind = CLI_HELP},
+                      {.name = "DATA", .kind = CLI_POSITIONAL, .target = a, .parse = parse_data},
+                      {.name = "-x",
+                       .kind = CLI_TEXT,
+                       .target = &a->x,
+                       .arg = "COL",
+                       .help = "the x column (default: the row number from 0)"},
+                      {.name = "-y",
+                       .kind = CLI_CUSTOM,
+                       .target = a,
+                       .parse = parse_y,
+                       .arg = "COL[,COL...]",
+                       .help = "the y columns of the first panel (required)"},
+                      {.name = "--panel",
+                       .kind = CLI_CUSTOM,
+                       .target = a,
+                       .parse = parse_panel,
+                       .arg = "COL[,...]",
+                       .help = "a further panel below, with these y columns (up to 3 more)"},
+                      {.name = "-o",
+                       .kind = CLI_LIST,
+                       .target = &outs,
+                       .arg = "FILE",
+                       .help = "output, .png or .svg (repeatable; FORMAT:PATH names the format)"},
+                      {.name = "--style",
+                       .kind = CLI_CUSTOM,
+                       .target = &a->style,
+                       .parse = parse_style,
+                       .arg = "S",
+                       .help = "line (default), points, or both"},
+                      {.name = "--title",
+                       .kind = CLI_TEXT,
+                       .target = &a->title,
+                       .arg = "TEXT",
+                       .help = "figure title"},
+                      {.name = "--xlabel",
+                       .kind = CLI_TEXT,
+                       .target = &a->xlabel,
+                       .arg = "TEXT",
+                       .help = "x axis title (default: the x column's name)"},
+                      {.name = "--ylabel",
+                       .kind = CLI_TEXT,
+                       .target = &a->ylabel,
+                       .arg = "TEXT",
+                       .help = "y axis title of every panel (default: the column's name when\n"
+                               "a panel has one; a legend names several)"},
+                      {.name = "--logx, --logy",
+                       .kind = CLI_DOC,
+                       .help = "logarithmic axes (points <= 0 are left out)"},
+                      {.name = "--logx", .kind = CLI_SET, .target = &a->logx},
+                      {.name = "--logy", .kind = CLI_SET, .target = &a->logy},
+                      {.name = "--xrange",
+                       .kind = CLI_CUSTOM,
+                       .target = a->xr,
+                       .parse = parse_axis_range,
+                       .arg = "MIN:MAX",
+                       .help = "x range (either side may be empty: from the data)"},
+                      {.name = "--yrange",
+                       .kind = CLI_CUSTOM,
+                       .target = a->yr,
+                       .parse = parse_axis_range,
+                       .arg = "MIN:MAX",
+                       .help = "y range of every panel"},
+                      {.name = "--size",
+                       .kind = CLI_CUSTOM,
+                       .target = a,
+                       .parse = parse_size,
+                       .arg = "WxH",
+                       .help = "picture size in pixels (default 800x600)"},
+                      {0}};
+    cli_opts table = {.cmd = "plot",
+                      .opts = rows,
+                      .help = plot_help,
+                      .width = 19,
+                      .unknown = "unknown option '{opt}'",
+                      .missing = "{opt} needs a value"};
+    int rc = cli_options_parse(&table, argc, argv);
+    a->noutputs = outs.count;
+    if (rc != CLI_OK)
+        return rc;
     if (!a->data)
         return cli_usage_error("plot", "no data file");
     if (!a->npanels)
@@ -227,7 +291,14 @@ int cmd_plot(int argc, char **argv)
         rc = cli_usage_error("plot", "%s has no column '%s'", a.data, a.x);
     for (int k = 0; k < a.npanels && rc == CLI_OK; k++) {
         char *names[MAX_Y + 1];
-        ny[k] = split_names(a.panel_cols[k], names, MAX_Y + 1);
+        size_t len = strlen(a.panel_cols[k]) + 1;
+        char *cols = malloc(len); /* split_names cuts it */
+        if (!cols) {
+            rc = CLI_FAIL;
+            break;
+        }
+        memcpy(cols, a.panel_cols[k], len);
+        ny[k] = split_names(cols, names, MAX_Y + 1);
         if (ny[k] == 0 || ny[k] > MAX_Y)
             rc = cli_usage_error("plot", "a panel takes 1 to %d y columns", MAX_Y);
         for (int c = 0; c < ny[k] && rc == CLI_OK; c++)
@@ -235,6 +306,7 @@ int cmd_plot(int argc, char **argv)
                 rc = cli_usage_error("plot", "%s has no column '%s' (it has %zu: %s%s)", a.data,
                                      names[c], t.ncols, t.ncols ? t.names[0] : "",
                                      t.ncols > 1 ? ", ..." : "");
+        free(cols);
     }
     if (rc != CLI_OK) {
         cli_table_free(&t);

@@ -25,6 +25,7 @@
 #include "commands.h"
 
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -107,34 +108,85 @@ static bool is_scene_format(const char *f)
     return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments");
 }
 
-static void usage(void)
+static void usage(const cli_opts *t)
 {
     printf("usage: cambium run MODEL.l [SIDE FILES...] [-n STEPS] [-D NAME=VALUE]... [--seed N]\n"
            "                  [-o OUT]... [--every K] [--homomorphism] [--float32]\n"
            "                  [--timing] [limits] [output options]\n\n"
            "Derives an L-system (cpfg or L+C dialect), interprets it with the turtle and\n"
-           "writes the outputs. Without -o prints a one-line summary.\n"
-           "  SIDE FILES        by extension: .v view file, .func/.fset functions, .s surface,\n"
-           "                    .con contour, .map colour map, .mat materials (.a .e .txt are\n"
-           "                    accepted and ignored)\n"
-           "  -n STEPS          derivation steps (default: the model's derivation length)\n"
-           "  -D NAME=VALUE     overrides the model's #define NAME\n"
-           "  --seed N          seed of stochastic production choice (srand48(N))\n"
-           "  -o OUT            output by extension, or FORMAT:PATH (- for stdout):\n");
-    for (size_t i = 0; i < sizeof OTHER_OUTPUTS / sizeof OTHER_OUTPUTS[0]; i++)
-        printf("                      .%-5s %s\n", OTHER_OUTPUTS[i].ext, OTHER_OUTPUTS[i].what);
-    for (size_t i = 0; i < sizeof SCENE_OUTPUTS / sizeof SCENE_OUTPUTS[0]; i++)
-        printf("                      .%-5s %s\n", SCENE_OUTPUTS[i].ext, SCENE_OUTPUTS[i].what);
-    printf("  --every K         also write the outputs after step 0 and every K-th step as\n"
-           "                    NAME.STEP.EXT (NAME.0003.png); a .glb becomes one animation\n"
-           "                    with a frame per K steps\n"
-           "  --homomorphism    write the string after the homomorphism\n"
-           "  --float32         follow cpfg exactly: float32 parameters, seed: ignored as in\n"
-           "                    cpfg's batch mode\n"
-           "  --timing          print the time and memory of each phase to stderr\n"
-           "  --no-print        discard what the model prints (printf); it goes to stdout,\n"
-           "                    or to stderr when an output is written to stdout\n\n%s\n%s",
-           cli_limits_help, cli_output_help);
+           "writes the outputs. Without -o prints a one-line summary.\n");
+    cli_options_help(stdout, t);
+}
+
+/* The help of -o: the formats, one a line. */
+static const char *output_help(void)
+{
+    static char text[2048];
+    if (*text)
+        return text;
+    size_t n =
+        (size_t)snprintf(text, sizeof text, "output by extension, or FORMAT:PATH (- for stdout):");
+    for (size_t i = 0; i < sizeof OTHER_OUTPUTS / sizeof OTHER_OUTPUTS[0] && n < sizeof text; i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "\n  .%-5s %s", OTHER_OUTPUTS[i].ext,
+                              OTHER_OUTPUTS[i].what);
+    for (size_t i = 0; i < sizeof SCENE_OUTPUTS / sizeof SCENE_OUTPUTS[0] && n < sizeof text; i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "\n  .%-5s %s", SCENE_OUTPUTS[i].ext,
+                              SCENE_OUTPUTS[i].what);
+    return text;
+}
+
+/* What the command line asks: the model, its side files and defines, the outputs. */
+typedef struct run_args {
+    const char *model;
+    const char *sides[256];
+    size_t nside;
+    const char *defines[256];
+    size_t ndefines;
+    target targets[MAX_OUTPUTS];
+    int ntargets;
+} run_args;
+
+/* A word that is not an option: the model (.l), a side file, or an ignored one. */
+static bool parse_file(const char *a, void *args, char *why, size_t n)
+{
+    run_args *ra = args;
+    if (!strcmp(a, "-"))
+        snprintf(why, n, "unknown option '{value}'");
+    else if (!ra->model && !strcmp(cli_extension(a), "l"))
+        ra->model = a;
+    else if (in_list(cli_extension(a), SIDE_KINDS, sizeof SIDE_KINDS / sizeof SIDE_KINDS[0])) {
+        if (ra->nside >= 256)
+            snprintf(why, n, "too many side files");
+        else
+            ra->sides[ra->nside++] = a;
+    } else if (!in_list(cli_extension(a), IGNORED_KINDS,
+                        sizeof IGNORED_KINDS / sizeof IGNORED_KINDS[0]))
+        snprintf(why, n, "'{value}': not a model (.l) or a known side file");
+    return !*why;
+}
+
+static bool parse_define(const char *d, void *args, char *why, size_t n)
+{
+    (void)why, (void)n;
+    run_args *ra = args;
+    if (!*d || *d == '=' || ra->ndefines >= 256)
+        return false;
+    ra->defines[ra->ndefines++] = d;
+    return true;
+}
+
+static bool parse_output(const char *v, void *args, char *why, size_t n)
+{
+    run_args *ra = args;
+    if (ra->ntargets >= MAX_OUTPUTS)
+        snprintf(why, n, "too many outputs");
+    else if (!parse_target(v, &ra->targets[ra->ntargets]))
+        snprintf(why, n,
+                 "no writer for '{value}' (.str .json .mtg .obj .ply .glb .png .svg .csv, "
+                 "segments:PATH, or FORMAT:PATH)");
+    else
+        ra->ntargets++;
+    return !*why;
 }
 
 /* NAME.EXT -> NAME.0003.EXT */
@@ -423,83 +475,94 @@ int cmd_run(int argc, char **argv)
 {
     if (names_tree_model(argc, argv))
         return cmd_grow(argc, argv);
-    const char *model = NULL;
-    const char *defines[256];
-    size_t ndefines = 0;
-    const char *sides[256];
-    size_t nside = 0;
-    target targets[MAX_OUTPUTS];
-    int ntargets = 0;
+    run_args ra = {0};
     long steps = -1, every = 0, seed = -1;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
     cbm_write_options wopt = cbm_write_options_default();
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        bool has_next = i + 1 < argc;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage();
-            return CLI_OK;
-        }
-        int r = cli_output_option("run", argc, argv, &i, &wopt);
-        if (r == 0)
-            r = cli_limit_option("run", argc, argv, &i);
-        if (r < 0)
-            return CLI_USAGE;
-        if (r > 0)
-            continue;
-        if (!strcmp(a, "-n") || !strcmp(a, "--every") || !strcmp(a, "--seed")) {
-            long v;
-            if (!has_next || !cli_parse_long(argv[i + 1], &v) || v < 0 ||
-                ((!strcmp(a, "-n") || !strcmp(a, "--every")) && v > 100000000))
-                return cli_usage_error("run", "%s expects a non-negative integer%s", a,
-                                       strcmp(a, "-n") && strcmp(a, "--every") ? ""
-                                                                               : " up to 10^8");
-            i++;
-            if (!strcmp(a, "-n"))
-                steps = v;
-            else if (!strcmp(a, "--every"))
-                every = v;
-            else
-                seed = v;
-        } else if (!strncmp(a, "-D", 2)) {
-            const char *d = a[2] ? a + 2 : (has_next ? argv[++i] : NULL);
-            if (!d || !*d || *d == '=' || ndefines >= 256)
-                return cli_usage_error("run", "-D expects NAME=VALUE");
-            defines[ndefines++] = d;
-        } else if (!strcmp(a, "-o")) {
-            if (!has_next)
-                return cli_usage_error("run", "-o expects a file name");
-            if (ntargets >= MAX_OUTPUTS)
-                return cli_usage_error("run", "too many outputs");
-            if (!parse_target(argv[i + 1], &targets[ntargets]))
-                return cli_usage_error("run",
-                                       "no writer for '%s' (.str .json .mtg .obj .ply .glb "
-                                       ".png .svg .csv, segments:PATH, or FORMAT:PATH)",
-                                       argv[i + 1]);
-            ntargets++;
-            i++;
-        } else if (!strcmp(a, "--homomorphism")) {
-            homomorphism = true;
-        } else if (!strcmp(a, "--float32")) {
-            float32 = true;
-        } else if (!strcmp(a, "--timing")) {
-            timing = true;
-        } else if (!strcmp(a, "--no-print")) {
-            no_print = true;
-        } else if (a[0] == '-') {
-            return cli_usage_error("run", "unknown option '%s'", a);
-        } else if (!model && !strcmp(cli_extension(a), "l")) {
-            model = a;
-        } else if (in_list(cli_extension(a), SIDE_KINDS,
-                           sizeof SIDE_KINDS / sizeof SIDE_KINDS[0])) {
-            if (nside >= 256)
-                return cli_usage_error("run", "too many side files");
-            sides[nside++] = a;
-        } else if (!in_list(cli_extension(a), IGNORED_KINDS,
-                            sizeof IGNORED_KINDS / sizeof IGNORED_KINDS[0])) {
-            return cli_usage_error("run", "'%s': not a model (.l) or a known side file", a);
-        }
-    }
+    const char *count = "{opt} expects a non-negative integer up to 10^8";
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "MODEL.l", .kind = CLI_POSITIONAL, .target = &ra, .parse = parse_file},
+        {.name = "SIDE FILES",
+         .kind = CLI_DOC,
+         .help = "by extension: .v view file, .func/.fset functions, .s surface,\n"
+                 ".con contour, .map colour map, .mat materials (.a .e .txt are\n"
+                 "accepted and ignored)"},
+        {.name = "-n",
+         .kind = CLI_LONG,
+         .target = &steps,
+         .min = 0,
+         .max = 100000000,
+         .bad = count,
+         .arg = "STEPS",
+         .help = "derivation steps (default: the model's derivation length)"},
+        {.name = "-D",
+         .kind = CLI_CUSTOM,
+         .target = &ra,
+         .parse = parse_define,
+         .attached = true,
+         .bad = "-D expects NAME=VALUE",
+         .arg = "NAME=VALUE",
+         .help = "overrides the model's #define NAME"},
+        {.name = "--seed",
+         .kind = CLI_LONG,
+         .target = &seed,
+         .min = 0,
+         .max = LONG_MAX,
+         .bad = "{opt} expects a non-negative integer",
+         .arg = "N",
+         .help = "seed of stochastic production choice (srand48(N))"},
+        {.name = "-o",
+         .kind = CLI_CUSTOM,
+         .target = &ra,
+         .parse = parse_output,
+         .bad = "-o expects a file name",
+         .arg = "OUT",
+         .help = output_help()},
+        {.name = "--every",
+         .kind = CLI_LONG,
+         .target = &every,
+         .min = 0,
+         .max = 100000000,
+         .bad = count,
+         .arg = "K",
+         .help = "also write the outputs after step 0 and every K-th step as\n"
+                 "NAME.STEP.EXT (NAME.0003.png); a .glb becomes one animation\n"
+                 "with a frame per K steps"},
+        {.name = "--homomorphism",
+         .kind = CLI_SET,
+         .target = &homomorphism,
+         .help = "write the string after the homomorphism"},
+        {.name = "--float32",
+         .kind = CLI_SET,
+         .target = &float32,
+         .help = "follow cpfg exactly: float32 parameters, seed: ignored as in\n"
+                 "cpfg's batch mode"},
+        {.name = "--timing",
+         .kind = CLI_SET,
+         .target = &timing,
+         .help = "print the time and memory of each phase to stderr"},
+        {.name = "--no-print",
+         .kind = CLI_SET,
+         .target = &no_print,
+         .help = "discard what the model prints (printf); it goes to stdout,\n"
+                 "or to stderr when an output is written to stdout"},
+        {.kind = CLI_GROUP, .target = cli_limit_options()},
+        {.kind = CLI_GROUP, .target = cli_output_options(&wopt)},
+        {0}};
+    cli_opts table = {.cmd = "run",
+                      .opts = rows,
+                      .help = usage,
+                      .width = 18,
+                      .unknown = "unknown option '{opt}'"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    const char *model = ra.model;
+    const char **defines = ra.defines, **sides = ra.sides;
+    size_t ndefines = ra.ndefines, nside = ra.nside;
+    target *targets = ra.targets;
+    int ntargets = ra.ntargets;
     if (!model)
         return cli_usage_error("run", "expected a MODEL.l");
     {

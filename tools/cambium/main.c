@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdarg.h>
@@ -12,6 +13,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "options.h"
 
 static void print_diag(void *ud, const cbm_diagnostic *d)
 {
@@ -61,93 +63,142 @@ static cbm_limits *cli_limits(void)
     return &limits;
 }
 
-const char cli_limits_help[] =
-    "limits (per run; docs/cli.md):\n"
-    "  --max-memory MB        memory the library may hold (default 4096 or half the\n"
-    "                         physical memory; 0: no limit)\n"
-    "  --max-modules N        modules in the L-system string (default 2^31)\n"
-    "  --max-steps N          derivation steps (default 10^6)\n"
-    "  --max-operations N     function calls and loop iterations in one step (10^8)\n"
-    "  --max-loop-iterations N  loop iterations in one step (10^8)\n"
-    "  --max-call-depth N     nested function calls (256)\n"
-    "  --max-expr-depth N     nesting of expressions and statements, operator chains\n"
-    "                         included (200, at most 1000)\n"
-    "  --max-decomp-depth N   maximum depth of decomposition and interpretation (1000)\n"
-    "  --max-expansion MB     size of the preprocessed model text, each macro\n"
-    "                         expansion counting 64 bytes (64)\n"
-    "  --max-segments N       mechanical segments of one plant (2^28)\n"
-    "  --allow-nonfinite      a module parameter that is inf or NaN is a warning (kept),\n"
-    "                         not an error\n";
-
-int cli_limit_option(const char *cmd, int argc, char **argv, int *i)
+/* A limit's value: a non-negative integer (at least 1 unless zero_ok), at most max. */
+static bool limit_value(const char *value, long max, bool zero_ok, long *out, char *why, size_t n)
 {
-    static const char *const NAMES[] = {
-        "--max-memory",          "--max-modules",    "--max-steps",      "--max-operations",
-        "--max-loop-iterations", "--max-call-depth", "--max-expr-depth", "--max-decomp-depth",
-        "--max-expansion",       "--max-segments"};
-    const char *a = argv[*i];
-    cbm_limits *l = cli_limits();
-    if (!strcmp(a, "--allow-nonfinite")) {
-        l->allow_nonfinite = true;
-        return 1;
-    }
-    size_t k = 0;
-    while (k < sizeof NAMES / sizeof NAMES[0] && strcmp(a, NAMES[k]))
-        k++;
-    if (k == sizeof NAMES / sizeof NAMES[0])
-        return 0;
     long v;
-    if (*i + 1 >= argc || !cli_parse_long(argv[*i + 1], &v) || v < 0) {
-        cli_usage_error(cmd, "%s expects a non-negative integer", a);
-        return -1;
+    if (!cli_parse_long(value, &v) || v < 0) {
+        snprintf(why, n, "{opt} expects a non-negative integer");
+        return false;
     }
-    /* the megabytes become bytes */
-    /* the depths are ints; nesting recurses on the stack, so its limit stays where the
-     * default 8 MB stack holds (parsing and evaluation take up to ~3 kB a level) */
-    bool is_int = k >= 5 && k <= 7;
-    if ((is_int && v > (k == 6 ? 1000 : 1000000)) ||
-        ((k == 0 || k == 8) && (unsigned long)v > (SIZE_MAX >> 21))) {
-        cli_usage_error(cmd, "%s: %ld is too large", a, v);
-        return -1;
+    if (v > max) {
+        snprintf(why, n, "{opt}: %ld is too large", v);
+        return false;
     }
-    if (v == 0 && k != 0) {
-        cli_usage_error(cmd, "%s must be at least 1", a);
-        return -1;
+    if (v == 0 && !zero_ok) {
+        snprintf(why, n, "{opt} must be at least 1");
+        return false;
     }
-    (*i)++;
-    switch (k) {
-    case 0:
-        l->max_bytes = (size_t)v << 20;
-        break;
-    case 1:
-        l->max_modules = (size_t)v;
-        break;
-    case 2:
-        l->max_steps = (size_t)v;
-        break;
-    case 3:
-        l->max_operations = v;
-        break;
-    case 4:
-        l->max_loop_iterations = v;
-        break;
-    case 5:
-        l->max_call_depth = (int)v;
-        break;
-    case 6:
-        l->max_expr_depth = (int)v;
-        break;
-    case 7:
-        l->max_decomp_depth = (int)v;
-        break;
-    case 8:
-        l->max_pp_bytes = (size_t)v << 20;
-        break;
-    default:
-        l->max_segments = (size_t)v;
-        break;
-    }
-    return 1;
+    *out = v;
+    return true;
+}
+
+/* megabytes into bytes (size_t); --max-memory 0 is no limit */
+static bool limit_megabytes(const char *value, void *target, char *why, size_t n)
+{
+    long v;
+    bool zero_ok = target == &limits.max_bytes;
+    if (!limit_value(value, (long)(SIZE_MAX >> 21), zero_ok, &v, why, n))
+        return false;
+    *(size_t *)target = (size_t)v << 20;
+    return true;
+}
+
+static bool limit_count(const char *value, void *target, char *why, size_t n)
+{
+    long v;
+    if (!limit_value(value, LONG_MAX, false, &v, why, n))
+        return false;
+    *(size_t *)target = (size_t)v;
+    return true;
+}
+
+static bool limit_long(const char *value, void *target, char *why, size_t n)
+{
+    return limit_value(value, LONG_MAX, false, target, why, n);
+}
+
+/* the depths are ints; nesting recurses on the stack, so its limit stays where the default 8 MB
+ * stack holds (parsing and evaluation take up to ~3 kB a level) */
+static bool limit_depth(const char *value, void *target, char *why, size_t n)
+{
+    long v;
+    if (!limit_value(value, target == &limits.max_expr_depth ? 1000 : 1000000, false, &v, why, n))
+        return false;
+    *(int *)target = (int)v;
+    return true;
+}
+
+static cli_opt limit_rows[] = {{.name = "--max-memory",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_bytes,
+                                .arg = "MB",
+                                .parse = limit_megabytes,
+                                .help = "memory the library may hold (default 4096 or half the\n"
+                                        "physical memory; 0: no limit)"},
+                               {.name = "--max-modules",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_modules,
+                                .arg = "N",
+                                .parse = limit_count,
+                                .help = "modules in the L-system string (default 2^31)"},
+                               {.name = "--max-steps",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_steps,
+                                .arg = "N",
+                                .parse = limit_count,
+                                .help = "derivation steps (default 10^6)"},
+                               {.name = "--max-operations",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_operations,
+                                .arg = "N",
+                                .parse = limit_long,
+                                .help = "function calls and loop iterations in one step (10^8)"},
+                               {.name = "--max-loop-iterations",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_loop_iterations,
+                                .arg = "N",
+                                .parse = limit_long,
+                                .help = "loop iterations in one step (10^8)"},
+                               {.name = "--max-call-depth",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_call_depth,
+                                .arg = "N",
+                                .parse = limit_depth,
+                                .help = "nested function calls (256)"},
+                               {.name = "--max-expr-depth",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_expr_depth,
+                                .arg = "N",
+                                .parse = limit_depth,
+                                .help = "nesting of expressions and statements, operator chains\n"
+                                        "included (200, at most 1000)"},
+                               {.name = "--max-decomp-depth",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_decomp_depth,
+                                .arg = "N",
+                                .parse = limit_depth,
+                                .help = "maximum depth of decomposition and interpretation (1000)"},
+                               {.name = "--max-expansion",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_pp_bytes,
+                                .arg = "MB",
+                                .parse = limit_megabytes,
+                                .help = "size of the preprocessed model text, each macro\n"
+                                        "expansion counting 64 bytes (64)"},
+                               {.name = "--max-segments",
+                                .kind = CLI_CUSTOM,
+                                .target = &limits.max_segments,
+                                .arg = "N",
+                                .parse = limit_count,
+                                .help = "mechanical segments of one plant (2^28)"},
+                               {.name = "--allow-nonfinite",
+                                .kind = CLI_SET,
+                                .target = &limits.allow_nonfinite,
+                                .help =
+                                    "a module parameter that is inf or NaN is a warning (kept),\n"
+                                    "not an error"},
+                               {0}};
+
+static cli_opts limit_table = {.title = "limits (per run; docs/cli.md):",
+                               .opts = limit_rows,
+                               .width = 23,
+                               .missing = "{opt} expects a non-negative integer"};
+
+cli_opts *cli_limit_options(void)
+{
+    cli_limits(); /* the defaults first: the options change them */
+    return &limit_table;
 }
 
 cbm_context *cli_context(void)

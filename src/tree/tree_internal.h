@@ -6,7 +6,7 @@
 
 #include "cambium/tree.h"
 #include "core/core.h"
-#include "mech/mech_internal.h"
+#include "mech/mech.h"
 
 enum {
     SEG_LATERAL = 1, /* a lateral bud internode (length bud_length) */
@@ -53,6 +53,27 @@ struct cbm_tree {
     CBM_ARRAY(cbm_tree_summary) years;
     cbm_tree_summary cur;
 };
+
+/* The plant's per-segment arrays the tree reads, from the mechanics' package header: a snapshot,
+ * taken again after the plant gains or loses segments (tree_plant_of). */
+typedef struct tree_plant {
+    size_t n;
+    const int64_t *parent;
+    const int32_t *order;
+    const uint32_t *nchild;
+    const double *len, *area;
+    const cbm__outer *outer;
+    const cbm_vec3 *pos;
+    const cbm_quat *q;
+} tree_plant;
+
+static inline tree_plant tree_plant_of(const cbm_plant *pl)
+{
+    return (tree_plant){
+        cbm_plant_segment_count(pl), cbm_plant_parents(pl),   cbm__plant_orders(pl),
+        cbm__plant_child_counts(pl), cbm__plant_lengths(pl),  cbm__plant_areas(pl),
+        cbm__plant_outers(pl),       cbm_plant_positions(pl), cbm_plant_orientations(pl)};
+}
 
 /* tree_spring.c: the spring pass (bud fate by resource allocation, 4.8-4.19, 7.1). */
 cbm_status cbm__tree_spring(cbm_tree *t);

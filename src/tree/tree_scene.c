@@ -10,7 +10,7 @@
  * round at the base, pointed at the tip (an apple leaf: ovate-elliptic); each fruit a sphere of
  * volume m / fruit_density on a stalk of 0.7 of its radius hanging from its node; and
  * optionally a ground square. */
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -19,8 +19,8 @@ cbm_status cbm_tree_to_scene(const cbm_tree *t, cbm_scene *scene, int sides, boo
 {
     if (!t || !scene)
         return CBM_E_INVALID;
-    const cbm_plant *p = t->plant;
-    CBM_TRY(cbm_plant_to_scene(p, scene, sides));
+    CBM_TRY(cbm_plant_to_scene(t->plant, scene, sides));
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     const cbm_tree_def *d = &t->def;
     double lo = 0.0, hi = 0.0;
     for (size_t i = 0; i < t->seg.len; i++) {

@@ -32,7 +32,7 @@
  * per node without mutating a global). Juvenile E is drawn per shoot, N(E_juv, sd E_juv).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -57,7 +57,7 @@ static double normal_pos(cbm_tree *t, double mean, double sd, double floor_frac)
     return v < floor_frac * mean ? floor_frac * mean : v;
 }
 
-static cbm_vec3 distal(const cbm_plant *p, size_t i)
+static cbm_vec3 distal(const tree_plant *p, size_t i)
 {
     return v3_madd(p->pos[i], q_rotate(p->q[i], v3(1, 0, 0)), p->len[i]);
 }
@@ -154,7 +154,8 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     tree_seg ps = t->seg.data[i];
     ps.flags &= (uint8_t)~SEG_APEX;
     t->seg.data[i].flags = ps.flags;
-    if (distal(t->plant, i).y < d->bud_length)
+    const tree_plant pv = tree_plant_of(t->plant);
+    if (distal(&pv, i).y < d->bud_length)
         return CBM_OK; /* the shoot reached the ground */
     int count = ps.count + 1, nodes = ps.nodes;
     double h = (double)count / (double)nodes;
@@ -200,7 +201,7 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
 /* Removes the subtrees rooted at the marked segments from the plant and the model state. */
 static cbm_status remove_marked(cbm_tree *t, uint8_t *gone, size_t *removed)
 {
-    cbm_plant *p = t->plant;
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     size_t n = p->n, nrm = 0;
     /* roots first (marked, parent not gone), then propagate */
     for (size_t i = 0; i < n; i++) {
@@ -211,14 +212,14 @@ static cbm_status remove_marked(cbm_tree *t, uint8_t *gone, size_t *removed)
     for (size_t i = n; i-- > 0;)
         if (gone[i] == 1) {
             size_t rm = 0;
-            CBM_TRY(cbm_plant_remove_subtree(p, i, &rm));
+            CBM_TRY(cbm_plant_remove_subtree(t->plant, i, &rm));
             nrm += rm;
         }
     size_t w = 0;
     for (size_t i = 0; i < n; i++)
         if (!gone[i])
             t->seg.data[w++] = t->seg.data[i];
-    CBM_ASSERT(w == p->n);
+    CBM_ASSERT(w == cbm_plant_segment_count(t->plant));
     t->seg.len = w;
     if (removed)
         *removed = nrm;
@@ -228,7 +229,7 @@ static cbm_status remove_marked(cbm_tree *t, uint8_t *gone, size_t *removed)
 static cbm_status solve(cbm_tree *t)
 {
     cbm_solve_stats st;
-    if (t->plant->n == 0)
+    if (cbm_plant_segment_count(t->plant) == 0)
         return CBM_OK; /* the tree broke at its base: nothing left to grow */
     double t0 = now();
     cbm_status s = cbm_plant_solve(t->plant, &t->solve, &st);
@@ -248,7 +249,7 @@ static cbm_status solve(cbm_tree *t)
 /* Breakage (8.26-8.27) and cropping of segments bent through the ground (A.1 F3). */
 static cbm_status break_and_crop(cbm_tree *t)
 {
-    cbm_plant *p = t->plant;
+    tree_plant v = tree_plant_of(t->plant), *p = &v;
     size_t n0 = p->n;
     if (n0 == 0)
         return CBM_OK;
@@ -262,7 +263,7 @@ static cbm_status break_and_crop(cbm_tree *t)
      * and one wrong break removes a whole limb; the next step's equilibrium decides */
     if (s == CBM_OK && t->def.modulus_of_rupture > 0.0 && t->converged) {
         memcpy(par, p->parent, n0 * sizeof *par);
-        s = cbm_plant_break(p, broken, n0, &nb, &nrm);
+        s = cbm_plant_break(t->plant, broken, n0, &nb, &nrm);
         if (s == CBM_OK && nb) {
             for (size_t k = 0; k < nb; k++)
                 gone[broken[k]] = 1;
@@ -273,17 +274,18 @@ static cbm_status break_and_crop(cbm_tree *t)
                 if (!gone[i])
                     t->seg.data[w++] = t->seg.data[i];
             }
-            CBM_ASSERT(w == p->n);
+            CBM_ASSERT(w == cbm_plant_segment_count(t->plant));
             t->seg.len = w;
             t->cur.breaks += nb;
             t->cur.removed += nrm;
         }
     }
     if (s == CBM_OK) {
+        v = tree_plant_of(t->plant); /* after the breaks */
         size_t n = p->n;
         memset(gone, 0, n0);
         if (nb && n > 0)
-            s = cbm_plant_evaluate(p, NULL);
+            s = cbm_plant_evaluate(t->plant, NULL);
         for (size_t i = 0; s == CBM_OK && i < n; i++)
             if (p->parent[i] >= 0 && distal(p, i).y < -t->def.bud_length) {
                 gone[i] = 1;
@@ -308,7 +310,7 @@ static cbm_status break_and_crop(cbm_tree *t)
 /* Rings by the pipe model with reaction wood, and ageing; marks what grew. */
 static cbm_status rings(cbm_tree *t, double *max_increment)
 {
-    cbm_plant *p = t->plant;
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     size_t n = p->n;
     double t0 = now();
     double *a0 = cbm__alloc(t->ctx, (n ? n : 1) * sizeof *a0);
@@ -317,10 +319,11 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
     for (size_t i = 0; i < n; i++)
         a0[i] = p->outer[i].a; /* the outer ring, kept per segment */
     cbm_growth_stats gs;
-    cbm_status s = cbm_plant_grow_rings(p, &t->growth, &gs);
+    cbm_status s = cbm_plant_grow_rings(t->plant, &t->growth, &gs);
     for (size_t i = 0; s == CBM_OK && i < n; i++) {
-        if (p->outer[i].a > a0[i]) { /* a new ring: read it from the pool */
-            const cbm_ring *o = p->rings.data + p->ring_first[i] + p->ring_count[i] - 1;
+        if (p->outer[i].a > a0[i]) { /* a new ring: the segment's last */
+            size_t nr;
+            const cbm_ring *o = cbm__plant_rings(t->plant, i, &nr) + nr - 1;
             t->seg.data[i].flags |= SEG_GREW;
             if (o->reaction > 0.0)
                 t->seg.data[i].flags |= SEG_REACT;
@@ -335,7 +338,7 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
 /* Shape statistics of the current state. */
 static void measure(const cbm_tree *t, double *height, double *width, double *tip_height)
 {
-    const cbm_plant *p = t->plant;
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     double top = 0.0, xlo = INFINITY, xhi = -INFINITY, zlo = INFINITY, zhi = -INFINITY;
     double tips = 0.0;
     size_t nt = 0;
@@ -360,7 +363,7 @@ static void measure(const cbm_tree *t, double *height, double *width, double *ti
  * (then) and the mean unloaded height (now). */
 static void spring_back(cbm_tree *t)
 {
-    const cbm_plant *p = t->plant;
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     double lo = 0.0, un = 0.0;
     size_t nt = 0;
     for (size_t i = 0; i < p->n; i++)
@@ -375,7 +378,7 @@ static void spring_back(cbm_tree *t)
 
 static double trunk_lean(const cbm_tree *t)
 {
-    const cbm_plant *p = t->plant;
+    const tree_plant v = tree_plant_of(t->plant), *p = &v;
     size_t last = SIZE_MAX;
     for (size_t i = 0; i < p->n; i++)
         if (t->seg.data[i].flags & SEG_TRUNK1)
@@ -490,6 +493,13 @@ void cbm_tree_destroy(cbm_tree *t)
     cbm__free(t->ctx, t, sizeof *t);
 }
 
+/* Diameter of the base segment's outer ring, m (0 without segments). */
+static double base_diameter(const cbm_tree *t)
+{
+    const tree_plant p = tree_plant_of(t->plant);
+    return p.n ? 2.0 * sqrt(p.outer[0].a * p.outer[0].b) : 0.0;
+}
+
 static cbm_status summer_step(cbm_tree *t)
 {
     size_t n = t->seg.len;
@@ -520,10 +530,11 @@ static cbm_status summer_step(cbm_tree *t)
         t->cur.height = h;
         t->cur.crown_width = w;
         t->cur.tip_height_loaded = th;
+        const tree_plant pv = tree_plant_of(t->plant);
         for (size_t i = 0; i < t->seg.len; i++)
-            if (t->plant->nchild[i] == 0) {
+            if (pv.nchild[i] == 0) {
                 t->seg.data[i].flags |= SEG_TIP;
-                t->seg.data[i].tip_y = distal(t->plant, i).y;
+                t->seg.data[i].tip_y = distal(&pv, i).y;
             }
         size_t nl = 0, nf = 0;
         for (size_t i = 0; i < t->seg.len; i++) {
@@ -534,8 +545,7 @@ static cbm_status summer_step(cbm_tree *t)
         t->cur.fruit = nf;
         t->cur.segments = t->seg.len; /* the year's final count replaces it */
         t->cur.lean = trunk_lean(t);
-        t->cur.base_diameter =
-            t->plant->n ? 2.0 * sqrt(t->plant->outer[0].a * t->plant->outer[0].b) : 0.0;
+        t->cur.base_diameter = base_diameter(t);
         t->season = CBM_TREE_WINTER;
     }
     return CBM_OK;
@@ -555,16 +565,17 @@ static cbm_status shed_unproductive(cbm_tree *t)
     uint8_t *gone = cbm__calloc(t->ctx, n, 1);
     if (!gone)
         return CBM_E_NOMEM;
+    const tree_plant pv = tree_plant_of(t->plant);
     size_t cnt = 0;
     /* gone[] first holds the productive flag, propagated from the tips to the base */
     for (size_t i = 0; i < n; i++) {
         const tree_seg *s = &t->seg.data[i];
         gone[i] = (s->flags & (SEG_GREW | SEG_BUD | SEG_APEX)) ||
-                  (t->plant->nchild[i] == 0 && !(s->flags & SEG_ABORTED));
+                  (pv.nchild[i] == 0 && !(s->flags & SEG_ABORTED));
     }
     for (size_t i = n; i-- > 1;)
-        if (gone[i] && t->plant->parent[i] >= 0)
-            gone[t->plant->parent[i]] = 1;
+        if (gone[i] && pv.parent[i] >= 0)
+            gone[pv.parent[i]] = 1;
     gone[0] = 0; /* the base is never shed */
     for (size_t i = 1; i < n; i++) {
         tree_seg *s = &t->seg.data[i];
@@ -584,7 +595,7 @@ static cbm_status shed_unproductive(cbm_tree *t)
     /* count only the most proximal shed branches */
     size_t branches = 0;
     for (size_t i = 0; i < n; i++)
-        if (gone[i] && !(t->plant->parent[i] >= 0 && gone[t->plant->parent[i]]))
+        if (gone[i] && !(pv.parent[i] >= 0 && gone[pv.parent[i]]))
             branches++;
     cbm_status s = CBM_OK;
     size_t nrm = 0;
@@ -608,8 +619,7 @@ static cbm_status end_year(cbm_tree *t)
         spring_back(t);
     t->cur.segments = t->seg.len;
     t->cur.lean = trunk_lean(t);
-    t->cur.base_diameter =
-        t->plant->n ? 2.0 * sqrt(t->plant->outer[0].a * t->plant->outer[0].b) : 0.0;
+    t->cur.base_diameter = base_diameter(t);
     for (size_t i = 0; i < t->seg.len; i++)
         t->cur.reaction_segments += (t->seg.data[i].flags & SEG_REACT) != 0;
     CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->years, t->cur));

@@ -24,7 +24,7 @@
  * and y_max the highest point along it (a forward max then a backward broadcast, as A.2 does).
  * It favours upward buds high on a bent parent: relay shoots.
  */
-#include "models/tree_internal.h"
+#include "tree/tree_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -38,7 +38,7 @@ double cbm_tree_fairness(double p, double f)
     return p < 0.0 ? 0.0 : (p > 1.0 ? 1.0 : p);
 }
 
-static cbm_vec3 distal(const cbm_plant *p, size_t i)
+static cbm_vec3 distal(const tree_plant *p, size_t i)
 {
     return v3_madd(p->pos[i], q_rotate(p->q[i], v3(1, 0, 0)), p->len[i]);
 }
@@ -77,7 +77,7 @@ static double decide(cbm_tree *t, size_t j, double v, bool relay)
 
 cbm_status cbm__tree_spring(cbm_tree *t)
 {
-    cbm_plant *p = t->plant;
+    const tree_plant view = tree_plant_of(t->plant), *p = &view;
     size_t n = p->n;
     if (n == 0)
         return CBM_OK;
