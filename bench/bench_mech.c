@@ -4,6 +4,9 @@
  * bytes as one pass touches). Writes a CSV.
  *
  * usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out FILE.csv] [--tol T]
+ *                   [--threads N] [--fast-only]
+ * (--threads: of the tree factorisation, 0 = one per processor, the default; 1 = serial;
+ * --fast-only: no relaxation rows)
  * (the relaxation factor is tuned over 0.1 .. 1 on sizes up to 10^4 and on the smallest size,
  * then the best one is used for the larger sizes)
  *
@@ -23,6 +26,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "mech/mech_internal.h" /* cbm__mech_tree_threads */
 
 #include <math.h>
 #include <stdio.h>
@@ -207,6 +211,8 @@ int main(int argc, char **argv)
     const char *out = "bench_mech.csv";
     double tol = 1e-8;
     const char *only = NULL;
+    int threads = 0; /* the solver's default: one per processor */
+    bool fast_only = false;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--max") && i + 1 < argc)
             maxn = (size_t)atof(argv[++i]);
@@ -218,12 +224,17 @@ int main(int argc, char **argv)
             only = argv[++i];
         else if (!strcmp(argv[i], "--tol") && i + 1 < argc)
             tol = atof(argv[++i]);
+        else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
+            threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--fast-only"))
+            fast_only = true;
         else {
             fprintf(stderr, "usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out "
-                            "FILE.csv] [--tol T]\n");
+                            "FILE.csv] [--tol T] [--threads N] [--fast-only]\n");
             return 2;
         }
     }
+    cbm__mech_tree_threads(threads, 50000);
     cbm_context *ctx = NULL;
     if (cbm_context_create(NULL, &ctx) != CBM_OK)
         return 1;
@@ -265,7 +276,9 @@ int main(int argc, char **argv)
             double rel_alpha[10];
             rows[nr] = solve(p, CBM_MECH_NEWTON, 0, tol, 0);
             rel_alpha[nr++] = 0;
-            if (n <= 10000 || n == minn) {
+            if (fast_only) {
+                /* the fast solver alone */
+            } else if (n <= 10000 || n == minn) {
                 /* tune the relaxation factor on the small sizes */
                 size_t bestp = (size_t)-1;
                 for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {

@@ -20,6 +20,8 @@
 #include "cambium/lsys.h"
 #include "lang/lang.h"
 
+#include <stdio.h>
+
 #define LSYS_PARAM_BIT  0x80u
 #define LSYS_MAX_PARAMS 255
 
@@ -153,6 +155,17 @@ struct cbm_lsys {
 };
 
 void cbm__lstr_free(cbm_context *ctx, lstr *s);
+
+/* Buffered text for the string writers (write.c): bytes and characters, numbers as "%.9g" (byte
+ * for byte snprintf's text, memoised by value) and "%lld". open gives NULL when memory runs out
+ * (close(NULL) then says CBM_E_NOMEM); close flushes, frees and reports a write error. */
+typedef struct cbm__strw cbm__strw;
+cbm__strw *cbm__strw_open(cbm_context *ctx, FILE *f);
+void cbm__strw_bytes(cbm__strw *w, const char *s, size_t n);
+void cbm__strw_char(cbm__strw *w, char c);
+void cbm__strw_g9(cbm__strw *w, double v);
+void cbm__strw_lld(cbm__strw *w, long long v);
+cbm_status cbm__strw_close(cbm__strw *w);
 /* Index in ls->sys of the L-system labelled id, -1 if none. */
 int cbm__lsys_find(const cbm_lsys *ls, int id);
 cbm_status cbm__lsys_parse(cbm_lsys *ls, const cbm__pp *pp);

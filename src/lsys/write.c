@@ -1,9 +1,107 @@
 /* Writers of the derived string: one module per line with parameters as %.9g (the notation of
  * cpfg's exact string dumps, round-trips float32 exactly), and cpfg's own `-str` layout
- * (modules run together, %g, lines wrapped at 70 characters). */
+ * (modules run together, %g, lines wrapped at 70 characters); the buffered text writer with a
+ * memo of number texts that the first uses (cbm__strw, for either dialect's writer). */
 #include "lsys/lsys_internal.h"
 
 #include <stdio.h>
+#include <string.h>
+
+/* ------------------------------------------------------------ buffered text with a number memo
+ * A derived string of 10^7 modules is written one line per module; through stdio that is a
+ * locked call per character and an fprintf("%.9g") per parameter, most of the run's time
+ * (printf's exact decimal conversion). The lines are built in a buffer instead, and the text of
+ * each number is kept in a direct-mapped memo keyed by its bit pattern: derived strings repeat
+ * few distinct values (angles, scale factors), so most parameters are a copy of text printed
+ * before. The text is what snprintf("%.9g") gives, so the output is byte for byte the same. */
+#define STRW_BUF   (1u << 16)
+#define STRW_SLOTS 4096u
+#define STRW_TXT   32 /* "%.9g" of a double: at most 16 characters ("-1.23456789e-308") */
+
+struct cbm__strw {
+    cbm_context *ctx;
+    FILE *f;
+    size_t n;
+    bool err;
+    uint64_t key[STRW_SLOTS];
+    uint8_t len[STRW_SLOTS]; /* 0: empty slot */
+    char txt[STRW_SLOTS][STRW_TXT];
+    char buf[STRW_BUF];
+};
+
+cbm__strw *cbm__strw_open(cbm_context *ctx, FILE *f)
+{
+    cbm__strw *w = cbm__calloc(ctx, 1, sizeof *w);
+    if (w) {
+        w->ctx = ctx;
+        w->f = f;
+    }
+    return w;
+}
+
+static void strw_flush(cbm__strw *w)
+{
+    if (w->n && fwrite(w->buf, 1, w->n, w->f) != w->n)
+        w->err = true;
+    w->n = 0;
+}
+
+void cbm__strw_bytes(cbm__strw *w, const char *s, size_t n)
+{
+    if (w->n + n > STRW_BUF) {
+        strw_flush(w);
+        if (n > STRW_BUF) {
+            if (fwrite(s, 1, n, w->f) != n)
+                w->err = true;
+            return;
+        }
+    }
+    memcpy(w->buf + w->n, s, n);
+    w->n += n;
+}
+
+void cbm__strw_char(cbm__strw *w, char c)
+{
+    if (w->n == STRW_BUF)
+        strw_flush(w);
+    w->buf[w->n++] = c;
+}
+
+void cbm__strw_g9(cbm__strw *w, double v)
+{
+    uint64_t bits;
+    memcpy(&bits, &v, sizeof bits);
+    unsigned h = (unsigned)((bits * 0x9E3779B97F4A7C15ull) >> 52) & (STRW_SLOTS - 1);
+    if (!w->len[h] || w->key[h] != bits) {
+        int n = snprintf(w->txt[h], STRW_TXT, "%.9g", v);
+        w->key[h] = bits;
+        w->len[h] = (uint8_t)(n > 0 && n < STRW_TXT ? n : 0);
+        if (!w->len[h]) { /* cannot happen for %.9g; written directly all the same */
+            char big[64];
+            n = snprintf(big, sizeof big, "%.9g", v);
+            cbm__strw_bytes(w, big, n > 0 ? (size_t)n : 0);
+            return;
+        }
+    }
+    cbm__strw_bytes(w, w->txt[h], w->len[h]);
+}
+
+void cbm__strw_lld(cbm__strw *w, long long v)
+{
+    char t[24];
+    int n = snprintf(t, sizeof t, "%lld", v);
+    cbm__strw_bytes(w, t, n > 0 ? (size_t)n : 0);
+}
+
+cbm_status cbm__strw_close(cbm__strw *w)
+{
+    if (!w)
+        return CBM_E_NOMEM;
+    strw_flush(w);
+    bool err = w->err || ferror(w->f);
+    cbm__free(w->ctx, w, sizeof *w);
+    return err ? CBM_E_IO : CBM_OK;
+}
 
 cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o)
 {
@@ -11,16 +109,20 @@ cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o)
         return cbm__lpfg_write_str(ls, homomorphism, o);
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
-    FILE *f = cbm_out_stream(o);
+    cbm__strw *w = cbm__strw_open(ls->ctx, cbm_out_stream(o));
+    if (!w)
+        return CBM_E_NOMEM;
     while (cbm_lsys_cursor_next(ls, homomorphism, &c)) {
-        putc(c.symbol, f);
-        for (int i = 0; i < c.nparams; i++)
-            fprintf(f, "%c%.9g", i ? ',' : '(', c.params[i]);
+        cbm__strw_char(w, (char)c.symbol);
+        for (int i = 0; i < c.nparams; i++) {
+            cbm__strw_char(w, i ? ',' : '(');
+            cbm__strw_g9(w, c.params[i]);
+        }
         if (c.nparams)
-            putc(')', f);
-        putc('\n', f);
+            cbm__strw_char(w, ')');
+        cbm__strw_char(w, '\n');
     }
-    return ferror(f) ? CBM_E_IO : CBM_OK;
+    return cbm__strw_close(w);
 }
 
 cbm_status cbm_lsys_write_cpfg(const cbm_lsys *ls, bool homomorphism, cbm_out *o)

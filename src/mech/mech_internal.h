@@ -33,6 +33,7 @@ typedef struct cbm__mech_work {
     cbm_vec3 *dpos;   /* tangent: world displacement of the proximal node (ground contact) */
     cbm_vec3 *dfc;    /* tangent: world force accumulators (ground contact) */
     cbm_vec3 *tmp;    /* a vector of the Krylov space */
+    uint32_t *tpart;  /* the tree's split for the threads of solve_tree.c (subtree sizes, bins) */
     cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
     cbm_vec3 *zbasis; /* the preconditioned vectors (flexible GMRES), krylov_cap of 3n */
     double *fdinv;    /* tree factorisation, 9 doubles per segment each: D^-1 */
@@ -51,6 +52,11 @@ typedef struct cbm__mech_work {
     uint8_t *fact; /* 1 if the segment or one it carries touches the ground */
     double *hess;  /* (m + 1) x m Hessenberg matrix and Givens data */
 } cbm__mech_work;
+
+/* Threads of the tree factorisation and solve (solve_tree.c): at most `threads` (0: one per
+ * processor, the default; 1: none), only for plants of at least `min_segments` segments. The
+ * results are the same to the bit for any count (tests set both to compare). */
+void cbm__mech_tree_threads(int threads, size_t min_segments);
 
 /* One overlapping pair of organ spheres (contact.c), a < b (segment indices). */
 typedef struct cbm__mech_pair {

@@ -46,10 +46,14 @@
  * returned. With mu > 0 the factorisation is that of J + mu S exactly (S only enters the
  * pivots), the Levenberg-Marquardt shift the fast solver uses to descend to stable states.
  */
+#define _POSIX_C_SOURCE 200809L
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <string.h>
+#include <unistd.h>
 
 typedef struct m3 {
     double m[9]; /* row-major */
@@ -129,7 +133,7 @@ static inline m3 transpose(const double *a)
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
-                       bool act);
+                       bool act, bool defer);
 
 /* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
 static bool sym_pd(const double *d)
@@ -179,38 +183,34 @@ static void contact_pre(const cbm_plant *p, size_t i, cbm_vec3 h, double *W, m3 
     }
 }
 
-/* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
- * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
- * D was singular and replaced by S. */
-static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
+/* What one backward sweep (factor_sweep) computes: the factorisation, with b and out the
+ * backward half of the solve J out = b too (fused), or with only_solve that half alone over an
+ * existing factorisation (cbm__mech_tree_apply). */
+typedef struct sweep {
+    cbm_plant *p;
+    const cbm_vec3 *b;
+    cbm_vec3 *out;
+    double mu;
+    bool ground, only_solve;
+    size_t singular, nonpd; /* counted by the sweep */
+} sweep;
+
+/* The factorisation of segment i (its children's Phi, and with ground their Gamma, Lambda and
+ * Xi, are in its accumulators) and, with sw->b, the backward half of the solve there. With
+ * defer (a subtree a thread sweeps, see "Threads" below) Phi is left in fw[i] and psi in dm[i]
+ * for the sweep of the top to add into the parent, in the serial order. */
+static void factor_one(sweep *sw, size_t i, bool defer)
 {
+    cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
-    const size_t n = p->n;
-    size_t singular = 0, nonpd = 0;
-    const bool ground = p->ground && w->fcap >= n;
-    memset(w->fw, 0, 9 * n * sizeof(double));
-    if (ground) {
-        memset(w->fact, 0, n);
-        for (size_t i = 0; i < n; i++) {
-            double kc;
-            cbm_vec3 h = q_h(p->q[i]);
-            (void)cbm__mech_contact(p, i, h, &kc);
-            /* mark the path to the root; only marked segments read or receive the contact
-             * accumulators, so only theirs need clearing */
-            for (int64_t j = (int64_t)i; kc != 0.0 && j >= 0 && !w->fact[j]; j = p->parent[j]) {
-                w->fact[j] = 1;
-                memset(w->fgam + 9 * j, 0, 9 * sizeof(double));
-                memset(w->flam + 9 * j, 0, 9 * sizeof(double));
-                memset(w->fxi + 9 * j, 0, 9 * sizeof(double));
-            }
-        }
+    const bool ground = sw->ground;
+    const double mu = sw->mu;
+    m3 R = rot(p->q[i]), Rt = transpose(R.m);
+    if (sw->only_solve) {
+        solve_back(p, i, sw->b, sw->out, &Rt, ground && w->fact[i], defer);
+        return;
     }
-    cbm_vec3 *acc = w->dm, *accf = w->dfc;
-    if (b && out)
-        for (size_t i = 0; i < n; i++)
-            acc[i] = accf[i] = v3(0, 0, 0);
-    for (size_t i = n; i-- > 0;) {
-        m3 R = rot(p->q[i]), Rt = transpose(R.m);
+    {
         cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
         cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
                             v3_scale(w->wown[i], w->lever[i]));
@@ -263,9 +263,9 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         D.m[8] += (1.0 + mu) * c.z;
         double *Di = w->fdinv + 9 * i;
         if (!sym_pd(D.m))
-            nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
+            sw->nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
         if (!minv(D.m, c.x * c.y * c.z, Di)) {
-            singular++;
+            sw->singular++;
             memset(Di, 0, 9 * sizeof(double));
             Di[0] = 1.0 / c.x;
             Di[4] = 1.0 / c.y;
@@ -280,7 +280,9 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         for (int k = 0; k < 9; k++)
             Phi.m[k] += W[k];
         int64_t pa = p->parent[i];
-        if (pa >= 0)
+        if (defer)
+            memcpy(W, Phi.m, sizeof Phi.m); /* W is not read again */
+        else if (pa >= 0)
             madd(w->fw + 9 * (size_t)pa, Phi.m);
         if (act) {
             /* Gamma = W a D^-1 P + Y, Lambda = Z + (Z a D^-1) Q, Xi = (Z a D^-1) P + Xi' */
@@ -297,14 +299,214 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
                 madd(w->fxi + 9 * (size_t)pa, xi.m);
             }
         }
-        if (b && out)
-            solve_back(p, i, b, out, &Rt, act);
+        if (sw->b && sw->out)
+            solve_back(p, i, sw->b, sw->out, &Rt, act, defer);
     }
+}
+
+/* ---- Threads
+ * Disjoint subtrees are independent in both sweeps: a thread can condense one from its tips
+ * while another condenses another; only what a subtree hands to its parent meets the rest. So
+ * the tree is split into the "top" (segments carrying more than a sixteenth of the tree per
+ * thread) and the subtrees hanging from it ("roots": a segment outside the top whose parent is in
+ * it), dealt to the threads in index order, each to the least loaded (by segments). The backward
+ * sweep runs each thread over its subtrees (in decreasing index, as the serial sweep), the roots
+ * keeping what they hand down (Phi in fw, psi in dm); then one sweep over the top, again in
+ * decreasing index, adds a root's hand-down where the serial sweep would have and factors the
+ * top's segments. Every accumulator so receives the same terms in the same order as in the serial
+ * sweep, so the results are the same to the bit for any number of threads. The forward sweep
+ * runs the top first, then the subtrees in parallel. A chain (no branch carries a small part of
+ * the tree) and a plant with ground contact stay serial. Entry per segment in tpart: bits 0-27
+ * the subtree size, then the thread (0: top) and the root bit. */
+#define PART_SIZE   0x0fffffffu
+#define PART_SHIFT  28
+#define PART_ROOT   0x80000000u
+#define MAX_THREADS 7
+
+static int tree_threads = 0; /* 0: one per processor */
+static size_t tree_min_segments = 50000;
+
+void cbm__mech_tree_threads(int threads, size_t min_segments)
+{
+    tree_threads = threads < 0 ? 0 : threads;
+    tree_min_segments = min_segments;
+}
+
+/* The threads to use for n segments and the split (tpart); 1: serial. */
+static int tree_split(cbm_plant *p)
+{
+    const size_t n = p->n;
+    int t = tree_threads;
+    if (t == 0) {
+        long np = sysconf(_SC_NPROCESSORS_ONLN);
+        t = np > 0 ? (int)np : 1;
+    }
+    if (t > MAX_THREADS)
+        t = MAX_THREADS;
+    if (t < 2 || n < tree_min_segments || n < 2 || n > PART_SIZE || !p->work.tpart)
+        return 1;
+    uint32_t *part = p->work.tpart;
+    const int64_t *par = p->parent;
+    for (size_t i = 0; i < n; i++)
+        part[i] = 1;
+    for (size_t i = n; i-- > 1;)
+        if (par[i] >= 0)
+            part[par[i]] += part[i];
+    size_t limit = n / (16 * (size_t)t), top = 0;
+    size_t load[MAX_THREADS + 1] = {0};
+    for (size_t i = 0; i < n; i++) {
+        uint32_t sz = part[i] & PART_SIZE;
+        int64_t pa = par[i];
+        if (sz > limit) {
+            top++; /* thread 0 */
+            continue;
+        }
+        uint32_t pp = pa >= 0 ? part[pa] : 0;
+        if (pa >= 0 && (pp >> PART_SHIFT & 7u) != 0) {
+            part[i] |= pp & (7u << PART_SHIFT); /* its parent's thread */
+            continue;
+        }
+        int best = 1;
+        for (int k = 2; k <= t; k++)
+            if (load[k] < load[best])
+                best = k;
+        load[best] += sz;
+        part[i] |= ((uint32_t)best << PART_SHIFT) | PART_ROOT;
+    }
+    return top * 4 > n ? 1 : t; /* mostly a chain: the threads would wait on the top */
+}
+
+typedef struct tree_job {
+    sweep sw;
+    int thread;
+    bool forward;
+} tree_job;
+
+static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground);
+
+static void *tree_job_run(void *arg)
+{
+    tree_job *j = arg;
+    cbm_plant *p = j->sw.p;
+    const uint32_t *part = p->work.tpart;
+    const uint32_t me = (uint32_t)j->thread;
+    if (j->forward) {
+        for (size_t i = 0; i < p->n; i++)
+            if ((part[i] >> PART_SHIFT & 7u) == me)
+                forward_one(p, i, j->sw.out, false);
+        return NULL;
+    }
+    for (size_t i = p->n; i-- > 0;)
+        if ((part[i] >> PART_SHIFT & 7u) == me)
+            factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
+    return NULL;
+}
+
+/* Runs the sweep's share of threads 1..t, the caller's thread taking the first (and the share of
+ * any thread that could not start), and adds up their counts. */
+static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular, size_t *nonpd)
+{
+    tree_job jobs[MAX_THREADS];
+    pthread_t th[MAX_THREADS];
+    memset(jobs, 0, sizeof jobs);
+    bool started[MAX_THREADS] = {false};
+    for (int k = 0; k < t; k++) {
+        jobs[k].sw = *sw;
+        jobs[k].sw.singular = jobs[k].sw.nonpd = 0;
+        jobs[k].thread = k + 1;
+        jobs[k].forward = forward;
+    }
+    for (int k = 1; k < t; k++)
+        started[k] = pthread_create(&th[k], NULL, tree_job_run, &jobs[k]) == 0;
+    tree_job_run(&jobs[0]);
+    for (int k = 1; k < t; k++) {
+        if (started[k])
+            pthread_join(th[k], NULL);
+        else
+            tree_job_run(&jobs[k]);
+    }
+    for (int k = 0; k < t; k++) {
+        *singular += jobs[k].sw.singular;
+        *nonpd += jobs[k].sw.nonpd;
+    }
+}
+
+/* The backward sweep of sw over the plant, then (with out) the forward sweep: serial, or split
+ * over threads (see "Threads"). */
+static void sweeps(sweep *sw)
+{
+    cbm_plant *p = sw->p;
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    int t = sw->ground ? 1 : tree_split(p);
+    if (t <= 1) {
+        for (size_t i = n; i-- > 0;)
+            factor_one(sw, i, false);
+    } else {
+        tree_parallel(sw, t, false, &sw->singular, &sw->nonpd);
+        const uint32_t *part = w->tpart;
+        const bool solve = sw->b && sw->out;
+        for (size_t i = n; i-- > 0;) {
+            uint32_t e = part[i];
+            if ((e >> PART_SHIFT & 7u) == 0) {
+                factor_one(sw, i, false);
+            } else if (e & PART_ROOT) {
+                int64_t pa = p->parent[i]; /* in the top */
+                if (!sw->only_solve)
+                    madd(w->fw + 9 * (size_t)pa, w->fw + 9 * i);
+                if (solve)
+                    w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
+            }
+        }
+    }
+    if (!(sw->b && sw->out))
+        return;
+    if (t <= 1) {
+        forward_solve(p, sw->out);
+        return;
+    }
+    const uint32_t *part = w->tpart;
+    for (size_t i = 0; i < n; i++)
+        if ((part[i] >> PART_SHIFT & 7u) == 0)
+            forward_one(p, i, sw->out, false);
+    size_t none = 0;
+    tree_parallel(sw, t, true, &none, &none);
+}
+
+/* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
+ * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
+ * D was singular and replaced by S. */
+static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    const bool ground = p->ground && w->fcap >= n;
+    memset(w->fw, 0, 9 * n * sizeof(double));
+    if (ground) {
+        memset(w->fact, 0, n);
+        for (size_t i = 0; i < n; i++) {
+            double kc;
+            cbm_vec3 h = q_h(p->q[i]);
+            (void)cbm__mech_contact(p, i, h, &kc);
+            /* mark the path to the root; only marked segments read or receive the contact
+             * accumulators, so only theirs need clearing */
+            for (int64_t j = (int64_t)i; kc != 0.0 && j >= 0 && !w->fact[j]; j = p->parent[j]) {
+                w->fact[j] = 1;
+                memset(w->fgam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->flam + 9 * j, 0, 9 * sizeof(double));
+                memset(w->fxi + 9 * j, 0, 9 * sizeof(double));
+            }
+        }
+    }
+    cbm_vec3 *acc = w->dm, *accf = w->dfc;
     if (b && out)
-        forward_solve(p, out);
+        for (size_t i = 0; i < n; i++)
+            acc[i] = accf[i] = v3(0, 0, 0);
+    sweep sw = {p, b, out, mu, ground, false, 0, 0};
+    sweeps(&sw);
     if (nonpd_out)
-        *nonpd_out = nonpd;
-    return singular;
+        *nonpd_out = sw.nonpd;
+    return sw.singular;
 }
 
 size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd)
@@ -347,17 +549,15 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     const bool ground = p->ground && w->fcap >= n;
     for (size_t i = 0; i < n; i++)
         w->dm[i] = w->dfc[i] = v3(0, 0, 0);
-    for (size_t i = n; i-- > 0;) {
-        m3 Rt = transpose(rot(p->q[i]).m);
-        solve_back(p, i, b, out, &Rt, ground && w->fact[i]);
-    }
-    forward_solve(p, out);
+    sweep sw = {p, b, out, 0.0, ground, true, 0, 0};
+    sweeps(&sw);
 }
 
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
- * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's. */
+ * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
+ * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
 static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
-                       bool act)
+                       bool act, bool defer)
 {
     cbm__mech_work *w = &p->work;
     cbm_vec3 m0 = w->dm[i]; /* sum of the children's psi (+ the contact term below) */
@@ -373,6 +573,10 @@ static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out,
     if (pa < 0)
         return;
     cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), m0);
+    if (defer) {
+        w->dm[i] = psi; /* not read again */
+        return;
+    }
     w->dm[pa] = v3_add(w->dm[pa], psi);
     if (act) {
         cbm_vec3 chi = v3_add(mvec(w->fzad + 9 * i, ui), f0);
@@ -380,28 +584,33 @@ static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out,
     }
 }
 
-static void forward_solve(cbm_plant *p, cbm_vec3 *out)
+/* The forward half of the solve at segment i (its parent's dth, and dX with ground, known). */
+static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground)
 {
     cbm__mech_work *w = &p->work;
     cbm_vec3 *dth = w->dth, *dx = w->dpos; /* dpos: displacement of the distal node here */
-    const bool ground = p->ground && w->fcap >= p->n;
-    for (size_t i = 0; i < p->n; i++) {
-        int64_t pa = p->parent[i];
-        cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
-        cbm_vec3 rhs = v3_add(out[i], mvec(w->fq + 9 * i, tp));
-        const bool act = ground && w->fact[i];
-        cbm_vec3 xp = v3(0, 0, 0);
-        if (act) {
-            xp = pa >= 0 ? dx[pa] : v3(0, 0, 0);
-            rhs = v3_add(rhs, mvec(w->fp + 9 * i, xp));
-        }
-        cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
-        out[i] = v;
-        dth[i] = v3_add(tp, mvec(w->fa + 9 * i, v));
-        if (act) {
-            /* dX_i = dX_parent + l_i dth_i x H_i */
-            cbm_vec3 h = q_h(p->q[i]);
-            dx[i] = v3_add(xp, v3_scale(v3_cross(dth[i], h), p->len[i]));
-        }
+    int64_t pa = p->parent[i];
+    cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
+    cbm_vec3 rhs = v3_add(out[i], mvec(w->fq + 9 * i, tp));
+    const bool act = ground && w->fact[i];
+    cbm_vec3 xp = v3(0, 0, 0);
+    if (act) {
+        xp = pa >= 0 ? dx[pa] : v3(0, 0, 0);
+        rhs = v3_add(rhs, mvec(w->fp + 9 * i, xp));
     }
+    cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
+    out[i] = v;
+    dth[i] = v3_add(tp, mvec(w->fa + 9 * i, v));
+    if (act) {
+        /* dX_i = dX_parent + l_i dth_i x H_i */
+        cbm_vec3 h = q_h(p->q[i]);
+        dx[i] = v3_add(xp, v3_scale(v3_cross(dth[i], h), p->len[i]));
+    }
+}
+
+static void forward_solve(cbm_plant *p, cbm_vec3 *out)
+{
+    const bool ground = p->ground && p->work.fcap >= p->n;
+    for (size_t i = 0; i < p->n; i++)
+        forward_one(p, i, out, ground);
 }

@@ -364,6 +364,21 @@ static int run_fail(const run *r, cbm_status s, const char *what)
     return rc;
 }
 
+/* Whether the outputs need the turtle pass over the current string. Only the string (.str)
+ * asked: no pass when it could not change the string or print anything: no query module for the
+ * turtle to fill (cpfg's ?P ?H ?L ?U) and no homomorphism or interpretation rules, whose code may
+ * print. The summary line without -o prints the box, a pass. (For the 8-step Koch curve the pass
+ * was a third of a string-only run.) */
+static bool needs_interpretation(const run *r)
+{
+    if (r->need_scene || r->json || r->ntargets == 0)
+        return true;
+    for (int k = 0; k < r->ntargets; k++)
+        if (strcmp(r->targets[k].format, "str"))
+            return true;
+    return cbm_model_has_queries(r->model) || cbm_lsys_has_homomorphism(r->ls);
+}
+
 /* What write_outputs writes after a step. */
 enum { ROW = 0, NUMBERED = 1, FINAL = 2 };
 
@@ -371,7 +386,7 @@ enum { ROW = 0, NUMBERED = 1, FINAL = 2 };
  * animation frames; FINAL writes the final files (the animations, the json document). */
 static int write_outputs(run *r, int what, int done)
 {
-    cbm_status s = interpret(r, done);
+    cbm_status s = needs_interpretation(r) ? interpret(r, done) : CBM_OK;
     if (s != CBM_OK)
         return run_fail(r, s, "interpretation");
     double t0 = cli_seconds();

@@ -1,0 +1,140 @@
+/* The tree factorisation and solve split a branched plant over threads (solve_tree.c,
+ * "Threads"): the results must be the same to the bit for any number of threads. A random tree
+ * (each segment continues its predecessor with probability 0.8, else branches off a random
+ * earlier one, as bench_mech's `tree`) is solved from rest with 1, 2 and 3 threads, the split
+ * forced even for this size, and every angle, moment, position and statistic compared bit for
+ * bit; a chain, which stays serial, too. */
+#include "test.h"
+
+#include "mech/mech_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E, double leaf, bool chain)
+{
+    cbm_context_seed(ctx, 11);
+    int64_t *par = malloc(n * sizeof *par);
+    double *count = malloc(n * sizeof *count);
+    unsigned char *seen = calloc(n, 1);
+    par[0] = -1;
+    for (size_t i = 1; i < n; i++)
+        par[i] = chain || cbm_context_uniform(ctx) < 0.8
+                     ? (int64_t)i - 1
+                     : (int64_t)(cbm_context_uniform(ctx) * (double)i);
+    for (size_t i = 0; i < n; i++)
+        count[i] = 1;
+    for (size_t i = n; i-- > 1;)
+        count[par[i]] += count[i];
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.capacity = n;
+    pd.base_orientation = cbm_mech_clamp_orientation(chain ? 0.3 : PI / 2);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    for (size_t i = 0; i < n && p; i++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = par[i];
+        d.length = 0.02;
+        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
+        d.core.youngs_modulus = E;
+        d.core.shear_modulus = E / 16;
+        d.core.density = 700;
+        if (i > 0 && seen[par[i]]) {
+            d.divergence = 2.39996 * (double)i;
+            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
+            d.roll = -d.divergence;
+        }
+        if (i > 0)
+            seen[par[i]] = 1;
+        d.point_mass = count[i] == 1 ? leaf : 0.0;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    free(seen);
+    free(par);
+    free(count);
+    return p;
+}
+
+typedef struct result {
+    size_t n, passes, newton, krylov;
+    double residual;
+    cbm_vec3 *omega, *moment, *pos;
+} result;
+
+static result solve_with(size_t n, double E, double leaf, bool chain, int threads)
+{
+    result r = {0};
+    cbm__mech_tree_threads(threads, 0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p = random_tree(ctx, n, E, leaf, chain);
+    if (p) {
+        cbm_solve_def d = cbm_solve_def_default();
+        d.warm_start = false;
+        cbm_solve_stats st;
+        CHECK_OK(cbm_plant_solve(p, &d, &st));
+        r.n = p->n;
+        r.passes = st.passes;
+        r.newton = st.newton_steps;
+        r.krylov = st.krylov_iterations;
+        r.residual = st.residual;
+        r.omega = malloc(n * sizeof *r.omega);
+        r.moment = malloc(n * sizeof *r.moment);
+        r.pos = malloc(n * sizeof *r.pos);
+        memcpy(r.omega, p->omega, n * sizeof *r.omega);
+        memcpy(r.moment, p->moment, n * sizeof *r.moment);
+        memcpy(r.pos, p->pos, n * sizeof *r.pos);
+        cbm_plant_destroy(p);
+    }
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_threads(0, 50000); /* the defaults */
+    return r;
+}
+
+static void result_free(result *r)
+{
+    free(r->omega);
+    free(r->moment);
+    free(r->pos);
+}
+
+static void check_same(size_t n, double E, double leaf, bool chain)
+{
+    result one = solve_with(n, E, leaf, chain, 1);
+    CHECK(one.n == n && one.passes > 0);
+    for (int t = 2; t <= 3; t++) {
+        result r = solve_with(n, E, leaf, chain, t);
+        CHECK(r.n == n);
+        CHECK_EQ_INT(r.passes, one.passes);
+        CHECK_EQ_INT(r.newton, one.newton);
+        CHECK_EQ_INT(r.krylov, one.krylov);
+        CHECK(memcmp(&r.residual, &one.residual, sizeof r.residual) == 0);
+        if (r.omega && one.omega) {
+            CHECK_MSG(!memcmp(r.omega, one.omega, n * sizeof *r.omega), "%d threads: Omega differs",
+                      t);
+            CHECK_MSG(!memcmp(r.moment, one.moment, n * sizeof *r.moment),
+                      "%d threads: moments differ", t);
+            CHECK_MSG(!memcmp(r.pos, one.pos, n * sizeof *r.pos), "%d threads: positions differ",
+                      t);
+        }
+        result_free(&r);
+    }
+    result_free(&one);
+}
+
+TEST(tree_solve_same_bits_any_thread_count)
+{
+    check_same(20000, 1e10, 0.005, false);
+}
+
+TEST(soft_tree_solve_same_bits_any_thread_count)
+{
+    check_same(20000, 3e8, 0.02, false);
+}
+
+TEST(chain_solve_same_bits_any_thread_count)
+{
+    check_same(3000, 1e10, 0.0, true);
+}
