@@ -23,6 +23,7 @@
 #define CAMBIUM_ELASTICA_H
 
 #include "cambium/base.h"
+#include "cambium/bend.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -98,8 +99,8 @@ typedef struct cbm_elastica_scurve {
     size_t n_points;
     cbm_elastica_fold *folds; ///< in order of increasing theta_tip
     size_t n_folds;
-    double length;          ///< L of the rod (sum of the pieces)
-    double stiffness_base;  ///< D(0), the unit of moment * L used for the arc length
+    double length;         ///< L of the rod (sum of the pieces)
+    double stiffness_base; ///< D(0), the unit of moment * L used for the arc length
 } cbm_elastica_scurve;
 
 /// Traces the S-curve of the rod (def NULL: defaults), finds and refines its folds and their jump
@@ -132,8 +133,7 @@ typedef struct cbm_elastica_jump {
 CBM_API cbm_status cbm_elastica_sweep(cbm_context *ctx, const cbm_elastica_rod *rod,
                                       const cbm_elastica_scurve *sc, double from, double to,
                                       cbm_elastica_state *path, size_t max_path, size_t *n_path,
-                                      cbm_elastica_jump *jumps, size_t max_jumps,
-                                      size_t *n_jumps);
+                                      cbm_elastica_jump *jumps, size_t max_jumps, size_t *n_jumps);
 
 /* ---- branched plants (Tresierras ch. 5) ---- */
 
@@ -152,13 +152,13 @@ typedef struct cbm_elastica_branch {
 /// One equilibrium of a plant: each branch's tip and base angle, base moment, and the whole
 /// plant's energy and Morse index (discrete second variation of the whole tree).
 typedef struct cbm_elastica_plant_state {
-    double *theta_tip;    ///< per branch, rad
-    double *theta_base;   ///< per branch, rad
-    double *moment_base;  ///< per branch
+    double *theta_tip;     ///< per branch, rad
+    double *theta_base;    ///< per branch, rad
+    double *moment_base;   ///< per branch
     double *tip_x, *tip_y; ///< per branch, tip position relative to the plant's base
-    double energy;        ///< V of the whole plant
-    int index;            ///< Morse index (0 stable)
-    int branch_index0;    ///< Morse index of the base branch alone with its tip loads as dead
+    double energy;         ///< V of the whole plant
+    int index;             ///< Morse index (0 stable)
+    int branch_index0;     ///< Morse index of the base branch alone with its tip loads as dead
 } cbm_elastica_plant_state;
 
 typedef struct cbm_elastica_plant_def {
@@ -176,10 +176,59 @@ CBM_API cbm_status cbm_elastica_plant_equilibria(cbm_context *ctx,
                                                  const cbm_elastica_branch *branches,
                                                  size_t n_branches,
                                                  const cbm_elastica_plant_def *def,
-                                                 double theta_base,
-                                                 cbm_elastica_plant_state **out, size_t *n_out);
+                                                 double theta_base, cbm_elastica_plant_state **out,
+                                                 size_t *n_out);
 CBM_API void cbm_elastica_plant_states_destroy(cbm_context *ctx, cbm_elastica_plant_state *s,
                                                size_t n, size_t n_branches);
+
+/* ---- the spec of the `elastica` command (docs/elastica.md) ---- */
+
+/// The most branches a spec may add to its base rod.
+#define CBM_ELASTICA_MAX_BRANCHES 63
+
+/// One `branch = ...` line of a spec.
+typedef struct cbm_elastica_branch_spec {
+    int parent;            ///< 0: the base rod; k: the k-th branch line
+    double offset;         ///< degrees
+    double length;         ///< m (dimensional) or in units of the base length; 0: the base's
+    double radius;         ///< m, dimensional mode; 0: the base's radius
+    double radius_tip;     ///< m, dimensional mode; 0: = radius
+    double stiffness;      ///< D / D(base), non-dimensional mode (default 1)
+    double weight;         ///< w / w(base), non-dimensional mode (default 1)
+    double rest_curvature; ///< kappa^g
+    double tip_load;       ///< downward force at the branch's tip
+    double tip_mass;       ///< kg at the tip (dimensional mode)
+    double tip_moment;     ///< moment at the branch's tip
+} cbm_elastica_branch_spec;
+
+/// A parsed elastica spec: the keys of `bend` (docs/bend.md) read by its own reader, with
+/// `alpha` (the non-dimensional load rho g L^3 / D, which makes the problem non-dimensional),
+/// `angle` over any angle, `theta_tip_min`, `theta_tip_max`, `sweep_min`, `sweep_max` (degrees)
+/// and `branch` lines.
+typedef struct cbm_elastica_spec {
+    cbm_bend_spec bend; ///< geometry, material and loads (dimensional mode)
+    bool dimensionless; ///< alpha given: L = D = 1, w = alpha, loads non-dimensional
+    double alpha;       ///< rho g L^3 / D
+    bool has_angle;     ///< `angle` given
+    double angle;       ///< clamp angle, degrees
+    double theta_tip_min, theta_tip_max; ///< degrees (default -90, 270)
+    double sweep_min, sweep_max;         ///< degrees (default -90, 270)
+    size_t n_branches;
+    cbm_elastica_branch_spec branches[CBM_ELASTICA_MAX_BRANCHES];
+} cbm_elastica_spec;
+
+/// Parses a spec; every error reported as FILE:line:col (docs/elastica.md). CBM_E_SYNTAX or
+/// CBM_E_SEMANTIC.
+CBM_API cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t len,
+                                           const char *file, cbm_elastica_spec *out);
+
+/// The rods of a parsed spec: pieces[0] and branches[0] are the base rod, then one per branch
+/// line (arrays of 1 + spec->n_branches). *length_ref and *stiffness_ref receive the base's L and
+/// D(0), the units of the non-dimensional outputs.
+CBM_API cbm_status cbm_elastica_spec_plant(const cbm_elastica_spec *spec,
+                                           cbm_elastica_piece *pieces,
+                                           cbm_elastica_branch *branches, double *length_ref,
+                                           double *stiffness_ref);
 
 /// Greenhill's critical alpha = (9/4) j_{-1/3}^2 = 7.83735 of the heavy vertical column.
 #define CBM_ELASTICA_ALPHA_CRITICAL 7.8373

@@ -22,8 +22,8 @@ cbm_status cbm__el_check(cbm_context *ctx, const cbm_elastica_rod *rod);
 /// is called at n_sample points equally spaced in s from 0 to L (any order) with the state.
 typedef void (*cbm__el_sample_fn)(void *ud, size_t i, double s, const double *y);
 cbm_status cbm__el_integrate(const cbm_elastica_rod *rod, double theta_tip, double dmoment,
-                             double y_base[EL_N], int *zeros, cbm__el_sample_fn sample,
-                             void *ud, size_t n_sample);
+                             double y_base[EL_N], int *zeros, cbm__el_sample_fn sample, void *ud,
+                             size_t n_sample);
 
 /// Fills a state from the integrated base values.
 void cbm__el_state(const cbm_elastica_rod *rod, double theta_tip, const double *y, int zeros,

@@ -68,9 +68,9 @@ cbm_status cbm__el_check(cbm_context *ctx, const cbm_elastica_rod *rod)
         return cbm__fail(ctx, CBM_E_INVALID, "elastica: tip force and moment must be finite");
     for (size_t k = 0; k < rod->n_pieces; k++) {
         const cbm_elastica_piece *p = &rod->pieces[k];
-        if (!(p->length > 0 && isfinite(p->length) && p->D0 > 0 && p->D1 > 0 &&
-              isfinite(p->D0) && isfinite(p->D1) && p->w0 >= 0 && p->w1 >= 0 &&
-              isfinite(p->w0) && isfinite(p->w1) && isfinite(p->rest_curvature)))
+        if (!(p->length > 0 && isfinite(p->length) && p->D0 > 0 && p->D1 > 0 && isfinite(p->D0) &&
+              isfinite(p->D1) && p->w0 >= 0 && p->w1 >= 0 && isfinite(p->w0) && isfinite(p->w1) &&
+              isfinite(p->rest_curvature)))
             return cbm__fail(ctx, CBM_E_INVALID,
                              "elastica: piece %zu needs length > 0, D > 0, w >= 0 (finite)", k);
     }
@@ -102,13 +102,12 @@ static void deriv(const piece_ctx *c, double s, const double *y, double *f)
 
 /* Dormand-Prince 5(4) tableau */
 static const double A21 = 1.0 / 5, A31 = 3.0 / 40, A32 = 9.0 / 40, A41 = 44.0 / 45,
-                    A42 = -56.0 / 15, A43 = 32.0 / 9, A51 = 19372.0 / 6561,
-                    A52 = -25360.0 / 2187, A53 = 64448.0 / 6561, A54 = -212.0 / 729,
-                    A61 = 9017.0 / 3168, A62 = -355.0 / 33, A63 = 46732.0 / 5247,
-                    A64 = 49.0 / 176, A65 = -5103.0 / 18656, B1 = 35.0 / 384, B3 = 500.0 / 1113,
-                    B4 = 125.0 / 192, B5 = -2187.0 / 6784, B6 = 11.0 / 84,
-                    E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
-                    E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
+                    A42 = -56.0 / 15, A43 = 32.0 / 9, A51 = 19372.0 / 6561, A52 = -25360.0 / 2187,
+                    A53 = 64448.0 / 6561, A54 = -212.0 / 729, A61 = 9017.0 / 3168,
+                    A62 = -355.0 / 33, A63 = 46732.0 / 5247, A64 = 49.0 / 176,
+                    A65 = -5103.0 / 18656, B1 = 35.0 / 384, B3 = 500.0 / 1113, B4 = 125.0 / 192,
+                    B5 = -2187.0 / 6784, B6 = 11.0 / 84, E1 = 71.0 / 57600, E3 = -71.0 / 16695,
+                    E4 = 71.0 / 1920, E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
 
 /* One step of size h from (s, y); ynew and the scaled error norm. */
 static double dp_step(const piece_ctx *c, double s, const double *y, double h, const double *sc,
@@ -136,8 +135,8 @@ static double dp_step(const piece_ctx *c, double s, const double *y, double h, c
     deriv(c, s + h, ynew, k7);
     double err = 0;
     for (int i = 0; i < EL_N; i++) {
-        double e = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
-                        E7 * k7[i]);
+        double e =
+            h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
         double m = fabs(y[i]) > fabs(ynew[i]) ? fabs(y[i]) : fabs(ynew[i]);
         double r = fabs(e) / (sc[i] + EL_TOL * m);
         if (r > err)
@@ -147,8 +146,8 @@ static double dp_step(const piece_ctx *c, double s, const double *y, double h, c
 }
 
 cbm_status cbm__el_integrate(const cbm_elastica_rod *rod, double theta_tip, double dmoment,
-                             double y_base[EL_N], int *zeros, cbm__el_sample_fn sample,
-                             void *ud, size_t n_sample)
+                             double y_base[EL_N], int *zeros, cbm__el_sample_fn sample, void *ud,
+                             size_t n_sample)
 {
     double L = cbm__el_length(rod);
     double Wtot = fabs(rod->tip_force), Dref = rod->pieces[0].D0;

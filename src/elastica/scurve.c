@@ -243,8 +243,7 @@ void cbm_elastica_scurve_destroy(cbm_context *ctx, cbm_elastica_scurve *sc)
 }
 
 cbm_status cbm_elastica_scurve_compute(cbm_context *ctx, const cbm_elastica_rod *rod,
-                                       const cbm_elastica_scan_def *def,
-                                       cbm_elastica_scurve **out)
+                                       const cbm_elastica_scan_def *def, cbm_elastica_scurve **out)
 {
     if (!ctx || !out)
         return CBM_E_INVALID;
@@ -281,8 +280,7 @@ cbm_status cbm_elastica_scurve_compute(cbm_context *ctx, const cbm_elastica_rod 
                               maxp);
                 break;
             }
-            cbm_elastica_state *p =
-                cbm__realloc(ctx, sc->points, cap * sizeof *p, nc * sizeof *p);
+            cbm_elastica_state *p = cbm__realloc(ctx, sc->points, cap * sizeof *p, nc * sizeof *p);
             if (!p) {
                 s = CBM_E_NOMEM;
                 break;
