@@ -172,6 +172,7 @@ TEST(elastica_greenhill_bifurcation)
     }
     CHECK_NEAR(0.5 * (lo + hi), 2.25 * 1.86635086 * 1.86635086, 1e-6);
     CHECK_NEAR(0.5 * (lo + hi), CBM_ELASTICA_ALPHA_CRITICAL, 1e-4);
+    printf("alpha_c = %.7f\n", 0.5 * (lo + hi));
     const double fam[] = {0.01, 5, 7.8, 7.845, 7.9, 30};
     const int folds[] = {0, 0, 0, 2, 2, 2};
     for (int i = 0; i < 6; i++) {
@@ -187,8 +188,8 @@ TEST(elastica_greenhill_bifurcation)
             CHECK_NEAR(sc->folds[0].at.curvature_base, -3.234, 1e-3);
             cbm_elastica_state eq[8];
             size_t n = 0;
-            CHECK_OK(cbm_elastica_equilibria(ctx, &r.rod, sc, 0.5 * 3.14159265358979323846, eq, 8,
-                                             &n));
+            CHECK_OK(
+                cbm_elastica_equilibria(ctx, &r.rod, sc, 0.5 * 3.14159265358979323846, eq, 8, &n));
             CHECK_EQ_INT((int)n, 3);
             if (n == 3) {
                 CHECK_NEAR(eq[0].theta_tip * DEG, -72.17, 0.01);
@@ -329,14 +330,109 @@ TEST(elastica_spec_errors)
     const char *good = "alpha = 15\nangle = 200\nbranch = parent 0 offset 10 stiffness 0.5\n";
     CHECK_OK(cbm_elastica_spec_parse(ctx, good, strlen(good), "g.spec", &sp));
     CHECK(sp.dimensionless && sp.has_angle && sp.angle == 200 && sp.n_branches == 1);
-    const char *bad[] = {"alpha = 15\nradius = 0.01\n", "branch = parent 3\n",
-                         "alpha = 1\nbranch = parent 0 radius 0.1\n", "angle = x\n",
-                         "theta_tip_min = 10\ntheta_tip_max = 0\n", "alpha = 2\nalpha = 3\n",
-                         "branch = parent 0 colour 3\n", "steps = 3\n"};
+    const char *bad[] = {"alpha = 15\nradius = 0.01\n",
+                         "branch = parent 3\n",
+                         "alpha = 1\nbranch = parent 0 radius 0.1\n",
+                         "angle = x\n",
+                         "theta_tip_min = 10\ntheta_tip_max = 0\n",
+                         "alpha = 2\nalpha = 3\n",
+                         "branch = parent 0 colour 3\n",
+                         "steps = 3\n"};
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         cbm_status s = cbm_elastica_spec_parse(ctx, bad[i], strlen(bad[i]), "b.spec", &sp);
         CHECK(s == CBM_E_SEMANTIC || s == CBM_E_SYNTAX);
     }
     cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
+/* A dimensional bend spec is the same rod as alpha = rho g A L^3 / (E I). */
+TEST(elastica_dimensional_mode)
+{
+    cbm_context *ctx = test_ctx();
+    const char *txt = "length = 2\nradius = 0.01\nE = 7.85e7\ndensity = 1000\nangle = 30\n";
+    cbm_elastica_spec sp;
+    CHECK_OK(cbm_elastica_spec_parse(ctx, txt, strlen(txt), "d.spec", &sp));
+    cbm_elastica_piece pc[1];
+    cbm_elastica_branch br[1];
+    double L = 0, D = 0;
+    CHECK_OK(cbm_elastica_spec_plant(&sp, pc, br, &L, &D));
+    double A = 3.14159265358979323846 * 1e-4, I = 3.14159265358979323846 * 1e-8 / 4;
+    double alpha = 1000 * 9.81 * A * 8 / (7.85e7 * I);
+    CHECK_NEAR(pc[0].w0 * L * L * L / D, alpha, 1e-9 * alpha);
+    cbm_elastica_rod rd = cbm_elastica_rod_default();
+    rd.pieces = pc, rd.n_pieces = 1;
+    cbm_elastica_scurve *sc = NULL;
+    CHECK_OK(cbm_elastica_scurve_compute(ctx, &rd, NULL, &sc));
+    rod1 r;
+    uniform(&r, alpha);
+    cbm_elastica_scurve *sc1 = curve(ctx, &r);
+    cbm_elastica_state a[4], b[4];
+    size_t na = 0, nb = 0;
+    CHECK_OK(cbm_elastica_equilibria(ctx, &rd, sc, 30 / DEG, a, 4, &na));
+    CHECK_OK(cbm_elastica_equilibria(ctx, &r.rod, sc1, 30 / DEG, b, 4, &nb));
+    CHECK_EQ_INT((int)na, (int)nb);
+    CHECK(na >= 1);
+    for (size_t i = 0; i < na && i < nb && i < 4; i++) {
+        CHECK_NEAR(a[i].theta_tip, b[i].theta_tip, 1e-9);
+        CHECK_NEAR(a[i].tip_x / L, b[i].tip_x, 1e-9);
+        CHECK_NEAR(a[i].tip_y / L, b[i].tip_y, 1e-9);
+        CHECK_NEAR(a[i].curvature_base * L, b[i].curvature_base, 1e-9);
+        CHECK_NEAR(a[i].energy * L / D, b[i].energy, 1e-9);
+        CHECK_EQ_INT(a[i].index, b[i].index);
+    }
+    cbm_elastica_scurve_destroy(ctx, sc);
+    cbm_elastica_scurve_destroy(ctx, sc1);
+    test_ctx_end(ctx);
+}
+
+/* Fig. 5.7's 7-branch plant (examples/elastica/fig5_7.spec): four bistable free-end branches
+ * give 3^4 equilibria, 2^4 of them stable, and each one's Morse index is the number of free-end
+ * branches in their (unstable) middle state, i.e. near their own base angle. */
+TEST(elastica_seven_branch_plant)
+{
+    cbm_context *ctx = test_ctx();
+    FILE *f = fopen(CBM_TEST_SOURCE_DIR "/examples/elastica/fig5_7.spec", "rb");
+    CHECK(f != NULL);
+    if (!f) {
+        test_ctx_end(ctx);
+        return;
+    }
+    char txt[4096];
+    size_t len = fread(txt, 1, sizeof txt, f);
+    fclose(f);
+    cbm_elastica_spec sp;
+    CHECK_OK(cbm_elastica_spec_parse(ctx, txt, len, "fig5_7.spec", &sp));
+    CHECK_EQ_INT((int)sp.n_branches, 6);
+    cbm_elastica_piece pc[7];
+    cbm_elastica_branch br[7];
+    CHECK_OK(cbm_elastica_spec_plant(&sp, pc, br, NULL, NULL));
+    cbm_elastica_plant_state *ps = NULL;
+    size_t n = 0;
+    CHECK_OK(plant_eq(ctx, br, 7, sp.angle / DEG, &ps, &n));
+    CHECK_EQ_INT((int)n, 81);
+    /* each free-end branch's tip, relative to its base, takes three clustered values over the
+     * 81 states: bent one way (the least), bent the other (the greatest), and the middle */
+    double lo[7], hi[7];
+    for (int b = 3; b < 7; b++) {
+        lo[b] = 10, hi[b] = -10;
+        for (size_t i = 0; i < n; i++) {
+            double d = remainder(ps[i].theta_tip[b] - ps[i].theta_base[b], 2 * 3.14159265358979);
+            lo[b] = fmin(lo[b], d), hi[b] = fmax(hi[b], d);
+        }
+    }
+    int stable = 0, rule = 0;
+    for (size_t i = 0; i < n; i++) {
+        stable += ps[i].index == 0;
+        int middle = 0;
+        for (int b = 3; b < 7; b++) {
+            double d = remainder(ps[i].theta_tip[b] - ps[i].theta_base[b], 2 * 3.14159265358979);
+            middle += d > lo[b] + 20 / DEG && d < hi[b] - 20 / DEG;
+        }
+        rule += middle == ps[i].index;
+    }
+    CHECK_EQ_INT(stable, 16);
+    CHECK_EQ_INT(rule, (int)n);
+    cbm_elastica_plant_states_destroy(ctx, ps, n, 7);
     test_ctx_end(ctx);
 }

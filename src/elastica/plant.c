@@ -92,13 +92,13 @@ static sample seg_at(const segment *g, double x)
     }
     const sample *a = &g->s[lo], *b = &g->s[hi];
     double t = b->x > a->x ? (x - a->x) / (b->x - a->x) : 0;
-    sample r = {x, a->m + t * (b->m - a->m), a->w + t * (b->w - a->w),
-                a->e + t * (b->e - a->e), a->phi + t * (b->phi - a->phi)};
+    sample r = {x, a->m + t * (b->m - a->m), a->w + t * (b->w - a->w), a->e + t * (b->e - a->e),
+                a->phi + t * (b->phi - a->phi)};
     return r;
 }
 
-static cbm_status push_seg(plant *P, size_t b, const sample *run, size_t n, int dir,
-                           const int *cs, const double *csh, size_t nc)
+static cbm_status push_seg(plant *P, size_t b, const sample *run, size_t n, int dir, const int *cs,
+                           const double *csh, size_t nc)
 {
     if (n < 2)
         return CBM_OK;
@@ -536,10 +536,9 @@ static void free_plant(plant *P)
     cbm__free(P->ctx, P->nchild, P->nb * sizeof *P->nchild);
 }
 
-cbm_status cbm_elastica_plant_equilibria(cbm_context *ctx, const cbm_elastica_branch *br,
-                                         size_t nb, const cbm_elastica_plant_def *def,
-                                         double theta_b, cbm_elastica_plant_state **out,
-                                         size_t *n_out)
+cbm_status cbm_elastica_plant_equilibria(cbm_context *ctx, const cbm_elastica_branch *br, size_t nb,
+                                         const cbm_elastica_plant_def *def, double theta_b,
+                                         cbm_elastica_plant_state **out, size_t *n_out)
 {
     if (!ctx || !br || !out || !n_out || nb == 0 || nb > CBM_ELASTICA_MAX_BRANCHES + 1 ||
         !isfinite(theta_b))
@@ -554,9 +553,8 @@ cbm_status cbm_elastica_plant_equilibria(cbm_context *ctx, const cbm_elastica_br
         cbm_status s = cbm__el_check(ctx, &r);
         if (s != CBM_OK)
             return s;
-        if ((b == 0 && br[b].parent != -1) || (b > 0 && (br[b].parent < 0 ||
-                                                         (size_t)br[b].parent >= b)) ||
-            !isfinite(br[b].offset))
+        if ((b == 0 && br[b].parent != -1) ||
+            (b > 0 && (br[b].parent < 0 || (size_t)br[b].parent >= b)) || !isfinite(br[b].offset))
             return cbm__fail(ctx, CBM_E_INVALID,
                              "elastica: branch %zu: its parent must come before it", b);
     }

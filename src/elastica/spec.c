@@ -39,8 +39,8 @@ static bool word(char c)
 }
 
 /* A number token text[p..q); false (reported) if not a finite number in [lo, hi]. */
-static bool number(rd *r, const char *name, const char *t, size_t n, int line, int col,
-                   double lo, double hi, double *out)
+static bool number(rd *r, const char *name, const char *t, size_t n, int line, int col, double lo,
+                   double hi, double *out)
 {
     char buf[64];
     if (n == 0 || n >= sizeof buf) {
@@ -71,7 +71,7 @@ static const double own_lo[S_N] = {0, -720, -3600, -3600, -720, -720, 0};
 static const double own_hi[S_N] = {1e6, 720, 3600, 3600, 720, 720, 0};
 
 /* keys of the base rod that have no meaning in the non-dimensional mode */
-static const char *const dim_keys[] = {"length", "radius",  "radius_base", "radius_tip", "E",
+static const char *const dim_keys[] = {"length",  "radius",  "radius_base", "radius_tip", "E",
                                        "density", "gravity", "tip_mass",    "aspect"};
 #define N_DIM (sizeof dim_keys / sizeof *dim_keys)
 
@@ -81,11 +81,11 @@ typedef struct branch_line {
     const char *dim_name, *nondim_name;
 } branch_line;
 
-static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, int line,
-                         size_t idx, cbm_elastica_branch_spec *b, branch_line *bl)
+static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, int line, size_t idx,
+                         cbm_elastica_branch_spec *b, branch_line *bl)
 {
-    static const char *const names[] = {"parent",     "offset",         "length",   "radius",
-                                        "radius_tip", "stiffness",      "weight",   "tip_load",
+    static const char *const names[] = {"parent",     "offset",         "length",    "radius",
+                                        "radius_tip", "stiffness",      "weight",    "tip_load",
                                         "tip_mass",   "rest_curvature", "tip_moment"};
     memset(b, 0, sizeof *b);
     b->stiffness = 1, b->weight = 1, b->parent = -1;
@@ -139,9 +139,9 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
             err(r, line, vcol, "'parent' expects a whole number");
             return;
         }
-        double *f[] = {NULL,         &b->offset,   &b->length,   &b->radius,
-                       &b->radius_tip, &b->stiffness, &b->weight, &b->tip_load,
-                       &b->tip_mass, &b->rest_curvature, &b->tip_moment};
+        double *f[] = {NULL,           &b->offset,         &b->length,    &b->radius,
+                       &b->radius_tip, &b->stiffness,      &b->weight,    &b->tip_load,
+                       &b->tip_mass,   &b->rest_curvature, &b->tip_moment};
         if (k == 0)
             b->parent = (int)x;
         else
@@ -155,8 +155,8 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
         err(r, line, 1, "a branch needs 'parent' (0: the base rod, k: the k-th branch line)");
 }
 
-cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t len,
-                                   const char *file, cbm_elastica_spec *out)
+cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t len, const char *file,
+                                   cbm_elastica_spec *out)
 {
     if (!ctx || (!text && len) || !out)
         return CBM_E_INVALID;
@@ -246,8 +246,9 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
         double x;
         if (!number(&r, own[k], text + vs, vn, line, vcol, own_lo[k], own_hi[k], &x))
             continue;
-        double *dst[S_N] = {&sp.alpha,     &sp.angle,     &sp.theta_tip_min, &sp.theta_tip_max,
-                            &sp.sweep_min, &sp.sweep_max, NULL};
+        double *dst[S_N] = {
+            &sp.alpha,     &sp.angle, &sp.theta_tip_min, &sp.theta_tip_max, &sp.sweep_min,
+            &sp.sweep_max, NULL};
         *dst[k] = x;
     }
     sp.dimensionless = seen[S_ALPHA];

@@ -278,8 +278,8 @@ static cbm_status run(cbm_context *ctx, const cbm_elastica_spec *spec, result *r
     }
     size_t np = 0;
     if (s == CBM_OK && r->nbr == 1) {
-        s = cbm_elastica_sweep(ctx, &rod, *sc, spec->sweep_min / DEG, spec->sweep_max / DEG,
-                               NULL, 0, &np, up, MAX_JUMPS, &r->nup);
+        s = cbm_elastica_sweep(ctx, &rod, *sc, spec->sweep_min / DEG, spec->sweep_max / DEG, NULL,
+                               0, &np, up, MAX_JUMPS, &r->nup);
         if (s == CBM_OK)
             s = cbm_elastica_sweep(ctx, &rod, *sc, spec->sweep_max / DEG, spec->sweep_min / DEG,
                                    NULL, 0, &np, down, MAX_JUMPS, &r->ndown);
