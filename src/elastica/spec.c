@@ -89,6 +89,7 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
                                         "tip_mass",   "rest_curvature", "tip_moment"};
     memset(b, 0, sizeof *b);
     b->stiffness = 1, b->weight = 1, b->parent = -1;
+    memset(bl, 0, sizeof *bl);
     bl->line = line;
     bool seen[11] = {false};
     while (p < e) {
@@ -175,6 +176,7 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
     int dim_line = 0, dim_col = 0;
     const char *dim_name = NULL;
     branch_line bl[CBM_ELASTICA_MAX_BRANCHES];
+    memset(bl, 0, sizeof bl);
     size_t i = 0;
     int line = 0;
     bool syntax = false;
