@@ -14,5 +14,6 @@
 #include "cambium/model.h"
 #include "cambium/tree.h"
 #include "cambium/measure.h"
+#include "cambium/elastica.h"
 
 #endif

@@ -10,6 +10,7 @@ int cmd_buckle(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_demo(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
+int cmd_elastica(int argc, char **argv);
 
 /* The forester's summary of a tree (cmd_info.c), also printed by `grow --report` and written in
  * the year-by-year summary of `grow`. */
@@ -25,6 +26,7 @@ void cli_measures_json(struct cbm_json *j, const char *key, const struct cbm_tre
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
     X("info", cmd_info, "what a model or output file holds")                                       \
     X("demo", cmd_demo, "write a synthetic tree in any output format")                             \
-    X("plot", cmd_plot, "plot columns of a CSV or JSON table as PNG or SVG")
+    X("plot", cmd_plot, "plot columns of a CSV or JSON table as PNG or SVG")                       \
+    X("elastica", cmd_elastica, "every equilibrium of a heavy elastica or plant, S-curves")
 
 #endif

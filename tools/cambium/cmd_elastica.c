@@ -1,0 +1,387 @@
+/* cambium elastica SPEC [-o scurve.csv|.png|.svg]... [--json]: the continuous elastica of a rod
+ * or a branched plant (docs/elastica.md). Traces the S-curve of the rod over the spec's tip
+ * angles, its folds and jump targets, a base-angle sweep up and down (hysteresis), and with
+ * `angle` every equilibrium at that clamp angle with its stability. Outputs are non-dimensional
+ * (lengths in units of L, curvature times L, energy times L / D(0)). Files are written
+ * atomically; nothing is written when the job fails. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+#include "commands.h"
+
+#include "cambium/elastica.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#define MAX_SPEC_BYTES (1u << 20)
+#define MAX_OUTPUTS    8
+#define MAX_EQ         4096
+#define MAX_JUMPS      64
+#define DEG            (180.0 / 3.14159265358979323846)
+
+static void help(void)
+{
+    printf("usage: cambium elastica SPEC [-o FILE.csv|FILE.png|FILE.svg]... [--json] [limits]\n\n"
+           "Every equilibrium of a heavy rod (or a branched plant) clamped at its base, by\n"
+           "shooting from the tip (Tresierras 2009). SPEC is a bend spec (docs/bend.md) with\n"
+           "alpha (rho g L^3 / D: non-dimensional mode), angle (any, degrees), theta_tip_min,\n"
+           "theta_tip_max, sweep_min, sweep_max and branch lines (docs/elastica.md).\n"
+           "-o writes the S-curve: .csv (theta_tip_deg,theta_base_deg,kappa_base,strain_base,\n"
+           "energy,tip_x,tip_y,dbase_dtip,index,stable) or a plot (.png, .svg: base curvature\n"
+           "and energy against the base angle). --json prints the folds, jumps, hysteresis\n"
+           "and, with angle, the equilibria at that angle.\n\n%s",
+           cli_limits_help);
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static char *read_spec(const char *path, size_t *len)
+{
+    struct stat st; /* only a regular file: a FIFO or a device would block */
+    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    char *buf = malloc(MAX_SPEC_BYTES + 1);
+    size_t n = buf ? fread(buf, 1, MAX_SPEC_BYTES + 1, f) : 0;
+    bool bad = !buf || ferror(f);
+    fclose(f);
+    if (bad) {
+        free(buf);
+        return NULL;
+    }
+    *len = n;
+    return buf;
+}
+
+typedef struct units {
+    double L, D;
+} units;
+
+static void state_json(FILE *f, const cbm_elastica_state *s, units u)
+{
+    fprintf(f,
+            "{\"theta_tip_deg\": %.9g, \"theta_base_deg\": %.9g, \"kappa_base\": %.9g, "
+            "\"tip_x\": %.9g, \"tip_y\": %.9g, \"energy\": %.9g, \"index\": %d, "
+            "\"stable\": %s}",
+            s->theta_tip * DEG, s->theta_base * DEG, s->curvature_base * u.L, s->tip_x / u.L,
+            s->tip_y / u.L, s->energy * u.L / u.D, s->index, s->index == 0 ? "true" : "false");
+}
+
+static void jumps_json(FILE *f, const cbm_elastica_jump *j, size_t n, units u)
+{
+    fprintf(f, "[");
+    for (size_t k = 0; k < n && k < MAX_JUMPS; k++) {
+        fprintf(f, "%s{\"from\": ", k ? ", " : "");
+        state_json(f, &j[k].from, u);
+        fprintf(f, ", \"to\": ");
+        state_json(f, &j[k].to, u);
+        fprintf(f, "}");
+    }
+    fprintf(f, "]");
+}
+
+typedef struct result {
+    const cbm_elastica_scurve *sc;
+    const cbm_elastica_state *eq;
+    size_t neq;
+    const cbm_elastica_jump *up, *down;
+    size_t nup, ndown;
+    const cbm_elastica_plant_state *pe;
+    size_t npe, nbr;
+    double alpha, secs;
+    units u;
+    const cbm_elastica_spec *spec;
+} result;
+
+static void write_json(FILE *f, const result *r)
+{
+    const cbm_elastica_scurve *sc = r->sc;
+    units u = r->u;
+    fprintf(f, "{\"alpha\": %.9g, \"theta_tip_min_deg\": %.9g, \"theta_tip_max_deg\": %.9g, ",
+            r->alpha, r->spec->theta_tip_min, r->spec->theta_tip_max);
+    fprintf(f, "\"points\": %zu, \"branches\": %zu, ", sc->n_points, r->nbr);
+    if (r->spec->has_angle) {
+        fprintf(f, "\"angle_deg\": %.9g, \"equilibria\": [", r->spec->angle);
+        if (r->nbr > 1)
+            for (size_t k = 0; k < r->npe; k++) {
+                const cbm_elastica_plant_state *p = &r->pe[k];
+                fprintf(f,
+                        "%s{\"theta_tip_deg\": %.9g, \"kappa_base\": %.9g, \"tip_x\": %.9g, "
+                        "\"tip_y\": %.9g, \"energy\": %.9g, \"index\": %d, \"stable\": %s, "
+                        "\"branch\": [",
+                        k ? ", " : "", p->theta_tip[0] * DEG,
+                        p->moment_base[0] / u.D * u.L + r->spec->bend.rest_curvature * u.L,
+                        p->tip_x[0] / u.L, p->tip_y[0] / u.L, p->energy * u.L / u.D, p->index,
+                        p->index == 0 ? "true" : "false");
+                for (size_t b = 0; b < r->nbr; b++)
+                    fprintf(f,
+                            "%s{\"theta_base_deg\": %.9g, \"theta_tip_deg\": %.9g, "
+                            "\"moment_base\": %.9g, \"tip_x\": %.9g, \"tip_y\": %.9g}",
+                            b ? ", " : "", p->theta_base[b] * DEG, p->theta_tip[b] * DEG,
+                            p->moment_base[b] * u.L / u.D, p->tip_x[b] / u.L, p->tip_y[b] / u.L);
+                fprintf(f, "]}");
+            }
+        else
+            for (size_t k = 0; k < r->neq; k++) {
+                fprintf(f, "%s", k ? ", " : "");
+                state_json(f, &r->eq[k], u);
+            }
+        fprintf(f, "], ");
+    }
+    fprintf(f, "\"folds\": [");
+    for (size_t k = 0; k < sc->n_folds; k++) {
+        const cbm_elastica_fold *fd = &sc->folds[k];
+        fprintf(f,
+                "%s{\"theta_base_deg\": %.9g, \"theta_tip_deg\": %.9g, \"kappa_base\": %.9g, "
+                "\"energy\": %.9g, \"jump\": ",
+                k ? ", " : "", fd->at.theta_base * DEG, fd->at.theta_tip * DEG,
+                fd->at.curvature_base * u.L, fd->at.energy * u.L / u.D);
+        if (fd->has_target)
+            state_json(f, &fd->target, u);
+        else
+            fprintf(f, "null");
+        fprintf(f, "}");
+    }
+    fprintf(f, "], \"hysteresis\": {\"sweep_min_deg\": %.9g, \"sweep_max_deg\": %.9g, \"up\": ",
+            r->spec->sweep_min, r->spec->sweep_max);
+    jumps_json(f, r->up, r->nup, u);
+    fprintf(f, ", \"down\": ");
+    jumps_json(f, r->down, r->ndown, u);
+    fprintf(f, "}, \"seconds\": %.6g}\n", r->secs);
+}
+
+static void write_csv(FILE *f, const result *r)
+{
+    fprintf(f, "theta_tip_deg,theta_base_deg,kappa_base,strain_base,energy,tip_x,tip_y,"
+               "dbase_dtip,index,stable\n");
+    for (size_t k = 0; k < r->sc->n_points; k++) {
+        const cbm_elastica_state *s = &r->sc->points[k];
+        fprintf(f, "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%d,%d\n", s->theta_tip * DEG,
+                s->theta_base * DEG, s->curvature_base * r->u.L, s->strain_base * r->u.L,
+                s->energy * r->u.L / r->u.D, s->tip_x / r->u.L, s->tip_y / r->u.L, s->dbase_dtip,
+                s->index, s->index == 0);
+    }
+}
+
+/* Two panels against the base angle: base curvature and energy, stable arcs solid, unstable
+ * dashed, folds marked. */
+static cbm_status write_plot(cbm_context *ctx, const result *r, const char *path)
+{
+    const cbm_elastica_scurve *sc = r->sc;
+    size_t n = sc->n_points;
+    double *x = malloc(n * sizeof *x), *ys = malloc(n * sizeof *x), *yu = malloc(n * sizeof *x),
+           *es = malloc(n * sizeof *x), *eu = malloc(n * sizeof *x);
+    double fx[64], fy[64], fe[64];
+    cbm_status s = CBM_E_NOMEM;
+    cbm_plot *p = NULL;
+    if (!x || !ys || !yu || !es || !eu)
+        goto done;
+    for (size_t k = 0; k < n; k++) {
+        const cbm_elastica_state *a = &sc->points[k];
+        bool st = a->index == 0, stn = k + 1 < n && sc->points[k + 1].index == 0;
+        bool stp = k > 0 && sc->points[k - 1].index == 0;
+        x[k] = a->theta_base * DEG;
+        double kb = a->curvature_base * r->u.L, e = a->energy * r->u.L / r->u.D;
+        /* a point joins the stable line if it or a neighbour is stable, so arcs meet */
+        ys[k] = (st || stn || stp) ? kb : NAN;
+        es[k] = (st || stn || stp) ? e : NAN;
+        yu[k] = st ? NAN : kb;
+        eu[k] = st ? NAN : e;
+        if (!st && (stn || stp))
+            yu[k] = kb, eu[k] = e;
+    }
+    size_t nf = sc->n_folds < 64 ? sc->n_folds : 64;
+    for (size_t k = 0; k < nf; k++) {
+        fx[k] = sc->folds[k].at.theta_base * DEG;
+        fy[k] = sc->folds[k].at.curvature_base * r->u.L;
+        fe[k] = sc->folds[k].at.energy * r->u.L / r->u.D;
+    }
+    char title[96];
+    snprintf(title, sizeof title, "S-curve, alpha = %.4g", r->alpha);
+    cbm_plot_def d = cbm_plot_def_default();
+    d.title = title;
+    d.panels = 2;
+    d.height = 800;
+    s = cbm_plot_create(ctx, &d, &p);
+    for (int panel = 0; panel < 2 && s == CBM_OK; panel++) {
+        cbm_plot_axes_def a = cbm_plot_axes_def_default();
+        a.xlabel = "base angle (deg)";
+        a.ylabel = panel ? "energy V L / D" : "base curvature kappa L";
+        s = cbm_plot_set_axes(p, panel, &a);
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        ser.x = x, ser.n = n;
+        ser.y = panel ? es : ys, ser.label = "stable";
+        if (s == CBM_OK)
+            s = cbm_plot_add_series(p, panel, &ser);
+        ser.y = panel ? eu : yu, ser.label = "unstable", ser.line = CBM_PLOT_DASHED;
+        if (s == CBM_OK)
+            s = cbm_plot_add_series(p, panel, &ser);
+        if (nf && s == CBM_OK) {
+            cbm_plot_series_def fs = cbm_plot_series_def_default();
+            fs.x = fx, fs.y = panel ? fe : fy, fs.n = nf, fs.label = "fold (jumping point)";
+            fs.line = CBM_PLOT_NO_LINE, fs.marker = CBM_PLOT_MARKER_CIRCLE;
+            s = cbm_plot_add_series(p, panel, &fs);
+        }
+    }
+    if (s == CBM_OK)
+        s = cbm_plot_write(p, path);
+done:
+    cbm_plot_destroy(p);
+    free(x), free(ys), free(yu), free(es), free(eu);
+    return s;
+}
+
+static cbm_status run(cbm_context *ctx, const cbm_elastica_spec *spec, result *r,
+                      cbm_elastica_scurve **sc, cbm_elastica_state **eq, cbm_elastica_jump *up,
+                      cbm_elastica_jump *down, cbm_elastica_plant_state **pe)
+{
+    static cbm_elastica_piece pieces[CBM_ELASTICA_MAX_BRANCHES + 1];
+    static cbm_elastica_branch br[CBM_ELASTICA_MAX_BRANCHES + 1];
+    cbm_status s = cbm_elastica_spec_plant(spec, pieces, br, &r->u.L, &r->u.D);
+    if (s != CBM_OK)
+        return s;
+    r->nbr = 1 + spec->n_branches;
+    r->alpha = pieces[0].w0 * r->u.L * r->u.L * r->u.L / r->u.D;
+    cbm_elastica_rod rod = cbm_elastica_rod_default();
+    rod.pieces = br[0].pieces, rod.n_pieces = 1;
+    rod.tip_force = br[0].tip_force, rod.tip_moment = br[0].tip_moment;
+    cbm_elastica_scan_def d = cbm_elastica_scan_def_default();
+    d.theta_tip_min = spec->theta_tip_min / DEG, d.theta_tip_max = spec->theta_tip_max / DEG;
+    s = cbm_elastica_scurve_compute(ctx, &rod, &d, sc);
+    if (s != CBM_OK)
+        return s;
+    r->sc = *sc;
+    if (spec->has_angle && r->nbr == 1) {
+        *eq = malloc(MAX_EQ * sizeof **eq);
+        if (!*eq)
+            return CBM_E_NOMEM;
+        s = cbm_elastica_equilibria(ctx, &rod, *sc, spec->angle / DEG, *eq, MAX_EQ, &r->neq);
+        if (s == CBM_OK && r->neq > MAX_EQ)
+            r->neq = MAX_EQ;
+        r->eq = *eq;
+    }
+    if (spec->has_angle && r->nbr > 1) {
+        cbm_elastica_plant_def pd = cbm_elastica_plant_def_default();
+        pd.scan = d;
+        s = cbm_elastica_plant_equilibria(ctx, br, r->nbr, &pd, spec->angle / DEG, pe, &r->npe);
+        r->pe = *pe;
+    }
+    size_t np = 0;
+    if (s == CBM_OK && r->nbr == 1) {
+        s = cbm_elastica_sweep(ctx, &rod, *sc, spec->sweep_min / DEG, spec->sweep_max / DEG, NULL,
+                               0, &np, up, MAX_JUMPS, &r->nup);
+        if (s == CBM_OK)
+            s = cbm_elastica_sweep(ctx, &rod, *sc, spec->sweep_max / DEG, spec->sweep_min / DEG,
+                                   NULL, 0, &np, down, MAX_JUMPS, &r->ndown);
+    }
+    return s;
+}
+
+int cmd_elastica(int argc, char **argv)
+{
+    const char *spec_path = NULL, *outs[MAX_OUTPUTS];
+    int nout = 0;
+    bool json = false;
+    for (int i = 1; i < argc; i++) {
+        int lr = cli_limit_option("elastica", argc, argv, &i);
+        if (lr < 0)
+            return CLI_USAGE;
+        if (lr > 0)
+            continue;
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            help();
+            return CLI_OK;
+        } else if (!strcmp(argv[i], "--json"))
+            json = true;
+        else if (!strcmp(argv[i], "-o")) {
+            if (i + 1 >= argc)
+                return cli_usage_error("elastica", "-o needs a file name");
+            if (nout == MAX_OUTPUTS)
+                return cli_usage_error("elastica", "at most %d outputs", MAX_OUTPUTS);
+            const char *ext = cli_extension(argv[i + 1]);
+            if (strcmp(ext, "csv") && strcmp(ext, "png") && strcmp(ext, "svg"))
+                return cli_usage_error("elastica",
+                                       "%s: unsupported output format '.%s' (use .csv, .png or "
+                                       ".svg)",
+                                       argv[i + 1], ext);
+            outs[nout++] = argv[++i];
+        } else if (argv[i][0] == '-' && argv[i][1])
+            return cli_usage_error("elastica", "unknown option '%s'", argv[i]);
+        else if (spec_path)
+            return cli_usage_error("elastica", "expected one SPEC, found '%s' too", argv[i]);
+        else
+            spec_path = argv[i];
+    }
+    if (!spec_path)
+        return cli_usage_error("elastica", "expected a SPEC file (see cambium elastica --help)");
+    if (cli_check_outputs(outs, nout) != CLI_OK)
+        return CLI_FAIL;
+    size_t len = 0;
+    char *text = read_spec(spec_path, &len);
+    if (!text || len > MAX_SPEC_BYTES) {
+        free(text);
+        fprintf(stderr, "cambium: %s: cannot read the spec (a regular file up to %u bytes)\n",
+                spec_path, MAX_SPEC_BYTES);
+        return CLI_FAIL;
+    }
+    cbm_context *ctx = cli_context();
+    static cbm_elastica_spec spec;
+    cbm_status s = cbm_elastica_spec_parse(ctx, text, len, spec_path, &spec);
+    free(text);
+    if (s != CBM_OK) {
+        int rc = cli_fail(ctx, s, spec_path);
+        cli_context_end(ctx);
+        return rc;
+    }
+    double t0 = now();
+    result r;
+    memset(&r, 0, sizeof r);
+    r.spec = &spec;
+    cbm_elastica_scurve *sc = NULL;
+    cbm_elastica_state *eq = NULL;
+    cbm_elastica_plant_state *pe = NULL;
+    static cbm_elastica_jump up[MAX_JUMPS], down[MAX_JUMPS];
+    r.up = up, r.down = down;
+    s = run(ctx, &spec, &r, &sc, &eq, up, down, &pe);
+    r.secs = now() - t0;
+    int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, "elastica");
+    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        const char *ext = cli_extension(outs[k]);
+        if (!strcmp(ext, "csv")) {
+            cbm_out *o = NULL;
+            s = cbm_out_open(ctx, outs[k], &o);
+            if (s == CBM_OK) {
+                write_csv(cbm_out_stream(o), &r);
+                s = cbm_out_commit(o);
+            }
+        } else
+            s = write_plot(ctx, &r, outs[k]);
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, outs[k]);
+    }
+    if (rc == CLI_OK && json)
+        write_json(stdout, &r);
+    if (rc == CLI_OK && !json && nout == 0) {
+        printf("alpha %.6g: %zu points, %zu fold%s", r.alpha, sc->n_points, sc->n_folds,
+               sc->n_folds == 1 ? "" : "s");
+        if (spec.has_angle)
+            printf(", %zu equilibri%s at %g deg", r.nbr > 1 ? r.npe : r.neq,
+                   (r.nbr > 1 ? r.npe : r.neq) == 1 ? "um" : "a", spec.angle);
+        printf(", %.3g s\n", r.secs);
+    }
+    cbm_elastica_plant_states_destroy(ctx, pe, r.npe, r.nbr);
+    free(eq);
+    cbm_elastica_scurve_destroy(ctx, sc);
+    cli_context_end(ctx);
+    return rc;
+}
