@@ -131,6 +131,31 @@ static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
                        bool act);
 
+/* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
+ * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
+ * of (1, trace, sum of the principal 2x2 minors, determinant) (zeros skipped: zero eigenvalues
+ * are critical, not unstable). Summed over the pivots this is the inertia of the matrix
+ * (Sylvester's law: the block elimination is a congruence when the matrix is symmetric). */
+static size_t sym_negative(const double *d)
+{
+    double a = d[0], b = 0.5 * (d[1] + d[3]), c = 0.5 * (d[2] + d[6]);
+    double e = d[4], f = 0.5 * (d[5] + d[7]), g = d[8];
+    double co[4] = {1.0, a + e + g, a * e - b * b + a * g - c * c + e * g - f * f,
+                    a * (e * g - f * f) - b * (b * g - f * c) + c * (b * f - e * c)};
+    /* a coefficient at rounding level is zero: an eigenvalue within 1e-9 of the block's scale
+     * of 0 is neutral (the rotation of a round column's bent shape about the vertical), not
+     * unstable */
+    double sc = fabs(a) + fabs(e) + fabs(g), tol = 1e-9 * sc;
+    size_t changes = 0;
+    double last = 1.0;
+    for (int k = 1; k < 4; k++, tol *= sc)
+        if (fabs(co[k]) > tol) {
+            changes += (co[k] > 0.0) != (last > 0.0);
+            last = co[k];
+        }
+    return changes;
+}
+
 /* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
 static bool sym_pd(const double *d)
 {
@@ -186,7 +211,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    size_t singular = 0, nonpd = 0;
+    size_t singular = 0, nonpd = 0, negative = 0;
     const bool ground = p->ground && w->fcap >= n;
     memset(w->fw, 0, 9 * n * sizeof(double));
     if (ground) {
@@ -262,8 +287,10 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         D.m[4] += (1.0 + mu) * c.y;
         D.m[8] += (1.0 + mu) * c.z;
         double *Di = w->fdinv + 9 * i;
-        if (!sym_pd(D.m))
+        if (!sym_pd(D.m)) {
             nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
+            negative += sym_negative(D.m);
+        }
         if (!minv(D.m, c.x * c.y * c.z, Di)) {
             singular++;
             memset(Di, 0, 9 * sizeof(double));
@@ -304,6 +331,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         forward_solve(p, out);
     if (nonpd_out)
         *nonpd_out = nonpd;
+    w->fneg = negative;
     return singular;
 }
 
