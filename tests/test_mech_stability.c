@@ -133,7 +133,7 @@ TEST(mech_stability_push_to_stable)
     CHECK(r.stats.stage == CBM_SOLVE_STAGE_STABILITY);
     cbm_bend_node nodes[101];
     CHECK_OK(cbm_bend_nodes(p, nodes, 101));
-    CHECK(fabs(nodes[100].x) > 0.25); /* bent: |tip x| ~ 0.30 L */
+    CHECK(fabs(nodes[100].x) > 0.25);    /* bent: |tip x| ~ 0.30 L */
     CHECK_NEAR(nodes[100].z, 0.0, 1e-6); /* the 1 % out-of-plane part of the push's start */
     cbm_plant_destroy(p);
     /* kept: reported */

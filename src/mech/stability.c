@@ -120,8 +120,8 @@ size_t cbm__mech_lowest_mode(cbm_plant *p, cbm_vec3 *mode, double *lambda)
             change += w->cj[i].x * d.x * d.x + w->cj[i].y * d.y * d.y + w->cj[i].z * d.z * d.z;
             v[i] = nvi;
         }
-        bool settled = isfinite(theta) && fabs(th - theta) <= 1e-12 * (fabs(th) + mu) &&
-                       sqrt(change) < 1e-6;
+        bool settled =
+            isfinite(theta) && fabs(th - theta) <= 1e-12 * (fabs(th) + mu) && sqrt(change) < 1e-6;
         theta = th;
         if (settled)
             break;
