@@ -44,6 +44,7 @@ typedef struct cbm_bend_spec {
     long steps;            ///< growth steps, 0 = static
     double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
     double radius_final;   ///< m, radius after the last step (secondary growth), 0 = none
+    long push_unstable; ///< 1 (default): push an unstable equilibrium to a stable one; 0: keep it
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

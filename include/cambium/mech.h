@@ -300,6 +300,15 @@ typedef struct cbm_solve_def {
     cbm_mech_precond preconditioner; ///< default CBM_MECH_PRECOND_TREE (Newton only)
     bool warm_start;              ///< start from the current Omega (default true); else from rest
     cbm_mech_warm_path warm_path; ///< default CBM_MECH_WARM_TRANSIENT (Newton only)
+    /// true: an unstable equilibrium the fast solver (tree factorisation) converged to is pushed
+    /// along its unstable mode (both ways) and the plant relaxed to the stable equilibrium of
+    /// least energy (`bend` asks for this). Default false: the equilibrium found is kept, so
+    /// that existing runs give the same results (continuation and studies of unstable states
+    /// want this too). Either way cbm_solve_stats.unstable_modes says what was returned.
+    bool push_unstable;
+    /// also compute cbm_solve_stats.lowest_eigenvalue when the equilibrium is stable (shifted
+    /// inverse iteration, tens of O(n) passes not counted in `passes`); default false
+    bool eigenvalue;
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);
@@ -339,7 +348,32 @@ typedef struct cbm_solve_stats {
     /// not positive definite); fast solver with the tree preconditioner only, else 0
     size_t unstable_joints;
     cbm_solve_stage stage; ///< the stage that reached the tolerance; CBM_SOLVE_STAGE_NONE if none
+    /// unstable modes of the returned equilibrium: the negative eigenvalues of the Hessian of
+    /// the total potential energy, D J (D the joints' dual lengths, J the tangent), counted by
+    /// Sylvester's law of inertia on the pivots of its O(n) tree factorisation (exact where D J
+    /// is symmetric: planar bending under dead loads; src/mech/stability.c). Both solvers; 0 if
+    /// the solve did not converge. A count the tangent's lowest eigenvalue does not confirm
+    /// (lambda >= 0: a misreading of an unsymmetric tangent) is reported as 0.
+    size_t unstable_modes;
+    /// lowest eigenvalue lambda of J v = lambda S v (S = diag of the joint rigidities: 1 for an
+    /// unloaded plant, 0 at a buckling load, < 0 unstable); computed when unstable_modes > 0
+    /// or cbm_solve_def.eigenvalue is set, else NaN
+    double lowest_eigenvalue;
 } cbm_solve_stats;
+
+/// Stability of the plant's current state (call after a solve): what cbm_solve_stats reports,
+/// computed on demand for any state.
+typedef struct cbm_stability {
+    size_t unstable_modes;    ///< inertia of the Hessian's tree pivots (see cbm_solve_stats)
+    double lowest_eigenvalue; ///< lowest eigenvalue of S^-1 J (shifted inverse iteration)
+    double energy;            ///< J, total potential energy (strain - work of dead forces)
+    double residual;          ///< relative residual of the state (an equilibrium if small)
+    size_t passes;            ///< O(n) factor or solve passes used
+} cbm_stability;
+
+/// Fills *out for the plant's current Omega (evaluated first). CBM_E_NOT_CONVERGED if no shift
+/// made the tangent positive definite (the eigenvalue is then NaN, the count still set).
+CBM_API cbm_status cbm_plant_stability(cbm_plant *plant, cbm_stability *out);
 
 /// Brings the plant to static equilibrium. Results (frames, positions, moments, stresses) are
 /// always readable afterwards. CBM_E_NOT_CONVERGED if the tolerance is not reached within the

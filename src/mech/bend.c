@@ -49,6 +49,7 @@ cbm_bend_spec cbm_bend_spec_default(void)
     s.alpha = 0.5;
     s.krylov_dim = 20;
     s.discretization = CBM_MECH_STAGGERED;
+    s.push_unstable = 1;
     return s;
 }
 
@@ -92,6 +93,7 @@ static const key_desc keys[] = {
     {"steps", K_INT, OFF(steps), 0, 1e7, false},
     {"length_initial", K_NUM, OFF(length_initial), 0, 1e6, true},
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
+    {"push_unstable", K_INT, OFF(push_unstable), 0, 1, false},
 };
 #undef OFF
 #define NKEYS (sizeof keys / sizeof *keys)
@@ -384,6 +386,8 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.alpha = s->alpha;
     d.max_passes = (size_t)s->max_passes;
     d.krylov_dim = s->krylov_dim;
+    d.push_unstable = s->push_unstable != 0;
+    d.eigenvalue = true; /* bend reports the lowest eigenvalue of every answer */
     return d;
 }
 

@@ -34,6 +34,7 @@ typedef struct cbm__mech_work {
     cbm_vec3 *dfc;    /* tangent: world force accumulators (ground contact) */
     cbm_vec3 *tmp;    /* a vector of the Krylov space */
     uint32_t *tpart;  /* the tree's split for the threads of solve_tree.c (subtree sizes, bins) */
+    cbm_vec3 *best;   /* Omega of the best state found by the stability stage */
     cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
     cbm_vec3 *zbasis; /* the preconditioned vectors (flexible GMRES), krylov_cap of 3n */
     double *fdinv;    /* tree factorisation, 9 doubles per segment each: D^-1 */
@@ -41,6 +42,7 @@ typedef struct cbm__mech_work {
     double *fa;       /* a = R J_r(d Omega) d */
     double *fwad;     /* W a D^-1 */
     double *fw;       /* W accumulators */
+    size_t fneg;      /* negative eigenvalues of the pivots' symmetric parts, last factorisation */
     /* tree factorisation with ground contact (allocated once a plant has a ground): 9 doubles
      * per segment each; see solve_tree.c */
     size_t fcap;   /* segments the contact arrays hold */
@@ -202,6 +204,20 @@ size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, doub
 size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle);
 /// out = J^-1 b with the factorisation (out and b may not alias).
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/* ---- stability.c ---- */
+
+/// Total potential energy of the current state (after a forward sweep, loads as prepared):
+/// strain energy sum_i d_i (Omega - rest) . C (Omega - rest) / 2, minus the work of the dead
+/// forces (weights at their points, point masses, tip forces), plus the ground's penalty.
+double cbm__mech_energy(const cbm_plant *p);
+/// Lowest eigenvalue of C^-1 J at the last evaluated state by shifted inverse iteration with the
+/// tree factorisation (J + mu S, mu raised until every pivot is positive definite); the
+/// eigenvector (Omega components) goes to `mode` (n entries). Uses work.step and work.tmp.
+/// Returns the factor-and-solve passes taken; *lambda is NaN if it failed.
+size_t cbm__mech_lowest_mode(cbm_plant *p, cbm_vec3 *mode, double *lambda);
+/// Largest frame rotation (rad) a change `v` of Omega causes (tangent forward sweep).
+double cbm__mech_mode_turn(cbm_plant *p, const cbm_vec3 *v);
+
 /// Relative residual from the max residual and moments.
 double cbm__mech_relres(double rmax, double mmax, double *char_moment);
 

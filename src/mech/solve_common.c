@@ -91,7 +91,8 @@
     X(rj)                                                                                          \
     X(wown)                                                                                        \
     X(lever)                                                                                       \
-    X(ftip) X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart)
+    X(ftip) X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp)            \
+    X(tpart) X(best)
 /* the tree factorisation: 9 doubles per segment each (with a Krylov workspace) */
 #define TREE_ARRAYS(X) X(fdinv) X(fq) X(fa) X(fwad) X(fw)
 /* the tree factorisation with ground contact: 9 doubles per segment each (fcap segments) */
@@ -590,10 +591,38 @@ cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
     return CBM_OK;
 }
 
+/* The unstable modes of an equilibrium the relaxation (or the fast solver without the tree
+ * factorisation) reached (stability.c), with the tree factorisation the workspace was reserved
+ * with (cbm_plant_solve); nothing is pushed. */
+static cbm_status diagnose_stability(cbm_plant *p, const cbm_solve_def *d, cbm_solve_stats *st)
+{
+    cbm__mech_work *w = &p->work;
+    CBM_TRY(cbm__mech_work_reserve(p, w->krylov_cap > 1 ? w->krylov_cap - 1 : 1));
+    cbm__mech_prepare(p);
+    cbm__mech_forward(p);
+    double mm = 0.0;
+    if (!isfinite(cbm__mech_backward(p, 0.0, NULL, &mm, NULL)))
+        return cbm__mech_report_nonfinite(p);
+    size_t nonpd = 0;
+    cbm__mech_tree_factor(p, 0.0, &nonpd);
+    size_t modes = w->fneg;
+    st->unstable_modes = 0;
+    st->lowest_eigenvalue = NAN;
+    if (modes > 0 || d->eigenvalue) {
+        double lam = NAN;
+        (void)cbm__mech_lowest_mode(p, w->save, &lam);
+        st->lowest_eigenvalue = lam;
+        if (modes > 0 && lam < 0.0)
+            st->unstable_modes = modes;
+    }
+    return CBM_OK;
+}
+
 cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_stats *stats)
 {
     cbm_solve_stats st;
     memset(&st, 0, sizeof st);
+    st.lowest_eigenvalue = NAN;
     if (stats)
         *stats = st;
     if (!p)
@@ -616,7 +645,8 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
         maxp = lim;
     if (maxp < 2)
         maxp = 2;
-    CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 0));
+    /* the relaxation too: the tree factorisation diagnoses its equilibrium's stability */
+    CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 1));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     if (!d.warm_start)
@@ -631,7 +661,7 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
         size_t passes = st.passes;
         p->load_scale = 1.0;
         p->mass_path = 1.0;
-        CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 0));
+        CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 1));
         cbm__mech_prepare(p);
         memset(&st, 0, sizeof st);
         s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
@@ -640,6 +670,9 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     }
     p->load_scale = 1.0;
     p->mass_path = 1.0;
+    st.lowest_eigenvalue = s == CBM_OK ? st.lowest_eigenvalue : NAN;
+    if (s == CBM_OK && !(d.solver == CBM_MECH_NEWTON && d.preconditioner == CBM_MECH_PRECOND_TREE))
+        s = diagnose_stability(p, &d, &st);
     if (s == CBM_OK) /* the point masses this Omega balances */
         memcpy(p->pmass0, p->pmass, p->n * sizeof *p->pmass0);
     cbm__context_counters(p->ctx)[s == CBM_OK ? st.stage : CBM_SOLVE_STAGE_NONE]++;

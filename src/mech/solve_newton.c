@@ -29,7 +29,10 @@
  *   (leave_consistent: after a failure, a state evaluated at the full load for the caller)
  *   stability       converged, tree preconditioner         Newton also converges to unstable
  *                                                          equilibria; push off them along the
- *                                                          soft mode and solve again
+ *                                                          soft mode and solve again; then the
+ *                                                          unstable modes are counted (stats)
+ *                                                          and, with push_unstable, the state
+ *                                                          pushed along the unstable mode
  *
  * The stages share newton_level (Newton iterations at one load level: tree_step,
  * fgmres_trust, line_search, plain_step_retry), transient() and from_masses(). The order is
@@ -133,6 +136,8 @@ typedef struct nk {
     bool transient_path;   /* the pseudo-transient stage is on the pipeline */
     cbm_solve_stage stage; /* the stage running (the one that converged once r is NK_DONE) */
     const char *why;       /* why the solve failed, where a stage knows it */
+    bool push;             /* push an unstable equilibrium off to a stable one */
+    bool want_eig;         /* compute the lowest eigenvalue of a stable equilibrium too */
 } nk;
 
 static double dot(const double *a, const double *b, size_t n)
@@ -793,6 +798,131 @@ static nk_result leave_consistent(nk *k, nk_result r)
     return r;
 }
 
+/* The motion off an unstable equilibrium after a push along its unstable mode: implicit Euler
+ * steps of the damped motion S dOmega/dt = -R with a time step 1/sigma, sigma at least
+ * sigma_min (twice the magnitude of the unstable eigenvalue, so that J + sigma S is positive
+ * definite along the mode and every step moves further away from the saddle instead of back
+ * to it, as the adaptive sigma of transient() does near it), each turning no frame by more
+ * than PTC_TURN; once the unshifted tangent has no negative pivot eigenvalue (the basin of a
+ * stable equilibrium, convex there) Newton finishes. */
+static nk_result leave_unstable(nk *k, double sigma_min)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t n3 = k->n3;
+    double *om = (double *)p->omega;
+    const double *res = (const double *)w->res;
+    for (int it = 0; it < PTC_MAX_STEPS; it++) {
+        if (!evaluate(k))
+            return NK_NONFINITE;
+        if (k->rel < k->tol)
+            return NK_DONE; /* an equilibrium: the caller reads its stability */
+        if (k->st->passes + 4 >= k->max_passes)
+            return NK_BUDGET;
+        size_t nonpd = 0;
+        cbm__mech_tree_factor(p, 0.0, &nonpd);
+        k->st->passes++;
+        if (w->fneg == 0)
+            return newton_level(k, k->tol, k->m, false);
+        double s = sigma_min;
+        for (;;) {
+            for (size_t q = 0; q < n3; q++)
+                ((double *)w->step)[q] = -res[q];
+            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, s, &nonpd);
+            k->st->passes++;
+            if (sing == 0 && nonpd == 0)
+                break;
+            s *= 2.0;
+            if (s > 1e8 || k->st->passes + 4 >= k->max_passes)
+                return NK_STALL;
+        }
+        double turn = largest_turn(p);
+        double lam = turn > PTC_TURN ? PTC_TURN / turn : 1.0;
+        const double *d = (const double *)w->tmp;
+        for (size_t q = 0; q < n3; q++)
+            om[q] += lam * d[q];
+        k->st->newton_steps++;
+    }
+    return NK_STALL;
+}
+
+/* The unstable modes of the converged state (stability.c): the inertia of the Hessian's tree
+ * pivots, confirmed by the lowest eigenvalue of S^-1 J (a count it does not confirm is the pivot
+ * test misreading an unsymmetric tangent, see stage_stability, and is reported as 0). Where the
+ * state is unstable and k->push is set, the plant is pushed along the unstable mode both ways
+ * (largest frame turn 0.1 rad), each push relaxed by the damped motion (leave_unstable()), and the
+ * stable equilibrium of least total potential energy kept; if neither push ends stable the
+ * equilibrium found is kept and reported. The diagnosis of a stable state costs one
+ * factorisation (not counted in `passes`, so that stable solves report what they did before);
+ * the pushes are counted. */
+static nk_result stability_modes(nk *k)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    cbm_solve_stats *st = k->st;
+    size_t nonpd = 0;
+    cbm__mech_tree_factor(p, 0.0, &nonpd);
+    size_t modes = w->fneg;
+    st->unstable_modes = 0;
+    st->lowest_eigenvalue = NAN;
+    if (modes == 0 && !k->want_eig)
+        return NK_DONE;
+    double lam = NAN;
+    (void)cbm__mech_lowest_mode(p, w->start, &lam);
+    st->lowest_eigenvalue = lam;
+    if (modes == 0 || !(lam < 0.0))
+        return NK_DONE;
+    st->unstable_modes = modes;
+    if (!k->push)
+        return NK_DONE;
+    memcpy(w->save, p->omega, p->n * sizeof *w->save);
+    double turn = cbm__mech_mode_turn(p, w->start);
+    double eps = turn > 0.0 ? 0.1 / turn : 0.0;
+    double best_e = INFINITY;
+    size_t best_modes = modes, best_nonpd = st->unstable_joints;
+    double best_lam = lam;
+    for (int sign = 1; sign >= -1 && eps > 0.0; sign -= 2) {
+        for (size_t i = 0; i < p->n; i++)
+            p->omega[i] = v3_add(w->save[i], v3_scale(w->start[i], sign * eps));
+        st->continuation_steps++;
+        nk_result tr = leave_unstable(k, 2.0 * -lam);
+        if (tr != NK_DONE)
+            continue;
+        size_t np = 0;
+        cbm__mech_tree_factor(p, 0.0, &np);
+        st->passes++;
+        if (w->fneg != 0) {
+            /* confirmed by the lowest eigenvalue only (as for the reported count) */
+            double l2 = NAN;
+            (void)cbm__mech_lowest_mode(p, w->res, &l2); /* res: scratch here */
+            if (!(l2 >= 0.0))
+                continue;
+        }
+        double e = cbm__mech_energy(p);
+        if (e < best_e) {
+            best_e = e;
+            best_modes = 0;
+            best_nonpd = np;
+            memcpy(w->best, p->omega, p->n * sizeof *w->best);
+        }
+    }
+    if (best_modes == 0) {
+        memcpy(p->omega, w->best, p->n * sizeof *p->omega);
+        k->stage = CBM_SOLVE_STAGE_STABILITY;
+        best_lam = NAN;
+        if (k->want_eig) {
+            if (!evaluate(k))
+                return NK_NONFINITE;
+            (void)cbm__mech_lowest_mode(p, w->start, &best_lam);
+        }
+    } else
+        memcpy(p->omega, w->save, p->n * sizeof *p->omega);
+    st->unstable_modes = best_modes;
+    st->unstable_joints = best_nonpd;
+    st->lowest_eigenvalue = best_lam;
+    return evaluate(k) ? NK_DONE : NK_NONFINITE;
+}
+
 /* Stage "stability", after convergence with the tree factorisation: Newton converges to
  * unstable equilibria too (a branch balanced upright). The unmodified factorisation is checked
  * at the solution; where a pivot block is not positive definite, the joint is pushed along its
@@ -838,6 +968,8 @@ static nk_result stage_stability(nk *k)
         }
         k->stage = CBM_SOLVE_STAGE_STABILITY;
     }
+    if (r == NK_DONE)
+        r = stability_modes(k);
     return r;
 }
 
@@ -892,6 +1024,8 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
         k.conservative = p->tipm[i].x == 0.0 && p->tipm[i].y == 0.0 && p->tipm[i].z == 0.0;
     k.m = def->krylov_dim;
     k.tol = def->tolerance;
+    k.push = def->push_unstable;
+    k.want_eig = def->eigenvalue;
     k.stage = CBM_SOLVE_STAGE_NONE;
     cbm__mech_work *w = &p->work;
 

@@ -135,6 +135,31 @@ static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
                        bool act, bool defer);
 
+/* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
+ * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
+ * of (1, trace, sum of the principal 2x2 minors, determinant) (zeros skipped: zero eigenvalues
+ * are critical, not unstable). Summed over the pivots this is the inertia of the matrix
+ * (Sylvester's law: the block elimination is a congruence when the matrix is symmetric). */
+static size_t sym_negative(const double *d)
+{
+    double a = d[0], b = 0.5 * (d[1] + d[3]), c = 0.5 * (d[2] + d[6]);
+    double e = d[4], f = 0.5 * (d[5] + d[7]), g = d[8];
+    double co[4] = {1.0, a + e + g, a * e - b * b + a * g - c * c + e * g - f * f,
+                    a * (e * g - f * f) - b * (b * g - f * c) + c * (b * f - e * c)};
+    /* a coefficient at rounding level is zero: an eigenvalue within 1e-9 of the block's scale
+     * of 0 is neutral (the rotation of a round column's bent shape about the vertical), not
+     * unstable */
+    double sc = fabs(a) + fabs(e) + fabs(g), tol = 1e-9 * sc;
+    size_t changes = 0;
+    double last = 1.0;
+    for (int k = 1; k < 4; k++, tol *= sc)
+        if (fabs(co[k]) > tol) {
+            changes += (co[k] > 0.0) != (last > 0.0);
+            last = co[k];
+        }
+    return changes;
+}
+
 /* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
 static bool sym_pd(const double *d)
 {
@@ -193,6 +218,7 @@ typedef struct sweep {
     double mu;
     bool ground, only_solve;
     size_t singular, nonpd; /* counted by the sweep */
+    size_t negative;        /* negative eigenvalues of the pivots' symmetric parts (stability) */
 } sweep;
 
 /* The factorisation of segment i (its children's Phi, and with ground their Gamma, Lambda and
@@ -262,8 +288,10 @@ static void factor_one(sweep *sw, size_t i, bool defer)
         D.m[4] += (1.0 + mu) * c.y;
         D.m[8] += (1.0 + mu) * c.z;
         double *Di = w->fdinv + 9 * i;
-        if (!sym_pd(D.m))
+        if (!sym_pd(D.m)) {
             sw->nonpd++; /* the subtree condensed here has lost its stiffness: unstable */
+            sw->negative += sym_negative(D.m);
+        }
         if (!minv(D.m, c.x * c.y * c.z, Di)) {
             sw->singular++;
             memset(Di, 0, 9 * sizeof(double));
@@ -404,7 +432,8 @@ static void *tree_job_run(void *arg)
 
 /* Runs the sweep's share of threads 1..t, the caller's thread taking the first (and the share of
  * any thread that could not start), and adds up their counts. */
-static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular, size_t *nonpd)
+static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular, size_t *nonpd,
+                          size_t *negative)
 {
     tree_job jobs[MAX_THREADS];
     pthread_t th[MAX_THREADS];
@@ -412,7 +441,7 @@ static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular
     bool started[MAX_THREADS] = {false};
     for (int k = 0; k < t; k++) {
         jobs[k].sw = *sw;
-        jobs[k].sw.singular = jobs[k].sw.nonpd = 0;
+        jobs[k].sw.singular = jobs[k].sw.nonpd = jobs[k].sw.negative = 0;
         jobs[k].thread = k + 1;
         jobs[k].forward = forward;
     }
@@ -428,6 +457,7 @@ static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular
     for (int k = 0; k < t; k++) {
         *singular += jobs[k].sw.singular;
         *nonpd += jobs[k].sw.nonpd;
+        *negative += jobs[k].sw.negative;
     }
 }
 
@@ -443,7 +473,7 @@ static void sweeps(sweep *sw)
         for (size_t i = n; i-- > 0;)
             factor_one(sw, i, false);
     } else {
-        tree_parallel(sw, t, false, &sw->singular, &sw->nonpd);
+        tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative);
         const uint32_t *part = w->tpart;
         const bool solve = sw->b && sw->out;
         for (size_t i = n; i-- > 0;) {
@@ -470,7 +500,7 @@ static void sweeps(sweep *sw)
         if ((part[i] >> PART_SHIFT & 7u) == 0)
             forward_one(p, i, sw->out, false);
     size_t none = 0;
-    tree_parallel(sw, t, true, &none, &none);
+    tree_parallel(sw, t, true, &none, &none, &none);
 }
 
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
@@ -502,10 +532,11 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
     if (b && out)
         for (size_t i = 0; i < n; i++)
             acc[i] = accf[i] = v3(0, 0, 0);
-    sweep sw = {p, b, out, mu, ground, false, 0, 0};
+    sweep sw = {p, b, out, mu, ground, false, 0, 0, 0};
     sweeps(&sw);
     if (nonpd_out)
         *nonpd_out = sw.nonpd;
+    w->fneg = sw.negative;
     return sw.singular;
 }
 
@@ -549,7 +580,7 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     const bool ground = p->ground && w->fcap >= n;
     for (size_t i = 0; i < n; i++)
         w->dm[i] = w->dfc[i] = v3(0, 0, 0);
-    sweep sw = {p, b, out, 0.0, ground, true, 0, 0};
+    sweep sw = {p, b, out, 0.0, ground, true, 0, 0, 0};
     sweeps(&sw);
 }
 

@@ -19,8 +19,8 @@ SPEC
 head -1 "$tmp/nodes.csv" | grep -qx 's,x,y,z,angle_deg,curvature,moment,stress'
 test "$(wc -l <"$tmp/nodes.csv")" -eq 42
 cmp "$tmp/stdout.json" "$tmp/sum.json"
-grep -q "\"stage\": \"newton\"}" "$tmp/stdout.json"
-for k in tip_x tip_y tip_z tip_angle_deg base_moment passes residual seconds stage; do
+grep -q "\"stage\": \"newton\", \"unstable_modes\": 0, \"stable\": true" "$tmp/stdout.json"
+for k in tip_x tip_y tip_z tip_angle_deg base_moment passes residual seconds stage unstable_modes stable lowest_eigenvalue; do
     grep -q "\"$k\": " "$tmp/stdout.json" || { echo "missing $k"; exit 1; }
 done
 tipy=$(grep -o '"tip_y": [^,]*' "$tmp/stdout.json" | cut -d' ' -f2)

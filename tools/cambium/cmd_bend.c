@@ -89,17 +89,22 @@ static char *read_spec(const char *path, size_t *len)
 static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
                        const cbm_bend_node *base, const cbm_bend_result *r, double secs, size_t n)
 {
+    char eig[32] = "null"; /* NaN (not computed) is no JSON number */
+    if (isfinite(r->stats.lowest_eigenvalue))
+        snprintf(eig, sizeof eig, "%.9g", r->stats.lowest_eigenvalue);
     fprintf(f,
             "{\"tip_x\": %.12g, \"tip_y\": %.12g, \"tip_z\": %.12g, \"tip_angle_deg\": %.12g, "
             "\"base_moment\": %.12g, \"passes\": %zu, \"residual\": %.6g, \"seconds\": %.6g, "
             "\"solver\": \"%s\", \"discretization\": \"%s\", \"segments\": %zu, "
             "\"newton_steps\": %zu, \"krylov_iterations\": %zu, \"base_stress\": %.12g, "
-            "\"steps\": %ld, \"broken_segments\": %zu, \"stage\": \"%s\"}\n",
+            "\"steps\": %ld, \"broken_segments\": %zu, \"stage\": \"%s\", "
+            "\"unstable_modes\": %zu, \"stable\": %s, \"lowest_eigenvalue\": %s}\n",
             tip->x, tip->y, tip->z, tip->angle_deg, base->moment, r->stats.passes,
             r->stats.residual, secs, cbm_mech_solver_name(spec->solver),
             cbm_mech_discretization_name(spec->discretization), n, r->stats.newton_steps,
             r->stats.krylov_iterations, base->stress, r->steps_done, r->broken_segments,
-            cbm_solve_stage_name(r->stats.stage));
+            cbm_solve_stage_name(r->stats.stage), r->stats.unstable_modes,
+            r->stats.unstable_modes ? "false" : "true", eig);
 }
 
 int cmd_bend(int argc, char **argv)
@@ -174,6 +179,13 @@ int cmd_bend(int argc, char **argv)
     }
     s = cbm_bend_nodes(plant, nodes, n + 1);
     int rc = CLI_OK;
+    if (res.stats.unstable_modes > 0) /* never an unstable answer without saying so */
+        fprintf(stderr,
+                "cambium: bend: warning: the equilibrium is unstable (%zu unstable modes, lowest "
+                "eigenvalue %.3g)%s\n",
+                res.stats.unstable_modes, res.stats.lowest_eigenvalue,
+                spec.push_unstable ? "; no push along the unstable mode reached a stable one"
+                                   : " (push_unstable = 0)");
     if (s != CBM_OK)
         rc = cli_fail(ctx, s, "bend");
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
