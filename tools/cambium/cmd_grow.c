@@ -6,6 +6,8 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include "cambium/dynamics.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +19,7 @@ static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
+           "                    [--modes N]\n"
            "                    [--params] [--report] [--seeds A-B] [limits]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
@@ -32,6 +35,7 @@ static void help(void)
            "  --summer          stop at the end of the last summer (leaves and fruit on; the\n"
            "                    .json then ends with that year, \"complete\": false)\n"
            "  --timing          time spent per phase on stderr\n"
+           "  --modes N         print the N lowest natural frequencies (Hz) of the grown tree\n"
            "  --quiet           no per-year lines on stdout\n"
            "  --params          print every parameter (parameter-file syntax) and exit\n"
            "  --seeds A-B       grow once per seed A..B and write the median, quartiles,\n"
@@ -331,6 +335,7 @@ int cmd_grow(int argc, char **argv)
     long years = -1, every = 0, seed_first = -1, seed_last = -1;
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false, report = false;
+    long modes = 0;
     cbm_write_options o = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -391,6 +396,9 @@ int cmd_grow(int argc, char **argv)
         } else if (!strcmp(a, "-y") || !strcmp(a, "--years") || !strcmp(a, "-n")) {
             if (!cli_parse_long(v, &years) || years < 0 || years > 1000)
                 return cli_usage_error("grow", "%s must be 0..1000", a);
+        } else if (!strcmp(a, "--modes")) {
+            if (!cli_parse_long(v, &modes) || modes < 1 || modes > 10000)
+                return cli_usage_error("grow", "--modes must be 1..10000");
         } else if (!strcmp(a, "--seed")) {
             long sd;
             if (!cli_parse_long(v, &sd) || sd < 0)
@@ -421,6 +429,8 @@ int cmd_grow(int argc, char **argv)
         if (summer || every || params || seed)
             return cli_usage_error("grow",
                                    "--seeds does not go with --summer, --every, --params, --seed");
+        if (modes > 0)
+            return cli_usage_error("grow", "--seeds does not go with --modes");
     }
     cli_output_target targets[MAX_OUTPUTS];
     int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json */
@@ -507,7 +517,7 @@ int cmd_grow(int argc, char **argv)
         rc = grow_seeds(ctx, &d, model, seed_first, seed_last, outs, nout, quiet);
         goto done;
     }
-    if (nout == 0 && quiet && !report) {
+    if (nout == 0 && quiet && !report && modes == 0) {
         rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
         goto done;
     }
@@ -607,6 +617,23 @@ int cmd_grow(int argc, char **argv)
     }
     if (timing && rc == CLI_OK)
         print_timing(ctx, t, summer, derive, t_interpret, t_write, cli_seconds() - t0);
+    if (modes > 0 && rc == CLI_OK) {
+        /* natural frequencies about the final equilibrium (docs/dynamics.md) */
+        double *f = malloc((size_t)modes * sizeof *f);
+        double tm = cli_seconds();
+        st = f ? cbm_plant_modes(cbm_tree_plant(t), (size_t)modes, f, NULL) : CBM_E_NOMEM;
+        if (st == CBM_OK) {
+            printf("%s after %d years: lowest %ld natural frequencies (Hz):", model,
+                   cbm_tree_years(t), modes);
+            for (long k = 0; k < modes; k++)
+                printf(" %.6g", f[k]);
+            printf("\n");
+            if (timing)
+                fprintf(stderr, "grow: modes in %.3f s\n", cli_seconds() - tm);
+        } else
+            rc = cli_fail(ctx, st, "natural frequencies");
+        free(f);
+    }
     if (report && rc == CLI_OK) {
         cbm_tree_measures tm;
         st = cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm);
