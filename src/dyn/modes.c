@@ -5,7 +5,7 @@
  * is applied in O(n) by the tree elimination of tree.c (one backward and one forward sweep per
  * solve, one each way per product with M), so a plain Lanczos run with full reorthogonalisation
  * needs nothing else; for the few tens of modes anyone asks for the Krylov basis stays small
- * (m = 2 count + 20, grown if the Ritz values have not converged), and the library keeps no
+ * (m = 3 count + 30, doubled if the Ritz values have not converged), and the library keeps no
  * Fortran dependency (ARPACK would add one to every build for a dozen lines of iteration here).
  *
  * The shift is 0: the factorisation of K then also decides the stability of the equilibrium
@@ -145,7 +145,7 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
                          nonpd);
     }
     size_t want = count < N ? count : N;
-    size_t mmax = 2 * want + 20;
+    size_t mmax = 3 * want + 30;
     if (mmax > N)
         mmax = N;
     for (size_t i = 0; i < count; i++)
@@ -187,7 +187,7 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
             for (size_t i = 0; i < got && ok; i++) {
                 size_t c = ord[i];
                 /* residual of the Ritz pair: |beta_m s_m| against theta */
-                if (m < N && fabs(bm * ev[(m - 1) * m + c]) > 1e-9 * fabs(th[c]))
+                if (m < N && fabs(bm * ev[(m - 1) * m + c]) > 1e-8 * fabs(th[c]))
                     ok = false;
             }
             if (ok) {

@@ -72,4 +72,13 @@ grep -q 'lowest 4 natural frequencies (Hz):' "$tmp/grow.txt"
 sed 's/.*(Hz)://' "$tmp/grow.txt" | tr ' ' '\n' | grep . >"$tmp/gf"
 test "$(wc -l <"$tmp/gf")" -eq 4
 sort -g -c "$tmp/gf"
+# grow -o wind:FILE.csv: the stem's row first, then one per first-order branch
+"$bin" grow -y 3 --quiet -o "wind:$tmp/wind.csv"
+head -1 "$tmp/wind.csv" | grep -qx 'axis,order,first_segment,critical_wind_m_s,weakest_segment,height_m'
+sed -n 2p "$tmp/wind.csv" | grep -q '^stem,0,0,'
+test "$(grep -c '^branch,1,' "$tmp/wind.csv")" -ge 1
+set +e
+"$bin" grow -y 1 -o wind:x.json 2>/dev/null
+test $? -eq 2
+set -e
 echo ok

@@ -15,6 +15,35 @@
 #define MAX_OUTPUTS 16
 #define MAX_DEFS    128
 
+/* -o wind:FILE.csv: the static critical wind speed of the stem and of each first-order branch
+ * (docs/dynamics.md, "Wind"), default wind (log profile, U_ref at 10 m, z0 0.1 m, along +x) */
+static cbm_status write_wind(cbm_context *ctx, const cbm_plant *p, const char *path)
+{
+    size_t n = 0;
+    cbm_wind_def wd = cbm_wind_def_default();
+    cbm_status st = cbm_plant_critical_wind(p, &wd, NULL, 0, &n);
+    if (st != CBM_OK)
+        return st;
+    cbm_wind_critical *rows = malloc((n ? n : 1) * sizeof *rows);
+    if (!rows)
+        return CBM_E_NOMEM;
+    st = cbm_plant_critical_wind(p, &wd, rows, n, &n);
+    cbm_out *o = NULL;
+    if (st == CBM_OK)
+        st = cbm_out_open(ctx, path, &o);
+    if (st == CBM_OK) {
+        FILE *f = cbm_out_stream(o);
+        fprintf(f, "axis,order,first_segment,critical_wind_m_s,weakest_segment,height_m\n");
+        for (size_t k = 0; k < n; k++)
+            fprintf(f, "%s,%d,%zu,%.6g,%zu,%.6g\n", rows[k].order == 0 ? "stem" : "branch",
+                    (int)rows[k].order, rows[k].first, rows[k].speed, rows[k].weakest,
+                    rows[k].height);
+        st = cbm_out_commit(o);
+    }
+    free(rows);
+    return st;
+}
+
 static void help(void)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
@@ -36,6 +65,7 @@ static void help(void)
            "                    .json then ends with that year, \"complete\": false)\n"
            "  --timing          time spent per phase on stderr\n"
            "  --modes N         print the N lowest natural frequencies (Hz) of the grown tree\n"
+           "  -o wind:FILE.csv  critical wind speed of the stem and each first-order branch\n"
            "  --quiet           no per-year lines on stdout\n"
            "  --params          print every parameter (parameter-file syntax) and exit\n"
            "  --seeds A-B       grow once per seed A..B and write the median, quartiles,\n"
@@ -433,10 +463,15 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--seeds does not go with --modes");
     }
     cli_output_target targets[MAX_OUTPUTS];
-    int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json */
+    int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv */
     for (int k = 0; k < nout; k++) {
         const char *ext = cli_extension(outs[k]);
         kind[k] = !strcmp(ext, "csv") ? 1 : !strcmp(ext, "mtg") ? 2 : !strcmp(ext, "json") ? 3 : 0;
+        if (!strncmp(outs[k], "wind:", 5)) {
+            if (strcmp(ext, "csv"))
+                return cli_usage_error("grow", "%s: the wind table is .csv", outs[k]);
+            kind[k] = 4;
+        }
         if (kind[k] == 0 && !cli_output_target_parse(outs[k], &targets[k]))
             return cli_usage_error("grow",
                                    "%s: unknown format (.png .svg .glb .obj .ply .csv .mtg "
@@ -446,7 +481,7 @@ int cmd_grow(int argc, char **argv)
     {
         const char *paths[MAX_OUTPUTS];
         for (int k = 0; k < nout; k++)
-            paths[k] = kind[k] == 0 ? targets[k].path : outs[k];
+            paths[k] = kind[k] == 0 ? targets[k].path : kind[k] == 4 ? outs[k] + 5 : outs[k];
         if (cli_check_outputs(paths, nout) != CLI_OK)
             return CLI_FAIL;
     }
@@ -595,6 +630,8 @@ int cmd_grow(int argc, char **argv)
             st = cbm_write_mtg(ctx, cbm_tree_plant(t), outs[k]);
         else if (kind[k] == 3)
             st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
+        else if (kind[k] == 4)
+            st = write_wind(ctx, cbm_tree_plant(t), outs[k] + 5);
         else if (anim[k])
             st = cbm_animation_write(anim[k], targets[k].path);
         else {
