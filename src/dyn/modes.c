@@ -110,8 +110,10 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *b
         cbm__dyn_apply(d, 0.0, 1.0, w, mw);
         double b = sqrt(fmax(dot(w, mw, N), 0.0));
         be[j] = b;
-        if (j + 1 == mmax)
+        if (j + 1 == mmax) {
+            j++;
             break;
+        }
         if (!(b > 1e-14 * fabs(al[j])) || !isfinite(b)) {
             j++;
             break;
@@ -119,7 +121,7 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *b
         for (size_t k = 0; k < N; k++)
             v[(j + 1) * N + k] = w[k] / b;
     }
-    return j == mmax ? mmax : j;
+    return j;
 }
 
 cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz, double *shapes)

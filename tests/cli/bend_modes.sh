@@ -58,6 +58,12 @@ awk -F, 'NR == 2 { e0 = $5 + $6; if (!($6 > 0) || $5 != 0) { print "start"; exit
     $1 > 0.3 { e = $5 + $6; r = (e - e1) / e1; if (r < 0) r = -r
         if (r > 1e-10) { print "drift after the impulse " r " at " $1; exit 1 } }
     END { r = (e1 - e0) / e0; if (r < 0) r = -r; if (!(r > 1e-4)) { print "impulse did no work"; exit 1 } }' "$tmp/motion.csv"
+# more modes than degrees of freedom (3 per segment): the rest are null; a massless rod refused
+printf 'length = 1\nsegments = 1\nradius = 0.01\n' >"$tmp/one.spec"
+"$bin" bend "$tmp/one.spec" --modes 4 --json | grep -q '"frequencies_hz": \[[0-9.e+-]*, [0-9.e+-]*, [0-9.e+-]*, null\]'
+printf 'length = 1\nsegments = 2\nradius = 0.01\ndensity = 0\n' >"$tmp/zero.spec"
+if "$bin" bend "$tmp/zero.spec" --modes 2 2>"$tmp/err"; then exit 1; fi
+grep -q 'has no mass' "$tmp/err"
 # errors: time keys without duration, bad --modes
 printf 'dt = 0.01\n' >"$tmp/bad.spec"
 if "$bin" bend "$tmp/bad.spec" 2>"$tmp/err"; then exit 1; fi
