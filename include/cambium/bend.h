@@ -45,6 +45,13 @@ typedef struct cbm_bend_spec {
     double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
     double radius_final;   ///< m, radius after the last step (secondary growth), 0 = none
     long push_unstable; ///< 1 (default): push an unstable equilibrium to a stable one; 0: keep it
+    /* motion about the equilibrium (cambium/dynamics.h, docs/bend.md "Motion") */
+    double duration;         ///< s of motion after the static solve; 0 = static only
+    double dt;               ///< s, time step; 0 = 1/20 of the period of the 6th mode
+    double damping_ratio;    ///< zeta of Rayleigh damping at the two lowest modes, [0, 1)
+    double impulse_time;     ///< s, time at which impulse_force acts (for one step)
+    double impulse_force;    ///< N, downward at the tip for one step; 0 = none
+    double initial_tip_load; ///< N, downward: start from the deflection under it, released at 0
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

@@ -94,6 +94,12 @@ static const key_desc keys[] = {
     {"length_initial", K_NUM, OFF(length_initial), 0, 1e6, true},
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
     {"push_unstable", K_INT, OFF(push_unstable), 0, 1, false},
+    {"duration", K_NUM, OFF(duration), 0, 1e6, true},
+    {"dt", K_NUM, OFF(dt), 0, 1e3, true},
+    {"damping_ratio", K_NUM, OFF(damping_ratio), 0, 0.99, false},
+    {"impulse_time", K_NUM, OFF(impulse_time), 0, 1e6, false},
+    {"impulse_force", K_NUM, OFF(impulse_force), -1e12, 1e12, false},
+    {"initial_tip_load", K_NUM, OFF(initial_tip_load), -1e12, 1e12, false},
 };
 #undef OFF
 #define NKEYS (sizeof keys / sizeof *keys)
@@ -291,6 +297,21 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
         if (s.radius_final > 0 && s.radius_final < r0) {
             err(&r, 0, 0, "radius_final (%g) must be at least the initial radius (%g)",
                 s.radius_final, r0);
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.duration == 0 && (s.dt > 0 || s.damping_ratio > 0 || s.impulse_time > 0 ||
+                                s.impulse_force != 0 || s.initial_tip_load != 0)) {
+            err(&r, 0, 0,
+                "dt, damping_ratio, impulse_time, impulse_force and initial_tip_load need "
+                "duration > 0");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.dt > 0 && s.duration / s.dt > 1e8) {
+            err(&r, 0, 0, "duration / dt = %g steps is more than 1e8", s.duration / s.dt);
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.duration > 0 && s.steps > 0) {
+            err(&r, 0, 0, "duration (motion) and steps (growth) cannot be combined");
             r.status = CBM_E_SEMANTIC;
         }
         size_t lim = cbm_context_limits(ctx)->max_segments;

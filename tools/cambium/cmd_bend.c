@@ -8,6 +8,7 @@
 #include "options.h"
 
 #include "cambium/bend.h"
+#include "cambium/dynamics.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,12 +21,16 @@
 
 static void help(const cli_opts *t)
 {
-    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [limits]\n\n"
+    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [--modes N] [limits]\n\n"
            "Solves one branch or rod described by SPEC (key = value lines; see docs/bend.md)\n"
            "for static equilibrium. -o writes the node table (.csv: s,x,y,z,angle_deg,\n"
            "curvature,moment,stress; SI units, degrees) or the summary (.json); --json prints\n"
            "the summary (tip_x, tip_y, tip_z, tip_angle_deg, base_moment, passes, residual,\n"
-           "seconds, ...) on stdout.\n");
+           "seconds, ...) on stdout.\n\n"
+           "--modes N adds frequencies_hz, the N lowest natural frequencies (Hz) about the\n"
+           "equilibrium, to the JSON (and prints them). With `duration` in the spec the rod\n"
+           "moves about its equilibrium and -o FILE.csv writes the motion instead, one row per\n"
+           "step: t,tip_x,tip_y,tip_z,kinetic_J,potential_J (docs/bend.md, \"Motion\").\n");
     cli_options_help(stdout, t);
 }
 
@@ -86,8 +91,41 @@ static char *read_spec(const char *path, size_t *len)
     return buf;
 }
 
+static void write_json_head(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
+                            const cbm_bend_node *base, const cbm_bend_result *r, double secs,
+                            size_t n);
+
+/* the motion and modes members of the JSON (empty without --modes and duration) */
+typedef struct bend_extra {
+    const double *freqs;
+    size_t nfreq;
+    double dt;
+    size_t rows;
+} bend_extra;
+
 static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
-                       const cbm_bend_node *base, const cbm_bend_result *r, double secs, size_t n)
+                       const cbm_bend_node *base, const cbm_bend_result *r, double secs, size_t n,
+                       const bend_extra *x)
+{
+    write_json_head(f, spec, tip, base, r, secs, n);
+    if (x->nfreq) {
+        fprintf(f, ", \"frequencies_hz\": [");
+        for (size_t i = 0; i < x->nfreq; i++) {
+            if (isfinite(x->freqs[i]))
+                fprintf(f, "%s%.12g", i ? ", " : "", x->freqs[i]);
+            else
+                fprintf(f, "%snull", i ? ", " : "");
+        }
+        fprintf(f, "]");
+    }
+    if (x->rows)
+        fprintf(f, ", \"dt\": %.12g, \"motion_rows\": %zu", x->dt, x->rows);
+    fprintf(f, "}\n");
+}
+
+static void write_json_head(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
+                            const cbm_bend_node *base, const cbm_bend_result *r, double secs,
+                            size_t n)
 {
     char eig[32] = "null"; /* NaN (not computed) is no JSON number */
     if (isfinite(r->stats.lowest_eigenvalue))
@@ -98,7 +136,7 @@ static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *
             "\"solver\": \"%s\", \"discretization\": \"%s\", \"segments\": %zu, "
             "\"newton_steps\": %zu, \"krylov_iterations\": %zu, \"base_stress\": %.12g, "
             "\"steps\": %ld, \"broken_segments\": %zu, \"stage\": \"%s\", "
-            "\"unstable_modes\": %zu, \"stable\": %s, \"lowest_eigenvalue\": %s}\n",
+            "\"unstable_modes\": %zu, \"stable\": %s, \"lowest_eigenvalue\": %s",
             tip->x, tip->y, tip->z, tip->angle_deg, base->moment, r->stats.passes,
             r->stats.residual, secs, cbm_mech_solver_name(spec->solver),
             cbm_mech_discretization_name(spec->discretization), n, r->stats.newton_steps,
@@ -107,9 +145,27 @@ static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *
             r->stats.unstable_modes ? "false" : "true", eig);
 }
 
+/* streams motion rows into the open CSV outputs */
+typedef struct motion_sink {
+    FILE *f[MAX_OUTPUTS];
+    int n;
+    size_t rows;
+} motion_sink;
+
+static cbm_status motion_row(void *user, const cbm_motion_row *r)
+{
+    motion_sink *m = user;
+    for (int k = 0; k < m->n; k++)
+        fprintf(m->f[k], "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n", r->t, r->tip_x, r->tip_y,
+                r->tip_z, r->kinetic, r->potential);
+    m->rows++;
+    return CBM_OK;
+}
+
 int cmd_bend(int argc, char **argv)
 {
     const char *spec_path = NULL;
+    long modes = 0;
     const char *outs[MAX_OUTPUTS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
     bool json = false;
@@ -117,6 +173,12 @@ int cmd_bend(int argc, char **argv)
         {.name = "--help|-h", .kind = CLI_HELP},
         {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = parse_spec},
         {.name = "--json", .kind = CLI_SET, .target = &json},
+        {.name = "--modes",
+         .kind = CLI_LONG,
+         .target = &modes,
+         .min = 1,
+         .max = 10000,
+         .bad = "--modes expects a count 1..10000, found '{value}'"},
         {.name = "-o",
          .kind = CLI_CUSTOM,
          .target = &out_list,
@@ -188,13 +250,59 @@ int cmd_bend(int argc, char **argv)
                                    : " (push_unstable = 0)");
     if (s != CBM_OK)
         rc = cli_fail(ctx, s, "bend");
+    bend_extra extra = {NULL, 0, 0.0, 0};
+    double *freqs = NULL;
+    if (rc == CLI_OK && modes > 0) {
+        freqs = malloc((size_t)modes * sizeof *freqs);
+        s = freqs ? cbm_plant_modes(plant, (size_t)modes, freqs, NULL) : CBM_E_NOMEM;
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, "bend --modes");
+        extra.freqs = freqs;
+        extra.nfreq = (size_t)modes;
+    }
+    bool motion = spec.duration > 0;
+    if (rc == CLI_OK && motion) {
+        /* the CSV outputs receive the motion, streamed row by row */
+        cbm_out *mo[MAX_OUTPUTS];
+        motion_sink sink = {{NULL}, 0, 0};
+        int nmo = 0;
+        for (int k = 0; k < nout && rc == CLI_OK; k++) {
+            if (strcmp(cli_extension(outs[k]), "csv"))
+                continue;
+            s = cbm_out_open(ctx, outs[k], &mo[nmo]);
+            if (s != CBM_OK) {
+                rc = cli_fail(ctx, s, outs[k]);
+                break;
+            }
+            sink.f[nmo] = cbm_out_stream(mo[nmo]);
+            fprintf(sink.f[nmo], "t,tip_x,tip_y,tip_z,kinetic_J,potential_J\n");
+            nmo++;
+        }
+        sink.n = nmo;
+        if (rc == CLI_OK) {
+            s = cbm_bend_motion(plant, &spec, motion_row, &sink, &extra.dt);
+            if (s != CBM_OK)
+                rc = cli_fail(ctx, s, "bend (motion)");
+            extra.rows = sink.rows;
+        }
+        for (int k = 0; k < nmo; k++) {
+            if (rc == CLI_OK) {
+                s = cbm_out_commit(mo[k]);
+                if (s != CBM_OK)
+                    rc = cli_fail(ctx, s, "bend (motion output)");
+            } else
+                cbm_out_abort(mo[k]);
+        }
+    }
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        if (motion && !strcmp(cli_extension(outs[k]), "csv"))
+            continue;
         cbm_out *o = NULL;
         s = cbm_out_open(ctx, outs[k], &o);
         if (s == CBM_OK) {
             FILE *f = cbm_out_stream(o);
             if (!strcmp(cli_extension(outs[k]), "json"))
-                write_json(f, &spec, &nodes[n], &nodes[0], &res, secs, n);
+                write_json(f, &spec, &nodes[n], &nodes[0], &res, secs, n, &extra);
             else {
                 fprintf(f, "s,x,y,z,angle_deg,curvature,moment,stress\n");
                 for (size_t j = 0; j <= n; j++) {
@@ -209,12 +317,19 @@ int cmd_bend(int argc, char **argv)
             rc = cli_fail(ctx, s, outs[k]);
     }
     if (rc == CLI_OK && json)
-        write_json(stdout, &spec, &nodes[n], &nodes[0], &res, secs, n);
+        write_json(stdout, &spec, &nodes[n], &nodes[0], &res, secs, n, &extra);
     if (rc == CLI_OK && !json && nout == 0)
         printf("tip (%.6g, %.6g, %.6g) m, tip angle %.6g deg, base moment %.6g N m, %zu passes, "
                "residual %.3g (stage %s), %.3g s\n",
                nodes[n].x, nodes[n].y, nodes[n].z, nodes[n].angle_deg, nodes[0].moment,
                res.stats.passes, res.stats.residual, cbm_solve_stage_name(res.stats.stage), secs);
+    if (rc == CLI_OK && !json && nout == 0 && extra.nfreq) {
+        printf("frequencies (Hz):");
+        for (size_t k = 0; k < extra.nfreq; k++)
+            printf(" %.6g", extra.freqs[k]);
+        printf("\n");
+    }
+    free(freqs);
     free(nodes);
     cbm_plant_destroy(plant);
     cli_context_end(ctx);

@@ -6,6 +6,8 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include "cambium/dynamics.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,10 +15,40 @@
 #define MAX_OUTPUTS 16
 #define MAX_DEFS    128
 
+/* -o wind:FILE.csv: the static critical wind speed of the stem and of each first-order branch
+ * (docs/dynamics.md, "Wind"), default wind (log profile, U_ref at 10 m, z0 0.1 m, along +x) */
+static cbm_status write_wind(cbm_context *ctx, const cbm_plant *p, const char *path)
+{
+    size_t n = 0;
+    cbm_wind_def wd = cbm_wind_def_default();
+    cbm_status st = cbm_plant_critical_wind(p, &wd, NULL, 0, &n);
+    if (st != CBM_OK)
+        return st;
+    cbm_wind_critical *rows = malloc((n ? n : 1) * sizeof *rows);
+    if (!rows)
+        return CBM_E_NOMEM;
+    st = cbm_plant_critical_wind(p, &wd, rows, n, &n);
+    cbm_out *o = NULL;
+    if (st == CBM_OK)
+        st = cbm_out_open(ctx, path, &o);
+    if (st == CBM_OK) {
+        FILE *f = cbm_out_stream(o);
+        fprintf(f, "axis,order,first_segment,critical_wind_m_s,weakest_segment,height_m\n");
+        for (size_t k = 0; k < n; k++)
+            fprintf(f, "%s,%d,%zu,%.6g,%zu,%.6g\n", rows[k].order == 0 ? "stem" : "branch",
+                    (int)rows[k].order, rows[k].first, rows[k].speed, rows[k].weakest,
+                    rows[k].height);
+        st = cbm_out_commit(o);
+    }
+    free(rows);
+    return st;
+}
+
 static void help(const cli_opts *t)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
+           "                    [--modes N]\n"
            "                    [--params] [--report] [--seeds A-B] [limits]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
@@ -24,7 +56,8 @@ static void help(const cli_opts *t)
            "fruit-tree; see docs/models.md). Outputs by extension: .png .svg .glb .obj .ply\n"
            "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
            "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
-           "summary). FORMAT:PATH names a scene format explicitly.\n\n");
+           "summary). FORMAT:PATH names a scene format explicitly. -o wind:FILE.csv writes the\n"
+           "critical wind speed of the stem and of each first-order branch.\n\n");
     cli_options_rows(stdout, t);
     printf("\nbuilt-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
@@ -362,6 +395,7 @@ int cmd_grow(int argc, char **argv)
     long years = -1, every = 0, seeds[2] = {-1, -1};
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false, report = false;
+    long modes = 0;
     cbm_write_options o = cbm_write_options_default();
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
@@ -405,6 +439,14 @@ int cmd_grow(int argc, char **argv)
          .kind = CLI_SET,
          .target = &timing,
          .help = "time spent per phase on stderr"},
+        {.name = "--modes",
+         .kind = CLI_LONG,
+         .target = &modes,
+         .min = 1,
+         .max = 10000,
+         .bad = "--modes must be 1..10000",
+         .arg = "N",
+         .help = "print the N lowest natural frequencies (Hz) of the grown tree"},
         {.name = "--quiet",
          .kind = CLI_SET,
          .target = &quiet,
@@ -450,12 +492,19 @@ int cmd_grow(int argc, char **argv)
         if (summer || every || params || seed)
             return cli_usage_error("grow",
                                    "--seeds does not go with --summer, --every, --params, --seed");
+        if (modes > 0)
+            return cli_usage_error("grow", "--seeds does not go with --modes");
     }
     cli_output_target targets[MAX_OUTPUTS];
-    int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json */
+    int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv */
     for (int k = 0; k < nout; k++) {
         const char *ext = cli_extension(outs[k]);
         kind[k] = !strcmp(ext, "csv") ? 1 : !strcmp(ext, "mtg") ? 2 : !strcmp(ext, "json") ? 3 : 0;
+        if (!strncmp(outs[k], "wind:", 5)) {
+            if (strcmp(ext, "csv"))
+                return cli_usage_error("grow", "%s: the wind table is .csv", outs[k]);
+            kind[k] = 4;
+        }
         if (kind[k] == 0 && !cli_output_target_parse(outs[k], &targets[k]))
             return cli_usage_error("grow",
                                    "%s: unknown format (.png .svg .glb .obj .ply .csv .mtg "
@@ -465,7 +514,7 @@ int cmd_grow(int argc, char **argv)
     {
         const char *paths[MAX_OUTPUTS];
         for (int k = 0; k < nout; k++)
-            paths[k] = kind[k] == 0 ? targets[k].path : outs[k];
+            paths[k] = kind[k] == 0 ? targets[k].path : kind[k] == 4 ? outs[k] + 5 : outs[k];
         if (cli_check_outputs(paths, nout) != CLI_OK)
             return CLI_FAIL;
     }
@@ -536,7 +585,7 @@ int cmd_grow(int argc, char **argv)
         rc = grow_seeds(ctx, &d, model, seed_first, seed_last, outs, nout, quiet);
         goto done;
     }
-    if (nout == 0 && quiet && !report) {
+    if (nout == 0 && quiet && !report && modes == 0) {
         rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
         goto done;
     }
@@ -614,6 +663,8 @@ int cmd_grow(int argc, char **argv)
             st = cbm_write_mtg(ctx, cbm_tree_plant(t), outs[k]);
         else if (kind[k] == 3)
             st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
+        else if (kind[k] == 4)
+            st = write_wind(ctx, cbm_tree_plant(t), outs[k] + 5);
         else if (anim[k])
             st = cbm_animation_write(anim[k], targets[k].path);
         else {
@@ -636,6 +687,23 @@ int cmd_grow(int argc, char **argv)
     }
     if (timing && rc == CLI_OK)
         print_timing(ctx, t, summer, derive, t_interpret, t_write, cli_seconds() - t0);
+    if (modes > 0 && rc == CLI_OK) {
+        /* natural frequencies about the final equilibrium (docs/dynamics.md) */
+        double *f = malloc((size_t)modes * sizeof *f);
+        double tm = cli_seconds();
+        st = f ? cbm_plant_modes(cbm_tree_plant(t), (size_t)modes, f, NULL) : CBM_E_NOMEM;
+        if (st == CBM_OK) {
+            printf("%s after %d years: lowest %ld natural frequencies (Hz):", model,
+                   cbm_tree_years(t), modes);
+            for (long k = 0; k < modes; k++)
+                printf(" %.6g", f[k]);
+            printf("\n");
+            if (timing)
+                fprintf(stderr, "grow: modes in %.3f s\n", cli_seconds() - tm);
+        } else
+            rc = cli_fail(ctx, st, "natural frequencies");
+        free(f);
+    }
     if (report && rc == CLI_OK) {
         cbm_tree_measures tm;
         st = cbm_measure_plant(ctx, NULL, cbm_tree_plant(t), &tm);

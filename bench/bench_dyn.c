@@ -1,0 +1,147 @@
+/* Benchmark of the dynamics (docs/performance.md, "Dynamics"): the lowest 10 natural
+ * frequencies and the time steps per second of Newmark's rule on random branched trees of
+ * 2,500 to 10^5 segments (the tree of bench_mech: trunk continued with probability 0.8,
+ * otherwise a lateral on a uniformly chosen earlier segment, 2 cm segments, pipe-model radii,
+ * E = 10 GPa, 700 kg/m^3, 5 g leaves on the tips, seed 7), solved for equilibrium first.
+ *
+ * usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S]
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cambium/cambium.h"
+#include "cambium/dynamics.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define PI 3.14159265358979323846
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* CPU time of the process: on a shared machine the wall clock also counts the other processes */
+static double cpu(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static cbm_plant *make_tree(cbm_context *ctx, size_t n)
+{
+    cbm_context_seed(ctx, 7);
+    int64_t *par = malloc(n * sizeof *par);
+    double *count = malloc(n * sizeof *count);
+    unsigned char *seen = calloc(n, 1);
+    cbm_plant *p = NULL;
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.capacity = n;
+    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
+    if (!par || !count || !seen || cbm_plant_create(ctx, &pd, &p) != CBM_OK)
+        goto done;
+    par[0] = -1;
+    for (size_t i = 1; i < n; i++)
+        par[i] = cbm_context_uniform(ctx) < 0.8 ? (int64_t)i - 1
+                                                : (int64_t)(cbm_context_uniform(ctx) * (double)i);
+    for (size_t i = 0; i < n; i++)
+        count[i] = 1;
+    for (size_t i = n; i-- > 1;)
+        count[par[i]] += count[i];
+    for (size_t i = 0; i < n && p; i++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = par[i];
+        d.length = 0.02;
+        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
+        d.core.youngs_modulus = 1e10;
+        d.core.shear_modulus = 1e10 / 16;
+        d.core.density = 700;
+        if (i > 0 && seen[par[i]]) {
+            d.divergence = 2.39996 * (double)i;
+            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
+            d.roll = -d.divergence;
+        }
+        if (i > 0)
+            seen[par[i]] = 1;
+        d.point_mass = count[i] == 1 ? 0.005 : 0.0;
+        if (cbm_plant_add_segment(p, &d, NULL) != CBM_OK) {
+            cbm_plant_destroy(p);
+            p = NULL;
+        }
+    }
+done:
+    free(seen);
+    free(par);
+    free(count);
+    return p;
+}
+
+int main(int argc, char **argv)
+{
+    size_t sizes[16] = {2500, 10000, 100000};
+    int nsizes = 3, modes = 10, steps = 1000;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--sizes") && i + 1 < argc) {
+            nsizes = 0;
+            for (char *t = strtok(argv[++i], ","); t && nsizes < 16; t = strtok(NULL, ","))
+                sizes[nsizes++] = (size_t)strtoull(t, NULL, 10);
+        } else if (!strcmp(argv[i], "--modes") && i + 1 < argc)
+            modes = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--steps") && i + 1 < argc)
+            steps = atoi(argv[++i]);
+        else {
+            fprintf(stderr, "usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S]\n");
+            return 2;
+        }
+    }
+    if (modes < 1 || steps < 1)
+        return 2;
+    printf("segments,modes,modes_s,modes_cpu_s,f1_hz,f%d_hz,steps,steps_per_s,ms_per_step,"
+           "cpu_ms_per_step\n",
+           modes);
+    for (int k = 0; k < nsizes; k++) {
+        cbm_context *ctx = NULL;
+        cbm_context_def cd = cbm_context_def_default();
+        if (cbm_context_create(&cd, &ctx) != CBM_OK)
+            return 1;
+        cbm_plant *p = make_tree(ctx, sizes[k]);
+        cbm_solve_def sd = cbm_solve_def_default();
+        if (!p || cbm_plant_solve(p, &sd, NULL) != CBM_OK) {
+            fprintf(stderr, "bench_dyn: no equilibrium for %zu segments\n", sizes[k]);
+            return 1;
+        }
+        double *f = malloc((size_t)modes * sizeof *f);
+        double t0 = now(), c0 = cpu();
+        cbm_status st = cbm_plant_modes(p, (size_t)modes, f, NULL);
+        double tm = now() - t0, cm = cpu() - c0;
+        if (st != CBM_OK) {
+            fprintf(stderr, "bench_dyn: modes: %s\n", cbm_context_last_error(ctx));
+            return 1;
+        }
+        cbm_motion_def md = cbm_motion_def_default();
+        md.dt = 1e-3;
+        cbm_motion *m = NULL;
+        if (cbm_motion_create(p, &md, &m) != CBM_OK)
+            return 1;
+        cbm_motion_add_force(m, sizes[k] - 1, (cbm_vec3){0, -1, 0});
+        t0 = now();
+        c0 = cpu();
+        for (int s = 0; s < steps; s++)
+            if (cbm_motion_step(m) != CBM_OK)
+                return 1;
+        double ts = now() - t0, cs = cpu() - c0;
+        printf("%zu,%d,%.4f,%.4f,%.6g,%.6g,%d,%.1f,%.4f,%.4f\n", sizes[k], modes, tm, cm, f[0],
+               f[modes - 1], steps, steps / ts, 1e3 * ts / steps, 1e3 * cs / steps);
+        fflush(stdout);
+        free(f);
+        cbm_motion_destroy(m);
+        cbm_plant_destroy(p);
+        cbm_context_destroy(ctx);
+    }
+    return 0;
+}

@@ -1,0 +1,157 @@
+/* cambium: small oscillations of a plant about its static equilibrium (issue 11): natural
+ * frequencies and mode shapes, and time-stepped motion under impulses and point loads.
+ *
+ * The model is the statics' own segment model (cbm_plant): rigid segments joined by 3-DOF
+ * elastic joints with the joint rigidities the solver uses (rings, staggered or chain
+ * discretisation), each segment a uniform elliptical rod (mass per length from the rings, rotary
+ * inertia of the solid outer ellipse), point masses (leaves, fruit) at the distal nodes. The
+ * coordinates are the small rotations q_k (world components) of every joint about its node,
+ * applied to everything the joint carries. About the equilibrium the motion obeys
+ *     M q'' + C q' + K q = f(t),
+ * K = joint stiffness R diag(C_joint / d) R^T plus the geometric stiffness of the dead loads
+ * (weights of the segments and point masses, tip forces) at the equilibrium (an upright stem
+ * sways slower than without gravity, a hanging one faster), M the mass matrix of the segments
+ * and point masses. Every product and every solve with K + c M costs O(n) (a tree elimination
+ * of 6x6 spatial blocks, src/dyn/tree.c). Design, derivation and limits: docs/dynamics.md.
+ *
+ * The plant must be at equilibrium (after cbm_plant_solve) when an analysis is created (its state
+ * is read, not recomputed: after an edit, solve or evaluate first); the analysis keeps its own
+ * copy of everything it needs and does not see later edits.
+ */
+#ifndef CAMBIUM_DYNAMICS_H
+#define CAMBIUM_DYNAMICS_H
+
+#include "cambium/base.h"
+#include "cambium/mech.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Natural frequencies (Hz, ascending) of the plant about its current equilibrium: the lowest
+/// `count` eigenvalues of K phi = omega^2 M phi by shift-invert Lanczos (docs/dynamics.md).
+/// freqs_hz[0..count) receive the frequencies; shapes (optional, count x 3n doubles, mode after
+/// mode) receive the mass-normalised mode shapes (joint rotations, world, rad). If the plant has
+/// fewer than count degrees of freedom (3 per segment), the rest of freqs_hz is NAN.
+/// CBM_E_INVALID for count 0, an empty plant or a massless segment; CBM_E_RUNTIME if the
+/// equilibrium is unstable (K not positive definite: a column past its buckling length);
+/// CBM_E_NOT_CONVERGED if the Ritz values did not converge.
+CBM_API cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz,
+                                   double *shapes);
+
+/// Time stepping (Newmark's average acceleration: implicit, unconditionally stable, second
+/// order, energy-conserving without damping).
+typedef struct cbm_motion_def {
+    double dt;            ///< s (> 0); default 1e-3
+    double damping_ratio; ///< zeta of Rayleigh damping, exact at the two lowest modes; default 0
+    /// Rayleigh coefficients added to those of damping_ratio: C += alpha M + beta K
+    double rayleigh_alpha; ///< 1/s, default 0
+    double rayleigh_beta;  ///< s, default 0
+} cbm_motion_def;
+
+/// Defaults: dt 1e-3 s, no damping.
+CBM_API cbm_motion_def cbm_motion_def_default(void);
+
+typedef struct cbm_motion cbm_motion;
+
+/// A motion about the plant's current equilibrium, at rest (q = 0). Copies what it needs.
+CBM_API cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def,
+                                     cbm_motion **out);
+CBM_API void cbm_motion_destroy(cbm_motion *m);
+
+/// Starts from the linear static deflection under a force (N, world) at the distal node of seg
+/// (K q = f), at rest; the force is released at t = 0.
+CBM_API cbm_status cbm_motion_start_deflected(cbm_motion *m, size_t seg, cbm_vec3 force);
+
+/// Adds a force (N, world) at the distal node of seg to the load of the next step only (an
+/// impulse of force * dt; call before each step for a sustained tug).
+CBM_API cbm_status cbm_motion_add_force(cbm_motion *m, size_t seg, cbm_vec3 force);
+
+/// One time step of dt. The forces added since the last step act at the new time.
+CBM_API cbm_status cbm_motion_step(cbm_motion *m);
+
+/// Time (s), kinetic energy 1/2 q'.M q' and potential energy 1/2 q.K q (J, about the
+/// equilibrium) of the current state; any pointer may be NULL.
+CBM_API void cbm_motion_state(cbm_motion *m, double *t, double *kinetic, double *potential);
+
+/// Current displacement (world, m) of the distal node of seg from the equilibrium.
+CBM_API cbm_status cbm_motion_displacement(const cbm_motion *m, size_t seg, cbm_vec3 *out);
+
+/// The joint rotations q (3n doubles, world, rad) of the current state; valid until the next
+/// step.
+CBM_API const double *cbm_motion_rotations(const cbm_motion *m);
+
+/* ---- wind (docs/dynamics.md, "Wind") ---- */
+
+/// Vertical profile of the mean wind speed.
+typedef enum cbm_wind_profile {
+    CBM_WIND_LOG,    ///< U(z) = U_ref ln((z - d) / z0) / ln((z_ref - d) / z0), 0 below d + z0
+    CBM_WIND_POWER,  ///< U(z) = U_ref (z / z_ref)^exponent, 0 at and below the base
+    CBM_WIND_UNIFORM ///< U(z) = U_ref
+} cbm_wind_profile;
+
+/// Mean wind and drag: on wood, 1/2 rho C_d (a + b) l |v_n| v_n with v_n the wind's component
+/// normal to the segment; on the organs at the distal nodes (leaves, fruit: the point masses),
+/// 1/2 rho C_d A |U| U with A = point mass * organ_area_per_kg. Heights z are above the base.
+typedef struct cbm_wind_def {
+    cbm_vec3 direction;       ///< horizontal direction the wind blows to; default (1, 0, 0)
+    cbm_wind_profile profile; ///< default CBM_WIND_LOG
+    double reference_height;  ///< z_ref, m, where the speed is U_ref; default 10
+    double roughness;         ///< z0, m (log profile); default 0.1
+    double displacement;      ///< d, m (log profile); default 0
+    double exponent;          ///< power-law exponent; default 1/7
+    double air_density;       ///< kg/m^3; default 1.226
+    double drag_wood;         ///< C_d of the segments (cylinders); default 1.0
+    double drag_organs;       ///< C_d of the organs; default 0.5
+    double organ_area_per_kg; ///< m^2 of drag area per kg of point mass; default 0 (none)
+} cbm_wind_def;
+
+/// Defaults as documented per field.
+CBM_API cbm_wind_def cbm_wind_def_default(void);
+
+/// Mean wind speed (m/s) at height z above the base for reference speed u_ref.
+CBM_API double cbm_wind_speed(const cbm_wind_def *def, double u_ref, double z);
+
+/// Critical wind speed of one axis: the reference speed U_ref at which the static drag of the
+/// mean wind plus the weight (the equilibrium's moments) brings the peak bending stress of some
+/// segment of the axis to its modulus of rupture (geometry of the equilibrium held fixed).
+typedef struct cbm_wind_critical {
+    size_t first;   ///< first segment of the axis (the stem's root or the branch's base)
+    int32_t order;  ///< 0 for the stem, 1 for a first-order branch
+    double speed;   ///< m/s; 0 if it already breaks under its weight, INFINITY if never,
+                    ///< NAN if no segment has a modulus of rupture
+    size_t weakest; ///< the segment that reaches it first
+    double height;  ///< m above the base of that segment's proximal node
+} cbm_wind_critical;
+
+/// One row for the stem (the segments of order 0) and one per first-order branch (an order-1
+/// segment on an order-0 parent, with everything it carries), in segment order, into
+/// out[0..max); *count receives the number of rows (may exceed max: then only max are stored).
+/// The plant must be at equilibrium.
+CBM_API cbm_status cbm_plant_critical_wind(const cbm_plant *plant, const cbm_wind_def *def,
+                                           cbm_wind_critical *out, size_t max, size_t *count);
+
+/* ---- the bend workbench's motion (docs/bend.md, "Motion") ---- */
+
+/// One row of a bend motion: time, tip position (world, m), kinetic and potential energy (J,
+/// about the equilibrium).
+typedef struct cbm_motion_row {
+    double t, tip_x, tip_y, tip_z, kinetic, potential;
+} cbm_motion_row;
+
+/// Called once per row (t = 0, then after every step); a non-OK return stops the run with it.
+typedef cbm_status (*cbm_motion_row_fn)(void *user, const cbm_motion_row *row);
+
+struct cbm_bend_spec;
+
+/// The motion a bend spec asks for (duration, dt, damping_ratio, impulse_time, impulse_force,
+/// initial_tip_load) of the solved rod `plant` about its equilibrium; the tip is the distal node
+/// of the last segment. *dt_used (optional) receives the step (the spec's dt, or 1/20 of the
+/// period of the 6th mode when 0).
+CBM_API cbm_status cbm_bend_motion(const cbm_plant *plant, const struct cbm_bend_spec *spec,
+                                   cbm_motion_row_fn row, void *user, double *dt_used);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
