@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "commands.h"
+#include "options.h"
 
 #include "cambium/elastica.h"
 
@@ -22,7 +23,7 @@
 #define MAX_JUMPS      64
 #define DEG            (180.0 / 3.14159265358979323846)
 
-static void help(void)
+static void help(const cli_opts *t)
 {
     printf("usage: cambium elastica SPEC [-o FILE.csv|FILE.png|FILE.svg]... [--json] [limits]\n\n"
            "Every equilibrium of a heavy rod (or a branched plant) clamped at its base, by\n"
@@ -32,8 +33,33 @@ static void help(void)
            "-o writes the S-curve: .csv (theta_tip_deg,theta_base_deg,kappa_base,strain_base,\n"
            "energy,tip_x,tip_y,dbase_dtip,index,stable) or a plot (.png, .svg: base curvature\n"
            "and energy against the base angle). --json prints the folds, jumps, hysteresis\n"
-           "and, with angle, the equilibria at that angle.\n\n%s",
-           cli_limits_help);
+           "and, with angle, the equilibria at that angle.\n");
+    cli_options_help(stdout, t);
+}
+
+/* The spec: one file. */
+static bool parse_spec(const char *a, void *target, char *why, size_t n)
+{
+    const char **spec = target;
+    if (*spec)
+        snprintf(why, n, "expected one SPEC, found '{value}' too");
+    else
+        *spec = a;
+    return !*why;
+}
+
+/* An output: .csv, .png or .svg. */
+static bool parse_output(const char *v, void *target, char *why, size_t n)
+{
+    cli_list *outs = target;
+    const char *ext = cli_extension(v);
+    if (outs->count == outs->max)
+        snprintf(why, n, "at most %d outputs", outs->max);
+    else if (strcmp(ext, "csv") && strcmp(ext, "png") && strcmp(ext, "svg"))
+        snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv, .png or .svg)", ext);
+    else
+        cli_list_add(outs, v);
+    return !*why;
 }
 
 static double now(void)
@@ -290,38 +316,28 @@ static cbm_status run(cbm_context *ctx, const cbm_elastica_spec *spec, result *r
 int cmd_elastica(int argc, char **argv)
 {
     const char *spec_path = NULL, *outs[MAX_OUTPUTS];
-    int nout = 0;
+    cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
     bool json = false;
-    for (int i = 1; i < argc; i++) {
-        int lr = cli_limit_option("elastica", argc, argv, &i);
-        if (lr < 0)
-            return CLI_USAGE;
-        if (lr > 0)
-            continue;
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            help();
-            return CLI_OK;
-        } else if (!strcmp(argv[i], "--json"))
-            json = true;
-        else if (!strcmp(argv[i], "-o")) {
-            if (i + 1 >= argc)
-                return cli_usage_error("elastica", "-o needs a file name");
-            if (nout == MAX_OUTPUTS)
-                return cli_usage_error("elastica", "at most %d outputs", MAX_OUTPUTS);
-            const char *ext = cli_extension(argv[i + 1]);
-            if (strcmp(ext, "csv") && strcmp(ext, "png") && strcmp(ext, "svg"))
-                return cli_usage_error("elastica",
-                                       "%s: unsupported output format '.%s' (use .csv, .png or "
-                                       ".svg)",
-                                       argv[i + 1], ext);
-            outs[nout++] = argv[++i];
-        } else if (argv[i][0] == '-' && argv[i][1])
-            return cli_usage_error("elastica", "unknown option '%s'", argv[i]);
-        else if (spec_path)
-            return cli_usage_error("elastica", "expected one SPEC, found '%s' too", argv[i]);
-        else
-            spec_path = argv[i];
-    }
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = parse_spec},
+        {.name = "--json", .kind = CLI_SET, .target = &json},
+        {.name = "-o",
+         .kind = CLI_CUSTOM,
+         .target = &out_list,
+         .parse = parse_output,
+         .bad = "-o needs a file name"},
+        {.kind = CLI_GROUP, .target = cli_limit_options()},
+        {0}};
+    cli_opts table = {.cmd = "elastica",
+                      .opts = rows,
+                      .help = help,
+                      .width = 18,
+                      .unknown = "unknown option '{opt}'"};
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    int nout = out_list.count;
     if (!spec_path)
         return cli_usage_error("elastica", "expected a SPEC file (see cambium elastica --help)");
     if (cli_check_outputs(outs, nout) != CLI_OK)
