@@ -1144,7 +1144,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
             bool ok = is_vec(t1);
             if (b->fn == F_VECROT) {
-                ok = ok && (is_vec(t0) || t0 == T_TVEC) && is_lvalue(L, args) &&
+                ok = ok && (is_vec(t0) || t0 == T_TVEC) &&
                      is_scalar(ND(ND(ND(args).next).next).type);
                 rt = t0;
             } else if (b->fn == F_MAKEQ) {
@@ -1157,8 +1157,7 @@ static int32_t call_expr(lc *L, const char *s, size_t n, size_t pos)
             }
             if (!ok) {
                 cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
-                          b->fn == F_VECROT ? " (a vector or TurtleVec variable, an axis, an angle)"
-                                            : "");
+                          b->fn == F_VECROT ? " (a vector or TurtleVec, an axis, an angle)" : "");
                 return -1;
             }
         } else if (b->fn == F_LENGTH || b->fn == F_NORMALIZE) {
@@ -3064,7 +3063,8 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
             out[0] = cos(ang / 2);
             for (int i = 0; i < 3; i++)
                 out[i + 1] = u[i] * sn;
-        } else { /* Rodrigues' rotation of each vector about the unit axis, in place */
+        } else { /* Rodrigues' rotation of each vector about the unit axis; like lpfg, a new
+                  * value: the argument is not changed (it may be any expression) */
             double l = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
             double ax[3] = {w[0] / (l > 0 ? l : 1), w[1] / (l > 0 ? l : 1), w[2] / (l > 0 ? l : 1)};
             double c = cos(ang), sn = sin(ang);
@@ -3076,10 +3076,6 @@ static void call_builtin(cbm_lsys *ls, const xn *n, double *fr, double *out)
                 for (int i = 0; i < 3; i++)
                     out[3 * v + i] = p[i] * c + cr[i] * sn + ax[i] * d * (1 - c);
             }
-            conv_value(lp, n->type, out);
-            memcpy(lv_ptr(lp, &lp->nodes.data[x], fr), out,
-                   (size_t)tsize(lp, n->type) * sizeof(double));
-            return;
         }
         conv_value(lp, n->type, out);
         return;
