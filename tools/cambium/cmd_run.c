@@ -24,6 +24,8 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include "cambium/turtle_motion.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -42,6 +44,9 @@ static const struct {
     {"mtg", "the plant as an OpenAlea MTG: the mechanical segments (L+C models with "
             "mechanics:), otherwise the segments the turtle draws, linked by its branches"},
     {"segments", "(segments:PATH) the same segments as a CSV table, one row each"},
+    {"motion",
+     "(motion:PATH.csv or .glb) the drawn segments and spheres at every recorded\n"
+     "                            step: a table, or a glTF animating each as a rigid node"},
 };
 
 static const struct {
@@ -64,7 +69,8 @@ typedef struct target {
     char format[16];
     const char *path;
     const char *arg;
-    cbm_animation *anim; /* .glb with --every */
+    cbm_animation *anim;       /* .glb with --every */
+    cbm_turtle_motion *motion; /* motion:PATH */
 } target;
 
 static bool in_list(const char *ext, const char *const *list, size_t n)
@@ -104,7 +110,8 @@ static bool parse_target(const char *arg, target *t)
 
 static bool is_scene_format(const char *f)
 {
-    return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments");
+    return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments") &&
+           strcmp(f, "motion");
 }
 
 static void usage(void)
@@ -128,6 +135,10 @@ static void usage(void)
     printf("  --every K         also write the outputs after step 0 and every K-th step as\n"
            "                    NAME.STEP.EXT (NAME.0003.png); a .glb becomes one animation\n"
            "                    with a frame per K steps\n"
+           "  --motion-every K  motion: outputs record a frame after step 0, every K-th step\n"
+           "                    (default 1) and the last step\n"
+           "  --step-time S     model time of one derivation step in motion: outputs, s\n"
+           "                    (default 0.04)\n"
            "  --homomorphism    write the string after the homomorphism\n"
            "  --float32         follow cpfg exactly: float32 parameters, seed: ignored as in\n"
            "                    cpfg's batch mode\n"
@@ -171,6 +182,7 @@ typedef struct run {
     cbm_vec3 lo, hi;      /* its box */
     bool has_box;
     double t_start, t_derive, t_interpret, t_write;
+    double step_time; /* s of model time per derivation step (motion: outputs) */
 } run;
 
 /* Interprets the current string: fills its query modules, draws the scene if one is needed,
@@ -333,6 +345,16 @@ static int write_outputs(run *r, int what, int done)
                 rc = run_fail(r, s, t->arg);
             continue;
         }
+        if (t->motion) { /* frames are recorded by record_motion; written at the end */
+            if (what == FINAL) {
+                s = !strcmp(cli_extension(t->path), "glb")
+                        ? cbm_turtle_motion_write_glb(t->motion, t->path)
+                        : cbm_turtle_motion_write_csv(t->motion, t->path);
+                if (s != CBM_OK)
+                    rc = run_fail(r, s, t->arg);
+            }
+            continue;
+        }
         if (t->anim) {
             s = what == NUMBERED ? cbm_animation_add_frame(t->anim, r->scene)
                                  : cbm_animation_write(t->anim, t->path);
@@ -359,6 +381,34 @@ static int write_outputs(run *r, int what, int done)
     }
     r->t_write += cli_seconds() - t0;
     return rc;
+}
+
+/* A frame of every motion: output after step `done`: the turtle's record of the current string
+ * (the first frame also draws a scene, for the parts' colours). */
+static int record_motion(run *r, int done, bool *any)
+{
+    bool first = true, want = false;
+    for (int i = 0; i < r->ntargets; i++)
+        if (r->targets[i].motion) {
+            want = true;
+            first = cbm_turtle_motion_frame_count(r->targets[i].motion) == 0;
+        }
+    if (!want)
+        return CLI_OK;
+    *any = true;
+    double t0 = cli_seconds();
+    cbm_scene *sc = NULL;
+    cbm_turtle *t = NULL;
+    cbm_status s = first ? cbm_scene_create(r->ctx, &sc) : CBM_OK;
+    if (s == CBM_OK)
+        s = cbm_model_interpret(r->model, sc, true, &t);
+    for (int i = 0; i < r->ntargets && s == CBM_OK; i++)
+        if (r->targets[i].motion)
+            s = cbm_turtle_motion_add_frame(r->targets[i].motion, t, sc, done * r->step_time, done);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(sc);
+    r->t_interpret += cli_seconds() - t0;
+    return s == CBM_OK ? CLI_OK : run_fail(r, s, "motion");
 }
 
 /* --timing: the phases on stderr. For a model with mechanics (L+C Equilibrium(), AddRings(), ...)
@@ -430,7 +480,8 @@ int cmd_run(int argc, char **argv)
     size_t nside = 0;
     target targets[MAX_OUTPUTS];
     int ntargets = 0;
-    long steps = -1, every = 0, seed = -1;
+    long steps = -1, every = 0, seed = -1, motion_every = 1;
+    double step_time = 0.04;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
     cbm_write_options wopt = cbm_write_options_default();
     for (int i = 1; i < argc; i++) {
@@ -461,6 +512,17 @@ int cmd_run(int argc, char **argv)
                 every = v;
             else
                 seed = v;
+        } else if (!strcmp(a, "--motion-every")) {
+            if (!has_next || !cli_parse_long(argv[i + 1], &motion_every) || motion_every < 1 ||
+                motion_every > 100000000)
+                return cli_usage_error("run", "--motion-every expects an integer 1..10^8");
+            i++;
+        } else if (!strcmp(a, "--step-time")) {
+            char *end = NULL;
+            step_time = has_next ? strtod(argv[i + 1], &end) : 0;
+            if (!has_next || end == argv[i + 1] || *end || !(step_time > 0) || !(step_time < 1e6))
+                return cli_usage_error("run", "--step-time expects seconds > 0");
+            i++;
         } else if (!strncmp(a, "-D", 2)) {
             const char *d = a[2] ? a + 2 : (has_next ? argv[++i] : NULL);
             if (!d || !*d || *d == '=' || ndefines >= 256)
@@ -510,6 +572,11 @@ int cmd_run(int argc, char **argv)
             return CLI_FAIL;
     }
     for (int k = 0; k < ntargets; k++)
+        if (!strcmp(targets[k].format, "motion") && strcmp(cli_extension(targets[k].path), "csv") &&
+            strcmp(cli_extension(targets[k].path), "glb"))
+            return cli_usage_error("run", "%s: a motion is written as .csv or .glb",
+                                   targets[k].arg);
+    for (int k = 0; k < ntargets; k++)
         if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
             strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))
             return cli_usage_error("run", "--every writes numbered files: %s cannot be stdout",
@@ -532,6 +599,7 @@ int cmd_run(int argc, char **argv)
     r.ntargets = ntargets;
     r.interpreted_step = -1;
     r.t_start = cli_seconds();
+    r.step_time = step_time;
     cbm_model_def def = {cbm_lsys_def_default(), sides, nside};
     def.lsys.path = model;
     def.lsys.defines = defines;
@@ -572,6 +640,9 @@ int cmd_run(int argc, char **argv)
     for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
         if (!strcmp(targets[k].format, "glb"))
             s = cbm_animation_create(ctx, &wopt, &targets[k].anim);
+    for (int k = 0; k < ntargets && s == CBM_OK; k++)
+        if (!strcmp(targets[k].format, "motion"))
+            s = cbm_turtle_motion_create(ctx, &targets[k].motion);
     if (s != CBM_OK) {
         rc = cli_fail(ctx, s, "output");
         goto done;
@@ -594,7 +665,10 @@ int cmd_run(int argc, char **argv)
     r.t_derive += cli_seconds() - t_reset;
     if (s == CBM_OK && (every > 0 || r.json))
         rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, 0);
-    int done = 0, last_row = 0;
+    bool motion = false;
+    if (s == CBM_OK && rc == CLI_OK)
+        rc = record_motion(&r, 0, &motion);
+    int done = 0, last_row = 0, last_motion = 0;
     cli_progress pr;
     cli_progress_begin(&pr);
     while (s == CBM_OK && rc == CLI_OK && done < n && !cbm_lsys_stopped(r.ls)) {
@@ -609,6 +683,10 @@ int cmd_run(int argc, char **argv)
         if ((every > 0 || r.json) && done % row_every == 0) {
             last_row = done;
             rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, done);
+        }
+        if (motion && rc == CLI_OK && done % motion_every == 0) {
+            last_motion = done;
+            rc = record_motion(&r, done, &motion);
         }
     }
     cli_progress_end(&pr);
@@ -631,6 +709,8 @@ int cmd_run(int argc, char **argv)
                     final_rc = cli_fail(ctx, fs, targets[k].arg);
             }
     }
+    if (final_rc == CLI_OK && motion && last_motion != done)
+        final_rc = record_motion(&r, done, &motion);
     json_end(&r);
     if (final_rc == CLI_OK)
         final_rc = write_outputs(&r, FINAL, done);
@@ -648,8 +728,10 @@ int cmd_run(int argc, char **argv)
     if (timing)
         print_timing(&r);
 done:
-    for (int k = 0; k < ntargets; k++)
+    for (int k = 0; k < ntargets; k++) {
         cbm_animation_destroy(targets[k].anim);
+        cbm_turtle_motion_destroy(targets[k].motion);
+    }
     cbm_json_destroy(r.json);
     cbm_scene_destroy(r.scene);
     cbm_scene_destroy(r.line_scene);
