@@ -14,5 +14,7 @@
 #include "cambium/model.h"
 #include "cambium/tree.h"
 #include "cambium/measure.h"
+#include "cambium/chain.h"
+#include "cambium/turtle_motion.h"
 
 #endif
