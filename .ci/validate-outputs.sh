@@ -35,6 +35,9 @@ done
   -o "$out/run-1.24c.ply" -o "$out/run-1.24c.svg" -o "$out/run-1.24c.png"
 "$bin" run tests/lsys/abop-1.27.l tests/lsys/abop-1.27.v -o "$out/run-1.27.glb" -o "$out/run-1.27.obj" -o "$out/run-1.27.ply"
 "$bin" run tests/lsys/abop-2.8a.l -n 7 --color-by order -o "$out/run-lines.svg" -o "$out/run-lines.png"
+# cambium run: the motion of Taylor-Hell's linked pendula as a node-TRS animation (gltf_frames.c)
+"$bin" run models/taylor-hell-pendula.l -n 2000 --motion-every 10 --step-time 0.0025 \
+  -o "motion:$out/run-pendula-motion.glb" -o "motion:$out/run-pendula-motion.csv"
 # cambium plot: a column plot of the parts table, both formats
 "$bin" plot "$out/tree.csv" -x age_years -y stress_ratio --panel order --style points \
   -o "$out/plot-parts.svg" -o "$out/plot-parts.png"

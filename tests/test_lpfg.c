@@ -221,6 +221,13 @@ TEST(lpfg_taylor_hell_constructs)
     run_model("taylor-hell-constructs.l");
 }
 
+/* VecRotate returns a new value (its argument unchanged), as do Normalize(v), v.Normalized(),
+ * CrossProd and DotProd; v.Normalize() changes v; copies and by-value parameters are copies */
+TEST(lpfg_vector_value_semantics)
+{
+    run_model("value-semantics.l");
+}
+
 TEST(lpfg_consider)
 {
     run_model("consider.l");

@@ -15,5 +15,7 @@
 #include "cambium/tree.h"
 #include "cambium/measure.h"
 #include "cambium/elastica.h"
+#include "cambium/chain.h"
+#include "cambium/turtle_motion.h"
 
 #endif

@@ -716,7 +716,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
             bool ok = lc_is_vec(t1);
             if (b->fn == FN_VECROT) {
-                ok = ok && (lc_is_vec(t0) || t0 == T_TVEC) && is_lvalue(L, args) &&
+                ok = ok && (lc_is_vec(t0) || t0 == T_TVEC) &&
                      lc_is_scalar(ND(ND(ND(args).next).next).type);
                 rt = t0;
             } else if (b->fn == FN_MAKEQ) {
@@ -729,9 +729,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             }
             if (!ok) {
                 cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
-                          b->fn == FN_VECROT
-                              ? " (a vector or TurtleVec variable, an axis, an angle)"
-                              : "");
+                          b->fn == FN_VECROT ? " (a vector or TurtleVec, an axis, an angle)" : "");
                 return -1;
             }
         } else if (b->fn == FN_LENGTH || b->fn == FN_NORMALIZE) {

@@ -441,7 +441,8 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
             out[0] = cos(ang / 2);
             for (int i = 0; i < 3; i++)
                 out[i + 1] = u[i] * sn;
-        } else { /* Rodrigues' rotation of each vector about the unit axis, in place */
+        } else { /* Rodrigues' rotation of each vector about the unit axis; like lpfg, a new
+                  * value: the argument is not changed (it may be any expression) */
             double l = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
             double ax[3] = {w[0] / (l > 0 ? l : 1), w[1] / (l > 0 ? l : 1), w[2] / (l > 0 ? l : 1)};
             double c = cos(ang), sn = sin(ang);
@@ -453,10 +454,6 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
                 for (int i = 0; i < 3; i++)
                     out[3 * v + i] = p[i] * c + cr[i] * sn + ax[i] * d * (1 - c);
             }
-            lc_conv_value(&lp->m, n->type, out);
-            memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), out,
-                   (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-            return;
         }
         lc_conv_value(&lp->m, n->type, out);
         return;

@@ -24,6 +24,8 @@
 #include "cli_output.h"
 #include "commands.h"
 
+#include "cambium/turtle_motion.h"
+
 #include <float.h>
 #include <limits.h>
 #include <math.h>
@@ -43,6 +45,9 @@ static const struct {
     {"mtg", "the plant as an OpenAlea MTG: the mechanical segments (L+C models with "
             "mechanics:), otherwise the segments the turtle draws, linked by its branches"},
     {"segments", "(segments:PATH) the same segments as a CSV table, one row each"},
+    {"motion",
+     "(motion:PATH.csv or .glb) the drawn segments and spheres at every recorded\n"
+     "                            step: a table, or a glTF animating each as a rigid node"},
 };
 
 static const struct {
@@ -65,7 +70,8 @@ typedef struct target {
     char format[16];
     const char *path;
     const char *arg;
-    cbm_animation *anim; /* .glb with --every */
+    cbm_animation *anim;       /* .glb with --every */
+    cbm_turtle_motion *motion; /* motion:PATH */
 } target;
 
 static bool in_list(const char *ext, const char *const *list, size_t n)
@@ -105,7 +111,8 @@ static bool parse_target(const char *arg, target *t)
 
 static bool is_scene_format(const char *f)
 {
-    return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments");
+    return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments") &&
+           strcmp(f, "motion");
 }
 
 static void usage(const cli_opts *t)
@@ -189,6 +196,17 @@ static bool parse_output(const char *v, void *args, char *why, size_t n)
     return !*why;
 }
 
+/* --step-time: seconds of model time per derivation step, > 0. */
+static bool parse_step_time(const char *v, void *target, char *why, size_t n)
+{
+    double *t = target;
+    char *end = NULL;
+    *t = strtod(v, &end);
+    if (end == v || *end || !(*t > 0) || !(*t < 1e6))
+        snprintf(why, n, "--step-time expects seconds > 0");
+    return !*why;
+}
+
 /* NAME.EXT -> NAME.0003.EXT */
 static char *step_path(const char *path, int step)
 {
@@ -223,6 +241,7 @@ typedef struct run {
     cbm_vec3 lo, hi;      /* its box */
     bool has_box;
     double t_start, t_derive, t_interpret, t_write;
+    double step_time; /* s of model time per derivation step (motion: outputs) */
 } run;
 
 /* Interprets the current string: fills its query modules, draws the scene if one is needed,
@@ -400,6 +419,16 @@ static int write_outputs(run *r, int what, int done)
                 rc = run_fail(r, s, t->arg);
             continue;
         }
+        if (t->motion) { /* frames are recorded by record_motion; written at the end */
+            if (what == FINAL) {
+                s = !strcmp(cli_extension(t->path), "glb")
+                        ? cbm_turtle_motion_write_glb(t->motion, t->path)
+                        : cbm_turtle_motion_write_csv(t->motion, t->path);
+                if (s != CBM_OK)
+                    rc = run_fail(r, s, t->arg);
+            }
+            continue;
+        }
         if (t->anim) {
             s = what == NUMBERED ? cbm_animation_add_frame(t->anim, r->scene)
                                  : cbm_animation_write(t->anim, t->path);
@@ -426,6 +455,34 @@ static int write_outputs(run *r, int what, int done)
     }
     r->t_write += cli_seconds() - t0;
     return rc;
+}
+
+/* A frame of every motion: output after step `done`: the turtle's record of the current string
+ * (the first frame also draws a scene, for the parts' colours). */
+static int record_motion(run *r, int done, bool *any)
+{
+    bool first = true, want = false;
+    for (int i = 0; i < r->ntargets; i++)
+        if (r->targets[i].motion) {
+            want = true;
+            first = cbm_turtle_motion_frame_count(r->targets[i].motion) == 0;
+        }
+    if (!want)
+        return CLI_OK;
+    *any = true;
+    double t0 = cli_seconds();
+    cbm_scene *sc = NULL;
+    cbm_turtle *t = NULL;
+    cbm_status s = first ? cbm_scene_create(r->ctx, &sc) : CBM_OK;
+    if (s == CBM_OK)
+        s = cbm_model_interpret(r->model, sc, true, &t);
+    for (int i = 0; i < r->ntargets && s == CBM_OK; i++)
+        if (r->targets[i].motion)
+            s = cbm_turtle_motion_add_frame(r->targets[i].motion, t, sc, done * r->step_time, done);
+    cbm_turtle_destroy(t);
+    cbm_scene_destroy(sc);
+    r->t_interpret += cli_seconds() - t0;
+    return s == CBM_OK ? CLI_OK : run_fail(r, s, "motion");
 }
 
 /* --timing: the phases on stderr. For a model with mechanics (L+C Equilibrium(), AddRings(), ...)
@@ -491,7 +548,8 @@ int cmd_run(int argc, char **argv)
     if (names_tree_model(argc, argv))
         return cmd_grow(argc, argv);
     run_args ra = {0};
-    long steps = -1, every = 0, seed = -1;
+    long steps = -1, every = 0, seed = -1, motion_every = 1;
+    double step_time = 0.04;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
     cbm_write_options wopt = cbm_write_options_default();
     const char *count = "{opt} expects a non-negative integer up to 10^8";
@@ -544,6 +602,23 @@ int cmd_run(int argc, char **argv)
          .help = "also write the outputs after step 0 and every K-th step as\n"
                  "NAME.STEP.EXT (NAME.0003.png); a .glb becomes one animation\n"
                  "with a frame per K steps"},
+        {.name = "--motion-every",
+         .kind = CLI_LONG,
+         .target = &motion_every,
+         .min = 1,
+         .max = 100000000,
+         .bad = "--motion-every expects an integer 1..10^8",
+         .arg = "K",
+         .help = "motion: outputs record a frame after step 0, every K-th step\n"
+                 "(default 1) and the last step"},
+        {.name = "--step-time",
+         .kind = CLI_CUSTOM,
+         .target = &step_time,
+         .parse = parse_step_time,
+         .bad = "--step-time expects seconds > 0",
+         .arg = "S",
+         .help = "model time of one derivation step in motion: outputs, s\n"
+                 "(default 0.04)"},
         {.name = "--homomorphism",
          .kind = CLI_SET,
          .target = &homomorphism,
@@ -588,6 +663,11 @@ int cmd_run(int argc, char **argv)
             return CLI_FAIL;
     }
     for (int k = 0; k < ntargets; k++)
+        if (!strcmp(targets[k].format, "motion") && strcmp(cli_extension(targets[k].path), "csv") &&
+            strcmp(cli_extension(targets[k].path), "glb"))
+            return cli_usage_error("run", "%s: a motion is written as .csv or .glb",
+                                   targets[k].arg);
+    for (int k = 0; k < ntargets; k++)
         if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
             strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))
             return cli_usage_error("run", "--every writes numbered files: %s cannot be stdout",
@@ -610,6 +690,7 @@ int cmd_run(int argc, char **argv)
     r.ntargets = ntargets;
     r.interpreted_step = -1;
     r.t_start = cli_seconds();
+    r.step_time = step_time;
     cbm_model_def def = {cbm_lsys_def_default(), sides, nside};
     def.lsys.path = model;
     def.lsys.defines = defines;
@@ -650,6 +731,9 @@ int cmd_run(int argc, char **argv)
     for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
         if (!strcmp(targets[k].format, "glb"))
             s = cbm_animation_create(ctx, &wopt, &targets[k].anim);
+    for (int k = 0; k < ntargets && s == CBM_OK; k++)
+        if (!strcmp(targets[k].format, "motion"))
+            s = cbm_turtle_motion_create(ctx, &targets[k].motion);
     if (s != CBM_OK) {
         rc = cli_fail(ctx, s, "output");
         goto done;
@@ -672,7 +756,10 @@ int cmd_run(int argc, char **argv)
     r.t_derive += cli_seconds() - t_reset;
     if (s == CBM_OK && (every > 0 || r.json))
         rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, 0);
-    int done = 0, last_row = 0;
+    bool motion = false;
+    if (s == CBM_OK && rc == CLI_OK)
+        rc = record_motion(&r, 0, &motion);
+    int done = 0, last_row = 0, last_motion = 0;
     cli_progress pr;
     cli_progress_begin(&pr);
     while (s == CBM_OK && rc == CLI_OK && done < n && !cbm_lsys_stopped(r.ls)) {
@@ -687,6 +774,10 @@ int cmd_run(int argc, char **argv)
         if ((every > 0 || r.json) && done % row_every == 0) {
             last_row = done;
             rc = write_outputs(&r, every > 0 ? NUMBERED : ROW, done);
+        }
+        if (motion && rc == CLI_OK && done % motion_every == 0) {
+            last_motion = done;
+            rc = record_motion(&r, done, &motion);
         }
     }
     cli_progress_end(&pr);
@@ -709,6 +800,8 @@ int cmd_run(int argc, char **argv)
                     final_rc = cli_fail(ctx, fs, targets[k].arg);
             }
     }
+    if (final_rc == CLI_OK && motion && last_motion != done)
+        final_rc = record_motion(&r, done, &motion);
     json_end(&r);
     if (final_rc == CLI_OK)
         final_rc = write_outputs(&r, FINAL, done);
@@ -726,8 +819,10 @@ int cmd_run(int argc, char **argv)
     if (timing)
         print_timing(&r);
 done:
-    for (int k = 0; k < ntargets; k++)
+    for (int k = 0; k < ntargets; k++) {
         cbm_animation_destroy(targets[k].anim);
+        cbm_turtle_motion_destroy(targets[k].motion);
+    }
     cbm_json_destroy(r.json);
     cbm_scene_destroy(r.scene);
     cbm_scene_destroy(r.line_scene);
