@@ -197,9 +197,9 @@ static bool parse_output(const char *v, void *args, char *why, size_t n)
 }
 
 /* --step-time: seconds of model time per derivation step, > 0. */
-static bool parse_step_time(const char *v, void *target, char *why, size_t n)
+static bool parse_step_time(const char *v, void *seconds, char *why, size_t n)
 {
-    double *t = target;
+    double *t = seconds;
     char *end = NULL;
     *t = strtod(v, &end);
     if (end == v || *end || !(*t > 0) || !(*t < 1e6))
