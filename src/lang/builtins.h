@@ -1,10 +1,11 @@
 /* The built-in functions of both dialects: one table (builtins.c) of names, arities and the
  * dialects that know them, and the evaluation of the pure math functions.
  *
- * To add a built-in: an FN_ value here (mechanics ones between FN_EQUILIBRIUM and FN_REACTIONBOUND),
- * a row of the table, and its evaluation: in cbm__builtin_math when it is a function of its
- * numbers alone, else in the evaluator of the dialect (lang/expr_eval.c, lsys/lpfg.c) and, for
- * the L+C dialect, its argument and result types in lang/lc_parse.c (call_expr).
+ * To add a built-in: an FN_ value here (mechanics ones between FN_EQUILIBRIUM and
+ * FN_REACTIONBOUND), a row of the table, and its evaluation: in cbm__builtin_math when it is a
+ * function of its numbers alone, else in the evaluator of the dialect (lang/expr_eval.c,
+ * lsys/lpfg.c) and, for the L+C dialect, its argument and result types in lang/lc_parse.c
+ * (call_expr).
  */
 #ifndef CBM_LANG_BUILTINS_H
 #define CBM_LANG_BUILTINS_H

@@ -91,8 +91,8 @@
     X(rj)                                                                                          \
     X(wown)                                                                                        \
     X(lever)                                                                                       \
-    X(ftip) X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp)            \
-    X(tpart) X(best)
+    X(ftip)                                                                                        \
+    X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart) X(best)
 /* the tree factorisation: 9 doubles per segment each (with a Krylov workspace) */
 #define TREE_ARRAYS(X) X(fdinv) X(fq) X(fa) X(fwad) X(fw)
 /* the tree factorisation with ground contact: 9 doubles per segment each (fcap segments) */
