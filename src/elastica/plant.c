@@ -598,7 +598,9 @@ cbm_status cbm_elastica_plant_equilibria(cbm_context *ctx, const cbm_elastica_br
     for (size_t k = 0; s == CBM_OK && k < P.segs[0].n; k++) {
         const segment *g = &P.segs[0].seg[k];
         double lo = g->s[0].x, hi = g->s[g->n - 1].x;
-        for (double t = ceil((lo - theta_b) / tp); t <= floor((hi - theta_b) / tp); t++) {
+        const double t0 = ceil((lo - theta_b) / tp), t1 = floor((hi - theta_b) / tp);
+        for (long m = 0; m <= (long)(t1 - t0); m++) { /* whole turns t0..t1 */
+            const double t = t0 + (double)m;
             descend(&P, 0, g, theta_b + t * tp, 0.0, phi);
             bool ok;
             s = polish(&P, phi, theta_b + t * tp, &w, &ok);

@@ -153,12 +153,14 @@ static cbm_status find_equilibria(cbm_context *ctx, const cbm_elastica_rod *rod,
         const cbm_elastica_state *a = &sc->points[i], *b = &sc->points[i + 1];
         double lo = fmin(a->theta_base, b->theta_base), hi = fmax(a->theta_base, b->theta_base);
         double k0 = ceil((lo - theta_b) / tp), k1 = floor((hi - theta_b) / tp);
-        for (double k = k0; k <= k1; k++) {
+        /* an integer counter: k0 and k1 are whole numbers of turns */
+        for (long m = 0; m <= (long)(k1 - k0); m++) {
+            const double k = k0 + (double)m;
             double target = theta_b + k * tp;
             /* a root exactly at the right end is found with the next interval */
             if (target == b->theta_base && i + 2 < sc->n_points)
                 continue;
-            cbm_elastica_state r;
+            cbm_elastica_state r = {0};
             cbm_status s = refine_root(ctx, rod, a, b, target, &r);
             if (s != CBM_OK)
                 return s;
@@ -268,7 +270,7 @@ cbm_status cbm_elastica_scurve_compute(cbm_context *ctx, const cbm_elastica_rod 
     sc->length = L;
     sc->stiffness_base = D0;
     size_t cap = 0, fcap = 0;
-    cbm_elastica_state cur;
+    cbm_elastica_state cur = {0};
     s = shoot(ctx, rod, d.theta_tip_min, &cur);
     while (s == CBM_OK) {
         if (sc->n_points == cap) {
@@ -293,7 +295,7 @@ cbm_status cbm_elastica_scurve_compute(cbm_context *ctx, const cbm_elastica_rod 
         double v = speed(&cur, L, D0);
         double h = v > 0 ? d.ds / v : d.max_step;
         h = h > d.max_step ? d.max_step : h < d.min_step ? d.min_step : h;
-        cbm_elastica_state next;
+        cbm_elastica_state next = {0};
         while (true) {
             double t = cur.theta_tip + h;
             if (t > d.theta_tip_max || d.theta_tip_max - t < 1e-3 * h)
@@ -374,10 +376,10 @@ cbm_status cbm_elastica_sweep(cbm_context *ctx, const cbm_elastica_rod *rod,
     cbm_elastica_state *eq = NULL;
     size_t ne = 0, cap = 0;
     s = find_equilibria(ctx, rod, sc, from, &eq, &ne, &cap);
-    if (s == CBM_OK && ne == 0)
+    if (s == CBM_OK && (ne == 0 || !eq))
         s = cbm__fail(ctx, CBM_E_NOT_FOUND, "elastica: no equilibrium at the sweep's start");
-    cbm_elastica_state cur;
-    if (s == CBM_OK) {
+    cbm_elastica_state cur = {0};
+    if (s == CBM_OK && eq) {
         cur = eq[0];
         for (size_t i = 1; i < ne; i++)
             if (eq[i].energy < cur.energy)
@@ -399,7 +401,7 @@ cbm_status cbm_elastica_sweep(cbm_context *ctx, const cbm_elastica_rod *rod,
         double h = v > 0 ? ds / v : hmax;
         h = h > hmax ? hmax : h < 1e-7 ? 1e-7 : h;
         double sgn = dir * (cur.dbase_dtip >= 0 ? 1.0 : -1.0);
-        cbm_elastica_state next;
+        cbm_elastica_state next = {0};
         s = shoot(ctx, rod, cur.theta_tip + sgn * h, &next);
         if (s != CBM_OK)
             break;

@@ -291,10 +291,16 @@ static cbm_status put(gw *g, const void *data, size_t count, int ncomp, int ctyp
     return CBM_OK;
 }
 
+/* colours compared by value (not by bytes: a float has no unique representation) */
+static bool same_rgba(const float *a, const float *b)
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2] && a[3] == b[3];
+}
+
 static bool same_shape(const body *a, const body *b)
 {
     return a->sphere == b->sphere && a->len == b->len && a->r0 == b->r0 && a->r1 == b->r1 &&
-           !memcmp(a->rgba, b->rgba, sizeof a->rgba);
+           same_rgba(a->rgba, b->rgba);
 }
 
 /* A segment along +x from the origin (radii r0 -> r1, closed by discs) or a sphere. */
@@ -577,7 +583,7 @@ cbm_status cbm_turtle_motion_write_glb(const cbm_turtle_motion *m, const char *p
             continue;
         meshes[k].body = i;
         size_t mat = 0;
-        while (mat < nmat && memcmp(m->bodies.data[mat_body[mat]].rgba, b->rgba, sizeof b->rgba))
+        while (mat < nmat && !same_rgba(m->bodies.data[mat_body[mat]].rgba, b->rgba))
             mat++;
         if (mat == nmat)
             mat_body[nmat++] = i;

@@ -590,6 +590,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
                        bool act, bool defer)
 {
+    if (!b || !out)
+        return; /* no right-hand side: nothing to solve (callers pass both) */
     cbm__mech_work *w = &p->work;
     cbm_vec3 m0 = w->dm[i]; /* sum of the children's psi (+ the contact term below) */
     cbm_vec3 f0 = act ? w->dfc[i] : v3(0, 0, 0);

@@ -108,7 +108,7 @@ static void write_json(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *
                        const bend_extra *x)
 {
     write_json_head(f, spec, tip, base, r, secs, n);
-    if (x->nfreq) {
+    if (x->nfreq && x->freqs) {
         fprintf(f, ", \"frequencies_hz\": [");
         for (size_t i = 0; i < x->nfreq; i++) {
             if (isfinite(x->freqs[i]))
@@ -323,7 +323,7 @@ int cmd_bend(int argc, char **argv)
                "residual %.3g (stage %s), %.3g s\n",
                nodes[n].x, nodes[n].y, nodes[n].z, nodes[n].angle_deg, nodes[0].moment,
                res.stats.passes, res.stats.residual, cbm_solve_stage_name(res.stats.stage), secs);
-    if (rc == CLI_OK && !json && nout == 0 && extra.nfreq) {
+    if (rc == CLI_OK && !json && nout == 0 && extra.nfreq && extra.freqs) {
         printf("frequencies (Hz):");
         for (size_t k = 0; k < extra.nfreq; k++)
             printf(" %.6g", extra.freqs[k]);

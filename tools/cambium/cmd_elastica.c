@@ -387,7 +387,7 @@ int cmd_elastica(int argc, char **argv)
     }
     if (rc == CLI_OK && json)
         write_json(stdout, &r);
-    if (rc == CLI_OK && !json && nout == 0) {
+    if (rc == CLI_OK && !json && nout == 0 && sc) {
         printf("alpha %.6g: %zu points, %zu fold%s", r.alpha, sc->n_points, sc->n_folds,
                sc->n_folds == 1 ? "" : "s");
         if (spec.has_angle)

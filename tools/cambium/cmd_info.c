@@ -745,7 +745,7 @@ static int read_segment_table(const char *path, const char *t, int kind, cbm_mea
                               size_t *nout)
 {
     const char *nl = strchr(t, '\n');
-    int col[NMECH];
+    int col[NMECH] = {0};
     const char *const *want = kind == SEG_MECH ? MECH_COLS : TURTLE_COLS;
     size_t nwant = kind == SEG_MECH ? NMECH : NTURTLE;
     header_columns(t, nl, want, nwant, col);
@@ -859,7 +859,7 @@ static int read_segment_table(const char *path, const char *t, int kind, cbm_mea
 static int segment_table_kind(const char *t)
 {
     const char *nl = strchr(t, '\n');
-    int col[NMECH];
+    int col[NMECH] = {0};
     if (!nl)
         return -1;
     if (header_columns(t, nl, MECH_COLS, NMECH, col))
