@@ -686,11 +686,14 @@ typedef struct builtin {
 #define ASPEN "years_to_shed = 3\nrelay_bias = 1\nfruit_prob = 0\n"
 /* real trembling aspen (docs/models.md): green Populus tremuloides wood, the wild form's E; the
  * chapter 7 switch multiplies the base E by stiffness_factor (3) for the wild form, so the base
- * here is a third of it (the crooked clone's supple wood, the thesis' hypothesis) */
+ * here is a third of it (the crooked clone's supple wood, the thesis' hypothesis). Phyllotaxis
+ * 137.5 deg, not the apple's 144: poplar shoots pass from 2/5 to 3/8 and 5/13 (Larson 1977),
+ * towards the golden angle, and an exact 2/5 spiral stacks every fifth bud on one side, where the
+ * wild form's fivefold tropism merges them into crossing branches */
 #define REAL_ASPEN                                                                                 \
     ASPEN "youngs_juvenile = 3.3e8\nyoungs_adult = 1.97e9\ndensity = 800\n"                        \
           "modulus_of_rupture = 35e6\nleaf_mass = 4e-4\nleaf_density = 0.2\nspur_fruit_prob = 0\n" \
-          "tropism = 0.1\n"
+          "tropism = 0.1\nphyllotaxis = 137.5\n"
 static const builtin builtins[] = {
     {"fruit-tree", false, ""},
     {"fruit-tree-fair", false, "fairness = 1\n"},
