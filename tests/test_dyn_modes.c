@@ -1,11 +1,11 @@
-/* Natural frequencies of the segment model (src/dyn): cantilevers against Euler-Bernoulli theory,
- * the effect of gravity on upright and hanging stems, a tip mass, and the tree operators against
- * each other (docs/validation.md, "Dynamics"). */
+/* Natural frequencies of the segment model (src/mech/dyn_*.c): cantilevers against Euler-Bernoulli
+ * theory, the effect of gravity on upright and hanging stems, a tip mass, and the tree operators
+ * against each other (docs/validation.md, "Dynamics"). */
 #include "mech_testlib.h"
 #include "cambium/dynamics.h"
 
 #include "core/vecmath.h"
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 
 /* shear modulus of the rods below: 0 = E / 2.6 */
 static double rod_shear = 0.0;

@@ -12,7 +12,7 @@
  * (weights of the segments and point masses, tip forces) at the equilibrium (an upright stem
  * sways slower than without gravity, a hanging one faster), M the mass matrix of the segments
  * and point masses. Every product and every solve with K + c M costs O(n) (a tree elimination
- * of 6x6 spatial blocks, src/dyn/tree.c). Design, derivation and limits: docs/dynamics.md.
+ * of 6x6 spatial blocks, src/mech/dyn_tree.c). Design, derivation and limits: docs/dynamics.md.
  *
  * The plant must be at equilibrium (after cbm_plant_solve) when an analysis is created (its state
  * is read, not recomputed: after an edit, solve or evaluate first); the analysis keeps its own

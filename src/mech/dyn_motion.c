@@ -7,7 +7,7 @@
  * Damping: Rayleigh, C = alpha_R M + beta_R K, from a damping ratio matched at the two lowest
  * modes (alpha_R = 2 zeta w1 w2 / (w1 + w2), beta_R = 2 zeta / (w1 + w2)), plus any explicit
  * coefficients. */
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 #include "core/vecmath.h"
 #include "mech/mech_internal.h"
 

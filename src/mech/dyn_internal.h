@@ -1,5 +1,5 @@
-/* Private layout of the linearised dynamics (src/dyn): the plant's equilibrium copied into the
- * arrays of the O(n) tree operators (tree.c), used by the modes (modes.c) and the time stepping
+/* Private layout of the linearised dynamics (src/mech/dyn_*.c): the plant's equilibrium copied into
+ * the arrays of the O(n) tree operators (tree.c), used by the modes (modes.c) and the time stepping
  * (motion.c). */
 #ifndef CBM_DYN_INTERNAL_H
 #define CBM_DYN_INTERNAL_H

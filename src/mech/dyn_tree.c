@@ -39,7 +39,7 @@
  * (Sylvester), which the factorisation counts. Cost: a few hundred flops per segment for the
  * factorisation, about a hundred per solve or product.
  */
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 #include "core/vecmath.h"
 #include "mech/mech_internal.h"
 

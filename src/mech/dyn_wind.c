@@ -6,7 +6,7 @@
  * at the smallest positive root of a quadratic in s. The geometry is held at the equilibrium
  * under weight alone: the extra bending under the wind (and the weight's extra lever arm it
  * gives) is neglected, which is conservative for a stem only in the sense of docs/dynamics.md. */
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 #include "core/vecmath.h"
 #include "mech/mech_internal.h"
 

@@ -13,7 +13,7 @@
  * theta of K^-1 M are the lowest lambda = 1 / theta. The small tridiagonal matrix is
  * diagonalised by cyclic Jacobi rotations (m is at most a few hundred).
  */
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 
 #include <math.h>
 #include <string.h>

@@ -1,6 +1,6 @@
 /* The bend workbench's motion: the spec's time keys on the solved rod (docs/bend.md). */
 #include "cambium/bend.h"
-#include "dyn/dyn_internal.h"
+#include "mech/dyn_internal.h"
 #include "core/vecmath.h"
 #include "mech/mech_internal.h"
 
