@@ -31,5 +31,11 @@ bool cli_parse_double(const char *s, double *out);
 bool cli_parse_long(const char *s, long *out);
 /// The extension of a path after the last dot ("csv"), "" if none.
 const char *cli_extension(const char *path);
+/// The contents of a regular file (a FIFO or a device would block or never end), up to max + 1
+/// bytes so that the caller sees an oversized file (*len > max); NULL when it cannot be read.
+/// Free with free().
+char *cli_read_regular_file(const char *path, size_t max, size_t *len);
+/// Seconds of the monotonic clock.
+double cli_now(void);
 
 #endif

@@ -13,8 +13,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <time.h>
 
 #define MAX_SPEC_BYTES (1u << 20)
 #define MAX_OUTPUTS    8
@@ -34,17 +32,6 @@ static void help(const cli_opts *t)
     cli_options_help(stdout, t);
 }
 
-/* The spec: one file ("-" included). */
-static bool parse_spec(const char *a, void *target, char *why, size_t n)
-{
-    const char **spec = target;
-    if (*spec)
-        snprintf(why, n, "expected one SPEC, found '{value}' too");
-    else
-        *spec = a;
-    return !*why;
-}
-
 /* An output: .csv or .json. */
 static bool parse_output(const char *v, void *target, char *why, size_t n)
 {
@@ -57,38 +44,6 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
     else
         cli_list_add(outs, v);
     return !*why;
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static char *read_spec(const char *path, size_t *len)
-{
-    /* only a regular file: a FIFO or a device would block or never end */
-    struct stat st;
-    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
-        return NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = malloc(MAX_SPEC_BYTES + 1);
-    if (!buf) {
-        fclose(f);
-        return NULL;
-    }
-    size_t n = fread(buf, 1, MAX_SPEC_BYTES + 1, f);
-    bool bad = ferror(f) != 0;
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return NULL;
-    }
-    *len = n;
-    return buf;
 }
 
 static void write_json_head(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
@@ -171,7 +126,7 @@ int cmd_bend(int argc, char **argv)
     bool json = false;
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
-        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = parse_spec},
+        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = cli_parse_one_spec},
         {.name = "--json", .kind = CLI_SET, .target = &json},
         {.name = "--modes",
          .kind = CLI_LONG,
@@ -201,7 +156,7 @@ int cmd_bend(int argc, char **argv)
         return CLI_FAIL;
 
     size_t len = 0;
-    char *text = read_spec(spec_path, &len);
+    char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
     if (!text) {
         fprintf(stderr, "cambium: %s: cannot read the spec\n", spec_path);
         return CLI_FAIL;
@@ -220,11 +175,11 @@ int cmd_bend(int argc, char **argv)
         cli_context_end(ctx);
         return rc;
     }
-    double t0 = now();
+    double t0 = cli_now();
     cbm_plant *plant = NULL;
     cbm_bend_result res;
     s = cbm_bend_run(ctx, &spec, &plant, &res);
-    double secs = now() - t0;
+    double secs = cli_now() - t0;
     if (s != CBM_OK) {
         int rc = cli_fail(ctx, s, "bend");
         cbm_plant_destroy(plant);

@@ -14,8 +14,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <time.h>
 
 #define MAX_SPEC_BYTES (1u << 20)
 #define MAX_OUTPUTS    8
@@ -37,17 +35,6 @@ static void help(const cli_opts *t)
     cli_options_help(stdout, t);
 }
 
-/* The spec: one file. */
-static bool parse_spec(const char *a, void *target, char *why, size_t n)
-{
-    const char **spec = target;
-    if (*spec)
-        snprintf(why, n, "expected one SPEC, found '{value}' too");
-    else
-        *spec = a;
-    return !*why;
-}
-
 /* An output: .csv, .png or .svg. */
 static bool parse_output(const char *v, void *target, char *why, size_t n)
 {
@@ -60,33 +47,6 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
     else
         cli_list_add(outs, v);
     return !*why;
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static char *read_spec(const char *path, size_t *len)
-{
-    struct stat st; /* only a regular file: a FIFO or a device would block */
-    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
-        return NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    char *buf = malloc(MAX_SPEC_BYTES + 1);
-    size_t n = buf ? fread(buf, 1, MAX_SPEC_BYTES + 1, f) : 0;
-    bool bad = !buf || ferror(f);
-    fclose(f);
-    if (bad) {
-        free(buf);
-        return NULL;
-    }
-    *len = n;
-    return buf;
 }
 
 typedef struct units {
@@ -320,7 +280,7 @@ int cmd_elastica(int argc, char **argv)
     bool json = false;
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
-        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = parse_spec},
+        {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = cli_parse_one_spec},
         {.name = "--json", .kind = CLI_SET, .target = &json},
         {.name = "-o",
          .kind = CLI_CUSTOM,
@@ -343,7 +303,7 @@ int cmd_elastica(int argc, char **argv)
     if (cli_check_outputs(outs, nout) != CLI_OK)
         return CLI_FAIL;
     size_t len = 0;
-    char *text = read_spec(spec_path, &len);
+    char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
     if (!text || len > MAX_SPEC_BYTES) {
         free(text);
         fprintf(stderr, "cambium: %s: cannot read the spec (a regular file up to %u bytes)\n",
@@ -359,7 +319,7 @@ int cmd_elastica(int argc, char **argv)
         cli_context_end(ctx);
         return rc;
     }
-    double t0 = now();
+    double t0 = cli_now();
     result r;
     memset(&r, 0, sizeof r);
     r.spec = &spec;
@@ -369,7 +329,7 @@ int cmd_elastica(int argc, char **argv)
     static cbm_elastica_jump up[MAX_JUMPS], down[MAX_JUMPS];
     r.up = up, r.down = down;
     s = run(ctx, &spec, &r, &sc, &eq, up, down, &pe);
-    r.secs = now() - t0;
+    r.secs = cli_now() - t0;
     int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, "elastica");
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         const char *ext = cli_extension(outs[k]);

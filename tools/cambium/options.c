@@ -247,3 +247,13 @@ void cli_options_help(FILE *f, const cli_opts *t)
     cli_options_rows(f, t);
     cli_options_groups(f, t);
 }
+
+bool cli_parse_one_spec(const char *word, void *target, char *why, size_t n)
+{
+    const char **spec = target;
+    if (*spec)
+        snprintf(why, n, "expected one SPEC, found '{value}' too");
+    else
+        *spec = word;
+    return !*why;
+}

@@ -81,6 +81,9 @@ void cli_options_rows(FILE *f, const cli_opts *t);
 void cli_options_groups(FILE *f, const cli_opts *t);
 /// Appends to a list: false when it is full.
 bool cli_list_add(cli_list *l, const char *item);
+/// A CLI_POSITIONAL parser for commands that take one file (const char **target): a second word
+/// is "expected one SPEC, found '{value}' too".
+bool cli_parse_one_spec(const char *word, void *target, char *why, size_t n);
 
 /// The limit options (--max-memory MB, ...; main.c) and the output options (--size, --view, ...
 /// into *o; cli_output.c), for a CLI_GROUP row.
