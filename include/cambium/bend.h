@@ -45,6 +45,10 @@ typedef struct cbm_bend_spec {
     double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
     double radius_final;   ///< m, radius after the last step (secondary growth), 0 = none
     long push_unstable; ///< 1 (default): push an unstable equilibrium to a stable one; 0: keep it
+    /* solver = approx (Method A, cambium/approx.h) */
+    cbm_approx_mode approx_mode; ///< corrected (default) or thesis
+    double approx_p;             ///< relative position of the bending reversal, [0, 1]; 1 = none
+    double approx_force;         ///< tip force / carried weight (> 0); 1 = the thesis
     /* motion about the equilibrium (cambium/dynamics.h, docs/bend.md "Motion") */
     double duration;         ///< s of motion after the static solve; 0 = static only
     double dt;               ///< s, time step; 0 = 1/20 of the period of the 6th mode

@@ -28,6 +28,7 @@
 #ifndef CAMBIUM_MECH_H
 #define CAMBIUM_MECH_H
 
+#include "cambium/approx.h"
 #include "cambium/base.h"
 #include "cambium/geom.h"
 
@@ -256,14 +257,23 @@ CBM_API cbm_status cbm_plant_distal_frame(const cbm_plant *plant, size_t seg, cb
 /* ---- solving ---- */
 
 typedef enum cbm_mech_solver {
-    CBM_MECH_RELAX, ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
-    CBM_MECH_NEWTON ///< Newton-Krylov: O(n) tree factorisation or stiffness-preconditioned GMRES
+    CBM_MECH_RELAX,  ///< the seeds' relaxation (Taylor-Hell 6.24; Jirasek eqs. 17-21)
+    CBM_MECH_NEWTON, ///< Newton-Krylov: O(n) tree factorisation or stiffness-preconditioned GMRES
+    /// Gürtler's force-applying approximative method (Method A, cambium/approx.h): one closed
+    /// angle generator per axis, no equilibrium iteration (src/mech/solve_approx.c,
+    /// docs/methods.md says what it leaves out)
+    CBM_MECH_APPROX,
+    CBM_MECH_SOLVER_COUNT ///< number of solvers (not a solver)
 } cbm_mech_solver;
 
-/// Name of a solver ("relax", "fast").
+/// Name of a solver ("relax", "fast", "approx", ...); NULL for a value out of range.
 CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
-/// Parses "relax", "fast", "newton" (case-sensitive). false if unknown.
+/// Parses a solver's name or alias ("relax", "relaxation", "fast", "newton", "newton-krylov",
+/// "approx", ...; case-sensitive). false if unknown.
 CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
+/// Writes the solvers' names, comma-separated ("relax, fast, approx"), into buf (size bytes,
+/// NUL-terminated, truncated if short; buf may be NULL with size 0); returns the full length.
+CBM_API size_t cbm_mech_solver_names(char *buf, size_t size);
 
 /// Preconditioner of the fast solver's GMRES (right preconditioning).
 typedef enum cbm_mech_precond {
@@ -309,6 +319,12 @@ typedef struct cbm_solve_def {
     /// also compute cbm_solve_stats.lowest_eigenvalue when the equilibrium is stable (shifted
     /// inverse iteration, tens of O(n) passes not counted in `passes`); default false
     bool eigenvalue;
+    /* Method A (CBM_MECH_APPROX) only */
+    cbm_approx_mode approx_mode; ///< default CBM_APPROX_CORRECTED
+    double approx_p;             ///< relative position of the bending reversal, [0, 1]; default 1
+    /// tip force = this times the weight an axis carries (> 0); default 1, the thesis's whole
+    /// weight at the tip (3/8 matches the small deflection of a uniform rod's tip)
+    double approx_force_factor;
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);

@@ -109,6 +109,8 @@ typedef struct cbm_tree_def {
     /// solver passes per equilibrium at most (400); a step that needs more goes on from the best
     /// iterate (counted in cbm_tree_summary.unconverged) and the next step continues from it
     int solve_max_passes;
+    /// the bending method of every equilibrium (default fast; relax, approx: docs/methods.md)
+    cbm_mech_solver solver;
     /* leaves and fruit */
     bool leaves;         ///< LEAVES 1
     double leaf_mass;    ///< kg, mean goal mass LEAF_MASS 2e-6 (sd mean/2)

@@ -71,6 +71,7 @@ static const cbm__builtin BUILTINS[] = {
     {"Wood", FN_WOOD, 5, LC},
     {"RingRate", FN_RINGRATE, 2, LC},
     {"Solver", FN_SOLVER, 3, LC},
+    {"SolverMethod", FN_SOLVERMETHOD, 1, LC},
     {"ReactionWood", FN_REACTION, 4, LC},
     {"ReactionBound", FN_REACTIONBOUND, 1, LC},
     {"RAND_MAX", FN_NONE, 0, LC},

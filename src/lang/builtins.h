@@ -76,6 +76,7 @@ typedef enum cbm__fn {
     FN_WOOD,
     FN_RINGRATE,
     FN_SOLVER,
+    FN_SOLVERMETHOD,
     FN_REACTION,
     FN_REACTIONBOUND,
     FN_NONE, /* a reserved name (RAND_MAX is a constant) */

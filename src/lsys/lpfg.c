@@ -349,6 +349,19 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->solve.max_passes = (size_t)a[1];
         m->go_on = a[2] == 1;
         return;
+    case FN_SOLVERMETHOD: {
+        /* the value of cbm_mech_solver: 0 relax, 1 fast, 2 approx, ... (docs/methods.md) */
+        if (!(a[0] >= 0) || !(a[0] < CBM_MECH_SOLVER_COUNT) || a[0] != floor(a[0])) {
+            char names[64], why[150];
+            cbm_mech_solver_names(names, sizeof names);
+            snprintf(why, sizeof why, "SolverMethod(n): n is 0 .. %d, in the order %s",
+                     CBM_MECH_SOLVER_COUNT - 1, names);
+            rt_error(lp, CBM_E_INVALID, why);
+            return;
+        }
+        m->solve.solver = (cbm_mech_solver)(int)a[0];
+        return;
+    }
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
             rt_error(lp, CBM_E_INVALID,

@@ -50,12 +50,15 @@ cbm_bend_spec cbm_bend_spec_default(void)
     s.krylov_dim = 20;
     s.discretization = CBM_MECH_STAGGERED;
     s.push_unstable = 1;
+    s.approx_mode = CBM_APPROX_CORRECTED;
+    s.approx_p = 1.0;
+    s.approx_force = 1.0;
     return s;
 }
 
 /* ---- the reader ---- */
 
-typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC } key_kind;
+typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC, K_APPROX_MODE } key_kind;
 
 typedef struct key_desc {
     const char *name;
@@ -90,6 +93,9 @@ static const key_desc keys[] = {
     {"max_passes", K_INT, OFF(max_passes), 0, 1e12, false},
     {"krylov_dim", K_INT, OFF(krylov_dim), 1, 500, false},
     {"discretization", K_DISC, OFF(discretization), 0, 0, false},
+    {"approx_mode", K_APPROX_MODE, OFF(approx_mode), 0, 0, false},
+    {"approx_p", K_NUM, OFF(approx_p), 0, 1, false},
+    {"approx_force", K_NUM, OFF(approx_force), 0, 1e6, true},
     {"steps", K_INT, OFF(steps), 0, 1e7, false},
     {"length_initial", K_NUM, OFF(length_initial), 0, 1e6, true},
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
@@ -143,11 +149,24 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
     if (k->kind == K_SOLVER) {
         cbm_mech_solver sv;
         if (!cbm_mech_solver_parse(buf, &sv)) {
-            err(r, line, col, "unknown solver '%s' (expected relax, fast or newton)", buf);
+            char names[128];
+            cbm_mech_solver_names(names, sizeof names);
+            err(r, line, col, "unknown solver '%s' (expected one of: %s; newton = fast)", buf,
+                names);
             r->status = CBM_E_SEMANTIC;
             return;
         }
         memcpy(base, &sv, sizeof sv);
+        return;
+    }
+    if (k->kind == K_APPROX_MODE) {
+        cbm_approx_mode m;
+        if (!cbm_approx_mode_parse(buf, &m)) {
+            err(r, line, col, "unknown approx_mode '%s' (expected corrected or thesis)", buf);
+            r->status = CBM_E_SEMANTIC;
+            return;
+        }
+        memcpy(base, &m, sizeof m);
         return;
     }
     if (k->kind == K_DISC) {
@@ -310,6 +329,12 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
             err(&r, 0, 0, "duration / dt = %g steps is more than 1e8", s.duration / s.dt);
             r.status = CBM_E_SEMANTIC;
         }
+        if (s.duration > 0 && s.solver == CBM_MECH_APPROX) {
+            err(&r, 0, 0,
+                "duration (motion about an equilibrium) needs solver relax or fast: "
+                "approx gives no equilibrium");
+            r.status = CBM_E_SEMANTIC;
+        }
         if (s.duration > 0 && s.steps > 0) {
             err(&r, 0, 0, "duration (motion) and steps (growth) cannot be combined");
             r.status = CBM_E_SEMANTIC;
@@ -408,6 +433,9 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.max_passes = (size_t)s->max_passes;
     d.krylov_dim = s->krylov_dim;
     d.push_unstable = s->push_unstable != 0;
+    d.approx_mode = s->approx_mode;
+    d.approx_p = s->approx_p;
+    d.approx_force_factor = s->approx_force;
     d.eigenvalue = true; /* bend reports the lowest eigenvalue of every answer */
     return d;
 }

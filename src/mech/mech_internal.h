@@ -283,4 +283,10 @@ cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t 
 cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
                                   cbm_solve_stats *st);
 
+/* ---- solve_approx.c ---- */
+
+/// Method A on the plant (CBM_MECH_APPROX): sets every joint's Omega from the approximative
+/// angle generator of its axis, then evaluates; after cbm__mech_prepare.
+cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *def, cbm_solve_stats *st);
+
 #endif

@@ -32,6 +32,7 @@
 #include "core/vecmath.h"
 
 #include <math.h>
+#include <stdio.h>
 
 /* ---- small helpers ---- */
 
@@ -40,24 +41,49 @@ const char *cbm_mech_discretization_name(cbm_mech_discretization d)
     return d == CBM_MECH_CHAIN ? "chain" : "staggered";
 }
 
+/* One row per solver: adding a method is one row (its name first, then its aliases). */
+static const struct {
+    cbm_mech_solver solver;
+    const char *names[4];
+} solver_table[] = {
+    {CBM_MECH_RELAX, {"relax", "relaxation"}},
+    {CBM_MECH_NEWTON, {"fast", "newton", "newton-krylov"}},
+    {CBM_MECH_APPROX, {"approx", "approximative"}},
+};
+#define SOLVER_ROWS (sizeof solver_table / sizeof solver_table[0])
+_Static_assert(SOLVER_ROWS == CBM_MECH_SOLVER_COUNT, "one row per solver");
+
 const char *cbm_mech_solver_name(cbm_mech_solver s)
 {
-    return s == CBM_MECH_RELAX ? "relax" : "fast";
+    for (size_t i = 0; i < SOLVER_ROWS; i++)
+        if (solver_table[i].solver == s)
+            return solver_table[i].names[0];
+    return NULL;
 }
 
 bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out)
 {
-    if (!name)
+    if (!name || !out)
         return false;
-    if (!strcmp(name, "relax") || !strcmp(name, "relaxation")) {
-        *out = CBM_MECH_RELAX;
-        return true;
-    }
-    if (!strcmp(name, "fast") || !strcmp(name, "newton") || !strcmp(name, "newton-krylov")) {
-        *out = CBM_MECH_NEWTON;
-        return true;
-    }
+    for (size_t i = 0; i < SOLVER_ROWS; i++)
+        for (size_t k = 0; k < 4 && solver_table[i].names[k]; k++)
+            if (!strcmp(name, solver_table[i].names[k])) {
+                *out = solver_table[i].solver;
+                return true;
+            }
     return false;
+}
+
+size_t cbm_mech_solver_names(char *buf, size_t size)
+{
+    size_t w = 0;
+    for (size_t i = 0; i < SOLVER_ROWS; i++) {
+        const char *n = solver_table[i].names[0];
+        int k = snprintf(buf && w < size ? buf + w : NULL, buf && w < size ? size - w : 0, "%s%s",
+                         i ? ", " : "", n);
+        w += k > 0 ? (size_t)k : 0;
+    }
+    return w;
 }
 
 void cbm_mech_ellipse_moments(double a, double b, double *i_l, double *i_u, double *j)

@@ -544,6 +544,9 @@ cbm_solve_def cbm_solve_def_default(void)
     d.krylov_dim = 10;
     d.preconditioner = CBM_MECH_PRECOND_TREE;
     d.warm_start = true;
+    d.approx_mode = CBM_APPROX_CORRECTED;
+    d.approx_p = 1.0;
+    d.approx_force_factor = 1.0;
     return d;
 }
 
@@ -628,6 +631,8 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     if (!p)
         return CBM_E_INVALID;
     cbm_solve_def d = def ? *def : cbm_solve_def_default();
+    if ((unsigned)d.solver >= (unsigned)CBM_MECH_SOLVER_COUNT)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: unknown solver %d", (int)d.solver);
     if (!(isfinite(d.tolerance) && d.tolerance > 0.0))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: tolerance must be positive");
     if (d.solver == CBM_MECH_RELAX && !(isfinite(d.alpha) && d.alpha > 0.0 && d.alpha <= 1.0))
@@ -635,6 +640,16 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     if (d.solver == CBM_MECH_NEWTON && (d.krylov_dim < 1 || d.krylov_dim > 500))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: krylov_dim must be in 1..500");
     CBM_TRY(check_plant(p));
+    if (d.solver == CBM_MECH_APPROX) { /* no iteration: its own pass (solve_approx.c) */
+        CBM_TRY(cbm__mech_work_reserve(p, 1));
+        p->load_scale = 1.0;
+        p->mass_path = 1.0;
+        cbm__mech_prepare(p);
+        cbm_status sa = cbm__mech_solve_approx(p, &d, &st);
+        if (stats)
+            *stats = st;
+        return sa;
+    }
     /* touching organ pairs leave a part of rank up to three per pair to FGMRES (contact.c): a
      * short restart stagnates there */
     if (p->contacts.on && d.krylov_dim < CBM__CONTACT_KRYLOV)

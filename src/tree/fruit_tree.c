@@ -448,6 +448,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     t->solve.tolerance = def->solve_tolerance;
     t->solve.warm_start = true;
     t->solve.max_passes = (size_t)def->solve_max_passes;
+    t->solve.solver = def->solver;
     cbm_plant_def pd = cbm_plant_def_default();
     pd.gravity = v3(0, -9.81, 0);
     pd.base_orientation = cbm_mech_clamp_orientation(def->elevation);

@@ -102,6 +102,7 @@ static cbm_tree_def thesis_def(void)
     d.ageing = CBM_AGEING_RINGS;
     d.solve_tolerance = 1e-6;
     d.solve_max_passes = 3000;
+    d.solver = CBM_MECH_NEWTON;
     d.leaves = true;
     d.leaf_mass = 2e-6;
     d.leaf_density = 0.095;
@@ -180,7 +181,8 @@ typedef enum kind {
     K_FORM,
     K_DISC,
     K_MEM,
-    K_AGE
+    K_AGE,
+    K_SOLVER
 } kind;
 
 typedef struct param {
@@ -242,6 +244,7 @@ static const param params[] = {
     P(ageing, K_AGE, 0, 0),
     P(solve_tolerance, K_DOUBLE, 1e-14, 0.1),
     P(solve_max_passes, K_INT, 3, 100000000),
+    P(solver, K_SOLVER, 0, 0),
     P(leaves, K_BOOL, 0, 0),
     P(leaf_mass, K_DOUBLE, 0, 1e3),
     P(leaf_density, K_DOUBLE, 1e-9, 1e6),
@@ -351,6 +354,17 @@ static cbm_status set_param(const param *pm, cbm_tree_def *d, const char *value,
     double v = 0.0;
     int e;
     switch (pm->k) {
+    case K_SOLVER: {
+        cbm_mech_solver sv;
+        if (!cbm_mech_solver_parse(value, &sv)) {
+            char names[128];
+            cbm_mech_solver_names(names, sizeof names);
+            snprintf(err, errsize, "'%s' is not one of %s", value, names);
+            return CBM_E_INVALID;
+        }
+        *(cbm_mech_solver *)(void *)base = sv;
+        return CBM_OK;
+    }
     case K_FUNC:
         return parse_func(value, (cbm_tree_func *)(void *)base, err, errsize) ? CBM_OK
                                                                               : CBM_E_INVALID;
@@ -660,6 +674,9 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
             break;
         case K_AGE:
             OUT("%s = %s\n", pm->name, age_names[d->ageing]);
+            break;
+        case K_SOLVER:
+            OUT("%s = %s\n", pm->name, cbm_mech_solver_name(d->solver));
             break;
         case K_FUNC: {
             const cbm_tree_func *f = (const cbm_tree_func *)(const void *)base;

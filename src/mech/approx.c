@@ -1,0 +1,468 @@
+/* Method A, the force-applying approximative bending of one branch (Gürtler 2018 §2.1, §3.1;
+ * digest 001 §2.1): the angle generator in its thesis-compatible and corrected modes, the
+ * conversion from physical parameters (5.1-5.2) and the phenotype distance (5.3-5.7).
+ *
+ * Notation: angles from the upward vertical; psi = t0 + theta is the tangent's angle at arc
+ * length s, omega the tip's extra deflection, K0^2 = F/EI per segment^2 (the listing's
+ * convention). The exact first integral of the tip-loaded elastica is
+ *     (dpsi/ds)^2 = 2 K0^2 (cos psi - cos(t0 + omega)),
+ * and the length condition (2.11)/(2.26) in the conic arc length sigma = s / (1 - s/H) (H the
+ * length of the full cone, so sigma(disc) = disc / (1 - coni)) is, with k = sin((t0+omega)/2)
+ * and sin phi0 = sin(t0/2) / k (the substitution sin(psi/2) = k sin phi),
+ *     K0 sigma(disc) = K(k) - F(phi0, k),
+ * K and F Legendre's complete and incomplete elliptic integrals of the first kind (Carlson's RF
+ * here). The corrected mode finds omega from it by bisection then the Illinois method, and
+ * integrates the profile as the pendulum psi'' = -K0^2 sin psi in sigma (the derivative of the
+ * first integral; smooth where the first integral's square root is not) by RK4 with steps of at
+ * most 0.05 / K0. The conic model itself (2.24-2.27: the cylinder's first integral with the local
+ * K) is the thesis's; it is not the exact elastica of a cone (docs/validation.md measures it). */
+#include "cambium/approx.h"
+#include "core/core.h"
+
+#include <math.h>
+#include <string.h>
+
+#define RAD (180.0 / 3.14159265358979323846)
+#define PI 3.14159265358979323846
+
+const char *cbm_approx_mode_name(cbm_approx_mode m)
+{
+    switch (m) {
+    case CBM_APPROX_CORRECTED:
+        return "corrected";
+    case CBM_APPROX_THESIS:
+        return "thesis";
+    }
+    return NULL;
+}
+
+bool cbm_approx_mode_parse(const char *name, cbm_approx_mode *out)
+{
+    if (!name || !out)
+        return false;
+    if (!strcmp(name, "corrected"))
+        *out = CBM_APPROX_CORRECTED;
+    else if (!strcmp(name, "thesis"))
+        *out = CBM_APPROX_THESIS;
+    else
+        return false;
+    return true;
+}
+
+const char *cbm_approx_route_name(cbm_approx_route r)
+{
+    static const char *const names[] = {"none", "closed", "closed-cosh", "bisection", "root"};
+    if ((unsigned)r >= sizeof names / sizeof names[0])
+        return "unknown";
+    return names[r];
+}
+
+cbm_approx_def cbm_approx_def_default(void)
+{
+    cbm_approx_def d;
+    memset(&d, 0, sizeof d);
+    d.disc = 100;
+    d.t0 = 90.0;
+    d.p = 1.0;
+    d.mode = CBM_APPROX_CORRECTED;
+    return d;
+}
+
+cbm_approx_rod cbm_approx_rod_default(void)
+{
+    cbm_approx_rod r;
+    memset(&r, 0, sizeof r);
+    r.youngs_modulus = 1e10;
+    r.density = 600.0;
+    r.gravity = 9.81;
+    r.length = 1.0;
+    r.radius_base = r.radius_tip = 0.01;
+    r.disc = 100;
+    r.force = -1.0;
+    return r;
+}
+
+double cbm_approx_omega_linear(double t0, double kh)
+{
+    double c = cos(t0), s = sin(t0);
+    if (!(kh > 0.0) || s == 0.0)
+        return 0.0;
+    if (fabs(c) < 1e-300)
+        return s * 0.5 * kh * kh;
+    double x = kh * sqrt(fabs(c));
+    if (c > 0.0) {
+        double cx = cos(x);
+        if (!(cx > 0.0))
+            return INFINITY; /* at or past the buckling argument pi/2 */
+        double h = sin(0.5 * x);
+        return s * 2.0 * h * h / (c * cx);
+    }
+    /* cos(i x) = cosh x: omega = s (cosh x - 1) / (|c| cosh x), no cancellation either */
+    double h = sinh(0.5 * x);
+    return s * 2.0 * h * h / (-c * cosh(x));
+}
+
+/* ---- the thesis's listing ---- */
+
+/* The listing's bisection (step 5): omega to within eps = 0.17 rad on [0, pi - t0], with ~10
+ * coarse steps of its Riemann sum. The inner loop ends as soon as its abscissa passes h: from
+ * there on the outcome (b = w) can no longer change, and with K0 = 0 the listing's loop never
+ * ends (q5). */
+static double thesis_bisection(double t0r, double k0, double h, double dx, int *evals)
+{
+    double a = 0.0, b = PI - t0r, w = 0.0;
+    const double eps = 0.17;
+    while (b - a > eps) {
+        w = 0.5 * (a + b);
+        double t = 0.0, x = 1.0;
+        do {
+            double dt = dx * sqrt(2.0) * k0 * sqrt(fabs(cos(t0r + t) - cos(t0r + w)));
+            t += dt;
+            x += dx;
+        } while (t < w && x < h);
+        (*evals)++;
+        if (x < h - dx)
+            a = w;
+        else
+            b = w;
+    }
+    return 0.5 * (a + b);
+}
+
+static cbm_status thesis_angles(cbm_context *ctx, const cbm_approx_def *d, double *res,
+                                cbm_approx_info *info)
+{
+    long disc = d->disc;
+    double dx = (double)disc / 10.0;
+    double h = (double)disc / (1.0 - d->coni);
+    double t0r = d->t0 / RAD, c = cos(t0r), s = sin(t0r), k0 = d->k0;
+    double w = -1.0;
+    info->route = CBM_APPROX_ROUTE_BISECTION;
+    if (d->coni == 0.0) {
+        if (c > 0.0) {
+            double x = k0 * h * sqrt(c);
+            w = s * (1.0 - cos(x)) / (c * cos(x));
+            info->route = CBM_APPROX_ROUTE_CLOSED;
+        } else {
+            double x = k0 * h * sqrt(fabs(c));
+            double ch = (exp(-x) + exp(x)) / 2.0;
+            w = s * (1.0 - ch) / (c * ch);
+            info->route = CBM_APPROX_ROUTE_CLOSED_COSH;
+        }
+    }
+    /* Java's sqrt of a negative number is NaN and NaN > 0.8 is false: the test is silently off
+     * past 90 degrees; C's sqrt behaves the same */
+    if (d->coni > 0.0 || k0 * h * sqrt(c) * 2.0 / PI > 0.8 || fabs(w) > 0.8 || w < 0.0) {
+        if (k0 == 0.0) {
+            w = 0.0; /* the listing loops for ever here (q5); no load bends nothing */
+            info->route = CBM_APPROX_ROUTE_NONE;
+        } else {
+            w = thesis_bisection(t0r, k0, h, dx, &info->evaluations);
+            info->route = CBM_APPROX_ROUTE_BISECTION;
+        }
+    }
+    info->omega = w * RAD;
+    double t = 0.0, t1 = 0.0;
+    res[0] = d->t0;
+    for (long i = 0; i < disc; i++) {
+        if (t < w) {
+            double q = 1.0 - d->coni * (double)(i + 1) / (double)disc;
+            t1 = k0 / (q * q) * sqrt(2.0 * (cos(t + t0r) - cos(w + t0r)));
+            if ((double)i > (double)disc * d->p)
+                t1 = -t1;
+            t += t1;
+        }
+        res[i + 1] = t1 * RAD; /* q1: held once t >= w */
+        if (!isfinite(res[i + 1]))
+            return cbm__fail(ctx, CBM_E_NONFINITE,
+                             "approx (thesis mode): the profile became NaN at segment %ld "
+                             "(t0 + omega past 180 degrees: the closed form or the reversal "
+                             "aims past the hanging direction)",
+                             i);
+    }
+    return CBM_OK;
+}
+
+/* ---- the corrected generator ---- */
+
+/* Carlson's symmetric elliptic integral R_F(x, y, z) by the duplication theorem; the fifth-order
+ * series once the arguments agree to 0.0025 leaves a relative error below 1e-16. */
+static double carlson_rf(double x, double y, double z)
+{
+    for (int it = 0; it < 200; it++) {
+        double sx = sqrt(x), sy = sqrt(y), sz = sqrt(z);
+        double lam = sx * (sy + sz) + sy * sz;
+        x = 0.25 * (x + lam);
+        y = 0.25 * (y + lam);
+        z = 0.25 * (z + lam);
+        double m = (x + y + z) / 3.0;
+        double ex = (m - x) / m, ey = (m - y) / m, ez = (m - z) / m;
+        if (fmax(fabs(ex), fmax(fabs(ey), fabs(ez))) < 0.0025) {
+            double e2 = ex * ey - ez * ez, e3 = ex * ey * ez;
+            return (1.0 + (e2 / 24.0 - 0.1 - 3.0 * e3 / 44.0) * e2 + e3 / 14.0) / sqrt(m);
+        }
+    }
+    return NAN;
+}
+
+/* K(k) - F(phi0, k) - target for omega (rad): the length, in units of 1/K0, a rod needs to
+ * reach the tip deflection omega from t0, minus the length it has. Every difference of
+ * cosines is written as a product of sines (no cancellation near omega = 0). */
+static double length_gap(double t0, double omega, double target)
+{
+    double psi = t0 + omega;
+    double k = sin(0.5 * psi);
+    double s0 = sin(0.5 * t0);
+    double c0 = cos(0.5 * t0);
+    double cpsi = cos(0.5 * psi);
+    double kk = cpsi * cpsi; /* 1 - k^2 */
+    double full = carlson_rf(0.0, kk, 1.0);
+    double part = 0.0;
+    if (s0 > 0.0) {
+        double sphi = s0 / k;
+        /* cos^2 phi0 = (k^2 - sin^2(t0/2)) / k^2 = sin(omega/2) sin(t0 + omega/2) / k^2 */
+        double cphi2 = sin(0.5 * omega) * sin(t0 + 0.5 * omega) / (k * k);
+        if (cphi2 < 0.0)
+            cphi2 = 0.0;
+        part = sphi * carlson_rf(cphi2, c0 * c0, 1.0);
+    }
+    return full - part - target;
+}
+
+/* omega (rad) with K0 sigma_end = K(k) - F(phi0, k): bisection on [0, pi - t0] (the gap rises
+ * from -target, or pi/2 - target at t0 = 0, to +infinity) until the bracket is finite and
+ * narrow, then Illinois to 1e-13. */
+static double corrected_omega(double t0, double target, int *evals, cbm_approx_route *route)
+{
+    double lo = 0.0, hi = PI - t0;
+    double glo = t0 > 0.0 ? -target : 0.5 * PI - target;
+    *route = CBM_APPROX_ROUTE_ROOT;
+    if (!(glo < 0.0) || !(hi > 0.0)) {
+        *route = CBM_APPROX_ROUTE_NONE; /* hanging, or upright below the buckling load */
+        return 0.0;
+    }
+    double ghi = INFINITY;
+    for (int i = 0; i < 200 && (!isfinite(ghi) || hi - lo > 0.05); i++) {
+        double m = 0.5 * (lo + hi);
+        double g = length_gap(t0, m, target);
+        (*evals)++;
+        if (g < 0.0) {
+            lo = m;
+            glo = g;
+        } else {
+            hi = m;
+            ghi = g;
+        }
+        if (hi - lo < 1e-15)
+            break;
+    }
+    int side = 0;
+    for (int i = 0; i < 100 && hi - lo > 1e-13; i++) {
+        double m = (lo * ghi - hi * glo) / (ghi - glo);
+        if (!(m > lo && m < hi))
+            m = 0.5 * (lo + hi);
+        double g = length_gap(t0, m, target);
+        (*evals)++;
+        if (g == 0.0)
+            return m;
+        if (g < 0.0) {
+            lo = m;
+            glo = g;
+            if (side == -1)
+                ghi *= 0.5;
+            side = -1;
+        } else {
+            hi = m;
+            ghi = g;
+            if (side == 1)
+                glo *= 0.5;
+            side = 1;
+        }
+    }
+    return 0.5 * (lo + hi);
+}
+
+/* One RK4 step of theta'' = -K0^2 sin(t0 + theta) over dsig. */
+static void pendulum_step(double t0, double k2, double dsig, double *th, double *om)
+{
+    double x = *th, v = *om;
+    double a1 = -k2 * sin(t0 + x);
+    double x2 = x + 0.5 * dsig * v, v2 = v + 0.5 * dsig * a1;
+    double a2 = -k2 * sin(t0 + x2);
+    double x3 = x + 0.5 * dsig * v2, v3 = v + 0.5 * dsig * a2;
+    double a3 = -k2 * sin(t0 + x3);
+    double x4 = x + dsig * v3, v4 = v + dsig * a3;
+    double a4 = -k2 * sin(t0 + x4);
+    *th = x + dsig / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4);
+    *om = v + dsig / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+}
+
+/* Integrates the pendulum from sigma0 to sigma1 in steps of at most hmax. */
+static void pendulum(double t0, double k2, double hmax, double sigma0, double sigma1, double *th,
+                     double *om)
+{
+    double span = sigma1 - sigma0;
+    if (!(span > 0.0))
+        return;
+    long n = (long)ceil(span / hmax);
+    if (n < 1)
+        n = 1;
+    double ds = span / (double)n;
+    for (long i = 0; i < n; i++)
+        pendulum_step(t0, k2, ds, th, om);
+}
+
+static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_info *info)
+{
+    long disc = d->disc;
+    double t0 = d->t0 / RAD, k0 = d->k0;
+    double sig_end = (double)disc / (1.0 - d->coni);
+    double w = 0.0;
+    info->route = CBM_APPROX_ROUTE_NONE;
+    if (k0 > 0.0)
+        w = corrected_omega(t0, k0 * sig_end, &info->evaluations, &info->route);
+    info->omega = w * RAD;
+    res[0] = d->t0;
+    if (w == 0.0) {
+        for (long i = 1; i <= disc; i++)
+            res[i] = 0.0;
+        return;
+    }
+    /* sigma of the arc length s (segments) on the cone of length H = disc / coni */
+    double inv_h = d->coni / (double)disc;
+    double k2 = k0 * k0;
+    double hmax = 0.05 / k0;
+    /* psi'(0) = sqrt(2) K0 sqrt(cos t0 - cos(t0 + w)) = 2 K0 sqrt(sin(w/2) sin(t0 + w/2)) */
+    double th = 0.0, om = 2.0 * k0 * sqrt(fmax(0.0, sin(0.5 * w) * sin(t0 + 0.5 * w)));
+    double sig = 0.0, prev_mid = 0.0;
+    for (long i = 0; i < disc; i++) {
+        double smid = (double)i + 0.5;
+        double sigmid = smid / (1.0 - smid * inv_h);
+        pendulum(t0, k2, hmax, sig, sigmid, &th, &om);
+        /* the profile stops at the tip angle: past it the first integral has no real root */
+        double mid = fmin(th, w);
+        double inc = mid - prev_mid;
+        prev_mid = mid;
+        if ((double)i > (double)disc * d->p)
+            inc = -inc;
+        res[i + 1] = inc * RAD;
+        double snode = (double)(i + 1);
+        double signode = snode / (1.0 - snode * inv_h);
+        pendulum(t0, k2, hmax, sigmid, signode, &th, &om);
+        sig = signode;
+    }
+}
+
+cbm_status cbm_approx_angles(cbm_context *ctx, const cbm_approx_def *d, double *res, size_t n_res,
+                             cbm_approx_info *info)
+{
+    cbm_approx_info inf;
+    memset(&inf, 0, sizeof inf);
+    if (info)
+        *info = inf;
+    if (!d || !res)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: no definition or result array");
+    if (d->disc < 1 || d->disc > 100000000)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: disc must be in 1..1e8 (got %ld)", d->disc);
+    if (n_res < (size_t)d->disc + 1)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: the result needs disc + 1 = %ld entries",
+                         d->disc + 1);
+    if (!(d->t0 >= 0.0 && d->t0 <= 180.0))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: t0 must be in [0, 180] degrees");
+    if (!(d->k0 >= 0.0) || !isfinite(d->k0))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: K0 must be finite and >= 0");
+    if (!(d->coni >= 0.0 && d->coni < 1.0))
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "approx: coni must be in [0, 1) (coni = 1 divides by zero, q4)");
+    if (!(d->p >= 0.0 && d->p <= 1.0))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: p must be in [0, 1]");
+    double sig_end = (double)d->disc / (1.0 - d->coni);
+    inf.omega_linear = cbm_approx_omega_linear(d->t0 / RAD, d->k0 * sig_end) * RAD;
+    cbm_status s = CBM_OK;
+    if (d->mode == CBM_APPROX_THESIS)
+        s = thesis_angles(ctx, d, res, &inf);
+    else if (d->mode == CBM_APPROX_CORRECTED)
+        corrected_angles(d, res, &inf);
+    else
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: unknown mode %d", (int)d->mode);
+    double tip = 0.0;
+    for (long i = 0; i <= d->disc; i++)
+        tip += res[i];
+    inf.tip_angle = tip;
+    if (info)
+        *info = inf;
+    return s;
+}
+
+/* ---- conversion (5.1-5.2) ---- */
+
+cbm_status cbm_approx_params(cbm_context *ctx, const cbm_approx_rod *r,
+                             cbm_approx_k0_convention conv, double *k0, double *coni)
+{
+    if (!r)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: no rod");
+    if (!(r->youngs_modulus > 0.0) || !isfinite(r->youngs_modulus))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: youngs_modulus must be > 0");
+    if (!(r->density >= 0.0) || !isfinite(r->density))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: density must be >= 0");
+    if (!(r->gravity >= 0.0) || !isfinite(r->gravity))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: gravity must be >= 0");
+    if (!(r->length > 0.0) || !isfinite(r->length))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: length must be > 0");
+    if (!(r->radius_base > 0.0) || !isfinite(r->radius_base))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: radius_base must be > 0");
+    if (!(r->radius_tip > 0.0 && r->radius_tip <= r->radius_base))
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "approx rod: radius_tip must be in (0, radius_base] (the method has no "
+                         "inverse taper)");
+    if (r->disc < 1)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: disc must be >= 1");
+    if (!isfinite(r->force))
+        return cbm__fail(ctx, CBM_E_INVALID, "approx rod: force must be finite");
+    if (conv != CBM_APPROX_K0_LISTING && conv != CBM_APPROX_K0_CHAPTER5)
+        return cbm__fail(ctx, CBM_E_INVALID, "approx: unknown K0 convention %d", (int)conv);
+    double rb = r->radius_base;
+    double f = r->force >= 0.0 ? r->force : r->gravity * r->density * PI * r->length * rb * rb;
+    double ei = r->youngs_modulus * PI * rb * rb * rb * rb / 4.0;
+    double h = r->length / (double)r->disc;
+    double k = h * sqrt(f / ei);
+    if (conv == CBM_APPROX_K0_CHAPTER5)
+        k *= sqrt(2.0);
+    if (k0)
+        *k0 = k;
+    if (coni)
+        *coni = 1.0 - r->radius_tip / rb;
+    return CBM_OK;
+}
+
+/* ---- phenotype distance (5.3-5.7) ---- */
+
+cbm_status cbm_approx_phenotype_distance(const double *a, size_t na, const double *b, size_t nb,
+                                         int dim, double *d, double *out)
+{
+    if (out)
+        *out = 0.0;
+    if ((dim != 2 && dim != 3) || nb == 0 || !b || (na > 0 && !a))
+        return CBM_E_INVALID;
+    double sum = 0.0, prev = 0.0;
+    for (size_t i = 0; i < na; i++) {
+        double best = INFINITY;
+        const double *p = a + (size_t)dim * i;
+        for (size_t k = 0; k < nb; k++) {
+            const double *q = b + (size_t)dim * k;
+            double dx = p[0] - q[0], dy = p[1] - q[1], dz = dim == 3 ? p[2] - q[2] : 0.0;
+            double e = dx * dx + dy * dy + dz * dz;
+            if (e < best)
+                best = e;
+        }
+        best = sqrt(best);
+        if (d)
+            d[i] = best;
+        if (i > 0)
+            sum += 0.5 * (prev + best);
+        prev = best;
+    }
+    if (out)
+        *out = sum;
+    return CBM_OK;
+}

@@ -1,0 +1,172 @@
+/* Method A on a plant (CBM_MECH_APPROX; Gürtler 2018 §2.1, §4; docs/methods.md): every axis
+ * (a root or a lateral and its chain of continuations) is bent by the approximative angle
+ * generator of cambium/approx.h, in index order so that an axis starts from its parent's bent
+ * frame (the thesis passes the parent's angle to its children; here the whole frame is
+ * inherited, so the lateral's own branching angles count too).
+ *
+ * Per axis, from the plant (the thesis's conversion 5.1-5.2, generalised):
+ *   t0   the angle of the axis's first segment, in the unloaded state of its own joint, from the
+ *        upward vertical (against gravity);
+ *   disc the axis's segment count; h its length / disc (the method assumes equal segments);
+ *   coni 1 - r_end / r_start of the linear taper through the first and last segments' semi-axes
+ *        a at their centroids, extrapolated to the axis's ends (clamped to [0, 0.99]);
+ *   F    approx_force_factor times the weight the axis carries (its own wood, its laterals and
+ *        every point mass on them: the thesis's "extra loads" of sub-branches, at the tip);
+ *   EI   the first segment's rigidity about the bending axis, scaled to r_start;
+ *   K0 = h sqrt(F / EI).
+ * The axis bends in the vertical plane through its first segment: joint k turns about the
+ * horizontal axis H x g by res[k+1] on top of its rest rotation. Tip forces and moments, ground
+ * and organ contact, torsion and out-of-plane loads are ignored; a rest curvature is kept as the
+ * unloaded shape and the bending superimposed (exactly where it lies in the bending plane).
+ * Afterwards one evaluation computes frames, forces and moments; stats.residual says how far the
+ * shape is from the equilibrium of the segment model (it is not one). */
+#include "mech/mech_internal.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef struct approx_scratch {
+    double *inc;   /* per segment: the bending rotation of its joint, rad */
+    cbm_vec3 *ax;  /* per segment: the world axis of that rotation */
+    size_t *chain; /* one axis's segments */
+    double *res;   /* the generator's output, chain length + 1 */
+    size_t n;
+} approx_scratch;
+
+static void scratch_free(cbm_context *ctx, approx_scratch *s)
+{
+    cbm__free(ctx, s->inc, s->n * sizeof *s->inc);
+    cbm__free(ctx, s->ax, s->n * sizeof *s->ax);
+    cbm__free(ctx, s->chain, s->n * sizeof *s->chain);
+    cbm__free(ctx, s->res, (s->n + 1) * sizeof *s->res);
+}
+
+static bool starts_axis(const cbm_plant *p, size_t i)
+{
+    return p->parent[i] < 0 || !(p->cont[i] & 1);
+}
+
+/* The parent's frame turned by segment i's branching rotation, and i's proximal node. */
+static cbm_quat joint_base(const cbm_plant *p, size_t i, cbm_vec3 *pos)
+{
+    int64_t pa = p->parent[i];
+    cbm_quat qa;
+    if (pa < 0) {
+        qa = p->base_q;
+        *pos = p->base_pos;
+    } else {
+        qa = p->q[pa];
+        *pos = v3_madd(p->pos[pa], q_h(qa), p->len[pa]);
+    }
+    cbm_quat b = p->branch[i];
+    if (b.w != 1.0)
+        qa = q_mul(qa, b);
+    return qa;
+}
+
+/* Generator parameters of the axis starting at segment i (frame before its joint: qa) and the
+ * increments of its chain into the scratch arrays. */
+static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch *sc, size_t i,
+                            cbm_quat qa)
+{
+    const cbm__mech_work *w = &p->work;
+    size_t m = 0;
+    double len = 0.0;
+    for (int64_t j = (int64_t)i; j >= 0; j = p->fchild[j]) {
+        sc->chain[m++] = (size_t)j;
+        len += p->len[j];
+    }
+    double g = v3_norm(p->gravity);
+    cbm_vec3 gdir = g > 0.0 ? v3_scale(p->gravity, 1.0 / g) : v3(0, -1, 0);
+    cbm_quat q0 = q_mul(qa, q_from_rotvec(v3_scale(w->rj[i], w->dual[i])));
+    cbm_vec3 h0 = q_h(q0);
+    double cosv = -v3_dot(h0, gdir);
+    double t0 = acos(fmax(-1.0, fmin(1.0, cosv)));
+    cbm_vec3 axis = v3_cross(h0, gdir);
+    double an = v3_norm(axis);
+    /* vertical: any horizontal axis; the segment's L keeps it deterministic */
+    axis = an > 1e-12 ? v3_scale(axis, 1.0 / an) : q_rotate(q0, v3(0, 1, 0));
+    /* taper through the centroids' semi-axes, extrapolated half a segment to each end */
+    double a0 = p->outer[i].a, a1 = p->outer[sc->chain[m - 1]].a;
+    double rb = a0, rt = a0;
+    if (m >= 2) {
+        double slope = (a1 - a0) / (double)(m - 1);
+        rb = a0 - 0.5 * slope;
+        rt = a1 + 0.5 * slope;
+    }
+    double coni = rb > 0.0 ? 1.0 - rt / rb : 0.0;
+    coni = fmax(0.0, fmin(0.99, coni));
+    if (!(rb > 0.0))
+        rb = a0;
+    cbm_vec3 al = q_rotate(q_conj(q0), axis);
+    cbm_vec3 c = p->rig[i];
+    double ei = al.y * al.y * c.y + al.z * al.z * c.z + al.x * al.x * c.x;
+    double scale = rb / a0;
+    ei *= scale * scale * scale * scale;
+    double f = d->approx_force_factor * g * p->cmass[i];
+    double hseg = len / (double)m;
+    cbm_approx_def ad = cbm_approx_def_default();
+    ad.disc = (long)m;
+    ad.t0 = t0 * (180.0 / CBM_PI);
+    ad.k0 = f > 0.0 && ei > 0.0 ? hseg * sqrt(f / ei) : 0.0;
+    ad.coni = coni;
+    ad.p = d->approx_p;
+    ad.mode = d->approx_mode;
+    if (!isfinite(ad.k0) || !isfinite(ad.t0))
+        return cbm__fail(p->ctx, CBM_E_NONFINITE, "approx: axis from segment %zu: K0 or t0 is not "
+                         "finite", i);
+    cbm_status s = cbm_approx_angles(p->ctx, &ad, sc->res, m + 1, NULL);
+    if (s != CBM_OK)
+        return cbm__fail(p->ctx, s, "approx: axis from segment %zu failed", i);
+    for (size_t k = 0; k < m; k++) {
+        sc->inc[sc->chain[k]] = sc->res[k + 1] * (CBM_PI / 180.0);
+        sc->ax[sc->chain[k]] = axis;
+    }
+    return CBM_OK;
+}
+
+cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solve_stats *st)
+{
+    if (!(d->approx_p >= 0.0 && d->approx_p <= 1.0))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: approx_p must be in [0, 1]");
+    if (!(d->approx_force_factor > 0.0) || !isfinite(d->approx_force_factor))
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: approx_force_factor must be > 0");
+    if (d->approx_mode != CBM_APPROX_CORRECTED && d->approx_mode != CBM_APPROX_THESIS)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: unknown approx mode %d",
+                         (int)d->approx_mode);
+    size_t n = p->n;
+    approx_scratch sc = {0};
+    sc.n = n;
+    sc.inc = cbm__alloc(p->ctx, n * sizeof *sc.inc);
+    sc.ax = cbm__alloc(p->ctx, n * sizeof *sc.ax);
+    sc.chain = cbm__alloc(p->ctx, n * sizeof *sc.chain);
+    sc.res = cbm__alloc(p->ctx, (n + 1) * sizeof *sc.res);
+    cbm_status s = sc.inc && sc.ax && sc.chain && sc.res ? CBM_OK : CBM_E_NOMEM;
+    const cbm__mech_work *w = &p->work;
+    for (size_t i = 0; i < n && s == CBM_OK; i++) {
+        cbm_vec3 pos;
+        cbm_quat qa = joint_base(p, i, &pos);
+        if (starts_axis(p, i))
+            s = bend_axis(p, d, &sc, i, qa);
+        if (s != CBM_OK)
+            break;
+        cbm_vec3 bend = v3_scale(q_rotate(q_conj(qa), sc.ax[i]), sc.inc[i] / w->dual[i]);
+        p->omega[i] = v3_add(w->rj[i], bend);
+        p->q[i] = q_normalize(q_mul(qa, q_from_rotvec(v3_scale(p->omega[i], w->dual[i]))));
+        p->pos[i] = pos;
+    }
+    scratch_free(p->ctx, &sc);
+    if (s != CBM_OK)
+        return s == CBM_E_NOMEM ? cbm__fail(p->ctx, s, "approx: out of memory") : s;
+    cbm__mech_forward(p);
+    double mmax = 0.0;
+    double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
+    if (!isfinite(r))
+        return cbm__mech_report_nonfinite(p);
+    st->passes = 1;
+    st->residual = cbm__mech_relres(r, mmax, &st->char_moment);
+    st->stage = CBM_SOLVE_STAGE_NONE;
+    st->lowest_eigenvalue = NAN;
+    return CBM_OK;
+}
