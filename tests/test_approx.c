@@ -455,9 +455,11 @@ TEST(approx_validation_table)
     const char *path = getenv("CBM_APPROX_TABLE");
     FILE *f = path ? fopen(path, "w") : NULL;
     if (f)
-        fprintf(f, "| alpha | coni | t0 (deg) | elastica tip angle (deg from vertical) | thesis, F = W: "
-                   "angle / position | corrected, F = W | corrected, F = 3W/8 |\n"
-                   "|---|---|---|---|---|---|---|\n");
+        fprintf(
+            f,
+            "| alpha | coni | t0 (deg) | elastica tip angle (deg from vertical) | thesis, F = W: "
+            "angle / position | corrected, F = W | corrected, F = 3W/8 |\n"
+            "|---|---|---|---|---|---|---|\n");
     for (size_t c = 0; c < 2; c++)
         for (size_t a = 0; a < sizeof alphas / sizeof *alphas; a++) {
             double cn = conis[c], al = alphas[a];
@@ -482,20 +484,21 @@ TEST(approx_validation_table)
                     CHECK_MSG(false, "no stable equilibrium alpha %g t0 %g", al, t0);
                     continue;
                 }
-                approx_err th = approx_vs(ctx, disc, t0, cn, W, 1.0, CBM_APPROX_THESIS, ex, ey, eth);
-                approx_err c1 = approx_vs(ctx, disc, t0, cn, W, 1.0, CBM_APPROX_CORRECTED, ex, ey, eth);
+                approx_err th =
+                    approx_vs(ctx, disc, t0, cn, W, 1.0, CBM_APPROX_THESIS, ex, ey, eth);
+                approx_err c1 =
+                    approx_vs(ctx, disc, t0, cn, W, 1.0, CBM_APPROX_CORRECTED, ex, ey, eth);
                 approx_err c3 =
                     approx_vs(ctx, disc, t0, cn, W, 0.375, CBM_APPROX_CORRECTED, ex, ey, eth);
                 CHECK(isfinite(c1.tip_pos + c3.tip_pos));
                 CHECK(isfinite(th.tip_pos) || (t0 + in_closed_omega(ctx, disc, t0, cn, W) > 180));
                 if (al <= 1.0 && t0 <= 135) {
-                    CHECK_MSG(c3.tip_pos < c1.tip_pos, "alpha %g t0 %g: 3/8 %g vs whole %g", al,
-                              t0, c3.tip_pos, c1.tip_pos);
+                    CHECK_MSG(c3.tip_pos < c1.tip_pos, "alpha %g t0 %g: 3/8 %g vs whole %g", al, t0,
+                              c3.tip_pos, c1.tip_pos);
                 }
                 if (al == 0.3 && cn == 0.0)
                     CHECK_MSG(c3.tip_pos < 0.01, "alpha 0.3 t0 %g: %g", t0, c3.tip_pos);
-                if (f)
-                {
+                if (f) {
                     char thc[64] = "NaN (ω past hanging)";
                     if (isfinite(th.tip_pos))
                         snprintf(thc, sizeof thc, "%.2f° / %.3f", th.tip_angle, th.tip_pos);

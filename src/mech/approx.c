@@ -23,7 +23,7 @@
 #include <string.h>
 
 #define RAD (180.0 / 3.14159265358979323846)
-#define PI 3.14159265358979323846
+#define PI  3.14159265358979323846
 
 const char *cbm_approx_mode_name(cbm_approx_mode m)
 {

@@ -114,8 +114,10 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     ad.p = d->approx_p;
     ad.mode = d->approx_mode;
     if (!isfinite(ad.k0) || !isfinite(ad.t0))
-        return cbm__fail(p->ctx, CBM_E_NONFINITE, "approx: axis from segment %zu: K0 or t0 is not "
-                         "finite", i);
+        return cbm__fail(p->ctx, CBM_E_NONFINITE,
+                         "approx: axis from segment %zu: K0 or t0 is not "
+                         "finite",
+                         i);
     cbm_status s = cbm_approx_angles(p->ctx, &ad, sc->res, m + 1, NULL);
     if (s != CBM_OK)
         return cbm__fail(p->ctx, s, "approx: axis from segment %zu failed", i);

@@ -96,8 +96,7 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
     const char *ext = cli_extension(v);
     if (outs->count == outs->max)
         snprintf(why, n, "at most %d outputs", outs->max);
-    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") &&
-             strcmp(ext, "png"))
+    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") && strcmp(ext, "png"))
         snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv, .json, .svg or .png)",
                  ext);
     else
@@ -208,8 +207,8 @@ static cbm_status write_plot(cbm_context *ctx, const char *path, const method_ru
     return s;
 }
 
-static int write_outputs(const char *const *outs, int nout, bool json, const method_run *m,
-                         int nm, const double *dist)
+static int write_outputs(const char *const *outs, int nout, bool json, const method_run *m, int nm,
+                         const double *dist)
 {
     cbm_context *ctx = cli_context();
     int rc = CLI_OK;
@@ -331,9 +330,8 @@ int cmd_compare(int argc, char **argv)
     double dist[CBM_MECH_SOLVER_COUNT * CBM_MECH_SOLVER_COUNT] = {0};
     for (int a = 0; a < nm && rc == CLI_OK; a++)
         for (int b = 0; b < nm; b++)
-            if (a != b && cbm_approx_phenotype_distance(m[a].xyz, m[a].n + 1, m[b].xyz,
-                                                        m[b].n + 1, 3, NULL,
-                                                        &dist[a * nm + b]) != CBM_OK)
+            if (a != b && cbm_approx_phenotype_distance(m[a].xyz, m[a].n + 1, m[b].xyz, m[b].n + 1,
+                                                        3, NULL, &dist[a * nm + b]) != CBM_OK)
                 rc = CLI_FAIL;
     if (rc == CLI_OK)
         rc = write_outputs(outs, out_list.count, json, m, nm, dist);
