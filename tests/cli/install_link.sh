@@ -68,7 +68,7 @@ if command -v groff >/dev/null; then
     groff -man -Tutf8 -ww -z "$man1" 2>"$tmp/groff.err"
     [ ! -s "$tmp/groff.err" ] || fail "roff warnings: $(head -3 "$tmp/groff.err")"
     groff -man -Tutf8 "$man1" 2>/dev/null | sed 's/.\x08//g' >"$tmp/man.txt"
-    for c in run grow bend buckle info demo plot elastica; do
+    for c in run grow bend buckle info demo plot elastica compare sweep; do
         { "$bin" "$c" --help 2>&1 || true; } | { grep -o -- '--[a-z][a-z0-9-]*' || true; } | sort -u | while read -r o; do
             [ "$o" = --help ] && continue
             grep -q -- "$o" "$tmp/man.txt" || { echo "FAIL: cambium.1 lacks $c $o"; exit 1; }

@@ -9,7 +9,7 @@ T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 
 # each option of each --help is known to its command's parser
-for c in run grow bend buckle info demo plot; do
+for c in run grow bend buckle info demo plot compare sweep; do
     "$bin" "$c" --help >"$T/help" || fail "$c --help exits $?"
     for o in $(grep -oE -- '(^|[ ,])--[a-z][a-z0-9-]*' "$T/help" | tr -d ' ,' | sort -u); do
         [ "$o" = --help ] && continue

@@ -12,6 +12,7 @@ int cmd_demo(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
 int cmd_elastica(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
+int cmd_sweep(int argc, char **argv);
 
 /* The forester's summary of a tree (cmd_info.c), also printed by `grow --report` and written in
  * the year-by-year summary of `grow`. */
@@ -25,6 +26,7 @@ void cli_measures_json(struct cbm_json *j, const char *key, const struct cbm_tre
     X("grow", cmd_grow, "grow a built-in tree model (fruit tree, aspen) with mechanics")           \
     X("bend", cmd_bend, "static equilibrium of one branch or rod from a spec file")                \
     X("compare", cmd_compare, "one bend problem by several bending methods, side by side")         \
+    X("sweep", cmd_sweep, "one-at-a-time sensitivity sweeps of a built-in tree model")             \
     X("buckle", cmd_buckle, "self-weight buckling length of a vertical column")                    \
     X("info", cmd_info, "what a model or output file holds")                                       \
     X("demo", cmd_demo, "write a synthetic tree in any output format")                             \
