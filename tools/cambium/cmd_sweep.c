@@ -80,8 +80,8 @@ static bool parse_param(const char *v, void *target, char *why, size_t n)
         const char *c = strchr(p, ',');
         size_t len = c ? (size_t)(c - p) : strlen(p);
         if (len == 0 || len >= sizeof s->values[0] || s->n == MAX_VALUES) {
-            snprintf(why, n, "--param %s: empty or too long value, or more than %d values",
-                     s->name, MAX_VALUES);
+            snprintf(why, n, "--param %s: empty or too long value, or more than %d values", s->name,
+                     MAX_VALUES);
             return false;
         }
         memcpy(s->values[s->n++], p, len);
@@ -126,8 +126,7 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
     const char *ext = cli_extension(v);
     if (outs->count == outs->max)
         snprintf(why, n, "at most %d outputs", outs->max);
-    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") &&
-             strcmp(ext, "png"))
+    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") && strcmp(ext, "png"))
         snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv, .json, .svg or .png)",
                  ext);
     else
