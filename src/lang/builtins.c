@@ -70,7 +70,7 @@ static const cbm__builtin BUILTINS[] = {
     {"PipeModel", FN_PIPEMODEL, 2, LC},
     {"Wood", FN_WOOD, 5, LC},
     {"RingRate", FN_RINGRATE, 2, LC},
-    {"Solver", FN_SOLVER, 3, LC},
+    {"Solver", FN_SOLVER, -1, LC}, /* 3 or 4 arguments (lc_parse.c) */
     {"ReactionWood", FN_REACTION, 4, LC},
     {"ReactionBound", FN_REACTIONBOUND, 1, LC},
     {"RAND_MAX", FN_NONE, 0, LC},

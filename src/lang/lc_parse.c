@@ -697,6 +697,10 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         na = parse_args(L, &args);
         if (na < 0)
             return -1;
+        if (b->fn == FN_SOLVER && na != 3 && na != 4) { /* the method is optional */
+            cbm__cerr(L->c, pos, "Solver() takes 3 or 4 arguments, %d given", na);
+            return -1;
+        }
         if (b->arity >= 0 && na != b->arity) {
             cbm__cerr(L->c, pos, "%s() takes %d argument%s, %d given", b->name, b->arity,
                       b->arity == 1 ? "" : "s", na);

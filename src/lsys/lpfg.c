@@ -339,15 +339,18 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         return;
     case FN_SOLVER:
         if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
-            !(a[2] == 0 || a[2] == 1)) {
+            !(a[2] == 0 || a[2] == 1) || (na == 4 && !(a[3] == 0 || a[3] == 1))) {
             rt_error(lp, CBM_E_INVALID,
                      "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
-                     "1)");
+                     "1[, method 0 fast or 1 relax])");
             return;
         }
         m->solve.tolerance = a[0];
         m->solve.max_passes = (size_t)a[1];
         m->go_on = a[2] == 1;
+        /* the optional method: 0 the fast solver (the default), 1 the seeds' relaxation */
+        if (na == 4)
+            m->solve.solver = a[3] == 1 ? CBM_MECH_RELAX : CBM_MECH_NEWTON;
         return;
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {

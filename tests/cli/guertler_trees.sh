@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Gürtler's trees in models/ (docs/models.md, "Gürtler's three trees"): each derives with both
+# solvers (METHOD 0 fast, 1 relax) over a few seeds without collapse, and an architectural
+# property is measured on its segments table:
+#   spruce: every whorl node carries 5-8 first-order laterals, whorl sizes vary over seeds, the
+#     lowest whorl's branches droop below their insertion, E rises with age (base > new shoot);
+#   sympodial: 2^k axes of order k, branch angles 30 deg, the tree stands lower than on rigid wood;
+# and the two solvers give the same tree (height within 1 %).
+set -euo pipefail
+bin=$1
+src=${CBM_SOURCE:?}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+info() { "$bin" info --json "$1" | sed -n "s/.*\"$2\":\([^,}]*\).*/\1/p"; }
+
+sizes=""
+for seed in 1 2 3; do
+    for method in 0 1; do
+        out="$tmp/sp-$seed-$method"
+        "$bin" run "$src/models/guertler-spruce.l" -D YEARS=5 -D SEED=$seed -D METHOD=$method \
+            -o "segments:$out.csv" >"$out.txt"
+        grep -q ' 0 unconverged equilibria' "$out.txt"
+        h=$(info "$out.csv" height_m)
+        w=$(info "$out.csv" crown_width_m)
+        # five years of leader (0.84 m with the seedling): no collapse, a crown
+        awk -v h="$h" -v w="$w" 'BEGIN { exit !(h > 0.75 && h < 0.9 && w > 0.3) }'
+        echo "$h" >"$out.h"
+    done
+    awk -v a="$(cat "$tmp/sp-$seed-0.h")" -v b="$(cat "$tmp/sp-$seed-1.h")" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+    csv="$tmp/sp-$seed-0.csv"
+    # first-order laterals per stem node: whorl nodes (4 or more) carry 5-8; at least 3 whorls
+    # flushed in 5 years (the last year's buds have no shoot yet)
+    w=$(awk -F, 'NR > 1 { ord[$1] = $3; if ($3 == 1 && ord[$2] == 0) n[$2]++ }
+        END { for (p in n) if (n[p] >= 4) print n[p] }' "$csv")
+    test "$(echo "$w" | wc -l)" -ge 3
+    echo "$w" | awk '$1 < 5 || $1 > 8 { exit 1 }'
+    sizes="$sizes $w"
+    # E grows with age: the trunk's base (5 rings) is stiffer than the newest shoot's wood
+    awk -F, 'NR == 2 { base = $13 } NR > 1 && $3 == 0 { top = $13 } END { exit !(base > 2 * top) }' "$csv"
+    # the lowest whorl droops: its laterals' tips lie below their insertion
+    awk -F, 'NR > 1 { ord[$1] = $3; y0[$1] = $5; root[$1] = ($3 == 1 && ord[$2] == 0) ? $1 : root[$2]
+                      if ($3 == 1) tip[root[$1]] = $8 }
+        END { low = -1; for (r in tip) if (low < 0 || y0[r] < y0[low]) low = r
+              exit !(tip[low] < y0[low]) }' "$csv"
+done
+# the whorl size is stochastic (thesis prob_n over n_subap)
+test "$(echo $sizes | tr ' ' '\n' | sort -u | wc -l)" -ge 2
+
+for method in 0 1; do
+    out="$tmp/sy-$method"
+    "$bin" run "$src/models/guertler-sympodial.l" -D ORDERS=6 -D METHOD=$method \
+        -o "segments:$out.csv" >"$out.txt"
+    grep -q ' 0 unconverged equilibria' "$out.txt"
+    # 2^k axes of order k (k = 1..6), each NSUB = 5 internodes
+    for k in 1 2 3 4 5 6; do
+        test "$(awk -F, -v k=$k 'NR > 1 && $3 == k' "$out.csv" | wc -l)" -eq $((5 * (1 << k)))
+    done
+    "$bin" info "$out.csv" | grep -q 'branch angles of 126 laterals: median 30 deg'
+    info "$out.csv" height_m >"$out.h"
+done
+awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(cat "$tmp/sy-1.h")" \
+    'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+# the wood bends: real wood stands lower (3.68 m) than nearly rigid wood (3.74 m)
+"$bin" run "$src/models/guertler-sympodial.l" -D ORDERS=6 -D E_WOOD=1e14 -o "segments:$tmp/rigid.csv" >/dev/null
+awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(info "$tmp/rigid.csv" height_m)" 'BEGIN { exit !(a < b - 0.03) }'
