@@ -71,6 +71,6 @@ EOF
 "$bin" run models/guertler-spruce.l -o docs/images/guertler-spruce.png --view front --size 600x700
 "$bin" run models/guertler-sympodial.l -o docs/images/guertler-sympodial.png --view front --size 700x600
 if [ -f models/guertler-beech.l ]; then
-    "$bin" run models/guertler-beech.l -o docs/images/guertler-beech.png --view front --size 700x700
+    "$bin" run models/guertler-beech.l -o docs/images/guertler-beech.png --size 700x700
 fi
 echo "guertler-trees: table in $doc, pictures in docs/images/" >&2

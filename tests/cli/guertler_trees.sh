@@ -5,6 +5,8 @@
 #   spruce: every whorl node carries 5-8 first-order laterals, whorl sizes vary over seeds, the
 #     lowest whorl's branches droop below their insertion, E rises with age (base > new shoot);
 #   sympodial: 2^k axes of order k, branch angles 30 deg, the tree stands lower than on rigid wood;
+#   beech: the carbon balance decides: thrice the wood's respiration sheds branches and leaves a
+#     thinner stem, the leader's branches alternate sides (distichous);
 # and the two solvers give the same tree (height within 1 %).
 set -euo pipefail
 bin=$1
@@ -64,3 +66,33 @@ awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(cat "$tmp/sy-1.h")" \
 # the wood bends: real wood stands lower (3.68 m) than nearly rigid wood (3.74 m)
 "$bin" run "$src/models/guertler-sympodial.l" -D ORDERS=6 -D E_WOOD=1e14 -o "segments:$tmp/rigid.csv" >/dev/null
 awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(info "$tmp/rigid.csv" height_m)" 'BEGIN { exit !(a < b - 0.03) }'
+
+for seed in 1 2; do
+    for method in 0 1; do
+        out="$tmp/be-$seed-$method"
+        "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D METHOD=$method \
+            -o "segments:$out.csv" >"$out.txt"
+        grep -q ' 0 unconverged equilibria' "$out.txt"
+        h=$(info "$out.csv" height_m)
+        awk -v h="$h" -v w="$(info "$out.csv" crown_width_m)" 'BEGIN { exit !(h > 1.2 && w > 0.4) }'
+        echo "$h" >"$out.h"
+    done
+    awk -v a="$(cat "$tmp/be-$seed-0.h")" -v b="$(cat "$tmp/be-$seed-1.h")" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+    # distichous: consecutive first-order laterals of the stem point to opposite sides (azimuths
+    # more than 120 deg apart) on at least 70 % of pairs (the leader's plane turns between years)
+    awk -F, 'function az(i) { return atan2($9 - $6, $7 - $4) * 180 / 3.14159265 }
+        NR > 1 { ord[$1] = $3 }
+        NR > 1 && $3 == 1 && ord[$2] == 0 { a = az(); any++
+            if (any > 1) { d = a - last; if (d < 0) d = -d; if (d > 180) d = 360 - d
+                           n++; if (d > 120) opp++ }
+            last = a }
+        END { exit !(any >= 6 && opp >= 0.7 * n) }' "$tmp/be-$seed-0.csv"
+    # the carbon balance: thrice the wood's respiration sheds branches, the stem grows thinner
+    "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D MAINT=1e-6 \
+        -o "segments:$tmp/starved.csv" >"$tmp/starved.txt"
+    grep -q ' 0 branches shed' "$tmp/be-$seed-0.txt"
+    ! grep -q ' 0 branches shed' "$tmp/starved.txt"
+    awk -v a="$(info "$tmp/be-$seed-0.csv" base_diameter_m)" -v b="$(info "$tmp/starved.csv" base_diameter_m)" \
+        'BEGIN { exit !(b < 0.95 * a) }'
+done
