@@ -96,3 +96,12 @@ for seed in 1 2; do
     awk -v a="$(info "$tmp/be-$seed-0.csv" base_diameter_m)" -v b="$(info "$tmp/starved.csv" base_diameter_m)" \
         'BEGIN { exit !(b < 0.95 * a) }'
 done
+
+# Solver()'s method: a fifth argument or a method other than 0 and 1 is an error naming the place
+sed 's/Solver(SOLVE_TOLERANCE, SOLVE_MAX_PASSES, 1, METHOD);/Solver(SOLVE_TOLERANCE, SOLVE_MAX_PASSES, 1, METHOD, 1);/' \
+    "$src/models/guertler-sympodial.l" >"$tmp/bad.l"
+if "$bin" run "$tmp/bad.l" -o "$tmp/bad.str" 2>"$tmp/err"; then exit 1; fi
+grep -q 'bad.l:[0-9]*:[0-9]*: error: Solver() takes 3 or 4 arguments, 5 given' "$tmp/err"
+if "$bin" run "$src/models/guertler-sympodial.l" -D METHOD=2 -o "$tmp/bad.str" 2>"$tmp/err"; then exit 1; fi
+grep -q 'error: Start: Solver(.*method 0 fast or 1 relax' "$tmp/err"
+test ! -e "$tmp/bad.str"
