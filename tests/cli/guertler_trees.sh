@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# Gürtler's trees in models/ (docs/models.md, "Gürtler's three trees"): each derives with both
+# solvers (METHOD 0 relax, 1 fast) over a few seeds without collapse, and an architectural
+# property is measured on its segments table:
+#   spruce: every whorl node carries 5-8 first-order laterals, whorl sizes vary over seeds, the
+#     lowest whorl's branches droop below their insertion, E rises with age (base > new shoot);
+#   sympodial: 2^k axes of order k, branch angles 30 deg, the tree stands lower than on rigid wood;
+#   beech: the carbon balance decides: thrice the wood's respiration sheds branches and leaves a
+#     thinner stem, the leader's branches alternate sides (distichous);
+# and the two solvers give the same tree (height within 1 %).
+set -euo pipefail
+bin=$1
+src=${CBM_SOURCE:?}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+info() { "$bin" info --json "$1" | sed -n "s/.*\"$2\":\([^,}]*\).*/\1/p"; }
+
+sizes=""
+for seed in 1 2 3; do
+    for method in 0 1; do
+        out="$tmp/sp-$seed-$method"
+        "$bin" run "$src/models/guertler-spruce.l" -D YEARS=5 -D SEED=$seed -D METHOD=$method \
+            -o "segments:$out.csv" >"$out.txt"
+        grep -q ' 0 unconverged equilibria' "$out.txt"
+        h=$(info "$out.csv" height_m)
+        w=$(info "$out.csv" crown_width_m)
+        # five years of leader (0.84 m with the seedling): no collapse, a crown
+        awk -v h="$h" -v w="$w" 'BEGIN { exit !(h > 0.75 && h < 0.9 && w > 0.3) }'
+        echo "$h" >"$out.h"
+    done
+    awk -v a="$(cat "$tmp/sp-$seed-0.h")" -v b="$(cat "$tmp/sp-$seed-1.h")" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+    csv="$tmp/sp-$seed-0.csv"
+    # first-order laterals per stem node: whorl nodes (4 or more) carry 5-8; at least 3 whorls
+    # flushed in 5 years (the last year's buds have no shoot yet)
+    w=$(awk -F, 'NR > 1 { ord[$1] = $3; if ($3 == 1 && ord[$2] == 0) n[$2]++ }
+        END { for (p in n) if (n[p] >= 4) print n[p] }' "$csv")
+    test "$(echo "$w" | wc -l)" -ge 3
+    echo "$w" | awk '$1 < 5 || $1 > 8 { exit 1 }'
+    sizes="$sizes $w"
+    # E grows with age: the trunk's base (5 rings) is stiffer than the newest shoot's wood
+    awk -F, 'NR == 2 { base = $13 } NR > 1 && $3 == 0 { top = $13 } END { exit !(base > 2 * top) }' "$csv"
+    # the lowest whorl droops: its laterals' tips lie below their insertion
+    awk -F, 'NR > 1 { ord[$1] = $3; y0[$1] = $5; root[$1] = ($3 == 1 && ord[$2] == 0) ? $1 : root[$2]
+                      if ($3 == 1) tip[root[$1]] = $8 }
+        END { low = -1; for (r in tip) if (low < 0 || y0[r] < y0[low]) low = r
+              exit !(tip[low] < y0[low]) }' "$csv"
+done
+# the whorl size is stochastic (thesis prob_n over n_subap)
+test "$(echo $sizes | tr ' ' '\n' | sort -u | wc -l)" -ge 2
+
+for method in 0 1; do
+    out="$tmp/sy-$method"
+    "$bin" run "$src/models/guertler-sympodial.l" -D ORDERS=6 -D METHOD=$method \
+        -o "segments:$out.csv" >"$out.txt"
+    grep -q ' 0 unconverged equilibria' "$out.txt"
+    # 2^k axes of order k (k = 1..6), each NSUB = 5 internodes
+    for k in 1 2 3 4 5 6; do
+        test "$(awk -F, -v k=$k 'NR > 1 && $3 == k' "$out.csv" | wc -l)" -eq $((5 * (1 << k)))
+    done
+    "$bin" info "$out.csv" | grep -q 'branch angles of 126 laterals: median 30 deg'
+    info "$out.csv" height_m >"$out.h"
+done
+awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(cat "$tmp/sy-1.h")" \
+    'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+# the wood bends: real wood stands lower (3.68 m) than nearly rigid wood (3.74 m)
+"$bin" run "$src/models/guertler-sympodial.l" -D ORDERS=6 -D E_WOOD=1e14 -o "segments:$tmp/rigid.csv" >/dev/null
+awk -v a="$(cat "$tmp/sy-0.h")" -v b="$(info "$tmp/rigid.csv" height_m)" 'BEGIN { exit !(a < b - 0.03) }'
+
+for seed in 1 2; do
+    for method in 0 1; do
+        out="$tmp/be-$seed-$method"
+        "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D METHOD=$method \
+            -o "segments:$out.csv" >"$out.txt"
+        grep -q ' 0 unconverged equilibria' "$out.txt"
+        h=$(info "$out.csv" height_m)
+        awk -v h="$h" -v w="$(info "$out.csv" crown_width_m)" 'BEGIN { exit !(h > 1.2 && w > 0.4) }'
+        echo "$h" >"$out.h"
+    done
+    awk -v a="$(cat "$tmp/be-$seed-0.h")" -v b="$(cat "$tmp/be-$seed-1.h")" \
+        'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
+    # distichous: consecutive first-order laterals of the stem point to opposite sides (azimuths
+    # more than 120 deg apart) on at least 70 % of pairs (the leader's plane turns between years)
+    awk -F, 'function az(i) { return atan2($9 - $6, $7 - $4) * 180 / 3.14159265 }
+        NR > 1 { ord[$1] = $3 }
+        NR > 1 && $3 == 1 && ord[$2] == 0 { a = az(); any++
+            if (any > 1) { d = a - last; if (d < 0) d = -d; if (d > 180) d = 360 - d
+                           n++; if (d > 120) opp++ }
+            last = a }
+        END { exit !(any >= 6 && opp >= 0.7 * n) }' "$tmp/be-$seed-0.csv"
+    # the carbon balance: thrice the wood's respiration sheds branches, the stem grows thinner
+    "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D MAINT=1e-6 \
+        -o "segments:$tmp/starved.csv" >"$tmp/starved.txt"
+    grep -q ' 0 branches shed' "$tmp/be-$seed-0.txt"
+    ! grep -q ' 0 branches shed' "$tmp/starved.txt"
+    awk -v a="$(info "$tmp/be-$seed-0.csv" base_diameter_m)" -v b="$(info "$tmp/starved.csv" base_diameter_m)" \
+        'BEGIN { exit !(b < 0.95 * a) }'
+done
+
+# the method: a value SolverMethod() does not know is an error naming the place, and nothing is written
+if "$bin" run "$src/models/guertler-sympodial.l" -D METHOD=9 -o "$tmp/bad.str" 2>"$tmp/err"; then exit 1; fi
+grep -q 'error: .*SolverMethod(n): n is 0 \.\.' "$tmp/err"
+test ! -e "$tmp/bad.str"
