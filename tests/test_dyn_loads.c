@@ -102,7 +102,8 @@ TEST(wind_drag_damping_small_amplitude)
     CHECK_OK(cbm_plant_modes(p, 2, f, shapes));
     double w1 = 2.0 * PI * f[0];
     /* the mode in the x-z plane: rotations about y; a combination of the degenerate pair */
-    double *phi = malloc(3 * (size_t)n * sizeof(double)), *q0 = malloc(3 * (size_t)n * sizeof(double));
+    double *phi = malloc(3 * (size_t)n * sizeof(double)),
+           *q0 = malloc(3 * (size_t)n * sizeof(double));
     double ay = shapes[3 * (n - 1) + 1], by = shapes[3 * n + 3 * (n - 1) + 1];
     double az = shapes[3 * (n - 1) + 2], bz = shapes[3 * n + 3 * (n - 1) + 2];
     /* c1 a + c2 b with zero z-rotation at the tip: c1 = bz, c2 = -az */
@@ -207,7 +208,8 @@ TEST(gust_variance_and_seed)
     for (int k = 0; k < a.n; k++)
         var += 0.5 * a.amp[k] * a.amp[k];
     double sigma = 0.2 * U, fa = g.f_min * L / U, fb = g.f_max * L / U;
-    double ref = sigma * sigma * (pow(1.0 + 10.2 * fa, -2.0 / 3.0) - pow(1.0 + 10.2 * fb, -2.0 / 3.0));
+    double ref =
+        sigma * sigma * (pow(1.0 + 10.2 * fa, -2.0 / 3.0) - pow(1.0 + 10.2 * fb, -2.0 / 3.0));
     printf("gust variance %.5f, band integral %.5f (sigma^2 %.5f)\n", var, ref, sigma * sigma);
     CHECK_REL(var, ref, 1e-3);
     CHECK(var > 0.9 * sigma * sigma);
