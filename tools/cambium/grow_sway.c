@@ -59,7 +59,8 @@ static cbm_vec3 sub(cbm_vec3 a, cbm_vec3 b)
 typedef struct sway_run {
     size_t n;
     cbm_segment_state *seg;
-    cbm_vec3 *theta, *dx, *de; /* per segment: rotation, displacement of the proximal and distal node */
+    cbm_vec3 *theta, *dx,
+        *de; /* per segment: rotation, displacement of the proximal and distal node */
     cbm_motion_part *parts;
     size_t *track;
     size_t ntrack;
