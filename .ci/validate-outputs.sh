@@ -42,6 +42,7 @@ done
 "$bin" plot "$out/tree.csv" -x age_years -y stress_ratio --panel order --style points \
   -o "$out/plot-parts.svg" -o "$out/plot-parts.png"
 echo "== glTF validator"
+"$bin" grow fruit-tree -y 3 --quiet --sway 2 --wind 15 -o "$out/grow-sway.glb" -o "$out/grow-sway.csv"
 NODE_PATH="$val/node_modules" node .ci/gltf-validate.js "$out"/*.glb
 echo "== assimp"
 for f in "$out"/*.obj "$out"/*.ply; do

@@ -131,6 +131,56 @@ typedef struct cbm_wind_critical {
 CBM_API cbm_status cbm_plant_critical_wind(const cbm_plant *plant, const cbm_wind_def *def,
                                            cbm_wind_critical *out, size_t max, size_t *count);
 
+/* ---- loads in time: wind drag with gusts, base motion (docs/dynamics.md, "Loads in time") ---- */
+
+/// Gusts: one longitudinal turbulence series u'(t) for the whole plant (spatially coherent),
+/// synthesised from the EN 1991-1-4 (Annex B) spectrum n S(n) / sigma^2 = 6.8 f_L / (1 +
+/// 10.2 f_L)^(5/3), f_L = n L / U_ref, as a sum of harmonics at log-spaced frequencies with
+/// seeded random phases. The wind at height z is U(z) (1 + u'(t) / U_ref) along the direction.
+typedef struct cbm_gust_def {
+    double intensity;    ///< sigma_u / U_ref; default 0 (steady wind)
+    double length_scale; ///< L, m; default 0: EN 1991-1-4's 300 (z_ref / 200)^(0.67 + 0.05 ln z0)
+    double f_min, f_max; ///< Hz, band of the harmonics; default 0.002 and 20
+    int32_t harmonics;   ///< default 400
+    uint64_t seed;       ///< default 1
+} cbm_gust_def;
+
+/// Defaults as documented per field.
+CBM_API cbm_gust_def cbm_gust_def_default(void);
+
+/// Wind on a motion from the next step on: drag 1/2 rho C_d A |v_rel| v_rel with the velocity of
+/// the air relative to the moving segment (normal to its axis) and organ, so that the drag also
+/// damps; the mean speed u_ref (m/s at the wind's reference height) with its profile; gust may be
+/// NULL (steady). The geometry is the equilibrium's (the motion is linear); the drag at the step's
+/// end is found by fixed-point iteration on the Newmark step (docs/dynamics.md).
+CBM_API cbm_status cbm_motion_set_wind(cbm_motion *m, const cbm_wind_def *wind, double u_ref,
+                                       const cbm_gust_def *gust);
+
+/// The reference speed U_ref (1 + u'(t) / U_ref) of the wind at time t (s): the gust series.
+CBM_API double cbm_motion_wind_at(const cbm_motion *m, double t);
+
+/// Starts at rest from the linear static deflection under the drag of the mean wind (K q = f)
+/// at t = 0; the wind must be set.
+CBM_API cbm_status cbm_motion_start_wind_static(cbm_motion *m);
+
+/// Prescribed base motion: the base's translational acceleration (world, m/s^2) at the time of
+/// the next step (call before each step; 0 when not called). The motion is solved in the base's
+/// frame (the fictitious force -m a on every mass), the base's velocity and displacement are
+/// integrated by the same trapezoidal rule from rest; cbm_motion_displacement stays relative to
+/// the base.
+CBM_API cbm_status cbm_motion_base_acceleration(cbm_motion *m, cbm_vec3 acc);
+
+/// The base's current displacement (world, m) from its start.
+CBM_API cbm_vec3 cbm_motion_base_displacement(const cbm_motion *m);
+
+/// Starts at time 0 from joint rotations q and rates v (3n doubles each, world, rad and rad/s;
+/// NULL: zero), e.g. a mode shape; the acceleration follows from the equation of motion with the
+/// wind (if set) at those rates.
+CBM_API cbm_status cbm_motion_start_state(cbm_motion *m, const double *q, const double *v);
+
+/// Fixed-point iterations the last step's drag took (0 without wind).
+CBM_API int cbm_motion_drag_iterations(const cbm_motion *m);
+
 /* ---- the bend workbench's motion (docs/bend.md, "Motion") ---- */
 
 /// One row of a bend motion: time, tip position (world, m), kinetic and potential energy (J,

@@ -29,6 +29,20 @@ CBM_API void cbm_turtle_motion_destroy(cbm_turtle_motion *m);
 /// scene: the first frame takes the parts' colours from it (grey without).
 CBM_API cbm_status cbm_turtle_motion_add_frame(cbm_turtle_motion *m, const cbm_turtle *turtle,
                                                const cbm_scene *scene, double time_s, long step);
+/// A segment of a frame given directly rather than drawn by a turtle (the sway of a grown tree,
+/// cambium grow --sway): it starts at p0 and runs along its frame's H (frame e_x) for length,
+/// radii r0 to r1, colour rgba (taken from the first frame).
+typedef struct cbm_motion_part {
+    cbm_vec3 p0;
+    cbm_quat frame;
+    double length, r0, r1;
+    float rgba[4];
+} cbm_motion_part;
+
+/// Records one frame of `count` segments at time_s (increasing); the first frame fixes the parts,
+/// later ones must give as many (CBM_E_INVALID otherwise).
+CBM_API cbm_status cbm_turtle_motion_add_parts(cbm_turtle_motion *m, const cbm_motion_part *parts,
+                                               size_t count, double time_s, long step);
 CBM_API size_t cbm_turtle_motion_frame_count(const cbm_turtle_motion *m);
 /// Parts per frame (segments and spheres).
 CBM_API size_t cbm_turtle_motion_part_count(const cbm_turtle_motion *m);

@@ -201,6 +201,53 @@ cbm_status cbm_turtle_motion_add_frame(cbm_turtle_motion *m, const cbm_turtle *t
     return CBM_OK;
 }
 
+cbm_status cbm_turtle_motion_add_parts(cbm_turtle_motion *m, const cbm_motion_part *parts,
+                                       size_t count, double time_s, long step)
+{
+    if (!m || (count && !parts))
+        return CBM_E_INVALID;
+    cbm_context *ctx = m->ctx;
+    size_t nf = m->times.len;
+    if (!isfinite(time_s) || (nf && !(time_s > m->times.data[nf - 1])))
+        return cbm__fail(ctx, CBM_E_INVALID, "motion: frame %zu: time %g s does not increase", nf,
+                         time_s);
+    if ((nf && count != m->bodies.len) || (!nf && count == 0))
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "motion: frame %zu gives %zu parts where frame 0 gave %zu", nf, count,
+                         m->bodies.len);
+    CBM_TRY(CBM_ARRAY_RESERVE(ctx, m->pose, m->pose.len + POSE * count));
+    CBM_TRY(CBM_ARRAY_RESERVE(ctx, m->times, nf + 1));
+    CBM_TRY(CBM_ARRAY_RESERVE(ctx, m->steps, nf + 1));
+    if (!nf)
+        CBM_TRY(CBM_ARRAY_RESERVE(ctx, m->bodies, count));
+    size_t base = m->pose.len;
+    for (size_t k = 0; k < count; k++) {
+        const cbm_motion_part *p = &parts[k];
+        cbm_quat q = q_normalize(p->frame);
+        cbm_vec3 h = q_rotate(q, v3(1, 0, 0));
+        cbm_vec3 e = v3_madd(p->p0, h, p->length);
+        if (!nf) {
+            body b = {
+                false, p->length, p->r0, p->r1, {p->rgba[0], p->rgba[1], p->rgba[2], p->rgba[3]}};
+            m->bodies.data[m->bodies.len++] = b;
+        } else { /* the short way from the previous frame's rotation */
+            const double *o = m->pose.data + base + POSE * k - POSE * count + 6;
+            if (o[0] * q.w + o[1] * q.x + o[2] * q.y + o[3] * q.z < 0)
+                q = (cbm_quat){-q.w, -q.x, -q.y, -q.z};
+        }
+        const double v[POSE] = {p->p0.x, p->p0.y, p->p0.z, e.x, e.y, e.z, q.w, q.x, q.y, q.z};
+        for (int c = 0; c < POSE; c++)
+            if (!isfinite(v[c]))
+                return cbm__fail(ctx, CBM_E_NONFINITE, "motion: frame %zu: part %zu is not finite",
+                                 nf, k);
+        memcpy(m->pose.data + base + POSE * k, v, sizeof v);
+    }
+    m->pose.len += POSE * count;
+    m->times.data[m->times.len++] = time_s;
+    m->steps.data[m->steps.len++] = step;
+    return CBM_OK;
+}
+
 bool cbm_turtle_motion_part(const cbm_turtle_motion *m, size_t frame, size_t part, cbm_vec3 *p0,
                             cbm_vec3 *p1)
 {

@@ -63,6 +63,8 @@ static const cbm__builtin BUILTINS[] = {
     {"AgeWood", FN_AGEWOOD, 1, LC},
     {"Break", FN_BREAK, 0, LC},
     {"Stability", FN_STABILITY, 0, LC},
+    {"Frequency", FN_FREQUENCY, 1, LC},
+    {"Sway", FN_SWAY, 4, LC},
     {"Gravity", FN_GRAVITY, 3, LC},
     {"Ground", FN_GROUND, 3, LC},
     {"Contact", FN_CONTACT, 2, LC},

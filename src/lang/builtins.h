@@ -68,6 +68,8 @@ typedef enum cbm__fn {
     FN_AGEWOOD,
     FN_BREAK,
     FN_STABILITY,
+    FN_FREQUENCY,
+    FN_SWAY,
     FN_GRAVITY,
     FN_GROUND,
     FN_CONTACT,

@@ -761,7 +761,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 rt = T_VOID;
             else if (b->fn == FN_EQUILIBRIUM || b->fn == FN_ADDRINGS || b->fn == FN_BREAK)
                 rt = T_INT;
-            else if (b->fn == FN_STABILITY)
+            else if (b->fn == FN_STABILITY || b->fn == FN_FREQUENCY || b->fn == FN_SWAY)
                 rt = T_DOUBLE;
             else if (b->fn == FN_CURGROUP || b->fn == FN_RAND)
                 rt = T_INT;

@@ -391,10 +391,28 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                  "Start, StartEach, EndEach or End");
         return;
     }
+    if (n->fn == FN_FREQUENCY && !(a[0] >= 1 && a[0] <= 1000 && a[0] == floor(a[0]))) {
+        rt_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
+        out[0] = 0;
+        return;
+    }
+    if (n->fn == FN_SWAY) {
+        if (!(a[0] > 0 && a[1] > 0 && a[1] <= a[0] && a[0] / a[1] <= 1e7 && a[2] >= 0 &&
+              a[3] >= 0 && isfinite(a[0]) && isfinite(a[2]) && isfinite(a[3]))) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
+                     ">= 0, gust intensity >= 0)");
+            out[0] = 0;
+            return;
+        }
+        memcpy(m->dyn_args, a, 4 * sizeof(double));
+    }
     int op = n->fn == FN_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
              : n->fn == FN_ADDRINGS  ? CBM__ML_RINGS
              : n->fn == FN_AGEWOOD   ? CBM__ML_AGE
              : n->fn == FN_STABILITY ? CBM__ML_STABILITY
+             : n->fn == FN_FREQUENCY ? CBM__ML_FREQUENCY
+             : n->fn == FN_SWAY      ? CBM__ML_SWAY
                                      : CBM__ML_BREAK;
     double r = 0;
     cbm_status s =
@@ -406,6 +424,8 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                  : n->fn == FN_ADDRINGS  ? "AddRings"
                  : n->fn == FN_AGEWOOD   ? "AgeWood"
                  : n->fn == FN_STABILITY ? "Stability"
+                 : n->fn == FN_FREQUENCY ? "Frequency"
+                 : n->fn == FN_SWAY      ? "Sway"
                                          : "Break",
                  msg);
         rt_error(lp, s, full);

@@ -690,6 +690,13 @@ static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, do
         if (st == CBM_OK)
             st = collapse(pl, &v, err, errn);
         *result = (double)v.seg.len;
+    } else if (st == CBM_OK && (op == CBM__ML_FREQUENCY || op == CBM__ML_SWAY)) {
+        /* the dynamics about the stored state; the string is not changed */
+        st = cbm_plant_evaluate(pl, NULL);
+        if (st == CBM_OK && op == CBM__ML_FREQUENCY)
+            st = cbm__mechlang_frequency(ctx, pl, (size_t)arg, result);
+        else if (st == CBM_OK)
+            st = cbm__mechlang_sway(ctx, pl, m->dyn_args, result);
     } else if (st == CBM_OK && op == CBM__ML_STABILITY) {
         st = cbm_plant_stability_factor(pl, result, NULL);
         if (st != CBM_OK)

@@ -26,9 +26,25 @@ typedef struct cbm__mechlang {
      * settings it was built with are unchanged (mechlang.c); keep: whether to keep it. */
     struct cbm__mechkept *kept;
     bool keep;
+    double dyn_args[4]; /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY */
 } cbm__mechlang;
 
-enum { CBM__ML_EQUILIBRIUM, CBM__ML_RINGS, CBM__ML_AGE, CBM__ML_BREAK, CBM__ML_STABILITY };
+/* The plant's dynamics for the dialect (mechlang_dyn.c): the k-th lowest natural frequency (Hz)
+ * and the peak displacement (m) of any node over a sway in the wind of args (duration s, dt s,
+ * U_ref m/s at 10 m, gust intensity). The plant must be evaluated. */
+cbm_status cbm__mechlang_frequency(cbm_context *ctx, const cbm_plant *p, size_t k, double *hz);
+cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double *args,
+                              double *peak);
+
+enum {
+    CBM__ML_EQUILIBRIUM,
+    CBM__ML_RINGS,
+    CBM__ML_AGE,
+    CBM__ML_BREAK,
+    CBM__ML_STABILITY,
+    CBM__ML_FREQUENCY, /* arg: k; the k-th lowest natural frequency, Hz */
+    CBM__ML_SWAY       /* dyn_args: duration, dt, wind, gust; the peak displacement, m */
+};
 
 /* Defaults: no segment module, gravity (0, -9.81, 0), no ground, no tropism, growth and solve
  * defaults. */

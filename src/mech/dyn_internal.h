@@ -20,6 +20,8 @@ typedef struct cbm__dyn {
     double *kel;   /* 9 per joint: elastic stiffness R diag(C / d) R^T, N m / rad */
     double *geo;   /* 9 per joint: G_k of the dead loads carried, N m / rad (tree.c) */
     double *body;  /* 36 per segment: spatial inertia about the base (segment + point mass) */
+    double *width; /* a + b of the outer section, m (the wind's drag, drag.c) */
+    double *pmass; /* point mass at the distal node, kg */
     cbm_vec3 base; /* the plant's base position, m (world = base + relative) */
     /* factorisation of sK K + sM M (tree.c) */
     double fk, fm; /* its sK and sM */
@@ -47,5 +49,54 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *x);
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f);
 /// Displacement of the distal node of seg for the rotations q.
 cbm_vec3 cbm__dyn_node_disp(const cbm__dyn *d, const double *q, size_t seg);
+
+/// The twists z (6 per segment: rotation, velocity of the origin) of the joint rates v: a point p
+/// of segment s moves at z[3..6) + z[0..3) x p (relative to the base).
+void cbm__dyn_twists(const cbm__dyn *d, const double *v, double *z);
+/// f += the generalised forces of per-segment wrenches w (6 per segment: moment about the
+/// origin, force), each acting on its segment; w is overwritten (summed over the subtrees).
+void cbm__dyn_wrench_force(const cbm__dyn *d, double *w, double *f);
+
+/// Checks a wind definition (wind.c): CBM_E_INVALID with the reason.
+cbm_status cbm__wind_check(cbm_context *ctx, const cbm_wind_def *d);
+
+/* Gust series (gust.c): u'(t) = sum_k amp_k cos(omega_k t + phase_k). */
+typedef struct cbm__gust {
+    int32_t n;
+    double *amp, *omega, *phase;
+} cbm__gust;
+/// Synthesises the series for reference speed u_ref (no harmonics when the intensity or u_ref is
+/// 0).
+cbm_status cbm__gust_build(cbm_context *ctx, const cbm_gust_def *g, const cbm_wind_def *w,
+                           double u_ref, cbm__gust *out);
+double cbm__gust_at(const cbm__gust *g, double t);
+void cbm__gust_free(cbm_context *ctx, cbm__gust *g);
+/// The one-sided spectrum (m^2/s^2/Hz) of the gusts at frequency f (Hz), and the length scale.
+double cbm__gust_spectrum(const cbm_gust_def *g, double sigma, double length, double u_ref,
+                          double f);
+double cbm__gust_length(const cbm_gust_def *g, const cbm_wind_def *w);
+
+/* Drag of the wind on the moving plant (drag.c): per segment, the drag point (the segment's
+ * midpoint) and axis, the drag constants, and the mean speed factors of the profile there. */
+typedef struct cbm__drag {
+    size_t n;
+    cbm_vec3 dir; /* unit, where the wind blows to */
+    double u_ref; /* m/s */
+    cbm_vec3 *c;  /* midpoint, relative to the base */
+    cbm_vec3 *h;  /* axis */
+    double *kw;   /* 1/2 rho C_d (a + b) l, kg/m */
+    double *ko;   /* 1/2 rho C_d,organ A, kg/m (0: none) */
+    double *uc;   /* U(z)/U_ref at the midpoint */
+    double *ue;   /* U(z)/U_ref at the distal node */
+    cbm__gust gust;
+    double *z, *w; /* work: 6 per segment each */
+} cbm__drag;
+/// Reads the wind's data off the dynamics' geometry (d) and the plant's sections.
+cbm_status cbm__drag_build(const cbm__dyn *d, const cbm_wind_def *wind, double u_ref,
+                           const cbm_gust_def *gust, cbm__drag *out);
+void cbm__drag_free(cbm_context *ctx, cbm__drag *g);
+/// f = the generalised drag forces at time t for joint rates v and base velocity vb.
+void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v, cbm_vec3 vb,
+                     double *f);
 
 #endif

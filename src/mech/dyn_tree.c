@@ -106,6 +106,8 @@ void cbm__dyn_free(cbm__dyn *d)
     cbm__free(d->ctx, d->z, 6 * n * sizeof(double));
     cbm__free(d->ctx, d->acc, 6 * n * sizeof(double));
     cbm__free(d->ctx, d->u, 3 * n * sizeof(double));
+    cbm__free(d->ctx, d->width, n * sizeof(double));
+    cbm__free(d->ctx, d->pmass, n * sizeof(double));
     memset(d, 0, sizeof *d);
 }
 
@@ -151,8 +153,10 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->z = cbm__alloc(d->ctx, 6 * n * sizeof(double));
     d->acc = cbm__alloc(d->ctx, 6 * n * sizeof(double));
     d->u = cbm__alloc(d->ctx, 3 * n * sizeof(double));
-    if (!d->parent || !d->x || !d->e || !d->kel || !d->geo || !d->body || !d->dinv || !d->lmat ||
-        !d->pi || !d->z || !d->acc || !d->u) {
+    d->width = cbm__alloc(d->ctx, n * sizeof(double));
+    d->pmass = cbm__alloc(d->ctx, n * sizeof(double));
+    if (!d->width || !d->pmass || !d->parent || !d->x || !d->e || !d->kel || !d->geo || !d->body ||
+        !d->dinv || !d->lmat || !d->pi || !d->z || !d->acc || !d->u) {
         cbm__dyn_free(d);
         return CBM_E_NOMEM;
     }
@@ -175,6 +179,8 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
         joint_rigidity(p, i, &cj, &dl);
         rdrt(r, v3(cj.x / dl, cj.y / dl, cj.z / dl), d->kel + 9 * i);
         double m = p->mpl[i] * l, a = p->outer[i].a, b = p->outer[i].b;
+        d->width[i] = a + b;
+        d->pmass[i] = p->pmass[i];
         double jc[9];
         double lc = chain ? 0.0 : l * l / 12.0;
         rdrt(r, v3(m * (a * a + b * b) / 4.0, m * (lc + a * a / 4.0), m * (lc + b * b / 4.0)), jc);
@@ -434,4 +440,32 @@ cbm_vec3 cbm__dyn_node_disp(const cbm__dyn *d, const double *q, size_t seg)
         u = v3_add(u, v3_cross(qk, v3_sub(e, d->x[k])));
     }
     return u;
+}
+
+void cbm__dyn_twists(const cbm__dyn *d, const double *v, double *z)
+{
+    for (size_t k = 0; k < d->n; k++) {
+        int64_t pa = d->parent[k];
+        double *zk = z + 6 * k;
+        if (pa >= 0)
+            memcpy(zk, z + 6 * pa, 6 * sizeof(double));
+        else
+            memset(zk, 0, 6 * sizeof(double));
+        s_q(d->x[k], v + 3 * k, zk);
+    }
+}
+
+void cbm__dyn_wrench_force(const cbm__dyn *d, double *w, double *f)
+{
+    for (size_t k = d->n; k-- > 0;) {
+        double *wk = w + 6 * k, sw[3];
+        st_w(d->x[k], wk, sw);
+        f[3 * k] += sw[0];
+        f[3 * k + 1] += sw[1];
+        f[3 * k + 2] += sw[2];
+        int64_t pa = d->parent[k];
+        if (pa >= 0)
+            for (int i = 0; i < 6; i++)
+                w[6 * pa + i] += wk[i];
+    }
 }

@@ -48,7 +48,7 @@ double cbm_wind_speed(const cbm_wind_def *def, double u_ref, double z)
     }
 }
 
-static cbm_status check_def(cbm_context *ctx, const cbm_wind_def *d)
+cbm_status cbm__wind_check(cbm_context *ctx, const cbm_wind_def *d)
 {
     cbm_vec3 dir = d->direction;
     if (!v3_isfinite(dir) || !(v3_norm(dir) > 0.0))
@@ -76,7 +76,7 @@ cbm_status cbm_plant_critical_wind(const cbm_plant *p, const cbm_wind_def *def,
     if (!p || !count || (max > 0 && !out))
         return CBM_E_INVALID;
     cbm_wind_def wd = def ? *def : cbm_wind_def_default();
-    CBM_TRY(check_def(p->ctx, &wd));
+    CBM_TRY(cbm__wind_check(p->ctx, &wd));
     size_t n = p->n;
     *count = 0;
     if (n == 0)

@@ -5,6 +5,7 @@
  * per seed and writes the distribution of the year-by-year figures over the seeds (.json). */
 #include "cli_output.h"
 #include "commands.h"
+#include "grow_sway.h"
 
 #include "cambium/dynamics.h"
 
@@ -48,7 +49,7 @@ static void help(const cli_opts *t)
 {
     printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
            "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--modes N]\n"
+           "                    [--modes N] [--sway SECONDS [--wind M_S] [--gust I]]\n"
            "                    [--params] [--report] [--seeds A-B] [limits]\n"
            "                    [output options]\n\n"
            "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
@@ -57,7 +58,9 @@ static void help(const cli_opts *t)
            "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
            "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
            "summary). FORMAT:PATH names a scene format explicitly. -o wind:FILE.csv writes the\n"
-           "critical wind speed of the stem and of each first-order branch.\n\n");
+           "critical wind speed of the stem and of each first-order branch. With --sway, .glb\n"
+           "outputs are the grown tree swaying in a gusty wind (an animation) and .csv (or\n"
+           "motion:FILE.csv) the displacements of the stem's and first-order branches' tips.\n\n");
     cli_options_rows(stdout, t);
     printf("\nbuilt-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
@@ -87,6 +90,31 @@ static bool parse_seed(const char *v, void *target, char *why, size_t n)
         return false;
     *(const char **)target = v;
     return true;
+}
+
+/* a non-negative number (--wind, --gust) or a positive one (--sway, --sway-dt) */
+static bool parse_nonneg(const char *v, void *target, char *why, size_t n)
+{
+    double x;
+    if (!cli_parse_double(v, &x))
+        snprintf(why, n, "{opt}: '{value}' is not a number");
+    else if (!(x >= 0.0))
+        snprintf(why, n, "{opt} must be >= 0 (got {value})");
+    else
+        *(double *)target = x;
+    return !*why;
+}
+
+static bool parse_pos(const char *v, void *target, char *why, size_t n)
+{
+    double x;
+    if (!cli_parse_double(v, &x))
+        snprintf(why, n, "{opt}: '{value}' is not a number");
+    else if (!(x > 0.0) || x > 1e6)
+        snprintf(why, n, "{opt} must be in (0, 1e6] (got {value})");
+    else
+        *(double *)target = x;
+    return !*why;
 }
 
 /* --seeds A-B */
@@ -396,6 +424,7 @@ int cmd_grow(int argc, char **argv)
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false, report = false;
     long modes = 0;
+    cli_sway sway = cli_sway_default();
     cbm_write_options o = cbm_write_options_default();
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
@@ -447,6 +476,31 @@ int cmd_grow(int argc, char **argv)
          .bad = "--modes must be 1..10000",
          .arg = "N",
          .help = "print the N lowest natural frequencies (Hz) of the grown tree"},
+        {.name = "--sway",
+         .kind = CLI_CUSTOM,
+         .target = &sway.seconds,
+         .parse = parse_pos,
+         .arg = "SECONDS",
+         .help = "simulate the grown tree swaying in a gusty wind for SECONDS:\n"
+                 ".glb outputs become the animation, .csv the tips' displacements"},
+        {.name = "--wind",
+         .kind = CLI_CUSTOM,
+         .target = &sway.wind,
+         .parse = parse_nonneg,
+         .arg = "M_S",
+         .help = "mean wind speed at 10 m for --sway (log profile; default 10)"},
+        {.name = "--gust",
+         .kind = CLI_CUSTOM,
+         .target = &sway.gust,
+         .parse = parse_nonneg,
+         .arg = "I",
+         .help = "turbulence intensity of the gusts for --sway (default 0.2; 0 steady)"},
+        {.name = "--sway-dt",
+         .kind = CLI_CUSTOM,
+         .target = &sway.dt,
+         .parse = parse_pos,
+         .arg = "S",
+         .help = "time step of --sway (default 0.002 s)"},
         {.name = "--quiet",
          .kind = CLI_SET,
          .target = &quiet,
@@ -494,9 +548,27 @@ int cmd_grow(int argc, char **argv)
                                    "--seeds does not go with --summer, --every, --params, --seed");
         if (modes > 0)
             return cli_usage_error("grow", "--seeds does not go with --modes");
+        if (sway.seconds > 0)
+            return cli_usage_error("grow", "--seeds does not go with --sway");
+    }
+    bool swaying = sway.seconds > 0;
+    {
+        /* the options of --sway without it: say so rather than ignore them */
+        const char *only[] = {"--wind", "--gust", "--sway-dt"};
+        for (int k = 0; k < 3 && !swaying; k++)
+            for (cli_opt *r = rows; r->name; r++)
+                if (!strcmp(r->name, only[k]) && r->seen)
+                    return cli_usage_error("grow", "%s needs --sway SECONDS", only[k]);
+        if (swaying && every > 0)
+            return cli_usage_error("grow", "--sway does not go with --every");
+        if (swaying && sway.dt > sway.seconds)
+            return cli_usage_error("grow", "--sway-dt must not exceed --sway");
     }
     cli_output_target targets[MAX_OUTPUTS];
-    int kind[MAX_OUTPUTS]; /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv */
+    /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv, 5 sway .glb, 6 sway table .csv */
+    int kind[MAX_OUTPUTS];
+    const char *sway_glb[MAX_OUTPUTS], *sway_csv[MAX_OUTPUTS];
+    int nsway_glb = 0, nsway_csv = 0;
     for (int k = 0; k < nout; k++) {
         const char *ext = cli_extension(outs[k]);
         kind[k] = !strcmp(ext, "csv") ? 1 : !strcmp(ext, "mtg") ? 2 : !strcmp(ext, "json") ? 3 : 0;
@@ -504,6 +576,22 @@ int cmd_grow(int argc, char **argv)
             if (strcmp(ext, "csv"))
                 return cli_usage_error("grow", "%s: the wind table is .csv", outs[k]);
             kind[k] = 4;
+        }
+        bool mprefix = !strncmp(outs[k], "motion:", 7);
+        if (mprefix && !swaying)
+            return cli_usage_error("grow", "%s: motion outputs need --sway SECONDS", outs[k]);
+        if (swaying && (mprefix || (kind[k] == 1 && strncmp(outs[k], "wind:", 5)) ||
+                        (kind[k] == 0 && !strcmp(ext, "glb") && !strchr(outs[k], ':')))) {
+            const char *path = mprefix ? outs[k] + 7 : outs[k];
+            if (!strcmp(ext, "glb")) {
+                kind[k] = 5;
+                sway_glb[nsway_glb++] = path;
+            } else if (!strcmp(ext, "csv")) {
+                kind[k] = 6;
+                sway_csv[nsway_csv++] = path;
+            } else
+                return cli_usage_error("grow", "%s: a motion output is .glb or .csv", outs[k]);
+            continue;
         }
         if (kind[k] == 0 && !cli_output_target_parse(outs[k], &targets[k]))
             return cli_usage_error("grow",
@@ -514,7 +602,10 @@ int cmd_grow(int argc, char **argv)
     {
         const char *paths[MAX_OUTPUTS];
         for (int k = 0; k < nout; k++)
-            paths[k] = kind[k] == 0 ? targets[k].path : kind[k] == 4 ? outs[k] + 5 : outs[k];
+            paths[k] = kind[k] == 0                                      ? targets[k].path
+                       : kind[k] == 4                                    ? outs[k] + 5
+                       : kind[k] >= 5 && !strncmp(outs[k], "motion:", 7) ? outs[k] + 7
+                                                                         : outs[k];
         if (cli_check_outputs(paths, nout) != CLI_OK)
             return CLI_FAIL;
     }
@@ -583,6 +674,10 @@ int cmd_grow(int argc, char **argv)
     }
     if (seed_first >= 0) {
         rc = grow_seeds(ctx, &d, model, seed_first, seed_last, outs, nout, quiet);
+        goto done;
+    }
+    if (swaying && nsway_glb + nsway_csv == 0) {
+        rc = cli_usage_error("grow", "--sway writes .glb or .csv outputs: give -o FILE");
         goto done;
     }
     if (nout == 0 && quiet && !report && modes == 0) {
@@ -665,6 +760,8 @@ int cmd_grow(int argc, char **argv)
             st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
         else if (kind[k] == 4)
             st = write_wind(ctx, cbm_tree_plant(t), outs[k] + 5);
+        else if (kind[k] >= 5)
+            continue; /* the sway's, below */
         else if (anim[k])
             st = cbm_animation_write(anim[k], targets[k].path);
         else {
@@ -687,6 +784,12 @@ int cmd_grow(int argc, char **argv)
     }
     if (timing && rc == CLI_OK)
         print_timing(ctx, t, summer, derive, t_interpret, t_write, cli_seconds() - t0);
+    if (swaying && rc == CLI_OK) {
+        st = cli_grow_sway(ctx, cbm_tree_plant(t), &sway, sway_glb, nsway_glb, sway_csv, nsway_csv,
+                           timing);
+        if (st != CBM_OK)
+            rc = cli_fail(ctx, st, "sway");
+    }
     if (modes > 0 && rc == CLI_OK) {
         /* natural frequencies about the final equilibrium (docs/dynamics.md) */
         double *f = malloc((size_t)modes * sizeof *f);

@@ -1,0 +1,92 @@
+/* The dialect's dynamics of its mechanical plant (docs/language.md, "Mechanics"): Frequency(k)
+ * and Sway(duration, dt, wind, gust), over the library's cbm_plant_modes and cbm_motion
+ * (docs/dynamics.md), about the plant's stored state. */
+#include "lsys/mechlang.h"
+
+#include "cambium/dynamics.h"
+#include "core/core.h"
+#include "core/vecmath.h"
+
+#include <math.h>
+#include <string.h>
+
+cbm_status cbm__mechlang_frequency(cbm_context *ctx, const cbm_plant *p, size_t k, double *hz)
+{
+    *hz = 0;
+    double *f = cbm__alloc(ctx, k * sizeof *f);
+    if (!f)
+        return CBM_E_NOMEM;
+    cbm_status st = cbm_plant_modes(p, k, f, NULL);
+    if (st == CBM_OK)
+        *hz = isfinite(f[k - 1]) ? f[k - 1] : 0.0;
+    cbm__free(ctx, f, k * sizeof *f);
+    return st;
+}
+
+/* The largest displacement of any distal node: one sweep from the base (a node rides on its
+ * parent's rigid motion: d_e(s) = d_e(parent) + Theta_parent x (x_s - e_parent) + Theta_s x
+ * (e_s - x_s), Theta the summed joint rotations). */
+static double peak_disp(size_t n, const int64_t *par, const cbm_vec3 *x, const cbm_vec3 *e,
+                        const double *q, cbm_vec3 *th, cbm_vec3 *de)
+{
+    double mx = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        cbm_vec3 qi = v3(q[3 * i], q[3 * i + 1], q[3 * i + 2]), dx = v3(0, 0, 0);
+        if (par[i] >= 0) {
+            size_t pa = (size_t)par[i];
+            th[i] = v3_add(th[pa], qi);
+            dx = v3_add(de[pa], v3_cross(th[pa], v3_sub(x[i], e[pa])));
+        } else
+            th[i] = qi;
+        de[i] = v3_add(dx, v3_cross(th[i], v3_sub(e[i], x[i])));
+        double d = v3_norm(de[i]);
+        mx = d > mx ? d : mx;
+    }
+    return mx;
+}
+
+cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double *args,
+                              double *peak)
+{
+    *peak = 0;
+    size_t n = cbm_plant_segment_count(p);
+    const int64_t *par = cbm_plant_parents(p);
+    const cbm_vec3 *pos = cbm_plant_positions(p);
+    const cbm_quat *ori = cbm_plant_orientations(p);
+    cbm_vec3 *buf = cbm__alloc(ctx, 3 * n * sizeof *buf);
+    if (!buf)
+        return CBM_E_NOMEM;
+    cbm_vec3 *e = buf, *th = buf + n, *de = buf + 2 * n;
+    for (size_t i = 0; i < n; i++) {
+        cbm_segment_state s;
+        cbm_plant_segment(p, i, &s);
+        e[i] = v3_madd(pos[i], q_rotate(ori[i], v3(1, 0, 0)), s.length);
+    }
+    cbm_motion_def md = cbm_motion_def_default();
+    md.dt = args[1];
+    md.damping_ratio = 0.03;
+    cbm_motion *m = NULL;
+    cbm_status st = cbm_motion_create(p, &md, &m);
+    cbm_wind_def wd = cbm_wind_def_default();
+    cbm_gust_def gd = cbm_gust_def_default();
+    gd.intensity = args[3];
+    if (st == CBM_OK)
+        st = cbm_motion_set_wind(m, &wd, args[2], &gd);
+    if (st == CBM_OK)
+        st = cbm_motion_start_wind_static(m);
+    long steps = (long)ceil(args[0] / args[1] - 1e-9);
+    double mx = 0.0;
+    if (st == CBM_OK)
+        mx = peak_disp(n, par, pos, e, cbm_motion_rotations(m), th, de);
+    for (long k = 0; k < steps && st == CBM_OK; k++) {
+        st = cbm_motion_step(m);
+        if (st == CBM_OK) {
+            double d = peak_disp(n, par, pos, e, cbm_motion_rotations(m), th, de);
+            mx = d > mx ? d : mx;
+        }
+    }
+    cbm_motion_destroy(m);
+    cbm__free(ctx, buf, 3 * n * sizeof *buf);
+    *peak = mx;
+    return st;
+}

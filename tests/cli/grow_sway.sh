@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# cambium grow --sway: the animated glTF (node translation and rotation channels), the tips'
+# displacement table (header, one row per frame and tracked tip, the stem's tip blown downwind,
+# nothing moves without wind, the same run twice the same table) and the usage errors.
+set -euo pipefail
+bin=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+"$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 -o "$tmp/sway.glb" -o "$tmp/motion.csv"
+head -c 4 "$tmp/sway.glb" | grep -q glTF
+grep -aq '"animations"' "$tmp/sway.glb"
+grep -aq '"path":"rotation"' "$tmp/sway.glb"
+grep -aq '"path":"translation"' "$tmp/sway.glb"
+test "$(head -1 "$tmp/motion.csv")" = "t_s,wind_m_s,axis,order,segment,dx_m,dy_m,dz_m"
+# 26 frames (0, 0.04, ..., 1 s) of every tracked tip; one stem tip (order 0)
+awk -F, 'NR > 1 { n[$1]++; if ($4 == 0) s++ } END {
+    f = 0; for (t in n) f++
+    if (f != 26) { print "frames", f; exit 1 }
+    if (s != 26) { print "stem rows", s; exit 1 } }' "$tmp/motion.csv"
+# the stem's tip leans downwind (+x) on average, more than it moves across
+awk -F, 'NR > 1 && $4 == 0 { x += $6; z += ($8 < 0 ? -$8 : $8) } END {
+    if (!(x > 0 && x > z)) { print "downwind", x, "across", z; exit 1 } }' "$tmp/motion.csv"
+# the same run, the same table; motion:FILE.csv names it explicitly
+"$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 -o "motion:$tmp/again.csv"
+cmp "$tmp/motion.csv" "$tmp/again.csv"
+# no wind: nothing moves
+"$bin" grow fruit-tree -y 2 --quiet --sway 0.2 --wind 0 -o "$tmp/still.csv"
+awk -F, 'NR > 1 && ($6 != 0 || $7 != 0 || $8 != 0) { print; exit 1 }' "$tmp/still.csv"
+# usage errors (exit 2) and no output written
+expect2() {
+    set +e
+    "$bin" grow fruit-tree -y 1 --quiet "$@" 2>"$tmp/err"
+    rc=$?
+    set -e
+    test $rc -eq 2 || { echo "exit $rc for $*"; cat "$tmp/err"; exit 1; }
+}
+expect2 --wind 5 -o "$tmp/x.csv"
+expect2 -o "motion:$tmp/x.csv"
+expect2 --sway 0 -o "$tmp/x.glb"
+expect2 --sway -1 -o "$tmp/x.glb"
+expect2 --sway 1
+expect2 --sway 1 --wind abc -o "$tmp/x.glb"
+expect2 --sway 0.01 --sway-dt 0.1 -o "$tmp/x.glb"
+expect2 --sway 1 -o "motion:$tmp/x.png"
+test ! -e "$tmp/x.csv" && test ! -e "$tmp/x.glb"
