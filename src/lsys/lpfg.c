@@ -778,7 +778,9 @@ static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p,
     s->sym[s->n++] = (uint8_t)(code | (np ? LSYS_PARAM_BIT : 0));
     if (np) {
         s->pc[s->npm++] = (uint8_t)np;
-        memcpy((double *)s->par + s->npar, p, (size_t)np * sizeof(double));
+        double *d = (double *)s->par + s->npar;
+        for (int q = 0; q < np; q++) /* a parameter or two: a loop, not a library call */
+            d[q] = p[q];
         s->npar += (size_t)np;
     }
     return CBM_OK;
@@ -1485,8 +1487,10 @@ static cbm_status generate_pass(cbm_lsys *ls)
                 c--; /* the closing EB is copied by the next iteration */
             continue;
         }
+        /* going Forward the successor is produced in place at the end of the new string (a
+         * body that does not produce truncates it back); Backward it is reversed into it */
         succ->n = succ->npm = succ->npar = 0;
-        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, succ);
+        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, back ? succ : nxt);
         if (lp->err != CBM_OK)
             return lp->err;
         for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
@@ -1501,10 +1505,10 @@ static cbm_status generate_pass(cbm_lsys *ls)
             }
             c++;
         }
-        if (done)
-            CBM_TRY(append_str(ls->ctx, nxt, succ, back));
-        else
+        if (!done)
             CBM_TRY(copy_at(ls->ctx, src, i, j, k, nxt));
+        else if (back)
+            CBM_TRY(append_str(ls->ctx, nxt, succ, true));
         CBM_TRY(check_size(ls, nxt));
         if (!back && (src->sym[i] & LSYS_PARAM_BIT))
             k += src->pc[j++];
@@ -1642,25 +1646,12 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
 }
 
 /* ---------------------------------------------------------------- output */
-/* Writes an integer in decimal, as "%lld" does. */
-static void write_integer(FILE *f, long long x)
-{
-    char buf[24], *p = buf + sizeof buf;
-    unsigned long long u = x < 0 ? 0 - (unsigned long long)x : (unsigned long long)x;
-    *--p = '\0';
-    do {
-        *--p = (char)('0' + u % 10);
-        u /= 10;
-    } while (u);
-    if (x < 0)
-        *--p = '-';
-    fputs(p, f);
-}
-
-static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v)
+/* Through the buffered writer of write.c (cbm__strw): a line per module, as the cpfg dialect's
+ * writer, so that a string of 10^7 modules is not a locked stdio call per character. */
+static const double *write_value(cbm__strw *w, const lpfg *lp, int t, const double *v)
 {
     if (t == T_INT || t == T_BOOL) {
-        write_integer(f, cbm__to_ll(v[0]));
+        cbm__strw_lld(w, cbm__to_ll(v[0]));
         return v + 1;
     }
     if (lc_is_scalar(t)) {
@@ -1668,19 +1659,19 @@ static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v
          * it, its digits; -0 keeps its sign through printf */
         if (v[0] == (double)(long long)(v[0] < 1e9 && v[0] > -1e9 ? v[0] : 0.5) &&
             !(v[0] == 0 && signbit(v[0])))
-            write_integer(f, (long long)v[0]);
+            cbm__strw_lld(w, (long long)v[0]);
         else
-            fprintf(f, "%.9g", v[0]);
+            cbm__strw_g9(w, v[0]);
         return v + 1;
     }
-    putc('{', f);
+    cbm__strw_char(w, '{');
     int nf = lc_is_vec(t) ? 3 : lp->m.types.data[t].nf;
     for (int i = 0; i < nf; i++) {
         if (i)
-            putc(',', f);
-        v = write_value(f, lp, lc_is_vec(t) ? T_DOUBLE : lp->m.types.data[t].ftype[i], v);
+            cbm__strw_char(w, ',');
+        v = write_value(w, lp, lc_is_vec(t) ? T_DOUBLE : lp->m.types.data[t].ftype[i], v);
     }
-    putc('}', f);
+    cbm__strw_char(w, '}');
     return v;
 }
 
@@ -1689,21 +1680,27 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
     const lpfg *lp = ls->lp;
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
-    FILE *f = cbm_out_stream(o);
+    cbm__strw *w = cbm__strw_open(ls->ctx, cbm_out_stream(o));
+    if (!w)
+        return CBM_E_NOMEM;
+    size_t namelen[128] = {0};
+    for (int code = 0; code < 128; code++)
+        if (lp->m.bycode[code] >= 0)
+            namelen[code] = strlen(lp->m.mods.data[lp->m.bycode[code]].name);
     while (cbm_lsys_cursor_next(ls, homomorphism, &c)) {
         const lc_module *m = &lp->m.mods.data[lp->m.bycode[c.symbol & 0x7f]];
-        fputs(m->name, f);
+        cbm__strw_bytes(w, m->name, namelen[c.symbol & 0x7f]);
         if (m->np) {
             const double *v = c.params;
             for (int i = 0; i < m->np; i++) {
-                putc(i ? ',' : '(', f);
-                v = write_value(f, lp, m->ptype[i], v);
+                cbm__strw_char(w, i ? ',' : '(');
+                v = write_value(w, lp, m->ptype[i], v);
             }
-            putc(')', f);
+            cbm__strw_char(w, ')');
         }
-        putc('\n', f);
+        cbm__strw_char(w, '\n');
     }
-    return ferror(f) ? CBM_E_IO : CBM_OK;
+    return cbm__strw_close(w);
 }
 
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol)
