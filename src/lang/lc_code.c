@@ -963,7 +963,7 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
             return false;
     /* twice: the first pass finds the constants, the second loads them on entry */
     cg g;
-    double konst[64];
+    double konst[64] = {0};
     int nkonst = 0;
     for (int pass = 0; pass < 2; pass++) {
         fc->ins.len = 0;
