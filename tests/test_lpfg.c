@@ -345,6 +345,88 @@ TEST(lpfg_errors_with_locations)
     cbm_context_destroy(ctx);
 }
 
+/* Functions compiled to register code against the same statements in a production body (the
+ * tree walker): every B module of tests/lpfg/compiled-functions.l equals the C module after
+ * it, bit for bit as written; fib by recursion gives the Fibonacci numbers. */
+TEST(lpfg_compiled_functions_match_tree_walker)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/tests/lpfg/compiled-functions.l", test_source_dir());
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s", cbm_context_last_error(ctx));
+    if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        for (int i = 0; i < 6; i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        char *got = lpfg_string(ctx, ls, false, '\n');
+        CHECK(got != NULL);
+        int pairs = 0, fibs = 0;
+        const int fib[] = {0, 1, 1, 2, 3, 5, 8, 13, 21};
+        char *prev = NULL;
+        for (char *l = got ? strtok(got, "\n") : NULL; l; l = strtok(NULL, "\n")) {
+            if (l[0] == 'C') {
+                CHECK_MSG(prev && prev[0] == 'B' && !strcmp(prev + 1, l + 1),
+                          "function gave %s, production body %s", prev ? prev : "-", l);
+                pairs++;
+            } else if (l[0] == 'B' && prev && prev[0] == 'C') {
+                int a = -1, b = -1;
+                CHECK(sscanf(l, "B(%d,%d,", &a, &b) == 2);
+                int k = 5 - fibs; /* the newest modules come first */
+                CHECK_MSG(k >= 0 && a == fib[k + 3] && b == fib[k], "fib: %s", l);
+                fibs++;
+            }
+            prev = l;
+        }
+        CHECK_MSG(pairs == 6 && fibs == 6, "%d pairs, %d fib modules", pairs, fibs);
+        free(got);
+        cbm_lsys_destroy(ls);
+    }
+    test_ctx_end(ctx);
+}
+
+/* A runtime error inside a compiled function names the statement where it happened, as the
+ * tree walker does; a loop there spends the step's budget. */
+TEST(lpfg_compiled_function_errors)
+{
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
+    CHECK(ctx != NULL);
+    if (!ctx)
+        return;
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = "#include <lpfgall.h>\nmodule A(int);\n" /* 1, 2 */
+               "int f(int n) {\n"                       /* 3 */
+               "    int d = n - 1;\n"                   /* 4 */
+               "    return 10 / d; }\n"                 /* 5: 10 / 0 */
+               "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_STATUS(cbm_lsys_step(ls), CBM_E_RUNTIME);
+        CHECK_MSG(strstr(g.text, "m.l:5:5: ") && strstr(g.text, "integer division by zero"), "%s",
+                  g.text);
+        cbm_lsys_destroy(ls);
+    }
+    def.text = "#include <lpfgall.h>\nmodule A(int);\n"
+               "int f(int n) { while (n > 0) n = n + 1; return n; }\n"
+               "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
+    def.max_loop_iterations = 1000;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_STATUS(cbm_lsys_step(ls), CBM_E_LIMIT);
+        CHECK_MSG(strstr(g.text, "more loop iterations in one step than the limit"), "%s", g.text);
+        cbm_lsys_destroy(ls);
+    }
+    cbm_context_destroy(ctx);
+}
+
 TEST(lpfg_runtime_limits)
 {
     cbm_context *ctx = test_ctx();

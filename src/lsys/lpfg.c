@@ -16,6 +16,7 @@
  * `ignore:`/`consider:` modules are passed over.
  */
 #include "lang/lc.h"
+#include "lang/lc_code.h"
 #include "lsys/lsys_internal.h"
 #include "lsys/mechlang.h"
 
@@ -47,11 +48,9 @@ typedef struct brtab {
 
 typedef struct lpfg lpfg;
 struct lpfg {
-    lc_model m; /* the compiled model (lang/lc.h) */
-    double *glob;
-    double *stack;
-    size_t stack_cap, sp;
-    int call_depth;
+    lc_model m;       /* the compiled model (lang/lc.h) */
+    lc_vm vm;         /* globals, frames, budgets, the first runtime error (lang/lc_code.h) */
+    lc_program prog;  /* the functions compiled to register code */
     double *ret;      /* where `return v;` writes v (in a function) */
     cbm__crand crand; /* rand(): the C library's random() */
     bool backward;
@@ -63,12 +62,6 @@ struct lpfg {
     brtab brk[2]; /* during generate: [0] the current string, [1] the new one going Backward */
     lstr succ;
     CBM_ARRAY(lstr) scratch;
-    cbm_status err;
-    char errmsg[160];
-    int32_t at;      /* text offset of the statement being executed (runtime messages) */
-    int32_t err_pos; /* where the first runtime error happened, -1: unknown */
-    long budget;     /* loop iterations left in this step (limits.max_loop_iterations) */
-    long ops;        /* calls and loop iterations left in this step (limits.max_operations) */
     bool nonfinite_warned;
     cbm__mechlang mech; /* mechanics: declarations and settings */
     /* models with mechanics: the module of the string each module of the interpretation came
@@ -80,41 +73,22 @@ struct lpfg {
 /* ---------------------------------------------------------------- evaluation */
 static void rt_error(lpfg *lp, cbm_status s, const char *msg)
 {
-    if (lp->err == CBM_OK) {
-        lp->err = s;
-        lp->err_pos = lp->at;
-        snprintf(lp->errmsg, sizeof lp->errmsg, "%s", msg);
-    }
+    cbm__lc_error(&lp->vm, s, msg);
 }
 
-/* Takes one operation (a call or a loop iteration) from the step's budgets; false after
- * reporting the limit. */
 static bool spend(lpfg *lp, bool loop)
 {
-    if (--lp->ops < 0) {
-        rt_error(lp, CBM_E_LIMIT,
-                 "more productions applied, function calls and loop iterations in one step "
-                 "than the limit (--max-operations)");
-        return false;
-    }
-    if (loop && --lp->budget < 0) {
-        rt_error(lp, CBM_E_LIMIT,
-                 "more loop iterations in one step than the limit (--max-loop-iterations)");
-        return false;
-    }
-    return true;
+    return cbm__lc_spend(&lp->vm, loop);
 }
 
 static double *lv_ptr(lpfg *lp, const lc_node *n, double *fr)
 {
-    return n->op == N_LOCAL ? fr + n->slot : lp->glob + n->slot;
+    return n->op == N_LOCAL ? fr + n->slot : lp->vm.glob + n->slot;
 }
 
 static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out);
 static int exec(cbm_lsys *ls, int32_t ni, double *fr);
 static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
-
-static double bin_scalar(int op, int t, double a, double b, lpfg *lp);
 
 /* The value of an expression's first double: the scalar nodes (and fields of variables) read
  * directly, as ev would give them, without ev's buffer; the rest through ev into a buffer large
@@ -129,7 +103,7 @@ static double evs(cbm_lsys *ls, int32_t ni, double *fr)
     case N_LOCAL:
         return fr[n->slot];
     case N_GLOBAL:
-        return lp->glob[n->slot];
+        return lp->vm.glob[n->slot];
     case N_FIELD: {
         const lc_node *base = &lp->m.nodes.data[n->a];
         if (base->op == N_LOCAL || base->op == N_GLOBAL)
@@ -153,7 +127,7 @@ static double evs(cbm_lsys *ls, int32_t ni, double *fr)
             int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
             if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
                 ct = T_DOUBLE;
-            return bin_scalar(n->fn, ct, a, b, lp);
+            return cbm__lc_bin_scalar(n->fn, ct, a, b, &lp->vm);
         }
         break;
     }
@@ -204,74 +178,6 @@ static void eval_discard(cbm_lsys *ls, int32_t ni, double *fr, double *buf)
         ev(ls, ni, fr, buf);
 }
 
-static double bin_scalar(int op, int t, double a, double b, lpfg *lp)
-{
-    double r;
-    if (t == T_INT && op <= B_REM) { /* C int arithmetic: 32 bits, wrapping on overflow */
-        long long x = (long long)lc_c_int(a), y = (long long)lc_c_int(b);
-        switch (op) {
-        case B_ADD:
-            return lc_wrap_int(x + y);
-        case B_SUB:
-            return lc_wrap_int(x - y);
-        case B_MUL:
-            return lc_wrap_int(x * y);
-        default:
-            if (y == 0) {
-                rt_error(lp, CBM_E_RUNTIME,
-                         op == B_DIV ? "integer division by zero" : "integer remainder by zero");
-                return 0;
-            }
-            return lc_wrap_int(op == B_DIV ? x / y : x % y);
-        }
-    }
-    switch (op) {
-    case B_ADD:
-        r = a + b;
-        break;
-    case B_SUB:
-        r = a - b;
-        break;
-    case B_MUL:
-        r = a * b;
-        break;
-    case B_DIV:
-        if (t == T_INT) {
-            long long d = cbm__to_ll(b);
-            if (d == 0) {
-                rt_error(lp, CBM_E_RUNTIME, "integer division by zero");
-                return 0;
-            }
-            /* C integer division, as the L+C dialect means it */
-            // NOLINTNEXTLINE(bugprone-integer-division)
-            return (double)(cbm__to_ll(a) / d);
-        }
-        r = a / b;
-        break;
-    case B_REM: {
-        long long d = cbm__to_ll(b);
-        if (d == 0) {
-            rt_error(lp, CBM_E_RUNTIME, "integer remainder by zero");
-            return 0;
-        }
-        return (double)(cbm__to_ll(a) % d);
-    }
-    case B_LT:
-        return a < b;
-    case B_GT:
-        return a > b;
-    case B_LE:
-        return a <= b;
-    case B_GE:
-        return a >= b;
-    case B_EQ:
-        return a == b;
-    default:
-        return a != b;
-    }
-    return lc_conv_scalar(t, r);
-}
-
 /* The mechanics built-ins (lsys/mechlang.c) over the current string. */
 static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
@@ -280,7 +186,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     int na = 0;
     for (int32_t x = n->a; x >= 0 && na < 5; x = lp->m.nodes.data[x].next)
         a[na++] = evs(ls, x, fr);
-    if (lp->err != CBM_OK)
+    if (lp->vm.err != CBM_OK)
         return;
     cbm__mechlang *m = &lp->mech;
     char msg[128];
@@ -591,8 +497,8 @@ static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     const lc_function *f = &lp->m.funcs.data[n->slot];
-    if (lp->call_depth >= cbm_context_limits(ls->ctx)->max_call_depth ||
-        lp->sp + (size_t)f->fsize + 1 > lp->stack_cap) {
+    if (lp->vm.call_depth >= cbm_context_limits(ls->ctx)->max_call_depth ||
+        lp->vm.sp + (size_t)f->fsize + 1 > lp->vm.stack_cap) {
         rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
         memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
         return;
@@ -601,22 +507,44 @@ static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
         return;
     }
-    double *nf = lp->stack + lp->sp;
-    size_t save = lp->sp;
-    lp->sp += (size_t)f->fsize;
+    double *nf = lp->vm.stack + lp->vm.sp;
+    size_t save = lp->vm.sp;
+    const lc_fcode *fc = lp->prog.n ? &lp->prog.fn[n->slot] : NULL;
+    if (fc && fc->compiled) { /* scalar parameters and result: the register code runs it */
+        if (lp->vm.sp + (size_t)fc->nreg + 1 > lp->vm.stack_cap) {
+            rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
+            memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
+            return;
+        }
+        lp->vm.sp += (size_t)fc->nreg;
+        int32_t x = n->a;
+        for (int i = 0; x >= 0; x = lp->m.nodes.data[x].next, i++)
+            ev(ls, x, fr, nf + i);
+        lp->vm.call_depth++;
+        int32_t at = lp->vm.at;
+        double r = cbm__lc_run(&lp->prog, n->slot, nf, &lp->vm);
+        lp->vm.at = at;
+        lp->vm.call_depth--;
+        lp->vm.sp = save;
+        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
+        if (f->ret != T_VOID)
+            out[0] = r;
+        return;
+    }
+    lp->vm.sp += (size_t)f->fsize;
     int off = 0;
     int i = 0;
     for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
         ev(ls, x, fr, nf + off);
         off += lc_type_size(&lp->m, f->ptype[i]);
     }
-    lp->call_depth++;
+    lp->vm.call_depth++;
     double *saved = lp->ret;
-    int32_t at = lp->at;
+    int32_t at = lp->vm.at;
     memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
     lp->ret = out;
     exec(ls, f->body, nf);
-    lp->at = at;
+    lp->vm.at = at;
     off = 0;
     i = 0;
     for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
@@ -626,8 +554,8 @@ static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         off += sz;
     }
     lp->ret = saved;
-    lp->call_depth--;
-    lp->sp = save;
+    lp->vm.call_depth--;
+    lp->vm.sp = save;
 }
 
 static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
@@ -674,7 +602,7 @@ static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
             int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
             if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
                 ct = T_DOUBLE;
-            out[0] = bin_scalar(n->fn, ct, a, b, lp);
+            out[0] = cbm__lc_bin_scalar(n->fn, ct, a, b, &lp->vm);
             return;
         }
         if (n->type == T_LOCVEC) {
@@ -811,7 +739,9 @@ static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p,
     s->sym[s->n++] = (uint8_t)(code | (np ? LSYS_PARAM_BIT : 0));
     if (np) {
         s->pc[s->npm++] = (uint8_t)np;
-        memcpy((double *)s->par + s->npar, p, (size_t)np * sizeof(double));
+        double *d = (double *)s->par + s->npar;
+        for (int q = 0; q < np; q++) /* a parameter or two: a loop, not a library call */
+            d[q] = p[q];
         s->npar += (size_t)np;
     }
     return CBM_OK;
@@ -1161,7 +1091,7 @@ static bool nonfinite(cbm_lsys *ls, int32_t pos, const char *module)
                  "a parameter of %.60s is not a finite number (--allow-nonfinite keeps it)",
                  module);
         rt_error(lp, CBM_E_RUNTIME, msg);
-        lp->err_pos = pos;
+        lp->vm.err_pos = pos;
         return false;
     }
     if (!lp->nonfinite_warned) {
@@ -1193,7 +1123,7 @@ static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
             int sz = lc_type_size(&lp->m, m->ptype[a]);
             for (int q = 0; q < sz; q++)
                 if (!isfinite(v[off + q]) && !nonfinite(ls, lp->m.nodes.data[x].pos, m->name))
-                    return lp->err;
+                    return lp->vm.err;
             off += sz;
         }
         CBM_TRY(push_mod(ls->ctx, out, m->code, v, m->size));
@@ -1207,10 +1137,10 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
 {
     lpfg *lp = ls->lp;
     for (; ni >= 0; ni = lp->m.nodes.data[ni].next) {
-        if (lp->err != CBM_OK)
+        if (lp->vm.err != CBM_OK)
             return X_RETURN;
         const lc_node *n = &lp->m.nodes.data[ni];
-        lp->at = n->pos;
+        lp->vm.at = n->pos;
         double tmp[MAXSZ + 1];
         int r;
         switch (n->op) {
@@ -1257,7 +1187,7 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
                     break;
                 if (r == X_RETURN)
                     return r;
-                if (lp->err != CBM_OK)
+                if (lp->vm.err != CBM_OK)
                     return X_RETURN;
                 if (n->op == S_FOR && n->c >= 0)
                     eval_discard(ls, n->c, fr, tmp);
@@ -1321,18 +1251,20 @@ static int exec(cbm_lsys *ls, int32_t ni, double *fr)
 static void budgets(cbm_lsys *ls)
 {
     const cbm_limits *lim = cbm_context_limits(ls->ctx);
-    ls->lp->budget = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
-    ls->lp->ops = lim->max_operations;
+    ls->lp->vm.budget = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
+    ls->lp->vm.max_call_depth = lim->max_call_depth;
+    ls->lp->vm.ops = lim->max_operations;
 }
 
 static cbm_status run_error(cbm_lsys *ls, const char *what)
 {
     lpfg *lp = ls->lp;
-    cbm_status s = lp->err;
-    lp->err = CBM_OK;
-    if (lp->err_pos >= 0)
-        return cbm__compiler_fail(&ls->comp, s, (size_t)lp->err_pos, "%s: %s", what, lp->errmsg);
-    return cbm__fail(ls->ctx, s, "%s: %s", what, lp->errmsg);
+    cbm_status s = lp->vm.err;
+    lp->vm.err = CBM_OK;
+    if (lp->vm.err_pos >= 0)
+        return cbm__compiler_fail(&ls->comp, s, (size_t)lp->vm.err_pos, "%s: %s", what,
+                                  lp->vm.errmsg);
+    return cbm__fail(ls->ctx, s, "%s: %s", what, lp->vm.errmsg);
 }
 
 static cbm_status run_block(cbm_lsys *ls, int which)
@@ -1341,10 +1273,10 @@ static cbm_status run_block(cbm_lsys *ls, int which)
     lpfg *lp = ls->lp;
     if (lp->m.blocks[which] < 0)
         return CBM_OK;
-    lp->sp = (size_t)lp->m.block_fsize[which];
+    lp->vm.sp = (size_t)lp->m.block_fsize[which];
     lp->ret = NULL;
-    exec(ls, lp->m.blocks[which], lp->stack);
-    return lp->err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
+    exec(ls, lp->m.blocks[which], lp->vm.stack);
+    return lp->vm.err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
 }
 
 /* Tries the productions of `set` on the module at (i, j, k) of src; produced modules go to
@@ -1366,8 +1298,8 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             if (lp->m.sms.data[pr->pred.first + anchor].mod != m ||
                 pr->group != (pass == 0 ? lp->group : 0))
                 continue;
-            double *fr = lp->stack;
-            lp->sp = (size_t)pr->fsize;
+            double *fr = lp->vm.stack;
+            lp->vm.sp = (size_t)pr->fsize;
             lp->ret = NULL;
             walk first = walk_at(src, i, j, k, 1);
             bool ok = true;
@@ -1407,11 +1339,11 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             lp->produced = false;
             /* a production applied is an operation: a decomposition that doubles to its
              * maximum depth stops at the budget */
-            lp->at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
+            lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
             if (!spend(lp, false))
                 return 0;
             exec(ls, pr->body, fr);
-            if (lp->err != CBM_OK)
+            if (lp->vm.err != CBM_OK)
                 return 0;
             if (lp->produced)
                 return np;
@@ -1449,8 +1381,8 @@ static cbm_status decompose(cbm_lsys *ls, const lc_rules *set, const lstr *src, 
         size_t from = out->n, source = i;
         tmp->n = tmp->npm = tmp->npar = 0;
         int done = level < set->depth ? try_rewrite(ls, set, src, i, j, k, NULL, tmp) : 0;
-        if (lp->err != CBM_OK)
-            return lp->err;
+        if (lp->vm.err != CBM_OK)
+            return lp->vm.err;
         for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
             if (src->sym[i] & LSYS_PARAM_BIT)
                 k += src->pc[j++];
@@ -1480,7 +1412,7 @@ static cbm_status decompose_cur(cbm_lsys *ls)
     ls->next.n = ls->next.npm = ls->next.npar = 0;
     cbm_status s = decompose(ls, &lp->m.decomp, &ls->cur, &ls->next, 0);
     if (s != CBM_OK)
-        return lp->err != CBM_OK ? run_error(ls, "decomposition") : s;
+        return lp->vm.err != CBM_OK ? run_error(ls, "decomposition") : s;
     lstr t = ls->cur;
     ls->cur = ls->next;
     ls->next = t;
@@ -1518,10 +1450,12 @@ static cbm_status generate_pass(cbm_lsys *ls)
                 c--; /* the closing EB is copied by the next iteration */
             continue;
         }
+        /* going Forward the successor is produced in place at the end of the new string (a
+         * body that does not produce truncates it back); Backward it is reversed into it */
         succ->n = succ->npm = succ->npar = 0;
-        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, succ);
-        if (lp->err != CBM_OK)
-            return lp->err;
+        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, back ? succ : nxt);
+        if (lp->vm.err != CBM_OK)
+            return lp->vm.err;
         for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
             if (back) {
                 i--;
@@ -1534,10 +1468,10 @@ static cbm_status generate_pass(cbm_lsys *ls)
             }
             c++;
         }
-        if (done)
-            CBM_TRY(append_str(ls->ctx, nxt, succ, back));
-        else
+        if (!done)
             CBM_TRY(copy_at(ls->ctx, src, i, j, k, nxt));
+        else if (back)
+            CBM_TRY(append_str(ls->ctx, nxt, succ, true));
         CBM_TRY(check_size(ls, nxt));
         if (!back && (src->sym[i] & LSYS_PARAM_BIT))
             k += src->pc[j++];
@@ -1582,7 +1516,7 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
     if (s != CBM_OK) {
         char what[48];
         snprintf(what, sizeof what, "step %d", ls->steps + 1);
-        if (lp->err != CBM_OK)
+        if (lp->vm.err != CBM_OK)
             return run_error(ls, what);
         if (s == CBM_E_NOMEM && cbm_context_limits(ls->ctx)->max_bytes)
             return cbm__fail(ls->ctx, CBM_E_LIMIT,
@@ -1613,14 +1547,14 @@ static void mech_declare(lpfg *lp)
 cbm_status cbm__lpfg_reset(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
-    memset(lp->glob, 0, (size_t)(lp->m.nglobal + 1) * sizeof(double));
-    lp->err = CBM_OK;
-    lp->at = lp->err_pos = -1;
+    memset(lp->vm.glob, 0, (size_t)(lp->m.nglobal + 1) * sizeof(double));
+    lp->vm.err = CBM_OK;
+    lp->vm.at = lp->vm.err_pos = -1;
     lp->nonfinite_warned = false;
     budgets(ls);
     lp->backward = false;
     lp->group = 0;
-    lp->call_depth = 0;
+    lp->vm.call_depth = 0;
     ls->steps = 0;
     ls->homo_valid = false;
     ls->ev.stopped = false;
@@ -1633,21 +1567,21 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->m.gvars.len; g++) {
         const lc_global *v = &lp->m.gvars.data[g];
-        lp->sp = 0;
+        lp->vm.sp = 0;
         lp->ret = NULL;
         if (v->init >= 0) {
-            ev(ls, v->init, lp->stack, lp->glob + v->slot);
-            lc_conv_value(&lp->m, v->type, lp->glob + v->slot);
+            ev(ls, v->init, lp->vm.stack, lp->vm.glob + v->slot);
+            lc_conv_value(&lp->m, v->type, lp->vm.glob + v->slot);
         }
-        if (lp->err != CBM_OK)
+        if (lp->vm.err != CBM_OK)
             return run_error(ls, lp->m.gvars.data[g].name);
     }
     CBM_TRY(run_block(ls, 0));
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
-    lp->sp = 0;
+    lp->vm.sp = 0;
     lp->out = &ls->cur;
-    cbm_status ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->stack);
-    if (lp->err != CBM_OK)
+    cbm_status ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->vm.stack);
+    if (lp->vm.err != CBM_OK)
         return run_error(ls, "axiom");
     CBM_TRY(ps);
     return decompose_cur(ls);
@@ -1667,7 +1601,7 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
         s = decompose(ls, &lp->m.interp, &ls->cur, &ls->homo_str, 0);
         lp->rewriting = false;
     }
-    if (s != CBM_OK && lp->err != CBM_OK)
+    if (s != CBM_OK && lp->vm.err != CBM_OK)
         return run_error(ls, "interpretation");
     if (s == CBM_OK)
         ls->homo_valid = true;
@@ -1675,25 +1609,12 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
 }
 
 /* ---------------------------------------------------------------- output */
-/* Writes an integer in decimal, as "%lld" does. */
-static void write_integer(FILE *f, long long x)
-{
-    char buf[24], *p = buf + sizeof buf;
-    unsigned long long u = x < 0 ? 0 - (unsigned long long)x : (unsigned long long)x;
-    *--p = '\0';
-    do {
-        *--p = (char)('0' + u % 10);
-        u /= 10;
-    } while (u);
-    if (x < 0)
-        *--p = '-';
-    fputs(p, f);
-}
-
-static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v)
+/* Through the buffered writer of write.c (cbm__strw): a line per module, as the cpfg dialect's
+ * writer, so that a string of 10^7 modules is not a locked stdio call per character. */
+static const double *write_value(cbm__strw *w, const lpfg *lp, int t, const double *v)
 {
     if (t == T_INT || t == T_BOOL) {
-        write_integer(f, cbm__to_ll(v[0]));
+        cbm__strw_lld(w, cbm__to_ll(v[0]));
         return v + 1;
     }
     if (lc_is_scalar(t)) {
@@ -1701,19 +1622,19 @@ static const double *write_value(FILE *f, const lpfg *lp, int t, const double *v
          * it, its digits; -0 keeps its sign through printf */
         if (v[0] == (double)(long long)(v[0] < 1e9 && v[0] > -1e9 ? v[0] : 0.5) &&
             !(v[0] == 0 && signbit(v[0])))
-            write_integer(f, (long long)v[0]);
+            cbm__strw_lld(w, (long long)v[0]);
         else
-            fprintf(f, "%.9g", v[0]);
+            cbm__strw_g9(w, v[0]);
         return v + 1;
     }
-    putc('{', f);
+    cbm__strw_char(w, '{');
     int nf = lc_is_vec(t) ? 3 : lp->m.types.data[t].nf;
     for (int i = 0; i < nf; i++) {
         if (i)
-            putc(',', f);
-        v = write_value(f, lp, lc_is_vec(t) ? T_DOUBLE : lp->m.types.data[t].ftype[i], v);
+            cbm__strw_char(w, ',');
+        v = write_value(w, lp, lc_is_vec(t) ? T_DOUBLE : lp->m.types.data[t].ftype[i], v);
     }
-    putc('}', f);
+    cbm__strw_char(w, '}');
     return v;
 }
 
@@ -1722,21 +1643,27 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
     const lpfg *lp = ls->lp;
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
-    FILE *f = cbm_out_stream(o);
+    cbm__strw *w = cbm__strw_open(ls->ctx, cbm_out_stream(o));
+    if (!w)
+        return CBM_E_NOMEM;
+    size_t namelen[128] = {0};
+    for (int code = 0; code < 128; code++)
+        if (lp->m.bycode[code] >= 0)
+            namelen[code] = strlen(lp->m.mods.data[lp->m.bycode[code]].name);
     while (cbm_lsys_cursor_next(ls, homomorphism, &c)) {
         const lc_module *m = &lp->m.mods.data[lp->m.bycode[c.symbol & 0x7f]];
-        fputs(m->name, f);
+        cbm__strw_bytes(w, m->name, namelen[c.symbol & 0x7f]);
         if (m->np) {
             const double *v = c.params;
             for (int i = 0; i < m->np; i++) {
-                putc(i ? ',' : '(', f);
-                v = write_value(f, lp, m->ptype[i], v);
+                cbm__strw_char(w, i ? ',' : '(');
+                v = write_value(w, lp, m->ptype[i], v);
             }
-            putc(')', f);
+            cbm__strw_char(w, ')');
         }
-        putc('\n', f);
+        cbm__strw_char(w, '\n');
     }
-    return ferror(f) ? CBM_E_IO : CBM_OK;
+    return cbm__strw_close(w);
 }
 
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol)
@@ -1840,9 +1767,10 @@ void cbm__lpfg_free(cbm_lsys *ls)
     brtab_free(ctx, &lp->brk[1]);
     cbm__mechlang_free(ctx, &lp->mech);
     CBM_ARRAY_FREE(ctx, lp->origin);
-    cbm__free(ctx, lp->glob, (size_t)(lp->m.nglobal + 1) * sizeof(double));
+    cbm__free(ctx, lp->vm.glob, (size_t)(lp->m.nglobal + 1) * sizeof(double));
     cbm__lc_model_free(ctx, &lp->m);
-    cbm__free(ctx, lp->stack, lp->stack_cap * sizeof(double));
+    cbm__free(ctx, lp->vm.stack, lp->vm.stack_cap * sizeof(double));
+    cbm__lc_program_free(ctx, &lp->prog);
     cbm__lstr_free(ctx, &lp->succ);
     for (size_t i = 0; i < lp->scratch.len; i++)
         cbm__lstr_free(ctx, &lp->scratch.data[i]);
@@ -1855,8 +1783,8 @@ static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt)
 {
     if (s->depth <= -2) {
         int32_t e = -2 - s->depth;
-        ls->lp->sp = 0;
-        double v = evs(ls, e, ls->lp->stack);
+        ls->lp->vm.sp = 0;
+        double v = evs(ls, e, ls->lp->vm.stack);
         return !(v >= 0) ? 0 : v > 1e6 ? 1000000 : (int)v; /* NaN: 0 */
     }
     return dflt;
@@ -1885,13 +1813,15 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
         int id = (int)i + 1;
         CBM_TRY(CBM_ARRAY_PUSH(ctx, lp->m.funcids, id));
     }
-    lp->stack_cap = 1u << 16;
-    lp->stack = cbm__calloc(ctx, lp->stack_cap, sizeof(double));
-    lp->glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
-    if (!lp->stack || !lp->glob)
+    CBM_TRY(cbm__lc_codegen(ctx, &lp->m, &lp->prog));
+    lp->vm.max_call_depth = cbm_context_limits(ctx)->max_call_depth;
+    lp->vm.stack_cap = 1u << 16;
+    lp->vm.stack = cbm__calloc(ctx, lp->vm.stack_cap, sizeof(double));
+    lp->vm.glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
+    if (!lp->vm.stack || !lp->vm.glob)
         return CBM_E_NOMEM;
     for (size_t i = 0; i < lp->m.main.prods.len; i++)
-        if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->stack_cap)
+        if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->vm.stack_cap)
             return cbm__fail(ctx, CBM_E_LIMIT, "a production has too many local variables");
     int maxd = cbm_context_limits(ctx)->max_decomp_depth;
     lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1);
@@ -1906,8 +1836,8 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     }
     ls->derivation_length = 0;
     if (lp->m.dlen_expr >= 0) {
-        lp->sp = 0;
-        double v = evs(ls, lp->m.dlen_expr, lp->stack);
+        lp->vm.sp = 0;
+        double v = evs(ls, lp->m.dlen_expr, lp->vm.stack);
         ls->derivation_length = v < 0 ? 0 : v > 1e9 ? 1000000000 : (int)v;
     }
     return CBM_OK;

@@ -159,10 +159,42 @@ void cbm__lstr_free(cbm_context *ctx, lstr *s);
 /* Buffered text for the string writers (write.c): bytes and characters, numbers as "%.9g" (byte
  * for byte snprintf's text, memoised by value) and "%lld". open gives NULL when memory runs out
  * (close(NULL) then says CBM_E_NOMEM); close flushes, frees and reports a write error. */
-typedef struct cbm__strw cbm__strw;
+#define STRW_BUF   (1u << 16)
+#define STRW_SLOTS 4096u
+#define STRW_TXT   32 /* "%.9g" of a double: at most 16 characters ("-1.23456789e-308") */
+
+typedef struct cbm__strw {
+    cbm_context *ctx;
+    FILE *f;
+    size_t n;
+    bool err;
+    uint64_t key[STRW_SLOTS];
+    uint8_t len[STRW_SLOTS]; /* 0: empty slot */
+    char txt[STRW_SLOTS][STRW_TXT];
+    char buf[STRW_BUF];
+} cbm__strw;
+
 cbm__strw *cbm__strw_open(cbm_context *ctx, FILE *f);
-void cbm__strw_bytes(cbm__strw *w, const char *s, size_t n);
-void cbm__strw_char(cbm__strw *w, char c);
+void cbm__strw_flush(cbm__strw *w);
+void cbm__strw_big(cbm__strw *w, const char *s, size_t n);
+/* inline: the writers call these per character and per module */
+static inline void cbm__strw_bytes(cbm__strw *w, const char *s, size_t n)
+{
+    if (n > STRW_BUF - w->n) {
+        cbm__strw_big(w, s, n);
+        return;
+    }
+    char *d = w->buf + w->n;
+    for (size_t i = 0; i < n; i++) /* short texts: a loop, not a call */
+        d[i] = s[i];
+    w->n += n;
+}
+static inline void cbm__strw_char(cbm__strw *w, char c)
+{
+    if (w->n == STRW_BUF)
+        cbm__strw_flush(w);
+    w->buf[w->n++] = c;
+}
 void cbm__strw_g9(cbm__strw *w, double v);
 void cbm__strw_lld(cbm__strw *w, long long v);
 cbm_status cbm__strw_close(cbm__strw *w);

@@ -14,21 +14,6 @@
  * each number is kept in a direct-mapped memo keyed by its bit pattern: derived strings repeat
  * few distinct values (angles, scale factors), so most parameters are a copy of text printed
  * before. The text is what snprintf("%.9g") gives, so the output is byte for byte the same. */
-#define STRW_BUF   (1u << 16)
-#define STRW_SLOTS 4096u
-#define STRW_TXT   32 /* "%.9g" of a double: at most 16 characters ("-1.23456789e-308") */
-
-struct cbm__strw {
-    cbm_context *ctx;
-    FILE *f;
-    size_t n;
-    bool err;
-    uint64_t key[STRW_SLOTS];
-    uint8_t len[STRW_SLOTS]; /* 0: empty slot */
-    char txt[STRW_SLOTS][STRW_TXT];
-    char buf[STRW_BUF];
-};
-
 cbm__strw *cbm__strw_open(cbm_context *ctx, FILE *f)
 {
     cbm__strw *w = cbm__calloc(ctx, 1, sizeof *w);
@@ -39,32 +24,23 @@ cbm__strw *cbm__strw_open(cbm_context *ctx, FILE *f)
     return w;
 }
 
-static void strw_flush(cbm__strw *w)
+void cbm__strw_flush(cbm__strw *w)
 {
     if (w->n && fwrite(w->buf, 1, w->n, w->f) != w->n)
         w->err = true;
     w->n = 0;
 }
 
-void cbm__strw_bytes(cbm__strw *w, const char *s, size_t n)
+void cbm__strw_big(cbm__strw *w, const char *s, size_t n)
 {
-    if (w->n + n > STRW_BUF) {
-        strw_flush(w);
-        if (n > STRW_BUF) {
-            if (fwrite(s, 1, n, w->f) != n)
-                w->err = true;
-            return;
-        }
+    cbm__strw_flush(w);
+    if (n > STRW_BUF) {
+        if (fwrite(s, 1, n, w->f) != n)
+            w->err = true;
+        return;
     }
-    memcpy(w->buf + w->n, s, n);
-    w->n += n;
-}
-
-void cbm__strw_char(cbm__strw *w, char c)
-{
-    if (w->n == STRW_BUF)
-        strw_flush(w);
-    w->buf[w->n++] = c;
+    memcpy(w->buf, s, n);
+    w->n = n;
 }
 
 void cbm__strw_g9(cbm__strw *w, double v)
@@ -88,16 +64,23 @@ void cbm__strw_g9(cbm__strw *w, double v)
 
 void cbm__strw_lld(cbm__strw *w, long long v)
 {
-    char t[24];
-    int n = snprintf(t, sizeof t, "%lld", v);
-    cbm__strw_bytes(w, t, n > 0 ? (size_t)n : 0);
+    /* the digits "%lld" gives, without printf */
+    char t[24], *p = t + sizeof t;
+    unsigned long long u = v < 0 ? 0 - (unsigned long long)v : (unsigned long long)v;
+    do {
+        *--p = (char)('0' + u % 10);
+        u /= 10;
+    } while (u);
+    if (v < 0)
+        *--p = '-';
+    cbm__strw_bytes(w, p, (size_t)(t + sizeof t - p));
 }
 
 cbm_status cbm__strw_close(cbm__strw *w)
 {
     if (!w)
         return CBM_E_NOMEM;
-    strw_flush(w);
+    cbm__strw_flush(w);
     bool err = w->err || ferror(w->f);
     cbm__free(w->ctx, w, sizeof *w);
     return err ? CBM_E_IO : CBM_OK;

@@ -1,0 +1,1032 @@
+/* The L+C dialect's register code (lc_code.h): the compiler from the typed node array of a
+ * function to instructions, and the loop that runs them. */
+#include "lang/lc_code.h"
+
+#include "lang/builtins.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+enum {
+    O_NOP, /* sets the statement position only */
+    O_CONST,
+    O_MOV,
+    O_GLD, /* d = glob[a] */
+    O_GST, /* glob[d] = a */
+    O_NEG,
+    O_NOT,
+    O_BOOL, /* d = a != 0 */
+    O_CONV, /* d = conv(t, a) */
+    O_ADDD,
+    O_SUBD,
+    O_MULD,
+    O_DIVD,
+    O_ADDF,
+    O_SUBF,
+    O_MULF,
+    O_DIVF,
+    O_ADDI,
+    O_SUBI,
+    O_MULI,
+    O_LT,
+    O_GT,
+    O_LE,
+    O_GE,
+    O_EQ,
+    O_NE,
+    O_DIVI,
+    O_REMI,
+    O_BIN,   /* d = cbm__lc_bin_scalar(t, type fn, a, b): the other operators and types */
+    O_INC,   /* ++/-- on local a: fn the mode, t the type, d the value */
+    O_GINC,  /* the same on global a */
+    O_MATH1, /* d = conv(t, math fn(a)) */
+    O_MATH2, /* d = conv(t, math fn(a, b)) */
+    O_JMP,   /* to a */
+    O_JZ,    /* to b if a == 0 */
+    O_JNZ,   /* to b if a != 0 */
+    O_SPEND, /* a loop iteration */
+    O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to b if a != 0 */
+    O_JMPS,  /* the same without a test (for (;;)): to a */
+    O_CALL,  /* d = function a on the frame at register b */
+    O_RET,   /* the value of a */
+    O_RET0,
+    /* a comparison and the jump on its falsehood in one (if, while, for): to d unless a op b */
+    O_JNLT,
+    O_JNGT,
+    O_JNLE,
+    O_JNGE,
+    O_JNEQ,
+    O_JNNE,
+    /* the same, jumping when it holds: the test at the bottom of a loop, which spends the
+     * iteration it starts */
+    O_JLT,
+    O_JGT,
+    O_JLE,
+    O_JGE,
+    O_JEQ,
+    O_JNE,
+    /* math built-ins of double result called directly */
+    O_SIN,
+    O_COS,
+    O_SQRT,
+    O_EXP
+};
+
+/* ---------------------------------------------------------------- runtime */
+void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg)
+{
+    if (vm->err == CBM_OK) {
+        vm->err = s;
+        vm->err_pos = vm->at;
+        snprintf(vm->errmsg, sizeof vm->errmsg, "%s", msg);
+    }
+}
+
+bool cbm__lc_spend(lc_vm *vm, bool loop)
+{
+    if (--vm->ops < 0) {
+        cbm__lc_error(vm, CBM_E_LIMIT,
+                      "more productions applied, function calls and loop iterations in one step "
+                      "than the limit (--max-operations)");
+        return false;
+    }
+    if (loop && --vm->budget < 0) {
+        cbm__lc_error(vm, CBM_E_LIMIT,
+                      "more loop iterations in one step than the limit (--max-loop-iterations)");
+        return false;
+    }
+    return true;
+}
+
+double cbm__lc_bin_scalar(int op, int t, double a, double b, lc_vm *vm)
+{
+    double r;
+    if (t == T_INT && op <= B_REM) { /* C int arithmetic: 32 bits, wrapping on overflow */
+        long long x = (long long)lc_c_int(a), y = (long long)lc_c_int(b);
+        switch (op) {
+        case B_ADD:
+            return lc_wrap_int(x + y);
+        case B_SUB:
+            return lc_wrap_int(x - y);
+        case B_MUL:
+            return lc_wrap_int(x * y);
+        default:
+            if (y == 0) {
+                cbm__lc_error(vm, CBM_E_RUNTIME,
+                              op == B_DIV ? "integer division by zero"
+                                          : "integer remainder by zero");
+                return 0;
+            }
+            return lc_wrap_int(op == B_DIV ? x / y : x % y);
+        }
+    }
+    switch (op) {
+    case B_ADD:
+        r = a + b;
+        break;
+    case B_SUB:
+        r = a - b;
+        break;
+    case B_MUL:
+        r = a * b;
+        break;
+    case B_DIV:
+        r = a / b;
+        break;
+    case B_REM: {
+        long long d = cbm__to_ll(b);
+        if (d == 0) {
+            cbm__lc_error(vm, CBM_E_RUNTIME, "integer remainder by zero");
+            return 0;
+        }
+        return (double)(cbm__to_ll(a) % d);
+    }
+    case B_LT:
+        return a < b;
+    case B_GT:
+        return a > b;
+    case B_LE:
+        return a <= b;
+    case B_GE:
+        return a >= b;
+    case B_EQ:
+        return a == b;
+    default:
+        return a != b;
+    }
+    return lc_conv_scalar(t, r);
+}
+
+static double inc(const lc_ins *ip, double *p)
+{
+    double old = *p;
+    *p = lc_conv_scalar(ip->t, *p + ((ip->fn & 1) ? -1 : 1));
+    return ip->fn >= 2 ? old : *p;
+}
+
+/* A loop iteration: one operation and one iteration from the budgets */
+#define SPEND_ONE()                                                                                \
+    do {                                                                                           \
+        if (vm->ops > 0 && vm->budget > 0) {                                                       \
+            vm->ops--;                                                                             \
+            vm->budget--;                                                                          \
+        } else { /* a limit is reached: cbm__lc_spend says which */                                \
+            vm->at = at;                                                                           \
+            (void)cbm__lc_spend(vm, true);                                                         \
+            return 0;                                                                              \
+        }                                                                                          \
+    } while (0)
+
+double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
+{
+    const lc_ins *code = p->fn[f].ins.data, *ip = code;
+    double *glob = vm->glob;
+    int32_t at = vm->at;
+    for (;; ip++) {
+        at = ip->at >= 0 ? ip->at : at;
+        switch (ip->op) {
+        case O_NOP:
+            break;
+        case O_CONST:
+            fr[ip->d] = ip->k;
+            break;
+        case O_MOV:
+            fr[ip->d] = fr[ip->a];
+            break;
+        case O_GLD:
+            fr[ip->d] = glob[ip->a];
+            break;
+        case O_GST:
+            glob[ip->d] = fr[ip->a];
+            break;
+        case O_NEG:
+            fr[ip->d] = -fr[ip->a];
+            break;
+        case O_NOT:
+            fr[ip->d] = fr[ip->a] == 0;
+            break;
+        case O_BOOL:
+            fr[ip->d] = fr[ip->a] != 0;
+            break;
+        case O_CONV:
+            fr[ip->d] = lc_conv_scalar(ip->t, fr[ip->a]);
+            break;
+        case O_ADDD:
+            fr[ip->d] = fr[ip->a] + fr[ip->b];
+            break;
+        case O_SUBD:
+            fr[ip->d] = fr[ip->a] - fr[ip->b];
+            break;
+        case O_MULD:
+            fr[ip->d] = fr[ip->a] * fr[ip->b];
+            break;
+        case O_DIVD:
+            fr[ip->d] = fr[ip->a] / fr[ip->b];
+            break;
+        case O_ADDF:
+            fr[ip->d] = (double)(float)(fr[ip->a] + fr[ip->b]);
+            break;
+        case O_SUBF:
+            fr[ip->d] = (double)(float)(fr[ip->a] - fr[ip->b]);
+            break;
+        case O_MULF:
+            fr[ip->d] = (double)(float)(fr[ip->a] * fr[ip->b]);
+            break;
+        case O_DIVF:
+            fr[ip->d] = (double)(float)(fr[ip->a] / fr[ip->b]);
+            break;
+        case O_ADDI:
+            fr[ip->d] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->a]) + (long long)lc_c_int(fr[ip->b]));
+            break;
+        case O_SUBI:
+            fr[ip->d] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->a]) - (long long)lc_c_int(fr[ip->b]));
+            break;
+        case O_MULI:
+            fr[ip->d] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->a]) * (long long)lc_c_int(fr[ip->b]));
+            break;
+        case O_LT:
+            fr[ip->d] = fr[ip->a] < fr[ip->b];
+            break;
+        case O_GT:
+            fr[ip->d] = fr[ip->a] > fr[ip->b];
+            break;
+        case O_LE:
+            fr[ip->d] = fr[ip->a] <= fr[ip->b];
+            break;
+        case O_GE:
+            fr[ip->d] = fr[ip->a] >= fr[ip->b];
+            break;
+        case O_EQ:
+            fr[ip->d] = fr[ip->a] == fr[ip->b];
+            break;
+        case O_NE:
+            fr[ip->d] = fr[ip->a] != fr[ip->b];
+            break;
+        case O_DIVI:
+        case O_REMI: {
+            long long x = (long long)lc_c_int(fr[ip->a]), y = (long long)lc_c_int(fr[ip->b]);
+            if (y == 0) {
+                vm->at = at;
+                cbm__lc_error(vm, CBM_E_RUNTIME,
+                              ip->op == O_DIVI ? "integer division by zero"
+                                               : "integer remainder by zero");
+                return 0;
+            }
+            fr[ip->d] = lc_wrap_int(ip->op == O_DIVI ? x / y : x % y);
+            break;
+        }
+        case O_JNLT:
+            if (!(fr[ip->a] < fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JNGT:
+            if (!(fr[ip->a] > fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JNLE:
+            if (!(fr[ip->a] <= fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JNGE:
+            if (!(fr[ip->a] >= fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JNEQ:
+            if (!(fr[ip->a] == fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JNNE:
+            if (!(fr[ip->a] != fr[ip->b]))
+                ip = code + ip->d - 1;
+            break;
+        case O_JLT:
+            if (fr[ip->a] < fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_JGT:
+            if (fr[ip->a] > fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_JLE:
+            if (fr[ip->a] <= fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_JGE:
+            if (fr[ip->a] >= fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_JEQ:
+            if (fr[ip->a] == fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_JNE:
+            if (fr[ip->a] != fr[ip->b]) {
+                SPEND_ONE();
+                ip = code + ip->d - 1;
+            }
+            break;
+        case O_SIN:
+            fr[ip->d] = sin(fr[ip->a]);
+            break;
+        case O_COS:
+            fr[ip->d] = cos(fr[ip->a]);
+            break;
+        case O_SQRT:
+            fr[ip->d] = sqrt(fr[ip->a]);
+            break;
+        case O_EXP:
+            fr[ip->d] = exp(fr[ip->a]);
+            break;
+        case O_BIN:
+            vm->at = at;
+            fr[ip->d] = cbm__lc_bin_scalar(ip->fn, ip->t, fr[ip->a], fr[ip->b], vm);
+            if (vm->err != CBM_OK)
+                return 0;
+            break;
+        case O_INC:
+            fr[ip->d] = inc(ip, fr + ip->a);
+            break;
+        case O_GINC:
+            fr[ip->d] = inc(ip, glob + ip->a);
+            break;
+        case O_MATH1:
+            fr[ip->d] = lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], 0, false));
+            break;
+        case O_MATH2:
+            fr[ip->d] =
+                lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], false));
+            break;
+        case O_JMP:
+            ip = code + ip->a - 1;
+            break;
+        case O_JZ:
+            if (fr[ip->a] == 0)
+                ip = code + ip->b - 1;
+            break;
+        case O_JNZ:
+            if (fr[ip->a] != 0)
+                ip = code + ip->b - 1;
+            break;
+        case O_SPEND:
+            SPEND_ONE();
+            break;
+        case O_JNZS:
+            if (fr[ip->a] != 0) {
+                SPEND_ONE();
+                ip = code + ip->b - 1;
+            }
+            break;
+        case O_JMPS:
+            SPEND_ONE();
+            ip = code + ip->a - 1;
+            break;
+        case O_CALL: {
+            const lc_fcode *cf = &p->fn[ip->a];
+            double *nf = fr + ip->b;
+            vm->at = at;
+            if (vm->call_depth >= vm->max_call_depth ||
+                (size_t)(nf - vm->stack) + (size_t)cf->nreg + 1 > vm->stack_cap) {
+                cbm__lc_error(vm, CBM_E_LIMIT,
+                              "function calls nested too deeply (--max-call-depth)");
+                return 0;
+            }
+            if (!cbm__lc_spend(vm, false))
+                return 0;
+            vm->call_depth++;
+            double r = cbm__lc_run(p, ip->a, nf, vm);
+            vm->call_depth--;
+            if (vm->err != CBM_OK)
+                return 0;
+            fr[ip->d] = r;
+            break;
+        }
+        case O_RET:
+            return fr[ip->a];
+        default: /* O_RET0 */
+            return 0;
+        }
+    }
+}
+
+/* ---------------------------------------------------------------- compiler */
+typedef struct cg {
+    cbm_context *ctx;
+    const lc_model *m;
+    const lc_program *p;
+    lc_fcode *fc;
+    int fsize, top;
+    int32_t pending_at; /* the statement whose first instruction is still to come */
+    size_t label_at;    /* instructions before a label bound last (jumps land there) */
+    bool fail;          /* not compilable (or out of memory: nomem) */
+    bool nomem;
+    int loops;         /* enclosing loops */
+    int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
+    lc_ins scratch;    /* what ins() gives after running out of memory */
+    /* the constants, each in a register of its own after the locals, loaded on entry */
+    double konst[64];
+    int nkonst;
+    int tbase; /* the first temporary */
+} cg;
+
+static const lc_node *node(const cg *g, int32_t ni)
+{
+    return &g->m->nodes.data[ni];
+}
+
+static int32_t emit(cg *g, int op, int d, int a, int b)
+{
+    lc_ins x;
+    memset(&x, 0, sizeof x);
+    x.op = (uint8_t)op;
+    x.d = d;
+    x.a = a;
+    x.b = b;
+    x.at = g->pending_at;
+    g->pending_at = -1;
+    if (CBM_ARRAY_PUSH(g->ctx, g->fc->ins, x) != CBM_OK) {
+        g->fail = g->nomem = true;
+        return -1;
+    }
+    return (int32_t)g->fc->ins.len - 1;
+}
+
+static lc_ins *ins(cg *g, int32_t i)
+{
+    return i >= 0 && !g->nomem ? &g->fc->ins.data[i] : &g->scratch;
+}
+
+/* The position where the next instruction goes, as a jump target: a statement started before
+ * it gets its own instruction, so that a jump to here does not set its position. */
+static int32_t here(cg *g)
+{
+    if (g->pending_at >= 0)
+        emit(g, O_NOP, 0, 0, 0);
+    g->label_at = g->fc->ins.len;
+    return (int32_t)g->fc->ins.len;
+}
+
+/* Patches a chain of jumps (linked through their target field) to target. */
+static void patch(cg *g, int32_t chain, int32_t target)
+{
+    while (chain >= 0 && !g->nomem) {
+        lc_ins *x = ins(g, chain);
+        int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->d : x->op == O_JMP ? &x->a : &x->b;
+        chain = *f;
+        *f = target;
+    }
+}
+
+static int tmp(cg *g)
+{
+    int r = g->top++;
+    if (g->top > g->fc->nreg)
+        g->fc->nreg = g->top;
+    return r;
+}
+
+/* Whether evaluating ni may change a variable (so that an operand read before it must be
+ * copied first). Conservative: anything but pure scalar arithmetic counts. */
+static bool writes(const cg *g, int32_t ni)
+{
+    if (ni < 0)
+        return false;
+    const lc_node *n = node(g, ni);
+    switch (n->op) {
+    case N_NUM:
+    case N_LOCAL:
+    case N_GLOBAL:
+        return false;
+    case N_FIELD:
+    case N_NEG:
+    case N_NOT:
+    case N_CAST:
+        return writes(g, n->a);
+    case N_BIN:
+    case N_AND:
+    case N_OR:
+    case N_COMMA:
+        return writes(g, n->a) || writes(g, n->b);
+    case N_COND:
+        return writes(g, n->a) || writes(g, n->b) || writes(g, n->c);
+    case N_CALLB:
+        if (n->fn < FN_MATH_END) {
+            for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+                if (writes(g, x))
+                    return true;
+            return false;
+        }
+        return true;
+    default:
+        return true;
+    }
+}
+
+static int cx(cg *g, int32_t ni, int hint);
+
+/* The register of constant v (loaded on entry), or v loaded into hint when there are many. */
+static int konst(cg *g, double v, int hint)
+{
+    for (int c = 0; c < g->nkonst; c++)
+        if (memcmp(&g->konst[c], &v, sizeof(double)) == 0)
+            return g->fsize + c;
+    if (g->nkonst < (int)(sizeof g->konst / sizeof g->konst[0])) {
+        g->konst[g->nkonst] = v;
+        return g->fsize + g->nkonst++;
+    }
+    int32_t i = emit(g, O_CONST, hint, 0, 0);
+    ins(g, i)->k = v;
+    return hint;
+}
+
+/* Whether instruction op computes a value into its register d (the others use d otherwise). */
+static bool computes(int op)
+{
+    return (op >= O_CONST && op <= O_CONV && op != O_GST) || (op >= O_ADDD && op <= O_MATH2) ||
+           op == O_CALL || (op >= O_SIN && op <= O_EXP);
+}
+
+/* Moves the value of register r into d (nothing when it is there). A value just computed into
+ * a temporary is computed into d instead when no jump lands between. */
+static void mov(cg *g, int d, int r)
+{
+    if (d == r || g->fail)
+        return;
+    size_t len = g->fc->ins.len;
+    if (r >= g->tbase && len > 0 && g->label_at != len) {
+        lc_ins *last = &g->fc->ins.data[len - 1];
+        if (last->d == r && computes(last->op) && g->pending_at < 0) {
+            last->d = d;
+            return;
+        }
+    }
+    emit(g, O_MOV, d, r, 0);
+}
+
+/* A binary operator on scalars, as the tree walker chooses its arithmetic type. */
+static int bin_op(int fn, int t, int *ty)
+{
+    *ty = t;
+    if (fn >= B_LT)
+        return O_LT + (fn - B_LT);
+    if (t == T_DOUBLE && fn <= B_DIV)
+        return O_ADDD + fn;
+    if (t == T_FLOAT && fn <= B_DIV)
+        return O_ADDF + fn;
+    if (t == T_INT && fn <= B_MUL)
+        return O_ADDI + fn;
+    if (t == T_INT && fn <= B_REM)
+        return fn == B_DIV ? O_DIVI : O_REMI;
+    return O_BIN;
+}
+
+static int lvalue(const cg *g, int32_t ni, bool *global)
+{
+    const lc_node *l = node(g, ni);
+    *global = l->op == N_GLOBAL;
+    if ((l->op != N_LOCAL && l->op != N_GLOBAL) || !lc_is_scalar(l->type))
+        return -1;
+    return l->slot;
+}
+
+/* Compiles expression ni; returns the register holding its value: a variable's own register,
+ * or hint (a temporary of the caller) where it computed it. */
+static int cx(cg *g, int32_t ni, int hint)
+{
+    if (g->fail)
+        return hint;
+    const lc_node *n = node(g, ni);
+    bool scalar = lc_is_scalar(n->type);
+    switch (n->op) {
+    case N_NUM:
+        return konst(g, n->v, hint);
+    case N_LOCAL:
+        if (!scalar)
+            break;
+        return n->slot;
+    case N_GLOBAL:
+        if (!scalar)
+            break;
+        emit(g, O_GLD, hint, n->slot, 0);
+        return hint;
+    case N_FIELD: {
+        const lc_node *base = node(g, n->a);
+        if (!scalar || (base->op != N_LOCAL && base->op != N_GLOBAL))
+            break;
+        if (base->op == N_LOCAL)
+            return base->slot + n->slot;
+        emit(g, O_GLD, hint, base->slot + n->slot, 0);
+        return hint;
+    }
+    case N_NEG:
+    case N_NOT:
+    case N_CAST: {
+        if (!scalar || !lc_is_scalar(node(g, n->a)->type))
+            break;
+        if (n->op == N_CAST && node(g, n->a)->op == N_NUM) { /* a converted number: a number */
+            lc_node k = *node(g, n->a);
+            k.v = lc_conv_scalar(n->type, k.v);
+            return konst(g, k.v, hint);
+        }
+        int r = cx(g, n->a, hint);
+        int32_t i = emit(g, n->op == N_NEG ? O_NEG : n->op == N_NOT ? O_NOT : O_CONV, hint, r, 0);
+        ins(g, i)->t = (uint8_t)n->type;
+        return hint;
+    }
+    case N_BIN: {
+        int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+        if (!lc_is_scalar(ta) || !lc_is_scalar(tb))
+            break;
+        int ra = cx(g, n->a, tmp(g));
+        if (ra < g->fsize && writes(g, n->b)) { /* read before the right operand runs */
+            int t = tmp(g);
+            emit(g, O_MOV, t, ra, 0);
+            ra = t;
+        }
+        int rb = cx(g, n->b, tmp(g));
+        int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
+        if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
+            ct = T_DOUBLE;
+        int ty;
+        int op = bin_op(n->fn, ct, &ty);
+        int32_t i = emit(g, op, hint, ra, rb);
+        ins(g, i)->t = (uint8_t)ty;
+        ins(g, i)->fn = n->fn;
+        return hint;
+    }
+    case N_AND:
+    case N_OR: {
+        int r = cx(g, n->a, tmp(g));
+        emit(g, O_BOOL, hint, r, 0);
+        int32_t j = emit(g, n->op == N_AND ? O_JZ : O_JNZ, 0, hint, -1);
+        r = cx(g, n->b, tmp(g));
+        emit(g, O_BOOL, hint, r, 0);
+        patch(g, j, here(g));
+        return hint;
+    }
+    case N_COND: {
+        if (!scalar)
+            break;
+        int r = cx(g, n->a, tmp(g));
+        int32_t jelse = emit(g, O_JZ, 0, r, -1);
+        mov(g, hint, cx(g, n->b, hint));
+        int32_t jend = emit(g, O_JMP, 0, -1, 0);
+        patch(g, jelse, here(g));
+        mov(g, hint, cx(g, n->c, hint));
+        patch(g, jend, here(g));
+        return hint;
+    }
+    case N_COMMA:
+        if (!scalar)
+            break;
+        (void)cx(g, n->a, tmp(g));
+        return cx(g, n->b, hint);
+    case N_ASSIGN: {
+        bool global;
+        int slot = lvalue(g, n->a, &global);
+        if (!scalar || slot < 0)
+            break;
+        int r = cx(g, n->b, hint);
+        if (global) {
+            emit(g, O_GST, slot, r, 0);
+            return r;
+        }
+        mov(g, slot, r);
+        return slot;
+    }
+    case N_INCDEC: {
+        bool global;
+        int slot = lvalue(g, n->a, &global);
+        if (slot < 0)
+            break;
+        int32_t i = emit(g, global ? O_GINC : O_INC, hint, slot, 0);
+        ins(g, i)->t = (uint8_t)n->type;
+        ins(g, i)->fn = n->fn;
+        return hint;
+    }
+    case N_CALLB: {
+        if (n->fn >= FN_MATH_END)
+            break;
+        int r[2] = {-1, -1}, na = 0;
+        for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
+            if (!lc_is_scalar(node(g, x)->type)) {
+                g->fail = true;
+                return hint;
+            }
+            r[na] = cx(g, x, tmp(g));
+            if (na == 0 && r[0] < g->fsize && node(g, x)->next >= 0 &&
+                writes(g, node(g, x)->next)) {
+                int t = tmp(g);
+                emit(g, O_MOV, t, r[0], 0);
+                r[0] = t;
+            }
+        }
+        if (na == 0) { /* no argument: both are 0 */
+            r[0] = tmp(g);
+            int32_t i = emit(g, O_CONST, r[0], 0, 0);
+            ins(g, i)->k = 0;
+        }
+        int t = n->type == T_VOID ? T_DOUBLE : n->type;
+        int op = na == 2 ? O_MATH2 : O_MATH1;
+        if (t == T_DOUBLE && na == 1) /* cbm__builtin_math's radian ones, without its switch */
+            op = n->fn == FN_SIN    ? O_SIN
+                 : n->fn == FN_COS  ? O_COS
+                 : n->fn == FN_SQRT ? O_SQRT
+                 : n->fn == FN_EXP  ? O_EXP
+                                    : op;
+        int32_t i = emit(g, op, hint, r[0], r[1]);
+        ins(g, i)->t = (uint8_t)t;
+        ins(g, i)->fn = n->fn;
+        return hint;
+    }
+    case N_CALLU: {
+        const lc_function *f = &g->m->funcs.data[n->slot];
+        if (!g->p->fn[n->slot].compiled || (!scalar && n->type != T_VOID))
+            break;
+        int base = g->top;
+        int np = 0;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            np++;
+        g->top += np;
+        if (g->top > g->fc->nreg)
+            g->fc->nreg = g->top;
+        int a = 0;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
+            if (!lc_is_scalar(node(g, x)->type) || a >= f->np || !lc_is_scalar(f->ptype[a])) {
+                g->fail = true;
+                return hint;
+            }
+            mov(g, base + a, cx(g, x, base + a));
+        }
+        emit(g, O_CALL, hint, n->slot, base);
+        return hint;
+    }
+    default:
+        break;
+    }
+    g->fail = true;
+    return hint;
+}
+
+static void cs(cg *g, int32_t ni);
+
+/* Compiles condition c and a jump taken when it is false (to patch); a comparison computed
+ * last into its temporary becomes a compare-and-jump. */
+static int32_t jump_false(cg *g, int32_t c)
+{
+    int save = g->top;
+    int t = tmp(g);
+    int r = cx(g, c, t);
+    g->top = save;
+    size_t len = g->fc->ins.len;
+    if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
+        lc_ins *last = &g->fc->ins.data[len - 1];
+        if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
+            last->op = (uint8_t)(O_JNLT + (last->op - O_LT));
+            last->d = -1;
+            return (int32_t)len - 1;
+        }
+    }
+    return emit(g, O_JZ, 0, r, -1);
+}
+
+/* Compiles condition c and a jump to target taken when it holds. */
+static void jump_true(cg *g, int32_t c, int32_t target)
+{
+    int save = g->top;
+    int t = tmp(g);
+    int r = cx(g, c, t);
+    g->top = save;
+    size_t len = g->fc->ins.len;
+    if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
+        lc_ins *last = &g->fc->ins.data[len - 1];
+        if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
+            last->op = (uint8_t)(O_JLT + (last->op - O_LT));
+            last->d = target;
+            return;
+        }
+    }
+    emit(g, O_JNZS, 0, r, target);
+}
+
+/* A loop with its test at the bottom: init; jump to the test; top: body; step; test: spend
+ * and jump to top when it holds (a do loop spends its first iteration before top). The order
+ * of evaluation is exec's (test, spend, body, step). */
+static void loop(cg *g, const lc_node *n)
+{
+    int32_t brk = g->brk, cont = g->cont;
+    g->brk = g->cont = -1;
+    g->loops++;
+    if (n->op == S_FOR && n->a >= 0)
+        cs(g, n->a);
+    int32_t c = n->op == S_FOR ? n->b : n->a;
+    if (c >= 0 && !lc_is_scalar(node(g, c)->type)) {
+        g->fail = true;
+        return;
+    }
+    int32_t to_test = n->op != S_DO && c >= 0 ? emit(g, O_JMP, 0, -1, 0) : -1;
+    if (n->op == S_DO || c < 0)
+        emit(g, O_SPEND, 0, 0, 0);
+    int32_t top = here(g);
+    cs(g, n->op == S_FOR ? n->d : n->b);
+    patch(g, g->cont, here(g));
+    int save = g->top;
+    if (n->op == S_FOR && n->c >= 0) {
+        if (!lc_is_scalar(node(g, n->c)->type))
+            g->fail = true;
+        else
+            (void)cx(g, n->c, tmp(g));
+    }
+    g->top = save;
+    patch(g, to_test, here(g));
+    if (c >= 0)
+        jump_true(g, c, top);
+    else
+        emit(g, O_JMPS, 0, top, 0);
+    patch(g, g->brk, here(g));
+    g->loops--;
+    g->brk = brk;
+    g->cont = cont;
+}
+
+/* Compiles the statement chain from ni, as exec runs it. */
+static void cs(cg *g, int32_t ni)
+{
+    for (; ni >= 0 && !g->fail; ni = node(g, ni)->next) {
+        const lc_node *n = node(g, ni);
+        g->pending_at = n->pos; /* exec sets the position at every statement */
+        int save = g->top;
+        switch (n->op) {
+        case S_EXPR: {
+            const lc_node *e = node(g, n->a);
+            if (!lc_is_scalar(e->type) && !(e->op == N_CALLU && e->type == T_VOID))
+                g->fail = true;
+            else
+                (void)cx(g, n->a, tmp(g));
+            break;
+        }
+        case S_DECL:
+            if (!lc_is_scalar(n->type))
+                g->fail = true;
+            else if (n->a >= 0) {
+                int r = cx(g, n->a, tmp(g));
+                if (n->type == T_DOUBLE)
+                    mov(g, n->slot, r);
+                else
+                    ins(g, emit(g, O_CONV, n->slot, r, 0))->t = (uint8_t)n->type;
+            } else
+                ins(g, emit(g, O_CONST, n->slot, 0, 0))->k = 0;
+            break;
+        case S_BLOCK:
+            cs(g, n->a);
+            break;
+        case S_IF: {
+            if (!lc_is_scalar(node(g, n->a)->type)) {
+                g->fail = true;
+                break;
+            }
+            int32_t jelse = jump_false(g, n->a);
+            cs(g, n->b);
+            if (n->c >= 0) {
+                int32_t jend = emit(g, O_JMP, 0, -1, 0);
+                patch(g, jelse, here(g));
+                cs(g, n->c);
+                patch(g, jend, here(g));
+            } else
+                patch(g, jelse, here(g));
+            break;
+        }
+        case S_WHILE:
+        case S_DO:
+        case S_FOR:
+            loop(g, n);
+            break;
+        case S_RETURN:
+            if (n->a < 0)
+                emit(g, O_RET0, 0, 0, 0);
+            else if (!lc_is_scalar(n->type))
+                g->fail = true;
+            else {
+                int r = cx(g, n->a, tmp(g));
+                if (n->type != T_DOUBLE) {
+                    int t = tmp(g);
+                    ins(g, emit(g, O_CONV, t, r, 0))->t = (uint8_t)n->type;
+                    r = t;
+                }
+                emit(g, O_RET, 0, r, 0);
+            }
+            break;
+        case S_BREAK:
+        case S_CONTINUE:
+            if (!g->loops) {
+                g->fail = true;
+                break;
+            }
+            if (n->op == S_BREAK)
+                g->brk = emit(g, O_JMP, 0, g->brk, 0);
+            else
+                g->cont = emit(g, O_JMP, 0, g->cont, 0);
+            break;
+        case S_NOP:
+            break;
+        default: /* produce, switch: the tree walker's */
+            g->fail = true;
+            break;
+        }
+        g->top = save;
+    }
+}
+
+/* Compiles function f into p->fn[f]; false when it cannot be compiled. */
+static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p, int f, bool *nomem)
+{
+    const lc_function *fn = &m->funcs.data[f];
+    lc_fcode *fc = &p->fn[f];
+    fc->ins.len = 0;
+    if ((fn->ret != T_VOID && !lc_is_scalar(fn->ret)) || fn->body < 0)
+        return false;
+    for (int i = 0; i < fn->np; i++)
+        if (!lc_is_scalar(fn->ptype[i]) || fn->pref[i])
+            return false;
+    /* twice: the first pass finds the constants, the second loads them on entry */
+    cg g;
+    double konst[64] = {0};
+    int nkonst = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        fc->ins.len = 0;
+        memset(&g, 0, sizeof g);
+        g.ctx = ctx;
+        g.m = m;
+        g.p = p;
+        g.fc = fc;
+        g.fsize = fn->fsize;
+        g.pending_at = -1;
+        g.label_at = (size_t)-1;
+        g.brk = g.cont = -1;
+        g.nkonst = nkonst;
+        memcpy(g.konst, konst, sizeof konst);
+        g.tbase = g.top = fn->fsize + nkonst;
+        fc->nreg = g.top;
+        for (int c = 0; c < nkonst; c++)
+            ins(&g, emit(&g, O_CONST, fn->fsize + c, 0, 0))->k = konst[c];
+        cs(&g, fn->body);
+        emit(&g, O_RET0, 0, 0, 0);
+        if (g.fail)
+            break;
+        nkonst = g.nkonst;
+        memcpy(konst, g.konst, sizeof konst);
+    }
+    *nomem = g.nomem;
+    return !g.fail;
+}
+
+cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
+{
+    memset(p, 0, sizeof *p);
+    if (!m->funcs.len)
+        return CBM_OK;
+    p->fn = cbm__calloc(ctx, m->funcs.len, sizeof *p->fn);
+    if (!p->fn)
+        return CBM_E_NOMEM;
+    p->n = m->funcs.len;
+    /* every function is assumed compiled, and those that cannot be, with their callers, are
+     * taken out until nothing changes */
+    for (size_t f = 0; f < p->n; f++)
+        p->fn[f].compiled = true;
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (size_t f = 0; f < p->n; f++) {
+            if (!p->fn[f].compiled)
+                continue;
+            bool nomem = false;
+            if (!compile_function(ctx, m, p, (int)f, &nomem)) {
+                if (nomem)
+                    return CBM_E_NOMEM;
+                p->fn[f].compiled = false;
+                changed = true;
+            }
+        }
+    }
+    return CBM_OK;
+}
+
+void cbm__lc_program_free(cbm_context *ctx, lc_program *p)
+{
+    for (size_t f = 0; f < p->n; f++)
+        CBM_ARRAY_FREE(ctx, p->fn[f].ins);
+    cbm__free(ctx, p->fn, p->n * sizeof *p->fn);
+    memset(p, 0, sizeof *p);
+}

@@ -1,0 +1,79 @@
+/* The L+C dialect's register code: the functions of a compiled model (lang/lc.h) whose values
+ * are all scalars (int, float, double, bool) translated to a compact register code, and the loop
+ * that runs it (lc_code.c).
+ *
+ * Why a register code and not native code through the system C compiler (as lpfg does): the
+ * run needs no compiler, no temporary files, no dlopen and no cache to keep valid, so it behaves
+ * the same on every machine and under ASan; and the tree walker it replaces is slow because of
+ * its recursion and its buffers, not because it interprets. A function's locals and parameters
+ * are registers of its frame (their slots), temporaries follow them; an instruction names its
+ * registers, so `s += sin(x * i) / i` is three instructions, not a walk of six nodes.
+ *
+ * Arithmetic is lpfg's as the tree walker computes it (cbm__lc_bin_scalar is shared by both):
+ * int operations in 32 bits with the wrap, float results rounded to float32, the same messages
+ * for division by zero and the budgets of cbm_limits (a loop iteration and a call each spend
+ * one operation, the call depth is bounded). A runtime error reports the position of the
+ * statement being executed, as the tree walker does.
+ *
+ * A function is compiled when its parameters and result are scalars (or void), no parameter is
+ * a reference, and its body uses only scalar expressions, the math built-ins, calls of compiled
+ * functions and the statements other than switch; the others run in the tree walker. */
+#ifndef CBM_LANG_LC_CODE_H
+#define CBM_LANG_LC_CODE_H
+
+#include "lang/lc.h"
+
+/* The runtime state both evaluators share: globals, the frame stack, the budgets and the first
+ * runtime error. */
+typedef struct lc_vm {
+    double *glob;
+    double *stack;
+    size_t stack_cap, sp;
+    int call_depth, max_call_depth;
+    long budget; /* loop iterations left in this step (limits.max_loop_iterations) */
+    long ops;    /* calls and loop iterations left in this step (limits.max_operations) */
+    cbm_status err;
+    char errmsg[160];
+    int32_t at;      /* text offset of the statement being executed (runtime messages) */
+    int32_t err_pos; /* where the first runtime error happened, -1: unknown */
+} lc_vm;
+
+typedef struct lc_ins {
+    uint8_t op, t; /* t: a type (conversions) or an operator (O_BIN) */
+    uint16_t fn;   /* a built-in (O_MATH) or the increment mode (O_INC) */
+    int32_t d, a, b;
+    int32_t at; /* the statement that starts here (its text offset), -1: none */
+    double k;
+} lc_ins;
+
+typedef struct lc_fcode {
+    CBM_ARRAY(lc_ins) ins;
+    int nreg;      /* frame doubles: locals, then temporaries */
+    bool compiled; /* false: the tree walker runs the function */
+} lc_fcode;
+
+/* The register code of a model's functions, by function index. */
+typedef struct lc_program {
+    lc_fcode *fn;
+    size_t n;
+} lc_program;
+
+/* Compiles every function that can be compiled; CBM_E_NOMEM only (a function that cannot be
+ * compiled is left to the tree walker). */
+cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
+void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
+
+/* Runs compiled function f on the frame fr (its parameters in their slots, room for nreg
+ * doubles); the result (0 for void). After a runtime error vm->err is set and the result is
+ * meaningless. */
+double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm);
+
+/* The first runtime error of a run wins; its position is vm->at. */
+void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg);
+/* Takes one operation (a call, a production applied or a loop iteration) from the step's
+ * budgets; false after reporting the limit. */
+bool cbm__lc_spend(lc_vm *vm, bool loop);
+/* a op b for scalars computed in type t (C's int, float or double arithmetic, comparisons). */
+double cbm__lc_bin_scalar(int op, int t, double a, double b, lc_vm *vm);
+
+#endif
