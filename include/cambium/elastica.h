@@ -45,6 +45,9 @@ typedef struct cbm_elastica_rod {
     size_t n_pieces;
     double tip_force;  ///< downward force at the tip (n_l; negative pulls up)
     double tip_moment; ///< moment applied at the tip, counter-clockwise positive
+    /// n_pieces downward point forces, one at the distal end of each piece (fruit, foliage
+    /// lumped at a growth segment's tip); NULL: none. Single rods only (plants ignore it).
+    const double *piece_loads;
 } cbm_elastica_rod;
 
 CBM_API cbm_elastica_piece cbm_elastica_piece_default(void); ///< length 1, D 1, w 0, straight
