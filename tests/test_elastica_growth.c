@@ -127,7 +127,8 @@ TEST(elastica_growth_remodeling_closed_form)
             CHECK(c->kappa_c == 0);
         }
         CHECK_MSG(worst < 1e-4, "kappa^g off (3.25) by %g (relative)", worst);
-        CHECK_MSG(shape_change(f0, f, f->n_cells) < 5e-5, "moved %g", shape_change(f0, f, f->n_cells));
+        CHECK_MSG(shape_change(f0, f, f->n_cells) < 5e-5, "moved %g",
+                  shape_change(f0, f, f->n_cells));
         kg_end[r] = f->cells[0].kappa_g;
         /* 13-fold: kappa^g covers 12/13 of the way (digest oracle 8) at t -> infinity */
         CHECK(f->stiffness_base / f0->stiffness_base > 12.0);
@@ -297,9 +298,8 @@ TEST(elastica_growth_table_3_1)
         for (size_t k = 0; k < ga->n_frames; k++)
             CHECK(ga->frames[k].index == 0 && gb->frames[k].index == 0);
         CHECK_NEAR(last(ga)->length, 1.2, 1e-12);
-        CHECK_NEAR(last(ga)->cells[0].radius, 1.05 + 2 * 0.01 * (1 - 0.005 / 1.2) -
-                                                  0.01 * 0.005 * (1 / 1.1 - 1 / 1.2),
-                   1e-12);
+        CHECK_NEAR(last(ga)->cells[0].radius,
+                   1.05 + 2 * 0.01 * (1 - 0.005 / 1.2) - 0.01 * 0.005 * (1 / 1.1 - 1 / 1.2), 1e-12);
     }
     cbm_elastica_growth_destroy(ctx, ga);
     cbm_elastica_growth_destroy(ctx, gb);

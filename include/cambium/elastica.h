@@ -218,6 +218,15 @@ typedef struct cbm_elastica_spec {
     double sweep_min, sweep_max;         ///< degrees (default -90, 270)
     size_t n_branches;
     cbm_elastica_branch_spec branches[CBM_ELASTICA_MAX_BRANCHES];
+    /* growth under control (steps > 0; include/cambium/elastica_growth.h) */
+    bool grows;                            ///< bend's `steps` > 0
+    int taper, law;                        ///< cbm_elastica_taper, cbm_elastica_law
+    bool control_static;                   ///< `control = static`: the inverse problem
+    double control_curvature;              ///< `control = K`, 1/m
+    double stiffness_ratio, stiffness_tau; ///< taper step
+    bool has_youngs_final, has_preferred;
+    double youngs_final, youngs_tau, segment_load, segment_load_point, preferred_angle;
+    double induced_rate, substeps, step_time, side;
 } cbm_elastica_spec;
 
 /// Parses a spec; every error reported as FILE:line:col (docs/elastica.md). CBM_E_SYNTAX or

@@ -75,23 +75,23 @@ typedef struct cbm_elastica_growth_def {
     cbm_elastica_taper taper;
     double stiffness_ratio, stiffness_tau; ///< CBM_ELASTICA_TAPER_STEP (ratio >= 1, tau > 0)
     double youngs;                         ///< E at t = 0 (> 0)
-    double youngs_final, youngs_tau; ///< remodeling: E(t) = E_f + (E - E_f) exp(-t / tau);
-                                     ///< tau 0: E constant
-    double density;                  ///< rho*, mass per volume (>= 0)
-    double gravity;                  ///< g (>= 0); weight per length rho* pi R^2 g
-    double segment_load;             ///< F_N, an extra load per tip_growth of length (>= 0)
-    bool segment_load_point;         ///< F_N as a point force at the tip of each Delta L of
-                                     ///< length instead of spread over it (Yamamoto & Yoshida)
-    double tip_load;                 ///< a downward force at the tip
-    double rest_curvature0;          ///< kappa_o^g of the initial rod
-    bool preferred;                  ///< new tip material from the preferred-angle law (3.34)
-    double preferred_angle;          ///< theta^d, rad: kappa_o^g = (theta^d - theta_tip) / Delta L
+    double youngs_final, youngs_tau;       ///< remodeling: E(t) = E_f + (E - E_f) exp(-t / tau);
+                                           ///< tau 0: E constant
+    double density;                        ///< rho*, mass per volume (>= 0)
+    double gravity;                        ///< g (>= 0); weight per length rho* pi R^2 g
+    double segment_load;                   ///< F_N, an extra load per tip_growth of length (>= 0)
+    bool segment_load_point;               ///< F_N as a point force at the tip of each Delta L of
+                             ///< length instead of spread over it (Yamamoto & Yoshida)
+    double tip_load;        ///< a downward force at the tip
+    double rest_curvature0; ///< kappa_o^g of the initial rod
+    bool preferred;         ///< new tip material from the preferred-angle law (3.34)
+    double preferred_angle; ///< theta^d, rad: kappa_o^g = (theta^d - theta_tip) / Delta L
     cbm_elastica_law law;
     cbm_elastica_control control;
     double control_curvature; ///< kappa^c where control_fn is NULL (1/length)
     cbm_elastica_field_fn control_fn;
     void *control_ud;
-    double induced_rate; ///< d kappa_I^g / dt where induced_fn is NULL
+    double induced_rate;              ///< d kappa_I^g / dt where induced_fn is NULL
     cbm_elastica_field_fn induced_fn; ///< kappa_I^g(s, t) itself (not its rate)
     void *induced_ud;
     int side; ///< at t = 0, of several stable equilibria of equal energy the one whose tip
@@ -130,9 +130,9 @@ typedef struct cbm_elastica_growth_frame {
     double stiffness_base; ///< D(0)
     double energy;         ///< V of the equilibrium
     int index;             ///< Morse index of the equilibrium (0 stable)
-    bool jumped;        ///< the followed equilibrium was lost (a fold): the rod jumped to the
-                        ///< lowest-energy stable equilibrium at the clamp angle
-    double hold_error;  ///< CONTROL_STATIC: max |theta - target| at the held cells' ends, rad
+    bool jumped;           ///< the followed equilibrium was lost (a fold): the rod jumped to the
+                           ///< lowest-energy stable equilibrium at the clamp angle
+    double hold_error;     ///< CONTROL_STATIC: max |theta - target| at the held cells' ends, rad
     size_t n_cells;
     cbm_elastica_growth_cell *cells; ///< base to tip
 } cbm_elastica_growth_frame;
@@ -149,6 +149,14 @@ typedef struct cbm_elastica_growth {
 CBM_API cbm_status cbm_elastica_grow(cbm_context *ctx, const cbm_elastica_growth_def *def,
                                      cbm_elastica_growth **out);
 CBM_API void cbm_elastica_growth_destroy(cbm_context *ctx, cbm_elastica_growth *g);
+
+/// The growth def of a parsed elastica spec with steps > 0 (docs/elastica.md "Growth"): L0 =
+/// length_initial (or length), Delta L = (length - L0) / steps, h = length / segments, R0 =
+/// radius, Delta R = (radius_final - radius) / steps, angle in degrees, tip_load + tip_mass g,
+/// rest_curvature as kappa_o^g, and the growth keys. CBM_E_INVALID (reported) when L0 or Delta L
+/// is not a whole number of cells.
+CBM_API cbm_status cbm_elastica_spec_growth(cbm_context *ctx, const cbm_elastica_spec *spec,
+                                            cbm_elastica_growth_def *out);
 
 #ifdef __cplusplus
 }

@@ -66,13 +66,13 @@ void cbm_elastica_growth_destroy(cbm_context *ctx, cbm_elastica_growth *g)
 
 /* the growing rod's cells */
 typedef struct cell {
-    double R, Rstart;          /* radius now, at the start of the step */
-    double D, Dprev, w, load;  /* load: point force at the distal end */
-    double kg, kg0, born;      /* kappa^g, kappa_o^g, birth time */
-    double ass, aas, ai;       /* int Ddot (kappa - kappa_o^g), int Ddot kappa^c, int D dkappa_I */
-    double kI;                 /* kappa_I^g at the last update */
-    double kappa, kc;          /* mean present curvature; kappa^c of the last update */
-    double theta, x, y;        /* distal end */
+    double R, Rstart;         /* radius now, at the start of the step */
+    double D, Dprev, w, load; /* load: point force at the distal end */
+    double kg, kg0, born;     /* kappa^g, kappa_o^g, birth time */
+    double ass, aas, ai;      /* int Ddot (kappa - kappa_o^g), int Ddot kappa^c, int D dkappa_I */
+    double kI;                /* kappa_I^g at the last update */
+    double kappa, kc;         /* mean present curvature; kappa^c of the last update */
+    double theta, x, y;       /* distal end */
 } cell;
 
 typedef struct grower {
@@ -137,8 +137,7 @@ static cbm_status check_def(cbm_context *ctx, const cbm_elastica_growth_def *d, 
     else if (!(isfinite(d->youngs) && d->youngs > 0 && isfinite(d->youngs_final) &&
                d->youngs_final > 0 && isfinite(d->youngs_tau) && d->youngs_tau >= 0))
         bad = "youngs and youngs_final must be positive, youngs_tau >= 0";
-    else if (!(isfinite(d->density) && d->density >= 0 && isfinite(d->gravity) &&
-               d->gravity >= 0))
+    else if (!(isfinite(d->density) && d->density >= 0 && isfinite(d->gravity) && d->gravity >= 0))
         bad = "density and gravity must be >= 0";
     else if (!(isfinite(d->segment_load) && d->segment_load >= 0))
         bad = "segment_load must be >= 0";
@@ -376,7 +375,8 @@ static double radius_at(const grower *g, const cell *c, size_t i, double phi, do
         return c->Rstart + (c->born < t0 ? phi * d->layer : 0.0);
     case CBM_ELASTICA_TAPER_STEP:
     default: {
-        double f = 1.0 + (d->stiffness_ratio - 1.0) * (1.0 - exp(-(t - c->born) / d->stiffness_tau));
+        double f =
+            1.0 + (d->stiffness_ratio - 1.0) * (1.0 - exp(-(t - c->born) / d->stiffness_tau));
         return d->radius0 * pow(f, 0.25);
     }
     }
