@@ -359,3 +359,43 @@ TEST(elastica_growth_bad_defs)
     CHECK(g == NULL);
     test_ctx_end(ctx);
 }
+
+/* kappa^c in the statics (bend's control_curvature, cbm_growth_def.control_up): one ring on a
+ * weightless horizontal rod moulded on kappa + kappa^c with kappa = 0 gives the rest curvature
+ * of the composite rod (3.12)/(3.16), kappa^g = (D - D_o) kappa^c / D, D/D_o = (r1/r0)^4: the
+ * tip angle is L kappa^g. With weight, kappa^c > 0 lifts the growing rod. */
+TEST(elastica_growth_control_in_statics)
+{
+    cbm_context *ctx = test_ctx();
+    const char *t = "length = 1\nsegments = 200\nradius = 0.01\nradius_final = 0.02\nsteps = 1\n"
+                    "density = 0\ncontrol_curvature = 0.5\n";
+    cbm_bend_spec sp;
+    CHECK_OK(cbm_bend_spec_parse(ctx, t, strlen(t), "c.spec", &sp));
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_bend_run(ctx, &sp, &p, NULL));
+    cbm_bend_node nodes[201];
+    if (p) {
+        CHECK_OK(cbm_bend_nodes(p, nodes, 201));
+        double kg = 0.5 * (1 - pow(0.01 / 0.02, 4));
+        CHECK_NEAR(nodes[200].angle_deg, kg * DEG, 1e-9);
+        CHECK_NEAR(nodes[200].y, (1 - cos(kg)) / kg, 1e-6);
+    }
+    cbm_plant_destroy(p);
+    double tip[2];
+    for (int r = 0; r < 2; r++) {
+        char buf[256];
+        snprintf(buf, sizeof buf,
+                 "length = 1\nsegments = 50\nradius = 0.01\nradius_final = 0.02\nsteps = 4\n"
+                 "control_curvature = %g\n",
+                 r ? 0.3 : 0.0);
+        CHECK_OK(cbm_bend_spec_parse(ctx, buf, strlen(buf), "c.spec", &sp));
+        p = NULL;
+        CHECK_OK(cbm_bend_run(ctx, &sp, &p, NULL));
+        tip[r] = 0;
+        if (p && cbm_bend_nodes(p, nodes, 51) == CBM_OK)
+            tip[r] = nodes[50].y;
+        cbm_plant_destroy(p);
+    }
+    CHECK(tip[1] > tip[0] + 0.1);
+    test_ctx_end(ctx);
+}
