@@ -337,7 +337,9 @@ TEST(elastica_spec_errors)
                          "theta_tip_min = 10\ntheta_tip_max = 0\n",
                          "alpha = 2\nalpha = 3\n",
                          "branch = parent 0 colour 3\n",
-                         "steps = 3\n"};
+                         "alpha = 15\nsteps = 3\n", /* growth is dimensional */
+                         "steps = 3\nbranch = parent 0\n",
+                         "taper = step\n" /* a growth key without steps */};
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         cbm_status s = cbm_elastica_spec_parse(ctx, bad[i], strlen(bad[i]), "b.spec", &sp);
         CHECK(s == CBM_E_SEMANTIC || s == CBM_E_SYNTAX);

@@ -56,6 +56,9 @@ typedef struct cbm_bend_spec {
     double impulse_time;     ///< s, time at which impulse_force acts (for one step)
     double impulse_force;    ///< N, downward at the tip for one step; 0 = none
     double initial_tip_load; ///< N, downward: start from the deflection under it, released at 0
+    /// rad/m, kappa^c of the rings of secondary growth: each is moulded on the current rate plus
+    /// this curvature towards the vertical (Tresierras 2009 (3.14); docs/growth.md); 0 = none
+    double control_curvature;
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

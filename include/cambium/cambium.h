@@ -15,6 +15,7 @@
 #include "cambium/tree.h"
 #include "cambium/measure.h"
 #include "cambium/elastica.h"
+#include "cambium/elastica_growth.h"
 #include "cambium/chain.h"
 #include "cambium/turtle_motion.h"
 

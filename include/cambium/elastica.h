@@ -45,6 +45,9 @@ typedef struct cbm_elastica_rod {
     size_t n_pieces;
     double tip_force;  ///< downward force at the tip (n_l; negative pulls up)
     double tip_moment; ///< moment applied at the tip, counter-clockwise positive
+    /// n_pieces downward point forces, one at the distal end of each piece (fruit, foliage
+    /// lumped at a growth segment's tip); NULL: none. Single rods only (plants ignore it).
+    const double *piece_loads;
 } cbm_elastica_rod;
 
 CBM_API cbm_elastica_piece cbm_elastica_piece_default(void); ///< length 1, D 1, w 0, straight
@@ -215,6 +218,15 @@ typedef struct cbm_elastica_spec {
     double sweep_min, sweep_max;         ///< degrees (default -90, 270)
     size_t n_branches;
     cbm_elastica_branch_spec branches[CBM_ELASTICA_MAX_BRANCHES];
+    /* growth under control (steps > 0; include/cambium/elastica_growth.h) */
+    bool grows;                            ///< bend's `steps` > 0
+    int taper, law;                        ///< cbm_elastica_taper, cbm_elastica_law
+    bool control_static;                   ///< `control = static`: the inverse problem
+    double control_curvature;              ///< `control = K`, 1/m
+    double stiffness_ratio, stiffness_tau; ///< taper step
+    bool has_youngs_final, has_preferred;
+    double youngs_final, youngs_tau, segment_load, segment_load_point, preferred_angle;
+    double induced_rate, substeps, step_time, side;
 } cbm_elastica_spec;
 
 /// Parses a spec; every error reported as FILE:line:col (docs/elastica.md). CBM_E_SYNTAX or

@@ -480,6 +480,15 @@ typedef struct cbm_growth_def {
     /// thesis): beyond it the ring's area (a + increment) b is laid at this aspect, so the
     /// section grows rounder instead of into a ribbon (docs/growth.md); default 0
     double reaction_max_aspect;
+    /// kappa^c, the control curvature of Tresierras (2009, (3.14)): a new ring is moulded on
+    /// the segment's current rate plus this rate, local components (twist about H, bending
+    /// about L, bending about U), rad/m. An asymmetric residual growth stress (tension wood) in
+    /// one number per direction; default 0 (the ring is moulded on the present shape)
+    cbm_vec3 control_rate;
+    /// kappa^c as a curvature that turns the axis towards the vertical (up = -gravity), rad/m,
+    /// added to control_rate (gravitropic control; negative turns down; nothing on a vertical
+    /// segment); default 0. docs/growth.md relates it to the elastica's law
+    double control_up;
 } cbm_growth_def;
 
 /// Defaults as documented per field.

@@ -32,7 +32,7 @@ cbm_elastica_piece cbm_elastica_piece_default(void)
 
 cbm_elastica_rod cbm_elastica_rod_default(void)
 {
-    cbm_elastica_rod r = {NULL, 0, 0.0, 0.0};
+    cbm_elastica_rod r = {NULL, 0, 0.0, 0.0, NULL};
     return r;
 }
 
@@ -73,6 +73,9 @@ cbm_status cbm__el_check(cbm_context *ctx, const cbm_elastica_rod *rod)
               isfinite(p->rest_curvature)))
             return cbm__fail(ctx, CBM_E_INVALID,
                              "elastica: piece %zu needs length > 0, D > 0, w >= 0 (finite)", k);
+        if (rod->piece_loads && !isfinite(rod->piece_loads[k]))
+            return cbm__fail(ctx, CBM_E_INVALID, "elastica: the load of piece %zu must be finite",
+                             k);
     }
     return CBM_OK;
 }
@@ -154,6 +157,8 @@ cbm_status cbm__el_integrate(const cbm_elastica_rod *rod, double theta_tip, doub
     for (size_t k = 0; k < rod->n_pieces; k++) {
         const cbm_elastica_piece *p = &rod->pieces[k];
         Wtot += 0.5 * (p->w0 + p->w1) * p->length;
+        if (rod->piece_loads)
+            Wtot += fabs(rod->piece_loads[k]);
     }
     double Mref = Dref / L + Wtot * L + fabs(rod->tip_moment) + fabs(dmoment);
     double sc[EL_N];
@@ -174,6 +179,9 @@ cbm_status cbm__el_integrate(const cbm_elastica_rod *rod, double theta_tip, doub
         piece_ctx c = {&rod->pieces[kk], send - rod->pieces[kk].length};
         if (kk == 0)
             c.s0 = 0;
+        /* a point force at the piece's distal end joins the weight carried from there on */
+        if (rod->piece_loads)
+            y[EL_P] += rod->piece_loads[kk];
         double s = send, stop_piece = c.s0;
         while (true) {
             /* the next stop: a sample point or the piece's start */

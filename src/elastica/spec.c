@@ -10,6 +10,7 @@
  *   theta_tip_max = 270
  *   branch = parent 0 offset 20 length 0.5 stiffness 0.1 weight 0.3
  */
+#include "cambium/elastica_growth.h"
 #include "elastica_internal.h"
 
 #include <errno.h>
@@ -64,11 +65,56 @@ static bool number(rd *r, const char *name, const char *t, size_t n, int line, i
     return true;
 }
 
-enum { S_ALPHA, S_ANGLE, S_TMIN, S_TMAX, S_SMIN, S_SMAX, S_BRANCH, S_N };
-static const char *const own[S_N] = {"alpha",     "angle",     "theta_tip_min", "theta_tip_max",
-                                     "sweep_min", "sweep_max", "branch"};
-static const double own_lo[S_N] = {0, -720, -3600, -3600, -720, -720, 0};
-static const double own_hi[S_N] = {1e6, 720, 3600, 3600, 720, 720, 0};
+enum {
+    S_ALPHA,
+    S_ANGLE,
+    S_TMIN,
+    S_TMAX,
+    S_SMIN,
+    S_SMAX,
+    S_BRANCH,
+    /* growth under control (steps > 0; docs/elastica.md "Growth") */
+    S_TAPER,
+    S_LAW,
+    S_CONTROL,
+    S_SRATIO,
+    S_STAU,
+    S_EFINAL,
+    S_ETAU,
+    S_SLOAD,
+    S_SLOADPT,
+    S_PREF,
+    S_INDUCED,
+    S_SUBSTEPS,
+    S_STEPTIME,
+    S_SIDE,
+    S_N
+};
+static const char *const own[S_N] = {"alpha",
+                                     "angle",
+                                     "theta_tip_min",
+                                     "theta_tip_max",
+                                     "sweep_min",
+                                     "sweep_max",
+                                     "branch",
+                                     "taper",
+                                     "law",
+                                     "control",
+                                     "stiffness_ratio",
+                                     "stiffness_tau",
+                                     "youngs_final",
+                                     "youngs_tau",
+                                     "segment_load",
+                                     "segment_load_point",
+                                     "preferred_angle",
+                                     "induced_rate",
+                                     "substeps",
+                                     "step_time",
+                                     "side"};
+static const double own_lo[S_N] = {0,     -720,   -3600, -3600, -720, -720, 0,    0, 0,     -1e6, 1,
+                                   1e-12, 1e-300, 0,     0,     0,    -720, -1e6, 1, 1e-12, -1};
+static const double own_hi[S_N] = {1e6,  720,   3600, 3600, 720, 720, 0,   0,     0,    1e6, 1e6,
+                                   1e12, 1e300, 1e12, 1e12, 1,   720, 1e6, 10000, 1e12, 1};
 
 /* keys of the base rod that have no meaning in the non-dimensional mode */
 static const char *const dim_keys[] = {"length",  "radius",  "radius_base", "radius_tip", "E",
@@ -165,6 +211,7 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
     memset(&sp, 0, sizeof sp);
     sp.theta_tip_min = -90, sp.theta_tip_max = 270;
     sp.sweep_min = -90, sp.sweep_max = 270;
+    sp.stiffness_ratio = 1, sp.stiffness_tau = 1, sp.substeps = 1, sp.step_time = 1, sp.side = 1;
     rd r = {ctx, file ? file : "<spec>", 0};
     char *copy = cbm__alloc(ctx, len + 1);
     if (!copy)
@@ -245,12 +292,52 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
             syntax = true;
             continue;
         }
+        if (k == S_TAPER || k == S_LAW ||
+            (k == S_CONTROL && vn == 6 && !memcmp(text + vs, "static", 6))) {
+            static const char *const words[3][3] = {
+                {"linear", "uniform", "step"}, {"growth", "remodel", "none"}, {"static", 0, 0}};
+            const char *const *w = words[k == S_TAPER ? 0 : k == S_LAW ? 1 : 2];
+            int m = 0;
+            while (m < 3 && !(w[m] && strlen(w[m]) == vn && !memcmp(w[m], text + vs, vn)))
+                m++;
+            if (m == 3) {
+                err(&r, line, vcol, "'%s' expects %s, found '%.*s'", own[k],
+                    k == S_TAPER ? "linear, uniform or step" : "growth, remodel or none",
+                    (int)(vn > 40 ? 40 : vn), text + vs);
+                continue;
+            }
+            if (k == S_TAPER)
+                sp.taper = m;
+            else if (k == S_LAW)
+                sp.law = m;
+            else
+                sp.control_static = true;
+            continue;
+        }
         double x;
         if (!number(&r, own[k], text + vs, vn, line, vcol, own_lo[k], own_hi[k], &x))
             continue;
-        double *dst[S_N] = {
-            &sp.alpha,     &sp.angle, &sp.theta_tip_min, &sp.theta_tip_max, &sp.sweep_min,
-            &sp.sweep_max, NULL};
+        double *dst[S_N] = {&sp.alpha,
+                            &sp.angle,
+                            &sp.theta_tip_min,
+                            &sp.theta_tip_max,
+                            &sp.sweep_min,
+                            &sp.sweep_max,
+                            NULL,
+                            NULL,
+                            NULL,
+                            &sp.control_curvature,
+                            &sp.stiffness_ratio,
+                            &sp.stiffness_tau,
+                            &sp.youngs_final,
+                            &sp.youngs_tau,
+                            &sp.segment_load,
+                            &sp.segment_load_point,
+                            &sp.preferred_angle,
+                            &sp.induced_rate,
+                            &sp.substeps,
+                            &sp.step_time,
+                            &sp.side};
         *dst[k] = x;
     }
     sp.dimensionless = seen[S_ALPHA];
@@ -268,8 +355,27 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
             err(&r, bl[b].line, bl[b].col_nondim, "branch key '%s' needs 'alpha'",
                 bl[b].nondim_name);
     }
-    if (st == CBM_OK && sp.bend.steps > 0)
-        err(&r, 0, 0, "growth (steps > 0) is not part of the elastica command");
+    sp.grows = st == CBM_OK && sp.bend.steps > 0;
+    sp.has_preferred = seen[S_PREF];
+    sp.has_youngs_final = seen[S_EFINAL];
+    for (int k = S_TAPER; k < S_N; k++)
+        if (seen[k] && !sp.grows)
+            err(&r, 0, 0, "'%s' is a growth key: it needs steps > 0", own[k]);
+    if (seen[S_SUBSTEPS] && sp.substeps != floor(sp.substeps))
+        err(&r, 0, 0, "'substeps' expects a whole number");
+    if (sp.grows) {
+        const cbm_bend_spec *b = &sp.bend;
+        if (sp.dimensionless)
+            err(&r, 0, 0, "growth is dimensional: drop 'alpha'");
+        if (sp.n_branches)
+            err(&r, 0, 0, "growth is for a single rod: drop the branch lines");
+        if (b->aspect != 1 || b->radius_base > 0 || b->radius_tip > 0)
+            err(&r, 0, 0,
+                "growth starts from a round, uniform rod: drop aspect, radius_base and "
+                "radius_tip (radius_final sets the taper)");
+        if (b->tip_moment != 0 || b->tropism != 0)
+            err(&r, 0, 0, "growth takes no tip_moment or tropism (use preferred_angle)");
+    }
     if (!(sp.theta_tip_max > sp.theta_tip_min))
         err(&r, 0, 0, "theta_tip_max (%g) must exceed theta_tip_min (%g)", sp.theta_tip_max,
             sp.theta_tip_min);
@@ -346,5 +452,51 @@ cbm_status cbm_elastica_spec_plant(const cbm_elastica_spec *sp, cbm_elastica_pie
         *length_ref = base.length;
     if (stiffness_ref)
         *stiffness_ref = base.D0;
+    return CBM_OK;
+}
+
+cbm_status cbm_elastica_spec_growth(cbm_context *ctx, const cbm_elastica_spec *sp,
+                                    cbm_elastica_growth_def *out)
+{
+    if (!ctx || !sp || !out || !sp->grows)
+        return CBM_E_INVALID;
+    const cbm_bend_spec *b = &sp->bend;
+    cbm_elastica_growth_def d = cbm_elastica_growth_def_default();
+    double L0 = b->length_initial > 0 ? b->length_initial : b->length;
+    double h = b->length / (double)b->segments, q = L0 / h;
+    if (fabs(q - nearbyint(q)) > 1e-9 * q || nearbyint(q) < 1)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "elastica growth: length_initial (%g) must be a whole number of segments "
+                         "(length / segments = %g)",
+                         L0, h);
+    d.length0 = L0;
+    d.cells = (size_t)nearbyint(q);
+    d.steps = (size_t)b->steps;
+    d.tip_growth = (b->length - L0) / (double)b->steps;
+    d.dt = sp->step_time;
+    d.substeps = (size_t)sp->substeps;
+    d.theta_base = (sp->has_angle ? sp->angle : b->angle) * CBM_PI / 180;
+    d.radius0 = b->radius;
+    d.layer = b->radius_final > 0 ? (b->radius_final - b->radius) / (double)b->steps : 0.0;
+    d.taper = (cbm_elastica_taper)sp->taper;
+    d.stiffness_ratio = sp->stiffness_ratio;
+    d.stiffness_tau = sp->stiffness_tau;
+    d.youngs = b->youngs_modulus;
+    d.youngs_final = sp->has_youngs_final ? sp->youngs_final : b->youngs_modulus;
+    d.youngs_tau = sp->youngs_tau;
+    d.density = b->density;
+    d.gravity = b->gravity;
+    d.segment_load = sp->segment_load;
+    d.segment_load_point = sp->segment_load_point != 0;
+    d.tip_load = b->tip_load + b->tip_mass * b->gravity;
+    d.rest_curvature0 = b->rest_curvature;
+    d.preferred = sp->has_preferred;
+    d.preferred_angle = sp->preferred_angle * CBM_PI / 180;
+    d.law = (cbm_elastica_law)sp->law;
+    d.control = sp->control_static ? CBM_ELASTICA_CONTROL_STATIC : CBM_ELASTICA_CONTROL_GIVEN;
+    d.control_curvature = sp->control_curvature;
+    d.induced_rate = sp->induced_rate;
+    d.side = sp->side < 0 ? -1 : 1;
+    *out = d;
     return CBM_OK;
 }

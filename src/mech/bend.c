@@ -28,6 +28,7 @@
 #include "cambium/bend.h"
 #include "core/core.h"
 #include "core/vecmath.h"
+#include "mech/growth_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -99,6 +100,7 @@ static const key_desc keys[] = {
     {"steps", K_INT, OFF(steps), 0, 1e7, false},
     {"length_initial", K_NUM, OFF(length_initial), 0, 1e6, true},
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
+    {"control_curvature", K_NUM, OFF(control_curvature), -1e6, 1e6, false},
     {"push_unstable", K_INT, OFF(push_unstable), 0, 1, false},
     {"duration", K_NUM, OFF(duration), 0, 1e6, true},
     {"dt", K_NUM, OFF(dt), 0, 1e3, true},
@@ -492,7 +494,9 @@ static cbm_status grow_step(cbm_plant *p, const cbm_bend_spec *s, long step)
             if (r1 <= st.a)
                 continue;
             cbm_ring g = spec_ring(s, r1);
-            g.rest_rate = st.rate; /* shape memory: the current material rate */
+            /* shape memory: the current material rate, plus kappa^c (Tresierras (3.14)) */
+            g.rest_rate =
+                v3_add(st.rate, cbm__growth_control(p, i, v3(0, 0, 0), s->control_curvature));
             CBM_TRY(cbm_plant_add_ring(p, i, &g));
         }
     }

@@ -102,6 +102,8 @@ cbm_status cbm__growth_check(cbm_context *ctx, const cbm_growth_def *d)
         bad = "reaction_increment must be >= 0";
     else if (!(isfinite(d->reaction_youngs) && d->reaction_youngs >= 0.0))
         bad = "reaction_youngs must be >= 0";
+    else if (!v3_isfinite(d->control_rate) || !isfinite(d->control_up))
+        bad = "control_rate and control_up must be finite";
     else if (!(isfinite(d->reaction_max_aspect) &&
                (d->reaction_max_aspect == 0.0 || d->reaction_max_aspect >= 1.0)))
         bad = "reaction_max_aspect must be 0 (no bound) or >= 1";
@@ -179,11 +181,28 @@ cbm_status cbm_plant_upright_roll(const cbm_plant *p, const cbm_segment_def *def
     return CBM_OK;
 }
 
-/* The ring of new wood on segment `seg` (outer semi-axes a, b), memorising `cur` (wood.c fills
- * the material and the rest rate, reaction wood or not). */
+cbm_vec3 cbm__growth_control(const cbm_plant *p, size_t seg, cbm_vec3 rate, double up)
+{
+    if (up == 0.0)
+        return rate;
+    double gn = v3_norm(p->gravity);
+    cbm_vec3 u = gn > 0.0 ? v3_scale(p->gravity, -1.0 / gn) : v3(0, 1, 0);
+    cbm_vec3 h = q_rotate(p->q[seg], v3(1, 0, 0));
+    /* a rotation about H x up turns H towards up */
+    cbm_vec3 ax = v3_cross(h, u);
+    double an = v3_norm(ax);
+    if (an < 1e-12)
+        return rate;
+    cbm_vec3 loc = q_rotate(q_conj(p->q[seg]), v3_scale(ax, up / an));
+    return v3_add(rate, loc);
+}
+
+/* The ring of new wood on segment `seg` (outer semi-axes a, b), memorising `cur` plus the
+ * control rate kappa^c (wood.c fills the material and the rest rate, reaction wood or not). */
 static cbm_status growth_ring(cbm_plant *p, size_t seg, double a, double b, const cbm_growth_def *d,
                               bool reaction, cbm_vec3 cur)
 {
+    cur = v3_add(cur, cbm__growth_control(p, seg, d->control_rate, d->control_up));
     cbm_ring r;
     memset(&r, 0, sizeof r);
     r.a = a;

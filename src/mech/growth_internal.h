@@ -17,4 +17,8 @@ bool cbm__wood_leans(const cbm_growth_def *d, cbm_vec3 current, cbm_vec3 rest);
 void cbm__wood_new_ring(const cbm_growth_def *d, bool reaction, cbm_vec3 current, cbm_vec3 rest,
                         cbm_ring *r);
 
+/// kappa^c of a new ring on segment `seg` in its local frame: `rate` plus `up` rad/m about the
+/// axis that turns the segment's heading towards -gravity (zero when it is vertical).
+cbm_vec3 cbm__growth_control(const cbm_plant *p, size_t seg, cbm_vec3 rate, double up);
+
 #endif

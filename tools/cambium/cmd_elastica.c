@@ -10,6 +10,7 @@
 #include "options.h"
 
 #include "cambium/elastica.h"
+#include "cambium/elastica_growth.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -31,7 +32,10 @@ static void help(const cli_opts *t)
            "-o writes the S-curve: .csv (theta_tip_deg,theta_base_deg,kappa_base,strain_base,\n"
            "energy,tip_x,tip_y,dbase_dtip,index,stable) or a plot (.png, .svg: base curvature\n"
            "and energy against the base angle). --json prints the folds, jumps, hysteresis\n"
-           "and, with angle, the equilibria at that angle.\n");
+           "and, with angle, the equilibria at that angle. With steps > 0 the rod grows\n"
+           "(Tresierras ch. 3: tip growth, accretion, remodeling, the kappa^g law with\n"
+           "kappa^c, the inverse problem): -o writes one row per cell per step (.csv) or the\n"
+           "configurations and curvatures (.png, .svg); --json the frames.\n");
     cli_options_help(stdout, t);
 }
 
@@ -273,6 +277,162 @@ static cbm_status run(cbm_context *ctx, const cbm_elastica_spec *spec, result *r
     return s;
 }
 
+/* ---- growth under control (steps > 0): one frame per step ---- */
+
+static void growth_json(FILE *f, const cbm_elastica_growth *g, const cbm_elastica_growth_def *d,
+                        double secs)
+{
+    fprintf(f,
+            "{\"growth\": {\"steps\": %zu, \"substeps\": %zu, \"cell_length\": %.9g, "
+            "\"tip_growth\": %.9g, \"layer\": %.9g, \"control\": \"%s\", \"frames\": [",
+            d->steps, d->substeps, g->cell_length, d->tip_growth, d->layer,
+            d->control == CBM_ELASTICA_CONTROL_STATIC ? "static" : "given");
+    for (size_t k = 0; k < g->n_frames; k++) {
+        const cbm_elastica_growth_frame *fr = &g->frames[k];
+        fprintf(f,
+                "%s{\"step\": %zu, \"time\": %.9g, \"length\": %.9g, \"theta_tip_deg\": %.9g, "
+                "\"tip_x\": %.9g, \"tip_y\": %.9g, \"strain_base\": %.9g, \"moment_base\": %.9g, "
+                "\"stiffness_base\": %.9g, \"radius_base\": %.9g, \"energy\": %.9g, "
+                "\"index\": %d, \"stable\": %s, \"jumped\": %s, \"hold_error\": %.3g}",
+                k ? ", " : "", k, fr->time, fr->length, fr->theta_tip * DEG, fr->tip_x, fr->tip_y,
+                fr->strain_base, fr->moment_base, fr->stiffness_base, fr->cells[0].radius,
+                fr->energy, fr->index, fr->index == 0 ? "true" : "false",
+                fr->jumped ? "true" : "false", fr->hold_error);
+    }
+    fprintf(f, "]}, \"seconds\": %.6g}\n", secs);
+}
+
+static void growth_csv(FILE *f, const cbm_elastica_growth *g)
+{
+    fprintf(f, "step,time,s,x,y,theta_deg,x_g,y_g,kappa,kappa_g,kappa_c,kappa_o_g,k_ss,k_as,k_i,"
+               "stiffness,weight,radius,born\n");
+    for (size_t k = 0; k < g->n_frames; k++) {
+        const cbm_elastica_growth_frame *fr = &g->frames[k];
+        for (size_t i = 0; i < fr->n_cells; i++) {
+            const cbm_elastica_growth_cell *c = &fr->cells[i];
+            fprintf(f,
+                    "%zu,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,%.12g,"
+                    "%.12g,%.12g,%.12g,%.12g,%.12g,%.12g\n",
+                    k, fr->time, c->s, c->x, c->y, c->theta * DEG, c->xg, c->yg, c->kappa,
+                    c->kappa_g, c->kappa_c, c->kappa_o_g, c->k_ss, c->k_as, c->k_i, c->stiffness,
+                    c->weight, c->radius, c->born);
+        }
+    }
+}
+
+/* Two panels: the present configurations of (up to 8) frames and the last growth configuration
+ * (dashed); the last frame's kappa, kappa^g and kappa^c against s. */
+static cbm_status growth_plot(cbm_context *ctx, const cbm_elastica_growth *g, const char *path)
+{
+    const cbm_elastica_growth_frame *lf = &g->frames[g->n_frames - 1];
+    size_t n = lf->n_cells + 1;
+    double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *s = malloc(n * sizeof *s),
+           *k1 = malloc(n * sizeof *s), *k2 = malloc(n * sizeof *s), *k3 = malloc(n * sizeof *s);
+    cbm_status st = CBM_E_NOMEM;
+    cbm_plot *p = NULL;
+    if (!x || !y || !s || !k1 || !k2 || !k3)
+        goto done;
+    cbm_plot_def d = cbm_plot_def_default();
+    d.title = "growing elastica";
+    d.panels = 2;
+    d.height = 800;
+    st = cbm_plot_create(ctx, &d, &p);
+    cbm_plot_axes_def a = cbm_plot_axes_def_default();
+    a.xlabel = "x";
+    a.ylabel = "y";
+    if (st == CBM_OK)
+        st = cbm_plot_set_axes(p, 0, &a);
+    size_t every = g->n_frames > 8 ? (g->n_frames + 7) / 8 : 1;
+    char labels[10][32];
+    int nl = 0;
+    for (size_t k = 0; k < g->n_frames && st == CBM_OK; k++) {
+        if (k % every && k + 1 != g->n_frames)
+            continue;
+        const cbm_elastica_growth_frame *fr = &g->frames[k];
+        x[0] = y[0] = 0;
+        for (size_t i = 0; i < fr->n_cells; i++)
+            x[i + 1] = fr->cells[i].x, y[i + 1] = fr->cells[i].y;
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        snprintf(labels[nl % 10], sizeof labels[0], "t = %g", fr->time);
+        ser.x = x, ser.y = y, ser.n = fr->n_cells + 1, ser.label = labels[nl % 10];
+        nl++;
+        st = cbm_plot_add_series(p, 0, &ser);
+    }
+    if (st == CBM_OK) {
+        x[0] = y[0] = 0;
+        for (size_t i = 0; i < lf->n_cells; i++)
+            x[i + 1] = lf->cells[i].xg, y[i + 1] = lf->cells[i].yg;
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        ser.x = x, ser.y = y, ser.n = n, ser.label = "growth configuration (last)";
+        ser.line = CBM_PLOT_DASHED;
+        st = cbm_plot_add_series(p, 0, &ser);
+    }
+    a.xlabel = "s";
+    a.ylabel = "curvature (last frame)";
+    if (st == CBM_OK)
+        st = cbm_plot_set_axes(p, 1, &a);
+    for (size_t i = 0; i < lf->n_cells; i++) {
+        s[i] = lf->cells[i].s;
+        k1[i] = lf->cells[i].kappa, k2[i] = lf->cells[i].kappa_g, k3[i] = lf->cells[i].kappa_c;
+    }
+    const double *ys[3] = {k1, k2, k3};
+    const char *ln[3] = {"kappa", "kappa^g", "kappa^c"};
+    for (int q = 0; q < 3 && st == CBM_OK; q++) {
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        ser.x = s, ser.y = ys[q], ser.n = lf->n_cells, ser.label = ln[q];
+        if (q)
+            ser.line = CBM_PLOT_DASHED;
+        st = cbm_plot_add_series(p, 1, &ser);
+    }
+    if (st == CBM_OK)
+        st = cbm_plot_write(p, path);
+done:
+    cbm_plot_destroy(p);
+    free(x), free(y), free(s), free(k1), free(k2), free(k3);
+    return st;
+}
+
+static int run_growth(cbm_context *ctx, const cbm_elastica_spec *spec, const char *const *outs,
+                      int nout, bool json)
+{
+    cbm_elastica_growth_def d;
+    cbm_elastica_growth *g = NULL;
+    double t0 = cli_now();
+    cbm_status s = cbm_elastica_spec_growth(ctx, spec, &d);
+    if (s == CBM_OK)
+        s = cbm_elastica_grow(ctx, &d, &g);
+    double secs = cli_now() - t0;
+    int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, "elastica");
+    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        const char *ext = cli_extension(outs[k]);
+        if (!strcmp(ext, "csv")) {
+            cbm_out *o = NULL;
+            s = cbm_out_open(ctx, outs[k], &o);
+            if (s == CBM_OK) {
+                growth_csv(cbm_out_stream(o), g);
+                s = cbm_out_commit(o);
+            }
+        } else
+            s = growth_plot(ctx, g, outs[k]);
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, outs[k]);
+    }
+    if (rc == CLI_OK && json)
+        growth_json(stdout, g, &d, secs);
+    if (rc == CLI_OK && !json && nout == 0) {
+        const cbm_elastica_growth_frame *f = &g->frames[g->n_frames - 1];
+        size_t jumps = 0;
+        for (size_t k = 0; k < g->n_frames; k++)
+            jumps += g->frames[k].jumped;
+        printf("grew %zu steps to length %.6g: tip (%.6g, %.6g), tip angle %.4g deg, %zu "
+               "jump%s, %.3g s\n",
+               d.steps, f->length, f->tip_x, f->tip_y, f->theta_tip * DEG, jumps,
+               jumps == 1 ? "" : "s", secs);
+    }
+    cbm_elastica_growth_destroy(ctx, g);
+    return rc;
+}
+
 int cmd_elastica(int argc, char **argv)
 {
     const char *spec_path = NULL, *outs[MAX_OUTPUTS];
@@ -318,6 +478,11 @@ int cmd_elastica(int argc, char **argv)
         int rc = cli_fail(ctx, s, spec_path);
         cli_context_end(ctx);
         return rc;
+    }
+    if (spec.grows) {
+        int grc = run_growth(ctx, &spec, outs, nout, json);
+        cli_context_end(ctx);
+        return grc;
     }
     double t0 = cli_now();
     result r;
