@@ -13,6 +13,7 @@
 #include "cambium/turtle.h"
 #include "cambium/model.h"
 #include "cambium/tree.h"
+#include "cambium/ober.h"
 #include "cambium/measure.h"
 #include "cambium/elastica.h"
 #include "cambium/chain.h"
