@@ -18,5 +18,6 @@
 #include "cambium/elastica.h"
 #include "cambium/chain.h"
 #include "cambium/turtle_motion.h"
+#include "cambium/light.h"
 
 #endif
