@@ -2,7 +2,8 @@
  * (docs/validation.md, "Oberlaender's parametric tree"): E1 the expected laterals per trunk
  * shoot of each Table 4 preset within sampling error; E2 the morphogenetic gradient
  * l_n = l_0 p^n; E3 the Cryptomeria trunk height after T years equal to the sum of the Richards
- * increments; the four presets' architecture measured on the tree (whorled vs spiral,
+ * increments; E5 light competition between two close trees; the four presets' architecture
+ * measured on the tree (whorled vs spiral,
  * plagiotropic vs orthotropic); the growth-function library against numerical derivatives; the
  * pipe model and the mortality invariant; formula errors at file:line:col. */
 #include "test.h"
@@ -14,8 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static cbm_ober_stand *grow(cbm_context *ctx, const char *model, int years,
-                            const char *const *set)
+static cbm_ober_stand *grow(cbm_context *ctx, const char *model, int years, const char *const *set)
 {
     cbm_ober_def d;
     CHECK_OK(cbm_ober_def_builtin(ctx, model, &d));
@@ -43,8 +43,8 @@ TEST(ober_e1_laterals_per_trunk_shoot)
         for (int seed = 1; seed <= 2; seed++) {
             char sd[16];
             snprintf(sd, sizeof sd, "%d", seed);
-            const char *set2[] = {"maxOrder", "1", "standX", "15", "standY", "15", "seed", sd,
-                                  NULL};
+            const char *set2[] = {"maxOrder", "1",    "standX", "15", "standY",
+                                  "15",       "seed", sd,       NULL};
             cbm_ober_stand *s = grow(ctx, models[m], 3, set2);
             for (size_t i = 0; s && i < cbm_ober_shoot_count(s); i++) {
                 cbm_ober_shoot h;
@@ -112,9 +112,13 @@ TEST(ober_e2_morphogenetic_gradient)
     CHECK(found[0] && found[1] && found[2] && found[3]);
     cbm_ober_destroy(s);
     /* the trend term: l = l_p p - delta x makes no shoot once delta >= l_p p / x */
-    const char *set2[] = {"specificLengthLambda[1]", "0.5 * len * position + 0.3 * baseLength",
-                          "specificLengthLambda[2]", "len * position - 40 * trend",
-                          "sproutingPossibilityLambda", "1", NULL};
+    const char *set2[] = {"specificLengthLambda[1]",
+                          "0.5 * len * position + 0.3 * baseLength",
+                          "specificLengthLambda[2]",
+                          "len * position - 40 * trend",
+                          "sproutingPossibilityLambda",
+                          "1",
+                          NULL};
     s = grow(ctx, "ober-rauh", 6, set2);
     for (size_t i = 0; s && i < cbm_ober_shoot_count(s); i++) {
         cbm_ober_shoot h, m;
@@ -236,10 +240,10 @@ TEST(ober_architecture_of_the_presets)
 TEST(ober_growth_functions)
 {
     cbm_context *ctx = test_ctx();
-    const char *fns[][2] = {
-        {"hossfeld", "30, 2, 1.5"},     {"gompertz", "25, 4, 0.2"}, {"logistic", "25, 0.3, 20"},
-        {"monomolecular", "25, 0.1, 0.9"}, {"bertalanffy", "25, 0.08"}, {"richards", "24.9506, 0.06438, 1.9736"},
-        {"levakovic", "25, 40, 1.3"},   {"korf", "25, 5, 0.6"}};
+    const char *fns[][2] = {{"hossfeld", "30, 2, 1.5"},   {"gompertz", "25, 4, 0.2"},
+                            {"logistic", "25, 0.3, 20"},  {"monomolecular", "25, 0.1, 0.9"},
+                            {"bertalanffy", "25, 0.08"},  {"richards", "24.9506, 0.06438, 1.9736"},
+                            {"levakovic", "25, 40, 1.3"}, {"korf", "25, 5, 0.6"}};
     for (size_t f = 0; f < sizeof fns / sizeof fns[0]; f++) {
         char inc[200], num[300];
         snprintf(inc, sizeof inc, "%s_inc(age, %s)", fns[f][0], fns[f][1]);
@@ -274,8 +278,8 @@ TEST(ober_pipe_model_and_mortality)
     cbm_context *ctx = test_ctx();
     cbm_ober_def d;
     CHECK_OK(cbm_ober_def_builtin(ctx, "ober-attims", &d));
-    CHECK_OK(cbm_ober_def_set(ctx, &d, "sproutingPossibilityLambda", "order == 0 ? 1 : ran(1) > 0.3",
-                              NULL));
+    CHECK_OK(cbm_ober_def_set(ctx, &d, "sproutingPossibilityLambda",
+                              "order == 0 ? 1 : ran(1) > 0.3", NULL));
     cbm_ober_stand *s = NULL;
     CHECK_OK(cbm_ober_create(ctx, &d, &s));
     double rp = d.pipe_size * 0.01;
@@ -385,5 +389,68 @@ TEST(ober_stand_and_determinism)
     CHECK(late > 0);
     cbm_ober_destroy(a);
     cbm_ober_destroy(b);
+    test_ctx_end(ctx);
+}
+
+/* Leaves of tree t on the side facing +x (toward its neighbour) and away from it, counted by
+ * the horizontal position of their shoot's middle relative to the tree's base. */
+static void sides(const cbm_ober_stand *s, size_t t, double *facing, double *away)
+{
+    cbm_vec3 p = cbm_ober_tree_position(s, t);
+    *facing = *away = 0;
+    for (size_t i = 0; i < cbm_ober_shoot_count(s); i++) {
+        cbm_ober_shoot h;
+        if (cbm_ober_shoot_info(s, i, &h) != CBM_OK || h.tree != t || h.order == 0)
+            continue;
+        double x = 0.5 * (h.base.x + h.tip.x) - p.x;
+        if (x > 0.02)
+            *facing += h.leaves;
+        else if (x < -0.02)
+            *away += h.leaves;
+    }
+}
+
+/* E5: two trees grown close together (ober-carbon, light field, 1.2 m apart) keep fewer leaves on
+ * the sides facing each other than away from each other, more so with time; the same pair 30 m
+ * apart shows only the structural noise of the whorls. */
+static double pair_asymmetry(const cbm_ober_stand *s)
+{
+    double f0, w0, f1, w1;
+    sides(s, 0, &f0, &w0);
+    sides(s, 1, &w1, &f1); /* tree 1 faces -x */
+    return (w0 + w1 - f0 - f1) / (w0 + w1 + f0 + f1);
+}
+
+TEST(ober_e5_light_competition)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_ober_stand *st[2] = {NULL, NULL};
+    const char *spacing[2] = {"1.2", "30"};
+    for (int k = 0; k < 2; k++) {
+        cbm_ober_def d;
+        CHECK_OK(cbm_ober_def_builtin(ctx, "ober-carbon", &d));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "standX", "2", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "spacing", spacing[k], NULL));
+        CHECK_OK(cbm_ober_create(ctx, &d, &st[k]));
+    }
+    double at5 = 0, at10 = 0;
+    for (int y = 1; st[0] && st[1] && y <= 10; y++) {
+        CHECK_OK(cbm_ober_year(st[0]));
+        CHECK_OK(cbm_ober_year(st[1]));
+        if (y < 4)
+            continue;
+        double close = pair_asymmetry(st[0]), far = pair_asymmetry(st[1]);
+        printf("year %2d: leaves away minus facing over their sum: 1.2 m apart %.3f, 30 m apart "
+               "%.3f\n",
+               y, close, far);
+        if (y >= 8)
+            CHECK(close - far > 0.1);
+        CHECK(fabs(far) < 0.1);
+        at5 = y == 5 ? close : at5;
+        at10 = y == 10 ? close : at10;
+    }
+    CHECK(at10 > at5 + 0.1); /* it grows with time */
+    cbm_ober_destroy(st[0]);
+    cbm_ober_destroy(st[1]);
     test_ctx_end(ctx);
 }

@@ -45,17 +45,17 @@ typedef struct cbm_ober_def {
     uint64_t seed; ///< generator seed
     int years;     ///< years grown by cbm_ober_run
     /* Table 3, in its order */
-    int max_order;                     ///< maxOrder
-    cbm_ober_formula base_length;      ///< baseLengthLambda (tree): cm/year -> baseLength
-    cbm_ober_formula carbon_tax;       ///< carbonTaxLambda (tree) -> carbonTax
-    int n_specific_length;             ///< slots set (order k uses slot min(k, n - 1))
+    int max_order;                ///< maxOrder
+    cbm_ober_formula base_length; ///< baseLengthLambda (tree): cm/year -> baseLength
+    cbm_ober_formula carbon_tax;  ///< carbonTaxLambda (tree) -> carbonTax
+    int n_specific_length;        ///< slots set (order k uses slot min(k, n - 1))
     cbm_ober_formula specific_length[CBM_OBER_ORDERS]; ///< specificLengthLambda[order] (bud), cm
     int n_num_nodes;
-    cbm_ober_formula num_nodes[CBM_OBER_ORDERS]; ///< numNodeLambda[order] (bud), >= 1
-    cbm_ober_formula sprouting;                  ///< sproutingPossibilityLambda (shoot), bool
-    cbm_ober_formula proventitious;              ///< proventitiosShootLambda (sleeping bud)
-    cbm_ober_formula apical_split;               ///< apicalSplitLambda (apical bud): a fork
-    cbm_ober_formula short_shoot;                ///< shortShootLambda (bud)
+    cbm_ober_formula num_nodes[CBM_OBER_ORDERS];   ///< numNodeLambda[order] (bud), >= 1
+    cbm_ober_formula sprouting;                    ///< sproutingPossibilityLambda (shoot), bool
+    cbm_ober_formula proventitious;                ///< proventitiosShootLambda (sleeping bud)
+    cbm_ober_formula apical_split;                 ///< apicalSplitLambda (apical bud): a fork
+    cbm_ober_formula short_shoot;                  ///< shortShootLambda (bud)
     double possibility_node_0, possibility_node_x; ///< a node bears growing buds if U < value
     double possibility_bud_0, possibility_bud_y;   ///< a bud grows if U < value, else sleeps
     int n_new_shoots;
@@ -71,12 +71,14 @@ typedef struct cbm_ober_def {
     cbm_ober_formula bending;              ///< bendingLambda (shoot): yearly increment
     double offset_0, offset_x;             ///< deg, head rotation between successive nodes
     /* beyond Table 3 (docs/models.md says why) */
-    double initial_length;  ///< cm, the seedling's trunk (0 = specificLengthLambda[0] at age 1)
-    double fork_angle;      ///< deg, each arm of a fork from the axis
-    bool pipe_all_leaves;   ///< pipe model counts all living leaves (0: this year's new ones)
-    bool carbon_sum;        ///< shoot carbon is the sum of its leaves' (0: their mean)
-    bool light;             ///< leaf carbon from ray-cast light (0: every leaf unshaded, 1)
-    int sky;                ///< cbm_sky_kind of the light pass (cambium/light.h)
+    double initial_length; ///< cm, the seedling's trunk (0 = specificLengthLambda[0] at age 1)
+    double fork_angle;     ///< deg, each arm of a fork from the axis
+    bool pipe_all_leaves;  ///< pipe model counts all living leaves (0: this year's new ones)
+    bool carbon_sum;       ///< shoot carbon is the sum of its leaves' (0: their mean)
+    bool light;            ///< leaf carbon from ray-cast light (0: every leaf unshaded, 1)
+    int sky;               ///< cbm_sky_kind of the light pass (0 dome, 1 field, 2 UOC, 3 SOC)
+    int light_rings, light_azimuths; ///< the sky's sectors (cbm_light_def rings, azimuths)
+    int light_samples;               ///< sample points per leaf side (cbm_light_def samples)
     /* the stand */
     int stand_x, stand_y; ///< trees on a grid of stand_x by stand_y (1 x 1: one tree)
     double spacing;       ///< m between neighbouring trees of the grid
@@ -121,28 +123,29 @@ typedef struct cbm_ober_stand cbm_ober_stand;
 
 /// The per-tree, per-year report (thesis getInfo(), digest section 5).
 typedef struct cbm_ober_report {
-    int year;                  ///< stand year (1-based)
-    int age;                   ///< tree age in years (0 = not germinated)
-    double height;             ///< m, highest point above the tree's base
-    size_t leaves;             ///< living leaves
-    size_t shoots;             ///< living annual shoots
-    size_t shoots_order[4];    ///< of which order 0, 1, 2, >= 3
-    size_t new_shoots;         ///< shoots made this year
-    size_t proventitious;      ///< of which from sleeping buds
-    size_t forks;              ///< apical splits this year
-    size_t removed;            ///< shoots pruned this year (no leaves, no children)
-    double wood_volume;        ///< m^3, sum of pi r^2 len over the shoots
-    double trunk_volume;       ///< m^3, the order-0 shoots'
-    double base_diameter;      ///< m, of the first trunk shoot
-    double carbon_tax;         ///< carbonTax of this year
-    double carbon_mean;        ///< carbonMean: mean carbon of the leaves
-    double base_length;        ///< cm, baseLength of this year
+    int year;               ///< stand year (1-based)
+    int age;                ///< tree age in years (0 = not germinated)
+    double height;          ///< m, highest point above the tree's base
+    size_t leaves;          ///< living leaves
+    size_t shoots;          ///< living annual shoots
+    size_t shoots_order[4]; ///< of which order 0, 1, 2, >= 3
+    size_t new_shoots;      ///< shoots made this year
+    size_t proventitious;   ///< of which from sleeping buds
+    size_t forks;           ///< apical splits this year
+    size_t removed;         ///< shoots pruned this year (no leaves, no children)
+    double wood_volume;     ///< m^3, sum of pi r^2 len over the shoots
+    double trunk_volume;    ///< m^3, the order-0 shoots'
+    double base_diameter;   ///< m, of the first trunk shoot
+    double carbon_tax;      ///< carbonTax of this year
+    double carbon_mean;     ///< carbonMean: mean carbon of the leaves
+    double base_length;     ///< cm, baseLength of this year
+    size_t light_rays;      ///< rays of the stand's light pass this year (0 without light)
+    double light_seconds;   ///< its wall-clock time
 } cbm_ober_report;
 
 /// Creates a stand: def.stand_x x def.stand_y seeds (timers 0..stagger); trees with timer 0
 /// germinate in the first step. The definition is checked, its formulas compiled and copied.
-CBM_API cbm_status cbm_ober_create(cbm_context *ctx, const cbm_ober_def *def,
-                                   cbm_ober_stand **out);
+CBM_API cbm_status cbm_ober_create(cbm_context *ctx, const cbm_ober_def *def, cbm_ober_stand **out);
 CBM_API void cbm_ober_destroy(cbm_ober_stand *stand);
 /// One year of every tree of the stand.
 CBM_API cbm_status cbm_ober_year(cbm_ober_stand *stand);
@@ -166,17 +169,16 @@ typedef struct cbm_ober_shoot {
     bool proventitious; ///< grew from a sleeping bud
     double position;    ///< p of the bud it grew from (1 = apical)
     double length, radius;
-    double tropism; ///< strength of its joint (orientation + the yearly bending)
-    double carbon;  ///< shoot carbon of the last step
-    int leaves;     ///< living leaves
-    int buds;       ///< lateral buds made (growing or sleeping)
-    int active_buds; ///< of which made growing (fertile node and bud, order <= maxOrder)
+    double tropism;     ///< strength of its joint (orientation + the yearly bending)
+    double carbon;      ///< shoot carbon of the last step
+    int leaves;         ///< living leaves
+    int buds;           ///< lateral buds made (growing or sleeping)
+    int active_buds;    ///< of which made growing (fertile node and bud, order <= maxOrder)
     cbm_vec3 base, tip; ///< m, world, y up
 } cbm_ober_shoot;
 
 CBM_API size_t cbm_ober_shoot_count(const cbm_ober_stand *stand);
-CBM_API cbm_status cbm_ober_shoot_info(const cbm_ober_stand *stand, size_t i,
-                                       cbm_ober_shoot *out);
+CBM_API cbm_status cbm_ober_shoot_info(const cbm_ober_stand *stand, size_t i, cbm_ober_shoot *out);
 
 /// Appends the stand to a scene: each shoot a cylinder (12 sides or `sides`), each living leaf
 /// a horizontal green rectangle at its node, and a ground square if `ground`.

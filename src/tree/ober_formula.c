@@ -49,8 +49,9 @@ static const var_name VARS[] = {
 #define NVARS (sizeof VARS / sizeof VARS[0])
 
 static const char *const NAMES[F_SPECIFIC_LENGTH] = {
-    "baseLengthLambda", "carbonTaxLambda",  "sproutingPossibilityLambda", "proventitiosShootLambda",
-    "apicalSplitLambda", "shortShootLambda", "orientationLambda",         "bendingLambda"};
+    "baseLengthLambda",        "carbonTaxLambda",   "sproutingPossibilityLambda",
+    "proventitiosShootLambda", "apicalSplitLambda", "shortShootLambda",
+    "orientationLambda",       "bendingLambda"};
 
 const char *cbm__ober_formula_name(int f)
 {
@@ -230,7 +231,7 @@ cbm_status cbm__ober_compile(cbm_context *ctx, const cbm_ober_def *d, ober_prog 
                             "apical parentOrder parentTrend");
         /* the formals' indices become the variables' slots; a variable of a lower level is
          * an error */
-        int lim = level_of(f) == LVL_TREE ? V_TREE_LEVEL_END
+        int lim = level_of(f) == LVL_TREE    ? V_TREE_LEVEL_END
                   : level_of(f) == LVL_SHOOT ? V_SHOOT_LEVEL_END
                                              : V_COUNT;
         for (size_t n = nodes0; n < c->nodes.len; n++) {

@@ -153,8 +153,7 @@ static cbm_status add_shoot(cbm_ober_stand *s, const new_shoot *n)
             b.trend = 0;
             b.position = (double)i / n->nodes;
             b.head = n->order == 0 ? ph + j * 360.0 / k : ph + d->shoot_poss[j];
-            bool grows =
-                uni(s) < (n->order == 0 ? d->possibility_bud_0 : d->possibility_bud_y);
+            bool grows = uni(s) < (n->order == 0 ? d->possibility_bud_0 : d->possibility_bud_y);
             if (n->short_shoot || n->order + 1 > d->max_order)
                 b.none = 1;
             else {
@@ -397,6 +396,8 @@ static void report(cbm_ober_stand *s, size_t ti)
     r->carbon_tax = t->carbon_tax;
     r->carbon_mean = t->carbon_mean;
     r->base_length = t->base_length;
+    r->light_rays = s->light_rays;
+    r->light_seconds = s->light_seconds;
 }
 
 static cbm_status tree_level(cbm_ober_stand *s, size_t ti, size_t n0)
@@ -426,16 +427,17 @@ static cbm_status germinate(cbm_ober_stand *s, size_t ti)
     fill_tree(s, t, ti);
     fill_bud(s, &b, &none);
     cbm_status st = CBM_OK;
-    double len = s->def.initial_length > 0
-                     ? s->def.initial_length
-                     : cbm__ober_eval(&s->prog, F_SPECIFIC_LENGTH, &st);
+    double len = s->def.initial_length > 0 ? s->def.initial_length
+                                           : cbm__ober_eval(&s->prog, F_SPECIFIC_LENGTH, &st);
     double nn = cbm__ober_eval(&s->prog, F_NUM_NODES, &st);
     CBM_TRY(st);
     if (!(len > 0))
         len = 1e-3; /* a seedling of no length still carries its buds */
     new_shoot n = {.mother = -1,
                    .tree = (int32_t)ti,
-                   .nodes = nn < 1 ? 1 : nn > 1000 ? 1000 : (int)lround(nn),
+                   .nodes = nn < 1      ? 1
+                            : nn > 1000 ? 1000
+                                        : (int)lround(nn),
                    .position = 1,
                    .len = len};
     return add_shoot(s, &n);
@@ -571,7 +573,8 @@ cbm_status cbm_ober_create(cbm_context *ctx, const cbm_ober_def *def, cbm_ober_s
         for (int ix = 0; ix < nx && st == CBM_OK; ix++) {
             ober_tree t;
             memset(&t, 0, sizeof t);
-            double x = (ix - 0.5 * (nx - 1)) * def->spacing, z = (iy - 0.5 * (ny - 1)) * def->spacing;
+            double x = (ix - 0.5 * (nx - 1)) * def->spacing,
+                   z = (iy - 0.5 * (ny - 1)) * def->spacing;
             if (def->jitter > 0) {
                 x += (2 * uni(s) - 1) * def->jitter;
                 z += (2 * uni(s) - 1) * def->jitter;

@@ -54,7 +54,7 @@ enum {
     F_SHORT_SHOOT,
     F_ORIENTATION,
     F_BENDING,
-    F_SPECIFIC_LENGTH,                              /* + order */
+    F_SPECIFIC_LENGTH,                                 /* + order */
     F_NUM_NODES = F_SPECIFIC_LENGTH + CBM_OBER_ORDERS, /* + order */
     F_COUNT = F_NUM_NODES + CBM_OBER_ORDERS
 };
@@ -83,20 +83,20 @@ typedef struct ober_bud {
     double position;
     double head; /* deg about the carrier's axis (phyllotaxis and the bud's own angle) */
     uint8_t sleep, used, none; /* none: a leaf position only (short shoot, beyond maxOrder) */
-    uint8_t apical;             /* the apical bud (no leaf) */
+    uint8_t apical;            /* the apical bud (no leaf) */
 } ober_bud;
 
 typedef struct ober_shoot {
     int32_t parent, tree;
     int32_t order, trend, nodes, age;
-    int32_t node; /* lateral: node on the mother (1..N); 0: at the mother's tip */
-    double head;  /* deg: lateral: head about the mother's axis; fork: the arm's side */
+    int32_t node;  /* lateral: node on the mother (1..N); 0: at the mother's tip */
+    double head;   /* deg: lateral: head about the mother's axis; fork: the arm's side */
     double insert; /* deg: insertion angle from the mother's axis (0: continuation) */
     double phase;  /* deg: cumulative head rotation of the axis at the shoot's base */
     double position;
     double len, radius, tropism, carbon; /* cm, cm, -, - */
     int32_t leaves_made;
-    int32_t leaves; /* living */
+    int32_t leaves;    /* living */
     int32_t supported; /* leaves counted by the pipe model this year (basipetal) */
     int32_t first_bud, nbuds, active_buds;
     int32_t children;
@@ -125,6 +125,8 @@ struct cbm_ober_stand {
     CBM_ARRAY(ober_shoot) shoots;
     CBM_ARRAY(ober_bud) buds;
     CBM_ARRAY(double) leaf_carbon; /* per lateral bud: carbon of its leaf from the light pass */
+    size_t light_rays;             /* of the last light pass */
+    double light_seconds;
 };
 
 /* ober_scene.c: the leaf quad of bud b (cm, world), false when it has no living leaf. */

@@ -68,6 +68,10 @@ cbm_ober_def cbm_ober_def_default(void)
     d.offset_0 = d.offset_x = 75;
     d.initial_length = 0;
     d.fork_angle = 25;
+    d.sky = 1; /* the thesis's light field: even light over a stand */
+    d.light_rings = 4;
+    d.light_azimuths = 8;
+    d.light_samples = 1;
     d.stand_x = d.stand_y = 1;
     d.spacing = 3;
     return d;
@@ -122,6 +126,9 @@ static const param PARAMS[] = {
     {"carbonSum", K_BOOL, O(carbon_sum), 0, 0, 0},
     {"light", K_BOOL, O(light), 0, 0, 0},
     {"sky", K_INT, O(sky), 0, 0, 3},
+    {"lightRings", K_INT, O(light_rings), 0, 1, 32},
+    {"lightAzimuths", K_INT, O(light_azimuths), 0, 1, 64},
+    {"lightSamples", K_INT, O(light_samples), 0, 1, 16},
     {"standX", K_INT, O(stand_x), 0, 1, 20},
     {"standY", K_INT, O(stand_y), 0, 1, 20},
     {"spacing", K_REAL, O(spacing), 0, 0.01, 1e3},
@@ -153,8 +160,7 @@ static bool parse_real(const char *s, double *out)
 }
 
 /* `{a, b, c}` or `a b c` */
-static bool parse_list(const char *s, double *v, int *n, double lo, double hi, char *err,
-                       size_t en)
+static bool parse_list(const char *s, double *v, int *n, double lo, double hi, char *err, size_t en)
 {
     while (*s == ' ' || *s == '\t')
         s++;
@@ -499,8 +505,8 @@ cbm_status cbm_ober_def_check(cbm_context *ctx, const cbm_ober_def *d)
             return cbm__fail(ctx, CBM_E_INVALID, "%s = %g outside [%g, %g]", pm->name, v, pm->lo,
                              pm->hi);
     }
-    if (d->n_specific_length < 1 || d->n_num_nodes < 1 ||
-        d->n_specific_length > CBM_OBER_ORDERS || d->n_num_nodes > CBM_OBER_ORDERS)
+    if (d->n_specific_length < 1 || d->n_num_nodes < 1 || d->n_specific_length > CBM_OBER_ORDERS ||
+        d->n_num_nodes > CBM_OBER_ORDERS)
         return cbm__fail(ctx, CBM_E_INVALID,
                          "specificLengthLambda and numNodeLambda need a formula for order 0");
     if (d->n_new_shoots < 1 || d->n_shoot_poss < 1 || d->n_shoot_angle < 1 ||
@@ -602,13 +608,27 @@ static const builtin BUILTINS[] = {
     {"ober-rauh", WHORLED ORTHO "offset_0 = 75\noffset_x = 75\n"},
     {"ober-troll", SPIRAL PLAGIO "offset_0 = 75\noffset_x = 75\n"},
     {"ober-cryptomeria", ""},
+    /* the carbon balance (eqs. 19-22) on Rauh's architecture, c = carbon - carbonTax: the
+     * tax with alpha = 0.5 and beta = 2e-3 per cm^3, l_max 60/40/25 cm, phi = 0.7, xi = 0.3,
+     * x = 2 cm (none given in the thesis), the sprouting thresholds of eq. 22 */
+    {"ober-carbon",
+     "light = 1\nyears = 15\ninitialLength = 30\n"
+     "carbonTaxLambda = (woodVolume - 0.5 * trunkVolume) / (1 + activeShoots) * 2e-3\n"
+     "specificLengthLambda[0] = 60 * max(carbon - carbonTax, 0)\n"
+     "specificLengthLambda[1] = 0.7 * 40 * max(carbon - carbonTax, 0) + 0.3 * (len * position - "
+     "2 * trend)\n"
+     "specificLengthLambda[2] = 0.7 * 25 * max(carbon - carbonTax, 0) + 0.3 * (len * position - "
+     "2 * trend)\n"
+     "sproutingPossibilityLambda = order == 0 ? carbon - carbonTax > 0.05 : carbon - carbonTax > "
+     "0.2\n"},
 };
 #define NBUILTINS (sizeof BUILTINS / sizeof BUILTINS[0])
 
 const char *const *cbm_ober_builtin_names(void)
 {
-    static const char *const names[] = {"ober-massart",     "ober-attims", "ober-rauh",
-                                        "ober-troll",       "ober-cryptomeria", NULL};
+    static const char *const names[] = {
+        "ober-massart",     "ober-attims", "ober-rauh", "ober-troll",
+        "ober-cryptomeria", "ober-carbon", NULL};
     _Static_assert(sizeof names / sizeof names[0] == NBUILTINS + 1, "builtin names");
     return names;
 }

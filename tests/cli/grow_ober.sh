@@ -6,7 +6,7 @@ set -euo pipefail
 bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-for m in massart attims rauh troll cryptomeria; do
+for m in massart attims rauh troll cryptomeria carbon; do
     diff <("$bin" grow "$CBM_SOURCE/models/ober-$m.tree" --params) <("$bin" grow ober-$m --params)
 done
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/s.json" \

@@ -148,6 +148,8 @@ static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const 
             cbm_json_number(j, "base_length_cm", r->base_length);
             cbm_json_number(j, "carbon_tax", r->carbon_tax);
             cbm_json_number(j, "carbon_mean", r->carbon_mean);
+            cbm_json_int(j, "light_rays", (int64_t)r->light_rays);
+            cbm_json_number(j, "light_seconds", r->light_seconds);
             cbm_json_end_object(j);
         }
         cbm_json_end_array(j);
@@ -290,7 +292,9 @@ int cmd_grow_ober(int argc, char **argv)
     int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot */
     const char *paths[MAX_OUTPUTS];
     for (int k = 0; k < nout; k++) {
-        kind[k] = !strncmp(outs[k], "plot:", 5) ? 2 : !strcmp(cli_extension(outs[k]), "json") ? 1 : 0;
+        kind[k] = !strncmp(outs[k], "plot:", 5)             ? 2
+                  : !strcmp(cli_extension(outs[k]), "json") ? 1
+                                                            : 0;
         paths[k] = kind[k] == 2 ? outs[k] + 5 : outs[k];
         if (kind[k] == 2 && strcmp(cli_extension(paths[k]), "svg") &&
             strcmp(cli_extension(paths[k]), "png"))
