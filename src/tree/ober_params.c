@@ -609,11 +609,11 @@ static const builtin BUILTINS[] = {
     {"ober-troll", SPIRAL PLAGIO "offset_0 = 75\noffset_x = 75\n"},
     {"ober-cryptomeria", ""},
     /* the carbon balance (eqs. 19-22) on Rauh's architecture, c = carbon - carbonTax: the
-     * tax with alpha = 0.5 and beta = 2e-3 per cm^3, l_max 60/40/25 cm, phi = 0.7, xi = 0.3,
+     * tax with alpha = 0.5 and beta = 5e-4 per cm^3, l_max 60/40/25 cm, phi = 0.7, xi = 0.3,
      * x = 2 cm (none given in the thesis), the sprouting thresholds of eq. 22 */
     {"ober-carbon",
      "light = 1\nyears = 15\ninitialLength = 30\n"
-     "carbonTaxLambda = (woodVolume - 0.5 * trunkVolume) / (1 + activeShoots) * 2e-3\n"
+     "carbonTaxLambda = (woodVolume - 0.5 * trunkVolume) / (1 + activeShoots) * 5e-4\n"
      "specificLengthLambda[0] = 60 * max(carbon - carbonTax, 0)\n"
      "specificLengthLambda[1] = 0.7 * 40 * max(carbon - carbonTax, 0) + 0.3 * (len * position - "
      "2 * trend)\n"
