@@ -13,10 +13,12 @@
 #include "cambium/turtle.h"
 #include "cambium/model.h"
 #include "cambium/tree.h"
+#include "cambium/ober.h"
 #include "cambium/measure.h"
 #include "cambium/elastica.h"
 #include "cambium/elastica_growth.h"
 #include "cambium/chain.h"
 #include "cambium/turtle_motion.h"
+#include "cambium/light.h"
 
 #endif

@@ -37,6 +37,25 @@ typedef enum cbm__fn {
     FN_MIN,
     FN_MAX,
     FN_MATH_END, /* not a function: the end of the math ones */
+    /* growth functions of forestry (tree parameter formulas only): cbm__builtin_growth, the
+     * growth y(t) and its increment y'(t) of each, arguments (t, a, b, c) */
+    FN_HOSSFELD,
+    FN_HOSSFELD_INC,
+    FN_GOMPERTZ,
+    FN_GOMPERTZ_INC,
+    FN_LOGISTIC,
+    FN_LOGISTIC_INC,
+    FN_MONOMOLECULAR,
+    FN_MONOMOLECULAR_INC,
+    FN_BERTALANFFY, /* (t, a, b) */
+    FN_BERTALANFFY_INC,
+    FN_RICHARDS,
+    FN_RICHARDS_INC,
+    FN_LEVAKOVIC,
+    FN_LEVAKOVIC_INC,
+    FN_KORF,
+    FN_KORF_INC,
+    FN_GROWTH_END, /* not a function: the end of the growth ones */
     /* random numbers (lang/random.h) */
     FN_RAN,
     FN_NRAN,
@@ -85,7 +104,9 @@ typedef enum cbm__fn {
     FN_COUNT
 } cbm__fn;
 
-enum { CBM__CPFG = 1, CBM__LC = 2 }; /* dialect bits */
+/* dialect bits; CBM__TREE: the formulas of tree parameter files (src/tree/ober_*.c), which are
+ * cpfg-dialect expressions that also know the growth functions and pow, min, max, abs, fmod */
+enum { CBM__CPFG = 1, CBM__LC = 2, CBM__TREE = 4 };
 
 typedef struct cbm__builtin {
     const char *name;
@@ -147,5 +168,10 @@ static inline double cbm__builtin_math(int fn, double a, double b, bool degrees)
         return 0;
     }
 }
+
+/// The value of a growth function (FN_HOSSFELD <= fn < FN_GROWTH_END) at its arguments
+/// a[0] = t, a[1..3] = the curve's a, b, c (Pretzsch's table in Oberlaender 2020, Fig. 13, with
+/// the Gompertz increment corrected).
+double cbm__builtin_growth(int fn, const double *a);
 
 #endif

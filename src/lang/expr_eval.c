@@ -40,6 +40,8 @@ static double call(cbm__eval *e, const cbm__node *n)
         a[k++] = cbm__eval_expr(e, i);
     if (n->fn < FN_MATH_END)
         return cbm__builtin_math(n->fn, a[0], a[1], true);
+    if (n->fn > FN_MATH_END && n->fn < FN_GROWTH_END)
+        return cbm__builtin_growth(n->fn, a);
     switch (n->fn) {
     case FN_RAN:
         return cbm__rand48_next(&e->rnd.r48) * a[0];

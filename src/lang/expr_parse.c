@@ -271,7 +271,7 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
         while (isalnum((unsigned char)c->text[c->pos]) || c->text[c->pos] == '_')
             c->pos++;
         size_t len = c->pos - start;
-        const cbm__builtin *fn = cbm__builtin_find(t, len, CBM__CPFG);
+        const cbm__builtin *fn = cbm__builtin_find(t, len, c->dialect ? c->dialect : CBM__CPFG);
         if (fn) {
             if (!match(c, "(", nl)) {
                 expected(c, "'(' after a function name");

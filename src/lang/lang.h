@@ -136,6 +136,7 @@ typedef struct cbm__compiler {
     const char *const *formals; /* names of the production's formal parameters */
     const size_t *formal_len;
     int nformals;
+    int dialect; /* builtins known (CBM__CPFG ...); 0 = the cpfg dialect's */
     int depth;
     size_t errors;
     bool fatal; /* out of memory or too many errors: stop parsing */

@@ -13,6 +13,11 @@ int cmd_plot(int argc, char **argv);
 int cmd_elastica(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
+/* grow for Oberlaender's parametric tree (cmd_grow_ober.c): cmd_grow hands over when the model
+ * is one (cli_grow_is_ober) */
+#include <stdbool.h>
+bool cli_grow_is_ober(int argc, char **argv);
+int cmd_grow_ober(int argc, char **argv);
 
 /* The forester's summary of a tree (cmd_info.c), also printed by `grow --report` and written in
  * the year-by-year summary of `grow`. */

@@ -1,0 +1,456 @@
+/* Oberlaender's parametric tree (cambium/ober.h) against the derived checks of the thesis
+ * (docs/validation.md, "Oberlaender's parametric tree"): E1 the expected laterals per trunk
+ * shoot of each Table 4 preset within sampling error; E2 the morphogenetic gradient
+ * l_n = l_0 p^n; E3 the Cryptomeria trunk height after T years equal to the sum of the Richards
+ * increments; E5 light competition between two close trees; the four presets' architecture
+ * measured on the tree (whorled vs spiral,
+ * plagiotropic vs orthotropic); the growth-function library against numerical derivatives; the
+ * pipe model and the mortality invariant; formula errors at file:line:col. */
+#include "test.h"
+
+#include "cambium/cambium.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static cbm_ober_stand *grow(cbm_context *ctx, const char *model, int years, const char *const *set)
+{
+    cbm_ober_def d;
+    CHECK_OK(cbm_ober_def_builtin(ctx, model, &d));
+    for (int k = 0; set && set[k]; k += 2)
+        CHECK_OK(cbm_ober_def_set(ctx, &d, set[k], set[k + 1], NULL));
+    d.years = years;
+    cbm_ober_stand *s = NULL;
+    CHECK_OK(cbm_ober_create(ctx, &d, &s));
+    if (s)
+        CHECK_OK(cbm_ober_run(s));
+    return s;
+}
+
+/* E1: laterals per trunk annual shoot, Massart/Rauh 2 x E[k] = 2 x 5.05 = 10.1, Attims/Troll
+ * 4 x 1.05 = 4.2 (possibilityNode_0 = possibilityBud_0 = 1), variance nodes x 0.0475; the mean
+ * over n shoots must be within 4 standard errors. */
+TEST(ober_e1_laterals_per_trunk_shoot)
+{
+    cbm_context *ctx = test_ctx();
+    const char *models[] = {"ober-massart", "ober-rauh", "ober-attims", "ober-troll"};
+    const double want[] = {10.1, 10.1, 4.2, 4.2}, var[] = {0.095, 0.095, 0.19, 0.19};
+    for (int m = 0; m < 4; m++) {
+        double sum = 0, sum2 = 0;
+        size_t n = 0;
+        for (int seed = 1; seed <= 2; seed++) {
+            char sd[16];
+            snprintf(sd, sizeof sd, "%d", seed);
+            const char *set2[] = {"maxOrder", "1",    "standX", "15", "standY",
+                                  "15",       "seed", sd,       NULL};
+            cbm_ober_stand *s = grow(ctx, models[m], 3, set2);
+            for (size_t i = 0; s && i < cbm_ober_shoot_count(s); i++) {
+                cbm_ober_shoot h;
+                CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+                if (h.order != 0)
+                    continue;
+                CHECK_EQ_INT(h.active_buds, h.buds); /* every trunk bud grows */
+                sum += h.buds, sum2 += (double)h.buds * h.buds, n++;
+            }
+            cbm_ober_destroy(s);
+        }
+        double mean = sum / n, v = sum2 / n - mean * mean, se = sqrt(var[m] / n);
+        printf("%s: %zu trunk shoots, %.4f laterals per shoot (expected %.2f, se %.4f), "
+               "variance %.4f (expected %.4f)\n",
+               models[m], n, mean, want[m], se, v, var[m]);
+        CHECK(n >= 1000);
+        CHECK_NEAR(mean, want[m], 4 * se);
+        CHECK_NEAR(v, var[m], 0.3 * var[m]);
+    }
+    test_ctx_end(ctx);
+}
+
+/* E2: with l = l_p p at every order and a lateral at p = 0.8 (node 4 of 5) on each shoot, the
+ * shoots of order n reach l_0 0.8^n; every lateral is l_p p exactly. */
+TEST(ober_e2_morphogenetic_gradient)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"baseLengthLambda",
+                         "100",
+                         "specificLengthLambda[1]",
+                         "len * position",
+                         "numNodeLambda",
+                         "5",
+                         "numberNewShoots_0",
+                         "{0, 1}",
+                         "shootPoss",
+                         "{0}",
+                         "possibilityBud_y",
+                         "1",
+                         "sproutingPossibilityLambda",
+                         "1",
+                         "maxOrder",
+                         "3",
+                         NULL};
+    cbm_ober_stand *s = grow(ctx, "ober-rauh", 5, set);
+    bool found[4] = {false};
+    size_t laterals = 0;
+    for (size_t i = 0; s && i < cbm_ober_shoot_count(s); i++) {
+        cbm_ober_shoot h, m;
+        CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+        if (h.order == 0) {
+            CHECK_NEAR(h.length, 1.0, 1e-12);
+            found[0] = true;
+            continue;
+        }
+        CHECK_OK(cbm_ober_shoot_info(s, (size_t)h.parent, &m));
+        double want = h.lateral ? m.length * h.position : m.length * 1.0;
+        CHECK_NEAR(h.length, want, 1e-12);
+        laterals += h.lateral;
+        if (h.lateral && fabs(h.length - pow(0.8, h.order)) < 1e-12)
+            found[h.order] = true;
+    }
+    printf("%zu laterals, l_n = 0.8^n m found for n = 0..3: %d %d %d %d\n", laterals, found[0],
+           found[1], found[2], found[3]);
+    CHECK(found[0] && found[1] && found[2] && found[3]);
+    cbm_ober_destroy(s);
+    /* the trend term: l = l_p p - delta x makes no shoot once delta >= l_p p / x */
+    const char *set2[] = {"specificLengthLambda[1]",
+                          "0.5 * len * position + 0.3 * baseLength",
+                          "specificLengthLambda[2]",
+                          "len * position - 40 * trend",
+                          "sproutingPossibilityLambda",
+                          "1",
+                          NULL};
+    s = grow(ctx, "ober-rauh", 6, set2);
+    for (size_t i = 0; s && i < cbm_ober_shoot_count(s); i++) {
+        cbm_ober_shoot h, m;
+        CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+        CHECK(h.length > 0);
+        if (h.order == 2 && !h.lateral) { /* an order-2 continuation: trend >= 1 */
+            CHECK_OK(cbm_ober_shoot_info(s, (size_t)h.parent, &m));
+            CHECK_NEAR(h.length, m.length - 0.4 * h.trend, 1e-12);
+        }
+    }
+    cbm_ober_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* E3: the Cryptomeria trunk after T years is sum_{k=1..T} h'(k), h' of eq. 15 (the seedling is
+ * the first year's increment); the digest's table gives 1.6146 m at 4 years, 7.7261 m at 12. */
+TEST(ober_e3_cryptomeria_height)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_ober_def d;
+    CHECK_OK(cbm_ober_def_builtin(ctx, "ober-cryptomeria", &d));
+    d.years = 15;
+    cbm_ober_stand *s = NULL;
+    CHECK_OK(cbm_ober_create(ctx, &d, &s));
+    double sum = 0;
+    for (int t = 1; s && t <= 15; t++) {
+        CHECK_OK(cbm_ober_year(s));
+        double e = exp(-0.06438 * t);
+        double inc = 24.9506 * 0.06438 * 1.9736 * e * pow(1 - e, 0.9736);
+        sum += inc;
+        double top = 0;
+        for (size_t i = 0; i < cbm_ober_shoot_count(s); i++) {
+            cbm_ober_shoot h;
+            CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+            if (h.order == 0) {
+                top = fmax(top, h.tip.y);
+                CHECK_NEAR(h.tip.x, 0, 1e-12); /* a vertical trunk does not bend */
+            }
+        }
+        CHECK_NEAR(top, sum, 1e-9 * sum);
+        const cbm_ober_report *r = cbm_ober_report_of(s, 0, t);
+        CHECK_EQ_INT(r->age, t);
+        CHECK_NEAR(r->base_length, 100 * inc, 1e-9 * 100 * inc); /* cm */
+        if (t == 4)
+            CHECK_NEAR(top, 1.6146, 1e-4);
+        if (t == 12)
+            CHECK_NEAR(top, 7.7261, 1e-4);
+    }
+    printf("Cryptomeria trunk after 15 years: %.4f m (sum of increments %.4f m; h(15) = 9.6907)\n",
+           sum, sum);
+    cbm_ober_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* The presets' architecture measured on the tree: laterals per occupied trunk node (whorled:
+ * about 5, spiral: about 1) and the mean angle of first-order shoots from the vertical
+ * (orthotropic: small; plagiotropic: near the 80 deg insertion). */
+TEST(ober_architecture_of_the_presets)
+{
+    cbm_context *ctx = test_ctx();
+    const char *models[] = {"ober-massart", "ober-attims", "ober-rauh", "ober-troll"};
+    const bool whorled[] = {true, false, true, false}, ortho[] = {false, true, true, false};
+    for (int m = 0; m < 4; m++) {
+        const char *set[] = {"maxOrder", "2", NULL};
+        cbm_ober_stand *s = grow(ctx, models[m], 6, set);
+        size_t n = s ? cbm_ober_shoot_count(s) : 0, laterals = 0, nodes = 0;
+        double angle = 0;
+        size_t na = 0;
+        for (size_t i = 0; i < n; i++) {
+            cbm_ober_shoot h;
+            CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+            if (h.order != 0)
+                continue;
+            /* laterals of this trunk shoot grouped by their node (base height) */
+            double ys[64];
+            int ny = 0;
+            for (size_t k = 0; k < n; k++) {
+                cbm_ober_shoot c;
+                CHECK_OK(cbm_ober_shoot_info(s, k, &c));
+                if (c.parent != (int64_t)i || !c.lateral)
+                    continue;
+                laterals++;
+                bool seen = false;
+                for (int q = 0; q < ny; q++)
+                    seen |= fabs(ys[q] - c.base.y) < 1e-9;
+                if (!seen && ny < 64)
+                    ys[ny++] = c.base.y;
+            }
+            nodes += (size_t)ny;
+        }
+        for (size_t i = 0; i < n; i++) {
+            cbm_ober_shoot h;
+            CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+            if (h.order != 1)
+                continue;
+            cbm_vec3 d = {h.tip.x - h.base.x, h.tip.y - h.base.y, h.tip.z - h.base.z};
+            double l = sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+            angle += acos(d.y / l) * 180 / 3.14159265358979;
+            na++;
+        }
+        double per_node = nodes ? (double)laterals / nodes : 0, mean_angle = na ? angle / na : 0;
+        printf("%s: %.2f laterals per trunk node, first-order shoots %.1f deg from the vertical\n",
+               models[m], per_node, mean_angle);
+        if (whorled[m])
+            CHECK(per_node > 4.5);
+        else
+            CHECK(per_node < 1.3);
+        if (ortho[m])
+            CHECK(mean_angle < 40);
+        else
+            CHECK(mean_angle > 65);
+        cbm_ober_destroy(s);
+    }
+    test_ctx_end(ctx);
+}
+
+/* The growth functions: each increment equals the central difference of its growth function
+ * (relative 1e-6), read through formulas (baseLengthLambda, reported each year). */
+TEST(ober_growth_functions)
+{
+    cbm_context *ctx = test_ctx();
+    const char *fns[][2] = {{"hossfeld", "30, 2, 1.5"},   {"gompertz", "25, 4, 0.2"},
+                            {"logistic", "25, 0.3, 20"},  {"monomolecular", "25, 0.1, 0.9"},
+                            {"bertalanffy", "25, 0.08"},  {"richards", "24.9506, 0.06438, 1.9736"},
+                            {"levakovic", "25, 40, 1.3"}, {"korf", "25, 5, 0.6"}};
+    for (size_t f = 0; f < sizeof fns / sizeof fns[0]; f++) {
+        char inc[200], num[300];
+        snprintf(inc, sizeof inc, "%s_inc(age, %s)", fns[f][0], fns[f][1]);
+        snprintf(num, sizeof num, "(%s(age + 1e-5, %s) - %s(age - 1e-5, %s)) / 2e-5", fns[f][0],
+                 fns[f][1], fns[f][0], fns[f][1]);
+        const char *a[] = {"baseLengthLambda", inc, "maxOrder", "0", NULL};
+        const char *b[] = {"baseLengthLambda", num, "maxOrder", "0", NULL};
+        cbm_ober_stand *sa = grow(ctx, "ober-cryptomeria", 6, a);
+        cbm_ober_stand *sb = grow(ctx, "ober-cryptomeria", 6, b);
+        for (int y = 1; sa && sb && y <= 6; y++) {
+            double va = cbm_ober_report_of(sa, 0, y)->base_length;
+            double vb = cbm_ober_report_of(sb, 0, y)->base_length;
+            CHECK_REL(va, vb, 1e-6);
+        }
+        printf("%s_inc = d %s / dt at ages 1..6\n", fns[f][0], fns[f][0]);
+        cbm_ober_destroy(sa);
+        cbm_ober_destroy(sb);
+    }
+    /* the thesis's printed Gompertz increment a b c e^(-b e^(-ct)) is not the derivative */
+    double t = 5, a = 25, b = 4, c = 0.2;
+    double printed = a * b * c * exp(-b * exp(-c * t));
+    double right = a * b * c * exp(-c * t) * exp(-b * exp(-c * t));
+    CHECK(fabs(printed - right) > 0.1 * right);
+    test_ctx_end(ctx);
+}
+
+/* Pipe model (eqs. 5-6): a new shoot's area is n pi R_p^2 for its n leaves, the area at a
+ * branching point at least the children's (da Vinci), radii never shrink; mortality: no shoot
+ * without leaves and without children survives a year. */
+TEST(ober_pipe_model_and_mortality)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_ober_def d;
+    CHECK_OK(cbm_ober_def_builtin(ctx, "ober-attims", &d));
+    CHECK_OK(cbm_ober_def_set(ctx, &d, "sproutingPossibilityLambda",
+                              "order == 0 ? 1 : ran(1) > 0.3", NULL));
+    cbm_ober_stand *s = NULL;
+    CHECK_OK(cbm_ober_create(ctx, &d, &s));
+    double rp = d.pipe_size * 0.01;
+    for (int y = 1; s && y <= 7; y++) {
+        CHECK_OK(cbm_ober_year(s));
+        size_t n = cbm_ober_shoot_count(s);
+        double *child_area = calloc(n, sizeof *child_area);
+        int *children = calloc(n, sizeof *children);
+        for (size_t i = 0; i < n; i++) {
+            cbm_ober_shoot h;
+            CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+            if (h.age == 0 && h.buds > 0) /* made this year: eq. 6 */
+                CHECK_NEAR(h.radius * h.radius, h.buds * rp * rp, 1e-12 * rp * rp * h.buds);
+            if (h.parent >= 0) {
+                child_area[h.parent] += h.radius * h.radius;
+                children[h.parent]++;
+            }
+        }
+        size_t bare = 0;
+        for (size_t i = 0; i < n; i++) {
+            cbm_ober_shoot h;
+            CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+            if (children[i])
+                CHECK(h.radius * h.radius >= child_area[i] * (1 - 1e-12));
+            bare += h.leaves == 0 && children[i] == 0;
+        }
+        CHECK_EQ_INT((int)bare, 0);
+        free(child_area);
+        free(children);
+    }
+    const cbm_ober_report *r = s ? cbm_ober_report_of(s, 0, 7) : NULL;
+    CHECK(r && r->removed > 0 && r->shoots > 30);
+    cbm_ober_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* Formula errors name the file, line and column; a formula may not read a lower level's
+ * variables; a runtime NaN is an error naming the formula. */
+TEST(ober_formula_errors)
+{
+    test_diags g;
+    cbm_context *ctx = test_diag_ctx(&g);
+    cbm_ober_def d = cbm_ober_def_default();
+    const char *t1 = "family = oberlaender\n# a comment\norientationLambda = -0.4 + foo * 2\n";
+    CHECK_STATUS(cbm_ober_def_parse(ctx, &d, t1, strlen(t1), "x.tree"), CBM_E_SYNTAX);
+    printf("%s", g.text);
+    CHECK(strstr(g.text, "x.tree:3:28:") && strstr(g.text, "unknown variable 'foo'"));
+    d = cbm_ober_def_default();
+    const char *t2 = "family = oberlaender\nbaseLengthLambda = position * 2\n";
+    CHECK_STATUS(cbm_ober_def_parse(ctx, &d, t2, strlen(t2), "y.tree"), CBM_E_SYNTAX);
+    CHECK(strstr(g.text, "y.tree:2:20:") && strstr(g.text, "'position' is a bud variable"));
+    d = cbm_ober_def_default();
+    const char *t3 = "family = oberlaender\nbendingLambda = (order +\n";
+    CHECK_STATUS(cbm_ober_def_parse(ctx, &d, t3, strlen(t3), "z.tree"), CBM_E_SYNTAX);
+    CHECK(strstr(g.text, "z.tree:2:") != NULL);
+    d = cbm_ober_def_default();
+    const char *t4 = "family = oberlaender\nshootangle = {60, 400}\nmaxOrder = 9\n";
+    CHECK_STATUS(cbm_ober_def_parse(ctx, &d, t4, strlen(t4), "w.tree"), CBM_E_SYNTAX);
+    CHECK(strstr(g.text, "w.tree:2:14:") && strstr(g.text, "w.tree:3:12:"));
+    /* a runtime error: log of a negative number in a bud formula */
+    d = cbm_ober_def_default();
+    const char *t5 = "family = oberlaender\nspecificLengthLambda[1] = log(position - 2)\n";
+    CHECK_OK(cbm_ober_def_parse(ctx, &d, t5, strlen(t5), "v.tree"));
+    d.years = 3;
+    cbm_ober_stand *s = NULL;
+    CHECK_OK(cbm_ober_create(ctx, &d, &s));
+    CHECK_STATUS(cbm_ober_run(s), CBM_E_RUNTIME);
+    CHECK(strstr(g.text, "v.tree:2:27:") && strstr(g.text, "specificLengthLambda[1]"));
+    cbm_ober_destroy(s);
+    /* the parameter file round-trips through its writer */
+    CHECK_OK(cbm_ober_def_builtin(ctx, "ober-troll", &d));
+    size_t need = cbm_ober_def_format(&d, NULL, 0);
+    char *buf = malloc(need + 1);
+    cbm_ober_def_format(&d, buf, need + 1);
+    cbm_ober_def e = cbm_ober_def_default();
+    CHECK_OK(cbm_ober_def_parse(ctx, &e, buf, need, "formatted"));
+    CHECK(e.n_shoot_poss == 2 && e.shoot_poss[1] == 180 && !strcmp(e.orientation.text, "-0.01"));
+    free(buf);
+    test_ctx_end(ctx);
+}
+
+/* Seeds with timers: a tree germinates after its timer and ages one year a step; a stand grows
+ * every tree; the same seed gives the same stand. */
+TEST(ober_stand_and_determinism)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"standX", "3", "standY", "2", "stagger", "3", "maxOrder", "1", NULL};
+    cbm_ober_stand *a = grow(ctx, "ober-troll", 6, set), *b = grow(ctx, "ober-troll", 6, set);
+    CHECK(a && cbm_ober_tree_count(a) == 6);
+    size_t late = 0;
+    for (size_t t = 0; a && t < 6; t++) {
+        int first = 0;
+        for (int y = 1; y <= 6; y++) {
+            const cbm_ober_report *r = cbm_ober_report_of(a, t, y);
+            if (r->age > 0 && !first)
+                first = y;
+            if (first)
+                CHECK_EQ_INT(r->age, y - first + 1);
+            else
+                CHECK_EQ_INT((int)r->shoots, 0);
+            CHECK_EQ_INT((int)r->shoots, (int)cbm_ober_report_of(b, t, y)->shoots);
+            CHECK_NEAR(r->height, cbm_ober_report_of(b, t, y)->height, 0);
+        }
+        CHECK(first >= 1 && first <= 4);
+        late += first > 1;
+    }
+    CHECK(late > 0);
+    cbm_ober_destroy(a);
+    cbm_ober_destroy(b);
+    test_ctx_end(ctx);
+}
+
+/* Leaves of tree t on the side facing +x (toward its neighbour) and away from it, counted by
+ * the horizontal position of their shoot's middle relative to the tree's base. */
+static void sides(const cbm_ober_stand *s, size_t t, double *facing, double *away)
+{
+    cbm_vec3 p = cbm_ober_tree_position(s, t);
+    *facing = *away = 0;
+    for (size_t i = 0; i < cbm_ober_shoot_count(s); i++) {
+        cbm_ober_shoot h;
+        if (cbm_ober_shoot_info(s, i, &h) != CBM_OK || h.tree != t || h.order == 0)
+            continue;
+        double x = 0.5 * (h.base.x + h.tip.x) - p.x;
+        if (x > 0.02)
+            *facing += h.leaves;
+        else if (x < -0.02)
+            *away += h.leaves;
+    }
+}
+
+/* E5: two trees grown close together (ober-carbon, light field, 1.2 m apart) keep fewer leaves on
+ * the sides facing each other than away from each other, more so with time; the same pair 30 m
+ * apart shows only the structural noise of the whorls. */
+static double pair_asymmetry(const cbm_ober_stand *s)
+{
+    double f0, w0, f1, w1;
+    sides(s, 0, &f0, &w0);
+    sides(s, 1, &w1, &f1); /* tree 1 faces -x */
+    return (w0 + w1 - f0 - f1) / (w0 + w1 + f0 + f1);
+}
+
+TEST(ober_e5_light_competition)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_ober_stand *st[2] = {NULL, NULL};
+    const char *spacing[2] = {"1.2", "30"};
+    for (int k = 0; k < 2; k++) {
+        cbm_ober_def d;
+        CHECK_OK(cbm_ober_def_builtin(ctx, "ober-carbon", &d));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "standX", "2", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "spacing", spacing[k], NULL));
+        CHECK_OK(cbm_ober_create(ctx, &d, &st[k]));
+    }
+    double at5 = 0, at10 = 0;
+    for (int y = 1; st[0] && st[1] && y <= 10; y++) {
+        CHECK_OK(cbm_ober_year(st[0]));
+        CHECK_OK(cbm_ober_year(st[1]));
+        if (y < 4)
+            continue;
+        double close = pair_asymmetry(st[0]), far = pair_asymmetry(st[1]);
+        printf("year %2d: leaves away minus facing over their sum: 1.2 m apart %.3f, 30 m apart "
+               "%.3f\n",
+               y, close, far);
+        if (y >= 8)
+            CHECK(close - far > 0.1);
+        CHECK(fabs(far) < 0.1);
+        at5 = y == 5 ? close : at5;
+        at10 = y == 10 ? close : at10;
+    }
+    CHECK(at10 > at5 + 0.1); /* it grows with time */
+    cbm_ober_destroy(st[0]);
+    cbm_ober_destroy(st[1]);
+    test_ctx_end(ctx);
+}

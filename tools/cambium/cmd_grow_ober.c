@@ -1,0 +1,421 @@
+/* cambium grow for Oberlaender's parametric tree (cambium/ober.h): `cambium grow` hands over to
+ * this file when its model is a built-in ober-* name or a .tree file whose first setting is
+ * `family = oberlaender`. It grows a stand (one tree, or --stand NxM trees --spacing D apart with
+ * germination staggered over --stagger years) and writes the stand (pictures and meshes), the
+ * per-tree per-year report (.json), and plot:FILE.svg|png, the carbon tax and the height of each
+ * tree over the years (the thesis's Fig. 25). */
+#include "cli_output.h"
+#include "commands.h"
+
+#include "cambium/ober.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_OUTPUTS 16
+#define MAX_DEFS    128
+
+static bool has_suffix(const char *s, const char *suf)
+{
+    size_t a = strlen(s), b = strlen(suf);
+    return a >= b && !strcmp(s + a - b, suf);
+}
+
+bool cli_grow_is_ober(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (a[0] == '-') {
+            /* options that take a separate value: skip it */
+            if (!strcmp(a, "-o") || !strcmp(a, "-y") || !strcmp(a, "-n") || !strcmp(a, "-D") ||
+                !strcmp(a, "--years") || !strcmp(a, "--seed") || !strcmp(a, "--every") ||
+                !strcmp(a, "--modes") || !strcmp(a, "--seeds"))
+                i++;
+            continue;
+        }
+        for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
+            if (!strcmp(a, *n))
+                return true;
+        if (has_suffix(a, ".tree")) {
+            size_t len = 0;
+            char *text = cli_read_regular_file(a, (size_t)1 << 24, &len);
+            bool yes = text && cbm_ober_text_is_family(text, len);
+            free(text);
+            return yes;
+        }
+    }
+    return false;
+}
+
+static void help(const cli_opts *t)
+{
+    printf("usage: cambium grow OBER-MODEL [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
+           "                    [--stand NxM] [--spacing D] [--stagger N] [-o FILE]...\n"
+           "                    [--params] [--quiet] [output options]\n\n"
+           "Grows Oberlaender's parametric tree (a built-in ober-* model or a .tree file\n"
+           "starting with 'family = oberlaender'; docs/models.md): one tree or a stand.\n"
+           "Outputs by extension: .png .svg .glb .obj .ply (the stand), .json (the report of\n"
+           "every tree and year), plot:FILE.svg or plot:FILE.png (carbon tax and height over\n"
+           "the years).\n\n");
+    cli_options_rows(stdout, t);
+    printf("\nbuilt-in models:");
+    for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
+        printf(" %s", *n);
+    printf("\n");
+    cli_options_groups(stdout, t);
+}
+
+static bool parse_model(const char *a, void *target, char *why, size_t n)
+{
+    const char **model = target;
+    if (*model)
+        snprintf(why, n, "more than one model: '%s' and '{value}'", *model);
+    else
+        *model = a;
+    return !*why;
+}
+
+/* --stand NxM */
+static bool parse_stand(const char *v, void *target, char *why, size_t n)
+{
+    long *xy = target;
+    char *end;
+    xy[0] = strtol(v, &end, 10);
+    if (end == v || (*end != 'x' && *end != 'X')) {
+        snprintf(why, n, "--stand expects NxM, got '{value}'");
+        return false;
+    }
+    const char *m = end + 1;
+    xy[1] = strtol(m, &end, 10);
+    if (end == m || *end || xy[0] < 1 || xy[1] < 1 || xy[0] > 20 || xy[1] > 20) {
+        snprintf(why, n, "--stand expects NxM with 1 <= N, M <= 20, got '{value}'");
+        return false;
+    }
+    return true;
+}
+
+static bool parse_spacing(const char *v, void *target, char *why, size_t n)
+{
+    (void)why, (void)n;
+    double *d = target;
+    return cli_parse_double(v, d) && *d >= 0.01 && *d <= 1000;
+}
+
+static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const char *model,
+                               const cbm_ober_def *d, double seconds, const char *path)
+{
+    cbm_json *j = NULL;
+    cbm_status cs = cbm_json_create(ctx, &j);
+    if (cs != CBM_OK)
+        return cs;
+    cbm_json_begin_object(j, NULL);
+    cbm_json_string(j, "model", model);
+    cbm_json_string(j, "family", "oberlaender");
+    cbm_json_int(j, "seed", (int64_t)d->seed);
+    cbm_json_int(j, "years_grown", cbm_ober_years(s));
+    cbm_json_number(j, "seconds", seconds);
+    cbm_json_begin_array(j, "trees");
+    for (size_t t = 0; t < cbm_ober_tree_count(s); t++) {
+        cbm_vec3 p = cbm_ober_tree_position(s, t);
+        cbm_json_begin_object(j, NULL);
+        cbm_json_int(j, "tree", (int64_t)t);
+        cbm_json_begin_array(j, "position_m");
+        cbm_json_number(j, NULL, p.x);
+        cbm_json_number(j, NULL, p.y);
+        cbm_json_number(j, NULL, p.z);
+        cbm_json_end_array(j);
+        cbm_json_begin_array(j, "years");
+        for (int y = 1; y <= cbm_ober_years(s); y++) {
+            const cbm_ober_report *r = cbm_ober_report_of(s, t, y);
+            cbm_json_begin_object(j, NULL);
+            cbm_json_int(j, "year", r->year);
+            cbm_json_int(j, "age", r->age);
+            cbm_json_number(j, "height_m", r->height);
+            cbm_json_int(j, "leaves", (int64_t)r->leaves);
+            cbm_json_int(j, "shoots", (int64_t)r->shoots);
+            cbm_json_begin_array(j, "shoots_per_order");
+            for (int k = 0; k < 4; k++)
+                cbm_json_int(j, NULL, (int64_t)r->shoots_order[k]);
+            cbm_json_end_array(j);
+            cbm_json_int(j, "new_shoots", (int64_t)r->new_shoots);
+            cbm_json_int(j, "proventitious_shoots", (int64_t)r->proventitious);
+            cbm_json_int(j, "forks", (int64_t)r->forks);
+            cbm_json_int(j, "pruned_shoots", (int64_t)r->removed);
+            cbm_json_number(j, "wood_volume_m3", r->wood_volume);
+            cbm_json_number(j, "trunk_volume_m3", r->trunk_volume);
+            cbm_json_number(j, "base_diameter_m", r->base_diameter);
+            cbm_json_number(j, "base_length_cm", r->base_length);
+            cbm_json_number(j, "carbon_tax", r->carbon_tax);
+            cbm_json_number(j, "carbon_mean", r->carbon_mean);
+            cbm_json_int(j, "light_rays", (int64_t)r->light_rays);
+            cbm_json_number(j, "light_seconds", r->light_seconds);
+            cbm_json_end_object(j);
+        }
+        cbm_json_end_array(j);
+        cbm_json_end_object(j);
+    }
+    cbm_json_end_array(j);
+    cbm_json_end_object(j);
+    cbm_status st = cbm_json_write_file(j, path);
+    cbm_json_destroy(j);
+    return st;
+}
+
+/* plot:FILE: carbon tax (top) and height (bottom) of every tree over the years */
+static cbm_status write_plot(cbm_context *ctx, const cbm_ober_stand *s, const char *model,
+                             const char *path)
+{
+    size_t nt = cbm_ober_tree_count(s), ny = (size_t)cbm_ober_years(s);
+    double *x = calloc(ny ? ny : 1, sizeof *x), *tax = calloc(ny ? ny : 1, sizeof *tax),
+           *h = calloc(ny ? ny : 1, sizeof *h);
+    if (!x || !tax || !h) {
+        free(x), free(tax), free(h);
+        return CBM_E_NOMEM;
+    }
+    cbm_plot_def pd = cbm_plot_def_default();
+    char title[160];
+    snprintf(title, sizeof title, "%s: carbon tax and height", model);
+    pd.title = title;
+    pd.panels = 2;
+    cbm_plot *p = NULL;
+    cbm_status st = cbm_plot_create(ctx, &pd, &p);
+    cbm_plot_axes_def a = cbm_plot_axes_def_default();
+    a.xlabel = "year";
+    a.ylabel = "carbon tax";
+    if (st == CBM_OK)
+        st = cbm_plot_set_axes(p, 0, &a);
+    a.ylabel = "height (m)";
+    if (st == CBM_OK)
+        st = cbm_plot_set_axes(p, 1, &a);
+    for (size_t t = 0; t < nt && t < 12 && st == CBM_OK; t++) {
+        for (size_t y = 0; y < ny; y++) {
+            const cbm_ober_report *r = cbm_ober_report_of(s, t, (int)y + 1);
+            x[y] = (double)y + 1;
+            tax[y] = r->age > 0 ? r->carbon_tax : NAN;
+            h[y] = r->age > 0 ? r->height : NAN;
+        }
+        char label[32];
+        snprintf(label, sizeof label, "tree %zu", t);
+        cbm_plot_series_def sd = cbm_plot_series_def_default();
+        sd.x = x, sd.n = ny, sd.label = nt > 1 ? label : NULL;
+        sd.marker = CBM_PLOT_MARKER_CIRCLE;
+        sd.y = tax;
+        st = cbm_plot_add_series(p, 0, &sd);
+        sd.y = h;
+        if (st == CBM_OK)
+            st = cbm_plot_add_series(p, 1, &sd);
+    }
+    if (st == CBM_OK)
+        st = cbm_plot_write(p, path);
+    cbm_plot_destroy(p);
+    free(x), free(tax), free(h);
+    return st;
+}
+
+int cmd_grow_ober(int argc, char **argv)
+{
+    const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS], *seed = NULL;
+    cli_list out_list = {outs, 0, MAX_OUTPUTS, "at most {max} outputs"};
+    cli_list def_list = {defs, 0, MAX_DEFS, "at most {max} -D options"};
+    long years = -1, stand[2] = {0, 0}, stagger = -1, seedv = -1;
+    double spacing = -1;
+    bool quiet = false, params = false;
+    cbm_write_options o = cbm_write_options_default();
+    cli_opt rows[] = {
+        {.name = "--help|-h", .kind = CLI_HELP},
+        {.name = "MODEL", .kind = CLI_POSITIONAL, .target = &model, .parse = parse_model},
+        {.name = "-y|-n|--years",
+         .kind = CLI_LONG,
+         .target = &years,
+         .min = 0,
+         .max = 1000,
+         .bad = "{opt} must be 0..1000",
+         .arg = "N",
+         .help = "years to grow (default: the model's 'years')"},
+        {.name = "-D",
+         .kind = CLI_LIST,
+         .target = &def_list,
+         .attached = true,
+         .arg = "NAME=VALUE",
+         .help = "set a parameter or formula (as in a parameter file)"},
+        {.name = "--seed",
+         .kind = CLI_LONG,
+         .target = &seedv,
+         .min = 0,
+         .max = 0x7fffffffL,
+         .bad = "--seed must be a non-negative integer",
+         .arg = "N",
+         .help = "generator seed (same as -D seed=N)"},
+        {.name = "--stand",
+         .kind = CLI_CUSTOM,
+         .target = stand,
+         .parse = parse_stand,
+         .arg = "NxM",
+         .help = "a stand of N x M trees on a grid (standX, standY)"},
+        {.name = "--spacing",
+         .kind = CLI_CUSTOM,
+         .target = &spacing,
+         .parse = parse_spacing,
+         .bad = "--spacing must be a distance in m, 0.01..1000",
+         .arg = "D",
+         .help = "m between neighbouring trees of the stand (spacing)"},
+        {.name = "--stagger",
+         .kind = CLI_LONG,
+         .target = &stagger,
+         .min = 0,
+         .max = 100,
+         .bad = "--stagger must be 0..100",
+         .arg = "N",
+         .help = "germination spread over 0..N years (stagger)"},
+        {.name = "-o", .kind = CLI_LIST, .target = &out_list},
+        {.name = "--quiet", .kind = CLI_SET, .target = &quiet, .help = "no per-year lines"},
+        {.name = "--params",
+         .kind = CLI_SET,
+         .target = &params,
+         .help = "print every parameter (parameter-file syntax) and exit"},
+        {.kind = CLI_GROUP, .target = cli_output_options(&o)},
+        {0}};
+    cli_opts table = {.cmd = "grow",
+                      .opts = rows,
+                      .help = help,
+                      .width = 18,
+                      .unknown = "unknown option {opt} (for an Oberlaender tree)",
+                      .unknown_last = "unknown option or missing value: {opt}",
+                      .missing = "unknown option or missing value: {opt}"};
+    (void)seed;
+    int prc = cli_options_parse(&table, argc, argv);
+    if (prc != CLI_OK)
+        return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
+    int nout = out_list.count;
+    cli_output_target targets[MAX_OUTPUTS];
+    int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot */
+    const char *paths[MAX_OUTPUTS];
+    for (int k = 0; k < nout; k++) {
+        kind[k] = !strncmp(outs[k], "plot:", 5)             ? 2
+                  : !strcmp(cli_extension(outs[k]), "json") ? 1
+                                                            : 0;
+        paths[k] = kind[k] == 2 ? outs[k] + 5 : outs[k];
+        if (kind[k] == 2 && strcmp(cli_extension(paths[k]), "svg") &&
+            strcmp(cli_extension(paths[k]), "png"))
+            return cli_usage_error("grow", "%s: the plot is .svg or .png", outs[k]);
+        if (kind[k] == 0) {
+            if (!cli_output_target_parse(outs[k], &targets[k]))
+                return cli_usage_error("grow",
+                                       "%s: unknown format (.png .svg .glb .obj .ply .json, "
+                                       "plot:FILE.svg, or FORMAT:PATH)",
+                                       outs[k]);
+            paths[k] = targets[k].path;
+        }
+    }
+    if (cli_check_outputs(paths, nout) != CLI_OK)
+        return CLI_FAIL;
+    cbm_context *ctx = cli_context();
+    int rc = CLI_OK;
+    cbm_ober_stand *s = NULL;
+    cbm_scene *sc = NULL;
+    cbm_ober_def d = cbm_ober_def_default();
+    cbm_status st = has_suffix(model, ".tree") ? cbm_ober_def_read(ctx, &d, model)
+                                               : cbm_ober_def_builtin(ctx, model, &d);
+    if (st != CBM_OK) {
+        rc = st == CBM_E_SYNTAX ? CLI_FAIL : cli_fail(ctx, st, model);
+        goto done;
+    }
+    for (int k = 0; k < def_list.count; k++) {
+        char name[128];
+        const char *eq = strchr(defs[k], '=');
+        if (!eq || eq == defs[k] || (size_t)(eq - defs[k]) >= sizeof name) {
+            rc = cli_usage_error("grow", "-D expects NAME=VALUE, got '%s'", defs[k]);
+            goto done;
+        }
+        memcpy(name, defs[k], (size_t)(eq - defs[k]));
+        name[eq - defs[k]] = '\0';
+        st = cbm_ober_def_set(ctx, &d, name, eq + 1, NULL);
+        if (st != CBM_OK) {
+            rc = cli_usage_error("grow", "-D %s", cbm_context_last_error(ctx));
+            goto done;
+        }
+    }
+    if (seedv >= 0)
+        d.seed = (uint64_t)seedv;
+    if (years >= 0)
+        d.years = (int)years;
+    if (stand[0] > 0)
+        d.stand_x = (int)stand[0], d.stand_y = (int)stand[1];
+    if (spacing > 0)
+        d.spacing = spacing;
+    if (stagger >= 0)
+        d.stagger = (int)stagger;
+    if (params) {
+        st = cbm_ober_def_check(ctx, &d);
+        if (st != CBM_OK) {
+            rc = CLI_FAIL;
+            goto done;
+        }
+        size_t need = cbm_ober_def_format(&d, NULL, 0);
+        char *buf = malloc(need + 1);
+        if (!buf) {
+            rc = CLI_FAIL;
+            goto done;
+        }
+        cbm_ober_def_format(&d, buf, need + 1);
+        fputs(buf, stdout);
+        free(buf);
+        goto done;
+    }
+    if (nout == 0 && quiet) {
+        rc = cli_usage_error("grow", "nothing to do: give -o FILE or drop --quiet");
+        goto done;
+    }
+    st = cbm_ober_create(ctx, &d, &s);
+    if (st != CBM_OK) {
+        rc = st == CBM_E_SYNTAX ? CLI_FAIL : cli_fail(ctx, st, model);
+        goto done;
+    }
+    double t0 = cli_seconds();
+    while (cbm_ober_years(s) < d.years) {
+        st = cbm_ober_year(s);
+        if (st != CBM_OK) {
+            rc = cli_fail(ctx, st, "growing the stand");
+            goto done;
+        }
+        if (!quiet) {
+            int y = cbm_ober_years(s);
+            size_t nt = cbm_ober_tree_count(s), leaves = 0, shoots = 0;
+            double hmax = 0, tax = 0;
+            for (size_t t = 0; t < nt; t++) {
+                const cbm_ober_report *r = cbm_ober_report_of(s, t, y);
+                leaves += r->leaves, shoots += r->shoots;
+                hmax = r->height > hmax ? r->height : hmax;
+                tax += r->carbon_tax / (double)nt;
+            }
+            printf("year %2d: %zu tree%s, %zu shoots, %zu leaves, height %.3f m%s, carbon tax "
+                   "%.4g\n",
+                   y, nt, nt == 1 ? "" : "s", shoots, leaves, hmax, nt > 1 ? " (tallest)" : "",
+                   tax);
+        }
+    }
+    double seconds = cli_seconds() - t0;
+    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        if (kind[k] == 1)
+            st = write_report(ctx, s, model, &d, seconds, outs[k]);
+        else if (kind[k] == 2)
+            st = write_plot(ctx, s, model, paths[k]);
+        else {
+            if (!sc) {
+                st = cbm_scene_create(ctx, &sc);
+                if (st == CBM_OK)
+                    st = cbm_ober_to_scene(s, sc, 10, o.ground);
+            }
+            if (st == CBM_OK)
+                st = cbm_scene_write_as(ctx, sc, targets[k].path, targets[k].format, &o);
+        }
+        if (st != CBM_OK)
+            rc = cli_fail(ctx, st, outs[k]);
+    }
+done:
+    cbm_scene_destroy(sc);
+    cbm_ober_destroy(s);
+    cli_context_end(ctx);
+    return rc;
+}
