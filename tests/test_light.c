@@ -149,8 +149,8 @@ TEST(sky_sectors_converge)
                     d.samples = 1;
                     double got = one_leaf(ctx, &d, rect_leaf((cbm_vec3){0, 0, 0}, 1, 1, b));
                     double err = fabs(got - exact);
-                    CHECK_MSG(err <= 0.5 * prev + 1e-9, "sky %d tilt %g: %d rings err %.3g", sky,
-                              b, r, err);
+                    CHECK_MSG(err <= 0.5 * prev + 1e-9, "sky %d tilt %g: %d rings err %.3g", sky, b,
+                              r, err);
                     if (r == 24)
                         CHECK_MSG(err <= 2e-3, "sky %d tilt %g: err %.3g", sky, b, err);
                     prev = err;
@@ -322,9 +322,9 @@ TEST(field_open_and_periodic)
     p.field_min[0] = 0, p.field_max[0] = 1;
     p.field_min[1] = 0, p.field_max[1] = 1;
     cbm_light_leaf l[3];
-    l[0] = rect_leaf((cbm_vec3){0.25, 1.0, 0.5}, 0.5, 1.0, 0.0);  /* canopy */
-    l[1] = rect_leaf((cbm_vec3){0.65, 0.0, 0.5}, 0.1, 0.1, 0.0);  /* lit */
-    l[2] = rect_leaf((cbm_vec3){0.25, 0.0, 0.5}, 0.1, 0.1, 0.0);  /* shaded */
+    l[0] = rect_leaf((cbm_vec3){0.25, 1.0, 0.5}, 0.5, 1.0, 0.0); /* canopy */
+    l[1] = rect_leaf((cbm_vec3){0.65, 0.0, 0.5}, 0.1, 0.1, 0.0); /* lit */
+    l[2] = rect_leaf((cbm_vec3){0.25, 0.0, 0.5}, 0.1, 0.1, 0.0); /* shaded */
     double a[3];
     cbm_light_stats st;
     p.edge = CBM_LIGHT_EDGE_PERIODIC;
@@ -359,8 +359,8 @@ static cbm_light_leaf *random_leaves(size_t n, uint64_t seed)
             x = x * 6364136223846793005ull + 1442695040888963407ull;
             r[k] = (double)(x >> 11) / 9007199254740992.0;
         }
-        l[i] = rect_leaf((cbm_vec3){4 * r[0], 3 * r[1], 4 * r[2]}, 0.1 + 0.1 * r[3], 0.1,
-                         1.2 * r[4]);
+        l[i] =
+            rect_leaf((cbm_vec3){4 * r[0], 3 * r[1], 4 * r[2]}, 0.1 + 0.1 * r[3], 0.1, 1.2 * r[4]);
         l[i].plant = (uint32_t)(i % 3);
     }
     return l;
