@@ -5,6 +5,8 @@
  * per run: leaves, samples, sources, threads, rays, wall-clock and CPU seconds, rays per second
  * (wall-clock and CPU), CPU ns per leaf, mean light per unit leaf area.
  * Usage: bench_light [max_leaves (default 1000000)] [samples (default 2)] [threads (0: all)]
+ *                    [periodic: the stand's square is the tile of an endless stand, so every
+ *                     leaf has the same surroundings whatever n]
  * n runs over 1e3, 3e3, 1e4, ... up to max_leaves. */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
@@ -12,6 +14,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 /* CPU time of the process (all threads): on a shared machine wall-clock rates say more about
@@ -41,9 +44,9 @@ static void stand(cbm_light_leaf *l, size_t n)
         cbm_vec3 e2 = {-sin(az) * cos(tilt), sin(tilt), cos(az) * cos(tilt)};
         const double su[4] = {-0.05, 0.05, 0.05, -0.05}, sv[4] = {-0.05, -0.05, 0.05, 0.05};
         for (int k = 0; k < 4; k++)
-            l[i].p[k] = (cbm_vec3){c.x + su[k] * e1.x + sv[k] * e2.x,
-                                   c.y + su[k] * e1.y + sv[k] * e2.y,
-                                   c.z + su[k] * e1.z + sv[k] * e2.z};
+            l[i].p[k] =
+                (cbm_vec3){c.x + su[k] * e1.x + sv[k] * e2.x, c.y + su[k] * e1.y + sv[k] * e2.y,
+                           c.z + su[k] * e1.z + sv[k] * e2.z};
         l[i].plant = (uint32_t)(i / 1000);
     }
 }
@@ -53,15 +56,16 @@ int main(int argc, char **argv)
     size_t max = argc > 1 ? (size_t)atof(argv[1]) : 1000000;
     int samples = argc > 2 ? atoi(argv[2]) : 2;
     int threads = argc > 3 ? atoi(argv[3]) : 0;
+    bool periodic = argc > 4 && !strcmp(argv[4], "periodic");
     cbm_context_def cd = cbm_context_def_default();
     cbm_context *ctx = NULL;
     if (cbm_context_create(&cd, &ctx) != CBM_OK)
         return 1;
-    printf("leaves,samples,sources,threads,rays,seconds,cpu_seconds,rays_per_s,rays_per_cpu_s,"
+    printf("edge,leaves,samples,sources,threads,rays,seconds,cpu_seconds,rays_per_s,rays_per_cpu_s,"
            "cpu_ns_per_leaf,mean_light\n");
     for (double nd = 1000; nd <= (double)max * 1.0001; nd *= sqrt(10.0)) {
-        size_t n = (size_t)llround(nd / pow(10, floor(log10(nd)))) *
-                   (size_t)pow(10, floor(log10(nd)));
+        size_t n =
+            (size_t)llround(nd / pow(10, floor(log10(nd)))) * (size_t)pow(10, floor(log10(nd)));
         cbm_light_leaf *l = malloc(n * sizeof *l);
         double *a = malloc(n * sizeof *a);
         if (!l || !a)
@@ -70,6 +74,11 @@ int main(int argc, char **argv)
         cbm_light_def d = cbm_light_def_default();
         d.samples = samples;
         d.threads = threads;
+        if (periodic) {
+            double side = sqrt((double)n * 0.01 / 4.0);
+            d.edge = CBM_LIGHT_EDGE_PERIODIC;
+            d.field_max[0] = d.field_max[1] = side;
+        }
         cbm_light_stats st;
         double c0 = cpu_now();
         cbm_status s = cbm_light_intercept(ctx, &d, l, n, NULL, 0, a, &st);
@@ -78,9 +87,10 @@ int main(int argc, char **argv)
             fprintf(stderr, "bench_light: %s\n", cbm_context_last_error(ctx));
             return 1;
         }
-        printf("%zu,%d,%zu,%d,%zu,%.4f,%.4f,%.4g,%.4g,%.1f,%.4f\n", n, samples, st.sources,
-               threads, st.rays, st.seconds, cpu, (double)st.rays / st.seconds,
-               (double)st.rays / cpu, 1e9 * cpu / (double)n, st.total / st.leaf_area);
+        printf("%s,%zu,%d,%zu,%d,%zu,%.4f,%.4f,%.4g,%.4g,%.1f,%.4f\n",
+               periodic ? "periodic" : "open", n, samples, st.sources, threads, st.rays, st.seconds,
+               cpu, (double)st.rays / st.seconds, (double)st.rays / cpu, 1e9 * cpu / (double)n,
+               st.total / st.leaf_area);
         fflush(stdout);
         free(l);
         free(a);

@@ -429,3 +429,47 @@ TEST(bad_input)
     free(out);
     end_ctx(ctx);
 }
+
+static void square_part(cbm_scene *s, cbm_organ organ, double x0, double x1, double y, bool flip)
+{
+    cbm_part p = cbm_part_default();
+    p.organ = organ;
+    CHECK(cbm_scene_begin_part(s, &p, NULL) == CBM_OK);
+    cbm_vec3 q[4] = {{x0, y, 0}, {x1, y, 0}, {x1, y, 1}, {x0, y, 1}};
+    if (flip) {
+        cbm_vec3 t = q[1];
+        q[1] = q[3];
+        q[3] = t;
+    }
+    CHECK(cbm_scene_add_polygon(s, q, 4) == CBM_OK);
+}
+
+/* a writer's scene: the leaf parts are the leaves (turned up whatever their winding), other
+ * parts occlude, the ground does not; the sun overhead, a roof over half the leaf: the leaf
+ * part gets half its area, its relative light 0.5 (16 x 16 jittered points per triangle: the
+ * worst of 200 seeds was 0.016 off) */
+TEST(scene_parts)
+{
+    cbm_context *ctx = new_ctx();
+    cbm_scene *s = NULL;
+    CHECK(cbm_scene_create(ctx, &s) == CBM_OK);
+    square_part(s, CBM_ORGAN_LEAF, 0, 1, 0, true);
+    square_part(s, CBM_ORGAN_BRANCH, 0, 0.5, 1, false);
+    square_part(s, CBM_ORGAN_GROUND, -5, 5, 2, false);
+    cbm_light_def d = cbm_light_def_default();
+    d.direct_fraction = 1.0;
+    d.sun = (cbm_vec3){0, 1, 0};
+    d.samples = 16;
+    d.two_sided = false;
+    double pl[3], pa[3];
+    size_t nl = 0;
+    CHECK(cbm_light_scene(ctx, &d, s, pl, pa, &nl, NULL) == CBM_OK);
+    CHECK_EQ_INT(nl, 2);
+    CHECK_NEAR(pa[0], 1.0, 1e-6);
+    CHECK_NEAR(pl[0], 0.5, 0.03);
+    CHECK_NEAR(cbm_scene_parts(s)[0].light, pl[0] / pa[0], 1e-12);
+    CHECK(isnan(cbm_scene_parts(s)[1].light));
+    CHECK_NEAR(pa[1], 0.0, 0.0);
+    cbm_scene_destroy(s);
+    end_ctx(ctx);
+}

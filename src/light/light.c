@@ -1,7 +1,7 @@
 /* Per-leaf light interception by ray casting over every plant of a scene (docs/light.md).
  *
- * The leaves (each quad as two triangles) and the occluder triangles form one Embree scene;
- * Embree's triangles stop rays from either side, so both faces of a leaf shade. A leaf's light
+ * The leaves (one Embree quad each) and the occluder triangles form one Embree scene;
+ * Embree's quads stop rays from either side, so both faces of a leaf shade. A leaf's light
  * is the integral over its area A of Σ_k E_k c_k(n, d_k) V(x, d_k), with the sky's sources
  * (d_k, E_k) of src/light/sky.c, c = |n·d| for a two-sided leaf or max(0, n·d) for the upper
  * face alone, and V(x, d) = 1 when the ray from x towards d reaches the sky. The integral is
@@ -453,34 +453,46 @@ static uint32_t *morton_order(cbm_context *ctx, const cbm_light_leaf *l, size_t 
 
 /* ---- the scene ---- */
 
-typedef struct tri_src {
+/* The scene's primitives: every leaf one quad, every occluder triangle a quad whose last two
+ * vertices are the same (Embree's quads take that as a triangle). One primitive per leaf rather
+ * than two triangles halves the BVH. */
+typedef struct prim_src {
     const cbm_light_leaf *leaves;
     size_t n_leaves;
     const cbm_vec3 *occ;
     size_t n_occ;
-} tri_src;
+} prim_src;
 
-static size_t tri_count(const tri_src *t)
+static size_t prim_count(const prim_src *t)
 {
-    return 2 * t->n_leaves + t->n_occ;
+    return t->n_leaves + t->n_occ;
 }
 
-static void tri_get(const tri_src *t, size_t k, cbm_vec3 v[3])
+static void prim_get(const prim_src *t, size_t k, cbm_vec3 v[4])
 {
-    if (k < 2 * t->n_leaves) {
-        const cbm_vec3 *p = t->leaves[k / 2].p;
-        v[0] = p[0];
-        v[1] = (k % 2) ? p[2] : p[1];
-        v[2] = (k % 2) ? p[3] : p[2];
+    if (k < t->n_leaves) {
+        for (int q = 0; q < 4; q++)
+            v[q] = t->leaves[k].p[q];
     } else {
-        const cbm_vec3 *p = t->occ + 3 * (k - 2 * t->n_leaves);
+        const cbm_vec3 *p = t->occ + 3 * (k - t->n_leaves);
         v[0] = p[0];
         v[1] = p[1];
         v[2] = p[2];
+        v[3] = p[2];
     }
 }
 
-/* copies of a triangle by whole tiles that overlap [lo, lo + len) in one axis: range of i */
+static void prim_box(const cbm_vec3 v[4], double *x0, double *x1, double *z0, double *z1)
+{
+    *x0 = *x1 = v[0].x;
+    *z0 = *z1 = v[0].z;
+    for (int q = 1; q < 4; q++) {
+        *x0 = fmin(*x0, v[q].x), *x1 = fmax(*x1, v[q].x);
+        *z0 = fmin(*z0, v[q].z), *z1 = fmax(*z1, v[q].z);
+    }
+}
+
+/* copies of a primitive by whole tiles that overlap [lo, lo + len) in one axis: range of i */
 static void copy_range(double tmin, double tmax, double lo, double len, long *i0, long *i1)
 {
     *i0 = (long)ceil((lo - tmax) / len);
@@ -499,55 +511,55 @@ static cbm_status embree_status(cbm_context *ctx, RTCDevice dev, const char *wha
     return cbm__fail(ctx, CBM_E_INTERNAL, "light: Embree error %d while %s", (int)e, what);
 }
 
-static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *j, const tri_src *t,
-                              RTCScene *out)
+static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *j,
+                              const prim_src *t, RTCScene *out)
 {
-    size_t nt = tri_count(t), total = 0;
+    size_t np = prim_count(t), total = 0;
     double lx = j->x1 - j->x0, lz = j->z1 - j->z0;
     bool periodic = j->mode == ENTRY_PERIODIC;
-    for (size_t k = 0; k < nt; k++) {
+    for (size_t k = 0; k < np; k++) {
         if (!periodic) {
             total++;
             continue;
         }
-        cbm_vec3 v[3];
-        tri_get(t, k, v);
+        cbm_vec3 v[4];
+        double x0, x1, z0, z1;
+        prim_get(t, k, v);
+        prim_box(v, &x0, &x1, &z0, &z1);
         long a0, a1, b0, b1;
-        copy_range(fmin(v[0].x, fmin(v[1].x, v[2].x)), fmax(v[0].x, fmax(v[1].x, v[2].x)), j->x0,
-                   lx, &a0, &a1);
-        copy_range(fmin(v[0].z, fmin(v[1].z, v[2].z)), fmax(v[0].z, fmax(v[1].z, v[2].z)), j->z0,
-                   lz, &b0, &b1);
+        copy_range(x0, x1, j->x0, lx, &a0, &a1);
+        copy_range(z0, z1, j->z0, lz, &b0, &b1);
         total += (size_t)(a1 - a0 + 1) * (size_t)(b1 - b0 + 1);
         if (total > (size_t)1 << 30)
             return cbm__fail(ctx, CBM_E_LIMIT,
-                             "light: the periodic tile is too small for the scene's triangles");
+                             "light: the periodic tile is too small for the scene's leaves");
     }
     RTCScene rs = rtcNewScene(dev);
     if (total > 0) {
-        RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_QUAD);
         float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                            3 * sizeof(float), 3 * total);
-        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                               3 * sizeof(unsigned), total);
+                                            3 * sizeof(float), 4 * total);
+        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
+                                               4 * sizeof(unsigned), total);
         if (vb && ib) {
             size_t m = 0;
-            for (size_t k = 0; k < nt; k++) {
-                cbm_vec3 v[3];
-                tri_get(t, k, v);
+            for (size_t k = 0; k < np; k++) {
+                cbm_vec3 v[4];
+                prim_get(t, k, v);
                 long a0 = 0, a1 = 0, b0 = 0, b1 = 0;
                 if (periodic) {
-                    copy_range(fmin(v[0].x, fmin(v[1].x, v[2].x)),
-                               fmax(v[0].x, fmax(v[1].x, v[2].x)), j->x0, lx, &a0, &a1);
-                    copy_range(fmin(v[0].z, fmin(v[1].z, v[2].z)),
-                               fmax(v[0].z, fmax(v[1].z, v[2].z)), j->z0, lz, &b0, &b1);
+                    double x0, x1, z0, z1;
+                    prim_box(v, &x0, &x1, &z0, &z1);
+                    copy_range(x0, x1, j->x0, lx, &a0, &a1);
+                    copy_range(z0, z1, j->z0, lz, &b0, &b1);
                 }
                 for (long a = a0; a <= a1; a++)
                     for (long b = b0; b <= b1; b++) {
-                        for (int q = 0; q < 3; q++) {
-                            vb[9 * m + 3 * (size_t)q] = (float)(v[q].x + (double)a * lx);
-                            vb[9 * m + 3 * (size_t)q + 1] = (float)v[q].y;
-                            vb[9 * m + 3 * (size_t)q + 2] = (float)(v[q].z + (double)b * lz);
-                            ib[3 * m + (size_t)q] = (unsigned)(3 * m + (size_t)q);
+                        for (int q = 0; q < 4; q++) {
+                            vb[12 * m + 3 * (size_t)q] = (float)(v[q].x + (double)a * lx);
+                            vb[12 * m + 3 * (size_t)q + 1] = (float)v[q].y;
+                            vb[12 * m + 3 * (size_t)q + 2] = (float)(v[q].z + (double)b * lz);
+                            ib[4 * m + (size_t)q] = (unsigned)(4 * m + (size_t)q);
                         }
                         m++;
                     }
@@ -660,7 +672,7 @@ cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
             goto done;
         }
         rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, &watch);
-        tri_src ts = {leaves, n_leaves, occluders, n_occluder_triangles};
+        prim_src ts = {leaves, n_leaves, occluders, n_occluder_triangles};
         if ((st = build_scene(ctx, dev, &j, &ts, &rs)) != CBM_OK)
             goto done;
         j.rs = rs;
