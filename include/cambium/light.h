@@ -57,7 +57,7 @@ typedef struct cbm_light_def {
     double field_height; ///< m, height of the lights; <= the scene's top: just above it (0)
     cbm_light_edge edge; ///< (CBM_LIGHT_EDGE_OPEN)
     /* ---- sampling ---- */
-    int samples;    ///< sample points per leaf side: samples² points per leaf, 1..16 (2)
+    int samples;    ///< sample points per leaf side: samples² points per leaf, 1..16 (1)
     bool two_sided; ///< a leaf takes light on both faces (true); false: the upper face only
     double max_light_square; ///< the light of a horizontal unshaded 1 m² leaf in the sky's units;
                              ///< the results are divided by it. 0: the exact value of the sky

@@ -112,7 +112,7 @@ cbm_light_def cbm_light_def_default(void)
     d.dome_radius = 0.0;
     d.field_height = 0.0;
     d.edge = CBM_LIGHT_EDGE_OPEN;
-    d.samples = 2;
+    d.samples = 1;
     d.two_sided = true;
     d.max_light_square = 0.0;
     d.threads = 0;
