@@ -149,8 +149,8 @@ TEST(sky_sectors_converge)
                     d.samples = 1;
                     double got = one_leaf(ctx, &d, rect_leaf((cbm_vec3){0, 0, 0}, 1, 1, b));
                     double err = fabs(got - exact);
-                    CHECK_MSG(err <= 0.5 * prev + 1e-9, "sky %d tilt %g: %d rings err %.3g", sky,
-                              b, r, err);
+                    CHECK_MSG(err <= 0.5 * prev + 1e-9, "sky %d tilt %g: %d rings err %.3g", sky, b,
+                              r, err);
                     if (r == 24)
                         CHECK_MSG(err <= 2e-3, "sky %d tilt %g: err %.3g", sky, b, err);
                     prev = err;
@@ -280,6 +280,7 @@ TEST(dome_focus_and_calibration)
     CHECK(cbm_light_calibrate(ctx, &d, (cbm_vec3){40, 3, -7}, &m) == CBM_OK);
     CHECK_NEAR(m, 1.0, 1e-12);
     d.dome_radius = 5.0;
+    d.samples = 4; /* the 1 m leaf straddles the beams' edges: sample it */
     CHECK(cbm_light_calibrate(ctx, &d, (cbm_vec3){0, 0, 0}, &m) == CBM_OK);
     CHECK_NEAR(m, 1.0, 1e-12); /* a 1 m leaf at the focus is inside every beam */
     CHECK(cbm_light_calibrate(ctx, &d, (cbm_vec3){4.9, 0, 0}, &m) == CBM_OK);
@@ -322,9 +323,9 @@ TEST(field_open_and_periodic)
     p.field_min[0] = 0, p.field_max[0] = 1;
     p.field_min[1] = 0, p.field_max[1] = 1;
     cbm_light_leaf l[3];
-    l[0] = rect_leaf((cbm_vec3){0.25, 1.0, 0.5}, 0.5, 1.0, 0.0);  /* canopy */
-    l[1] = rect_leaf((cbm_vec3){0.65, 0.0, 0.5}, 0.1, 0.1, 0.0);  /* lit */
-    l[2] = rect_leaf((cbm_vec3){0.25, 0.0, 0.5}, 0.1, 0.1, 0.0);  /* shaded */
+    l[0] = rect_leaf((cbm_vec3){0.25, 1.0, 0.5}, 0.5, 1.0, 0.0); /* canopy */
+    l[1] = rect_leaf((cbm_vec3){0.65, 0.0, 0.5}, 0.1, 0.1, 0.0); /* lit */
+    l[2] = rect_leaf((cbm_vec3){0.25, 0.0, 0.5}, 0.1, 0.1, 0.0); /* shaded */
     double a[3];
     cbm_light_stats st;
     p.edge = CBM_LIGHT_EDGE_PERIODIC;
@@ -359,8 +360,8 @@ static cbm_light_leaf *random_leaves(size_t n, uint64_t seed)
             x = x * 6364136223846793005ull + 1442695040888963407ull;
             r[k] = (double)(x >> 11) / 9007199254740992.0;
         }
-        l[i] = rect_leaf((cbm_vec3){4 * r[0], 3 * r[1], 4 * r[2]}, 0.1 + 0.1 * r[3], 0.1,
-                         1.2 * r[4]);
+        l[i] =
+            rect_leaf((cbm_vec3){4 * r[0], 3 * r[1], 4 * r[2]}, 0.1 + 0.1 * r[3], 0.1, 1.2 * r[4]);
         l[i].plant = (uint32_t)(i % 3);
     }
     return l;
@@ -427,5 +428,49 @@ TEST(bad_input)
     CHECK(st == CBM_E_NOMEM);
     free(many);
     free(out);
+    end_ctx(ctx);
+}
+
+static void square_part(cbm_scene *s, cbm_organ organ, double x0, double x1, double y, bool flip)
+{
+    cbm_part p = cbm_part_default();
+    p.organ = organ;
+    CHECK(cbm_scene_begin_part(s, &p, NULL) == CBM_OK);
+    cbm_vec3 q[4] = {{x0, y, 0}, {x1, y, 0}, {x1, y, 1}, {x0, y, 1}};
+    if (flip) {
+        cbm_vec3 t = q[1];
+        q[1] = q[3];
+        q[3] = t;
+    }
+    CHECK(cbm_scene_add_polygon(s, q, 4) == CBM_OK);
+}
+
+/* a writer's scene: the leaf parts are the leaves (turned up whatever their winding), other
+ * parts occlude, the ground does not; the sun overhead, a roof over half the leaf: the leaf
+ * part gets half its area, its relative light 0.5 (16 x 16 jittered points per triangle: the
+ * worst of 200 seeds was 0.016 off) */
+TEST(scene_parts)
+{
+    cbm_context *ctx = new_ctx();
+    cbm_scene *s = NULL;
+    CHECK(cbm_scene_create(ctx, &s) == CBM_OK);
+    square_part(s, CBM_ORGAN_LEAF, 0, 1, 0, true);
+    square_part(s, CBM_ORGAN_BRANCH, 0, 0.5, 1, false);
+    square_part(s, CBM_ORGAN_GROUND, -5, 5, 2, false);
+    cbm_light_def d = cbm_light_def_default();
+    d.direct_fraction = 1.0;
+    d.sun = (cbm_vec3){0, 1, 0};
+    d.samples = 16;
+    d.two_sided = false;
+    double pl[3], pa[3];
+    size_t nl = 0;
+    CHECK(cbm_light_scene(ctx, &d, s, pl, pa, &nl, NULL) == CBM_OK);
+    CHECK_EQ_INT(nl, 2);
+    CHECK_NEAR(pa[0], 1.0, 1e-6);
+    CHECK_NEAR(pl[0], 0.5, 0.03);
+    CHECK_NEAR(cbm_scene_parts(s)[0].light, pl[0] / pa[0], 1e-12);
+    CHECK(isnan(cbm_scene_parts(s)[1].light));
+    CHECK_NEAR(pa[1], 0.0, 0.0);
+    cbm_scene_destroy(s);
     end_ctx(ctx);
 }

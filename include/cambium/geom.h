@@ -47,6 +47,8 @@ typedef struct cbm_part {
     double stress;        ///< bending stress, Pa
     double age;           ///< wood age, years
     double reaction_wood; ///< fraction of reaction wood in the section, 0..1
+    double light;         ///< leaves: intercepted light / one-sided area (1 = unshaded
+                          ///< horizontal; cbm_light_scene, docs/light.md)
 } cbm_part;
 
 /// A part with neutral defaults: branch, order -1, no ids, grey, NaN quantities.

@@ -11,6 +11,7 @@
 #define CAMBIUM_LIGHT_H
 
 #include "cambium/base.h"
+#include "cambium/geom.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -56,23 +57,23 @@ typedef struct cbm_light_def {
     double field_height; ///< m, height of the lights; <= the scene's top: just above it (0)
     cbm_light_edge edge; ///< (CBM_LIGHT_EDGE_OPEN)
     /* ---- sampling ---- */
-    int samples;       ///< sample points per leaf side: samples² points per leaf, 1..16 (2)
-    bool two_sided;    ///< a leaf takes light on both faces (true); false: the upper face only
+    int samples;    ///< sample points per leaf side: samples² points per leaf, 1..16 (1)
+    bool two_sided; ///< a leaf takes light on both faces (true); false: the upper face only
     double max_light_square; ///< the light of a horizontal unshaded 1 m² leaf in the sky's units;
                              ///< the results are divided by it. 0: the exact value of the sky
                              ///< (results in m² of unshaded horizontal leaf) (0)
-    int threads;   ///< 0: one per processor (at most 64); results never depend on it
-    uint64_t seed; ///< jitter of the sample points (1)
+    int threads;             ///< 0: one per processor (at most 64); results never depend on it
+    uint64_t seed;           ///< jitter of the sample points (1)
 } cbm_light_def;
 
 /// The defaults given in parentheses above.
 CBM_API cbm_light_def cbm_light_def_default(void);
 
 typedef struct cbm_light_stats {
-    size_t rays;     ///< occlusion rays cast
-    double seconds;  ///< wall-clock time of the call
-    size_t sources;  ///< directional sources of the sky (sectors, lights, sun)
-    double total;    ///< sum of absorbed over all leaves, m²
+    size_t rays;      ///< occlusion rays cast
+    double seconds;   ///< wall-clock time of the call
+    size_t sources;   ///< directional sources of the sky (sectors, lights, sun)
+    double total;     ///< sum of absorbed over all leaves, m²
     double leaf_area; ///< sum of the leaves' one-sided areas, m²
 } cbm_light_stats;
 
@@ -104,6 +105,16 @@ CBM_API cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *de
 /// its focus, an open field less near its edges.
 CBM_API cbm_status cbm_light_calibrate(cbm_context *ctx, const cbm_light_def *def, cbm_vec3 at,
                                        double *max_light_square);
+
+/// The light of the leaves of a writer's scene (geom.h): the triangles of the parts whose organ
+/// is CBM_ORGAN_LEAF are the leaves (each turned to face up), those of every other part but the
+/// ground occlude. Sets each leaf part's `light` to its intercepted light over its one-sided
+/// area (1 = unshaded horizontal), for `color_by = CBM_COLOR_LIGHT`. part_light and part_area
+/// (optional, cbm_scene_part_count entries, caller's) receive each part's intercepted light in
+/// m² and its leaf area in m² (0 for other parts); *n_leaf_triangles (optional) the leaves cast.
+CBM_API cbm_status cbm_light_scene(cbm_context *ctx, const cbm_light_def *def, cbm_scene *scene,
+                                   double *part_light, double *part_area, size_t *n_leaf_triangles,
+                                   cbm_light_stats *stats);
 
 #ifdef __cplusplus
 }

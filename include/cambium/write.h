@@ -41,6 +41,7 @@ typedef enum cbm_color_by {
     CBM_COLOR_REACTION,   ///< fraction of reaction wood, 0..1
     CBM_COLOR_ORDER,      ///< branch order, one colour per order
     CBM_COLOR_STRESS_MPA, ///< bending stress in MPa (range from the data unless set)
+    CBM_COLOR_LIGHT,      ///< leaves: relative light (cbm_part.light; 0 to the largest unless set)
     CBM_COLOR_COUNT
 } cbm_color_by;
 

@@ -52,6 +52,7 @@ cbm_part cbm_part_default(void)
     p.stress = NAN;
     p.age = NAN;
     p.reaction_wood = NAN;
+    p.light = NAN;
     return p;
 }
 

@@ -1,6 +1,7 @@
 /* Colour modes (cbm_color_by): the quantity each mode shows for a part, its range over a scene,
  * the title of its legend, and the display colour of each part under the writer's options. Organs
- * other than wood keep their own colour, faded, since the quantities belong to the wood. */
+ * other than wood keep their own colour, faded, since the quantities belong to the wood (light,
+ * to the leaves: there the wood is faded). */
 #include "writers.h"
 
 #include <math.h>
@@ -19,6 +20,8 @@ double cbm__part_quantity(const cbm_part *p, cbm_color_by by)
         return p->order >= 0 ? (double)p->order : NAN;
     case CBM_COLOR_STRESS_MPA:
         return p->stress * 1e-6;
+    case CBM_COLOR_LIGHT:
+        return p->light;
     default:
         return NAN;
     }
@@ -37,6 +40,8 @@ const char *cbm__color_title(cbm_color_by by)
         return "branch order";
     case CBM_COLOR_STRESS_MPA:
         return "stress (MPa)";
+    case CBM_COLOR_LIGHT:
+        return "light (rel.)";
     default:
         return "";
     }
@@ -69,7 +74,8 @@ void cbm__color_range(const cbm_scene *s, const cbm_write_options *o, double *lo
         }
         if (!(a <= b))
             a = 0.0, b = 1.0;
-        if (o->color_by == CBM_COLOR_AGE || o->color_by == CBM_COLOR_STRESS_MPA)
+        if (o->color_by == CBM_COLOR_AGE || o->color_by == CBM_COLOR_STRESS_MPA ||
+            o->color_by == CBM_COLOR_LIGHT)
             a = fmin(a, 0.0);
     }
     if (isfinite(o->range_min))
@@ -88,8 +94,10 @@ void cbm__part_color_range(const cbm_part *p, const cbm_write_options *o, double
     memcpy(rgba, p->color, 4 * sizeof(float));
     if (o->color_by == CBM_COLOR_MATERIAL || o->color_by >= CBM_COLOR_COUNT)
         return;
-    if (p->organ != CBM_ORGAN_BRANCH) {
-        /* quantities belong to the wood: other organs keep their colour, a little faded */
+    if (o->color_by == CBM_COLOR_LIGHT ? p->organ != CBM_ORGAN_LEAF
+                                       : p->organ != CBM_ORGAN_BRANCH) {
+        /* quantities belong to the wood (light to the leaves): other organs keep their
+         * colour, a little faded */
         for (int k = 0; k < 3; k++)
             rgba[k] = 0.5f * rgba[k] + 0.5f * 0.8f;
         return;

@@ -88,8 +88,8 @@ static bool parse_color_by(const char *v, void *target, char *why, size_t n)
 {
     (void)why, (void)n;
     cbm_write_options *o = target;
-    static const char *const names[] = {"material", "stress", "age",
-                                        "reaction", "order",  "stress-mpa"};
+    static const char *const names[] = {"material", "stress",     "age",  "reaction",
+                                        "order",    "stress-mpa", "light"};
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++)
         if (!strcmp(v, names[k])) {
             o->color_by = (cbm_color_by)k;
@@ -150,7 +150,7 @@ cli_opts *cli_output_options(cbm_write_options *o)
          .bad = bad,
          .arg = "M",
          .help = "material | stress (/ MOR) | stress-mpa | age | reaction |\n"
-                 "order (default material)"},
+                 "order | light (leaves; grow) (default material)"},
         {.name = "--range",
          .kind = CLI_CUSTOM,
          .target = o,

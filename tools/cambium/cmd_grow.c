@@ -3,6 +3,7 @@
  * (.csv), the MTG (.mtg) and the year-by-year summary (.json); with --every K a .glb holds a
  * growth animation of one frame every K growth steps. With --seeds A-B it grows the model once
  * per seed and writes the distribution of the year-by-year figures over the seeds (.json). */
+#include "cli_light.h"
 #include "cli_output.h"
 #include "commands.h"
 #include "grow_sway.h"
@@ -58,9 +59,10 @@ static void help(const cli_opts *t)
            "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
            "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
            "summary). FORMAT:PATH names a scene format explicitly. -o wind:FILE.csv writes the\n"
-           "critical wind speed of the stem and of each first-order branch. With --sway, .glb\n"
-           "outputs are the grown tree swaying in a gusty wind (an animation) and .csv (or\n"
-           "motion:FILE.csv) the displacements of the stem's and first-order branches' tips.\n\n");
+           "critical wind speed of the stem and of each first-order branch; -o light:FILE.csv\n"
+           "the light of each leaf (--light). With --sway, .glb outputs are the grown tree\n"
+           "swaying in a gusty wind (an animation) and .csv (or motion:FILE.csv) the\n"
+           "displacements of the stem's and first-order branches' tips.\n\n");
     cli_options_rows(stdout, t);
     printf("\nbuilt-in models:");
     for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
@@ -428,6 +430,8 @@ int cmd_grow(int argc, char **argv)
     long modes = 0;
     cli_sway sway = cli_sway_default();
     cbm_write_options o = cbm_write_options_default();
+    cli_light light = {false, cbm_light_def_default()};
+    const char *light_csv = NULL;
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
         {.name = "MODEL", .kind = CLI_POSITIONAL, .target = &model, .parse = parse_model},
@@ -525,6 +529,15 @@ int cmd_grow(int argc, char **argv)
          .help = "the final tree as a forester measures it (height, diameter at\n"
                  "breast height, crown, buckling safety, pipe model, branch\n"
                  "angles, stress ratios, intersections; cambium info --help)"},
+        {.name = "--light",
+         .kind = CLI_CUSTOM,
+         .target = &light,
+         .parse = cli_light_parse,
+         .arg = "SKY[,K=V]",
+         .help = "light of every leaf of the final tree by ray casting: SKY is\n"
+                 "soc, uoc, dome or field; K=V: rings=N azimuths=N samples=N\n"
+                 "direct=F sun-elevation=DEG one-sided periodic (docs/light.md);\n"
+                 "-o light:FILE.csv writes it per leaf, --color-by light paints it"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {.kind = CLI_GROUP, .target = cli_output_options(&o)},
         {0}};
@@ -552,6 +565,8 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--seeds does not go with --modes");
         if (sway.seconds > 0)
             return cli_usage_error("grow", "--seeds does not go with --sway");
+        if (light.on)
+            return cli_usage_error("grow", "--seeds does not go with --light");
     }
     bool swaying = sway.seconds > 0;
     {
@@ -567,7 +582,8 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--sway-dt must not exceed --sway");
     }
     cli_output_target targets[MAX_OUTPUTS];
-    /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv, 5 sway .glb, 6 sway table .csv */
+    /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv, 5 sway .glb, 6 sway table .csv,
+     * 7 light:FILE.csv */
     int kind[MAX_OUTPUTS];
     const char *sway_glb[MAX_OUTPUTS], *sway_csv[MAX_OUTPUTS];
     int nsway_glb = 0, nsway_csv = 0;
@@ -578,6 +594,13 @@ int cmd_grow(int argc, char **argv)
             if (strcmp(ext, "csv"))
                 return cli_usage_error("grow", "%s: the wind table is .csv", outs[k]);
             kind[k] = 4;
+        }
+        if (!strncmp(outs[k], "light:", 6)) {
+            if (strcmp(ext, "csv"))
+                return cli_usage_error("grow", "%s: the light table is .csv", outs[k]);
+            kind[k] = 7;
+            light_csv = outs[k] + 6;
+            continue;
         }
         bool mprefix = !strncmp(outs[k], "motion:", 7);
         if (mprefix && !swaying)
@@ -601,11 +624,15 @@ int cmd_grow(int argc, char **argv)
                                    ".json, or FORMAT:PATH)",
                                    outs[k]);
     }
+    /* the light table or the light colours ask for the light pass (soc sky by default) */
+    if (light_csv || o.color_by == CBM_COLOR_LIGHT)
+        light.on = true;
     {
         const char *paths[MAX_OUTPUTS];
         for (int k = 0; k < nout; k++)
             paths[k] = kind[k] == 0                                      ? targets[k].path
                        : kind[k] == 4                                    ? outs[k] + 5
+                       : kind[k] == 7                                    ? outs[k] + 6
                        : kind[k] >= 5 && !strncmp(outs[k], "motion:", 7) ? outs[k] + 7
                                                                          : outs[k];
         if (cli_check_outputs(paths, nout) != CLI_OK)
@@ -752,6 +779,18 @@ int cmd_grow(int argc, char **argv)
         goto done;
     }
     bool scene_built = false;
+    if (light.on) {
+        /* the light of the scene the writers get, so that --color-by light paints it */
+        double tw = cli_seconds();
+        cbm_scene_clear(sc);
+        st = cbm_tree_to_scene(t, sc, 12, o.ground);
+        scene_built = true;
+        t_interpret += cli_seconds() - tw;
+        if (st == CBM_OK)
+            st = cli_light_run(ctx, &light, sc, light_csv, quiet);
+        if (st != CBM_OK)
+            rc = cli_fail(ctx, st, "light");
+    }
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         double tw = cli_seconds(), ti = 0.0;
         if (kind[k] == 1)
@@ -762,6 +801,8 @@ int cmd_grow(int argc, char **argv)
             st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
         else if (kind[k] == 4)
             st = write_wind(ctx, cbm_tree_plant(t), outs[k] + 5);
+        else if (kind[k] == 7)
+            st = CBM_OK; /* written by the light pass above */
         else if (kind[k] >= 5)
             continue; /* the sway's, below */
         else if (anim[k])
