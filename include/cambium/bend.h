@@ -52,6 +52,14 @@ typedef struct cbm_bend_spec {
     double impulse_time;     ///< s, time at which impulse_force acts (for one step)
     double impulse_force;    ///< N, downward at the tip for one step; 0 = none
     double initial_tip_load; ///< N, downward: start from the deflection under it, released at 0
+    /* the incremental FEM (solver = fem; cbm_fem_def, docs/bend.md "solver = fem") */
+    long fem_increments;     ///< load increments of the static solve (default 20)
+    double fem_shear_ratio;  ///< G / E in the elements (0 = the spec's G)
+    double fem_sigma;        ///< reaction sensitivity of the maturation strain, [0, 1]
+    double fem_phi;          ///< reaction direction, degrees from the upper side
+    double fem_strain_min;   ///< a (strain)
+    double fem_strain_max;   ///< b (strain)
+    cbm_fem_axial fem_axial; ///< axial maturation resultant: formula or listing
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

@@ -42,6 +42,8 @@ const char *cbm_mech_discretization_name(cbm_mech_discretization d)
 
 const char *cbm_mech_solver_name(cbm_mech_solver s)
 {
+    if (s == CBM_MECH_FEM)
+        return "fem";
     return s == CBM_MECH_RELAX ? "relax" : "fast";
 }
 
@@ -55,6 +57,10 @@ bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out)
     }
     if (!strcmp(name, "fast") || !strcmp(name, "newton") || !strcmp(name, "newton-krylov")) {
         *out = CBM_MECH_NEWTON;
+        return true;
+    }
+    if (!strcmp(name, "fem")) {
+        *out = CBM_MECH_FEM;
         return true;
     }
     return false;
