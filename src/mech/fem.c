@@ -64,18 +64,18 @@ static cbm_status check_def(cbm_context *ctx, const cbm_fem_def *d)
 
 typedef struct fem_ws {
     size_t n;
-    cbm_quat *q;   /* frames of the FE geometry */
-    double *sec;   /* 4 per segment: EA, GJ, EI_L, EI_U */
-    double *dm;    /* 36 per node: pivot block, then its Cholesky factor */
-    double *ym;    /* 36 per node: D^-1 k21 */
-    double *f;     /* 6 per node: load, then D^-1 (load) */
-    double *x;     /* 6 per node: solution */
-    double *lw;    /* kg/m of line load per segment */
-    double *pm;    /* kg at the distal node */
-    double *ma;    /* sum E dA of the straining rings (maturation) */
-    double *mr;    /* sum E d(r^3) of the straining rings */
-    cbm_vec3 *tf;  /* tip force */
-    cbm_vec3 *tm;  /* tip moment */
+    cbm_quat *q;  /* frames of the FE geometry */
+    double *sec;  /* 4 per segment: EA, GJ, EI_L, EI_U */
+    double *dm;   /* 36 per node: pivot block, then its Cholesky factor */
+    double *ym;   /* 36 per node: D^-1 k21 */
+    double *f;    /* 6 per node: load, then D^-1 (load) */
+    double *x;    /* 6 per node: solution */
+    double *lw;   /* kg/m of line load per segment */
+    double *pm;   /* kg at the distal node */
+    double *ma;   /* sum E dA of the straining rings (maturation) */
+    double *mr;   /* sum E d(r^3) of the straining rings */
+    cbm_vec3 *tf; /* tip force */
+    cbm_vec3 *tm; /* tip moment */
     size_t bytes;
 } fem_ws;
 
@@ -124,6 +124,17 @@ static void ws_free(cbm_plant *p, fem_ws *w)
 /* Rigidities of the layered section (2.73-2.75 for ellipses): every ring's outer minus inner. */
 static void sections(const cbm_plant *p, const cbm_fem_def *d, double *sec)
 {
+    if (d->shear_ratio == 0.0) {
+        /* the plant's running sums: O(1) per segment however many rings it has */
+        for (size_t i = 0; i < p->n; i++) {
+            sec[4 * i] = p->ea[i];
+            sec[4 * i + 1] = p->rig[i].x;
+            sec[4 * i + 2] = p->rig[i].y;
+            sec[4 * i + 3] = p->rig[i].z;
+        }
+        return;
+    }
+    /* G = shear_ratio E: GJ needs every ring (O(rings)) */
     for (size_t i = 0; i < p->n; i++) {
         const cbm_ring *r = p->rings.data + p->ring_first[i];
         double ea = 0, gj = 0, eil = 0, eiu = 0, a0 = 0, b0 = 0, il0 = 0, iu0 = 0, j0 = 0;
@@ -328,8 +339,7 @@ static void element_loads(const cbm_plant *p, const fem_ws *w, const cbm_fem_def
     add3(fd + 3, v3_scale(w->tm[i], s));
 }
 
-static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double s,
-                           double *maxrot)
+static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double s, double *maxrot)
 {
     size_t n = p->n;
     memset(w->dm, 0, 36 * n * sizeof *w->dm);
@@ -402,11 +412,10 @@ static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double
         } else {
             th = v3_scale(th, 0.5);
         }
-        cbm_vec3 rot = v3_add(v3_scale(v3_cross(h, du), 1.0 / p->len[i]),
-                              v3_scale(h, v3_dot(th, h)));
+        cbm_vec3 rot =
+            v3_add(v3_scale(v3_cross(h, du), 1.0 / p->len[i]), v3_scale(h, v3_dot(th, h)));
         if (!v3_isfinite(rot))
-            return cbm__fail(p->ctx, CBM_E_NONFINITE, "fem: segment %zu: non-finite rotation",
-                             i);
+            return cbm__fail(p->ctx, CBM_E_NONFINITE, "fem: segment %zu: non-finite rotation", i);
         double a = v3_norm(rot);
         if (a > mr)
             mr = a;

@@ -8,12 +8,12 @@
 
 /* What the plant carried before a growth step (per segment). */
 typedef struct cbm__fem_snap {
-    size_t n;        /* segments then */
-    double *mpl;     /* kg/m */
-    double *pmass;   /* kg */
-    size_t *rings;   /* ring count */
-    cbm_vec3 *tipf;  /* N, world */
-    cbm_vec3 *tipm;  /* N m, world */
+    size_t n;       /* segments then */
+    double *mpl;    /* kg/m */
+    double *pmass;  /* kg */
+    size_t *rings;  /* ring count */
+    cbm_vec3 *tipf; /* N, world */
+    cbm_vec3 *tipm; /* N m, world */
 } cbm__fem_snap;
 
 /// Records the plant's loads and ring counts (allocates; release with cbm__fem_snap_free).

@@ -143,6 +143,7 @@ struct cbm_plant {
     cbm_vec3 *rest;    /* rigidity-weighted rest rate = rigr / rig */
     double *mpl;       /* kg/m */
     double *area;      /* m^2 */
+    double *ea;        /* N: axial rigidity, sum over rings of E times ring area (fem.c) */
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;

@@ -125,7 +125,7 @@ cbm_plant_def cbm_plant_def_default(void)
 // clang-format off
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
-    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
+    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(ea) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
     X(moment) X(pmass0)                                                                            \
     X(cmass) X(crad)
 // clang-format on
@@ -265,6 +265,7 @@ static void section_add(cbm_plant *p, size_t i, const double in[4], const cbm_ri
     p->rig[i] = v3_add(p->rig[i], ck);
     p->rigr[i] = v3_add(p->rigr[i], v3_mul(ck, r->rest_rate));
     p->mpl[i] += r->density * (out[3] - in[3]);
+    p->ea[i] += r->youngs_modulus * (out[3] - in[3]);
     p->area[i] = out[3];
 }
 
@@ -287,6 +288,7 @@ static void update_section(cbm_plant *p, size_t i)
     double v[2][4] = {{0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}};
     p->rig[i] = p->rigr[i] = v3(0, 0, 0);
     p->mpl[i] = 0.0;
+    p->ea[i] = 0.0;
     p->area[i] = 0.0;
     for (size_t k = 0; k < nr; k++)
         section_add(p, i, v[k & 1], &r[k], v[(k + 1) & 1]);
