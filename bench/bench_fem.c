@@ -26,6 +26,14 @@ static double now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* CPU time of the process: on a shared machine the wall clock also counts other jobs' turns */
+static double cpu(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 /* Guertler's branch: 4 m long (elements of Le = 4 / n_FE, so the physics stays the same across
  * the sweep), tip radius r_end, base radius r_start after n_FE steps (ring thickness
  * (r_start - r_end) / (n_FE - 1)), t0 = 60 degrees from the vertical. */
@@ -82,7 +90,7 @@ static cbm_plant *make_tree(cbm_context *ctx, size_t n)
     par[0] = -1;
     for (size_t i = 1; i < n; i++)
         par[i] = cbm_context_uniform(ctx) < 0.8 ? (int64_t)i - 1
-                                                 : (int64_t)(cbm_context_uniform(ctx) * (double)i);
+                                                : (int64_t)(cbm_context_uniform(ctx) * (double)i);
     for (size_t i = 0; i < n; i++)
         count[i] = 1;
     for (size_t i = n; i-- > 1;)
@@ -121,7 +129,7 @@ static cbm_plant *make_tree(cbm_context *ctx, size_t n)
 }
 
 /* One growth step: a 0.1 mm ring everywhere, a 2 cm element at every tip. */
-static double one_step(cbm_plant *p, size_t *tips)
+static double one_step(cbm_plant *p, size_t *tips, double *cpu_s)
 {
     cbm_fem_growth g = cbm_fem_growth_default();
     g.ring_thickness = 1e-4;
@@ -131,9 +139,10 @@ static double one_step(cbm_plant *p, size_t *tips)
     g.tip_length = 0.02;
     g.tip_radius = 0.002;
     cbm_fem_stats fs;
-    double t0 = now();
+    double t0 = now(), c0 = cpu();
     cbm_status s = cbm_plant_fem_grow(p, NULL, &g, &fs);
     double t = now() - t0;
+    *cpu_s = cpu() - c0;
     *tips = fs.tips_added;
     return s == CBM_OK ? t : NAN;
 }
@@ -161,14 +170,14 @@ int main(int argc, char **argv)
         return 1;
     }
     if (csv)
-        fprintf(csv, "experiment,n,reps,best_s,mean_s,per_element_us,peak_bytes\n");
+        fprintf(csv, "experiment,n,reps,best_s,mean_or_cpu_s,per_element_us,peak_bytes\n");
     cbm_context *ctx = NULL;
     if (cbm_context_create(NULL, &ctx) != CBM_OK)
         return 1;
     printf("1. Guertler's branch grown to n_FE elements (n_FE steps, one solve each)\n");
-    printf("%8s %6s %12s %12s %14s %12s %10s\n", "n_FE", "reps", "best s", "mean s",
-           "us/(step*el)", "peak bytes", "tip deg");
-    static const size_t nfes[] = {10, 20, 30, 40, 100, 400, 1000, 4000};
+    printf("%8s %6s %12s %12s %14s %12s %10s\n", "n_FE", "reps", "best s", "mean s", "us/(step*el)",
+           "peak bytes", "tip deg");
+    static const size_t nfes[] = {10, 20, 30, 40, 100, 400, 1000, 2000};
     for (size_t k = 0; k < sizeof nfes / sizeof *nfes && nfes[k] <= maxn; k++) {
         size_t nfe = nfes[k];
         int r = nfe <= 40 ? reps : nfe <= 400 ? 20 : nfe <= 1000 ? 3 : 1;
@@ -203,8 +212,9 @@ int main(int argc, char **argv)
             fprintf(csv, "guertler-branch,%zu,%d,%.6e,%.6e,%.4f,%zu\n", nfe, r, best, sum / r, per,
                     peak);
     }
-    printf("\n2. One growth step, unbranched branch of n elements\n");
-    printf("%9s %12s %12s\n", "n", "step s", "us/element");
+    printf("\n2. One growth step, unbranched branch of n elements of 2 cm\n");
+    printf("(a first step, then the best of 3: the buffers a growing plant keeps are in place)\n");
+    printf("%9s %12s %12s %12s\n", "n", "step s", "cpu s", "us/element");
     for (size_t n = 100; n <= maxn; n *= 10) {
         cbm_plant_def pd = cbm_plant_def_default();
         pd.capacity = n + 1;
@@ -212,7 +222,7 @@ int main(int argc, char **argv)
         if (cbm_plant_create(ctx, &pd, &p) != CBM_OK)
             return 1;
         cbm_segment_def d = cbm_segment_def_default();
-        d.length = 1.0 / (double)n;
+        d.length = 0.02; /* as the tree's: 1e-5 m elements of 1 cm radius lose definiteness */
         for (size_t i = 0; i < n; i++) {
             d.parent = (int64_t)i - 1;
             if (cbm_plant_add_segment(p, &d, NULL) != CBM_OK)
@@ -221,16 +231,21 @@ int main(int argc, char **argv)
         if (cbm_plant_evaluate(p, NULL) != CBM_OK)
             return 1;
         size_t tips = 0;
-        double best = INFINITY;
-        for (int j = 0; j < 3; j++)
-            best = fmin(best, one_step(p, &tips));
-        printf("%9zu %12.3e %12.3f\n", n, best, best / (double)n * 1e6);
+        double best = INFINITY, bc = INFINITY, c = 0;
+        (void)one_step(p, &tips, &c);
+        for (int j = 0; j < 3; j++) {
+            best = fmin(best, one_step(p, &tips, &c));
+            bc = fmin(bc, c);
+        }
+        printf("%9zu %12.3e %12.3e %12.3f\n", n, best, bc, bc / (double)n * 1e6);
         if (csv)
-            fprintf(csv, "chain-step,%zu,3,%.6e,,%.4f,\n", n, best, best / (double)n * 1e6);
+            fprintf(csv, "chain-step,%zu,3,%.6e,%.6e,%.4f,\n", n, best, bc, bc / (double)n * 1e6);
         cbm_plant_destroy(p);
     }
     printf("\n3. One growth step, random branched tree of n segments\n");
-    printf("%9s %8s %12s %12s %14s\n", "n", "tips", "step s", "us/element", "peak bytes");
+    printf("(first step, then the best of 3)\n");
+    printf("%9s %8s %12s %12s %12s %12s %14s\n", "n", "tips", "first s", "step s", "cpu s",
+           "us/element", "peak bytes");
     for (size_t n = 1000; n <= maxn; n *= 10) {
         cbm_context *c2 = NULL;
         if (cbm_context_create(NULL, &c2) != CBM_OK)
@@ -239,11 +254,17 @@ int main(int argc, char **argv)
         if (!p || cbm_plant_evaluate(p, NULL) != CBM_OK)
             return 1;
         size_t tips = 0, base = cbm_context_bytes(c2);
-        double t = one_step(p, &tips);
+        double c = 0, first = one_step(p, &tips, &c), t = INFINITY, bc = INFINITY;
         size_t peak = cbm_context_peak_bytes(c2) - base;
-        printf("%9zu %8zu %12.3e %12.3f %14zu\n", n, tips, t, t / (double)n * 1e6, peak);
+        for (int j = 0; j < 3; j++) {
+            t = fmin(t, one_step(p, &tips, &c));
+            bc = fmin(bc, c);
+        }
+        printf("%9zu %8zu %12.3e %12.3e %12.3e %12.3f %14zu\n", n, tips, first, t, bc,
+               bc / (double)n * 1e6, peak);
         if (csv)
-            fprintf(csv, "tree-step,%zu,1,%.6e,,%.4f,%zu\n", n, t, t / (double)n * 1e6, peak);
+            fprintf(csv, "tree-step,%zu,3,%.6e,%.6e,%.4f,%zu\n", n, t, bc, bc / (double)n * 1e6,
+                    peak);
         cbm_plant_destroy(p);
         cbm_context_destroy(c2);
     }

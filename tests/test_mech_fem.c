@@ -124,8 +124,8 @@ TEST(fem_branched_agrees_with_statics_small_load)
     for (int k = 0; k < 3; k++) {
         double e = v3_norm(v3_sub(tips[0][k], tips[1][k]));
         printf("node %d: fem (%.4e %.4e %.4e) statics (%.4e %.4e %.4e) |diff| / max %.2e\n", k,
-               tips[0][k].x, tips[0][k].y, tips[0][k].z, tips[1][k].x, tips[1][k].y,
-               tips[1][k].z, e / dmax[1]);
+               tips[0][k].x, tips[0][k].y, tips[0][k].z, tips[1][k].x, tips[1][k].y, tips[1][k].z,
+               e / dmax[1]);
         CHECK(e < 2e-3 * dmax[1]);
     }
     CHECK(dmax[1] > 1e-4); /* the load bends it measurably */

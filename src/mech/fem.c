@@ -11,9 +11,11 @@
  *
  * Nodes are the segments' distal nodes (6 DOF each, world components); the clamp's DOF are
  * removed. The stiffness couples a node only to its parent's node, so eliminating the nodes from
- * the highest index down (children before parents: topological order) creates no fill: each
- * elimination adds a 6x6 Schur block to the parent's pivot. One step is O(n) time and memory
- * (6x6 Cholesky per node), whatever the branching; no library needed (docs/methods.md says why).
+ * the highest index down (children before parents: topological order) creates no fill. The Schur
+ * block a subtree would add to its parent's pivot is the stiffness of a part free at its far end,
+ * exactly zero, so every pivot is its element's k22 and only the loads are condensed (the wrench
+ * carried to the parent). One step is O(n) time and memory (6x6 Cholesky per node), whatever the
+ * branching; no library needed (docs/methods.md says why).
  *
  * Geometry: only orientations are state (as in the thesis, which keeps only angles). Each
  * segment turns by the rotation of its chord, H x (dx_distal - dx_proximal) / L, plus the mean
@@ -79,17 +81,43 @@ typedef struct fem_ws {
     size_t bytes;
 } fem_ws;
 
+/* A grow-only buffer kept in the plant: *buf holds at least `need` bytes afterwards. */
+static cbm_status keep_buffer(cbm_plant *p, void **buf, size_t *have, size_t need)
+{
+    if (*have >= need)
+        return CBM_OK;
+    size_t want = need + need / 2; /* room for the elements of the next growth steps */
+    void *b = cbm__alloc(p->ctx, want);
+    if (!b)
+        return CBM_E_NOMEM;
+    if (*buf)
+        cbm__free(p->ctx, *buf, *have);
+    *buf = b;
+    *have = want;
+    return CBM_OK;
+}
+
+void cbm__fem_free(cbm_plant *p)
+{
+    if (p->fem_ws)
+        cbm__free(p->ctx, p->fem_ws, p->fem_ws_bytes);
+    if (p->fem_snap)
+        cbm__free(p->ctx, p->fem_snap, p->fem_snap_bytes);
+    p->fem_ws = p->fem_snap = NULL;
+    p->fem_ws_bytes = p->fem_snap_bytes = 0;
+}
+
+/* Carves the workspace for the plant's n segments from its kept buffer. Every array is written
+ * before it is read (dm and f are cleared per step), so nothing is cleared here. */
 static cbm_status ws_alloc(cbm_plant *p, fem_ws *w)
 {
     size_t n = p->n;
-    size_t nd = n * (4 + 36 + 36 + 6 + 6 + 4 + 6 + 4);
+    size_t nd = n * (4 + 4 + 36 + 36 + 6 + 6 + 4 + 6);
     memset(w, 0, sizeof *w);
-    w->bytes = nd * sizeof(double);
-    double *b = cbm__alloc(p->ctx, w->bytes);
-    if (!b)
-        return CBM_E_NOMEM;
-    memset(b, 0, w->bytes);
+    CBM_TRY(keep_buffer(p, &p->fem_ws, &p->fem_ws_bytes, nd * sizeof(double)));
+    double *b = p->fem_ws;
     w->n = n;
+    w->bytes = nd * sizeof(double);
     w->q = (cbm_quat *)b;
     b += 4 * n;
     w->sec = b;
@@ -114,8 +142,7 @@ static cbm_status ws_alloc(cbm_plant *p, fem_ws *w)
 
 static void ws_free(cbm_plant *p, fem_ws *w)
 {
-    if (w->q)
-        cbm__free(p->ctx, w->q, w->bytes);
+    (void)p;
     memset(w, 0, sizeof *w);
 }
 
@@ -342,18 +369,20 @@ static void element_loads(const cbm_plant *p, const fem_ws *w, const cbm_fem_def
 static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double s, double *maxrot)
 {
     size_t n = p->n;
-    memset(w->dm, 0, 36 * n * sizeof *w->dm);
     memset(w->f, 0, 6 * n * sizeof *w->f);
     for (size_t i = n; i-- > 0;) {
         cbm_vec3 h, l, u;
         frame_of(w->q[i], &h, &l, &u);
         double r[9] = {h.x, l.x, u.x, h.y, l.y, u.y, h.z, l.z, u.z};
-        double k11[36], k12[36], k22[36], fp[6], fd[6];
+        double k11[36], k12[36], k22[36], fp[6], fd[6]; /* k11 is not needed (see below) */
         element_blocks(p->len[i], w->sec + 4 * i, r, k11, k12, k22);
         element_loads(p, w, d, i, s, h, u, fp, fd);
+        /* the pivot is k22 alone: what a child's subtree adds to it, k11 - k12 D^-1 k21, is the
+         * stiffness of a part free at its far end, exactly zero (a clamped tree is statically
+         * determinate). Forming it would only add round-off, which the chain transports with
+         * growing lever arms until a pivot of a 10^5-element chain loses definiteness. */
         double *di = w->dm + 36 * i, *fi = w->f + 6 * i;
-        for (int k = 0; k < 36; k++)
-            di[k] += k22[k];
+        memcpy(di, k22, sizeof k22);
         for (int k = 0; k < 6; k++)
             fi[k] += fd[k];
         if (!chol6(di))
@@ -375,14 +404,8 @@ static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double
             for (int k = 0; k < 6; k++)
                 yi[6 * k + c] = col[k];
         }
-        double *dp = w->dm + 36 * (size_t)pa, *fpa = w->f + 6 * (size_t)pa;
+        double *fpa = w->f + 6 * (size_t)pa;
         for (int a = 0; a < 6; a++) {
-            for (int b = 0; b < 6; b++) {
-                double t = 0;
-                for (int k = 0; k < 6; k++)
-                    t += k12[6 * a + k] * yi[6 * k + b];
-                dp[6 * a + b] += k11[6 * a + b] - t;
-            }
             double t = 0;
             for (int k = 0; k < 6; k++)
                 t += k12[6 * a + k] * fi[k];
@@ -516,15 +539,14 @@ cbm_status cbm__fem_snap_take(cbm_plant *p, cbm__fem_snap *s)
     s->n = n;
     if (n == 0)
         return CBM_OK;
-    s->mpl = cbm__alloc(p->ctx, n * sizeof *s->mpl);
-    s->pmass = cbm__alloc(p->ctx, n * sizeof *s->pmass);
-    s->rings = cbm__alloc(p->ctx, n * sizeof *s->rings);
-    s->tipf = cbm__alloc(p->ctx, n * sizeof *s->tipf);
-    s->tipm = cbm__alloc(p->ctx, n * sizeof *s->tipm);
-    if (!s->mpl || !s->pmass || !s->rings || !s->tipf || !s->tipm) {
-        cbm__fem_snap_free(p, s);
-        return CBM_E_NOMEM;
-    }
+    size_t per = 2 * sizeof(double) + sizeof(size_t) + 2 * sizeof(cbm_vec3);
+    CBM_TRY(keep_buffer(p, &p->fem_snap, &p->fem_snap_bytes, n * per));
+    char *b = p->fem_snap;
+    s->tipf = (cbm_vec3 *)b;
+    s->tipm = s->tipf + n;
+    s->mpl = (double *)(s->tipm + n);
+    s->pmass = s->mpl + n;
+    s->rings = (size_t *)(s->pmass + n);
     memcpy(s->mpl, p->mpl, n * sizeof *s->mpl);
     memcpy(s->pmass, p->pmass, n * sizeof *s->pmass);
     memcpy(s->rings, p->ring_count, n * sizeof *s->rings);
@@ -535,17 +557,7 @@ cbm_status cbm__fem_snap_take(cbm_plant *p, cbm__fem_snap *s)
 
 void cbm__fem_snap_free(cbm_plant *p, cbm__fem_snap *s)
 {
-    size_t n = s->n;
-    if (s->mpl)
-        cbm__free(p->ctx, s->mpl, n * sizeof *s->mpl);
-    if (s->pmass)
-        cbm__free(p->ctx, s->pmass, n * sizeof *s->pmass);
-    if (s->rings)
-        cbm__free(p->ctx, s->rings, n * sizeof *s->rings);
-    if (s->tipf)
-        cbm__free(p->ctx, s->tipf, n * sizeof *s->tipf);
-    if (s->tipm)
-        cbm__free(p->ctx, s->tipm, n * sizeof *s->tipm);
+    (void)p; /* the buffer stays with the plant for the next step */
     memset(s, 0, sizeof *s);
 }
 

@@ -16,7 +16,11 @@ typedef struct cbm__fem_snap {
     cbm_vec3 *tipm; /* N m, world */
 } cbm__fem_snap;
 
-/// Records the plant's loads and ring counts (allocates; release with cbm__fem_snap_free).
+/// Releases the FEM buffers kept in the plant (cbm_plant_destroy).
+void cbm__fem_free(cbm_plant *p);
+
+/// Records the plant's loads and ring counts (into a buffer the plant keeps; cbm__fem_snap_free
+/// forgets it).
 cbm_status cbm__fem_snap_take(cbm_plant *p, cbm__fem_snap *s);
 void cbm__fem_snap_free(cbm_plant *p, cbm__fem_snap *s);
 

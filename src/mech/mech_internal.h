@@ -165,6 +165,10 @@ struct cbm_plant {
     size_t ring_free[64];
 
     cbm__mech_work work;
+    /* the incremental FEM's workspace and growth snapshot (fem.c), kept between calls so that a
+     * growth step does not fault fresh pages in again; grow-only */
+    void *fem_ws, *fem_snap;
+    size_t fem_ws_bytes, fem_snap_bytes;
 };
 
 /* ---- plant.c ---- */

@@ -29,6 +29,7 @@
  * segment order, capacities kept) when more than half of it is holes.
  */
 #include "mech/mech_internal.h"
+#include "mech/fem_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -213,6 +214,7 @@ void cbm_plant_destroy(cbm_plant *p)
     CBM_ARRAY_FREE(ctx, p->rings);
     cbm__mech_work_free(p);
     cbm__mech_pairs_free(p);
+    cbm__fem_free(p);
     cbm__free(ctx, p, sizeof *p);
 }
 
