@@ -541,12 +541,12 @@ cbm_status cbm__fem_snap_take(cbm_plant *p, cbm__fem_snap *s)
         return CBM_OK;
     size_t per = 2 * sizeof(double) + sizeof(size_t) + 2 * sizeof(cbm_vec3);
     CBM_TRY(keep_buffer(p, &p->fem_snap, &p->fem_snap_bytes, n * per));
-    char *b = p->fem_snap;
-    s->tipf = (cbm_vec3 *)b;
-    s->tipm = s->tipf + n;
-    s->mpl = (double *)(s->tipm + n);
-    s->pmass = s->mpl + n;
-    s->rings = (size_t *)(s->pmass + n);
+    char *b = p->fem_snap; /* every part a multiple of 8 bytes: each stays aligned */
+    s->tipf = (cbm_vec3 *)(void *)b;
+    s->tipm = (cbm_vec3 *)(void *)(b + n * sizeof(cbm_vec3));
+    s->mpl = (double *)(void *)(b + 2 * n * sizeof(cbm_vec3));
+    s->pmass = (double *)(void *)(b + 2 * n * sizeof(cbm_vec3) + n * sizeof(double));
+    s->rings = (size_t *)(void *)(b + 2 * n * sizeof(cbm_vec3) + 2 * n * sizeof(double));
     memcpy(s->mpl, p->mpl, n * sizeof *s->mpl);
     memcpy(s->pmass, p->pmass, n * sizeof *s->pmass);
     memcpy(s->rings, p->ring_count, n * sizeof *s->rings);
