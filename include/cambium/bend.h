@@ -59,6 +59,14 @@ typedef struct cbm_bend_spec {
     /// rad/m, kappa^c of the rings of secondary growth: each is moulded on the current rate plus
     /// this curvature towards the vertical (Tresierras 2009 (3.14); docs/growth.md); 0 = none
     double control_curvature;
+    /* the incremental FEM (solver = fem; cbm_fem_def, docs/bend.md "solver = fem") */
+    long fem_increments;     ///< load increments of the static solve (default 20)
+    double fem_shear_ratio;  ///< G / E in the elements (0 = the spec's G)
+    double fem_sigma;        ///< reaction sensitivity of the maturation strain, [0, 1]
+    double fem_phi;          ///< reaction direction, degrees from the upper side
+    double fem_strain_min;   ///< a (strain)
+    double fem_strain_max;   ///< b (strain)
+    cbm_fem_axial fem_axial; ///< axial maturation resultant: formula or listing
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

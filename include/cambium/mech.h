@@ -263,13 +263,16 @@ typedef enum cbm_mech_solver {
     /// angle generator per axis, no equilibrium iteration (src/mech/solve_approx.c,
     /// docs/methods.md says what it leaves out)
     CBM_MECH_APPROX,
+    /// incremental finite elements (Guertler 2018 sec. 2.2 after Fourcaud & Lac 2003): the load
+    /// in cbm_fem_def.increments linear steps on the current geometry (src/mech/fem.c)
+    CBM_MECH_FEM,
     CBM_MECH_SOLVER_COUNT ///< number of solvers (not a solver)
 } cbm_mech_solver;
 
-/// Name of a solver ("relax", "fast", "approx", ...); NULL for a value out of range.
+/// Name of a solver ("relax", "fast", "approx", "fem"); NULL for a value out of range.
 CBM_API const char *cbm_mech_solver_name(cbm_mech_solver s);
 /// Parses a solver's name or alias ("relax", "relaxation", "fast", "newton", "newton-krylov",
-/// "approx", ...; case-sensitive). false if unknown.
+/// "approx", "fem", ...; case-sensitive). false if unknown.
 CBM_API bool cbm_mech_solver_parse(const char *name, cbm_mech_solver *out);
 /// Writes the solvers' names, comma-separated ("relax, fast, approx"), into buf (size bytes,
 /// NUL-terminated, truncated if short; buf may be NULL with size 0); returns the full length.
@@ -301,6 +304,38 @@ typedef enum cbm_mech_warm_path {
     CBM_MECH_WARM_MASS_PATH
 } cbm_mech_warm_path;
 
+/// Which resultant of the maturation strain stretches an element (Guertler's deviation D5).
+typedef enum cbm_fem_axial {
+    /// Default, the thesis's eq. 2.79: N = E dA (a + sigma (b - a) / 2), the hoop mean of 2.62.
+    CBM_FEM_AXIAL_FORMULA,
+    /// The thesis's listing: N = E dA sigma (a + (b - a) / 2) (no stretch at sigma = 0).
+    CBM_FEM_AXIAL_LISTING
+} cbm_fem_axial;
+
+/// The incremental finite-element method (solver CBM_MECH_FEM, cbm_plant_fem_grow): 3-D
+/// Euler-Bernoulli two-node beams, one per segment, layered sections from the segment's rings,
+/// clamped roots, an O(n) tree factorisation per step (src/mech/fem.c, docs/methods.md).
+typedef struct cbm_fem_def {
+    /// cbm_plant_solve: the full load is applied in this many equal increments, each a linear
+    /// solve on the geometry the previous ones left (>= 1; default 20)
+    size_t increments;
+    /// G / E of every ring (Guertler: 1/3); 0 (default) = each ring's own shear modulus
+    double shear_ratio;
+    /// reaction sensitivity sigma in [0, 1] of new wood's maturation strain (2.62); default 0
+    double sigma;
+    /// rad, reaction direction phi: the hoop angle of the reacting side, measured in the section
+    /// about H from its upper side (the part of "up" across the segment), eq. 2.63; default 0
+    double phi;
+    double strain_min; ///< a of eq. 2.62, dimensionless strain (1 microstrain = 1e-6); default 0
+    /// b of eq. 2.62: b >= 0 compression wood (psi = phi + pi, the side opposite phi expands);
+    /// b < 0 tension wood (psi = phi, that side contracts); default 0
+    double strain_max;
+    cbm_fem_axial axial; ///< default CBM_FEM_AXIAL_FORMULA
+} cbm_fem_def;
+
+/// Defaults as documented per field.
+CBM_API cbm_fem_def cbm_fem_def_default(void);
+
 typedef struct cbm_solve_def {
     cbm_mech_solver solver;          ///< default CBM_MECH_NEWTON
     double tolerance;                ///< relative residual to reach, default 1e-8
@@ -325,6 +360,7 @@ typedef struct cbm_solve_def {
     /// tip force = this times the weight an axis carries (> 0); default 1, the thesis's whole
     /// weight at the tip (3/8 matches the small deflection of a uniform rod's tip)
     double approx_force_factor;
+    cbm_fem_def fem; ///< settings of CBM_MECH_FEM; default cbm_fem_def_default()
 } cbm_solve_def;
 
 CBM_API cbm_solve_def cbm_solve_def_default(void);
@@ -341,6 +377,7 @@ typedef enum cbm_solve_stage {
     CBM_SOLVE_STAGE_RELAX_BURSTS, ///< "relax-bursts": relaxation bursts between Newton attempts
     CBM_SOLVE_STAGE_STABILITY,    ///< "stability": re-solved after a push off an unstable state
     CBM_SOLVE_STAGE_RELAX,        ///< "relax": the relaxation solver (CBM_MECH_RELAX)
+    CBM_SOLVE_STAGE_FEM,          ///< "fem": the incremental FEM's increments (CBM_MECH_FEM)
     CBM_SOLVE_STAGE_COUNT
 } cbm_solve_stage;
 
@@ -595,6 +632,52 @@ CBM_API cbm_status cbm_mech_buckle(cbm_context *ctx, const cbm_buckle_def *def,
 /// bisection to relative tolerance rel_tol): the length at which the stability factor is 1.
 CBM_API cbm_status cbm_mech_buckle_length(cbm_context *ctx, const cbm_buckle_def *def, size_t n,
                                           double rel_tol, double *length);
+
+/* ---- incremental finite elements: growth (src/mech/fem.c; Guertler 2018 sec. 2.2) ---- */
+
+/// One growth step of the incremental FEM (cbm_plant_fem_grow).
+typedef struct cbm_fem_growth {
+    /// m added to both semi-axes of every existing segment as one new ring (secondary growth);
+    /// 0 = none
+    double ring_thickness;
+    /// wood of new rings and new tip cores: E, G, density, modulus of rupture (a, b, rest rate,
+    /// age and reaction are set by the step); default cbm_ring_default()
+    cbm_ring wood;
+    double tip_length; ///< m, a new element continues every axis tip (primary growth); 0 = none
+    double tip_radius; ///< m, radius of a new element's core (> 0 with tip_length > 0)
+    /// new elements point along `direction` (world; Guertler's primaryTropism) instead of
+    /// continuing their parent's heading
+    bool primary_tropism;
+    cbm_vec3 direction; ///< world, normalised internally; default (0, 1, 0)
+    /// kg added this step to each existing segment's point mass (extra loads: leaves, fruit),
+    /// segment_count entries, or NULL
+    const double *added_mass;
+} cbm_fem_growth;
+
+/// Defaults: no ring, cbm_ring_default() wood, no primary growth, direction (0, 1, 0).
+CBM_API cbm_fem_growth cbm_fem_growth_default(void);
+
+/// What an FEM step did.
+typedef struct cbm_fem_stats {
+    size_t increments;   ///< linear solves (cbm_plant_solve: fem.increments; growth: 1)
+    size_t elements;     ///< elements (segments) at the end
+    size_t rings_added;  ///< rings laid down (growth)
+    size_t tips_added;   ///< elements added (growth)
+    double max_rotation; ///< rad, largest rotation of an element in the last increment
+} cbm_fem_stats;
+
+/// One growth step of the incremental FEM on the plant's current geometry (Guertler 2018 sec.
+/// 2.2.4, Fourcaud & Lac 2003): secondary growth (a ring of `ring_thickness` on every existing
+/// segment, stress-free on the current shape: its rest rate is the segment's current Omega),
+/// primary growth (a new element at every axis tip), then ONE linear solve of the load increment
+/// of the step: the weight of the new rings and new elements, the maturation strain of the new
+/// wood (def->sigma, phi, a, b) and the weight of added_mass, on the stiffness of all rings in
+/// the current orientation. The element rotations are accumulated into the frames and Omega;
+/// the plant is evaluated (positions, moments) at the end. Nothing already applied is re-applied:
+/// the deformation of earlier steps is memorised. def NULL = cbm_fem_def_default().
+/// CBM_E_INVALID naming the field for bad settings; CBM_E_NONFINITE if the solve fails.
+CBM_API cbm_status cbm_plant_fem_grow(cbm_plant *plant, const cbm_fem_def *def,
+                                      const cbm_fem_growth *growth, cbm_fem_stats *stats);
 
 #ifdef __cplusplus
 }

@@ -29,6 +29,7 @@
 #include "core/core.h"
 #include "core/vecmath.h"
 #include "mech/growth_internal.h"
+#include "mech/fem_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -54,12 +55,14 @@ cbm_bend_spec cbm_bend_spec_default(void)
     s.approx_mode = CBM_APPROX_CORRECTED;
     s.approx_p = 1.0;
     s.approx_force = 1.0;
+    s.fem_increments = 20;
+    s.fem_axial = CBM_FEM_AXIAL_FORMULA;
     return s;
 }
 
 /* ---- the reader ---- */
 
-typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC, K_APPROX_MODE } key_kind;
+typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC, K_APPROX_MODE, K_AXIAL } key_kind;
 
 typedef struct key_desc {
     const char *name;
@@ -108,6 +111,13 @@ static const key_desc keys[] = {
     {"impulse_time", K_NUM, OFF(impulse_time), 0, 1e6, false},
     {"impulse_force", K_NUM, OFF(impulse_force), -1e12, 1e12, false},
     {"initial_tip_load", K_NUM, OFF(initial_tip_load), -1e12, 1e12, false},
+    {"fem_increments", K_INT, OFF(fem_increments), 1, 1e7, false},
+    {"fem_shear_ratio", K_NUM, OFF(fem_shear_ratio), 0, 1e3, false},
+    {"fem_sigma", K_NUM, OFF(fem_sigma), 0, 1, false},
+    {"fem_phi", K_NUM, OFF(fem_phi), -360, 360, false},
+    {"fem_strain_min", K_NUM, OFF(fem_strain_min), -1, 1, false},
+    {"fem_strain_max", K_NUM, OFF(fem_strain_max), -1, 1, false},
+    {"fem_axial", K_AXIAL, OFF(fem_axial), 0, 0, false},
 };
 #undef OFF
 #define NKEYS (sizeof keys / sizeof *keys)
@@ -169,6 +179,20 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
             return;
         }
         memcpy(base, &m, sizeof m);
+        return;
+    }
+    if (k->kind == K_AXIAL) {
+        cbm_fem_axial a;
+        if (!strcmp(buf, "formula"))
+            a = CBM_FEM_AXIAL_FORMULA;
+        else if (!strcmp(buf, "listing"))
+            a = CBM_FEM_AXIAL_LISTING;
+        else {
+            err(r, line, col, "unknown fem_axial '%s' (expected formula or listing)", buf);
+            r->status = CBM_E_SEMANTIC;
+            return;
+        }
+        memcpy(base, &a, sizeof a);
         return;
     }
     if (k->kind == K_DISC) {
@@ -341,6 +365,24 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
             err(&r, 0, 0, "duration (motion) and steps (growth) cannot be combined");
             r.status = CBM_E_SEMANTIC;
         }
+        bool fem_keys = false;
+        for (size_t k = 0; k < NKEYS; k++)
+            if (seen[k] && !strncmp(keys[k].name, "fem_", 4))
+                fem_keys = true;
+        if (fem_keys && s.solver != CBM_MECH_FEM) {
+            err(&r, 0, 0, "the fem_* keys need solver = fem");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.solver == CBM_MECH_FEM && s.duration > 0) {
+            err(&r, 0, 0,
+                "solver = fem cannot be combined with duration (motion starts from a "
+                "static equilibrium)");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.solver == CBM_MECH_FEM && s.steps > 0 && s.modulus_of_rupture > 0) {
+            err(&r, 0, 0, "solver = fem grows without breakage: drop modulus_of_rupture or steps");
+            r.status = CBM_E_SEMANTIC;
+        }
         size_t lim = cbm_context_limits(ctx)->max_segments;
         if (lim && (size_t)s.segments > lim) {
             err(&r, 0, 0, "segments = %ld exceeds limits.max_segments (%zu)", s.segments, lim);
@@ -439,6 +481,13 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.approx_p = s->approx_p;
     d.approx_force_factor = s->approx_force;
     d.eigenvalue = true; /* bend reports the lowest eigenvalue of every answer */
+    d.fem.increments = (size_t)s->fem_increments;
+    d.fem.shear_ratio = s->fem_shear_ratio;
+    d.fem.sigma = s->fem_sigma;
+    d.fem.phi = s->fem_phi * CBM_PI / 180.0;
+    d.fem.strain_min = s->fem_strain_min;
+    d.fem.strain_max = s->fem_strain_max;
+    d.fem.axial = s->fem_axial;
     return d;
 }
 
@@ -518,6 +567,20 @@ cbm_status cbm_bend_run(cbm_context *ctx, const cbm_bend_spec *s, cbm_plant **ou
     cbm_status st = cbm_plant_solve(p, &sd, &r.stats);
     passes += r.stats.passes;
     for (long k = 1; st == CBM_OK && k <= s->steps; k++) {
+        if (s->solver == CBM_MECH_FEM) {
+            /* the step's new loads as one increment on the current geometry (fem.c) */
+            cbm__fem_snap sn;
+            st = cbm__fem_snap_take(p, &sn);
+            if (st == CBM_OK)
+                st = grow_step(p, s, k);
+            if (st == CBM_OK)
+                st = cbm__fem_increment(p, &sd.fem, &sn, NULL);
+            cbm__fem_snap_free(p, &sn);
+            passes++;
+            if (st == CBM_OK)
+                r.steps_done = k;
+            continue;
+        }
         st = grow_step(p, s, k);
         if (st == CBM_OK) {
             st = cbm_plant_solve(p, &sd, &r.stats);

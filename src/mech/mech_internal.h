@@ -143,6 +143,7 @@ struct cbm_plant {
     cbm_vec3 *rest;    /* rigidity-weighted rest rate = rigr / rig */
     double *mpl;       /* kg/m */
     double *area;      /* m^2 */
+    double *ea;        /* N: axial rigidity, sum over rings of E times ring area (fem.c) */
     /* state and loads */
     cbm_vec3 *omega;
     double *pmass;
@@ -164,6 +165,10 @@ struct cbm_plant {
     size_t ring_free[64];
 
     cbm__mech_work work;
+    /* the incremental FEM's workspace and growth snapshot (fem.c), kept between calls so that a
+     * growth step does not fault fresh pages in again; grow-only */
+    void *fem_ws, *fem_snap;
+    size_t fem_ws_bytes, fem_snap_bytes;
 };
 
 /* ---- plant.c ---- */

@@ -29,6 +29,7 @@
  * segment order, capacities kept) when more than half of it is holes.
  */
 #include "mech/mech_internal.h"
+#include "mech/fem_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -49,6 +50,7 @@ static const struct {
     {CBM_MECH_RELAX, {"relax", "relaxation"}},
     {CBM_MECH_NEWTON, {"fast", "newton", "newton-krylov"}},
     {CBM_MECH_APPROX, {"approx", "approximative"}},
+    {CBM_MECH_FEM, {"fem"}},
 };
 #define SOLVER_ROWS (sizeof solver_table / sizeof solver_table[0])
 _Static_assert(SOLVER_ROWS == CBM_MECH_SOLVER_COUNT, "one row per solver");
@@ -145,7 +147,7 @@ cbm_plant_def cbm_plant_def_default(void)
 // clang-format off
 #define PLANT_ARRAYS(X)                                                                            \
     X(parent) X(order) X(cont) X(nchild) X(fchild) X(len) X(branch) X(ring_first) X(ring_count)  \
-    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
+    X(ring_cap) X(outer) X(rig) X(rigr) X(rest) X(mpl) X(area) X(ea) X(omega) X(pmass) X(tipf) X(tipm) X(q) X(pos) X(force)          \
     X(moment) X(pmass0)                                                                            \
     X(cmass) X(crad)
 // clang-format on
@@ -233,6 +235,7 @@ void cbm_plant_destroy(cbm_plant *p)
     CBM_ARRAY_FREE(ctx, p->rings);
     cbm__mech_work_free(p);
     cbm__mech_pairs_free(p);
+    cbm__fem_free(p);
     cbm__free(ctx, p, sizeof *p);
 }
 
@@ -285,6 +288,7 @@ static void section_add(cbm_plant *p, size_t i, const double in[4], const cbm_ri
     p->rig[i] = v3_add(p->rig[i], ck);
     p->rigr[i] = v3_add(p->rigr[i], v3_mul(ck, r->rest_rate));
     p->mpl[i] += r->density * (out[3] - in[3]);
+    p->ea[i] += r->youngs_modulus * (out[3] - in[3]);
     p->area[i] = out[3];
 }
 
@@ -307,6 +311,7 @@ static void update_section(cbm_plant *p, size_t i)
     double v[2][4] = {{0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}};
     p->rig[i] = p->rigr[i] = v3(0, 0, 0);
     p->mpl[i] = 0.0;
+    p->ea[i] = 0.0;
     p->area[i] = 0.0;
     for (size_t k = 0; k < nr; k++)
         section_add(p, i, v[k & 1], &r[k], v[(k + 1) & 1]);

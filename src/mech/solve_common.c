@@ -73,6 +73,7 @@
  * into the same force accumulators (dfc) from the nodes' displacements, so it stays exact.
  */
 #include "mech/mech_internal.h"
+#include "mech/fem_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -547,16 +548,22 @@ cbm_solve_def cbm_solve_def_default(void)
     d.approx_mode = CBM_APPROX_CORRECTED;
     d.approx_p = 1.0;
     d.approx_force_factor = 1.0;
+    d.fem = cbm_fem_def_default();
     return d;
 }
 
 const char *cbm_solve_stage_name(cbm_solve_stage stage)
 {
     static const char *const names[CBM_SOLVE_STAGE_COUNT] = {
-        [CBM_SOLVE_STAGE_NONE] = "none",           [CBM_SOLVE_STAGE_NEWTON] = "newton",
-        [CBM_SOLVE_STAGE_TRANSIENT] = "transient", [CBM_SOLVE_STAGE_MASS_PATH] = "mass-path",
-        [CBM_SOLVE_STAGE_LOAD_PATH] = "load-path", [CBM_SOLVE_STAGE_RELAX_BURSTS] = "relax-bursts",
-        [CBM_SOLVE_STAGE_STABILITY] = "stability", [CBM_SOLVE_STAGE_RELAX] = "relax",
+        [CBM_SOLVE_STAGE_NONE] = "none",
+        [CBM_SOLVE_STAGE_NEWTON] = "newton",
+        [CBM_SOLVE_STAGE_TRANSIENT] = "transient",
+        [CBM_SOLVE_STAGE_MASS_PATH] = "mass-path",
+        [CBM_SOLVE_STAGE_LOAD_PATH] = "load-path",
+        [CBM_SOLVE_STAGE_RELAX_BURSTS] = "relax-bursts",
+        [CBM_SOLVE_STAGE_STABILITY] = "stability",
+        [CBM_SOLVE_STAGE_RELAX] = "relax",
+        [CBM_SOLVE_STAGE_FEM] = "fem",
     };
     if ((unsigned)stage >= (unsigned)CBM_SOLVE_STAGE_COUNT)
         return "unknown";
@@ -649,6 +656,17 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
         if (stats)
             *stats = st;
         return sa;
+    }
+    if (d.solver == CBM_MECH_FEM) {
+        /* the incremental FEM is no equilibrium iteration: its own path (fem.c) */
+        cbm_status sf = cbm__mech_solve_fem(p, &d.fem, &st);
+        p->load_scale = 1.0;
+        if (sf == CBM_OK)
+            memcpy(p->pmass0, p->pmass, p->n * sizeof *p->pmass0);
+        cbm__context_counters(p->ctx)[sf == CBM_OK ? st.stage : CBM_SOLVE_STAGE_NONE]++;
+        if (stats)
+            *stats = st;
+        return sf;
     }
     /* touching organ pairs leave a part of rank up to three per pair to FGMRES (contact.c): a
      * short restart stagnates there */
