@@ -284,7 +284,7 @@ static cbm_status equilibrium(grower *g, bool initial)
 {
     const cbm_elastica_growth_def *d = g->d;
     cbm_elastica_rod rod = make_rod(g, 0, g->n, d->tip_load);
-    cbm_elastica_state st;
+    cbm_elastica_state st = {0};
     g->jumped = false;
     if (initial || !follow(g->ctx, &rod, d->theta_base, g->theta_tip, &st)) {
         cbm_status s = choose(g->ctx, &rod, d->theta_base, initial ? d->theta_base : g->theta_tip,

@@ -5,6 +5,7 @@
 #include "lang/builtins.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -540,9 +541,14 @@ static int cx(cg *g, int32_t ni, int hint);
 /* The register of constant v (loaded on entry), or v loaded into hint when there are many. */
 static int konst(cg *g, double v, int hint)
 {
-    for (int c = 0; c < g->nkonst; c++)
-        if (memcmp(&g->konst[c], &v, sizeof(double)) == 0)
+    for (int c = 0; c < g->nkonst; c++) {
+        /* the same bits, not the same value: -0.0 and 0.0 are different constants */
+        uint64_t a, b;
+        memcpy(&a, &g->konst[c], sizeof a);
+        memcpy(&b, &v, sizeof b);
+        if (a == b)
             return g->fsize + c;
+    }
     if (g->nkonst < (int)(sizeof g->konst / sizeof g->konst[0])) {
         g->konst[g->nkonst] = v;
         return g->fsize + g->nkonst++;

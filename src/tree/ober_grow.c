@@ -254,7 +254,7 @@ static double leaf_carbon_of(const cbm_ober_stand *s, const ober_shoot *h, doubl
     double acc = 0;
     int n = 0;
     for (int32_t k = 0; k < h->nbuds; k++) {
-        size_t b = (size_t)(h->first_bud + k);
+        size_t b = (size_t)h->first_bud + (size_t)k;
         if (s->buds.data[b].apical)
             continue;
         acc += b < s->leaf_carbon.len ? s->leaf_carbon.data[b] : 1.0;

@@ -21,7 +21,7 @@ bool cli_light_parse(const char *v, void *target, char *why, size_t n)
         snprintf(why, n, "--light: value too long");
         return false;
     }
-    strcpy(buf, v);
+    memcpy(buf, v, strlen(v) + 1);
     char *next = strchr(buf, ',');
     if (next)
         *next++ = '\0';

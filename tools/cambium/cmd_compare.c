@@ -129,7 +129,7 @@ static int run_method(const char *text, size_t len, const char *path, method_run
         s = m->nodes && m->xyz ? cbm_bend_nodes(plant, m->nodes, m->n + 1) : CBM_E_NOMEM;
     }
     int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, what);
-    if (rc == CLI_OK)
+    if (rc == CLI_OK && m->nodes && m->xyz)
         for (size_t i = 0; i <= m->n; i++) {
             m->xyz[3 * i] = m->nodes[i].x;
             m->xyz[3 * i + 1] = m->nodes[i].y;
@@ -146,6 +146,8 @@ static void write_json(FILE *f, const method_run *m, int nm, const double *dist)
     fprintf(f, "{\"methods\": [");
     for (int a = 0; a < nm; a++) {
         const method_run *r = &m[a];
+        if (!r->nodes) /* a method that did not run stops the command before any output */
+            continue;
         const cbm_bend_node *tip = &r->nodes[r->n];
         fprintf(f,
                 "%s{\"solver\": \"%s\", \"tip_x\": %.12g, \"tip_y\": %.12g, \"tip_z\": %.12g, "
@@ -184,7 +186,7 @@ static cbm_status write_plot(cbm_context *ctx, const char *path, const method_ru
     for (int a = 0; a < nm && s == CBM_OK; a++) {
         size_t n = m[a].n + 1;
         double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y);
-        if (!x || !y)
+        if (!x || !y || !m[a].nodes)
             s = CBM_E_NOMEM;
         for (size_t i = 0; s == CBM_OK && i < n; i++) {
             x[i] = m[a].nodes[i].x;
@@ -227,7 +229,7 @@ static int write_outputs(const char *const *outs, int nout, bool json, const met
                 else {
                     fprintf(f, "solver,node,s,x,y,z,angle_deg\n");
                     for (int a = 0; a < nm; a++)
-                        for (size_t i = 0; i <= m[a].n; i++) {
+                        for (size_t i = 0; m[a].nodes && i <= m[a].n; i++) {
                             const cbm_bend_node *d = &m[a].nodes[i];
                             fprintf(f, "%s,%zu,%.12g,%.12g,%.12g,%.12g,%.12g\n",
                                     cbm_mech_solver_name(m[a].solver), i, d->s, d->x, d->y, d->z,
@@ -245,6 +247,8 @@ static int write_outputs(const char *const *outs, int nout, bool json, const met
         write_json(stdout, m, nm, dist);
     if (rc == CLI_OK && !json && nout == 0) {
         for (int a = 0; a < nm; a++) {
+            if (!m[a].nodes)
+                continue;
             const cbm_bend_node *tip = &m[a].nodes[m[a].n];
             printf("%-8s tip (%.6g, %.6g) m, tip angle %.6g deg, %.3g s, %zu bytes peak, %zu "
                    "passes, residual %.3g\n",

@@ -402,8 +402,10 @@ static int run_growth(cbm_context *ctx, const cbm_elastica_spec *spec, const cha
     if (s == CBM_OK)
         s = cbm_elastica_grow(ctx, &d, &g);
     double secs = cli_now() - t0;
+    if (s == CBM_OK && (!g || g->n_frames == 0))
+        s = CBM_E_INTERNAL; /* a growth that succeeded has its first frame at least */
     int rc = s == CBM_OK ? CLI_OK : cli_fail(ctx, s, "elastica");
-    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+    for (int k = 0; k < nout && rc == CLI_OK && g; k++) {
         const char *ext = cli_extension(outs[k]);
         if (!strcmp(ext, "csv")) {
             cbm_out *o = NULL;
@@ -417,9 +419,9 @@ static int run_growth(cbm_context *ctx, const cbm_elastica_spec *spec, const cha
         if (s != CBM_OK)
             rc = cli_fail(ctx, s, outs[k]);
     }
-    if (rc == CLI_OK && json)
+    if (rc == CLI_OK && g && json)
         growth_json(stdout, g, &d, secs);
-    if (rc == CLI_OK && !json && nout == 0) {
+    if (rc == CLI_OK && g && !json && nout == 0) {
         const cbm_elastica_growth_frame *f = &g->frames[g->n_frames - 1];
         size_t jumps = 0;
         for (size_t k = 0; k < g->n_frames; k++)

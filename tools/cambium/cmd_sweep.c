@@ -420,7 +420,7 @@ int cmd_sweep(int argc, char **argv)
     int nseeds = seeds.n ? seeds.n : 1, nr = 0, cap = 0;
     for (int w = 0; w < sl->n; w++)
         cap += sl->s[w].n * nseeds;
-    row *rows = calloc((size_t)cap, sizeof *rows);
+    row *rows = calloc(cap > 0 ? (size_t)cap : 1, sizeof *rows);
     if (!rows)
         rc = CLI_FAIL;
     for (int w = 0; w < sl->n && rc == CLI_OK; w++)
