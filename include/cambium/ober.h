@@ -185,6 +185,12 @@ CBM_API cbm_status cbm_ober_shoot_info(const cbm_ober_stand *stand, size_t i, cb
 CBM_API cbm_status cbm_ober_to_scene(const cbm_ober_stand *stand, cbm_scene *scene, int sides,
                                      bool ground);
 
+/// Writes the stand as one OpenAlea MTG coding file (FORM-A, docs/formats.md): one plant P<n>
+/// per tree (n = tree index + 1; trees without shoots are absent), its annual shoots as segments
+/// S in axes A, with the shoot's features (m, y up). Nothing is left at path on failure.
+CBM_API cbm_status cbm_ober_write_mtg(cbm_context *ctx, const cbm_ober_stand *stand,
+                                      const char *path);
+
 #ifdef __cplusplus
 }
 #endif

@@ -10,9 +10,11 @@ for m in massart attims rauh troll cryptomeria carbon; do
     diff <("$bin" grow "$CBM_SOURCE/models/ober-$m.tree" --params) <("$bin" grow ober-$m --params)
 done
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/s.json" \
-    -o "$tmp/s.obj" -o "$tmp/s.svg" -o "plot:$tmp/p.svg" --size 200 >"$tmp/out.txt"
+    -o "$tmp/s.obj" -o "$tmp/s.svg" -o "plot:$tmp/p.svg" -o "$tmp/s.mtg" --size 200 >"$tmp/out.txt"
 grep -q '^year  4: 4 trees,' "$tmp/out.txt"
-for f in s.json s.obj s.svg p.svg; do test -s "$tmp/$f"; done
+for f in s.json s.obj s.svg p.svg s.mtg; do test -s "$tmp/$f"; done
+# the MTG: a plant per tree (all four germinate by year 4 with --stagger 1)
+test "$(grep -c '/P[1-4]/A1/S1' "$tmp/s.mtg")" -eq 4
 for k in age height_m leaves shoots_per_order wood_volume_m3 carbon_tax carbon_mean; do
     grep -q "\"$k\":" "$tmp/s.json" || { echo "missing $k"; exit 1; }
 done

@@ -56,8 +56,8 @@ static void help(const cli_opts *t)
            "Grows Oberlaender's parametric tree (a built-in ober-* model or a .tree file\n"
            "starting with 'family = oberlaender'; docs/models.md): one tree or a stand.\n"
            "Outputs by extension: .png .svg .glb .obj .ply (the stand), .json (the report of\n"
-           "every tree and year), plot:FILE.svg or plot:FILE.png (carbon tax and height over\n"
-           "the years).\n\n");
+           "every tree and year), .mtg (the stand as one MTG, a plant per tree),\n"
+           "plot:FILE.svg or plot:FILE.png (carbon tax and height over the years).\n\n");
     cli_options_rows(stdout, t);
     printf("\nbuilt-in models:");
     for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
@@ -289,11 +289,12 @@ int cmd_grow_ober(int argc, char **argv)
         return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
     int nout = out_list.count;
     cli_output_target targets[MAX_OUTPUTS];
-    int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot */
+    int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot, 3 mtg */
     const char *paths[MAX_OUTPUTS];
     for (int k = 0; k < nout; k++) {
         kind[k] = !strncmp(outs[k], "plot:", 5)             ? 2
                   : !strcmp(cli_extension(outs[k]), "json") ? 1
+                  : !strcmp(cli_extension(outs[k]), "mtg")  ? 3
                                                             : 0;
         paths[k] = kind[k] == 2 ? outs[k] + 5 : outs[k];
         if (kind[k] == 2 && strcmp(cli_extension(paths[k]), "svg") &&
@@ -302,7 +303,7 @@ int cmd_grow_ober(int argc, char **argv)
         if (kind[k] == 0) {
             if (!cli_output_target_parse(outs[k], &targets[k]))
                 return cli_usage_error("grow",
-                                       "%s: unknown format (.png .svg .glb .obj .ply .json, "
+                                       "%s: unknown format (.png .svg .glb .obj .ply .json .mtg, "
                                        "plot:FILE.svg, or FORMAT:PATH)",
                                        outs[k]);
             paths[k] = targets[k].path;
@@ -401,6 +402,8 @@ int cmd_grow_ober(int argc, char **argv)
             st = write_report(ctx, s, model, &d, seconds, outs[k]);
         else if (kind[k] == 2)
             st = write_plot(ctx, s, model, paths[k]);
+        else if (kind[k] == 3)
+            st = cbm_ober_write_mtg(ctx, s, outs[k]);
         else {
             if (!sc) {
                 st = cbm_scene_create(ctx, &sc);
