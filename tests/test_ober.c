@@ -535,3 +535,47 @@ TEST(ober_stand_mtg)
     cbm_ober_destroy(s);
     test_ctx_end(ctx);
 }
+
+/* The statics on a tree (cbm_ober_mechanics): without gravity the solved plant keeps its rest
+ * shape, which must be the turtle's shape without the joint, tip for tip (this checks the
+ * divergence/deviation/roll that rebuild every frame, and the attachment of each lateral at its
+ * node): with orientationLambda = bendingLambda = 0 (no joint) the tips equal the kinematic ones
+ * to 1e-9 m. Under gravity the statics bend the tree (sag > 1 mm) and converge, and with the joint
+ * off the difference to the kinematic shape is the sag alone. */
+TEST(ober_mechanics_rest_shape_and_sag)
+{
+    cbm_context *ctx = test_ctx();
+    const char *nojoint[] = {"orientationLambda", "0", "bendingLambda", "0", NULL};
+    cbm_ober_stand *s = grow(ctx, "ober-massart", 5, nojoint);
+    cbm_ober_stand *j = grow(ctx, "ober-massart", 5, NULL);
+    CHECK(s && j);
+    if (!s || !j) {
+        cbm_ober_destroy(s);
+        cbm_ober_destroy(j);
+        test_ctx_end(ctx);
+        return;
+    }
+    cbm_ober_mech_def md = cbm_ober_mech_def_default();
+    md.gravity = 0;
+    cbm_ober_mech_result r;
+    CHECK_OK(cbm_ober_mechanics(s, 0, &md, &r, NULL));
+    CHECK(r.shoots == cbm_ober_shoot_count(s) && r.segments > r.shoots);
+    CHECK(r.max_tip_difference < 1e-9);
+    CHECK(r.max_sag < 1e-9 && r.max_joint < 1e-12);
+    /* with the joint, no gravity: the difference is the joint's displacement */
+    CHECK_OK(cbm_ober_mechanics(j, 0, &md, &r, NULL));
+    CHECK(r.max_joint > 1e-3);
+    CHECK_NEAR(r.max_tip_difference, r.max_joint, 1e-9);
+    md.gravity = 9.81;
+    CHECK_OK(cbm_ober_mechanics(s, 0, &md, &r, NULL));
+    CHECK(r.converged);
+    CHECK(r.max_sag > 1e-3);
+    CHECK_NEAR(r.max_tip_difference, r.max_sag, 1e-12);
+    CHECK(r.mean_tip_difference > 0 && r.mean_tip_difference <= r.max_tip_difference);
+    CHECK(r.mass > 0);
+    md.youngs_modulus = -1;
+    CHECK(cbm_ober_mechanics(s, 0, &md, &r, NULL) == CBM_E_INVALID);
+    cbm_ober_destroy(s);
+    cbm_ober_destroy(j);
+    test_ctx_end(ctx);
+}

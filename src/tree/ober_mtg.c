@@ -13,10 +13,9 @@
 #include <math.h>
 
 static const char *const features[] = {
-    "id",     "tree",   "order",         "trend",  "age",      "nodes",  "leaves",
-    "buds",   "active_buds", "short_shoot", "proventitious", "x0", "y0", "z0",
-    "x1",     "y1",     "z1",            "length", "radius",   "position", "tropism",
-    "carbon"};
+    "id",          "tree",        "order",         "trend",    "age",     "nodes", "leaves", "buds",
+    "active_buds", "short_shoot", "proventitious", "x0",       "y0",      "z0",    "x1",     "y1",
+    "z1",          "length",      "radius",        "position", "tropism", "carbon"};
 enum { NINT = 11 };
 
 typedef struct mtg_rows {

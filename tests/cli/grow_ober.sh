@@ -19,6 +19,18 @@ for k in age height_m leaves shoots_per_order wood_volume_m3 carbon_tax carbon_m
     grep -q "\"$k\":" "$tmp/s.json" || { echo "missing $k"; exit 1; }
 done
 test "$(grep -o '"tree":' "$tmp/s.json" | wc -l)" -eq 4
+# --mechanics: the statics of the final trees in the report and a picture of the bent trees
+"$bin" grow ober-troll -y 4 --stand 2x1 --mechanics --quiet -o "$tmp/m.json" -o "mech:$tmp/m.svg"
+test -s "$tmp/m.svg"
+test "$(grep -o '"max_tip_difference_m":' "$tmp/m.json" | wc -l)" -eq 2
+grep -q '"converged":true' "$tmp/m.json"
+set +e
+"$bin" grow ober-troll -y 2 -o "mech:$tmp/n.svg" 2>"$tmp/err.txt"
+rc=$?
+set -e
+test $rc -eq 2
+grep -q 'needs --mechanics' "$tmp/err.txt"
+test ! -e "$tmp/n.svg"
 # same seed, same report; -D sets formulas
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/t.json" --quiet
 cmp <(grep -v seconds "$tmp/s.json") <(grep -v seconds "$tmp/t.json")
