@@ -56,6 +56,8 @@ static const char *const NAMES[F_SPECIFIC_LENGTH] = {
 const char *cbm__ober_formula_name(int f)
 {
     static char buf[F_COUNT][48];
+    if (f < 0 || f >= F_COUNT) /* not a formula (and cppcheck wants the bound said) */
+        return "?";
     if (f < F_SPECIFIC_LENGTH)
         return NAMES[f];
     if (!buf[f][0])

@@ -24,10 +24,8 @@
 
 cbm_ober_mech_def cbm_ober_mech_def_default(void)
 {
-    return (cbm_ober_mech_def){.youngs_modulus = 8e9,
-                               .density = 800,
-                               .leaf_mass_per_area = 0.2,
-                               .gravity = 9.81};
+    return (cbm_ober_mech_def){
+        .youngs_modulus = 8e9, .density = 800, .leaf_mass_per_area = 0.2, .gravity = 9.81};
 }
 
 static cbm_vec3 rot(cbm_vec3 v, cbm_vec3 axis, double a)
@@ -92,8 +90,8 @@ cbm_status cbm_ober_mechanics(const cbm_ober_stand *s, size_t tree, const cbm_ob
         return CBM_E_INVALID;
     cbm_context *ctx = s->ctx;
     if (!(def->youngs_modulus > 0) || !(def->density >= 0) || !(def->leaf_mass_per_area >= 0) ||
-        !(def->gravity >= 0) || !isfinite(def->youngs_modulus + def->density +
-                                          def->leaf_mass_per_area + def->gravity))
+        !(def->gravity >= 0) ||
+        !isfinite(def->youngs_modulus + def->density + def->leaf_mass_per_area + def->gravity))
         return cbm__fail(ctx, CBM_E_INVALID,
                          "ober mechanics: E > 0, density, leaf mass per area and gravity >= 0");
     memset(out, 0, sizeof *out);
