@@ -23,6 +23,7 @@ test "$(grep -o '"tree":' "$tmp/s.json" | wc -l)" -eq 4
 "$bin" grow ober-troll -y 4 --stand 2x1 --mechanics --quiet -o "$tmp/m.json" -o "mech:$tmp/m.svg"
 test -s "$tmp/m.svg"
 test "$(grep -o '"max_tip_difference_m":' "$tmp/m.json" | wc -l)" -eq 2
+test "$(grep -o '"mech_max_tip_difference_m":' "$tmp/m.json" | wc -l)" -eq 8
 grep -q '"converged":true' "$tmp/m.json"
 set +e
 "$bin" grow ober-troll -y 2 -o "mech:$tmp/n.svg" 2>"$tmp/err.txt"

@@ -105,7 +105,8 @@ static bool parse_spacing(const char *v, void *target, char *why, size_t n)
 
 static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const char *model,
                                const cbm_ober_def *d, double seconds,
-                               const cbm_ober_mech_result *mech, const char *path)
+                               const cbm_ober_mech_result *mech, const double *yearly,
+                               const char *path)
 {
     cbm_json *j = NULL;
     cbm_status cs = cbm_json_create(ctx, &j);
@@ -152,6 +153,11 @@ static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const 
             cbm_json_number(j, "carbon_mean", r->carbon_mean);
             cbm_json_int(j, "light_rays", (int64_t)r->light_rays);
             cbm_json_number(j, "light_seconds", r->light_seconds);
+            if (yearly && r->age > 0) { /* --mechanics: this year's tree under the statics */
+                const double *m = &yearly[((size_t)(y - 1) * cbm_ober_tree_count(s) + t) * 2];
+                cbm_json_number(j, "mech_max_tip_difference_m", m[0]);
+                cbm_json_number(j, "mech_mean_tip_difference_m", m[1]);
+            }
             cbm_json_end_object(j);
         }
         cbm_json_end_array(j);
@@ -344,6 +350,7 @@ int cmd_grow_ober(int argc, char **argv)
     cbm_scene *sc = NULL;
     cbm_ober_mech_result *mech = NULL;
     cbm_plant **plants = NULL;
+    double *yearly = NULL; /* --mechanics: per year and tree, max and mean tip difference */
     cbm_ober_def d = cbm_ober_def_default();
     cbm_status st = has_suffix(model, ".tree") ? cbm_ober_def_read(ctx, &d, model)
                                                : cbm_ober_def_builtin(ctx, model, &d);
@@ -403,11 +410,30 @@ int cmd_grow_ober(int argc, char **argv)
         goto done;
     }
     double t0 = cli_seconds();
+    if (mechanics && d.years > 0 &&
+        !(yearly = calloc((size_t)d.years * cbm_ober_tree_count(s) * 2, sizeof *yearly))) {
+        rc = cli_fail(ctx, CBM_E_NOMEM, "mechanics");
+        goto done;
+    }
     while (cbm_ober_years(s) < d.years) {
         st = cbm_ober_year(s);
         if (st != CBM_OK) {
             rc = cli_fail(ctx, st, "growing the stand");
             goto done;
+        }
+        if (yearly) { /* the statics of every tree after the year (the growth stays kinematic) */
+            size_t nt = cbm_ober_tree_count(s), y = (size_t)cbm_ober_years(s) - 1;
+            cbm_ober_mech_def md = cbm_ober_mech_def_default();
+            for (size_t t = 0; t < nt; t++) {
+                cbm_ober_mech_result mr;
+                st = cbm_ober_mechanics(s, t, &md, &mr, NULL);
+                if (st != CBM_OK) {
+                    rc = cli_fail(ctx, st, "mechanics");
+                    goto done;
+                }
+                yearly[(y * nt + t) * 2] = mr.max_tip_difference;
+                yearly[(y * nt + t) * 2 + 1] = mr.mean_tip_difference;
+            }
         }
         if (!quiet) {
             int y = cbm_ober_years(s);
@@ -451,7 +477,7 @@ int cmd_grow_ober(int argc, char **argv)
     }
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         if (kind[k] == 1)
-            st = write_report(ctx, s, model, &d, seconds, mech, outs[k]);
+            st = write_report(ctx, s, model, &d, seconds, mech, yearly, outs[k]);
         else if (kind[k] == 2)
             st = write_plot(ctx, s, model, paths[k]);
         else if (kind[k] == 3)
@@ -482,6 +508,7 @@ done:
         cbm_plant_destroy(plants[t]);
     free(plants);
     free(mech);
+    free(yearly);
     cbm_scene_destroy(sc);
     cbm_ober_destroy(s);
     cli_context_end(ctx);
