@@ -5,7 +5,8 @@
  * increments; E5 light competition between two close trees; the four presets' architecture
  * measured on the tree (whorled vs spiral,
  * plagiotropic vs orthotropic); the growth-function library against numerical derivatives; the
- * pipe model and the mortality invariant; formula errors at file:line:col. */
+ * pipe model and the mortality invariant; formula errors at file:line:col; the stand's MTG (a plant
+ * per tree, every shoot a segment of its tree, the axes' continuations). */
 #include "test.h"
 
 #include "cambium/cambium.h"
@@ -452,5 +453,129 @@ TEST(ober_e5_light_competition)
     CHECK(at10 > at5 + 0.1); /* it grows with time */
     cbm_ober_destroy(st[0]);
     cbm_ober_destroy(st[1]);
+    test_ctx_end(ctx);
+}
+
+/* The stand's MTG: one plant P<tree + 1> per germinated tree, each tree's shoots its segments
+ * (the `tree` feature equals the plant's number - 1 on every row), the continuations '^<' as many
+ * as the shoots whose axis goes on (mothers with a non-lateral child: one per fork too). */
+TEST(ober_stand_mtg)
+{
+    cbm_context *ctx = test_ctx();
+    const char *set[] = {"standX", "2", "standY", "2", "stagger", "2", "maxOrder", "2", NULL};
+    cbm_ober_stand *s = grow(ctx, "ober-troll", 5, set);
+    CHECK(s != NULL);
+    if (!s) {
+        test_ctx_end(ctx);
+        return;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/ober_stand.mtg", test_tmp_dir());
+    CHECK_OK(cbm_ober_write_mtg(ctx, s, path));
+    size_t nt = cbm_ober_tree_count(s), ns = cbm_ober_shoot_count(s);
+    size_t rows_of[8] = {0}, expect_rows[8] = {0}, plants = 0, expect_plants = 0, cont = 0;
+    size_t expect_cont = 0;
+    unsigned char *continued = calloc(ns ? ns : 1, 1);
+    for (size_t i = 0; i < ns; i++) {
+        cbm_ober_shoot o;
+        CHECK_OK(cbm_ober_shoot_info(s, i, &o));
+        expect_rows[o.tree < 8 ? o.tree : 7]++;
+        if (o.parent >= 0 && !o.lateral && !continued[o.parent]) {
+            continued[o.parent] = 1;
+            expect_cont++;
+        }
+    }
+    free(continued);
+    for (size_t t = 0; t < nt && t < 8; t++)
+        expect_plants += expect_rows[t] > 0;
+    FILE *f = fopen(path, "r");
+    CHECK(f != NULL);
+    char line[4096];
+    bool in_topo = false;
+    long plant = -1;
+    while (f && fgets(line, sizeof line, f)) {
+        if (!strncmp(line, "MTG:", 4)) {
+            in_topo = true;
+            continue;
+        }
+        if (!in_topo || !strncmp(line, "TOPO", 4))
+            continue;
+        const char *c = line;
+        while (*c == '\t')
+            c++;
+        if (!strncmp(c, "/P", 2)) {
+            plant = strtol(c + 2, NULL, 10);
+            plants++;
+        } else if (!strncmp(c, "^<", 2))
+            cont++;
+        else
+            CHECK(!strncmp(c, "+A", 2));
+        /* the `tree` feature: the 2nd of the 22 columns at the end of the line */
+        int tabs = 0;
+        for (const char *q = line; *q; q++)
+            tabs += *q == '\t';
+        int want = tabs - 20, k = 0;
+        const char *q = line;
+        while (k < want && *q)
+            k += *q++ == '\t';
+        long tree = strtol(q, NULL, 10);
+        CHECK_EQ_INT((int)tree, (int)plant - 1);
+        if (tree >= 0 && tree < 8)
+            rows_of[tree]++;
+    }
+    if (f)
+        fclose(f);
+    remove(path);
+    CHECK(expect_plants >= 2);
+    CHECK_EQ_INT((int)plants, (int)expect_plants);
+    CHECK_EQ_INT((int)cont, (int)expect_cont);
+    CHECK(cont > 0);
+    for (size_t t = 0; t < 8; t++)
+        CHECK_EQ_INT((int)rows_of[t], (int)expect_rows[t]);
+    cbm_ober_destroy(s);
+    test_ctx_end(ctx);
+}
+
+/* The statics on a tree (cbm_ober_mechanics): without gravity the solved plant keeps its rest
+ * shape, which must be the turtle's shape without the joint, tip for tip (this checks the
+ * divergence/deviation/roll that rebuild every frame, and the attachment of each lateral at its
+ * node): with orientationLambda = bendingLambda = 0 (no joint) the tips equal the kinematic ones
+ * to 1e-9 m. Under gravity the statics bend the tree (sag > 1 mm) and converge, and with the joint
+ * off the difference to the kinematic shape is the sag alone. */
+TEST(ober_mechanics_rest_shape_and_sag)
+{
+    cbm_context *ctx = test_ctx();
+    const char *nojoint[] = {"orientationLambda", "0", "bendingLambda", "0", NULL};
+    cbm_ober_stand *s = grow(ctx, "ober-massart", 5, nojoint);
+    cbm_ober_stand *j = grow(ctx, "ober-massart", 5, NULL);
+    CHECK(s && j);
+    if (!s || !j) {
+        cbm_ober_destroy(s);
+        cbm_ober_destroy(j);
+        test_ctx_end(ctx);
+        return;
+    }
+    cbm_ober_mech_def md = cbm_ober_mech_def_default();
+    md.gravity = 0;
+    cbm_ober_mech_result r;
+    CHECK_OK(cbm_ober_mechanics(s, 0, &md, &r, NULL));
+    CHECK(r.shoots == cbm_ober_shoot_count(s) && r.segments > r.shoots);
+    CHECK(r.max_tip_difference < 1e-9);
+    CHECK(r.max_sag < 1e-9 && r.max_joint < 1e-12);
+    /* with the joint, no gravity: the difference is the joint's displacement */
+    CHECK_OK(cbm_ober_mechanics(j, 0, &md, &r, NULL));
+    CHECK(r.max_joint > 1e-3);
+    CHECK_NEAR(r.max_tip_difference, r.max_joint, 1e-9);
+    md.gravity = 9.81;
+    CHECK_OK(cbm_ober_mechanics(s, 0, &md, &r, NULL));
+    CHECK(r.converged);
+    CHECK(r.max_sag > 1e-3);
+    CHECK_NEAR(r.max_tip_difference, r.max_sag, 1e-12);
+    CHECK(r.mean_tip_difference > 0 && r.mean_tip_difference <= r.max_tip_difference);
+    CHECK(r.mass > 0);
+    md.youngs_modulus = -1;
+    CHECK(cbm_ober_mechanics(s, 0, &md, &r, NULL) == CBM_E_INVALID);
+    cbm_ober_destroy(s);
+    cbm_ober_destroy(j);
     test_ctx_end(ctx);
 }

@@ -20,6 +20,7 @@
 
 #include "cambium/base.h"
 #include "cambium/geom.h"
+#include "cambium/mech.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -184,6 +185,43 @@ CBM_API cbm_status cbm_ober_shoot_info(const cbm_ober_stand *stand, size_t i, cb
 /// a horizontal green rectangle at its node, and a ground square if `ground`.
 CBM_API cbm_status cbm_ober_to_scene(const cbm_ober_stand *stand, cbm_scene *scene, int sides,
                                      bool ground);
+
+/// Writes the stand as one OpenAlea MTG coding file (FORM-A, docs/formats.md): one plant P<n>
+/// per tree (n = tree index + 1; trees without shoots are absent), its annual shoots as segments
+/// S in axes A, with the shoot's features (m, y up). Nothing is left at path on failure.
+CBM_API cbm_status cbm_ober_write_mtg(cbm_context *ctx, const cbm_ober_stand *stand,
+                                      const char *path);
+
+/// The statics on a tree (docs/models.md, "Mechanics"): wood and leaf loads.
+typedef struct cbm_ober_mech_def {
+    double youngs_modulus;     ///< Pa, green wood along the grain (default 8e9)
+    double density;            ///< kg/m^3, green wood (default 800)
+    double leaf_mass_per_area; ///< kg/m^2, fresh leaf (default 0.2)
+    double gravity;            ///< m/s^2 (default 9.81; 0 keeps the rest shape)
+} cbm_ober_mech_def;
+CBM_API cbm_ober_mech_def cbm_ober_mech_def_default(void);
+
+/// How the statics' shape of a tree differs from the kinematic shape (the joint's).
+typedef struct cbm_ober_mech_result {
+    size_t tree, shoots, segments;
+    double mass;                ///< kg, wood and leaves
+    bool converged;             ///< the solver reached its tolerance
+    double residual;            ///< its relative residual
+    double max_tip_difference;  ///< m, max over shoots of |tip (statics) - tip (joint)|
+    double mean_tip_difference; ///< m, its mean over the shoots
+    size_t max_shoot;           ///< the shoot (stand index) of the max
+    double max_sag;             ///< m, max |tip (statics) - tip (rest shape, no joint)|
+    double max_joint;           ///< m, max |tip (joint) - tip (rest shape)|
+    double kinematic_height, mechanical_height; ///< m, above the tree's base
+} cbm_ober_mech_result;
+
+/// Makes tree `tree` of the stand a mechanical plant (each shoot one segment per node, the
+/// pipe-model radius, the shape without the gravitropism joint as the rest shape, leaves as point
+/// masses), solves its statics under gravity and compares the shoot tips with the kinematic
+/// shape. *plant_out (optional) receives the solved plant (the caller destroys it).
+CBM_API cbm_status cbm_ober_mechanics(const cbm_ober_stand *stand, size_t tree,
+                                      const cbm_ober_mech_def *def, cbm_ober_mech_result *out,
+                                      cbm_plant **plant_out);
 
 #ifdef __cplusplus
 }

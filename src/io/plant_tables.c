@@ -209,7 +209,7 @@ cbm_status cbm__write_mtg_table(cbm_context *ctx, const cbm__mtg_table *t, const
             for (int c = 0; c < it.col; c++)
                 fputc('\t', f);
             if (first_line)
-                fprintf(f, "/P%d/A1/S1", plant_no);
+                fprintf(f, "/P%lld/A1/S1", t->plant ? (long long)t->plant[r] : (long long)plant_no);
             else if (it.new_axis)
                 fprintf(f, "+A%d/S1", ++axis_no);
             else

@@ -75,6 +75,9 @@ typedef struct cbm__mtg_table {
     /// Fills values[0..nfeatures) for row i (non-finite: an empty cell).
     cbm_status (*row)(const void *user, size_t i, double *values);
     const void *user;
+    /// Optional, per row: the number of the plant (P<n>) a root row starts; NULL numbers the
+    /// plants 1, 2, ... in the order of their roots.
+    const int64_t *plant;
 } cbm__mtg_table;
 
 /// Writes the table as an MTG coding file (FORM-A, scales P, A, S) through cbm_out.

@@ -10,13 +10,28 @@ for m in massart attims rauh troll cryptomeria carbon; do
     diff <("$bin" grow "$CBM_SOURCE/models/ober-$m.tree" --params) <("$bin" grow ober-$m --params)
 done
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/s.json" \
-    -o "$tmp/s.obj" -o "$tmp/s.svg" -o "plot:$tmp/p.svg" --size 200 >"$tmp/out.txt"
+    -o "$tmp/s.obj" -o "$tmp/s.svg" -o "plot:$tmp/p.svg" -o "$tmp/s.mtg" --size 200 >"$tmp/out.txt"
 grep -q '^year  4: 4 trees,' "$tmp/out.txt"
-for f in s.json s.obj s.svg p.svg; do test -s "$tmp/$f"; done
+for f in s.json s.obj s.svg p.svg s.mtg; do test -s "$tmp/$f"; done
+# the MTG: a plant per tree (all four germinate by year 4 with --stagger 1)
+test "$(grep -c '/P[1-4]/A1/S1' "$tmp/s.mtg")" -eq 4
 for k in age height_m leaves shoots_per_order wood_volume_m3 carbon_tax carbon_mean; do
     grep -q "\"$k\":" "$tmp/s.json" || { echo "missing $k"; exit 1; }
 done
 test "$(grep -o '"tree":' "$tmp/s.json" | wc -l)" -eq 4
+# --mechanics: the statics of the final trees in the report and a picture of the bent trees
+"$bin" grow ober-troll -y 4 --stand 2x1 --mechanics --quiet -o "$tmp/m.json" -o "mech:$tmp/m.svg"
+test -s "$tmp/m.svg"
+test "$(grep -o '"max_tip_difference_m":' "$tmp/m.json" | wc -l)" -eq 2
+test "$(grep -o '"mech_max_tip_difference_m":' "$tmp/m.json" | wc -l)" -eq 8
+grep -q '"converged":true' "$tmp/m.json"
+set +e
+"$bin" grow ober-troll -y 2 -o "mech:$tmp/n.svg" 2>"$tmp/err.txt"
+rc=$?
+set -e
+test $rc -eq 2
+grep -q 'needs --mechanics' "$tmp/err.txt"
+test ! -e "$tmp/n.svg"
 # same seed, same report; -D sets formulas
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/t.json" --quiet
 cmp <(grep -v seconds "$tmp/s.json") <(grep -v seconds "$tmp/t.json")

@@ -56,8 +56,9 @@ static void help(const cli_opts *t)
            "Grows Oberlaender's parametric tree (a built-in ober-* model or a .tree file\n"
            "starting with 'family = oberlaender'; docs/models.md): one tree or a stand.\n"
            "Outputs by extension: .png .svg .glb .obj .ply (the stand), .json (the report of\n"
-           "every tree and year), plot:FILE.svg or plot:FILE.png (carbon tax and height over\n"
-           "the years).\n\n");
+           "every tree and year), .mtg (the stand as one MTG, a plant per tree),\n"
+           "plot:FILE.svg or plot:FILE.png (carbon tax and height over the years), and with\n"
+           "--mechanics mech:FILE (the trees bent by the statics, any scene format).\n\n");
     cli_options_rows(stdout, t);
     printf("\nbuilt-in models:");
     for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
@@ -103,7 +104,9 @@ static bool parse_spacing(const char *v, void *target, char *why, size_t n)
 }
 
 static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const char *model,
-                               const cbm_ober_def *d, double seconds, const char *path)
+                               const cbm_ober_def *d, double seconds,
+                               const cbm_ober_mech_result *mech, const double *yearly,
+                               const char *path)
 {
     cbm_json *j = NULL;
     cbm_status cs = cbm_json_create(ctx, &j);
@@ -150,9 +153,32 @@ static cbm_status write_report(cbm_context *ctx, const cbm_ober_stand *s, const 
             cbm_json_number(j, "carbon_mean", r->carbon_mean);
             cbm_json_int(j, "light_rays", (int64_t)r->light_rays);
             cbm_json_number(j, "light_seconds", r->light_seconds);
+            if (yearly && r->age > 0) { /* --mechanics: this year's tree under the statics */
+                const double *m = &yearly[((size_t)(y - 1) * cbm_ober_tree_count(s) + t) * 2];
+                cbm_json_number(j, "mech_max_tip_difference_m", m[0]);
+                cbm_json_number(j, "mech_mean_tip_difference_m", m[1]);
+            }
             cbm_json_end_object(j);
         }
         cbm_json_end_array(j);
+        if (mech && mech[t].shoots > 0) { /* --mechanics: the final tree under the statics */
+            const cbm_ober_mech_result *m = &mech[t];
+            cbm_json_begin_object(j, "mechanics");
+            cbm_json_int(j, "year", cbm_ober_years(s));
+            cbm_json_int(j, "shoots", (int64_t)m->shoots);
+            cbm_json_int(j, "segments", (int64_t)m->segments);
+            cbm_json_number(j, "mass_kg", m->mass);
+            cbm_json_bool(j, "converged", m->converged);
+            cbm_json_number(j, "residual", m->residual);
+            cbm_json_number(j, "max_tip_difference_m", m->max_tip_difference);
+            cbm_json_number(j, "mean_tip_difference_m", m->mean_tip_difference);
+            cbm_json_int(j, "max_tip_difference_shoot", (int64_t)m->max_shoot);
+            cbm_json_number(j, "max_sag_m", m->max_sag);
+            cbm_json_number(j, "max_joint_displacement_m", m->max_joint);
+            cbm_json_number(j, "kinematic_height_m", m->kinematic_height);
+            cbm_json_number(j, "mechanical_height_m", m->mechanical_height);
+            cbm_json_end_object(j);
+        }
         cbm_json_end_object(j);
     }
     cbm_json_end_array(j);
@@ -220,7 +246,7 @@ int cmd_grow_ober(int argc, char **argv)
     cli_list def_list = {defs, 0, MAX_DEFS, "at most {max} -D options"};
     long years = -1, stand[2] = {0, 0}, stagger = -1, seedv = -1;
     double spacing = -1;
-    bool quiet = false, params = false;
+    bool quiet = false, params = false, mechanics = false;
     cbm_write_options o = cbm_write_options_default();
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
@@ -270,6 +296,10 @@ int cmd_grow_ober(int argc, char **argv)
          .help = "germination spread over 0..N years (stagger)"},
         {.name = "-o", .kind = CLI_LIST, .target = &out_list},
         {.name = "--quiet", .kind = CLI_SET, .target = &quiet, .help = "no per-year lines"},
+        {.name = "--mechanics",
+         .kind = CLI_SET,
+         .target = &mechanics,
+         .help = "solve the final trees' statics (.json 'mechanics', mech:FILE)"},
         {.name = "--params",
          .kind = CLI_SET,
          .target = &params,
@@ -289,20 +319,24 @@ int cmd_grow_ober(int argc, char **argv)
         return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
     int nout = out_list.count;
     cli_output_target targets[MAX_OUTPUTS];
-    int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot */
+    int kind[MAX_OUTPUTS]; /* 0 scene, 1 json, 2 plot, 3 mtg, 4 mech: scene of the statics */
     const char *paths[MAX_OUTPUTS];
     for (int k = 0; k < nout; k++) {
-        kind[k] = !strncmp(outs[k], "plot:", 5)             ? 2
+        kind[k] = !strncmp(outs[k], "mech:", 5)             ? 4
+                  : !strncmp(outs[k], "plot:", 5)           ? 2
                   : !strcmp(cli_extension(outs[k]), "json") ? 1
+                  : !strcmp(cli_extension(outs[k]), "mtg")  ? 3
                                                             : 0;
         paths[k] = kind[k] == 2 ? outs[k] + 5 : outs[k];
         if (kind[k] == 2 && strcmp(cli_extension(paths[k]), "svg") &&
             strcmp(cli_extension(paths[k]), "png"))
             return cli_usage_error("grow", "%s: the plot is .svg or .png", outs[k]);
-        if (kind[k] == 0) {
-            if (!cli_output_target_parse(outs[k], &targets[k]))
+        if (kind[k] == 4 && !mechanics)
+            return cli_usage_error("grow", "%s: a mech: output needs --mechanics", outs[k]);
+        if (kind[k] == 0 || kind[k] == 4) {
+            if (!cli_output_target_parse(outs[k] + (kind[k] == 4 ? 5 : 0), &targets[k]))
                 return cli_usage_error("grow",
-                                       "%s: unknown format (.png .svg .glb .obj .ply .json, "
+                                       "%s: unknown format (.png .svg .glb .obj .ply .json .mtg, "
                                        "plot:FILE.svg, or FORMAT:PATH)",
                                        outs[k]);
             paths[k] = targets[k].path;
@@ -314,6 +348,9 @@ int cmd_grow_ober(int argc, char **argv)
     int rc = CLI_OK;
     cbm_ober_stand *s = NULL;
     cbm_scene *sc = NULL;
+    cbm_ober_mech_result *mech = NULL;
+    cbm_plant **plants = NULL;
+    double *yearly = NULL; /* --mechanics: per year and tree, max and mean tip difference */
     cbm_ober_def d = cbm_ober_def_default();
     cbm_status st = has_suffix(model, ".tree") ? cbm_ober_def_read(ctx, &d, model)
                                                : cbm_ober_def_builtin(ctx, model, &d);
@@ -373,11 +410,30 @@ int cmd_grow_ober(int argc, char **argv)
         goto done;
     }
     double t0 = cli_seconds();
+    if (mechanics && d.years > 0 &&
+        !(yearly = calloc((size_t)d.years * cbm_ober_tree_count(s) * 2, sizeof *yearly))) {
+        rc = cli_fail(ctx, CBM_E_NOMEM, "mechanics");
+        goto done;
+    }
     while (cbm_ober_years(s) < d.years) {
         st = cbm_ober_year(s);
         if (st != CBM_OK) {
             rc = cli_fail(ctx, st, "growing the stand");
             goto done;
+        }
+        if (yearly) { /* the statics of every tree after the year (the growth stays kinematic) */
+            size_t nt = cbm_ober_tree_count(s), y = (size_t)cbm_ober_years(s) - 1;
+            cbm_ober_mech_def md = cbm_ober_mech_def_default();
+            for (size_t t = 0; t < nt; t++) {
+                cbm_ober_mech_result mr;
+                st = cbm_ober_mechanics(s, t, &md, &mr, NULL);
+                if (st != CBM_OK) {
+                    rc = cli_fail(ctx, st, "mechanics");
+                    goto done;
+                }
+                yearly[(y * nt + t) * 2] = mr.max_tip_difference;
+                yearly[(y * nt + t) * 2 + 1] = mr.mean_tip_difference;
+            }
         }
         if (!quiet) {
             int y = cbm_ober_years(s);
@@ -396,12 +452,46 @@ int cmd_grow_ober(int argc, char **argv)
         }
     }
     double seconds = cli_seconds() - t0;
+    if (mechanics) {
+        size_t nt = cbm_ober_tree_count(s);
+        mech = calloc(nt ? nt : 1, sizeof *mech);
+        plants = calloc(nt ? nt : 1, sizeof *plants);
+        if (!mech || !plants) {
+            rc = cli_fail(ctx, CBM_E_NOMEM, "mechanics");
+            goto done;
+        }
+        cbm_ober_mech_def md = cbm_ober_mech_def_default();
+        for (size_t t = 0; t < nt; t++) {
+            st = cbm_ober_mechanics(s, t, &md, &mech[t], &plants[t]);
+            if (st != CBM_OK) {
+                rc = cli_fail(ctx, st, "mechanics");
+                goto done;
+            }
+            if (!quiet && mech[t].shoots > 0)
+                printf("mechanics, tree %zu: %zu segments, %.4g kg, tip difference to the joint's "
+                       "shape max %.4g m, mean %.4g m (sag %.4g m)%s\n",
+                       t, mech[t].segments, mech[t].mass, mech[t].max_tip_difference,
+                       mech[t].mean_tip_difference, mech[t].max_sag,
+                       mech[t].converged ? "" : ", NOT converged");
+        }
+    }
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         if (kind[k] == 1)
-            st = write_report(ctx, s, model, &d, seconds, outs[k]);
+            st = write_report(ctx, s, model, &d, seconds, mech, yearly, outs[k]);
         else if (kind[k] == 2)
             st = write_plot(ctx, s, model, paths[k]);
-        else {
+        else if (kind[k] == 3)
+            st = cbm_ober_write_mtg(ctx, s, outs[k]);
+        else if (kind[k] == 4) {
+            cbm_scene *ms = NULL;
+            st = cbm_scene_create(ctx, &ms);
+            for (size_t t = 0; t < cbm_ober_tree_count(s) && st == CBM_OK; t++)
+                if (plants[t])
+                    st = cbm_plant_to_scene(plants[t], ms, 10);
+            if (st == CBM_OK)
+                st = cbm_scene_write_as(ctx, ms, targets[k].path, targets[k].format, &o);
+            cbm_scene_destroy(ms);
+        } else {
             if (!sc) {
                 st = cbm_scene_create(ctx, &sc);
                 if (st == CBM_OK)
@@ -414,6 +504,11 @@ int cmd_grow_ober(int argc, char **argv)
             rc = cli_fail(ctx, st, outs[k]);
     }
 done:
+    for (size_t t = 0; plants && t < cbm_ober_tree_count(s); t++)
+        cbm_plant_destroy(plants[t]);
+    free(plants);
+    free(mech);
+    free(yearly);
     cbm_scene_destroy(sc);
     cbm_ober_destroy(s);
     cli_context_end(ctx);
