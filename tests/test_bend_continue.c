@@ -21,8 +21,10 @@ static void run(cbm_context *ctx, long segs, double angle, cbm_bend_param param,
                 double to, long steps, cbm_bend_branch *br)
 {
     char t[256];
-    snprintf(t, sizeof t, "length = %.17g\nsegments = %ld\nradius = 0.01\nangle = %g\n"
-             "tolerance = 1e-10\n", rod_length(15), segs, angle);
+    snprintf(t, sizeof t,
+             "length = %.17g\nsegments = %ld\nradius = 0.01\nangle = %g\n"
+             "tolerance = 1e-10\n",
+             rod_length(15), segs, angle);
     cbm_bend_spec sp;
     CHECK_OK(cbm_bend_spec_parse(ctx, t, strlen(t), "c.spec", &sp));
     cbm_bend_continuation_def d = cbm_bend_continuation_def_default();
@@ -74,7 +76,8 @@ TEST(bend_continue_angle_fold_alpha15)
         CHECK(f != NULL && f->has_jump);
         err[k] = f ? fabs(f->at.param - fold_deg) : 1;
         if (f && f->has_jump) {
-            double jx = f->jump.tip_x / L - ef->target.tip_x, jy = f->jump.tip_y / L - ef->target.tip_y;
+            double jx = f->jump.tip_x / L - ef->target.tip_x,
+                   jy = f->jump.tip_y / L - ef->target.tip_y;
             printf("%ld segments: fold %.6f deg (elastica %.6f, error %.2e, bracket %.1e), "
                    "tip (%.5f, %.5f) L; jump to tip angle %.4f deg, tip error %.2e L\n",
                    segs, f->at.param, fold_deg, err[k], f->bracket, f->at.tip_x / L,

@@ -50,8 +50,7 @@ static void set_param(cbm_plant *p, cbm_bend_param which, double v)
 }
 
 /* the branch point of the plant's current (solved) state; prev_deg unwraps the tip angle */
-static cbm_status read_point(cbm_plant *p, double param, double prev_deg,
-                             cbm_bend_branch_point *o)
+static cbm_status read_point(cbm_plant *p, double param, double prev_deg, cbm_bend_branch_point *o)
 {
     size_t n = cbm_plant_segment_count(p);
     cbm_segment_state tip, base;
@@ -163,7 +162,8 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
     cbm_status st = cbm_plant_solve(p, &sd, &ss);
     if (st != CBM_OK)
         return st == CBM_E_NOT_CONVERGED
-                   ? cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g", d->from)
+                   ? cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g",
+                               d->from)
                    : st;
     cbm_bend_branch_point cur;
     CBM_TRY(read_point(p, d->from, NAN, &cur));
@@ -184,14 +184,15 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
             return st;
         cbm_bend_branch_point np;
+        memset(&np, 0, sizeof np);
         bool conv = st == CBM_OK;
         if (conv)
             CBM_TRY(read_point(p, pn, cur.tip_angle_deg, &np));
         /* continuity: the tip turns in the plane and moves (also out of it) by at most what a
          * turn of max_turn_deg of the whole rod would give */
         bool cont = conv && fabs(np.tip_angle_deg - cur.tip_angle_deg) <= d->max_turn_deg &&
-                    hypot(hypot(np.tip_x - cur.tip_x, np.tip_y - cur.tip_y), np.tip_z - cur.tip_z) <=
-                        spec->length * d->max_turn_deg * CBM_PI / 180.0;
+                    hypot(hypot(np.tip_x - cur.tip_x, np.tip_y - cur.tip_y),
+                          np.tip_z - cur.tip_z) <= spec->length * d->max_turn_deg * CBM_PI / 180.0;
         bool same = cont && np.unstable_modes == cur.unstable_modes;
         if (same) {
             CBM_TRY(push_point(g, &np));
