@@ -107,6 +107,67 @@ typedef struct cbm_bend_node {
 /// Fills n_nodes = segment count + 1 rows (for a single unbranched rod).
 CBM_API cbm_status cbm_bend_nodes(const cbm_plant *plant, cbm_bend_node *nodes, size_t n_nodes);
 
+/* ---- continuation of the rod's equilibria in a parameter (docs/bend.md, "Continuation") ---- */
+
+/// The parameter a continuation varies.
+typedef enum cbm_bend_param {
+    CBM_BEND_PARAM_ANGLE,  ///< the clamp's elevation, degrees (any angle, not only -90 .. 90)
+    CBM_BEND_PARAM_GRAVITY ///< the gravitational acceleration, m/s^2 (the load of the weight)
+} cbm_bend_param;
+
+/// How to follow the branch: natural-parameter steps from `from` to `to` with warm starts.
+typedef struct cbm_bend_continuation_def {
+    cbm_bend_param param; ///< default CBM_BEND_PARAM_ANGLE
+    double from, to;      ///< the parameter's range (degrees or m/s^2); from != to
+    long steps;           ///< equal steps of the range (>= 1; default 60)
+    /// a step whose tip turns by more than this (degrees) has left the branch (default 10)
+    double max_turn_deg;
+    /// the bisection stops when the step is below this fraction of |to - from| (default 1e-7)
+    double min_step;
+} cbm_bend_continuation_def;
+
+CBM_API cbm_bend_continuation_def cbm_bend_continuation_def_default(void);
+
+/// One equilibrium of the branch.
+typedef struct cbm_bend_branch_point {
+    double param;               ///< the parameter's value
+    double tip_angle_deg;       ///< in-plane angle of the tip tangent, continuous along the branch
+    double tip_x, tip_y, tip_z; ///< m, relative to the base
+    size_t unstable_modes;      ///< negative eigenvalues of the energy's Hessian
+    double lowest_eigenvalue;   ///< lowest eigenvalue of S^-1 J (0 at a fold)
+    double energy;              ///< J, total potential energy
+    bool jumped;                ///< reached by a jump from a fold, not along the branch
+} cbm_bend_branch_point;
+
+/// An event on the branch: a fold (the branch cannot be continued with the parameter going
+/// forward) or a change of the number of unstable modes along it.
+typedef struct cbm_bend_fold {
+    bool fold;                  ///< true: a fold; false: a change of stability along the branch
+    cbm_bend_branch_point at;   ///< the last equilibrium before the event (within the bracket)
+    double bracket;             ///< the event lies in [at.param, at.param + bracket]
+    bool has_jump;              ///< fold only: a jump target was found
+    cbm_bend_branch_point jump; ///< fold only: the equilibrium reached just past the fold
+} cbm_bend_fold;
+
+/// A traced branch (owned; release with cbm_bend_branch_free).
+typedef struct cbm_bend_branch {
+    cbm_bend_branch_point *points; ///< in the order they were reached
+    size_t n_points;
+    cbm_bend_fold *folds;
+    size_t n_folds;
+} cbm_bend_branch;
+
+/// Solves the spec's rod at def->from (the spec's push_unstable applies to this first solve),
+/// then follows its equilibria to def->to: each step is warm-started from the last equilibrium
+/// without any push; a step that does not converge, turns the tip by more than max_turn_deg or
+/// changes the number of unstable modes is halved. When a step below min_step still fails, the
+/// fold is located (bisection on the parameter) and the rod jumps: it is solved just past the
+/// fold with push_unstable, and the branch continues from the equilibrium it reaches. Needs the
+/// fast solver, no growth steps and no motion. On failure *out is empty.
+CBM_API cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
+                                     const cbm_bend_continuation_def *def, cbm_bend_branch *out);
+CBM_API void cbm_bend_branch_free(cbm_bend_branch *branch);
+
 #ifdef __cplusplus
 }
 #endif

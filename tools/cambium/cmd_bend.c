@@ -19,7 +19,9 @@
 
 static void help(const cli_opts *t)
 {
-    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [--modes N] [limits]\n\n"
+    printf("usage: cambium bend SPEC [-o FILE.csv|FILE.json]... [--json] [--modes N] [limits]\n"
+           "       cambium bend SPEC --continue PARAM=FROM:TO[:STEPS] [-o FILE.csv|FILE.json]...\n"
+           "            [--json]\n\n"
            "Solves one branch or rod described by SPEC (key = value lines; see docs/bend.md)\n"
            "for static equilibrium. -o writes the node table (.csv: s,x,y,z,angle_deg,\n"
            "curvature,moment,stress; SI units, degrees) or the summary (.json); --json prints\n"
@@ -49,6 +51,150 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
 static void write_json_head(FILE *f, const cbm_bend_spec *spec, const cbm_bend_node *tip,
                             const cbm_bend_node *base, const cbm_bend_result *r, double secs,
                             size_t n);
+
+/* --continue PARAM=FROM:TO[:STEPS] (docs/bend.md, "Continuation") */
+typedef struct continue_arg {
+    bool on;
+    cbm_bend_continuation_def def;
+} continue_arg;
+
+static bool parse_continue(const char *v, void *target, char *why, size_t n)
+{
+    continue_arg *c = target;
+    c->def = cbm_bend_continuation_def_default();
+    const char *eq = strchr(v, '=');
+    size_t k = eq ? (size_t)(eq - v) : 0;
+    if (eq && k == 5 && !strncmp(v, "angle", 5))
+        c->def.param = CBM_BEND_PARAM_ANGLE;
+    else if (eq && k == 7 && !strncmp(v, "gravity", 7))
+        c->def.param = CBM_BEND_PARAM_GRAVITY;
+    else {
+        snprintf(why, n,
+                 "--continue expects PARAM=FROM:TO[:STEPS] with PARAM angle or gravity, "
+                 "found '{value}'");
+        return false;
+    }
+    char *end = NULL;
+    double a = strtod(eq + 1, &end), b = 0;
+    bool ok = end != eq + 1 && *end == ':' && isfinite(a);
+    if (ok) {
+        const char *q = end + 1;
+        b = strtod(q, &end);
+        ok = end != q && isfinite(b) && b != a;
+    }
+    long steps = c->def.steps;
+    if (ok && *end == ':') {
+        const char *q = end + 1;
+        steps = strtol(q, &end, 10);
+        ok = end != q && steps >= 1 && steps <= 10000000;
+    }
+    if (!ok || *end) {
+        snprintf(why, n,
+                 "--continue: '{value}' is not PARAM=FROM:TO[:STEPS] (FROM != TO finite "
+                 "numbers, STEPS 1..10^7)");
+        return false;
+    }
+    c->def.from = a;
+    c->def.to = b;
+    c->def.steps = steps;
+    c->on = true;
+    return true;
+}
+
+static void write_branch_point(FILE *f, const cbm_bend_branch_point *p)
+{
+    char eig[32] = "null";
+    if (isfinite(p->lowest_eigenvalue))
+        snprintf(eig, sizeof eig, "%.9g", p->lowest_eigenvalue);
+    fprintf(f,
+            "{\"param\": %.12g, \"tip_angle_deg\": %.12g, \"tip_x\": %.12g, \"tip_y\": %.12g, "
+            "\"tip_z\": %.12g, \"unstable_modes\": %zu, \"lowest_eigenvalue\": %s, "
+            "\"energy\": %.12g, \"jumped\": %s}",
+            p->param, p->tip_angle_deg, p->tip_x, p->tip_y, p->tip_z, p->unstable_modes, eig,
+            p->energy, p->jumped ? "true" : "false");
+}
+
+static void write_branch_json(FILE *f, const cbm_bend_continuation_def *d, const cbm_bend_branch *b,
+                              double secs)
+{
+    fprintf(f, "{\"param\": \"%s\", \"from\": %.12g, \"to\": %.12g, \"steps\": %ld, \"branch\": [",
+            d->param == CBM_BEND_PARAM_ANGLE ? "angle" : "gravity", d->from, d->to, d->steps);
+    for (size_t i = 0; i < b->n_points; i++) {
+        fprintf(f, "%s", i ? ", " : "");
+        write_branch_point(f, &b->points[i]);
+    }
+    fprintf(f, "], \"folds\": [");
+    for (size_t i = 0; i < b->n_folds; i++) {
+        const cbm_bend_fold *k = &b->folds[i];
+        fprintf(f, "%s{\"kind\": \"%s\", \"bracket\": %.6g, \"at\": ", i ? ", " : "",
+                k->fold ? "fold" : "stability", k->bracket);
+        write_branch_point(f, &k->at);
+        fprintf(f, ", \"jump\": ");
+        if (k->has_jump)
+            write_branch_point(f, &k->jump);
+        else
+            fprintf(f, "null");
+        fprintf(f, "}");
+    }
+    fprintf(f, "], \"seconds\": %.6g}\n", secs);
+}
+
+static void write_branch_csv(FILE *f, const cbm_bend_branch *b)
+{
+    fprintf(f, "param,tip_angle_deg,tip_x,tip_y,tip_z,unstable_modes,lowest_eigenvalue,energy,"
+               "jumped\n");
+    for (size_t i = 0; i < b->n_points; i++) {
+        const cbm_bend_branch_point *p = &b->points[i];
+        fprintf(f, "%.12g,%.12g,%.12g,%.12g,%.12g,%zu,%.9g,%.12g,%d\n", p->param, p->tip_angle_deg,
+                p->tip_x, p->tip_y, p->tip_z, p->unstable_modes, p->lowest_eigenvalue, p->energy,
+                p->jumped ? 1 : 0);
+    }
+}
+
+/* the continuation job: the branch to the outputs; nothing written on failure */
+static int run_continue(cbm_context *ctx, const cbm_bend_spec *spec,
+                        const cbm_bend_continuation_def *d, const char **outs, int nout, bool json)
+{
+    double t0 = cli_now();
+    cbm_bend_branch br;
+    cbm_status s = cbm_bend_continue(ctx, spec, d, &br);
+    double secs = cli_now() - t0;
+    if (s != CBM_OK)
+        return cli_fail(ctx, s, "bend --continue");
+    int rc = CLI_OK;
+    for (int k = 0; k < nout && rc == CLI_OK; k++) {
+        cbm_out *o = NULL;
+        s = cbm_out_open(ctx, outs[k], &o);
+        if (s == CBM_OK) {
+            FILE *f = cbm_out_stream(o);
+            if (!strcmp(cli_extension(outs[k]), "json"))
+                write_branch_json(f, d, &br, secs);
+            else
+                write_branch_csv(f, &br);
+            s = cbm_out_commit(o);
+        }
+        if (s != CBM_OK)
+            rc = cli_fail(ctx, s, outs[k]);
+    }
+    if (rc == CLI_OK && json)
+        write_branch_json(stdout, d, &br, secs);
+    if (rc == CLI_OK && !json && nout == 0) {
+        printf("%zu equilibria, %zu events, %.3g s\n", br.n_points, br.n_folds, secs);
+        for (size_t i = 0; i < br.n_folds; i++) {
+            const cbm_bend_fold *k = &br.folds[i];
+            printf("%s at %.9g (tip angle %.6g deg, tip (%.6g, %.6g, %.6g) m, lowest eigenvalue "
+                   "%.3g)",
+                   k->fold ? "fold" : "stability change", k->at.param, k->at.tip_angle_deg,
+                   k->at.tip_x, k->at.tip_y, k->at.tip_z, k->at.lowest_eigenvalue);
+            if (k->has_jump)
+                printf(", jumps to tip angle %.6g deg, tip (%.6g, %.6g, %.6g) m",
+                       k->jump.tip_angle_deg, k->jump.tip_x, k->jump.tip_y, k->jump.tip_z);
+            printf("\n");
+        }
+    }
+    cbm_bend_branch_free(&br);
+    return rc;
+}
 
 /* the motion and modes members of the JSON (empty without --modes and duration) */
 typedef struct bend_extra {
@@ -124,6 +270,7 @@ int cmd_bend(int argc, char **argv)
     const char *outs[MAX_OUTPUTS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
     bool json = false;
+    continue_arg cont = {false, cbm_bend_continuation_def_default()};
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
         {.name = "SPEC", .kind = CLI_POSITIONAL, .target = &spec_path, .parse = cli_parse_one_spec},
@@ -139,6 +286,14 @@ int cmd_bend(int argc, char **argv)
          .target = &out_list,
          .parse = parse_output,
          .bad = "-o needs a file name"},
+        {.name = "--continue",
+         .kind = CLI_CUSTOM,
+         .target = &cont,
+         .arg = "PARAM=FROM:TO[:STEPS]",
+         .help = "follow the equilibria in PARAM (angle, gravity) from FROM to TO; folds,\n"
+                 "jumps; -o FILE.csv/.json and --json write the branch",
+         .parse = parse_continue,
+         .bad = "--continue needs PARAM=FROM:TO[:STEPS]"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {0}};
     cli_opts table = {.cmd = "bend",
@@ -174,6 +329,11 @@ int cmd_bend(int argc, char **argv)
         int rc = cli_fail(ctx, s, spec_path);
         cli_context_end(ctx);
         return rc;
+    }
+    if (cont.on) {
+        int crc = run_continue(ctx, &spec, &cont.def, outs, nout, json);
+        cli_context_end(ctx);
+        return crc;
     }
     double t0 = cli_now();
     cbm_plant *plant = NULL;
