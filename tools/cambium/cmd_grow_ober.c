@@ -455,6 +455,7 @@ int cmd_grow_ober(int argc, char **argv)
     if (mechanics) {
         size_t nt = cbm_ober_tree_count(s);
         mech = calloc(nt ? nt : 1, sizeof *mech);
+        // NOLINTNEXTLINE(bugprone-sizeof-expression): an array of pointers, one plant per tree
         plants = calloc(nt ? nt : 1, sizeof *plants);
         if (!mech || !plants) {
             rc = cli_fail(ctx, CBM_E_NOMEM, "mechanics");
