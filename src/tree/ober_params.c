@@ -3,6 +3,7 @@
  * the writer of a whole parameter set and the built-in presets (Table 4's Massart, Attims, Rauh
  * and Troll, the statistical Cryptomeria of eqs. 14-18). docs/models.md lists every name. */
 #include "tree/ober_internal.h"
+#include "tree/tree_internal.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -455,35 +456,9 @@ cbm_status cbm_ober_def_read(cbm_context *ctx, cbm_ober_def *def, const char *pa
 {
     if (!path || !def)
         return CBM_E_INVALID;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return cbm__fail(ctx, CBM_E_IO, "%s: cannot open: %s", path, strerror(errno));
-    size_t cap = 4096, len = 0;
-    char *buf = cbm__alloc(ctx, cap);
-    cbm_status s = buf ? CBM_OK : CBM_E_NOMEM;
-    while (s == CBM_OK) {
-        if (len == cap) {
-            if (cap > ((size_t)1 << 24)) {
-                s = cbm__fail(ctx, CBM_E_LIMIT, "%s: parameter file larger than 16 MiB", path);
-                break;
-            }
-            char *nb = cbm__realloc(ctx, buf, cap, cap * 2);
-            if (!nb) {
-                s = CBM_E_NOMEM;
-                break;
-            }
-            buf = nb;
-            cap *= 2;
-        }
-        size_t r = fread(buf + len, 1, cap - len, f);
-        len += r;
-        if (r == 0) {
-            if (ferror(f))
-                s = cbm__fail(ctx, CBM_E_IO, "%s: read error", path);
-            break;
-        }
-    }
-    fclose(f);
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    cbm_status s = cbm__tree_read_params(ctx, path, &buf, &len, &cap);
     if (s == CBM_OK)
         s = cbm_ober_def_parse(ctx, def, buf, len, path);
     if (buf)

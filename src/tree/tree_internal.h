@@ -78,4 +78,9 @@ static inline tree_plant tree_plant_of(const cbm_plant *pl)
 /* tree_spring.c: the spring pass (bud fate by resource allocation, 4.8-4.19, 7.1). */
 cbm_status cbm__tree_spring(cbm_tree *t);
 
+/* A parameter file's text (tree_params.c; the fruit tree's and Oberländer's readers): *buf, len
+ * bytes in cap allocated, freed by the caller (cbm__free(ctx, buf, cap)) also on failure. */
+cbm_status cbm__tree_read_params(cbm_context *ctx, const char *path, char **buf, size_t *len,
+                                 size_t *cap);
+
 #endif

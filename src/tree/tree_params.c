@@ -13,6 +13,7 @@
 #include "cambium/tree.h"
 #include "core/core.h"
 #include "core/vecmath.h"
+#include "tree/tree_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -593,10 +594,13 @@ cbm_status cbm_tree_def_parse(cbm_context *ctx, cbm_tree_def *def, const char *t
     return cbm_tree_def_check(ctx, def);
 }
 
-cbm_status cbm_tree_def_read(cbm_context *ctx, cbm_tree_def *def, const char *path)
+/* A parameter file's whole text (both model families' readers): *buf holds len bytes in an
+ * allocation of cap bytes, which the caller frees, also on failure; at most 16 MiB. */
+cbm_status cbm__tree_read_params(cbm_context *ctx, const char *path, char **out, size_t *out_len,
+                                 size_t *out_cap)
 {
-    if (!path || !def)
-        return CBM_E_INVALID;
+    *out = NULL;
+    *out_len = *out_cap = 0;
     FILE *f = fopen(path, "rb");
     if (!f)
         return cbm__fail(ctx, CBM_E_IO, "%s: cannot open: %s", path, strerror(errno));
@@ -626,6 +630,19 @@ cbm_status cbm_tree_def_read(cbm_context *ctx, cbm_tree_def *def, const char *pa
         }
     }
     fclose(f);
+    *out = buf;
+    *out_len = len;
+    *out_cap = buf ? cap : 0;
+    return s;
+}
+
+cbm_status cbm_tree_def_read(cbm_context *ctx, cbm_tree_def *def, const char *path)
+{
+    if (!path || !def)
+        return CBM_E_INVALID;
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    cbm_status s = cbm__tree_read_params(ctx, path, &buf, &len, &cap);
     if (s == CBM_OK)
         s = cbm_tree_def_parse(ctx, def, buf, len, path);
     if (buf)
