@@ -162,7 +162,13 @@ TEST(mech_stage_workspace_one_allocation)
     c0 = calls;
     CHECK_OK(cbm_plant_solve(p, &sd, NULL));
     CHECK_EQ_INT(calls - c0, 1);
-    CHECK_EQ_INT(p->work.cap, 101);
+    CHECK_EQ_INT(p->work.cap, 150);
+    /* ... which grew by half: the next segments fit without another allocation */
+    d.parent = 100;
+    CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    c0 = calls;
+    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
+    CHECK_EQ_INT(calls - c0, 0);
     cbm_plant_destroy(p);
     CHECK_EQ_INT(cbm_context_bytes(ctx), 0);
     cbm_context_destroy(ctx);

@@ -170,8 +170,10 @@ static cbm_status work_reserve(cbm_plant *p, int krylov_dim)
     cbm__mech_work *w = &p->work;
     work_shape sh = {w->cap, w->fcap, w->krylov_cap};
     int kc = krylov_dim > 0 ? krylov_dim + 1 : 0;
+    /* a growing plant adds a few segments per step: grow by half again, so the block is
+     * replaced O(log n) times over a run instead of at every solve */
     if (p->n > sh.cap)
-        sh.cap = p->n;
+        sh.cap = p->n > sh.cap + sh.cap / 2 ? p->n : sh.cap + sh.cap / 2;
     if (kc > sh.kc)
         sh.kc = kc;
     if (p->ground && sh.kc > 0)
