@@ -182,6 +182,7 @@ static void eval_discard(cbm_lsys *ls, int32_t ni, double *fr, double *buf)
 static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
+    out[0] = 0; /* every path that stops on an error leaves a defined value */
     double a[5] = {0, 0, 0, 0, 0};
     int na = 0;
     for (int32_t x = n->a; x >= 0 && na < 5; x = lp->m.nodes.data[x].next)
@@ -299,7 +300,6 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     }
     if (n->fn == FN_FREQUENCY && !(a[0] >= 1 && a[0] <= 1000 && a[0] == floor(a[0]))) {
         rt_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
-        out[0] = 0;
         return;
     }
     if (n->fn == FN_SWAY) {
@@ -308,7 +308,6 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
             rt_error(lp, CBM_E_INVALID,
                      "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
                      ">= 0, gust intensity >= 0)");
-            out[0] = 0;
             return;
         }
         memcpy(m->dyn_args, a, 4 * sizeof(double));
