@@ -125,6 +125,70 @@ TEST(intersections_loop_through)
     test_ctx_end(ctx);
 }
 
+/* Stems clamped at one point (the stems of a spur, separate roots of the table) join there:
+ * three thin stems leaving one base point at 15 degrees from one another overlap at it, which
+ * is their junction; the same stems with their bases 2 cm apart do not join, and the two that
+ * overlap there count. */
+TEST(intersections_roots_at_one_point)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_measure_segment s[6];
+    double r = 0.002, l = 0.03;
+    for (int k = 0; k < 3; k++) {
+        double a = (double)(k - 1) * 15 * PI / 180;
+        cbm_vec3 d = V(sin(a) * l, cos(a) * l, 0);
+        s[2 * k] = seg(-1, false, V(0, 0, 0), d, r, r);
+        s[2 * k + 1] = seg(2 * k, false, d, V(2 * d.x, 2 * d.y, 0), r, r);
+    }
+    unsigned char fl[6];
+    CHECK_EQ_INT(count_pairs(ctx, s, 6, fl, NULL), 0);
+    /* the middle stem's base moved 2 cm down along its own line: it now grows through the
+     * others' bases (no common point) */
+    s[2].p0 = V(0, -0.02, 0);
+    CHECK(count_pairs(ctx, s, 6, fl, NULL) >= 2);
+    CHECK(fl[2]);
+    test_ctx_end(ctx);
+}
+
+/* Siblings that leave a thick axis's end close together overlap in the knot of that node (the
+ * ball of the largest radius there): a trunk of radius 6 cm carries two fronds of radius 3 mm
+ * 8 degrees apart, cut in 1 cm segments; they overlap up to 4.3 cm out, inside the knot, and do not
+ * count. A frond that curls back and crosses the other 9 cm out counts: the knot ends at R. */
+TEST(intersections_knot_of_a_node)
+{
+    cbm_context *ctx = test_ctx();
+    enum { NS = 12 };
+    cbm_measure_segment s[1 + 2 * NS + 2];
+    size_t n = 0;
+    s[n++] = seg(-1, false, V(0, 0, 0), V(0, 0.25, 0), 0.06, 0.06);
+    for (int f = 0; f < 2; f++) {
+        double a = (f ? 34.0 : 26.0) * PI / 180; /* from the vertical, 8 degrees apart */
+        cbm_vec3 d = V(sin(a) * 0.01, cos(a) * 0.01, 0);
+        for (int k = 0; k < NS; k++, n++)
+            s[n] = seg(k ? (int64_t)n - 1 : 0, k == 0, V(d.x * k, 0.25 + d.y * k, 0),
+                       V(d.x * (k + 1), 0.25 + d.y * (k + 1), 0), 0.003, 0.003);
+    }
+    unsigned char fl[1 + 2 * NS + 2];
+    CHECK_EQ_INT(count_pairs(ctx, s, n, fl, NULL), 0);
+    /* without the thick trunk (the fronds are roots at one point, radius 3 mm) the knot is 3 mm
+     * and the overlap counts */
+    cbm_measure_segment t[2 * NS];
+    for (size_t i = 1; i < n; i++) {
+        t[i - 1] = s[i];
+        t[i - 1].parent = s[i].parent > 0 ? s[i].parent - 1 : -1;
+    }
+    CHECK(count_pairs(ctx, t, n - 1, NULL, NULL) >= 2);
+    /* the first frond's tip turns across the second 20 cm out: counts */
+    cbm_vec3 tip = s[NS].p1;
+    s[n] = seg((int64_t)NS, false, tip, V(0.15, 0.36, 0.001), 0.003, 0.003);
+    n++;
+    s[n] = seg((int64_t)n - 1, false, s[n - 1].p1, V(-0.02, 0.30, 0.001), 0.003, 0.003);
+    n++;
+    CHECK(count_pairs(ctx, s, n, fl, NULL) >= 1);
+    CHECK(fl[n - 1] || fl[n - 2]);
+    test_ctx_end(ctx);
+}
+
 static double rnd(unsigned *state)
 {
     *state = *state * 1103515245u + 12345u;

@@ -6,18 +6,29 @@
 # `<!-- tree-report: end -->`, so the figures there always come from the code. Branch
 # intersections are also measured over seeds 1-SEEDS (default 5; 0: not) for every model (the
 # real-wood ones also with the thesis' upright roll, stem_frame = 0, to show what it does), and
-# for the models/*.l whose segments table is mechanical (one run each), a second table between
+# for every model in the language (models/*.l: its segments table, the mechanical one or the
+# turtle's; over seeds 1-LC_SEEDS, default 3, for the models with a SEED) a second table between
 # `<!-- tree-report-lc: begin -->` and `<!-- tree-report-lc: end -->`.
 #
 # Usage (from the repository root, after `make`):
-#   tools/tree-report.sh            rewrite the table in docs/models.md
-#   tools/tree-report.sh --print    print the table on stdout, change nothing
+#   tools/tree-report.sh            rewrite both tables in docs/models.md
+#   tools/tree-report.sh --lc       rewrite only the second (the models in the language)
+#   tools/tree-report.sh --print    print the tables on stdout, change nothing (with --lc: the
+#                                   second)
 # CAMBIUM=path/to/cambium overrides the tool (default build/bin/cambium).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CAMBIUM:-build/bin/cambium}
 nseeds=${SEEDS:-5}
 doc=docs/models.md
+print=0 only_lc=0
+for a in "$@"; do
+    case $a in
+    --print) print=1 ;;
+    --lc) only_lc=1 ;;
+    *) echo "tree-report: unknown option $a (--print, --lc)" >&2; exit 2 ;;
+    esac
+done
 [ -x "$bin" ] || { echo "tree-report: $bin not found (run make first)" >&2; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -45,6 +56,8 @@ fmt() {
     if [ -z "$v" ] || [ "$v" = null ]; then printf '–'; else LC_ALL=C printf "$f" "$v"; fi
 }
 
+table=""
+if [ "$only_lc" = 0 ]; then
 models=$("$bin" grow --help | sed -n 's/^built-in models: *//p')
 [ -n "$models" ] || { echo "tree-report: no built-in models listed by grow --help" >&2; exit 1; }
 # intersecting fraction (%) of model $1 over seeds 1-nseeds, extra grow options after it:
@@ -98,21 +111,37 @@ for m in $models; do
     table="$table
 $row"
 done
+fi
 
-# the models in the language whose segments table is mechanical, one run each
-lc="| model (\`cambium run\`) | segments | segments intersecting |
-|---|---|---|"
+# every model in the language (models/*.l): its segments table, mechanical or the turtle's, from
+# the model as shipped, and over seeds 1-LC_SEEDS (default 3; -D SEED=s) for the models that
+# draw random numbers from a SEED
+lc_seeds=${LC_SEEDS:-3}
+lc="| model (\`cambium run\`) | table | segments | segments intersecting | seeds 1–$lc_seeds: segments intersecting (%), median (range) |
+|---|---|---|---|---|"
 for f in models/*.l; do
     "$bin" run "$f" -o "segments:$tmp/lc.csv" >/dev/null
     j=$("$bin" info --json "$tmp/lc.csv")
-    grep -q '"table":"mechanical segments"' <<<"$j" || continue
+    kind=$(sed -n 's/.*"table":"\([a-z]*\) segments".*/\1/p' <<<"$j")
     frac=$(num "$j" intersecting_fraction)
+    seeds="– (no random numbers)"
+    if grep -q '^#define SEED ' "$f" && [ "$lc_seeds" -gt 0 ]; then
+        fr=()
+        for s in $(seq 1 "$lc_seeds"); do
+            "$bin" run "$f" -D SEED="$s" -o "segments:$tmp/lc.csv" >/dev/null
+            fr+=("$(num "$("$bin" info --json "$tmp/lc.csv")" intersecting_fraction)")
+        done
+        seeds=$(printf '%s\n' "${fr[@]}" | sort -g | awk '{ v[NR] = 100 * $1 }
+            END { md = NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2
+                  printf "%.2f (%.2f–%.2f)", md, v[1], v[NR] }')
+    fi
     lc="$lc
-| \`$f\` | $(num "$j" segments) | $(fmt '%.1f %%' "$(awk -v s="$frac" 'BEGIN{print s*100}')") ($(num "$j" intersecting_segments)) |"
+| \`$f\` | $kind | $(num "$j" segments) | $(fmt '%.1f %%' "$(awk -v s="$frac" 'BEGIN{print s*100}')") ($(num "$j" intersecting_segments)) | $seeds |"
 done
 
-if [ "${1:-}" = --print ]; then
-    printf '%s\n\n%s\n' "$table" "$lc"
+if [ "$print" = 1 ]; then
+    [ -n "$table" ] && printf '%s\n\n' "$table"
+    printf '%s\n' "$lc"
     exit 0
 fi
 # replaces the lines between <!-- NAME: begin --> and <!-- NAME: end --> with a file
@@ -126,8 +155,12 @@ put() {
         !skip { print }' "$doc" >"$tmp/doc"
     cp "$tmp/doc" "$doc"
 }
-printf '%s\n' "$table" >"$tmp/table"
 printf '%s\n' "$lc" >"$tmp/lc"
-put tree-report "$tmp/table"
 put tree-report-lc "$tmp/lc"
-echo "tree-report: $doc updated ($(wc -w <<<"$models") models)"
+if [ "$only_lc" = 0 ]; then
+    printf '%s\n' "$table" >"$tmp/table"
+    put tree-report "$tmp/table"
+    echo "tree-report: $doc updated ($(wc -w <<<"$models") models, $(ls models/*.l | wc -l) in the language)"
+else
+    echo "tree-report: $doc updated ($(ls models/*.l | wc -l) models in the language)"
+fi

@@ -24,8 +24,16 @@
  * node) is compared with JUNCTION_REACH = 4 times the sum of their largest radii, cot(theta/2)
  * for theta = 28 degrees: no longer, and the pair is taken to meet inside a junction (laterals
  * leaving at 28 degrees or more have left it by then). A limb that passes through another
- * away from their common junction has a longer path and counts. The walk up the ancestors
- * stops beyond that length.
+ * away from their common junction has a longer path and counts.
+ *
+ * Two more junctions. The knot of a node: the wood of all the segments meeting at a node fills
+ * a ball about as large as the thickest of them, so siblings leaving a thick axis's end close
+ * together (the fronds of a cycad's crown, 7.5 degrees apart in the golden spiral, on a trunk of
+ * radius 6 cm) overlap inside it for longer than the path rule allows; a pair whose meeting point
+ * lies within R of their common node, R the largest radius of the segments meeting there, each
+ * of the two no farther than R from it along the tree, meets inside the knot. And roots whose
+ * bases are one point (the stems of a spur, written as separate axes) join at that point. The
+ * walks up the ancestors stop beyond the longer of the path bound and the largest radius.
  */
 #include "core/core.h"
 #include "core/vecmath.h"
@@ -108,46 +116,107 @@ static double closest(cbm_vec3 p, cbm_vec3 d1, cbm_vec3 q, cbm_vec3 d2, double *
     return v3_dot(dd, dd);
 }
 
-static bool tubes_meet(const cbm_measure_segment *x, const cbm_measure_segment *y)
+/* Whether the tubes of x and y meet; *at is then the midpoint of the closest points of their
+ * axes (where they meet). */
+static bool tubes_meet(const cbm_measure_segment *x, const cbm_measure_segment *y, cbm_vec3 *at)
 {
     double s, t;
-    double d2 = closest(x->p0, v3_sub(x->p1, x->p0), y->p0, v3_sub(y->p1, y->p0), &s, &t);
+    cbm_vec3 dx = v3_sub(x->p1, x->p0), dy = v3_sub(y->p1, y->p0);
+    double d2 = closest(x->p0, dx, y->p0, dy, &s, &t);
     double r = x->r0 + s * (x->r1 - x->r0) + y->r0 + t * (y->r1 - y->r0);
+    *at = v3_scale(v3_add(v3_madd(x->p0, dx, s), v3_madd(y->p0, dy, t)), 0.5);
     return r > 0.0 && d2 < r * r;
 }
 
 #define MAX_WALK       256
 #define JUNCTION_REACH 4.0
 
-/* Whether i and j meet inside a junction: the tree path between their nearest ends is no longer
- * than JUNCTION_REACH times the sum of their largest radii. */
+/* Whether two segments that meet at `at` meet inside a junction (the header's comment): the tree
+ * path between their nearest ends, through the node n where their lines of descent join, is no
+ * longer than JUNCTION_REACH times the sum of their largest radii; or both lie within the knot of
+ * n (the tree path from n to each no longer than R, the largest radius of the segments meeting
+ * at n) and `at` lies inside it (no farther than R from n). Roots whose bases are the same point
+ * (several axes clamped at one node, as the stems of a spur) join at that point. The walks up
+ * the ancestors stop beyond the longer of the two reaches, `reach` being the largest radius of
+ * the table. */
 static bool adjacent(const cbm_measure_segment *s, const double *len, const double *rmax, size_t i,
-                     size_t j)
+                     size_t j, cbm_vec3 at, double reach)
 {
     double bound = JUNCTION_REACH * (rmax[i] + rmax[j]);
+    double walk = fmax(bound, reach);
     int64_t anc[MAX_WALK];
     double gap[MAX_WALK];
     size_t na = 0;
     double g = 0.0;
-    for (int64_t a = s[i].parent; a >= 0 && na < MAX_WALK && g <= bound; a = s[a].parent) {
+    int64_t below_i = (int64_t)i; /* the last segment of i's line below the ancestor */
+    int64_t prev[MAX_WALK];
+    int64_t a = s[i].parent;
+    for (; a >= 0 && na < MAX_WALK && g <= walk; a = s[a].parent) {
         if ((size_t)a == j)
-            return true;
+            break;
         anc[na] = a;
+        prev[na] = below_i;
         gap[na++] = g;
         g += len[a];
+        below_i = a;
     }
-    double h = 0.0;
-    size_t steps = 0;
-    for (int64_t b = s[j].parent; b >= 0 && steps < MAX_WALK && h <= bound;
-         b = s[b].parent, steps++) {
-        if ((size_t)b == i)
-            return true;
-        for (size_t k = 0; k < na; k++)
-            if (anc[k] == b)
-                return gap[k] + h <= bound;
-        h += len[b];
+    /* the node and its knot's radius, the path between the two through it */
+    cbm_vec3 node;
+    double knot, path, gi, gj;
+    if (a >= 0 && (size_t)a == j) { /* j is an ancestor of i: they join at j's distal node */
+        node = s[j].p1;
+        knot = fmax(rmax[j], rmax[below_i]);
+        path = gi = g;
+        gj = 0.0;
+    } else {
+        bool found = false;
+        double h = 0.0;
+        size_t steps = 0;
+        int64_t below_j = (int64_t)j, b = s[j].parent;
+        size_t k = 0;
+        for (; b >= 0 && steps < MAX_WALK && h <= walk && !found; steps++) {
+            if ((size_t)b == i)
+                break;
+            for (k = 0; k < na && anc[k] != b; k++)
+                ;
+            if (k < na) {
+                found = true;
+                break;
+            }
+            h += len[b];
+            below_j = b;
+            b = s[b].parent;
+        }
+        if (b >= 0 && (size_t)b == i) { /* i is an ancestor of j */
+            node = s[i].p1;
+            knot = fmax(rmax[i], rmax[below_j]);
+            path = gj = h;
+            gi = 0.0;
+        } else if (found) {
+            node = s[b].p1;
+            knot = fmax(rmax[b], fmax(rmax[prev[k]], rmax[below_j]));
+            gi = gap[k];
+            gj = h;
+            path = gi + gj;
+        } else if (a < 0 && b < 0 && below_i != below_j) {
+            /* both walks reached their roots: the same base point joins them */
+            double rr = fmax(rmax[below_i], rmax[below_j]);
+            cbm_vec3 d = v3_sub(s[below_i].p0, s[below_j].p0);
+            if (!(v3_dot(d, d) <= 1e-12 * rr * rr))
+                return false;
+            node = s[below_i].p0;
+            knot = rr;
+            gi = g;
+            gj = h;
+            path = gi + gj;
+        } else {
+            return false;
+        }
     }
-    return false;
+    if (path <= bound)
+        return true;
+    cbm_vec3 d = v3_sub(at, node);
+    return gi <= knot && gj <= knot && v3_dot(d, d) <= knot * knot;
 }
 
 typedef struct grid {
@@ -214,11 +283,13 @@ cbm_status cbm_measure_intersections(cbm_context *ctx, const cbm_measure_segment
     if (!len)
         return CBM_E_NOMEM;
     double *rmax = len + n, *size = len + 2 * n;
+    double reach = 0.0; /* the largest radius: no knot is larger */
     grid gr = {v3(INFINITY, INFINITY, INFINITY), 0.0};
     cbm_vec3 top = v3(-INFINITY, -INFINITY, -INFINITY);
     for (size_t i = 0; i < n; i++) {
         len[i] = v3_norm(v3_sub(s[i].p1, s[i].p0));
         rmax[i] = fmax(s[i].r0, s[i].r1);
+        reach = fmax(reach, rmax[i]);
         size[i] = fmax(len[i], 2.0 * rmax[i]);
         cbm_vec3 lo =
             v3(fmin(s[i].p0.x, s[i].p1.x), fmin(s[i].p0.y, s[i].p1.y), fmin(s[i].p0.z, s[i].p1.z));
@@ -258,9 +329,10 @@ cbm_status cbm_measure_intersections(cbm_context *ctx, const cbm_measure_segment
             for (size_t x = a; x < b && st == CBM_OK; x++)
                 for (size_t y = x + 1; y < b && st == CBM_OK; y++) {
                     size_t i = e.data[x].seg, j = e.data[y].seg;
-                    if (i == j || !tubes_meet(&s[i], &s[j]))
+                    cbm_vec3 at;
+                    if (i == j || !tubes_meet(&s[i], &s[j], &at))
                         continue;
-                    if (adjacent(s, len, rmax, j > i ? j : i, j > i ? i : j))
+                    if (adjacent(s, len, rmax, j > i ? j : i, j > i ? i : j, at, reach))
                         continue;
                     st = CBM_ARRAY_PUSH(ctx, found, ((pair){i < j ? i : j, i < j ? j : i}));
                 }
