@@ -18,8 +18,8 @@ static void check_row(const double *got, const double *want, int n, const char *
 {
     /* the digest prints two decimals */
     for (int i = 0; i < n; i++)
-        CHECK_MSG(fabs(got[i] - want[i]) <= 0.005 + 1e-9, "%s: element %d: %.4f, digest %.2f",
-                  what, i, got[i], want[i]);
+        CHECK_MSG(fabs(got[i] - want[i]) <= 0.005 + 1e-9, "%s: element %d: %.4f, digest %.2f", what,
+                  i, got[i], want[i]);
 }
 
 TEST(fem_thesis_digest_rows)
@@ -57,7 +57,7 @@ TEST(fem_thesis_digest_rows)
     d = cbm_fem_thesis_def_default();
     d.support = CBM_FEM_SUPPORT_CLAMPED;
     d.printed_stiffness = false;
-    static const double lift[10] = {60.0, 25.89, 7.29, -1.25, -3.98,
+    static const double lift[10] = {60.0,  25.89, 7.29,  -1.25, -3.98,
                                     -3.83, -2.74, -1.77, -1.28, -1.15};
     CHECK_OK(cbm_fem_thesis_angles(ctx, &d, beta, 10, &in));
     check_row(beta, lift, 10, "clamped +=");
@@ -145,8 +145,12 @@ TEST(fem_thesis_free_agrees_with_clamped_when_self_equilibrated)
     for (size_t nd = 0; nd <= s.m; nd++) {
         const double *t = dd, *w = dd + 3, *g = dd + 6 * nd;
         double rx = px[nd] - px[0], ry = 0.0, rz = pz[nd] - pz[0];
-        double want[6] = {t[0] + w[1] * rz - w[2] * ry, t[1] + w[2] * rx - w[0] * rz,
-                          t[2] + w[0] * ry - w[1] * rx, w[0], w[1], w[2]};
+        double want[6] = {t[0] + w[1] * rz - w[2] * ry,
+                          t[1] + w[2] * rx - w[0] * rz,
+                          t[2] + w[0] * ry - w[1] * rx,
+                          w[0],
+                          w[1],
+                          w[2]};
         for (int k = 0; k < 6; k++)
             worst = fmax(worst, fabs(g[k] - want[k]));
     }
@@ -220,8 +224,9 @@ TEST(fem_thesis_planar_split_is_the_whole_svd)
             scale = fmax(scale, fabs(xa[i]));
             diff = fmax(diff, fabs(xa[i] - xb[i]));
         }
-        printf("printed %d: whole SVD %ld cut (%ld sweeps), split %ld cut; differ by %.3g of %.3g\n",
-               printed, ia.dropped, ia.sweeps, ib.dropped, diff, scale);
+        printf(
+            "printed %d: whole SVD %ld cut (%ld sweeps), split %ld cut; differ by %.3g of %.3g\n",
+            printed, ia.dropped, ia.sweeps, ib.dropped, diff, scale);
         CHECK_EQ_INT(ia.dropped, ib.dropped);
         CHECK(diff <= 1e-9 * scale);
     }

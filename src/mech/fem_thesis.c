@@ -335,8 +335,8 @@ cbm_status cbm__fem_pinv_solve(cbm_context *ctx, size_t n, const double *a, cons
     return CBM_OK;
 }
 
-cbm_status cbm__fem_pinv_solve_planar(cbm_context *ctx, size_t n, const double *a,
-                                      const double *b, double *x, cbm__fem_pinv_info *info)
+cbm_status cbm__fem_pinv_solve_planar(cbm_context *ctx, size_t n, const double *a, const double *b,
+                                      double *x, cbm__fem_pinv_info *info)
 {
     /* the chain lies in the x-z plane: DOF (ux, uz, theta_y) of every node never couple with
      * (uy, theta_x, theta_z) (the element's in-plane set {u, w, theta_y} is closed, also in the
