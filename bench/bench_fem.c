@@ -7,9 +7,11 @@
  *   2. One growth step on an unbranched branch of n elements (time per element: O(n)).
  *   3. One growth step on a random branched tree of n segments (ring on every segment, a new
  *      element at every tip, leaves' mass), the goal being < 1 s at 10^5.
- * Usage: bench_fem [--reps N] [--max N] [--out file.csv] */
+ *   4. The thesis-compatible path (cambium/fem_thesis.h), n_FE 10..--thesis-max (<= 40).
+ * Usage: bench_fem [--reps N] [--max N] [--thesis-max N] [--out file.csv] */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "cambium/fem_thesis.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -152,6 +154,7 @@ int main(int argc, char **argv)
     int reps = 200;
     size_t maxn = 1000000;
     const char *out = NULL;
+    size_t thesis_max = 40;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--reps") && i + 1 < argc)
             reps = atoi(argv[++i]);
@@ -159,8 +162,11 @@ int main(int argc, char **argv)
             maxn = (size_t)atof(argv[++i]);
         else if (!strcmp(argv[i], "--out") && i + 1 < argc)
             out = argv[++i];
+        else if (!strcmp(argv[i], "--thesis-max") && i + 1 < argc)
+            thesis_max = (size_t)atof(argv[++i]);
         else {
-            fprintf(stderr, "usage: bench_fem [--reps N] [--max N] [--out file.csv]\n");
+            fprintf(stderr, "usage: bench_fem [--reps N] [--max N] [--thesis-max N] [--out "
+                            "file.csv]\n");
             return 2;
         }
     }
@@ -267,6 +273,34 @@ int main(int argc, char **argv)
                     peak);
         cbm_plant_destroy(p);
         cbm_context_destroy(c2);
+    }
+    printf(
+        "\n4. The thesis-compatible path (cbm_fem_thesis_angles): the listing as printed (dense,\n"
+        "free-free SVD) and clamped (dense elimination), the digest's branch (L = 1 m)\n");
+    printf("%8s %6s %12s %12s %10s\n", "n_FE", "reps", "free cpu s", "clamp cpu s", "tip deg");
+    static const long tfes[] = {10, 20, 30, 40};
+    for (size_t k = 0; k < sizeof tfes / sizeof *tfes && (size_t)tfes[k] <= thesis_max; k++) {
+        cbm_fem_thesis_def d = cbm_fem_thesis_def_default();
+        d.n_fe = tfes[k];
+        d.le = 1.0 / (double)tfes[k];
+        double beta[40], tf = INFINITY, tc = INFINITY;
+        int r = tfes[k] <= 20 ? 5 : 1;
+        cbm_fem_thesis_info in;
+        for (int j = 0; j < r; j++) {
+            d.support = CBM_FEM_SUPPORT_FREE;
+            double c0 = cpu();
+            if (cbm_fem_thesis_angles(ctx, &d, beta, 40, &in) != CBM_OK)
+                return 1;
+            tf = fmin(tf, cpu() - c0);
+            d.support = CBM_FEM_SUPPORT_CLAMPED;
+            c0 = cpu();
+            if (cbm_fem_thesis_angles(ctx, &d, beta, 40, NULL) != CBM_OK)
+                return 1;
+            tc = fmin(tc, cpu() - c0);
+        }
+        printf("%8ld %6d %12.3e %12.3e %10.3f\n", tfes[k], r, tf, tc, in.tip_angle);
+        if (csv)
+            fprintf(csv, "thesis-path,%ld,%d,%.6e,%.6e,,\n", tfes[k], r, tf, tc);
     }
     cbm_context_destroy(ctx);
     if (csv)

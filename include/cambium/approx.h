@@ -87,6 +87,19 @@ CBM_API cbm_status cbm_approx_angles(cbm_context *ctx, const cbm_approx_def *def
 /// at and past the buckling argument x = pi/2.
 CBM_API double cbm_approx_omega_linear(double t0_rad, double kh);
 
+/// How an axis of a plant is loaded when solver = approx bends it (cbm_solve_def.approx_load).
+typedef enum cbm_approx_load {
+    /// Default, the thesis: everything the axis carries as one force at its tip, K0 and coni from
+    /// the base rigidity and the axis's linear taper. A tapered upright axis (a stem) then puts
+    /// the whole tree's weight on its thinnest part and buckles (docs/validation.md).
+    CBM_APPROX_LOAD_TIP,
+    /// K0 such that the generator's small-load tip rotation, (K0 disc)^2 / 2, equals the axis's
+    /// own linear one as a horizontal cantilever: the integral of M/EI over the axis, M the
+    /// moment of its own wood, point masses and laterals where they hang, EI each segment's; coni
+    /// 0 (the calibration holds the taper). The same shape family, with the right stiffness.
+    CBM_APPROX_LOAD_CALIBRATED
+} cbm_approx_load;
+
 /// Which K0 the conversion returns.
 typedef enum cbm_approx_k0_convention {
     /// Default: the listing's K0 = h sqrt(F/EI) (its generator multiplies by sqrt 2 itself).

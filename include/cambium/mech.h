@@ -360,6 +360,8 @@ typedef struct cbm_solve_def {
     /// tip force = this times the weight an axis carries (> 0); default 1, the thesis's whole
     /// weight at the tip (3/8 matches the small deflection of a uniform rod's tip)
     double approx_force_factor;
+    /// how an axis's load enters the generator; default CBM_APPROX_LOAD_TIP (the thesis)
+    cbm_approx_load approx_load;
     cbm_fem_def fem; ///< settings of CBM_MECH_FEM; default cbm_fem_def_default()
 } cbm_solve_def;
 

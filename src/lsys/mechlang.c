@@ -89,6 +89,9 @@ void cbm__mechlang_init(cbm__mechlang *m)
     m->growth = cbm_growth_def_default();
     m->growth.ageing = CBM_AGEING_CORE;
     m->solve = cbm_solve_def_default();
+    /* SolverMethod(2) in growth: the rings memorise approx's shapes, and the thesis's tip load
+     * buckles stems (docs/methods.md, "In growth") */
+    m->solve.approx_load = CBM_APPROX_LOAD_CALIBRATED;
     m->discretization = CBM_MECH_STAGGERED;
     m->keep = true;
 }

@@ -14,6 +14,10 @@
  *        every point mass on them: the thesis's "extra loads" of sub-branches, at the tip);
  *   EI   the first segment's rigidity about the bending axis, scaled to r_start;
  *   K0 = h sqrt(F / EI).
+ * With approx_load = calibrated (what growth uses), K0 is chosen instead so that the generator's
+ * small-load tip rotation (K0 disc)^2 / 2 is the axis's own linear one as a horizontal
+ * cantilever, the integral of M/EI with every segment's EI and the load where it hangs, and
+ * coni = 0: the tip load on a strongly tapered stem buckles the thesis's cone.
  * The axis bends in the vertical plane through its first segment: joint k turns about the
  * horizontal axis H x g by res[k+1] on top of its rest rotation. Tip forces and moments, ground
  * and organ contact, torsion and out-of-plane loads are ignored; a rest curvature is kept as the
@@ -111,6 +115,25 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     ad.t0 = t0 * (180.0 / CBM_PI);
     ad.k0 = f > 0.0 && ei > 0.0 ? hseg * sqrt(f / ei) : 0.0;
     ad.coni = coni;
+    if (d->approx_load == CBM_APPROX_LOAD_CALIBRATED) {
+        /* the axis straightened horizontally: from the tip down, the moment at a distance u
+         * before segment j's distal node is M_d + g (beyond u + mpl u^2 / 2), "beyond" all that
+         * hangs from the distal node (continuation, laterals, point mass); Simpson's rule is
+         * exact for it */
+        double md = 0.0, wl = 0.0;
+        for (size_t k = m; k-- > 0;) {
+            size_t j = sc->chain[k];
+            double lj = p->len[j], own = p->mpl[j] * lj, beyond = p->cmass[j] - own;
+            double mp = md + g * (beyond * lj + 0.5 * own * lj);
+            double mm = md + g * (0.5 * beyond * lj + 0.125 * own * lj);
+            double eij = 0.5 * (p->rig[j].y + p->rig[j].z);
+            wl += lj / 6.0 * (md + 4.0 * mm + mp) / eij;
+            md = mp;
+        }
+        wl *= d->approx_force_factor;
+        ad.k0 = wl > 0.0 ? sqrt(2.0 * wl) / (double)m : (wl == 0.0 ? 0.0 : NAN);
+        ad.coni = 0.0;
+    }
     ad.p = d->approx_p;
     ad.mode = d->approx_mode;
     if (!isfinite(ad.k0) || !isfinite(ad.t0))
@@ -134,6 +157,9 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: approx_p must be in [0, 1]");
     if (!(d->approx_force_factor > 0.0) || !isfinite(d->approx_force_factor))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: approx_force_factor must be > 0");
+    if (d->approx_load != CBM_APPROX_LOAD_TIP && d->approx_load != CBM_APPROX_LOAD_CALIBRATED)
+        return cbm__fail(p->ctx, CBM_E_INVALID, "solve: unknown approx load %d",
+                         (int)d->approx_load);
     if (d->approx_mode != CBM_APPROX_CORRECTED && d->approx_mode != CBM_APPROX_THESIS)
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: unknown approx mode %d",
                          (int)d->approx_mode);
