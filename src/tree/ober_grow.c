@@ -298,7 +298,7 @@ static void aggregates(cbm_ober_stand *s, size_t ti, const int32_t *own, size_t 
 }
 
 /* Turtle interpretation: positions and frames of every shoot (parents come first). */
-static void geometry(cbm_ober_stand *s)
+void cbm__ober_geometry(cbm_ober_stand *s)
 {
     const cbm_vec3 up = v3(0, 1, 0), g = v3(0, -1, 0);
     for (size_t i = 0; i < s->shoots.len; i++) {
@@ -331,6 +331,16 @@ static void geometry(cbm_ober_stand *s)
                 L = rot(L, a, ang);
                 U = rot(U, a, ang);
             }
+        }
+        /* the bend of the statics (mechanicsFeedback), in the shoot's own frame */
+        cbm_vec3 w = v3_add(h->bend_mem, h->bend_el);
+        double wn = v3_norm(w);
+        if (wn > 0) {
+            cbm_vec3 a = v3_scale(
+                v3_add(v3_add(v3_scale(H, w.x), v3_scale(L, w.y)), v3_scale(U, w.z)), 1.0 / wn);
+            H = rot(H, a, wn);
+            L = rot(L, a, wn);
+            U = rot(U, a, wn);
         }
         h->H = v3_normalize(H), h->L = v3_normalize(L), h->U = v3_normalize(U);
         h->base = base;
@@ -626,7 +636,9 @@ cbm_status cbm_ober_year(cbm_ober_stand *s)
     lists_free(s, &l);
     CBM_TRY(st);
     CBM_TRY(compact(s));
-    geometry(s);
+    cbm__ober_geometry(s);
+    if (s->def.mech_feedback)
+        CBM_TRY(cbm__ober_feedback(s));
     reports(s);
     for (size_t ti = 0; ti < s->trees.len; ti++) {
         ober_tree *t = &s->trees.data[ti];
