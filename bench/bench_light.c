@@ -6,8 +6,9 @@
  * (wall-clock and CPU), CPU ns per leaf, mean light per unit leaf area.
  * Usage: bench_light [max_leaves (default 1000000)] [samples (default 2)] [threads (0: all)]
  *                    [periodic: the stand's square is the tile of an endless stand, so every
- *                     leaf has the same surroundings whatever n]
- * n runs over 1e3, 3e3, 1e4, ... up to max_leaves. */
+ *                     leaf has the same surroundings whatever n; open: not]
+ *                    [min_leaves (default 1000)]
+ * n runs over 1e3, 3e3, 1e4, ... up to max_leaves (from min_leaves on). */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
 
@@ -57,6 +58,7 @@ int main(int argc, char **argv)
     int samples = argc > 2 ? atoi(argv[2]) : 2;
     int threads = argc > 3 ? atoi(argv[3]) : 0;
     bool periodic = argc > 4 && !strcmp(argv[4], "periodic");
+    double min = argc > 5 ? atof(argv[5]) : 1000;
     cbm_context_def cd = cbm_context_def_default();
     cbm_context *ctx = NULL;
     if (cbm_context_create(&cd, &ctx) != CBM_OK)
@@ -66,6 +68,8 @@ int main(int argc, char **argv)
     for (double nd = 1000; nd <= (double)max * 1.0001; nd *= sqrt(10.0)) {
         size_t n =
             (size_t)llround(nd / pow(10, floor(log10(nd)))) * (size_t)pow(10, floor(log10(nd)));
+        if ((double)n < min * 0.9999)
+            continue;
         cbm_light_leaf *l = malloc(n * sizeof *l);
         double *a = malloc(n * sizeof *a);
         if (!l || !a)

@@ -579,3 +579,170 @@ TEST(ober_mechanics_rest_shape_and_sag)
     cbm_ober_destroy(j);
     test_ctx_end(ctx);
 }
+
+/* lightStems: the shoots shade as prisms. Rauh's lengths do not read the carbon, so the tree is
+ * the same with and without stems; the same sample points then see the same leaves plus the
+ * stems, so no shoot's carbon may rise, some must fall, and with stems off the carbon is that of
+ * a run that never heard of the option (bit for bit). */
+TEST(ober_light_stems_shade)
+{
+    cbm_context *ctx = test_ctx();
+    const char *off[] = {"light", "1", NULL};
+    const char *on[] = {"light", "1", "lightStems", "1", NULL};
+    const char *off2[] = {"light", "1", "lightStems", "0", NULL};
+    cbm_ober_stand *a = grow(ctx, "ober-rauh", 6, off), *b = grow(ctx, "ober-rauh", 6, on),
+                   *c = grow(ctx, "ober-rauh", 6, off2);
+    CHECK(a && b && c);
+    size_t n = a ? cbm_ober_shoot_count(a) : 0, lower = 0;
+    CHECK(n > 50 && b && c && cbm_ober_shoot_count(b) == n && cbm_ober_shoot_count(c) == n);
+    double sa = 0, sb = 0;
+    for (size_t i = 0; b && c && i < n; i++) {
+        cbm_ober_shoot x, y, z;
+        CHECK_OK(cbm_ober_shoot_info(a, i, &x));
+        CHECK_OK(cbm_ober_shoot_info(b, i, &y));
+        CHECK_OK(cbm_ober_shoot_info(c, i, &z));
+        CHECK(x.tip.x == y.tip.x && x.tip.y == y.tip.y && x.tip.z == y.tip.z);
+        CHECK(x.carbon == z.carbon);
+        CHECK(y.carbon <= x.carbon);
+        lower += y.carbon < x.carbon;
+        sa += x.carbon;
+        sb += y.carbon;
+    }
+    printf("shoot carbon summed over %zu shoots: leaves only %.3f, with stems %.3f; %zu lower\n", n,
+           sa, sb, lower);
+    CHECK(lower > n / 10 && sb < sa);
+    cbm_ober_destroy(a);
+    cbm_ober_destroy(b);
+    cbm_ober_destroy(c);
+    test_ctx_end(ctx);
+}
+
+/* mechanicsFeedback: the statics bends the growing tree. With very stiff wood the tree is the
+ * kinematic one (tips within 1e-4 m); green wood (8 GPa) makes it lower and its branch tips lower
+ * than with feedback off, and softer wood (4 GPa) lower still; without the option the tree is that
+ * of a run that sets it to 0 (bit for bit). */
+static double mean_tip_height(const cbm_ober_stand *s, int order_min)
+{
+    double sum = 0;
+    size_t n = 0;
+    for (size_t i = 0; i < cbm_ober_shoot_count(s); i++) {
+        cbm_ober_shoot h;
+        if (cbm_ober_shoot_info(s, i, &h) == CBM_OK && h.order >= order_min) {
+            sum += h.tip.y;
+            n++;
+        }
+    }
+    return n ? sum / (double)n : 0;
+}
+
+TEST(ober_mechanics_feedback)
+{
+    cbm_context *ctx = test_ctx();
+    const char *off[] = {"maxOrder", "2", NULL};
+    const char *off0[] = {"maxOrder", "2", "mechanicsFeedback", "0", NULL};
+    const char *stiff[] = {"maxOrder", "2", "mechanicsFeedback", "1", "mechE", "1e15", NULL};
+    const char *soft[] = {"maxOrder", "2", "mechanicsFeedback", "1", NULL}; /* 8 GPa */
+    const char *softer[] = {"maxOrder", "2", "mechanicsFeedback", "1", "mechE", "4e9", NULL};
+    cbm_ober_stand *a = grow(ctx, "ober-troll", 6, off), *a0 = grow(ctx, "ober-troll", 6, off0),
+                   *k = grow(ctx, "ober-troll", 6, stiff), *b = grow(ctx, "ober-troll", 6, soft),
+                   *c = grow(ctx, "ober-troll", 6, softer);
+    CHECK(a && a0 && k && b && c);
+    if (!(a && a0 && k && b && c)) {
+        test_ctx_end(ctx);
+        return;
+    }
+    size_t n = cbm_ober_shoot_count(a);
+    CHECK(n > 20 && cbm_ober_shoot_count(a0) == n && cbm_ober_shoot_count(k) == n);
+    double dk = 0;
+    for (size_t i = 0; i < n; i++) {
+        cbm_ober_shoot x, y, z;
+        CHECK_OK(cbm_ober_shoot_info(a, i, &x));
+        CHECK_OK(cbm_ober_shoot_info(a0, i, &y));
+        CHECK_OK(cbm_ober_shoot_info(k, i, &z));
+        CHECK(x.tip.x == y.tip.x && x.tip.y == y.tip.y && x.tip.z == y.tip.z);
+        dk = fmax(dk, sqrt((x.tip.x - z.tip.x) * (x.tip.x - z.tip.x) +
+                           (x.tip.y - z.tip.y) * (x.tip.y - z.tip.y) +
+                           (x.tip.z - z.tip.z) * (x.tip.z - z.tip.z)));
+    }
+    double ha = cbm_ober_report_of(a, 0, 6)->height, hb = cbm_ober_report_of(b, 0, 6)->height,
+           hc = cbm_ober_report_of(c, 0, 6)->height;
+    double ta = mean_tip_height(a, 1), tb = mean_tip_height(b, 1), tc = mean_tip_height(c, 1);
+    printf("stiff wood: tips within %.2e m of the kinematic tree; height %.3f / %.3f / %.3f m, "
+           "mean branch tip height %.3f / %.3f / %.3f m (off, E 8 GPa, E 4 GPa)\n",
+           dk, ha, hb, hc, ta, tb, tc);
+    CHECK(dk < 1e-4);
+    CHECK(hb < ha && hc < hb);
+    CHECK(tb < ta - 0.01 && tc < tb);
+    cbm_ober_destroy(a);
+    cbm_ober_destroy(a0);
+    cbm_ober_destroy(k);
+    cbm_ober_destroy(b);
+    cbm_ober_destroy(c);
+    test_ctx_end(ctx);
+}
+
+/* E4, carbon-balance growth (ober-carbon: lengths 60/40/25 cm x the budget carbon - carbonTax,
+ * light field): no trunk shoot exceeds l_max;0 = 60 cm (a horizontal leaf's carbon is at most 1,
+ * an unshaded one's), and the laterals made in the last year are longer on well-lit mothers than
+ * on shaded ones (mothers' carbon above and below the median). */
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+TEST(ober_e4_carbon_balance)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_ober_stand *s = grow(ctx, "ober-carbon", 10, NULL);
+    CHECK(s != NULL);
+    if (!s) {
+        test_ctx_end(ctx);
+        return;
+    }
+    size_t n = cbm_ober_shoot_count(s), trunk = 0, m = 0;
+    double lmax = 0;
+    double *c = calloc(n ? n : 1, sizeof *c), *len = calloc(n ? n : 1, sizeof *len);
+    CHECK(c && len);
+    for (size_t i = 0; c && len && i < n; i++) {
+        cbm_ober_shoot h, mo;
+        CHECK_OK(cbm_ober_shoot_info(s, i, &h));
+        if (h.order == 0) {
+            trunk++;
+            lmax = fmax(lmax, h.length);
+        }
+        if (h.age != 0 || h.order == 0 || h.parent < 0)
+            continue;
+        CHECK_OK(cbm_ober_shoot_info(s, (size_t)h.parent, &mo));
+        c[m] = mo.carbon;
+        len[m++] = h.length;
+    }
+    /* the median of the mothers' carbon, then the mean length either side of it */
+    double lo = 0, hi = 0, med = 0;
+    size_t nlo = 0, nhi = 0;
+    double *sorted = calloc(m ? m : 1, sizeof *sorted);
+    CHECK(sorted != NULL);
+    if (sorted && m > 0) {
+        memcpy(sorted, c, m * sizeof *c);
+        qsort(sorted, m, sizeof *sorted, by_value);
+        med = sorted[m / 2];
+    }
+    free(sorted);
+    for (size_t i = 0; i < m; i++) {
+        if (c[i] < med)
+            lo += len[i], nlo++;
+        else if (c[i] > med)
+            hi += len[i], nhi++;
+    }
+    lo = nlo ? lo / (double)nlo : 0;
+    hi = nhi ? hi / (double)nhi : 0;
+    printf("E4: %zu trunk shoots, longest %.4f m; %zu new laterals: mean %.4f m on mothers below "
+           "the median carbon %.3f, %.4f m above\n",
+           trunk, lmax, m, lo, med, hi);
+    CHECK(trunk >= 10 && lmax <= 0.6 + 1e-12);
+    CHECK(nlo > 20 && nhi > 20 && hi > lo * 1.2);
+    free(c);
+    free(len);
+    cbm_ober_destroy(s);
+    test_ctx_end(ctx);
+}

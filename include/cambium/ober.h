@@ -80,6 +80,13 @@ typedef struct cbm_ober_def {
     int sky;               ///< cbm_sky_kind of the light pass (0 dome, 1 field, 2 UOC, 3 SOC)
     int light_rings, light_azimuths; ///< the sky's sectors (cbm_light_def rings, azimuths)
     int light_samples;               ///< sample points per leaf side (cbm_light_def samples)
+    bool light_stems; ///< the shoots shade too, each a hexagonal prism of its radius (0: leaves)
+    /* mechanics in the growth (docs/models.md, "Mechanics"): every year each tree's statics
+     * bends its shoots, the new wood memorises the bend, and the bent tree grows on and is lit */
+    bool mech_feedback;    ///< mechanicsFeedback (0: the kinematic shape alone)
+    double mech_e;         ///< mechE, Pa: green wood's Young's modulus (8e9)
+    double mech_density;   ///< mechDensity, kg/m^3: green wood (800)
+    double mech_leaf_mass; ///< mechLeafMass, kg/m^2 of leaf (0.2)
     /* the stand */
     int stand_x, stand_y; ///< trees on a grid of stand_x by stand_y (1 x 1: one tree)
     double spacing;       ///< m between neighbouring trees of the grid

@@ -28,9 +28,14 @@
  *     opposite side, up to field_height, above which there is nothing. A ray that crosses more
  *     than MAX_WRAPS sides counts as stopped (it runs nearly level through an endless canopy).
  *
- * Work order: the leaves in Morton order of their centres (neighbours' rays one after the other
- * keep the same BVH nodes in the cache), and from each sample point all its rays as one stream
- * (rtcOccluded1M) but in the periodic stand, whose rays go segment by segment.
+ * Work order: the leaves in Morton order of their centres, in batches of up to 64 sample points
+ * (more when one leaf has more); a batch's rays go to Embree as one stream (rtcOccluded1M),
+ * source by source, so the parallel rays of neighbouring points follow one another through the
+ * same BVH nodes (1.2x fewer CPU seconds at 10^5 leaves than point by point; the same stream
+ * flagged coherent, which makes Embree trace it in packets, was 2.3x slower: the rays of a
+ * stand's sample points are too scattered for packets). Each point's light is then summed over
+ * the sources in their order, so the result is that of the ray-by-ray loop, bit for bit.
+ * The periodic stand, whose rays go segment by segment, casts ray by ray.
  *
  * The leaves are shared among threads in chunks through an atomic counter; a leaf's result
  * depends on its index, the seed and the scene alone, so it does not depend on the thread
@@ -52,11 +57,16 @@
 #define MAX_THREADS 64
 #define MAX_WRAPS   4096
 #define CHUNK       32 /* leaves per work item */
-/* a thread's scratch: one ray, one cosine and one source index per source, in blocks of 16
- * bytes (Embree's rays are 16-byte aligned; the context's allocator need not be: one block
- * more and the start rounded up) */
-#define SCRATCH(n)                                                                                 \
-    ((((n) * (sizeof(struct RTCRay) + sizeof(double) + sizeof(uint32_t))) + 15) & ~(size_t)15)
+#define BATCH       64 /* sample points per ray stream (at least one leaf's samples²) */
+/* a thread's scratch for a batch of P points (P >= the points of one leaf): P x nsrc rays (Embree's
+ * rays are 16-byte aligned; the context's allocator need not be: one block more and the start
+ * rounded up), as many ray tags and visibility flags, the cosines of up to P leaves and the
+ * points' places and weights */
+#define SCRATCH(p, n)                                                                              \
+    ((((p) * (n) * (sizeof(struct RTCRay) + sizeof(double) + sizeof(uint32_t) + 1) +               \
+       (p) * (sizeof(batch_leaf) + sizeof(batch_point))) +                                         \
+      15) &                                                                                        \
+     ~(size_t)15)
 
 typedef enum entry_mode { ENTRY_INFINITY, ENTRY_DOME, ENTRY_FIELD, ENTRY_PERIODIC } entry_mode;
 
@@ -74,7 +84,8 @@ typedef struct light_job {
     entry_mode mode;
     double x0, x1, z0, z1, top; /* field rectangle and height */
     unsigned char *scratch_mem; /* as allocated */
-    unsigned char *scratch;     /* 16-byte aligned; per thread SCRATCH(nsrc) bytes */
+    unsigned char *scratch;     /* 16-byte aligned; per thread SCRATCH(points, nsrc) bytes */
+    size_t points;              /* sample points per batch */
     atomic_size_t next;
     atomic_size_t rays;
     atomic_int thread_id;
@@ -269,111 +280,232 @@ static void set_ray(struct RTCRay *r, cbm_vec3 o, cbm_vec3 d, double tfar)
     r->flags = 0;
 }
 
-/* The light a point x of a leaf of normal n receives: with one segment per ray (all but the
- * periodic stand), the point's rays go to Embree as one stream (rtcOccluded1M), which is
- * faster than ray by ray; the result is the same. */
+/* The light a point x of a leaf of normal n receives in the periodic stand, ray by ray (a ray
+ * there is a chain of segments, tile by tile). */
 static double point_light(const light_job *j, cbm_vec3 x, cbm_vec3 n, const double *cosk,
-                          struct RTCRay *rs, uint32_t *idx, size_t *rays)
+                          size_t *rays)
 {
     double acc = 0.0;
-    if (j->mode == ENTRY_PERIODIC) {
-        for (size_t k = 0; k < j->nsrc; k++) {
-            double cs = cosk[k];
-            if (cs == 0.0)
-                continue;
-            cbm_vec3 o = v3_madd(x, n, cs > 0 ? j->eps : -j->eps);
-            if (lit_periodic(j, o, j->src[k].dir, rays))
-                acc += j->src[k].irradiance * fabs(cs);
-        }
-        return acc;
-    }
-    unsigned m = 0;
     for (size_t k = 0; k < j->nsrc; k++) {
         double cs = cosk[k];
         if (cs == 0.0)
             continue;
-        cbm_vec3 o = v3_madd(x, n, cs > 0 ? j->eps : -j->eps), d = j->src[k].dir;
-        double tfar = INFINITY;
-        if (j->mode == ENTRY_DOME) {
-            cbm_vec3 r = v3_sub(o, j->def->focus);
-            if (v3_norm(v3_madd(r, d, -v3_dot(r, d))) > j->def->dome_radius)
-                continue;
-        } else if (j->mode == ENTRY_FIELD) {
-            if (o.y >= j->top)
-                continue;
-            tfar = (j->top - o.y) / d.y;
-            double qx = o.x + tfar * d.x, qz = o.z + tfar * d.z;
-            if (qx < j->x0 || qx > j->x1 || qz < j->z0 || qz > j->z1)
-                continue;
-        }
-        set_ray(&rs[m], o, d, tfar);
-        idx[m++] = (uint32_t)k;
+        cbm_vec3 o = v3_madd(x, n, cs > 0 ? j->eps : -j->eps);
+        if (lit_periodic(j, o, j->src[k].dir, rays))
+            acc += j->src[k].irradiance * fabs(cs);
     }
-    if (m == 0)
-        return 0.0;
-    struct RTCIntersectContext ic;
-    rtcInitIntersectContext(&ic);
-    rtcOccluded1M(j->rs, &ic, rs, m, sizeof *rs);
-    *rays += m;
-    for (unsigned q = 0; q < m; q++)
-        if (!(rs[q].tfar < 0.0f))
-            acc += j->src[idx[q]].irradiance * fabs(cosk[idx[q]]);
     return acc;
 }
 
-/* light of one leaf in the sky's units */
-static double leaf_light(const light_job *j, size_t i, double *cosk, struct RTCRay *rs,
-                         uint32_t *idx, size_t *rays)
+/* A leaf's normal, one-sided area and the cosines c_k of its face with every source (cosk);
+ * false when it gets no light at all (no area, or no source on a face that takes light). */
+static bool leaf_setup(const light_job *j, size_t i, double *cosk, cbm_vec3 *n, double *area)
 {
     const cbm_light_leaf *lf = &j->leaves[i];
     cbm_vec3 c = v3_cross(v3_sub(lf->p[2], lf->p[0]), v3_sub(lf->p[3], lf->p[1]));
     double len = v3_norm(c);
     if (!(len > 0))
-        return 0.0;
-    cbm_vec3 n = v3_scale(c, 1.0 / len);
-    double area = 0.5 * len;
+        return false;
+    *n = v3_scale(c, 1.0 / len);
+    *area = 0.5 * len;
     bool any = false;
     for (size_t k = 0; k < j->nsrc; k++) {
-        double cs = v3_dot(n, j->src[k].dir);
+        double cs = v3_dot(*n, j->src[k].dir);
         cosk[k] = j->def->two_sided ? cs : fmax(0.0, cs);
         any |= cosk[k] != 0.0;
     }
-    if (!any)
-        return 0.0;
+    return any;
+}
+
+/* Sample point (a, b) of leaf i: its place and Jacobian (the point is skipped when jac <= 0). */
+static cbm_vec3 leaf_point(const light_job *j, size_t i, int a, int b, double *jac)
+{
     int m = j->def->samples;
     uint64_t base = (j->def->seed * 0x9e3779b97f4a7c15ull) ^ ((uint64_t)i * 0x2545f4914f6cdd1dull);
+    uint64_t h = base + 2u * (uint64_t)(a * m + b);
+    double u = (a + hash01(h)) / m, v = (b + hash01(h + 1u)) / m;
+    cbm_vec3 xu, xv;
+    cbm_vec3 x = bilinear(j->leaves[i].p, u, v, &xu, &xv);
+    *jac = v3_norm(v3_cross(xu, xv));
+    return x;
+}
+
+/* light of one leaf in the sky's units, ray by ray (the periodic stand) */
+static double leaf_light(const light_job *j, size_t i, double *cosk, size_t *rays)
+{
+    cbm_vec3 n;
+    double area;
+    if (!leaf_setup(j, i, cosk, &n, &area))
+        return 0.0;
+    int m = j->def->samples;
     double total = 0.0, wsum = 0.0;
     for (int a = 0; a < m; a++)
         for (int b = 0; b < m; b++) {
-            uint64_t h = base + 2u * (uint64_t)(a * m + b);
-            double u = (a + hash01(h)) / m, v = (b + hash01(h + 1u)) / m;
-            cbm_vec3 xu, xv;
-            cbm_vec3 x = bilinear(lf->p, u, v, &xu, &xv);
-            double jac = v3_norm(v3_cross(xu, xv));
+            double jac;
+            cbm_vec3 x = leaf_point(j, i, a, b, &jac);
             if (!(jac > 0))
                 continue;
-            total += jac * point_light(j, x, n, cosk, rs, idx, rays);
+            total += jac * point_light(j, x, n, cosk, rays);
             wsum += jac;
         }
     return wsum > 0 ? area * total / wsum : 0.0;
 }
 
+/* ---- batches: the rays of many points, source by source, as one coherent stream ---- */
+
+typedef struct batch_leaf {
+    cbm_vec3 n;
+    double area;
+    uint32_t index, first, count; /* the leaf, its first point in the batch and their number */
+} batch_leaf;
+
+typedef struct batch_point {
+    cbm_vec3 x;
+    double jac;
+    uint32_t leaf; /* its slot in the batch */
+} batch_point;
+
+/* a thread's scratch, carved from SCRATCH(points, nsrc) bytes (16-byte aligned) */
+typedef struct scratch {
+    struct RTCRay *rays; /* points x nsrc */
+    double *cosk;        /* leaves x nsrc (a batch holds at most `points` leaves) */
+    batch_leaf *leaf;
+    batch_point *pt;
+    uint32_t *tag; /* ray q is point tag / nsrc towards source tag % nsrc */
+    uint8_t *vis;  /* points x nsrc: the ray reached the sky */
+} scratch;
+
+static scratch scratch_of(const light_job *j, unsigned char *mem)
+{
+    size_t p = j->points, n = j->nsrc;
+    scratch w;
+    w.rays = (struct RTCRay *)(void *)mem;
+    mem += p * n * sizeof *w.rays;
+    w.cosk = (double *)(void *)mem;
+    mem += p * n * sizeof *w.cosk;
+    w.leaf = (batch_leaf *)(void *)mem;
+    mem += p * sizeof *w.leaf;
+    w.pt = (batch_point *)(void *)mem;
+    mem += p * sizeof *w.pt;
+    w.tag = (uint32_t *)(void *)mem;
+    mem += p * n * sizeof *w.tag;
+    w.vis = mem;
+    return w;
+}
+
+/* Casts the rays of the batch's points (the sources outside, the points inside: neighbouring
+ * points' parallel rays one after the other, through the same BVH nodes), then sums each point's
+ * light over the sources in their order, as point_light does, so the results are those of the
+ * ray-by-ray loop. */
+static void flush_batch(const light_job *j, scratch *w, size_t nl, size_t np, size_t *rays)
+{
+    size_t ns = j->nsrc;
+    unsigned m = 0;
+    for (size_t k = 0; k < ns; k++) {
+        cbm_vec3 d = j->src[k].dir;
+        for (size_t p = 0; p < np; p++) {
+            const batch_point *q = &w->pt[p];
+            double cs = w->cosk[q->leaf * ns + k];
+            if (cs == 0.0)
+                continue;
+            cbm_vec3 o = v3_madd(q->x, w->leaf[q->leaf].n, cs > 0 ? j->eps : -j->eps);
+            double tfar = INFINITY;
+            if (j->mode == ENTRY_DOME) {
+                cbm_vec3 r = v3_sub(o, j->def->focus);
+                if (v3_norm(v3_madd(r, d, -v3_dot(r, d))) > j->def->dome_radius)
+                    continue;
+            } else if (j->mode == ENTRY_FIELD) {
+                if (o.y >= j->top)
+                    continue;
+                tfar = (j->top - o.y) / d.y;
+                double qx = o.x + tfar * d.x, qz = o.z + tfar * d.z;
+                if (qx < j->x0 || qx > j->x1 || qz < j->z0 || qz > j->z1)
+                    continue;
+            }
+            set_ray(&w->rays[m], o, d, tfar);
+            w->tag[m++] = (uint32_t)(p * ns + k);
+        }
+    }
+    memset(w->vis, 0, np * ns);
+    if (m > 0) {
+        struct RTCIntersectContext ic;
+        rtcInitIntersectContext(&ic);
+        rtcOccluded1M(j->rs, &ic, w->rays, m, sizeof *w->rays);
+        *rays += m;
+        for (unsigned q = 0; q < m; q++)
+            w->vis[w->tag[q]] = !(w->rays[q].tfar < 0.0f);
+    }
+    for (size_t t = 0; t < nl; t++) {
+        const batch_leaf *lf = &w->leaf[t];
+        const double *ck = w->cosk + t * ns;
+        double total = 0.0, wsum = 0.0;
+        for (uint32_t p = lf->first; p < lf->first + lf->count; p++) {
+            const uint8_t *v = w->vis + (size_t)p * ns;
+            double acc = 0.0;
+            for (size_t k = 0; k < ns; k++)
+                if (v[k])
+                    acc += j->src[k].irradiance * fabs(ck[k]);
+            total += w->pt[p].jac * acc;
+            wsum += w->pt[p].jac;
+        }
+        j->absorbed[lf->index] = (wsum > 0 ? lf->area * total / wsum : 0.0) * j->scale;
+    }
+}
+
+/* The leaves order[first..last) in batches of at most j->points sample points. */
+static void run_batches(const light_job *j, scratch *w, size_t first, size_t last, size_t *rays)
+{
+    int m = j->def->samples;
+    size_t per = (size_t)m * (size_t)m, nl = 0, np = 0;
+    for (size_t q = first; q < last; q++) {
+        if (np + per > j->points) {
+            flush_batch(j, w, nl, np, rays);
+            nl = np = 0;
+        }
+        size_t i = j->order[q];
+        batch_leaf *lf = &w->leaf[nl];
+        if (!leaf_setup(j, i, w->cosk + nl * j->nsrc, &lf->n, &lf->area)) {
+            j->absorbed[i] = 0.0 * j->scale;
+            continue;
+        }
+        lf->index = (uint32_t)i;
+        lf->first = (uint32_t)np;
+        for (int a = 0; a < m; a++)
+            for (int b = 0; b < m; b++) {
+                double jac;
+                cbm_vec3 x = leaf_point(j, i, a, b, &jac);
+                if (!(jac > 0))
+                    continue;
+                w->pt[np].x = x;
+                w->pt[np].jac = jac;
+                w->pt[np++].leaf = (uint32_t)nl;
+            }
+        lf->count = (uint32_t)np - lf->first;
+        nl++;
+    }
+    if (nl > 0)
+        flush_batch(j, w, nl, np, rays);
+}
+
 static void *work(void *arg)
 {
     light_job *j = arg;
-    unsigned char *mem = j->scratch + (size_t)atomic_fetch_add(&j->thread_id, 1) * SCRATCH(j->nsrc);
-    struct RTCRay *rs = (struct RTCRay *)(void *)mem;
-    double *ck = (double *)(void *)(mem + j->nsrc * sizeof *rs);
-    uint32_t *idx = (uint32_t *)(void *)(mem + j->nsrc * (sizeof *rs + sizeof *ck));
+    unsigned char *mem =
+        j->scratch + (size_t)atomic_fetch_add(&j->thread_id, 1) * SCRATCH(j->points, j->nsrc);
+    scratch w = scratch_of(j, mem);
     size_t rays = 0;
     for (;;) {
         size_t first = atomic_fetch_add(&j->next, CHUNK);
         if (first >= j->n)
             break;
         size_t last = first + CHUNK < j->n ? first + CHUNK : j->n;
+        if (j->mode != ENTRY_PERIODIC) {
+            run_batches(j, &w, first, last, &rays);
+            continue;
+        }
         for (size_t q = first; q < last; q++) {
             size_t i = j->order[q];
-            j->absorbed[i] = leaf_light(j, i, ck, rs, idx, &rays) * j->scale;
+            j->absorbed[i] = leaf_light(j, i, w.cosk, &rays) * j->scale;
         }
     }
     atomic_fetch_add(&j->rays, rays);
@@ -682,7 +814,10 @@ cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
             st = CBM_E_NOMEM;
             goto done;
         }
-        j.scratch_mem = cbm__calloc(ctx, (size_t)nthreads * SCRATCH(nsrc) + 16, 1);
+        j.points = (size_t)dd.samples * (size_t)dd.samples;
+        if (j.points < BATCH)
+            j.points = BATCH;
+        j.scratch_mem = cbm__calloc(ctx, (size_t)nthreads * SCRATCH(j.points, nsrc) + 16, 1);
         j.scratch = j.scratch_mem + ((16 - (uintptr_t)j.scratch_mem % 16) % 16);
         if (!j.scratch_mem) {
             st = CBM_E_NOMEM;
@@ -717,7 +852,7 @@ done:
     if (dev)
         rtcReleaseDevice(dev);
     cbm__free(ctx, src, nsrc * sizeof *src);
-    cbm__free(ctx, j.scratch_mem, (size_t)nthreads * SCRATCH(nsrc) + 16);
+    cbm__free(ctx, j.scratch_mem, (size_t)nthreads * SCRATCH(j.points, nsrc) + 16);
     cbm__free(ctx, order, (n_leaves ? n_leaves : 1) * sizeof *order);
     if (st != CBM_OK) {
         for (size_t i = 0; i < n_leaves; i++)

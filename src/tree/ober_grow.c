@@ -264,14 +264,15 @@ static double leaf_carbon_of(const cbm_ober_stand *s, const ober_shoot *h, doubl
     return n ? acc / n : 0.0;
 }
 
-/* Tree-level aggregates over the tree's living shoots [0, n0). */
-static void aggregates(cbm_ober_stand *s, size_t ti, size_t n0)
+/* Tree-level aggregates over the tree's living shoots of the start of the year (own[0..n), in
+ * increasing index). */
+static void aggregates(cbm_ober_stand *s, size_t ti, const int32_t *own, size_t n)
 {
     ober_tree *t = &s->trees.data[ti];
     double wood = 0, trunk = 0, leaves = 0, active = 0, csum = 0, top = 0;
-    for (size_t i = 0; i < n0; i++) {
-        ober_shoot *h = &s->shoots.data[i];
-        if (h->tree != (int32_t)ti || !h->alive)
+    for (size_t q = 0; q < n; q++) {
+        ober_shoot *h = &s->shoots.data[own[q]];
+        if (!h->alive)
             continue;
         double v = CBM_PI * h->radius * h->radius * h->len;
         wood += v;
@@ -297,7 +298,7 @@ static void aggregates(cbm_ober_stand *s, size_t ti, size_t n0)
 }
 
 /* Turtle interpretation: positions and frames of every shoot (parents come first). */
-static void geometry(cbm_ober_stand *s)
+void cbm__ober_geometry(cbm_ober_stand *s)
 {
     const cbm_vec3 up = v3(0, 1, 0), g = v3(0, -1, 0);
     for (size_t i = 0; i < s->shoots.len; i++) {
@@ -330,6 +331,16 @@ static void geometry(cbm_ober_stand *s)
                 L = rot(L, a, ang);
                 U = rot(U, a, ang);
             }
+        }
+        /* the bend of the statics (mechanicsFeedback), in the shoot's own frame */
+        cbm_vec3 w = v3_add(h->bend_mem, h->bend_el);
+        double wn = v3_norm(w);
+        if (wn > 0) {
+            cbm_vec3 a = v3_scale(
+                v3_add(v3_add(v3_scale(H, w.x), v3_scale(L, w.y)), v3_scale(U, w.z)), 1.0 / wn);
+            H = rot(H, a, wn);
+            L = rot(L, a, wn);
+            U = rot(U, a, wn);
         }
         h->H = v3_normalize(H), h->L = v3_normalize(L), h->U = v3_normalize(U);
         h->base = base;
@@ -369,19 +380,23 @@ static cbm_status compact(cbm_ober_stand *s)
     return CBM_OK;
 }
 
-static void report(cbm_ober_stand *s, size_t ti)
+/* The year's report of every tree, in one pass over the shoots (in index order, so that each
+ * tree's sums are taken in the order of its shoots). */
+static void reports(cbm_ober_stand *s)
 {
-    ober_tree *t = &s->trees.data[ti];
-    cbm_ober_report *r = &t->cur;
-    r->year = s->year;
-    r->age = t->age;
-    r->leaves = r->shoots = 0;
-    memset(r->shoots_order, 0, sizeof r->shoots_order);
-    r->wood_volume = r->trunk_volume = r->height = r->base_diameter = 0;
+    for (size_t ti = 0; ti < s->trees.len; ti++) {
+        ober_tree *t = &s->trees.data[ti];
+        cbm_ober_report *r = &t->cur;
+        r->year = s->year;
+        r->age = t->age;
+        r->leaves = r->shoots = 0;
+        memset(r->shoots_order, 0, sizeof r->shoots_order);
+        r->wood_volume = r->trunk_volume = r->height = r->base_diameter = 0;
+    }
     for (size_t i = 0; i < s->shoots.len; i++) {
         const ober_shoot *h = &s->shoots.data[i];
-        if (h->tree != (int32_t)ti)
-            continue;
+        ober_tree *t = &s->trees.data[h->tree];
+        cbm_ober_report *r = &t->cur;
         r->leaves += (size_t)h->leaves;
         r->shoots++;
         r->shoots_order[h->order < 3 ? h->order : 3]++;
@@ -393,18 +408,22 @@ static void report(cbm_ober_stand *s, size_t ti)
         if (h->parent < 0 && r->base_diameter == 0)
             r->base_diameter = 2 * h->radius * 0.01;
     }
-    r->carbon_tax = t->carbon_tax;
-    r->carbon_mean = t->carbon_mean;
-    r->base_length = t->base_length;
-    r->light_rays = s->light_rays;
-    r->light_seconds = s->light_seconds;
+    for (size_t ti = 0; ti < s->trees.len; ti++) {
+        ober_tree *t = &s->trees.data[ti];
+        cbm_ober_report *r = &t->cur;
+        r->carbon_tax = t->carbon_tax;
+        r->carbon_mean = t->carbon_mean;
+        r->base_length = t->base_length;
+        r->light_rays = s->light_rays;
+        r->light_seconds = s->light_seconds;
+    }
 }
 
-static cbm_status tree_level(cbm_ober_stand *s, size_t ti, size_t n0)
+static cbm_status tree_level(cbm_ober_stand *s, size_t ti, const int32_t *own, size_t n)
 {
     ober_tree *t = &s->trees.data[ti];
     cbm_status st = CBM_OK;
-    aggregates(s, ti, n0);
+    aggregates(s, ti, own, n);
     fill_tree(s, t, ti);
     t->base_length = cbm__ober_eval(&s->prog, F_BASE_LENGTH, &st);
     s->prog.vars[V_BASE_LENGTH] = t->base_length;
@@ -416,7 +435,7 @@ static cbm_status germinate(cbm_ober_stand *s, size_t ti)
 {
     ober_tree *t = &s->trees.data[ti];
     t->age = 1;
-    CBM_TRY(tree_level(s, ti, 0));
+    CBM_TRY(tree_level(s, ti, NULL, 0));
     /* the seed acts as a virtual apical bud of order 0 on a shoot of length 0 */
     ober_shoot none;
     memset(&none, 0, sizeof none);
@@ -443,109 +462,186 @@ static cbm_status germinate(cbm_ober_stand *s, size_t ti)
     return add_shoot(s, &n);
 }
 
+/* The shoots of every tree at the start of the year: own[first[t] .. first[t + 1]) are tree t's
+ * indices below n0, increasing (a counting sort), so that each tree's steps visit its own shoots
+ * rather than all the stand's. */
+typedef struct tree_lists {
+    size_t *first; /* trees + 1 */
+    int32_t *own;  /* n0 */
+    size_t trees, n0;
+} tree_lists;
+
+static cbm_status lists_make(cbm_ober_stand *s, size_t n0, tree_lists *l)
+{
+    l->trees = s->trees.len;
+    l->n0 = n0;
+    l->first = cbm__calloc(s->ctx, l->trees + 1, sizeof *l->first);
+    l->own = cbm__calloc(s->ctx, n0 ? n0 : 1, sizeof *l->own);
+    if (!l->first || !l->own)
+        return CBM_E_NOMEM;
+    for (size_t i = 0; i < n0; i++)
+        l->first[s->shoots.data[i].tree + 1]++;
+    for (size_t t = 0; t < l->trees; t++)
+        l->first[t + 1] += l->first[t];
+    for (size_t i = n0; i-- > 0;) { /* from the end of each tree's run, backwards */
+        int32_t t = s->shoots.data[i].tree;
+        l->own[--l->first[t + 1]] = (int32_t)i;
+    }
+    /* first[t + 1] now holds tree t's start */
+    for (size_t t = 0; t < l->trees; t++)
+        l->first[t] = l->first[t + 1];
+    l->first[l->trees] = n0;
+    return CBM_OK;
+}
+
+static void lists_free(cbm_ober_stand *s, tree_lists *l)
+{
+    cbm__free(s->ctx, l->first, (l->trees + 1) * sizeof *l->first);
+    cbm__free(s->ctx, l->own, (l->n0 ? l->n0 : 1) * sizeof *l->own);
+}
+
+/* Mortality rule 1: shoot i, bare and without children, dies (and leaves its mother one child
+ * fewer). */
+static void prune(cbm_ober_stand *s, ober_tree *t, size_t i)
+{
+    ober_shoot *h = &s->shoots.data[i];
+    if (!h->alive || h->leaves > 0 || h->children > 0)
+        return;
+    h->alive = 0;
+    t->cur.removed++;
+    if (h->parent >= 0)
+        s->shoots.data[h->parent].children--;
+}
+
+/* One tree's year (its age already counted): tree level, shoot level, pipe model, bending,
+ * proventitious shoots, leaf death and pruning. own[0..n) are its shoots of the start of the year
+ * (increasing); the shoots it makes are appended to the stand from index `from` on. */
+static cbm_status tree_year(cbm_ober_stand *s, size_t ti, const int32_t *own, size_t n)
+{
+    const cbm_ober_def *d = &s->def;
+    ober_tree *t = &s->trees.data[ti];
+    size_t from = s->shoots.len;
+    for (size_t q = 0; q < n; q++)
+        s->shoots.data[own[q]].age++;
+    CBM_TRY(tree_level(s, ti, own, n));
+    /* shoot level: last year's shoots sprout */
+    for (size_t q = 0; q < n; q++) {
+        ober_shoot *h = &s->shoots.data[own[q]];
+        if (!h->alive || !h->fresh)
+            continue;
+        h->fresh = 0;
+        cbm_status st = CBM_OK;
+        fill_tree(s, t, ti);
+        fill_shoot(s, h);
+        bool sprout = cbm__ober_eval(&s->prog, F_SPROUTING, &st) != 0;
+        CBM_TRY(st);
+        int32_t fb = h->first_bud, nb = h->nbuds;
+        h->sprouted = sprout;
+        for (int32_t k = 0; k < nb; k++) {
+            ober_bud *b = &s->buds.data[fb + k];
+            if (b->used || b->sleep || b->none)
+                continue;
+            if (sprout)
+                CBM_TRY(grow_bud(s, ti, fb + k, false));
+            else
+                b->used = 1; /* a bud that misses its year dies */
+        }
+    }
+    /* pipe model: leaves supported, basipetally (the new shoots, all above `from`, first) */
+    for (size_t q = 0; q < n; q++) {
+        ober_shoot *h = &s->shoots.data[own[q]];
+        h->supported = d->pipe_all_leaves ? h->leaves : 0;
+    }
+    for (size_t i = from; i < s->shoots.len; i++) {
+        ober_shoot *h = &s->shoots.data[i];
+        h->supported = d->pipe_all_leaves ? h->leaves : h->leaves_made;
+    }
+    for (size_t i = s->shoots.len; i-- > from;) {
+        ober_shoot *h = &s->shoots.data[i];
+        if (h->alive && h->parent >= 0)
+            s->shoots.data[h->parent].supported += h->supported;
+    }
+    for (size_t q = n; q-- > 0;) {
+        ober_shoot *h = &s->shoots.data[own[q]];
+        if (h->alive && h->parent >= 0)
+            s->shoots.data[h->parent].supported += h->supported;
+    }
+    for (size_t q = 0; q < n; q++) {
+        int32_t i = own[q];
+        ober_shoot *h = &s->shoots.data[i];
+        if (!h->alive)
+            continue;
+        h->radius = sqrt(h->supported * d->pipe_size * d->pipe_size + h->radius * h->radius);
+        /* bending: the joint's strength grows by bendingLambda each year */
+        cbm_status st = CBM_OK;
+        fill_tree(s, t, ti);
+        fill_shoot(s, h);
+        h->tropism += cbm__ober_eval(&s->prog, F_BENDING, &st);
+        CBM_TRY(st);
+        /* proventitious shoots from sleeping buds */
+        int32_t fb = h->first_bud, nb = h->nbuds;
+        for (int32_t k = 0; k < nb; k++) {
+            ober_bud *b = &s->buds.data[fb + k];
+            if (!b->sleep || b->used || b->none)
+                continue;
+            fill_tree(s, t, ti);
+            fill_bud(s, b, &s->shoots.data[i]);
+            bool wake = cbm__ober_eval(&s->prog, F_PROVENTITIOUS, &st) != 0;
+            CBM_TRY(st);
+            if (wake)
+                CBM_TRY(grow_bud(s, ti, fb + k, true));
+        }
+    }
+    /* leaf death, then pruning of bare shoots without children (children first) */
+    for (size_t q = 0; q < n; q++) {
+        ober_shoot *h = &s->shoots.data[own[q]];
+        if (h->age >= d->leaf_die_age)
+            h->leaves = 0;
+    }
+    for (size_t i = from; i < s->shoots.len; i++) {
+        ober_shoot *h = &s->shoots.data[i];
+        if (h->age >= d->leaf_die_age)
+            h->leaves = 0;
+    }
+    for (size_t i = s->shoots.len; i-- > from;)
+        prune(s, t, i);
+    for (size_t q = n; q-- > 0;)
+        prune(s, t, (size_t)own[q]);
+    return CBM_OK;
+}
+
 cbm_status cbm_ober_year(cbm_ober_stand *s)
 {
     if (!s)
         return CBM_E_INVALID;
-    const cbm_ober_def *d = &s->def;
     s->year++;
     CBM_TRY(cbm__ober_light(s));
     size_t n0 = s->shoots.len;
-    for (size_t ti = 0; ti < s->trees.len; ti++) {
+    tree_lists l;
+    memset(&l, 0, sizeof l);
+    cbm_status st = lists_make(s, n0, &l);
+    for (size_t ti = 0; ti < s->trees.len && st == CBM_OK; ti++) {
         ober_tree *t = &s->trees.data[ti];
         memset(&t->cur, 0, sizeof t->cur);
         if (t->age == 0) {
             if (t->timer > 0)
                 t->timer--;
             else
-                CBM_TRY(germinate(s, ti));
+                st = germinate(s, ti);
             continue;
         }
         t->age++;
-        for (size_t i = 0; i < n0; i++)
-            if (s->shoots.data[i].tree == (int32_t)ti)
-                s->shoots.data[i].age++;
-        CBM_TRY(tree_level(s, ti, n0));
-        /* shoot level: last year's shoots sprout */
-        for (size_t i = 0; i < n0; i++) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree != (int32_t)ti || !h->alive || !h->fresh)
-                continue;
-            h->fresh = 0;
-            cbm_status st = CBM_OK;
-            fill_tree(s, t, ti);
-            fill_shoot(s, h);
-            bool sprout = cbm__ober_eval(&s->prog, F_SPROUTING, &st) != 0;
-            CBM_TRY(st);
-            int32_t fb = h->first_bud, nb = h->nbuds;
-            h->sprouted = sprout;
-            for (int32_t k = 0; k < nb; k++) {
-                ober_bud *b = &s->buds.data[fb + k];
-                if (b->used || b->sleep || b->none)
-                    continue;
-                if (sprout)
-                    CBM_TRY(grow_bud(s, ti, fb + k, false));
-                else
-                    b->used = 1; /* a bud that misses its year dies */
-            }
-        }
-        /* pipe model: leaves supported, basipetally */
-        for (size_t i = 0; i < s->shoots.len; i++) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree == (int32_t)ti)
-                h->supported = d->pipe_all_leaves ? h->leaves : i >= n0 ? h->leaves_made : 0;
-        }
-        for (size_t i = s->shoots.len; i-- > 0;) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree == (int32_t)ti && h->alive && h->parent >= 0)
-                s->shoots.data[h->parent].supported += h->supported;
-        }
-        for (size_t i = 0; i < n0; i++) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree != (int32_t)ti || !h->alive)
-                continue;
-            h->radius = sqrt(h->supported * d->pipe_size * d->pipe_size + h->radius * h->radius);
-            /* bending: the joint's strength grows by bendingLambda each year */
-            cbm_status st = CBM_OK;
-            fill_tree(s, t, ti);
-            fill_shoot(s, h);
-            h->tropism += cbm__ober_eval(&s->prog, F_BENDING, &st);
-            CBM_TRY(st);
-            /* proventitious shoots from sleeping buds */
-            int32_t fb = h->first_bud, nb = h->nbuds;
-            for (int32_t k = 0; k < nb; k++) {
-                ober_bud *b = &s->buds.data[fb + k];
-                if (!b->sleep || b->used || b->none)
-                    continue;
-                fill_tree(s, t, ti);
-                fill_bud(s, b, &s->shoots.data[i]);
-                bool wake = cbm__ober_eval(&s->prog, F_PROVENTITIOUS, &st) != 0;
-                CBM_TRY(st);
-                if (wake)
-                    CBM_TRY(grow_bud(s, ti, fb + k, true));
-            }
-        }
-        /* leaf death, then pruning of bare shoots without children */
-        for (size_t i = 0; i < s->shoots.len; i++) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree == (int32_t)ti && h->age >= d->leaf_die_age)
-                h->leaves = 0;
-        }
-        for (size_t i = s->shoots.len; i-- > 0;) {
-            ober_shoot *h = &s->shoots.data[i];
-            if (h->tree != (int32_t)ti || !h->alive || h->leaves > 0 || h->children > 0)
-                continue;
-            h->alive = 0;
-            t->cur.removed++;
-            if (h->parent >= 0)
-                s->shoots.data[h->parent].children--;
-        }
+        st = tree_year(s, ti, l.own + l.first[ti], l.first[ti + 1] - l.first[ti]);
     }
+    lists_free(s, &l);
+    CBM_TRY(st);
     CBM_TRY(compact(s));
-    geometry(s);
+    cbm__ober_geometry(s);
+    if (s->def.mech_feedback)
+        CBM_TRY(cbm__ober_feedback(s));
+    reports(s);
     for (size_t ti = 0; ti < s->trees.len; ti++) {
         ober_tree *t = &s->trees.data[ti];
-        report(s, ti);
         CBM_TRY(CBM_ARRAY_PUSH(s->ctx, t->years, t->cur));
     }
     return CBM_OK;

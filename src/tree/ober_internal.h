@@ -103,6 +103,11 @@ typedef struct ober_shoot {
     uint8_t lateral, short_shoot, proventitious, fresh, alive, sprouted;
     /* geometry, recomputed every year (cm, local frame) */
     cbm_vec3 base, tip, H, L, U;
+    /* mechanics feedback (ober_mech.c): rotation vectors (rad) in the shoot's own (H, L, U) after
+     * the joint, the bend its wood memorised and this year's elastic bend on top; the radius
+     * (cm) when it last memorised */
+    cbm_vec3 bend_mem, bend_el;
+    double radius_mem;
 } ober_shoot;
 
 typedef struct ober_tree {
@@ -133,5 +138,9 @@ struct cbm_ober_stand {
 bool cbm__ober_leaf_quad(const cbm_ober_stand *s, size_t b, cbm_vec3 q[4]);
 /* ober_light.c: the leaves' carbon from the light pass (or 1 each without light). */
 cbm_status cbm__ober_light(cbm_ober_stand *s);
+/* ober_grow.c: positions and frames of every shoot from the graph (turtle interpretation). */
+void cbm__ober_geometry(cbm_ober_stand *s);
+/* ober_mech.c: the statics of every tree bends its shoots (mechanicsFeedback). */
+cbm_status cbm__ober_feedback(cbm_ober_stand *s);
 
 #endif

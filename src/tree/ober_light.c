@@ -9,6 +9,33 @@
 #include "cambium/light.h"
 #include "core/vecmath.h"
 
+#define PRISM 6 /* sides of a shoot's prism: 2 triangles each */
+
+/* The prisms of every shoot (m, 3 vertices per triangle) into occ[PRISM * 2 * 3 * shoots]. */
+static size_t stem_triangles(const cbm_ober_stand *s, cbm_vec3 *occ)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < s->shoots.len; i++) {
+        const ober_shoot *h = &s->shoots.data[i];
+        double R = CBM_PI * h->radius / 3.0;
+        if (!(h->len > 0 && R > 0))
+            continue;
+        cbm_vec3 ring[2][PRISM];
+        for (int k = 0; k < PRISM; k++) {
+            double a = 2.0 * CBM_PI * k / PRISM;
+            cbm_vec3 off = v3_add(v3_scale(h->L, R * cos(a)), v3_scale(h->U, R * sin(a)));
+            ring[0][k] = v3_scale(v3_add(h->base, off), 0.01);
+            ring[1][k] = v3_scale(v3_add(h->tip, off), 0.01);
+        }
+        for (int k = 0; k < PRISM; k++) {
+            int k1 = (k + 1) % PRISM;
+            occ[m++] = ring[0][k], occ[m++] = ring[0][k1], occ[m++] = ring[1][k1];
+            occ[m++] = ring[0][k], occ[m++] = ring[1][k1], occ[m++] = ring[1][k];
+        }
+    }
+    return m / 3;
+}
+
 cbm_status cbm__ober_light(cbm_ober_stand *s)
 {
     CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->leaf_carbon, s->buds.len));
@@ -29,7 +56,11 @@ cbm_status cbm__ober_light(cbm_ober_stand *s)
     cbm_light_leaf *leaves = cbm__calloc(s->ctx, n, sizeof *leaves);
     double *absorbed = cbm__calloc(s->ctx, n, sizeof *absorbed);
     size_t *which = cbm__calloc(s->ctx, n, sizeof *which);
-    cbm_status st = leaves && absorbed && which ? CBM_OK : CBM_E_NOMEM;
+    size_t nocc = s->def.light_stems ? (size_t)PRISM * 2 * 3 * s->shoots.len : 0, ntri = 0;
+    cbm_vec3 *occ = nocc ? cbm__calloc(s->ctx, nocc, sizeof *occ) : NULL;
+    cbm_status st = leaves && absorbed && which && (occ || !nocc) ? CBM_OK : CBM_E_NOMEM;
+    if (st == CBM_OK && occ)
+        ntri = stem_triangles(s, occ);
     size_t k = 0;
     for (size_t b = 0; b < s->buds.len && st == CBM_OK; b++) {
         if (!cbm__ober_leaf_quad(s, b, leaves[k].p))
@@ -45,7 +76,7 @@ cbm_status cbm__ober_light(cbm_ober_stand *s)
         ld.samples = s->def.light_samples;
         ld.seed = s->def.seed + (uint64_t)s->year;
         cbm_light_stats stats;
-        st = cbm_light_intercept(s->ctx, &ld, leaves, n, NULL, 0, absorbed, &stats);
+        st = cbm_light_intercept(s->ctx, &ld, leaves, n, occ, ntri, absorbed, &stats);
         if (st == CBM_OK) {
             s->light_rays = stats.rays;
             s->light_seconds = stats.seconds;
@@ -57,5 +88,6 @@ cbm_status cbm__ober_light(cbm_ober_stand *s)
     cbm__free(s->ctx, leaves, n * sizeof *leaves);
     cbm__free(s->ctx, absorbed, n * sizeof *absorbed);
     cbm__free(s->ctx, which, n * sizeof *which);
+    cbm__free(s->ctx, occ, nocc * sizeof *occ);
     return st;
 }

@@ -73,6 +73,9 @@ cbm_ober_def cbm_ober_def_default(void)
     d.light_rings = 4;
     d.light_azimuths = 8;
     d.light_samples = 1;
+    d.mech_e = 8e9; /* as cbm_ober_mech_def_default() */
+    d.mech_density = 800;
+    d.mech_leaf_mass = 0.2;
     d.stand_x = d.stand_y = 1;
     d.spacing = 3;
     return d;
@@ -130,6 +133,11 @@ static const param PARAMS[] = {
     {"lightRings", K_INT, O(light_rings), 0, 1, 32},
     {"lightAzimuths", K_INT, O(light_azimuths), 0, 1, 64},
     {"lightSamples", K_INT, O(light_samples), 0, 1, 16},
+    {"lightStems", K_BOOL, O(light_stems), 0, 0, 0},
+    {"mechanicsFeedback", K_BOOL, O(mech_feedback), 0, 0, 0},
+    {"mechE", K_REAL, O(mech_e), 0, 1e5, 1e15},
+    {"mechDensity", K_REAL, O(mech_density), 0, 0, 1e5},
+    {"mechLeafMass", K_REAL, O(mech_leaf_mass), 0, 0, 1e3},
     {"standX", K_INT, O(stand_x), 0, 1, 20},
     {"standY", K_INT, O(stand_y), 0, 1, 20},
     {"spacing", K_REAL, O(spacing), 0, 0.01, 1e3},

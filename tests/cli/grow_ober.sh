@@ -32,6 +32,9 @@ set -e
 test $rc -eq 2
 grep -q 'needs --mechanics' "$tmp/err.txt"
 test ! -e "$tmp/n.svg"
+# light with stems and the mechanics in the growth: the rays' line
+"$bin" grow ober-carbon -y 3 -D lightStems=1 -D mechanicsFeedback=1 -o "$tmp/c.json" >"$tmp/c.txt"
+grep -q '^light: [1-9][0-9]* rays in .* M rays/s' "$tmp/c.txt"
 # same seed, same report; -D sets formulas
 "$bin" grow ober-troll -y 4 --stand 2x2 --spacing 2 --stagger 1 -o "$tmp/t.json" --quiet
 cmp <(grep -v seconds "$tmp/s.json") <(grep -v seconds "$tmp/t.json")

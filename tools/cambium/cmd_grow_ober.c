@@ -452,6 +452,17 @@ int cmd_grow_ober(int argc, char **argv)
         }
     }
     double seconds = cli_seconds() - t0;
+    if (!quiet && cbm_ober_tree_count(s) > 0) { /* the light passes' rays (the same in each tree) */
+        size_t rays = 0;
+        double light_s = 0;
+        for (int y = 1; y <= cbm_ober_years(s); y++) {
+            rays += cbm_ober_report_of(s, 0, y)->light_rays;
+            light_s += cbm_ober_report_of(s, 0, y)->light_seconds;
+        }
+        if (rays > 0)
+            printf("light: %zu rays in %.3f s (%.3g M rays/s); all else %.3f s\n", rays, light_s,
+                   light_s > 0 ? 1e-6 * (double)rays / light_s : 0.0, seconds - light_s);
+    }
     if (mechanics) {
         size_t nt = cbm_ober_tree_count(s);
         mech = calloc(nt ? nt : 1, sizeof *mech);
