@@ -13,11 +13,15 @@ TEST(api_model_def_default_loads_a_model)
     CHECK(memcmp(&d.lsys, &l, sizeof l) == 0);
     CHECK(d.side_files == NULL);
     CHECK_EQ_INT(d.side_count, 0);
+    CHECK_EQ_INT(l.solver, -1); /* the model's own SolverMethod() */
     cbm_context *ctx = test_ctx();
     d.lsys.path = "koch.l";
     d.lsys.text = "Lsystem: 1\nderivation length: 2\nAxiom: F-F-F-F\n"
                   "F --> F+F-F-FF+F+F-F\nendlsystem\n";
     cbm_model *m = NULL;
+    d.lsys.solver = CBM_MECH_SOLVER_COUNT; /* no such method: refused, nothing loaded */
+    CHECK(cbm_model_load(ctx, &d, &m) == CBM_E_INVALID && m == NULL);
+    d.lsys.solver = -1;
     CHECK_OK(cbm_model_load(ctx, &d, &m));
     CHECK_OK(cbm_model_reset(m));
     CHECK_OK(cbm_model_step(m));

@@ -28,6 +28,10 @@ typedef struct cbm_lsys_def {
     bool ignore_seed;         ///< ignore `seed:` as cpfg does in batch mode
     int64_t seed;             ///< >= 0: seed of stochastic choice (srand48); -1: the model's
     long max_loop_iterations; ///< loop iterations per step (0: limits.max_loop_iterations)
+    /// >= 0: the bending method (a cbm_mech_solver of cambium/mech.h) of every mechanics
+    /// operation of an L+C model, whatever its SolverMethod() calls say (`cambium compare`
+    /// runs one model under several methods so); -1 (default): the model's own choice.
+    int solver;
 } cbm_lsys_def;
 
 /// Function of the function files: value of function `id` (1-based) at x.

@@ -266,7 +266,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
             rt_error(lp, CBM_E_INVALID, why);
             return;
         }
-        m->solve.solver = (cbm_mech_solver)(int)a[0];
+        /* a method imposed by the caller (cbm_lsys_def.solver) wins over the model's */
+        if (ls->solver_override < 0)
+            m->solve.solver = (cbm_mech_solver)(int)a[0];
         return;
     }
     case FN_REACTION:
@@ -1532,11 +1534,14 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
 }
 
 /* The mechanics settings at their defaults with the model's declarations (the kept plant, if
- * any, freed first by the caller). */
-static void mech_declare(lpfg *lp)
+ * any, freed first by the caller), and the caller's bending method if it imposes one. */
+static void mech_declare(cbm_lsys *ls)
 {
+    lpfg *lp = ls->lp;
     const lc_mech_decl *d = &lp->m.mech_decl;
     cbm__mechlang_init(&lp->mech);
+    if (ls->solver_override >= 0)
+        lp->mech.solve.solver = (cbm_mech_solver)ls->solver_override;
     lp->mech.seg_code = d->seg_code;
     lp->mech.seg_off = d->seg_off;
     memcpy(lp->mech.mass_off, d->mass_off, sizeof d->mass_off);
@@ -1562,7 +1567,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     cbm__crand_seed(&lp->crand, 1);
     /* mechanics settings back to their defaults; the declarations stay */
     cbm__mechlang_free(ls->ctx, &lp->mech);
-    mech_declare(lp);
+    mech_declare(ls);
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->m.gvars.len; g++) {
         const lc_global *v = &lp->m.gvars.data[g];
@@ -1800,7 +1805,7 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = false;
     ls->float32 = false;
     cbm_status s = cbm__lc_compile(&ls->comp, pp->text.data, &lp->m);
-    mech_declare(lp);
+    mech_declare(ls);
     if (s == CBM_OK && ls->comp.errors)
         s = CBM_E_SYNTAX;
     if (s == CBM_E_SYNTAX)

@@ -3,6 +3,7 @@
  * order cpfg tries them in), list the L-systems of the file (the main one and its
  * sub-L-systems, lsys_internal.h) and allocate the run state (globals, parameter frame). */
 #include "lang/lc.h"
+#include "cambium/mech.h"
 #include "lsys/lsys_internal.h"
 
 #include <stdlib.h>
@@ -12,6 +13,7 @@ cbm_lsys_def cbm_lsys_def_default(void)
     cbm_lsys_def d;
     memset(&d, 0, sizeof d);
     d.seed = -1;
+    d.solver = -1;
     return d;
 }
 
@@ -133,6 +135,9 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     if (!ctx || !def || !out || (!def->path && !def->text))
         return CBM_E_INVALID;
     *out = NULL;
+    if (def->solver < -1 || def->solver >= CBM_MECH_SOLVER_COUNT)
+        return cbm__fail(ctx, CBM_E_INVALID, "solver %d: -1 (the model's) or 0 .. %d", def->solver,
+                         CBM_MECH_SOLVER_COUNT - 1);
     cbm__pp pp;
     CBM_TRY(cbm__pp_run(ctx, def->path, def->text, def->defines, def->define_count, &pp));
     if (pp.errors) {
@@ -150,6 +155,7 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->ignore_seed = def->ignore_seed;
     ls->cur.f32 = ls->next.f32 = ls->homo_str.f32 = ls->succ.f32 = def->float32;
     ls->seed_override = def->seed;
+    ls->solver_override = def->solver;
     ls->loop_budget = def->max_loop_iterations; /* 0: the context's limit */
     ls->start_block = ls->end_block = ls->start_each = ls->end_each = -1;
     ls->dlength_expr = ls->seed_expr = -1;

@@ -106,6 +106,7 @@ struct cbm_lsys {
     bool float32;
     bool ignore_seed;
     int64_t seed_override; /* -1: none */
+    int solver_override;   /* -1: none; else the cbm_mech_solver of every mechanics operation */
     long loop_budget;      /* the model's max_loop_iterations, 0: the context's limit */
     bool nonfinite_warned; /* the warning of limits.allow_nonfinite was given */
     long ops;              /* productions applied in decomposition / homomorphism: budget left */

@@ -78,4 +78,41 @@ set +e
 "$bin" run "$tmp/h9.l" -n 2 2>"$tmp/err" >/dev/null; rc=$?
 set -e
 test $rc -eq 1 && grep -q "SolverMethod(n): n is 0 .. [0-9]*, in the order relax, fast, approx" "$tmp/err" || fail "SolverMethod(9): $(cat "$tmp/err")"
+# one plant, four methods: an L+C model grown once per method; cbm_lsys_def.solver overrides the
+# model's SolverMethod(), so compare's approx plant is the one the model grows with
+# SolverMethod(2), and a model asking for approx is still bent by fast when compare says fast
+"$bin" compare "$tmp/h.l" -n 6 --solvers relax,fast,approx,fem -o "$tmp/p.csv" -o "$tmp/p.json" -o "$tmp/p.svg"
+head -1 "$tmp/p.csv" | grep -qx 'solver,segment,x0,y0,z0,x1,y1,z1' || fail "plant csv header"
+nseg=$(($(wc -l <"$tmp/f.csv") - 1))
+test "$(wc -l <"$tmp/p.csv")" -eq $((1 + 4 * nseg)) || fail "plant csv rows"
+grep -q '<svg' "$tmp/p.svg" || fail "plant svg"
+for k in '"solver": "fem"' '"height": ' '"tip_deflection": ' '"from": "fem", "to": "relax"'; do
+    grep -q "$k" "$tmp/p.json" || fail "plant json lacks $k"
+done
+# segment by segment against run's plants (x1 y1 z1: run's columns 7-9 at %.9g)
+same() { # $1 solver in p.csv, $2 run's segments csv
+    awk -F, -v s="$1" 'NR == FNR { if (FNR > 1) { x[$1] = $7; y[$1] = $8; z[$1] = $9 }; next }
+        $1 == s { n++; d = ($6 - x[$2])^2 + ($7 - y[$2])^2 + ($8 - z[$2])^2; if (d > 1e-16) bad++ }
+        END { exit bad || n == 0 }' "$2" "$tmp/p.csv"
+}
+same approx "$tmp/a.csv" || fail "compare approx is not the SolverMethod(2) plant"
+same fast "$tmp/f.csv" || fail "compare fast is not the default plant"
+! same approx "$tmp/f.csv" || fail "approx and fast grew the same plant"
+"$bin" compare "$tmp/h.l" -n 6 --solvers fast | grep -q '^fast ' || fail "plant text"
+awk 'BEGIN { RS = "{"; FS = "," }
+     /"from": "relax", "to": "fast"/ { split($3, a, ": "); if (a[2] + 0 > 1e-4) bad = 1; seen++ }
+     /"from": "fast", "to": "approx"/ { split($3, a, ": "); if (a[2] + 0 < 1e-3) bad = 1; seen++ }
+     END { exit bad || seen != 2 }' "$tmp/p.json" || fail "plant distances"
+# a built-in tree: -D and -n reach the model, the methods' solver key is set
+"$bin" compare fruit-tree -n 2 -D density=700 --seed 3 --solvers fast,approx --json >"$tmp/t.json"
+grep -q '"solver": "approx", "segments": [1-9]' "$tmp/t.json" || fail "tree compare"
+# a model without mechanics, -D on a spec, a broken define: usage errors, nothing written
+set +e
+"$bin" compare "$src/models/cpfg-herb-sublsystems.l" -o "$tmp/x.csv" 2>"$tmp/err"; rc=$?
+"$bin" compare "$tmp/rod.spec" -D A=1 -o "$tmp/x.csv" 2>/dev/null; rc2=$?
+"$bin" compare fruit-tree -D nosuch=1 -o "$tmp/x.csv" 2>/dev/null; rc3=$?
+set -e
+test $rc -eq 2 && grep -q "declares no mechanics" "$tmp/err" || fail "no mechanics: $rc"
+test $rc2 -eq 2 && test $rc3 -eq 2 || fail "-D with a spec / unknown -D: $rc2 $rc3"
+test ! -e "$tmp/x.csv" || fail "wrote on a usage error"
 echo ok

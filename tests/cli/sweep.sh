@@ -32,4 +32,21 @@ for bad in "--param nosuch=1" "--param density=abc" "--param density" "--seeds x
     test $rc -eq 2 || fail "'$bad' exits $rc"
     test ! -e "$tmp/never.csv" || fail "'$bad' wrote a file"
 done
+# an L-system model: NAME is a #define, -n its steps; with mechanics the plant's segments, else
+# the turtle's primitives; a name the model does not define is a usage error
+src=${CBM_SOURCE:-$(cd "$(dirname "$0")/../.." && pwd)}
+"$bin" sweep "$src/models/jirasek-hanging.l" --param DENSITY=300,900 -n 6 -o "$tmp/l.csv" -o "$tmp/l.svg"
+test "$(wc -l <"$tmp/l.csv")" -eq 3 || fail "l rows"
+grep -q '<svg' "$tmp/l.svg" || fail "l plot"
+# the heavier wood hangs lower: a smaller vertical extent, the same segment count
+awk -F, 'NR == 2 { y = $5; n = $7 } NR == 3 { if (!($5 < y) || $7 != n || n == 0) exit 1 }' "$tmp/l.csv" || fail "DENSITY"
+"$bin" run "$src/models/jirasek-hanging.l" -n 6 -D DENSITY=900 -o "segments:$tmp/r.csv" >/dev/null
+test "$(awk -F, 'NR == 3 { print $7 }' "$tmp/l.csv")" -eq $(($(wc -l <"$tmp/r.csv") - 1)) || fail "l segments"
+"$bin" sweep "$src/models/cpfg-herb-sublsystems.l" --param ANGLE=120,137.5 -n 6 >"$tmp/c.txt"
+awk -F, 'NR > 1 && !($7 > 0 && $4 > 0) { exit 1 }' "$tmp/c.txt" || fail "cpfg sweep"
+set +e
+"$bin" sweep "$src/models/jirasek-hanging.l" --param NOSUCH=1 -n 1 -o "$tmp/never.csv" 2>"$tmp/err"; rc=$?
+set -e
+test $rc -eq 2 && grep -q "not a #define" "$tmp/err" || fail "unknown define: $rc"
+test ! -e "$tmp/never.csv" || fail "unknown define wrote a file"
 echo ok

@@ -2,17 +2,16 @@
  *              [-D NAME=VALUE]... [-o FILE.csv|.json|.svg|.png]...: the one-at-a-time
  * sensitivity sweeps of Gürtler's chapter 6 as a tool (docs/cli.md). For every --param in turn
  * and every value of it (the others at the model's values and the -D overrides), a built-in tree
- * model (or a .tree file) is grown for each seed; the rows give the extent of the grown plant in
- * x, y and z (max - min over every segment node, m) and its segment count. The table has one row
- * per (param, value, seed); a plot per sweep shows the extents and the count against the value,
- * averaged over the seeds. */
+ * model, a .tree file or an L-system model (.l: NAME is one of its #defines) is grown for each
+ * seed (cli_study.h); the rows give the extent of the grown plant in x, y and z (max - min over
+ * every segment node, m) and its segment count. The table has one row per (param, value, seed);
+ * a plot per sweep shows the extents and the count against the value, averaged over the seeds. */
 #define _POSIX_C_SOURCE 200809L
-#include "cli.h"
+#include "cli_study.h"
 #include "commands.h"
 #include "options.h"
 
 #include "cambium/plot.h"
-#include "cambium/tree.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -21,7 +20,6 @@
 #define MAX_SWEEPS  8
 #define MAX_VALUES  64
 #define MAX_SEEDS   32
-#define MAX_DEFS    32
 #define MAX_OUTPUTS 8
 
 typedef struct sweep {
@@ -52,12 +50,14 @@ static void help(const cli_opts *t)
     printf("usage: cambium sweep MODEL --param NAME=V1,V2,... [--param ...] [--seeds S1,S2,...]\n"
            "                     [-n YEARS] [-D NAME=VALUE]... [-o FILE.csv|.json|.svg|.png]...\n\n"
            "One-at-a-time sensitivity sweeps of a built-in tree model or a .tree file (as\n"
-           "`cambium grow` takes it): for each --param and each of its values, the tree is grown\n"
-           "for every seed and measured: extent in x, y, z (max - min over the segment nodes, m)\n"
-           "and segment count. -o .csv/.json writes the table (param,value,seed,extent_x,\n"
-           "extent_y,extent_z,segments,seconds), .svg/.png a plot per sweep (several --param:\n"
-           "FILE-NAME.svg each) of the seed means against the value. Without -o the table is\n"
-           "printed.\n");
+           "`cambium grow` takes it) or of an L-system model (.l: NAME is a #define of the\n"
+           "model, -n the derivation steps, --seeds seed its productions): for each --param\n"
+           "and each of its values, the model is grown for every seed and measured: extent in\n"
+           "x, y, z (max - min over the segment nodes, m; a .l model without mechanics: the\n"
+           "turtle's box) and segment count (without mechanics: the turtle's primitives).\n"
+           "-o .csv/.json writes the table (param,value,seed,extent_x,extent_y,extent_z,\n"
+           "segments,seconds), .svg/.png a plot per sweep (several --param: FILE-NAME.svg\n"
+           "each) of the seed means against the value. Without -o the table is printed.\n");
     cli_options_help(stdout, t);
 }
 
@@ -118,101 +118,6 @@ static bool parse_seeds(const char *v, void *target, char *why, size_t n)
             p++;
     }
     return l->n > 0;
-}
-
-static bool parse_output(const char *v, void *target, char *why, size_t n)
-{
-    cli_list *outs = target;
-    const char *ext = cli_extension(v);
-    if (outs->count == outs->max)
-        snprintf(why, n, "at most %d outputs", outs->max);
-    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") && strcmp(ext, "png"))
-        snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv, .json, .svg or .png)",
-                 ext);
-    else
-        cli_list_add(outs, v);
-    return !*why;
-}
-
-static bool parse_define(const char *v, void *target, char *why, size_t n)
-{
-    cli_list *l = target;
-    if (!strchr(v, '=') || v[0] == '=')
-        snprintf(why, n, "-D expects NAME=VALUE, found '{value}'");
-    else if (!cli_list_add(l, v))
-        snprintf(why, n, "at most %d -D", MAX_DEFS);
-    return !*why;
-}
-
-/* Extent of the plant: max - min of every node over every segment. */
-static void measure(const cbm_plant *p, double ext[3], size_t *segments)
-{
-    size_t n = cbm_plant_segment_count(p);
-    *segments = n;
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = 0; i < n; i++) {
-        cbm_segment_state s;
-        if (cbm_plant_segment(p, i, &s) != CBM_OK)
-            continue;
-        const cbm_vec3 pts[2] = {s.proximal, s.distal};
-        for (int k = 0; k < 2; k++) {
-            double c[3] = {pts[k].x, pts[k].y, pts[k].z};
-            for (int a = 0; a < 3; a++) {
-                lo[a] = fmin(lo[a], c[a]);
-                hi[a] = fmax(hi[a], c[a]);
-            }
-        }
-    }
-    for (int a = 0; a < 3; a++)
-        ext[a] = n ? hi[a] - lo[a] : 0.0;
-}
-
-static cbm_status set(cbm_context *ctx, cbm_tree_def *d, const char *nv)
-{
-    char name[128];
-    const char *eq = strchr(nv, '=');
-    size_t len = (size_t)(eq - nv);
-    if (len >= sizeof name)
-        len = sizeof name - 1;
-    memcpy(name, nv, len);
-    name[len] = 0;
-    return cbm_tree_def_set(ctx, d, name, eq + 1);
-}
-
-/* Grows one tree; CLI_OK or the failure (printed). */
-static int grow_one(const cbm_tree_def *base, const sweep *sw, int v, const char *seed, long years,
-                    row *r)
-{
-    cbm_context *ctx = cli_context();
-    cbm_tree_def d = *base;
-    cbm_status s = cbm_tree_def_set(ctx, &d, sw->name, sw->values[v]);
-    if (s == CBM_OK && seed)
-        s = cbm_tree_def_set(ctx, &d, "seed", seed);
-    if (s == CBM_OK && years >= 0)
-        d.years = (int)years;
-    if (s != CBM_OK) {
-        int rc = cli_usage_error("sweep", "--param %s=%s: %s", sw->name, sw->values[v],
-                                 cbm_context_last_error(ctx));
-        cli_context_end(ctx);
-        return rc;
-    }
-    cbm_tree *t = NULL;
-    double t0 = cli_now();
-    s = cbm_tree_create(ctx, &d, &t);
-    if (s == CBM_OK)
-        s = cbm_tree_run(t);
-    r->seconds = cli_now() - t0;
-    int rc = CLI_OK;
-    if (s == CBM_OK)
-        measure(cbm_tree_plant(t), r->ext, &r->segments);
-    else {
-        char what[160];
-        snprintf(what, sizeof what, "sweep %s=%s", sw->name, sw->values[v]);
-        rc = cli_fail(ctx, s, what);
-    }
-    cbm_tree_destroy(t);
-    cli_context_end(ctx);
-    return rc;
 }
 
 static void write_table(FILE *f, bool json, const sweep_list *sl, const seed_list *seeds,
@@ -298,6 +203,20 @@ static cbm_status write_plot(cbm_context *ctx, const char *path, const sweep *sw
     return s;
 }
 
+/* What the outputs show. */
+typedef struct sweep_out {
+    const sweep_list *sl;
+    const seed_list *seeds;
+    const row *rows;
+    int nr;
+} sweep_out;
+
+static void write_rows(FILE *f, bool json, void *ud)
+{
+    const sweep_out *o = ud;
+    write_table(f, json, o->sl, o->seeds, o->rows, o->nr);
+}
+
 /* FILE.svg for one sweep, FILE-NAME.svg for each of several. */
 static void plot_path(char *buf, size_t n, const char *path, const char *name, bool several)
 {
@@ -309,16 +228,28 @@ static void plot_path(char *buf, size_t n, const char *path, const char *name, b
     snprintf(buf, n, "%.*s-%s%s", (int)(dot - path), path, name, dot);
 }
 
+static cbm_status write_plots(cbm_context *ctx, const char *path, void *ud)
+{
+    const sweep_out *o = ud;
+    cbm_status s = CBM_OK;
+    for (int w = 0; w < o->sl->n && s == CBM_OK; w++) {
+        char p[512];
+        plot_path(p, sizeof p, path, o->sl->s[w].name, o->sl->n > 1);
+        s = write_plot(ctx, p, &o->sl->s[w], w, o->rows, o->nr);
+    }
+    return s;
+}
+
 int cmd_sweep(int argc, char **argv)
 {
     const char *model = NULL;
     sweep_list *sl = calloc(1, sizeof *sl);
     seed_list seeds;
     memset(&seeds, 0, sizeof seeds);
-    const char *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
+    const char *outs[MAX_OUTPUTS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
-    cli_list def_list = {defs, 0, MAX_DEFS, NULL};
-    long years = -1;
+    cli_study_args margs;
+    cli_study_args_init(&margs);
     if (!sl)
         return CLI_FAIL;
     cli_opt opts[] = {
@@ -338,29 +269,14 @@ int cmd_sweep(int argc, char **argv)
          .help = "grow each value with these seeds (default: the model's seed)",
          .parse = parse_seeds,
          .bad = "--seeds needs a list of seeds"},
-        {.name = "-n|--years",
-         .kind = CLI_LONG,
-         .target = &years,
-         .arg = "YEARS",
-         .help = "years to grow (default: the model's)",
-         .min = 0,
-         .max = 1000,
-         .bad = "{opt} expects 0..1000, found '{value}'"},
-        {.name = "-D",
-         .kind = CLI_CUSTOM,
-         .target = &def_list,
-         .arg = "NAME=VALUE",
-         .help = "set a model parameter for every run (repeatable)",
-         .parse = parse_define,
-         .attached = true,
-         .bad = "-D needs NAME=VALUE"},
         {.name = "-o",
          .kind = CLI_CUSTOM,
          .target = &out_list,
          .arg = "FILE",
          .help = ".csv/.json table, .svg/.png plot per sweep (repeatable)",
-         .parse = parse_output,
+         .parse = cli_study_parse_output,
          .bad = "-o needs a file name"},
+        {.kind = CLI_GROUP, .target = cli_study_model_options(&margs)},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {0}};
     cli_opts table = {.cmd = "sweep",
@@ -381,8 +297,7 @@ int cmd_sweep(int argc, char **argv)
     const char *check[MAX_OUTPUTS * MAX_SWEEPS];
     int nc = 0;
     for (int k = 0; k < out_list.count; k++) {
-        const char *ext = cli_extension(outs[k]);
-        if (strcmp(ext, "svg") && strcmp(ext, "png"))
+        if (!cli_study_is_plot(outs[k]))
             check[nc++] = outs[k];
         else
             for (int w = 0; w < sl->n; w++) {
@@ -396,27 +311,13 @@ int cmd_sweep(int argc, char **argv)
         free(sl);
         return CLI_FAIL;
     }
-    /* the base definition: the model and the -D overrides */
-    cbm_context *ctx = cli_context();
-    cbm_tree_def base = cbm_tree_def_default();
-    size_t len = strlen(model);
-    cbm_status st = len > 5 && !strcmp(model + len - 5, ".tree")
-                        ? cbm_tree_def_read(ctx, &base, model)
-                        : cbm_tree_def_builtin(ctx, model, &base);
-    if (st != CBM_OK)
-        rc = st == CBM_E_NOT_FOUND ? cli_usage_error("sweep", "%s", cbm_context_last_error(ctx))
-                                   : cli_fail(ctx, st, model);
-    for (int k = 0; k < def_list.count && rc == CLI_OK; k++)
-        if (set(ctx, &base, defs[k]) != CBM_OK)
-            rc = cli_usage_error("sweep", "-D %s", cbm_context_last_error(ctx));
-    /* every swept name must exist: check them all before growing anything */
-    for (int w = 0; w < sl->n && rc == CLI_OK; w++) {
-        cbm_tree_def probe = base;
+    /* the model and the -D overrides; every swept value must be valid: all are checked
+     * before anything grows */
+    cli_study_model *base = malloc(sizeof *base);
+    rc = base ? cli_study_model_load(base, "sweep", model, &margs, false) : CLI_FAIL;
+    for (int w = 0; w < sl->n && rc == CLI_OK; w++)
         for (int v = 0; v < sl->s[w].n && rc == CLI_OK; v++)
-            if (cbm_tree_def_set(ctx, &probe, sl->s[w].name, sl->s[w].values[v]) != CBM_OK)
-                rc = cli_usage_error("sweep", "--param %s", cbm_context_last_error(ctx));
-    }
-    cli_context_end(ctx);
+            rc = cli_study_check_param(base, "sweep", sl->s[w].name, sl->s[w].values[v]);
     int nseeds = seeds.n ? seeds.n : 1, nr = 0, cap = 0;
     for (int w = 0; w < sl->n; w++)
         cap += sl->s[w].n * nseeds;
@@ -430,36 +331,24 @@ int cmd_sweep(int argc, char **argv)
                 r->sweep = w;
                 r->value = v;
                 r->seed = q;
-                rc = grow_one(&base, &sl->s[w], v, seeds.n ? seeds.v[q] : NULL, years, r);
-                if (rc == CLI_OK)
+                cli_study_run run = {sl->s[w].name, sl->s[w].values[v], seeds.n ? seeds.v[q] : NULL,
+                                     -1, false};
+                cli_study_plant p;
+                rc = cli_study_grow(base, &run, &p);
+                if (rc == CLI_OK) {
+                    memcpy(r->ext, p.ext, sizeof r->ext);
+                    r->segments = p.segments;
+                    r->seconds = p.seconds;
                     nr++;
+                }
             }
-    ctx = rc == CLI_OK ? cli_context() : NULL;
-    for (int k = 0; k < out_list.count && rc == CLI_OK; k++) {
-        const char *ext = cli_extension(outs[k]);
-        cbm_status s = CBM_OK;
-        if (!strcmp(ext, "svg") || !strcmp(ext, "png")) {
-            for (int w = 0; w < sl->n && s == CBM_OK; w++) {
-                char p[512];
-                plot_path(p, sizeof p, outs[k], sl->s[w].name, sl->n > 1);
-                s = write_plot(ctx, p, &sl->s[w], w, rows, nr);
-            }
-        } else {
-            cbm_out *o = NULL;
-            s = cbm_out_open(ctx, outs[k], &o);
-            if (s == CBM_OK) {
-                write_table(cbm_out_stream(o), !strcmp(ext, "json"), sl, &seeds, rows, nr);
-                s = cbm_out_commit(o);
-            }
-        }
-        if (s != CBM_OK)
-            rc = cli_fail(ctx, s, outs[k]);
-    }
-    if (ctx)
-        cli_context_end(ctx);
+    sweep_out so = {sl, &seeds, rows, nr};
+    if (rc == CLI_OK)
+        rc = cli_study_write(outs, out_list.count, write_plots, write_rows, &so);
     if (rc == CLI_OK && out_list.count == 0)
         write_table(stdout, false, sl, &seeds, rows, nr);
     free(rows);
+    free(base);
     free(sl);
     return rc;
 }
