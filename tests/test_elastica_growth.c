@@ -334,6 +334,36 @@ TEST(elastica_growth_table_3_1)
     test_ctx_end(ctx);
 }
 
+TEST(elastica_growth_case_b_readings)
+{
+    /* Table 3.1's "B's larger taper slows the downward collapse" depends on the reading of the
+     * table (docs/validation.md, "Growth under control"): with a layer N dR thick at the base per
+     * step (N = 3: 0.03 for A, 0.15 for B) and three steps to 1.3 L0, B's tip ends above A's
+     * (measured by 0.0070 L0); with a layer dR per step and two steps to 1.2 L0 (the example
+     * specs' reading) it ends below (by 0.0027 L0), its extra stiffness outweighed by its
+     * extra weight */
+    cbm_context *ctx = test_ctx();
+    double y[2][2] = {{0, 0}, {0, 0}};
+    for (int reading = 0; reading < 2; reading++)
+        for (int c = 0; c < 2; c++) {
+            cbm_elastica_growth_def d = cbm_elastica_growth_def_default();
+            d.layer = (c ? 0.05 : 0.01) * (reading ? 3 : 1);
+            d.steps = reading ? 3 : 2;
+            cbm_elastica_growth *g = grow(ctx, &d);
+            if (g) {
+                y[reading][c] = last(g)->tip_y;
+                CHECK_NEAR(last(g)->length, reading ? 1.3 : 1.2, 1e-12);
+                CHECK(last(g)->index == 0);
+            }
+            cbm_elastica_growth_destroy(ctx, g);
+        }
+    printf("layer dR, 2 steps: tip y A %.4f B %.4f; layer 3 dR, 3 steps: A %.4f B %.4f (L0)\n",
+           y[0][0], y[0][1], y[1][0], y[1][1]);
+    CHECK(y[0][1] < y[0][0] - 0.002);
+    CHECK(y[1][1] > y[1][0] + 0.005);
+    test_ctx_end(ctx);
+}
+
 TEST(elastica_growth_bad_defs)
 {
     cbm_context *ctx = test_ctx();

@@ -111,11 +111,30 @@ CBM_API cbm_status cbm_bend_nodes(const cbm_plant *plant, cbm_bend_node *nodes, 
 
 /// The parameter a continuation varies.
 typedef enum cbm_bend_param {
-    CBM_BEND_PARAM_ANGLE,  ///< the clamp's elevation, degrees (any angle, not only -90 .. 90)
-    CBM_BEND_PARAM_GRAVITY ///< the gravitational acceleration, m/s^2 (the load of the weight)
+    CBM_BEND_PARAM_ANGLE,    ///< the clamp's elevation, degrees (any angle, not only -90 .. 90)
+    CBM_BEND_PARAM_GRAVITY,  ///< the gravitational acceleration, m/s^2 (the load of the weight)
+    CBM_BEND_PARAM_DENSITY,  ///< the wood's density, kg/m^3 (the weight, not the tip mass)
+    CBM_BEND_PARAM_TIP_LOAD, ///< the downward tip force, N
+    CBM_BEND_PARAM_LENGTH    ///< the rod's length, m (every segment scaled alike)
 } cbm_bend_param;
 
-/// How to follow the branch: natural-parameter steps from `from` to `to` with warm starts.
+/// How the branch is followed.
+typedef enum cbm_bend_continuation_method {
+    /// pseudo-arclength: predictor along the branch's tangent, Newton on the equilibrium bordered
+    /// by the arclength condition; goes round folds onto the unstable arcs (default)
+    CBM_BEND_CONTINUE_ARCLENGTH,
+    /// natural-parameter steps: the parameter only moves forward; at a fold the rod jumps
+    CBM_BEND_CONTINUE_NATURAL
+} cbm_bend_continuation_method;
+
+/// Why an arclength continuation stopped.
+typedef enum cbm_bend_branch_end {
+    CBM_BEND_END_TO,   ///< the branch reached `to` (always so for the natural method)
+    CBM_BEND_END_FROM, ///< the branch turned back and left the range at `from`
+    CBM_BEND_END_LIMIT ///< max_points equilibria were traced (a closed branch, or a long one)
+} cbm_bend_branch_end;
+
+/// How to follow the branch from `from` to `to` with warm starts.
 typedef struct cbm_bend_continuation_def {
     cbm_bend_param param; ///< default CBM_BEND_PARAM_ANGLE
     double from, to;      ///< the parameter's range (degrees or m/s^2); from != to
@@ -124,6 +143,14 @@ typedef struct cbm_bend_continuation_def {
     double max_turn_deg;
     /// the bisection stops when the step is below this fraction of |to - from| (default 1e-7)
     double min_step;
+    cbm_bend_continuation_method method; ///< default CBM_BEND_CONTINUE_ARCLENGTH
+    /// arclength only: where the branch followed loses stability without a fold (a
+    /// bifurcation: a straight column past Greenhill's load), leave it along the lowest mode
+    /// onto the bifurcating branch (its side: the tip moving towards +x, or +z when the mode
+    /// is out of the plane) and follow that one (default false)
+    bool switch_branch;
+    /// arclength only: the most equilibria traced before stopping (default 100000)
+    size_t max_points;
 } cbm_bend_continuation_def;
 
 CBM_API cbm_bend_continuation_def cbm_bend_continuation_def_default(void);
@@ -147,6 +174,7 @@ typedef struct cbm_bend_fold {
     double bracket;             ///< the event lies in [at.param, at.param + bracket]
     bool has_jump;              ///< fold only: a jump target was found
     cbm_bend_branch_point jump; ///< fold only: the equilibrium reached just past the fold
+    bool switched; ///< stability change only: the continuation left here onto the new branch
 } cbm_bend_fold;
 
 /// A traced branch (owned; release with cbm_bend_branch_free).
@@ -155,15 +183,28 @@ typedef struct cbm_bend_branch {
     size_t n_points;
     cbm_bend_fold *folds;
     size_t n_folds;
+    cbm_bend_branch_end end; ///< why the continuation stopped
 } cbm_bend_branch;
 
 /// Solves the spec's rod at def->from (the spec's push_unstable applies to this first solve),
-/// then follows its equilibria to def->to: each step is warm-started from the last equilibrium
-/// without any push; a step that does not converge, turns the tip by more than max_turn_deg or
-/// changes the number of unstable modes is halved. When a step below min_step still fails, the
-/// fold is located (bisection on the parameter) and the rod jumps: it is solved just past the
-/// fold with push_unstable, and the branch continues from the equilibrium it reaches. Needs the
-/// fast solver, no growth steps and no motion. On failure *out is empty.
+/// then follows its equilibria.
+///
+/// Arclength (default): steps of equal length in (Omega, parameter) along the branch's tangent,
+/// each corrected by Newton on the equilibrium bordered by the arclength condition (the tree
+/// factorisation solves both right-hand sides exactly); the step halves when Newton fails or
+/// the tip turns by more than max_turn_deg. A fold (the tangent's parameter component changes
+/// sign) and a change of the number of unstable modes are located by bisection of the step;
+/// at a fold the jump target (the equilibrium reached just past it with the push) is reported
+/// and the branch is followed round the fold onto its unstable arc. It stops when the
+/// parameter reaches `to` (landing on it exactly), leaves the range at `from`, or after
+/// max_points equilibria (out->end says which).
+///
+/// Natural (CBM_BEND_CONTINUE_NATURAL): steps from def->from to def->to: each step is warm-started
+/// from the last equilibrium without any push; a step that does not converge, turns the tip by more
+/// than max_turn_deg or changes the number of unstable modes is halved. When a step below min_step
+/// still fails, the fold is located (bisection on the parameter) and the rod jumps: it is solved
+/// just past the fold with push_unstable, and the branch continues from the equilibrium it reaches.
+/// Needs the fast solver, no growth steps and no motion. On failure *out is empty.
 CBM_API cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
                                      const cbm_bend_continuation_def *def, cbm_bend_branch *out);
 CBM_API void cbm_bend_branch_free(cbm_bend_branch *branch);

@@ -27,6 +27,8 @@ cbm_bend_continuation_def cbm_bend_continuation_def_default(void)
     d.steps = 60;
     d.max_turn_deg = 10.0;
     d.min_step = 1e-7;
+    d.method = CBM_BEND_CONTINUE_ARCLENGTH;
+    d.max_points = 100000;
     return d;
 }
 
@@ -39,14 +41,46 @@ void cbm_bend_branch_free(cbm_bend_branch *b)
     memset(b, 0, sizeof *b);
 }
 
-static void set_param(cbm_plant *p, cbm_bend_param which, double v)
+/* What a parameter change touches: the spec's loads and the rod's segment lengths at the
+ * start (the length parameter scales them all alike). */
+typedef struct param_ctx {
+    const cbm_bend_spec *spec;
+    cbm_bend_param which;
+    double *len0; /* segment lengths as built (length parameter only) */
+    double l0;    /* their sum */
+} param_ctx;
+
+static cbm_status set_param(const param_ctx *c, cbm_plant *p, double v)
 {
-    if (which == CBM_BEND_PARAM_ANGLE) {
+    size_t n = cbm_plant_segment_count(p);
+    switch (c->which) {
+    case CBM_BEND_PARAM_ANGLE: {
         const cbm_vec3 *pos = cbm_plant_positions(p);
         cbm_vec3 base = pos ? pos[0] : v3(0, 0, 0);
         cbm_plant_set_base(p, base, cbm_mech_clamp_orientation(v * CBM_PI / 180.0));
-    } else
+        return CBM_OK;
+    }
+    case CBM_BEND_PARAM_GRAVITY:
         cbm_plant_set_gravity(p, v3(0, -v, 0));
+        return CBM_OK;
+    case CBM_BEND_PARAM_DENSITY:
+        for (size_t i = 0; i < n; i++)
+            for (size_t k = 0; k < cbm_plant_ring_count(p, i); k++) {
+                cbm_ring r;
+                CBM_TRY(cbm_plant_get_ring(p, i, k, &r));
+                r.density = v;
+                CBM_TRY(cbm_plant_set_ring(p, i, k, &r));
+            }
+        return CBM_OK;
+    case CBM_BEND_PARAM_TIP_LOAD:
+        return cbm_plant_set_load(p, n - 1, c->spec->tip_mass, v3(0, -v, 0),
+                                  v3(0, 0, c->spec->tip_moment));
+    case CBM_BEND_PARAM_LENGTH:
+        for (size_t i = 0; i < n; i++)
+            CBM_TRY(cbm_plant_set_length(p, i, c->len0[i] * (v / c->l0)));
+        return CBM_OK;
+    }
+    return CBM_E_INVALID;
 }
 
 /* the branch point of the plant's current (solved) state; prev_deg unwraps the tip angle */
@@ -136,8 +170,18 @@ static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: angle must be -360 .. 360");
     if (d->param == CBM_BEND_PARAM_GRAVITY && (d->from < 0 || d->to < 0))
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: gravity must be >= 0");
-    if (d->param != CBM_BEND_PARAM_ANGLE && d->param != CBM_BEND_PARAM_GRAVITY)
+    if (d->param == CBM_BEND_PARAM_DENSITY && (d->from <= 0 || d->to <= 0))
+        return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: density must be > 0");
+    if (d->param == CBM_BEND_PARAM_LENGTH && (d->from <= 0 || d->to <= 0))
+        return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: length must be > 0");
+    if (d->param != CBM_BEND_PARAM_ANGLE && d->param != CBM_BEND_PARAM_GRAVITY &&
+        d->param != CBM_BEND_PARAM_DENSITY && d->param != CBM_BEND_PARAM_TIP_LOAD &&
+        d->param != CBM_BEND_PARAM_LENGTH)
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: unknown parameter");
+    if (d->method != CBM_BEND_CONTINUE_ARCLENGTH && d->method != CBM_BEND_CONTINUE_NATURAL)
+        return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: unknown method");
+    if (d->method == CBM_BEND_CONTINUE_ARCLENGTH && d->max_points < 2)
+        return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: max_points must be >= 2");
     if (d->steps < 1 || d->steps > 10000000)
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: STEPS must be 1 .. 10^7");
     if (!(d->max_turn_deg > 0 && d->max_turn_deg <= 180) || !(d->min_step > 0 && d->min_step < 1))
@@ -147,8 +191,8 @@ static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
 }
 
 static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
-                        const cbm_bend_continuation_def *d, cbm_plant *p, growbuf *g,
-                        cbm_vec3 *saved)
+                        const cbm_bend_continuation_def *d, const param_ctx *pc, cbm_plant *p,
+                        growbuf *g, cbm_vec3 *saved)
 {
     size_t n = cbm_plant_segment_count(p);
     cbm_solve_def sd = cbm_solve_def_default();
@@ -157,7 +201,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
     sd.max_passes = (size_t)spec->max_passes;
     sd.krylov_dim = spec->krylov_dim;
     sd.push_unstable = spec->push_unstable != 0;
-    set_param(p, d->param, d->from);
+    CBM_TRY(set_param(pc, p, d->from));
     cbm_solve_stats ss;
     cbm_status st = cbm_plant_solve(p, &sd, &ss);
     if (st != CBM_OK)
@@ -179,7 +223,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         if (dir * (d->to - pn) < 0.5 * hmin)
             pn = d->to; /* land on TO exactly */
         memcpy(saved, cbm_plant_omegas(p), n * sizeof *saved);
-        set_param(p, d->param, pn);
+        CBM_TRY(set_param(pc, p, pn));
         st = cbm_plant_solve(p, &sd, &ss);
         if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
             return st;
@@ -203,7 +247,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         }
         if (fabs(step) > hmin) { /* bisect: retry from the last equilibrium with half the step */
             restore(p, saved, n);
-            set_param(p, d->param, pv);
+            CBM_TRY(set_param(pc, p, pv));
             h = 0.5 * step;
             continue;
         }
@@ -226,7 +270,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         double pj = pv + dir * fmax(hmin, 1e-3 * fabs(h0));
         if (dir * (pj - d->to) > 0)
             pj = d->to;
-        set_param(p, d->param, pj);
+        CBM_TRY(set_param(pc, p, pj));
         cbm_solve_def jd = sd;
         jd.push_unstable = true;
         st = cbm_plant_solve(p, &jd, &ss);
@@ -250,6 +294,498 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
     return CBM_OK;
 }
 
+/* ---- pseudo-arclength ----
+ *
+ * The branch is the curve R(Omega, lambda) = 0 in the space of the joints' rotation rates and
+ * the parameter, measured by the metric
+ *     |(dOmega, dlambda)|^2 = sum_i c_i |dOmega_i|^2 + (sigma dlambda)^2,   c_i = d_i L,
+ * (d_i the joint's dual length, L the rod's length: sum_i c_i |dOmega_i|^2 is L times the
+ * integral of the change of curvature squared, the square of a turn in radians for a uniform
+ * bend, whatever the segment count), sigma = pi/180 for an angle in degrees and 1/|to - from|
+ * otherwise. From an equilibrium u = (Omega, lambda) with unit tangent t, the predictor
+ * u + ds t is corrected by Newton on
+ *     R(Omega, lambda) = 0,   <t, u - u_pred> = 0
+ * by bordering: J a = R and J b = dR/dlambda (one tree factorisation, two exact O(n) solves;
+ * dR/dlambda by a central difference), then
+ *     dlambda = (<t, a> - N) / (sigma^2 t_lambda - <t, b>),   dOmega = -a - b dlambda.
+ * The bordered matrix stays regular at a fold, where J is singular, so Newton goes round it.
+ * The tangent at the new point is (-b, 1) normalised, oriented like the last one; a fold is a
+ * change of sign of its parameter component. */
+
+typedef struct arc {
+    cbm_context *ctx;
+    const cbm_bend_spec *spec;
+    const cbm_bend_continuation_def *d;
+    const param_ctx *pc;
+    cbm_plant *p;
+    size_t n;
+    double sigma, tol, range;
+    double *c;                          /* n: metric weights */
+    cbm_vec3 *res, *rl, *va, *vb, *tmp; /* n each */
+    growbuf *g;
+    bool switched; /* the branch was left at a bifurcation already */
+    /* the branch lies in the rod's plane (x-y; bending about each joint's L axis only): the
+     * updates keep it there (see plane()) */
+    bool planar;
+    double m_ref; /* N m, the loads' moment scale over the range (moment_scale) */
+} arc;
+
+/* A bend rod is loaded in its plane, so its planar states form an invariant set: a branch that
+ * starts in the plane stays in it, and only rounding moves it out. That matters where the
+ * branch has a zero mode out of the plane: a round column's buckled states are a circle of
+ * copies turned about the vertical, and Newton's updates, amplified along that mode, let the
+ * continuation wander round it. Dropping the out-of-plane components (twist H and bending
+ * about U) of every update and tangent keeps the branch in the plane; the stability count
+ * still comes from the full 3-D tangent. */
+static void plane(const arc *a, cbm_vec3 *v)
+{
+    if (!a->planar)
+        return;
+    for (size_t i = 0; i < a->n; i++)
+        v[i].x = v[i].z = 0.0;
+}
+
+/* an equilibrium of the branch with its tangent */
+typedef struct apt {
+    cbm_vec3 *om, *t; /* n each */
+    double lam, tl;
+    cbm_bend_branch_point pt;
+} apt;
+
+static void apt_copy(const arc *a, apt *dst, const apt *src)
+{
+    memcpy(dst->om, src->om, a->n * sizeof *dst->om);
+    memcpy(dst->t, src->t, a->n * sizeof *dst->t);
+    dst->lam = src->lam;
+    dst->tl = src->tl;
+    dst->pt = src->pt;
+}
+
+static double mdot(const arc *a, const cbm_vec3 *x, const cbm_vec3 *y)
+{
+    double s = 0.0;
+    for (size_t i = 0; i < a->n; i++)
+        s += a->c[i] * v3_dot(x[i], y[i]);
+    return s;
+}
+
+static void put_omega(arc *a, const cbm_vec3 *om)
+{
+    memcpy(a->p->omega, om, a->n * sizeof *om);
+}
+
+/* R(Omega, lam) into out (the plant's current Omega); *relres its relative size */
+static cbm_status eval_at(arc *a, double lam, cbm_vec3 *out, double *relres)
+{
+    cbm_plant *p = a->p;
+    CBM_TRY(set_param(a->pc, p, lam));
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    cbm__mech_forward(p);
+    double mmax = 0.0;
+    double r = cbm__mech_backward(p, 0.0, out, &mmax, NULL);
+    if (!isfinite(r))
+        return cbm__mech_report_nonfinite(p);
+    /* relative to the larger of the moments present and the load's scale: a straight column
+     * carries no moment, and its residual's rounding is then no reason to iterate */
+    if (relres)
+        *relres = cbm__mech_relres(r, fmax(mmax, a->m_ref), NULL);
+    return CBM_OK;
+}
+
+/* the moment scale of the loads at parameter value v: (weight + tip force) L + tip moment */
+static cbm_status moment_scale(arc *a, double v, double *m)
+{
+    CBM_TRY(set_param(a->pc, a->p, v));
+    const cbm_bend_spec *s = a->spec;
+    double g = a->d->param == CBM_BEND_PARAM_GRAVITY ? v : s->gravity;
+    double tl = a->d->param == CBM_BEND_PARAM_TIP_LOAD ? v : s->tip_load;
+    double len = a->d->param == CBM_BEND_PARAM_LENGTH ? v : s->length;
+    *m = (cbm_plant_total_mass(a->p) * fabs(g) + fabs(tl)) * len + fabs(s->tip_moment);
+    return CBM_OK;
+}
+
+/* at (Omega, lam): res = R, rl = dR/dlambda, and the tree factorisation of J */
+static cbm_status linearise(arc *a, double lam, double *relres)
+{
+    double h = 1e-6 * fmax(fabs(lam), a->range);
+    CBM_TRY(eval_at(a, lam + h, a->rl, NULL));
+    CBM_TRY(eval_at(a, lam - h, a->tmp, NULL));
+    for (size_t i = 0; i < a->n; i++)
+        a->rl[i] = v3_scale(v3_sub(a->rl[i], a->tmp[i]), 0.5 / h);
+    CBM_TRY(eval_at(a, lam, a->res, relres));
+    size_t nonpd = 0;
+    cbm__mech_tree_factor(a->p, 0.0, &nonpd);
+    return CBM_OK;
+}
+
+/* the unit tangent at x (an equilibrium in the plant): (-J^-1 dR/dlambda, 1) normalised,
+ * oriented along prev (or along the sweep's direction without one) */
+static cbm_status tangent(arc *a, apt *x, const apt *prev, double dir)
+{
+    put_omega(a, x->om);
+    CBM_TRY(linearise(a, x->lam, NULL));
+    cbm__mech_tree_apply(a->p, a->rl, a->vb);
+    plane(a, a->vb);
+    double nrm = sqrt(mdot(a, a->vb, a->vb) + a->sigma * a->sigma);
+    double sgn = 1.0;
+    if (prev) {
+        double dot = a->sigma * a->sigma * prev->tl;
+        for (size_t i = 0; i < a->n; i++)
+            dot -= a->c[i] * v3_dot(a->vb[i], prev->t[i]);
+        sgn = dot < 0.0 ? -1.0 : 1.0;
+    } else
+        sgn = dir;
+    for (size_t i = 0; i < a->n; i++)
+        x->t[i] = v3_scale(a->vb[i], -sgn / nrm);
+    x->tl = sgn / nrm;
+    if (!isfinite(x->tl) || !isfinite(nrm))
+        return cbm__mech_report_nonfinite(a->p);
+    return CBM_OK;
+}
+
+/* Newton from the predictor base + ds t (t, tl: the hyperplane's normal) to an equilibrium on
+ * the hyperplane; the result in x (om, lam; the plant holds it). false if it did not converge
+ * in 12 iterations or went astray (a joint turning by more than 0.5 rad in one update). */
+static cbm_status correct(arc *a, const apt *base, const cbm_vec3 *t, double tl, double ds, apt *x,
+                          int *iters, bool *ok)
+{
+    const size_t n = a->n;
+    for (size_t i = 0; i < n; i++)
+        x->om[i] = v3_add(base->om[i], v3_scale(t[i], ds));
+    x->lam = base->lam + ds * tl;
+    const double lam_p = x->lam;
+    *ok = false;
+    bool tiny = false;
+    for (int it = 0; it <= 12; it++) {
+        *iters = it;
+        put_omega(a, x->om);
+        double rr = INFINITY;
+        CBM_TRY(linearise(a, x->lam, &rr));
+        if (rr <= a->tol || tiny) {
+            *ok = true;
+            return CBM_OK;
+        }
+        if (it == 12)
+            break;
+        cbm__mech_tree_apply(a->p, a->res, a->va);
+        cbm__mech_tree_apply(a->p, a->rl, a->vb);
+        plane(a, a->va);
+        plane(a, a->vb);
+        /* N = <t, u - u_pred> with u_pred = base + ds t: Omega's part against base + ds t */
+        double nn = a->sigma * a->sigma * tl * (x->lam - lam_p);
+        for (size_t i = 0; i < n; i++)
+            nn += a->c[i] * v3_dot(t[i], v3_sub(x->om[i], v3_add(base->om[i], v3_scale(t[i], ds))));
+        double ta = mdot(a, t, a->va), tb = mdot(a, t, a->vb);
+        double den = a->sigma * a->sigma * tl - tb;
+        if (!isfinite(den) || den == 0.0)
+            return CBM_OK;
+        double dl = (ta - nn) / den;
+        double big = 0.0, sz = 0.0;
+        const double *dual = a->p->work.dual;
+        for (size_t i = 0; i < n; i++) {
+            cbm_vec3 dv = v3_scale(v3_add(a->va[i], v3_scale(a->vb[i], dl)), -1.0);
+            x->om[i] = v3_add(x->om[i], dv);
+            double turn = dual[i] * sqrt(v3_norm2(dv));
+            big = fmax(big, turn);
+            sz += a->c[i] * v3_norm2(dv);
+        }
+        x->lam += dl;
+        if (!isfinite(x->lam) || !(big <= 0.5))
+            return CBM_OK;
+        /* an update far below the tolerance's scale: converged where the relative residual
+         * cannot say so (a straight column: no moments to compare with) */
+        tiny = sqrt(sz + a->sigma * a->sigma * dl * dl) < 1e-12;
+    }
+    return CBM_OK;
+}
+
+/* Corrects from base by ds along base's tangent and reads the point (stability included);
+ * *ok false when Newton failed or the tip jumped (another branch). */
+/* read_point, with the count checked against the lowest eigenvalue: where that is not below
+ * -1e-9 no mode is unstable, and a count > 0 is a zero mode the pivots' inertia saw negative
+ * by rounding (the turn of a round column's buckled plane about the vertical) */
+static cbm_status arc_read(arc *a, double lam, double prev_deg, cbm_bend_branch_point *o)
+{
+    CBM_TRY(read_point(a->p, lam, prev_deg, o));
+    if (o->unstable_modes > 0 && o->lowest_eigenvalue >= -1e-9)
+        o->unstable_modes = 0;
+    return CBM_OK;
+}
+
+static cbm_status step_to(arc *a, const apt *base, double ds, apt *x, int *iters, bool *ok)
+{
+    CBM_TRY(correct(a, base, base->t, base->tl, ds, x, iters, ok));
+    if (!*ok)
+        return CBM_OK;
+    CBM_TRY(arc_read(a, x->lam, base->pt.tip_angle_deg, &x->pt));
+    const cbm_bend_branch_point *u = &base->pt, *v = &x->pt;
+    double turn = a->d->max_turn_deg;
+    *ok = fabs(v->tip_angle_deg - u->tip_angle_deg) <= turn &&
+          hypot(hypot(v->tip_x - u->tip_x, v->tip_y - u->tip_y), v->tip_z - u->tip_z) <=
+              a->spec->length * turn * CBM_PI / 180.0;
+    if (*ok)
+        CBM_TRY(tangent(a, x, base, 1.0));
+    return CBM_OK;
+}
+
+typedef enum ev_kind { EV_FOLD, EV_STAB } ev_kind;
+
+static bool has_event(ev_kind k, const apt *a0, const apt *x)
+{
+    if (k == EV_FOLD) /* a tangent along a mode (tl = 0, just after a switch) has no side */
+        return (a0->tl > 0.0 && x->tl < 0.0) || (a0->tl < 0.0 && x->tl > 0.0);
+    return x->pt.unstable_modes != a0->pt.unstable_modes;
+}
+
+/* Bisection of the step from cur: lo (no event yet) and hi (past it) with |hi - lo| in the
+ * parameter below min_step of the range, or the step below 1e-12 of ds. */
+static cbm_status refine(arc *a, const apt *cur, const apt *nxt, double ds, ev_kind k, apt *lo,
+                         apt *hi, apt *mid)
+{
+    apt_copy(a, lo, cur);
+    apt_copy(a, hi, nxt);
+    double slo = 0.0, shi = ds;
+    const double want = a->d->min_step * a->range;
+    while (fabs(hi->lam - lo->lam) > want && shi - slo > 1e-12 * ds) {
+        double sm = 0.5 * (slo + shi);
+        int it = 0;
+        bool ok = false;
+        CBM_TRY(step_to(a, cur, sm, mid, &it, &ok));
+        if (!ok)
+            break; /* the bracket stays as it is */
+        if (has_event(k, cur, mid)) {
+            apt_copy(a, hi, mid);
+            shi = sm;
+        } else {
+            apt_copy(a, lo, mid);
+            slo = sm;
+        }
+    }
+    return CBM_OK;
+}
+
+/* the jump target of a fold at lo: the rod solved just past it with the push */
+static cbm_status jump_from(arc *a, const apt *lo, double dir, cbm_bend_fold *f)
+{
+    cbm_solve_def sd = cbm_solve_def_default();
+    sd.solver = a->spec->solver;
+    sd.tolerance = a->spec->tolerance;
+    sd.max_passes = (size_t)a->spec->max_passes;
+    sd.krylov_dim = a->spec->krylov_dim;
+    sd.push_unstable = true;
+    put_omega(a, lo->om);
+    double pj = lo->lam + dir * fmax(a->d->min_step * a->range, 1e-3 * a->range / a->d->steps);
+    CBM_TRY(set_param(a->pc, a->p, pj));
+    cbm_solve_stats ss;
+    cbm_status st = cbm_plant_solve(a->p, &sd, &ss);
+    if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
+        return st;
+    if (st == CBM_OK) {
+        CBM_TRY(read_point(a->p, pj, lo->pt.tip_angle_deg, &f->jump));
+        f->jump.jumped = true;
+        f->has_jump = true;
+    }
+    return CBM_OK;
+}
+
+/* Leaves the branch at lo along the lowest mode (a bifurcation): lo's tangent becomes the
+ * mode (parameter component 0), its sign the one that moves the tip towards +x (+z). */
+static cbm_status switch_at(arc *a, apt *lo)
+{
+    put_omega(a, lo->om);
+    CBM_TRY(eval_at(a, lo->lam, a->res, NULL));
+    double lam = NAN;
+    (void)cbm__mech_lowest_mode(a->p, a->va, &lam);
+    if (!isfinite(lam))
+        return cbm__fail(a->ctx, CBM_E_NOT_CONVERGED,
+                         "bend continuation: no lowest mode at the bifurcation %.9g", lo->lam);
+    /* a mode in the plane (to rounding: a round column's pair of modes resolves towards the
+     * plane to 1 %) is followed in the plane; one mostly out of it in 3-D */
+    size_t n = a->n;
+    double out = 0.0, all = mdot(a, a->va, a->va);
+    for (size_t i = 0; i < n; i++)
+        out += a->c[i] * (a->va[i].x * a->va[i].x + a->va[i].z * a->va[i].z);
+    if (out > 0.1 * all)
+        a->planar = false;
+    plane(a, a->va);
+    /* the tip's displacement along the mode, by a small trial */
+    cbm_vec3 x0 = v3(lo->pt.tip_x, lo->pt.tip_y, lo->pt.tip_z);
+    double nrm = sqrt(mdot(a, a->va, a->va));
+    for (size_t i = 0; i < n; i++)
+        a->tmp[i] = v3_add(lo->om[i], v3_scale(a->va[i], 1e-6 / nrm));
+    put_omega(a, a->tmp);
+    CBM_TRY(eval_at(a, lo->lam, a->res, NULL));
+    cbm_segment_state tip, base;
+    CBM_TRY(cbm_plant_segment(a->p, n - 1, &tip));
+    CBM_TRY(cbm_plant_segment(a->p, 0, &base));
+    cbm_vec3 dx = v3_sub(v3_sub(tip.distal, base.proximal), x0);
+    double side = fabs(dx.x) >= fabs(dx.z) ? dx.x : dx.z;
+    double sgn = side < 0.0 ? -1.0 : 1.0;
+    for (size_t i = 0; i < n; i++)
+        lo->t[i] = v3_scale(a->va[i], sgn / nrm);
+    lo->tl = 0.0;
+    put_omega(a, lo->om);
+    return CBM_OK;
+}
+
+static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *mid)
+{
+    const cbm_bend_continuation_def *d = a->d;
+    const double dir = d->to > d->from ? 1.0 : -1.0;
+    const double dsmax = a->sigma * a->range / (double)d->steps, dsmin = dsmax * d->min_step;
+    double ds = dsmax;
+    cbm_bend_branch *b = a->g->b;
+    for (;;) {
+        if (b->n_points >= d->max_points) {
+            b->end = CBM_BEND_END_LIMIT;
+            return CBM_OK;
+        }
+        int it = 0;
+        bool ok = false;
+        CBM_TRY(step_to(a, cur, ds, nxt, &it, &ok));
+        if (!ok) {
+            ds *= 0.5;
+            if (ds < dsmin)
+                return cbm__fail(a->ctx, CBM_E_NOT_CONVERGED,
+                                 "bend continuation: the branch cannot be followed beyond %.9g "
+                                 "(tip angle %.6g deg)",
+                                 cur->lam, cur->pt.tip_angle_deg);
+            continue;
+        }
+        /* the range's ends: land on the end crossed, by Newton at the fixed parameter from the
+         * interpolated state */
+        bool past_to = dir * (nxt->lam - d->to) >= 0.0,
+             past_from = dir * (nxt->lam - d->from) < 0.0;
+        if (past_to || past_from) {
+            double end = past_to ? d->to : d->from;
+            double f = (end - cur->lam) / (nxt->lam - cur->lam);
+            for (size_t i = 0; i < a->n; i++) {
+                mid->om[i] = v3_add(cur->om[i], v3_scale(v3_sub(nxt->om[i], cur->om[i]), f));
+                mid->t[i] = v3(0, 0, 0);
+            }
+            mid->lam = end;
+            mid->tl = 0.0;
+            mid->pt = cur->pt;
+            /* the hyperplane lambda = end: t = (0, 1 / sigma) */
+            memset(lo->t, 0, a->n * sizeof *lo->t);
+            CBM_TRY(correct(a, mid, lo->t, 1.0 / a->sigma, 0.0, hi, &it, &ok));
+            if (ok) {
+                CBM_TRY(arc_read(a, end, cur->pt.tip_angle_deg, &hi->pt));
+                CBM_TRY(push_point(a->g, &hi->pt));
+            }
+            b->end = past_to ? CBM_BEND_END_TO : CBM_BEND_END_FROM;
+            return CBM_OK;
+        }
+        bool fold = has_event(EV_FOLD, cur, nxt), stab = has_event(EV_STAB, cur, nxt);
+        if (fold || stab) {
+            ev_kind k = fold ? EV_FOLD : EV_STAB;
+            CBM_TRY(refine(a, cur, nxt, ds, k, lo, hi, mid));
+            cbm_bend_fold f;
+            memset(&f, 0, sizeof f);
+            f.fold = fold;
+            f.at = lo->pt;
+            f.bracket = fabs(hi->lam - lo->lam);
+            if (fold)
+                CBM_TRY(jump_from(a, lo, cur->tl > 0.0 ? 1.0 : -1.0, &f));
+            /* once: a second bifurcation on the new branch is reported, not taken */
+            bool sw = !fold && d->switch_branch && !a->switched &&
+                      nxt->pt.unstable_modes > cur->pt.unstable_modes;
+            a->switched = a->switched || sw;
+            f.switched = sw;
+            CBM_TRY(push_fold(a->g, &f));
+            if (lo->lam != cur->lam || lo->pt.tip_angle_deg != cur->pt.tip_angle_deg)
+                CBM_TRY(push_point(a->g, &lo->pt));
+            if (sw) {
+                CBM_TRY(switch_at(a, lo));
+                apt_copy(a, cur, lo);
+                ds = dsmax;
+                continue;
+            }
+            if (hi->lam != nxt->lam || hi->pt.tip_angle_deg != nxt->pt.tip_angle_deg)
+                CBM_TRY(push_point(a->g, &hi->pt));
+        }
+        CBM_TRY(push_point(a->g, &nxt->pt));
+        apt_copy(a, cur, nxt);
+        ds = it <= 3 ? fmin(2.0 * ds, dsmax) : it >= 7 ? 0.5 * ds : ds;
+    }
+}
+
+static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
+                                  const cbm_bend_continuation_def *d, const param_ctx *pc,
+                                  cbm_plant *p, growbuf *g)
+{
+    cbm_solve_def sd = cbm_solve_def_default();
+    sd.solver = spec->solver;
+    sd.tolerance = spec->tolerance;
+    sd.max_passes = (size_t)spec->max_passes;
+    sd.krylov_dim = spec->krylov_dim;
+    sd.push_unstable = spec->push_unstable != 0;
+    CBM_TRY(set_param(pc, p, d->from));
+    cbm_solve_stats ss;
+    cbm_status st = cbm_plant_solve(p, &sd, &ss);
+    if (st != CBM_OK)
+        return st == CBM_E_NOT_CONVERGED
+                   ? cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g",
+                               d->from)
+                   : st;
+    const size_t n = cbm_plant_segment_count(p);
+    arc a = {.ctx = ctx, .spec = spec, .d = d, .pc = pc, .p = p, .n = n, .g = g};
+    a.range = fabs(d->to - d->from);
+    a.sigma = d->param == CBM_BEND_PARAM_ANGLE ? CBM_PI / 180.0 : 1.0 / a.range;
+    a.tol = spec->tolerance;
+    {
+        double m0 = 0.0, m1 = 0.0;
+        st = moment_scale(&a, d->to, &m1);
+        if (st == CBM_OK)
+            st = moment_scale(&a, d->from, &m0);
+        if (st != CBM_OK)
+            return st;
+        a.m_ref = fmax(m0, m1);
+    }
+    {
+        const cbm_vec3 *om = cbm_plant_omegas(p);
+        double in = 0.0, out = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            in = fmax(in, fabs(om[i].y));
+            out = fmax(out, fmax(fabs(om[i].x), fabs(om[i].z)));
+        }
+        a.planar = out <= 1e-9 * (in + 1.0 / spec->length);
+    }
+    /* one block: c, then 5 work vectors and 5 points of 2 vectors each */
+    double *c = malloc(n * sizeof *c);
+    cbm_vec3 *blk = malloc(15 * n * sizeof *blk);
+    if (!c || !blk) {
+        free(c);
+        free(blk);
+        return CBM_E_NOMEM;
+    }
+    const double *dual = p->work.dual;
+    for (size_t i = 0; i < n; i++)
+        c[i] = dual[i] * spec->length;
+    a.c = c;
+    a.res = blk, a.rl = blk + n, a.va = blk + 2 * n, a.vb = blk + 3 * n, a.tmp = blk + 4 * n;
+    apt pts[5];
+    for (int k = 0; k < 5; k++) {
+        memset(&pts[k], 0, sizeof pts[k]);
+        pts[k].om = blk + (5 + 2 * k) * n;
+        pts[k].t = blk + (6 + 2 * k) * n;
+    }
+    apt *cur = &pts[0];
+    memcpy(cur->om, cbm_plant_omegas(p), n * sizeof *cur->om);
+    cur->lam = d->from;
+    st = arc_read(&a, d->from, NAN, &cur->pt);
+    if (st == CBM_OK)
+        st = push_point(g, &cur->pt);
+    if (st == CBM_OK)
+        st = tangent(&a, cur, NULL, d->to > d->from ? 1.0 : -1.0);
+    if (st == CBM_OK)
+        st = arc_trace(&a, cur, &pts[1], &pts[2], &pts[3], &pts[4]);
+    free(c);
+    free(blk);
+    return st;
+}
+
 cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
                              const cbm_bend_continuation_def *def, cbm_bend_branch *out)
 {
@@ -260,10 +796,25 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
     cbm_plant *p = NULL;
     CBM_TRY(cbm_bend_build(ctx, spec, &p));
     size_t n = cbm_plant_segment_count(p);
+    param_ctx pc = {spec, def->param, NULL, 0.0};
     cbm_vec3 *saved = malloc(n * sizeof *saved);
+    pc.len0 = malloc(n * sizeof *pc.len0);
     growbuf g = {out, 0, 0};
-    cbm_status st = saved ? trace(ctx, spec, def, p, &g, saved) : CBM_E_NOMEM;
+    cbm_status st = CBM_E_NOMEM;
+    if (saved && pc.len0) {
+        st = CBM_OK;
+        for (size_t i = 0; i < n && st == CBM_OK; i++) {
+            cbm_segment_state s;
+            st = cbm_plant_segment(p, i, &s);
+            pc.len0[i] = s.length;
+            pc.l0 += s.length;
+        }
+    }
+    if (st == CBM_OK)
+        st = def->method == CBM_BEND_CONTINUE_NATURAL ? trace(ctx, spec, def, &pc, p, &g, saved)
+                                                      : trace_arclength(ctx, spec, def, &pc, p, &g);
     free(saved);
+    free(pc.len0);
     cbm_plant_destroy(p);
     if (st != CBM_OK)
         cbm_bend_branch_free(out);

@@ -48,7 +48,7 @@ expect "cambium grow: unknown option --bogus" grow --bogus x
 expect "cambium grow: more than one model: 'a' and 'b'" grow a b
 expect "cambium grow: --seeds expects A-B with 0 <= A <= B, got '5-3'" grow --seeds 5-3
 expect "cambium bend: -o needs a file name" bend a -o
-expect "cambium bend: x.txt: unsupported output format '.txt' (use .csv or .json)" bend a -o x.txt
+expect "cambium bend: x.txt: unsupported output format '.txt' (use .csv or .json; .svg or .png with --continue)" bend a -o x.txt
 expect "cambium buckle: --E is required (see --help)" buckle
 expect "cambium buckle: --E: 'x' is not a number" buckle --E x
 expect "cambium buckle: unknown option '--wobble' (see --help)" buckle --wobble

@@ -9,6 +9,7 @@
 
 #include "cambium/bend.h"
 #include "cambium/dynamics.h"
+#include "cambium/plot.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -41,8 +42,11 @@ static bool parse_output(const char *v, void *target, char *why, size_t n)
     const char *ext = cli_extension(v);
     if (outs->count == outs->max)
         snprintf(why, n, "at most %d outputs", outs->max);
-    else if (strcmp(ext, "csv") && strcmp(ext, "json"))
-        snprintf(why, n, "{value}: unsupported output format '.%s' (use .csv or .json)", ext);
+    else if (strcmp(ext, "csv") && strcmp(ext, "json") && strcmp(ext, "svg") && strcmp(ext, "png"))
+        snprintf(why, n,
+                 "{value}: unsupported output format '.%s' (use .csv or .json; .svg or .png "
+                 "with --continue)",
+                 ext);
     else
         cli_list_add(outs, v);
     return !*why;
@@ -64,16 +68,21 @@ static bool parse_continue(const char *v, void *target, char *why, size_t n)
     c->def = cbm_bend_continuation_def_default();
     const char *eq = strchr(v, '=');
     size_t k = eq ? (size_t)(eq - v) : 0;
-    if (eq && k == 5 && !strncmp(v, "angle", 5))
-        c->def.param = CBM_BEND_PARAM_ANGLE;
-    else if (eq && k == 7 && !strncmp(v, "gravity", 7))
-        c->def.param = CBM_BEND_PARAM_GRAVITY;
-    else {
+    static const char *const names[] = {"angle", "gravity", "density", "tip_load", "length"};
+    static const cbm_bend_param params[] = {CBM_BEND_PARAM_ANGLE, CBM_BEND_PARAM_GRAVITY,
+                                            CBM_BEND_PARAM_DENSITY, CBM_BEND_PARAM_TIP_LOAD,
+                                            CBM_BEND_PARAM_LENGTH};
+    size_t which = 5;
+    for (size_t i = 0; eq && i < 5; i++)
+        if (k == strlen(names[i]) && !strncmp(v, names[i], k))
+            which = i;
+    if (which == 5) {
         snprintf(why, n,
-                 "--continue expects PARAM=FROM:TO[:STEPS] with PARAM angle or gravity, "
-                 "found '{value}'");
+                 "--continue expects PARAM=FROM:TO[:STEPS] with PARAM angle, gravity, density, "
+                 "tip_load or length, found '{value}'");
         return false;
     }
+    c->def.param = params[which];
     char *end = NULL;
     double a = strtod(eq + 1, &end), b = 0;
     bool ok = end != eq + 1 && *end == ':' && isfinite(a);
@@ -114,11 +123,36 @@ static void write_branch_point(FILE *f, const cbm_bend_branch_point *p)
             p->energy, p->jumped ? "true" : "false");
 }
 
+static const char *param_name(cbm_bend_param p)
+{
+    switch (p) {
+    case CBM_BEND_PARAM_ANGLE:
+        return "angle";
+    case CBM_BEND_PARAM_GRAVITY:
+        return "gravity";
+    case CBM_BEND_PARAM_DENSITY:
+        return "density";
+    case CBM_BEND_PARAM_TIP_LOAD:
+        return "tip_load";
+    case CBM_BEND_PARAM_LENGTH:
+        return "length";
+    }
+    return "?";
+}
+
 static void write_branch_json(FILE *f, const cbm_bend_continuation_def *d, const cbm_bend_branch *b,
                               double secs)
 {
-    fprintf(f, "{\"param\": \"%s\", \"from\": %.12g, \"to\": %.12g, \"steps\": %ld, \"branch\": [",
-            d->param == CBM_BEND_PARAM_ANGLE ? "angle" : "gravity", d->from, d->to, d->steps);
+    bool arc = d->method == CBM_BEND_CONTINUE_ARCLENGTH;
+    fprintf(f, "{\"param\": \"%s\", \"from\": %.12g, \"to\": %.12g, \"steps\": %ld, ",
+            param_name(d->param), d->from, d->to, d->steps);
+    if (arc) /* the natural method's JSON keeps its members */
+        fprintf(f, "\"method\": \"arclength\", \"switch_branch\": %s, \"end\": \"%s\", ",
+                d->switch_branch ? "true" : "false",
+                b->end == CBM_BEND_END_TO     ? "to"
+                : b->end == CBM_BEND_END_FROM ? "from"
+                                              : "limit");
+    fprintf(f, "\"branch\": [");
     for (size_t i = 0; i < b->n_points; i++) {
         fprintf(f, "%s", i ? ", " : "");
         write_branch_point(f, &b->points[i]);
@@ -126,8 +160,11 @@ static void write_branch_json(FILE *f, const cbm_bend_continuation_def *d, const
     fprintf(f, "], \"folds\": [");
     for (size_t i = 0; i < b->n_folds; i++) {
         const cbm_bend_fold *k = &b->folds[i];
-        fprintf(f, "%s{\"kind\": \"%s\", \"bracket\": %.6g, \"at\": ", i ? ", " : "",
+        fprintf(f, "%s{\"kind\": \"%s\", \"bracket\": %.6g, ", i ? ", " : "",
                 k->fold ? "fold" : "stability", k->bracket);
+        if (arc)
+            fprintf(f, "\"switched\": %s, ", k->switched ? "true" : "false");
+        fprintf(f, "\"at\": ");
         write_branch_point(f, &k->at);
         fprintf(f, ", \"jump\": ");
         if (k->has_jump)
@@ -151,6 +188,98 @@ static void write_branch_csv(FILE *f, const cbm_bend_branch *b)
     }
 }
 
+/* Two panels against the parameter: the tip's angle and the energy, stable arcs solid, unstable
+ * dashed, folds circled, jump targets crossed (the branch's S-curve). */
+static cbm_status write_branch_plot(cbm_context *ctx, const cbm_bend_continuation_def *d,
+                                    const cbm_bend_branch *b, const char *path)
+{
+    size_t n = b->n_points, nf = b->n_folds, m = 0, nj = 0;
+    /* 2 n slots: a NaN before each jump target breaks the lines there */
+    double *x = malloc((10 * n + 6 * nf + 1) * sizeof *x);
+    if (!x)
+        return CBM_E_NOMEM;
+    double *ys = x + 2 * n, *yu = ys + 2 * n, *es = yu + 2 * n, *eu = es + 2 * n;
+    double *fx = eu + 2 * n, *fy = fx + nf, *jx = fy + nf, *jy = jx + nf, *fe = jy + nf,
+           *je = fe + nf;
+    for (size_t k = 0; k < n; k++) {
+        const cbm_bend_branch_point *a = &b->points[k];
+        if (a->jumped) {
+            x[m] = ys[m] = yu[m] = es[m] = eu[m] = NAN;
+            m++;
+        }
+        /* a point joins the stable line if it or a neighbour it is joined to is stable (so the
+         * arcs meet), the unstable line likewise */
+        bool st = a->unstable_modes == 0, ps = false, pu = false;
+        if (k > 0 && !a->jumped) {
+            ps = b->points[k - 1].unstable_modes == 0;
+            pu = !ps;
+        }
+        if (k + 1 < n && !b->points[k + 1].jumped) {
+            bool ns = b->points[k + 1].unstable_modes == 0;
+            ps = ps || ns;
+            pu = pu || !ns;
+        }
+        x[m] = a->param;
+        ys[m] = st || ps ? a->tip_angle_deg : NAN;
+        es[m] = st || ps ? a->energy : NAN;
+        yu[m] = !st || pu ? a->tip_angle_deg : NAN;
+        eu[m] = !st || pu ? a->energy : NAN;
+        m++;
+    }
+    for (size_t k = 0; k < nf; k++) {
+        const cbm_bend_fold *f = &b->folds[k];
+        fx[k] = f->fold ? f->at.param : NAN;
+        fy[k] = f->at.tip_angle_deg;
+        fe[k] = f->at.energy;
+        if (f->fold && f->has_jump) {
+            jx[nj] = f->jump.param;
+            jy[nj] = f->jump.tip_angle_deg;
+            je[nj++] = f->jump.energy;
+        }
+    }
+    static const char *const units[] = {"deg", "m/s^2", "kg/m^3", "N", "m"};
+    char xl[64], title[96];
+    snprintf(xl, sizeof xl, "%s (%s)", param_name(d->param), units[d->param]);
+    snprintf(title, sizeof title, "equilibria of the rod in %s", param_name(d->param));
+    cbm_plot *p = NULL;
+    cbm_plot_def pd = cbm_plot_def_default();
+    pd.title = title;
+    pd.panels = 2;
+    pd.height = 800;
+    cbm_status s = cbm_plot_create(ctx, &pd, &p);
+    for (int panel = 0; panel < 2 && s == CBM_OK; panel++) {
+        cbm_plot_axes_def a = cbm_plot_axes_def_default();
+        a.xlabel = xl;
+        a.ylabel = panel ? "energy (J)" : "tip angle (deg)";
+        s = cbm_plot_set_axes(p, panel, &a);
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        ser.x = x, ser.n = m;
+        ser.y = panel ? es : ys, ser.label = "stable";
+        if (s == CBM_OK)
+            s = cbm_plot_add_series(p, panel, &ser);
+        ser.y = panel ? eu : yu, ser.label = "unstable", ser.line = CBM_PLOT_DASHED;
+        if (s == CBM_OK)
+            s = cbm_plot_add_series(p, panel, &ser);
+        cbm_plot_series_def fs = cbm_plot_series_def_default();
+        fs.line = CBM_PLOT_NO_LINE;
+        if (nf && s == CBM_OK) {
+            fs.x = fx, fs.y = panel ? fe : fy, fs.n = nf, fs.label = "fold";
+            fs.marker = CBM_PLOT_MARKER_CIRCLE;
+            s = cbm_plot_add_series(p, panel, &fs);
+        }
+        if (nj && s == CBM_OK) {
+            fs.x = jx, fs.y = panel ? je : jy, fs.n = nj, fs.label = "jump target";
+            fs.marker = CBM_PLOT_MARKER_CROSS;
+            s = cbm_plot_add_series(p, panel, &fs);
+        }
+    }
+    if (s == CBM_OK)
+        s = cbm_plot_write(p, path);
+    cbm_plot_destroy(p);
+    free(x);
+    return s;
+}
+
 /* the continuation job: the branch to the outputs; nothing written on failure */
 static int run_continue(cbm_context *ctx, const cbm_bend_spec *spec,
                         const cbm_bend_continuation_def *d, const char **outs, int nout, bool json)
@@ -164,10 +293,17 @@ static int run_continue(cbm_context *ctx, const cbm_bend_spec *spec,
     int rc = CLI_OK;
     for (int k = 0; k < nout && rc == CLI_OK; k++) {
         cbm_out *o = NULL;
+        const char *ext = cli_extension(outs[k]);
+        if (!strcmp(ext, "svg") || !strcmp(ext, "png")) {
+            s = write_branch_plot(ctx, d, &br, outs[k]);
+            if (s != CBM_OK)
+                rc = cli_fail(ctx, s, outs[k]);
+            continue;
+        }
         s = cbm_out_open(ctx, outs[k], &o);
         if (s == CBM_OK) {
             FILE *f = cbm_out_stream(o);
-            if (!strcmp(cli_extension(outs[k]), "json"))
+            if (!strcmp(ext, "json"))
                 write_branch_json(f, d, &br, secs);
             else
                 write_branch_csv(f, &br);
@@ -184,8 +320,11 @@ static int run_continue(cbm_context *ctx, const cbm_bend_spec *spec,
             const cbm_bend_fold *k = &br.folds[i];
             printf("%s at %.9g (tip angle %.6g deg, tip (%.6g, %.6g, %.6g) m, lowest eigenvalue "
                    "%.3g)",
-                   k->fold ? "fold" : "stability change", k->at.param, k->at.tip_angle_deg,
-                   k->at.tip_x, k->at.tip_y, k->at.tip_z, k->at.lowest_eigenvalue);
+                   k->fold       ? "fold"
+                   : k->switched ? "bifurcation (branch switched)"
+                                 : "stability change",
+                   k->at.param, k->at.tip_angle_deg, k->at.tip_x, k->at.tip_y, k->at.tip_z,
+                   k->at.lowest_eigenvalue);
             if (k->has_jump)
                 printf(", jumps to tip angle %.6g deg, tip (%.6g, %.6g, %.6g) m",
                        k->jump.tip_angle_deg, k->jump.tip_x, k->jump.tip_y, k->jump.tip_z);
@@ -269,7 +408,7 @@ int cmd_bend(int argc, char **argv)
     long modes = 0;
     const char *outs[MAX_OUTPUTS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
-    bool json = false;
+    bool json = false, natural = false, switch_branch = false;
     continue_arg cont = {false, cbm_bend_continuation_def_default()};
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
@@ -294,6 +433,16 @@ int cmd_bend(int argc, char **argv)
                  "jumps; -o FILE.csv/.json and --json write the branch",
          .parse = parse_continue,
          .bad = "--continue needs PARAM=FROM:TO[:STEPS]"},
+        {.name = "--natural",
+         .kind = CLI_SET,
+         .target = &natural,
+         .help = "with --continue: natural-parameter steps (the parameter only moves\n"
+                 "forward, the rod jumps at a fold) instead of pseudo-arclength"},
+        {.name = "--switch-branch",
+         .kind = CLI_SET,
+         .target = &switch_branch,
+         .help = "with --continue: at the first loss of stability without a fold\n"
+                 "(a bifurcation) follow the bifurcating branch"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {0}};
     cli_opts table = {.cmd = "bend",
@@ -309,6 +458,18 @@ int cmd_bend(int argc, char **argv)
         return cli_usage_error("bend", "expected a SPEC file (see cambium bend --help)");
     if (cli_check_outputs(outs, nout) != CLI_OK)
         return CLI_FAIL;
+    if ((natural || switch_branch) && !cont.on)
+        return cli_usage_error("bend", "--natural and --switch-branch need --continue");
+    if (natural && switch_branch)
+        return cli_usage_error("bend",
+                               "--switch-branch needs the arclength method (not --natural)");
+    for (int k = 0; k < nout && !cont.on; k++) {
+        const char *ext = cli_extension(outs[k]);
+        if (!strcmp(ext, "svg") || !strcmp(ext, "png"))
+            return cli_usage_error("bend", "%s: plots (.svg, .png) need --continue", outs[k]);
+    }
+    cont.def.method = natural ? CBM_BEND_CONTINUE_NATURAL : CBM_BEND_CONTINUE_ARCLENGTH;
+    cont.def.switch_branch = switch_branch;
 
     size_t len = 0;
     char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
