@@ -1726,6 +1726,18 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
     *modules = lp->m.mods.len;
 }
 
+bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why)
+{
+    const char *dummy;
+    if (!why)
+        why = &dummy;
+    if (!ls || !ls->lp) {
+        *why = "native code is for the L+C dialect's functions";
+        return false;
+    }
+    return cbm__lc_native_load(ls->ctx, &ls->lp->m, &ls->lp->prog, cache_dir, why);
+}
+
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
 {
     return ls && ls->lp && ls->lp->mech.seg_code >= 0;
