@@ -58,7 +58,7 @@ extern char **environ;
     };
 LC_RT_STRUCT
 #define LC_STR_(...) #__VA_ARGS__
-#define LC_STR(...) LC_STR_(__VA_ARGS__)
+#define LC_STR(...)  LC_STR_(__VA_ARGS__)
 
 typedef double (*lc_native_fn)(double *fr, struct lc_rt *R, int32_t at);
 
@@ -150,8 +150,7 @@ static void put(src *s, const char *fmt, ...)
     va_copy(ap2, ap);
     int n = vsnprintf(NULL, 0, fmt, ap);
     va_end(ap);
-    if (n < 0 || s->nomem ||
-        CBM_ARRAY_RESERVE(s->ctx, s->t, s->t.len + (size_t)n + 1) != CBM_OK)
+    if (n < 0 || s->nomem || CBM_ARRAY_RESERVE(s->ctx, s->t, s->t.len + (size_t)n + 1) != CBM_OK)
         s->nomem = true;
     else {
         (void)vsnprintf(s->t.data + s->t.len, (size_t)n + 1, fmt, ap2);
@@ -162,15 +161,20 @@ static void put(src *s, const char *fmt, ...)
 
 /* the helpers are lang/lc.h's lc_c_int and lc_wrap_int (the same text) */
 static const char prelude[] =
-    "#include <math.h>\n#include <stddef.h>\n#include <stdint.h>\n" LC_STR(LC_RT_STRUCT) "\n"
-    "static double cint(double v) { if (!(v > -2147483649.0 && v < 2147483648.0)) "
-    "return -2147483648.0; return (double)(int32_t)v; }\n"
-    "static double wrap(long long r) { return (double)(int32_t)(uint32_t)(unsigned long long)r; "
-    "}\n"
-    "static double kbits(uint64_t b) { union { uint64_t u; double d; } x; x.u = b; return x.d; "
-    "}\n"
-    "#define SPEND(at) do { if (*R->ops > 0 && *R->budget > 0) { --*R->ops; --*R->budget; } "
-    "else { R->limit(R, at); return 0; } } while (0)\n";
+    "#include <math.h>\n#include <stddef.h>\n#include <stdint.h>\n" LC_STR(
+        LC_RT_STRUCT) "\n"
+                      "static double cint(double v) { if (!(v > -2147483649.0 && v < "
+                      "2147483648.0)) "
+                      "return -2147483648.0; return (double)(int32_t)v; }\n"
+                      "static double wrap(long long r) { return "
+                      "(double)(int32_t)(uint32_t)(unsigned long long)r; "
+                      "}\n"
+                      "static double kbits(uint64_t b) { union { uint64_t u; double d; } x; x.u = "
+                      "b; return x.d; "
+                      "}\n"
+                      "#define SPEND(at) do { if (*R->ops > 0 && *R->budget > 0) { --*R->ops; "
+                      "--*R->budget; } "
+                      "else { R->limit(R, at); return 0; } } while (0)\n";
 
 /* "%s" of a value of register text e converted to type t, as lc_conv_scalar */
 static void put_conv(src *s, int t, const char *e)
@@ -238,19 +242,19 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
     case O_SUBD:
     case O_MULD:
     case O_DIVD:
-        put(s, "r%d = r%d %c r%d;", x->d, x->a, "+-*/"[x->op - O_ADDD], x->b);
+        put(s, "r%d = r%d %c r%d;", x->d, x->a, "+-*/"[x->op - O_ADDD], x -> b);
         break;
     case O_ADDF:
     case O_SUBF:
     case O_MULF:
     case O_DIVF:
-        put(s, "r%d = (double)(float)(r%d %c r%d);", x->d, x->a, "+-*/"[x->op - O_ADDF], x->b);
+        put(s, "r%d = (double)(float)(r%d %c r%d);", x->d, x->a, "+-*/"[x->op - O_ADDF], x -> b);
         break;
     case O_ADDI:
     case O_SUBI:
     case O_MULI:
         put(s, "r%d = wrap((long long)cint(r%d) %c (long long)cint(r%d));", x->d, x->a,
-            "+-*"[x->op - O_ADDI], x->b);
+            "+-*"[x->op - O_ADDI], x -> b);
         break;
     case O_LT:
     case O_GT:
@@ -281,8 +285,7 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
     case O_JGE:
     case O_JEQ:
     case O_JNE:
-        put(s, "if (r%d %s r%d) { SPEND(at); goto L%d; }", x->a, cmp_c[x->op - O_JLT], x->b,
-            x->d);
+        put(s, "if (r%d %s r%d) { SPEND(at); goto L%d; }", x->a, cmp_c[x->op - O_JLT], x->b, x->d);
         break;
     case O_SIN:
     case O_COS:
@@ -293,8 +296,8 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
         break;
     }
     case O_BIN:
-        put(s, "r%d = R->bin(R, at, %d, %d, r%d, r%d); if (R->failed) return 0;", x->d, x->fn,
-            x->t, x->a, x->b);
+        put(s, "r%d = R->bin(R, at, %d, %d, r%d, r%d); if (R->failed) return 0;", x->d, x->fn, x->t,
+            x->a, x->b);
         break;
     case O_INC:
     case O_GINC:
@@ -380,9 +383,15 @@ static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
 }
 
 /* ---------------------------------------------------------------- compile, cache, load */
-static const char *const cc_flags[] = {
-    "-O2", "-fPIC", "-shared", "-fno-builtin", "-ffp-contract=off", "-fno-fast-math",
-    "-fno-tree-vectorize", "-fno-tree-slp-vectorize", "-w"};
+static const char *const cc_flags[] = {"-O2",
+                                       "-fPIC",
+                                       "-shared",
+                                       "-fno-builtin",
+                                       "-ffp-contract=off",
+                                       "-fno-fast-math",
+                                       "-fno-tree-vectorize",
+                                       "-fno-tree-slp-vectorize",
+                                       "-w"};
 #define N_CC_FLAGS (sizeof cc_flags / sizeof cc_flags[0])
 
 static uint64_t fnv1a(uint64_t h, const char *t, size_t n)
