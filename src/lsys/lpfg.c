@@ -1875,3 +1875,7 @@ bool cbm__lpfg_has_interpretation(const cbm_lsys *ls)
 {
     return ls->lp->m.interp.present && ls->lp->m.interp.prods.len > 0;
 }
+
+/* The step protocol of the L+C dialect (lsys_internal.h). */
+const cbm__dialect cbm__lpfg_dialect = {cbm__lpfg_reset, cbm__lpfg_step, cbm__lpfg_interpretation,
+                                        cbm__lpfg_has_interpretation, cbm__lpfg_write_str};
