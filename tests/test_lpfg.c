@@ -427,6 +427,133 @@ TEST(lpfg_compiled_function_errors)
     cbm_context_destroy(ctx);
 }
 
+/* The string after `steps` steps of model path (or text) with the functions in the register
+ * code (native false) or as native code compiled into the test's directory; NULL when native
+ * code is asked and cannot be had (*why says why). */
+static char *run_functions(cbm_context *ctx, const char *path, const char *text, int steps,
+                           bool native, const char **why)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", path, cbm_context_last_error(ctx));
+    if (s != CBM_OK)
+        return NULL;
+    char *got = NULL;
+    if (!native || cbm_lsys_compile_native(ls, test_tmp_dir(), why)) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        for (int i = 0; i < steps; i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, '\n');
+    }
+    cbm_lsys_destroy(ls);
+    return got;
+}
+
+/* Native code (lang/lc_native.c) gives the register code's strings byte for byte: int wrap,
+ * division, float rounding, loops, ++/--, globals, math built-ins, recursion
+ * (compiled-functions.l), and a 400-term series (bench/lc/compute.l, 12 steps); loading it a
+ * second time takes the cached object. */
+TEST(lpfg_native_matches_register_code)
+{
+    static const struct {
+        const char *file;
+        int steps;
+    } models[] = {{"tests/lpfg/compiled-functions.l", 6}, {"bench/lc/compute.l", 12}};
+    cbm_context *ctx = test_ctx();
+    for (size_t k = 0; k < sizeof models / sizeof models[0]; k++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", test_source_dir(), models[k].file);
+        const char *why = NULL;
+        char *code = run_functions(ctx, path, NULL, models[k].steps, false, NULL);
+        char *native = run_functions(ctx, path, NULL, models[k].steps, true, &why);
+        if (!native && why && strstr(why, "compiler")) {
+            free(code);
+            test_skip("no C compiler (cc) for native code");
+            break;
+        }
+        CHECK_MSG(native != NULL, "%s: %s", models[k].file, why ? why : "no string");
+        CHECK_MSG(code && native && !strcmp(code, native), "%s: native code differs",
+                  models[k].file);
+        char *again = run_functions(ctx, path, NULL, models[k].steps, true, &why);
+        CHECK_MSG(again && native && !strcmp(again, native), "%s: cached object differs",
+                  models[k].file);
+        free(code);
+        free(native);
+        free(again);
+    }
+    test_ctx_end(ctx);
+}
+
+/* One step of model text with the functions in the register code or native code: its status
+ * and diagnostics in *g; CBM_E_UNSUPPORTED when native code cannot be had. */
+static cbm_status step_diags(const char *text, bool native, test_diags *g)
+{
+    cbm_context *ctx = test_diag_ctx(g);
+    CHECK(ctx != NULL);
+    if (!ctx)
+        return CBM_E_NOMEM;
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    def.max_loop_iterations = 1000;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_OK(s);
+    const char *why = NULL;
+    if (s == CBM_OK && native && !cbm_lsys_compile_native(ls, test_tmp_dir(), &why)) {
+        CHECK_MSG(why && strstr(why, "compiler"), "%s", why ? why : "?");
+        s = CBM_E_UNSUPPORTED;
+    } else if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        s = cbm_lsys_step(ls);
+    }
+    cbm_lsys_destroy(ls);
+    cbm_context_destroy(ctx);
+    return s;
+}
+
+/* Native code stops at the same statement with the same message as the register code: a
+ * division by zero names its line and column, loops spend the step's budget, recursion is
+ * bounded by the call depth. */
+TEST(lpfg_native_errors)
+{
+    static const struct {
+        const char *text, *where, *what;
+        cbm_status status;
+    } cases[] = {
+        {"#include <lpfgall.h>\nmodule A(int);\n"
+         "int f(int n) {\n"
+         "    int d = n - 1;\n"
+         "    return 10 % d; }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:5:5: ", "integer remainder by zero", CBM_E_RUNTIME},
+        {"#include <lpfgall.h>\nmodule A(int);\n"
+         "int f(int n) { while (n > 0) n = n + 1; return n; }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:3:", "more loop iterations in one step than the limit", CBM_E_LIMIT},
+        {"#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:3:", "function calls nested too deeply", CBM_E_LIMIT},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        test_diags code, native;
+        CHECK_STATUS(step_diags(cases[k].text, false, &code), cases[k].status);
+        cbm_status s = step_diags(cases[k].text, true, &native);
+        if (s == CBM_E_UNSUPPORTED) {
+            test_skip("no C compiler (cc) for native code");
+            return;
+        }
+        CHECK_STATUS(s, cases[k].status);
+        CHECK_MSG(strstr(code.text, cases[k].where) && strstr(code.text, cases[k].what), "%s",
+                  code.text);
+        CHECK_MSG(!strcmp(code.text, native.text), "register code: %s\nnative code: %s", code.text,
+                  native.text);
+    }
+}
+
 TEST(lpfg_runtime_limits)
 {
     cbm_context *ctx = test_ctx();

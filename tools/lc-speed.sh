@@ -7,7 +7,8 @@
 # Models: the lpfg oracle models (../shared/oracles/vlab/lpfg-*), the 8-step quadratic Koch
 # curve of that oracle, and bench/lc/compute.l (production bodies that compute: a 400-term
 # series per module per step). models/taylor-hell-fruit-tree.l needs the mechanics built-ins
-# lpfg does not have, so it is timed for cambium alone.
+# lpfg does not have, and models/taylor-hell-pendula.l (the A.4 listing) its vector built-ins,
+# so they are timed for cambium alone, with native code and with the register code.
 #
 # Usage: tools/lc-speed.sh [CAMBIUM [RUNS]]   (from the repository root; defaults
 # build/bin/cambium and 5 paired runs). Skips (exit 0 with a message) when the peers are not
@@ -30,6 +31,9 @@ command -v lpfg >/dev/null || { echo "lc-speed: SKIP: lpfg is not on PATH after 
 [ -d "$oracles" ] || { echo "lc-speed: SKIP: $oracles is absent"; exit 0; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# cambium's native code of the models' functions goes to a cache of this run (docs/cli.md,
+# --no-native); a first run of each model fills it, as lpfg's first run compiles its model
+export XDG_CACHE_HOME=$tmp/cache
 
 # wall seconds and peak RSS (MB) of one command, "s mb"
 measure() {
@@ -51,6 +55,7 @@ compare() {
         printf "| %s | lpfg cannot run it (%s) |\n" "$name" "$(grep -m1 -i error "$w/compile.log")"
         return
     fi
+    (cd "$w" && "$bin" run lsystem.l "$@" -o "$w/ours.str" >/dev/null 2>&1)
     : >"$w/c" && : >"$w/p" && : >"$w/cm" && : >"$w/pm"
     for _ in $(seq "$runs"); do
         read -r s m <<<"$(cd "$w" && measure "$bin" run lsystem.l "$@" -o "$w/ours.str")"
@@ -79,5 +84,16 @@ mkdir -p "$tmp/koch8" && cp "$oracles"/lpfg-quadratic-koch/model/* "$tmp/koch8/"
     compare koch-8-steps "$tmp/koch8" color.map view.v anim.a
 mkdir -p "$tmp/compute" && cp "$root/bench/lc/compute.l" "$tmp/compute/lsystem.l" &&
     compare compute "$tmp/compute"
-read -r s m <<<"$(measure "$bin" run "$root/models/taylor-hell-fruit-tree.l" -o "$tmp/fruit.str")"
-printf "| taylor-hell-fruit-tree (cambium alone: mechanics built-ins) | %s | %s | - | - | - |\n" "$s" "$m"
+# cambium alone, native code (after a first run that compiles it) and the register code
+for f in taylor-hell-fruit-tree taylor-hell-pendula; do
+    "$bin" run "$root/models/$f.l" -o "$tmp/$f.str" >/dev/null 2>&1
+    : >"$tmp/n" && : >"$tmp/r"
+    for _ in $(seq "$runs"); do
+        read -r s _ <<<"$(measure "$bin" run "$root/models/$f.l" -o "$tmp/$f.str")"
+        echo "$s" >>"$tmp/n"
+        read -r s _ <<<"$(measure "$bin" run "$root/models/$f.l" --no-native -o "$tmp/$f.str")"
+        echo "$s" >>"$tmp/r"
+    done
+    printf "| %s (cambium alone: native code %s s, register code %s s) | - | - | - | - | - |\n" \
+        "$f" "$(median <"$tmp/n")" "$(median <"$tmp/r")"
+done

@@ -47,6 +47,15 @@ CBM_API cbm_lsys_def cbm_lsys_def_default(void);
 CBM_API cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **out);
 CBM_API void cbm_lsys_destroy(cbm_lsys *ls);
 
+/// Runs the L+C model's functions of scalar values (those the register code runs) as native
+/// code: translated to C, compiled by the system C compiler (`cc` on PATH) into a shared object
+/// cached in cache_dir (created when missing) under the hash of its source, and loaded. Results,
+/// limits and error messages stay those of the register code, to the bit. Returns true when
+/// native code runs; false leaves the model as it was and says why in *why (a static string,
+/// may be NULL): a cpfg-dialect model, no function to compile, no compiler, an unwritable
+/// directory. Call it after cbm_lsys_load, before the first step.
+CBM_API bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why);
+
 /// The model's `derivation length:` (steps).
 CBM_API int cbm_lsys_derivation_length(const cbm_lsys *ls);
 /// Starts over: runs the Start: block, builds the axiom (step 0).

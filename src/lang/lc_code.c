@@ -9,71 +9,6 @@
 #include <stdio.h>
 #include <string.h>
 
-enum {
-    O_NOP, /* sets the statement position only */
-    O_CONST,
-    O_MOV,
-    O_GLD, /* d = glob[a] */
-    O_GST, /* glob[d] = a */
-    O_NEG,
-    O_NOT,
-    O_BOOL, /* d = a != 0 */
-    O_CONV, /* d = conv(t, a) */
-    O_ADDD,
-    O_SUBD,
-    O_MULD,
-    O_DIVD,
-    O_ADDF,
-    O_SUBF,
-    O_MULF,
-    O_DIVF,
-    O_ADDI,
-    O_SUBI,
-    O_MULI,
-    O_LT,
-    O_GT,
-    O_LE,
-    O_GE,
-    O_EQ,
-    O_NE,
-    O_DIVI,
-    O_REMI,
-    O_BIN,   /* d = cbm__lc_bin_scalar(t, type fn, a, b): the other operators and types */
-    O_INC,   /* ++/-- on local a: fn the mode, t the type, d the value */
-    O_GINC,  /* the same on global a */
-    O_MATH1, /* d = conv(t, math fn(a)) */
-    O_MATH2, /* d = conv(t, math fn(a, b)) */
-    O_JMP,   /* to a */
-    O_JZ,    /* to b if a == 0 */
-    O_JNZ,   /* to b if a != 0 */
-    O_SPEND, /* a loop iteration */
-    O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to b if a != 0 */
-    O_JMPS,  /* the same without a test (for (;;)): to a */
-    O_CALL,  /* d = function a on the frame at register b */
-    O_RET,   /* the value of a */
-    O_RET0,
-    /* a comparison and the jump on its falsehood in one (if, while, for): to d unless a op b */
-    O_JNLT,
-    O_JNGT,
-    O_JNLE,
-    O_JNGE,
-    O_JNEQ,
-    O_JNNE,
-    /* the same, jumping when it holds: the test at the bottom of a loop, which spends the
-     * iteration it starts */
-    O_JLT,
-    O_JGT,
-    O_JLE,
-    O_JGE,
-    O_JEQ,
-    O_JNE,
-    /* math built-ins of double result called directly */
-    O_SIN,
-    O_COS,
-    O_SQRT,
-    O_EXP
-};
-
 /* ---------------------------------------------------------------- runtime */
 void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg)
 {
@@ -181,6 +116,8 @@ static double inc(const lc_ins *ip, double *p)
 
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
+    if (p->native) /* the same functions as native code (lc_native.c) */
+        return cbm__lc_native_run(p, f, fr, vm);
     const lc_ins *code = p->fn[f].ins.data, *ip = code;
     double *glob = vm->glob;
     int32_t at = vm->at;
@@ -1031,6 +968,7 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
 
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p)
 {
+    cbm__lc_native_free(ctx, p);
     for (size_t f = 0; f < p->n; f++)
         CBM_ARRAY_FREE(ctx, p->fn[f].ins);
     cbm__free(ctx, p->fn, p->n * sizeof *p->fn);

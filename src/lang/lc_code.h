@@ -38,6 +38,72 @@ typedef struct lc_vm {
     int32_t err_pos; /* where the first runtime error happened, -1: unknown */
 } lc_vm;
 
+/* The instructions (lc_code.c runs them, lc_native.c translates them to C). */
+enum {
+    O_NOP, /* sets the statement position only */
+    O_CONST,
+    O_MOV,
+    O_GLD, /* d = glob[a] */
+    O_GST, /* glob[d] = a */
+    O_NEG,
+    O_NOT,
+    O_BOOL, /* d = a != 0 */
+    O_CONV, /* d = conv(t, a) */
+    O_ADDD,
+    O_SUBD,
+    O_MULD,
+    O_DIVD,
+    O_ADDF,
+    O_SUBF,
+    O_MULF,
+    O_DIVF,
+    O_ADDI,
+    O_SUBI,
+    O_MULI,
+    O_LT,
+    O_GT,
+    O_LE,
+    O_GE,
+    O_EQ,
+    O_NE,
+    O_DIVI,
+    O_REMI,
+    O_BIN,   /* d = cbm__lc_bin_scalar(t, type fn, a, b): the other operators and types */
+    O_INC,   /* ++/-- on local a: fn the mode, t the type, d the value */
+    O_GINC,  /* the same on global a */
+    O_MATH1, /* d = conv(t, math fn(a)) */
+    O_MATH2, /* d = conv(t, math fn(a, b)) */
+    O_JMP,   /* to a */
+    O_JZ,    /* to b if a == 0 */
+    O_JNZ,   /* to b if a != 0 */
+    O_SPEND, /* a loop iteration */
+    O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to b if a != 0 */
+    O_JMPS,  /* the same without a test (for (;;)): to a */
+    O_CALL,  /* d = function a on the frame at register b */
+    O_RET,   /* the value of a */
+    O_RET0,
+    /* a comparison and the jump on its falsehood in one (if, while, for): to d unless a op b */
+    O_JNLT,
+    O_JNGT,
+    O_JNLE,
+    O_JNGE,
+    O_JNEQ,
+    O_JNNE,
+    /* the same, jumping when it holds: the test at the bottom of a loop, which spends the
+     * iteration it starts */
+    O_JLT,
+    O_JGT,
+    O_JLE,
+    O_JGE,
+    O_JEQ,
+    O_JNE,
+    /* math built-ins of double result called directly */
+    O_SIN,
+    O_COS,
+    O_SQRT,
+    O_EXP
+};
+
 typedef struct lc_ins {
     uint8_t op, t; /* t: a type (conversions) or an operator (O_BIN) */
     uint16_t fn;   /* a built-in (O_MATH) or the increment mode (O_INC) */
@@ -53,9 +119,12 @@ typedef struct lc_fcode {
 } lc_fcode;
 
 /* The register code of a model's functions, by function index. */
+typedef struct lc_native lc_native; /* lc_native.c */
+
 typedef struct lc_program {
     lc_fcode *fn;
     size_t n;
+    lc_native *native; /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
 
 /* Compiles every function that can be compiled; CBM_E_NOMEM only (a function that cannot be
@@ -67,6 +136,16 @@ void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
  * doubles); the result (0 for void). After a runtime error vm->err is set and the result is
  * meaningless. */
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm);
+
+/* Native code (lc_native.c): the compiled functions translated to C, compiled by the system C
+ * compiler into a shared object cached in cache_dir under the hash of its source, and loaded;
+ * cbm__lc_run then runs them natively with the same arithmetic, budgets and messages. false
+ * (the register code stays) when there is nothing to compile, no compiler, or anything fails;
+ * why goes to *why (a static string). */
+bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
+                         const char **why);
+void cbm__lc_native_free(cbm_context *ctx, lc_program *p);
+double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 
 /* The first runtime error of a run wins; its position is vm->at. */
 void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg);

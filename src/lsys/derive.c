@@ -803,10 +803,8 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
     return CBM_OK;
 }
 
-cbm_status cbm_lsys_step(cbm_lsys *ls)
+static cbm_status cpfg_step(cbm_lsys *ls)
 {
-    if (ls->lp)
-        return cbm__lpfg_step(ls);
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
@@ -842,11 +840,8 @@ cbm_status cbm_lsys_step(cbm_lsys *ls)
     return CBM_OK;
 }
 
-cbm_status cbm_lsys_reset(cbm_lsys *ls)
+static cbm_status cpfg_reset(cbm_lsys *ls)
 {
-    memset(&ls->mech_time, 0, sizeof ls->mech_time);
-    if (ls->lp)
-        return cbm__lpfg_reset(ls);
     memset(ls->globals, 0, ls->nglobals * sizeof(double));
     size_t off = 0;
     for (size_t i = 0; i < ls->comp.arrays.len; i++) {
@@ -894,10 +889,8 @@ cbm_status cbm_lsys_reset(cbm_lsys *ls)
 static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out);
 static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out);
 
-cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
+static cbm_status cpfg_interpretation(cbm_lsys *ls)
 {
-    if (ls->lp)
-        return cbm__lpfg_interpretation(ls);
     lstr *out = &ls->homo_str;
     lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->max_depth));
@@ -1017,9 +1010,35 @@ size_t cbm_lsys_param_count(const cbm_lsys *ls)
 {
     return ls->cur.npar;
 }
+static bool cpfg_has_interpretation(const cbm_lsys *ls)
+{
+    return ls->homo.present;
+}
+
+/* The step protocol of the cpfg dialect (the L+C one is in lpfg.c). */
+const cbm__dialect cbm__cpfg_dialect = {cpfg_reset, cpfg_step, cpfg_interpretation,
+                                        cpfg_has_interpretation, cbm__cpfg_write_str};
+
+/* The entry points: the dialect's step protocol (lsys_internal.h). */
+cbm_status cbm_lsys_reset(cbm_lsys *ls)
+{
+    memset(&ls->mech_time, 0, sizeof ls->mech_time);
+    return ls->dialect->reset(ls);
+}
+
+cbm_status cbm_lsys_step(cbm_lsys *ls)
+{
+    return ls->dialect->step(ls);
+}
+
+cbm_status cbm_lsys_apply_homomorphism(cbm_lsys *ls)
+{
+    return ls->dialect->interpret(ls);
+}
+
 bool cbm_lsys_has_homomorphism(const cbm_lsys *ls)
 {
-    return ls->lp ? cbm__lpfg_has_interpretation(ls) : ls->homo.present;
+    return ls->dialect->has_interpretation(ls);
 }
 
 size_t cbm_lsys_homomorphism_module_count(const cbm_lsys *ls)

@@ -1730,6 +1730,18 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
     *modules = lp->m.mods.len;
 }
 
+bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why)
+{
+    const char *dummy;
+    if (!why)
+        why = &dummy;
+    if (!ls || !ls->lp) {
+        *why = "native code is for the L+C dialect's functions";
+        return false;
+    }
+    return cbm__lc_native_load(ls->ctx, &ls->lp->m, &ls->lp->prog, cache_dir, why);
+}
+
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
 {
     return ls && ls->lp && ls->lp->mech.seg_code >= 0;
@@ -1867,3 +1879,7 @@ bool cbm__lpfg_has_interpretation(const cbm_lsys *ls)
 {
     return ls->lp->m.interp.present && ls->lp->m.interp.prods.len > 0;
 }
+
+/* The step protocol of the L+C dialect (lsys_internal.h). */
+const cbm__dialect cbm__lpfg_dialect = {cbm__lpfg_reset, cbm__lpfg_step, cbm__lpfg_interpretation,
+                                        cbm__lpfg_has_interpretation, cbm__lpfg_write_str};

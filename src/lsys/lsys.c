@@ -161,8 +161,10 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->dlength_expr = ls->seed_expr = -1;
     ls->main.seed_expr = ls->decomp.seed_expr = ls->homo.seed_expr = -1;
     cbm_status s = cbm__compiler_init(&ls->comp, ctx, &pp);
+    bool lc = s == CBM_OK && cbm__lc_detect(&pp);
+    ls->dialect = lc ? &cbm__lpfg_dialect : &cbm__cpfg_dialect;
     if (s == CBM_OK)
-        s = cbm__lc_detect(&pp) ? cbm__lpfg_parse(ls, &pp) : cbm__lsys_parse(ls, &pp);
+        s = lc ? cbm__lpfg_parse(ls, &pp) : cbm__lsys_parse(ls, &pp);
     cbm__pp_free(&pp);
     ls->comp.pp = NULL;
     ls->comp.text = NULL;

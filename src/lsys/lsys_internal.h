@@ -153,7 +153,22 @@ struct cbm_lsys {
     bool homo_valid;
     cbm_lsys_mech_timing mech_time; /* mechanics operations since the last reset */
     struct lpfg *lp; /* the L+C dialect's model (lpfg.c), NULL for the cpfg dialect */
+    const struct cbm__dialect *dialect; /* its step protocol (below) */
 };
+
+/* The step protocol where the two dialects differ: the public entry points (cbm_lsys_reset,
+ * _step, _apply_homomorphism, _has_homomorphism, _write_str) call the model's dialect through
+ * this table instead of testing which dialect it is. The cpfg dialect's is in derive.c and
+ * write.c, the L+C dialect's in lpfg.c. */
+typedef struct cbm__dialect {
+    cbm_status (*reset)(cbm_lsys *ls);              /* Start, the axiom */
+    cbm_status (*step)(cbm_lsys *ls);               /* one derivation step */
+    cbm_status (*interpret)(cbm_lsys *ls);          /* homomorphism / interpretation rules */
+    bool (*has_interpretation)(const cbm_lsys *ls); /* the model has such rules */
+    cbm_status (*write_str)(const cbm_lsys *ls, bool homomorphism, cbm_out *o); /* `.str` */
+} cbm__dialect;
+extern const cbm__dialect cbm__cpfg_dialect, cbm__lpfg_dialect;
+cbm_status cbm__cpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
 
 void cbm__lstr_free(cbm_context *ctx, lstr *s);
 

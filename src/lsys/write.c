@@ -88,8 +88,11 @@ cbm_status cbm__strw_close(cbm__strw *w)
 
 cbm_status cbm_lsys_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o)
 {
-    if (ls->lp)
-        return cbm__lpfg_write_str(ls, homomorphism, o);
+    return ls->dialect->write_str(ls, homomorphism, o);
+}
+
+cbm_status cbm__cpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o)
+{
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, homomorphism, &c);
     cbm__strw *w = cbm__strw_open(ls->ctx, cbm_out_stream(o));

@@ -543,6 +543,24 @@ static bool names_tree_model(int argc, char **argv)
     return false;
 }
 
+/* The L+C model's functions as native code, cached in $XDG_CACHE_HOME/cambium (or
+ * ~/.cache/cambium): a model whose functions compute then runs as fast as compiled C. Without
+ * a compiler or a cache directory the register code runs them, with the same results. */
+static void native_code(cbm_lsys *ls, bool timing)
+{
+    const char *xdg = getenv("XDG_CACHE_HOME"), *home = getenv("HOME");
+    char dir[4096];
+    int n = -1;
+    if (xdg && xdg[0] == '/')
+        n = snprintf(dir, sizeof dir, "%s/cambium", xdg);
+    else if (home && home[0] == '/')
+        n = snprintf(dir, sizeof dir, "%s/.cache/cambium", home);
+    const char *why = "no cache directory ($XDG_CACHE_HOME and $HOME unset)";
+    bool ok = n > 0 && (size_t)n < sizeof dir && cbm_lsys_compile_native(ls, dir, &why);
+    if (timing)
+        fprintf(stderr, "native code: %s\n", ok ? "yes" : why ? why : "no");
+}
+
 int cmd_run(int argc, char **argv)
 {
     if (names_tree_model(argc, argv))
@@ -551,6 +569,7 @@ int cmd_run(int argc, char **argv)
     long steps = -1, every = 0, seed = -1, motion_every = 1;
     double step_time = 0.04;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
+    bool no_native = false;
     cbm_write_options wopt = cbm_write_options_default();
     const char *count = "{opt} expects a non-negative integer up to 10^8";
     cli_opt rows[] = {
@@ -637,6 +656,11 @@ int cmd_run(int argc, char **argv)
          .target = &no_print,
          .help = "discard what the model prints (printf); it goes to stdout,\n"
                  "or to stderr when an output is written to stdout"},
+        {.name = "--no-native",
+         .kind = CLI_SET,
+         .target = &no_native,
+         .help = "run the L+C functions in the register code, not as native code\n"
+                 "compiled with cc (cached in $XDG_CACHE_HOME/cambium)"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {.kind = CLI_GROUP, .target = cli_output_options(&wopt)},
         {0}};
@@ -705,6 +729,8 @@ int cmd_run(int argc, char **argv)
         goto done;
     }
     r.ls = cbm_model_lsys(r.model);
+    if (!no_native)
+        native_code(r.ls, timing);
     for (int k = 0; k < ntargets; k++) {
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");

@@ -1,0 +1,582 @@
+/* The L+C dialect's compiled functions as native code (lc_code.h): the register code of every
+ * compiled function translated to C, one C statement per instruction and the registers as
+ * locals, compiled by the system C compiler into a shared object, cached under the hash of its
+ * source and loaded with dlopen.
+ *
+ * Why: the register code's dispatch costs several times the arithmetic it runs, so models whose
+ * functions compute (bench/lc/compute.l) stayed slower than lpfg, whose models are C++. The
+ * translation keeps the register code's semantics exactly, because it is the register code:
+ * - arithmetic: each instruction is one C expression rounded as the loop rounds it (doubles,
+ *   float32 results through (double)(float), ints in 32 bits with the wrap), compiled without
+ *   contraction (no fused multiply-add), without vectorization (GCC 12's SLP vectorizer drops
+ *   float round trips, lang/lc.h) and without built-ins (no constant folding of sin with
+ *   another library than the one the loop calls); the rarer operators (O_BIN, the math
+ *   built-ins other than sin, cos, sqrt, exp) call back into this file's functions;
+ * - budgets, call depth and frame stack: the loop's checks in the same places, on the same
+ *   lc_vm (through the pointers of struct lc_rt), so limits stop a run at the same operation;
+ * - messages: each instruction that starts a statement sets `at`, and every error passes it
+ *   back, so a runtime error names the same file:line:col.
+ * Any failure (no compiler, an unwritable cache, a corrupt cached file) leaves the register
+ * code in place: native code is an acceleration, never a requirement. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "lang/builtins.h"
+#include "lang/lc_code.h"
+
+#include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <inttypes.h>
+#include <math.h>
+#include <spawn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+/* The runtime the native code sees: declared once here and pasted into the generated source
+ * as text (LC_STR), so both sides always agree on its layout. */
+#define LC_RT_STRUCT                                                                               \
+    struct lc_rt {                                                                                 \
+        double *glob;                                                                              \
+        long *ops, *budget;                                                                        \
+        int *call_depth;                                                                           \
+        int max_call_depth;                                                                        \
+        int failed;                                                                                \
+        double *stack;                                                                             \
+        size_t stack_cap;                                                                          \
+        void *vm;                                                                                  \
+        void (*limit)(struct lc_rt *, int32_t);                                                    \
+        int (*spend_call)(struct lc_rt *, int32_t);                                                \
+        void (*fault)(struct lc_rt *, int32_t, int);                                               \
+        double (*math)(int, double, double);                                                       \
+        double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
+    };
+LC_RT_STRUCT
+#define LC_STR_(...) #__VA_ARGS__
+#define LC_STR(...)  LC_STR_(__VA_ARGS__)
+
+typedef double (*lc_native_fn)(double *fr, struct lc_rt *R, int32_t at);
+
+struct lc_native {
+    void *so;
+    lc_native_fn const *fn; /* by function index, NULL: not compiled */
+};
+
+/* what fault() reports */
+enum { F_DIV, F_REM, F_DEEP };
+
+/* ---------------------------------------------------------------- the runtime's calls */
+static void rt_limit(struct lc_rt *R, int32_t at)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    (void)cbm__lc_spend(vm, true);
+    R->failed = 1;
+}
+
+static int rt_spend_call(struct lc_rt *R, int32_t at)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    if (cbm__lc_spend(vm, false))
+        return 1;
+    R->failed = 1;
+    return 0;
+}
+
+static void rt_fault(struct lc_rt *R, int32_t at, int what)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    if (what == F_DEEP)
+        cbm__lc_error(vm, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
+    else
+        cbm__lc_error(vm, CBM_E_RUNTIME,
+                      what == F_DIV ? "integer division by zero" : "integer remainder by zero");
+    R->failed = 1;
+}
+
+static double rt_math(int fn, double a, double b)
+{
+    return cbm__builtin_math(fn, a, b, false);
+}
+
+static double rt_bin(struct lc_rt *R, int32_t at, int op, int t, double a, double b)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    double r = cbm__lc_bin_scalar(op, t, a, b, vm);
+    if (vm->err != CBM_OK)
+        R->failed = 1;
+    return r;
+}
+
+double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
+{
+    struct lc_rt R = {vm->glob,
+                      &vm->ops,
+                      &vm->budget,
+                      &vm->call_depth,
+                      vm->max_call_depth,
+                      vm->err != CBM_OK,
+                      vm->stack,
+                      vm->stack_cap,
+                      vm,
+                      rt_limit,
+                      rt_spend_call,
+                      rt_fault,
+                      rt_math,
+                      rt_bin};
+    return p->native->fn[f](fr, &R, vm->at);
+}
+
+/* ---------------------------------------------------------------- the C source */
+typedef struct src {
+    cbm_context *ctx;
+    CBM_ARRAY(char) t;
+    bool nomem;
+} src;
+
+static void put(src *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(src *s, const char *fmt, ...)
+{
+    va_list ap, ap2;
+    va_start(ap, fmt);
+    va_copy(ap2, ap);
+    int n = vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    if (n < 0 || s->nomem || CBM_ARRAY_RESERVE(s->ctx, s->t, s->t.len + (size_t)n + 1) != CBM_OK)
+        s->nomem = true;
+    else {
+        (void)vsnprintf(s->t.data + s->t.len, (size_t)n + 1, fmt, ap2);
+        s->t.len += (size_t)n;
+    }
+    va_end(ap2);
+}
+
+/* the helpers are lang/lc.h's lc_c_int and lc_wrap_int (the same text) */
+static const char prelude[] =
+    "#include <math.h>\n#include <stddef.h>\n#include <stdint.h>\n" LC_STR(
+        LC_RT_STRUCT) "\n"
+                      "static double cint(double v) { if (!(v > -2147483649.0 && v < "
+                      "2147483648.0)) "
+                      "return -2147483648.0; return (double)(int32_t)v; }\n"
+                      "static double wrap(long long r) { return "
+                      "(double)(int32_t)(uint32_t)(unsigned long long)r; "
+                      "}\n"
+                      "static double kbits(uint64_t b) { union { uint64_t u; double d; } x; x.u = "
+                      "b; return x.d; "
+                      "}\n"
+                      "#define SPEND(at) do { if (*R->ops > 0 && *R->budget > 0) { --*R->ops; "
+                      "--*R->budget; } "
+                      "else { R->limit(R, at); return 0; } } while (0)\n";
+
+/* "%s" of a value of register text e converted to type t, as lc_conv_scalar */
+static void put_conv(src *s, int t, const char *e)
+{
+    switch (t) {
+    case T_INT:
+        put(s, "cint(%s)", e);
+        break;
+    case T_FLOAT:
+        put(s, "(double)(float)(%s)", e);
+        break;
+    case T_BOOL:
+        put(s, "(double)(%s != 0)", e);
+        break;
+    default:
+        put(s, "(%s)", e);
+        break;
+    }
+}
+
+static void put_const(src *s, int d, double k)
+{
+    uint64_t b;
+    memcpy(&b, &k, sizeof b);
+    put(s, "r%d = kbits(0x%016" PRIx64 "u);", d, b);
+}
+
+static const char *const cmp_c[] = {"<", ">", "<=", ">=", "==", "!="};
+
+static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins *x)
+{
+    char a[64], g[48];
+    snprintf(a, sizeof a, "r%d", x->a);
+    switch (x->op) {
+    case O_NOP:
+        put(s, ";");
+        break;
+    case O_CONST:
+        put_const(s, x->d, x->k);
+        break;
+    case O_MOV:
+        put(s, "r%d = r%d;", x->d, x->a);
+        break;
+    case O_GLD:
+        put(s, "r%d = R->glob[%d];", x->d, x->a);
+        break;
+    case O_GST:
+        put(s, "R->glob[%d] = r%d;", x->d, x->a);
+        break;
+    case O_NEG:
+        put(s, "r%d = -r%d;", x->d, x->a);
+        break;
+    case O_NOT:
+        put(s, "r%d = (double)(r%d == 0);", x->d, x->a);
+        break;
+    case O_BOOL:
+        put(s, "r%d = (double)(r%d != 0);", x->d, x->a);
+        break;
+    case O_CONV:
+        put(s, "r%d = ", x->d);
+        put_conv(s, x->t, a);
+        put(s, ";");
+        break;
+    case O_ADDD:
+    case O_SUBD:
+    case O_MULD:
+    case O_DIVD:
+        put(s, "r%d = r%d %c r%d;", x->d, x->a, "+-*/"[x->op - O_ADDD], x -> b);
+        break;
+    case O_ADDF:
+    case O_SUBF:
+    case O_MULF:
+    case O_DIVF:
+        put(s, "r%d = (double)(float)(r%d %c r%d);", x->d, x->a, "+-*/"[x->op - O_ADDF], x -> b);
+        break;
+    case O_ADDI:
+    case O_SUBI:
+    case O_MULI:
+        put(s, "r%d = wrap((long long)cint(r%d) %c (long long)cint(r%d));", x->d, x->a,
+            "+-*"[x->op - O_ADDI], x -> b);
+        break;
+    case O_LT:
+    case O_GT:
+    case O_LE:
+    case O_GE:
+    case O_EQ:
+    case O_NE:
+        put(s, "r%d = (double)(r%d %s r%d);", x->d, x->a, cmp_c[x->op - O_LT], x->b);
+        break;
+    case O_DIVI:
+    case O_REMI:
+        put(s,
+            "{ long long x = (long long)cint(r%d), y = (long long)cint(r%d); if (y == 0) { "
+            "R->fault(R, at, %d); return 0; } r%d = wrap(x %c y); }",
+            x->a, x->b, x->op == O_DIVI ? F_DIV : F_REM, x->d, x->op == O_DIVI ? '/' : '%');
+        break;
+    case O_JNLT:
+    case O_JNGT:
+    case O_JNLE:
+    case O_JNGE:
+    case O_JNEQ:
+    case O_JNNE:
+        put(s, "if (!(r%d %s r%d)) goto L%d;", x->a, cmp_c[x->op - O_JNLT], x->b, x->d);
+        break;
+    case O_JLT:
+    case O_JGT:
+    case O_JLE:
+    case O_JGE:
+    case O_JEQ:
+    case O_JNE:
+        put(s, "if (r%d %s r%d) { SPEND(at); goto L%d; }", x->a, cmp_c[x->op - O_JLT], x->b, x->d);
+        break;
+    case O_SIN:
+    case O_COS:
+    case O_SQRT:
+    case O_EXP: {
+        static const char *const name[] = {"sin", "cos", "sqrt", "exp"};
+        put(s, "r%d = %s(r%d);", x->d, name[x->op - O_SIN], x->a);
+        break;
+    }
+    case O_BIN:
+        put(s, "r%d = R->bin(R, at, %d, %d, r%d, r%d); if (R->failed) return 0;", x->d, x->fn, x->t,
+            x->a, x->b);
+        break;
+    case O_INC:
+    case O_GINC:
+        if (x->op == O_INC)
+            snprintf(g, sizeof g, "r%d", x->a);
+        else
+            snprintf(g, sizeof g, "R->glob[%d]", x->a);
+        put(s, "{ double o = %s; %s = ", g, g);
+        snprintf(a, sizeof a, "%s + %d", g, (x->fn & 1) ? -1 : 1);
+        put_conv(s, x->t, a);
+        put(s, "; r%d = %s; }", x->d, x->fn >= 2 ? "o" : g);
+        break;
+    case O_MATH1:
+    case O_MATH2:
+        snprintf(g, sizeof g, "R->math(%d, r%d, %s%d)", x->fn, x->a, x->op == O_MATH2 ? "r" : "",
+                 x->op == O_MATH2 ? x->b : 0);
+        put(s, "r%d = ", x->d);
+        put_conv(s, x->t, g);
+        put(s, ";");
+        break;
+    case O_JMP:
+        put(s, "goto L%d;", x->a);
+        break;
+    case O_JZ:
+        put(s, "if (r%d == 0) goto L%d;", x->a, x->b);
+        break;
+    case O_JNZ:
+        put(s, "if (r%d != 0) goto L%d;", x->a, x->b);
+        break;
+    case O_SPEND:
+        put(s, "SPEND(at);");
+        break;
+    case O_JNZS:
+        put(s, "if (r%d != 0) { SPEND(at); goto L%d; }", x->a, x->b);
+        break;
+    case O_JMPS:
+        put(s, "SPEND(at); goto L%d;", x->a);
+        break;
+    case O_CALL: {
+        /* the arguments are in the caller's registers b..; the callee's frame is fr + b as in
+         * the loop, so the frame stack and its limit are the same */
+        const lc_function *cf = &m->funcs.data[x->a];
+        put(s, "{ double *nf = fr + %d;", x->b);
+        for (int i = 0; i < cf->np; i++)
+            put(s, " nf[%d] = r%d;", i, x->b + i);
+        put(s,
+            " if (*R->call_depth >= R->max_call_depth || (size_t)(nf - R->stack) + %d + 1 > "
+            "R->stack_cap) { R->fault(R, at, %d); return 0; }"
+            " if (!R->spend_call(R, at)) return 0;"
+            " ++*R->call_depth; double v = f%d(nf, R, at); --*R->call_depth;"
+            " if (R->failed) return 0; r%d = v; }",
+            p->fn[x->a].nreg, F_DEEP, x->a, x->d);
+        break;
+    }
+    case O_RET:
+        put(s, "return r%d;", x->a);
+        break;
+    default: /* O_RET0 */
+        put(s, "return 0;");
+        break;
+    }
+}
+
+static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
+{
+    const lc_fcode *fc = &p->fn[f];
+    int fsize = m->funcs.data[f].fsize;
+    put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
+    /* the locals start as the frame holds them (the loop reads the frame itself) */
+    for (int r = 0; r < fc->nreg; r++)
+        put(s, r < fsize ? "    double r%d = fr[%d];\n" : "    double r%d = 0;\n", r, r);
+    put(s, "    (void)fr; (void)R; (void)at;\n");
+    for (size_t i = 0; i < fc->ins.len; i++) {
+        const lc_ins *x = &fc->ins.data[i];
+        put(s, "L%zu:", i);
+        if (x->at >= 0)
+            put(s, " at = %d;", (int)x->at);
+        put(s, " ");
+        put_ins(s, p, m, x);
+        put(s, "\n");
+    }
+    put(s, "L%zu: return 0;\n}\n", fc->ins.len);
+}
+
+/* ---------------------------------------------------------------- compile, cache, load */
+static const char *const cc_flags[] = {"-O2",
+                                       "-fPIC",
+                                       "-shared",
+                                       "-fno-builtin",
+                                       "-ffp-contract=off",
+                                       "-fno-fast-math",
+                                       "-fno-tree-vectorize",
+                                       "-fno-tree-slp-vectorize",
+                                       "-w"};
+#define N_CC_FLAGS (sizeof cc_flags / sizeof cc_flags[0])
+
+static uint64_t fnv1a(uint64_t h, const char *t, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        h ^= (unsigned char)t[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+/* mkdir -p */
+static bool make_dirs(const char *dir)
+{
+    char path[4096];
+    size_t n = strlen(dir);
+    if (n == 0 || n >= sizeof path)
+        return false;
+    memcpy(path, dir, n + 1);
+    for (size_t i = 1; i <= n; i++) {
+        if (path[i] != '/' && path[i] != '\0')
+            continue;
+        char c = path[i];
+        path[i] = '\0';
+        if (mkdir(path, 0700) != 0 && errno != EEXIST)
+            return false;
+        path[i] = c;
+    }
+    struct stat st;
+    return stat(dir, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* cc FLAGS -o so c -lm, its output discarded; true when it succeeded */
+static bool run_cc(const char *c_path, const char *so_path)
+{
+    /* posix_spawn takes char *const argv[]: the words are copied into one writable buffer */
+    char words[8192], *argv[N_CC_FLAGS + 7];
+    size_t k = 0, used = 0;
+    const char *w[N_CC_FLAGS + 6];
+    w[k++] = "cc";
+    for (size_t i = 0; i < N_CC_FLAGS; i++)
+        w[k++] = cc_flags[i];
+    w[k++] = "-o";
+    w[k++] = so_path;
+    w[k++] = c_path;
+    w[k++] = "-lm";
+    for (size_t i = 0; i < k; i++) {
+        size_t n = strlen(w[i]) + 1;
+        if (used + n > sizeof words)
+            return false;
+        argv[i] = memcpy(words + used, w[i], n);
+        used += n;
+    }
+    argv[k] = NULL;
+    posix_spawn_file_actions_t fa;
+    if (posix_spawn_file_actions_init(&fa) != 0)
+        return false;
+    bool ok = posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0) == 0 &&
+              posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0) == 0 &&
+              posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0) == 0;
+    pid_t pid;
+    ok = ok && posix_spawnp(&pid, "cc", &fa, NULL, argv, environ) == 0;
+    posix_spawn_file_actions_destroy(&fa);
+    if (!ok)
+        return false;
+    int st;
+    while (waitpid(pid, &st, 0) < 0)
+        if (errno != EINTR)
+            return false;
+    return WIFEXITED(st) && WEXITSTATUS(st) == 0;
+}
+
+/* dlopen so and check that it is the object of this key with n functions */
+static void *open_so(const char *so_path, const char *key, size_t n, lc_native_fn const **fn)
+{
+    void *so = dlopen(so_path, RTLD_NOW | RTLD_LOCAL);
+    if (!so)
+        return NULL;
+    const char *k = dlsym(so, "cbm_lc_key");
+    const int *count = dlsym(so, "cbm_lc_count");
+    void *table = dlsym(so, "cbm_lc_table");
+    if (!k || !count || !table || strcmp(k, key) != 0 || *count != (int)n) {
+        dlclose(so);
+        return NULL;
+    }
+    memcpy(fn, &table, sizeof table); /* POSIX: data and function pointers convert */
+    return so;
+}
+
+bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
+                         const char **why)
+{
+    *why = NULL;
+    if (p->native)
+        return true;
+    size_t ncompiled = 0;
+    for (size_t f = 0; f < p->n; f++)
+        ncompiled += p->fn[f].compiled;
+    if (!ncompiled || !cache_dir) {
+        *why = "no function of the model compiles to native code";
+        return false;
+    }
+    src s = {ctx, {NULL, 0, 0}, false};
+    put(&s, "%s", prelude);
+    for (size_t f = 0; f < p->n; f++)
+        if (p->fn[f].compiled)
+            put(&s, "static double f%zu(double *fr, struct lc_rt *R, int32_t at);\n", f);
+    for (size_t f = 0; f < p->n; f++)
+        if (p->fn[f].compiled)
+            put_function(&s, p, m, (int)f);
+    uint64_t h = fnv1a(14695981039346656037ULL, s.t.data ? s.t.data : "", s.t.len);
+    for (size_t i = 0; i < N_CC_FLAGS; i++)
+        h = fnv1a(h, cc_flags[i], strlen(cc_flags[i]) + 1);
+    char key[17];
+    snprintf(key, sizeof key, "%016" PRIx64, h);
+    put(&s, "const char cbm_lc_key[] = \"%s\";\nconst int cbm_lc_count = %zu;\n", key, p->n);
+    put(&s, "double (*const cbm_lc_table[%zu])(double *, struct lc_rt *, int32_t) = {", p->n);
+    for (size_t f = 0; f < p->n; f++)
+        put(&s, p->fn[f].compiled ? "f%zu," : "0,", f);
+    put(&s, "};\n");
+    bool ok = false;
+    char so_path[4096], tmp_so[4096], c_path[4096];
+    long pid = (long)getpid();
+    if (s.nomem) {
+        *why = "out of memory";
+        goto done;
+    }
+    if ((size_t)snprintf(so_path, sizeof so_path, "%s/lc-%s.so", cache_dir, key) >=
+            sizeof so_path ||
+        (size_t)snprintf(tmp_so, sizeof tmp_so, "%s/lc-%s.%ld.so", cache_dir, key, pid) >=
+            sizeof tmp_so ||
+        (size_t)snprintf(c_path, sizeof c_path, "%s/lc-%s.%ld.c", cache_dir, key, pid) >=
+            sizeof c_path) {
+        *why = "the cache directory's path is too long";
+        goto done;
+    }
+    lc_native_fn const *fn = NULL;
+    void *so = access(so_path, R_OK) == 0 ? open_so(so_path, key, p->n, &fn) : NULL;
+    if (!so) { /* not cached (or not usable): compile it */
+        if (!make_dirs(cache_dir)) {
+            *why = "the cache directory cannot be created";
+            goto done;
+        }
+        FILE *c = fopen(c_path, "w");
+        bool written = c && fwrite(s.t.data, 1, s.t.len, c) == s.t.len;
+        if (c && fclose(c) != 0)
+            written = false;
+        if (!written) {
+            *why = "the C source cannot be written to the cache directory";
+            (void)unlink(c_path);
+            goto done;
+        }
+        bool built = run_cc(c_path, tmp_so);
+        (void)unlink(c_path);
+        /* rename is atomic: a concurrent run sees the old object, the new one or none */
+        if (!built || rename(tmp_so, so_path) != 0) {
+            *why = "the C compiler (cc) is missing or failed";
+            (void)unlink(tmp_so);
+            goto done;
+        }
+        so = open_so(so_path, key, p->n, &fn);
+        if (!so) {
+            *why = "the compiled object cannot be loaded";
+            goto done;
+        }
+    }
+    p->native = cbm__calloc(ctx, 1, sizeof *p->native);
+    if (!p->native) {
+        dlclose(so);
+        *why = "out of memory";
+        goto done;
+    }
+    p->native->so = so;
+    p->native->fn = fn;
+    ok = true;
+done:
+    CBM_ARRAY_FREE(ctx, s.t);
+    return ok;
+}
+
+void cbm__lc_native_free(cbm_context *ctx, lc_program *p)
+{
+    if (!p->native)
+        return;
+    dlclose(p->native->so);
+    cbm__free(ctx, p->native, sizeof *p->native);
+    p->native = NULL;
+}
