@@ -1537,7 +1537,11 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
 static void mech_declare(lpfg *lp)
 {
     const lc_mech_decl *d = &lp->m.mech_decl;
+    cbm_lsys_sway_fn fn = lp->mech.sway_fn; /* the caller's observer outlives a reset */
+    void *ud = lp->mech.sway_ud;
     cbm__mechlang_init(&lp->mech);
+    lp->mech.sway_fn = fn;
+    lp->mech.sway_ud = ud;
     lp->mech.seg_code = d->seg_code;
     lp->mech.seg_off = d->seg_off;
     memcpy(lp->mech.mass_off, d->mass_off, sizeof d->mass_off);
@@ -1729,6 +1733,14 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
 {
     return ls && ls->lp && ls->lp->mech.seg_code >= 0;
+}
+
+void cbm_lsys_set_sway_observer(cbm_lsys *ls, cbm_lsys_sway_fn fn, void *ud)
+{
+    if (!ls || !ls->lp)
+        return;
+    ls->lp->mech.sway_fn = fn;
+    ls->lp->mech.sway_ud = ud;
 }
 
 cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out)
