@@ -539,3 +539,109 @@ TEST(critical_wind_hwind_pine)
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
+
+/* All the modes at once (count = 3n, the number of degrees of freedom, and more): Lanczos reaches
+ * an invariant subspace (repeated frequencies of a round rod, or the whole space) and restarts
+ * M-orthogonally. Oracles: each pair satisfies K phi = lambda M phi (residual 1e-8 of |K phi|),
+ * the shapes are M-orthonormal (1e-9), and no eigenvalue is missing or doubled: sum lambda =
+ * trace(M^-1 K) and sum lambda^2 = trace((M^-1 K)^2) (1e-8); frequencies past 3n are NAN. */
+static void check_all_modes(cbm_context *ctx, cbm_plant *p)
+{
+    cbm__dyn dy;
+    CHECK_OK(cbm__dyn_build(p, &dy));
+    size_t N = 3 * dy.n, extra = 2;
+    double *f = calloc(N + extra, sizeof *f), *ph = calloc((N + extra) * N, sizeof *ph);
+    double *a = calloc(N * N, sizeof *a), *e = calloc(N, sizeof *e), *y = calloc(N, sizeof *y);
+    double *ky = calloc(N, sizeof *ky), *my = calloc(N, sizeof *my);
+    CHECK(f && ph && a && e && y && ky && my);
+    CHECK_OK(cbm_plant_modes(p, N + extra, f, ph));
+    for (size_t i = N; i < N + extra; i++)
+        CHECK(isnan(f[i]));
+    double s1 = 0.0, s2 = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        CHECK(isfinite(f[i]) && f[i] > 0.0);
+        if (i > 0)
+            CHECK(f[i] >= f[i - 1]);
+        double lam = pow(2.0 * PI * f[i], 2);
+        s1 += lam;
+        s2 += lam * lam;
+        const double *phi = ph + i * N;
+        cbm__dyn_apply(&dy, 1.0, 0.0, phi, ky);
+        cbm__dyn_apply(&dy, 0.0, 1.0, phi, my);
+        double r = 0.0, k2 = 0.0;
+        for (size_t k = 0; k < N; k++) {
+            r += pow(ky[k] - lam * my[k], 2);
+            k2 += ky[k] * ky[k];
+        }
+        CHECK(sqrt(r) <= 1e-8 * sqrt(k2));
+        for (size_t j = 0; j <= i; j++) {
+            double m = 0.0;
+            for (size_t k = 0; k < N; k++)
+                m += ph[j * N + k] * my[k];
+            CHECK_NEAR(m, i == j ? 1.0 : 0.0, 1e-9);
+        }
+    }
+    /* A = M^-1 K column by column */
+    for (size_t c = 0; c < N; c++) {
+        memset(e, 0, N * sizeof *e);
+        e[c] = 1.0;
+        cbm__dyn_apply(&dy, 1.0, 0.0, e, ky);
+        CHECK_EQ_INT(cbm__dyn_factor(&dy, 0.0, 1.0), 0);
+        cbm__dyn_solve(&dy, ky, y);
+        for (size_t r = 0; r < N; r++)
+            a[r * N + c] = y[r];
+    }
+    double t1 = 0.0, t2 = 0.0;
+    for (size_t i = 0; i < N; i++) {
+        t1 += a[i * N + i];
+        for (size_t k = 0; k < N; k++)
+            t2 += a[i * N + k] * a[k * N + i];
+    }
+    printf("%zu modes: %.6g .. %.6g Hz; sum lambda %.12g (trace %.12g), sum lambda^2 %.12g "
+           "(trace %.12g)\n",
+           N, f[0], f[N - 1], s1, t1, s2, t2);
+    CHECK_REL(s1, t1, 1e-8);
+    CHECK_REL(s2, t2, 1e-8);
+    free(f);
+    free(ph);
+    free(a);
+    free(e);
+    free(y);
+    free(ky);
+    free(my);
+    cbm__dyn_free(&dy);
+    (void)ctx;
+}
+
+TEST(all_modes)
+{
+    cbm_context *ctx = test_ctx();
+    /* a round horizontal rod without gravity: every bending frequency twice */
+    cbm_plant *p = rod(ctx, 4, 1.0, 0.01, 0.0, 0.0, 0.0, 1e10);
+    check_all_modes(ctx, p);
+    cbm_plant_destroy(p);
+    /* a branched plant under gravity with point masses */
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(1.2);
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_segment_def d = cbm_segment_def_default();
+    d.core.a = 0.02;
+    d.core.b = 0.015;
+    for (int i = 0; i < 7; i++) {
+        d.parent = i == 0 ? -1 : (i % 3 == 0 ? i / 2 : i - 1);
+        d.lateral = i % 3 == 0 && i > 0;
+        d.deviation = d.lateral ? 0.6 : 0.05;
+        d.divergence = 2.4 * i;
+        d.point_mass = i % 4 == 0 ? 0.05 : 0.0;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    cbm_solve_def sd = cbm_solve_def_default();
+    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
+    check_all_modes(ctx, p);
+    /* one segment: three degrees of freedom */
+    cbm_plant_destroy(p);
+    p = rod(ctx, 1, 0.1, 0.01, 0.3, 9.81, 0.01, 1e10);
+    check_all_modes(ctx, p);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}

@@ -74,6 +74,9 @@ CBM_API cbm_status cbm_motion_step(cbm_motion *m);
 /// equilibrium) of the current state; any pointer may be NULL.
 CBM_API void cbm_motion_state(cbm_motion *m, double *t, double *kinetic, double *potential);
 
+/// The time step (s) of the motion.
+CBM_API double cbm_motion_dt(const cbm_motion *m);
+
 /// Current displacement (world, m) of the distal node of seg from the equilibrium.
 CBM_API cbm_status cbm_motion_displacement(const cbm_motion *m, size_t seg, cbm_vec3 *out);
 

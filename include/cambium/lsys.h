@@ -164,6 +164,22 @@ CBM_API bool cbm_lsys_has_mechanics(const cbm_lsys *ls);
 /// a message when the model declares no mechanics or the string holds an invalid segment.
 CBM_API cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out);
 
+typedef struct cbm_motion cbm_motion; /* cambium/dynamics.h */
+/// Phases of a Sway() call reported to the sway observer.
+typedef enum cbm_lsys_sway_phase {
+    CBM_LSYS_SWAY_BEGIN, ///< the motion is set up and at its start (t = 0)
+    CBM_LSYS_SWAY_STEP,  ///< after each time step
+    CBM_LSYS_SWAY_END    ///< after the last step (the motion is still valid)
+} cbm_lsys_sway_phase;
+/// Observer of the L+C dialect's Sway(): called with the plant at its stored state (the
+/// equilibrium the motion is about) and the motion (read its time, rotations and wind with
+/// cbm_motion_state, cbm_motion_rotations, cbm_motion_wind_at; do not step it). A non-OK status
+/// stops the Sway() call and the run with that status.
+typedef cbm_status (*cbm_lsys_sway_fn)(void *ud, const cbm_plant *plant, cbm_motion *motion,
+                                       cbm_lsys_sway_phase phase);
+/// L+C dialect: sets (fn NULL: clears) the observer of every later Sway() call.
+CBM_API void cbm_lsys_set_sway_observer(cbm_lsys *ls, cbm_lsys_sway_fn fn, void *ud);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1539,9 +1539,13 @@ static void mech_declare(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
     const lc_mech_decl *d = &lp->m.mech_decl;
+    cbm_lsys_sway_fn fn = lp->mech.sway_fn; /* the caller's observer outlives a reset */
+    void *ud = lp->mech.sway_ud;
     cbm__mechlang_init(&lp->mech);
     if (ls->solver_override >= 0)
         lp->mech.solve.solver = (cbm_mech_solver)ls->solver_override;
+    lp->mech.sway_fn = fn;
+    lp->mech.sway_ud = ud;
     lp->mech.seg_code = d->seg_code;
     lp->mech.seg_off = d->seg_off;
     memcpy(lp->mech.mass_off, d->mass_off, sizeof d->mass_off);
@@ -1745,6 +1749,14 @@ bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **w
 bool cbm_lsys_has_mechanics(const cbm_lsys *ls)
 {
     return ls && ls->lp && ls->lp->mech.seg_code >= 0;
+}
+
+void cbm_lsys_set_sway_observer(cbm_lsys *ls, cbm_lsys_sway_fn fn, void *ud)
+{
+    if (!ls || !ls->lp)
+        return;
+    ls->lp->mech.sway_fn = fn;
+    ls->lp->mech.sway_ud = ud;
 }
 
 cbm_status cbm_lsys_mech_plant(cbm_lsys *ls, cbm_plant **out)

@@ -699,7 +699,7 @@ static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, do
         if (st == CBM_OK && op == CBM__ML_FREQUENCY)
             st = cbm__mechlang_frequency(ctx, pl, (size_t)arg, result);
         else if (st == CBM_OK)
-            st = cbm__mechlang_sway(ctx, pl, m->dyn_args, result);
+            st = cbm__mechlang_sway(ctx, pl, m->dyn_args, m->sway_fn, m->sway_ud, result);
     } else if (st == CBM_OK && op == CBM__ML_STABILITY) {
         st = cbm_plant_stability_factor(pl, result, NULL);
         if (st != CBM_OK)

@@ -26,7 +26,9 @@ typedef struct cbm__mechlang {
      * settings it was built with are unchanged (mechlang.c); keep: whether to keep it. */
     struct cbm__mechkept *kept;
     bool keep;
-    double dyn_args[4]; /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY */
+    double dyn_args[4];       /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY */
+    cbm_lsys_sway_fn sway_fn; /* observer of Sway() (cbm_lsys_set_sway_observer), NULL: none */
+    void *sway_ud;
 } cbm__mechlang;
 
 /* The plant's dynamics for the dialect (mechlang_dyn.c): the k-th lowest natural frequency (Hz)
@@ -34,7 +36,7 @@ typedef struct cbm__mechlang {
  * U_ref m/s at 10 m, gust intensity). The plant must be evaluated. */
 cbm_status cbm__mechlang_frequency(cbm_context *ctx, const cbm_plant *p, size_t k, double *hz);
 cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double *args,
-                              double *peak);
+                              cbm_lsys_sway_fn fn, void *ud, double *peak);
 
 enum {
     CBM__ML_EQUILIBRIUM,

@@ -46,7 +46,7 @@ static double peak_disp(size_t n, const int64_t *par, const cbm_vec3 *x, const c
 }
 
 cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double *args,
-                              double *peak)
+                              cbm_lsys_sway_fn fn, void *ud, double *peak)
 {
     *peak = 0;
     size_t n = cbm_plant_segment_count(p);
@@ -78,13 +78,19 @@ cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double
     double mx = 0.0;
     if (st == CBM_OK)
         mx = peak_disp(n, par, pos, e, cbm_motion_rotations(m), th, de);
+    if (st == CBM_OK && fn)
+        st = fn(ud, p, m, CBM_LSYS_SWAY_BEGIN);
     for (long k = 0; k < steps && st == CBM_OK; k++) {
         st = cbm_motion_step(m);
         if (st == CBM_OK) {
             double d = peak_disp(n, par, pos, e, cbm_motion_rotations(m), th, de);
             mx = d > mx ? d : mx;
         }
+        if (st == CBM_OK && fn)
+            st = fn(ud, p, m, CBM_LSYS_SWAY_STEP);
     }
+    if (st == CBM_OK && fn)
+        st = fn(ud, p, m, CBM_LSYS_SWAY_END);
     cbm_motion_destroy(m);
     cbm__free(ctx, buf, 3 * n * sizeof *buf);
     *peak = mx;

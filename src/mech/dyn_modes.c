@@ -71,20 +71,47 @@ static double dot(const double *a, const double *b, size_t n)
     return s;
 }
 
+/* w -= the M-projection of w on v[0..cols), twice (classical Gram-Schmidt); mw = M w after. When
+ * diag is not NULL it receives the coefficient of column cols - 1 summed over both passes. */
+static void m_orthogonalise(cbm__dyn *d, const double *v, size_t cols, double *w, double *mw,
+                            double *diag)
+{
+    size_t N = 3 * d->n;
+    for (int pass = 0; pass < 2; pass++) {
+        cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+        for (size_t i = 0; i < cols; i++) {
+            double c = dot(v + i * N, mw, N);
+            if (diag && i + 1 == cols)
+                *diag = pass == 0 ? c : *diag + c;
+            for (size_t k = 0; k < N; k++)
+                w[k] -= c * v[i * N + k];
+        }
+    }
+    cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+}
+
+/* a reproducible start vector with every component in [0.5, 1.5) (xorshift state s) */
+static void start_vector(uint64_t *s, double *w, size_t N)
+{
+    for (size_t i = 0; i < N; i++) {
+        *s ^= *s << 13;
+        *s ^= *s >> 7;
+        *s ^= *s << 17;
+        w[i] = 0.5 + (double)(*s >> 11) * 0x1.0p-53;
+    }
+}
+
 /* One Lanczos run of at most mmax steps; returns the steps done (the basis in v, the tridiagonal
- * in al, be), stopping early on an invariant subspace. */
+ * in al, be). When the Krylov space closes (an invariant subspace: it happens with exactly
+ * repeated frequencies, or when the run reaches all N degrees of freedom) the run restarts from a
+ * new start vector M-orthogonal to the basis, with be = 0 at the seam, so T stays tridiagonal and
+ * its eigenvalues those of the whole space spanned; it stops when no new direction is left. */
 static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *be, double *w,
                       double *mw)
 {
     size_t N = 3 * d->n;
-    /* start: a fixed, reproducible vector with every component non-zero */
     uint64_t s = 0x9E3779B97F4A7C15ull;
-    for (size_t i = 0; i < N; i++) {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        w[i] = 0.5 + (double)(s >> 11) * 0x1.0p-53;
-    }
+    start_vector(&s, w, N);
     cbm__dyn_apply(d, 0.0, 1.0, w, mw);
     double nrm = sqrt(dot(w, mw, N));
     for (size_t i = 0; i < N; i++)
@@ -94,29 +121,26 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *b
         double *vj = v + j * N;
         cbm__dyn_apply(d, 0.0, 1.0, vj, mw);
         cbm__dyn_solve(d, mw, w);
-        /* full reorthogonalisation in the M inner product, twice (classical Gram-Schmidt) */
-        for (int pass = 0; pass < 2; pass++) {
-            cbm__dyn_apply(d, 0.0, 1.0, w, mw);
-            for (size_t i = 0; i <= j; i++) {
-                double c = dot(v + i * N, mw, N);
-                if (pass == 0 && i == j)
-                    al[j] = c;
-                else if (i == j)
-                    al[j] += c;
-                for (size_t k = 0; k < N; k++)
-                    w[k] -= c * v[i * N + k];
-            }
-        }
-        cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+        /* full reorthogonalisation in the M inner product */
+        m_orthogonalise(d, v, j + 1, w, mw, &al[j]);
         double b = sqrt(fmax(dot(w, mw, N), 0.0));
         be[j] = b;
-        if (j + 1 == mmax) {
+        if (j + 1 == mmax || !isfinite(b)) {
             j++;
             break;
         }
-        if (!(b > 1e-14 * fabs(al[j])) || !isfinite(b)) {
-            j++;
-            break;
+        if (!(b > 1e-10 * fabs(al[j]))) {
+            /* closed: restart M-orthogonal to the basis, or stop if it spans everything */
+            be[j] = 0.0;
+            start_vector(&s, w, N);
+            cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+            double n0 = sqrt(dot(w, mw, N));
+            m_orthogonalise(d, v, j + 1, w, mw, NULL);
+            b = sqrt(fmax(dot(w, mw, N), 0.0));
+            if (!(b > 1e-8 * n0)) {
+                j++;
+                break;
+            }
         }
         for (size_t k = 0; k < N; k++)
             v[(j + 1) * N + k] = w[k] / b;

@@ -27,6 +27,13 @@ struct cbm_motion {
     int iters;
     bool base_moves;
     cbm_vec3 ba_next, ba, bv, bd; /* the base's acceleration (next step, now), velocity, disp */
+    /* the fused step (fused_step below): per segment the spatial inertia in 10 doubles (the
+     * symmetric 3x3 J about the origin, the first moment h, the mass), the stiffness block
+     * A = K_el + sym G (9), the carried sums of the backward sweep (6), the twists of the
+     * solution (6) and of the next step's right-hand side vector (6, and 3 for the damping's) */
+    double *pc, *ak, *gam, *zs, *zw, *thw;
+    bool zw_valid; /* zw and thw hold the twists of the current state's vectors */
+    bool forced;   /* f holds forces added since the last step */
 };
 
 cbm_motion_def cbm_motion_def_default(void)
@@ -52,6 +59,13 @@ void cbm_motion_destroy(cbm_motion *m)
     cbm__free(ctx, m->g2, b);
     cbm__free(ctx, m->rhs, b);
     cbm__free(ctx, m->wb, 2 * b);
+    size_t ns = m->d.n;
+    cbm__free(ctx, m->pc, 10 * ns * sizeof(double));
+    cbm__free(ctx, m->ak, 9 * ns * sizeof(double));
+    cbm__free(ctx, m->gam, 6 * ns * sizeof(double));
+    cbm__free(ctx, m->zs, 6 * ns * sizeof(double));
+    cbm__free(ctx, m->zw, 6 * ns * sizeof(double));
+    cbm__free(ctx, m->thw, 3 * ns * sizeof(double));
     cbm__drag_free(ctx, &m->drag);
     cbm__dyn_free(&m->d);
     cbm__free(ctx, m, sizeof *m);
@@ -59,6 +73,7 @@ void cbm_motion_destroy(cbm_motion *m)
 
 static cbm_status refactor(cbm_motion *m)
 {
+    m->zw_valid = false; /* called after every change of the state outside a step */
     double dt = m->dt;
     size_t r =
         cbm__dyn_factor(&m->d, 1.0 + 2.0 * m->beta / dt, 4.0 / (dt * dt) + 2.0 * m->alpha / dt);
@@ -67,6 +82,179 @@ static cbm_status refactor(cbm_motion *m)
                          "motion: the effective stiffness is singular (dt too long for an "
                          "unstable equilibrium)");
     return CBM_OK;
+}
+
+/* The spatial inertia P = [[J, [h]], [[h]^T, m I]] (tree.c, add_inertia: J about the origin, h
+ * the first moment of the mass) in 10 doubles, and A = K_el + sym G, read by the fused step. */
+static void compact_blocks(cbm_motion *m)
+{
+    const cbm__dyn *d = &m->d;
+    for (size_t k = 0; k < d->n; k++) {
+        const double *p = d->body + 36 * k;
+        double *c = m->pc + 10 * k;
+        c[0] = p[0];
+        c[1] = p[7];
+        c[2] = p[14];
+        c[3] = 0.5 * (p[1] + p[6]);
+        c[4] = 0.5 * (p[2] + p[12]);
+        c[5] = 0.5 * (p[8] + p[13]);
+        c[6] = p[16]; /* h_x: [h] row 2, column 1 */
+        c[7] = p[5];  /* h_y: row 0, column 2 */
+        c[8] = p[9];  /* h_z: row 1, column 0 */
+        c[9] = p[21];
+        const double *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                m->ak[9 * k + 3 * i + j] = ke[3 * i + j] + 0.5 * (g[3 * i + j] + g[3 * j + i]);
+    }
+}
+
+/* The twists of the next step's right-hand side vectors from the current state: zw of
+ * w1 = a0 q + a1 v + a (the product with M), thw the rotations of w2 = beta (2 q / dt + v) (the
+ * product with K). One forward sweep; the fused step keeps them current itself. */
+static void rhs_twists(cbm_motion *m, double a0, double a1)
+{
+    const cbm__dyn *d = &m->d;
+    double b2 = 2.0 * m->beta / m->dt;
+    for (size_t k = 0; k < d->n; k++) {
+        int64_t pa = d->parent[k];
+        double *zk = m->zw + 6 * k, *tk = m->thw + 3 * k;
+        const double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k;
+        double w[3] = {a0 * q[0] + a1 * v[0] + a[0], a0 * q[1] + a1 * v[1] + a[1],
+                       a0 * q[2] + a1 * v[2] + a[2]};
+        cbm_vec3 x = d->x[k];
+        if (pa >= 0) {
+            memcpy(zk, m->zw + 6 * pa, 6 * sizeof(double));
+            memcpy(tk, m->thw + 3 * pa, 3 * sizeof(double));
+        } else {
+            memset(zk, 0, 6 * sizeof(double));
+            memset(tk, 0, 3 * sizeof(double));
+        }
+        zk[0] += w[0];
+        zk[1] += w[1];
+        zk[2] += w[2];
+        zk[3] += x.y * w[2] - x.z * w[1];
+        zk[4] += x.z * w[0] - x.x * w[2];
+        zk[5] += x.x * w[1] - x.y * w[0];
+        for (int i = 0; i < 3; i++)
+            tk[i] += b2 * q[i] + m->beta * v[i];
+        m->gam[6 * k] = m->gam[6 * k + 1] = m->gam[6 * k + 2] = 0.0;
+        m->gam[6 * k + 3] = m->gam[6 * k + 4] = m->gam[6 * k + 5] = 0.0;
+    }
+    m->zw_valid = true;
+}
+
+/* One Newmark step without drag or base motion in two sweeps over the tree instead of six (the
+ * products M w1 and K w2 of the right-hand side, the solve's elimination and back-substitution,
+ * and the state update): the products' wrenches are summed up the tree in the same backward
+ * sweep as the elimination's (tree.c: u_k = b_k - S^T sum psi_c with b = f + M w1 + K w2, one
+ * carried sum Gamma = W - psi per segment), and the forward sweep that back-substitutes q1 also
+ * updates v, a and builds the twists of the next step's w1, w2. The same arithmetic as the
+ * general path in another order: the two agree to round-off (tests/test_dyn_loads.c). */
+static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1)
+{
+    const cbm__dyn *d = &m->d;
+    size_t n = d->n;
+    double dt = m->dt, beta = m->beta, b2 = 2.0 * beta / dt;
+    bool damp = beta > 0.0, forced = m->forced;
+    double *u = d->u, nan_check = 0.0; /* stays 0 unless some q is not finite */
+    for (size_t k = n; k-- > 0;) {
+        const double *pc = m->pc + 10 * k, *z = m->zw + 6 * k;
+        double *gk = m->gam + 6 * k;
+        /* T = P z + the children's carried sums */
+        double t[6];
+        t[0] = gk[0] + pc[0] * z[0] + pc[3] * z[1] + pc[4] * z[2] + pc[7] * z[5] - pc[8] * z[4];
+        t[1] = gk[1] + pc[3] * z[0] + pc[1] * z[1] + pc[5] * z[2] + pc[8] * z[3] - pc[6] * z[5];
+        t[2] = gk[2] + pc[4] * z[0] + pc[5] * z[1] + pc[2] * z[2] + pc[6] * z[4] - pc[7] * z[3];
+        t[3] = gk[3] + pc[9] * z[3] + z[1] * pc[8] - z[2] * pc[7];
+        t[4] = gk[4] + pc[9] * z[4] + z[2] * pc[6] - z[0] * pc[8];
+        t[5] = gk[5] + pc[9] * z[5] + z[0] * pc[7] - z[1] * pc[6];
+        cbm_vec3 x = d->x[k];
+        static const double nof[3] = {0, 0, 0};
+        const double *fk = forced ? m->f + 3 * k : nof;
+        double uk[3];
+        uk[0] = fk[0] + t[0] - (x.y * t[5] - x.z * t[4]);
+        uk[1] = fk[1] + t[1] - (x.z * t[3] - x.x * t[5]);
+        uk[2] = fk[2] + t[2] - (x.x * t[4] - x.y * t[3]);
+        int64_t pa = d->parent[k];
+        if (damp) {
+            const double *q = m->q + 3 * k, *v = m->v + 3 * k, *ak = m->ak + 9 * k,
+                         *g = d->geo + 9 * k;
+            double w[3] = {b2 * q[0] + beta * v[0], b2 * q[1] + beta * v[1],
+                           b2 * q[2] + beta * v[2]};
+            double th[3] = {0, 0, 0};
+            if (pa >= 0)
+                memcpy(th, m->thw + 3 * pa, sizeof th);
+            for (int i = 0; i < 3; i++) {
+                uk[i] += ak[3 * i] * w[0] + ak[3 * i + 1] * w[1] + ak[3 * i + 2] * w[2] +
+                         g[i] * th[0] + g[3 + i] * th[1] + g[6 + i] * th[2];
+                t[i] += g[3 * i] * w[0] + g[3 * i + 1] * w[1] + g[3 * i + 2] * w[2];
+            }
+        }
+        memcpy(u + 3 * k, uk, sizeof uk);
+        if (pa < 0)
+            continue;
+        const double *di = d->dinv + 9 * k, *lm = d->lmat + 18 * k;
+        double s[3];
+        for (int i = 0; i < 3; i++)
+            s[i] = di[3 * i] * uk[0] + di[3 * i + 1] * uk[1] + di[3 * i + 2] * uk[2];
+        double *gp = m->gam + 6 * pa;
+        for (int j = 0; j < 6; j++)
+            gp[j] += t[j] - (lm[j] * s[0] + lm[6 + j] * s[1] + lm[12 + j] * s[2]);
+    }
+    for (size_t k = 0; k < n; k++) {
+        int64_t pa = d->parent[k];
+        double *zs = m->zs + 6 * k, *zw = m->zw + 6 * k, *th = m->thw + 3 * k;
+        const double *lm = d->lmat + 18 * k, *di = d->dinv + 9 * k;
+        double r[3] = {u[3 * k], u[3 * k + 1], u[3 * k + 2]};
+        if (pa >= 0) {
+            const double *zp = m->zs + 6 * pa;
+            memcpy(zs, zp, 6 * sizeof(double));
+            memcpy(zw, m->zw + 6 * pa, 6 * sizeof(double));
+            if (damp)
+                memcpy(th, m->thw + 3 * pa, 3 * sizeof(double));
+            for (int i = 0; i < 3; i++)
+                r[i] -= lm[6 * i] * zp[0] + lm[6 * i + 1] * zp[1] + lm[6 * i + 2] * zp[2] +
+                        lm[6 * i + 3] * zp[3] + lm[6 * i + 4] * zp[4] + lm[6 * i + 5] * zp[5];
+        } else {
+            memset(zs, 0, 6 * sizeof(double));
+            memset(zw, 0, 6 * sizeof(double));
+            if (damp)
+                memset(th, 0, 3 * sizeof(double));
+        }
+        double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k, w[3];
+        for (int i = 0; i < 3; i++) {
+            double qn = di[3 * i] * r[0] + di[3 * i + 1] * r[1] + di[3 * i + 2] * r[2];
+            double an = c0 * (qn - q[i]) - c1 * v[i] - a[i];
+            v[i] += 0.5 * dt * (a[i] + an);
+            a[i] = an;
+            q[i] = qn;
+            nan_check += 0.0 * qn;
+            w[i] = a0 * qn + a1 * v[i] + an;
+        }
+        if (damp)
+            for (int i = 0; i < 3; i++)
+                th[i] += b2 * q[i] + beta * v[i];
+        cbm_vec3 x = d->x[k];
+        zs[0] += q[0];
+        zs[1] += q[1];
+        zs[2] += q[2];
+        zs[3] += x.y * q[2] - x.z * q[1];
+        zs[4] += x.z * q[0] - x.x * q[2];
+        zs[5] += x.x * q[1] - x.y * q[0];
+        zw[0] += w[0];
+        zw[1] += w[1];
+        zw[2] += w[2];
+        zw[3] += x.y * w[2] - x.z * w[1];
+        zw[4] += x.z * w[0] - x.x * w[2];
+        zw[5] += x.x * w[1] - x.y * w[0];
+        double *gk = m->gam + 6 * k;
+        gk[0] = gk[1] = gk[2] = gk[3] = gk[4] = gk[5] = 0.0;
+        if (forced)
+            m->f[3 * k] = m->f[3 * k + 1] = m->f[3 * k + 2] = 0.0;
+    }
+    m->forced = false;
+    return nan_check == 0.0;
 }
 
 cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, cbm_motion **out)
@@ -117,11 +305,19 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
     m->g2 = cbm__calloc(ctx, m->nq, sizeof(double));
     m->rhs = cbm__calloc(ctx, m->nq, sizeof(double));
     m->wb = cbm__calloc(ctx, 2 * m->nq, sizeof(double));
+    size_t ns = m->d.n;
+    m->pc = cbm__alloc(ctx, 10 * ns * sizeof(double));
+    m->ak = cbm__alloc(ctx, 9 * ns * sizeof(double));
+    m->gam = cbm__calloc(ctx, 6 * ns, sizeof(double));
+    m->zs = cbm__calloc(ctx, 6 * ns, sizeof(double));
+    m->zw = cbm__calloc(ctx, 6 * ns, sizeof(double));
+    m->thw = cbm__calloc(ctx, 3 * ns, sizeof(double));
     if (!m->q || !m->v || !m->a || !m->f || !m->w1 || !m->w2 || !m->y || !m->g || !m->g2 ||
-        !m->rhs || !m->wb) {
+        !m->rhs || !m->wb || !m->pc || !m->ak || !m->gam || !m->zs || !m->zw || !m->thw) {
         cbm_motion_destroy(m);
         return CBM_E_NOMEM;
     }
+    compact_blocks(m);
     st = refactor(m);
     if (st != CBM_OK) {
         cbm_motion_destroy(m);
@@ -160,6 +356,7 @@ cbm_status cbm_motion_add_force(cbm_motion *m, size_t seg, cbm_vec3 force)
     if (!m || seg >= m->d.n || !v3_isfinite(force))
         return CBM_E_INVALID;
     cbm__dyn_point_force(&m->d, seg, force, m->f);
+    m->forced = true;
     return CBM_OK;
 }
 
@@ -206,6 +403,17 @@ cbm_status cbm_motion_step(cbm_motion *m)
     size_t n = m->nq;
     double dt = m->dt, c0 = 4.0 / (dt * dt), c1 = 4.0 / dt;
     double a0 = c0 + 2.0 * m->alpha / dt, a1 = c1 + m->alpha;
+    if (!m->wind && !m->base_moves) {
+        if (!m->zw_valid)
+            rhs_twists(m, a0, a1);
+        bool finite = fused_step(m, a0, a1, c0, c1);
+        m->t += dt;
+        if (!finite)
+            return cbm__fail(m->d.ctx, CBM_E_NONFINITE, "motion: non-finite state at t = %g s",
+                             m->t);
+        return CBM_OK;
+    }
+    m->zw_valid = false;
     for (size_t i = 0; i < n; i++) {
         m->w1[i] = a0 * m->q[i] + a1 * m->v[i] + m->a[i];
         m->w2[i] = m->beta * (2.0 / dt * m->q[i] + m->v[i]);
@@ -267,6 +475,7 @@ cbm_status cbm_motion_step(cbm_motion *m)
         m->f[i] = 0.0;
         finite = finite && isfinite(qn);
     }
+    m->forced = false;
     m->ba = ba1;
     m->bv = bv1;
     m->bd = bd1;
@@ -424,4 +633,9 @@ cbm_status cbm_motion_displacement(const cbm_motion *m, size_t seg, cbm_vec3 *ou
 const double *cbm_motion_rotations(const cbm_motion *m)
 {
     return m ? m->q : NULL;
+}
+
+double cbm_motion_dt(const cbm_motion *m)
+{
+    return m ? m->dt : 0.0;
 }

@@ -23,6 +23,13 @@ awk -F, 'NR > 1 && $4 == 0 { x += $6; z += ($8 < 0 ? -$8 : $8) } END {
 # the same run, the same table; motion:FILE.csv names it explicitly
 "$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 -o "motion:$tmp/again.csv"
 cmp "$tmp/motion.csv" "$tmp/again.csv"
+# drag on the leaves and fruit (--organ-area): a steady wind blows the stem's tip further
+# downwind than the wood's drag alone (the organs' load adds to it in the same direction)
+"$bin" grow fruit-tree -y 2 --quiet --sway 0.2 --wind 12 --gust 0 -o "$tmp/wood.csv"
+"$bin" grow fruit-tree -y 2 --quiet --sway 0.2 --wind 12 --gust 0 --organ-area 5 -o "$tmp/leaves.csv"
+w=$(awk -F, 'NR > 1 && $4 == 0 && $1 == 0 { print $6 }' "$tmp/wood.csv")
+l=$(awk -F, 'NR > 1 && $4 == 0 && $1 == 0 { print $6 }' "$tmp/leaves.csv")
+awk -v w="$w" -v l="$l" 'BEGIN { if (!(w > 0 && l > 1.2 * w)) { print "wood", w, "leaves", l; exit 1 } }'
 # no wind: nothing moves
 "$bin" grow fruit-tree -y 2 --quiet --sway 0.2 --wind 0 -o "$tmp/still.csv"
 awk -F, 'NR > 1 && ($6 != 0 || $7 != 0 || $8 != 0) { print; exit 1 }' "$tmp/still.csv"
@@ -42,4 +49,6 @@ expect2 --sway 1
 expect2 --sway 1 --wind abc -o "$tmp/x.glb"
 expect2 --sway 0.01 --sway-dt 0.1 -o "$tmp/x.glb"
 expect2 --sway 1 -o "motion:$tmp/x.png"
+expect2 --organ-area 5 -o "$tmp/x.csv"
+expect2 --sway 1 --organ-area -1 -o "$tmp/x.glb"
 test ! -e "$tmp/x.csv" && test ! -e "$tmp/x.glb"

@@ -60,3 +60,38 @@ for bad in 'Frequency(0)' 'Frequency(1.5)' 'Sway(0, 0.01, 1, 0)' 'Sway(1, 2, 1, 
     test $rc -eq 1 || { echo "exit $rc for $bad"; cat "$tmp/err"; exit 1; }
     grep -q 'bad.l:[0-9]*:[0-9]*: error' "$tmp/err" || { echo "no diagnostic for $bad"; cat "$tmp/err"; exit 1; }
 done
+# run -o sway:FILE: the last Sway() call's motion as grow --sway writes it. The gusty call (2 s,
+# dt 2 ms) gives 51 frames (0, 0.04, ..., 2 s) of the one tracked tip (the stem's), all within
+# the printed peak; a model whose last call is the steady one writes the static drag deflection
+# in every frame (the printed peak, 1e-6).
+"$bin" run "$tmp/rod.l" -o "sway:$tmp/sway.glb" -o "sway:$tmp/sway.csv" >"$tmp/out2"
+head -c 4 "$tmp/sway.glb" | grep -q glTF
+grep -aq '"path":"rotation"' "$tmp/sway.glb"
+test "$(head -1 "$tmp/sway.csv")" = "t_s,wind_m_s,axis,order,segment,dx_m,dy_m,dz_m"
+gusty=$(awk '$1 == "gusty" { print $2 }' "$tmp/out2")
+awk -F, -v peak="$gusty" 'NR > 1 { n++; d = sqrt($6 * $6 + $7 * $7 + $8 * $8); if (d > m) m = d
+    if ($4 != 0 || $5 != 39) { print "row", $0; exit 1 } }
+    END { if (n != 51) { print "rows", n; exit 1 }
+          if (!(m <= peak * (1 + 1e-9) && m > 0.3 * peak)) { print "max", m, "peak", peak; exit 1 } }' "$tmp/sway.csv"
+sed 's/printf("gusty.*//' "$tmp/rod.l" >"$tmp/steady.l"
+"$bin" run "$tmp/steady.l" -o "sway:$tmp/steady.csv" >"$tmp/out3"
+steady=$(awk '$1 == "steady" { print $2 }' "$tmp/out3")
+awk -F, -v s="$steady" 'NR > 1 { n++; d = sqrt($6 * $6 + $7 * $7 + $8 * $8)
+    e = (d - s) / s; if (e < 0) e = -e; if (e > 1e-6) { print "frame", $1, d, "static", s; exit 1 } }
+    END { if (n != 6) { print "rows", n; exit 1 } }' "$tmp/steady.csv"
+# a model that never calls Sway(): exit 1, a message, nothing written
+sed 's/printf("\(still\|steady\|gusty\).*//' "$tmp/rod.l" >"$tmp/nosway.l"
+set +e
+"$bin" run "$tmp/nosway.l" -o "sway:$tmp/none.csv" >/dev/null 2>"$tmp/err"
+rc=$?
+set -e
+test $rc -eq 1 || { echo "exit $rc without Sway()"; cat "$tmp/err"; exit 1; }
+grep -q 'no Sway()' "$tmp/err"
+test ! -e "$tmp/none.csv" && test ! -e "$tmp/none.csv.part"
+# a wrong extension is a usage error (exit 2)
+set +e
+"$bin" run "$tmp/rod.l" -o "sway:$tmp/x.png" >/dev/null 2>"$tmp/err"
+rc=$?
+set -e
+test $rc -eq 2 || { echo "exit $rc for sway:x.png"; cat "$tmp/err"; exit 1; }
+test ! -e "$tmp/x.png"

@@ -501,6 +501,13 @@ int cmd_grow(int argc, char **argv)
          .parse = parse_nonneg,
          .arg = "I",
          .help = "turbulence intensity of the gusts for --sway (default 0.2; 0 steady)"},
+        {.name = "--organ-area",
+         .kind = CLI_CUSTOM,
+         .target = &sway.organ_area,
+         .parse = parse_nonneg,
+         .arg = "M2_PER_KG",
+         .help = "drag area of the leaves and fruit per kg for --sway (C_d 0.5;\n"
+                 "default 0: no drag on them)"},
         {.name = "--sway-dt",
          .kind = CLI_CUSTOM,
          .target = &sway.dt,
@@ -571,8 +578,8 @@ int cmd_grow(int argc, char **argv)
     bool swaying = sway.seconds > 0;
     {
         /* the options of --sway without it: say so rather than ignore them */
-        const char *only[] = {"--wind", "--gust", "--sway-dt"};
-        for (int k = 0; k < 3 && !swaying; k++)
+        const char *only[] = {"--wind", "--gust", "--sway-dt", "--organ-area"};
+        for (int k = 0; k < 4 && !swaying; k++)
             for (cli_opt *r = rows; r->name; r++)
                 if (!strcmp(r->name, only[k]) && r->seen)
                     return cli_usage_error("grow", "%s needs --sway SECONDS", only[k]);

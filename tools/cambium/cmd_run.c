@@ -23,6 +23,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli_output.h"
 #include "commands.h"
+#include "grow_sway.h"
 
 #include "cambium/turtle_motion.h"
 
@@ -48,6 +49,10 @@ static const struct {
     {"motion",
      "(motion:PATH.csv or .glb) the drawn segments and spheres at every recorded\n"
      "                            step: a table, or a glTF animating each as a rigid node"},
+    {"sway",
+     "(sway:PATH.csv or .glb) the motion of the model's last Sway() call (L+C\n"
+     "                            mechanics): the tips' displacements, or a glTF animating\n"
+     "                            each segment (the sway outputs of grow)"},
 };
 
 static const struct {
@@ -112,7 +117,7 @@ static bool parse_target(const char *arg, target *t)
 static bool is_scene_format(const char *f)
 {
     return strcmp(f, "str") && strcmp(f, "json") && strcmp(f, "mtg") && strcmp(f, "segments") &&
-           strcmp(f, "motion");
+           strcmp(f, "motion") && strcmp(f, "sway");
 }
 
 static void usage(const cli_opts *t)
@@ -419,6 +424,8 @@ static int write_outputs(run *r, int what, int done)
                 rc = run_fail(r, s, t->arg);
             continue;
         }
+        if (!strcmp(t->format, "sway")) /* recorded by the Sway() observer, written after */
+            continue;
         if (t->motion) { /* frames are recorded by record_motion; written at the end */
             if (what == FINAL) {
                 s = !strcmp(cli_extension(t->path), "glb")
@@ -691,6 +698,20 @@ int cmd_run(int argc, char **argv)
             strcmp(cli_extension(targets[k].path), "glb"))
             return cli_usage_error("run", "%s: a motion is written as .csv or .glb",
                                    targets[k].arg);
+    cli_run_sway sway = {0};
+    for (int k = 0; k < ntargets; k++) {
+        if (strcmp(targets[k].format, "sway"))
+            continue;
+        bool glb = !strcmp(cli_extension(targets[k].path), "glb");
+        if (!glb && strcmp(cli_extension(targets[k].path), "csv"))
+            return cli_usage_error("run", "%s: a sway is written as .csv or .glb", targets[k].arg);
+        if ((glb ? sway.nglb : sway.ncsv) == 8)
+            return cli_usage_error("run", "at most 8 sway: outputs of each kind");
+        if (glb)
+            sway.glb[sway.nglb++] = targets[k].path;
+        else
+            sway.csv[sway.ncsv++] = targets[k].path;
+    }
     for (int k = 0; k < ntargets; k++)
         if (every > 0 && !strcmp(targets[k].path, "/dev/stdout") &&
             strcmp(targets[k].format, "glb") && strcmp(targets[k].format, "json"))
@@ -731,6 +752,18 @@ int cmd_run(int argc, char **argv)
     r.ls = cbm_model_lsys(r.model);
     if (!no_native)
         native_code(r.ls, timing);
+    sway.ctx = ctx;
+    if (sway.nglb + sway.ncsv > 0) {
+        if (!cbm_lsys_has_mechanics(r.ls)) {
+            fprintf(stderr,
+                    "cambium run: %s: sway: outputs need an L+C model with mechanics "
+                    "that calls Sway()\n",
+                    model);
+            rc = CLI_FAIL;
+            goto done;
+        }
+        cbm_lsys_set_sway_observer(r.ls, cli_run_sway_observe, &sway);
+    }
     for (int k = 0; k < ntargets; k++) {
         r.need_scene |= is_scene_format(targets[k].format);
         r.need_json |= !strcmp(targets[k].format, "json");
@@ -831,6 +864,18 @@ int cmd_run(int argc, char **argv)
     json_end(&r);
     if (final_rc == CLI_OK)
         final_rc = write_outputs(&r, FINAL, done);
+    if (final_rc == CLI_OK && sway.nglb + sway.ncsv > 0) {
+        if (!sway.rec) {
+            fprintf(stderr, "cambium run: %s: sway: outputs asked but the model called no Sway()\n",
+                    model);
+            final_rc = CLI_FAIL;
+        } else {
+            cbm_status ss = cli_sway_rec_finish(sway.rec, CBM_OK);
+            sway.rec = NULL;
+            if (ss != CBM_OK)
+                final_rc = cli_fail(ctx, ss, "sway");
+        }
+    }
     if (rc == CLI_OK)
         rc = final_rc;
     if (rc == CLI_OK && ntargets == 0) {
@@ -845,6 +890,7 @@ int cmd_run(int argc, char **argv)
     if (timing)
         print_timing(&r);
 done:
+    cli_sway_rec_discard(sway.rec);
     for (int k = 0; k < ntargets; k++) {
         cbm_animation_destroy(targets[k].anim);
         cbm_turtle_motion_destroy(targets[k].motion);
