@@ -47,6 +47,7 @@ typedef struct param_ctx {
     const cbm_bend_spec *spec;
     cbm_bend_param which;
     double *len0; /* segment lengths as built (length parameter only) */
+    size_t n;     /* their number: the rod's segments never change in a continuation */
     double l0;    /* their sum */
 } param_ctx;
 
@@ -76,7 +77,7 @@ static cbm_status set_param(const param_ctx *c, cbm_plant *p, double v)
         return cbm_plant_set_load(p, n - 1, c->spec->tip_mass, v3(0, -v, 0),
                                   v3(0, 0, c->spec->tip_moment));
     case CBM_BEND_PARAM_LENGTH:
-        for (size_t i = 0; i < n; i++)
+        for (size_t i = 0; i < c->n; i++)
             CBM_TRY(cbm_plant_set_length(p, i, c->len0[i] * (v / c->l0)));
         return CBM_OK;
     }
@@ -752,6 +753,8 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
         }
         a.planar = out <= 1e-9 * (in + 1.0 / spec->length);
     }
+    if (n == 0) /* a spec builds at least one segment */
+        return CBM_E_INVALID;
     /* one block: c, then 5 work vectors and 5 points of 2 vectors each */
     double *c = malloc(n * sizeof *c);
     cbm_vec3 *blk = malloc(15 * n * sizeof *blk);
@@ -796,7 +799,7 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
     cbm_plant *p = NULL;
     CBM_TRY(cbm_bend_build(ctx, spec, &p));
     size_t n = cbm_plant_segment_count(p);
-    param_ctx pc = {spec, def->param, NULL, 0.0};
+    param_ctx pc = {spec, def->param, NULL, n, 0.0};
     cbm_vec3 *saved = malloc(n * sizeof *saved);
     pc.len0 = malloc(n * sizeof *pc.len0);
     growbuf g = {out, 0, 0};
@@ -806,8 +809,8 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
         for (size_t i = 0; i < n && st == CBM_OK; i++) {
             cbm_segment_state s;
             st = cbm_plant_segment(p, i, &s);
-            pc.len0[i] = s.length;
-            pc.l0 += s.length;
+            pc.len0[i] = st == CBM_OK ? s.length : 0.0;
+            pc.l0 += pc.len0[i];
         }
     }
     if (st == CBM_OK)
