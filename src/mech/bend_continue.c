@@ -84,6 +84,25 @@ static cbm_status set_param(const param_ctx *c, cbm_plant *p, double v)
     return CBM_E_INVALID;
 }
 
+/* The solve settings of the spec, and the equilibrium at the sweep's start: both traces begin
+ * there. */
+static cbm_status start_solve(cbm_context *ctx, const cbm_bend_spec *spec,
+                              const cbm_bend_continuation_def *d, const param_ctx *pc, cbm_plant *p,
+                              cbm_solve_def *sd, cbm_solve_stats *ss)
+{
+    *sd = cbm_solve_def_default();
+    sd->solver = spec->solver;
+    sd->tolerance = spec->tolerance;
+    sd->max_passes = (size_t)spec->max_passes;
+    sd->krylov_dim = spec->krylov_dim;
+    sd->push_unstable = spec->push_unstable != 0;
+    CBM_TRY(set_param(pc, p, d->from));
+    cbm_status st = cbm_plant_solve(p, sd, ss);
+    if (st == CBM_E_NOT_CONVERGED)
+        return cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g", d->from);
+    return st;
+}
+
 /* the branch point of the plant's current (solved) state; prev_deg unwraps the tip angle */
 static cbm_status read_point(cbm_plant *p, double param, double prev_deg, cbm_bend_branch_point *o)
 {
@@ -196,20 +215,11 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
                         growbuf *g, cbm_vec3 *saved)
 {
     size_t n = cbm_plant_segment_count(p);
-    cbm_solve_def sd = cbm_solve_def_default();
-    sd.solver = spec->solver;
-    sd.tolerance = spec->tolerance;
-    sd.max_passes = (size_t)spec->max_passes;
-    sd.krylov_dim = spec->krylov_dim;
-    sd.push_unstable = spec->push_unstable != 0;
-    CBM_TRY(set_param(pc, p, d->from));
+    cbm_solve_def sd;
     cbm_solve_stats ss;
-    cbm_status st = cbm_plant_solve(p, &sd, &ss);
+    cbm_status st = start_solve(ctx, spec, d, pc, p, &sd, &ss);
     if (st != CBM_OK)
-        return st == CBM_E_NOT_CONVERGED
-                   ? cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g",
-                               d->from)
-                   : st;
+        return st;
     cbm_bend_branch_point cur;
     CBM_TRY(read_point(p, d->from, NAN, &cur));
     CBM_TRY(push_point(g, &cur));
@@ -716,20 +726,11 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
                                   const cbm_bend_continuation_def *d, const param_ctx *pc,
                                   cbm_plant *p, growbuf *g)
 {
-    cbm_solve_def sd = cbm_solve_def_default();
-    sd.solver = spec->solver;
-    sd.tolerance = spec->tolerance;
-    sd.max_passes = (size_t)spec->max_passes;
-    sd.krylov_dim = spec->krylov_dim;
-    sd.push_unstable = spec->push_unstable != 0;
-    CBM_TRY(set_param(pc, p, d->from));
+    cbm_solve_def sd;
     cbm_solve_stats ss;
-    cbm_status st = cbm_plant_solve(p, &sd, &ss);
+    cbm_status st = start_solve(ctx, spec, d, pc, p, &sd, &ss);
     if (st != CBM_OK)
-        return st == CBM_E_NOT_CONVERGED
-                   ? cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g",
-                               d->from)
-                   : st;
+        return st;
     const size_t n = cbm_plant_segment_count(p);
     arc a = {.ctx = ctx, .spec = spec, .d = d, .pc = pc, .p = p, .n = n, .g = g};
     a.range = fabs(d->to - d->from);
