@@ -35,6 +35,8 @@ const char *cli_extension(const char *path);
 /// bytes so that the caller sees an oversized file (*len > max); NULL when it cannot be read.
 /// Free with free().
 char *cli_read_regular_file(const char *path, size_t max, size_t *len);
+/// A spec file (bend, compare, elastica) whole, up to 1 MiB; NULL after saying why on stderr.
+char *cli_read_spec(const char *path, size_t *len);
 /// Seconds of the monotonic clock.
 double cli_now(void);
 

@@ -15,8 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_SPEC_BYTES (1u << 20)
-#define MAX_OUTPUTS    8
+#define MAX_OUTPUTS 8
 
 static void help(const cli_opts *t)
 {
@@ -472,16 +471,9 @@ int cmd_bend(int argc, char **argv)
     cont.def.switch_branch = switch_branch;
 
     size_t len = 0;
-    char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
-    if (!text) {
-        fprintf(stderr, "cambium: %s: cannot read the spec\n", spec_path);
+    char *text = cli_read_spec(spec_path, &len);
+    if (!text)
         return CLI_FAIL;
-    }
-    if (len > MAX_SPEC_BYTES) {
-        free(text);
-        fprintf(stderr, "cambium: %s: spec larger than %u bytes\n", spec_path, MAX_SPEC_BYTES);
-        return CLI_FAIL;
-    }
     cbm_context *ctx = cli_context();
     cbm_bend_spec spec;
     cbm_status s = cbm_bend_spec_parse(ctx, text, len, spec_path, &spec);

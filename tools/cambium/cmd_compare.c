@@ -20,8 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_SPEC_BYTES (1u << 20)
-#define MAX_OUTPUTS    8
+#define MAX_OUTPUTS 8
 
 typedef struct solver_list {
     cbm_mech_solver s[CBM_MECH_SOLVER_COUNT];
@@ -346,16 +345,9 @@ static bool names_model(const char *path)
 static int run_spec(const char *spec_path, method_run *m, int nm)
 {
     size_t len = 0;
-    char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
-    if (!text) {
-        fprintf(stderr, "cambium: %s: cannot read the spec\n", spec_path);
+    char *text = cli_read_spec(spec_path, &len);
+    if (!text)
         return CLI_FAIL;
-    }
-    if (len > MAX_SPEC_BYTES) {
-        free(text);
-        fprintf(stderr, "cambium: %s: spec larger than %u bytes\n", spec_path, MAX_SPEC_BYTES);
-        return CLI_FAIL;
-    }
     int rc = CLI_OK;
     for (int a = 0; a < nm && rc == CLI_OK; a++)
         rc = run_method(text, len, spec_path, &m[a]);

@@ -16,11 +16,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_SPEC_BYTES (1u << 20)
-#define MAX_OUTPUTS    8
-#define MAX_EQ         4096
-#define MAX_JUMPS      64
-#define DEG            (180.0 / 3.14159265358979323846)
+#define MAX_OUTPUTS 8
+#define MAX_EQ      4096
+#define MAX_JUMPS   64
+#define DEG         (180.0 / 3.14159265358979323846)
 
 static void help(const cli_opts *t)
 {
@@ -465,13 +464,9 @@ int cmd_elastica(int argc, char **argv)
     if (cli_check_outputs(outs, nout) != CLI_OK)
         return CLI_FAIL;
     size_t len = 0;
-    char *text = cli_read_regular_file(spec_path, MAX_SPEC_BYTES, &len);
-    if (!text || len > MAX_SPEC_BYTES) {
-        free(text);
-        fprintf(stderr, "cambium: %s: cannot read the spec (a regular file up to %u bytes)\n",
-                spec_path, MAX_SPEC_BYTES);
+    char *text = cli_read_spec(spec_path, &len);
+    if (!text)
         return CLI_FAIL;
-    }
     cbm_context *ctx = cli_context();
     static cbm_elastica_spec spec;
     cbm_status s = cbm_elastica_spec_parse(ctx, text, len, spec_path, &spec);

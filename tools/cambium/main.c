@@ -301,6 +301,23 @@ char *cli_read_regular_file(const char *path, size_t max, size_t *len)
     return buf;
 }
 
+#define MAX_SPEC_BYTES (1u << 20)
+
+char *cli_read_spec(const char *path, size_t *len)
+{
+    char *text = cli_read_regular_file(path, MAX_SPEC_BYTES, len);
+    if (!text) {
+        fprintf(stderr, "cambium: %s: cannot read the spec\n", path);
+        return NULL;
+    }
+    if (*len > MAX_SPEC_BYTES) {
+        free(text);
+        fprintf(stderr, "cambium: %s: spec larger than %u bytes\n", path, MAX_SPEC_BYTES);
+        return NULL;
+    }
+    return text;
+}
+
 double cli_now(void)
 {
     struct timespec ts;
