@@ -680,15 +680,16 @@ static void bound_share(cbm_context *ctx, unsigned seed, const char *full, doubl
 
 /* The reaction-wood increment follows the lean (docs/growth.md): with the fixed increment of
  * the thesis about 23 % of the 8-year real tree's segments (over half of its limbs) sat at the
- * 1.5 bound; with the increment scaled by sin(lean) / sin(20 deg) the bound is the exception:
- * the median over seeds 1-5 is below 10 % of the segments and 20 % of the limbs (measured: 23 %
- * -> 6 % of the segments, 65 % -> 6 % of the limbs). */
+ * 1.5 bound; with the increment scaled by sin(lean) / sin(10 deg) (the presets' theta_f) the
+ * bound is the exception: the median over seeds 1-5 is below 15 % of the segments and 30 % of the
+ * limbs (measured: 23 % -> 11 % of the segments, 65 % -> 20 % of the limbs; theta_f = 20 deg gave
+ * 6 % and 6 % but let fruit-tree-low-mor die back in 5 of 50 seeds, docs/models.md). */
 TEST(tree_real_reaction_bound_the_exception)
 {
     cbm_context *ctx = test_ctx();
     double all[5], limbs[5], all0[5], limbs0[5];
     for (unsigned seed = 1; seed <= 5; seed++) {
-        bound_share(ctx, seed, "20", &all[seed - 1], &limbs[seed - 1]);
+        bound_share(ctx, seed, "10", &all[seed - 1], &limbs[seed - 1]);
         bound_share(ctx, seed, "0", &all0[seed - 1], &limbs0[seed - 1]);
         printf("seed %u at the bound: fixed increment %.1f %% of segments, %.1f %% of limbs; "
                "following the lean %.1f %%, %.1f %%\n",
@@ -700,8 +701,8 @@ TEST(tree_real_reaction_bound_the_exception)
     qsort(all0, 5, sizeof all0[0], cmp_dbl);
     printf("median at the bound: %.1f %% -> %.1f %% of segments, %.1f %% -> %.1f %% of limbs\n",
            100 * all0[2], 100 * all[2], 100 * limbs0[2], 100 * limbs[2]);
-    CHECK(all[2] < 0.10);
-    CHECK(limbs[2] < 0.20);
+    CHECK(all[2] < 0.15);
+    CHECK(limbs[2] < 0.30);
     test_ctx_end(ctx);
 }
 
