@@ -211,6 +211,50 @@ TEST(growth_reaction_wood_rights_a_lean)
     test_ctx_end(ctx);
 }
 
+/* The increment follows the lean (reaction_full_lean > 0): a horizontal cantilever of three
+ * segments bent down by a tip load leans more from its set-point (its straight rest shape) the
+ * further out a segment is, theta_i = sum_{j<i} |Omega_j| l + |Omega_i| l / 2 (one plane, one
+ * sign of curvature), and segment i lays increment x min(1, sin theta_i / sin full). With the
+ * fixed increment (the old law, full lean 0) all three lay the same. */
+TEST(growth_reaction_increment_follows_lean)
+{
+    cbm_context *ctx = test_ctx();
+    for (int pass = 0; pass < 2; pass++) {
+        cbm_plant *p = make_rod(ctx, 3, 0.6, radius_uniform, 1e9, 0, 0.0, CBM_MECH_STAGGERED);
+        CHECK_OK(cbm_plant_set_load(p, 2, 0.0, (cbm_vec3){0, -10.0, 0}, (cbm_vec3){0, 0, 0}));
+        CHECK_OK(cbm_plant_solve(p, NULL, NULL));
+        double theta[3], a0[3], sum = 0.0;
+        for (size_t i = 0; i < 3; i++) {
+            cbm_segment_state s;
+            CHECK_OK(cbm_plant_segment(p, i, &s));
+            double turn = v3_norm(v3_sub(s.rate, s.rest_rate)) * s.length;
+            theta[i] = sum + 0.5 * turn;
+            sum += turn;
+            a0[i] = s.a;
+        }
+        /* about 4, 10 and 13 deg: the first two below the full lean, the tip beyond it */
+        CHECK(theta[0] > 0.02 && theta[2] < 0.8 && theta[0] < theta[1] && theta[1] < theta[2]);
+        cbm_growth_def g = wood();
+        g.pipe_rate = 1e-12; /* no pipe-model growth: a grows by the reaction increment alone */
+        g.reaction_threshold = 0.0;
+        g.reaction_increment = 1e-3;
+        const double full = 0.2;
+        g.reaction_full_lean = pass ? full : 0.0;
+        CHECK_OK(cbm_plant_grow_rings(p, &g, NULL));
+        for (size_t i = 0; i < 3; i++) {
+            cbm_segment_state s;
+            CHECK_OK(cbm_plant_segment(p, i, &s));
+            double dose = sin(theta[i]) / sin(full);
+            double want = 1e-3 * (pass ? (dose < 1.0 ? dose : 1.0) : 1.0);
+            printf("full lean %.1f: segment %zu lean %.4f rad, increment %.4g m (want %.4g)\n",
+                   g.reaction_full_lean, i, theta[i], s.a - a0[i], want);
+            CHECK_REL(s.a - a0[i], want, 1e-6);
+        }
+        cbm_plant_destroy(p);
+    }
+    test_ctx_end(ctx);
+}
+
 /* Bad input is named and changes nothing. */
 TEST(growth_errors)
 {

@@ -615,6 +615,97 @@ TEST(tree_real_ten_years_in_range)
     test_ctx_end(ctx);
 }
 
+/* Winter pruning (clear_trunk, docs/models.md): with clear_trunk = 0.6 m no branch leaves the
+ * leader below 0.6 m after 4 years in seeds 1-3, where the unpruned tree has several. */
+static size_t low_laterals(cbm_context *ctx, unsigned seed, const char *clear)
+{
+    char sd[32];
+    snprintf(sd, sizeof sd, "%u", seed);
+    const char *set[] = {"seed", sd, "clear_trunk", clear, NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 4, set);
+    cbm_measure_segment *tab = NULL;
+    size_t n = 0, low = 0;
+    CHECK_OK(cbm_measure_plant_table(ctx, cbm_tree_plant(t), &tab, &n));
+    char *leader = calloc(n ? n : 1, 1);
+    for (size_t i = 0; tab && leader && i < n; i++) {
+        int64_t pa = tab[i].parent;
+        leader[i] = pa < 0 || (!tab[i].lateral && leader[pa]);
+        low += pa >= 0 && leader[pa] && !leader[i] && tab[i].p0.y < 0.6 - 1e-9;
+    }
+    free(leader);
+    cbm_measure_table_free(ctx, tab, n);
+    cbm_tree_destroy(t);
+    return low;
+}
+
+TEST(tree_real_clear_trunk_pruned)
+{
+    cbm_context *ctx = test_ctx();
+    for (unsigned seed = 1; seed <= 3; seed++) {
+        size_t kept = low_laterals(ctx, seed, "0"), pruned = low_laterals(ctx, seed, "0.6");
+        printf("seed %u: branches off the leader below 0.6 m after 4 years: %zu unpruned, %zu "
+               "with clear_trunk 0.6\n",
+               seed, kept, pruned);
+        CHECK(kept > 0);
+        CHECK(pruned == 0);
+    }
+    test_ctx_end(ctx);
+}
+
+/* Share of segments whose section sits at the reaction-wood bound a/b = 1.5, of all segments and
+ * of the limbs (segments thicker than 1 cm: the trunk and the main branches). */
+static void bound_share(cbm_context *ctx, unsigned seed, const char *full, double *all,
+                        double *limbs)
+{
+    char sd[32];
+    snprintf(sd, sizeof sd, "%u", seed);
+    const char *set[] = {"seed", sd, "reaction_full_lean", full, NULL};
+    cbm_tree *t = grow(ctx, "fruit-tree", 8, set);
+    const cbm_plant *p = cbm_tree_plant(t);
+    size_t n = cbm_plant_segment_count(p), at = 0, nl = 0, atl = 0;
+    for (size_t i = 0; i < n; i++) {
+        cbm_segment_state st;
+        CHECK_OK(cbm_plant_segment(p, i, &st));
+        bool bound = st.a >= 1.5 * st.b * (1.0 - 1e-6);
+        at += bound;
+        if (st.b > 0.005) {
+            nl++;
+            atl += bound;
+        }
+    }
+    *all = n ? (double)at / (double)n : 0.0;
+    *limbs = nl ? (double)atl / (double)nl : 0.0;
+    cbm_tree_destroy(t);
+}
+
+/* The reaction-wood increment follows the lean (docs/growth.md): with the fixed increment of
+ * the thesis about 23 % of the 8-year real tree's segments (over half of its limbs) sat at the
+ * 1.5 bound; with the increment scaled by sin(lean) / sin(10 deg) (the presets' theta_f) the
+ * bound is the exception: the median over seeds 1-5 is below 15 % of the segments and 30 % of the
+ * limbs (measured: 23 % -> 11 % of the segments, 65 % -> 20 % of the limbs; theta_f = 20 deg gave
+ * 6 % and 6 % but let fruit-tree-low-mor die back in 5 of 50 seeds, docs/models.md). */
+TEST(tree_real_reaction_bound_the_exception)
+{
+    cbm_context *ctx = test_ctx();
+    double all[5], limbs[5], all0[5], limbs0[5];
+    for (unsigned seed = 1; seed <= 5; seed++) {
+        bound_share(ctx, seed, "10", &all[seed - 1], &limbs[seed - 1]);
+        bound_share(ctx, seed, "0", &all0[seed - 1], &limbs0[seed - 1]);
+        printf("seed %u at the bound: fixed increment %.1f %% of segments, %.1f %% of limbs; "
+               "following the lean %.1f %%, %.1f %%\n",
+               seed, 100 * all0[seed - 1], 100 * limbs0[seed - 1], 100 * all[seed - 1],
+               100 * limbs[seed - 1]);
+    }
+    qsort(all, 5, sizeof all[0], cmp_dbl);
+    qsort(limbs, 5, sizeof limbs[0], cmp_dbl);
+    qsort(all0, 5, sizeof all0[0], cmp_dbl);
+    printf("median at the bound: %.1f %% -> %.1f %% of segments, %.1f %% -> %.1f %% of limbs\n",
+           100 * all0[2], 100 * all[2], 100 * limbs0[2], 100 * limbs[2]);
+    CHECK(all[2] < 0.15);
+    CHECK(limbs[2] < 0.30);
+    test_ctx_end(ctx);
+}
+
 /* The real-wood tree does not hang on the solver's path: solved to a relative residual of 1e-4,
  * 1e-6 (the default) or 1e-9, seeds 1-3 grow to within 5 % of the same segments and 2 % of the
  * same height in 6 years (the thesis constants' tree, whose thin rubber shoots pass folds,

@@ -519,6 +519,11 @@ typedef struct cbm_growth_def {
     /// thesis): beyond it the ring's area (a + increment) b is laid at this aspect, so the
     /// section grows rounder instead of into a ribbon (docs/growth.md); default 0
     double reaction_max_aspect;
+    /// rad: with > 0, the reaction-wood increment responds to the stimulus: it is
+    /// reaction_increment x min(1, sin(theta) / sin(reaction_full_lean)), theta the angle by which
+    /// the segment's heading has left its set-point (the heading its rest shape gives it),
+    /// accumulated from the base (docs/growth.md); 0 = the fixed increment of 8.20 (default)
+    double reaction_full_lean;
     /// kappa^c, the control curvature of Tresierras (2009, (3.14)): a new ring is moulded on
     /// the segment's current rate plus this rate, local components (twist about H, bending
     /// about L, bending about U), rad/m. An asymmetric residual growth stress (tension wood) in

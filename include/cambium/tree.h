@@ -72,6 +72,9 @@ typedef struct cbm_tree_def {
     double sink;         ///< zeta of the sink V_parent -= V zeta n (4.16; 1/4)
     double fairness;     ///< F in [0, 1] (4.18-4.19; 1 = fair)
     int years_to_shed;   ///< years without radial growth before a branch is shed (0 = never)
+    /// m: each winter the branches on the leader (the axis of the first shoot and its terminal
+    /// buds) below this height are pruned, the clear trunk of a trained orchard tree (0 = none)
+    double clear_trunk;
     /// years a lateral or terminal bud that did not shoot stays dormant (a spur) and is decided
     /// again each spring (0 = it aborts at once, the thesis); dormant buds regrow a broken axis
     int dormancy;
@@ -101,6 +104,9 @@ typedef struct cbm_tree_def {
     double reaction_beta;       ///< beta = REACT_ALPHA 0.3 (8.25)
     double reaction_increment;  ///< m, RW_INCREMENT 0.001 (8.20)
     double reaction_max_aspect; ///< largest a/b reaction wood makes (0 = unbounded, thesis)
+    /// lean (rad) from the set-point at which the reaction increment is full; smaller leans lay
+    /// less, as sin(lean) (0 = the fixed increment, thesis)
+    double reaction_full_lean;
     double growth_steps_per_year; ///< growth steps a year of ageing spans (2.8 MAXBUDS = 58.8)
     cbm_mech_discretization discretization; ///< staggered (default) or the listing's chain
     cbm_ring_memory memory;                 ///< segment rate (default) or the listing's joint rate

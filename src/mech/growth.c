@@ -107,6 +107,9 @@ cbm_status cbm__growth_check(cbm_context *ctx, const cbm_growth_def *d)
     else if (!(isfinite(d->reaction_max_aspect) &&
                (d->reaction_max_aspect == 0.0 || d->reaction_max_aspect >= 1.0)))
         bad = "reaction_max_aspect must be 0 (no bound) or >= 1";
+    else if (!(isfinite(d->reaction_full_lean) && d->reaction_full_lean >= 0.0 &&
+               d->reaction_full_lean <= 0.5 * CBM_PI))
+        bad = "reaction_full_lean must be in [0, pi/2] rad";
     if (bad)
         return cbm__fail(ctx, CBM_E_INVALID, "growth: %s", bad);
     return CBM_OK;
@@ -264,6 +267,43 @@ cbm_status cbm__growth_rates(cbm_plant *p, cbm_ring_memory memory, cbm_vec3 *out
     return CBM_OK;
 }
 
+/* The stimulus of reaction wood: the angle theta by which each segment's heading has left its
+ * set-point, the heading its rest shape would give it. The loaded shape turns a segment away
+ * from its rest shape by (Omega - rest) len over its length (a rotation vector, taken to world
+ * axes); summed from the base (small rotations add), the sum at a segment's middle is the turn
+ * of its heading from the set-point, and its part about the heading itself (twist) is no lean.
+ * dose = min(1, sin(theta) / sin(full lean)): the response grows with the sine of the lean as
+ * the graviceptive term of the AC model (Bastien et al. 2013) and the eccentric growth of
+ * inclined stems with their inclination (Sinnott 1952; Alméras & Fournier 2009). Parents come
+ * before their children in the plant's order. */
+static cbm_status reaction_dose(const cbm_plant *p, const cbm_growth_def *def, const cbm_vec3 *cur,
+                                double *dose)
+{
+    size_t n = p->n;
+    cbm_vec3 *prox = cbm__alloc(p->ctx, n * sizeof *prox);
+    if (!prox)
+        return CBM_E_NOMEM;
+    const double full =
+        sin(def->reaction_full_lean < 0.5 * CBM_PI ? def->reaction_full_lean : 0.5 * CBM_PI);
+    for (size_t i = 0; i < n; i++) {
+        int64_t pa = p->parent[i];
+        cbm_vec3 turn = v3_scale(q_rotate(p->q[i], v3_sub(cur[i], p->rest[i])), p->len[i]);
+        cbm_vec3 base = v3(0, 0, 0);
+        if (pa >= 0) {
+            cbm_vec3 tp = v3_scale(q_rotate(p->q[pa], v3_sub(cur[pa], p->rest[pa])), p->len[pa]);
+            base = v3_add(prox[pa], tp);
+        }
+        prox[i] = base;
+        cbm_vec3 mid = v3_madd(base, turn, 0.5);
+        cbm_vec3 h = q_rotate(p->q[i], v3(1, 0, 0));
+        double theta = v3_norm(v3_sub(mid, v3_scale(h, v3_dot(mid, h))));
+        double d = sin(theta < 0.5 * CBM_PI ? theta : 0.5 * CBM_PI) / full;
+        dose[i] = d < 1.0 ? d : 1.0;
+    }
+    cbm__free(p->ctx, prox, n * sizeof *prox);
+    return CBM_OK;
+}
+
 cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_growth_stats *stats)
 {
     cbm_growth_stats gs;
@@ -281,6 +321,12 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
     double *acc = cbm__calloc(p->ctx, n, sizeof *acc);
     cbm_vec3 *cur = cbm__alloc(p->ctx, n * sizeof *cur);
     cbm_status s = acc && cur ? cbm__growth_rates(p, def->memory, cur) : CBM_E_NOMEM;
+    /* the lean stimulus: the share of the full increment each segment lays (NULL = all of it) */
+    double *dose = NULL;
+    if (s == CBM_OK && def->reaction_full_lean > 0.0) {
+        dose = cbm__alloc(p->ctx, n * sizeof *dose);
+        s = dose ? reaction_dose(p, def, cur, dose) : CBM_E_NOMEM;
+    }
     const double h = 0.5 * def->pipe_exponent;
     /* pow(x, 1) is x exactly: the area-preserving P = 2 needs no pow */
     const double leaf = h == 1.0 ? def->leaf_area : pow(def->leaf_area, h);
@@ -296,7 +342,7 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
         double nb = zeta * na;
         bool rw = cbm__wood_leans(def, cur[i], p->rest[i]);
         if (rw) {
-            na += def->reaction_increment;
+            na += dose ? dose[i] * def->reaction_increment : def->reaction_increment;
             double k = def->reaction_max_aspect;
             if (k >= 1.0 && na > k * nb) {
                 /* eccentric growth is bounded in real wood: the reaction ring's area goes round
@@ -328,6 +374,8 @@ cbm_status cbm_plant_grow_rings(cbm_plant *p, const cbm_growth_def *def, cbm_gro
         cbm__free(p->ctx, acc, n * sizeof *acc);
     if (cur)
         cbm__free(p->ctx, cur, n * sizeof *cur);
+    if (dose)
+        cbm__free(p->ctx, dose, n * sizeof *dose);
     if (stats)
         *stats = gs;
     return s;

@@ -175,6 +175,7 @@ static cbm_status grow_apex(cbm_tree *t, size_t i)
     c.bud_year = t->year;
     c.phyllo = fmod(ps.phyllo + d->phyllotaxis, 2.0 * CBM_PI);
     c.juv_e = ps.juv_e;
+    c.leader = ps.leader;
     size_t ci, li;
     CBM_TRY(add_seg(t, i, d->internode_length, d->radius, 0.0, 0.0, c.juv_e, trop, &c, true, &ci));
     /* lateral bud: divergence = the parent's phyllotactic angle, deviation from h */
@@ -443,6 +444,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     g.reaction_beta = crooked ? 0.0 : def->reaction_beta;
     g.reaction_increment = def->reaction_increment;
     g.reaction_max_aspect = def->reaction_max_aspect;
+    g.reaction_full_lean = def->reaction_full_lean;
     t->growth = g;
     t->solve = cbm_solve_def_default();
     t->solve.tolerance = def->solve_tolerance;
@@ -461,6 +463,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
         tree_seg r;
         memset(&r, 0, sizeof r);
         r.flags = SEG_APEX | SEG_TRUNK1;
+        r.leader = 1;
         r.nodes = def->first_buds;
         r.low_since = -1;
         r.juv_e = t->e_juv;
@@ -611,6 +614,36 @@ static cbm_status shed_unproductive(cbm_tree *t)
     return s;
 }
 
+/* Winter pruning of a trained tree: every branch that leaves the leader below clear_trunk is
+ * removed with all it carries, as orchardists remove the feathers below the lowest scaffold
+ * (docs/models.md); the wood it laid on the trunk stays. */
+static cbm_status prune_trunk(cbm_tree *t)
+{
+    size_t n = t->seg.len;
+    if (t->def.clear_trunk <= 0.0 || n < 2)
+        return CBM_OK;
+    uint8_t *gone = cbm__calloc(t->ctx, n, 1);
+    if (!gone)
+        return CBM_E_NOMEM;
+    const tree_plant pv = tree_plant_of(t->plant);
+    size_t cnt = 0;
+    for (size_t i = 1; i < n; i++) {
+        int64_t pa = pv.parent[i];
+        if (pa >= 0 && t->seg.data[pa].leader && !t->seg.data[i].leader &&
+            pv.pos[i].y < t->def.clear_trunk) {
+            gone[i] = 1;
+            cnt++;
+        }
+    }
+    cbm_status s = CBM_OK;
+    size_t nrm = 0;
+    if (cnt)
+        s = remove_marked(t, gone, &nrm);
+    cbm__free(t->ctx, gone, n);
+    t->cur.removed += nrm;
+    return s;
+}
+
 static cbm_status end_year(cbm_tree *t)
 {
     /* ageing (8.2) once a year by the year's growth steps: the rings of the year age together */
@@ -619,6 +652,7 @@ static cbm_status end_year(cbm_tree *t)
                                (double)t->cur.growth_steps / t->def.growth_steps_per_year));
     t->cur.seconds_rings += now() - t0;
     CBM_TRY(shed_unproductive(t));
+    CBM_TRY(prune_trunk(t));
     if (!t->unloaded_recorded)
         spring_back(t);
     t->cur.segments = t->seg.len;

@@ -21,6 +21,7 @@ enum {
 
 typedef struct tree_seg {
     uint8_t flags;
+    uint8_t leader;    /* on the leader: the first shoot and its terminal buds' shoots */
     int32_t count;     /* node number in its annual shoot */
     int32_t nodes;     /* nodes of that shoot (numBuds) */
     int32_t low_since; /* year since which the segment has not grown, -1 */
