@@ -227,6 +227,19 @@ static cbm_status remove_marked(cbm_tree *t, uint8_t *gone, size_t *removed)
     return CBM_OK;
 }
 
+/* Removes the cnt marked segments (if any) with all they carry, frees the marks (n of them) and
+ * counts the removed segments in the year's figures: shedding and pruning end alike. */
+static cbm_status remove_gone(cbm_tree *t, uint8_t *gone, size_t cnt, size_t n)
+{
+    cbm_status s = CBM_OK;
+    size_t nrm = 0;
+    if (cnt)
+        s = remove_marked(t, gone, &nrm);
+    cbm__free(t->ctx, gone, n);
+    t->cur.removed += nrm;
+    return s;
+}
+
 static cbm_status solve(cbm_tree *t)
 {
     cbm_solve_stats st;
@@ -604,14 +617,8 @@ static cbm_status shed_unproductive(cbm_tree *t)
     for (size_t i = 0; i < n; i++)
         if (gone[i] && !(pv.parent[i] >= 0 && gone[pv.parent[i]]))
             branches++;
-    cbm_status s = CBM_OK;
-    size_t nrm = 0;
-    if (cnt)
-        s = remove_marked(t, gone, &nrm);
-    cbm__free(t->ctx, gone, n);
     t->cur.shed += branches;
-    t->cur.removed += nrm;
-    return s;
+    return remove_gone(t, gone, cnt, n);
 }
 
 /* Winter pruning of a trained tree: every branch that leaves the leader below clear_trunk is
@@ -635,13 +642,7 @@ static cbm_status prune_trunk(cbm_tree *t)
             cnt++;
         }
     }
-    cbm_status s = CBM_OK;
-    size_t nrm = 0;
-    if (cnt)
-        s = remove_marked(t, gone, &nrm);
-    cbm__free(t->ctx, gone, n);
-    t->cur.removed += nrm;
-    return s;
+    return remove_gone(t, gone, cnt, n);
 }
 
 static cbm_status end_year(cbm_tree *t)
