@@ -3,6 +3,7 @@
 #include "cli_study.h"
 
 #include "cambium/model.h"
+#include "cambium/plot.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -355,4 +356,77 @@ int cli_study_write(const char *const *outs, int n, cli_study_plot_fn plot,
     }
     cli_context_end(ctx);
     return rc;
+}
+
+cbm_status cli_scurve_plot_write(cbm_context *ctx, const cli_scurve_plot *s, const char *path)
+{
+    const size_t n = s->n;
+    /* 2 n slots: a NaN before each gap breaks the lines there */
+    double *x = malloc((10 * n + 1) * sizeof *x);
+    if (!x)
+        return CBM_E_NOMEM;
+    double *ys = x + 2 * n, *yu = ys + 2 * n, *es = yu + 2 * n, *eu = es + 2 * n;
+    size_t m = 0;
+    for (size_t k = 0; k < n; k++) {
+        bool gap = s->gap && s->gap[k];
+        if (gap) {
+            x[m] = ys[m] = yu[m] = es[m] = eu[m] = NAN;
+            m++;
+        }
+        /* a point joins the stable line if it or a neighbour it is joined to is stable (so the
+         * arcs meet), the unstable line likewise */
+        bool st = s->stable[k], ps = false, pu = false;
+        if (k > 0 && !gap) {
+            ps = s->stable[k - 1];
+            pu = !ps;
+        }
+        if (k + 1 < n && !(s->gap && s->gap[k + 1])) {
+            bool ns = s->stable[k + 1];
+            ps = ps || ns;
+            pu = pu || !ns;
+        }
+        x[m] = s->x[k];
+        ys[m] = st || ps ? s->y[k] : NAN;
+        es[m] = st || ps ? s->e[k] : NAN;
+        yu[m] = !st || pu ? s->y[k] : NAN;
+        eu[m] = !st || pu ? s->e[k] : NAN;
+        m++;
+    }
+    cbm_plot *p = NULL;
+    cbm_plot_def pd = cbm_plot_def_default();
+    pd.title = s->title;
+    pd.panels = 2;
+    pd.height = 800;
+    cbm_status st = cbm_plot_create(ctx, &pd, &p);
+    for (int panel = 0; panel < 2 && st == CBM_OK; panel++) {
+        cbm_plot_axes_def a = cbm_plot_axes_def_default();
+        a.xlabel = s->xlabel;
+        a.ylabel = panel ? s->elabel : s->ylabel;
+        st = cbm_plot_set_axes(p, panel, &a);
+        cbm_plot_series_def ser = cbm_plot_series_def_default();
+        ser.x = x, ser.n = m;
+        ser.y = panel ? es : ys, ser.label = "stable";
+        if (st == CBM_OK)
+            st = cbm_plot_add_series(p, panel, &ser);
+        ser.y = panel ? eu : yu, ser.label = "unstable", ser.line = CBM_PLOT_DASHED;
+        if (st == CBM_OK)
+            st = cbm_plot_add_series(p, panel, &ser);
+        cbm_plot_series_def fs = cbm_plot_series_def_default();
+        fs.line = CBM_PLOT_NO_LINE;
+        if (s->nf && st == CBM_OK) {
+            fs.x = s->fx, fs.y = panel ? s->fe : s->fy, fs.n = s->nf, fs.label = s->fold_label;
+            fs.marker = CBM_PLOT_MARKER_CIRCLE;
+            st = cbm_plot_add_series(p, panel, &fs);
+        }
+        if (s->nj && st == CBM_OK) {
+            fs.x = s->jx, fs.y = panel ? s->je : s->jy, fs.n = s->nj, fs.label = "jump target";
+            fs.marker = CBM_PLOT_MARKER_CROSS;
+            st = cbm_plot_add_series(p, panel, &fs);
+        }
+    }
+    if (st == CBM_OK)
+        st = cbm_plot_write(p, path);
+    cbm_plot_destroy(p);
+    free(x);
+    return st;
 }

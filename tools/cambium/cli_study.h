@@ -89,4 +89,23 @@ typedef void (*cli_study_table_fn)(FILE *f, bool json, void *ud);
 int cli_study_write(const char *const *outs, int n, cli_study_plot_fn plot,
                     cli_study_table_fn table, void *ud);
 
+/// An S-curve to draw (`bend --continue` and `elastica` both draw one): n equilibria in the
+/// order traced, against x, with y in the top panel and e (the energy) in the bottom one.
+typedef struct cli_scurve_plot {
+    const char *title, *xlabel, *ylabel, *elabel;
+    const double *x, *y, *e;
+    const bool *stable; ///< n: stable equilibria on the solid line, the others dashed
+    const bool *gap;    ///< n or NULL: the line breaks before this point (a jump target)
+    size_t n;
+    const double *fx, *fy, *fe; ///< nf marked points (folds), circled; NaN x skips one
+    size_t nf;
+    const char *fold_label;
+    const double *jx, *jy, *je; ///< nj jump targets, crossed
+    size_t nj;
+} cli_scurve_plot;
+
+/// Draws the S-curve's two panels to path (.svg or .png): each arc joins its stable neighbours
+/// so stable and unstable arcs meet.
+cbm_status cli_scurve_plot_write(cbm_context *ctx, const cli_scurve_plot *s, const char *path);
+
 #endif

@@ -4,6 +4,7 @@
  * files are written atomically through cbm_out; nothing is written when the job fails. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "cli_study.h"
 #include "commands.h"
 #include "options.h"
 
@@ -192,38 +193,22 @@ static void write_branch_csv(FILE *f, const cbm_bend_branch *b)
 static cbm_status write_branch_plot(cbm_context *ctx, const cbm_bend_continuation_def *d,
                                     const cbm_bend_branch *b, const char *path)
 {
-    size_t n = b->n_points, nf = b->n_folds, m = 0, nj = 0;
-    /* 2 n slots: a NaN before each jump target breaks the lines there */
-    double *x = malloc((10 * n + 6 * nf + 1) * sizeof *x);
-    if (!x)
+    size_t n = b->n_points, nf = b->n_folds, nj = 0;
+    double *x = malloc((3 * n + 6 * nf + 1) * sizeof *x);
+    bool *flags = malloc((2 * n + 1) * sizeof *flags);
+    if (!x || !flags) {
+        free(x);
+        free(flags);
         return CBM_E_NOMEM;
-    double *ys = x + 2 * n, *yu = ys + 2 * n, *es = yu + 2 * n, *eu = es + 2 * n;
-    double *fx = eu + 2 * n, *fy = fx + nf, *jx = fy + nf, *jy = jx + nf, *fe = jy + nf,
-           *je = fe + nf;
+    }
+    double *y = x + n, *e = y + n, *fx = e + n, *fy = fx + nf, *fe = fy + nf, *jx = fe + nf,
+           *jy = jx + nf, *je = jy + nf;
+    bool *stable = flags, *gap = flags + n;
     for (size_t k = 0; k < n; k++) {
         const cbm_bend_branch_point *a = &b->points[k];
-        if (a->jumped) {
-            x[m] = ys[m] = yu[m] = es[m] = eu[m] = NAN;
-            m++;
-        }
-        /* a point joins the stable line if it or a neighbour it is joined to is stable (so the
-         * arcs meet), the unstable line likewise */
-        bool st = a->unstable_modes == 0, ps = false, pu = false;
-        if (k > 0 && !a->jumped) {
-            ps = b->points[k - 1].unstable_modes == 0;
-            pu = !ps;
-        }
-        if (k + 1 < n && !b->points[k + 1].jumped) {
-            bool ns = b->points[k + 1].unstable_modes == 0;
-            ps = ps || ns;
-            pu = pu || !ns;
-        }
-        x[m] = a->param;
-        ys[m] = st || ps ? a->tip_angle_deg : NAN;
-        es[m] = st || ps ? a->energy : NAN;
-        yu[m] = !st || pu ? a->tip_angle_deg : NAN;
-        eu[m] = !st || pu ? a->energy : NAN;
-        m++;
+        x[k] = a->param, y[k] = a->tip_angle_deg, e[k] = a->energy;
+        stable[k] = a->unstable_modes == 0;
+        gap[k] = a->jumped;
     }
     for (size_t k = 0; k < nf; k++) {
         const cbm_bend_fold *f = &b->folds[k];
@@ -240,42 +225,28 @@ static cbm_status write_branch_plot(cbm_context *ctx, const cbm_bend_continuatio
     char xl[64], title[96];
     snprintf(xl, sizeof xl, "%s (%s)", param_name(d->param), units[d->param]);
     snprintf(title, sizeof title, "equilibria of the rod in %s", param_name(d->param));
-    cbm_plot *p = NULL;
-    cbm_plot_def pd = cbm_plot_def_default();
-    pd.title = title;
-    pd.panels = 2;
-    pd.height = 800;
-    cbm_status s = cbm_plot_create(ctx, &pd, &p);
-    for (int panel = 0; panel < 2 && s == CBM_OK; panel++) {
-        cbm_plot_axes_def a = cbm_plot_axes_def_default();
-        a.xlabel = xl;
-        a.ylabel = panel ? "energy (J)" : "tip angle (deg)";
-        s = cbm_plot_set_axes(p, panel, &a);
-        cbm_plot_series_def ser = cbm_plot_series_def_default();
-        ser.x = x, ser.n = m;
-        ser.y = panel ? es : ys, ser.label = "stable";
-        if (s == CBM_OK)
-            s = cbm_plot_add_series(p, panel, &ser);
-        ser.y = panel ? eu : yu, ser.label = "unstable", ser.line = CBM_PLOT_DASHED;
-        if (s == CBM_OK)
-            s = cbm_plot_add_series(p, panel, &ser);
-        cbm_plot_series_def fs = cbm_plot_series_def_default();
-        fs.line = CBM_PLOT_NO_LINE;
-        if (nf && s == CBM_OK) {
-            fs.x = fx, fs.y = panel ? fe : fy, fs.n = nf, fs.label = "fold";
-            fs.marker = CBM_PLOT_MARKER_CIRCLE;
-            s = cbm_plot_add_series(p, panel, &fs);
-        }
-        if (nj && s == CBM_OK) {
-            fs.x = jx, fs.y = panel ? je : jy, fs.n = nj, fs.label = "jump target";
-            fs.marker = CBM_PLOT_MARKER_CROSS;
-            s = cbm_plot_add_series(p, panel, &fs);
-        }
-    }
-    if (s == CBM_OK)
-        s = cbm_plot_write(p, path);
-    cbm_plot_destroy(p);
+    cli_scurve_plot sp = {.title = title,
+                          .xlabel = xl,
+                          .ylabel = "tip angle (deg)",
+                          .elabel = "energy (J)",
+                          .x = x,
+                          .y = y,
+                          .e = e,
+                          .stable = stable,
+                          .gap = gap,
+                          .n = n,
+                          .fx = fx,
+                          .fy = fy,
+                          .fe = fe,
+                          .nf = nf,
+                          .fold_label = "fold",
+                          .jx = jx,
+                          .jy = jy,
+                          .je = je,
+                          .nj = nj};
+    cbm_status s = cli_scurve_plot_write(ctx, &sp, path);
     free(x);
+    free(flags);
     return s;
 }
 

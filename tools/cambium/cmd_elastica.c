@@ -6,6 +6,7 @@
  * atomically; nothing is written when the job fails. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "cli_study.h"
 #include "commands.h"
 #include "options.h"
 
@@ -168,65 +169,45 @@ static cbm_status write_plot(cbm_context *ctx, const result *r, const char *path
 {
     const cbm_elastica_scurve *sc = r->sc;
     size_t n = sc->n_points;
-    double *x = malloc(n * sizeof *x), *ys = malloc(n * sizeof *x), *yu = malloc(n * sizeof *x),
-           *es = malloc(n * sizeof *x), *eu = malloc(n * sizeof *x);
+    double *x = malloc((3 * n + 1) * sizeof *x);
+    bool *stable = malloc((n + 1) * sizeof *stable);
     double fx[64], fy[64], fe[64];
     cbm_status s = CBM_E_NOMEM;
-    cbm_plot *p = NULL;
-    if (!x || !ys || !yu || !es || !eu)
-        goto done;
-    for (size_t k = 0; k < n; k++) {
-        const cbm_elastica_state *a = &sc->points[k];
-        bool st = a->index == 0, stn = k + 1 < n && sc->points[k + 1].index == 0;
-        bool stp = k > 0 && sc->points[k - 1].index == 0;
-        x[k] = a->theta_base * DEG;
-        double kb = a->curvature_base * r->u.L, e = a->energy * r->u.L / r->u.D;
-        /* a point joins the stable line if it or a neighbour is stable, so arcs meet */
-        ys[k] = (st || stn || stp) ? kb : NAN;
-        es[k] = (st || stn || stp) ? e : NAN;
-        yu[k] = st ? NAN : kb;
-        eu[k] = st ? NAN : e;
-        if (!st && (stn || stp))
-            yu[k] = kb, eu[k] = e;
-    }
-    size_t nf = sc->n_folds < 64 ? sc->n_folds : 64;
-    for (size_t k = 0; k < nf; k++) {
-        fx[k] = sc->folds[k].at.theta_base * DEG;
-        fy[k] = sc->folds[k].at.curvature_base * r->u.L;
-        fe[k] = sc->folds[k].at.energy * r->u.L / r->u.D;
-    }
-    char title[96];
-    snprintf(title, sizeof title, "S-curve, alpha = %.4g", r->alpha);
-    cbm_plot_def d = cbm_plot_def_default();
-    d.title = title;
-    d.panels = 2;
-    d.height = 800;
-    s = cbm_plot_create(ctx, &d, &p);
-    for (int panel = 0; panel < 2 && s == CBM_OK; panel++) {
-        cbm_plot_axes_def a = cbm_plot_axes_def_default();
-        a.xlabel = "base angle (deg)";
-        a.ylabel = panel ? "energy V L / D" : "base curvature kappa L";
-        s = cbm_plot_set_axes(p, panel, &a);
-        cbm_plot_series_def ser = cbm_plot_series_def_default();
-        ser.x = x, ser.n = n;
-        ser.y = panel ? es : ys, ser.label = "stable";
-        if (s == CBM_OK)
-            s = cbm_plot_add_series(p, panel, &ser);
-        ser.y = panel ? eu : yu, ser.label = "unstable", ser.line = CBM_PLOT_DASHED;
-        if (s == CBM_OK)
-            s = cbm_plot_add_series(p, panel, &ser);
-        if (nf && s == CBM_OK) {
-            cbm_plot_series_def fs = cbm_plot_series_def_default();
-            fs.x = fx, fs.y = panel ? fe : fy, fs.n = nf, fs.label = "fold (jumping point)";
-            fs.line = CBM_PLOT_NO_LINE, fs.marker = CBM_PLOT_MARKER_CIRCLE;
-            s = cbm_plot_add_series(p, panel, &fs);
+    if (x && stable) {
+        double *y = x + n, *e = y + n;
+        for (size_t k = 0; k < n; k++) {
+            const cbm_elastica_state *a = &sc->points[k];
+            x[k] = a->theta_base * DEG;
+            y[k] = a->curvature_base * r->u.L;
+            e[k] = a->energy * r->u.L / r->u.D;
+            stable[k] = a->index == 0;
         }
+        size_t nf = sc->n_folds < 64 ? sc->n_folds : 64;
+        for (size_t k = 0; k < nf; k++) {
+            fx[k] = sc->folds[k].at.theta_base * DEG;
+            fy[k] = sc->folds[k].at.curvature_base * r->u.L;
+            fe[k] = sc->folds[k].at.energy * r->u.L / r->u.D;
+        }
+        char title[96];
+        snprintf(title, sizeof title, "S-curve, alpha = %.4g", r->alpha);
+        cli_scurve_plot sp = {.title = title,
+                              .xlabel = "base angle (deg)",
+                              .ylabel = "base curvature kappa L",
+                              .elabel = "energy V L / D",
+                              .x = x,
+                              .y = y,
+                              .e = e,
+                              .stable = stable,
+                              .n = n,
+                              .fx = fx,
+                              .fy = fy,
+                              .fe = fe,
+                              .nf = nf,
+                              .fold_label = "fold (jumping point)"};
+        s = cli_scurve_plot_write(ctx, &sp, path);
     }
-    if (s == CBM_OK)
-        s = cbm_plot_write(p, path);
-done:
-    cbm_plot_destroy(p);
-    free(x), free(ys), free(yu), free(es), free(eu);
+    free(x);
+    free(stable);
     return s;
 }
 
