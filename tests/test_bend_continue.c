@@ -333,6 +333,71 @@ TEST(bend_continue_switch_greenhill)
     test_ctx_end(ctx);
 }
 
+TEST(bend_continue_stability_count_honest)
+{
+    /* The count of unstable modes along a branch (docs/bend.md "Stability along a branch"): a
+     * round column just past its buckling load has a lowest eigenvalue a hair below 0, and the
+     * count must say so (2: the column may buckle in any plane), while the buckled states, whose
+     * only non-positive eigenvalue is the zero mode of their turn about the vertical, count 0
+     * and carry that mode as symmetry_mode. The bisection is pushed to 1e-12 of the range so
+     * that the first state past the load has its eigenvalue in (-1e-9, 0). */
+    cbm_context *ctx = test_ctx();
+    char t[256];
+    snprintf(t, sizeof t,
+             "length = %.17g\nsegments = 50\nradius = 0.01\nangle = 90\ntolerance = 1e-10\n",
+             rod_length(15));
+    cbm_bend_spec sp;
+    CHECK_OK(cbm_bend_spec_parse(ctx, t, strlen(t), "c.spec", &sp));
+    cbm_bend_continuation_def d = cbm_bend_continuation_def_default();
+    d.param = CBM_BEND_PARAM_GRAVITY;
+    d.from = 4;
+    d.to = 15;
+    d.steps = 20;
+    d.min_step = 1e-12;
+    cbm_bend_branch br;
+    CHECK_OK(cbm_bend_continue(ctx, &sp, &d, &br));
+    const cbm_bend_fold *s = first(&br, false);
+    CHECK(s != NULL);
+    size_t k = 0;
+    while (s && k < br.n_points &&
+           !(br.points[k].param == s->at.param && br.points[k].unstable_modes == 0 &&
+             k + 1 < br.n_points && br.points[k + 1].unstable_modes > 0))
+        k++;
+    CHECK(k + 1 < br.n_points);
+    if (s && k + 1 < br.n_points) {
+        const cbm_bend_branch_point *past = &br.points[k + 1];
+        printf("past the load: g = %.12f, lowest eigenvalue %.3e, %zu unstable modes\n",
+               past->param, past->lowest_eigenvalue, past->unstable_modes);
+        CHECK(past->lowest_eigenvalue < 0 && past->lowest_eigenvalue > -1e-9);
+        /* a double eigenvalue in exact arithmetic, split by rounding: 1 or 2 */
+        CHECK(past->unstable_modes >= 1 && past->unstable_modes <= 2);
+        CHECK(!past->symmetry_mode);
+    }
+    for (size_t i = 0; i < br.n_points; i++)
+        CHECK(!br.points[i].symmetry_mode); /* a straight column: no circle of states */
+    cbm_bend_branch_free(&br);
+    d.min_step = 1e-7;
+    d.switch_branch = true;
+    CHECK_OK(cbm_bend_continue(ctx, &sp, &d, &br));
+    size_t buckled = 0, sym = 0, unstable = 0;
+    for (size_t i = 0; i < br.n_points; i++) {
+        const cbm_bend_branch_point *q = &br.points[i];
+        if (fabs(q->tip_angle_deg - 90) < 1e-3)
+            continue;
+        buckled++;
+        sym += q->symmetry_mode;
+        unstable += q->unstable_modes > 0;
+        CHECK(q->lowest_eigenvalue > -1e-6); /* the zero mode is the lowest, to rounding */
+    }
+    printf("buckled: %zu states, %zu with the symmetry's zero mode, %zu counted unstable\n",
+           buckled, sym, unstable);
+    CHECK(buckled > 10);
+    CHECK_EQ_INT((long)sym, (long)buckled);
+    CHECK_EQ_INT((long)unstable, 0);
+    cbm_bend_branch_free(&br);
+    test_ctx_end(ctx);
+}
+
 TEST(bend_continue_arclength_params)
 {
     /* density, tip load and length: each moves the elastica's load; every equilibrium of the

@@ -162,8 +162,11 @@ typedef struct cbm_bend_branch_point {
     double tip_x, tip_y, tip_z; ///< m, relative to the base
     size_t unstable_modes;      ///< negative eigenvalues of the energy's Hessian
     double lowest_eigenvalue;   ///< lowest eigenvalue of S^-1 J (0 at a fold)
-    double energy;              ///< J, total potential energy
-    bool jumped;                ///< reached by a jump from a fold, not along the branch
+    /// the state has the zero mode of a symmetry (a round rod clamped along gravity turned about
+    /// the vertical); it is not counted in unstable_modes, whatever sign rounding gave it
+    bool symmetry_mode;
+    double energy; ///< J, total potential energy
+    bool jumped;   ///< reached by a jump from a fold, not along the branch
 } cbm_bend_branch_point;
 
 /// An event on the branch: a fold (the branch cannot be continued with the parameter going

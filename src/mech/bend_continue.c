@@ -103,6 +103,112 @@ static cbm_status start_solve(cbm_context *ctx, const cbm_bend_spec *spec,
     return st;
 }
 
+/* S-weighted dot product */
+static double sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b)
+{
+    const cbm_vec3 *c = p->work.cj;
+    double s = 0.0;
+    for (size_t i = 0; i < p->n; i++)
+        s += c[i].x * a[i].x * b[i].x + c[i].y * a[i].y * b[i].y + c[i].z * a[i].z * b[i].z;
+    return s;
+}
+
+/* v -= (g.S v / g.S g) g: v S-orthogonal to g */
+static void deflate(const cbm_plant *p, const cbm_vec3 *g, double gg, cbm_vec3 *v)
+{
+    double f = sdot(p, g, v) / gg;
+    for (size_t i = 0; i < p->n; i++)
+        v[i] = v3_sub(v[i], v3_scale(g[i], f));
+}
+
+/* The lowest eigenvalue of S^-1 J on the S-orthogonal complement of g (NaN if none found):
+ * shifted inverse iteration as cbm__mech_lowest_mode, each iterate deflated. */
+static cbm_status lowest_without(cbm_plant *p, const cbm_vec3 *g, double gg, double *lambda)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    *lambda = NAN;
+    double mu = 0.0;
+    for (;;) {
+        size_t nonpd = 0;
+        size_t sing = cbm__mech_tree_factor(p, mu, &nonpd);
+        if (sing == 0 && nonpd == 0)
+            break;
+        mu = mu < 0.05 ? 0.05 : 2.0 * mu;
+        if (mu > 1e6)
+            return CBM_OK;
+    }
+    cbm_vec3 *v = malloc(3 * n * sizeof *v);
+    if (!v)
+        return CBM_E_NOMEM;
+    cbm_vec3 *b = v + n, *x = b + n;
+    for (size_t i = 0; i < n; i++)
+        v[i] = v3(0.01 / w->cj[i].x, 1.0 / w->cj[i].y, 0.01 / w->cj[i].z);
+    deflate(p, g, gg, v);
+    double theta = NAN, nv = sqrt(sdot(p, v, v));
+    for (size_t i = 0; i < n && nv > 0.0; i++)
+        v[i] = v3_scale(v[i], 1.0 / nv);
+    for (int it = 0; it < 300 && nv > 0.0; it++) {
+        for (size_t i = 0; i < n; i++)
+            b[i] = v3(w->cj[i].x * v[i].x, w->cj[i].y * v[i].y, w->cj[i].z * v[i].z);
+        cbm__mech_tree_apply(p, b, x);
+        deflate(p, g, gg, x);
+        double xs = sdot(p, x, x), vx = sdot(p, v, x);
+        if (!(xs > 0.0) || !isfinite(xs))
+            break;
+        double th = vx / xs, nx = sqrt(xs), change = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            cbm_vec3 nvi = v3_scale(x[i], (vx < 0.0 ? -1.0 : 1.0) / nx);
+            cbm_vec3 d = v3_sub(nvi, v[i]);
+            change += w->cj[i].x * d.x * d.x + w->cj[i].y * d.y * d.y + w->cj[i].z * d.z * d.z;
+            v[i] = nvi;
+        }
+        bool settled =
+            isfinite(theta) && fabs(th - theta) <= 1e-12 * (fabs(th) + mu) && sqrt(change) < 1e-6;
+        theta = th;
+        if (settled)
+            break;
+    }
+    free(v);
+    *lambda = theta - mu;
+    return CBM_OK;
+}
+
+/* The zero mode of a symmetry (docs/bend.md "Stability along a branch"). A round rod clamped
+ * along gravity, without rest curvature or tip moment, has a circle of equilibria: the shape
+ * turned about the vertical through the base. Turning every joint's frame by phi about its own
+ * heading H (the base frame with it, which is the turn about the vertical when the clamp is
+ * vertical) maps Omega_i to R_H(phi) Omega_i, so the circle's tangent is
+ *     g_i = H x Omega_i = (0, -Omega_U, Omega_L)   (local H, L, U).
+ * *has: J g = 0 to 1e-8 of the S-weighted norms (an equilibrium to the solver's tolerance is
+ * equivariant to that order; a clamp a few 1e-7 rad off the vertical is not, and its mode out of
+ * the plane is a real one), so g is such a mode. Then *lambda2 is the lowest eigenvalue of
+ * S^-1 J off g: the state is stable, up to the neutral turn, iff lambda2 >= 0. Scratch:
+ * work.step (g) and work.tmp. */
+static cbm_status symmetry_mode(cbm_plant *p, bool *has, double *lambda2)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    cbm_vec3 *g = w->step, *jg = w->tmp;
+    *has = false;
+    *lambda2 = NAN;
+    for (size_t i = 0; i < n; i++)
+        g[i] = v3(0.0, -p->omega[i].z, p->omega[i].y);
+    double gg = sdot(p, g, g);
+    if (!(gg > 0.0)) /* a straight rod: no circle, its zero modes are bucklings */
+        return CBM_OK;
+    cbm__mech_jvp(p, g, jg);
+    double r = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        const cbm_vec3 c = w->cj[i], v = jg[i];
+        r += v.x * v.x / c.x + v.y * v.y / c.y + v.z * v.z / c.z;
+    }
+    if (!(r <= 1e-16 * gg))
+        return CBM_OK;
+    *has = true;
+    return lowest_without(p, g, gg, lambda2);
+}
+
 /* the branch point of the plant's current (solved) state; prev_deg unwraps the tip angle */
 static cbm_status read_point(cbm_plant *p, double param, double prev_deg, cbm_bend_branch_point *o)
 {
@@ -126,7 +232,21 @@ static cbm_status read_point(cbm_plant *p, double param, double prev_deg, cbm_be
     o->tip_x = tip.distal.x - base.proximal.x;
     o->tip_y = tip.distal.y - base.proximal.y;
     o->tip_z = tip.distal.z - base.proximal.z;
-    o->unstable_modes = sb.unstable_modes;
+    /* The pivots' inertia is exact for a symmetric D J; off the plane of a bent state it is a
+     * reading of it (cambium/mech.h), and it may count a zero mode as negative by rounding.
+     * The count is therefore checked against the eigenvalues: none below 0 means no unstable
+     * mode; a symmetry's zero mode (the only negative one by rounding) is not one when every
+     * eigenvalue off it is >= 0. A real eigenvalue just below 0 (a column a hair past its
+     * buckling load) still counts. */
+    double l2 = NAN;
+    size_t count = sb.unstable_modes;
+    if (st == CBM_OK)
+        CBM_TRY(symmetry_mode(p, &o->symmetry_mode, &l2));
+    if (count > 0 && isfinite(sb.lowest_eigenvalue) && sb.lowest_eigenvalue >= 0.0)
+        count = 0;
+    else if (count > 0 && o->symmetry_mode && isfinite(l2) && l2 >= 0.0)
+        count = 0;
+    o->unstable_modes = count;
     o->lowest_eigenvalue = sb.lowest_eigenvalue;
     o->energy = sb.energy;
     return CBM_OK;
@@ -248,7 +368,11 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         bool cont = conv && fabs(np.tip_angle_deg - cur.tip_angle_deg) <= d->max_turn_deg &&
                     hypot(hypot(np.tip_x - cur.tip_x, np.tip_y - cur.tip_y),
                           np.tip_z - cur.tip_z) <= spec->length * d->max_turn_deg * CBM_PI / 180.0;
-        bool same = cont && np.unstable_modes == cur.unstable_modes;
+        /* a state that gains (or loses) a symmetry's zero mode has left the branch at a
+         * bifurcation: the straight column past Greenhill's load, which the solver leaves for
+         * the circle of buckled states, all neutral in the turn about the vertical */
+        bool same = cont && np.unstable_modes == cur.unstable_modes &&
+                    np.symmetry_mode == cur.symmetry_mode;
         if (same) {
             CBM_TRY(push_point(g, &np));
             cur = np;
@@ -513,23 +637,13 @@ static cbm_status correct(arc *a, const apt *base, const cbm_vec3 *t, double tl,
 
 /* Corrects from base by ds along base's tangent and reads the point (stability included);
  * *ok false when Newton failed or the tip jumped (another branch). */
-/* read_point, with the count checked against the lowest eigenvalue: where that is not below
- * -1e-9 no mode is unstable, and a count > 0 is a zero mode the pivots' inertia saw negative
- * by rounding (the turn of a round column's buckled plane about the vertical) */
-static cbm_status arc_read(arc *a, double lam, double prev_deg, cbm_bend_branch_point *o)
-{
-    CBM_TRY(read_point(a->p, lam, prev_deg, o));
-    if (o->unstable_modes > 0 && o->lowest_eigenvalue >= -1e-9)
-        o->unstable_modes = 0;
-    return CBM_OK;
-}
 
 static cbm_status step_to(arc *a, const apt *base, double ds, apt *x, int *iters, bool *ok)
 {
     CBM_TRY(correct(a, base, base->t, base->tl, ds, x, iters, ok));
     if (!*ok)
         return CBM_OK;
-    CBM_TRY(arc_read(a, x->lam, base->pt.tip_angle_deg, &x->pt));
+    CBM_TRY(read_point(a->p, x->lam, base->pt.tip_angle_deg, &x->pt));
     const cbm_bend_branch_point *u = &base->pt, *v = &x->pt;
     double turn = a->d->max_turn_deg;
     *ok = fabs(v->tip_angle_deg - u->tip_angle_deg) <= turn &&
@@ -682,7 +796,7 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
             memset(lo->t, 0, a->n * sizeof *lo->t);
             CBM_TRY(correct(a, mid, lo->t, 1.0 / a->sigma, 0.0, hi, &it, &ok));
             if (ok) {
-                CBM_TRY(arc_read(a, end, cur->pt.tip_angle_deg, &hi->pt));
+                CBM_TRY(read_point(a->p, end, cur->pt.tip_angle_deg, &hi->pt));
                 CBM_TRY(push_point(a->g, &hi->pt));
             }
             b->end = past_to ? CBM_BEND_END_TO : CBM_BEND_END_FROM;
@@ -778,7 +892,7 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
     apt *cur = &pts[0];
     memcpy(cur->om, cbm_plant_omegas(p), n * sizeof *cur->om);
     cur->lam = d->from;
-    st = arc_read(&a, d->from, NAN, &cur->pt);
+    st = read_point(a.p, d->from, NAN, &cur->pt);
     if (st == CBM_OK)
         st = push_point(g, &cur->pt);
     if (st == CBM_OK)

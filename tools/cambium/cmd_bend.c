@@ -118,9 +118,9 @@ static void write_branch_point(FILE *f, const cbm_bend_branch_point *p)
     fprintf(f,
             "{\"param\": %.12g, \"tip_angle_deg\": %.12g, \"tip_x\": %.12g, \"tip_y\": %.12g, "
             "\"tip_z\": %.12g, \"unstable_modes\": %zu, \"lowest_eigenvalue\": %s, "
-            "\"energy\": %.12g, \"jumped\": %s}",
+            "\"symmetry_mode\": %s, \"energy\": %.12g, \"jumped\": %s}",
             p->param, p->tip_angle_deg, p->tip_x, p->tip_y, p->tip_z, p->unstable_modes, eig,
-            p->energy, p->jumped ? "true" : "false");
+            p->symmetry_mode ? "true" : "false", p->energy, p->jumped ? "true" : "false");
 }
 
 static const char *param_name(cbm_bend_param p)
