@@ -155,6 +155,10 @@ TEST(bend_continue_refuses)
     d.param = CBM_BEND_PARAM_GRAVITY;
     d.from = -1;
     CHECK(cbm_bend_continue(ctx, &sp, &d, &br) == CBM_E_INVALID);
+    d.from = 1;
+    d.switch_branch = true;
+    d.switch_at = -1;
+    CHECK(cbm_bend_continue(ctx, &sp, &d, &br) == CBM_E_INVALID);
     test_ctx_end(ctx);
 }
 
@@ -330,6 +334,105 @@ TEST(bend_continue_switch_greenhill)
     CHECK_EQ_INT((long)unstable, 0);
     CHECK(e && e->param == 15 && e->tip_angle_deg < 0);
     cbm_bend_branch_free(&br);
+    test_ctx_end(ctx);
+}
+
+/* the elastica's k-th bifurcation of the straight heavy column in [lo, hi]: the load where
+ * d theta_base / d theta_tip at the straight state (theta_tip = 90 deg) changes sign */
+static double elastica_greenhill(cbm_context *ctx, double lo, double hi)
+{
+    double slo = 0, shi = 0;
+    elastica_base_deg(ctx, lo, 0, 90, NULL, &slo);
+    elastica_base_deg(ctx, hi, 0, 90, NULL, &shi);
+    if (!(slo * shi < 0))
+        return NAN;
+    for (int it = 0; it < 60; it++) {
+        double a = 0.5 * (lo + hi), sm = 0;
+        elastica_base_deg(ctx, a, 0, 90, NULL, &sm);
+        if ((sm < 0) == (slo < 0))
+            lo = a;
+        else
+            hi = a;
+    }
+    return 0.5 * (lo + hi);
+}
+
+TEST(bend_continue_switch_second_greenhill)
+{
+    /* The second buckling load of the heavy column: the straight column swept in g from 4 to
+     * 60 m/s^2 (alpha 6.1 to 91.7) meets two bifurcations; leaving at the second follows the
+     * second buckling mode. Reference: the elastica's second bifurcation of the straight state
+     * (alpha_2 = 55.97703 = (9/4) j^2, j = 4.98785323 the second zero of J_-1/3), and every
+     * equilibrium of the new branch on the elastica's solutions at a vertical clamp, each
+     * unstable in both (the second mode is a saddle). The discretisation error at 50 and 100
+     * segments shows the order. */
+    cbm_context *ctx = test_ctx();
+    double a1 = elastica_greenhill(ctx, 7, 9), a2 = elastica_greenhill(ctx, 50, 60);
+    printf("elastica: alpha_1 = %.7f, alpha_2 = %.7f\n", a1, a2);
+    CHECK_NEAR(a1, 2.25 * 1.86635086 * 1.86635086, 1e-6);
+    CHECK_NEAR(a2, 2.25 * 4.98785323 * 4.98785323, 1e-5);
+    double err[2] = {NAN, NAN};
+    const long segs[2] = {50, 100};
+    for (int r = 0; r < 2; r++) {
+        char t[256];
+        snprintf(t, sizeof t,
+                 "length = %.17g\nsegments = %ld\nradius = 0.01\nangle = 90\ntolerance = 1e-10\n",
+                 rod_length(15), segs[r]);
+        cbm_bend_spec sp;
+        CHECK_OK(cbm_bend_spec_parse(ctx, t, strlen(t), "c.spec", &sp));
+        cbm_bend_continuation_def d = cbm_bend_continuation_def_default();
+        d.param = CBM_BEND_PARAM_GRAVITY;
+        d.from = 4;
+        d.to = 60;
+        d.steps = 40;
+        d.switch_branch = true;
+        d.switch_at = 2;
+        cbm_bend_branch br;
+        CHECK_OK(cbm_bend_continue(ctx, &sp, &d, &br));
+        const cbm_bend_fold *b1 = NULL, *b2 = NULL;
+        for (size_t i = 0; i < br.n_folds; i++) {
+            if (br.folds[i].bifurcation == 1)
+                b1 = &br.folds[i];
+            if (br.folds[i].bifurcation == 2)
+                b2 = &br.folds[i];
+        }
+        CHECK(b1 && !b1->switched && b2 && b2->switched);
+        CHECK(br.end == CBM_BEND_END_TO);
+        if (!b1 || !b2) {
+            cbm_bend_branch_free(&br);
+            continue;
+        }
+        double g2 = 9.81 * a2 / 15;
+        err[r] = fabs(b2->at.param / g2 - 1);
+        size_t k0 = 0;
+        while (k0 < br.n_points && br.points[k0].param <= b2->at.param)
+            k0++;
+        const load_map m = {15 / 9.81, 1, 0, 90};
+        size_t mism = 0, saddle = 0, n = 0;
+        double worst = branch_error(ctx, &br, k0, &m, &mism);
+        for (size_t i = k0; i < br.n_points; i++) {
+            const cbm_bend_branch_point *q = &br.points[i];
+            int idx = 0;
+            elastica_base_deg(ctx, 15 * q->param / 9.81, 0, q->tip_angle_deg, &idx, NULL);
+            n++;
+            saddle += q->unstable_modes > 0 && idx > 0;
+        }
+        printf("%ld segments: bifurcations at g = %.7f and %.7f (elastica %.7f, %.7f; errors "
+               "%.2e, %.2e); mode-2 branch: %zu equilibria within %.2e deg of the elastica, "
+               "%zu unstable in both\n",
+               segs[r], b1->at.param, b2->at.param, 9.81 * a1 / 15, g2,
+               fabs(b1->at.param / (9.81 * a1 / 15) - 1), err[r], n, worst, saddle);
+        CHECK(n > 10);
+        CHECK(worst < (r ? 0.04 : 0.15)); /* measured 1.17e-1, 2.93e-2 deg */
+        CHECK_EQ_INT((long)saddle, (long)n);
+        cbm_bend_branch_free(&br);
+    }
+    if (isfinite(err[0]) && isfinite(err[1])) {
+        double order = log2(err[0] / err[1]);
+        printf("second load: order %.2f\n", order);
+        CHECK(err[1] < 5e-4);
+        CHECK(fabs(order - 2) < 0.3);
+    }
     test_ctx_end(ctx);
 }
 

@@ -149,6 +149,11 @@ typedef struct cbm_bend_continuation_def {
     /// onto the bifurcating branch (its side: the tip moving towards +x, or +z when the mode
     /// is out of the plane) and follow that one (default false)
     bool switch_branch;
+    /// with switch_branch: the bifurcation met along the trace to leave at, counted from 1
+    /// (default 1, the first); 0 leaves at every one met, on the new branches too. At the k-th
+    /// the mode followed is the one whose eigenvalue crosses 0 there (the k-th buckling mode of
+    /// a column), not the lowest
+    long switch_at;
     /// arclength only: the most equilibria traced before stopping (default 100000)
     size_t max_points;
 } cbm_bend_continuation_def;
@@ -178,6 +183,9 @@ typedef struct cbm_bend_fold {
     bool has_jump;              ///< fold only: a jump target was found
     cbm_bend_branch_point jump; ///< fold only: the equilibrium reached just past the fold
     bool switched; ///< stability change only: the continuation left here onto the new branch
+    /// stability change only: a bifurcation (the count rose without a fold), numbered from 1 in
+    /// the order met; 0 for other events
+    long bifurcation;
 } cbm_bend_fold;
 
 /// A traced branch (owned; release with cbm_bend_branch_free).

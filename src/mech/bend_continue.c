@@ -29,6 +29,7 @@ cbm_bend_continuation_def cbm_bend_continuation_def_default(void)
     d.min_step = 1e-7;
     d.method = CBM_BEND_CONTINUE_ARCLENGTH;
     d.max_points = 100000;
+    d.switch_at = 1;
     return d;
 }
 
@@ -123,13 +124,31 @@ static void deflate(const cbm_plant *p, const cbm_vec3 *g, double gg, cbm_vec3 *
 
 /* The lowest eigenvalue of S^-1 J on the S-orthogonal complement of g (NaN if none found):
  * shifted inverse iteration as cbm__mech_lowest_mode, each iterate deflated. */
+static cbm_status inverse_iteration(cbm_plant *p, const cbm_vec3 *g, double gg, bool nearest,
+                                    cbm_vec3 *mode, double *lambda);
+
 static cbm_status lowest_without(cbm_plant *p, const cbm_vec3 *g, double gg, double *lambda)
+{
+    return inverse_iteration(p, g, gg, false, NULL, lambda);
+}
+
+/* Shifted inverse iteration with the tree factorisation: the lowest eigenvalue of S^-1 J (the
+ * shift raised until every pivot is positive definite, as cbm__mech_lowest_mode), or with
+ * `nearest` the one nearest 0 (no shift: the mode whose eigenvalue crosses 0 at a bifurcation,
+ * whatever lies below it). Each iterate is deflated of g when g != NULL. The eigenvector goes
+ * to mode (S-normalised) when mode != NULL. */
+static cbm_status inverse_iteration(cbm_plant *p, const cbm_vec3 *g, double gg, bool nearest,
+                                    cbm_vec3 *mode, double *lambda)
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
     *lambda = NAN;
     double mu = 0.0;
-    for (;;) {
+    if (nearest) {
+        if (cbm__mech_tree_factor(p, 0.0, NULL) != 0)
+            return CBM_OK; /* a singular pivot: exactly on the bifurcation */
+    }
+    while (!nearest) {
         size_t nonpd = 0;
         size_t sing = cbm__mech_tree_factor(p, mu, &nonpd);
         if (sing == 0 && nonpd == 0)
@@ -144,7 +163,8 @@ static cbm_status lowest_without(cbm_plant *p, const cbm_vec3 *g, double gg, dou
     cbm_vec3 *b = v + n, *x = b + n;
     for (size_t i = 0; i < n; i++)
         v[i] = v3(0.01 / w->cj[i].x, 1.0 / w->cj[i].y, 0.01 / w->cj[i].z);
-    deflate(p, g, gg, v);
+    if (g)
+        deflate(p, g, gg, v);
     double theta = NAN, nv = sqrt(sdot(p, v, v));
     for (size_t i = 0; i < n && nv > 0.0; i++)
         v[i] = v3_scale(v[i], 1.0 / nv);
@@ -152,7 +172,8 @@ static cbm_status lowest_without(cbm_plant *p, const cbm_vec3 *g, double gg, dou
         for (size_t i = 0; i < n; i++)
             b[i] = v3(w->cj[i].x * v[i].x, w->cj[i].y * v[i].y, w->cj[i].z * v[i].z);
         cbm__mech_tree_apply(p, b, x);
-        deflate(p, g, gg, x);
+        if (g)
+            deflate(p, g, gg, x);
         double xs = sdot(p, x, x), vx = sdot(p, v, x);
         if (!(xs > 0.0) || !isfinite(xs))
             break;
@@ -169,6 +190,8 @@ static cbm_status lowest_without(cbm_plant *p, const cbm_vec3 *g, double gg, dou
         if (settled)
             break;
     }
+    if (mode)
+        memcpy(mode, v, n * sizeof *mode);
     free(v);
     *lambda = theta - mu;
     return CBM_OK;
@@ -322,6 +345,8 @@ static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: unknown method");
     if (d->method == CBM_BEND_CONTINUE_ARCLENGTH && d->max_points < 2)
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: max_points must be >= 2");
+    if (d->switch_at < 0)
+        return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: switch_at must be >= 0");
     if (d->steps < 1 || d->steps > 10000000)
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: STEPS must be 1 .. 10^7");
     if (!(d->max_turn_deg > 0 && d->max_turn_deg <= 180) || !(d->min_step > 0 && d->min_step < 1))
@@ -459,6 +484,7 @@ typedef struct arc {
     cbm_vec3 *res, *rl, *va, *vb, *tmp; /* n each */
     growbuf *g;
     bool switched; /* the branch was left at a bifurcation already */
+    long n_bif;    /* bifurcations met so far */
     /* the branch lies in the rod's plane (x-y; bending about each joint's L axis only): the
      * updates keep it there (see plane()) */
     bool planar;
@@ -721,7 +747,12 @@ static cbm_status switch_at(arc *a, apt *lo)
     put_omega(a, lo->om);
     CBM_TRY(eval_at(a, lo->lam, a->res, NULL));
     double lam = NAN;
-    (void)cbm__mech_lowest_mode(a->p, a->va, &lam);
+    /* on a stable branch the mode crossing 0 is the lowest; past an earlier bifurcation it is
+     * the one nearest 0, with the earlier modes below it */
+    if (lo->pt.unstable_modes == 0)
+        (void)cbm__mech_lowest_mode(a->p, a->va, &lam);
+    else
+        CBM_TRY(inverse_iteration(a->p, NULL, 0.0, true, a->va, &lam));
     if (!isfinite(lam))
         return cbm__fail(a->ctx, CBM_E_NOT_CONVERGED,
                          "bend continuation: no lowest mode at the bifurcation %.9g", lo->lam);
@@ -813,9 +844,12 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
             f.bracket = fabs(hi->lam - lo->lam);
             if (fold)
                 CBM_TRY(jump_from(a, lo, cur->tl > 0.0 ? 1.0 : -1.0, &f));
-            /* once: a second bifurcation on the new branch is reported, not taken */
-            bool sw = !fold && d->switch_branch && !a->switched &&
-                      nxt->pt.unstable_modes > cur->pt.unstable_modes;
+            /* a bifurcation: the count rises without a fold; the chosen one is taken (every
+             * one with switch_at 0), the others are reported */
+            bool bif = !fold && nxt->pt.unstable_modes > cur->pt.unstable_modes;
+            f.bifurcation = bif ? ++a->n_bif : 0;
+            bool sw = bif && d->switch_branch &&
+                      (d->switch_at == 0 || (f.bifurcation == d->switch_at && !a->switched));
             a->switched = a->switched || sw;
             f.switched = sw;
             CBM_TRY(push_fold(a->g, &f));

@@ -40,8 +40,16 @@ printf 'length = 8.604725161155775\nsegments = 40\nradius = 0.01\nangle = 90\n' 
 "$bin" bend "$tmp/c.spec" --continue gravity=4:15:20 --switch-branch -o "$tmp/c.csv" -o "$tmp/c.png"
 test -s "$tmp/c.png"
 tail -1 "$tmp/c.csv" | awk -F, '{ if (!($1 == 15 && $3 > 1 && $6 == 0)) { print; exit 1 } }'
+# the second bifurcation of the straight column (the second buckling load, 36.61 m/s^2 for the
+# elastica): --switch-at 2 leaves there; the JSON numbers the bifurcations met
+"$bin" bend "$tmp/c.spec" --continue gravity=4:60:40 --switch-branch --switch-at 2 |
+    grep -q '^bifurcation (branch switched) at 36\.5'
+"$bin" bend "$tmp/c.spec" --continue gravity=4:60:40 --switch-branch --switch-at 2 --json |
+    grep -q '"switch_at": 2, .*"switched": true, .*"bifurcation": 2}'
 # usage errors (exit 2) and refused specs (exit 1), nothing written
 set +e
+"$bin" bend "$tmp/c.spec" --continue gravity=4:6 --switch-at 2 2>/dev/null; rc9=$?
+"$bin" bend "$tmp/c.spec" --continue gravity=4:6 --switch-branch --switch-at -1 2>/dev/null; rc10=$?
 "$bin" bend "$tmp/r.spec" --continue width=0:1 -o "$tmp/x.csv" 2>/dev/null; rc1=$?
 "$bin" bend "$tmp/r.spec" --continue angle=0:10 --natural --switch-branch 2>/dev/null; rc5=$?
 "$bin" bend "$tmp/r.spec" --natural -o "$tmp/x.csv" 2>/dev/null; rc6=$?
@@ -54,5 +62,6 @@ printf 'solver = relax\n' >>"$tmp/r.spec"
 set -e
 test $rc1 -eq 2 && test $rc2 -eq 2 && test $rc3 -eq 2 && test $rc4 -eq 1
 test $rc5 -eq 2 && test $rc6 -eq 2 && test $rc7 -eq 2 && test $rc8 -eq 1
+test $rc9 -eq 2 && test $rc10 -eq 2
 grep -q 'fast' "$tmp/err"
 test ! -e "$tmp/x.csv" && test ! -e "$tmp/x.svg"

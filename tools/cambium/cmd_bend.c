@@ -152,6 +152,8 @@ static void write_branch_json(FILE *f, const cbm_bend_continuation_def *d, const
                 b->end == CBM_BEND_END_TO     ? "to"
                 : b->end == CBM_BEND_END_FROM ? "from"
                                               : "limit");
+    if (arc && d->switch_branch)
+        fprintf(f, "\"switch_at\": %ld, ", d->switch_at);
     fprintf(f, "\"branch\": [");
     for (size_t i = 0; i < b->n_points; i++) {
         fprintf(f, "%s", i ? ", " : "");
@@ -171,6 +173,8 @@ static void write_branch_json(FILE *f, const cbm_bend_continuation_def *d, const
             write_branch_point(f, &k->jump);
         else
             fprintf(f, "null");
+        if (arc)
+            fprintf(f, ", \"bifurcation\": %ld", k->bifurcation);
         fprintf(f, "}");
     }
     fprintf(f, "], \"seconds\": %.6g}\n", secs);
@@ -379,6 +383,7 @@ int cmd_bend(int argc, char **argv)
     const char *outs[MAX_OUTPUTS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, NULL};
     bool json = false, natural = false, switch_branch = false;
+    long switch_at = -1;
     continue_arg cont = {false, cbm_bend_continuation_def_default()};
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
@@ -413,6 +418,15 @@ int cmd_bend(int argc, char **argv)
          .target = &switch_branch,
          .help = "with --continue: at the first loss of stability without a fold\n"
                  "(a bifurcation) follow the bifurcating branch"},
+        {.name = "--switch-at",
+         .kind = CLI_LONG,
+         .target = &switch_at,
+         .arg = "N",
+         .min = 0,
+         .max = 1000000,
+         .help = "with --switch-branch: leave at the N-th bifurcation met (default 1;\n"
+                 "0: at every one)",
+         .bad = "--switch-at expects a count 0..1000000, found '{value}'"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {0}};
     cli_opts table = {.cmd = "bend",
@@ -440,6 +454,10 @@ int cmd_bend(int argc, char **argv)
     }
     cont.def.method = natural ? CBM_BEND_CONTINUE_NATURAL : CBM_BEND_CONTINUE_ARCLENGTH;
     cont.def.switch_branch = switch_branch;
+    if (switch_at >= 0 && !switch_branch)
+        return cli_usage_error("bend", "--switch-at needs --switch-branch");
+    if (switch_at >= 0)
+        cont.def.switch_at = switch_at;
 
     size_t len = 0;
     char *text = cli_read_spec(spec_path, &len);
