@@ -20,6 +20,8 @@ typedef struct cbm__dyn {
     double *kel;   /* 9 per joint: elastic stiffness R diag(C / d) R^T, N m / rad */
     double *geo;   /* 9 per joint: G_k of the dead loads carried, N m / rad (tree.c) */
     double *body;  /* 36 per segment: spatial inertia about the base (segment + point mass) */
+    double *pc;    /* 10 per segment: body in compact form (cbm__dyn_pz) */
+    double *ak;    /* 9 per joint: A = K_el + sym G */
     double *width; /* a + b of the outer section, m (the wind's drag, drag.c) */
     double *pmass; /* point mass at the distal node, kg */
     cbm_vec3 base; /* the plant's base position, m (world = base + relative) */
@@ -33,6 +35,59 @@ typedef struct cbm__dyn {
     double *acc; /* 6 per segment */
     double *u;   /* 3 per joint */
 } cbm__dyn;
+
+/* The per-segment kernels of the sweeps, shared by the operators of tree.c and the fused step of
+ * motion.c (inline: they run once per segment per sweep). */
+
+/* The sweeps read or update the parent's 6 doubles, and a lateral's parent can be anywhere before
+ * it (a shoot added years after its mother's segments): a cache miss the loop waits for unless the
+ * line is asked for some segments ahead (CBM__AHEAD). A hint only: no effect on the results. */
+#if defined(__GNUC__) || defined(__clang__)
+#define CBM__PREFETCH(p) __builtin_prefetch(p)
+#else
+#define CBM__PREFETCH(p) ((void)(p))
+#endif
+#define CBM__AHEAD 12
+
+/// Asks for the parent's 6 doubles of arr of segment k (if it exists and has a parent). A macro:
+/// GCC finds a function around the hint free of effects and drops its calls before inlining.
+#define CBM__DYN_AHEAD(parent, n, k, arr)                                                          \
+    do {                                                                                           \
+        size_t k_ = (k);                                                                           \
+        if (k_ < (n) && (parent)[k_] >= 0)                                                         \
+            CBM__PREFETCH((arr) + 6 * (parent)[k_]);                                               \
+    } while (0)
+
+/// z += S q = (q, x x q): the twist of a rotation q about the joint's node x (tree.c), 6 doubles.
+static inline void cbm__dyn_sq(const cbm_vec3 *x, const double *q, double *z)
+{
+    z[0] += q[0];
+    z[1] += q[1];
+    z[2] += q[2];
+    z[3] += x->y * q[2] - x->z * q[1];
+    z[4] += x->z * q[0] - x->x * q[2];
+    z[5] += x->x * q[1] - x->y * q[0];
+}
+
+/// out = S^T (n, f) = n - x x f, the joint's share of a wrench w = (n, f).
+static inline void cbm__dyn_stw(const cbm_vec3 *x, const double *w, double *out)
+{
+    out[0] = w[0] - (x->y * w[5] - x->z * w[4]);
+    out[1] = w[1] - (x->z * w[3] - x->x * w[5]);
+    out[2] = w[2] - (x->x * w[4] - x->y * w[3]);
+}
+
+/// t = g + P z for the spatial inertia P = [[J, [h]], [[h]^T, m I]] in the 10 doubles pc: the
+/// symmetric J about the origin (xx, yy, zz, xy, xz, yz), the first moment h, the mass m.
+static inline void cbm__dyn_pz(const double *pc, const double *z, const double *g, double *t)
+{
+    t[0] = g[0] + pc[0] * z[0] + pc[3] * z[1] + pc[4] * z[2] + pc[7] * z[5] - pc[8] * z[4];
+    t[1] = g[1] + pc[3] * z[0] + pc[1] * z[1] + pc[5] * z[2] + pc[8] * z[3] - pc[6] * z[5];
+    t[2] = g[2] + pc[4] * z[0] + pc[5] * z[1] + pc[2] * z[2] + pc[6] * z[4] - pc[7] * z[3];
+    t[3] = g[3] + pc[9] * z[3] + z[1] * pc[8] - z[2] * pc[7];
+    t[4] = g[4] + pc[9] * z[4] + z[2] * pc[6] - z[0] * pc[8];
+    t[5] = g[5] + pc[9] * z[5] + z[0] * pc[7] - z[1] * pc[6];
+}
 
 /// Copies the plant's equilibrium (its state must be current: after a solve or an evaluation)
 /// into d. CBM_E_INVALID for an empty plant or a segment without mass.
