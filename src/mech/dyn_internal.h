@@ -29,6 +29,7 @@ typedef struct cbm__dyn {
     double fk, fm; /* its sK and sM */
     double *dinv;  /* 9 per joint */
     double *lmat;  /* 18 per joint: L = B + S^T Pi (3 x 6) */
+    double *dl;    /* 18 per joint: D^-1 L, read by the forward sweeps in place of both */
     double *pi;    /* 36 per joint: articulated block (work of the factorisation) */
     /* work */
     double *z;   /* 6 per segment */
@@ -69,6 +70,18 @@ static inline void cbm__dyn_sq(const cbm_vec3 *x, const double *q, double *z)
     z[5] += x->x * q[1] - x->y * q[0];
 }
 
+/// cbm__dyn_sq for a rotation given as three numbers (the sweeps' own values, kept out of memory:
+/// stored one by one and read back in pairs they would stall the loads).
+static inline void cbm__dyn_sq3(const cbm_vec3 *x, double q0, double q1, double q2, double *z)
+{
+    z[0] += q0;
+    z[1] += q1;
+    z[2] += q2;
+    z[3] += x->y * q2 - x->z * q1;
+    z[4] += x->z * q0 - x->x * q2;
+    z[5] += x->x * q1 - x->y * q0;
+}
+
 /// out = S^T (n, f) = n - x x f, the joint's share of a wrench w = (n, f).
 static inline void cbm__dyn_stw(const cbm_vec3 *x, const double *w, double *out)
 {
@@ -89,6 +102,28 @@ static inline void cbm__dyn_pz(const double *pc, const double *z, const double *
     t[5] = g[5] + pc[9] * z[5] + z[0] * pc[7] - z[1] * pc[6];
 }
 
+/// s = D^-1 u for the joint's inverse pivot di (3x3), the elimination's step from the tips.
+static inline void cbm__dyn_dinv_u(const double *di, const double *u, double *s)
+{
+    for (int i = 0; i < 3; i++)
+        s[i] = di[3 * i] * u[0] + di[3 * i + 1] * u[1] + di[3 * i + 2] * u[2];
+}
+
+/// out = L^T s (6) for the joint's L (3x6): its wrench passed on to the parent.
+static inline void cbm__dyn_lt_s(const double *lm, const double *s, double *out)
+{
+    for (int j = 0; j < 6; j++)
+        out[j] = lm[j] * s[0] + lm[6 + j] * s[1] + lm[12 + j] * s[2];
+}
+
+/// q = s - D^-1 L zp: the back-substitution of a joint from s = D^-1 u and the parent's twist.
+static inline void cbm__dyn_back_sub(const double *dl, const double *s, const double *zp, double *q)
+{
+    for (int i = 0; i < 3; i++)
+        q[i] = s[i] - (dl[6 * i] * zp[0] + dl[6 * i + 1] * zp[1] + dl[6 * i + 2] * zp[2] +
+                       dl[6 * i + 3] * zp[3] + dl[6 * i + 4] * zp[4] + dl[6 * i + 5] * zp[5]);
+}
+
 /// Copies the plant's equilibrium (its state must be current: after a solve or an evaluation)
 /// into d. CBM_E_INVALID for an empty plant or a segment without mass.
 cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d);
@@ -98,7 +133,7 @@ void cbm__dyn_apply(cbm__dyn *d, double sk, double sm, const double *v, double *
 /// Factorises sk K + sm M; returns the number of pivot blocks that are not positive definite
 /// (0: the matrix is positive definite), or (size_t)-1 if one is singular.
 size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm);
-/// x = (sk K + sm M)^-1 b with the last factorisation (x and b may alias).
+/// x = (sk K + sm M)^-1 b with the last factorisation (x and b may alias; u is used as work).
 void cbm__dyn_solve(cbm__dyn *d, const double *b, double *x);
 /// f += the generalised force of a force F (world) at the distal node of seg.
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f);

@@ -117,23 +117,44 @@ static void rhs_twists(cbm_motion *m, double a0, double a1)
  * carried sum Gamma = W - psi per segment), and the forward sweep that back-substitutes q1 also
  * updates v, a and builds the twists of the next step's w1, w2. The same arithmetic as the
  * general path in another order: the two agree to round-off (tests/test_dyn_loads.c). */
+/* Newmark's update of one coordinate to the new rotation qn; returns the component of the next
+ * step's w1 = a0 q + a1 v + a. nm: a0, a1, c0, c1, dt / 2. */
+static inline double newmark(double qn, double *q, double *v, double *a, const double *nm,
+                             double *nan_check)
+{
+    double an = nm[2] * (qn - *q) - nm[3] * *v - *a;
+    double vn = *v + nm[4] * (*a + an);
+    *v = vn;
+    *a = an;
+    *q = qn;
+    *nan_check += 0.0 * qn;
+    return nm[0] * qn + nm[1] * vn + an;
+}
+
 static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1)
 {
+    const double nm[5] = {a0, a1, c0, c1, 0.5 * m->dt};
     const cbm__dyn *d = &m->d;
     size_t n = d->n;
     double dt = m->dt, beta = m->beta, b2 = 2.0 * beta / dt;
     bool damp = beta > 0.0, forced = m->forced;
     double *u = d->u, nan_check = 0.0; /* stays 0 unless some q is not finite */
+    /* from the tips; each segment's carried sum and force are cleared once read, so that the
+     * forward sweep need not touch them */
     for (size_t k = n; k-- > 0;) {
         if (k >= CBM__AHEAD)
             CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, m->gam);
         /* T = the children's carried sums + P z */
         double t[6], uk[3];
-        cbm__dyn_pz(d->pc + 10 * k, m->zw + 6 * k, m->gam + 6 * k, t);
+        double *gk = m->gam + 6 * k;
+        cbm__dyn_pz(d->pc + 10 * k, m->zw + 6 * k, gk, t);
+        memset(gk, 0, 6 * sizeof(double));
         cbm__dyn_stw(d->x + k, t, uk);
         if (forced)
-            for (int i = 0; i < 3; i++)
+            for (int i = 0; i < 3; i++) {
                 uk[i] += m->f[3 * k + i];
+                m->f[3 * k + i] = 0.0;
+            }
         int64_t pa = d->parent[k];
         if (damp) {
             const double *q = m->q + 3 * k, *v = m->v + 3 * k, *ak = d->ak + 9 * k,
@@ -149,58 +170,45 @@ static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1
                 t[i] += g[3 * i] * w[0] + g[3 * i + 1] * w[1] + g[3 * i + 2] * w[2];
             }
         }
-        memcpy(u + 3 * k, uk, sizeof uk);
+        /* the elimination's step as in tree.c (cbm__dyn_solve): D^-1 u kept, the rest passed on */
+        double *sk = u + 3 * k, lts[6];
+        cbm__dyn_dinv_u(d->dinv + 9 * k, uk, sk);
         if (pa < 0)
             continue;
-        const double *di = d->dinv + 9 * k, *lm = d->lmat + 18 * k;
-        double s[3];
-        for (int i = 0; i < 3; i++)
-            s[i] = di[3 * i] * uk[0] + di[3 * i + 1] * uk[1] + di[3 * i + 2] * uk[2];
+        cbm__dyn_lt_s(d->lmat + 18 * k, sk, lts);
         double *gp = m->gam + 6 * pa;
         for (int j = 0; j < 6; j++)
-            gp[j] += t[j] - (lm[j] * s[0] + lm[6 + j] * s[1] + lm[12 + j] * s[2]);
+            gp[j] += t[j] - lts[j];
     }
+    /* from the base: q1, then v, a and the twists of the next step's right-hand side */
     for (size_t k = 0; k < n; k++) {
         int64_t pa = d->parent[k];
-        double *zs = m->zs + 6 * k, *zw = m->zw + 6 * k, *th = m->thw + 3 * k;
+        double *zs = m->zs + 6 * k, *zw = m->zw + 6 * k, *th = m->thw + 3 * k, qn[3];
         CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, m->zs);
         CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, m->zw);
-        const double *lm = d->lmat + 18 * k, *di = d->dinv + 9 * k;
-        double r[3] = {u[3 * k], u[3 * k + 1], u[3 * k + 2]};
         if (pa >= 0) {
             const double *zp = m->zs + 6 * pa;
+            cbm__dyn_back_sub(d->dl + 18 * k, u + 3 * k, zp, qn);
             memcpy(zs, zp, 6 * sizeof(double));
             memcpy(zw, m->zw + 6 * pa, 6 * sizeof(double));
             if (damp)
                 memcpy(th, m->thw + 3 * pa, 3 * sizeof(double));
-            for (int i = 0; i < 3; i++)
-                r[i] -= lm[6 * i] * zp[0] + lm[6 * i + 1] * zp[1] + lm[6 * i + 2] * zp[2] +
-                        lm[6 * i + 3] * zp[3] + lm[6 * i + 4] * zp[4] + lm[6 * i + 5] * zp[5];
         } else {
+            memcpy(qn, u + 3 * k, sizeof qn);
             memset(zs, 0, 6 * sizeof(double));
             memset(zw, 0, 6 * sizeof(double));
             if (damp)
                 memset(th, 0, 3 * sizeof(double));
         }
-        double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k, w[3];
-        for (int i = 0; i < 3; i++) {
-            double qn = di[3 * i] * r[0] + di[3 * i + 1] * r[1] + di[3 * i + 2] * r[2];
-            double an = c0 * (qn - q[i]) - c1 * v[i] - a[i];
-            v[i] += 0.5 * dt * (a[i] + an);
-            a[i] = an;
-            q[i] = qn;
-            nan_check += 0.0 * qn;
-            w[i] = a0 * qn + a1 * v[i] + an;
-        }
+        double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k;
+        double w0 = newmark(qn[0], q, v, a, nm, &nan_check);
+        double w1 = newmark(qn[1], q + 1, v + 1, a + 1, nm, &nan_check);
+        double w2 = newmark(qn[2], q + 2, v + 2, a + 2, nm, &nan_check);
         if (damp)
             for (int i = 0; i < 3; i++)
                 th[i] += b2 * q[i] + beta * v[i];
-        cbm__dyn_sq(d->x + k, q, zs);
-        cbm__dyn_sq(d->x + k, w, zw);
-        double *gk = m->gam + 6 * k;
-        gk[0] = gk[1] = gk[2] = gk[3] = gk[4] = gk[5] = 0.0;
-        if (forced)
-            m->f[3 * k] = m->f[3 * k + 1] = m->f[3 * k + 2] = 0.0;
+        cbm__dyn_sq3(d->x + k, qn[0], qn[1], qn[2], zs);
+        cbm__dyn_sq3(d->x + k, w0, w1, w2, zw);
     }
     m->forced = false;
     return nan_check == 0.0;

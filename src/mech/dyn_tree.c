@@ -104,6 +104,7 @@ void cbm__dyn_free(cbm__dyn *d)
     cbm__free(d->ctx, d->ak, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->dinv, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->lmat, 18 * n * sizeof(double));
+    cbm__free(d->ctx, d->dl, 18 * n * sizeof(double));
     cbm__free(d->ctx, d->pi, 36 * n * sizeof(double));
     cbm__free(d->ctx, d->z, 6 * n * sizeof(double));
     cbm__free(d->ctx, d->acc, 6 * n * sizeof(double));
@@ -178,6 +179,7 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->ak = cbm__alloc(d->ctx, 9 * n * sizeof(double));
     d->dinv = cbm__alloc(d->ctx, 9 * n * sizeof(double));
     d->lmat = cbm__alloc(d->ctx, 18 * n * sizeof(double));
+    d->dl = cbm__alloc(d->ctx, 18 * n * sizeof(double));
     d->pi = cbm__alloc(d->ctx, 36 * n * sizeof(double));
     d->z = cbm__alloc(d->ctx, 6 * n * sizeof(double));
     d->acc = cbm__alloc(d->ctx, 6 * n * sizeof(double));
@@ -185,7 +187,7 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->width = cbm__alloc(d->ctx, n * sizeof(double));
     d->pmass = cbm__alloc(d->ctx, n * sizeof(double));
     if (!d->width || !d->pmass || !d->parent || !d->x || !d->e || !d->kel || !d->geo || !d->body ||
-        !d->pc || !d->ak || !d->dinv || !d->lmat || !d->pi || !d->z || !d->acc || !d->u) {
+        !d->pc || !d->ak || !d->dinv || !d->lmat || !d->dl || !d->pi || !d->z || !d->acc || !d->u) {
         cbm__dyn_free(d);
         return CBM_E_NOMEM;
     }
@@ -369,15 +371,15 @@ size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm)
         }
         if (!pd)
             nonpd++;
-        int64_t pa = d->parent[k];
-        if (pa < 0)
-            continue;
-        /* Phi = Pi - L^T D^-1 L into the parent's Pi */
-        double dl[18]; /* D^-1 L */
+        double *dl = d->dl + 18 * k; /* D^-1 L */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 6; j++)
                 dl[6 * i + j] =
                     di[3 * i] * lm[j] + di[3 * i + 1] * lm[6 + j] + di[3 * i + 2] * lm[12 + j];
+        int64_t pa = d->parent[k];
+        if (pa < 0)
+            continue;
+        /* Phi = Pi - L^T D^-1 L into the parent's Pi */
         double *pp = d->pi + 36 * pa;
         for (int i = 0; i < 6; i++)
             for (int j = 0; j < 6; j++)
@@ -394,42 +396,38 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *xout)
     size_t n = d->n;
     double *acc = d->acc, *u = d->u, *z = d->z;
     memset(acc, 0, 6 * n * sizeof(double));
+    /* from the tips: u_k = b_k - S^T sum psi_c, kept as D^-1 u_k (in u), psi into the parent */
     for (size_t k = n; k-- > 0;) {
-        double sw[3];
+        double sw[3], uk[3], lts[6];
         if (k >= CBM__AHEAD)
             CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, acc);
-        cbm__dyn_stw(d->x + k, acc + 6 * k, sw);
-        double *uk = u + 3 * k;
+        const double *ak = acc + 6 * k;
+        cbm__dyn_stw(d->x + k, ak, sw);
         for (int i = 0; i < 3; i++)
             uk[i] = b[3 * k + i] - sw[i];
+        double *s = u + 3 * k;
+        cbm__dyn_dinv_u(d->dinv + 9 * k, uk, s);
         int64_t pa = d->parent[k];
         if (pa < 0)
             continue;
-        const double *di = d->dinv + 9 * k, *lm = d->lmat + 18 * k;
-        double t[3];
-        for (int i = 0; i < 3; i++)
-            t[i] = di[3 * i] * uk[0] + di[3 * i + 1] * uk[1] + di[3 * i + 2] * uk[2];
-        double *ap = acc + 6 * pa, *ak = acc + 6 * k;
+        cbm__dyn_lt_s(d->lmat + 18 * k, s, lts);
+        double *ap = acc + 6 * pa;
         for (int j = 0; j < 6; j++)
-            ap[j] += ak[j] + lm[j] * t[0] + lm[6 + j] * t[1] + lm[12 + j] * t[2];
+            ap[j] += ak[j] + lts[j];
     }
+    /* from the base: v_k = D^-1 u_k - D^-1 L_k Z_parent, Z_k = Z_parent + S_k v_k */
     for (size_t k = 0; k < n; k++) {
         int64_t pa = d->parent[k];
-        double *zk = z + 6 * k;
+        double *zk = z + 6 * k, q[3];
         CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, z);
-        const double *lm = d->lmat + 18 * k, *di = d->dinv + 9 * k;
-        double r[3] = {u[3 * k], u[3 * k + 1], u[3 * k + 2]};
         if (pa >= 0) {
             const double *zp = z + 6 * pa;
+            cbm__dyn_back_sub(d->dl + 18 * k, u + 3 * k, zp, q);
             memcpy(zk, zp, 6 * sizeof(double));
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 6; j++)
-                    r[i] -= lm[6 * i + j] * zp[j];
-        } else
+        } else {
+            memcpy(q, u + 3 * k, sizeof q);
             memset(zk, 0, 6 * sizeof(double));
-        double q[3];
-        for (int i = 0; i < 3; i++)
-            q[i] = di[3 * i] * r[0] + di[3 * i + 1] * r[1] + di[3 * i + 2] * r[2];
+        }
         cbm__dyn_sq(d->x + k, q, zk);
         memcpy(xout + 3 * k, q, sizeof q);
     }
