@@ -28,8 +28,8 @@ typedef struct cbm__dyn {
     /* factorisation of sK K + sM M (tree.c) */
     double fk, fm; /* its sK and sM */
     double *dinv;  /* 9 per joint */
-    double *lmat;  /* 18 per joint: L = B + S^T Pi (3 x 6) */
-    double *dl;    /* 18 per joint: D^-1 L, read by the forward sweeps in place of both */
+    double *dl;    /* 18 per joint: D^-1 L for L = B + S^T Pi (3 x 6); as L^T D^-1 u =
+                    * (D^-1 L)^T u for the symmetric D, the sweeps need no L */
     double *pi;    /* 36 per joint: articulated block (work of the factorisation) */
     /* work */
     double *z;   /* 6 per segment */
@@ -109,7 +109,8 @@ static inline void cbm__dyn_dinv_u(const double *di, const double *u, double *s)
         s[i] = di[3 * i] * u[0] + di[3 * i + 1] * u[1] + di[3 * i + 2] * u[2];
 }
 
-/// out = L^T s (6) for the joint's L (3x6): its wrench passed on to the parent.
+/// out = L^T s (6) for a joint's L (3x6); with D^-1 L and u, L^T D^-1 u: the wrench the
+/// elimination passes on to the parent.
 static inline void cbm__dyn_lt_s(const double *lm, const double *s, double *out)
 {
     for (int j = 0; j < 6; j++)

@@ -175,7 +175,7 @@ static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1
         cbm__dyn_dinv_u(d->dinv + 9 * k, uk, sk);
         if (pa < 0)
             continue;
-        cbm__dyn_lt_s(d->lmat + 18 * k, sk, lts);
+        cbm__dyn_lt_s(d->dl + 18 * k, uk, lts);
         double *gp = m->gam + 6 * pa;
         for (int j = 0; j < 6; j++)
             gp[j] += t[j] - lts[j];

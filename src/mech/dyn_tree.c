@@ -103,7 +103,6 @@ void cbm__dyn_free(cbm__dyn *d)
     cbm__free(d->ctx, d->pc, 10 * n * sizeof(double));
     cbm__free(d->ctx, d->ak, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->dinv, 9 * n * sizeof(double));
-    cbm__free(d->ctx, d->lmat, 18 * n * sizeof(double));
     cbm__free(d->ctx, d->dl, 18 * n * sizeof(double));
     cbm__free(d->ctx, d->pi, 36 * n * sizeof(double));
     cbm__free(d->ctx, d->z, 6 * n * sizeof(double));
@@ -178,7 +177,6 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->pc = cbm__alloc(d->ctx, 10 * n * sizeof(double));
     d->ak = cbm__alloc(d->ctx, 9 * n * sizeof(double));
     d->dinv = cbm__alloc(d->ctx, 9 * n * sizeof(double));
-    d->lmat = cbm__alloc(d->ctx, 18 * n * sizeof(double));
     d->dl = cbm__alloc(d->ctx, 18 * n * sizeof(double));
     d->pi = cbm__alloc(d->ctx, 36 * n * sizeof(double));
     d->z = cbm__alloc(d->ctx, 6 * n * sizeof(double));
@@ -187,7 +185,7 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->width = cbm__alloc(d->ctx, n * sizeof(double));
     d->pmass = cbm__alloc(d->ctx, n * sizeof(double));
     if (!d->width || !d->pmass || !d->parent || !d->x || !d->e || !d->kel || !d->geo || !d->body ||
-        !d->pc || !d->ak || !d->dinv || !d->lmat || !d->dl || !d->pi || !d->z || !d->acc || !d->u) {
+        !d->pc || !d->ak || !d->dinv || !d->dl || !d->pi || !d->z || !d->acc || !d->u) {
         cbm__dyn_free(d);
         return CBM_E_NOMEM;
     }
@@ -344,7 +342,7 @@ size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm)
                 ps[3 * i + j] = a;
             }
         const double *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
-        double *lm = d->lmat + 18 * k;
+        double lm[18];
         /* L = B + PS^T; B = sk [G^T 0] */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 6; j++)
@@ -410,7 +408,7 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *xout)
         int64_t pa = d->parent[k];
         if (pa < 0)
             continue;
-        cbm__dyn_lt_s(d->lmat + 18 * k, s, lts);
+        cbm__dyn_lt_s(d->dl + 18 * k, uk, lts);
         double *ap = acc + 6 * pa;
         for (int j = 0; j < 6; j++)
             ap[j] += ak[j] + lts[j];
