@@ -8,8 +8,8 @@
 #include "core/vecmath.h"
 
 /* radius r, gravity g (m/s^2, along -y), Young's modulus E, shear modulus G (0: E / 2.6) */
-static inline cbm_plant *dyn_rod(cbm_context *ctx, int n, double L, double r, double elev,
-                                 double g, double tip_mass, double E, double G, bool solve)
+static inline cbm_plant *dyn_rod(cbm_context *ctx, int n, double L, double r, double elev, double g,
+                                 double tip_mass, double E, double G, bool solve)
 {
     cbm_plant_def pd = cbm_plant_def_default();
     pd.base_orientation = cbm_mech_clamp_orientation(elev);
