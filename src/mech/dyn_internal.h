@@ -34,7 +34,7 @@ typedef struct cbm__dyn {
     /* work */
     double *z;   /* 6 per segment */
     double *acc; /* 6 per segment */
-    double *u;   /* 3 per joint */
+    double *u;   /* 3 per joint: D^-1 u of the last elimination (cbm__dyn_solve, the fused step) */
 } cbm__dyn;
 
 /* The per-segment kernels of the sweeps, shared by the operators of tree.c and the fused step of
