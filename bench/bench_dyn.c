@@ -4,13 +4,18 @@
  * otherwise a lateral on a uniformly chosen earlier segment, 2 cm segments, pipe-model radii,
  * E = 10 GPa, 700 kg/m^3, 5 g leaves on the tips, seed 7), solved for equilibrium first.
  *
- * usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S]
+ * usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream]
+ *
+ * --stream adds the CPU time of reading, once, as many bytes as a still-air step reads from
+ * memory when its arrays do not fit in the cache (STEP_BYTES per segment), summed with four
+ * partial sums: the floor the memory bus sets under the step (docs/performance.md).
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
 #include "cambium/dynamics.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,6 +36,40 @@ static double cpu(void)
     struct timespec ts;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Bytes a still-air undamped step (dyn_motion.c, fused_step) reads per segment: the backward
+ * sweep the parent index 8, the inertia 80, the right-hand side's twist 48, the carried sum 48,
+ * the node 24, D^-1 72, D^-1 L 144; the forward sweep the parent index 8, D^-1 L 144 again (at
+ * 10^5 segments long gone from the cache), D^-1 u 24, the
+ * twists 48 + 48 (written: read for ownership), the node 24, q, v, a 72; plus D^-1 u written in
+ * the backward sweep 24. The parent's values are in the cache (just written or read). */
+#define STEP_BYTES 816
+
+/* CPU seconds to read `bytes` once (the best of five passes over a buffer that large) */
+static double stream_read(size_t bytes, double *sink)
+{
+    size_t n = bytes / sizeof(double);
+    double *a = malloc(n * sizeof *a), best = INFINITY;
+    if (!a)
+        return NAN;
+    for (size_t i = 0; i < n; i++)
+        a[i] = (double)(i & 255);
+    for (int r = 0; r < 5; r++) {
+        double c0 = cpu(), s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+        size_t i = 0;
+        for (; i + 4 <= n; i += 4) {
+            s0 += a[i];
+            s1 += a[i + 1];
+            s2 += a[i + 2];
+            s3 += a[i + 3];
+        }
+        *sink += s0 + s1 + s2 + s3;
+        double t = cpu() - c0;
+        best = t < best ? t : best;
+    }
+    free(a);
+    return best;
 }
 
 static cbm_plant *make_tree(cbm_context *ctx, size_t n)
@@ -85,6 +124,8 @@ int main(int argc, char **argv)
 {
     size_t sizes[16] = {2500, 10000, 100000};
     int nsizes = 3, modes = 10, steps = 1000;
+    bool stream = false;
+    double sink = 0.0;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--sizes") && i + 1 < argc) {
             nsizes = 0;
@@ -94,16 +135,19 @@ int main(int argc, char **argv)
             modes = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--steps") && i + 1 < argc)
             steps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--stream"))
+            stream = true;
         else {
-            fprintf(stderr, "usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S]\n");
+            fprintf(stderr,
+                    "usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream]\n");
             return 2;
         }
     }
     if (modes < 1 || steps < 1)
         return 2;
     printf("segments,modes,modes_s,modes_cpu_s,f1_hz,f%d_hz,steps,steps_per_s,ms_per_step,"
-           "cpu_ms_per_step\n",
-           modes);
+           "cpu_ms_per_step%s\n",
+           modes, stream ? ",stream_read_ms" : "");
     for (int k = 0; k < nsizes; k++) {
         cbm_context *ctx = NULL;
         cbm_context_def cd = cbm_context_def_default();
@@ -135,13 +179,18 @@ int main(int argc, char **argv)
             if (cbm_motion_step(m) != CBM_OK)
                 return 1;
         double ts = now() - t0, cs = cpu() - c0;
-        printf("%zu,%d,%.4f,%.4f,%.6g,%.6g,%d,%.1f,%.4f,%.4f\n", sizes[k], modes, tm, cm, f[0],
+        printf("%zu,%d,%.4f,%.4f,%.6g,%.6g,%d,%.1f,%.4f,%.4f", sizes[k], modes, tm, cm, f[0],
                f[modes - 1], steps, steps / ts, 1e3 * ts / steps, 1e3 * cs / steps);
+        if (stream)
+            printf(",%.4f", 1e3 * stream_read(STEP_BYTES * sizes[k], &sink));
+        printf("\n");
         fflush(stdout);
         free(f);
         cbm_motion_destroy(m);
         cbm_plant_destroy(p);
         cbm_context_destroy(ctx);
     }
+    if (sink == 1.0) /* keeps the sums */
+        printf("#\n");
     return 0;
 }

@@ -1,7 +1,7 @@
 /* Loads in time on the linearised dynamics (src/mech/dyn_motion.c, dyn_drag.c, dyn_gust.c): wind
  * drag with the relative velocity, the gust synthesis, and prescribed base motion, against closed
  * forms (docs/validation.md, "Dynamics: loads in time"). */
-#include "mech_testlib.h"
+#include "dyn_testlib.h"
 #include "cambium/dynamics.h"
 
 #include "core/vecmath.h"
@@ -15,26 +15,7 @@
 /* a straight horizontal rod (along +x) of n segments, radius r, no gravity, solved */
 static cbm_plant *hrod(cbm_context *ctx, int n, double L, double r)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.0);
-    pd.gravity = v3(0, 0, 0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    if (!p)
-        return NULL;
-    cbm_segment_def d = cbm_segment_def_default();
-    d.length = L / n;
-    d.core.youngs_modulus = E_W;
-    d.core.shear_modulus = E_W / 2.6;
-    d.core.density = RHO_W;
-    d.core.a = d.core.b = r;
-    for (int i = 0; i < n; i++) {
-        d.parent = i - 1;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    cbm_solve_def sd = cbm_solve_def_default();
-    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
-    return p;
+    return dyn_rod(ctx, n, L, r, 0.0, 0.0, 0.0, E_W, 0.0, true);
 }
 
 /* uniform wind across the rod (along +z), C_d 1 */

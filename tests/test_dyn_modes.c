@@ -1,7 +1,7 @@
 /* Natural frequencies of the segment model (src/mech/dyn_*.c): cantilevers against Euler-Bernoulli
  * theory, the effect of gravity on upright and hanging stems, a tip mass, and the tree operators
  * against each other (docs/validation.md, "Dynamics"). */
-#include "mech_testlib.h"
+#include "dyn_testlib.h"
 #include "cambium/dynamics.h"
 
 #include "core/vecmath.h"
@@ -10,35 +10,10 @@
 /* shear modulus of the rods below: 0 = E / 2.6 */
 static double rod_shear = 0.0;
 
-/* a straight rod of n segments, radius r, clamped at elev rad, gravity g (m/s^2, along -y), a tip
- * mass, Young's modulus E; solved unless solve is false (then only evaluated) */
 static cbm_plant *rod_s(cbm_context *ctx, int n, double L, double r, double elev, double g,
                         double tip_mass, double E, bool solve)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(elev);
-    pd.gravity = v3(0, -g, 0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    if (!p)
-        return NULL;
-    cbm_segment_def d = cbm_segment_def_default();
-    d.length = L / n;
-    d.core.youngs_modulus = E;
-    d.core.shear_modulus = rod_shear > 0 ? rod_shear : E / 2.6;
-    d.core.density = 600;
-    d.core.a = d.core.b = r;
-    for (int i = 0; i < n; i++) {
-        d.parent = i - 1;
-        d.point_mass = i == n - 1 ? tip_mass : 0.0;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    if (solve) {
-        cbm_solve_def sd = cbm_solve_def_default();
-        CHECK_OK(cbm_plant_solve(p, &sd, NULL));
-    } else
-        CHECK_OK(cbm_plant_evaluate(p, NULL));
-    return p;
+    return dyn_rod(ctx, n, L, r, elev, g, tip_mass, E, rod_shear, solve);
 }
 
 static cbm_plant *rod(cbm_context *ctx, int n, double L, double r, double elev, double g,

@@ -20,19 +20,110 @@ typedef struct cbm__dyn {
     double *kel;   /* 9 per joint: elastic stiffness R diag(C / d) R^T, N m / rad */
     double *geo;   /* 9 per joint: G_k of the dead loads carried, N m / rad (tree.c) */
     double *body;  /* 36 per segment: spatial inertia about the base (segment + point mass) */
+    double *pc;    /* 10 per segment: body in compact form (cbm__dyn_pz) */
+    double *ak;    /* 9 per joint: A = K_el + sym G */
     double *width; /* a + b of the outer section, m (the wind's drag, drag.c) */
     double *pmass; /* point mass at the distal node, kg */
     cbm_vec3 base; /* the plant's base position, m (world = base + relative) */
     /* factorisation of sK K + sM M (tree.c) */
     double fk, fm; /* its sK and sM */
     double *dinv;  /* 9 per joint */
-    double *lmat;  /* 18 per joint: L = B + S^T Pi (3 x 6) */
+    double *dl;    /* 18 per joint: D^-1 L for L = B + S^T Pi (3 x 6); as L^T D^-1 u =
+                    * (D^-1 L)^T u for the symmetric D, the sweeps need no L */
     double *pi;    /* 36 per joint: articulated block (work of the factorisation) */
     /* work */
     double *z;   /* 6 per segment */
     double *acc; /* 6 per segment */
-    double *u;   /* 3 per joint */
+    double *u;   /* 3 per joint: D^-1 u of the last elimination (cbm__dyn_solve, the fused step) */
 } cbm__dyn;
+
+/* The per-segment kernels of the sweeps, shared by the operators of tree.c and the fused step of
+ * motion.c (inline: they run once per segment per sweep). */
+
+/* The sweeps read or update the parent's 6 doubles, and a lateral's parent can be anywhere before
+ * it (a shoot added years after its mother's segments): a cache miss the loop waits for unless the
+ * line is asked for some segments ahead (CBM__AHEAD). A hint only: no effect on the results. */
+#if defined(__GNUC__) || defined(__clang__)
+#define CBM__PREFETCH(p) __builtin_prefetch(p)
+#else
+#define CBM__PREFETCH(p) ((void)(p))
+#endif
+#define CBM__AHEAD 12
+
+/// Asks for the parent's 6 doubles of arr of segment k (if it exists and has a parent). A macro:
+/// GCC finds a function around the hint free of effects and drops its calls before inlining.
+#define CBM__DYN_AHEAD(parent, n, k, arr)                                                          \
+    do {                                                                                           \
+        size_t k_ = (k);                                                                           \
+        if (k_ < (n) && (parent)[k_] >= 0)                                                         \
+            CBM__PREFETCH((arr) + 6 * (parent)[k_]);                                               \
+    } while (0)
+
+/// z += S q = (q, x x q): the twist of a rotation q about the joint's node x (tree.c), 6 doubles.
+static inline void cbm__dyn_sq(const cbm_vec3 *x, const double *q, double *z)
+{
+    z[0] += q[0];
+    z[1] += q[1];
+    z[2] += q[2];
+    z[3] += x->y * q[2] - x->z * q[1];
+    z[4] += x->z * q[0] - x->x * q[2];
+    z[5] += x->x * q[1] - x->y * q[0];
+}
+
+/// cbm__dyn_sq for a rotation given as three numbers (the sweeps' own values, kept out of memory:
+/// stored one by one and read back in pairs they would stall the loads).
+static inline void cbm__dyn_sq3(const cbm_vec3 *x, double q0, double q1, double q2, double *z)
+{
+    z[0] += q0;
+    z[1] += q1;
+    z[2] += q2;
+    z[3] += x->y * q2 - x->z * q1;
+    z[4] += x->z * q0 - x->x * q2;
+    z[5] += x->x * q1 - x->y * q0;
+}
+
+/// out = S^T (n, f) = n - x x f, the joint's share of a wrench w = (n, f).
+static inline void cbm__dyn_stw(const cbm_vec3 *x, const double *w, double *out)
+{
+    out[0] = w[0] - (x->y * w[5] - x->z * w[4]);
+    out[1] = w[1] - (x->z * w[3] - x->x * w[5]);
+    out[2] = w[2] - (x->x * w[4] - x->y * w[3]);
+}
+
+/// t = g + P z for the spatial inertia P = [[J, [h]], [[h]^T, m I]] in the 10 doubles pc: the
+/// symmetric J about the origin (xx, yy, zz, xy, xz, yz), the first moment h, the mass m.
+static inline void cbm__dyn_pz(const double *pc, const double *z, const double *g, double *t)
+{
+    t[0] = g[0] + pc[0] * z[0] + pc[3] * z[1] + pc[4] * z[2] + pc[7] * z[5] - pc[8] * z[4];
+    t[1] = g[1] + pc[3] * z[0] + pc[1] * z[1] + pc[5] * z[2] + pc[8] * z[3] - pc[6] * z[5];
+    t[2] = g[2] + pc[4] * z[0] + pc[5] * z[1] + pc[2] * z[2] + pc[6] * z[4] - pc[7] * z[3];
+    t[3] = g[3] + pc[9] * z[3] + z[1] * pc[8] - z[2] * pc[7];
+    t[4] = g[4] + pc[9] * z[4] + z[2] * pc[6] - z[0] * pc[8];
+    t[5] = g[5] + pc[9] * z[5] + z[0] * pc[7] - z[1] * pc[6];
+}
+
+/// s = D^-1 u for the joint's inverse pivot di (3x3), the elimination's step from the tips.
+static inline void cbm__dyn_dinv_u(const double *di, const double *u, double *s)
+{
+    for (int i = 0; i < 3; i++)
+        s[i] = di[3 * i] * u[0] + di[3 * i + 1] * u[1] + di[3 * i + 2] * u[2];
+}
+
+/// out = L^T s (6) for a joint's L (3x6); with D^-1 L and u, L^T D^-1 u: the wrench the
+/// elimination passes on to the parent.
+static inline void cbm__dyn_lt_s(const double *lm, const double *s, double *out)
+{
+    for (int j = 0; j < 6; j++)
+        out[j] = lm[j] * s[0] + lm[6 + j] * s[1] + lm[12 + j] * s[2];
+}
+
+/// q = s - D^-1 L zp: the back-substitution of a joint from s = D^-1 u and the parent's twist.
+static inline void cbm__dyn_back_sub(const double *dl, const double *s, const double *zp, double *q)
+{
+    for (int i = 0; i < 3; i++)
+        q[i] = s[i] - (dl[6 * i] * zp[0] + dl[6 * i + 1] * zp[1] + dl[6 * i + 2] * zp[2] +
+                       dl[6 * i + 3] * zp[3] + dl[6 * i + 4] * zp[4] + dl[6 * i + 5] * zp[5]);
+}
 
 /// Copies the plant's equilibrium (its state must be current: after a solve or an evaluation)
 /// into d. CBM_E_INVALID for an empty plant or a segment without mass.
@@ -43,7 +134,7 @@ void cbm__dyn_apply(cbm__dyn *d, double sk, double sm, const double *v, double *
 /// Factorises sk K + sm M; returns the number of pivot blocks that are not positive definite
 /// (0: the matrix is positive definite), or (size_t)-1 if one is singular.
 size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm);
-/// x = (sk K + sm M)^-1 b with the last factorisation (x and b may alias).
+/// x = (sk K + sm M)^-1 b with the last factorisation (x and b may alias; u is used as work).
 void cbm__dyn_solve(cbm__dyn *d, const double *b, double *x);
 /// f += the generalised force of a force F (world) at the distal node of seg.
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f);

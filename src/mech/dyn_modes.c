@@ -4,9 +4,12 @@
  * Why Lanczos with our own tree factorisation rather than ARPACK: the operator (K - sigma M)^-1 M
  * is applied in O(n) by the tree elimination of tree.c (one backward and one forward sweep per
  * solve, one each way per product with M), so a plain Lanczos run with full reorthogonalisation
- * needs nothing else; for the few tens of modes anyone asks for the Krylov basis stays small
- * (m = 3 count + 30, doubled if the Ritz values have not converged), and the library keeps no
- * Fortran dependency (ARPACK would add one to every build for a dozen lines of iteration here).
+ * needs nothing else (per step one solve, two products with M, the three-term recurrence and one
+ * Gram-Schmidt pass over the basis; at 10^5 segments the pass and the page faults of the basis
+ * cost about as much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
+ * the Krylov basis stays small (m = 3 count + 30, doubled if the Ritz values have not converged),
+ * and the library keeps no Fortran dependency (ARPACK would add one to every build for a dozen
+ * lines of iteration here).
  *
  * The shift is 0: the factorisation of K then also decides the stability of the equilibrium
  * (positive pivots iff K is positive definite), and for a stable plant the largest Ritz values
@@ -63,31 +66,55 @@ static void jacobi(double *a, size_t m, double *w, double *v)
         w[i] = a[i * m + i];
 }
 
-static double dot(const double *a, const double *b, size_t n)
+/* The dot product in four partial sums: one sum is bound by the latency of the additions (a
+ * quarter of the rate the basis streams from memory at); the vectors' length is 3 n. */
+static double dot(const double *restrict a, const double *restrict b, size_t n)
 {
-    double s = 0.0;
-    for (size_t i = 0; i < n; i++)
-        s += a[i] * b[i];
-    return s;
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    size_t i = 0;
+    for (; i + 4 <= n; i += 4) {
+        s0 += a[i] * b[i];
+        s1 += a[i + 1] * b[i + 1];
+        s2 += a[i + 2] * b[i + 2];
+        s3 += a[i + 3] * b[i + 3];
+    }
+    for (; i < n; i++)
+        s0 += a[i] * b[i];
+    return (s0 + s2) + (s1 + s3);
 }
 
-/* w -= the M-projection of w on v[0..cols), twice (classical Gram-Schmidt); mw = M w after. When
- * diag is not NULL it receives the coefficient of column cols - 1 summed over both passes. */
+/* w -= c v */
+static void axpy(double c, const double *restrict v, double *restrict w, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        w[i] -= c * v[i];
+}
+
+/* w -= the M-projection of w on v[0..cols) by classical Gram-Schmidt, repeated once when the pass
+ * removed more than 1 - 1/sqrt(2) of w's M-norm (the criterion of Daniel, Gragg, Kaufman and
+ * Stewart: a second pass then restores orthogonality to round-off, a third is never needed); mw =
+ * M w after. Each pass reads the basis twice, which at 10^5 segments costs more than the tree
+ * sweeps: the second pass is skipped when it would change nothing. When diag is not NULL it
+ * receives the coefficient of column cols - 1 summed over the passes. */
 static void m_orthogonalise(cbm__dyn *d, const double *v, size_t cols, double *w, double *mw,
                             double *diag)
 {
     size_t N = 3 * d->n;
+    cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+    double before = dot(w, mw, N);
     for (int pass = 0; pass < 2; pass++) {
-        cbm__dyn_apply(d, 0.0, 1.0, w, mw);
         for (size_t i = 0; i < cols; i++) {
             double c = dot(v + i * N, mw, N);
             if (diag && i + 1 == cols)
                 *diag = pass == 0 ? c : *diag + c;
-            for (size_t k = 0; k < N; k++)
-                w[k] -= c * v[i * N + k];
+            axpy(c, v + i * N, w, N);
         }
+        cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+        double after = dot(w, mw, N);
+        if (after >= 0.5 * before)
+            break;
+        before = after;
     }
-    cbm__dyn_apply(d, 0.0, 1.0, w, mw);
 }
 
 /* a reproducible start vector with every component in [0.5, 1.5) (xorshift state s) */
@@ -101,28 +128,80 @@ static void start_vector(uint64_t *s, double *w, size_t N)
     }
 }
 
+/* The Ritz values th (of the m x m tridiagonal al, be; t is overwritten) with their vectors ev,
+ * and ord the order of decreasing theta (increasing lambda). */
+static void ritz(const double *al, const double *be, size_t m, double *t, double *ev, double *th,
+                 size_t *ord)
+{
+    memset(t, 0, m * m * sizeof(double));
+    for (size_t i = 0; i < m; i++) {
+        t[i * m + i] = al[i];
+        if (i + 1 < m)
+            t[i * m + i + 1] = t[(i + 1) * m + i] = be[i];
+    }
+    jacobi(t, m, th, ev);
+    for (size_t i = 0; i < m; i++)
+        ord[i] = i;
+    for (size_t i = 1; i < m; i++)
+        for (size_t k = i; k > 0 && th[ord[k]] > th[ord[k - 1]]; k--) {
+            size_t tmp = ord[k];
+            ord[k] = ord[k - 1];
+            ord[k - 1] = tmp;
+        }
+}
+
+/* whether the lowest `want` Ritz pairs of a run of m steps ending with beta = bm have residuals
+ * |bm s_m| <= tol theta */
+static bool ritz_converged(size_t m, size_t want, double bm, const double *ev, const double *th,
+                           const size_t *ord, double tol)
+{
+    for (size_t i = 0; i < want && i < m; i++) {
+        size_t c = ord[i];
+        if (fabs(bm * ev[(m - 1) * m + c]) > tol * fabs(th[c]))
+            return false;
+    }
+    return want <= m;
+}
+
+/* The Lanczos run stops early, before mmax, once the wanted pairs' residuals are below this (the
+ * acceptance test below is 1e-8): the eigenvalues then agree with a longer run's to about its
+ * square, the shapes to it over the relative gap. Checked every CHECK_EVERY steps (the small
+ * eigenproblem costs O(m^3) against the O(m n) of a step). */
+#define EARLY_TOL   1e-12
+#define CHECK_EVERY 4
+
 /* One Lanczos run of at most mmax steps; returns the steps done (the basis in v, the tridiagonal
  * in al, be). When the Krylov space closes (an invariant subspace: it happens with exactly
  * repeated frequencies, or when the run reaches all N degrees of freedom) the run restarts from a
  * new start vector M-orthogonal to the basis, with be = 0 at the seam, so T stays tridiagonal and
- * its eigenvalues those of the whole space spanned; it stops when no new direction is left. */
-static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *be, double *w,
-                      double *mw)
+ * its eigenvalues those of the whole space spanned; it stops when no new direction is left, or
+ * when the lowest `want` Ritz pairs have converged (t, ev, th, ord: scratch for ritz). M v_j is
+ * carried from the step before (M w / b) instead of being recomputed. */
+static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, double *v, double *al, double *be,
+                      double *w, double *mw, double *mv, double *t, double *ev, double *th,
+                      size_t *ord)
 {
     size_t N = 3 * d->n;
     uint64_t s = 0x9E3779B97F4A7C15ull;
     start_vector(&s, w, N);
     cbm__dyn_apply(d, 0.0, 1.0, w, mw);
     double nrm = sqrt(dot(w, mw, N));
-    for (size_t i = 0; i < N; i++)
+    for (size_t i = 0; i < N; i++) {
         v[i] = w[i] / nrm;
+        mv[i] = mw[i] / nrm;
+    }
     size_t j = 0;
     for (; j < mmax; j++) {
-        double *vj = v + j * N;
-        cbm__dyn_apply(d, 0.0, 1.0, vj, mw);
-        cbm__dyn_solve(d, mw, w);
-        /* full reorthogonalisation in the M inner product */
-        m_orthogonalise(d, v, j + 1, w, mw, &al[j]);
+        cbm__dyn_solve(d, mv, w);
+        /* the three-term recurrence (v_{j-1}' M w = beta_{j-1}, v_j' M w = (M v_j)' w), then the
+         * full reorthogonalisation in the M inner product, which now removes only round-off and
+         * so needs one pass where it needed two */
+        if (j > 0)
+            axpy(be[j - 1], v + (j - 1) * N, w, N);
+        double a = dot(mv, w, N), corr;
+        axpy(a, v + j * N, w, N);
+        m_orthogonalise(d, v, j + 1, w, mw, &corr);
+        al[j] = a + corr;
         double b = sqrt(fmax(dot(w, mw, N), 0.0));
         be[j] = b;
         if (j + 1 == mmax || !isfinite(b)) {
@@ -141,9 +220,18 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, double *v, double *al, double *b
                 j++;
                 break;
             }
+        } else if (j + 1 >= want && (j + 1) % CHECK_EVERY == 0) {
+            ritz(al, be, j + 1, t, ev, th, ord);
+            if (ritz_converged(j + 1, want, b, ev, th, ord, EARLY_TOL)) {
+                j++;
+                break;
+            }
         }
-        for (size_t k = 0; k < N; k++)
-            v[(j + 1) * N + k] = w[k] / b;
+        double rb = 1.0 / b;
+        for (size_t k = 0; k < N; k++) {
+            v[(j + 1) * N + k] = w[k] * rb;
+            mv[k] = mw[k] * rb;
+        }
     }
     return j;
 }
@@ -179,43 +267,27 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
     st = CBM_E_NOT_CONVERGED;
     for (int attempt = 0; attempt < 6 && st == CBM_E_NOT_CONVERGED; attempt++) {
         size_t ma = mmax; /* the sizes allocated (mmax may grow below) */
-        double *v = cbm__calloc(ctx, (mmax + 1) * N, sizeof(double));
+        /* the basis is written column by column before it is read: not cleared, so that the
+         * pages of the columns an early stop leaves unused are never touched */
+        double *v = cbm__alloc(ctx, (mmax + 1) * N * sizeof(double));
         double *w = cbm__alloc(ctx, N * sizeof(double));
         double *mw = cbm__alloc(ctx, N * sizeof(double));
+        double *mv = cbm__alloc(ctx, N * sizeof(double));
         double *al = cbm__calloc(ctx, mmax, sizeof(double));
         double *be = cbm__calloc(ctx, mmax, sizeof(double));
         double *t = cbm__calloc(ctx, mmax * mmax, sizeof(double));
         double *ev = cbm__alloc(ctx, mmax * mmax * sizeof(double));
         double *th = cbm__alloc(ctx, mmax * sizeof(double));
         size_t *ord = cbm__alloc(ctx, mmax * sizeof(size_t));
-        if (!v || !w || !mw || !al || !be || !t || !ev || !th || !ord)
+        if (!v || !w || !mw || !mv || !al || !be || !t || !ev || !th || !ord)
             st = CBM_E_NOMEM;
         else {
-            size_t m = lanczos(&d, mmax, v, al, be, w, mw);
-            for (size_t i = 0; i < m; i++) {
-                t[i * m + i] = al[i];
-                if (i + 1 < m)
-                    t[i * m + i + 1] = t[(i + 1) * m + i] = be[i];
-            }
-            jacobi(t, m, th, ev);
-            /* order by decreasing theta (increasing lambda) */
-            for (size_t i = 0; i < m; i++)
-                ord[i] = i;
-            for (size_t i = 1; i < m; i++)
-                for (size_t k = i; k > 0 && th[ord[k]] > th[ord[k - 1]]; k--) {
-                    size_t tmp = ord[k];
-                    ord[k] = ord[k - 1];
-                    ord[k - 1] = tmp;
-                }
+            size_t m = lanczos(&d, mmax, want, v, al, be, w, mw, mv, t, ev, th, ord);
+            ritz(al, be, m, t, ev, th, ord);
             size_t got = want < m ? want : m;
             bool ok = m == N || got == want;
-            double bm = be[m - 1];
-            for (size_t i = 0; i < got && ok; i++) {
-                size_t c = ord[i];
-                /* residual of the Ritz pair: |beta_m s_m| against theta */
-                if (m < N && fabs(bm * ev[(m - 1) * m + c]) > 1e-8 * fabs(th[c]))
-                    ok = false;
-            }
+            if (ok && m < N)
+                ok = ritz_converged(m, got, be[m - 1], ev, th, ord, 1e-8);
             if (ok) {
                 for (size_t i = 0; i < got; i++) {
                     size_t c = ord[i];
@@ -240,6 +312,7 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
         cbm__free(ctx, v, (ma + 1) * N * sizeof(double));
         cbm__free(ctx, w, N * sizeof(double));
         cbm__free(ctx, mw, N * sizeof(double));
+        cbm__free(ctx, mv, N * sizeof(double));
         cbm__free(ctx, al, ma * sizeof(double));
         cbm__free(ctx, be, ma * sizeof(double));
         cbm__free(ctx, t, ma * ma * sizeof(double));

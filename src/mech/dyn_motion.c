@@ -27,11 +27,10 @@ struct cbm_motion {
     int iters;
     bool base_moves;
     cbm_vec3 ba_next, ba, bv, bd; /* the base's acceleration (next step, now), velocity, disp */
-    /* the fused step (fused_step below): per segment the spatial inertia in 10 doubles (the
-     * symmetric 3x3 J about the origin, the first moment h, the mass), the stiffness block
-     * A = K_el + sym G (9), the carried sums of the backward sweep (6), the twists of the
-     * solution (6) and of the next step's right-hand side vector (6, and 3 for the damping's) */
-    double *pc, *ak, *gam, *zs, *zw, *thw;
+    /* the fused step (fused_step below): per segment the carried sums of the backward sweep
+     * (6), the twists of the solution (6) and of the next step's right-hand side vector (6, and
+     * 3 for the damping's) */
+    double *gam, *zs, *zw, *thw;
     bool zw_valid; /* zw and thw hold the twists of the current state's vectors */
     bool forced;   /* f holds forces added since the last step */
 };
@@ -60,8 +59,6 @@ void cbm_motion_destroy(cbm_motion *m)
     cbm__free(ctx, m->rhs, b);
     cbm__free(ctx, m->wb, 2 * b);
     size_t ns = m->d.n;
-    cbm__free(ctx, m->pc, 10 * ns * sizeof(double));
-    cbm__free(ctx, m->ak, 9 * ns * sizeof(double));
     cbm__free(ctx, m->gam, 6 * ns * sizeof(double));
     cbm__free(ctx, m->zs, 6 * ns * sizeof(double));
     cbm__free(ctx, m->zw, 6 * ns * sizeof(double));
@@ -84,31 +81,6 @@ static cbm_status refactor(cbm_motion *m)
     return CBM_OK;
 }
 
-/* The spatial inertia P = [[J, [h]], [[h]^T, m I]] (tree.c, add_inertia: J about the origin, h
- * the first moment of the mass) in 10 doubles, and A = K_el + sym G, read by the fused step. */
-static void compact_blocks(cbm_motion *m)
-{
-    const cbm__dyn *d = &m->d;
-    for (size_t k = 0; k < d->n; k++) {
-        const double *p = d->body + 36 * k;
-        double *c = m->pc + 10 * k;
-        c[0] = p[0];
-        c[1] = p[7];
-        c[2] = p[14];
-        c[3] = 0.5 * (p[1] + p[6]);
-        c[4] = 0.5 * (p[2] + p[12]);
-        c[5] = 0.5 * (p[8] + p[13]);
-        c[6] = p[16]; /* h_x: [h] row 2, column 1 */
-        c[7] = p[5];  /* h_y: row 0, column 2 */
-        c[8] = p[9];  /* h_z: row 1, column 0 */
-        c[9] = p[21];
-        const double *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++)
-                m->ak[9 * k + 3 * i + j] = ke[3 * i + j] + 0.5 * (g[3 * i + j] + g[3 * j + i]);
-    }
-}
-
 /* The twists of the next step's right-hand side vectors from the current state: zw of
  * w1 = a0 q + a1 v + a (the product with M), thw the rotations of w2 = beta (2 q / dt + v) (the
  * product with K). One forward sweep; the fused step keeps them current itself. */
@@ -122,7 +94,6 @@ static void rhs_twists(cbm_motion *m, double a0, double a1)
         const double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k;
         double w[3] = {a0 * q[0] + a1 * v[0] + a[0], a0 * q[1] + a1 * v[1] + a[1],
                        a0 * q[2] + a1 * v[2] + a[2]};
-        cbm_vec3 x = d->x[k];
         if (pa >= 0) {
             memcpy(zk, m->zw + 6 * pa, 6 * sizeof(double));
             memcpy(tk, m->thw + 3 * pa, 3 * sizeof(double));
@@ -130,12 +101,7 @@ static void rhs_twists(cbm_motion *m, double a0, double a1)
             memset(zk, 0, 6 * sizeof(double));
             memset(tk, 0, 3 * sizeof(double));
         }
-        zk[0] += w[0];
-        zk[1] += w[1];
-        zk[2] += w[2];
-        zk[3] += x.y * w[2] - x.z * w[1];
-        zk[4] += x.z * w[0] - x.x * w[2];
-        zk[5] += x.x * w[1] - x.y * w[0];
+        cbm__dyn_sq(d->x + k, w, zk);
         for (int i = 0; i < 3; i++)
             tk[i] += b2 * q[i] + m->beta * v[i];
         m->gam[6 * k] = m->gam[6 * k + 1] = m->gam[6 * k + 2] = 0.0;
@@ -151,34 +117,47 @@ static void rhs_twists(cbm_motion *m, double a0, double a1)
  * carried sum Gamma = W - psi per segment), and the forward sweep that back-substitutes q1 also
  * updates v, a and builds the twists of the next step's w1, w2. The same arithmetic as the
  * general path in another order: the two agree to round-off (tests/test_dyn_loads.c). */
+/* Newmark's update of one coordinate to the new rotation qn; returns the component of the next
+ * step's w1 = a0 q + a1 v + a. nm: a0, a1, c0, c1, dt / 2. */
+static inline double newmark(double qn, double *q, double *v, double *a, const double *nm,
+                             double *nan_check)
+{
+    double an = nm[2] * (qn - *q) - nm[3] * *v - *a;
+    double vn = *v + nm[4] * (*a + an);
+    *v = vn;
+    *a = an;
+    *q = qn;
+    *nan_check += 0.0 * qn;
+    return nm[0] * qn + nm[1] * vn + an;
+}
+
 static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1)
 {
+    const double nm[5] = {a0, a1, c0, c1, 0.5 * m->dt};
     const cbm__dyn *d = &m->d;
     size_t n = d->n;
     double dt = m->dt, beta = m->beta, b2 = 2.0 * beta / dt;
     bool damp = beta > 0.0, forced = m->forced;
     double *u = d->u, nan_check = 0.0; /* stays 0 unless some q is not finite */
+    /* from the tips; each segment's carried sum and force are cleared once read, so that the
+     * forward sweep need not touch them */
     for (size_t k = n; k-- > 0;) {
-        const double *pc = m->pc + 10 * k, *z = m->zw + 6 * k;
+        if (k >= CBM__AHEAD)
+            CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, m->gam);
+        /* T = the children's carried sums + P z */
+        double t[6], uk[3];
         double *gk = m->gam + 6 * k;
-        /* T = P z + the children's carried sums */
-        double t[6];
-        t[0] = gk[0] + pc[0] * z[0] + pc[3] * z[1] + pc[4] * z[2] + pc[7] * z[5] - pc[8] * z[4];
-        t[1] = gk[1] + pc[3] * z[0] + pc[1] * z[1] + pc[5] * z[2] + pc[8] * z[3] - pc[6] * z[5];
-        t[2] = gk[2] + pc[4] * z[0] + pc[5] * z[1] + pc[2] * z[2] + pc[6] * z[4] - pc[7] * z[3];
-        t[3] = gk[3] + pc[9] * z[3] + z[1] * pc[8] - z[2] * pc[7];
-        t[4] = gk[4] + pc[9] * z[4] + z[2] * pc[6] - z[0] * pc[8];
-        t[5] = gk[5] + pc[9] * z[5] + z[0] * pc[7] - z[1] * pc[6];
-        cbm_vec3 x = d->x[k];
-        static const double nof[3] = {0, 0, 0};
-        const double *fk = forced ? m->f + 3 * k : nof;
-        double uk[3];
-        uk[0] = fk[0] + t[0] - (x.y * t[5] - x.z * t[4]);
-        uk[1] = fk[1] + t[1] - (x.z * t[3] - x.x * t[5]);
-        uk[2] = fk[2] + t[2] - (x.x * t[4] - x.y * t[3]);
+        cbm__dyn_pz(d->pc + 10 * k, m->zw + 6 * k, gk, t);
+        memset(gk, 0, 6 * sizeof(double));
+        cbm__dyn_stw(d->x + k, t, uk);
+        if (forced)
+            for (int i = 0; i < 3; i++) {
+                uk[i] += m->f[3 * k + i];
+                m->f[3 * k + i] = 0.0;
+            }
         int64_t pa = d->parent[k];
         if (damp) {
-            const double *q = m->q + 3 * k, *v = m->v + 3 * k, *ak = m->ak + 9 * k,
+            const double *q = m->q + 3 * k, *v = m->v + 3 * k, *ak = d->ak + 9 * k,
                          *g = d->geo + 9 * k;
             double w[3] = {b2 * q[0] + beta * v[0], b2 * q[1] + beta * v[1],
                            b2 * q[2] + beta * v[2]};
@@ -191,67 +170,45 @@ static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1
                 t[i] += g[3 * i] * w[0] + g[3 * i + 1] * w[1] + g[3 * i + 2] * w[2];
             }
         }
-        memcpy(u + 3 * k, uk, sizeof uk);
+        /* the elimination's step as in tree.c (cbm__dyn_solve): D^-1 u kept, the rest passed on */
+        double *sk = u + 3 * k, lts[6];
+        cbm__dyn_dinv_u(d->dinv + 9 * k, uk, sk);
         if (pa < 0)
             continue;
-        const double *di = d->dinv + 9 * k, *lm = d->lmat + 18 * k;
-        double s[3];
-        for (int i = 0; i < 3; i++)
-            s[i] = di[3 * i] * uk[0] + di[3 * i + 1] * uk[1] + di[3 * i + 2] * uk[2];
+        cbm__dyn_lt_s(d->dl + 18 * k, uk, lts);
         double *gp = m->gam + 6 * pa;
         for (int j = 0; j < 6; j++)
-            gp[j] += t[j] - (lm[j] * s[0] + lm[6 + j] * s[1] + lm[12 + j] * s[2]);
+            gp[j] += t[j] - lts[j];
     }
+    /* from the base: q1, then v, a and the twists of the next step's right-hand side */
     for (size_t k = 0; k < n; k++) {
         int64_t pa = d->parent[k];
-        double *zs = m->zs + 6 * k, *zw = m->zw + 6 * k, *th = m->thw + 3 * k;
-        const double *lm = d->lmat + 18 * k, *di = d->dinv + 9 * k;
-        double r[3] = {u[3 * k], u[3 * k + 1], u[3 * k + 2]};
+        double *zs = m->zs + 6 * k, *zw = m->zw + 6 * k, *th = m->thw + 3 * k, qn[3];
+        CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, m->zs);
+        CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, m->zw);
         if (pa >= 0) {
             const double *zp = m->zs + 6 * pa;
+            cbm__dyn_back_sub(d->dl + 18 * k, u + 3 * k, zp, qn);
             memcpy(zs, zp, 6 * sizeof(double));
             memcpy(zw, m->zw + 6 * pa, 6 * sizeof(double));
             if (damp)
                 memcpy(th, m->thw + 3 * pa, 3 * sizeof(double));
-            for (int i = 0; i < 3; i++)
-                r[i] -= lm[6 * i] * zp[0] + lm[6 * i + 1] * zp[1] + lm[6 * i + 2] * zp[2] +
-                        lm[6 * i + 3] * zp[3] + lm[6 * i + 4] * zp[4] + lm[6 * i + 5] * zp[5];
         } else {
+            memcpy(qn, u + 3 * k, sizeof qn);
             memset(zs, 0, 6 * sizeof(double));
             memset(zw, 0, 6 * sizeof(double));
             if (damp)
                 memset(th, 0, 3 * sizeof(double));
         }
-        double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k, w[3];
-        for (int i = 0; i < 3; i++) {
-            double qn = di[3 * i] * r[0] + di[3 * i + 1] * r[1] + di[3 * i + 2] * r[2];
-            double an = c0 * (qn - q[i]) - c1 * v[i] - a[i];
-            v[i] += 0.5 * dt * (a[i] + an);
-            a[i] = an;
-            q[i] = qn;
-            nan_check += 0.0 * qn;
-            w[i] = a0 * qn + a1 * v[i] + an;
-        }
+        double *q = m->q + 3 * k, *v = m->v + 3 * k, *a = m->a + 3 * k;
+        double w0 = newmark(qn[0], q, v, a, nm, &nan_check);
+        double w1 = newmark(qn[1], q + 1, v + 1, a + 1, nm, &nan_check);
+        double w2 = newmark(qn[2], q + 2, v + 2, a + 2, nm, &nan_check);
         if (damp)
             for (int i = 0; i < 3; i++)
                 th[i] += b2 * q[i] + beta * v[i];
-        cbm_vec3 x = d->x[k];
-        zs[0] += q[0];
-        zs[1] += q[1];
-        zs[2] += q[2];
-        zs[3] += x.y * q[2] - x.z * q[1];
-        zs[4] += x.z * q[0] - x.x * q[2];
-        zs[5] += x.x * q[1] - x.y * q[0];
-        zw[0] += w[0];
-        zw[1] += w[1];
-        zw[2] += w[2];
-        zw[3] += x.y * w[2] - x.z * w[1];
-        zw[4] += x.z * w[0] - x.x * w[2];
-        zw[5] += x.x * w[1] - x.y * w[0];
-        double *gk = m->gam + 6 * k;
-        gk[0] = gk[1] = gk[2] = gk[3] = gk[4] = gk[5] = 0.0;
-        if (forced)
-            m->f[3 * k] = m->f[3 * k + 1] = m->f[3 * k + 2] = 0.0;
+        cbm__dyn_sq3(d->x + k, qn[0], qn[1], qn[2], zs);
+        cbm__dyn_sq3(d->x + k, w0, w1, w2, zw);
     }
     m->forced = false;
     return nan_check == 0.0;
@@ -306,18 +263,15 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
     m->rhs = cbm__calloc(ctx, m->nq, sizeof(double));
     m->wb = cbm__calloc(ctx, 2 * m->nq, sizeof(double));
     size_t ns = m->d.n;
-    m->pc = cbm__alloc(ctx, 10 * ns * sizeof(double));
-    m->ak = cbm__alloc(ctx, 9 * ns * sizeof(double));
     m->gam = cbm__calloc(ctx, 6 * ns, sizeof(double));
     m->zs = cbm__calloc(ctx, 6 * ns, sizeof(double));
     m->zw = cbm__calloc(ctx, 6 * ns, sizeof(double));
     m->thw = cbm__calloc(ctx, 3 * ns, sizeof(double));
     if (!m->q || !m->v || !m->a || !m->f || !m->w1 || !m->w2 || !m->y || !m->g || !m->g2 ||
-        !m->rhs || !m->wb || !m->pc || !m->ak || !m->gam || !m->zs || !m->zw || !m->thw) {
+        !m->rhs || !m->wb || !m->gam || !m->zs || !m->zw || !m->thw) {
         cbm_motion_destroy(m);
         return CBM_E_NOMEM;
     }
-    compact_blocks(m);
     st = refactor(m);
     if (st != CBM_OK) {
         cbm_motion_destroy(m);

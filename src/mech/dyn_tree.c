@@ -100,8 +100,10 @@ void cbm__dyn_free(cbm__dyn *d)
     cbm__free(d->ctx, d->kel, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->geo, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->body, 36 * n * sizeof(double));
+    cbm__free(d->ctx, d->pc, 10 * n * sizeof(double));
+    cbm__free(d->ctx, d->ak, 9 * n * sizeof(double));
     cbm__free(d->ctx, d->dinv, 9 * n * sizeof(double));
-    cbm__free(d->ctx, d->lmat, 18 * n * sizeof(double));
+    cbm__free(d->ctx, d->dl, 18 * n * sizeof(double));
     cbm__free(d->ctx, d->pi, 36 * n * sizeof(double));
     cbm__free(d->ctx, d->z, 6 * n * sizeof(double));
     cbm__free(d->ctx, d->acc, 6 * n * sizeof(double));
@@ -131,6 +133,31 @@ static void joint_rigidity(const cbm_plant *p, size_t i, cbm_vec3 *cj, double *d
     }
 }
 
+/* The spatial inertia P = [[J, [h]], [[h]^T, m I]] (add_inertia: J about the origin, h the first
+ * moment of the mass) in 10 doubles (cbm__dyn_pz), and A = K_el + sym G: the blocks the sweeps
+ * read, a third of the 36 + 9 + 9 doubles they are made of. */
+static void compact_blocks(cbm__dyn *d)
+{
+    for (size_t k = 0; k < d->n; k++) {
+        const double *p = d->body + 36 * k;
+        double *c = d->pc + 10 * k;
+        c[0] = p[0];
+        c[1] = p[7];
+        c[2] = p[14];
+        c[3] = 0.5 * (p[1] + p[6]);
+        c[4] = 0.5 * (p[2] + p[12]);
+        c[5] = 0.5 * (p[8] + p[13]);
+        c[6] = p[16]; /* h_x: [h] row 2, column 1 */
+        c[7] = p[5];  /* h_y: row 0, column 2 */
+        c[8] = p[9];  /* h_z: row 1, column 0 */
+        c[9] = p[21];
+        const double *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                d->ak[9 * k + 3 * i + j] = ke[3 * i + j] + 0.5 * (g[3 * i + j] + g[3 * j + i]);
+    }
+}
+
 cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
 {
     memset(d, 0, sizeof *d);
@@ -147,8 +174,10 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->kel = cbm__alloc(d->ctx, 9 * n * sizeof(double));
     d->geo = cbm__calloc(d->ctx, 9 * n, sizeof(double));
     d->body = cbm__calloc(d->ctx, 36 * n, sizeof(double));
+    d->pc = cbm__alloc(d->ctx, 10 * n * sizeof(double));
+    d->ak = cbm__alloc(d->ctx, 9 * n * sizeof(double));
     d->dinv = cbm__alloc(d->ctx, 9 * n * sizeof(double));
-    d->lmat = cbm__alloc(d->ctx, 18 * n * sizeof(double));
+    d->dl = cbm__alloc(d->ctx, 18 * n * sizeof(double));
     d->pi = cbm__alloc(d->ctx, 36 * n * sizeof(double));
     d->z = cbm__alloc(d->ctx, 6 * n * sizeof(double));
     d->acc = cbm__alloc(d->ctx, 6 * n * sizeof(double));
@@ -156,7 +185,7 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
     d->width = cbm__alloc(d->ctx, n * sizeof(double));
     d->pmass = cbm__alloc(d->ctx, n * sizeof(double));
     if (!d->width || !d->pmass || !d->parent || !d->x || !d->e || !d->kel || !d->geo || !d->body ||
-        !d->dinv || !d->lmat || !d->pi || !d->z || !d->acc || !d->u) {
+        !d->pc || !d->ak || !d->dinv || !d->dl || !d->pi || !d->z || !d->acc || !d->u) {
         cbm__dyn_free(d);
         return CBM_E_NOMEM;
     }
@@ -220,27 +249,9 @@ cbm_status cbm__dyn_build(const cbm_plant *p, cbm__dyn *d)
                 pft[36 * pa + k] += pft[36 * i + k];
         }
     }
+    compact_blocks(d);
     d->fk = d->fm = NAN;
     return CBM_OK;
-}
-
-/* column j of S: (e_j, x x e_j) */
-static inline void st_w(cbm_vec3 x, const double *w, double *out)
-{
-    /* S^T (n, f) = n - x x f */
-    out[0] = w[0] - (x.y * w[5] - x.z * w[4]);
-    out[1] = w[1] - (x.z * w[3] - x.x * w[5]);
-    out[2] = w[2] - (x.x * w[4] - x.y * w[3]);
-}
-
-static inline void s_q(cbm_vec3 x, const double *q, double *z)
-{
-    z[0] += q[0];
-    z[1] += q[1];
-    z[2] += q[2];
-    z[3] += x.y * q[2] - x.z * q[1];
-    z[4] += x.z * q[0] - x.x * q[2];
-    z[5] += x.x * q[1] - x.y * q[0];
 }
 
 void cbm__dyn_apply(cbm__dyn *d, double sk, double sm, const double *v, double *y)
@@ -250,38 +261,38 @@ void cbm__dyn_apply(cbm__dyn *d, double sk, double sm, const double *v, double *
     for (size_t k = 0; k < n; k++) {
         int64_t pa = d->parent[k];
         double *zk = z + 6 * k;
+        CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, z);
         if (pa >= 0)
             memcpy(zk, z + 6 * pa, 6 * sizeof(double));
         else
             memset(zk, 0, 6 * sizeof(double));
-        s_q(d->x[k], v + 3 * k, zk);
+        cbm__dyn_sq(d->x + k, v + 3 * k, zk);
+        memset(acc + 6 * k, 0, 6 * sizeof(double));
     }
-    memset(acc, 0, 6 * n * sizeof(double));
+    bool stiff = sk != 0.0;
     for (size_t k = n; k-- > 0;) {
         int64_t pa = d->parent[k];
-        double *w = acc + 6 * k;
-        const double *zk = z + 6 * k, *pb = d->body + 36 * k;
-        for (int i = 0; i < 6; i++) {
-            double a = 0.0;
-            for (int j = 0; j < 6; j++)
-                a += pb[6 * i + j] * zk[j];
-            w[i] += sm * a;
-        }
-        const double *vk = v + 3 * k, *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
-        double sw[3];
-        st_w(d->x[k], w, sw);
-        double th[3] = {0, 0, 0};
-        if (pa >= 0)
-            memcpy(th, z + 6 * pa, 3 * sizeof(double));
-        for (int i = 0; i < 3; i++) {
-            double a = 0.0;
-            for (int j = 0; j < 3; j++)
-                a += (ke[3 * i + j] + 0.5 * (g[3 * i + j] + g[3 * j + i])) * vk[j] +
-                     g[3 * j + i] * th[j];
-            y[3 * k + i] = sk * a + sw[i];
-        }
-        for (int i = 0; i < 3; i++)
-            w[i] += sk * (g[3 * i] * vk[0] + g[3 * i + 1] * vk[1] + g[3 * i + 2] * vk[2]);
+        /* the subtree's wrench in registers (through acc only to the parent) */
+        double w[6], pz[6], sw[3];
+        if (k >= CBM__AHEAD)
+            CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, acc);
+        static const double none[6] = {0, 0, 0, 0, 0, 0};
+        cbm__dyn_pz(d->pc + 10 * k, z + 6 * k, none, pz);
+        for (int i = 0; i < 6; i++)
+            w[i] = acc[6 * k + i] + sm * pz[i];
+        cbm__dyn_stw(d->x + k, w, sw);
+        if (stiff) {
+            const double *vk = v + 3 * k, *g = d->geo + 9 * k, *ak = d->ak + 9 * k;
+            const double *th = pa >= 0 ? z + 6 * pa : none;
+            for (int i = 0; i < 3; i++) {
+                double a = ak[3 * i] * vk[0] + ak[3 * i + 1] * vk[1] + ak[3 * i + 2] * vk[2] +
+                           g[i] * th[0] + g[3 + i] * th[1] + g[6 + i] * th[2];
+                y[3 * k + i] = sk * a + sw[i];
+            }
+            for (int i = 0; i < 3; i++)
+                w[i] += sk * (g[3 * i] * vk[0] + g[3 * i + 1] * vk[1] + g[3 * i + 2] * vk[2]);
+        } else
+            memcpy(y + 3 * k, sw, sizeof sw);
         if (pa >= 0)
             for (int i = 0; i < 6; i++)
                 acc[6 * pa + i] += w[i];
@@ -331,7 +342,7 @@ size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm)
                 ps[3 * i + j] = a;
             }
         const double *g = d->geo + 9 * k, *ke = d->kel + 9 * k;
-        double *lm = d->lmat + 18 * k;
+        double lm[18];
         /* L = B + PS^T; B = sk [G^T 0] */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 6; j++)
@@ -358,15 +369,15 @@ size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm)
         }
         if (!pd)
             nonpd++;
-        int64_t pa = d->parent[k];
-        if (pa < 0)
-            continue;
-        /* Phi = Pi - L^T D^-1 L into the parent's Pi */
-        double dl[18]; /* D^-1 L */
+        double *dl = d->dl + 18 * k; /* D^-1 L */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 6; j++)
                 dl[6 * i + j] =
                     di[3 * i] * lm[j] + di[3 * i + 1] * lm[6 + j] + di[3 * i + 2] * lm[12 + j];
+        int64_t pa = d->parent[k];
+        if (pa < 0)
+            continue;
+        /* Phi = Pi - L^T D^-1 L into the parent's Pi */
         double *pp = d->pi + 36 * pa;
         for (int i = 0; i < 6; i++)
             for (int j = 0; j < 6; j++)
@@ -383,40 +394,39 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *xout)
     size_t n = d->n;
     double *acc = d->acc, *u = d->u, *z = d->z;
     memset(acc, 0, 6 * n * sizeof(double));
+    /* from the tips: u_k = b_k - S^T sum psi_c, kept as D^-1 u_k (in u), psi into the parent */
     for (size_t k = n; k-- > 0;) {
-        double sw[3];
-        st_w(d->x[k], acc + 6 * k, sw);
-        double *uk = u + 3 * k;
+        double sw[3], uk[3], lts[6];
+        if (k >= CBM__AHEAD)
+            CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, acc);
+        const double *ak = acc + 6 * k;
+        cbm__dyn_stw(d->x + k, ak, sw);
         for (int i = 0; i < 3; i++)
             uk[i] = b[3 * k + i] - sw[i];
+        double *s = u + 3 * k;
+        cbm__dyn_dinv_u(d->dinv + 9 * k, uk, s);
         int64_t pa = d->parent[k];
         if (pa < 0)
             continue;
-        const double *di = d->dinv + 9 * k, *lm = d->lmat + 18 * k;
-        double t[3];
-        for (int i = 0; i < 3; i++)
-            t[i] = di[3 * i] * uk[0] + di[3 * i + 1] * uk[1] + di[3 * i + 2] * uk[2];
-        double *ap = acc + 6 * pa, *ak = acc + 6 * k;
+        cbm__dyn_lt_s(d->dl + 18 * k, uk, lts);
+        double *ap = acc + 6 * pa;
         for (int j = 0; j < 6; j++)
-            ap[j] += ak[j] + lm[j] * t[0] + lm[6 + j] * t[1] + lm[12 + j] * t[2];
+            ap[j] += ak[j] + lts[j];
     }
+    /* from the base: v_k = D^-1 u_k - D^-1 L_k Z_parent, Z_k = Z_parent + S_k v_k */
     for (size_t k = 0; k < n; k++) {
         int64_t pa = d->parent[k];
-        double *zk = z + 6 * k;
-        const double *lm = d->lmat + 18 * k, *di = d->dinv + 9 * k;
-        double r[3] = {u[3 * k], u[3 * k + 1], u[3 * k + 2]};
+        double *zk = z + 6 * k, q[3];
+        CBM__DYN_AHEAD(d->parent, n, k + CBM__AHEAD, z);
         if (pa >= 0) {
             const double *zp = z + 6 * pa;
+            cbm__dyn_back_sub(d->dl + 18 * k, u + 3 * k, zp, q);
             memcpy(zk, zp, 6 * sizeof(double));
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 6; j++)
-                    r[i] -= lm[6 * i + j] * zp[j];
-        } else
+        } else {
+            memcpy(q, u + 3 * k, sizeof q);
             memset(zk, 0, 6 * sizeof(double));
-        double q[3];
-        for (int i = 0; i < 3; i++)
-            q[i] = di[3 * i] * r[0] + di[3 * i + 1] * r[1] + di[3 * i + 2] * r[2];
-        s_q(d->x[k], q, zk);
+        }
+        cbm__dyn_sq(d->x + k, q, zk);
         memcpy(xout + 3 * k, q, sizeof q);
     }
 }
@@ -451,7 +461,7 @@ void cbm__dyn_twists(const cbm__dyn *d, const double *v, double *z)
             memcpy(zk, z + 6 * pa, 6 * sizeof(double));
         else
             memset(zk, 0, 6 * sizeof(double));
-        s_q(d->x[k], v + 3 * k, zk);
+        cbm__dyn_sq(d->x + k, v + 3 * k, zk);
     }
 }
 
@@ -459,7 +469,7 @@ void cbm__dyn_wrench_force(const cbm__dyn *d, double *w, double *f)
 {
     for (size_t k = d->n; k-- > 0;) {
         double *wk = w + 6 * k, sw[3];
-        st_w(d->x[k], wk, sw);
+        cbm__dyn_stw(d->x + k, wk, sw);
         f[3 * k] += sw[0];
         f[3 * k + 1] += sw[1];
         f[3 * k + 2] += sw[2];
