@@ -69,7 +69,9 @@ cbm_ober_def cbm_ober_def_default(void)
     d.offset_0 = d.offset_x = 75;
     d.initial_length = 0;
     d.fork_angle = 25;
-    d.sky = 1; /* the thesis's light field: even light over a stand */
+    d.seed_stems = 1;
+    d.seed_stem_head = 60; /* Listing 14's cumulative RH(60) */
+    d.sky = 1;             /* the thesis's light field: even light over a stand */
     d.light_rings = 4;
     d.light_azimuths = 8;
     d.light_samples = 1;
@@ -126,6 +128,9 @@ static const param PARAMS[] = {
     {"offset_x", K_REAL, O(offset_x), 0, -360, 360},
     {"initialLength", K_REAL, O(initial_length), 0, 0, 1e5},
     {"forkAngle", K_REAL, O(fork_angle), 0, 0, 90},
+    {"seedStems", K_INT, O(seed_stems), 0, 1, 64},
+    {"seedStemHead", K_REAL, O(seed_stem_head), 0, -360, 360},
+    {"seedStemTilt", K_REAL, O(seed_stem_tilt), 0, 0, 180},
     {"pipeAllLeaves", K_BOOL, O(pipe_all_leaves), 0, 0, 0},
     {"carbonSum", K_BOOL, O(carbon_sum), 0, 0, 0},
     {"light", K_BOOL, O(light), 0, 0, 0},
