@@ -228,7 +228,9 @@ typedef struct cbm_ober_mech_result {
 /// Makes tree `tree` of the stand a mechanical plant (each shoot one segment per node, the
 /// pipe-model radius, the shape without the gravitropism joint as the rest shape, leaves as point
 /// masses), solves its statics under gravity and compares the shoot tips with the kinematic
-/// shape. *plant_out (optional) receives the solved plant (the caller destroys it).
+/// shape. On a tree grown with mechanicsFeedback the rest shape also carries the bends the
+/// wood memorised (docs/models.md). *plant_out (optional) receives the solved plant (the caller
+/// destroys it).
 CBM_API cbm_status cbm_ober_mechanics(const cbm_ober_stand *stand, size_t tree,
                                       const cbm_ober_mech_def *def, cbm_ober_mech_result *out,
                                       cbm_plant **plant_out);
