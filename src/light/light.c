@@ -330,6 +330,32 @@ static cbm_vec3 leaf_point(const light_job *j, size_t i, int a, int b, double *j
     return x;
 }
 
+typedef struct batch_point {
+    cbm_vec3 x;
+    double jac;
+    uint32_t leaf; /* its slot in the batch */
+} batch_point;
+
+/* The sample points of leaf i with a positive Jacobian, in grid order, into out[0..) (room for
+ * samples²), each tagged with the batch slot `slot`; returns their number. Both passes (ray by
+ * ray and batched) take their points here, so they see the same points in the same order. */
+static size_t leaf_points(const light_job *j, size_t i, uint32_t slot, batch_point *out)
+{
+    int m = j->def->samples;
+    size_t np = 0;
+    for (int a = 0; a < m; a++)
+        for (int b = 0; b < m; b++) {
+            double jac;
+            cbm_vec3 x = leaf_point(j, i, a, b, &jac);
+            if (!(jac > 0))
+                continue;
+            out[np].x = x;
+            out[np].jac = jac;
+            out[np++].leaf = slot;
+        }
+    return np;
+}
+
 /* light of one leaf in the sky's units, ray by ray (the periodic stand) */
 static double leaf_light(const light_job *j, size_t i, double *cosk, size_t *rays)
 {
@@ -337,17 +363,13 @@ static double leaf_light(const light_job *j, size_t i, double *cosk, size_t *ray
     double area;
     if (!leaf_setup(j, i, cosk, &n, &area))
         return 0.0;
-    int m = j->def->samples;
+    batch_point pt[16 * 16]; /* samples <= 16 (check_def) */
+    size_t np = leaf_points(j, i, 0, pt);
     double total = 0.0, wsum = 0.0;
-    for (int a = 0; a < m; a++)
-        for (int b = 0; b < m; b++) {
-            double jac;
-            cbm_vec3 x = leaf_point(j, i, a, b, &jac);
-            if (!(jac > 0))
-                continue;
-            total += jac * point_light(j, x, n, cosk, rays);
-            wsum += jac;
-        }
+    for (size_t p = 0; p < np; p++) {
+        total += pt[p].jac * point_light(j, pt[p].x, n, cosk, rays);
+        wsum += pt[p].jac;
+    }
     return wsum > 0 ? area * total / wsum : 0.0;
 }
 
@@ -358,12 +380,6 @@ typedef struct batch_leaf {
     double area;
     uint32_t index, first, count; /* the leaf, its first point in the batch and their number */
 } batch_leaf;
-
-typedef struct batch_point {
-    cbm_vec3 x;
-    double jac;
-    uint32_t leaf; /* its slot in the batch */
-} batch_point;
 
 /* a thread's scratch, carved from SCRATCH(points, nsrc) bytes (16-byte aligned) */
 typedef struct scratch {
@@ -470,16 +486,7 @@ static void run_batches(const light_job *j, scratch *w, size_t first, size_t las
         }
         lf->index = (uint32_t)i;
         lf->first = (uint32_t)np;
-        for (int a = 0; a < m; a++)
-            for (int b = 0; b < m; b++) {
-                double jac;
-                cbm_vec3 x = leaf_point(j, i, a, b, &jac);
-                if (!(jac > 0))
-                    continue;
-                w->pt[np].x = x;
-                w->pt[np].jac = jac;
-                w->pt[np++].leaf = (uint32_t)nl;
-            }
+        np += leaf_points(j, i, (uint32_t)nl, w->pt + np);
         lf->count = (uint32_t)np - lf->first;
         nl++;
     }
