@@ -45,6 +45,8 @@
 
 #include "../core/vecmath.h"
 
+#include "../geom/embree_device.h"
+
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
@@ -90,25 +92,6 @@ typedef struct light_job {
     atomic_size_t rays;
     atomic_int thread_id;
 } light_job;
-
-typedef struct mem_watch {
-    cbm_context *ctx;
-    atomic_llong bytes;
-} mem_watch;
-
-static bool memory_monitor(void *ud, ssize_t bytes, bool post)
-{
-    mem_watch *m = ud;
-    long long now = atomic_fetch_add(&m->bytes, (long long)bytes) + (long long)bytes;
-    if (bytes > 0 && !post) {
-        size_t max = cbm_context_limits(m->ctx)->max_bytes;
-        if (max && (size_t)now + cbm_context_bytes(m->ctx) > max) {
-            atomic_fetch_sub(&m->bytes, (long long)bytes);
-            return false;
-        }
-    }
-    return true;
-}
 
 cbm_light_def cbm_light_def_default(void)
 {
@@ -640,16 +623,6 @@ static void copy_range(double tmin, double tmax, double lo, double len, long *i0
         *i1 = *i0; /* cannot happen for a finite triangle; keep one copy */
 }
 
-static cbm_status embree_status(cbm_context *ctx, RTCDevice dev, const char *what)
-{
-    enum RTCError e = rtcGetDeviceError(dev);
-    if (e == RTC_ERROR_NONE)
-        return CBM_OK;
-    if (e == RTC_ERROR_OUT_OF_MEMORY)
-        return cbm__fail(ctx, CBM_E_NOMEM, "light: out of memory while %s", what);
-    return cbm__fail(ctx, CBM_E_INTERNAL, "light: Embree error %d while %s", (int)e, what);
-}
-
 static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *j,
                               const prim_src *t, RTCScene *out)
 {
@@ -711,7 +684,7 @@ static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *
     }
     rtcCommitScene(rs);
     *out = rs;
-    return embree_status(ctx, dev, "building the light scene");
+    return cbm__rtc_status(ctx, dev, "light", "building the light scene");
 }
 
 cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
@@ -801,16 +774,10 @@ cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
     RTCDevice dev = NULL;
     RTCScene rs = NULL;
     uint32_t *order = NULL;
-    mem_watch watch = {ctx, 0};
+    cbm__rtc_watch watch;
     if (n_leaves > 0) {
-        char cfg[64];
-        snprintf(cfg, sizeof cfg, "threads=%d,verbose=0", nthreads);
-        dev = rtcNewDevice(cfg);
-        if (!dev) {
-            st = cbm__fail(ctx, CBM_E_INTERNAL, "light: cannot create the Embree device");
+        if ((st = cbm__rtc_device(ctx, nthreads, "light", &watch, &dev)) != CBM_OK)
             goto done;
-        }
-        rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, &watch);
         prim_src ts = {leaves, n_leaves, occluders, n_occluder_triangles};
         if ((st = build_scene(ctx, dev, &j, &ts, &rs)) != CBM_OK)
             goto done;
