@@ -395,28 +395,12 @@ cbm_status cbm_ober_def_parse(cbm_context *ctx, cbm_ober_def *def, const char *t
         return CBM_E_INVALID;
     const char *file = name ? name : "<parameters>";
     size_t errors = 0, max_diag = cbm_context_limits(ctx)->max_diagnostics;
-    size_t pos = 0;
-    int line = 0;
+    cbm__param_lines it = {text, len, 0, 0}; /* a '#' starts a comment: formulas have none */
     char buf[CBM_OBER_FORMULA_MAX + 8], err[240];
-    while (pos < len) {
-        line++;
-        size_t end = pos;
-        while (end < len && text[end] != '\n')
-            end++;
-        size_t n = end - pos;
-        const char *l = text + pos;
-        pos = end + 1;
-        /* a '#' starts a comment (formulas have no '#') */
-        size_t m = 0;
-        while (m < n && l[m] != '#')
-            m++;
-        while (m > 0 && (l[m - 1] == ' ' || l[m - 1] == '\t' || l[m - 1] == '\r'))
-            m--;
-        size_t i = 0;
-        while (i < m && (l[i] == ' ' || l[i] == '\t'))
-            i++;
-        if (i == m)
-            continue;
+    const char *l;
+    size_t i, m;
+    while (cbm__param_next(&it, &l, &i, &m)) {
+        int line = it.line;
 #define ERR(col, ...)                                                                              \
     do {                                                                                           \
         cbm__diag(ctx, CBM_ERROR, file, line, (int)(col) + 1, __VA_ARGS__);                        \
