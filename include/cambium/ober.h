@@ -74,6 +74,9 @@ typedef struct cbm_ober_def {
     /* beyond Table 3 (docs/models.md says why) */
     double initial_length; ///< cm, the seedling's trunk (0 = specificLengthLambda[0] at age 1)
     double fork_angle;     ///< deg, each arm of a fork from the axis
+    int seed_stems;        ///< seedStems: trunks a seed makes (Listing 14: 5), each its own axis
+    double seed_stem_head; ///< seedStemHead, deg: trunk k turned by k times this about the vertical
+    double seed_stem_tilt; ///< seedStemTilt, deg: each trunk's tilt from the vertical (0: upright)
     bool pipe_all_leaves;  ///< pipe model counts all living leaves (0: this year's new ones)
     bool carbon_sum;       ///< shoot carbon is the sum of its leaves' (0: their mean)
     bool light;            ///< leaf carbon from ray-cast light (0: every leaf unshaded, 1)
@@ -225,7 +228,9 @@ typedef struct cbm_ober_mech_result {
 /// Makes tree `tree` of the stand a mechanical plant (each shoot one segment per node, the
 /// pipe-model radius, the shape without the gravitropism joint as the rest shape, leaves as point
 /// masses), solves its statics under gravity and compares the shoot tips with the kinematic
-/// shape. *plant_out (optional) receives the solved plant (the caller destroys it).
+/// shape. On a tree grown with mechanicsFeedback the rest shape also carries the bends the
+/// wood memorised (docs/models.md). *plant_out (optional) receives the solved plant (the caller
+/// destroys it).
 CBM_API cbm_status cbm_ober_mechanics(const cbm_ober_stand *stand, size_t tree,
                                       const cbm_ober_mech_def *def, cbm_ober_mech_result *out,
                                       cbm_plant **plant_out);

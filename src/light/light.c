@@ -45,6 +45,8 @@
 
 #include "../core/vecmath.h"
 
+#include "../geom/embree_device.h"
+
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
@@ -90,25 +92,6 @@ typedef struct light_job {
     atomic_size_t rays;
     atomic_int thread_id;
 } light_job;
-
-typedef struct mem_watch {
-    cbm_context *ctx;
-    atomic_llong bytes;
-} mem_watch;
-
-static bool memory_monitor(void *ud, ssize_t bytes, bool post)
-{
-    mem_watch *m = ud;
-    long long now = atomic_fetch_add(&m->bytes, (long long)bytes) + (long long)bytes;
-    if (bytes > 0 && !post) {
-        size_t max = cbm_context_limits(m->ctx)->max_bytes;
-        if (max && (size_t)now + cbm_context_bytes(m->ctx) > max) {
-            atomic_fetch_sub(&m->bytes, (long long)bytes);
-            return false;
-        }
-    }
-    return true;
-}
 
 cbm_light_def cbm_light_def_default(void)
 {
@@ -330,6 +313,32 @@ static cbm_vec3 leaf_point(const light_job *j, size_t i, int a, int b, double *j
     return x;
 }
 
+typedef struct batch_point {
+    cbm_vec3 x;
+    double jac;
+    uint32_t leaf; /* its slot in the batch */
+} batch_point;
+
+/* The sample points of leaf i with a positive Jacobian, in grid order, into out[0..) (room for
+ * samples²), each tagged with the batch slot `slot`; returns their number. Both passes (ray by
+ * ray and batched) take their points here, so they see the same points in the same order. */
+static size_t leaf_points(const light_job *j, size_t i, uint32_t slot, batch_point *out)
+{
+    int m = j->def->samples;
+    size_t np = 0;
+    for (int a = 0; a < m; a++)
+        for (int b = 0; b < m; b++) {
+            double jac;
+            cbm_vec3 x = leaf_point(j, i, a, b, &jac);
+            if (!(jac > 0))
+                continue;
+            out[np].x = x;
+            out[np].jac = jac;
+            out[np++].leaf = slot;
+        }
+    return np;
+}
+
 /* light of one leaf in the sky's units, ray by ray (the periodic stand) */
 static double leaf_light(const light_job *j, size_t i, double *cosk, size_t *rays)
 {
@@ -337,17 +346,13 @@ static double leaf_light(const light_job *j, size_t i, double *cosk, size_t *ray
     double area;
     if (!leaf_setup(j, i, cosk, &n, &area))
         return 0.0;
-    int m = j->def->samples;
+    batch_point pt[16 * 16]; /* samples <= 16 (check_def) */
+    size_t np = leaf_points(j, i, 0, pt);
     double total = 0.0, wsum = 0.0;
-    for (int a = 0; a < m; a++)
-        for (int b = 0; b < m; b++) {
-            double jac;
-            cbm_vec3 x = leaf_point(j, i, a, b, &jac);
-            if (!(jac > 0))
-                continue;
-            total += jac * point_light(j, x, n, cosk, rays);
-            wsum += jac;
-        }
+    for (size_t p = 0; p < np; p++) {
+        total += pt[p].jac * point_light(j, pt[p].x, n, cosk, rays);
+        wsum += pt[p].jac;
+    }
     return wsum > 0 ? area * total / wsum : 0.0;
 }
 
@@ -358,12 +363,6 @@ typedef struct batch_leaf {
     double area;
     uint32_t index, first, count; /* the leaf, its first point in the batch and their number */
 } batch_leaf;
-
-typedef struct batch_point {
-    cbm_vec3 x;
-    double jac;
-    uint32_t leaf; /* its slot in the batch */
-} batch_point;
 
 /* a thread's scratch, carved from SCRATCH(points, nsrc) bytes (16-byte aligned) */
 typedef struct scratch {
@@ -470,16 +469,7 @@ static void run_batches(const light_job *j, scratch *w, size_t first, size_t las
         }
         lf->index = (uint32_t)i;
         lf->first = (uint32_t)np;
-        for (int a = 0; a < m; a++)
-            for (int b = 0; b < m; b++) {
-                double jac;
-                cbm_vec3 x = leaf_point(j, i, a, b, &jac);
-                if (!(jac > 0))
-                    continue;
-                w->pt[np].x = x;
-                w->pt[np].jac = jac;
-                w->pt[np++].leaf = (uint32_t)nl;
-            }
+        np += leaf_points(j, i, (uint32_t)nl, w->pt + np);
         lf->count = (uint32_t)np - lf->first;
         nl++;
     }
@@ -633,16 +623,6 @@ static void copy_range(double tmin, double tmax, double lo, double len, long *i0
         *i1 = *i0; /* cannot happen for a finite triangle; keep one copy */
 }
 
-static cbm_status embree_status(cbm_context *ctx, RTCDevice dev, const char *what)
-{
-    enum RTCError e = rtcGetDeviceError(dev);
-    if (e == RTC_ERROR_NONE)
-        return CBM_OK;
-    if (e == RTC_ERROR_OUT_OF_MEMORY)
-        return cbm__fail(ctx, CBM_E_NOMEM, "light: out of memory while %s", what);
-    return cbm__fail(ctx, CBM_E_INTERNAL, "light: Embree error %d while %s", (int)e, what);
-}
-
 static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *j,
                               const prim_src *t, RTCScene *out)
 {
@@ -704,7 +684,7 @@ static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *
     }
     rtcCommitScene(rs);
     *out = rs;
-    return embree_status(ctx, dev, "building the light scene");
+    return cbm__rtc_status(ctx, dev, "light", "building the light scene");
 }
 
 cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
@@ -794,16 +774,10 @@ cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
     RTCDevice dev = NULL;
     RTCScene rs = NULL;
     uint32_t *order = NULL;
-    mem_watch watch = {ctx, 0};
+    cbm__rtc_watch watch;
     if (n_leaves > 0) {
-        char cfg[64];
-        snprintf(cfg, sizeof cfg, "threads=%d,verbose=0", nthreads);
-        dev = rtcNewDevice(cfg);
-        if (!dev) {
-            st = cbm__fail(ctx, CBM_E_INTERNAL, "light: cannot create the Embree device");
+        if ((st = cbm__rtc_device(ctx, nthreads, "light", &watch, &dev)) != CBM_OK)
             goto done;
-        }
-        rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, &watch);
         prim_src ts = {leaves, n_leaves, occluders, n_occluder_triangles};
         if ((st = build_scene(ctx, dev, &j, &ts, &rs)) != CBM_OK)
             goto done;

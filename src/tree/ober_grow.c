@@ -445,21 +445,31 @@ static cbm_status germinate(cbm_ober_stand *s, size_t ti)
     b.apical = 1;
     fill_tree(s, t, ti);
     fill_bud(s, &b, &none);
-    cbm_status st = CBM_OK;
-    double len = s->def.initial_length > 0 ? s->def.initial_length
-                                           : cbm__ober_eval(&s->prog, F_SPECIFIC_LENGTH, &st);
-    double nn = cbm__ober_eval(&s->prog, F_NUM_NODES, &st);
-    CBM_TRY(st);
-    if (!(len > 0))
-        len = 1e-3; /* a seedling of no length still carries its buds */
-    new_shoot n = {.mother = -1,
-                   .tree = (int32_t)ti,
-                   .nodes = nn < 1      ? 1
-                            : nn > 1000 ? 1000
-                                        : (int)lround(nn),
-                   .position = 1,
-                   .len = len};
-    return add_shoot(s, &n);
+    /* a multi-stem seed (Listing 14's seeding): seedStems trunks, trunk k turned by k + 1 times
+     * seedStemHead about the vertical (the cumulative RH) and tilted by seedStemTilt (RL), each
+     * with its own draw of the length formula; one stem is upright (bit for bit the old seedling)
+     * unless seedStemTilt says otherwise */
+    int stems = s->def.seed_stems > 1 ? s->def.seed_stems : 1;
+    for (int k = 0; k < stems; k++) {
+        cbm_status st = CBM_OK;
+        double len = s->def.initial_length > 0 ? s->def.initial_length
+                                               : cbm__ober_eval(&s->prog, F_SPECIFIC_LENGTH, &st);
+        double nn = cbm__ober_eval(&s->prog, F_NUM_NODES, &st);
+        CBM_TRY(st);
+        if (!(len > 0))
+            len = 1e-3; /* a seedling of no length still carries its buds */
+        new_shoot n = {.mother = -1,
+                       .tree = (int32_t)ti,
+                       .nodes = nn < 1      ? 1
+                                : nn > 1000 ? 1000
+                                            : (int)lround(nn),
+                       .head = stems > 1 ? (k + 1) * s->def.seed_stem_head : 0,
+                       .insert = s->def.seed_stem_tilt,
+                       .position = 1,
+                       .len = len};
+        CBM_TRY(add_shoot(s, &n));
+    }
+    return CBM_OK;
 }
 
 /* The shoots of every tree at the start of the year: own[first[t] .. first[t + 1]) are tree t's

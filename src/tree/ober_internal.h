@@ -105,8 +105,9 @@ typedef struct ober_shoot {
     cbm_vec3 base, tip, H, L, U;
     /* mechanics feedback (ober_mech.c): rotation vectors (rad) in the shoot's own (H, L, U) after
      * the joint, the bend its wood memorised and this year's elastic bend on top; the radius
-     * (cm) when it last memorised */
-    cbm_vec3 bend_mem, bend_el;
+     * (cm) when it last memorised; bend_rest: the memorised bend of the rest shape this year's
+     * statics started from (bend_mem before this year's share), which --mechanics observes from */
+    cbm_vec3 bend_mem, bend_el, bend_rest;
     double radius_mem;
 } ober_shoot;
 

@@ -9,8 +9,9 @@
  * round section of one ring of wood (def: E, G = E/16, green density). Its rest shape is the
  * turtle's shape WITHOUT the joint: the head and insertion angles only (each shoot straight along
  * its mother's frame turned by its head and insertion angles), so that the statics alone do the
- * bending the joint does in the thesis. The shoot's living leaves hang as point masses, spread
- * evenly over the distal ends of its N segments. The base is clamped upright at the tree's
+ * bending the joint does in the thesis (on a tree grown with mechanicsFeedback, plus the bends
+ * its wood memorised: straight() says which). The shoot's living leaves hang as point masses,
+ * spread evenly over the distal ends of its N segments. The base is clamped upright at the tree's
  * position. Only the final tree is solved (one equilibrium, not a history: no rings laid down on
  * the bent shape, no yearly growth of the plant); docs/models.md says so. */
 #include "core/vecmath.h"
@@ -39,7 +40,8 @@ typedef struct frame3 {
     cbm_vec3 H, L, U, base, tip; /* m */
 } frame3;
 
-/* The shoots' frames without the gravitropism joint (ober_grow.c geometry() less the RV). */
+/* The shoots' frames without the gravitropism joint (ober_grow.c geometry() less the RV and the
+ * elastic part of the feedback's bend). */
 static void straight(const cbm_ober_stand *s, frame3 *f)
 {
     for (size_t i = 0; i < s->shoots.len; i++) {
@@ -60,6 +62,22 @@ static void straight(const cbm_ober_stand *s, frame3 *f)
             U = rot(U, H, h->head * DEG);
             H = rot(H, L, h->insert * DEG);
             U = rot(U, L, h->insert * DEG);
+        }
+        /* the bend the wood had memorised under mechanicsFeedback when this year's statics
+         * bent it (the rest shape the feedback solved from, less the joint), in the shoot's
+         * frame as ober_grow.c applies it: the statics then finds this year's bend again, and
+         * the difference left is the joint's. Not this year's share of the memory: the
+         * feedback's equilibrium is the old memory plus the whole bend d (w d memorised,
+         * (1 - w) d elastic), so starting from the new memory would count w d twice. Zero
+         * without the feedback: the shape is as before. */
+        double wn = v3_norm(h->bend_rest);
+        if (wn > 0) {
+            cbm_vec3 w = h->bend_rest;
+            cbm_vec3 a = v3_scale(
+                v3_add(v3_add(v3_scale(H, w.x), v3_scale(L, w.y)), v3_scale(U, w.z)), 1.0 / wn);
+            H = rot(H, a, wn);
+            L = rot(L, a, wn);
+            U = rot(U, a, wn);
         }
         f[i].H = v3_normalize(H), f[i].L = v3_normalize(L), f[i].U = v3_normalize(U);
         f[i].base = base;
@@ -332,6 +350,7 @@ cbm_status cbm__ober_feedback(cbm_ober_stand *s)
             double r0 = h->radius_mem, r = h->radius;
             double w = r > 0 ? 1.0 - (r0 / r) * (r0 / r) * (r0 / r) * (r0 / r) : 1.0;
             w = w < 0 ? 0 : w;
+            h->bend_rest = h->bend_mem;
             h->bend_mem = v3_madd(h->bend_mem, dl, w);
             h->bend_el = v3_scale(dl, 1.0 - w);
             h->radius_mem = r;

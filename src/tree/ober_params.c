@@ -69,7 +69,9 @@ cbm_ober_def cbm_ober_def_default(void)
     d.offset_0 = d.offset_x = 75;
     d.initial_length = 0;
     d.fork_angle = 25;
-    d.sky = 1; /* the thesis's light field: even light over a stand */
+    d.seed_stems = 1;
+    d.seed_stem_head = 60; /* Listing 14's cumulative RH(60) */
+    d.sky = 1;             /* the thesis's light field: even light over a stand */
     d.light_rings = 4;
     d.light_azimuths = 8;
     d.light_samples = 1;
@@ -126,6 +128,9 @@ static const param PARAMS[] = {
     {"offset_x", K_REAL, O(offset_x), 0, -360, 360},
     {"initialLength", K_REAL, O(initial_length), 0, 0, 1e5},
     {"forkAngle", K_REAL, O(fork_angle), 0, 0, 90},
+    {"seedStems", K_INT, O(seed_stems), 0, 1, 64},
+    {"seedStemHead", K_REAL, O(seed_stem_head), 0, -360, 360},
+    {"seedStemTilt", K_REAL, O(seed_stem_tilt), 0, 0, 180},
     {"pipeAllLeaves", K_BOOL, O(pipe_all_leaves), 0, 0, 0},
     {"carbonSum", K_BOOL, O(carbon_sum), 0, 0, 0},
     {"light", K_BOOL, O(light), 0, 0, 0},
@@ -390,28 +395,12 @@ cbm_status cbm_ober_def_parse(cbm_context *ctx, cbm_ober_def *def, const char *t
         return CBM_E_INVALID;
     const char *file = name ? name : "<parameters>";
     size_t errors = 0, max_diag = cbm_context_limits(ctx)->max_diagnostics;
-    size_t pos = 0;
-    int line = 0;
+    cbm__param_lines it = {text, len, 0, 0}; /* a '#' starts a comment: formulas have none */
     char buf[CBM_OBER_FORMULA_MAX + 8], err[240];
-    while (pos < len) {
-        line++;
-        size_t end = pos;
-        while (end < len && text[end] != '\n')
-            end++;
-        size_t n = end - pos;
-        const char *l = text + pos;
-        pos = end + 1;
-        /* a '#' starts a comment (formulas have no '#') */
-        size_t m = 0;
-        while (m < n && l[m] != '#')
-            m++;
-        while (m > 0 && (l[m - 1] == ' ' || l[m - 1] == '\t' || l[m - 1] == '\r'))
-            m--;
-        size_t i = 0;
-        while (i < m && (l[i] == ' ' || l[i] == '\t'))
-            i++;
-        if (i == m)
-            continue;
+    const char *l;
+    size_t i, m;
+    while (cbm__param_next(&it, &l, &i, &m)) {
+        int line = it.line;
 #define ERR(col, ...)                                                                              \
     do {                                                                                           \
         cbm__diag(ctx, CBM_ERROR, file, line, (int)(col) + 1, __VA_ARGS__);                        \

@@ -84,4 +84,15 @@ cbm_status cbm__tree_spring(cbm_tree *t);
 cbm_status cbm__tree_read_params(cbm_context *ctx, const char *path, char **buf, size_t *len,
                                  size_t *cap);
 
+/* The lines of a parameter text (tree_params.c; both readers): cbm__param_next skips blank and
+ * comment-only lines and gives the next line's start *l, its 1-based number (it->line), the first
+ * non-blank column *i and the end *m of its content before a '#' and trailing blanks; false at the
+ * end of the text. */
+typedef struct cbm__param_lines {
+    const char *text;
+    size_t len, pos;
+    int line;
+} cbm__param_lines;
+bool cbm__param_next(cbm__param_lines *it, const char **l, size_t *i, size_t *m);
+
 #endif

@@ -498,6 +498,33 @@ cbm_status cbm_tree_def_check(cbm_context *ctx, const cbm_tree_def *d)
 
 /* ---- the reader ---- */
 
+bool cbm__param_next(cbm__param_lines *it, const char **l, size_t *i, size_t *m)
+{
+    while (it->pos < it->len) {
+        it->line++;
+        size_t end = it->pos;
+        while (end < it->len && it->text[end] != '\n')
+            end++;
+        size_t n = end - it->pos;
+        const char *t = it->text + it->pos;
+        it->pos = end + 1;
+        /* strip the comment (no value holds a '#') and trailing space */
+        size_t e = 0;
+        while (e < n && t[e] != '#')
+            e++;
+        while (e > 0 && (t[e - 1] == ' ' || t[e - 1] == '\t' || t[e - 1] == '\r'))
+            e--;
+        size_t b = 0;
+        while (b < e && (t[b] == ' ' || t[b] == '\t'))
+            b++;
+        if (b == e)
+            continue;
+        *l = t, *i = b, *m = e;
+        return true;
+    }
+    return false;
+}
+
 static bool is_name_char(char c)
 {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
@@ -511,28 +538,12 @@ cbm_status cbm_tree_def_parse(cbm_context *ctx, cbm_tree_def *def, const char *t
     const char *file = name ? name : "<parameters>";
     size_t errors = 0;
     size_t max_diag = cbm_context_limits(ctx)->max_diagnostics;
-    size_t pos = 0;
-    int line = 0;
+    cbm__param_lines it = {text, len, 0, 0};
     char buf[1024];
-    while (pos < len) {
-        line++;
-        size_t end = pos;
-        while (end < len && text[end] != '\n')
-            end++;
-        size_t n = end - pos;
-        const char *l = text + pos;
-        pos = end + 1;
-        /* strip the comment and trailing space */
-        size_t m = 0;
-        while (m < n && l[m] != '#')
-            m++;
-        while (m > 0 && (l[m - 1] == ' ' || l[m - 1] == '\t' || l[m - 1] == '\r'))
-            m--;
-        size_t i = 0;
-        while (i < m && (l[i] == ' ' || l[i] == '\t'))
-            i++;
-        if (i == m)
-            continue;
+    const char *l;
+    size_t i, m;
+    while (cbm__param_next(&it, &l, &i, &m)) {
+        int line = it.line;
 #define ERR(col, ...)                                                                              \
     do {                                                                                           \
         cbm__diag(ctx, CBM_ERROR, file, line, (int)(col) + 1, __VA_ARGS__);                        \

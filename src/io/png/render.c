@@ -31,6 +31,8 @@
 #include "../../core/vecmath.h"
 #include "../../plot/font.h"
 
+#include "../../geom/embree_device.h"
+
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
@@ -66,25 +68,6 @@ typedef struct render_job {
     const uint32_t *band_lines; /* the lines touching each band, in scene order */
     atomic_int next_band;
 } render_job;
-
-typedef struct mem_watch {
-    cbm_context *ctx;
-    atomic_llong bytes;
-} mem_watch;
-
-static bool memory_monitor(void *ud, ssize_t bytes, bool post)
-{
-    mem_watch *m = ud;
-    long long now = atomic_fetch_add(&m->bytes, (long long)bytes) + (long long)bytes;
-    if (bytes > 0 && !post) {
-        size_t max = cbm_context_limits(m->ctx)->max_bytes;
-        if (max && (size_t)now + cbm_context_bytes(m->ctx) > max) {
-            atomic_fetch_sub(&m->bytes, (long long)bytes);
-            return false;
-        }
-    }
-    return true;
-}
 
 /* splitmix64 finaliser: decorrelated uniform numbers from a counter */
 static double hash01(uint64_t x)
@@ -619,16 +602,6 @@ static int default_threads(void)
     return n < 1 ? 1 : n > MAX_THREADS ? MAX_THREADS : (int)n;
 }
 
-static cbm_status embree_status(cbm_context *ctx, RTCDevice dev, const char *what)
-{
-    enum RTCError e = rtcGetDeviceError(dev);
-    if (e == RTC_ERROR_NONE)
-        return CBM_OK;
-    if (e == RTC_ERROR_OUT_OF_MEMORY)
-        return cbm__fail(ctx, CBM_E_NOMEM, "renderer: out of memory while %s", what);
-    return cbm__fail(ctx, CBM_E_INTERNAL, "renderer: Embree error %d while %s", (int)e, what);
-}
-
 cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_options *opts,
                       cbm_image **out)
 {
@@ -671,7 +644,7 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
     j.accum = cbm__calloc(ctx, pix, 4 * sizeof(float));
     RTCDevice dev = NULL;
     RTCScene rs = NULL;
-    mem_watch watch = {ctx, 0};
+    cbm__rtc_watch watch;
     if (!prim || !j.accum) {
         st = CBM_E_NOMEM;
         goto done;
@@ -723,14 +696,8 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
             j.sdepth[q] = INFINITY;
     }
     if (fitted && kept > 0 && bounded) {
-        char cfg[64];
-        snprintf(cfg, sizeof cfg, "threads=%d,verbose=0", nthreads);
-        dev = rtcNewDevice(cfg);
-        if (!dev) {
-            st = cbm__fail(ctx, CBM_E_INTERNAL, "renderer: cannot create the Embree device");
+        if ((st = cbm__rtc_device(ctx, nthreads, "renderer", &watch, &dev)) != CBM_OK)
             goto done;
-        }
-        rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, &watch);
         rs = rtcNewScene(dev);
         RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
         /* positions straight from the scene's vertices (stride 24 bytes; the 16-byte reads of
@@ -774,7 +741,8 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
             size += 2.0 * half;
         }
         rtcCommitScene(rs);
-        if ((st = embree_status(ctx, dev, "building the ray-casting scene")) != CBM_OK)
+        if ((st = cbm__rtc_status(ctx, dev, "renderer", "building the ray-casting scene")) !=
+            CBM_OK)
             goto done;
         j.rs = rs;
         j.back = 2.0 * size + 1.0;
