@@ -62,6 +62,26 @@ TEST(nice_range)
     lo = hi = 5.0; /* a point range is widened */
     cbm_plot_nice_range(&lo, &hi, 5, false);
     CHECK(lo < 5.0 && hi > 5.0);
+    /* the range ends on ticks: [-0.81, 0.79] rounds to steps of 0.2 (-1, 0.8), whose ticks take
+     * 0.25 and would stop at 0.75; it is rounded again to 0.25, so both ends are ticks */
+    lo = -0.807935175864, hi = 0.790851308183;
+    cbm_plot_nice_range(&lo, &hi, 8, false);
+    {
+        double t[32];
+        size_t nt = cbm_plot_ticks(lo, hi, 8, false, t, 32);
+        CHECK_MSG(nt >= 2 && fabs(t[0] - lo) < 1e-12 && fabs(t[nt - 1] - hi) < 1e-12,
+                  "range [%g, %g], ticks %g .. %g", lo, hi, nt ? t[0] : NAN, nt ? t[nt - 1] : NAN);
+    }
+    for (double top = 0.05; top < 40.0; top *= 1.37) /* every range ends on ticks */
+        for (int target = 3; target <= 10; target++) {
+            double l2 = -0.3 * top, h2 = top, t[64];
+            cbm_plot_nice_range(&l2, &h2, target, false);
+            size_t nt = cbm_plot_ticks(l2, h2, target, false, t, 64);
+            CHECK_MSG(nt >= 2 && fabs(t[0] - l2) <= 1e-9 * (h2 - l2) &&
+                          fabs(t[nt - 1] - h2) <= 1e-9 * (h2 - l2) && l2 <= -0.3 * top && h2 >= top,
+                      "[%g, %g] target %d: range [%g, %g], ticks %g .. %g", -0.3 * top, top, target,
+                      l2, h2, nt ? t[0] : NAN, nt ? t[nt - 1] : NAN);
+        }
     lo = 0.03, hi = 4000;
     cbm_plot_nice_range(&lo, &hi, 5, true);
     CHECK_NEAR(lo, 0.01, 1e-15);

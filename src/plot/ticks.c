@@ -123,8 +123,22 @@ void cbm_plot_nice_range(double *lo, double *hi, int target, bool log)
     }
     double mant, step = nice_step(b - a, target, &mant);
     double tol = REL_EPS * (b - a);
-    *lo = floor((a + tol) / step) * step;
-    *hi = ceil((b - tol) / step) * step;
+    double l = floor((a + tol) / step) * step, h = ceil((b - tol) / step) * step;
+    /* The rounded range is wider than the data, so its ticks (cbm_plot_ticks on [l, h]) may
+     * take a coarser step and end short of h: data between the last tick and the frame looked
+     * cut (0.79 on an axis ticked to 0.75 and framed at 0.8). Round out again to the step of
+     * the ticks with the next nice step until the range's own ticks take that step (a few
+     * mantissas at most: a step of at least the span / target rounds to a span that keeps it). */
+    for (int it = 0; it < 8; it++) {
+        double s2 = nice_step(h - l, target, &mant);
+        if (fabs(s2 - step) <= REL_EPS * step)
+            break;
+        step = nice_step(step * target * (1.0 + 1e-6), target, &mant);
+        l = floor((a + tol) / step) * step;
+        h = ceil((b - tol) / step) * step;
+    }
+    *lo = l;
+    *hi = h;
 }
 
 /* Decimals that tell apart ticks `step` apart: -floor(log10 step), one more for a mantissa of
