@@ -4,11 +4,15 @@
  *   // expect after N: MODULES                 (one-line form of -o x.str, space separated)
  *   // expect interpretation after N: MODULES
  * and error messages. */
+#define _POSIX_C_SOURCE 200809L
 #include "lsys_util.h"
 
 #include "cambium/io.h"
 
 #include <dirent.h>
+#include <errno.h>
+#include <stdlib.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* The string (or its interpretation) as `-o x.str` writes it, lines joined with sep. */
@@ -484,6 +488,39 @@ TEST(lpfg_native_matches_register_code)
         free(native);
         free(again);
     }
+    test_ctx_end(ctx);
+}
+
+/* A hung C compiler does not hang the run: a `cc` that sleeps is killed after CBM_CC_TIMEOUT
+ * seconds (with the children of its process group), native code is refused with a reason that
+ * says so, and the functions keep the register code (the string is the register code's). */
+TEST(lpfg_native_cc_timeout)
+{
+    cbm_context *ctx = test_ctx();
+    char dir[4096], cc[4200], path[4096], env[16384];
+    snprintf(dir, sizeof dir, "%s/fakecc", test_tmp_dir());
+    CHECK(mkdir(dir, 0700) == 0 || errno == EEXIST);
+    snprintf(cc, sizeof cc, "%s/cc", dir);
+    FILE *f = fopen(cc, "w");
+    CHECK(f != NULL);
+    if (f) {
+        fputs("#!/bin/sh\nsleep 60\n", f);
+        CHECK(fclose(f) == 0);
+    }
+    CHECK(chmod(cc, 0755) == 0);
+    const char *old = getenv("PATH");
+    snprintf(env, sizeof env, "%s:%s", dir, old ? old : "/usr/bin:/bin");
+    CHECK(setenv("PATH", env, 1) == 0);
+    CHECK(setenv("CBM_CC_TIMEOUT", "0.5", 1) == 0);
+    snprintf(path, sizeof path, "%s/tests/lpfg/compiled-functions.l", test_source_dir());
+    const char *why = NULL;
+    char *code = run_functions(ctx, path, NULL, 6, false, NULL);
+    char *native = run_functions(ctx, path, NULL, 6, true, &why);
+    CHECK_MSG(native == NULL, "native code from a compiler that never finishes");
+    CHECK_MSG(why && strstr(why, "timed out"), "%s", why ? why : "no reason");
+    CHECK(code != NULL);
+    free(code);
+    free(native);
     test_ctx_end(ctx);
 }
 

@@ -32,6 +32,9 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
+#include <signal.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -424,9 +427,28 @@ static bool make_dirs(const char *dir)
     return stat(dir, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
-/* cc FLAGS -o so c -lm, its output discarded; true when it succeeded */
-static bool run_cc(const char *c_path, const char *so_path)
+/* seconds a cc run may take before it is killed (a hung compiler must not hang a run: the
+   caller falls back to the register code); CBM_CC_TIMEOUT overrides it, for the test */
+static double cc_timeout_s(void)
 {
+    const char *e = getenv("CBM_CC_TIMEOUT");
+    char *end = NULL;
+    double t = e ? strtod(e, &end) : 0.0;
+    return e && end != e && t > 0.0 && t <= 3600.0 ? t : 120.0;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* cc FLAGS -o so c -lm, its output discarded; true when it succeeded, *timed_out when it
+   was killed for running longer than cc_timeout_s() */
+static bool run_cc(const char *c_path, const char *so_path, bool *timed_out)
+{
+    *timed_out = false;
     /* posix_spawn takes char *const argv[]: the words are copied into one writable buffer */
     char words[8192], *argv[N_CC_FLAGS + 7];
     size_t k = 0, used = 0;
@@ -452,15 +474,36 @@ static bool run_cc(const char *c_path, const char *so_path)
     bool ok = posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0) == 0 &&
               posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0) == 0 &&
               posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0) == 0;
+    /* cc in a process group of its own, so that a timeout kills its cc1/as/ld children too */
+    posix_spawnattr_t at;
+    bool at_ok = posix_spawnattr_init(&at) == 0;
+    ok = ok && at_ok && posix_spawnattr_setflags(&at, POSIX_SPAWN_SETPGROUP) == 0 &&
+         posix_spawnattr_setpgroup(&at, 0) == 0;
     pid_t pid;
-    ok = ok && posix_spawnp(&pid, "cc", &fa, NULL, argv, environ) == 0;
+    ok = ok && posix_spawnp(&pid, "cc", &fa, &at, argv, environ) == 0;
     posix_spawn_file_actions_destroy(&fa);
+    if (at_ok)
+        posix_spawnattr_destroy(&at);
     if (!ok)
         return false;
     int st;
-    while (waitpid(pid, &st, 0) < 0)
-        if (errno != EINTR)
+    double deadline = now_s() + cc_timeout_s();
+    for (;;) {
+        pid_t r = waitpid(pid, &st, WNOHANG);
+        if (r == pid)
+            break;
+        if (r < 0 && errno != EINTR)
             return false;
+        if (now_s() > deadline) {
+            (void)kill(-pid, SIGKILL);
+            while (waitpid(pid, &st, 0) < 0 && errno == EINTR)
+                ;
+            *timed_out = true;
+            return false;
+        }
+        struct timespec nap = {0, 10 * 1000 * 1000};
+        (void)nanosleep(&nap, NULL);
+    }
     return WIFEXITED(st) && WEXITSTATUS(st) == 0;
 }
 
@@ -544,11 +587,13 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
             (void)unlink(c_path);
             goto done;
         }
-        bool built = run_cc(c_path, tmp_so);
+        bool timed_out = false;
+        bool built = run_cc(c_path, tmp_so, &timed_out);
         (void)unlink(c_path);
         /* rename is atomic: a concurrent run sees the old object, the new one or none */
         if (!built || rename(tmp_so, so_path) != 0) {
-            *why = "the C compiler (cc) is missing or failed";
+            *why = timed_out ? "the C compiler (cc) timed out (CBM_CC_TIMEOUT)"
+                             : "the C compiler (cc) is missing or failed";
             (void)unlink(tmp_so);
             goto done;
         }
