@@ -6,6 +6,7 @@
  * target. Under a gravity sweep the vertical column loses its stability at Greenhill's load. */
 #include "test.h"
 
+#include <stdint.h>
 #include <string.h>
 
 #define PI 3.14159265358979323846
@@ -529,5 +530,215 @@ TEST(bend_continue_arclength_params)
         CHECK_EQ_INT((long)mism, 0);
         cbm_bend_branch_free(&br);
     }
+    test_ctx_end(ctx);
+}
+
+/* ---- a branched plant (cbm_plant_continue) against the elastica's plant (Tresierras ch. 5) ----
+ *
+ * A planar Y: a stem of 0.5 L, its continuation of 0.5 L (the main axis, L = the alpha = 15
+ * rod's length) and a lateral of 0.25 L at `Y_OFFSET` from the stem's tip tangent, all of the
+ * rod's section (r 0.01 m, E 1e10, density 600). The lateral is turned in the plane: spun by 90
+ * degrees about H (L, normal to the plane, goes to U), deviated, spun back. */
+#define Y_OFFSET (40.0 * PI / 180)
+
+static cbm_plant *y_plant(cbm_context *ctx, long per_l, double angle_deg)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(angle_deg * PI / 180);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    if (!p)
+        return NULL;
+    double L = rod_length(15), h = L / (double)per_l;
+    long ns = per_l / 2, nl = per_l / 4;
+    int64_t prev = -1;
+    for (long k = 0; k < 2 * ns; k++) { /* the main axis: stem then continuation */
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = prev;
+        d.length = h;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+        prev++;
+    }
+    prev = ns - 1; /* the stem's tip */
+    for (long k = 0; k < nl; k++) {
+        cbm_segment_def d = cbm_segment_def_default();
+        d.parent = prev;
+        d.length = h;
+        if (k == 0) {
+            d.divergence = PI / 2;
+            d.deviation = Y_OFFSET;
+            d.roll = -PI / 2;
+            d.lateral = true;
+        }
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+        prev = (int64_t)cbm_plant_segment_count(p) - 1;
+    }
+    return p;
+}
+
+static cbm_status y_elastica(cbm_context *ctx, double theta_base, cbm_elastica_plant_state **ps,
+                             size_t *n)
+{
+    double L = rod_length(15), D = 1e10 * PI * 1e-8 / 4, w = 600 * 9.81 * PI * 1e-4;
+    cbm_elastica_piece half = cbm_elastica_piece_default(), lat;
+    half.length = 0.5 * L, half.D0 = half.D1 = D, half.w0 = half.w1 = w;
+    lat = half;
+    lat.length = 0.25 * L;
+    cbm_elastica_branch b[3];
+    memset(b, 0, sizeof b);
+    b[0].parent = -1, b[0].pieces = &half, b[0].n_pieces = 1;
+    b[1].parent = 0, b[1].pieces = &half, b[1].n_pieces = 1;
+    b[2].parent = 0, b[2].offset = Y_OFFSET, b[2].pieces = &lat, b[2].n_pieces = 1;
+    cbm_elastica_plant_def d = cbm_elastica_plant_def_default();
+    return cbm_elastica_plant_equilibria(ctx, b, 3, &d, theta_base, ps, n);
+}
+
+/* the number of the elastica Y's equilibria at a base angle (degrees) */
+static size_t y_count(cbm_context *ctx, double deg)
+{
+    cbm_elastica_plant_state *ps = NULL;
+    size_t n = 0;
+    CHECK_OK(y_elastica(ctx, deg * PI / 180, &ps, &n));
+    cbm_elastica_plant_states_destroy(ctx, ps, n, 3);
+    return n;
+}
+
+static double wrap180(double a)
+{
+    return a - 360.0 * round(a / 360.0);
+}
+
+/* The Y swept in base angle from 90 degrees (hanging left, stable) down to 10: the branch folds
+ * and comes back to 90 on its unstable arc. Both equilibria met at 90 lie on the elastica's
+ * (main axis tip angle, to O(h): three resolutions), stable iff the elastica's is; the fold lies
+ * where the elastica's composite S-curve has one (two of its equilibria merge: the count drops by
+ * 2). */
+TEST(plant_continue_y_elastica)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_elastica_plant_state *ps = NULL;
+    size_t ne = 0;
+    CHECK_OK(y_elastica(ctx, PI / 2, &ps, &ne));
+    CHECK_EQ_INT((long)ne, 3);
+    /* the elastica's fold: bisection on the count of equilibria */
+    double lo = 40, hi = 50;
+    size_t nlo = y_count(ctx, lo), nhi = y_count(ctx, hi);
+    CHECK(nhi == nlo + 2);
+    for (int k = 0; k < 24 && nhi == nlo + 2; k++) {
+        double m = 0.5 * (lo + hi);
+        if (y_count(ctx, m) == nhi)
+            hi = m;
+        else
+            lo = m;
+    }
+    double efold = 0.5 * (lo + hi);
+    printf("elastica Y: %zu equilibria at 90 deg; fold at %.6f deg (bracket %.1e)\n", ne, efold,
+           hi - lo);
+    double tip_err[3] = {1, 1, 1}, fold_err[3] = {1, 1, 1};
+    for (int r = 0; r < 3; r++) {
+        long per_l = 40L << r;
+        cbm_plant *p = y_plant(ctx, per_l, 90);
+        if (!p)
+            break;
+        cbm_plant_continuation_def d = cbm_plant_continuation_def_default();
+        d.cont.from = 90;
+        d.cont.to = 10;
+        d.cont.steps = 40;
+        d.solve.tolerance = 1e-10;
+        d.solve.push_unstable = true; /* start on a stable state */
+        cbm_bend_branch br;
+        CHECK_OK(cbm_plant_continue(ctx, p, &d, &br));
+        CHECK_EQ_INT((long)br.end, (long)CBM_BEND_END_FROM);
+        CHECK(br.n_points > 2 && br.points[0].unstable_modes == 0);
+        double worst = 0.0;
+        int at90 = 0;
+        for (size_t i = 0; i < br.n_points; i++) {
+            const cbm_bend_branch_point *q = &br.points[i];
+            if (q->param != 90.0)
+                continue;
+            at90++;
+            size_t best = 0;
+            double e = INFINITY;
+            for (size_t k = 0; k < ne; k++) {
+                double ek = fabs(wrap180(q->tip_angle_deg - ps[k].theta_tip[1] * 180 / PI));
+                if (ek < e)
+                    e = ek, best = k;
+            }
+            worst = fmax(worst, e);
+            printf("%ld per L: at 90 deg main tip %.5f deg (elastica %.5f, error %.2e), unstable "
+                   "modes %zu (elastica planar index %d)\n",
+                   per_l, q->tip_angle_deg, ps[best].theta_tip[1] * 180 / PI, e, q->unstable_modes,
+                   ps[best].index);
+            CHECK((q->unstable_modes == 0) == (ps[best].index == 0));
+        }
+        CHECK_EQ_INT(at90, 2);
+        const cbm_bend_fold *f = first(&br, true), *s = first(&br, false);
+        CHECK(f != NULL && f->has_jump);
+        /* the bent plant's plane can turn about the vertical: the 3-D count gains the
+         * out-of-plane mode, without a fold, before the fold (the rod's does at 90 degrees) */
+        CHECK(s != NULL && f != NULL && s->at.param > f->at.param);
+        if (f)
+            printf("%ld per L: fold at %.6f deg (elastica %.6f, error %.2e), jump to main tip "
+                   "%.4f deg (stable: %d)\n",
+                   per_l, f->at.param, efold, fabs(f->at.param - efold), f->jump.tip_angle_deg,
+                   f->jump.unstable_modes == 0);
+        if (f && f->has_jump)
+            CHECK_EQ_INT((long)f->jump.unstable_modes, 0);
+        tip_err[r] = worst;
+        fold_err[r] = f ? fabs(f->at.param - efold) : 1;
+        cbm_bend_branch_free(&br);
+        cbm_plant_destroy(p);
+    }
+    double ot1 = log2(tip_err[0] / tip_err[1]), ot2 = log2(tip_err[1] / tip_err[2]);
+    double of1 = log2(fold_err[0] / fold_err[1]), of2 = log2(fold_err[1] / fold_err[2]);
+    printf("Y: tip errors %.3e %.3e %.3e deg (orders %.2f %.2f), fold errors %.3e %.3e %.3e deg "
+           "(orders %.2f %.2f)\n",
+           tip_err[0], tip_err[1], tip_err[2], ot1, ot2, fold_err[0], fold_err[1], fold_err[2], of1,
+           of2);
+    CHECK(tip_err[2] < 0.03 && fold_err[2] < 0.02);
+    /* FIRST order, not the single rod's second: the error is O(h) at the branch point
+     * (docs/validation.md "Folds of a branched discrete plant"). The test fails if the order
+     * changes either way. */
+    CHECK_MSG(fabs(ot1 - 1) < 0.25 && fabs(ot2 - 1) < 0.25, "tip orders %g %g", ot1, ot2);
+    CHECK_MSG(fabs(of1 - 1) < 0.25 && fabs(of2 - 1) < 0.25, "fold orders %g %g", of1, of2);
+    cbm_elastica_plant_states_destroy(ctx, ps, ne, 3);
+    test_ctx_end(ctx);
+}
+
+TEST(plant_continue_errors)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant *p = y_plant(ctx, 8, 90);
+    if (!p) {
+        test_ctx_end(ctx);
+        return;
+    }
+    /* the default tip is the main axis's: the stem's continuation, not the lateral added last */
+    CHECK_EQ_INT((long)cbm_plant_main_tip(p), 7);
+    cbm_plant_continuation_def d = cbm_plant_continuation_def_default();
+    CHECK(d.tip_segment == SIZE_MAX && d.length == 0 && d.solve.solver == CBM_MECH_NEWTON);
+    CHECK(d.cont.method == CBM_BEND_CONTINUE_ARCLENGTH && d.cont.param == CBM_BEND_PARAM_ANGLE);
+    d.cont.from = 90;
+    d.cont.to = 80;
+    cbm_bend_branch br;
+    cbm_plant_continuation_def bad = d;
+    bad.cont.param = CBM_BEND_PARAM_DENSITY; /* a bend spec's parameter */
+    CHECK(cbm_plant_continue(ctx, p, &bad, &br) == CBM_E_INVALID);
+    bad = d;
+    bad.tip_segment = 10; /* 8 + 2 segments: 0 .. 9 */
+    CHECK(cbm_plant_continue(ctx, p, &bad, &br) == CBM_E_INVALID);
+    bad = d;
+    bad.solve.solver = CBM_MECH_RELAX;
+    CHECK(cbm_plant_continue(ctx, p, &bad, &br) == CBM_E_INVALID);
+    bad = d;
+    bad.cont.to = bad.cont.from;
+    CHECK(cbm_plant_continue(ctx, p, &bad, &br) == CBM_E_INVALID);
+    CHECK(br.n_points == 0 && br.points == NULL);
+    /* a second root: two clamps */
+    cbm_segment_def sd = cbm_segment_def_default();
+    CHECK_OK(cbm_plant_add_segment(p, &sd, NULL));
+    CHECK(cbm_plant_continue(ctx, p, &d, &br) == CBM_E_INVALID);
+    cbm_context_clear_errors(ctx);
+    cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }

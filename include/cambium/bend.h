@@ -218,6 +218,36 @@ typedef struct cbm_bend_branch {
 /// Needs the fast solver, no growth steps and no motion. On failure *out is empty.
 CBM_API cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
                                      const cbm_bend_continuation_def *def, cbm_bend_branch *out);
+
+/* ---- the same for any plant (docs/bend.md, "Continuation of a branched plant") ---- */
+
+/// How to continue a plant built by the caller.
+typedef struct cbm_plant_continuation_def {
+    /// the trace; param CBM_BEND_PARAM_ANGLE (the clamp's elevation, degrees, about the base's
+    /// position) or CBM_BEND_PARAM_GRAVITY (|g| along -y) only: the others mean something for a
+    /// bend spec's rod only
+    cbm_bend_continuation_def cont;
+    cbm_solve_def solve; ///< the solver must be CBM_MECH_NEWTON (the default here)
+    /// the segment whose distal tip the branch points report; SIZE_MAX (default): the main
+    /// axis's tip (cbm_plant_main_tip)
+    size_t tip_segment;
+    /// m: scales the continuity test and the metric (a rod's L); 0 (default): the main axis's
+    /// length
+    double length;
+} cbm_plant_continuation_def;
+
+CBM_API cbm_plant_continuation_def cbm_plant_continuation_def_default(void);
+
+/// The tip segment of the main axis: from the root, each segment's continuation child (its
+/// first child) in turn; SIZE_MAX for an empty plant.
+CBM_API size_t cbm_plant_main_tip(const cbm_plant *plant);
+
+/// cbm_bend_continue for a plant with one root (segment 0) and any branching, which the caller
+/// builds (rest state, loads, rings): the same methods, stability count, fold and bifurcation
+/// events. The plant is changed: it is left at the last state traced, with the parameter's
+/// last value set. cbm_bend_continue is this with the plant its spec builds.
+CBM_API cbm_status cbm_plant_continue(cbm_context *ctx, cbm_plant *plant,
+                                      const cbm_plant_continuation_def *def, cbm_bend_branch *out);
 CBM_API void cbm_bend_branch_free(cbm_bend_branch *branch);
 
 #ifdef __cplusplus

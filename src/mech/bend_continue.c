@@ -1,6 +1,8 @@
 /* cambium: continuation of the bend rod's equilibria in a parameter (docs/bend.md,
- * "Continuation"): natural-parameter steps with warm starts and step halving, the stability of
- * every equilibrium, folds located by bisection on the parameter and the jump past each fold.
+ * "Continuation"), and of any plant with one clamp in its base angle or gravity
+ * (cbm_plant_continue; the rod is the plant its spec builds): natural-parameter steps with warm
+ * starts and step halving, the stability of every equilibrium, folds located by bisection on the
+ * parameter and the jump past each fold.
  *
  * Why natural-parameter steps and not arclength: the question a user asks of a plant is what it
  * does when the parameter moves one way (a clamp turned slowly, a load raised), and that is the
@@ -16,6 +18,7 @@
 #include "mech/mech_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -52,6 +55,16 @@ typedef struct param_ctx {
     double l0;    /* their sum */
 } param_ctx;
 
+/* What the trace needs beyond the parameter: the solve settings, the length that scales the
+ * continuity test and the metric, the segment whose tip is reported, and the bend spec when the
+ * plant is a bend rod (its loads give the moment scale; NULL for any other plant). */
+typedef struct cont_cfg {
+    const cbm_bend_spec *spec;
+    cbm_solve_def sd;
+    double length;
+    size_t tip;
+} cont_cfg;
+
 static cbm_status set_param(const param_ctx *c, cbm_plant *p, double v)
 {
     size_t n = cbm_plant_segment_count(p);
@@ -85,18 +98,13 @@ static cbm_status set_param(const param_ctx *c, cbm_plant *p, double v)
     return CBM_E_INVALID;
 }
 
-/* The solve settings of the spec, and the equilibrium at the sweep's start: both traces begin
- * there. */
-static cbm_status start_solve(cbm_context *ctx, const cbm_bend_spec *spec,
+/* The solve settings (the spec's, or the caller's for a plant), and the equilibrium at the
+ * sweep's start: both traces begin there. */
+static cbm_status start_solve(cbm_context *ctx, const cont_cfg *cfg,
                               const cbm_bend_continuation_def *d, const param_ctx *pc, cbm_plant *p,
                               cbm_solve_def *sd, cbm_solve_stats *ss)
 {
-    *sd = cbm_solve_def_default();
-    sd->solver = spec->solver;
-    sd->tolerance = spec->tolerance;
-    sd->max_passes = (size_t)spec->max_passes;
-    sd->krylov_dim = spec->krylov_dim;
-    sd->push_unstable = spec->push_unstable != 0;
+    *sd = cfg->sd;
     CBM_TRY(set_param(pc, p, d->from));
     cbm_status st = cbm_plant_solve(p, sd, ss);
     if (st == CBM_E_NOT_CONVERGED)
@@ -233,14 +241,14 @@ static cbm_status symmetry_mode(cbm_plant *p, bool *has, double *lambda2)
 }
 
 /* the branch point of the plant's current (solved) state; prev_deg unwraps the tip angle */
-static cbm_status read_point(cbm_plant *p, double param, double prev_deg, cbm_bend_branch_point *o)
+static cbm_status read_point(cbm_plant *p, size_t tip_seg, double param, double prev_deg,
+                             cbm_bend_branch_point *o)
 {
-    size_t n = cbm_plant_segment_count(p);
     cbm_segment_state tip, base;
-    CBM_TRY(cbm_plant_segment(p, n - 1, &tip));
+    CBM_TRY(cbm_plant_segment(p, tip_seg, &tip));
     CBM_TRY(cbm_plant_segment(p, 0, &base));
     cbm_quat q;
-    CBM_TRY(cbm_plant_distal_frame(p, n - 1, &q));
+    CBM_TRY(cbm_plant_distal_frame(p, tip_seg, &q));
     cbm_vec3 h = q_rotate(q, v3(1, 0, 0));
     double a = atan2(h.y, h.x) * 180.0 / CBM_PI;
     if (isfinite(prev_deg))
@@ -316,8 +324,7 @@ static void restore(cbm_plant *p, const cbm_vec3 *saved, size_t n)
         (void)cbm_plant_set_omega(p, i, saved[i]);
 }
 
-static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
-                            const cbm_bend_continuation_def *d)
+static cbm_status check_spec(cbm_context *ctx, const cbm_bend_spec *s)
 {
     if (s->solver != CBM_MECH_NEWTON)
         return cbm__fail(ctx, CBM_E_INVALID,
@@ -327,6 +334,11 @@ static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
         return cbm__fail(ctx, CBM_E_INVALID,
                          "bend continuation: a spec with growth `steps` or a motion `duration` "
                          "cannot be continued");
+    return CBM_OK;
+}
+
+static cbm_status check_def(cbm_context *ctx, const cbm_bend_continuation_def *d)
+{
     if (!(isfinite(d->from) && isfinite(d->to)) || d->from == d->to)
         return cbm__fail(ctx, CBM_E_INVALID, "bend continuation: FROM and TO must differ");
     if (d->param == CBM_BEND_PARAM_ANGLE && (fabs(d->from) > 360 || fabs(d->to) > 360))
@@ -355,18 +367,17 @@ static cbm_status check_def(cbm_context *ctx, const cbm_bend_spec *s,
     return CBM_OK;
 }
 
-static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
-                        const cbm_bend_continuation_def *d, const param_ctx *pc, cbm_plant *p,
-                        growbuf *g, cbm_vec3 *saved)
+static cbm_status trace(cbm_context *ctx, const cont_cfg *cfg, const cbm_bend_continuation_def *d,
+                        const param_ctx *pc, cbm_plant *p, growbuf *g, cbm_vec3 *saved)
 {
     size_t n = cbm_plant_segment_count(p);
     cbm_solve_def sd;
     cbm_solve_stats ss;
-    cbm_status st = start_solve(ctx, spec, d, pc, p, &sd, &ss);
+    cbm_status st = start_solve(ctx, cfg, d, pc, p, &sd, &ss);
     if (st != CBM_OK)
         return st;
     cbm_bend_branch_point cur;
-    CBM_TRY(read_point(p, d->from, NAN, &cur));
+    CBM_TRY(read_point(p, cfg->tip, d->from, NAN, &cur));
     CBM_TRY(push_point(g, &cur));
     sd.push_unstable = false; /* follow the branch, stable or not */
     const double range = d->to - d->from, dir = range > 0 ? 1.0 : -1.0;
@@ -387,12 +398,12 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
         memset(&np, 0, sizeof np);
         bool conv = st == CBM_OK;
         if (conv)
-            CBM_TRY(read_point(p, pn, cur.tip_angle_deg, &np));
+            CBM_TRY(read_point(p, cfg->tip, pn, cur.tip_angle_deg, &np));
         /* continuity: the tip turns in the plane and moves (also out of it) by at most what a
          * turn of max_turn_deg of the whole rod would give */
         bool cont = conv && fabs(np.tip_angle_deg - cur.tip_angle_deg) <= d->max_turn_deg &&
                     hypot(hypot(np.tip_x - cur.tip_x, np.tip_y - cur.tip_y),
-                          np.tip_z - cur.tip_z) <= spec->length * d->max_turn_deg * CBM_PI / 180.0;
+                          np.tip_z - cur.tip_z) <= cfg->length * d->max_turn_deg * CBM_PI / 180.0;
         /* a state that gains (or loses) a symmetry's zero mode has left the branch at a
          * bifurcation: the straight column past Greenhill's load, which the solver leaves for
          * the circle of buckled states, all neutral in the turn about the vertical */
@@ -441,7 +452,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
             return cbm__fail(ctx, st, "bend continuation: no equilibrium past the fold at %.9g",
                              pv);
         }
-        CBM_TRY(read_point(p, pj, cur.tip_angle_deg, &np));
+        CBM_TRY(read_point(p, cfg->tip, pj, cur.tip_angle_deg, &np));
         np.jumped = true;
         f.has_jump = true;
         f.jump = np;
@@ -474,7 +485,7 @@ static cbm_status trace(cbm_context *ctx, const cbm_bend_spec *spec,
 
 typedef struct arc {
     cbm_context *ctx;
-    const cbm_bend_spec *spec;
+    const cont_cfg *cfg;
     const cbm_bend_continuation_def *d;
     const param_ctx *pc;
     cbm_plant *p;
@@ -554,11 +565,18 @@ static cbm_status eval_at(arc *a, double lam, cbm_vec3 *out, double *relres)
     return CBM_OK;
 }
 
-/* the moment scale of the loads at parameter value v: (weight + tip force) L + tip moment */
+/* the moment scale of the loads at parameter value v: (weight + tip force) L + tip moment; a
+ * plant that is no bend rod: its weight times the length (point loads are not counted: the
+ * scale is only a floor under the moments present) */
 static cbm_status moment_scale(arc *a, double v, double *m)
 {
     CBM_TRY(set_param(a->pc, a->p, v));
-    const cbm_bend_spec *s = a->spec;
+    const cbm_bend_spec *s = a->cfg->spec;
+    if (!s) {
+        double g = sqrt(v3_norm2(cbm_plant_gravity(a->p)));
+        *m = cbm_plant_total_mass(a->p) * g * a->cfg->length;
+        return CBM_OK;
+    }
     double g = a->d->param == CBM_BEND_PARAM_GRAVITY ? v : s->gravity;
     double tl = a->d->param == CBM_BEND_PARAM_TIP_LOAD ? v : s->tip_load;
     double len = a->d->param == CBM_BEND_PARAM_LENGTH ? v : s->length;
@@ -669,12 +687,12 @@ static cbm_status step_to(arc *a, const apt *base, double ds, apt *x, int *iters
     CBM_TRY(correct(a, base, base->t, base->tl, ds, x, iters, ok));
     if (!*ok)
         return CBM_OK;
-    CBM_TRY(read_point(a->p, x->lam, base->pt.tip_angle_deg, &x->pt));
+    CBM_TRY(read_point(a->p, a->cfg->tip, x->lam, base->pt.tip_angle_deg, &x->pt));
     const cbm_bend_branch_point *u = &base->pt, *v = &x->pt;
     double turn = a->d->max_turn_deg;
     *ok = fabs(v->tip_angle_deg - u->tip_angle_deg) <= turn &&
           hypot(hypot(v->tip_x - u->tip_x, v->tip_y - u->tip_y), v->tip_z - u->tip_z) <=
-              a->spec->length * turn * CBM_PI / 180.0;
+              a->cfg->length * turn * CBM_PI / 180.0;
     if (*ok)
         CBM_TRY(tangent(a, x, base, 1.0));
     return CBM_OK;
@@ -719,11 +737,7 @@ static cbm_status refine(arc *a, const apt *cur, const apt *nxt, double ds, ev_k
 /* the jump target of a fold at lo: the rod solved just past it with the push */
 static cbm_status jump_from(arc *a, const apt *lo, double dir, cbm_bend_fold *f)
 {
-    cbm_solve_def sd = cbm_solve_def_default();
-    sd.solver = a->spec->solver;
-    sd.tolerance = a->spec->tolerance;
-    sd.max_passes = (size_t)a->spec->max_passes;
-    sd.krylov_dim = a->spec->krylov_dim;
+    cbm_solve_def sd = a->cfg->sd;
     sd.push_unstable = true;
     put_omega(a, lo->om);
     double pj = lo->lam + dir * fmax(a->d->min_step * a->range, 1e-3 * a->range / a->d->steps);
@@ -733,7 +747,7 @@ static cbm_status jump_from(arc *a, const apt *lo, double dir, cbm_bend_fold *f)
     if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
         return st;
     if (st == CBM_OK) {
-        CBM_TRY(read_point(a->p, pj, lo->pt.tip_angle_deg, &f->jump));
+        CBM_TRY(read_point(a->p, a->cfg->tip, pj, lo->pt.tip_angle_deg, &f->jump));
         f->jump.jumped = true;
         f->has_jump = true;
     }
@@ -773,7 +787,7 @@ static cbm_status switch_at(arc *a, apt *lo)
     put_omega(a, a->tmp);
     CBM_TRY(eval_at(a, lo->lam, a->res, NULL));
     cbm_segment_state tip, base;
-    CBM_TRY(cbm_plant_segment(a->p, n - 1, &tip));
+    CBM_TRY(cbm_plant_segment(a->p, a->cfg->tip, &tip));
     CBM_TRY(cbm_plant_segment(a->p, 0, &base));
     cbm_vec3 dx = v3_sub(v3_sub(tip.distal, base.proximal), x0);
     double side = fabs(dx.x) >= fabs(dx.z) ? dx.x : dx.z;
@@ -827,7 +841,7 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
             memset(lo->t, 0, a->n * sizeof *lo->t);
             CBM_TRY(correct(a, mid, lo->t, 1.0 / a->sigma, 0.0, hi, &it, &ok));
             if (ok) {
-                CBM_TRY(read_point(a->p, end, cur->pt.tip_angle_deg, &hi->pt));
+                CBM_TRY(read_point(a->p, a->cfg->tip, end, cur->pt.tip_angle_deg, &hi->pt));
                 CBM_TRY(push_point(a->g, &hi->pt));
             }
             b->end = past_to ? CBM_BEND_END_TO : CBM_BEND_END_FROM;
@@ -870,20 +884,20 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
     }
 }
 
-static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
+static cbm_status trace_arclength(cbm_context *ctx, const cont_cfg *cfg,
                                   const cbm_bend_continuation_def *d, const param_ctx *pc,
                                   cbm_plant *p, growbuf *g)
 {
     cbm_solve_def sd;
     cbm_solve_stats ss;
-    cbm_status st = start_solve(ctx, spec, d, pc, p, &sd, &ss);
+    cbm_status st = start_solve(ctx, cfg, d, pc, p, &sd, &ss);
     if (st != CBM_OK)
         return st;
     const size_t n = cbm_plant_segment_count(p);
-    arc a = {.ctx = ctx, .spec = spec, .d = d, .pc = pc, .p = p, .n = n, .g = g};
+    arc a = {.ctx = ctx, .cfg = cfg, .d = d, .pc = pc, .p = p, .n = n, .g = g};
     a.range = fabs(d->to - d->from);
     a.sigma = d->param == CBM_BEND_PARAM_ANGLE ? CBM_PI / 180.0 : 1.0 / a.range;
-    a.tol = spec->tolerance;
+    a.tol = cfg->sd.tolerance;
     {
         double m0 = 0.0, m1 = 0.0;
         st = moment_scale(&a, d->to, &m1);
@@ -900,7 +914,7 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
             in = fmax(in, fabs(om[i].y));
             out = fmax(out, fmax(fabs(om[i].x), fabs(om[i].z)));
         }
-        a.planar = out <= 1e-9 * (in + 1.0 / spec->length);
+        a.planar = out <= 1e-9 * (in + 1.0 / cfg->length);
     }
     if (n == 0) /* a spec builds at least one segment */
         return CBM_E_INVALID;
@@ -914,7 +928,7 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
     }
     const double *dual = p->work.dual;
     for (size_t i = 0; i < n; i++)
-        c[i] = dual[i] * spec->length;
+        c[i] = dual[i] * cfg->length;
     a.c = c;
     a.res = blk, a.rl = blk + n, a.va = blk + 2 * n, a.vb = blk + 3 * n, a.tmp = blk + 4 * n;
     apt pts[5];
@@ -926,7 +940,7 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
     apt *cur = &pts[0];
     memcpy(cur->om, cbm_plant_omegas(p), n * sizeof *cur->om);
     cur->lam = d->from;
-    st = read_point(a.p, d->from, NAN, &cur->pt);
+    st = read_point(a.p, cfg->tip, d->from, NAN, &cur->pt);
     if (st == CBM_OK)
         st = push_point(g, &cur->pt);
     if (st == CBM_OK)
@@ -938,17 +952,13 @@ static cbm_status trace_arclength(cbm_context *ctx, const cbm_bend_spec *spec,
     return st;
 }
 
-cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
-                             const cbm_bend_continuation_def *def, cbm_bend_branch *out)
+/* The trace of any plant p (its segment count fixed; p is left at the last state traced):
+ * the common path of cbm_bend_continue and cbm_plant_continue. */
+static cbm_status run(cbm_context *ctx, const cont_cfg *cfg, const cbm_bend_continuation_def *def,
+                      cbm_plant *p, cbm_bend_branch *out)
 {
-    if (!ctx || !spec || !def || !out)
-        return CBM_E_INVALID;
-    memset(out, 0, sizeof *out);
-    CBM_TRY(check_def(ctx, spec, def));
-    cbm_plant *p = NULL;
-    CBM_TRY(cbm_bend_build(ctx, spec, &p));
     size_t n = cbm_plant_segment_count(p);
-    param_ctx pc = {spec, def->param, NULL, n, 0.0};
+    param_ctx pc = {cfg->spec, def->param, NULL, n, 0.0};
     cbm_vec3 *saved = malloc(n * sizeof *saved);
     pc.len0 = malloc(n * sizeof *pc.len0);
     growbuf g = {out, 0, 0};
@@ -963,12 +973,104 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
         }
     }
     if (st == CBM_OK)
-        st = def->method == CBM_BEND_CONTINUE_NATURAL ? trace(ctx, spec, def, &pc, p, &g, saved)
-                                                      : trace_arclength(ctx, spec, def, &pc, p, &g);
+        st = def->method == CBM_BEND_CONTINUE_NATURAL ? trace(ctx, cfg, def, &pc, p, &g, saved)
+                                                      : trace_arclength(ctx, cfg, def, &pc, p, &g);
     free(saved);
     free(pc.len0);
-    cbm_plant_destroy(p);
     if (st != CBM_OK)
         cbm_bend_branch_free(out);
     return st;
+}
+
+cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
+                             const cbm_bend_continuation_def *def, cbm_bend_branch *out)
+{
+    if (!ctx || !spec || !def || !out)
+        return CBM_E_INVALID;
+    memset(out, 0, sizeof *out);
+    CBM_TRY(check_spec(ctx, spec));
+    CBM_TRY(check_def(ctx, def));
+    cbm_plant *p = NULL;
+    CBM_TRY(cbm_bend_build(ctx, spec, &p));
+    size_t n = cbm_plant_segment_count(p);
+    cont_cfg cfg = {.spec = spec, .sd = cbm_solve_def_default(), .length = spec->length};
+    cfg.sd.solver = spec->solver;
+    cfg.sd.tolerance = spec->tolerance;
+    cfg.sd.max_passes = (size_t)spec->max_passes;
+    cfg.sd.krylov_dim = spec->krylov_dim;
+    cfg.sd.push_unstable = spec->push_unstable != 0;
+    cfg.tip = n - 1;
+    cbm_status st = run(ctx, &cfg, def, p, out);
+    cbm_plant_destroy(p);
+    return st;
+}
+
+cbm_plant_continuation_def cbm_plant_continuation_def_default(void)
+{
+    cbm_plant_continuation_def d;
+    memset(&d, 0, sizeof d);
+    d.cont = cbm_bend_continuation_def_default();
+    d.solve = cbm_solve_def_default();
+    d.solve.solver = CBM_MECH_NEWTON;
+    d.tip_segment = SIZE_MAX;
+    return d;
+}
+
+size_t cbm_plant_main_tip(const cbm_plant *p)
+{
+    size_t n = cbm_plant_segment_count(p);
+    const int64_t *par = cbm_plant_parents(p);
+    if (n == 0 || !par)
+        return SIZE_MAX;
+    /* topological order: the continuation child of the axis' last segment comes after it */
+    size_t last = 0;
+    for (size_t i = 1; i < n; i++) {
+        cbm_segment_state s;
+        if (par[i] == (int64_t)last && cbm_plant_segment(p, i, &s) == CBM_OK && s.continuation)
+            last = i;
+    }
+    return last;
+}
+
+cbm_status cbm_plant_continue(cbm_context *ctx, cbm_plant *plant,
+                              const cbm_plant_continuation_def *def, cbm_bend_branch *out)
+{
+    if (!ctx || !plant || !def || !out)
+        return CBM_E_INVALID;
+    memset(out, 0, sizeof *out);
+    size_t n = cbm_plant_segment_count(plant);
+    if (n == 0)
+        return cbm__fail(ctx, CBM_E_INVALID, "plant continuation: the plant has no segment");
+    if (def->solve.solver != CBM_MECH_NEWTON)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "plant continuation: needs the Newton solver (the stability count comes "
+                         "from its tree factorisation)");
+    if (def->cont.param != CBM_BEND_PARAM_ANGLE && def->cont.param != CBM_BEND_PARAM_GRAVITY)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "plant continuation: only the base angle and gravity can be continued "
+                         "in a plant built by the caller");
+    const int64_t *par = cbm_plant_parents(plant);
+    for (size_t i = 1; i < n; i++)
+        if (par[i] < 0)
+            return cbm__fail(ctx, CBM_E_INVALID,
+                             "plant continuation: segment %zu is a second root (one clamp only)",
+                             i);
+    if (par[0] >= 0)
+        return cbm__fail(ctx, CBM_E_INVALID, "plant continuation: segment 0 is not the root");
+    if (def->tip_segment != SIZE_MAX && def->tip_segment >= n)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "plant continuation: tip_segment %zu is beyond the %zu segments",
+                         def->tip_segment, n);
+    if (!(def->length >= 0.0) || !isfinite(def->length))
+        return cbm__fail(ctx, CBM_E_INVALID, "plant continuation: length must be >= 0");
+    CBM_TRY(check_def(ctx, &def->cont));
+    cont_cfg cfg = {.spec = NULL, .sd = def->solve, .length = def->length};
+    cfg.tip = def->tip_segment == SIZE_MAX ? cbm_plant_main_tip(plant) : def->tip_segment;
+    if (cfg.length == 0.0) /* the main axis's length: the rod's L of a single rod */
+        for (int64_t i = (int64_t)cbm_plant_main_tip(plant); i >= 0; i = par[i]) {
+            cbm_segment_state s;
+            CBM_TRY(cbm_plant_segment(plant, (size_t)i, &s));
+            cfg.length += s.length;
+        }
+    return run(ctx, &cfg, &def->cont, plant, out);
 }
