@@ -73,6 +73,10 @@ typedef struct glb {
     CBM_ARRAY(node) nodes;
     CBM_ARRAY(size_t) children;
     bool organ_used[CBM_ORGAN_COUNT];
+    /* scratch of add_scene_groups, kept from frame to frame and from the measuring pass to the
+     * streaming one: its pages are touched once, not once a pass */
+    CBM_ARRAY(uint32_t) remap, verts, idx;
+    CBM_ARRAY(float) fbuf;
 } glb;
 
 static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
@@ -161,14 +165,18 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     if ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
-    remap = cbm__alloc(ctx, (nv ? nv : 1) * sizeof *remap);
-    verts = cbm__alloc(ctx, cap_v * sizeof *verts);
-    idx = cbm__alloc(ctx, cap_v * sizeof *idx);
-    fbuf = cbm__alloc(ctx, cap_v * 4 * sizeof *fbuf);
-    if (!remap || !verts || !idx || !fbuf) {
-        st = CBM_E_NOMEM;
+    if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
         goto done;
-    }
+    remap = g->remap.data;
+    verts = g->verts.data;
+    idx = g->idx.data;
+    fbuf = g->fbuf.data;
+    /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
+    for (size_t i = 0; i < 4 * np; i++)
+        col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
     *first_child = g->children.len;
     *count = 0;
     /* groups in a fixed order: branch orders, then the organs */
@@ -210,8 +218,7 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             goto done;
         for (size_t i = 0; fill && i < nvg; i++)
             for (int k = 0; k < 4; k++)
-                fbuf[4 * i + (size_t)k] =
-                    fminf(1.0f, fmaxf(0.0f, col[4 * vpart[verts[i]] + (size_t)k]));
+                fbuf[4 * i + (size_t)k] = col[4 * vpart[verts[i]] + (size_t)k];
         if ((st = add_accessor(g, fbuf, nvg, 4, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.col)) !=
             CBM_OK)
             goto done;
@@ -251,10 +258,6 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
 done:
     cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
     cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
-    cbm__free(ctx, remap, (nv ? nv : 1) * sizeof *remap);
-    cbm__free(ctx, verts, cap_v * sizeof *verts);
-    cbm__free(ctx, idx, cap_v * sizeof *idx);
-    cbm__free(ctx, fbuf, cap_v * 4 * sizeof *fbuf);
     return st;
 }
 
@@ -481,6 +484,10 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.nodes);
     CBM_ARRAY_FREE(ctx, a->g.children);
     CBM_ARRAY_FREE(ctx, a->frames);
+    CBM_ARRAY_FREE(ctx, a->g.remap);
+    CBM_ARRAY_FREE(ctx, a->g.verts);
+    CBM_ARRAY_FREE(ctx, a->g.idx);
+    CBM_ARRAY_FREE(ctx, a->g.fbuf);
     cbm__free(ctx, a, sizeof *a);
 }
 
