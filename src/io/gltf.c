@@ -54,26 +54,47 @@ typedef struct node {
     bool frame;
 } node;
 
+/* Where the BIN chunk goes: kept in memory (an animation built frame by frame, whose scenes may
+ * be gone when it is written), only measured (the first of the two passes of a direct write: the
+ * JSON needs every offset and bound before the first byte of BIN), or streamed to the file (the
+ * second pass, the same calls again). Streaming spares a buffer as large as the file. */
+typedef enum { BIN_MEMORY, BIN_MEASURE, BIN_STREAM } bin_mode;
+
 typedef struct glb {
     cbm_context *ctx;
     const cbm_write_options *o;
-    CBM_ARRAY(uint8_t) bin;
+    CBM_ARRAY(uint8_t) bin; /* BIN_MEMORY only */
+    size_t bin_len;         /* bytes of BIN so far, in every mode */
+    bin_mode mode;
+    cbm_out *sink; /* BIN_STREAM only */
     CBM_ARRAY(accessor) acc;
     CBM_ARRAY(view) views;
     CBM_ARRAY(mesh) meshes;
     CBM_ARRAY(node) nodes;
     CBM_ARRAY(size_t) children;
     bool organ_used[CBM_ORGAN_COUNT];
+    /* scratch of add_scene_groups, kept from frame to frame and from the measuring pass to the
+     * streaming one: its pages are touched once, not once a pass */
+    CBM_ARRAY(uint32_t) remap, verts, idx;
+    CBM_ARRAY(float) fbuf;
 } glb;
 
 static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
 {
-    size_t off = (g->bin.len + 3) & ~(size_t)3;
-    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
-    memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
-    if (bytes)
-        memcpy(g->bin.data + off, data, bytes);
-    g->bin.len = off + bytes;
+    size_t off = (g->bin_len + 3) & ~(size_t)3;
+    if (g->mode == BIN_MEMORY) {
+        CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
+        memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
+        if (bytes)
+            memcpy(g->bin.data + off, data, bytes);
+        g->bin.len = off + bytes;
+    } else if (g->mode == BIN_STREAM) {
+        const uint8_t zero[4] = {0, 0, 0, 0};
+        cbm_out_write(g->sink, zero, off - g->bin_len); /* errors surface at commit */
+        if (bytes)
+            cbm_out_write(g->sink, data, bytes);
+    }
+    g->bin_len = off + bytes;
     view v = {off, bytes, target};
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->views, v));
     *id = g->views.len - 1;
@@ -144,14 +165,18 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     if ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
-    remap = cbm__alloc(ctx, (nv ? nv : 1) * sizeof *remap);
-    verts = cbm__alloc(ctx, cap_v * sizeof *verts);
-    idx = cbm__alloc(ctx, cap_v * sizeof *idx);
-    fbuf = cbm__alloc(ctx, cap_v * 4 * sizeof *fbuf);
-    if (!remap || !verts || !idx || !fbuf) {
-        st = CBM_E_NOMEM;
+    if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
         goto done;
-    }
+    remap = g->remap.data;
+    verts = g->verts.data;
+    idx = g->idx.data;
+    fbuf = g->fbuf.data;
+    /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
+    for (size_t i = 0; i < 4 * np; i++)
+        col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
     *first_child = g->children.len;
     *count = 0;
     /* groups in a fixed order: branch orders, then the organs */
@@ -181,7 +206,8 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             memcpy(fbuf + 3 * i, v[verts[i]].p, 3 * sizeof(float));
         if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, true, &m.pos)) != CBM_OK)
             goto done;
-        for (size_t i = 0; i < nvg; i++) {
+        bool fill = g->mode != BIN_MEASURE; /* measuring needs the bounds of POSITION only */
+        for (size_t i = 0; fill && i < nvg; i++) {
             const float *n = v[verts[i]].n;
             double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
             for (int k = 0; k < 3; k++)
@@ -190,16 +216,15 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.nrm)) !=
             CBM_OK)
             goto done;
-        for (size_t i = 0; i < nvg; i++)
+        for (size_t i = 0; fill && i < nvg; i++)
             for (int k = 0; k < 4; k++)
-                fbuf[4 * i + (size_t)k] =
-                    fminf(1.0f, fmaxf(0.0f, col[4 * vpart[verts[i]] + (size_t)k]));
+                fbuf[4 * i + (size_t)k] = col[4 * vpart[verts[i]] + (size_t)k];
         if ((st = add_accessor(g, fbuf, nvg, 4, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.col)) !=
             CBM_OK)
             goto done;
         size_t *dst[5] = {&m.stress, &m.age, &m.react, &m.order, &m.seg};
         for (int q = 0; q < 5; q++) {
-            for (size_t i = 0; i < nvg; i++) {
+            for (size_t i = 0; fill && i < nvg; i++) {
                 const cbm_part *p = &parts[vpart[verts[i]]];
                 double x = q == 0   ? p->stress_ratio
                            : q == 1 ? p->age
@@ -233,10 +258,6 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
 done:
     cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
     cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
-    cbm__free(ctx, remap, (nv ? nv : 1) * sizeof *remap);
-    cbm__free(ctx, verts, cap_v * sizeof *verts);
-    cbm__free(ctx, idx, cap_v * sizeof *idx);
-    cbm__free(ctx, fbuf, cap_v * 4 * sizeof *fbuf);
     return st;
 }
 
@@ -377,7 +398,7 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
         cbm_json_end_array(j);
         cbm_json_begin_array(j, "buffers");
         cbm_json_begin_object(j, NULL);
-        cbm_json_int(j, "byteLength", (int64_t)((g->bin.len + 3) & ~(size_t)3));
+        cbm_json_int(j, "byteLength", (int64_t)((g->bin_len + 3) & ~(size_t)3));
         cbm_json_end_object(j);
         cbm_json_end_array(j);
     }
@@ -424,6 +445,8 @@ struct cbm_animation {
     cbm_write_options o;      /* a copy: g.o points here */
     CBM_ARRAY(size_t) frames; /* per frame: first group node in children, group count */
     bool animated, finished;
+    const cbm_scene *const *frame_src; /* a direct write's scenes (cbm_write_glb), NULL otherwise */
+    size_t frame_src_count;
 };
 
 cbm_status cbm_animation_create(cbm_context *ctx, const cbm_write_options *opts,
@@ -461,6 +484,10 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.nodes);
     CBM_ARRAY_FREE(ctx, a->g.children);
     CBM_ARRAY_FREE(ctx, a->frames);
+    CBM_ARRAY_FREE(ctx, a->g.remap);
+    CBM_ARRAY_FREE(ctx, a->g.verts);
+    CBM_ARRAY_FREE(ctx, a->g.idx);
+    CBM_ARRAY_FREE(ctx, a->g.fbuf);
     cbm__free(ctx, a, sizeof *a);
 }
 
@@ -550,65 +577,105 @@ static cbm_status finish(cbm_animation *a, size_t *root, long *anim_input, size_
     return st;
 }
 
+/* Opens the file and writes the GLB header, the JSON chunk and the BIN chunk's header for a BIN
+ * of g->bin_len bytes; the caller writes BIN, then bin_tail. */
+static cbm_status open_glb(glb *g, const char *path, const char *text, size_t tlen, cbm_out **out)
+{
+    size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin_len + 3) & ~(size_t)3;
+    size_t total = 12 + 8 + jpad + (bpad ? 8 + bpad : 0);
+    *out = NULL;
+    if (total > UINT32_MAX)
+        return cbm__fail(g->ctx, CBM_E_LIMIT, "%s: scene too large for a .glb (%zu bytes > 4 GiB)",
+                         path, total);
+    CBM_TRY(cbm_out_open(g->ctx, path, out));
+    uint8_t h[12];
+    /* the 4-byte magic, not a string */
+    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
+    memcpy(h, "glTF", 4);
+    le32(h + 4, 2);
+    le32(h + 8, (uint32_t)total);
+    cbm_out_write(*out, h, 12);
+    le32(h, (uint32_t)jpad);
+    /* a 4-byte chunk type, not a string */
+    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
+    memcpy(h + 4, "JSON", 4);
+    cbm_out_write(*out, h, 8);
+    cbm_out_write(*out, text, tlen);
+    cbm_out_write(*out, "   ", jpad - tlen);
+    if (bpad) {
+        le32(h, (uint32_t)bpad);
+        /* a 4-byte chunk type, not a string */
+        // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
+        memcpy(h + 4, "BIN\0", 4);
+        cbm_out_write(*out, h, 8);
+    }
+    return CBM_OK;
+}
+
+/* The zeros that pad BIN to a multiple of 4 bytes. */
+static void bin_tail(const glb *g, cbm_out *out)
+{
+    const uint8_t zero[4] = {0, 0, 0, 0};
+    size_t bpad = (g->bin_len + 3) & ~(size_t)3;
+    cbm_out_write(out, zero, bpad - g->bin_len);
+}
+
+/* The frame nodes and the JSON text of a finished animation (j holds the text). */
+static cbm_status finish_json(cbm_animation *a, cbm_json **j, const char **text, size_t *tlen)
+{
+    size_t root = 0, anim_first = 0, nframes = 0;
+    long anim_input = -1;
+    *j = NULL;
+    CBM_TRY(finish(a, &root, &anim_input, &anim_first, &nframes));
+    CBM_TRY(cbm_json_create(a->g.ctx, j));
+    write_json(&a->g, *j, root, anim_input, anim_first, nframes);
+    return cbm_json_text(*j, text, tlen);
+}
+
 cbm_status cbm_animation_write(cbm_animation *a, const char *path)
 {
     if (!a || !path || a->finished)
         return CBM_E_INVALID;
     a->finished = true;
     glb *g = &a->g;
-    cbm_context *ctx = g->ctx;
-    size_t root = 0, anim_first = 0, nframes = 0;
-    long anim_input = -1;
     cbm_json *j = NULL;
-    cbm_status st = finish(a, &root, &anim_input, &anim_first, &nframes);
-    if (st == CBM_OK)
-        st = cbm_json_create(ctx, &j);
     const char *text = NULL;
     size_t tlen = 0;
+    cbm_out *out = NULL;
+    cbm_status st = finish_json(a, &j, &text, &tlen);
+    if (st == CBM_OK)
+        st = open_glb(g, path, text, tlen, &out);
     if (st == CBM_OK) {
-        write_json(g, j, root, anim_input, anim_first, nframes);
-        st = cbm_json_text(j, &text, &tlen);
-    }
-    if (st == CBM_OK) {
-        size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin.len + 3) & ~(size_t)3;
-        size_t total = 12 + 8 + jpad + (bpad ? 8 + bpad : 0);
-        if (total > UINT32_MAX) {
-            st = cbm__fail(ctx, CBM_E_LIMIT, "%s: scene too large for a .glb (%zu bytes > 4 GiB)",
-                           path, total);
-        } else {
-            cbm_out *out;
-            st = cbm_out_open(ctx, path, &out);
-            if (st == CBM_OK) {
-                uint8_t h[12];
-                /* the 4-byte magic, not a string */
-                // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-                memcpy(h, "glTF", 4);
-                le32(h + 4, 2);
-                le32(h + 8, (uint32_t)total);
-                cbm_out_write(out, h, 12);
-                le32(h, (uint32_t)jpad);
-                /* a 4-byte chunk type, not a string */
-                // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-                memcpy(h + 4, "JSON", 4);
-                cbm_out_write(out, h, 8);
-                cbm_out_write(out, text, tlen);
-                cbm_out_write(out, "   ", jpad - tlen);
-                if (bpad) {
-                    le32(h, (uint32_t)bpad);
-                    /* a 4-byte chunk type, not a string */
-                    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-                    memcpy(h + 4, "BIN\0", 4);
-                    cbm_out_write(out, h, 8);
-                    cbm_out_write(out, g->bin.data, g->bin.len);
-                    const uint8_t zero[4] = {0, 0, 0, 0};
-                    cbm_out_write(out, zero, bpad - g->bin.len);
-                }
-                st = cbm_out_commit(out);
-            }
-        }
+        cbm_out_write(out, g->bin.data, g->bin.len);
+        bin_tail(g, out);
+        st = cbm_out_commit(out);
     }
     cbm_json_destroy(j);
     return st;
+}
+
+/* Adds the frames of a direct write (one scene, or the options' frames). */
+static cbm_status add_frames(cbm_animation *a, const cbm_scene *scene, const char *path)
+{
+    size_t nf = a->animated ? a->frame_src_count : 1;
+    for (size_t f = 0; f < nf; f++) {
+        const cbm_scene *s = a->animated ? a->frame_src[f] : scene;
+        if (!s)
+            return cbm__fail(a->g.ctx, CBM_E_INVALID, "%s: animation frame %zu has no scene", path,
+                             f);
+        CBM_TRY(cbm_animation_add_frame(a, s));
+    }
+    return CBM_OK;
+}
+
+/* Forgets what the measuring pass recorded, so that the streaming pass records it again. */
+static void rewind_glb(cbm_animation *a)
+{
+    glb *g = &a->g;
+    g->acc.len = g->views.len = g->meshes.len = g->nodes.len = g->children.len = 0;
+    a->frames.len = 0;
+    g->bin_len = 0;
+    memset(g->organ_used, 0, sizeof g->organ_used);
 }
 
 cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *path,
@@ -629,15 +696,41 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
     /* cbm_animation_create set a (CBM_TRY returned otherwise) */
     // NOLINTNEXTLINE(clang-analyzer-core.NullDereference)
     a->animated = anim;
-    cbm_status st = CBM_OK;
-    size_t nf = anim ? o->frame_count : 1;
-    for (size_t f = 0; f < nf && st == CBM_OK; f++) {
-        const cbm_scene *s = anim ? o->frames[f] : scene;
-        st = s ? cbm_animation_add_frame(a, s)
-               : cbm__fail(ctx, CBM_E_INVALID, "%s: animation frame %zu has no scene", path, f);
-    }
+    a->frame_src = anim ? o->frames : NULL;
+    a->frame_src_count = anim ? o->frame_count : 0;
+    /* Every scene is at hand: measure BIN in a first pass (for the JSON), then stream it. */
+    glb *g = &a->g;
+    g->mode = BIN_MEASURE;
+    cbm_json *j = NULL;
+    const char *text = NULL;
+    size_t tlen = 0;
+    cbm_out *out = NULL;
+    cbm_status st = add_frames(a, scene, path);
     if (st == CBM_OK)
-        st = cbm_animation_write(a, path);
+        st = finish_json(a, &j, &text, &tlen);
+    if (st == CBM_OK)
+        st = open_glb(g, path, text, tlen, &out);
+    size_t measured = g->bin_len;
+    if (st == CBM_OK) {
+        rewind_glb(a);
+        g->mode = BIN_STREAM;
+        g->sink = out;
+        st = add_frames(a, scene, path);
+        size_t root = 0, anim_first = 0, nframes = 0;
+        long anim_input = -1;
+        if (st == CBM_OK)
+            st = finish(a, &root, &anim_input, &anim_first, &nframes);
+        if (st == CBM_OK && g->bin_len != measured)
+            st = cbm__fail(ctx, CBM_E_INTERNAL, "%s: BIN chunk of %zu bytes measured as %zu", path,
+                           g->bin_len, measured);
+        if (st == CBM_OK) {
+            bin_tail(g, out);
+            st = cbm_out_commit(out);
+        } else {
+            cbm_out_abort(out);
+        }
+    }
+    cbm_json_destroy(j);
     cbm_animation_destroy(a);
     return st;
 }
