@@ -112,24 +112,6 @@ static cbm_status start_solve(cbm_context *ctx, const cont_cfg *cfg,
     return st;
 }
 
-/* S-weighted dot product */
-static double sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b)
-{
-    const cbm_vec3 *c = p->work.cj;
-    double s = 0.0;
-    for (size_t i = 0; i < p->n; i++)
-        s += c[i].x * a[i].x * b[i].x + c[i].y * a[i].y * b[i].y + c[i].z * a[i].z * b[i].z;
-    return s;
-}
-
-/* v -= (g.S v / g.S g) g: v S-orthogonal to g */
-static void deflate(const cbm_plant *p, const cbm_vec3 *g, double gg, cbm_vec3 *v)
-{
-    double f = sdot(p, g, v) / gg;
-    for (size_t i = 0; i < p->n; i++)
-        v[i] = v3_sub(v[i], v3_scale(g[i], f));
-}
-
 /* The lowest eigenvalue of S^-1 J on the S-orthogonal complement of g (NaN if none found):
  * shifted inverse iteration as cbm__mech_lowest_mode, each iterate deflated. */
 static cbm_status inverse_iteration(cbm_plant *p, const cbm_vec3 *g, double gg, bool nearest,
@@ -156,48 +138,19 @@ static cbm_status inverse_iteration(cbm_plant *p, const cbm_vec3 *g, double gg, 
         if (cbm__mech_tree_factor(p, 0.0, NULL) != 0)
             return CBM_OK; /* a singular pivot: exactly on the bifurcation */
     }
-    while (!nearest) {
-        size_t nonpd = 0;
-        size_t sing = cbm__mech_tree_factor(p, mu, &nonpd);
-        if (sing == 0 && nonpd == 0)
-            break;
-        mu = mu < 0.05 ? 0.05 : 2.0 * mu;
-        if (mu > 1e6)
-            return CBM_OK;
-    }
+    size_t passes = 0;
+    if (!nearest && !cbm__mech_shift_until_definite(p, &mu, &passes))
+        return CBM_OK;
     cbm_vec3 *v = malloc(3 * n * sizeof *v);
     if (!v)
         return CBM_E_NOMEM;
     cbm_vec3 *b = v + n, *x = b + n;
     for (size_t i = 0; i < n; i++)
         v[i] = v3(0.01 / w->cj[i].x, 1.0 / w->cj[i].y, 0.01 / w->cj[i].z);
-    if (g)
-        deflate(p, g, gg, v);
-    double theta = NAN, nv = sqrt(sdot(p, v, v));
-    for (size_t i = 0; i < n && nv > 0.0; i++)
-        v[i] = v3_scale(v[i], 1.0 / nv);
-    for (int it = 0; it < 300 && nv > 0.0; it++) {
-        for (size_t i = 0; i < n; i++)
-            b[i] = v3(w->cj[i].x * v[i].x, w->cj[i].y * v[i].y, w->cj[i].z * v[i].z);
-        cbm__mech_tree_apply(p, b, x);
-        if (g)
-            deflate(p, g, gg, x);
-        double xs = sdot(p, x, x), vx = sdot(p, v, x);
-        if (!(xs > 0.0) || !isfinite(xs))
-            break;
-        double th = vx / xs, nx = sqrt(xs), change = 0.0;
-        for (size_t i = 0; i < n; i++) {
-            cbm_vec3 nvi = v3_scale(x[i], (vx < 0.0 ? -1.0 : 1.0) / nx);
-            cbm_vec3 d = v3_sub(nvi, v[i]);
-            change += w->cj[i].x * d.x * d.x + w->cj[i].y * d.y * d.y + w->cj[i].z * d.z * d.z;
-            v[i] = nvi;
-        }
-        bool settled =
-            isfinite(theta) && fabs(th - theta) <= 1e-12 * (fabs(th) + mu) && sqrt(change) < 1e-6;
-        theta = th;
-        if (settled)
-            break;
-    }
+    double theta = NAN;
+    bool ok = true;
+    cbm__mech_inverse_def d = {.mu = mu, .g = g, .gg = gg, .max_it = 300};
+    cbm__mech_inverse_iteration(p, &d, v, b, x, &theta, &ok);
     if (mode)
         memcpy(mode, v, n * sizeof *mode);
     free(v);
@@ -225,7 +178,7 @@ static cbm_status symmetry_mode(cbm_plant *p, bool *has, double *lambda2)
     *lambda2 = NAN;
     for (size_t i = 0; i < n; i++)
         g[i] = v3(0.0, -p->omega[i].z, p->omega[i].y);
-    double gg = sdot(p, g, g);
+    double gg = cbm__mech_sdot(p, g, g);
     if (!(gg > 0.0)) /* a straight rod: no circle, its zero modes are bucklings */
         return CBM_OK;
     cbm__mech_jvp(p, g, jg);

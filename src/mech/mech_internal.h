@@ -220,6 +220,25 @@ double cbm__mech_energy(const cbm_plant *p);
 /// eigenvector (Omega components) goes to `mode` (n entries). Uses work.step and work.tmp.
 /// Returns the factor-and-solve passes taken; *lambda is NaN if it failed.
 size_t cbm__mech_lowest_mode(cbm_plant *p, cbm_vec3 *mode, double *lambda);
+/// S-weighted dot product a . S b (S = diag of the joints' rigidities, work.cj).
+double cbm__mech_sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b);
+/// v -= (g.S v / g.S g) g: v made S-orthogonal to g (gg = g.S g).
+void cbm__mech_deflate(const cbm_plant *p, const cbm_vec3 *g, double gg, cbm_vec3 *v);
+/// Factors J + mu S with mu = 0, then 0.05, doubling, until every pivot is positive definite;
+/// false once mu passes 1e6 (no usable factorisation). *passes counts the factorisations.
+bool cbm__mech_shift_until_definite(cbm_plant *p, double *mu, size_t *passes);
+typedef struct cbm__mech_inverse_def {
+    double mu;         ///< the shift the factorisation was made with
+    const cbm_vec3 *g; ///< when not NULL, every iterate is made S-orthogonal to g
+    double gg;         ///< g.S g
+    int max_it;        ///< iterations at most
+} cbm__mech_inverse_def;
+/// Shifted inverse iteration v <- (J + mu S)^-1 S v with the factorisation the caller made.
+/// v: the start on entry (any scale), the S-normalised iterate on return; b, x: n scratch
+/// vectors each. *theta: the last Rayleigh quotient of S^-1 (J + mu S), NaN if none; *ok is
+/// false when an iterate broke down (zero or not finite). Returns the solves taken.
+size_t cbm__mech_inverse_iteration(cbm_plant *p, const cbm__mech_inverse_def *d, cbm_vec3 *v,
+                                   cbm_vec3 *b, cbm_vec3 *x, double *theta, bool *ok);
 /// Largest frame rotation (rad) a change `v` of Omega causes (tangent forward sweep).
 double cbm__mech_mode_turn(cbm_plant *p, const cbm_vec3 *v);
 

@@ -61,14 +61,83 @@ double cbm__mech_mode_turn(cbm_plant *p, const cbm_vec3 *v)
     return sqrt(t);
 }
 
-/* S-weighted dot product */
-static double sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b)
+double cbm__mech_sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b)
 {
     const cbm_vec3 *c = p->work.cj;
     double s = 0.0;
     for (size_t i = 0; i < p->n; i++)
         s += c[i].x * a[i].x * b[i].x + c[i].y * a[i].y * b[i].y + c[i].z * a[i].z * b[i].z;
     return s;
+}
+
+void cbm__mech_deflate(const cbm_plant *p, const cbm_vec3 *g, double gg, cbm_vec3 *v)
+{
+    double f = cbm__mech_sdot(p, g, v) / gg;
+    for (size_t i = 0; i < p->n; i++)
+        v[i] = v3_sub(v[i], v3_scale(g[i], f));
+}
+
+bool cbm__mech_shift_until_definite(cbm_plant *p, double *mu, size_t *passes)
+{
+    *mu = 0.0;
+    for (;;) {
+        size_t nonpd = 0;
+        size_t sing = cbm__mech_tree_factor(p, *mu, &nonpd);
+        ++*passes;
+        if (sing == 0 && nonpd == 0)
+            return true;
+        *mu = *mu < 0.05 ? 0.05 : 2.0 * *mu;
+        if (*mu > 1e6)
+            return false;
+    }
+}
+
+size_t cbm__mech_inverse_iteration(cbm_plant *p, const cbm__mech_inverse_def *d, cbm_vec3 *v,
+                                   cbm_vec3 *b, cbm_vec3 *x, double *theta, bool *ok)
+{
+    const cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    size_t passes = 0;
+    *theta = NAN;
+    *ok = true;
+    if (d->g)
+        cbm__mech_deflate(p, d->g, d->gg, v);
+    double nv = sqrt(cbm__mech_sdot(p, v, v));
+    if (!(nv > 0.0))
+        return passes;
+    for (size_t i = 0; i < n; i++)
+        v[i] = v3_scale(v[i], 1.0 / nv);
+    for (int it = 0; it < d->max_it; it++) {
+        /* x = (J + mu S)^-1 S v */
+        for (size_t i = 0; i < n; i++)
+            b[i] = v3(w->cj[i].x * v[i].x, w->cj[i].y * v[i].y, w->cj[i].z * v[i].z);
+        cbm__mech_tree_apply(p, b, x);
+        passes++;
+        if (d->g)
+            cbm__mech_deflate(p, d->g, d->gg, x);
+        /* Rayleigh quotient of the shifted inverse: (x.S x) / (v.S x) = 1 / theta */
+        double xs = cbm__mech_sdot(p, x, x), vx = cbm__mech_sdot(p, v, x);
+        if (!(xs > 0.0) || !isfinite(xs)) {
+            *ok = false;
+            return passes;
+        }
+        double th = vx / xs; /* eigenvalue of S^-1 (J + mu S) */
+        double nx = sqrt(xs);
+        double change = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            cbm_vec3 nvi = v3_scale(x[i], (vx < 0.0 ? -1.0 : 1.0) / nx);
+            cbm_vec3 dv = v3_sub(nvi, v[i]);
+            change +=
+                w->cj[i].x * dv.x * dv.x + w->cj[i].y * dv.y * dv.y + w->cj[i].z * dv.z * dv.z;
+            v[i] = nvi;
+        }
+        bool settled = isfinite(*theta) && fabs(th - *theta) <= 1e-12 * (fabs(th) + d->mu) &&
+                       sqrt(change) < 1e-6;
+        *theta = th;
+        if (settled)
+            break;
+    }
+    return passes;
 }
 
 size_t cbm__mech_lowest_mode(cbm_plant *p, cbm_vec3 *mode, double *lambda)
@@ -80,52 +149,21 @@ size_t cbm__mech_lowest_mode(cbm_plant *p, cbm_vec3 *mode, double *lambda)
     /* the shift: every pivot of J + mu S positive definite (then J + mu S is, for D J
      * symmetric, and inverse iteration finds the lowest eigenvalue) */
     double mu = 0.0;
-    for (;;) {
-        size_t nonpd = 0;
-        size_t sing = cbm__mech_tree_factor(p, mu, &nonpd);
-        passes++;
-        if (sing == 0 && nonpd == 0)
-            break;
-        mu = mu < 0.05 ? 0.05 : 2.0 * mu;
-        if (mu > 1e6)
-            return passes;
-    }
+    if (!cbm__mech_shift_until_definite(p, &mu, &passes))
+        return passes;
     /* start: a fixed, deliberately unequal mix of the components of every joint, S-normalised
      * (deterministic): a degenerate pair of modes (a round column buckles in any plane) then
      * resolves (to 1 %) towards bending about L, the vertical plane of a clamp from
      * cbm_mech_clamp_orientation */
-    cbm_vec3 *v = w->tmp, *x = w->step;
+    cbm_vec3 *v = w->tmp, *b = w->step;
     for (size_t i = 0; i < n; i++)
         v[i] = v3(0.01 / w->cj[i].x, 1.0 / w->cj[i].y, 0.01 / w->cj[i].z);
-    double nv = sqrt(sdot(p, v, v));
-    for (size_t i = 0; i < n; i++)
-        v[i] = v3_scale(v[i], 1.0 / nv);
     double theta = NAN;
-    for (int it = 0; it < 200; it++) {
-        /* x = (J + mu S)^-1 S v */
-        for (size_t i = 0; i < n; i++)
-            x[i] = v3(w->cj[i].x * v[i].x, w->cj[i].y * v[i].y, w->cj[i].z * v[i].z);
-        cbm__mech_tree_apply(p, x, mode);
-        passes++;
-        /* Rayleigh quotient of the shifted inverse: (x.S x) / (v.S x) = 1 / theta */
-        double xs = sdot(p, mode, mode), vx = sdot(p, v, mode);
-        if (!(xs > 0.0) || !isfinite(xs))
-            return passes;
-        double th = vx / xs; /* eigenvalue of S^-1 (J + mu S) */
-        double nx = sqrt(xs);
-        double change = 0.0;
-        for (size_t i = 0; i < n; i++) {
-            cbm_vec3 nvi = v3_scale(mode[i], (vx < 0.0 ? -1.0 : 1.0) / nx);
-            cbm_vec3 d = v3_sub(nvi, v[i]);
-            change += w->cj[i].x * d.x * d.x + w->cj[i].y * d.y * d.y + w->cj[i].z * d.z * d.z;
-            v[i] = nvi;
-        }
-        bool settled =
-            isfinite(theta) && fabs(th - theta) <= 1e-12 * (fabs(th) + mu) && sqrt(change) < 1e-6;
-        theta = th;
-        if (settled)
-            break;
-    }
+    bool ok = true;
+    cbm__mech_inverse_def d = {.mu = mu, .max_it = 200};
+    passes += cbm__mech_inverse_iteration(p, &d, v, b, mode, &theta, &ok);
+    if (!ok)
+        return passes;
     memcpy(mode, v, n * sizeof *mode);
     *lambda = theta - mu;
     return passes;
