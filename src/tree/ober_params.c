@@ -160,19 +160,6 @@ static const param *find(const char *name, size_t len)
     return NULL;
 }
 
-static bool parse_real(const char *s, double *out)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    while (*end == ' ' || *end == '\t')
-        end++;
-    if (end == s || *end || errno == ERANGE || !isfinite(v))
-        return false;
-    *out = v;
-    return true;
-}
-
 /* `{a, b, c}` or `a b c` */
 static bool parse_list(const char *s, double *v, int *n, double lo, double hi, char *err, size_t en)
 {
@@ -246,7 +233,7 @@ static cbm_status set_param(const param *pm, int index, cbm_ober_def *d, const c
     }
     case K_INT:
     case K_REAL:
-        if (!parse_real(value, &v) || (pm->k == K_INT && v != floor(v))) {
+        if (!cbm__param_real(value, &v) || (pm->k == K_INT && v != floor(v))) {
             snprintf(err, en, "expected %s", pm->k == K_INT ? "an integer" : "a number");
             return CBM_E_INVALID;
         }

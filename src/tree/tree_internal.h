@@ -94,5 +94,8 @@ typedef struct cbm__param_lines {
     int line;
 } cbm__param_lines;
 bool cbm__param_next(cbm__param_lines *it, const char **l, size_t *i, size_t *m);
+/* A parameter value as a finite double (trailing blanks allowed, nothing else): false if it is
+ * not one (both readers). */
+bool cbm__param_real(const char *s, double *out);
 
 #endif

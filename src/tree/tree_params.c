@@ -286,7 +286,7 @@ static const param *find(const char *name, size_t len)
     return NULL;
 }
 
-static bool parse_num(const char *s, double *out)
+bool cbm__param_real(const char *s, double *out)
 {
     char *end;
     errno = 0;
@@ -413,7 +413,7 @@ static cbm_status set_param(const param *pm, cbm_tree_def *d, const char *value,
     default:
         break;
     }
-    if (!parse_num(value, &v)) {
+    if (!cbm__param_real(value, &v)) {
         snprintf(err, errsize, "'%s' is not a number", value);
         return CBM_E_INVALID;
     }
