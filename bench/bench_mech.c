@@ -182,9 +182,12 @@ typedef struct run {
     double seconds, residual;
 } run;
 
+static int threads = 0; /* the solver's default: one per processor */
+
 static run solve(cbm_plant *p, cbm_mech_solver s, double alpha, double tol, size_t max_passes)
 {
     cbm_solve_def d = cbm_solve_def_default();
+    d.threads = threads;
     d.solver = s;
     d.alpha = alpha;
     d.tolerance = tol;
@@ -211,7 +214,6 @@ int main(int argc, char **argv)
     const char *out = "bench_mech.csv";
     double tol = 1e-8;
     const char *only = NULL;
-    int threads = 0; /* the solver's default: one per processor */
     bool fast_only = false;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--max") && i + 1 < argc)
@@ -234,7 +236,6 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    cbm__mech_tree_threads(threads, 50000);
     cbm_context *ctx = NULL;
     if (cbm_context_create(NULL, &ctx) != CBM_OK)
         return 1;

@@ -66,13 +66,14 @@ typedef struct result {
 static result solve_with(size_t n, double E, double leaf, bool chain, int threads)
 {
     result r = {0};
-    cbm__mech_tree_threads(threads, 0);
+    cbm__mech_tree_min_segments(0);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
     cbm_plant *p = random_tree(ctx, n, E, leaf, chain);
     if (p) {
         cbm_solve_def d = cbm_solve_def_default();
         d.warm_start = false;
+        d.threads = threads;
         cbm_solve_stats st;
         CHECK_OK(cbm_plant_solve(p, &d, &st));
         r.n = p->n;
@@ -89,7 +90,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
         cbm_plant_destroy(p);
     }
     cbm_context_destroy(ctx);
-    cbm__mech_tree_threads(0, 50000); /* the defaults */
+    cbm__mech_tree_min_segments(50000); /* the default */
     return r;
 }
 
