@@ -204,13 +204,14 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 
 /* ---- prepare ---- */
 
-void cbm__mech_prepare(cbm_plant *p)
+/* The joint arrays of segments [lo, hi). */
+static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
 {
     cbm__mech_work *w = &p->work;
     double s = p->load_scale;
     cbm_vec3 g = v3_scale(p->gravity, s);
     bool stag = p->disc == CBM_MECH_STAGGERED;
-    for (size_t i = 0; i < p->n; i++) {
+    for (size_t i = lo; i < hi; i++) {
         double l = p->len[i];
         int64_t pa = p->parent[i];
         w->wown[i] = v3_scale(g, p->mpl[i] * l);
@@ -241,13 +242,60 @@ void cbm__mech_prepare(cbm_plant *p)
             w->rj[i] = v3_scale(v3_add(v3_scale(rp, 0.5 * lp), v3_scale(ri, 0.5 * l)), 1.0 / d);
             w->lever[i] = 0.5 * l;
         }
-    }
-    /* carried mass (independent of the shape) */
-    for (size_t i = p->n; i-- > 0;)
         p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
-    for (size_t i = p->n; i-- > 0;)
-        if (p->parent[i] >= 0)
+    }
+}
+
+typedef struct prep_job {
+    cbm_plant *p;
+    size_t lo, hi; /* the joint arrays of these segments */
+    uint32_t me;   /* then the carried masses of this thread's subtrees */
+} prep_job;
+
+static void prepare_job(void *arg)
+{
+    prep_job *j = arg;
+    prepare_range(j->p, j->lo, j->hi);
+}
+
+static void cmass_job(void *arg)
+{
+    prep_job *j = arg;
+    cbm_plant *p = j->p;
+    const uint32_t *restrict part = p->work.tpart;
+    for (size_t i = p->n; i-- > 0;) {
+        uint32_t e = part[i];
+        if (cbm__part_thread(e) == j->me && !(e & CBM__PART_ROOT) && p->parent[i] >= 0)
             p->cmass[p->parent[i]] += p->cmass[i];
+    }
+}
+
+void cbm__mech_prepare(cbm_plant *p)
+{
+    const size_t n = p->n;
+    int t = cbm__mech_tree_split(p);
+    if (t <= 1) {
+        prepare_range(p, 0, n);
+        /* carried mass (independent of the shape) */
+        for (size_t i = n; i-- > 0;)
+            if (p->parent[i] >= 0)
+                p->cmass[p->parent[i]] += p->cmass[i];
+    } else {
+        /* each segment's joint arrays alone: in ranges; the carried masses as the backward
+         * sweep (cbm__mech_backward), the same sums in the same order */
+        prep_job jobs[8];
+        for (int k = 0; k < t; k++)
+            jobs[k] = (prep_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t,
+                                 (uint32_t)k + 1};
+        cbm__mech_run_threads(t, prepare_job, jobs, sizeof *jobs);
+        cbm__mech_run_threads(t, cmass_job, jobs, sizeof *jobs);
+        const uint32_t *part = p->work.tpart;
+        for (size_t i = n; i-- > 0;) {
+            uint32_t e = part[i];
+            if ((cbm__part_thread(e) == 0 || (e & CBM__PART_ROOT)) && p->parent[i] >= 0)
+                p->cmass[p->parent[i]] += p->cmass[i];
+        }
+    }
     cbm__mech_pairs_prepare(p);
 }
 

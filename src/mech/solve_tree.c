@@ -543,6 +543,18 @@ static void sweeps(sweep *sw)
     tree_parallel(sw, t, true, &none, &none, &none);
 }
 
+/* Zeroes a[lo .. hi) (the accumulators before a sweep, in ranges over the threads). */
+typedef struct zero_job {
+    double *a;
+    size_t lo, hi;
+} zero_job;
+
+static void zero_run(void *arg)
+{
+    zero_job *j = arg;
+    memset(j->a + j->lo, 0, (j->hi - j->lo) * sizeof(double));
+}
+
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
  * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
  * D was singular and replaced by S. */
@@ -551,7 +563,16 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
     const bool ground = p->ground && w->fcap >= n;
-    memset(w->fw, 0, 9 * n * sizeof(double));
+    int t = ground ? 1 : cbm__mech_tree_split(p);
+    if (t <= 1) {
+        memset(w->fw, 0, 9 * n * sizeof(double));
+    } else {
+        zero_job jobs[MAX_THREADS];
+        for (int k = 0; k < t; k++)
+            jobs[k] = (zero_job){w->fw, 9 * n * (size_t)k / (size_t)t,
+                                 9 * n * (size_t)(k + 1) / (size_t)t};
+        cbm__mech_run_threads(t, zero_run, jobs, sizeof *jobs);
+    }
     if (ground) {
         memset(w->fact, 0, n);
         for (size_t i = 0; i < n; i++) {
