@@ -411,9 +411,14 @@ static void forward_job(void *arg)
     pass_job *j = arg;
     cbm_plant *p = j->p;
     const uint32_t *restrict part = p->work.tpart;
-    for (size_t i = 0; i < p->n; i++)
+    const int64_t *par = p->parent;
+    const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+    for (size_t i = 0; i < p->n; i++) {
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, q, 4);
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
         if (cbm__part_thread(part[i]) == j->me)
             forward_seg(p, i);
+    }
 }
 
 void cbm__mech_forward(cbm_plant *p)
@@ -421,8 +426,13 @@ void cbm__mech_forward(cbm_plant *p)
     const size_t n = p->n;
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
-        for (size_t i = 0; i < n; i++)
+        const int64_t *par = p->parent;
+        const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+        for (size_t i = 0; i < n; i++) {
+            CBM__PREFETCH_PARENT_FWD(par, i, n, q, 4);
+            CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
             forward_seg(p, i);
+        }
         return;
     }
     const uint32_t *part = p->work.tpart;
@@ -499,7 +509,11 @@ static void backward_job(void *arg)
     double *restrict zz = p->work.zz;
     const bool ground = p->ground;
     const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
+    const int64_t *par = p->parent;
+    double *f = (double *)p->force, *m = (double *)p->moment;
     for (size_t i = p->n; i-- > 0;) {
+        CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
+        CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
         uint32_t e = part[i];
         if (cbm__part_thread(e) == j->me)
             backward_seg(p, i, j, ground, pairs, (e & CBM__PART_ROOT) != 0, &zz[i]);
@@ -519,7 +533,11 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
     double ss = 0.0;
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
+        const int64_t *par = p->parent;
+        double *f = (double *)p->force, *m = (double *)p->moment;
         for (size_t i = n; i-- > 0;) {
+            CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
+            CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
             double z2;
             backward_seg(p, i, &all, ground, pairs, false, &z2);
             ss += z2;

@@ -470,15 +470,26 @@ static void tree_job_run(void *arg)
     cbm_plant *p = j->sw.p;
     const uint32_t *part = p->work.tpart;
     const uint32_t me = (uint32_t)j->thread;
+    const int64_t *par = p->parent;
+    const double *dth = (const double *)p->work.dth;
     if (j->forward) {
-        for (size_t i = 0; i < p->n; i++)
+        for (size_t i = 0; i < p->n; i++) {
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
             if ((part[i] >> PART_SHIFT & 7u) == me)
                 forward_one(p, i, j->sw.out, false);
+        }
         return;
     }
-    for (size_t i = p->n; i-- > 0;)
+    double *fw = p->work.fw, *dm = (double *)p->work.dm;
+    const bool solve = j->sw.b && j->sw.out;
+    for (size_t i = p->n; i-- > 0;) {
+        if (!j->sw.only_solve)
+            CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+        if (solve)
+            CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
         if ((part[i] >> PART_SHIFT & 7u) == me)
             factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
+    }
 }
 
 /* Runs the sweep's share of threads 1..t and adds up their counts. */
@@ -510,8 +521,16 @@ static void sweeps(sweep *sw)
     const size_t n = p->n;
     int t = sw->ground ? 1 : cbm__mech_tree_split(p);
     if (t <= 1) {
-        for (size_t i = n; i-- > 0;)
+        const int64_t *par = p->parent;
+        double *fw = w->fw, *dm = (double *)w->dm;
+        const bool solve = sw->b && sw->out;
+        for (size_t i = n; i-- > 0;) {
+            if (!sw->only_solve)
+                CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+            if (solve)
+                CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
             factor_one(sw, i, false);
+        }
     } else {
         tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative);
         const uint32_t *part = w->tpart;
@@ -705,6 +724,10 @@ static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground)
 static void forward_solve(cbm_plant *p, cbm_vec3 *out)
 {
     const bool ground = p->ground && p->work.fcap >= p->n;
-    for (size_t i = 0; i < p->n; i++)
+    const int64_t *par = p->parent;
+    const double *dth = (const double *)p->work.dth;
+    for (size_t i = 0; i < p->n; i++) {
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
         forward_one(p, i, out, ground);
+    }
 }
