@@ -66,13 +66,14 @@ typedef struct result {
 static result solve_with(size_t n, double E, double leaf, bool chain, int threads)
 {
     result r = {0};
-    cbm__mech_tree_threads(threads, 0);
+    cbm__mech_tree_min_segments(0);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
     cbm_plant *p = random_tree(ctx, n, E, leaf, chain);
     if (p) {
         cbm_solve_def d = cbm_solve_def_default();
         d.warm_start = false;
+        d.threads = threads;
         cbm_solve_stats st;
         CHECK_OK(cbm_plant_solve(p, &d, &st));
         r.n = p->n;
@@ -89,7 +90,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
         cbm_plant_destroy(p);
     }
     cbm_context_destroy(ctx);
-    cbm__mech_tree_threads(0, 50000); /* the defaults */
+    cbm__mech_tree_min_segments(50000); /* the default */
     return r;
 }
 
@@ -137,4 +138,28 @@ TEST(soft_tree_solve_same_bits_any_thread_count)
 TEST(chain_solve_same_bits_any_thread_count)
 {
     check_same(3000, 1e10, 0.0, true);
+}
+
+/* The thread count is a setting of the solve (cbm_solve_def.threads) and of a bend spec; a
+ * negative count is refused with a message naming it. */
+TEST(thread_count_setting)
+{
+    cbm_solve_def d = cbm_solve_def_default();
+    CHECK_EQ_INT(d.threads, 0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p = random_tree(ctx, 50, 1e10, 0.005, false);
+    d.threads = -1;
+    CHECK(cbm_plant_solve(p, &d, NULL) == CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "threads") != NULL);
+    d.threads = 2;
+    CHECK_OK(cbm_plant_solve(p, &d, NULL));
+    cbm_plant_destroy(p);
+    const char *spec = "segments = 10\nthreads = 3\n";
+    cbm_bend_spec s;
+    CHECK_OK(cbm_bend_spec_parse(ctx, spec, strlen(spec), "t.spec", &s));
+    CHECK_EQ_INT(s.threads, 3);
+    const char *bad = "threads = -2\n";
+    CHECK(cbm_bend_spec_parse(ctx, bad, strlen(bad), "t.spec", &s) != CBM_OK);
+    cbm_context_destroy(ctx);
 }

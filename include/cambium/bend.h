@@ -45,6 +45,7 @@ typedef struct cbm_bend_spec {
     double length_initial; ///< m, length at step 0 (primary growth up to `length`), 0 = length
     double radius_final;   ///< m, radius after the last step (secondary growth), 0 = none
     long push_unstable; ///< 1 (default): push an unstable equilibrium to a stable one; 0: keep it
+    long threads;       ///< threads of the statics' sweeps (cbm_solve_def.threads): 0 = one per CPU
     /* solver = approx (Method A, cambium/approx.h) */
     cbm_approx_mode approx_mode; ///< corrected (default) or thesis
     double approx_p;             ///< relative position of the bending reversal, [0, 1]; 1 = none

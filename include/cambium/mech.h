@@ -354,6 +354,10 @@ typedef struct cbm_solve_def {
     /// also compute cbm_solve_stats.lowest_eigenvalue when the equilibrium is stable (shifted
     /// inverse iteration, tens of O(n) passes not counted in `passes`); default false
     bool eigenvalue;
+    /// threads of the sweeps over a branched plant of 50,000 segments or more (fast solver and
+    /// relaxation): 0 = one per processor (the default), 1 = serial; at most 7 are used. The
+    /// results are the same to the bit for any count. Also used by the plant's later evaluations.
+    int threads;
     /* Method A (CBM_MECH_APPROX) only */
     cbm_approx_mode approx_mode; ///< default CBM_APPROX_CORRECTED
     double approx_p;             ///< relative position of the bending reversal, [0, 1]; default 1

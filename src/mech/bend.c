@@ -105,6 +105,7 @@ static const key_desc keys[] = {
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
     {"control_curvature", K_NUM, OFF(control_curvature), -1e6, 1e6, false},
     {"push_unstable", K_INT, OFF(push_unstable), 0, 1, false},
+    {"threads", K_INT, OFF(threads), 0, 1024, false},
     {"duration", K_NUM, OFF(duration), 0, 1e6, true},
     {"dt", K_NUM, OFF(dt), 0, 1e3, true},
     {"damping_ratio", K_NUM, OFF(damping_ratio), 0, 0.99, false},
@@ -477,6 +478,7 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.max_passes = (size_t)s->max_passes;
     d.krylov_dim = s->krylov_dim;
     d.push_unstable = s->push_unstable != 0;
+    d.threads = (int)s->threads;
     d.approx_mode = s->approx_mode;
     d.approx_p = s->approx_p;
     d.approx_force_factor = s->approx_force;

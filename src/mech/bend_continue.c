@@ -952,6 +952,7 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
     cfg.sd.max_passes = (size_t)spec->max_passes;
     cfg.sd.krylov_dim = spec->krylov_dim;
     cfg.sd.push_unstable = spec->push_unstable != 0;
+    cfg.sd.threads = (int)spec->threads;
     cfg.tip = n - 1;
     cbm_status st = run(ctx, &cfg, def, p, out);
     cbm_plant_destroy(p);

@@ -34,6 +34,7 @@ typedef struct cbm__mech_work {
     cbm_vec3 *dfc;    /* tangent: world force accumulators (ground contact) */
     cbm_vec3 *tmp;    /* a vector of the Krylov space */
     uint32_t *tpart;  /* the tree's split for the threads of solve_tree.c (subtree sizes, bins) */
+    double *zz;       /* per joint: its term of the line search's merit (threaded backward sweep) */
     cbm_vec3 *best;   /* Omega of the best state found by the stability stage */
     cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
     cbm_vec3 *zbasis; /* the preconditioned vectors (flexible GMRES), krylov_cap of 3n */
@@ -53,12 +54,58 @@ typedef struct cbm__mech_work {
     double *fzad;  /* Z a D^-1 */
     uint8_t *fact; /* 1 if the segment or one it carries touches the ground */
     double *hess;  /* (m + 1) x m Hessenberg matrix and Givens data */
+    /* the split in tpart is for this topology while tsplit > 0: the threads it uses (1: serial),
+     * asked for tsplit_req threads at tsplit_min segments (plant.c clears it when the topology
+     * changes, a re-carved workspace when it is replaced) */
+    int tsplit, tsplit_req;
+    size_t tsplit_min;
 } cbm__mech_work;
 
-/* Threads of the tree factorisation and solve (solve_tree.c): at most `threads` (0: one per
- * processor, the default; 1: none), only for plants of at least `min_segments` segments. The
- * results are the same to the bit for any count (tests set both to compare). */
-void cbm__mech_tree_threads(int threads, size_t min_segments);
+/* Threads of the tree sweeps (solve_tree.c, "Threads"): the count comes from cbm_solve_def.threads
+ * (cbm_plant.threads); they are used only for plants of at least `min_segments` segments
+ * (default 50,000; tests lower it to compare small trees). The results are the same to the bit
+ * for any count. */
+void cbm__mech_tree_min_segments(size_t min_segments);
+/* The split's entry per segment in work.tpart: bits 0-27 the subtree size, then the thread
+ * (0: the top, swept serially) and the root bit (a subtree's root: its parent is in the top). */
+#define CBM__PART_SIZE  0x0fffffffu
+#define CBM__PART_SHIFT 28
+#define CBM__PART_ROOT  0x80000000u
+static inline uint32_t cbm__part_thread(uint32_t e)
+{
+    return e >> CBM__PART_SHIFT & 7u;
+}
+/* Prefetches of the sweeps: a lateral's parent lies anywhere in memory, and a sweep would wait
+ * for its accumulators (a quarter of the factorisation's time at 10^6 segments, measured with
+ * perf); the parent of the segment CBM__PF ahead is fetched meanwhile. No effect on the results.
+ * (Macros: GCC drops __builtin_prefetch inside a static inline function.) */
+#define CBM__PF 16
+#define CBM__PREFETCH_PARENT_BWD(par, i, base, elems)                                              \
+    do {                                                                                           \
+        if ((i) >= CBM__PF) {                                                                      \
+            int64_t pf_ = (par)[(i)-CBM__PF];                                                      \
+            if (pf_ >= 0) {                                                                        \
+                __builtin_prefetch((base) + (size_t)pf_ * (elems), 1, 3);                          \
+                __builtin_prefetch((base) + (size_t)pf_ * (elems) + (elems)-1, 1, 3);              \
+            }                                                                                      \
+        }                                                                                          \
+    } while (0)
+#define CBM__PREFETCH_PARENT_FWD(par, i, n, base, elems)                                           \
+    do {                                                                                           \
+        if ((i) + CBM__PF < (n)) {                                                                 \
+            int64_t pf_ = (par)[(i) + CBM__PF];                                                    \
+            if (pf_ >= 0) {                                                                        \
+                __builtin_prefetch((base) + (size_t)pf_ * (elems), 0, 3);                          \
+                __builtin_prefetch((base) + (size_t)pf_ * (elems) + (elems)-1, 0, 3);              \
+            }                                                                                      \
+        }                                                                                          \
+    } while (0)
+/// The threads the plant's tree sweeps use (1: serial), with the split in work.tpart; cached
+/// until the topology, the thread count or the workspace changes.
+int cbm__mech_tree_split(cbm_plant *p);
+/// Runs fn(args + k size) for k = 0 .. t-1: k = 0 on the calling thread, the others each on a
+/// thread of its own (on the caller when one cannot start); returns when all are done.
+void cbm__mech_run_threads(int t, void (*fn)(void *), void *args, size_t size);
 
 /* One overlapping pair of organ spheres (contact.c), a < b (segment indices). */
 typedef struct cbm__mech_pair {
@@ -123,6 +170,7 @@ struct cbm_plant {
     double ground_k;   /* N/m, penalty stiffness per metre of penetration */
     double ground_s;   /* m, smoothing depth (0: none) */
     cbm__mech_contacts contacts; /* organ-organ contact (contact.c) */
+    int threads; /* of the tree sweeps: cbm_solve_def.threads of the last solve (0: one per CPU) */
 
     size_t n, cap;
     /* topology and rest geometry */

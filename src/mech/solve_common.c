@@ -93,7 +93,8 @@
     X(wown)                                                                                        \
     X(lever)                                                                                       \
     X(ftip)                                                                                        \
-    X(mtip) X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart) X(best)
+    X(mtip)                                                                                        \
+    X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart) X(best) X(zz)
 /* the tree factorisation: 9 doubles per segment each (with a Krylov workspace) */
 #define TREE_ARRAYS(X) X(fdinv) X(fq) X(fa) X(fwad) X(fw)
 /* the tree factorisation with ground contact: 9 doubles per segment each (fcap segments) */
@@ -203,13 +204,14 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 
 /* ---- prepare ---- */
 
-void cbm__mech_prepare(cbm_plant *p)
+/* The joint arrays of segments [lo, hi). */
+static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
 {
     cbm__mech_work *w = &p->work;
     double s = p->load_scale;
     cbm_vec3 g = v3_scale(p->gravity, s);
     bool stag = p->disc == CBM_MECH_STAGGERED;
-    for (size_t i = 0; i < p->n; i++) {
+    for (size_t i = lo; i < hi; i++) {
         double l = p->len[i];
         int64_t pa = p->parent[i];
         w->wown[i] = v3_scale(g, p->mpl[i] * l);
@@ -240,13 +242,60 @@ void cbm__mech_prepare(cbm_plant *p)
             w->rj[i] = v3_scale(v3_add(v3_scale(rp, 0.5 * lp), v3_scale(ri, 0.5 * l)), 1.0 / d);
             w->lever[i] = 0.5 * l;
         }
-    }
-    /* carried mass (independent of the shape) */
-    for (size_t i = p->n; i-- > 0;)
         p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
-    for (size_t i = p->n; i-- > 0;)
-        if (p->parent[i] >= 0)
+    }
+}
+
+typedef struct prep_job {
+    cbm_plant *p;
+    size_t lo, hi; /* the joint arrays of these segments */
+    uint32_t me;   /* then the carried masses of this thread's subtrees */
+} prep_job;
+
+static void prepare_job(void *arg)
+{
+    prep_job *j = arg;
+    prepare_range(j->p, j->lo, j->hi);
+}
+
+static void cmass_job(void *arg)
+{
+    prep_job *j = arg;
+    cbm_plant *p = j->p;
+    const uint32_t *restrict part = p->work.tpart;
+    for (size_t i = p->n; i-- > 0;) {
+        uint32_t e = part[i];
+        if (cbm__part_thread(e) == j->me && !(e & CBM__PART_ROOT) && p->parent[i] >= 0)
             p->cmass[p->parent[i]] += p->cmass[i];
+    }
+}
+
+void cbm__mech_prepare(cbm_plant *p)
+{
+    const size_t n = p->n;
+    int t = cbm__mech_tree_split(p);
+    if (t <= 1) {
+        prepare_range(p, 0, n);
+        /* carried mass (independent of the shape) */
+        for (size_t i = n; i-- > 0;)
+            if (p->parent[i] >= 0)
+                p->cmass[p->parent[i]] += p->cmass[i];
+    } else {
+        /* each segment's joint arrays alone: in ranges; the carried masses as the backward
+         * sweep (cbm__mech_backward), the same sums in the same order */
+        prep_job jobs[8];
+        for (int k = 0; k < t; k++)
+            jobs[k] = (prep_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t,
+                                 (uint32_t)k + 1};
+        cbm__mech_run_threads(t, prepare_job, jobs, sizeof *jobs);
+        cbm__mech_run_threads(t, cmass_job, jobs, sizeof *jobs);
+        const uint32_t *part = p->work.tpart;
+        for (size_t i = n; i-- > 0;) {
+            uint32_t e = part[i];
+            if ((cbm__part_thread(e) == 0 || (e & CBM__PART_ROOT)) && p->parent[i] >= 0)
+                p->cmass[p->parent[i]] += p->cmass[i];
+        }
+    }
     cbm__mech_pairs_prepare(p);
 }
 
@@ -312,111 +361,224 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
     return k * (depth - 0.5 * s);
 }
 
+/* ---- the passes over threads ----
+ * A branched plant of many segments is swept by several threads with the split of the tree
+ * factorisation (solve_tree.c, "Threads"): the forward sweep does the top (the segments carrying
+ * much of the tree) first, then each thread its subtrees; the backward sweep runs each thread
+ * over its subtrees, a subtree's root keeping its force and moment instead of adding them into
+ * its parent, then one sweep over the top in decreasing index adds them where the serial sweep
+ * would have. Every accumulator so receives the same terms in the same order, the maxima do not
+ * depend on the order, and the line search's merit is summed from per-joint terms (work.zz) in
+ * the serial order afterwards: the results are the same to the bit for any number of threads. */
+
+/* Forward sweep at segment i: its frame and proximal node from its parent's. */
+static inline void forward_seg(cbm_plant *p, size_t i)
+{
+    const int64_t *restrict par = p->parent;
+    const double *restrict len = p->len;
+    cbm_quat *restrict q = p->q;
+    cbm_vec3 *restrict pos = p->pos;
+    int64_t pa = par[i];
+    cbm_quat qa;
+    cbm_vec3 pp;
+    if (pa < 0) {
+        qa = p->base_q;
+        pp = p->base_pos;
+    } else {
+        qa = q[pa];
+        pp = v3_madd(pos[pa], q_h(qa), len[pa]);
+    }
+    cbm_quat b = p->branch[i];
+    if (b.w != 1.0)
+        qa = q_mul(qa, b);
+    q[i] = qnorm(q_mul(qa, qexp(v3_scale(p->omega[i], p->work.dual[i]))));
+    pos[i] = pp;
+    p->force[i] = v3(0, 0, 0);
+    p->moment[i] = v3(0, 0, 0);
+}
+
+typedef struct pass_job {
+    cbm_plant *p;
+    uint32_t me; /* the thread's number in the split (1 ..) */
+    /* backward: the settings and what the thread's share found */
+    double alpha;
+    cbm_vec3 *res;
+    double rmax, mmax, emax, sum, ss;
+} pass_job;
+
+static void forward_job(void *arg)
+{
+    pass_job *j = arg;
+    cbm_plant *p = j->p;
+    const uint32_t *restrict part = p->work.tpart;
+    const int64_t *par = p->parent;
+    const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+    for (size_t i = 0; i < p->n; i++) {
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, q, 4);
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
+        if (cbm__part_thread(part[i]) == j->me)
+            forward_seg(p, i);
+    }
+}
+
 void cbm__mech_forward(cbm_plant *p)
 {
     const size_t n = p->n;
-    const int64_t *restrict par = p->parent;
-    const double *restrict len = p->len;
-    const double *restrict dual = p->work.dual;
-    const cbm_quat *restrict br = p->branch;
-    const cbm_vec3 *restrict om = p->omega;
-    cbm_quat *restrict q = p->q;
-    cbm_vec3 *restrict pos = p->pos;
+    int t = cbm__mech_tree_split(p);
+    if (t <= 1) {
+        const int64_t *par = p->parent;
+        const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+        for (size_t i = 0; i < n; i++) {
+            CBM__PREFETCH_PARENT_FWD(par, i, n, q, 4);
+            CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
+            forward_seg(p, i);
+        }
+        return;
+    }
+    const uint32_t *part = p->work.tpart;
+    for (size_t i = 0; i < n; i++)
+        if (cbm__part_thread(part[i]) == 0)
+            forward_seg(p, i);
+    pass_job jobs[8];
+    for (int k = 0; k < t; k++)
+        jobs[k] = (pass_job){.p = p, .me = (uint32_t)k + 1};
+    cbm__mech_run_threads(t, forward_job, jobs, sizeof *jobs);
+}
+
+/* Backward sweep at segment i (its children's force and moment are in its accumulators): its
+ * force, moment and residual; adds them into its parent's unless `defer`; the merit's term goes
+ * to *zz. */
+static inline void backward_seg(cbm_plant *p, size_t i, pass_job *j, bool ground, bool pairs,
+                                bool defer, double *zz)
+{
+    const cbm__mech_work *w = &p->work;
     cbm_vec3 *restrict f = p->force;
     cbm_vec3 *restrict m = p->moment;
-    for (size_t i = 0; i < n; i++) {
-        int64_t pa = par[i];
-        cbm_quat qa;
-        cbm_vec3 pp;
-        if (pa < 0) {
-            qa = p->base_q;
-            pp = p->base_pos;
-        } else {
-            qa = q[pa];
-            pp = v3_madd(pos[pa], q_h(qa), len[pa]);
-        }
-        cbm_quat b = br[i];
-        if (b.w != 1.0)
-            qa = q_mul(qa, b);
-        q[i] = qnorm(q_mul(qa, qexp(v3_scale(om[i], dual[i]))));
-        pos[i] = pp;
-        f[i] = v3(0, 0, 0);
-        m[i] = v3(0, 0, 0);
+    cbm_vec3 h, l, u;
+    q_frame(p->q[i], &h, &l, &u);
+    cbm_vec3 fd = v3_add(f[i], w->ftip[i]);
+    if (ground)
+        fd.y += cbm__mech_contact(p, i, h, NULL);
+    if (pairs)
+        fd = v3_add(fd, p->contacts.fnode[i]);
+    cbm_vec3 wo = w->wown[i];
+    double li = p->len[i];
+    cbm_vec3 arm = v3_add(v3_scale(fd, li), v3_scale(wo, w->lever[i]));
+    cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), w->mtip[i]);
+    cbm_vec3 fi = v3_add(fd, wo);
+    f[i] = fi;
+    m[i] = mi;
+    int64_t pa = p->parent[i];
+    if (pa >= 0 && !defer) {
+        f[pa] = v3_add(f[pa], fi);
+        m[pa] = v3_add(m[pa], mi);
+    }
+    cbm_vec3 ml = v3(v3_dot(mi, h), v3_dot(mi, l), v3_dot(mi, u));
+    cbm_vec3 c = w->cj[i], o = p->omega[i], r0 = w->rj[i];
+    cbm_vec3 e = v3(c.x * (o.x - r0.x), c.y * (o.y - r0.y), c.z * (o.z - r0.z));
+    cbm_vec3 r = v3_sub(e, ml);
+    double rn = v3_norm2(r), mn = v3_norm2(mi), en = v3_norm2(e);
+    j->sum += rn + mn;
+    {
+        /* merit of the line search: the unbalanced rotation of each joint (rad),
+         * d C^-1 r, so that every joint weighs alike whatever its size */
+        double dj = w->dual[i];
+        cbm_vec3 z = v3(dj * r.x / c.x, dj * r.y / c.y, dj * r.z / c.z);
+        *zz = v3_norm2(z);
+    }
+    if (rn > j->rmax)
+        j->rmax = rn;
+    if (mn > j->mmax)
+        j->mmax = mn;
+    if (en > j->emax)
+        j->emax = en;
+    if (j->res)
+        j->res[i] = r;
+    if (j->alpha > 0.0) {
+        double alpha = j->alpha;
+        cbm_vec3 t = v3(r0.x + ml.x / c.x, r0.y + ml.y / c.y, r0.z + ml.z / c.z);
+        p->omega[i] = v3_add(v3_scale(o, 1.0 - alpha), v3_scale(t, alpha));
+    }
+}
+
+static void backward_job(void *arg)
+{
+    pass_job *j = arg;
+    cbm_plant *p = j->p;
+    const uint32_t *restrict part = p->work.tpart;
+    double *restrict zz = p->work.zz;
+    const bool ground = p->ground;
+    const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
+    const int64_t *par = p->parent;
+    double *f = (double *)p->force, *m = (double *)p->moment;
+    for (size_t i = p->n; i-- > 0;) {
+        CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
+        CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
+        uint32_t e = part[i];
+        if (cbm__part_thread(e) == j->me)
+            backward_seg(p, i, j, ground, pairs, (e & CBM__PART_ROOT) != 0, &zz[i]);
     }
 }
 
 double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax_out,
                           double *sumsq_out)
 {
-    const cbm__mech_work *w = &p->work;
-    const int64_t *restrict par = p->parent;
-    const double *restrict len = p->len;
-    const double *restrict lever = w->lever;
-    const cbm_vec3 *restrict wown = w->wown, *restrict ftip = w->ftip, *restrict mtip = w->mtip;
-    const cbm_vec3 *restrict cj = w->cj, *restrict rj = w->rj;
-    const cbm_quat *restrict q = p->q;
-    cbm_vec3 *restrict f = p->force;
-    cbm_vec3 *restrict m = p->moment;
-    cbm_vec3 *restrict om = p->omega;
-    double rmax = 0.0, mmax = 0.0, emax = 0.0, sum = 0.0, ss = 0.0;
+    const size_t n = p->n;
     const bool ground = p->ground;
     /* organ-organ contact (contact.c): the pair forces at the distal nodes of this shape */
     const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
     if (pairs)
         cbm__mech_pairs_eval(p);
-    const cbm_vec3 *restrict fpair = p->contacts.fnode;
-    for (size_t i = p->n; i-- > 0;) {
-        cbm_vec3 h, l, u;
-        q_frame(q[i], &h, &l, &u);
-        cbm_vec3 fd = v3_add(f[i], ftip[i]);
-        if (ground)
-            fd.y += cbm__mech_contact(p, i, h, NULL);
-        if (pairs)
-            fd = v3_add(fd, fpair[i]);
-        cbm_vec3 arm = v3_add(v3_scale(fd, len[i]), v3_scale(wown[i], lever[i]));
-        cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), mtip[i]);
-        cbm_vec3 fi = v3_add(fd, wown[i]);
-        f[i] = fi;
-        m[i] = mi;
-        int64_t pa = par[i];
-        if (pa >= 0) {
-            f[pa] = v3_add(f[pa], fi);
-            m[pa] = v3_add(m[pa], mi);
+    pass_job all = {.p = p, .alpha = alpha, .res = res};
+    double ss = 0.0;
+    int t = cbm__mech_tree_split(p);
+    if (t <= 1) {
+        const int64_t *par = p->parent;
+        double *f = (double *)p->force, *m = (double *)p->moment;
+        for (size_t i = n; i-- > 0;) {
+            CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
+            CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
+            double z2;
+            backward_seg(p, i, &all, ground, pairs, false, &z2);
+            ss += z2;
         }
-        cbm_vec3 ml = v3(v3_dot(mi, h), v3_dot(mi, l), v3_dot(mi, u));
-        cbm_vec3 c = cj[i], o = om[i], r0 = rj[i];
-        cbm_vec3 e = v3(c.x * (o.x - r0.x), c.y * (o.y - r0.y), c.z * (o.z - r0.z));
-        cbm_vec3 r = v3_sub(e, ml);
-        double rn = v3_norm2(r), mn = v3_norm2(mi), en = v3_norm2(e);
-        sum += rn + mn;
-        {
-            /* merit of the line search: the unbalanced rotation of each joint (rad),
-             * d C^-1 r, so that every joint weighs alike whatever its size */
-            double dj = w->dual[i];
-            cbm_vec3 z = v3(dj * r.x / c.x, dj * r.y / c.y, dj * r.z / c.z);
-            ss += v3_norm2(z);
+    } else {
+        pass_job jobs[8];
+        for (int k = 0; k < t; k++) {
+            jobs[k] = all;
+            jobs[k].me = (uint32_t)k + 1;
         }
-        if (rn > rmax)
-            rmax = rn;
-        if (mn > mmax)
-            mmax = mn;
-        if (en > emax)
-            emax = en;
-        if (res)
-            res[i] = r;
-        if (alpha > 0.0) {
-            cbm_vec3 t = v3(r0.x + ml.x / c.x, r0.y + ml.y / c.y, r0.z + ml.z / c.z);
-            om[i] = v3_add(v3_scale(o, 1.0 - alpha), v3_scale(t, alpha));
+        cbm__mech_run_threads(t, backward_job, jobs, sizeof *jobs);
+        /* the top, adding each subtree's root where the serial sweep would have */
+        const uint32_t *part = p->work.tpart;
+        double *zz = p->work.zz;
+        cbm_vec3 *f = p->force, *m = p->moment;
+        for (size_t i = n; i-- > 0;) {
+            uint32_t e = part[i];
+            if (cbm__part_thread(e) == 0) {
+                backward_seg(p, i, &all, ground, pairs, false, &zz[i]);
+            } else if (e & CBM__PART_ROOT) {
+                int64_t pa = p->parent[i];
+                f[pa] = v3_add(f[pa], f[i]);
+                m[pa] = v3_add(m[pa], m[i]);
+            }
         }
+        for (int k = 0; k < t; k++) {
+            all.sum += jobs[k].sum;
+            all.rmax = jobs[k].rmax > all.rmax ? jobs[k].rmax : all.rmax;
+            all.mmax = jobs[k].mmax > all.mmax ? jobs[k].mmax : all.mmax;
+            all.emax = jobs[k].emax > all.emax ? jobs[k].emax : all.emax;
+        }
+        for (size_t i = n; i-- > 0;) /* the serial order of the sum */
+            ss += zz[i];
     }
-    if (!isfinite(sum))
+    if (!isfinite(all.sum))
         return NAN;
-    if (mmax == 0.0)
-        mmax = emax;
+    double mmax = all.mmax == 0.0 ? all.emax : all.mmax;
     *mmax_out = sqrt(mmax);
     if (sumsq_out)
         *sumsq_out = ss;
-    return sqrt(rmax);
+    return sqrt(all.rmax);
 }
 
 double cbm__mech_relres(double rmax, double mmax, double *char_moment)
@@ -547,6 +709,7 @@ cbm_solve_def cbm_solve_def_default(void)
     d.krylov_dim = 10;
     d.preconditioner = CBM_MECH_PRECOND_TREE;
     d.warm_start = true;
+    d.threads = 0; /* one per processor */
     d.approx_mode = CBM_APPROX_CORRECTED;
     d.approx_p = 1.0;
     d.approx_force_factor = 1.0;
@@ -648,6 +811,10 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: alpha must be in (0, 1]");
     if (d.solver == CBM_MECH_NEWTON && (d.krylov_dim < 1 || d.krylov_dim > 500))
         return cbm__fail(p->ctx, CBM_E_INVALID, "solve: krylov_dim must be in 1..500");
+    if (d.threads < 0)
+        return cbm__fail(p->ctx, CBM_E_INVALID,
+                         "solve: threads must be >= 0 (0: one per processor)");
+    p->threads = d.threads;
     CBM_TRY(check_plant(p));
     if (d.solver == CBM_MECH_APPROX) { /* no iteration: its own pass (solve_approx.c) */
         CBM_TRY(cbm__mech_work_reserve(p, 1));

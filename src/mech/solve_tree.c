@@ -346,31 +346,22 @@ static void factor_one(sweep *sw, size_t i, bool defer)
  * runs the top first, then the subtrees in parallel. A chain (no branch carries a small part of
  * the tree) and a plant with ground contact stay serial. Entry per segment in tpart: bits 0-27
  * the subtree size, then the thread (0: top) and the root bit. */
-#define PART_SIZE   0x0fffffffu
-#define PART_SHIFT  28
-#define PART_ROOT   0x80000000u
+#define PART_SIZE   CBM__PART_SIZE
+#define PART_SHIFT  CBM__PART_SHIFT
+#define PART_ROOT   CBM__PART_ROOT
 #define MAX_THREADS 7
 
-static int tree_threads = 0; /* 0: one per processor */
 static size_t tree_min_segments = 50000;
 
-void cbm__mech_tree_threads(int threads, size_t min_segments)
+void cbm__mech_tree_min_segments(size_t min_segments)
 {
-    tree_threads = threads < 0 ? 0 : threads;
     tree_min_segments = min_segments;
 }
 
-/* The threads to use for n segments and the split (tpart); 1: serial. */
-static int tree_split(cbm_plant *p)
+/* The split for n segments into tpart; returns the threads (1: serial). */
+static int split_compute(cbm_plant *p, int t)
 {
     const size_t n = p->n;
-    int t = tree_threads;
-    if (t == 0) {
-        long np = sysconf(_SC_NPROCESSORS_ONLN);
-        t = np > 0 ? (int)np : 1;
-    }
-    if (t > MAX_THREADS)
-        t = MAX_THREADS;
     if (t < 2 || n < tree_min_segments || n < 2 || n > PART_SIZE || !p->work.tpart)
         return 1;
     uint32_t *part = p->work.tpart;
@@ -404,6 +395,67 @@ static int tree_split(cbm_plant *p)
     return top * 4 > n ? 1 : t; /* mostly a chain: the threads would wait on the top */
 }
 
+static int processors = 1;
+static pthread_once_t processors_once = PTHREAD_ONCE_INIT;
+
+static void processors_count(void)
+{
+    long np = sysconf(_SC_NPROCESSORS_ONLN);
+    processors = np > 0 ? (int)(np < 64 ? np : 64) : 1;
+}
+
+int cbm__mech_tree_split(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    if (p->n < tree_min_segments || p->n < 2)
+        return 1; /* before anything else: the small plants of a growth run pay nothing */
+    int t = p->threads;
+    if (t <= 0) {
+        pthread_once(&processors_once, processors_count); /* sysconf reads files: once */
+        t = processors;
+    }
+    if (t > MAX_THREADS)
+        t = MAX_THREADS;
+    if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments)
+        return w->tsplit;
+    w->tsplit = split_compute(p, t);
+    w->tsplit_req = t;
+    w->tsplit_min = tree_min_segments;
+    return w->tsplit;
+}
+
+typedef struct run_arg {
+    void (*fn)(void *);
+    void *arg;
+} run_arg;
+
+static void *run_one(void *arg)
+{
+    run_arg *r = arg;
+    r->fn(r->arg);
+    return NULL;
+}
+
+void cbm__mech_run_threads(int t, void (*fn)(void *), void *args, size_t size)
+{
+    pthread_t th[MAX_THREADS];
+    run_arg ra[MAX_THREADS];
+    bool started[MAX_THREADS] = {false};
+    if (t > MAX_THREADS)
+        t = MAX_THREADS;
+    for (int k = 1; k < t; k++) {
+        ra[k] = (run_arg){fn, (char *)args + (size_t)k * size};
+        started[k] = pthread_create(&th[k], NULL, run_one, &ra[k]) == 0;
+    }
+    fn(args);
+    for (int k = 1; k < t; k++) {
+        if (started[k])
+            pthread_join(th[k], NULL);
+        else
+            fn((char *)args + (size_t)k * size);
+    }
+}
+
 typedef struct tree_job {
     sweep sw;
     int thread;
@@ -412,48 +464,47 @@ typedef struct tree_job {
 
 static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground);
 
-static void *tree_job_run(void *arg)
+static void tree_job_run(void *arg)
 {
     tree_job *j = arg;
     cbm_plant *p = j->sw.p;
     const uint32_t *part = p->work.tpart;
     const uint32_t me = (uint32_t)j->thread;
+    const int64_t *par = p->parent;
+    const double *dth = (const double *)p->work.dth;
     if (j->forward) {
-        for (size_t i = 0; i < p->n; i++)
+        for (size_t i = 0; i < p->n; i++) {
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
             if ((part[i] >> PART_SHIFT & 7u) == me)
                 forward_one(p, i, j->sw.out, false);
-        return NULL;
+        }
+        return;
     }
-    for (size_t i = p->n; i-- > 0;)
+    double *fw = p->work.fw, *dm = (double *)p->work.dm;
+    const bool solve = j->sw.b && j->sw.out;
+    for (size_t i = p->n; i-- > 0;) {
+        if (!j->sw.only_solve)
+            CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+        if (solve)
+            CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
         if ((part[i] >> PART_SHIFT & 7u) == me)
             factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
-    return NULL;
+    }
 }
 
-/* Runs the sweep's share of threads 1..t, the caller's thread taking the first (and the share of
- * any thread that could not start), and adds up their counts. */
+/* Runs the sweep's share of threads 1..t and adds up their counts. */
 static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular, size_t *nonpd,
                           size_t *negative)
 {
     tree_job jobs[MAX_THREADS];
-    pthread_t th[MAX_THREADS];
     memset(jobs, 0, sizeof jobs);
-    bool started[MAX_THREADS] = {false};
     for (int k = 0; k < t; k++) {
         jobs[k].sw = *sw;
         jobs[k].sw.singular = jobs[k].sw.nonpd = jobs[k].sw.negative = 0;
         jobs[k].thread = k + 1;
         jobs[k].forward = forward;
     }
-    for (int k = 1; k < t; k++)
-        started[k] = pthread_create(&th[k], NULL, tree_job_run, &jobs[k]) == 0;
-    tree_job_run(&jobs[0]);
-    for (int k = 1; k < t; k++) {
-        if (started[k])
-            pthread_join(th[k], NULL);
-        else
-            tree_job_run(&jobs[k]);
-    }
+    cbm__mech_run_threads(t, tree_job_run, jobs, sizeof *jobs);
     for (int k = 0; k < t; k++) {
         *singular += jobs[k].sw.singular;
         *nonpd += jobs[k].sw.nonpd;
@@ -468,10 +519,18 @@ static void sweeps(sweep *sw)
     cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    int t = sw->ground ? 1 : tree_split(p);
+    int t = sw->ground ? 1 : cbm__mech_tree_split(p);
     if (t <= 1) {
-        for (size_t i = n; i-- > 0;)
+        const int64_t *par = p->parent;
+        double *fw = w->fw, *dm = (double *)w->dm;
+        const bool solve = sw->b && sw->out;
+        for (size_t i = n; i-- > 0;) {
+            if (!sw->only_solve)
+                CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+            if (solve)
+                CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
             factor_one(sw, i, false);
+        }
     } else {
         tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative);
         const uint32_t *part = w->tpart;
@@ -503,6 +562,18 @@ static void sweeps(sweep *sw)
     tree_parallel(sw, t, true, &none, &none, &none);
 }
 
+/* Zeroes a[lo .. hi) (the accumulators before a sweep, in ranges over the threads). */
+typedef struct zero_job {
+    double *a;
+    size_t lo, hi;
+} zero_job;
+
+static void zero_run(void *arg)
+{
+    zero_job *j = arg;
+    memset(j->a + j->lo, 0, (j->hi - j->lo) * sizeof(double));
+}
+
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
  * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
  * D was singular and replaced by S. */
@@ -511,7 +582,16 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
     const bool ground = p->ground && w->fcap >= n;
-    memset(w->fw, 0, 9 * n * sizeof(double));
+    int t = ground ? 1 : cbm__mech_tree_split(p);
+    if (t <= 1) {
+        memset(w->fw, 0, 9 * n * sizeof(double));
+    } else {
+        zero_job jobs[MAX_THREADS];
+        for (int k = 0; k < t; k++)
+            jobs[k] = (zero_job){w->fw, 9 * n * (size_t)k / (size_t)t,
+                                 9 * n * (size_t)(k + 1) / (size_t)t};
+        cbm__mech_run_threads(t, zero_run, jobs, sizeof *jobs);
+    }
     if (ground) {
         memset(w->fact, 0, n);
         for (size_t i = 0; i < n; i++) {
@@ -644,6 +724,10 @@ static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground)
 static void forward_solve(cbm_plant *p, cbm_vec3 *out)
 {
     const bool ground = p->ground && p->work.fcap >= p->n;
-    for (size_t i = 0; i < p->n; i++)
+    const int64_t *par = p->parent;
+    const double *dth = (const double *)p->work.dth;
+    for (size_t i = 0; i < p->n; i++) {
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
         forward_one(p, i, out, ground);
+    }
 }
