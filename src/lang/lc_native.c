@@ -58,6 +58,7 @@ extern char **environ;
         void (*fault)(struct lc_rt *, int32_t, int);                                               \
         double (*math)(int, double, double);                                                       \
         double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
+        int (*prod)(struct lc_rt *, int32_t, int, const double *);                                 \
     };
 LC_RT_STRUCT
 #define LC_STR_(...) #__VA_ARGS__
@@ -119,6 +120,16 @@ static double rt_bin(struct lc_rt *R, int32_t at, int op, int t, double a, doubl
     return r;
 }
 
+static int rt_prod(struct lc_rt *R, int32_t at, int sm, const double *v)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    if (vm->produce(vm->produce_ud, sm, v))
+        return 1;
+    R->failed = 1;
+    return 0;
+}
+
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
     struct lc_rt R = {vm->glob,
@@ -134,7 +145,8 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_spend_call,
                       rt_fault,
                       rt_math,
-                      rt_bin};
+                      rt_bin,
+                      rt_prod};
     return p->native->fn[f](fr, &R, vm->at);
 }
 
@@ -355,6 +367,21 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
             p->fn[x->a].nreg, F_DEEP, x->a, x->d);
         break;
     }
+    case O_PROD: { /* the module's parameters from its run of registers */
+        int size = m->mods.data[m->sms.data[x->d].mod].size;
+        if (!size) {
+            put(s, "if (!R->prod(R, at, %d, 0)) return 0;", x->d);
+            break;
+        }
+        put(s, "{ double v[%d] = {", size);
+        for (int i = 0; i < size; i++)
+            put(s, "%sr%d", i ? ", " : "", x->a + i);
+        put(s, "}; if (!R->prod(R, at, %d, v)) return 0; }", x->d);
+        break;
+    }
+    case O_DONE:
+        put(s, "return 1;");
+        break;
     case O_RET:
         put(s, "return r%d;", x->a);
         break;
@@ -367,7 +394,7 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
 static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
 {
     const lc_fcode *fc = &p->fn[f];
-    int fsize = m->funcs.data[f].fsize;
+    int fsize = fc->fsize;
     put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
     /* the locals start as the frame holds them (the loop reads the frame itself) */
     for (int r = 0; r < fc->nreg; r++)
@@ -534,7 +561,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     for (size_t f = 0; f < p->n; f++)
         ncompiled += p->fn[f].compiled;
     if (!ncompiled || !cache_dir) {
-        *why = "no function of the model compiles to native code";
+        *why = "no function or production body of the model compiles to native code";
         return false;
     }
     src s = {ctx, {NULL, 0, 0}, false};
