@@ -5,6 +5,7 @@
  *   // expect interpretation after N: MODULES
  * and error messages. */
 #define _POSIX_C_SOURCE 200809L
+#include "lsys/lsys_internal.h"
 #include "lsys_util.h"
 
 #include "cambium/io.h"
@@ -663,5 +664,115 @@ TEST(lpfg_struct_many_fields)
     CHECK(ls == NULL);
     free(t);
     cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
+/* ---- production bodies in the register code (lang/lc_code.h) ---- */
+
+enum { BY_WALKER, BY_CODE, BY_NATIVE };
+
+/* The string (and, when the model has one, its interpretation) after `steps` steps (at most;
+ * fewer when the model stops) with the production bodies run by the tree walker, the register
+ * code or native code; NULL when native code cannot be had (*why). *compiled and *total: the
+ * bodies compiled, of all. */
+static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, const char **why,
+                        size_t *compiled, size_t *total)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", path, cbm_context_last_error(ctx));
+    if (s != CBM_OK)
+        return NULL;
+    cbm__lpfg_bodies(ls, compiled, total);
+    cbm__lpfg_walk_bodies(ls, by == BY_WALKER);
+    char *got = NULL;
+    if (by != BY_NATIVE || cbm_lsys_compile_native(ls, test_tmp_dir(), why)) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        if (steps < 0)
+            steps = cbm_lsys_derivation_length(ls);
+        for (int i = 0; i < steps && !cbm_lsys_stopped(ls); i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, '\n');
+        if (got && cbm_lsys_has_homomorphism(ls)) {
+            char *img = lpfg_string(ctx, ls, true, '\n');
+            size_t a = strlen(got), b = img ? strlen(img) : 0;
+            char *both = realloc(got, a + b + 2);
+            if (both) {
+                both[a] = '|';
+                memcpy(both + a + 1, img ? img : "", b + 1);
+                got = both;
+            }
+            free(img);
+        }
+    }
+    cbm_lsys_destroy(ls);
+    return got;
+}
+
+/* Compiled production bodies give the tree walker's strings and interpretations byte for byte,
+ * in the register code and in native code: every model of tests/lpfg, the six lpfg oracle
+ * models (with ../shared), compute.l and 12 years of the L+C fruit tree (structs, nproduce,
+ * groups, new contexts, globals). */
+TEST(lpfg_bodies_match_walker)
+{
+    static const struct {
+        const char *file;
+        int steps;
+        bool oracle;
+    } models[] = {
+        {"tests/lpfg/backward-sum.l", 1, false},
+        {"tests/lpfg/c-library.l", 1, false},
+        {"tests/lpfg/compiled-functions.l", 6, false},
+        {"tests/lpfg/consider.l", 1, false},
+        {"tests/lpfg/decomposition-interp.l", 2, false},
+        {"tests/lpfg/forward-signal.l", 1, false},
+        {"tests/lpfg/group0-cut-nproduce.l", 2, false},
+        {"tests/lpfg/groups-globals.l", 3, false},
+        {"tests/lpfg/in-left-context.l", 1, false},
+        {"tests/lpfg/struct-vectors.l", 1, false},
+        {"tests/lpfg/taylor-hell-constructs.l", 3, false},
+        {"tests/lpfg/two-branch-context.l", 1, false},
+        {"tests/lpfg/value-semantics.l", 1, false},
+        {"bench/lc/compute.l", 12, false},
+        {"models/taylor-hell-fruit-tree.l", 48, false},
+        {"lpfg-compound-param", -1, true},
+        {"lpfg-hormone-up", -1, true},
+        {"lpfg-innewcontext", -1, true},
+        {"lpfg-newcontext", -1, true},
+        {"lpfg-quadratic-koch", -1, true},
+        {"lpfg-sympodial", -1, true},
+    };
+    cbm_context *ctx = test_ctx();
+    bool native_ok = true;
+    for (size_t k = 0; k < sizeof models / sizeof models[0]; k++) {
+        char path[4096];
+        if (models[k].oracle) {
+            if (test_skip_without_oracles())
+                continue;
+            snprintf(path, sizeof path, "%s/%s/model/lsystem.l", oracle_dir(), models[k].file);
+        } else
+            snprintf(path, sizeof path, "%s/%s", test_source_dir(), models[k].file);
+        const char *why = NULL;
+        size_t compiled = 0, total = 0;
+        char *walker = run_bodies(ctx, path, models[k].steps, BY_WALKER, NULL, &compiled, &total);
+        char *code = run_bodies(ctx, path, models[k].steps, BY_CODE, NULL, &compiled, &total);
+        printf("  %s: %zu of %zu production bodies compiled\n", models[k].file, compiled, total);
+        CHECK_MSG(walker && code && !strcmp(walker, code),
+                  "%s: the register code's string differs from the tree walker's", models[k].file);
+        char *native =
+            native_ok ? run_bodies(ctx, path, models[k].steps, BY_NATIVE, &why, &compiled, &total)
+                      : NULL;
+        if (!native && why && strstr(why, "compiler"))
+            native_ok = false; /* no cc: the register code is still checked */
+        else if (native_ok && !(compiled == 0 && !native && why && strstr(why, "no function")))
+            CHECK_MSG(native && walker && !strcmp(walker, native),
+                      "%s: native code's string differs from the tree walker's (%s)",
+                      models[k].file, why ? why : "");
+        free(walker);
+        free(code);
+        free(native);
+    }
     test_ctx_end(ctx);
 }

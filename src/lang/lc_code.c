@@ -378,7 +378,7 @@ typedef struct cg {
     size_t label_at;    /* instructions before a label bound last (jumps land there) */
     bool fail;          /* not compilable (or out of memory: nomem) */
     bool nomem;
-    bool body;          /* a production body: produce, and return gives no value */
+    bool body;         /* a production body: produce, and return gives no value */
     int loops;         /* enclosing loops */
     int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
     lc_ins scratch;    /* what ins() gives after running out of memory */
@@ -1172,8 +1172,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             const lc_production *pr = &sets[k]->prods.data[q];
             size_t f = p->body0[k] + q;
             bool nomem = false;
-            p->fn[f].compiled = pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body,
-                                                              pr->fsize, true, &nomem);
+            p->fn[f].compiled =
+                pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body, pr->fsize, true, &nomem);
             if (nomem)
                 return CBM_E_NOMEM;
             if (!p->fn[f].compiled)

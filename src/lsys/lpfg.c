@@ -67,7 +67,7 @@ struct lpfg {
     /* models with mechanics: the module of the string each module of the interpretation came
      * from (empty: the interpretation is the string itself) */
     CBM_ARRAY(size_t) origin;
-    bool rewriting; /* inside a derivation pass: mechanics calls are refused */
+    bool rewriting;   /* inside a derivation pass: mechanics calls are refused */
     bool walk_bodies; /* the tree walker runs every production body (tests compare) */
 };
 
