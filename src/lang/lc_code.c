@@ -354,11 +354,20 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
         }
         case O_PROD:
             vm->at = at;
-            if (!vm->produce(vm->produce_ud, ip->d, fr + ip->a))
+            if (!vm->produce(vm->host, ip->d, fr + ip->a))
                 return 0;
             break;
         case O_DONE:
             return 1;
+        case O_EVAL: {
+            double v[MAXSZ + 1];
+            vm->at = at;
+            if (!vm->eval(vm->host, ip->a, fr, p->fn[f].nreg, v))
+                return 0;
+            for (int i = 0; i < ip->b; i++)
+                fr[ip->d + i] = v[i];
+            break;
+        }
         case O_RET:
             return fr[ip->a];
         default: /* O_RET0 */
@@ -566,6 +575,18 @@ static int lvalue(const cg *g, int32_t ni, bool *global)
     return place(g, ni, global);
 }
 
+/* In a production body, expression ni (of size doubles) left to the tree walker into the run
+ * at dst; elsewhere the function is not compiled. */
+static int delegate(cg *g, int32_t ni, int dst, int size)
+{
+    if (!g->body) {
+        g->fail = true;
+        return dst;
+    }
+    emit(g, O_EVAL, dst, ni, size);
+    return dst;
+}
+
 /* Compiles expression ni; returns the register holding its value: a variable's own register,
  * or hint (a temporary of the caller) where it computed it. */
 static int cx(cg *g, int32_t ni, int hint)
@@ -685,6 +706,9 @@ static int cx(cg *g, int32_t ni, int hint)
     case N_CALLB: {
         if (n->fn >= FN_MATH_END)
             break;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            if (!lc_is_scalar(node(g, x)->type))
+                return delegate(g, ni, hint, 1);
         int r[2] = {-1, -1}, na = 0;
         for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
@@ -723,8 +747,9 @@ static int cx(cg *g, int32_t ni, int hint)
             break;
         int base = g->top;
         int np = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
-            np++;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next, np++)
+            if (!lc_is_scalar(node(g, x)->type) || np >= f->np || !lc_is_scalar(f->ptype[np]))
+                return delegate(g, ni, hint, n->type == T_VOID ? 0 : 1);
         g->top += np;
         if (g->top > g->fc->nreg)
             g->fc->nreg = g->top;
@@ -742,8 +767,11 @@ static int cx(cg *g, int32_t ni, int hint)
     default:
         break;
     }
-    g->fail = true;
-    return hint;
+    if (!scalar && n->type != T_VOID) { /* not a scalar where one is read */
+        g->fail = true;
+        return hint;
+    }
+    return delegate(g, ni, hint, scalar ? 1 : 0);
 }
 
 static void cs(cg *g, int32_t ni);
@@ -854,8 +882,7 @@ static int cxv(cg *g, int32_t ni, int dst)
     default:
         break;
     }
-    g->fail = true;
-    return dst;
+    return delegate(g, ni, dst, sz);
 }
 
 /* `produce` (or `nproduce`) of the modules [first, first + n) of the model's sms: each
@@ -981,12 +1008,10 @@ static void cs(cg *g, int32_t ni)
         switch (n->op) {
         case S_EXPR: {
             const lc_node *e = node(g, n->a);
-            if (lc_is_scalar(e->type) || (e->op == N_CALLU && e->type == T_VOID))
+            if (lc_is_scalar(e->type) || e->type == T_VOID)
                 (void)cx(g, n->a, tmp(g));
-            else if (e->type != T_VOID)
-                (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, e->type)));
             else
-                g->fail = true;
+                (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, e->type)));
             break;
         }
         case S_DECL:

@@ -40,7 +40,11 @@ typedef struct lc_vm {
      * sms) with its parameters v (the module's size in doubles) to the string being produced;
      * false after reporting an error (a parameter not finite, out of memory) */
     bool (*produce)(void *ud, int sm, const double *v);
-    void *produce_ud;
+    /* an expression the register code leaves to the tree walker: node ni evaluated on frame fr
+     * (whose registers end at fr + nreg, where the walker's frames start) into out (room for
+     * MAXSZ + 1 doubles); false after an error */
+    bool (*eval)(void *ud, int32_t ni, double *fr, int nreg, double *out);
+    void *host; /* the ud of produce and eval */
 } lc_vm;
 
 /* The instructions (lc_code.c runs them, lc_native.c translates them to C). */
@@ -109,7 +113,8 @@ enum {
     O_EXP,
     /* production bodies */
     O_PROD, /* appends module sm d with its parameters in registers a.. (vm->produce) */
-    O_DONE  /* `produce` ends the body: the production applied (the run returns 1) */
+    O_DONE, /* `produce` ends the body: the production applied (the run returns 1) */
+    O_EVAL  /* node a evaluated by the tree walker (vm->eval), its first b doubles to d.. */
 };
 
 typedef struct lc_ins {
@@ -147,9 +152,12 @@ typedef struct lc_program {
  * A production body compiles when its statements do (as a function's) and its values are
  * scalars or runs of them: a struct or vector local, global, field, constructor, assignment or
  * conditional is copied register by register, and `produce`/`nproduce` writes each module from
- * a run of registers through vm->produce. Vector arithmetic and the built-ins other than the
- * math ones (random numbers, Forward(), printf, contexts in the body) are the walker's. The
- * run of a body returns 1 when it produced (the production applied), 0 when it ended without. */
+ * a run of registers through vm->produce. An expression the compiler does not handle (vector
+ * arithmetic, the built-ins other than the math ones, contexts, calls of functions left to the
+ * walker) is evaluated by the tree walker on the body's frame (O_EVAL through vm->eval), so the
+ * body still compiles; statements it does not handle (switch) leave the whole body to the
+ * walker. The run of a body returns 1 when it produced (the production applied), 0 when it
+ * ended without. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
 

@@ -1157,6 +1157,19 @@ static bool produce_compiled(void *ud, int smi, const double *v)
     return true;
 }
 
+/* An expression of a compiled body left to the tree walker (lc_vm.eval): its frames above the
+ * body's registers. */
+static bool eval_walker(void *ud, int32_t ni, double *fr, int nreg, double *out)
+{
+    cbm_lsys *ls = ud;
+    lpfg *lp = ls->lp;
+    size_t save = lp->vm.sp;
+    lp->vm.sp = (size_t)(fr - lp->vm.stack) + (size_t)nreg;
+    ev(ls, ni, fr, out);
+    lp->vm.sp = save;
+    return lp->vm.err == CBM_OK;
+}
+
 enum { X_NORMAL, X_BREAK, X_CONTINUE, X_RETURN };
 
 static int exec(cbm_lsys *ls, int32_t ni, double *fr)
@@ -1897,7 +1910,8 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     lp->vm.max_call_depth = cbm_context_limits(ctx)->max_call_depth;
     lp->vm.stack_cap = 1u << 16;
     lp->vm.produce = produce_compiled;
-    lp->vm.produce_ud = ls;
+    lp->vm.eval = eval_walker;
+    lp->vm.host = ls;
     for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
         if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
             lp->prog.fn[f].compiled = false;
