@@ -1778,13 +1778,15 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
     *modules = lp->m.mods.len;
 }
 
-void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total)
+void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_t *walked)
 {
     const lc_program *p = &ls->lp->prog;
-    *compiled = *total = 0;
+    *compiled = *total = *walked = 0;
     for (size_t f = p->fn ? p->body0[LC_MAIN] : 0; f < p->n; f++) {
         *compiled += p->fn[f].compiled;
         ++*total;
+        for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
+            *walked += p->fn[f].ins.data[i].op == O_EVAL;
     }
 }
 
