@@ -101,6 +101,17 @@ static double inc(const lc_ins *ip, double *p)
     return ip->fn >= 2 ? old : *p;
 }
 
+/* O_EVAL: out of line, so that its buffer is not in the frame of every (recursive) run */
+static __attribute__((noinline)) bool eval(const lc_ins *ip, double *fr, int nreg, lc_vm *vm)
+{
+    double v[MAXSZ + 1];
+    if (!vm->eval(vm->host, ip->a, fr, nreg, v))
+        return false;
+    for (int i = 0; i < ip->b; i++)
+        fr[ip->d + i] = v[i];
+    return true;
+}
+
 /* A loop iteration: one operation and one iteration from the budgets */
 #define SPEND_ONE()                                                                                \
     do {                                                                                           \
@@ -359,15 +370,11 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             break;
         case O_DONE:
             return 1;
-        case O_EVAL: {
-            double v[MAXSZ + 1];
+        case O_EVAL:
             vm->at = at;
-            if (!vm->eval(vm->host, ip->a, fr, p->fn[f].nreg, v))
+            if (!eval(ip, fr, p->fn[f].nreg, vm))
                 return 0;
-            for (int i = 0; i < ip->b; i++)
-                fr[ip->d + i] = v[i];
             break;
-        }
         case O_RET:
             return fr[ip->a];
         default: /* O_RET0 */
