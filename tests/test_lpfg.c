@@ -5,6 +5,7 @@
  *   // expect interpretation after N: MODULES
  * and error messages. */
 #define _POSIX_C_SOURCE 200809L
+#include "lsys/lsys_internal.h"
 #include "lsys_util.h"
 
 #include "cambium/io.h"
@@ -664,4 +665,238 @@ TEST(lpfg_struct_many_fields)
     free(t);
     cbm_context_clear_errors(ctx);
     test_ctx_end(ctx);
+}
+
+/* ---- production bodies in the register code (lang/lc_code.h) ---- */
+
+enum { BY_WALKER, BY_CODE, BY_NATIVE };
+
+/* The string (and, when the model has one, its interpretation) after `steps` steps (at most;
+ * fewer when the model stops) with the production bodies run by the tree walker, the register
+ * code or native code; NULL when native code cannot be had (*why). *compiled and *total: the
+ * bodies compiled, of all; *walked: their expressions left to the walker. */
+static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, const char **why,
+                        size_t *compiled, size_t *total, size_t *walked)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s: %s", path, cbm_context_last_error(ctx));
+    if (s != CBM_OK)
+        return NULL;
+    cbm__lpfg_bodies(ls, compiled, total, walked);
+    cbm__lpfg_walk_bodies(ls, by == BY_WALKER);
+    char *got = NULL;
+    if (by != BY_NATIVE || cbm_lsys_compile_native(ls, test_tmp_dir(), why)) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        if (steps < 0)
+            steps = cbm_lsys_derivation_length(ls);
+        for (int i = 0; i < steps && !cbm_lsys_stopped(ls); i++)
+            CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, '\n');
+        if (got && cbm_lsys_has_homomorphism(ls)) {
+            char *img = lpfg_string(ctx, ls, true, '\n');
+            size_t a = strlen(got), b = img ? strlen(img) : 0;
+            char *both = realloc(got, a + b + 2);
+            if (both) {
+                both[a] = '|';
+                memcpy(both + a + 1, img ? img : "", b + 1);
+                got = both;
+            }
+            free(img);
+        }
+    }
+    cbm_lsys_destroy(ls);
+    return got;
+}
+
+/* Compiled production bodies give the tree walker's strings and interpretations byte for byte,
+ * in the register code and in native code: every model of tests/lpfg, the six lpfg oracle
+ * models (with ../shared), compute.l and 48 steps of the L+C fruit tree (structs, nproduce,
+ * groups, new contexts, globals). Which bodies compile, and how many of their expressions are
+ * left to the walker (O_EVAL: contexts, vector arithmetic, random numbers, calls of functions
+ * with struct or reference parameters), is checked per model, so that a change that leaves
+ * more to the walker is seen. */
+TEST(lpfg_bodies_match_walker)
+{
+    static const struct {
+        const char *file;
+        int steps;
+        bool oracle;
+        size_t compiled, total, walked; /* bodies compiled, of all; expressions walked */
+    } models[] = {
+        {"tests/lpfg/backward-sum.l", 1, false, 1, 1, 3},
+        {"tests/lpfg/c-library.l", 1, false, 5, 5, 14},
+        {"tests/lpfg/compiled-functions.l", 6, false, 1, 1, 0},
+        {"tests/lpfg/consider.l", 1, false, 2, 2, 0},
+        {"tests/lpfg/decomposition-interp.l", 2, false, 3, 3, 0},
+        {"tests/lpfg/forward-signal.l", 1, false, 1, 1, 0},
+        {"tests/lpfg/group0-cut-nproduce.l", 2, false, 3, 3, 0},
+        {"tests/lpfg/groups-globals.l", 3, false, 6, 6, 0},
+        {"tests/lpfg/in-left-context.l", 1, false, 1, 1, 2},
+        {"tests/lpfg/struct-vectors.l", 1, false, 1, 1, 4},
+        {"tests/lpfg/taylor-hell-constructs.l", 3, false, 7, 7, 2},
+        {"tests/lpfg/two-branch-context.l", 1, false, 3, 3, 0},
+        {"tests/lpfg/value-semantics.l", 1, false, 2, 2, 36},
+        {"bench/lc/compute.l", 12, false, 1, 1, 0},
+        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 32},
+        {"lpfg-compound-param", -1, true, 4, 4, 0},
+        {"lpfg-hormone-up", -1, true, 4, 4, 0},
+        {"lpfg-innewcontext", -1, true, 3, 3, 3},
+        {"lpfg-newcontext", -1, true, 6, 6, 0},
+        {"lpfg-quadratic-koch", -1, true, 1, 1, 0},
+        {"lpfg-sympodial", -1, true, 6, 6, 3},
+    };
+    cbm_context *ctx = test_ctx();
+    bool native_ok = true;
+    for (size_t k = 0; k < sizeof models / sizeof models[0]; k++) {
+        char path[4096];
+        if (models[k].oracle) {
+            if (test_skip_without_oracles())
+                continue;
+            snprintf(path, sizeof path, "%s/%s/model/lsystem.l", oracle_dir(), models[k].file);
+        } else
+            snprintf(path, sizeof path, "%s/%s", test_source_dir(), models[k].file);
+        const char *why = NULL;
+        size_t compiled = 0, total = 0, walked = 0;
+        char *walker =
+            run_bodies(ctx, path, models[k].steps, BY_WALKER, NULL, &compiled, &total, &walked);
+        char *code =
+            run_bodies(ctx, path, models[k].steps, BY_CODE, NULL, &compiled, &total, &walked);
+        CHECK_MSG(compiled == models[k].compiled && total == models[k].total &&
+                      walked == models[k].walked,
+                  "%s: %zu of %zu production bodies compiled, %zu expressions left to the walker "
+                  "(expected %zu of %zu, %zu)",
+                  models[k].file, compiled, total, walked, models[k].compiled, models[k].total,
+                  models[k].walked);
+        CHECK_MSG(walker && code && !strcmp(walker, code),
+                  "%s: the register code's string differs from the tree walker's", models[k].file);
+        char *native = native_ok ? run_bodies(ctx, path, models[k].steps, BY_NATIVE, &why,
+                                              &compiled, &total, &walked)
+                                 : NULL;
+        if (!native && why && strstr(why, "compiler"))
+            native_ok = false; /* no cc: the register code is still checked */
+        else if (native_ok && !(compiled == 0 && !native && why && strstr(why, "no function")))
+            CHECK_MSG(native && walker && !strcmp(walker, native),
+                      "%s: native code's string differs from the tree walker's (%s)",
+                      models[k].file, why ? why : "");
+        free(walker);
+        free(code);
+        free(native);
+    }
+    test_ctx_end(ctx);
+}
+
+/* One step of model text with the bodies run by the walker, the register code or native code:
+ * its status and diagnostics in *g, the string after it in *str (the caller frees it);
+ * CBM_E_UNSUPPORTED when native code cannot be had. */
+static cbm_status body_step(const char *text, int by, test_diags *g, char **str, size_t *compiled)
+{
+    *str = NULL;
+    cbm_context *ctx = test_diag_ctx(g);
+    CHECK(ctx != NULL);
+    if (!ctx)
+        return CBM_E_NOMEM;
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    def.max_loop_iterations = 1000;
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_OK(s);
+    const char *why = NULL;
+    size_t total = 0, walked = 0;
+    if (s == CBM_OK) {
+        cbm__lpfg_bodies(ls, compiled, &total, &walked);
+        cbm__lpfg_walk_bodies(ls, by == BY_WALKER);
+    }
+    if (s == CBM_OK && by == BY_NATIVE && !cbm_lsys_compile_native(ls, test_tmp_dir(), &why)) {
+        CHECK_MSG(why && (strstr(why, "compiler") || (!*compiled && strstr(why, "no function"))),
+                  "%s", why ? why : "?");
+        s = CBM_E_UNSUPPORTED;
+    } else if (s == CBM_OK) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        s = cbm_lsys_step(ls);
+        if (s == CBM_OK)
+            *str = lpfg_string(ctx, ls, false, ' ');
+    }
+    cbm_lsys_destroy(ls);
+    cbm_context_destroy(ctx);
+    return s;
+}
+
+/* Errors in compiled production bodies stop at the same statement with the same message as in
+ * the tree walker, in the register code and in native code: a division by zero, a parameter
+ * that is not finite (named at its argument), the loop budget, the call depth of a compiled
+ * function called from the body, an error inside an expression left to the walker (O_EVAL).
+ * A body with a switch stays in the walker whole (counted) and gives the same string. */
+TEST(lpfg_bodies_errors_and_fallback)
+{
+    static const struct {
+        const char *text, *where, *what;
+        cbm_status status;
+        size_t compiled;
+    } cases[] = {
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+         "A(x) : {\n"
+         "    int d = x - 1;\n"
+         "    produce A(10 / d); }\n",
+         "m.l:6:5: ", "integer division by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int, double);\nAxiom: A(1, 0);\n"
+         "A(x, y) : {\n"
+         "    nproduce A(x, y);\n"
+         "    produce A(x + 1, 1 / y); }\n",
+         "m.l:6:27: ", "is not a finite number", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+         "A(x) : {\n"
+         "    while (x > 0)\n"
+         "        x = x + 1;\n"
+         "    produce A(x); }\n",
+         "m.l:6:9: ", "more loop iterations in one step than the limit", CBM_E_LIMIT, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
+         "Axiom: A(1);\n"
+         "A(x) : { produce A(f(x)); }\n",
+         "m.l:3:16: ", "nested too deeply", CBM_E_LIMIT, 1},
+        {"#include <lpfgall.h>\nstruct P { int a; };\nmodule A(int);\n"
+         "int g(P p) { return 7 % p.a; }\n"
+         "Axiom: A(1);\n"
+         "A(x) : { P p; p.a = x - 1; produce A(g(p)); }\n",
+         "m.l:4:14: ", "integer remainder by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1) A(2) A(3);\n"
+         "A(x) : {\n"
+         "    switch (x) {\n"
+         "    case 1: produce A(10);\n"
+         "    case 2: break;\n"
+         "    default: produce A(x * x);\n"
+         "    }\n"
+         "    produce A(-x); }\n",
+         NULL, NULL, CBM_OK, 0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        test_diags walker, code, native;
+        char *sw = NULL, *sc = NULL, *sn = NULL;
+        size_t compiled = 9;
+        CHECK_STATUS(body_step(cases[k].text, BY_WALKER, &walker, &sw, &compiled), cases[k].status);
+        CHECK_STATUS(body_step(cases[k].text, BY_CODE, &code, &sc, &compiled), cases[k].status);
+        CHECK_MSG(compiled == cases[k].compiled, "case %zu: %zu bodies compiled", k, compiled);
+        if (cases[k].where)
+            CHECK_MSG(strstr(walker.text, cases[k].where) && strstr(walker.text, cases[k].what),
+                      "case %zu: %s", k, walker.text);
+        CHECK_MSG(!strcmp(walker.text, code.text), "walker: %s\nregister code: %s", walker.text,
+                  code.text);
+        CHECK_MSG((!sw && !sc) || (sw && sc && !strcmp(sw, sc)), "case %zu: '%s' / '%s'", k,
+                  sw ? sw : "", sc ? sc : "");
+        cbm_status s = body_step(cases[k].text, BY_NATIVE, &native, &sn, &compiled);
+        if (s != CBM_E_UNSUPPORTED) {
+            CHECK_STATUS(s, cases[k].status);
+            CHECK_MSG(!strcmp(walker.text, native.text), "walker: %s\nnative code: %s", walker.text,
+                      native.text);
+            CHECK_MSG((!sw && !sn) || (sw && sn && !strcmp(sw, sn)), "case %zu: '%s' / '%s'", k,
+                      sw ? sw : "", sn ? sn : "");
+        }
+        free(sw);
+        free(sc);
+        free(sn);
+    }
 }

@@ -5,8 +5,9 @@
 # paired runs (cambium then lpfg, alternating, so both see the same machine load).
 #
 # Models: the lpfg oracle models (../shared/oracles/vlab/lpfg-*), the 8-step quadratic Koch
-# curve of that oracle, and bench/lc/compute.l (production bodies that compute: a 400-term
-# series per module per step). models/taylor-hell-fruit-tree.l needs the mechanics built-ins
+# curve of that oracle, bench/lc/compute.l (production bodies that compute: a 400-term
+# series in a function per module per step) and bench/lc/bodies.l (the same series in the
+# production body itself). models/taylor-hell-fruit-tree.l needs the mechanics built-ins
 # lpfg does not have, and models/taylor-hell-pendula.l (the A.4 listing) its vector built-ins,
 # so they are timed for cambium alone, with native code and with the register code.
 #
@@ -84,6 +85,8 @@ mkdir -p "$tmp/koch8" && cp "$oracles"/lpfg-quadratic-koch/model/* "$tmp/koch8/"
     compare koch-8-steps "$tmp/koch8" color.map view.v anim.a
 mkdir -p "$tmp/compute" && cp "$root/bench/lc/compute.l" "$tmp/compute/lsystem.l" &&
     compare compute "$tmp/compute"
+mkdir -p "$tmp/bodies" && cp "$root/bench/lc/bodies.l" "$tmp/bodies/lsystem.l" &&
+    compare bodies "$tmp/bodies"
 # cambium alone, native code (after a first run that compiles it) and the register code
 for f in taylor-hell-fruit-tree taylor-hell-pendula; do
     "$bin" run "$root/models/$f.l" -o "$tmp/$f.str" >/dev/null 2>&1

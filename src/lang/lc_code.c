@@ -101,6 +101,17 @@ static double inc(const lc_ins *ip, double *p)
     return ip->fn >= 2 ? old : *p;
 }
 
+/* O_EVAL: out of line, so that its buffer is not in the frame of every (recursive) run */
+static __attribute__((noinline)) bool eval(const lc_ins *ip, double *fr, int nreg, lc_vm *vm)
+{
+    double v[MAXSZ + 1];
+    if (!vm->eval(vm->host, ip->a, fr, nreg, v))
+        return false;
+    for (int i = 0; i < ip->b; i++)
+        fr[ip->d + i] = v[i];
+    return true;
+}
+
 /* A loop iteration: one operation and one iteration from the budgets */
 #define SPEND_ONE()                                                                                \
     do {                                                                                           \
@@ -352,6 +363,18 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             fr[ip->d] = r;
             break;
         }
+        case O_PROD:
+            vm->at = at;
+            if (!vm->produce(vm->host, ip->d, fr + ip->a))
+                return 0;
+            break;
+        case O_DONE:
+            return 1;
+        case O_EVAL:
+            vm->at = at;
+            if (!eval(ip, fr, p->fn[f].nreg, vm))
+                return 0;
+            break;
         case O_RET:
             return fr[ip->a];
         default: /* O_RET0 */
@@ -371,6 +394,7 @@ typedef struct cg {
     size_t label_at;    /* instructions before a label bound last (jumps land there) */
     bool fail;          /* not compilable (or out of memory: nomem) */
     bool nomem;
+    bool body;         /* a production body: produce, and return gives no value */
     int loops;         /* enclosing loops */
     int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
     lc_ins scratch;    /* what ins() gives after running out of memory */
@@ -536,13 +560,38 @@ static int bin_op(int fn, int t, int *ty)
     return O_BIN;
 }
 
-static int lvalue(const cg *g, int32_t ni, bool *global)
+/* The first double of variable or field ni (a field of a field of a variable ...), -1: ni is
+ * no such place. */
+static int place(const cg *g, int32_t ni, bool *global)
 {
     const lc_node *l = node(g, ni);
-    *global = l->op == N_GLOBAL;
-    if ((l->op != N_LOCAL && l->op != N_GLOBAL) || !lc_is_scalar(l->type))
+    if (l->op == N_LOCAL || l->op == N_GLOBAL) {
+        *global = l->op == N_GLOBAL;
+        return l->slot;
+    }
+    if (l->op != N_FIELD)
         return -1;
-    return l->slot;
+    int base = place(g, l->a, global);
+    return base < 0 ? -1 : base + l->slot;
+}
+
+static int lvalue(const cg *g, int32_t ni, bool *global)
+{
+    if (!lc_is_scalar(node(g, ni)->type))
+        return -1;
+    return place(g, ni, global);
+}
+
+/* In a production body, expression ni (of size doubles) left to the tree walker into the run
+ * at dst; elsewhere the function is not compiled. */
+static int delegate(cg *g, int32_t ni, int dst, int size)
+{
+    if (!g->body) {
+        g->fail = true;
+        return dst;
+    }
+    emit(g, O_EVAL, dst, ni, size);
+    return dst;
 }
 
 /* Compiles expression ni; returns the register holding its value: a variable's own register,
@@ -566,12 +615,13 @@ static int cx(cg *g, int32_t ni, int hint)
         emit(g, O_GLD, hint, n->slot, 0);
         return hint;
     case N_FIELD: {
-        const lc_node *base = node(g, n->a);
-        if (!scalar || (base->op != N_LOCAL && base->op != N_GLOBAL))
+        bool global;
+        int slot = scalar ? place(g, ni, &global) : -1;
+        if (slot < 0)
             break;
-        if (base->op == N_LOCAL)
-            return base->slot + n->slot;
-        emit(g, O_GLD, hint, base->slot + n->slot, 0);
+        if (!global)
+            return slot;
+        emit(g, O_GLD, hint, slot, 0);
         return hint;
     }
     case N_NEG:
@@ -663,6 +713,9 @@ static int cx(cg *g, int32_t ni, int hint)
     case N_CALLB: {
         if (n->fn >= FN_MATH_END)
             break;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            if (!lc_is_scalar(node(g, x)->type))
+                return delegate(g, ni, hint, 1);
         int r[2] = {-1, -1}, na = 0;
         for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
@@ -701,8 +754,9 @@ static int cx(cg *g, int32_t ni, int hint)
             break;
         int base = g->top;
         int np = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
-            np++;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next, np++)
+            if (!lc_is_scalar(node(g, x)->type) || np >= f->np || !lc_is_scalar(f->ptype[np]))
+                return delegate(g, ni, hint, n->type == T_VOID ? 0 : 1);
         g->top += np;
         if (g->top > g->fc->nreg)
             g->fc->nreg = g->top;
@@ -720,11 +774,157 @@ static int cx(cg *g, int32_t ni, int hint)
     default:
         break;
     }
-    g->fail = true;
-    return hint;
+    if (!scalar && n->type != T_VOID) { /* not a scalar where one is read */
+        g->fail = true;
+        return hint;
+    }
+    return delegate(g, ni, hint, scalar ? 1 : 0);
 }
 
 static void cs(cg *g, int32_t ni);
+
+/* n consecutive temporaries (a run for a value of several doubles) */
+static int tmpn(cg *g, int n)
+{
+    int r = g->top;
+    g->top += n;
+    if (g->top > g->fc->nreg)
+        g->fc->nreg = g->top;
+    return r;
+}
+
+/* Copies the run of n registers (or globals: from_global) at r to the run at d. */
+static void copy_run(cg *g, int d, int r, int n, bool from_global)
+{
+    for (int i = 0; i < n && (d != r || from_global); i++)
+        emit(g, from_global ? O_GLD : O_MOV, d + i, r + i, 0);
+}
+
+/* Rounds the run of a value of type t at register r in place, as lc_conv_value. */
+static void conv_run(cg *g, int t, int r)
+{
+    if (lc_is_scalar(t)) {
+        if (t != T_DOUBLE)
+            ins(g, emit(g, O_CONV, r, r, 0))->t = (uint8_t)t;
+        return;
+    }
+    if (t == T_V3F) {
+        for (int i = 0; i < 3; i++)
+            ins(g, emit(g, O_CONV, r + i, r + i, 0))->t = T_FLOAT;
+        return;
+    }
+    if (t == T_V3D)
+        return;
+    const lc_type *ty = &g->m->types.data[t];
+    for (int f = 0; f < ty->nf; f++)
+        conv_run(g, ty->ftype[f], r + ty->foff[f]);
+}
+
+/* Compiles expression ni of any type: the first register of the run holding its value (a
+ * local's own run, or dst, a run of the caller of the value's size). Scalars are cx's; the
+ * values of several doubles are copied: variables, fields, constructors, assignments,
+ * conditionals. */
+static int cxv(cg *g, int32_t ni, int dst)
+{
+    if (g->fail)
+        return dst;
+    const lc_node *n = node(g, ni);
+    if (lc_is_scalar(n->type))
+        return cx(g, ni, dst);
+    int sz = lc_type_size(g->m, n->type);
+    switch (n->op) {
+    case N_LOCAL:
+    case N_GLOBAL:
+    case N_FIELD: {
+        bool global;
+        int slot = place(g, ni, &global);
+        if (slot < 0)
+            break;
+        if (!global)
+            return slot;
+        copy_run(g, dst, slot, sz, true);
+        return dst;
+    }
+    case N_CTOR: {
+        if (n->a < 0) {
+            for (int i = 0; i < sz; i++)
+                ins(g, emit(g, O_CONST, dst + i, 0, 0))->k = 0;
+            return dst;
+        }
+        int off = 0;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next) {
+            int xs = lc_type_size(g->m, node(g, x)->type);
+            if (off + xs > sz) {
+                g->fail = true;
+                return dst;
+            }
+            int save = g->top;
+            int r = cxv(g, x, dst + off);
+            copy_run(g, dst + off, r, xs, false);
+            g->top = save;
+            off += xs;
+        }
+        return dst;
+    }
+    case N_ASSIGN: {
+        bool global;
+        int slot = place(g, n->a, &global);
+        if (slot < 0 || lc_type_size(g->m, node(g, n->a)->type) != sz)
+            break;
+        int r = cxv(g, n->b, dst);
+        for (int i = 0; i < sz; i++)
+            emit(g, global ? O_GST : O_MOV, slot + i, r + i, 0);
+        return r;
+    }
+    case N_COND: {
+        int r = cx(g, n->a, tmp(g));
+        int32_t jelse = emit(g, O_JZ, 0, r, -1);
+        copy_run(g, dst, cxv(g, n->b, dst), sz, false);
+        int32_t jend = emit(g, O_JMP, 0, -1, 0);
+        patch(g, jelse, here(g));
+        copy_run(g, dst, cxv(g, n->c, dst), sz, false);
+        patch(g, jend, here(g));
+        return dst;
+    }
+    default:
+        break;
+    }
+    return delegate(g, ni, dst, sz);
+}
+
+/* `produce` (or `nproduce`) of the modules [first, first + n) of the model's sms: each
+ * module's parameters computed into a run of temporaries and appended; `produce` ends the
+ * body. */
+static void produce(cg *g, const lc_node *n)
+{
+    for (int32_t i = 0; i < n->b && !g->fail; i++) {
+        const lc_modref *sm = &g->m->sms.data[n->a + i];
+        const lc_module *mod = &g->m->mods.data[sm->mod];
+        int save = g->top;
+        int base = tmpn(g, mod->size);
+        int off = 0, a = 0;
+        for (int32_t x = sm->args; x >= 0; x = node(g, x)->next, a++) {
+            int xs = a < mod->np ? lc_type_size(g->m, mod->ptype[a]) : -1;
+            if (xs != lc_type_size(g->m, node(g, x)->type) || off + xs > mod->size) {
+                g->fail = true;
+                return;
+            }
+            int s2 = g->top;
+            int r = cxv(g, x, base + off);
+            copy_run(g, base + off, r, xs, false);
+            g->top = s2;
+            off += xs;
+        }
+        if (off != mod->size) {
+            g->fail = true;
+            return;
+        }
+        emit(g, O_PROD, n->a + i, base, 0);
+        g->top = save;
+    }
+    if (!n->fn)
+        emit(g, O_DONE, 0, 0, 0);
+}
 
 /* Compiles condition c and a jump taken when it is false (to patch); a comparison computed
  * last into its temporary becomes a compare-and-jump. */
@@ -815,16 +1015,22 @@ static void cs(cg *g, int32_t ni)
         switch (n->op) {
         case S_EXPR: {
             const lc_node *e = node(g, n->a);
-            if (!lc_is_scalar(e->type) && !(e->op == N_CALLU && e->type == T_VOID))
-                g->fail = true;
-            else
+            if (lc_is_scalar(e->type) || e->type == T_VOID)
                 (void)cx(g, n->a, tmp(g));
+            else
+                (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, e->type)));
             break;
         }
         case S_DECL:
-            if (!lc_is_scalar(n->type))
-                g->fail = true;
-            else if (n->a >= 0) {
+            if (!lc_is_scalar(n->type)) { /* into its run, then rounded as exec does */
+                int sz = lc_type_size(g->m, n->type);
+                if (n->a >= 0) {
+                    copy_run(g, n->slot, cxv(g, n->a, n->slot), sz, false);
+                    conv_run(g, n->type, n->slot);
+                } else
+                    for (int i = 0; i < sz; i++)
+                        ins(g, emit(g, O_CONST, n->slot + i, 0, 0))->k = 0;
+            } else if (n->a >= 0) {
                 int r = cx(g, n->a, tmp(g));
                 if (n->type == T_DOUBLE)
                     mov(g, n->slot, r);
@@ -858,7 +1064,13 @@ static void cs(cg *g, int32_t ni)
             loop(g, n);
             break;
         case S_RETURN:
-            if (n->a < 0)
+            if (g->body) { /* a body's return: its value is dropped, nothing produced */
+                if (n->a >= 0 && lc_is_scalar(node(g, n->a)->type))
+                    (void)cx(g, n->a, tmp(g));
+                else if (n->a >= 0)
+                    (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, node(g, n->a)->type)));
+                emit(g, O_RET0, 0, 0, 0);
+            } else if (n->a < 0)
                 emit(g, O_RET0, 0, 0, 0);
             else if (!lc_is_scalar(n->type))
                 g->fail = true;
@@ -885,7 +1097,13 @@ static void cs(cg *g, int32_t ni)
             break;
         case S_NOP:
             break;
-        default: /* produce, switch: the tree walker's */
+        case S_PRODUCE:
+            if (!g->body)
+                g->fail = true;
+            else
+                produce(g, n);
+            break;
+        default: /* switch: the tree walker's */
             g->fail = true;
             break;
         }
@@ -893,17 +1111,14 @@ static void cs(cg *g, int32_t ni)
     }
 }
 
-/* Compiles function f into p->fn[f]; false when it cannot be compiled. */
-static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p, int f, bool *nomem)
+/* Compiles the statements `body` with fsize doubles of locals into p->fn[f]; false when they
+ * cannot be compiled. */
+static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int f, int32_t body,
+                         int fsize, bool is_body, bool *nomem)
 {
-    const lc_function *fn = &m->funcs.data[f];
     lc_fcode *fc = &p->fn[f];
     fc->ins.len = 0;
-    if ((fn->ret != T_VOID && !lc_is_scalar(fn->ret)) || fn->body < 0)
-        return false;
-    for (int i = 0; i < fn->np; i++)
-        if (!lc_is_scalar(fn->ptype[i]) || fn->pref[i])
-            return false;
+    fc->fsize = fsize;
     /* twice: the first pass finds the constants, the second loads them on entry */
     cg g;
     double konst[64] = {0};
@@ -915,17 +1130,18 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
         g.m = m;
         g.p = p;
         g.fc = fc;
-        g.fsize = fn->fsize;
+        g.body = is_body;
+        g.fsize = fsize;
         g.pending_at = -1;
         g.label_at = (size_t)-1;
         g.brk = g.cont = -1;
         g.nkonst = nkonst;
         memcpy(g.konst, konst, sizeof konst);
-        g.tbase = g.top = fn->fsize + nkonst;
+        g.tbase = g.top = fsize + nkonst;
         fc->nreg = g.top;
         for (int c = 0; c < nkonst; c++)
-            ins(&g, emit(&g, O_CONST, fn->fsize + c, 0, 0))->k = konst[c];
-        cs(&g, fn->body);
+            ins(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = konst[c];
+        cs(&g, body);
         emit(&g, O_RET0, 0, 0, 0);
         if (g.fail)
             break;
@@ -936,22 +1152,41 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
     return !g.fail;
 }
 
+/* Compiles function f into p->fn[f]; false when it cannot be compiled. */
+static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p, int f, bool *nomem)
+{
+    const lc_function *fn = &m->funcs.data[f];
+    p->fn[f].ins.len = 0;
+    if ((fn->ret != T_VOID && !lc_is_scalar(fn->ret)) || fn->body < 0)
+        return false;
+    for (int i = 0; i < fn->np; i++)
+        if (!lc_is_scalar(fn->ptype[i]) || fn->pref[i])
+            return false;
+    return compile_code(ctx, m, p, f, fn->body, fn->fsize, false, nomem);
+}
+
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
 {
     memset(p, 0, sizeof *p);
-    if (!m->funcs.len)
+    const lc_rules *sets[3] = {&m->main, &m->decomp, &m->interp};
+    size_t nfunc = m->funcs.len, n = nfunc;
+    for (int k = 0; k < 3; k++) {
+        p->body0[k] = n;
+        n += sets[k]->prods.len;
+    }
+    if (!n)
         return CBM_OK;
-    p->fn = cbm__calloc(ctx, m->funcs.len, sizeof *p->fn);
+    p->fn = cbm__calloc(ctx, n, sizeof *p->fn);
     if (!p->fn)
         return CBM_E_NOMEM;
-    p->n = m->funcs.len;
+    p->n = n;
     /* every function is assumed compiled, and those that cannot be, with their callers, are
      * taken out until nothing changes */
-    for (size_t f = 0; f < p->n; f++)
+    for (size_t f = 0; f < nfunc; f++)
         p->fn[f].compiled = true;
     for (bool changed = true; changed;) {
         changed = false;
-        for (size_t f = 0; f < p->n; f++) {
+        for (size_t f = 0; f < nfunc; f++) {
             if (!p->fn[f].compiled)
                 continue;
             bool nomem = false;
@@ -963,6 +1198,19 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             }
         }
     }
+    /* then the production bodies, which call the compiled functions */
+    for (int k = 0; k < 3; k++)
+        for (size_t q = 0; q < sets[k]->prods.len; q++) {
+            const lc_production *pr = &sets[k]->prods.data[q];
+            size_t f = p->body0[k] + q;
+            bool nomem = false;
+            p->fn[f].compiled =
+                pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body, pr->fsize, true, &nomem);
+            if (nomem)
+                return CBM_E_NOMEM;
+            if (!p->fn[f].compiled)
+                p->fn[f].ins.len = 0;
+        }
     return CBM_OK;
 }
 

@@ -36,6 +36,15 @@ typedef struct lc_vm {
     char errmsg[160];
     int32_t at;      /* text offset of the statement being executed (runtime messages) */
     int32_t err_pos; /* where the first runtime error happened, -1: unknown */
+    /* `produce` of a compiled production body: appends module sm (an index of the model's
+     * sms) with its parameters v (the module's size in doubles) to the string being produced;
+     * false after reporting an error (a parameter not finite, out of memory) */
+    bool (*produce)(void *ud, int sm, const double *v);
+    /* an expression the register code leaves to the tree walker: node ni evaluated on frame fr
+     * (whose registers end at fr + nreg, where the walker's frames start) into out (room for
+     * MAXSZ + 1 doubles); false after an error */
+    bool (*eval)(void *ud, int32_t ni, double *fr, int nreg, double *out);
+    void *host; /* the ud of produce and eval */
 } lc_vm;
 
 /* The instructions (lc_code.c runs them, lc_native.c translates them to C). */
@@ -101,7 +110,11 @@ enum {
     O_SIN,
     O_COS,
     O_SQRT,
-    O_EXP
+    O_EXP,
+    /* production bodies */
+    O_PROD, /* appends module sm d with its parameters in registers a.. (vm->produce) */
+    O_DONE, /* `produce` ends the body: the production applied (the run returns 1) */
+    O_EVAL  /* node a evaluated by the tree walker (vm->eval), its first b doubles to d.. */
 };
 
 typedef struct lc_ins {
@@ -114,23 +127,46 @@ typedef struct lc_ins {
 
 typedef struct lc_fcode {
     CBM_ARRAY(lc_ins) ins;
+    int fsize;     /* the locals (and parameters, formals) the frame holds on entry */
     int nreg;      /* frame doubles: locals, then temporaries */
     bool compiled; /* false: the tree walker runs the function */
 } lc_fcode;
 
-/* The register code of a model's functions, by function index. */
+/* The register code of a model's functions, by function index, then of its production bodies:
+ * those of the main rules from body0[0], of the decomposition rules from body0[1], of the
+ * interpretation rules from body0[2], each by production index. */
 typedef struct lc_native lc_native; /* lc_native.c */
+
+enum { LC_MAIN, LC_DECOMP, LC_INTERP };
 
 typedef struct lc_program {
     lc_fcode *fn;
     size_t n;
+    size_t body0[3];
     lc_native *native; /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
 
-/* Compiles every function that can be compiled; CBM_E_NOMEM only (a function that cannot be
- * compiled is left to the tree walker). */
+/* Compiles every function and every production body that can be compiled; CBM_E_NOMEM only
+ * (a function or body that cannot be compiled is left to the tree walker).
+ *
+ * A production body compiles when its statements do (as a function's) and its values are
+ * scalars or runs of them: a struct or vector local, global, field, constructor, assignment or
+ * conditional is copied register by register, and `produce`/`nproduce` writes each module from
+ * a run of registers through vm->produce. An expression the compiler does not handle (vector
+ * arithmetic, the built-ins other than the math ones, contexts, calls of functions left to the
+ * walker) is evaluated by the tree walker on the body's frame (O_EVAL through vm->eval), so the
+ * body still compiles; statements it does not handle (switch) leave the whole body to the
+ * walker. The run of a body returns 1 when it produced (the production applied), 0 when it
+ * ended without. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
+
+/* The production body p of rule set `set` (LC_MAIN ...): its index in p->fn, -1: none. */
+static inline int cbm__lc_body(const lc_program *p, int set, size_t prod)
+{
+    size_t end = set == LC_INTERP ? p->n : p->body0[set + 1];
+    return p->fn && p->body0[set] + prod < end ? (int)(p->body0[set] + prod) : -1;
+}
 
 /* Runs compiled function f on the frame fr (its parameters in their slots, room for nreg
  * doubles); the result (0 for void). After a runtime error vm->err is set and the result is

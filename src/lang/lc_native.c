@@ -58,6 +58,8 @@ extern char **environ;
         void (*fault)(struct lc_rt *, int32_t, int);                                               \
         double (*math)(int, double, double);                                                       \
         double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
+        int (*prod)(struct lc_rt *, int32_t, int, const double *);                                 \
+        int (*eval)(struct lc_rt *, int32_t, int32_t, double *, int, double *);                    \
     };
 LC_RT_STRUCT
 #define LC_STR_(...) #__VA_ARGS__
@@ -119,6 +121,26 @@ static double rt_bin(struct lc_rt *R, int32_t at, int op, int t, double a, doubl
     return r;
 }
 
+static int rt_prod(struct lc_rt *R, int32_t at, int sm, const double *v)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    if (vm->produce(vm->host, sm, v))
+        return 1;
+    R->failed = 1;
+    return 0;
+}
+
+static int rt_eval(struct lc_rt *R, int32_t at, int32_t ni, double *fr, int nreg, double *out)
+{
+    lc_vm *vm = R->vm;
+    vm->at = at;
+    if (vm->eval(vm->host, ni, fr, nreg, out))
+        return 1;
+    R->failed = 1;
+    return 0;
+}
+
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
     struct lc_rt R = {vm->glob,
@@ -134,7 +156,9 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_spend_call,
                       rt_fault,
                       rt_math,
-                      rt_bin};
+                      rt_bin,
+                      rt_prod,
+                      rt_eval};
     return p->native->fn[f](fr, &R, vm->at);
 }
 
@@ -207,7 +231,7 @@ static void put_const(src *s, int d, double k)
 
 static const char *const cmp_c[] = {"<", ">", "<=", ">=", "==", "!="};
 
-static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins *x)
+static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const lc_ins *x)
 {
     char a[64], g[48];
     snprintf(a, sizeof a, "r%d", x->a);
@@ -355,6 +379,28 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
             p->fn[x->a].nreg, F_DEEP, x->a, x->d);
         break;
     }
+    case O_PROD: { /* the module's parameters from its run of registers */
+        int size = m->mods.data[m->sms.data[x->d].mod].size;
+        if (!size) {
+            put(s, "if (!R->prod(R, at, %d, 0)) return 0;", x->d);
+            break;
+        }
+        put(s, "{ double v[%d] = {", size);
+        for (int i = 0; i < size; i++)
+            put(s, "%sr%d", i ? ", " : "", x->a + i);
+        put(s, "}; if (!R->prod(R, at, %d, v)) return 0; }", x->d);
+        break;
+    }
+    case O_DONE:
+        put(s, "return 1;");
+        break;
+    case O_EVAL: /* the walker reads and writes the locals in the frame (put_function) */
+        put(s, "{ double v[%d]; if (!R->eval(R, at, %d, fr, %d, v)) return 0;", MAXSZ + 1, x->a,
+            p->fn[f].nreg);
+        for (int i = 0; i < x->b; i++)
+            put(s, " r%d = v[%d];", x->d + i, i);
+        put(s, " }");
+        break;
     case O_RET:
         put(s, "return r%d;", x->a);
         break;
@@ -367,11 +413,20 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, const lc_ins
 static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
 {
     const lc_fcode *fc = &p->fn[f];
-    int fsize = m->funcs.data[f].fsize;
+    int fsize = fc->fsize;
     put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
-    /* the locals start as the frame holds them (the loop reads the frame itself) */
+    /* the locals start as the frame holds them (the loop reads the frame itself); where the
+     * tree walker evaluates an expression (O_EVAL) it reads and writes them there, so they stay
+     * in the frame */
+    bool in_frame = false;
+    for (size_t i = 0; i < fc->ins.len; i++)
+        in_frame = in_frame || fc->ins.data[i].op == O_EVAL;
     for (int r = 0; r < fc->nreg; r++)
-        put(s, r < fsize ? "    double r%d = fr[%d];\n" : "    double r%d = 0;\n", r, r);
+        put(s,
+            r >= fsize  ? "    double r%d = 0;\n"
+            : !in_frame ? "    double r%d = fr[%d];\n"
+                        : "#define r%d fr[%d]\n",
+            r, r);
     put(s, "    (void)fr; (void)R; (void)at;\n");
     for (size_t i = 0; i < fc->ins.len; i++) {
         const lc_ins *x = &fc->ins.data[i];
@@ -379,10 +434,12 @@ static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
         if (x->at >= 0)
             put(s, " at = %d;", (int)x->at);
         put(s, " ");
-        put_ins(s, p, m, x);
+        put_ins(s, p, m, f, x);
         put(s, "\n");
     }
     put(s, "L%zu: return 0;\n}\n", fc->ins.len);
+    for (int r = 0; in_frame && r < fsize; r++)
+        put(s, "#undef r%d\n", r);
 }
 
 /* ---------------------------------------------------------------- compile, cache, load */
@@ -534,7 +591,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     for (size_t f = 0; f < p->n; f++)
         ncompiled += p->fn[f].compiled;
     if (!ncompiled || !cache_dir) {
-        *why = "no function of the model compiles to native code";
+        *why = "no function or production body of the model compiles to native code";
         return false;
     }
     src s = {ctx, {NULL, 0, 0}, false};

@@ -67,7 +67,8 @@ struct lpfg {
     /* models with mechanics: the module of the string each module of the interpretation came
      * from (empty: the interpretation is the string itself) */
     CBM_ARRAY(size_t) origin;
-    bool rewriting; /* inside a derivation pass: mechanics calls are refused */
+    bool rewriting;   /* inside a derivation pass: mechanics calls are refused */
+    bool walk_bodies; /* the tree walker runs every production body (tests compare) */
 };
 
 /* ---------------------------------------------------------------- evaluation */
@@ -1132,6 +1133,43 @@ static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
     return CBM_OK;
 }
 
+/* `produce` of a compiled body (lc_vm.produce): module sm with its parameters v, computed and
+ * converted by the register code; checked and appended as produce() does. */
+static bool produce_compiled(void *ud, int smi, const double *v)
+{
+    cbm_lsys *ls = ud;
+    lpfg *lp = ls->lp;
+    const lc_modref *sm = &lp->m.sms.data[smi];
+    const lc_module *m = &lp->m.mods.data[sm->mod];
+    int off = 0, a = 0;
+    for (int32_t x = sm->args; x >= 0; x = lp->m.nodes.data[x].next, a++) {
+        int sz = lc_type_size(&lp->m, m->ptype[a]);
+        for (int q = 0; q < sz; q++)
+            if (!isfinite(v[off + q]) && !nonfinite(ls, lp->m.nodes.data[x].pos, m->name))
+                return false;
+        off += sz;
+    }
+    cbm_status s = push_mod(ls->ctx, lp->out, m->code, v, m->size);
+    if (s != CBM_OK) {
+        rt_error(lp, s, "out of memory");
+        return false;
+    }
+    return true;
+}
+
+/* An expression of a compiled body left to the tree walker (lc_vm.eval): its frames above the
+ * body's registers. */
+static bool eval_walker(void *ud, int32_t ni, double *fr, int nreg, double *out)
+{
+    cbm_lsys *ls = ud;
+    lpfg *lp = ls->lp;
+    size_t save = lp->vm.sp;
+    lp->vm.sp = (size_t)(fr - lp->vm.stack) + (size_t)nreg;
+    ev(ls, ni, fr, out);
+    lp->vm.sp = save;
+    return lp->vm.err == CBM_OK;
+}
+
 enum { X_NORMAL, X_BREAK, X_CONTINUE, X_RETURN };
 
 static int exec(cbm_lsys *ls, int32_t ni, double *fr)
@@ -1290,6 +1328,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
     lpfg *lp = ls->lp;
     int m = lp->m.bycode[src->sym[i] & 0x7f];
     bool back = nxt && lp->backward;
+    int which = set == &lp->m.main ? LC_MAIN : set == &lp->m.decomp ? LC_DECOMP : LC_INTERP;
     /* the productions of the active group first, then those of group 0 (as lpfg) */
     for (int pass = lp->group != 0 ? 0 : 1; pass < 2; pass++)
         for (size_t p = 0; p < set->prods.len; p++) {
@@ -1343,7 +1382,12 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
             if (!spend(lp, false))
                 return 0;
-            exec(ls, pr->body, fr);
+            int bi = lp->walk_bodies ? -1 : cbm__lc_body(&lp->prog, which, p);
+            if (bi >= 0 && lp->prog.fn[bi].compiled) { /* the register (or native) code */
+                lp->vm.sp = (size_t)lp->prog.fn[bi].nreg;
+                lp->produced = cbm__lc_run(&lp->prog, bi, fr, &lp->vm) != 0;
+            } else
+                exec(ls, pr->body, fr);
             if (lp->vm.err != CBM_OK)
                 return 0;
             if (lp->produced)
@@ -1734,6 +1778,29 @@ void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_
     *modules = lp->m.mods.len;
 }
 
+void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_t *walked)
+{
+    const lc_program *p = &ls->lp->prog;
+    *compiled = *total = *walked = 0;
+    for (size_t f = p->fn ? p->body0[LC_MAIN] : 0; f < p->n; f++) {
+        *compiled += p->fn[f].compiled;
+        ++*total;
+        for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
+            *walked += p->fn[f].ins.data[i].op == O_EVAL;
+    }
+}
+
+bool cbm__lpfg_body_compiled(const cbm_lsys *ls, int set, size_t index)
+{
+    int f = cbm__lc_body(&ls->lp->prog, set, index);
+    return f >= 0 && ls->lp->prog.fn[f].compiled;
+}
+
+void cbm__lpfg_walk_bodies(cbm_lsys *ls, bool on)
+{
+    ls->lp->walk_bodies = on;
+}
+
 bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why)
 {
     const char *dummy;
@@ -1844,6 +1911,12 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     CBM_TRY(cbm__lc_codegen(ctx, &lp->m, &lp->prog));
     lp->vm.max_call_depth = cbm_context_limits(ctx)->max_call_depth;
     lp->vm.stack_cap = 1u << 16;
+    lp->vm.produce = produce_compiled;
+    lp->vm.eval = eval_walker;
+    lp->vm.host = ls;
+    for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
+        if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
+            lp->prog.fn[f].compiled = false;
     lp->vm.stack = cbm__calloc(ctx, lp->vm.stack_cap, sizeof(double));
     lp->vm.glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
     if (!lp->vm.stack || !lp->vm.glob)
