@@ -312,5 +312,3 @@ TEST(modal_cut_and_bad_input)
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }
-
-

@@ -356,8 +356,7 @@ cbm_status cbm__modal_start_state(cbm_motion *m, const double *q, const double *
         }
         for (size_t i = 0; i < nq; i++)
             if (!isfinite(src[j][i]))
-                return cbm__fail(m->d.ctx, CBM_E_INVALID, "motion: start state %zu not finite",
-                                 i);
+                return cbm__fail(m->d.ctx, CBM_E_INVALID, "motion: start state %zu not finite", i);
         cbm__dyn_apply(&m->d, 0.0, 1.0, src[j], m->y);
         project(md, nq, m->y, dst[j]);
     }
@@ -429,7 +428,8 @@ cbm_status cbm__modal_step(cbm_motion *m)
         if (!md->gb_valid)
             base_projections(m);
         for (size_t r = 0; r < k; r++)
-            md->p[r] += md->gb[3 * r] * ba1.x + md->gb[3 * r + 1] * ba1.y + md->gb[3 * r + 2] * ba1.z;
+            md->p[r] +=
+                md->gb[3 * r] * ba1.x + md->gb[3 * r + 1] * ba1.y + md->gb[3 * r + 2] * ba1.z;
         bv1 = v3_add(m->bv, v3_scale(v3_add(m->ba, ba1), 0.5 * dt));
         bd1 = v3_add(v3_madd(m->bd, m->bv, dt), v3_scale(v3_add(m->ba, ba1), 0.25 * dt * dt));
     }
