@@ -31,7 +31,7 @@ w=$(awk -F, 'NR > 1 && $4 == 0 && $1 == 0 { print $6 }' "$tmp/wood.csv")
 l=$(awk -F, 'NR > 1 && $4 == 0 && $1 == 0 { print $6 }' "$tmp/leaves.csv")
 awk -v w="$w" -v l="$l" 'BEGIN { if (!(w > 0 && l > 1.2 * w)) { print "wood", w, "leaves", l; exit 1 } }'
 # --sway-modes: the modal motion of the lowest 30 modes follows the full one (the stem's tip
-# within 1 % of its largest displacement at every frame (measured 0.04 %; 1.3 % with 10 modes); docs/dynamics.md, "Modal reduction")
+# within 1 % of its largest displacement at every frame (measured 0.04 %, 1.3 % with 10 modes; docs/dynamics.md, "Modal reduction")
 "$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 --sway-modes 30 -o "$tmp/modal.csv"
 paste -d, "$tmp/motion.csv" "$tmp/modal.csv" | awk -F, 'NR > 1 && $4 == 0 {
     d = ($6 - $14) ^ 2 + ($7 - $15) ^ 2 + ($8 - $16) ^ 2; u = $6 ^ 2 + $7 ^ 2 + $8 ^ 2
