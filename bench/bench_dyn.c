@@ -4,7 +4,13 @@
  * otherwise a lateral on a uniformly chosen earlier segment, 2 cm segments, pipe-model radii,
  * E = 10 GPa, 700 kg/m^3, 5 g leaves on the tips, seed 7), solved for equilibrium first.
  *
- * usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream]
+ * usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream] [--modal K]
+ *
+ * --modal K adds the modal motion of the lowest K modes (CBM_MOTION_MODAL): its set-up (the K
+ * modes), a step (timed over at least 10^5 steps, the same tip load) and one output frame (the
+ * full rotations rebuilt, cbm_motion_rotations), CPU times; then its set-up for a gusty wind
+ * (10 m/s at 10 m, log profile, intensity 0.2: the drag's projections) and a windy step (timed
+ * over 10^4 steps).
  *
  * --stream adds the CPU time of reading, once, as many bytes as a still-air step reads from
  * memory when its arrays do not fit in the cache (STEP_BYTES per segment), summed with four
@@ -123,7 +129,7 @@ done:
 int main(int argc, char **argv)
 {
     size_t sizes[16] = {2500, 10000, 100000};
-    int nsizes = 3, modes = 10, steps = 1000;
+    int nsizes = 3, modes = 10, steps = 1000, modal = 0;
     bool stream = false;
     double sink = 0.0;
     for (int i = 1; i < argc; i++) {
@@ -137,17 +143,22 @@ int main(int argc, char **argv)
             steps = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--stream"))
             stream = true;
+        else if (!strcmp(argv[i], "--modal") && i + 1 < argc)
+            modal = atoi(argv[++i]);
         else {
-            fprintf(stderr,
-                    "usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream]\n");
+            fprintf(stderr, "usage: bench_dyn [--sizes N,N,...] [--modes K] [--steps S] [--stream] "
+                            "[--modal K]\n");
             return 2;
         }
     }
-    if (modes < 1 || steps < 1)
+    if (modes < 1 || steps < 1 || modal < 0)
         return 2;
     printf("segments,modes,modes_s,modes_cpu_s,f1_hz,f%d_hz,steps,steps_per_s,ms_per_step,"
-           "cpu_ms_per_step%s\n",
-           modes, stream ? ",stream_read_ms" : "");
+           "cpu_ms_per_step%s%s\n",
+           modes, stream ? ",stream_read_ms" : "",
+           modal ? ",modal_k,modal_setup_cpu_s,modal_cpu_ms_per_step,modal_frame_cpu_ms,"
+                   "modal_wind_setup_cpu_s,modal_wind_cpu_ms_per_step"
+                 : "");
     for (int k = 0; k < nsizes; k++) {
         cbm_context *ctx = NULL;
         cbm_context_def cd = cbm_context_def_default();
@@ -183,6 +194,42 @@ int main(int argc, char **argv)
                f[modes - 1], steps, steps / ts, 1e3 * ts / steps, 1e3 * cs / steps);
         if (stream)
             printf(",%.4f", 1e3 * stream_read(STEP_BYTES * sizes[k], &sink));
+        if (modal) {
+            cbm_motion *mm = NULL;
+            md.method = CBM_MOTION_MODAL;
+            md.modes = (size_t)modal;
+            c0 = cpu();
+            if (cbm_motion_create(p, &md, &mm) != CBM_OK) {
+                fprintf(stderr, "bench_dyn: modal: %s\n", cbm_context_last_error(ctx));
+                return 1;
+            }
+            double csu = cpu() - c0;
+            cbm_motion_add_force(mm, sizes[k] - 1, (cbm_vec3){0, -1, 0});
+            int ms = steps < 100000 ? 100000 : steps;
+            c0 = cpu();
+            for (int s = 0; s < ms; s++)
+                if (cbm_motion_step(mm) != CBM_OK)
+                    return 1;
+            double cms = cpu() - c0;
+            c0 = cpu();
+            const double *q = cbm_motion_rotations(mm);
+            double cf = cpu() - c0;
+            sink += q[0];
+            printf(",%d,%.4f,%.6f,%.4f", modal, csu, 1e3 * cms / ms, 1e3 * cf);
+            cbm_wind_def wd = cbm_wind_def_default();
+            cbm_gust_def gd = cbm_gust_def_default();
+            gd.intensity = 0.2;
+            c0 = cpu();
+            if (cbm_motion_set_wind(mm, &wd, 10.0, &gd) != CBM_OK)
+                return 1;
+            double cws = cpu() - c0;
+            c0 = cpu();
+            for (int s = 0; s < 10000; s++)
+                if (cbm_motion_step(mm) != CBM_OK)
+                    return 1;
+            printf(",%.4f,%.6f", cws, 1e3 * (cpu() - c0) / 10000);
+            cbm_motion_destroy(mm);
+        }
         printf("\n");
         fflush(stdout);
         free(f);

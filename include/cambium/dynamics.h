@@ -39,14 +39,31 @@ extern "C" {
 CBM_API cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz,
                                    double *shapes);
 
+/// How a motion integrates (docs/dynamics.md, "Modal reduction").
+typedef enum cbm_motion_method {
+    /// All 3n joint rotations: O(n) per step (the default).
+    CBM_MOTION_FULL = 0,
+    /// The lowest K modes only (computed once at creation, O(K n)): O(K) per step without wind
+    /// and with gusts O(K^3); the forces are projected on the modes, the wind's drag linearised
+    /// about the still plant (quasi-steady, with its aerodynamic damping); the full shape is
+    /// rebuilt only when asked (cbm_motion_rotations, cbm_motion_displacement). An approximation:
+    /// the truncated modes' response is dropped (docs/dynamics.md states its error).
+    CBM_MOTION_MODAL
+} cbm_motion_method;
+
 /// Time stepping (Newmark's average acceleration: implicit, unconditionally stable, second
 /// order, energy-conserving without damping).
 typedef struct cbm_motion_def {
     double dt;            ///< s (> 0); default 1e-3
     double damping_ratio; ///< zeta of Rayleigh damping, exact at the two lowest modes; default 0
     /// Rayleigh coefficients added to those of damping_ratio: C += alpha M + beta K
-    double rayleigh_alpha; ///< 1/s, default 0
-    double rayleigh_beta;  ///< s, default 0
+    double rayleigh_alpha;    ///< 1/s, default 0
+    double rayleigh_beta;     ///< s, default 0
+    cbm_motion_method method; ///< default CBM_MOTION_FULL
+    /// CBM_MOTION_MODAL: the number of modes K (0: from mode_cut_hz); at most 3n. Default 0.
+    size_t modes;
+    /// CBM_MOTION_MODAL with modes 0: every mode below this frequency (Hz, > 0). Default 0.
+    double mode_cut_hz;
 } cbm_motion_def;
 
 /// Defaults: dt 1e-3 s, no damping.
@@ -183,6 +200,10 @@ CBM_API cbm_status cbm_motion_start_state(cbm_motion *m, const double *q, const 
 
 /// Fixed-point iterations the last step's drag took (0 without wind).
 CBM_API int cbm_motion_drag_iterations(const cbm_motion *m);
+
+/// The number of modes a CBM_MOTION_MODAL motion integrates (0 for CBM_MOTION_FULL); freqs_hz
+/// (optional) receives a pointer to their frequencies (Hz, ascending), valid while m lives.
+CBM_API size_t cbm_motion_modes(const cbm_motion *m, const double **freqs_hz);
 
 /* ---- the bend workbench's motion (docs/bend.md, "Motion") ---- */
 

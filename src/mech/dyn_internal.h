@@ -190,4 +190,65 @@ void cbm__drag_free(cbm_context *ctx, cbm__drag *g);
 void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v, cbm_vec3 vb,
                      double *f);
 
+/* The modal reduction of a motion (modal.c, CBM_MOTION_MODAL): K mass-normalised modes phi_r
+ * (M-orthonormal, phi_r^T K phi_r = w_r^2), the modal coordinates eta (q = sum eta_r phi_r) and
+ * their rates, and the projections of the loads that do not change during a run. */
+typedef struct cbm__modal {
+    size_t k;
+    double *phi;            /* k x 3n, mode after mode */
+    double *w, *fhz;        /* k: rad/s, Hz */
+    double *eta, *ed, *edd; /* k: coordinates, rates, accelerations */
+    double *p;              /* k: forces added for the next step, projected */
+    double *cr;             /* k: Rayleigh damping of each mode, alpha + beta w^2 */
+    double *gb;             /* 3k: phi_r^T of the base's fictitious force per unit acceleration */
+    bool gb_valid;
+    /* wind, linearised about the still plant: g(t, v) ~ s|s| g_mean + |s| (G v + G_b v_base),
+     * s = U_ref(t) / U_ref (the gusts are uniform, the drag is homogeneous of degree 2) */
+    bool wind;
+    double s_last; /* |s| the matrix a was factorised for (NAN: none) */
+    double *pw;    /* k: phi^T g_mean */
+    double *ca;    /* k x k: -phi^T G phi (symmetric, positive semi-definite) */
+    double *cb;    /* k x 3: phi^T G_b */
+    double *a, *r; /* k x k: the step's matrix (Cholesky factor); k: work */
+    double *qbuf;  /* 3n: the rebuilt rotations */
+    bool q_stale;
+} cbm__modal;
+
+/* A motion (motion.c; its modal reduction in modal.c). */
+struct cbm_motion {
+    cbm__dyn d;
+    size_t nq;
+    double dt, t, alpha, beta;
+    double *q, *v, *a, *f, *w1, *w2, *y;
+    /* loads in time: the wind's drag (drag.c) and the base's motion */
+    bool wind;
+    cbm__drag drag;
+    double *g, *g2, *rhs; /* 3n: drag forces of two iterates, the step's right-hand side */
+    double *wb;           /* 6n: the base's fictitious wrenches */
+    int iters;
+    bool base_moves;
+    cbm_vec3 ba_next, ba, bv, bd; /* the base's acceleration (next step, now), velocity, disp */
+    /* the fused step (fused_step below): per segment the carried sums of the backward sweep
+     * (6), the twists of the solution (6) and of the next step's right-hand side vector (6, and
+     * 3 for the damping's) */
+    double *gam, *zs, *zw, *thw;
+    bool zw_valid;     /* zw and thw hold the twists of the current state's vectors */
+    bool forced;       /* f holds forces added since the last step */
+    cbm__modal *modal; /* CBM_MOTION_MODAL: the reduced state (modal.c); NULL for the full one */
+};
+
+/* The modal motion (modal.c): the public cbm_motion_* calls hand over when m->modal is set. */
+cbm_status cbm__modal_create(const cbm_plant *plant, cbm_motion *m, size_t count, double cut_hz,
+                             double damping_ratio);
+void cbm__modal_free(cbm_context *ctx, cbm__modal *md, size_t nq);
+cbm_status cbm__modal_step(cbm_motion *m);
+cbm_status cbm__modal_add_force(cbm_motion *m, size_t seg, cbm_vec3 force);
+cbm_status cbm__modal_start_deflected(cbm_motion *m, size_t seg, cbm_vec3 force);
+cbm_status cbm__modal_start_state(cbm_motion *m, const double *q, const double *v);
+cbm_status cbm__modal_set_wind(cbm_motion *m, cbm__drag *nd);
+cbm_status cbm__modal_start_wind_static(cbm_motion *m);
+void cbm__modal_energies(const cbm_motion *m, double *kinetic, double *potential);
+cbm_vec3 cbm__modal_displacement(const cbm_motion *m, size_t seg);
+const double *cbm__modal_rotations(const cbm_motion *m);
+
 #endif

@@ -14,30 +14,9 @@
 #include <math.h>
 #include <string.h>
 
-struct cbm_motion {
-    cbm__dyn d;
-    size_t nq;
-    double dt, t, alpha, beta;
-    double *q, *v, *a, *f, *w1, *w2, *y;
-    /* loads in time: the wind's drag (drag.c) and the base's motion */
-    bool wind;
-    cbm__drag drag;
-    double *g, *g2, *rhs; /* 3n: drag forces of two iterates, the step's right-hand side */
-    double *wb;           /* 6n: the base's fictitious wrenches */
-    int iters;
-    bool base_moves;
-    cbm_vec3 ba_next, ba, bv, bd; /* the base's acceleration (next step, now), velocity, disp */
-    /* the fused step (fused_step below): per segment the carried sums of the backward sweep
-     * (6), the twists of the solution (6) and of the next step's right-hand side vector (6, and
-     * 3 for the damping's) */
-    double *gam, *zs, *zw, *thw;
-    bool zw_valid; /* zw and thw hold the twists of the current state's vectors */
-    bool forced;   /* f holds forces added since the last step */
-};
-
 cbm_motion_def cbm_motion_def_default(void)
 {
-    cbm_motion_def d = {1e-3, 0.0, 0.0, 0.0};
+    cbm_motion_def d = {1e-3, 0.0, 0.0, 0.0, CBM_MOTION_FULL, 0, 0.0};
     return d;
 }
 
@@ -64,6 +43,7 @@ void cbm_motion_destroy(cbm_motion *m)
     cbm__free(ctx, m->zw, 6 * ns * sizeof(double));
     cbm__free(ctx, m->thw, 3 * ns * sizeof(double));
     cbm__drag_free(ctx, &m->drag);
+    cbm__modal_free(ctx, m->modal, m->nq);
     cbm__dyn_free(&m->d);
     cbm__free(ctx, m, sizeof *m);
 }
@@ -229,8 +209,11 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
         !(md.rayleigh_beta >= 0.0) || !isfinite(md.rayleigh_alpha) || !isfinite(md.rayleigh_beta))
         return cbm__fail(ctx, CBM_E_INVALID,
                          "motion: damping_ratio and the Rayleigh coefficients must be >= 0");
+    if (md.method != CBM_MOTION_FULL && md.method != CBM_MOTION_MODAL)
+        return cbm__fail(ctx, CBM_E_INVALID, "motion: unknown method %d", (int)md.method);
+    bool modal = md.method == CBM_MOTION_MODAL;
     double alpha = md.rayleigh_alpha, beta = md.rayleigh_beta;
-    if (md.damping_ratio > 0.0) {
+    if (md.damping_ratio > 0.0 && !modal) {
         double f[2];
         CBM_TRY(cbm_plant_modes(plant, 2, f, NULL));
         double w1 = 2.0 * 3.14159265358979323846 * f[0];
@@ -272,7 +255,9 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
         cbm_motion_destroy(m);
         return CBM_E_NOMEM;
     }
-    st = refactor(m);
+    /* the modal motion needs no factorisation: its modes come from their own Lanczos run */
+    st = modal ? cbm__modal_create(plant, m, md.modes, md.mode_cut_hz, md.damping_ratio)
+               : refactor(m);
     if (st != CBM_OK) {
         cbm_motion_destroy(m);
         return st;
@@ -285,6 +270,8 @@ cbm_status cbm_motion_start_deflected(cbm_motion *m, size_t seg, cbm_vec3 force)
 {
     if (!m || seg >= m->d.n || !v3_isfinite(force))
         return CBM_E_INVALID;
+    if (m->modal)
+        return cbm__modal_start_deflected(m, seg, force);
     size_t n = m->nq;
     memset(m->w1, 0, n * sizeof(double));
     cbm__dyn_point_force(&m->d, seg, force, m->w1);
@@ -309,6 +296,8 @@ cbm_status cbm_motion_add_force(cbm_motion *m, size_t seg, cbm_vec3 force)
 {
     if (!m || seg >= m->d.n || !v3_isfinite(force))
         return CBM_E_INVALID;
+    if (m->modal)
+        return cbm__modal_add_force(m, seg, force);
     cbm__dyn_point_force(&m->d, seg, force, m->f);
     m->forced = true;
     return CBM_OK;
@@ -354,6 +343,8 @@ cbm_status cbm_motion_step(cbm_motion *m)
 {
     if (!m)
         return CBM_E_INVALID;
+    if (m->modal)
+        return cbm__modal_step(m);
     size_t n = m->nq;
     double dt = m->dt, c0 = 4.0 / (dt * dt), c1 = 4.0 / dt;
     double a0 = c0 + 2.0 * m->alpha / dt, a1 = c1 + m->alpha;
@@ -447,6 +438,13 @@ cbm_status cbm_motion_set_wind(cbm_motion *m, const cbm_wind_def *wind, double u
         return CBM_E_INVALID;
     cbm__drag nd;
     CBM_TRY(cbm__drag_build(&m->d, wind, u_ref, gust, &nd));
+    if (m->modal) {
+        cbm_status st = cbm__modal_set_wind(m, &nd);
+        cbm__drag_free(m->d.ctx, &m->drag);
+        m->drag = nd;
+        m->wind = true;
+        return st;
+    }
     size_t n = m->nq;
     /* keep the acceleration consistent with the new load: a += M^-1 (g_new - g_old) */
     if (m->wind)
@@ -479,6 +477,8 @@ cbm_status cbm_motion_start_wind_static(cbm_motion *m)
         return CBM_E_INVALID;
     if (!m->wind)
         return cbm__fail(m->d.ctx, CBM_E_INVALID, "motion: no wind set to start from");
+    if (m->modal)
+        return cbm__modal_start_wind_static(m);
     size_t n = m->nq;
     memset(m->v, 0, n * sizeof(double));
     m->bv = m->ba = m->bd = v3(0, 0, 0);
@@ -507,6 +507,8 @@ cbm_status cbm_motion_start_state(cbm_motion *m, const double *q, const double *
 {
     if (!m)
         return CBM_E_INVALID;
+    if (m->modal)
+        return cbm__modal_start_state(m, q, v);
     size_t n = m->nq;
     for (size_t i = 0; i < n; i++) {
         m->q[i] = q ? q[i] : 0.0;
@@ -560,6 +562,10 @@ void cbm_motion_state(cbm_motion *m, double *t, double *kinetic, double *potenti
     size_t n = m->nq;
     if (t)
         *t = m->t;
+    if (m->modal) {
+        cbm__modal_energies(m, kinetic, potential);
+        return;
+    }
     if (kinetic) {
         cbm__dyn_apply(&m->d, 0.0, 1.0, m->v, m->y);
         double s = 0.0;
@@ -580,13 +586,23 @@ cbm_status cbm_motion_displacement(const cbm_motion *m, size_t seg, cbm_vec3 *ou
 {
     if (!m || !out || seg >= m->d.n)
         return CBM_E_INVALID;
-    *out = cbm__dyn_node_disp(&m->d, m->q, seg);
+    *out = m->modal ? cbm__modal_displacement(m, seg) : cbm__dyn_node_disp(&m->d, m->q, seg);
     return CBM_OK;
 }
 
 const double *cbm_motion_rotations(const cbm_motion *m)
 {
+    if (m && m->modal) /* rebuilt on demand from the modal coordinates (a cache: not a change
+                        * of the motion's state) */
+        return cbm__modal_rotations(m);
     return m ? m->q : NULL;
+}
+
+size_t cbm_motion_modes(const cbm_motion *m, const double **freqs_hz)
+{
+    if (freqs_hz)
+        *freqs_hz = m && m->modal ? m->modal->fhz : NULL;
+    return m && m->modal ? m->modal->k : 0;
 }
 
 double cbm_motion_dt(const cbm_motion *m)

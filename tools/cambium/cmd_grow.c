@@ -514,6 +514,13 @@ int cmd_grow(int argc, char **argv)
          .parse = parse_pos,
          .arg = "S",
          .help = "time step of --sway (default 0.002 s)"},
+        {.name = "--sway-modes",
+         .kind = CLI_CUSTOM,
+         .target = &sway.modes,
+         .parse = parse_nonneg,
+         .arg = "K",
+         .help = "--sway by the lowest K modes only (modal reduction; default 0:\n"
+                 "all degrees of freedom)"},
         {.name = "--quiet",
          .kind = CLI_SET,
          .target = &quiet,
@@ -578,13 +585,15 @@ int cmd_grow(int argc, char **argv)
     bool swaying = sway.seconds > 0;
     {
         /* the options of --sway without it: say so rather than ignore them */
-        const char *only[] = {"--wind", "--gust", "--sway-dt", "--organ-area"};
-        for (int k = 0; k < 4 && !swaying; k++)
+        const char *only[] = {"--wind", "--gust", "--sway-dt", "--organ-area", "--sway-modes"};
+        for (int k = 0; k < 5 && !swaying; k++)
             for (cli_opt *r = rows; r->name; r++)
                 if (!strcmp(r->name, only[k]) && r->seen)
                     return cli_usage_error("grow", "%s needs --sway SECONDS", only[k]);
         if (swaying && every > 0)
             return cli_usage_error("grow", "--sway does not go with --every");
+        if (sway.modes != floor(sway.modes) || sway.modes > 1e9)
+            return cli_usage_error("grow", "--sway-modes must be a whole number");
         if (swaying && sway.dt > sway.seconds)
             return cli_usage_error("grow", "--sway-dt must not exceed --sway");
     }

@@ -20,7 +20,7 @@
 
 cli_sway cli_sway_default(void)
 {
-    cli_sway s = {0.0, 10.0, 0.2, 2e-3, 25.0, 0.03, 1, 0.0};
+    cli_sway s = {0.0, 10.0, 0.2, 2e-3, 25.0, 0.03, 1, 0.0, 0.0};
     return s;
 }
 
@@ -279,6 +279,10 @@ cbm_status cli_grow_sway(cbm_context *ctx, const cbm_plant *plant, const cli_swa
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = o->dt;
     md.damping_ratio = o->damping;
+    if (o->modes > 0) {
+        md.method = CBM_MOTION_MODAL;
+        md.modes = (size_t)o->modes;
+    }
     double t0 = cli_seconds();
     cbm_status st = cbm_motion_create(plant, &md, &m);
     if (st != CBM_OK)

@@ -17,6 +17,7 @@ typedef struct cli_sway {
     double damping;    ///< structural damping ratio
     long seed;         ///< gust seed
     double organ_area; ///< drag area of the organs (point masses) per kg, m^2/kg; 0: none
+    double modes;      ///< > 0: the modal motion of the lowest this many modes; 0: full order
 } cli_sway;
 
 /// Defaults: wind 10 m/s, gust 0.2, dt 2 ms, 25 fps, damping 0.03, seed 1, no organ drag.
