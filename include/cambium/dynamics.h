@@ -152,6 +152,8 @@ CBM_API cbm_status cbm_plant_critical_wind(const cbm_plant *plant, const cbm_win
 /// synthesised from the EN 1991-1-4 (Annex B) spectrum n S(n) / sigma^2 = 6.8 f_L / (1 +
 /// 10.2 f_L)^(5/3), f_L = n L / U_ref, as a sum of harmonics at log-spaced frequencies with
 /// seeded random phases. The wind at height z is U(z) (1 + u'(t) / U_ref) along the direction.
+/// With coherence_decay > 0, u'(p, t) is a field with the same spectrum at every point and
+/// Davenport's coherence between points (docs/dynamics.md, "Gust field").
 typedef struct cbm_gust_def {
     double intensity;    ///< sigma_u / U_ref; default 0 (steady wind)
     double length_scale; ///< L, m; default 0: EN 1991-1-4's 300 (z_ref / 200)^(0.67 + 0.05 ln z0)
