@@ -124,6 +124,18 @@ typedef struct cbm_wind_def {
     double drag_wood;         ///< C_d of the segments (cylinders); default 1.0
     double drag_organs;       ///< C_d of the organs; default 0.5
     double organ_area_per_kg; ///< m^2 of drag area per kg of point mass; default 0 (none)
+    /* Leaves and fruit apart (docs/dynamics.md, "Drag of leaves and fruit"), at the distal
+     * nodes, in addition to the lumped organ drag above (set organ_area_per_kg 0 with them):
+     * leaves as flat plates that reconfigure, 1/2 rho C_d A |w| w (|w| / U_0)^B above U_0;
+     * fruit as one sphere a node, A = pi r^2 with r from the fruit's mass and density. */
+    const double *leaf_area;  ///< per segment: one-sided leaf area at its distal node, m^2
+                              ///< (read while the drag is built, not kept); NULL: no leaf drag
+    const double *fruit_mass; ///< per segment: fruit at its distal node, kg; NULL: no fruit drag
+    double drag_leaf;         ///< C_d of a leaf, a flat plate across the flow; default 1.17
+    double leaf_vogel;        ///< Vogel exponent B (drag ~ U^(2+B) above U_0); default -2/3
+    double leaf_vogel_speed;  ///< U_0, m/s, where reconfiguration starts; default 5
+    double drag_fruit;        ///< C_d of a fruit (a sphere); default 0.47
+    double fruit_density;     ///< kg/m^3; default 800
 } cbm_wind_def;
 
 /// Defaults as documented per field.
@@ -157,12 +169,21 @@ CBM_API cbm_status cbm_plant_critical_wind(const cbm_plant *plant, const cbm_win
 /// synthesised from the EN 1991-1-4 (Annex B) spectrum n S(n) / sigma^2 = 6.8 f_L / (1 +
 /// 10.2 f_L)^(5/3), f_L = n L / U_ref, as a sum of harmonics at log-spaced frequencies with
 /// seeded random phases. The wind at height z is U(z) (1 + u'(t) / U_ref) along the direction.
+/// With coherence_decay > 0, u'(p, t) is a field with the same spectrum at every point and
+/// Davenport's coherence between points (docs/dynamics.md, "Gust field").
 typedef struct cbm_gust_def {
     double intensity;    ///< sigma_u / U_ref; default 0 (steady wind)
     double length_scale; ///< L, m; default 0: EN 1991-1-4's 300 (z_ref / 200)^(0.67 + 0.05 ln z0)
     double f_min, f_max; ///< Hz, band of the harmonics; default 0.002 and 20
     int32_t harmonics;   ///< default 400
     uint64_t seed;       ///< default 1
+    /// Davenport's decay constant a of the coherence exp(-a f r / U_ref) between points r apart
+    /// across the wind; > 0 makes the gusts a spatially correlated field (Veers' method on a grid
+    /// over the crown, interpolated to the segments, docs/dynamics.md "Gust field"); default 0:
+    /// one series for the whole plant (the limit of infinite coherence length)
+    double coherence_decay;
+    /// grid points of the field along the crown's longer side across the wind (2..16); default 6
+    int32_t grid;
 } cbm_gust_def;
 
 /// Defaults as documented per field.

@@ -184,9 +184,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     out[0] = 0; /* every path that stops on an error leaves a defined value */
-    double a[5] = {0, 0, 0, 0, 0};
+    double a[6] = {0, 0, 0, 0, 0, 0};
     int na = 0;
-    for (int32_t x = n->a; x >= 0 && na < 5; x = lp->m.nodes.data[x].next)
+    for (int32_t x = n->a; x >= 0 && na < 6; x = lp->m.nodes.data[x].next)
         a[na++] = evs(ls, x, fr);
     if (lp->vm.err != CBM_OK)
         return;
@@ -313,7 +313,14 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                      ">= 0, gust intensity >= 0)");
             return;
         }
-        memcpy(m->dyn_args, a, 4 * sizeof(double));
+        if (na == 6 && !(a[4] >= 0 && a[5] >= 0 && isfinite(a[4]) && isfinite(a[5]))) {
+            rt_error(lp, CBM_E_INVALID,
+                     "SwayDrag(duration, dt, wind, gust, gust coherence decay >= 0, leaf area "
+                     ">= 0 m^2/kg)");
+            return;
+        }
+        memcpy(m->dyn_args, a, 6 * sizeof(double));
+        m->dyn_args[6] = na == 6 ? 1.0 : 0.0;
     }
     int op = n->fn == FN_EQUILIBRIUM ? CBM__ML_EQUILIBRIUM
              : n->fn == FN_ADDRINGS  ? CBM__ML_RINGS
@@ -333,7 +340,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                  : n->fn == FN_AGEWOOD   ? "AgeWood"
                  : n->fn == FN_STABILITY ? "Stability"
                  : n->fn == FN_FREQUENCY ? "Frequency"
-                 : n->fn == FN_SWAY      ? "Sway"
+                 : n->fn == FN_SWAY      ? (na == 6 ? "SwayDrag" : "Sway")
                                          : "Break",
                  msg);
         rt_error(lp, s, full);

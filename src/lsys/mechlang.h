@@ -26,14 +26,17 @@ typedef struct cbm__mechlang {
      * settings it was built with are unchanged (mechlang.c); keep: whether to keep it. */
     struct cbm__mechkept *kept;
     bool keep;
-    double dyn_args[4];       /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY */
+    /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY; SwayDrag's coherence decay and
+     * leaf area per kg after them, and 1 in the last for SwayDrag (0: Sway) */
+    double dyn_args[7];
     cbm_lsys_sway_fn sway_fn; /* observer of Sway() (cbm_lsys_set_sway_observer), NULL: none */
     void *sway_ud;
 } cbm__mechlang;
 
 /* The plant's dynamics for the dialect (mechlang_dyn.c): the k-th lowest natural frequency (Hz)
  * and the peak displacement (m) of any node over a sway in the wind of args (duration s, dt s,
- * U_ref m/s at 10 m, gust intensity). The plant must be evaluated. */
+ * U_ref m/s at 10 m, gust intensity, then for SwayDrag (args[6] = 1) the gust field's coherence
+ * decay and the leaves' area per kg). The plant must be evaluated. */
 cbm_status cbm__mechlang_frequency(cbm_context *ctx, const cbm_plant *p, size_t k, double *hz);
 cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double *args,
                               cbm_lsys_sway_fn fn, void *ud, double *peak);

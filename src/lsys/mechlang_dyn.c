@@ -1,6 +1,13 @@
-/* The dialect's dynamics of its mechanical plant (docs/language.md, "Mechanics"): Frequency(k)
- * and Sway(duration, dt, wind, gust), over the library's cbm_plant_modes and cbm_motion
- * (docs/dynamics.md), about the plant's stored state. */
+/* The dialect's dynamics of its mechanical plant (docs/language.md, "Mechanics"): Frequency(k),
+ * Sway(duration, dt, wind, gust) and SwayDrag(duration, dt, wind, gust, coherence, leaf area per
+ * kg), over the library's cbm_plant_modes and cbm_motion (docs/dynamics.md), about the plant's
+ * stored state.
+ *
+ * SwayDrag's organs: the dialect's point masses carry a mass and, where declared, the radius of
+ * the organ's sphere (`mass: Grape(mass, radius)`), not whether they are leaves or fruit. A node
+ * with a sphere is fruit, its drag that of the sphere (the library's sphere of the fruit's mass
+ * and density has the same radius: the mass is passed as density x volume); a node without one
+ * carries leaves, their area the point mass times the leaf area per kg (0: no leaf drag). */
 #include "lsys/mechlang.h"
 
 #include "cambium/dynamics.h"
@@ -70,8 +77,25 @@ cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double
     cbm_wind_def wd = cbm_wind_def_default();
     cbm_gust_def gd = cbm_gust_def_default();
     gd.intensity = args[3];
+    double *organs = NULL;
+    if (args[6] == 1.0) { /* SwayDrag */
+        gd.coherence_decay = args[4];
+        organs = cbm__alloc(ctx, 2 * n * sizeof *organs);
+        if (!organs)
+            st = CBM_E_NOMEM;
+        for (size_t i = 0; organs && i < n; i++) {
+            cbm_segment_state s;
+            cbm_plant_segment(p, i, &s);
+            double r = s.contact_radius;
+            organs[i] = r > 0.0 ? 0.0 : s.point_mass * args[5];
+            organs[n + i] = r > 0.0 ? wd.fruit_density * 4.0 / 3.0 * CBM_PI * r * r * r : 0.0;
+        }
+        wd.leaf_area = organs;
+        wd.fruit_mass = organs ? organs + n : NULL;
+    }
     if (st == CBM_OK)
         st = cbm_motion_set_wind(m, &wd, args[2], &gd);
+    cbm__free(ctx, organs, 2 * n * sizeof *organs); /* the drag keeps its own constants */
     if (st == CBM_OK)
         st = cbm_motion_start_wind_static(m);
     long steps = (long)ceil(args[0] / args[1] - 1e-9);

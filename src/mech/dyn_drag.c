@@ -7,6 +7,14 @@
  * aerodynamic damping (rho C_d D U per length for small motions in a mean wind U) follows from
  * the same formula with no separate coefficient.
  *
+ * Leaves and fruit apart (cbm_wind_def's leaf_area and fruit_mass): a fruit is a sphere, 1/2 rho
+ * C_d pi r^2 |w| w; a leaf a flat plate across the flow that reconfigures (rolls into a cone,
+ * streams with the wind) above U_0, its drag 1/2 rho C_d A |w| w (|w| / U_0)^B, B the Vogel
+ * exponent (docs/dynamics.md, "Drag of leaves and fruit", with sources).
+ *
+ * With a gust field (cbm_gust_def.coherence_decay > 0) each drag point takes the field's value
+ * interpolated from the grid (gust.c), the same for all the fixed-point iterations of a step.
+ *
  * The motion is linear, so the geometry (c, e, the axes) is that of the equilibrium; v comes from
  * the joint rates by one forward sweep (the twists) and the forces go back to the joints by one
  * backward sweep of the wrenches: O(n) per evaluation. */
@@ -30,6 +38,10 @@ void cbm__drag_free(cbm_context *ctx, cbm__drag *g)
     cbm__free(ctx, g->ue, n * sizeof(double));
     cbm__free(ctx, g->z, 6 * n * sizeof(double));
     cbm__free(ctx, g->w, 6 * n * sizeof(double));
+    cbm__free(ctx, g->gi, 8 * n * sizeof(int32_t));
+    cbm__free(ctx, g->gw, 8 * n * sizeof(double));
+    cbm__free(ctx, g->leaf, n * sizeof(double));
+    cbm__free(ctx, g->fruit, n * sizeof(double));
     cbm__gust_free(ctx, &g->gust);
     memset(g, 0, sizeof *g);
 }
@@ -64,6 +76,15 @@ cbm_status cbm__drag_build(const cbm__dyn *d, const cbm_wind_def *wind, double u
     g->dir = v3_normalize(wind->direction);
     g->u_ref = u_ref;
     double half_rho = 0.5 * wind->air_density;
+    if (wind->leaf_area || wind->fruit_mass) {
+        st = cbm__wind_organs(ctx, wind, n, &g->leaf, &g->fruit);
+        if (st != CBM_OK) {
+            cbm__drag_free(ctx, g);
+            return st;
+        }
+        g->vogel = wind->leaf_vogel;
+        g->vogel_speed = wind->leaf_vogel_speed;
+    }
     for (size_t i = 0; i < n; i++) {
         cbm_vec3 ax = v3_sub(d->e[i], d->x[i]);
         double l = v3_norm(ax);
@@ -75,16 +96,47 @@ cbm_status cbm__drag_build(const cbm__dyn *d, const cbm_wind_def *wind, double u
         g->uc[i] = cbm_wind_speed(wind, 1.0, g->c[i].y);
         g->ue[i] = cbm_wind_speed(wind, 1.0, d->e[i].y);
     }
+    if (g->gust.n > 0 && gust && gust->coherence_decay > 0.0) {
+        cbm_vec3 *pts = cbm__alloc(ctx, 2 * n * sizeof *pts);
+        g->gi = cbm__alloc(ctx, 8 * n * sizeof(int32_t));
+        g->gw = cbm__alloc(ctx, 8 * n * sizeof(double));
+        st = pts && g->gi && g->gw ? CBM_OK : CBM_E_NOMEM;
+        if (st == CBM_OK) {
+            memcpy(pts, g->c, n * sizeof *pts);
+            memcpy(pts + n, d->e, n * sizeof *pts);
+            st = cbm__gust_field_build(ctx, gust, u_ref, g->dir, pts, 2 * n, &g->gust);
+        }
+        cbm__free(ctx, pts, 2 * n * sizeof *pts);
+        if (st != CBM_OK) {
+            cbm__drag_free(ctx, g);
+            return st;
+        }
+        for (size_t i = 0; i < n; i++) {
+            cbm__gust_field_weights(&g->gust, g->c[i], g->gi + 8 * i, g->gw + 8 * i);
+            cbm__gust_field_weights(&g->gust, d->e[i], g->gi + 8 * i + 4, g->gw + 8 * i + 4);
+        }
+    }
     return CBM_OK;
+}
+
+/* the gust field's value at the 4 grid points idx with weights wt */
+static inline double field_value(const double *gv, const int32_t *idx, const double *wt)
+{
+    return wt[0] * gv[idx[0]] + wt[1] * gv[idx[1]] + wt[2] * gv[idx[2]] + wt[3] * gv[idx[3]];
 }
 
 void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v, cbm_vec3 vb,
                      double *f)
 {
     size_t n = g->n;
-    double ut = g->u_ref + (g->gust.n > 0 ? cbm__gust_at(&g->gust, t) : 0.0);
+    const double *gv = g->gust.n > 0 && g->gust.np > 0 ? cbm__gust_field_at(&g->gust, t) : NULL;
+    double ut = g->u_ref + (g->gust.n > 0 && !gv ? cbm__gust_at(&g->gust, t) : 0.0), ute = ut;
     cbm__dyn_twists(d, v, g->z);
     for (size_t i = 0; i < n; i++) {
+        if (gv) {
+            ut = g->u_ref + field_value(gv, g->gi + 8 * i, g->gw + 8 * i);
+            ute = g->u_ref + field_value(gv, g->gi + 8 * i + 4, g->gw + 8 * i + 4);
+        }
         const double *z = g->z + 6 * i;
         cbm_vec3 om = v3(z[0], z[1], z[2]), v0 = v3_add(v3(z[3], z[4], z[5]), vb);
         double *w = g->w + 6 * i;
@@ -93,10 +145,13 @@ void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v,
         cbm_vec3 rn = v3_madd(rel, h, -v3_dot(rel, h));
         cbm_vec3 F = v3_scale(rn, g->kw[i] * v3_norm(rn));
         cbm_vec3 M = v3_cross(c, F);
-        if (g->ko[i] > 0.0) {
+        double kf = g->fruit ? g->fruit[i] : 0.0, kl = g->leaf ? g->leaf[i] : 0.0;
+        if (g->ko[i] > 0.0 || kf > 0.0 || kl > 0.0) {
             cbm_vec3 e = d->e[i];
-            cbm_vec3 ro = v3_sub(v3_scale(g->dir, ut * g->ue[i]), v3_add(v0, v3_cross(om, e)));
-            cbm_vec3 Fo = v3_scale(ro, g->ko[i] * v3_norm(ro));
+            cbm_vec3 ro = v3_sub(v3_scale(g->dir, ute * g->ue[i]), v3_add(v0, v3_cross(om, e)));
+            double wn = v3_norm(ro);
+            double k = g->ko[i] + kf + kl * cbm__leaf_reconfiguration(g->vogel, g->vogel_speed, wn);
+            cbm_vec3 Fo = v3_scale(ro, k * wn);
             F = v3_add(F, Fo);
             M = v3_add(M, v3_cross(e, Fo));
         }

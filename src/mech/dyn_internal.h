@@ -7,6 +7,8 @@
 #include "cambium/dynamics.h"
 #include "core/core.h"
 
+#include <math.h>
+
 /* The linear system about one equilibrium. Coordinates: q_k, the small rotation (world) of joint
  * k about its node x_k; a twist Z = (rotation, displacement of the origin) is a 6-vector, a
  * wrench W = (moment about the origin, force) too; positions are relative to the plant's base so
@@ -150,11 +152,32 @@ void cbm__dyn_wrench_force(const cbm__dyn *d, double *w, double *f);
 
 /// Checks a wind definition (wind.c): CBM_E_INVALID with the reason.
 cbm_status cbm__wind_check(cbm_context *ctx, const cbm_wind_def *d);
+/// The drag constants 1/2 rho C_d A (kg/m) of the leaves and of the fruit of n segments from
+/// d->leaf_area and d->fruit_mass (wind.c); *leaf or *fruit NULL when its array is; free with
+/// cbm__free (n doubles). CBM_E_INVALID for a negative or non-finite entry.
+cbm_status cbm__wind_organs(cbm_context *ctx, const cbm_wind_def *d, size_t n, double **leaf,
+                            double **fruit);
+/// The factor (|w| / U_0)^B above U_0 (1 below) by which a leaf's drag coefficient falls as it
+/// reconfigures (wind.c's formula, docs/dynamics.md).
+static inline double cbm__leaf_reconfiguration(double vogel, double u0, double w)
+{
+    return vogel != 0.0 && w > u0 ? pow(w / u0, vogel) : 1.0;
+}
 
-/* Gust series (gust.c): u'(t) = sum_k amp_k cos(omega_k t + phase_k). */
+/* Gust series (gust.c): u'(t) = sum_k amp_k cos(omega_k t + phase_k); with a coherence decay,
+ * a field over a grid of np = nx ny points in the plane normal to the wind (origin o, lateral
+ * axis ex, vertical axis ey, spacings hx, hy): u'_j(t) = sum_k (are_kj cos omega_k t - aim_kj
+ * sin omega_k t), the values of the last time asked kept in gv. */
 typedef struct cbm__gust {
     int32_t n;
     double *amp, *omega, *phase;
+    int32_t np, nx, ny;
+    cbm_vec3 o, ex, ey;
+    double hx, hy;
+    double *are, *aim; /* n * np, harmonic after harmonic */
+    double *gv;        /* np */
+    double t_last;
+    bool have;
 } cbm__gust;
 /// Synthesises the series for reference speed u_ref (no harmonics when the intensity or u_ref is
 /// 0).
@@ -166,6 +189,15 @@ void cbm__gust_free(cbm_context *ctx, cbm__gust *g);
 double cbm__gust_spectrum(const cbm_gust_def *g, double sigma, double length, double u_ref,
                           double f);
 double cbm__gust_length(const cbm_gust_def *g, const cbm_wind_def *w);
+/// Turns a built series (out of cbm__gust_build, with harmonics) into the spatially correlated
+/// field of g->coherence_decay > 0 over the bounding box of the points pts[0..npts) (relative to
+/// the base) seen along the wind's direction dir (unit); nothing when the decay is 0.
+cbm_status cbm__gust_field_build(cbm_context *ctx, const cbm_gust_def *g, double u_ref,
+                                 cbm_vec3 dir, const cbm_vec3 *pts, size_t npts, cbm__gust *out);
+/// The field's values at its grid points at time t (cached: the drag's iterations ask the same t).
+const double *cbm__gust_field_at(cbm__gust *g, double t);
+/// The 4 grid points and bilinear weights of the point p (its projection, clamped to the grid).
+void cbm__gust_field_weights(const cbm__gust *g, cbm_vec3 p, int32_t idx[4], double wt[4]);
 
 /* Drag of the wind on the moving plant (drag.c): per segment, the drag point (the segment's
  * midpoint) and axis, the drag constants, and the mean speed factors of the profile there. */
@@ -180,7 +212,12 @@ typedef struct cbm__drag {
     double *uc;   /* U(z)/U_ref at the midpoint */
     double *ue;   /* U(z)/U_ref at the distal node */
     cbm__gust gust;
-    double *z, *w; /* work: 6 per segment each */
+    int32_t *gi;   /* with a gust field: 4 grid points of the midpoint, 4 of the distal node */
+    double *gw;    /* their bilinear weights */
+    double *leaf;  /* 1/2 rho C_d,leaf A_leaf at the distal node, kg/m (NULL: none) */
+    double *fruit; /* 1/2 rho C_d,fruit A_fruit at the distal node, kg/m (NULL: none) */
+    double vogel, vogel_speed; /* the leaves' reconfiguration: exponent B and onset U_0 */
+    double *z, *w;             /* work: 6 per segment each */
 } cbm__drag;
 /// Reads the wind's data off the dynamics' geometry (d) and the plant's sections.
 cbm_status cbm__drag_build(const cbm__dyn *d, const cbm_wind_def *wind, double u_ref,

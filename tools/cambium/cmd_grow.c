@@ -19,10 +19,14 @@
 
 /* -o wind:FILE.csv: the static critical wind speed of the stem and of each first-order branch
  * (docs/dynamics.md, "Wind"), default wind (log profile, U_ref at 10 m, z0 0.1 m, along +x) */
-static cbm_status write_wind(cbm_context *ctx, const cbm_plant *p, const char *path)
+static cbm_status write_wind(cbm_context *ctx, const cbm_plant *p, const cli_sway *organs,
+                             const char *path)
 {
     size_t n = 0;
     cbm_wind_def wd = cbm_wind_def_default();
+    wd.leaf_area = organs->leaf_area; /* --organ-drag */
+    wd.fruit_mass = organs->fruit_mass;
+    wd.fruit_density = organs->fruit_density;
     cbm_status st = cbm_plant_critical_wind(p, &wd, NULL, 0, &n);
     if (st != CBM_OK)
         return st;
@@ -427,6 +431,8 @@ int cmd_grow(int argc, char **argv)
     long years = -1, every = 0, seeds[2] = {-1, -1};
     const char *seed = NULL;
     bool timing = false, quiet = false, params = false, summer = false, report = false;
+    bool organ_drag = false;
+    double *organ_buf = NULL; /* --organ-drag: leaf areas and fruit masses per segment */
     long modes = 0;
     cli_sway sway = cli_sway_default();
     cbm_write_options o = cbm_write_options_default();
@@ -508,6 +514,26 @@ int cmd_grow(int argc, char **argv)
          .arg = "M2_PER_KG",
          .help = "drag area of the leaves and fruit per kg for --sway (C_d 0.5;\n"
                  "default 0: no drag on them)"},
+        {.name = "--gust-coherence",
+         .kind = CLI_CUSTOM,
+         .target = &sway.coherence,
+         .parse = parse_nonneg,
+         .arg = "A",
+         .help = "gusts as a field correlated over the crown, coherence\n"
+                 "exp(-A f r / U) (Davenport; ~10; default 0: one series)"},
+        {.name = "--gust-grid",
+         .kind = CLI_LONG,
+         .target = &sway.grid,
+         .min = 2,
+         .max = 16,
+         .bad = "--gust-grid must be 2..16",
+         .arg = "N",
+         .help = "points of the gust field along the crown (default 6)"},
+        {.name = "--organ-drag",
+         .kind = CLI_SET,
+         .target = &organ_drag,
+         .help = "drag on the model's leaves (plates that reconfigure) and fruit\n"
+                 "(spheres) apart, for --sway and -o wind:FILE.csv"},
         {.name = "--sway-dt",
          .kind = CLI_CUSTOM,
          .target = &sway.dt,
@@ -585,8 +611,9 @@ int cmd_grow(int argc, char **argv)
     bool swaying = sway.seconds > 0;
     {
         /* the options of --sway without it: say so rather than ignore them */
-        const char *only[] = {"--wind", "--gust", "--sway-dt", "--organ-area", "--sway-modes"};
-        for (int k = 0; k < 5 && !swaying; k++)
+        const char *only[] = {"--wind",      "--gust",      "--sway-dt",      "--organ-area",
+                              "--sway-modes", "--gust-grid", "--gust-coherence"};
+        for (int k = 0; k < 7 && !swaying; k++)
             for (cli_opt *r = rows; r->name; r++)
                 if (!strcmp(r->name, only[k]) && r->seen)
                     return cli_usage_error("grow", "%s needs --sway SECONDS", only[k]);
@@ -596,6 +623,8 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--sway-modes must be a whole number");
         if (swaying && sway.dt > sway.seconds)
             return cli_usage_error("grow", "--sway-dt must not exceed --sway");
+        if (organ_drag && sway.organ_area > 0)
+            return cli_usage_error("grow", "--organ-drag does not go with --organ-area");
     }
     cli_output_target targets[MAX_OUTPUTS];
     /* 0 scene, 1 csv, 2 mtg, 3 json, 4 wind:FILE.csv, 5 sway .glb, 6 sway table .csv,
@@ -653,6 +682,13 @@ int cmd_grow(int argc, char **argv)
                                                                          : outs[k];
         if (cli_check_outputs(paths, nout) != CLI_OK)
             return CLI_FAIL;
+    }
+    if (organ_drag && !swaying) {
+        bool wind_out = false;
+        for (int k = 0; k < nout; k++)
+            wind_out = wind_out || kind[k] == 4;
+        if (!wind_out)
+            return cli_usage_error("grow", "--organ-drag needs --sway SECONDS or -o wind:FILE.csv");
     }
     if (!model)
         model = "fruit-tree";
@@ -795,6 +831,26 @@ int cmd_grow(int argc, char **argv)
         goto done;
     }
     bool scene_built = false;
+    if (organ_drag) {
+        /* the leaves' area from their mass and the model's leaf_density (kg/m^2), the fruit's
+         * mass: per segment, at its distal node (docs/dynamics.md, "Drag of leaves and fruit") */
+        size_t ns = cbm_plant_segment_count(cbm_tree_plant(t));
+        organ_buf = calloc(2 * (ns ? ns : 1), sizeof *organ_buf);
+        if (!organ_buf) {
+            rc = cli_fail(ctx, CBM_E_NOMEM, "--organ-drag");
+            goto done;
+        }
+        for (size_t i = 0; i < ns; i++) {
+            cbm_tree_segment ts;
+            if (cbm_tree_segment_info(t, i, &ts) == CBM_OK) {
+                organ_buf[i] = ts.leaf_mass / d.leaf_density;
+                organ_buf[ns + i] = ts.fruit_mass;
+            }
+        }
+        sway.leaf_area = organ_buf;
+        sway.fruit_mass = organ_buf + ns;
+        sway.fruit_density = d.fruit_density;
+    }
     if (light.on) {
         /* the light of the scene the writers get, so that --color-by light paints it */
         double tw = cli_seconds();
@@ -816,7 +872,7 @@ int cmd_grow(int argc, char **argv)
         else if (kind[k] == 3)
             st = write_summary(ctx, t, model, &d, grow_time, summer, outs[k]);
         else if (kind[k] == 4)
-            st = write_wind(ctx, cbm_tree_plant(t), outs[k] + 5);
+            st = write_wind(ctx, cbm_tree_plant(t), &sway, outs[k] + 5);
         else if (kind[k] == 7)
             st = CBM_OK; /* written by the light pass above */
         else if (kind[k] >= 5)
@@ -877,6 +933,7 @@ int cmd_grow(int argc, char **argv)
         }
     }
 done:
+    free(organ_buf);
     for (int k = 0; k < nout; k++)
         cbm_animation_destroy(anim[k]);
     cbm_scene_destroy(sc);

@@ -20,7 +20,7 @@
 
 cli_sway cli_sway_default(void)
 {
-    cli_sway s = {0.0, 10.0, 0.2, 2e-3, 25.0, 0.03, 1, 0.0, 0.0};
+    cli_sway s = {0.0, 10.0, 0.2, 2e-3, 25.0, 0.03, 1, 0.0, 0.0, 0.0, 6, NULL, NULL, 800.0};
     return s;
 }
 
@@ -289,9 +289,14 @@ cbm_status cli_grow_sway(cbm_context *ctx, const cbm_plant *plant, const cli_swa
         return st;
     cbm_wind_def wd = cbm_wind_def_default();
     wd.organ_area_per_kg = o->organ_area;
+    wd.leaf_area = o->leaf_area;
+    wd.fruit_mass = o->fruit_mass;
+    wd.fruit_density = o->fruit_density;
     cbm_gust_def gd = cbm_gust_def_default();
     gd.intensity = o->gust;
     gd.seed = (uint64_t)o->seed;
+    gd.coherence_decay = o->coherence;
+    gd.grid = (int32_t)o->grid;
     st = cbm_motion_set_wind(m, &wd, o->wind, &gd);
     if (st == CBM_OK)
         st = cbm_motion_start_wind_static(m);

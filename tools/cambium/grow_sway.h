@@ -18,6 +18,11 @@ typedef struct cli_sway {
     long seed;         ///< gust seed
     double organ_area; ///< drag area of the organs (point masses) per kg, m^2/kg; 0: none
     double modes;      ///< > 0: the modal motion of the lowest this many modes; 0: full order
+    double coherence;  ///< Davenport decay constant of the gust field; 0: one series
+    long grid;         ///< grid points of the gust field along the crown's longer side
+    /// --organ-drag: per segment leaf area (m^2) and fruit mass (kg), NULL: none
+    const double *leaf_area, *fruit_mass;
+    double fruit_density; ///< kg/m^3 of the fruit (the model's)
 } cli_sway;
 
 /// Defaults: wind 10 m/s, gust 0.2, dt 2 ms, 25 fps, damping 0.03, seed 1, no organ drag.
