@@ -139,10 +139,8 @@ TEST(approx_corrected_vs_elastica)
                 double from_vertical = 90.0 - th[2 * i + 1] * 180.0 / PI;
                 worst = fmax(worst, fabs(t0s[a] + cum - from_vertical));
             }
-            /* closed form since 2026-11 (RK4 before: 2e-5); the buckled upright rod (t0 = 0) is
-             * limited by the oracle's own shape there (3.7e-6) */
-            double tol = t0s[a] == 0.0 ? 1e-5 : 2e-9;
-            CHECK_MSG(worst < tol, "t0 %g K0 %g: profile off by %g deg", t0s[a], k0s[b], worst);
+            /* closed form since 2026-11 (RK4 before: 2e-5 allowed) */
+            CHECK_MSG(worst < 2e-9, "t0 %g K0 %g: profile off by %g deg", t0s[a], k0s[b], worst);
         }
     test_ctx_end(ctx);
 }
