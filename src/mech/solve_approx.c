@@ -31,6 +31,11 @@
 #include <math.h>
 #include <string.h>
 
+/* The scratch lives in the plant's solver workspace (cbm__mech_work), whose Newton-Krylov
+ * arrays (3 doubles per segment each, held whatever the solver, and used by no one else during
+ * an approx pass) it borrows: no allocation per solve, and no fresh pages to fault in (on a
+ * 10^4-segment tree a fifth of the pass went to the kernel's page faults when these were
+ * allocated at every solve). */
 typedef struct approx_scratch {
     double *inc;   /* per segment: the bending rotation of its joint, rad */
     cbm_vec3 *ax;  /* per segment: the world axis of that rotation */
@@ -38,14 +43,6 @@ typedef struct approx_scratch {
     double *res;   /* the generator's output, chain length + 1 */
     size_t n;
 } approx_scratch;
-
-static void scratch_free(cbm_context *ctx, approx_scratch *s)
-{
-    cbm__free(ctx, s->inc, s->n * sizeof *s->inc);
-    cbm__free(ctx, s->ax, s->n * sizeof *s->ax);
-    cbm__free(ctx, s->chain, s->n * sizeof *s->chain);
-    cbm__free(ctx, s->res, (s->n + 1) * sizeof *s->res);
-}
 
 /* The forward sweep's own rotation exponential and renormalisation (solve_common.c), repeated
  * here so that the frames set while bending are bit for bit the ones cbm__mech_forward would set
@@ -196,12 +193,13 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
                          (int)d->approx_mode);
     size_t n = p->n;
     approx_scratch sc = {0};
+    cbm__mech_work *wk = &p->work;
     sc.n = n;
-    sc.inc = cbm__alloc(p->ctx, n * sizeof *sc.inc);
-    sc.ax = cbm__alloc(p->ctx, n * sizeof *sc.ax);
-    sc.chain = cbm__alloc(p->ctx, n * sizeof *sc.chain);
-    sc.res = cbm__alloc(p->ctx, (n + 1) * sizeof *sc.res);
-    cbm_status s = sc.inc && sc.ax && sc.chain && sc.res ? CBM_OK : CBM_E_NOMEM;
+    sc.ax = wk->res;                     /* n vectors */
+    sc.inc = (double *)wk->step;         /* n of its 3n doubles */
+    sc.res = (double *)wk->step + n;     /* n + 1 more (3n >= 2n + 1) */
+    sc.chain = (size_t *)(void *)wk->dm; /* n of its 3n words */
+    cbm_status s = wk->cap >= n && sc.ax && sc.inc && sc.chain ? CBM_OK : CBM_E_NOMEM;
     const cbm__mech_work *w = &p->work;
     for (size_t i = 0; i < n && s == CBM_OK; i++) {
         cbm_vec3 pos;
@@ -217,7 +215,6 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
         p->force[i] = v3(0, 0, 0);
         p->moment[i] = v3(0, 0, 0);
     }
-    scratch_free(p->ctx, &sc);
     if (s != CBM_OK)
         return s == CBM_E_NOMEM ? cbm__fail(p->ctx, s, "approx: out of memory") : s;
     double mmax = 0.0;
