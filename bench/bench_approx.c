@@ -4,7 +4,10 @@
  *     repetitions per disc (10 .. 1000), both modes, time per call and the bytes of its result;
  *  2. on plants: solver = approx against one statics pass (cbm_plant_evaluate: one forward and
  *     one backward sweep, what one relaxation pass costs) and against the fast solver's
- *     equilibrium, per segment, on a horizontal chain and on a random branched tree.
+ *     equilibrium, per segment, on a horizontal chain and on a random branched tree;
+ *  3. every method (a pass, approx in both modes, fast, relax, fem) side by side on the same
+ *     tree (10^3 and 10^4 segments), each in a fresh context: time of one solve from rest and
+ *     the peak memory it adds above the plant's own, per segment (kind "side").
  *
  * usage: bench_approx [--out FILE.csv] [--max N]
  * Writes rows kind,workload,mode,n,reps,seconds_per_call,ns_per_segment,bytes. */
@@ -199,6 +202,53 @@ int main(int argc, char **argv)
                    st.passes);
             cbm_plant_destroy(p);
             cbm_context_clear_errors(ctx);
+        }
+    /* 3. every method side by side on the same tree, each in a fresh context: time of one solve
+     * from rest (the best of 3 for the one-shot ones) and the peak memory it adds above the
+     * plant's own (bytes through the library's allocator), per segment */
+    const struct {
+        const char *name;
+        int solver; /* -1: one statics pass */
+        cbm_approx_mode mode;
+    } meth[] = {{"pass", -1, CBM_APPROX_CORRECTED},
+                {"approx-corrected", CBM_MECH_APPROX, CBM_APPROX_CORRECTED},
+                {"approx-thesis", CBM_MECH_APPROX, CBM_APPROX_THESIS},
+                {"fast", CBM_MECH_NEWTON, CBM_APPROX_CORRECTED},
+                {"relax", CBM_MECH_RELAX, CBM_APPROX_CORRECTED},
+                {"fem", CBM_MECH_FEM, CBM_APPROX_CORRECTED}};
+    for (size_t n = 1000; n <= maxn && n <= 10000; n *= 10)
+        for (size_t k = 0; k < sizeof meth / sizeof *meth; k++) {
+            cbm_context *c2 = NULL;
+            if (cbm_context_create(&cd, &c2) != CBM_OK)
+                return 1;
+            cbm_plant *p = make_tree(c2, n);
+            if (!p)
+                return 1;
+            size_t base = cbm_context_peak_bytes(c2);
+            cbm_solve_def sd = cbm_solve_def_default();
+            sd.warm_start = false;
+            sd.approx_mode = meth[k].mode;
+            if (meth[k].solver >= 0)
+                sd.solver = (cbm_mech_solver)meth[k].solver;
+            bool once = meth[k].solver >= 0 && meth[k].solver != CBM_MECH_APPROX;
+            double best = INFINITY;
+            cbm_solve_stats st = {0};
+            cbm_status s = CBM_OK;
+            for (int r = 0; r < (once ? 1 : 3); r++) {
+                double t0 = now();
+                s = meth[k].solver < 0 ? cbm_plant_evaluate(p, NULL) : cbm_plant_solve(p, &sd, &st);
+                best = fmin(best, now() - t0);
+            }
+            size_t extra = cbm_context_peak_bytes(c2) - base;
+            double dn = (double)n;
+            fprintf(f, "side,tree,%s,%zu,%d,%.6g,%.6g,%zu\n", meth[k].name, n, once ? 1 : 3, best,
+                    1e9 * best / dn, extra);
+            printf("side by side, tree n %5zu: %-16s %10.1f ns/seg %8.1f extra bytes/seg (plant "
+                   "%.0f bytes/seg)%s\n",
+                   n, meth[k].name, 1e9 * best / dn, (double)extra / dn, (double)base / dn,
+                   s == CBM_OK ? "" : " (failed)");
+            cbm_plant_destroy(p);
+            cbm_context_destroy(c2);
         }
     fclose(f);
     cbm_context_destroy(ctx);

@@ -11,13 +11,18 @@
  * and sin phi0 = sin(t0/2) / k (the substitution sin(psi/2) = k sin phi),
  *     K0 sigma(disc) = K(k) - F(phi0, k),
  * K and F Legendre's complete and incomplete elliptic integrals of the first kind (Carlson's RF
- * here). The corrected mode finds omega from it by bisection then the Illinois method, and
- * integrates the profile as the pendulum psi'' = -K0^2 sin psi in sigma (the derivative of the
- * first integral; smooth where the first integral's square root is not) by RK4 with steps of at
- * most 0.05 / K0. The conic model itself (2.24-2.27: the cylinder's first integral with the local
+ * here). Its solution is Jacobi's sin(psi/2) = k sn(F(phi0, k) + K0 sigma, k^2), and the same
+ * condition read from the tip is sin(t0/2) = k cd(K0 sigma(disc), k^2). The corrected mode finds
+ * omega from the latter by the secant method started at the linearised omega (a few evaluations
+ * of sn, cn, dn by series and duplication, no elliptic integral), falling back on the former by
+ * bisection and Illinois when it does not converge or t0 = 0; it fills the profile from the
+ * closed form by the addition theorem, one step per segment (docs/performance.md, "Method A";
+ * until 2026-11 it was RK4 of the pendulum psi'' = -K0^2 sin psi, docs/validation.md has what
+ * moved). The conic model itself (2.24-2.27: the cylinder's first integral with the local
  * K) is the thesis's; it is not the exact elastica of a cone (docs/validation.md measures it). */
 #include "cambium/approx.h"
 #include "core/core.h"
+#include "mech/approx_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -115,8 +120,9 @@ static double thesis_bisection(double t0r, double k0, double h, double dx, int *
     while (b - a > eps) {
         w = 0.5 * (a + b);
         double t = 0.0, x = 1.0;
+        double cw = cos(t0r + w); /* loop-invariant: once per trial, same bits */
         do {
-            double dt = dx * sqrt(2.0) * k0 * sqrt(fabs(cos(t0r + t) - cos(t0r + w)));
+            double dt = dx * sqrt(2.0) * k0 * sqrt(fabs(cos(t0r + t) - cw));
             t += dt;
             x += dx;
         } while (t < w && x < h);
@@ -162,12 +168,12 @@ static cbm_status thesis_angles(cbm_context *ctx, const cbm_approx_def *d, doubl
         }
     }
     info->omega = w * RAD;
-    double t = 0.0, t1 = 0.0;
+    double t = 0.0, t1 = 0.0, cw = cos(w + t0r);
     res[0] = d->t0;
     for (long i = 0; i < disc; i++) {
         if (t < w) {
             double q = 1.0 - d->coni * (double)(i + 1) / (double)disc;
-            t1 = k0 / (q * q) * sqrt(2.0 * (cos(t + t0r) - cos(w + t0r)));
+            t1 = k0 / (q * q) * sqrt(2.0 * (cos(t + t0r) - cw));
             if ((double)i > (double)disc * d->p)
                 t1 = -t1;
             t += t1;
@@ -282,6 +288,174 @@ static double corrected_omega(double t0, double target, int *evals, cbm_approx_r
     return 0.5 * (lo + hi);
 }
 
+/* Jacobi's elliptic functions sn, cn, dn of (u, m = k^2), u >= 0: the Maclaurin series to u^9
+ * at u / 2^j <= 1/32 (their nearest pole is at i K'(m), |K'| >= pi/2, so the first omitted term
+ * is below 1e-16 relative), then j duplications. No transcendental call: ~5 duplications for
+ * u ~ 1 cost less than one sine. Absolute error ~1e-15 for u up to K(m) below m = 0.99, growing
+ * with u where m -> 1 (the root below checks what it finds). */
+typedef struct jacobi3 {
+    double sn, cn, dn;
+} jacobi3;
+
+static jacobi3 jacobi(double u, double m, double mc)
+{
+    int j = 0;
+    double v = u;
+    while (v > 0.03125 && j < 1100) {
+        v *= 0.5;
+        j++;
+    }
+    double v2 = v * v, m2 = m * m, m3 = m2 * m, m4 = m2 * m2;
+    jacobi3 r;
+    r.sn = v * (1.0 - v2 * ((1.0 + m) / 6.0 -
+                            v2 * ((1.0 + 14.0 * m + m2) / 120.0 -
+                                  v2 * ((1.0 + 135.0 * m + 135.0 * m2 + m3) / 5040.0 -
+                                        v2 * (1.0 + 1228.0 * m + 5478.0 * m2 + 1228.0 * m3 + m4) /
+                                            362880.0))));
+    r.cn =
+        1.0 - v2 * (0.5 - v2 * ((1.0 + 4.0 * m) / 24.0 -
+                                v2 * ((1.0 + 44.0 * m + 16.0 * m2) / 720.0 -
+                                      v2 * (1.0 + 408.0 * m + 912.0 * m2 + 64.0 * m3) / 40320.0)));
+    r.dn = 1.0 - m * v2 *
+                     (0.5 - v2 * ((4.0 + m) / 24.0 -
+                                  v2 * ((16.0 + 44.0 * m + m2) / 720.0 -
+                                        v2 * (64.0 + 912.0 * m + 408.0 * m2 + m3) / 40320.0)));
+    /* the duplication in forms without cancellation as m -> 1 (mc = 1 - m given, not formed):
+     * 1 - m s^4 = c^2 (1 + s^2) + mc s^4, d^2 - m s^2 c^2 = c^2 d^2 + mc s^2, and
+     * c^2 - s^2 d^2 = c^4 - mc s^4 (small only where cn itself is) */
+    for (; j > 0; j--) {
+        double s = r.sn, c = r.cn, d = r.dn, s2 = s * s, c2 = c * c;
+        double den = 1.0 / (c2 * (1.0 + s2) + mc * s2 * s2);
+        r.sn = 2.0 * s * c * d * den;
+        r.cn = (c2 * c2 - mc * s2 * s2) * den;
+        r.dn = (c2 * d * d + mc * s2) * den;
+    }
+    return r;
+}
+
+/* The addition theorem: the functions of a + b from those of a and b. */
+static inline jacobi3 jacobi_add(jacobi3 a, jacobi3 b, double m, double mc)
+{
+    /* 1 - m sa^2 sb^2 = ca^2 + sa^2 cb^2 + mc sa^2 sb^2, a sum of positive terms */
+    double sa2 = a.sn * a.sn, sb2 = b.sn * b.sn;
+    double den = 1.0 / (a.cn * a.cn + sa2 * b.cn * b.cn + mc * sa2 * sb2);
+    jacobi3 r;
+    r.sn = (a.sn * b.cn * b.dn + b.sn * a.cn * a.dn) * den;
+    r.cn = (a.cn * b.cn - a.sn * a.dn * b.sn * b.dn) * den;
+    r.dn = (a.dn * b.dn - m * a.sn * a.cn * b.sn * b.cn) * den;
+    return r;
+}
+
+/* K(k) from k' = sqrt(1 - k^2) by the arithmetic-geometric mean, pi / (2 AGM(1, k')). */
+static double complete_k(double kc)
+{
+    double a = 1.0, b = kc;
+    for (int i = 0; i < 40 && fabs(a - b) > 1e-15 * a; i++) {
+        double c = 0.5 * (a + b);
+        b = sqrt(a * b);
+        a = c;
+    }
+    return PI / (a + b);
+}
+
+/* The same length condition seen from the tip. The profile is sin(psi/2) = k sn(u, k^2) with
+ * u = K(k) at the tip (psi' = 0) and u = K(k) - K0 sigma_end at the base, so the condition is
+ * sin(t0/2) = k cd(K0 sigma_end), here multiplied by dn: k cn(T) - sin(t0/2) dn(T), T =
+ * K0 sigma_end. Smooth in omega (the gap above goes as sqrt(omega)); negative at omega = 0,
+ * (1 - sin(t0/2)) sech T > 0 at the hanging direction. Its other roots, with T > K(k), are the
+ * inflected shapes that wind past a free end; the caller keeps out of them. */
+static double tip_residual(double t0, double s0, double omega, double target)
+{
+    double k = sin(0.5 * (t0 + omega)), kc = cos(0.5 * (t0 + omega));
+    jacobi3 j = jacobi(target, k * k, kc * kc);
+    return k * j.cn - s0 * j.dn;
+}
+
+/* omega (rad) from tip_residual by the secant method, started at the linearised omega (2.31),
+ * inside a bracket kept by sign: a trial with K(k) <= T (only possible for T >= pi/2, since K
+ * >= pi/2) lies below the physical root and is bisected away. Stops when the step falls below
+ * 1e-13 rad. false if it does not converge in 60 evaluations (the caller then takes the
+ * elliptic-integral root); ~6 evaluations of ~5 duplications each in the plants' range. */
+bool cbm__approx_omega_fast(double t0, double target, int *evals, double *out)
+{
+    double lo = 0.0, hi = PI - t0, s0 = sin(0.5 * t0);
+    bool check_k = target >= 0.5 * PI;
+    double x0 = cbm_approx_omega_linear(t0, target);
+    if (!(x0 > 0.0 && x0 < hi))
+        x0 = 0.5 * hi;
+    int n = 0;
+    while (check_k && complete_k(cos(0.5 * (t0 + x0))) <= target && n < 60) {
+        lo = x0;
+        x0 = 0.5 * (lo + hi);
+        n++;
+    }
+    double g0 = tip_residual(t0, s0, x0, target);
+    n++;
+    if (g0 < 0.0)
+        lo = x0;
+    else
+        hi = x0;
+    /* the linearised omega overestimates: the second point below it, or above if it was short */
+    double x1 = g0 > 0.0 ? 0.9 * x0 : fmin(1.1 * x0, 0.5 * (x0 + hi));
+    while (n < 60) {
+        n++;
+        if (check_k && complete_k(cos(0.5 * (t0 + x1))) <= target) {
+            lo = x1;
+            x1 = 0.5 * (lo + hi);
+            continue;
+        }
+        double g1 = tip_residual(t0, s0, x1, target);
+        if (g1 == 0.0) {
+            *evals += n;
+            *out = x1;
+            return true;
+        }
+        if (g1 < 0.0)
+            lo = x1;
+        else
+            hi = x1;
+        double x2 = x1 - g1 * (x1 - x0) / (g1 - g0);
+        if (!(x2 > lo && x2 < hi))
+            x2 = 0.5 * (lo + hi);
+        double step = fabs(x2 - x1);
+        x0 = x1;
+        g0 = g1;
+        x1 = x2;
+        if (step < 1e-13 || hi - lo < 1e-13) {
+            *evals += n;
+            *out = x2;
+            return true;
+        }
+    }
+    *evals += n;
+    return false;
+}
+
+double cbm__approx_omega_reference(double t0, double target, int *evals)
+{
+    cbm_approx_route route;
+    return corrected_omega(t0, target, evals, &route);
+}
+
+/* atan(y / x) for x > 0: the Maclaurin series to t^13 where |t| <= 1/16 (the first omitted
+ * term is below 5e-19 relative; a segment's half increment is that small unless the axis has a
+ * handful of segments under a large load), atan2 otherwise. */
+static inline double atan_small(double y, double x)
+{
+    if (!(fabs(y) <= 0.0625 * x))
+        return atan2(y, x);
+    double t = y / x, t2 = t * t, t4 = t2 * t2;
+    /* Estrin's pairs: half the dependent multiplications of Horner's rule */
+    double a = 1.0 - t2 / 3.0, b = 1.0 / 5.0 - t2 / 7.0, c = 1.0 / 9.0 - t2 / 11.0;
+    double q = a + t4 * (b + t4 * (c + t4 / 13.0));
+    return t * q;
+}
+
+/* The profile in closed form: with k = sin((t0 + omega)/2) and m = k^2, sin(psi/2) = k sn(u),
+ * cos(psi/2) = dn(u), u = u0 + K0 sigma, where sn(u0) = sin(t0/2)/k, cn(u0) = cos phi0 and
+ * dn(u0) = cos(t0/2) are known without F(phi0, k). The midpoints follow each other by the
+ * addition theorem (one step of the functions per segment, a constant one on a cylinder), and
+ * each increment of psi is one atan2 of the half-angle difference (no cancellation). */
 /* One RK4 step of theta'' = -K0^2 sin(t0 + theta) over dsig. */
 static void pendulum_step(double t0, double k2, double dsig, double *th, double *om)
 {
@@ -312,22 +486,13 @@ static void pendulum(double t0, double k2, double hmax, double sigma0, double si
         pendulum_step(t0, k2, ds, th, om);
 }
 
-static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_info *info)
+/* The profile by RK4 of the pendulum (the corrected mode's profile until 2026-11), kept for the
+ * one case the closed form cannot hold: t0 + omega rounds to 180 degrees in double precision,
+ * so that k' (and K(k)) no longer carry the length. */
+static void pendulum_profile(const cbm_approx_def *d, double t0, double w, double *res)
 {
     long disc = d->disc;
-    double t0 = d->t0 / RAD, k0 = d->k0;
-    double sig_end = (double)disc / (1.0 - d->coni);
-    double w = 0.0;
-    info->route = CBM_APPROX_ROUTE_NONE;
-    if (k0 > 0.0)
-        w = corrected_omega(t0, k0 * sig_end, &info->evaluations, &info->route);
-    info->omega = w * RAD;
-    res[0] = d->t0;
-    if (w == 0.0) {
-        for (long i = 1; i <= disc; i++)
-            res[i] = 0.0;
-        return;
-    }
+    double k0 = d->k0;
     /* sigma of the arc length s (segments) on the cone of length H = disc / coni */
     double inv_h = d->coni / (double)disc;
     double k2 = k0 * k0;
@@ -339,8 +504,10 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
         double smid = (double)i + 0.5;
         double sigmid = smid / (1.0 - smid * inv_h);
         pendulum(t0, k2, hmax, sig, sigmid, &th, &om);
-        /* the profile stops at the tip angle: past it the first integral has no real root */
-        double mid = fmin(th, w);
+        /* the profile stops at the tip angle: past it the first integral has no real root;
+         * and it never turns back (RK4 past the tip of a rod hanging at round-off swung back
+         * before 2026-11, by up to -22 degrees in one increment) */
+        double mid = fmin(fmax(th, prev_mid), w);
         double inc = mid - prev_mid;
         prev_mid = mid;
         if ((double)i > (double)disc * d->p)
@@ -350,6 +517,85 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
         double signode = snode / (1.0 - snode * inv_h);
         pendulum(t0, k2, hmax, sigmid, signode, &th, &om);
         sig = signode;
+    }
+}
+
+#define FROM_TIP 12.0
+
+static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_info *info)
+{
+    long disc = d->disc;
+    double t0 = d->t0 / RAD, k0 = d->k0;
+    double sig_end = (double)disc / (1.0 - d->coni);
+    double w = 0.0;
+    info->route = CBM_APPROX_ROUTE_NONE;
+    if (k0 > 0.0) {
+        double target = k0 * sig_end;
+        bool fast =
+            t0 > 0.0 && t0 < PI && cbm__approx_omega_fast(t0, target, &info->evaluations, &w);
+        if (fast)
+            info->route = CBM_APPROX_ROUTE_ROOT;
+        else
+            w = corrected_omega(t0, target, &info->evaluations, &info->route);
+    }
+    info->omega = w * RAD;
+    res[0] = d->t0;
+    if (w == 0.0) {
+        for (long i = 1; i <= disc; i++)
+            res[i] = 0.0;
+        return;
+    }
+    double k = sin(0.5 * (t0 + w)), m = k * k, kc = cos(0.5 * (t0 + w)), mc = kc * kc;
+    double s0 = sin(0.5 * t0), c0 = cos(0.5 * t0);
+    /* cos^2 phi0 = sin(omega/2) sin(t0 + omega/2) / k^2 (no cancellation) */
+    double cphi2 = fmax(0.0, sin(0.5 * w) * sin(t0 + 0.5 * w)) / m;
+    jacobi3 cur = {s0 / k, sqrt(cphi2), c0};
+    double prev_s = s0, prev_c = c0; /* sin and cos of the previous psi/2 */
+    double inv_h = d->coni / (double)disc;
+    jacobi3 step = {0.0, 1.0, 1.0};
+    if (d->coni == 0.0)
+        step = jacobi(k0, m, mc);
+    /* Past a length of FROM_TIP / K0 the additions from the base would carry the decaying
+     * solution forward (near the hanging direction cn and dn fall like sech u and their
+     * rounding errors grow like cosh^2 u; at K0 sigma_end = 45 the profile wrapped by 360
+     * degrees): each midpoint is then taken from the tip instead, sin(psi/2) = k cd(x),
+     * cos(psi/2) = k' nd(x), x = K0 (sigma_end - sigma), one evaluation per segment (to 1.5e-7
+     * degrees at 15; below 12 the additions hold 3e-10, tests/test_approx.c). */
+    bool from_tip = k0 * sig_end > FROM_TIP;
+    if (from_tip && complete_k(kc) <= k0 * sig_end) {
+        pendulum_profile(d, t0, w, res);
+        return;
+    }
+    double sig = 0.0;
+    for (long i = 0; i < disc; i++) {
+        double smid = (double)i + 0.5;
+        double sigmid = d->coni == 0.0 ? smid : smid / (1.0 - smid * inv_h);
+        double hs, hc;
+        if (from_tip) {
+            jacobi3 x = jacobi(k0 * (sig_end - sigmid), m, mc);
+            hs = k * x.cn / x.dn;
+            hc = kc / x.dn;
+            /* at the limit of double precision (t0 + omega rounds to 180 degrees, K(k) < T) x
+             * can pass the quarter period and psi below t0: hold t0 there */
+            if (!(hs * c0 - hc * s0 >= 0.0)) {
+                hs = s0;
+                hc = c0;
+            }
+        } else {
+            if (i > 0 && d->coni == 0.0)
+                cur = jacobi_add(cur, step, m, mc);
+            else
+                cur = jacobi_add(cur, jacobi(k0 * (sigmid - sig), m, mc), m, mc);
+            hs = k * cur.sn;
+            hc = cur.dn;
+        }
+        sig = sigmid;
+        double inc = 2.0 * atan_small(hs * prev_c - hc * prev_s, hc * prev_c + hs * prev_s);
+        prev_s = hs;
+        prev_c = hc;
+        if ((double)i > (double)disc * d->p)
+            inc = -inc;
+        res[i + 1] = inc * RAD;
     }
 }
 

@@ -22,7 +22,8 @@
  * horizontal axis H x g by res[k+1] on top of its rest rotation. Tip forces and moments, ground
  * and organ contact, torsion and out-of-plane loads are ignored; a rest curvature is kept as the
  * unloaded shape and the bending superimposed (exactly where it lies in the bending plane).
- * Afterwards one evaluation computes frames, forces and moments; stats.residual says how far the
+ * The frames are set while bending, exactly as the forward sweep would set them; afterwards one
+ * backward sweep computes forces and moments; stats.residual says how far the
  * shape is from the equilibrium of the segment model (it is not one). */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -30,6 +31,11 @@
 #include <math.h>
 #include <string.h>
 
+/* The scratch lives in the plant's solver workspace (cbm__mech_work), whose Newton-Krylov
+ * arrays (3 doubles per segment each, held whatever the solver, and used by no one else during
+ * an approx pass) it borrows: no allocation per solve, and no fresh pages to fault in (on a
+ * 10^4-segment tree a fifth of the pass went to the kernel's page faults when these were
+ * allocated at every solve). */
 typedef struct approx_scratch {
     double *inc;   /* per segment: the bending rotation of its joint, rad */
     cbm_vec3 *ax;  /* per segment: the world axis of that rotation */
@@ -38,12 +44,34 @@ typedef struct approx_scratch {
     size_t n;
 } approx_scratch;
 
-static void scratch_free(cbm_context *ctx, approx_scratch *s)
+/* The forward sweep's own rotation exponential and renormalisation (solve_common.c), repeated
+ * here so that the frames set while bending are bit for bit the ones cbm__mech_forward would set
+ * again from the same Omega: the approx pass then skips that sweep (a third of its time on a
+ * chain). */
+static inline cbm_quat fwd_qexp(cbm_vec3 r)
 {
-    cbm__free(ctx, s->inc, s->n * sizeof *s->inc);
-    cbm__free(ctx, s->ax, s->n * sizeof *s->ax);
-    cbm__free(ctx, s->chain, s->n * sizeof *s->chain);
-    cbm__free(ctx, s->res, (s->n + 1) * sizeof *s->res);
+    double a2 = r.x * r.x + r.y * r.y + r.z * r.z;
+    double c, k;
+    if (a2 < 0.04) {
+        double h2 = 0.25 * a2;
+        c = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))));
+        k = 0.5 * (1.0 + h2 * (-1.0 / 6.0 +
+                               h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0)))));
+    } else {
+        double a = sqrt(a2);
+        c = cos(0.5 * a);
+        k = sin(0.5 * a) / a;
+    }
+    cbm_quat q = {c, r.x * k, r.y * k, r.z * k};
+    return q;
+}
+
+static inline cbm_quat fwd_qnorm(cbm_quat q)
+{
+    double n2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    double s = 1.5 - 0.5 * n2;
+    cbm_quat r = {q.w * s, q.x * s, q.y * s, q.z * s};
+    return r;
 }
 
 static bool starts_axis(const cbm_plant *p, size_t i)
@@ -165,12 +193,13 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
                          (int)d->approx_mode);
     size_t n = p->n;
     approx_scratch sc = {0};
+    cbm__mech_work *wk = &p->work;
     sc.n = n;
-    sc.inc = cbm__alloc(p->ctx, n * sizeof *sc.inc);
-    sc.ax = cbm__alloc(p->ctx, n * sizeof *sc.ax);
-    sc.chain = cbm__alloc(p->ctx, n * sizeof *sc.chain);
-    sc.res = cbm__alloc(p->ctx, (n + 1) * sizeof *sc.res);
-    cbm_status s = sc.inc && sc.ax && sc.chain && sc.res ? CBM_OK : CBM_E_NOMEM;
+    sc.ax = wk->res;                     /* n vectors */
+    sc.inc = (double *)wk->step;         /* n of its 3n doubles */
+    sc.res = (double *)wk->step + n;     /* n + 1 more (3n >= 2n + 1) */
+    sc.chain = (size_t *)(void *)wk->dm; /* n of its 3n words */
+    cbm_status s = wk->cap >= n && sc.ax && sc.inc && sc.chain ? CBM_OK : CBM_E_NOMEM;
     const cbm__mech_work *w = &p->work;
     for (size_t i = 0; i < n && s == CBM_OK; i++) {
         cbm_vec3 pos;
@@ -181,13 +210,13 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
             break;
         cbm_vec3 bend = v3_scale(q_rotate(q_conj(qa), sc.ax[i]), sc.inc[i] / w->dual[i]);
         p->omega[i] = v3_add(w->rj[i], bend);
-        p->q[i] = q_normalize(q_mul(qa, q_from_rotvec(v3_scale(p->omega[i], w->dual[i]))));
+        p->q[i] = fwd_qnorm(q_mul(qa, fwd_qexp(v3_scale(p->omega[i], w->dual[i]))));
         p->pos[i] = pos;
+        p->force[i] = v3(0, 0, 0);
+        p->moment[i] = v3(0, 0, 0);
     }
-    scratch_free(p->ctx, &sc);
     if (s != CBM_OK)
         return s == CBM_E_NOMEM ? cbm__fail(p->ctx, s, "approx: out of memory") : s;
-    cbm__mech_forward(p);
     double mmax = 0.0;
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     if (!isfinite(r))
