@@ -117,6 +117,11 @@ typedef struct glb {
     CBM_ARRAY(color_mat) cmats;
     CBM_ARRAY(bucket) buckets;
     CBM_ARRAY(uint32_t) ibucket, iorder, htab; /* scratch of the instance grouping */
+    /* a direct write of one scene: the measuring pass keeps the parts' colours and the sorted
+     * instances (keep), which the streaming pass of the same, unchanged scene reuses (reuse) */
+    bool keep, reuse;
+    float *kept_col;
+    size_t kept_np;
 } glb;
 
 static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
@@ -253,6 +258,29 @@ static uint32_t color_key(const float *c)
 
 /* Sorts the kept instances of the scene into buckets (group, sides, colour), each bucket's
  * instances contiguous in g->iorder, the buckets numbered in order of first appearance. */
+static size_t bucket_hash(uint64_t key, float taper, size_t cap)
+{
+    uint32_t tb;
+    memcpy(&tb, &taper, sizeof tb);
+    return (size_t)(((key ^ ((uint64_t)tb << 17)) * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+}
+
+/* The bucket table at twice its capacity, every bucket placed again. */
+static cbm_status grow_bucket_table(glb *g, size_t *cap)
+{
+    *cap = *cap ? 2 * *cap : 64;
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->htab, *cap));
+    uint32_t *ht = g->htab.data;
+    memset(ht, 0xff, *cap * sizeof *ht);
+    for (size_t b = 0; b < g->buckets.len; b++) {
+        size_t h = bucket_hash(g->buckets.data[b].key, g->buckets.data[b].taper, *cap);
+        while (ht[h] != UINT32_MAX)
+            h = (h + 1) & (*cap - 1);
+        ht[h] = (uint32_t)b;
+    }
+    return CBM_OK;
+}
+
 static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
 {
     size_t ni = cbm_scene_instance_count(s);
@@ -261,14 +289,11 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
     g->buckets.len = 0;
     if (!ni)
         return CBM_OK;
-    size_t cap = 16;
-    while (cap < 2 * ni)
-        cap *= 2;
-    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->htab, cap));
+    size_t cap = 0; /* sized by the buckets, not the instances: a few in most drawings */
+    CBM_TRY(grow_bucket_table(g, &cap));
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->ibucket, ni));
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni));
-    uint32_t *ht = g->htab.data, *ib = g->ibucket.data;
-    memset(ht, 0xff, cap * sizeof *ht);
+    uint32_t *ib = g->ibucket.data;
     for (size_t i = 0; i < ni; i++) {
         const cbm_part *p = &parts[in[i].part];
         ib[i] = UINT32_MAX;
@@ -278,20 +303,21 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
         uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)in[i].sides << 32) |
                        color_key(col + 4 * (size_t)in[i].part);
         float tp = in[i].taper;
-        uint32_t tb;
-        memcpy(&tb, &tp, sizeof tb);
-        size_t h =
-            (size_t)(((key ^ ((uint64_t)tb << 17)) * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+        uint32_t *ht = g->htab.data;
+        size_t h = bucket_hash(key, tp, cap);
         while (ht[h] != UINT32_MAX &&
                (g->buckets.data[ht[h]].key != key || g->buckets.data[ht[h]].taper != tp))
             h = (h + 1) & (cap - 1);
-        if (ht[h] == UINT32_MAX) {
+        uint32_t id = ht[h];
+        if (id == UINT32_MAX) {
             bucket b = {key, tp, grp, in[i].sides, in[i].part, 0, 0};
             CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->buckets, b));
-            ht[h] = (uint32_t)(g->buckets.len - 1);
+            id = ht[h] = (uint32_t)(g->buckets.len - 1);
+            if (2 * g->buckets.len > cap)
+                CBM_TRY(grow_bucket_table(g, &cap));
         }
-        ib[i] = ht[h];
-        g->buckets.data[ht[h]].count++;
+        ib[i] = id;
+        g->buckets.data[id].count++;
     }
     size_t at = 0;
     for (size_t b = 0; b < g->buckets.len; b++) {
@@ -423,7 +449,10 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
     cbm_status st;
-    if ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
+    bool reuse = g->reuse && g->kept_col && g->kept_np == np;
+    if (reuse)
+        col = g->kept_col;
+    if ((!reuse && (st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK) ||
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
@@ -432,10 +461,15 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
         goto done;
     /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
-    for (size_t i = 0; i < 4 * np; i++)
+    for (size_t i = 0; i < 4 * np && !reuse; i++)
         col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
-    if ((st = sort_instances(g, s, col)) != CBM_OK)
+    if (!reuse && (st = sort_instances(g, s, col)) != CBM_OK)
         goto done;
+    if (g->keep && !reuse) {
+        g->kept_col = col; /* freed with the writer */
+        g->kept_np = np;
+        g->keep = false;
+    }
     bool has_inst[NG] = {false};
     for (size_t b = 0; b < g->buckets.len; b++)
         has_inst[g->buckets.data[b].grp] = true;
@@ -473,7 +507,8 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     for (size_t k = 0; k < ng && st == CBM_OK; k++)
         st = CBM_ARRAY_PUSH(ctx, g->children, gids[k]);
 done:
-    cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
+    if (col != g->kept_col)
+        cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
     cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
     return st;
 }
@@ -825,6 +860,7 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.ibucket);
     CBM_ARRAY_FREE(ctx, a->g.iorder);
     CBM_ARRAY_FREE(ctx, a->g.htab);
+    cbm__free(ctx, a->g.kept_col, 4 * (a->g.kept_np ? a->g.kept_np : 1) * sizeof(float));
     cbm__free(ctx, a, sizeof *a);
 }
 
@@ -1039,6 +1075,7 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
     /* Every scene is at hand: measure BIN in a first pass (for the JSON), then stream it. */
     glb *g = &a->g;
     g->mode = BIN_MEASURE;
+    g->keep = !anim; /* one scene, unchanged between the passes */
     cbm_json *j = NULL;
     const char *text = NULL;
     size_t tlen = 0;
@@ -1053,6 +1090,7 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
         rewind_glb(a);
         g->mode = BIN_STREAM;
         g->sink = out;
+        g->reuse = g->kept_col != NULL;
         st = add_frames(a, scene, path);
         size_t root = 0, anim_first = 0, nframes = 0;
         long anim_input = -1;
