@@ -31,6 +31,8 @@ done
   -o "$out/run-2.8a.csv"
 "$bin" run tests/lsys/abop-2.8a.l tests/lsys/abop-2.8a.v -n 6 --every 2 --color-by order \
   -o "$out/run-2.8a-growth.glb"
+# only .glb outputs: the segments as instances of a unit cylinder or frustum (EXT_mesh_gpu_instancing)
+"$bin" run tests/lsys/abop-2.8a.l tests/lsys/abop-2.8a.v -n 6 -o "$out/run-2.8a-instances.glb"
 "$bin" run tests/lsys/abop-1.24c.l tests/lsys/abop-1.24c.v --view front -o "$out/run-1.24c.glb" -o "$out/run-1.24c.obj" \
   -o "$out/run-1.24c.ply" -o "$out/run-1.24c.svg" -o "$out/run-1.24c.png"
 "$bin" run tests/lsys/abop-1.27.l tests/lsys/abop-1.27.v -o "$out/run-1.27.glb" -o "$out/run-1.27.obj" -o "$out/run-1.27.ply"

@@ -201,6 +201,88 @@ TEST(glb_per_segment_attributes)
     test_ctx_end(ctx);
 }
 
+/* A scene in instancing mode keeps straight uncapped tubes of constant section as instances;
+ * the .glb writes them as EXT_mesh_gpu_instancing nodes whose TRS applied to the unit
+ * cylinder gives the tessellated tube's points; capped or tapered tubes stay triangles; the
+ * other writers refuse the scene. */
+TEST(glb_tube_instances)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *si = NULL, *sm = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &si));
+    CHECK_OK(cbm_scene_create(ctx, &sm));
+    cbm_scene_set_instancing(si, true);
+    CHECK(cbm_scene_instancing(si) && !cbm_scene_instancing(sm));
+    cbm_part p = cbm_part_default();
+    p.order = 0;
+    p.segment = 7;
+    p.stress_ratio = 0.5;
+    /* H along (1, 2, 2) / 3, U perpendicular to it, L = U x H */
+    cbm_frame f;
+    f.h = (cbm_vec3){1.0 / 3, 2.0 / 3, 2.0 / 3};
+    f.u = (cbm_vec3){2.0 / 3, 1.0 / 3, -2.0 / 3};
+    f.l = (cbm_vec3){f.u.y * f.h.z - f.u.z * f.h.y, f.u.z * f.h.x - f.u.x * f.h.z,
+                     f.u.x * f.h.y - f.u.y * f.h.x};
+    cbm_section s0 = {{1, 2, 3}, f, 0.04, 0.02}, s1 = {{1 + 0.5, 2 + 1, 3 + 1}, f, 0.04, 0.02};
+    cbm_section t1 = s1;
+    t1.a = 0.03; /* tapered: triangles */
+    for (int k = 0; k < 2; k++) {
+        cbm_scene *s = k ? sm : si;
+        CHECK_OK(cbm_scene_begin_part(s, &p, NULL));
+        CHECK_OK(cbm_scene_add_tube(s, &s0, &s1, 8, false));
+        CHECK_OK(cbm_scene_add_tube(s, &s0, &s1, 8, true));
+        CHECK_OK(cbm_scene_add_tube(s, &s0, &t1, 8, false));
+    }
+    CHECK_EQ_INT(cbm_scene_instance_count(si), 1);
+    CHECK_EQ_INT(cbm_scene_instance_count(sm), 0);
+    CHECK_EQ_INT(cbm_scene_triangle_count(sm), cbm_scene_triangle_count(si) + 16);
+    const cbm_scene_instance *in = cbm_scene_instances(si);
+    CHECK(in[0].sides == 8 && in[0].part == 0 && in[0].a == 0.04f && in[0].b == 0.02f);
+    cbm_vec3 lo, hi;
+    CHECK(cbm_scene_bounds(si, &lo, &hi));
+    CHECK(lo.x <= 1 - 0.04 + 1e-6 && hi.z >= 4 + 0.04 - 1e-6);
+
+    CHECK_OK(cbm_scene_write(ctx, si, io_path("inst.glb"), NULL));
+    size_t len = 0;
+    char *j = glb_json(io_path("inst.glb"), &len);
+    CHECK(j && strstr(j, "\"extensionsRequired\":[\"EXT_mesh_gpu_instancing\"]"));
+    CHECK(j && strstr(j, "\"name\":\"branch order 0 tubes\""));
+    free(j);
+    const char *g = io_path("inst.glb");
+    float t[3], q[4], sc[3];
+    for (int k = 0; k < 3; k++) {
+        t[k] = glb_attribute(g, "TRANSLATION", (size_t)k);
+        sc[k] = glb_attribute(g, "SCALE", (size_t)k);
+    }
+    for (int k = 0; k < 4; k++)
+        q[k] = glb_attribute(g, "ROTATION", (size_t)k);
+    CHECK(t[0] == 1.0f && t[1] == 2.0f && t[2] == 3.0f);
+    CHECK(sc[0] == 0.04f && fabsf(sc[1] - 1.5f) < 1e-6f && sc[2] == 0.02f);
+    CHECK(glb_attribute(g, "_SEGMENT", 0) == 7.0f && glb_attribute(g, "_STRESS_RATIO", 0) == 0.5f);
+    /* the tessellated tube's first ring from the instance: R (S (cos t, 0, sin t)) + T */
+    const cbm_scene_vertex *v = cbm_scene_vertices(sm);
+    double x = q[0], y = q[1], z = q[2], w = q[3];
+    double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                      {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                      {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+    for (int k = 0; k < 8; k++) {
+        double a = 2.0 * 3.14159265358979323846 * k / 8;
+        double lp[3] = {sc[0] * cos(a), 0.0, sc[2] * sin(a)};
+        for (int r = 0; r < 3; r++) {
+            double pw = t[r] + m[r][0] * lp[0] + m[r][1] * lp[1] + m[r][2] * lp[2];
+            CHECK(fabs(pw - v[k].p[r]) < 1e-6);
+        }
+    }
+    /* meshes other than .glb refuse instances, as they refuse pixel lines */
+    CHECK_STATUS(cbm_scene_write(ctx, si, io_path("inst.obj"), NULL), CBM_E_UNSUPPORTED);
+    CHECK_STATUS(cbm_scene_write(ctx, si, io_path("inst.ply"), NULL), CBM_E_UNSUPPORTED);
+    cbm_scene_clear(si);
+    CHECK(cbm_scene_instance_count(si) == 0 && cbm_scene_instancing(si));
+    cbm_scene_destroy(si);
+    cbm_scene_destroy(sm);
+    test_ctx_end(ctx);
+}
+
 TEST(glb_nodes_attributes_and_animation)
 {
     cbm_context *ctx = test_ctx();

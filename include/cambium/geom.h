@@ -115,6 +115,28 @@ CBM_API cbm_status cbm_scene_add_line(cbm_scene *scene, cbm_vec3 p0, cbm_vec3 p1
 CBM_API size_t cbm_scene_line_count(const cbm_scene *scene);
 CBM_API const cbm_scene_line *cbm_scene_lines(const cbm_scene *scene);
 
+/// A straight tube of elliptical sections, the end one the start one scaled, kept as an instance
+/// of one unit cylinder or frustum instead of triangles (a scene in instancing mode): the .glb
+/// writer writes it as such (EXT_mesh_gpu_instancing), 60 bytes where the triangles of an
+/// 8-sided tube take ~1.1 kB.
+typedef struct cbm_scene_instance {
+    float p0[3], p1[3]; ///< the axis's ends, m
+    float u[3];         ///< unit U of the sections, perpendicular to the axis (L = U x H)
+    float a, b;         ///< semi-axes along U and L at p0, m
+    float taper;        ///< the section at p1 over the one at p0 (1: a cylinder)
+    uint32_t part;      ///< index of the part
+    int32_t sides;      ///< sides of the rings it stands for
+} cbm_scene_instance;
+
+/// Instancing mode: cbm_scene_add_tube keeps straight uncapped tubes whose end section is the
+/// start one scaled as instances (false, the default: as triangles). Set it only when every output
+/// of the scene is a .glb; the other writers refuse a scene with instances. Kept by
+/// cbm_scene_clear.
+CBM_API void cbm_scene_set_instancing(cbm_scene *scene, bool on);
+CBM_API bool cbm_scene_instancing(const cbm_scene *scene);
+CBM_API size_t cbm_scene_instance_count(const cbm_scene *scene);
+CBM_API const cbm_scene_instance *cbm_scene_instances(const cbm_scene *scene);
+
 CBM_API size_t cbm_scene_vertex_count(const cbm_scene *scene);
 CBM_API const cbm_scene_vertex *cbm_scene_vertices(const cbm_scene *scene);
 CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
@@ -126,7 +148,8 @@ CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
 CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
 /// Mutable access, e.g. to fill stress after a solve.
 CBM_API cbm_part *cbm_scene_part(cbm_scene *scene, uint32_t id);
-/// Axis-aligned bounds of all vertices and line ends; false if the scene is empty.
+/// Axis-aligned bounds of all vertices, line ends and instances (their ends widened by their
+/// larger semi-axis); false if the scene is empty.
 CBM_API bool cbm_scene_bounds(const cbm_scene *scene, cbm_vec3 *lo, cbm_vec3 *hi);
 
 #ifdef __cplusplus

@@ -18,7 +18,8 @@ struct cbm_scene {
     CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
     CBM_ARRAY(cbm_part) parts;
     CBM_ARRAY(cbm_scene_line) lines;
-    bool line_mode;
+    CBM_ARRAY(cbm_scene_instance) inst;
+    bool line_mode, instancing;
     /* tube in progress */
     int tube_sides;
     bool tube_cap0, tube_cap1, tube_open; /* caps at the start, at the end */
@@ -79,12 +80,13 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->tpart);
     CBM_ARRAY_FREE(ctx, s->parts);
     CBM_ARRAY_FREE(ctx, s->lines);
+    CBM_ARRAY_FREE(ctx, s->inst);
     cbm__free(ctx, s, sizeof *s);
 }
 
 void cbm_scene_clear(cbm_scene *s)
 {
-    s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = 0;
+    s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
     s->tube_open = false;
 }
 
@@ -244,9 +246,73 @@ cbm_status cbm_scene_tube_end(cbm_scene *s)
     return CBM_OK;
 }
 
+static bool same_vec(cbm_vec3 a, cbm_vec3 b)
+{
+    return a.x == b.x && a.y == b.y && a.z == b.z;
+}
+
+/* A tube an instance can stand for: no caps, sections in the same frame, the end one the start
+ * one scaled by *taper, H along the axis (then the instance's rotation and scale give the rings'
+ * points and normals: the scene's ring normals are the sections' own, without the taper's
+ * slope, so both rings' normals are the unit frustum's scaled as the start section). */
+static bool instanceable(const cbm_scene *s, const cbm_section *s0, const cbm_section *s1,
+                         int sides, bool caps, double *taper)
+{
+    double a0 = fabs(s0->a), b0 = fabs(s0->b), a1 = fabs(s1->a), b1 = fabs(s1->b);
+    *taper = a0 == a1 && b0 == b1 ? 1.0 : a0 > 0.0 ? a1 / a0 : -1.0;
+    if (!s->instancing || caps || sides < 3 || sides > 1024 || !(*taper > 0.0) ||
+        !(fabs(b0 * *taper - b1) <= 1e-12 * (b1 + a1)) || !isfinite(*taper) ||
+        !same_vec(s0->frame.h, s1->frame.h) || !same_vec(s0->frame.u, s1->frame.u) ||
+        !same_vec(s0->frame.l, s1->frame.l) || !v3_isfinite(s0->center) ||
+        !v3_isfinite(s1->center) || !isfinite(s0->a) || !isfinite(s0->b))
+        return false;
+    cbm_vec3 d = v3_sub(s1->center, s0->center), h = s0->frame.h, u = s0->frame.u;
+    double len = v3_norm(d);
+    /* a right frame: unit H along the axis, unit U across it, L = +-(U x H) (an ellipse is
+     * symmetric, so a mirrored L draws the same tube) */
+    return len > 0.0 && fabs(v3_norm(h) - 1.0) < 1e-9 && fabs(v3_norm(u) - 1.0) < 1e-9 &&
+           v3_norm(v3_cross(d, h)) <= 1e-9 * len && v3_dot(d, h) > 0.0 &&
+           fabs(v3_dot(u, h)) < 1e-9 &&
+           fabs(fabs(v3_dot(s0->frame.l, v3_cross(u, h))) - 1.0) < 1e-9;
+}
+
+void cbm_scene_set_instancing(cbm_scene *s, bool on)
+{
+    if (s)
+        s->instancing = on;
+}
+
+bool cbm_scene_instancing(const cbm_scene *s)
+{
+    return s && s->instancing;
+}
+
+size_t cbm_scene_instance_count(const cbm_scene *s)
+{
+    return s ? s->inst.len : 0;
+}
+
+const cbm_scene_instance *cbm_scene_instances(const cbm_scene *s)
+{
+    return s ? s->inst.data : NULL;
+}
+
 cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1, int sides,
                               bool caps)
 {
+    double taper = 1.0;
+    if (s && s0 && s1 && !s->tube_open && instanceable(s, s0, s1, sides, caps, &taper)) {
+        CBM_TRY(ensure_part(s));
+        cbm_scene_instance in = {{(float)s0->center.x, (float)s0->center.y, (float)s0->center.z},
+                                 {(float)s1->center.x, (float)s1->center.y, (float)s1->center.z},
+                                 {(float)s0->frame.u.x, (float)s0->frame.u.y, (float)s0->frame.u.z},
+                                 (float)fabs(s0->a),
+                                 (float)fabs(s0->b),
+                                 (float)taper,
+                                 (uint32_t)(s->parts.len - 1),
+                                 sides};
+        return CBM_ARRAY_PUSH(s->ctx, s->inst, in);
+    }
     CBM_TRY(cbm_scene_tube_begin(s, sides, caps));
     CBM_TRY(cbm_scene_tube_ring(s, s0));
     CBM_TRY(cbm_scene_tube_ring(s, s1));
@@ -503,7 +569,7 @@ static void grow_bounds(const float *p, double l[3], double h[3])
 
 bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
 {
-    if (s->verts.len == 0 && s->lines.len == 0)
+    if (s->verts.len == 0 && s->lines.len == 0 && s->inst.len == 0)
         return false;
     double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (size_t i = 0; i < s->verts.len; i++)
@@ -511,6 +577,19 @@ bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
     for (size_t i = 0; i < s->lines.len; i++) {
         grow_bounds(s->lines.data[i].p0, l, h);
         grow_bounds(s->lines.data[i].p1, l, h);
+    }
+    for (size_t i = 0; i < s->inst.len; i++) {
+        const cbm_scene_instance *in = &s->inst.data[i];
+        float r = in->a > in->b ? in->a : in->b;
+        for (int e = 0; e < 2; e++)
+            for (int k = 0; k < 3; k++) {
+                const float *p = e ? in->p1 : in->p0;
+                float q[3] = {p[0], p[1], p[2]};
+                q[k] -= r;
+                grow_bounds(q, l, h);
+                q[k] += 2 * r;
+                grow_bounds(q, l, h);
+            }
     }
     if (lo)
         *lo = v3(l[0], l[1], l[2]);

@@ -19,11 +19,14 @@
 
 #include "cambium/io.h"
 
+#include "../core/vecmath.h"
+
 #include <math.h>
 #include <stdio.h>
 
 #define GL_FLOAT                5126
 #define GL_UNSIGNED_INT         5125
+#define GL_UNSIGNED_SHORT       5123
 #define GL_ARRAY_BUFFER         34962
 #define GL_ELEMENT_ARRAY_BUFFER 34963
 #define MAX_ORDER_GROUPS        32
@@ -43,7 +46,38 @@ typedef struct view {
 typedef struct mesh {
     size_t pos, nrm, col, stress, age, react, order, seg, idx;
     int material;
+    size_t cmat1; /* instanced (POSITION, NORMAL and indices only): colour material + 1 */
+    size_t unit1; /* instanced: its unit cylinder + 1 */
 } mesh;
+
+/* The per-instance accessors of an instanced node (EXT_mesh_gpu_instancing). */
+typedef struct inst_attrs {
+    size_t tr, rot, scale, stress, age, react, order, seg;
+} inst_attrs;
+
+/* A unit cylinder or frustum of `sides` (rings at y = 0 and 1, radii 1 and taper), shared by
+ * instances. */
+typedef struct unit_mesh {
+    int sides;
+    float taper;
+    size_t pos, nrm, idx;
+} unit_mesh;
+
+/* A material of instanced meshes: the organ's, coloured by baseColorFactor (no COLOR_0). */
+typedef struct color_mat {
+    int organ;
+    uint32_t key; /* 8-bit sRGB RGB and alpha */
+    float rgba[4];
+} color_mat;
+
+/* Instances of one group, side count and colour: one instanced node. */
+typedef struct bucket {
+    uint64_t key;
+    float taper;
+    int grp, sides;
+    uint32_t part0;
+    size_t count, start;
+} bucket;
 
 typedef struct node {
     char name[48];
@@ -52,6 +86,7 @@ typedef struct node {
     int organ, order;      /* -1 if not a group node */
     bool hidden;           /* scale 0 in the static pose */
     bool frame;
+    size_t inst1; /* instanced: its inst_attrs + 1 */
 } node;
 
 /* Where the BIN chunk goes: kept in memory (an animation built frame by frame, whose scenes may
@@ -77,6 +112,16 @@ typedef struct glb {
      * streaming one: its pages are touched once, not once a pass */
     CBM_ARRAY(uint32_t) remap, verts, idx;
     CBM_ARRAY(float) fbuf;
+    CBM_ARRAY(inst_attrs) insts;
+    CBM_ARRAY(unit_mesh) units;
+    CBM_ARRAY(color_mat) cmats;
+    CBM_ARRAY(bucket) buckets;
+    CBM_ARRAY(uint32_t) ibucket, iorder, htab; /* scratch of the instance grouping */
+    /* a direct write of one scene: the measuring pass keeps the parts' colours and the sorted
+     * instances (keep), which the streaming pass of the same, unchanged scene reuses (reuse) */
+    bool keep, reuse;
+    float *kept_col;
+    size_t kept_np;
 } glb;
 
 static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
@@ -106,7 +151,8 @@ static cbm_status add_accessor(glb *g, const void *data, size_t count, int ncomp
 {
     accessor a;
     memset(&a, 0, sizeof a);
-    CBM_TRY(add_view(g, data, count * (size_t)ncomp * 4, target, &a.view));
+    size_t csize = ctype == GL_UNSIGNED_SHORT ? 2 : 4;
+    CBM_TRY(add_view(g, data, count * (size_t)ncomp * csize, target, &a.view));
     a.count = count;
     a.ncomp = ncomp;
     a.ctype = ctype;
@@ -140,7 +186,249 @@ static float known(double x)
     return isfinite(x) ? (float)x : -1.0f;
 }
 
-/* One mesh with its node per non-empty group of the scene; node ids appended to children. */
+/* The per-part attributes in file order: _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER, _SEGMENT. */
+static float part_value(const cbm_part *p, int q)
+{
+    double x = q == 0   ? p->stress_ratio
+               : q == 1 ? p->age
+               : q == 2 ? p->reaction_wood
+               : q == 3 ? (p->order >= 0 ? (double)p->order : NAN)
+                        : (p->segment >= 0 ? (double)p->segment : NAN);
+    return known(x);
+}
+
+/* The unit cylinder or frustum of `sides`: the rings of cbm_scene_tube_ring at y = 0 and y = 1
+ * in the frame x = U, y = H, z = L = U x H, radii 1 and taper, normals those of the rings'
+ * sections (as the scene's), its triangles wound as the scene's; written once. */
+static cbm_status unit_cylinder(glb *g, int sides, float taper, size_t *unit)
+{
+    for (size_t i = 0; i < g->units.len; i++)
+        if (g->units.data[i].sides == sides && g->units.data[i].taper == taper) {
+            *unit = i;
+            return CBM_OK;
+        }
+    size_t n = (size_t)sides;
+    float *f = cbm__alloc(g->ctx, 6 * n * sizeof *f);
+    uint16_t *ix = cbm__alloc(g->ctx, 6 * n * sizeof *ix);
+    cbm_status st = f && ix ? CBM_OK : CBM_E_NOMEM;
+    unit_mesh u = {sides, taper, 0, 0, 0};
+    for (size_t y = 0; y < 2 && st == CBM_OK; y++)
+        for (int k = 0; k < sides; k++) {
+            double t = 2.0 * CBM_PI * k / sides, r = y ? (double)taper : 1.0;
+            float *v = f + 3 * (y * n + (size_t)k);
+            v[0] = (float)(r * cos(t));
+            v[1] = (float)y;
+            v[2] = (float)(r * sin(t));
+        }
+    if (st == CBM_OK)
+        st = add_accessor(g, f, 2 * n, 3, GL_FLOAT, GL_ARRAY_BUFFER, true, &u.pos);
+    for (size_t y = 0; y < 2 && st == CBM_OK; y++)
+        for (int k = 0; k < sides; k++) {
+            double t = 2.0 * CBM_PI * k / sides;
+            float *v = f + 3 * (y * n + (size_t)k);
+            v[0] = (float)cos(t);
+            v[1] = 0.0f;
+            v[2] = (float)sin(t);
+        }
+    if (st == CBM_OK)
+        st = add_accessor(g, f, 2 * n, 3, GL_FLOAT, GL_ARRAY_BUFFER, false, &u.nrm);
+    for (size_t i = 0; i < n && st == CBM_OK; i++) {
+        uint16_t i0 = (uint16_t)i, i1 = (uint16_t)((i + 1) % n), m = (uint16_t)n;
+        uint16_t *t = ix + 6 * i;
+        t[0] = i0, t[1] = (uint16_t)(m + i1), t[2] = i1;
+        t[3] = i0, t[4] = (uint16_t)(m + i0), t[5] = (uint16_t)(m + i1);
+    }
+    if (st == CBM_OK)
+        st = add_accessor(g, ix, 6 * n, 1, GL_UNSIGNED_SHORT, GL_ELEMENT_ARRAY_BUFFER, false,
+                          &u.idx);
+    if (st == CBM_OK)
+        st = CBM_ARRAY_PUSH(g->ctx, g->units, u);
+    *unit = g->units.len - 1;
+    cbm__free(g->ctx, f, 6 * n * sizeof *f);
+    cbm__free(g->ctx, ix, 6 * n * sizeof *ix);
+    return st;
+}
+
+/* 8-bit display sRGB and alpha of a clamped linear colour: the key of a colour material. */
+static uint32_t color_key(const float *c)
+{
+    return ((uint32_t)cbm__srgb8(c[0]) << 24) | ((uint32_t)cbm__srgb8(c[1]) << 16) |
+           ((uint32_t)cbm__srgb8(c[2]) << 8) | (uint32_t)(c[3] * 255.0f + 0.5f);
+}
+
+/* Sorts the kept instances of the scene into buckets (group, sides, colour), each bucket's
+ * instances contiguous in g->iorder, the buckets numbered in order of first appearance. */
+static size_t bucket_hash(uint64_t key, float taper, size_t cap)
+{
+    uint32_t tb;
+    memcpy(&tb, &taper, sizeof tb);
+    return (size_t)(((key ^ ((uint64_t)tb << 17)) * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+}
+
+/* The bucket table at twice its capacity, every bucket placed again. */
+static cbm_status grow_bucket_table(glb *g, size_t *cap)
+{
+    *cap = *cap ? 2 * *cap : 64;
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->htab, *cap));
+    uint32_t *ht = g->htab.data;
+    memset(ht, 0xff, *cap * sizeof *ht);
+    for (size_t b = 0; b < g->buckets.len; b++) {
+        size_t h = bucket_hash(g->buckets.data[b].key, g->buckets.data[b].taper, *cap);
+        while (ht[h] != UINT32_MAX)
+            h = (h + 1) & (*cap - 1);
+        ht[h] = (uint32_t)b;
+    }
+    return CBM_OK;
+}
+
+static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
+{
+    size_t ni = cbm_scene_instance_count(s);
+    const cbm_scene_instance *in = cbm_scene_instances(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    g->buckets.len = 0;
+    if (!ni)
+        return CBM_OK;
+    size_t cap = 0; /* sized by the buckets, not the instances: a few in most drawings */
+    CBM_TRY(grow_bucket_table(g, &cap));
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->ibucket, ni));
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni));
+    uint32_t *ib = g->ibucket.data;
+    for (size_t i = 0; i < ni; i++) {
+        const cbm_part *p = &parts[in[i].part];
+        ib[i] = UINT32_MAX;
+        if (!cbm__part_kept(p, g->o))
+            continue;
+        int grp = group_of(p);
+        uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)in[i].sides << 32) |
+                       color_key(col + 4 * (size_t)in[i].part);
+        float tp = in[i].taper;
+        uint32_t *ht = g->htab.data;
+        size_t h = bucket_hash(key, tp, cap);
+        while (ht[h] != UINT32_MAX &&
+               (g->buckets.data[ht[h]].key != key || g->buckets.data[ht[h]].taper != tp))
+            h = (h + 1) & (cap - 1);
+        uint32_t id = ht[h];
+        if (id == UINT32_MAX) {
+            bucket b = {key, tp, grp, in[i].sides, in[i].part, 0, 0};
+            CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->buckets, b));
+            id = ht[h] = (uint32_t)(g->buckets.len - 1);
+            if (2 * g->buckets.len > cap)
+                CBM_TRY(grow_bucket_table(g, &cap));
+        }
+        ib[i] = id;
+        g->buckets.data[id].count++;
+    }
+    size_t at = 0;
+    for (size_t b = 0; b < g->buckets.len; b++) {
+        g->buckets.data[b].start = at;
+        at += g->buckets.data[b].count;
+    }
+    for (size_t i = 0; i < ni; i++)
+        if (ib[i] != UINT32_MAX)
+            g->iorder.data[g->buckets.data[ib[i]].start++] = (uint32_t)i;
+    for (size_t b = 0; b < g->buckets.len; b++)
+        g->buckets.data[b].start -= g->buckets.data[b].count;
+    return CBM_OK;
+}
+
+/* The instanced mesh of a unit cylinder in a colour material (shared by every node using it). */
+static cbm_status instanced_mesh(glb *g, int organ, int sides, float taper, const float *rgba,
+                                 size_t *id)
+{
+    size_t unit = 0, cm = 0;
+    CBM_TRY(unit_cylinder(g, sides, taper, &unit));
+    uint32_t key = color_key(rgba);
+    while (cm < g->cmats.len && (g->cmats.data[cm].organ != organ || g->cmats.data[cm].key != key))
+        cm++;
+    if (cm == g->cmats.len) {
+        color_mat c = {organ, key, {rgba[0], rgba[1], rgba[2], rgba[3]}};
+        CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->cmats, c));
+    }
+    for (size_t i = 0; i < g->meshes.len; i++)
+        if (g->meshes.data[i].unit1 == unit + 1 && g->meshes.data[i].cmat1 == cm + 1) {
+            *id = i;
+            return CBM_OK;
+        }
+    mesh m;
+    memset(&m, 0, sizeof m);
+    m.pos = g->units.data[unit].pos;
+    m.nrm = g->units.data[unit].nrm;
+    m.idx = g->units.data[unit].idx;
+    m.material = organ;
+    m.cmat1 = cm + 1;
+    m.unit1 = unit + 1;
+    CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->meshes, m));
+    *id = g->meshes.len - 1;
+    return CBM_OK;
+}
+
+/* One instanced node per bucket of group grp; their ids appended to g->children. */
+static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *col, int grp,
+                                     const char *group_name, size_t *count)
+{
+    const cbm_scene_instance *in = cbm_scene_instances(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    bool fill = g->mode != BIN_MEASURE; /* no bounds needed: nothing to compute when measuring */
+    *count = 0;
+    for (size_t b = 0; b < g->buckets.len; b++) {
+        const bucket *bk = &g->buckets.data[b];
+        if (bk->grp != grp)
+            continue;
+        size_t n = bk->count, mid = 0;
+        const uint32_t *ord = g->iorder.data + bk->start;
+        int organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
+        CBM_TRY(instanced_mesh(g, organ, bk->sides, bk->taper, col + 4 * (size_t)bk->part0, &mid));
+        CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->fbuf, 4 * n));
+        float *f = g->fbuf.data;
+        inst_attrs ia;
+        for (size_t i = 0; fill && i < n; i++)
+            memcpy(f + 3 * i, in[ord[i]].p0, 3 * sizeof(float));
+        CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia.tr));
+        for (size_t i = 0; fill && i < n; i++) {
+            const cbm_scene_instance *q = &in[ord[i]];
+            cbm_vec3 p0 = v3(q->p0[0], q->p0[1], q->p0[2]), p1 = v3(q->p1[0], q->p1[1], q->p1[2]);
+            cbm_vec3 h = v3_normalize(v3_sub(p1, p0)), u = v3(q->u[0], q->u[1], q->u[2]);
+            u = v3_normalize(v3_madd(u, h, -v3_dot(u, h)));
+            cbm_quat r = cbm__quat_of_columns(u, h, v3_cross(u, h));
+            float *d = f + 4 * i;
+            d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
+        }
+        CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia.rot));
+        for (size_t i = 0; fill && i < n; i++) {
+            const cbm_scene_instance *q = &in[ord[i]];
+            double dx = (double)q->p1[0] - q->p0[0], dy = (double)q->p1[1] - q->p0[1],
+                   dz = (double)q->p1[2] - q->p0[2];
+            f[3 * i] = q->a;
+            f[3 * i + 1] = (float)sqrt(dx * dx + dy * dy + dz * dz);
+            f[3 * i + 2] = q->b;
+        }
+        CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia.scale));
+        size_t *dst[5] = {&ia.stress, &ia.age, &ia.react, &ia.order, &ia.seg};
+        for (int k = 0; k < 5; k++) {
+            for (size_t i = 0; fill && i < n; i++)
+                f[i] = part_value(&parts[in[ord[i]].part], k);
+            CBM_TRY(add_accessor(g, f, n, 1, GL_FLOAT, 0, false, dst[k]));
+        }
+        CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->insts, ia));
+        node nd;
+        memset(&nd, 0, sizeof nd);
+        nd.mesh = (long)mid;
+        nd.organ = nd.order = -1;
+        nd.inst1 = g->insts.len;
+        snprintf(nd.name, sizeof nd.name, "%.40s tubes", group_name);
+        CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->nodes, nd));
+        CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->children, g->nodes.len - 1));
+        (*count)++;
+    }
+    return CBM_OK;
+}
+
+static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col,
+                                 const uint32_t *vpart, int grp, float *fbuf);
+
+/* One node per non-empty group of the scene, with the mesh of its triangles and an instanced
+ * child node per bucket of its instances; the group nodes' ids appended to children. */
 static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_child, size_t *count)
 {
     cbm_context *ctx = g->ctx;
@@ -148,21 +436,23 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     size_t nv = cbm_scene_vertex_count(s), nt = cbm_scene_triangle_count(s);
     size_t np = cbm_scene_part_count(s);
     const cbm_part *parts = cbm_scene_parts(s);
-    const cbm_scene_vertex *v = cbm_scene_vertices(s);
-    const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
+    const uint32_t *tp = cbm_scene_triangle_parts(s);
     enum { NG = CBM_ORGAN_COUNT + MAX_ORDER_GROUPS };
     size_t ntg[NG] = {0};
     for (size_t t = 0; t < nt; t++)
         if (cbm__part_kept(&parts[tp[t]], o))
             ntg[group_of(&parts[tp[t]])]++;
     float *col = NULL, *fbuf = NULL;
-    uint32_t *vpart = NULL, *remap = NULL, *verts = NULL, *idx = NULL;
+    uint32_t *vpart = NULL;
     size_t maxt = 0;
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
     cbm_status st;
-    if ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
+    bool reuse = g->reuse && g->kept_col && g->kept_np == np;
+    if (reuse)
+        col = g->kept_col;
+    if ((!reuse && (st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK) ||
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
@@ -170,20 +460,72 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
         goto done;
-    remap = g->remap.data;
-    verts = g->verts.data;
-    idx = g->idx.data;
-    fbuf = g->fbuf.data;
     /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
-    for (size_t i = 0; i < 4 * np; i++)
+    for (size_t i = 0; i < 4 * np && !reuse; i++)
         col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
-    *first_child = g->children.len;
-    *count = 0;
+    if (!reuse && (st = sort_instances(g, s, col)) != CBM_OK)
+        goto done;
+    if (g->keep && !reuse) {
+        g->kept_col = col; /* freed with the writer */
+        g->kept_np = np;
+        g->keep = false;
+    }
+    bool has_inst[NG] = {false};
+    for (size_t b = 0; b < g->buckets.len; b++)
+        has_inst[g->buckets.data[b].grp] = true;
+    /* the group nodes' ids go to children last, contiguous (their instanced nodes come first) */
+    size_t gids[NG], ng = 0;
     /* groups in a fixed order: branch orders, then the organs */
     for (int gi = 0; gi < NG; gi++) {
         int grp = gi < MAX_ORDER_GROUPS ? CBM_ORGAN_COUNT + gi : gi - MAX_ORDER_GROUPS;
-        if (!ntg[grp])
+        if (!ntg[grp] && !has_inst[grp])
             continue;
+        node nd;
+        memset(&nd, 0, sizeof nd);
+        nd.mesh = -1;
+        nd.organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
+        nd.order = grp >= CBM_ORGAN_COUNT ? grp - CBM_ORGAN_COUNT : -1;
+        if (nd.order >= 0)
+            snprintf(nd.name, sizeof nd.name, "branch order %d", nd.order);
+        else
+            snprintf(nd.name, sizeof nd.name, "%s", cbm_organ_name((cbm_organ)nd.organ));
+        fbuf = g->fbuf.data; /* the instances may have moved it */
+        if (ntg[grp] && (st = add_group_mesh(g, s, col, vpart, grp, fbuf)) != CBM_OK)
+            goto done;
+        if (ntg[grp])
+            nd.mesh = (long)g->meshes.len - 1;
+        nd.child0 = g->children.len;
+        if (has_inst[grp] &&
+            (st = add_instance_nodes(g, s, col, grp, nd.name, &nd.nchild)) != CBM_OK)
+            goto done;
+        if ((st = CBM_ARRAY_PUSH(ctx, g->nodes, nd)) != CBM_OK)
+            goto done;
+        gids[ng++] = g->nodes.len - 1;
+    }
+    *first_child = g->children.len;
+    *count = ng;
+    for (size_t k = 0; k < ng && st == CBM_OK; k++)
+        st = CBM_ARRAY_PUSH(ctx, g->children, gids[k]);
+done:
+    if (col != g->kept_col)
+        cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
+    cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
+    return st;
+}
+
+/* The triangles of group grp as one mesh (appended to g->meshes). */
+static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col,
+                                 const uint32_t *vpart, int grp, float *fbuf)
+{
+    cbm_context *ctx = g->ctx;
+    const cbm_write_options *o = g->o;
+    size_t nv = cbm_scene_vertex_count(s), nt = cbm_scene_triangle_count(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    const cbm_scene_vertex *v = cbm_scene_vertices(s);
+    const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
+    uint32_t *remap = g->remap.data, *verts = g->verts.data, *idx = g->idx.data;
+    cbm_status st = CBM_OK;
+    {
         memset(remap, 0xff, (nv ? nv : 1) * sizeof *remap);
         size_t nvg = 0, ni = 0;
         for (size_t t = 0; t < nt; t++) {
@@ -200,6 +542,7 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             }
         }
         mesh m;
+        memset(&m, 0, sizeof m);
         m.material = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp; /* organ; renumbered */
         g->organ_used[m.material] = true;
         for (size_t i = 0; i < nvg; i++)
@@ -224,15 +567,8 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             goto done;
         size_t *dst[5] = {&m.stress, &m.age, &m.react, &m.order, &m.seg};
         for (int q = 0; q < 5; q++) {
-            for (size_t i = 0; fill && i < nvg; i++) {
-                const cbm_part *p = &parts[vpart[verts[i]]];
-                double x = q == 0   ? p->stress_ratio
-                           : q == 1 ? p->age
-                           : q == 2 ? p->reaction_wood
-                           : q == 3 ? (p->order >= 0 ? (double)p->order : NAN)
-                                    : (p->segment >= 0 ? (double)p->segment : NAN);
-                fbuf[i] = known(x);
-            }
+            for (size_t i = 0; fill && i < nvg; i++)
+                fbuf[i] = part_value(&parts[vpart[verts[i]]], q);
             if ((st = add_accessor(g, fbuf, nvg, 1, GL_FLOAT, GL_ARRAY_BUFFER, false, dst[q])) !=
                 CBM_OK)
                 goto done;
@@ -241,23 +577,8 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
                                &m.idx)) != CBM_OK ||
             (st = CBM_ARRAY_PUSH(ctx, g->meshes, m)) != CBM_OK)
             goto done;
-        node nd;
-        memset(&nd, 0, sizeof nd);
-        nd.mesh = (long)g->meshes.len - 1;
-        nd.organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
-        nd.order = grp >= CBM_ORGAN_COUNT ? grp - CBM_ORGAN_COUNT : -1;
-        if (nd.order >= 0)
-            snprintf(nd.name, sizeof nd.name, "branch order %d", nd.order);
-        else
-            snprintf(nd.name, sizeof nd.name, "%s", cbm_organ_name((cbm_organ)nd.organ));
-        if ((st = CBM_ARRAY_PUSH(ctx, g->nodes, nd)) != CBM_OK ||
-            (st = CBM_ARRAY_PUSH(ctx, g->children, g->nodes.len - 1)) != CBM_OK)
-            goto done;
-        (*count)++;
     }
 done:
-    cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
-    cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
     return st;
 }
 
@@ -278,6 +599,14 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
     cbm_json_string(j, "version", "2.0");
     cbm_json_string(j, "generator", "cambium " CBM_VERSION_STRING);
     cbm_json_end_object(j);
+    if (g->insts.len) {
+        /* required: a viewer without it would draw one tube per instanced node */
+        for (int r = 0; r < 2; r++) {
+            cbm_json_begin_array(j, r ? "extensionsRequired" : "extensionsUsed");
+            cbm_json_string(j, NULL, "EXT_mesh_gpu_instancing");
+            cbm_json_end_array(j);
+        }
+    }
     cbm_json_int(j, "scene", 0);
     cbm_json_begin_array(j, "scenes");
     cbm_json_begin_object(j, NULL);
@@ -304,6 +633,23 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
         if (n->hidden) {
             const float z[3] = {0, 0, 0};
             json_floats(j, "scale", z, 3);
+        }
+        if (n->inst1) {
+            const inst_attrs *ia = &g->insts.data[n->inst1 - 1];
+            cbm_json_begin_object(j, "extensions");
+            cbm_json_begin_object(j, "EXT_mesh_gpu_instancing");
+            cbm_json_begin_object(j, "attributes");
+            cbm_json_int(j, "TRANSLATION", (int64_t)ia->tr);
+            cbm_json_int(j, "ROTATION", (int64_t)ia->rot);
+            cbm_json_int(j, "SCALE", (int64_t)ia->scale);
+            cbm_json_int(j, "_STRESS_RATIO", (int64_t)ia->stress);
+            cbm_json_int(j, "_AGE", (int64_t)ia->age);
+            cbm_json_int(j, "_REACTION_WOOD", (int64_t)ia->react);
+            cbm_json_int(j, "_ORDER", (int64_t)ia->order);
+            cbm_json_int(j, "_SEGMENT", (int64_t)ia->seg);
+            cbm_json_end_object(j);
+            cbm_json_end_object(j);
+            cbm_json_end_object(j);
         }
         if (n->organ >= 0) {
             cbm_json_begin_object(j, "extras");
@@ -332,17 +678,22 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
             cbm_json_begin_object(j, "attributes");
             cbm_json_int(j, "POSITION", (int64_t)m->pos);
             cbm_json_int(j, "NORMAL", (int64_t)m->nrm);
-            cbm_json_int(j, "COLOR_0", (int64_t)m->col);
-            cbm_json_int(j, "_STRESS_RATIO", (int64_t)m->stress);
-            cbm_json_int(j, "_AGE", (int64_t)m->age);
-            cbm_json_int(j, "_REACTION_WOOD", (int64_t)m->react);
-            cbm_json_int(j, "_ORDER", (int64_t)m->order);
-            cbm_json_int(j, "_SEGMENT", (int64_t)m->seg);
+            if (!m->unit1) {
+                cbm_json_int(j, "COLOR_0", (int64_t)m->col);
+                cbm_json_int(j, "_STRESS_RATIO", (int64_t)m->stress);
+                cbm_json_int(j, "_AGE", (int64_t)m->age);
+                cbm_json_int(j, "_REACTION_WOOD", (int64_t)m->react);
+                cbm_json_int(j, "_ORDER", (int64_t)m->order);
+                cbm_json_int(j, "_SEGMENT", (int64_t)m->seg);
+            }
             cbm_json_end_object(j);
             cbm_json_int(j, "indices", (int64_t)m->idx);
+            /* the organs' materials, then the colour materials of the instanced meshes */
             int mat = 0;
-            for (int k = 0; k < m->material; k++)
+            for (int k = 0; k < (m->cmat1 ? CBM_ORGAN_COUNT : m->material); k++)
                 mat += g->organ_used[k];
+            if (m->cmat1)
+                mat += (int)m->cmat1 - 1;
             cbm_json_int(j, "material", mat);
             cbm_json_int(j, "mode", 4);
             cbm_json_end_object(j);
@@ -363,6 +714,20 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
             cbm_json_number(j, "roughnessFactor", k == CBM_ORGAN_FRUIT ? 0.45 : 0.85);
             cbm_json_end_object(j);
             if (k == CBM_ORGAN_LEAF || k == CBM_ORGAN_FLOWER || k == CBM_ORGAN_GROUND)
+                cbm_json_bool(j, "doubleSided", true);
+            cbm_json_end_object(j);
+        }
+        for (size_t c = 0; c < g->cmats.len; c++) {
+            const color_mat *cm = &g->cmats.data[c];
+            cbm_json_begin_object(j, NULL);
+            cbm_json_string(j, "name", cbm_organ_name((cbm_organ)cm->organ));
+            cbm_json_begin_object(j, "pbrMetallicRoughness");
+            json_floats(j, "baseColorFactor", cm->rgba, 4);
+            cbm_json_number(j, "metallicFactor", 0.0);
+            cbm_json_number(j, "roughnessFactor", cm->organ == CBM_ORGAN_FRUIT ? 0.45 : 0.85);
+            cbm_json_end_object(j);
+            if (cm->organ == CBM_ORGAN_LEAF || cm->organ == CBM_ORGAN_FLOWER ||
+                cm->organ == CBM_ORGAN_GROUND)
                 cbm_json_bool(j, "doubleSided", true);
             cbm_json_end_object(j);
         }
@@ -488,6 +853,14 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.verts);
     CBM_ARRAY_FREE(ctx, a->g.idx);
     CBM_ARRAY_FREE(ctx, a->g.fbuf);
+    CBM_ARRAY_FREE(ctx, a->g.insts);
+    CBM_ARRAY_FREE(ctx, a->g.units);
+    CBM_ARRAY_FREE(ctx, a->g.cmats);
+    CBM_ARRAY_FREE(ctx, a->g.buckets);
+    CBM_ARRAY_FREE(ctx, a->g.ibucket);
+    CBM_ARRAY_FREE(ctx, a->g.iorder);
+    CBM_ARRAY_FREE(ctx, a->g.htab);
+    cbm__free(ctx, a->g.kept_col, 4 * (a->g.kept_np ? a->g.kept_np : 1) * sizeof(float));
     cbm__free(ctx, a, sizeof *a);
 }
 
@@ -673,6 +1046,7 @@ static void rewind_glb(cbm_animation *a)
 {
     glb *g = &a->g;
     g->acc.len = g->views.len = g->meshes.len = g->nodes.len = g->children.len = 0;
+    g->insts.len = g->units.len = g->cmats.len = 0;
     a->frames.len = 0;
     g->bin_len = 0;
     memset(g->organ_used, 0, sizeof g->organ_used);
@@ -701,6 +1075,7 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
     /* Every scene is at hand: measure BIN in a first pass (for the JSON), then stream it. */
     glb *g = &a->g;
     g->mode = BIN_MEASURE;
+    g->keep = !anim; /* one scene, unchanged between the passes */
     cbm_json *j = NULL;
     const char *text = NULL;
     size_t tlen = 0;
@@ -715,6 +1090,7 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
         rewind_glb(a);
         g->mode = BIN_STREAM;
         g->sink = out;
+        g->reuse = g->kept_col != NULL;
         st = add_frames(a, scene, path);
         size_t root = 0, anim_first = 0, nframes = 0;
         long anim_input = -1;

@@ -24,6 +24,7 @@
 
 #include "../core/core.h"
 #include "../core/vecmath.h"
+#include "writers.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -88,8 +89,9 @@ static bool recorded(const cbm_prim *p)
     return p->kind == CBM_PRIM_CYLINDER || p->kind == CBM_PRIM_GCYL || p->kind == CBM_PRIM_SPHERE;
 }
 
-/* Rotation matrix with columns h, l, u -> unit quaternion (Shepperd's method). */
-static cbm_quat quat_of_frame(cbm_vec3 h, cbm_vec3 l, cbm_vec3 u)
+/* Rotation matrix with columns h, l, u -> unit quaternion (Shepperd's method); gltf.c's
+ * instances use it too. */
+cbm_quat cbm__quat_of_columns(cbm_vec3 h, cbm_vec3 l, cbm_vec3 u)
 {
     double m00 = h.x, m10 = h.y, m20 = h.z, m01 = l.x, m11 = l.y, m21 = l.z, m02 = u.x, m12 = u.y,
            m22 = u.z;
@@ -122,7 +124,7 @@ static cbm_quat segment_rotation(const cbm_prim *p)
         u = v3_madd(a, h, -v3_dot(a, h));
     }
     u = v3_normalize(u);
-    return quat_of_frame(h, v3_cross(u, h), u);
+    return cbm__quat_of_columns(h, v3_cross(u, h), u);
 }
 
 cbm_status cbm_turtle_motion_add_frame(cbm_turtle_motion *m, const cbm_turtle *t,

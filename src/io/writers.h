@@ -53,6 +53,8 @@ cbm_status cbm__part_colors(cbm_context *ctx, const cbm_scene *s, const cbm_writ
 /// Kept-vertex remap: new index of each vertex (UINT32_MAX if dropped) and the count kept.
 cbm_status cbm__vertex_remap(cbm_context *ctx, const cbm_scene *s, const cbm_write_options *o,
                              const uint32_t *vpart, uint32_t **out, size_t *kept);
+/// The unit quaternion of the rotation whose matrix has columns c0, c1, c2 (a right frame).
+cbm_quat cbm__quat_of_columns(cbm_vec3 c0, cbm_vec3 c1, cbm_vec3 c2);
 /// Default options when opts is NULL.
 const cbm_write_options *cbm__opts(const cbm_write_options *o, cbm_write_options *def);
 

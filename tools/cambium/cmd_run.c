@@ -577,6 +577,7 @@ int cmd_run(int argc, char **argv)
     double step_time = 0.04;
     bool float32 = false, timing = false, homomorphism = false, no_print = false;
     bool no_native = false;
+    bool glb_mesh = false;
     cbm_write_options wopt = cbm_write_options_default();
     const char *count = "{opt} expects a non-negative integer up to 10^8";
     cli_opt rows[] = {
@@ -668,6 +669,11 @@ int cmd_run(int argc, char **argv)
          .target = &no_native,
          .help = "run the L+C functions in the register code, not as native code\n"
                  "compiled with cc (cached in $XDG_CACHE_HOME/cambium)"},
+        {.name = "--glb-mesh",
+         .kind = CLI_SET,
+         .target = &glb_mesh,
+         .help = ".glb: every segment's tube as triangles with per-vertex colours,\n"
+                 "not as an instance of one cylinder (EXT_mesh_gpu_instancing)"},
         {.kind = CLI_GROUP, .target = cli_limit_options()},
         {.kind = CLI_GROUP, .target = cli_output_options(&wopt)},
         {0}};
@@ -785,6 +791,12 @@ int cmd_run(int argc, char **argv)
         s = cbm_scene_create(ctx, &r.scene);
     if (s == CBM_OK && pictures && !meshes)
         cbm_scene_set_line_mode(r.scene, true);
+    /* straight tubes as instances of one cylinder when every scene output is a .glb */
+    bool glb_only = meshes && !pictures && !glb_mesh;
+    for (int k = 0; k < ntargets; k++)
+        glb_only &= !is_scene_format(targets[k].format) || !strcmp(targets[k].format, "glb");
+    if (s == CBM_OK && glb_only)
+        cbm_scene_set_instancing(r.scene, true);
     if (s == CBM_OK && r.need_json)
         s = cbm_json_create(ctx, &r.json);
     for (int k = 0; k < ntargets && s == CBM_OK && every > 0; k++)
