@@ -309,6 +309,18 @@ TEST(modal_cut_and_bad_input)
     md.modes = 5;
     md.method = (cbm_motion_method)7;
     CHECK(cbm_motion_create(p, &md, &m) == CBM_E_INVALID && !m);
+    /* a gust field is not projected on the modes: refused, the series is taken */
+    md.method = CBM_MOTION_MODAL;
+    m = motion(p, &md);
+    if (m) {
+        cbm_wind_def wd = cbm_wind_def_default();
+        cbm_gust_def gd = cbm_gust_def_default();
+        gd.coherence_decay = 10.0;
+        CHECK(cbm_motion_set_wind(m, &wd, 10.0, &gd) == CBM_E_INVALID);
+        gd.coherence_decay = 0.0;
+        CHECK_OK(cbm_motion_set_wind(m, &wd, 10.0, &gd));
+    }
+    cbm_motion_destroy(m);
     cbm_plant_destroy(p);
     test_ctx_end(ctx);
 }

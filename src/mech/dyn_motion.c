@@ -438,6 +438,14 @@ cbm_status cbm_motion_set_wind(cbm_motion *m, const cbm_wind_def *wind, double u
         return CBM_E_INVALID;
     cbm__drag nd;
     CBM_TRY(cbm__drag_build(&m->d, wind, u_ref, gust, &nd));
+    if (m->modal && nd.gust.np > 0) {
+        /* the modal loads are projected once, for one gust factor over the whole plant */
+        cbm__drag_free(m->d.ctx, &nd);
+        return cbm__fail(m->d.ctx, CBM_E_INVALID,
+                         "motion: the modal motion takes a gust series, not a gust field "
+                         "(coherence_decay = %g): use the full motion or coherence_decay = 0",
+                         gust ? gust->coherence_decay : 0.0);
+    }
     if (m->modal) {
         cbm_status st = cbm__modal_set_wind(m, &nd);
         cbm__drag_free(m->d.ctx, &m->drag);
