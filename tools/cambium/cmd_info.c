@@ -398,6 +398,9 @@ static int info_glb(const char *path, const unsigned char *b, size_t n)
             }
     }
     print_bounds(lo, hi);
+    if (strstr(js, "\"EXT_mesh_gpu_instancing\""))
+        printf("  instanced tubes (EXT_mesh_gpu_instancing): the bounds are the unit tubes' and "
+               "the triangles', not the placed instances'\n");
     free(js);
     return CLI_OK;
 }
