@@ -25,9 +25,9 @@ extern "C" {
 /// Which version of the angle generator.
 typedef enum cbm_approx_mode {
     /// Default: the tip angle omega is the accurate root of the exact condition (2.26) (elliptic
-    /// integrals, to 1e-12 rad), the profile is the elastica of that condition integrated
-    /// accurately (the pendulum equation in the conic arc length, RK4), increments stop at the
-    /// tip angle (no held increment), no cancellation near t0 = 90 degrees.
+    /// integrals, to 1e-12 rad), the profile is the elastica of that condition in closed form
+    /// (Jacobi's functions of the conic arc length), increments stop at the tip angle (no held
+    /// increment), no cancellation near t0 = 90 degrees.
     CBM_APPROX_CORRECTED,
     /// The listing of §3.1 step by step, with its quirks q1-q6 (digest §2.1.2): the linearised
     /// closed form or the coarse bisection (eps = 0.17 rad) for omega, the left Riemann sum of
