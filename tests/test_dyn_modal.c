@@ -315,6 +315,7 @@ TEST(modal_cut_and_bad_input)
     if (m) {
         cbm_wind_def wd = cbm_wind_def_default();
         cbm_gust_def gd = cbm_gust_def_default();
+        gd.intensity = 0.2;
         gd.coherence_decay = 10.0;
         CHECK(cbm_motion_set_wind(m, &wd, 10.0, &gd) == CBM_E_INVALID);
         gd.coherence_decay = 0.0;
