@@ -611,7 +611,7 @@ int cmd_grow(int argc, char **argv)
     bool swaying = sway.seconds > 0;
     {
         /* the options of --sway without it: say so rather than ignore them */
-        const char *only[] = {"--wind",      "--gust",      "--sway-dt",      "--organ-area",
+        const char *only[] = {"--wind",       "--gust",      "--sway-dt",       "--organ-area",
                               "--sway-modes", "--gust-grid", "--gust-coherence"};
         for (int k = 0; k < 7 && !swaying; k++)
             for (cli_opt *r = rows; r->name; r++)
@@ -623,6 +623,9 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--sway-modes must be a whole number");
         if (swaying && sway.dt > sway.seconds)
             return cli_usage_error("grow", "--sway-dt must not exceed --sway");
+        if (sway.modes > 0 && sway.coherence > 0)
+            return cli_usage_error("grow", "--sway-modes does not go with --gust-coherence (the "
+                                           "modal motion takes one gust series)");
         if (organ_drag && sway.organ_area > 0)
             return cli_usage_error("grow", "--organ-drag does not go with --organ-area");
     }
