@@ -86,8 +86,8 @@ TEST(full_cone)
         CHECK_OK(cbm_plant_modes(p, 4, f, NULL));
         err[q][0] = fabs(f[0] - ref[0]) / ref[0];
         err[q][1] = fabs(f[2] - ref[1]) / ref[1];
-        printf("cone, %3d segments: %.9g / %.9g Hz, exact %.9g / %.9g Hz, errors %.2e / %.2e\n",
-               n, f[0], f[2], ref[0], ref[1], err[q][0], err[q][1]);
+        printf("cone, %3d segments: %.9g / %.9g Hz, exact %.9g / %.9g Hz, errors %.2e / %.2e\n", n,
+               f[0], f[2], ref[0], ref[1], err[q][0], err[q][1]);
         cbm_plant_destroy(p);
     }
     for (int j = 0; j < 2; j++)
