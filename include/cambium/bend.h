@@ -11,6 +11,7 @@
 
 #include "cambium/base.h"
 #include "cambium/mech.h"
+#include "cambium/fem_thesis.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -50,6 +51,7 @@ typedef struct cbm_bend_spec {
     cbm_approx_mode approx_mode; ///< corrected (default) or thesis
     double approx_p;             ///< relative position of the bending reversal, [0, 1]; 1 = none
     double approx_force;         ///< tip force / carried weight (> 0); 1 = the thesis
+    cbm_approx_load approx_load; ///< thesis (default: the tip load) or calibrated (growth's)
     /* motion about the equilibrium (cambium/dynamics.h, docs/bend.md "Motion") */
     double duration;         ///< s of motion after the static solve; 0 = static only
     double dt;               ///< s, time step; 0 = 1/20 of the period of the 6th mode
@@ -68,6 +70,13 @@ typedef struct cbm_bend_spec {
     double fem_strain_min;   ///< a (strain)
     double fem_strain_max;   ///< b (strain)
     cbm_fem_axial fem_axial; ///< axial maturation resultant: formula or listing
+    /* the thesis-compatible FE path (solver = fem, fem_path = thesis; docs/bend.md) */
+    cbm_fem_path fem_path;       ///< clamped (default: the plant FEM) or thesis
+    long fem_elements;           ///< n_FE of the thesis path, 5 .. segments (default 10)
+    cbm_fem_support fem_support; ///< free (default: the listing's pseudo-inverse) or clamped
+    long fem_primary_tropism;    ///< 1: every new element starts at the clamp's angle
+    int fem_update;              ///< 0 listing (default: beta += theta_y, lifts), 1 sagging
+    int fem_stiffness;           ///< 0 printed (default: the listing's K, D2), 1 symmetric
 } cbm_bend_spec;
 
 /// Defaults: length 1, 100 segments, radius 0.01, aspect 1, E 1e10, density 600, gravity 9.81,

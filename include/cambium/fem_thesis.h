@@ -87,6 +87,35 @@ typedef struct cbm_fem_thesis_info {
 CBM_API cbm_status cbm_fem_thesis_angles(cbm_context *ctx, const cbm_fem_thesis_def *def,
                                          double *beta, size_t n_beta, cbm_fem_thesis_info *info);
 
+/// Akima's (1970) interpolation through (x[i], y[i]), i < n (n >= 5, x strictly increasing, all
+/// finite), evaluated at the m abscissae xq into yq (xq outside [x[0], x[n-1]] continues the end
+/// cubic). A piecewise cubic Hermite curve: the slope at an interior point x[i] (2 <= i <= n-3) is
+/// Akima's weighted mean of the chords on either side, (w[i+1] d[i-1] + w[i-1] d[i]) / (w[i+1] +
+/// w[i-1]) with d[i] the chord slope of [x[i], x[i+1]] and w[i] = |d[i] - d[i-1]|, and where both
+/// weights vanish the chords' mean weighted by the neighbouring interval lengths; the two slopes
+/// at each end are those of the parabola through the three end points (the end rule of the
+/// library the thesis used). It reproduces straight lines exactly, stays flat beside a step, and
+/// is O(h^2) for smooth data. CBM_E_INVALID for n < 5, a non-increasing x, a non-finite value.
+CBM_API cbm_status cbm_akima(cbm_context *ctx, const double *x, const double *y, size_t n,
+                             const double *xq, double *yq, size_t m);
+
+/// The thesis's output step (digest §2.2.4, "Output"): the Akima spline A through the n_fe
+/// element angles beta[i] at i / (n_fe - 1), read at the n_gu abscissae j / (n_gu - 1):
+/// out[j] = A(j / (n_gu - 1)), ABSOLUTE degrees from the upward vertical, base to tip (the
+/// listing returns out[0] and then the increments out[j] - out[j-1]). n_fe >= 5, n_gu >= n_fe
+/// (the listing raises a smaller n_gu to n_fe; here the caller does). CBM_E_INVALID otherwise.
+CBM_API cbm_status cbm_fem_thesis_resample(cbm_context *ctx, const double *beta, size_t n_fe,
+                                           double *out, size_t n_gu);
+
+/// Which finite-element method `bend` uses with solver = fem (cbm_bend_spec.fem_path).
+typedef enum cbm_fem_path {
+    /// Default: the plant FEM (cbm_fem_def; 3-D, clamped, the spec's loads and growth)
+    CBM_FEM_PATH_CLAMPED,
+    /// cbm_fem_thesis_angles on n_FE = fem_elements elements, resampled by cbm_fem_thesis_resample
+    /// to the spec's segments (n_GU) and posed as the rod's shape (docs/bend.md)
+    CBM_FEM_PATH_THESIS
+} cbm_fem_path;
+
 #ifdef __cplusplus
 }
 #endif

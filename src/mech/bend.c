@@ -57,12 +57,13 @@ cbm_bend_spec cbm_bend_spec_default(void)
     s.approx_force = 1.0;
     s.fem_increments = 20;
     s.fem_axial = CBM_FEM_AXIAL_FORMULA;
+    s.fem_elements = 10;
     return s;
 }
 
 /* ---- the reader ---- */
 
-typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC, K_APPROX_MODE, K_AXIAL } key_kind;
+typedef enum { K_NUM, K_INT, K_SOLVER, K_DISC, K_APPROX_MODE, K_AXIAL, K_WORD } key_kind;
 
 typedef struct key_desc {
     const char *name;
@@ -71,6 +72,26 @@ typedef struct key_desc {
     double lo, hi; /* allowed range (inclusive) */
     bool lo_open;  /* lo excluded */
 } key_desc;
+
+static const char *const w_fem_path[] = {"clamped", "thesis", NULL};
+static const char *const w_fem_support[] = {"free", "clamped", NULL};
+static const char *const w_approx_load[] = {"thesis", "calibrated", NULL};
+static const char *const w_fem_update[] = {"listing", "sagging", NULL};
+static const char *const w_fem_stiffness[] = {"printed", "symmetric", NULL};
+/* K_WORD keys: the allowed words, NULL-terminated; the value stored is the word's index (an
+ * int or an enum of the same values) */
+static const struct {
+    const char *key;
+    const char *const *words;
+} word_keys[] = {{"fem_path", w_fem_path},
+                 {"fem_support", w_fem_support},
+                 {"approx_load", w_approx_load},
+                 {"fem_update", w_fem_update},
+                 {"fem_stiffness", w_fem_stiffness}};
+_Static_assert(CBM_FEM_PATH_THESIS == 1 && CBM_FEM_SUPPORT_CLAMPED == 1 &&
+                   CBM_APPROX_LOAD_CALIBRATED == 1 && sizeof(cbm_fem_path) == sizeof(int) &&
+                   sizeof(cbm_fem_support) == sizeof(int) && sizeof(cbm_approx_load) == sizeof(int),
+               "the word tables follow the enums");
 
 #define OFF(f) offsetof(cbm_bend_spec, f)
 static const key_desc keys[] = {
@@ -100,6 +121,7 @@ static const key_desc keys[] = {
     {"approx_mode", K_APPROX_MODE, OFF(approx_mode), 0, 0, false},
     {"approx_p", K_NUM, OFF(approx_p), 0, 1, false},
     {"approx_force", K_NUM, OFF(approx_force), 0, 1e6, true},
+    {"approx_load", K_WORD, OFF(approx_load), 0, 0, false},
     {"steps", K_INT, OFF(steps), 0, 1e7, false},
     {"length_initial", K_NUM, OFF(length_initial), 0, 1e6, true},
     {"radius_final", K_NUM, OFF(radius_final), 0, 1e3, true},
@@ -119,6 +141,12 @@ static const key_desc keys[] = {
     {"fem_strain_min", K_NUM, OFF(fem_strain_min), -1, 1, false},
     {"fem_strain_max", K_NUM, OFF(fem_strain_max), -1, 1, false},
     {"fem_axial", K_AXIAL, OFF(fem_axial), 0, 0, false},
+    {"fem_path", K_WORD, OFF(fem_path), 0, 0, false},
+    {"fem_elements", K_INT, OFF(fem_elements), 5, 1000, false},
+    {"fem_support", K_WORD, OFF(fem_support), 0, 0, false},
+    {"fem_primary_tropism", K_INT, OFF(fem_primary_tropism), 0, 1, false},
+    {"fem_update", K_WORD, OFF(fem_update), 0, 0, false},
+    {"fem_stiffness", K_WORD, OFF(fem_stiffness), 0, 0, false},
 };
 #undef OFF
 #define NKEYS (sizeof keys / sizeof *keys)
@@ -182,6 +210,27 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
         memcpy(base, &m, sizeof m);
         return;
     }
+    if (k->kind == K_WORD) {
+        const char *const *words = NULL;
+        for (size_t w = 0; w < sizeof word_keys / sizeof *word_keys; w++)
+            if (!strcmp(word_keys[w].key, k->name))
+                words = word_keys[w].words;
+        int iv = 0;
+        while (words[iv] && strcmp(words[iv], buf))
+            iv++;
+        if (!words[iv]) {
+            char names[96] = "";
+            for (int w = 0; words[w]; w++) {
+                strncat(names, w ? " or " : "", sizeof names - strlen(names) - 1);
+                strncat(names, words[w], sizeof names - strlen(names) - 1);
+            }
+            err(r, line, col, "unknown %s '%s' (expected %s)", k->name, buf, names);
+            r->status = CBM_E_SEMANTIC;
+            return;
+        }
+        memcpy(base, &iv, sizeof iv);
+        return;
+    }
     if (k->kind == K_AXIAL) {
         cbm_fem_axial a;
         if (!strcmp(buf, "formula"))
@@ -240,6 +289,53 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
         return;
     }
     memcpy(base, &x, sizeof x);
+}
+
+static bool key_seen(const bool *seen, const char *name)
+{
+    for (size_t k = 0; k < NKEYS; k++)
+        if (!strcmp(keys[k].name, name))
+            return seen[k];
+    return false;
+}
+
+/* fem_path = thesis: Gürtler's planar chain grown in n_FE steps (fem_thesis.h) takes the rod's
+ * geometry, wood and gravity and nothing else; its listing's defaults where the spec is silent */
+static void thesis_check(reader *r, cbm_bend_spec *s, const bool *seen)
+{
+    static const char *const refused[] = {
+        "tip_load",           "tip_mass", "tip_moment",     "rest_curvature",    "tropism",
+        "modulus_of_rupture", "steps",    "fem_increments", "control_curvature", "aspect"};
+    for (size_t k = 0; k < sizeof refused / sizeof *refused; k++)
+        if (key_seen(seen, refused[k])) {
+            err(r, 0, 0,
+                "fem_path = thesis grows its own chain of fem_elements steps under its own "
+                "weight: '%s' has no meaning there",
+                refused[k]);
+            r->status = CBM_E_SEMANTIC;
+        }
+    if (s->gravity < 0) {
+        err(r, 0, 0, "fem_path = thesis needs gravity >= 0 (got %g)", s->gravity);
+        r->status = CBM_E_SEMANTIC;
+    }
+    if (s->segments < s->fem_elements) {
+        err(r, 0, 0,
+            "fem_path = thesis resamples fem_elements = %ld angles to segments = %ld: segments "
+            "must be at least fem_elements",
+            s->fem_elements, s->segments);
+        r->status = CBM_E_SEMANTIC;
+    }
+    double rb = s->radius_base > 0 ? s->radius_base : s->radius;
+    double rt = s->radius_tip > 0 ? s->radius_tip : s->radius;
+    if (rt > rb) {
+        err(r, 0, 0, "fem_path = thesis needs radius_tip (%g) <= radius_base (%g)", rt, rb);
+        r->status = CBM_E_SEMANTIC;
+    }
+    if (!key_seen(seen, "fem_axial"))
+        s->fem_axial = CBM_FEM_AXIAL_LISTING;
+    if (!key_seen(seen, "fem_shear_ratio"))
+        s->fem_shear_ratio =
+            s->shear_modulus > 0 ? s->shear_modulus / s->youngs_modulus : 1.0 / 3.0;
 }
 
 cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, const char *file,
@@ -374,6 +470,19 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
             err(&r, 0, 0, "the fem_* keys need solver = fem");
             r.status = CBM_E_SEMANTIC;
         }
+        bool thesis_keys = false;
+        for (size_t k = 0; k < NKEYS; k++)
+            if (seen[k] && keys[k].offset >= offsetof(cbm_bend_spec, fem_elements) &&
+                !strncmp(keys[k].name, "fem_", 4))
+                thesis_keys = true;
+        if (thesis_keys && s.fem_path != CBM_FEM_PATH_THESIS) {
+            err(&r, 0, 0,
+                "fem_elements, fem_support, fem_primary_tropism, fem_update and fem_stiffness "
+                "need fem_path = thesis");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.fem_path == CBM_FEM_PATH_THESIS)
+            thesis_check(&r, &s, seen);
         if (s.solver == CBM_MECH_FEM && s.duration > 0) {
             err(&r, 0, 0,
                 "solver = fem cannot be combined with duration (motion starts from a "
@@ -482,6 +591,7 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.approx_mode = s->approx_mode;
     d.approx_p = s->approx_p;
     d.approx_force_factor = s->approx_force;
+    d.approx_load = s->approx_load;
     d.eigenvalue = true; /* bend reports the lowest eigenvalue of every answer */
     d.fem.increments = (size_t)s->fem_increments;
     d.fem.shear_ratio = s->fem_shear_ratio;
@@ -491,6 +601,64 @@ static cbm_solve_def spec_solve_def(const cbm_bend_spec *s)
     d.fem.strain_max = s->fem_strain_max;
     d.fem.axial = s->fem_axial;
     return d;
+}
+
+/* The thesis path's inputs from the spec (docs/bend.md, "fem_path = thesis"). */
+static cbm_fem_thesis_def thesis_def(const cbm_bend_spec *s)
+{
+    cbm_fem_thesis_def d = cbm_fem_thesis_def_default();
+    d.n_fe = s->fem_elements;
+    d.t0 = 90.0 - s->angle;
+    d.rho = s->density;
+    d.youngs_modulus = s->youngs_modulus;
+    d.grav = s->gravity;
+    d.le = s->length / (double)s->fem_elements;
+    d.r_start = s->radius_base > 0 ? s->radius_base : s->radius;
+    d.r_end = s->radius_tip > 0 ? s->radius_tip : s->radius;
+    d.sigma = s->fem_sigma;
+    d.phi = s->fem_phi;
+    d.a = s->fem_strain_min;
+    d.b = s->fem_strain_max;
+    d.primary_tropism = s->fem_primary_tropism != 0;
+    d.extra_loads = NULL;
+    d.support = s->fem_support;
+    d.printed_stiffness = s->fem_stiffness == 0;
+    d.update_sign = s->fem_update == 0 ? 1 : -1;
+    d.axial = s->fem_axial;
+    d.shear_ratio = s->fem_shear_ratio > 0 ? s->fem_shear_ratio
+                    : s->shear_modulus > 0 ? s->shear_modulus / s->youngs_modulus
+                                           : 1.0 / 3.0;
+    return d;
+}
+
+/* fem_path = thesis: the listing's n_FE angles, Akima-resampled to the rod's segments (n_GU),
+ * posed as the rod's shape (fem_thesis.c). */
+static cbm_status thesis_run(cbm_context *ctx, const cbm_bend_spec *s, cbm_plant *p,
+                             cbm_bend_result *r)
+{
+    cbm_fem_thesis_def d = thesis_def(s);
+    size_t nfe = (size_t)s->fem_elements, ngu = cbm_plant_segment_count(p);
+    size_t bytes = (nfe + ngu) * sizeof(double);
+    double *beta = cbm__alloc(ctx, bytes);
+    if (!beta)
+        return CBM_E_NOMEM;
+    double *a = beta + nfe;
+    cbm_status st = cbm_fem_thesis_angles(ctx, &d, beta, nfe, NULL);
+    if (st == CBM_OK)
+        st = cbm_fem_thesis_resample(ctx, beta, nfe, a, ngu);
+    double resid = 0.0;
+    if (st == CBM_OK)
+        st = cbm__fem_thesis_pose(p, a, ngu, &resid);
+    cbm__free(ctx, beta, bytes);
+    if (st == CBM_OK) {
+        /* one dense solve per growth step; the residual of the posed plant (its cores remember
+         * the pose), not info.residual, the share of the step's load the pseudo-inverse drops */
+        r->stats.passes = nfe;
+        r->stats.residual = resid;
+        r->stats.lowest_eigenvalue = NAN;
+        r->steps_done = (long)nfe;
+    }
+    return st;
 }
 
 /* Tropism rest rate of a new segment continuing `parent` (Taylor-Hell 6.8-6.12). */
@@ -564,6 +732,17 @@ cbm_status cbm_bend_run(cbm_context *ctx, const cbm_bend_spec *s, cbm_plant **ou
     memset(&r, 0, sizeof r);
     cbm_plant *p = NULL;
     CBM_TRY(cbm_bend_build(ctx, s, &p));
+    if (s->solver == CBM_MECH_FEM && s->fem_path == CBM_FEM_PATH_THESIS) {
+        cbm_status ts = thesis_run(ctx, s, p, &r);
+        if (ts != CBM_OK) {
+            cbm_plant_destroy(p);
+            return ts;
+        }
+        if (res)
+            *res = r;
+        *out = p;
+        return CBM_OK;
+    }
     cbm_solve_def sd = spec_solve_def(s);
     size_t passes = 0;
     cbm_status st = cbm_plant_solve(p, &sd, &r.stats);

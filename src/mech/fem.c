@@ -449,7 +449,7 @@ static cbm_status fem_step(cbm_plant *p, fem_ws *w, const cbm_fem_def *d, double
 }
 
 /* Rotation vector of a unit quaternion (|angle| <= pi). */
-static cbm_vec3 q_log(cbm_quat q)
+cbm_vec3 cbm__fem_q_log(cbm_quat q)
 {
     if (q.w < 0.0) {
         q.w = -q.w;
@@ -472,7 +472,7 @@ static cbm_status store_frames(cbm_plant *p, const fem_ws *w, double *residual)
         int64_t pa = p->parent[i];
         cbm_quat qa = pa < 0 ? p->base_q : w->q[pa];
         qa = q_mul(qa, p->branch[i]);
-        p->omega[i] = v3_scale(q_log(q_mul(q_conj(qa), w->q[i])), 1.0 / dual[i]);
+        p->omega[i] = v3_scale(cbm__fem_q_log(q_mul(q_conj(qa), w->q[i])), 1.0 / dual[i]);
     }
     return cbm_plant_evaluate(p, residual);
 }

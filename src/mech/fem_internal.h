@@ -67,4 +67,13 @@ cbm_status cbm__fem_pinv_solve_planar(cbm_context *ctx, size_t n, const double *
 cbm_status cbm__fem_clamped_solve(cbm_context *ctx, size_t n, const double *a, const double *b,
                                   double *x);
 
+/// Rotation vector of a unit quaternion (|angle| <= pi).
+cbm_vec3 cbm__fem_q_log(cbm_quat q);
+
+/// Poses the single-chain plant p (n segments) at the absolute angles beta (degrees from the
+/// upward vertical, in the clamp's plane: cbm_fem_thesis_resample's output) and sets each core's
+/// rest rate so that the pose is an equilibrium of the plant's loads; the plant evaluated, its
+/// relative equilibrium residual (round-off) into *residual (may be NULL).
+cbm_status cbm__fem_thesis_pose(cbm_plant *p, const double *beta, size_t n, double *residual);
+
 #endif

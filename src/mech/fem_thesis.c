@@ -17,6 +17,7 @@
 #include "cambium/fem_thesis.h"
 #include "core/core.h"
 #include "mech/fem_internal.h"
+#include "core/vecmath.h"
 
 #include <float.h>
 #include <math.h>
@@ -525,4 +526,148 @@ cbm_status cbm_fem_thesis_angles(cbm_context *ctx, const cbm_fem_thesis_def *def
     }
     cbm__free(ctx, buf, bytes);
     return st;
+}
+
+/* ---- the output step: Akima's interpolation and the thesis's resampling ---- */
+
+/* Slope at x1 (the middle point, at = 1) or x0 (at = 0) / x2 (at = 2) of the parabola through
+ * three points (Lagrange form differentiated). */
+static double parabola_slope(const double *x, const double *y, int at)
+{
+    double t = x[at];
+    return y[0] * (2 * t - x[1] - x[2]) / ((x[0] - x[1]) * (x[0] - x[2])) +
+           y[1] * (2 * t - x[0] - x[2]) / ((x[1] - x[0]) * (x[1] - x[2])) +
+           y[2] * (2 * t - x[0] - x[1]) / ((x[2] - x[0]) * (x[2] - x[1]));
+}
+
+cbm_status cbm_akima(cbm_context *ctx, const double *x, const double *y, size_t n, const double *xq,
+                     double *yq, size_t m)
+{
+    if (!x || !y || (m && (!xq || !yq)))
+        return CBM_E_INVALID;
+    if (n < 5)
+        return cbm__fail(ctx, CBM_E_INVALID, "akima: %zu points, at least 5 needed", n);
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(x[i]) || !isfinite(y[i]) || (i > 0 && !(x[i] > x[i - 1])))
+            return cbm__fail(ctx, CBM_E_INVALID,
+                             "akima: point %zu: abscissae must be finite and strictly increasing, "
+                             "ordinates finite",
+                             i);
+    for (size_t j = 0; j < m; j++)
+        if (!isfinite(xq[j]))
+            return cbm__fail(ctx, CBM_E_INVALID, "akima: query %zu is not finite", j);
+    /* d[i]: chord slopes (n - 1); s[i]: the slopes at the points (n) */
+    size_t bytes = (2 * n - 1) * sizeof(double);
+    double *d = cbm__alloc(ctx, bytes);
+    if (!d)
+        return CBM_E_NOMEM;
+    double *s = d + (n - 1);
+    for (size_t i = 0; i + 1 < n; i++)
+        d[i] = (y[i + 1] - y[i]) / (x[i + 1] - x[i]);
+    for (size_t i = 2; i + 2 < n; i++) {
+        double wp = fabs(d[i + 1] - d[i]), wm = fabs(d[i - 1] - d[i - 2]);
+        if (wp == 0.0 && wm == 0.0)
+            s[i] =
+                ((x[i + 1] - x[i]) * d[i - 1] + (x[i] - x[i - 1]) * d[i]) / (x[i + 1] - x[i - 1]);
+        else
+            s[i] = (wp * d[i - 1] + wm * d[i]) / (wp + wm);
+    }
+    s[0] = parabola_slope(x, y, 0);
+    s[1] = parabola_slope(x, y, 1);
+    s[n - 2] = parabola_slope(x + n - 3, y + n - 3, 1);
+    s[n - 1] = parabola_slope(x + n - 3, y + n - 3, 2);
+    for (size_t j = 0; j < m; j++) {
+        /* the interval [x[k], x[k+1]] holding xq (the end ones continued outside) */
+        size_t lo = 0, hi = n - 2;
+        while (lo < hi) {
+            size_t mid = (lo + hi + 1) / 2;
+            if (x[mid] <= xq[j])
+                lo = mid;
+            else
+                hi = mid - 1;
+        }
+        double h = x[lo + 1] - x[lo], t = xq[j] - x[lo];
+        double c2 = (3.0 * d[lo] - 2.0 * s[lo] - s[lo + 1]) / h;
+        double c3 = (s[lo] + s[lo + 1] - 2.0 * d[lo]) / (h * h);
+        yq[j] = y[lo] + t * (s[lo] + t * (c2 + t * c3));
+    }
+    cbm__free(ctx, d, bytes);
+    return CBM_OK;
+}
+
+cbm_status cbm_fem_thesis_resample(cbm_context *ctx, const double *beta, size_t n_fe, double *out,
+                                   size_t n_gu)
+{
+    if (!beta || !out)
+        return CBM_E_INVALID;
+    if (n_fe < 5 || n_gu < n_fe)
+        return cbm__fail(ctx, CBM_E_INVALID,
+                         "fem_thesis: resampling needs n_fe >= 5 (Akima) and n_gu >= n_fe; got "
+                         "n_fe %zu, n_gu %zu",
+                         n_fe, n_gu);
+    size_t bytes = (n_fe + n_gu) * sizeof(double);
+    double *xs = cbm__alloc(ctx, bytes);
+    if (!xs)
+        return CBM_E_NOMEM;
+    double *xq = xs + n_fe;
+    for (size_t i = 0; i < n_fe; i++)
+        xs[i] = (double)i / (double)(n_fe - 1);
+    for (size_t j = 0; j < n_gu; j++)
+        xq[j] = (double)j / (double)(n_gu - 1);
+    cbm_status st = cbm_akima(ctx, xs, beta, n_fe, xq, out, n_gu);
+    cbm__free(ctx, xs, bytes);
+    return st;
+}
+
+/* ---- the rod of `bend` posed at the resampled angles ---- */
+
+cbm_status cbm__fem_thesis_pose(cbm_plant *p, const double *beta, size_t n, double *residual)
+{
+    if (!p || !beta || n != p->n)
+        return CBM_E_INVALID;
+    CBM_TRY(cbm__mech_work_reserve(p, 0));
+    p->load_scale = 1.0;
+    cbm__mech_prepare(p);
+    const double *dual = p->work.dual;
+    /* beta: degrees from the upward vertical in the clamp's plane; the clamp is at elevation
+     * e0 = 90 - beta_0 of the thesis's t0, and turning up by d is a turn by -d about L */
+    cbm_quat prev = p->base_q;
+    cbm_vec3 hb = q_rotate(p->base_q, v3(1, 0, 0));
+    double e0 = atan2(hb.y, sqrt(hb.x * hb.x + hb.z * hb.z));
+    for (size_t i = 0; i < n; i++) {
+        if (p->parent[i] != (int64_t)i - 1 || p->branch[i].w != 1.0)
+            return cbm__fail(p->ctx, CBM_E_INVALID,
+                             "fem_thesis: the rod must be one straight chain");
+        double d = (90.0 - beta[i]) / RAD - e0;
+        cbm_quat q = q_normalize(q_mul(p->base_q, q_from_rotvec(v3(0, -d, 0))));
+        p->omega[i] = v3_scale(cbm__fem_q_log(q_mul(q_conj(prev), q)), 1.0 / dual[i]);
+        prev = q;
+    }
+    CBM_TRY(cbm_plant_evaluate(p, NULL));
+    /* the posed shape memorised: the rest rates that make it an equilibrium of its loads, as a
+     * grown branch's rings remember their history. Joint i must rest at rj = Omega - M/C (its
+     * moment in its frame, its rigidity); a staggered joint's rest is the length-weighted mean
+     * of its two segments' (cbm__mech_prepare), solved for segment by segment from the base. */
+    bool stag = cbm_plant_discretization(p) == CBM_MECH_STAGGERED;
+    cbm_vec3 rprev = v3(0, 0, 0);
+    for (size_t i = 0; i < n; i++) {
+        cbm_vec3 m = p->moment[i], c = p->work.cj[i], o = p->omega[i];
+        cbm_vec3 h = q_rotate(p->q[i], v3(1, 0, 0)), l = q_rotate(p->q[i], v3(0, 1, 0)),
+                 u = q_rotate(p->q[i], v3(0, 0, 1));
+        cbm_vec3 rj =
+            v3(o.x - v3_dot(m, h) / c.x, o.y - v3_dot(m, l) / c.y, o.z - v3_dot(m, u) / c.z);
+        cbm_vec3 ri = rj;
+        if (stag && i > 0 && (p->cont[i] & 1)) {
+            double lp = p->len[i - 1], li = p->len[i];
+            ri = v3_scale(v3_sub(v3_scale(rj, dual[i]), v3_scale(rprev, 0.5 * lp)), 2.0 / li);
+        }
+        if (cbm_plant_ring_count(p, i) != 1)
+            return cbm__fail(p->ctx, CBM_E_INVALID, "fem_thesis: segment %zu has several rings", i);
+        cbm_ring g;
+        CBM_TRY(cbm_plant_get_ring(p, i, 0, &g));
+        g.rest_rate = ri;
+        CBM_TRY(cbm_plant_set_ring(p, i, 0, &g));
+        rprev = ri;
+    }
+    return cbm_plant_evaluate(p, residual);
 }
