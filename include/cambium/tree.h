@@ -117,6 +117,9 @@ typedef struct cbm_tree_def {
     int solve_max_passes;
     /// the bending method of every equilibrium (default fast; relax, approx: docs/methods.md)
     cbm_mech_solver solver;
+    /// with solver = approx, how an axis's load enters the generator (default calibrated: the
+    /// thesis's tip load buckles tapered stems in growth; docs/methods.md, "In growth")
+    cbm_approx_load approx_load;
     /* leaves and fruit */
     bool leaves;         ///< LEAVES 1
     double leaf_mass;    ///< kg, mean goal mass LEAF_MASS 2e-6 (sd mean/2)

@@ -465,8 +465,8 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     t->solve.max_passes = (size_t)def->solve_max_passes;
     t->solve.solver = def->solver;
     /* approx in growth: the rings memorise its shapes, and the thesis's tip load buckles
-     * stems (docs/methods.md, "In growth") */
-    t->solve.approx_load = CBM_APPROX_LOAD_CALIBRATED;
+     * stems (docs/methods.md, "In growth"); calibrated unless the parameters say thesis */
+    t->solve.approx_load = def->approx_load;
     cbm_plant_def pd = cbm_plant_def_default();
     pd.gravity = v3(0, -9.81, 0);
     pd.base_orientation = cbm_mech_clamp_orientation(def->elevation);

@@ -104,6 +104,7 @@ static cbm_tree_def thesis_def(void)
     d.solve_tolerance = 1e-6;
     d.solve_max_passes = 3000;
     d.solver = CBM_MECH_NEWTON;
+    d.approx_load = CBM_APPROX_LOAD_CALIBRATED;
     d.leaves = true;
     d.leaf_mass = 2e-6;
     d.leaf_density = 0.095;
@@ -186,6 +187,7 @@ typedef enum kind {
     K_DISC,
     K_MEM,
     K_AGE,
+    K_ALOAD,
     K_SOLVER
 } kind;
 
@@ -251,6 +253,7 @@ static const param params[] = {
     P(solve_tolerance, K_DOUBLE, 1e-14, 0.1),
     P(solve_max_passes, K_INT, 3, 100000000),
     P(solver, K_SOLVER, 0, 0),
+    P(approx_load, K_ALOAD, 0, 0),
     P(leaves, K_BOOL, 0, 0),
     P(leaf_mass, K_DOUBLE, 0, 1e3),
     P(leaf_density, K_DOUBLE, 1e-9, 1e6),
@@ -277,6 +280,8 @@ static const char *const form_names[] = {"general", "wild", "crooked"};
 static const char *const disc_names[] = {"staggered", "chain"};
 static const char *const mem_names[] = {"segment", "joint"};
 static const char *const age_names[] = {"rings", "core"};
+/* in the order of cbm_approx_load */
+static const char *const aload_names[] = {"thesis", "calibrated"};
 
 static const param *find(const char *name, size_t len)
 {
@@ -377,11 +382,13 @@ static cbm_status set_param(const param *pm, cbm_tree_def *d, const char *value,
     case K_FORM:
     case K_DISC:
     case K_MEM:
-    case K_AGE: {
-        const char *const *names = pm->k == K_FORM   ? form_names
-                                   : pm->k == K_DISC ? disc_names
-                                   : pm->k == K_MEM  ? mem_names
-                                                     : age_names;
+    case K_AGE:
+    case K_ALOAD: {
+        const char *const *names = pm->k == K_FORM    ? form_names
+                                   : pm->k == K_DISC  ? disc_names
+                                   : pm->k == K_MEM   ? mem_names
+                                   : pm->k == K_ALOAD ? aload_names
+                                                      : age_names;
         int n = pm->k == K_FORM ? 3 : 2;
         e = parse_enum(value, names, n);
         if (e < 0) {
@@ -396,6 +403,8 @@ static cbm_status set_param(const param *pm, cbm_tree_def *d, const char *value,
             *(cbm_mech_discretization *)(void *)base = (cbm_mech_discretization)e;
         else if (pm->k == K_MEM)
             *(cbm_ring_memory *)(void *)base = (cbm_ring_memory)e;
+        else if (pm->k == K_ALOAD)
+            *(cbm_approx_load *)(void *)base = (cbm_approx_load)e;
         else
             *(cbm_ageing *)(void *)base = (cbm_ageing)e;
         return CBM_OK;
@@ -707,6 +716,9 @@ size_t cbm_tree_def_format(const cbm_tree_def *d, char *buf, size_t size)
             break;
         case K_AGE:
             OUT("%s = %s\n", pm->name, age_names[d->ageing]);
+            break;
+        case K_ALOAD:
+            OUT("%s = %s\n", pm->name, aload_names[d->approx_load]);
             break;
         case K_SOLVER:
             OUT("%s = %s\n", pm->name, cbm_mech_solver_name(d->solver));

@@ -66,6 +66,17 @@ set +e
 set -e
 test $rc -ne 0 && grep -q "nosuch" "$tmp/err" || fail "grow bad solver"
 "$bin" grow -D solver=approx -n 2 -o "$tmp/t.csv" >/dev/null || fail "grow with approx"
+# the approx load: calibrated by default, the thesis's tip load on request (another tree)
+"$bin" grow --params | grep -qx 'approx_load = calibrated' || fail "default approx_load"
+"$bin" grow -D solver=approx -D approx_load=thesis -n 2 -o "$tmp/th.csv" >/dev/null ||
+    fail "grow with the thesis load"
+! cmp -s "$tmp/t.csv" "$tmp/th.csv" || fail "approx_load=thesis changed nothing"
+"$bin" grow -D solver=approx -D approx_load=calibrated -n 2 -o "$tmp/ca.csv" >/dev/null
+cmp -s "$tmp/t.csv" "$tmp/ca.csv" || fail "approx_load=calibrated is not the default"
+set +e
+"$bin" grow -D approx_load=tip --params >/dev/null 2>"$tmp/err"; rc=$?
+set -e
+test $rc -ne 0 && grep -q "'tip' is not one of thesis calibrated" "$tmp/err" || fail "bad approx_load"
 
 # L+C: SolverMethod(2) bends with approx (another shape than the default), 9 is an error
 sed 's/^Start: {/Start: {\n    SolverMethod(2);/' "$src/models/jirasek-hanging.l" >"$tmp/h.l"
