@@ -1789,7 +1789,9 @@ void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_
 {
     const lc_program *p = &ls->lp->prog;
     *compiled = *total = *walked = 0;
-    for (size_t f = p->fn ? p->body0[LC_MAIN] : 0; f < p->n; f++) {
+    if (!p->fn)
+        return;
+    for (size_t f = p->body0[LC_MAIN]; f < p->n; f++) {
         *compiled += p->fn[f].compiled;
         ++*total;
         for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
