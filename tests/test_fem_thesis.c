@@ -400,8 +400,8 @@ TEST(fem_thesis_bend_path_equals_api)
     /* the digest's branch (n_FE 10, Le 0.1, r 0.05, rho 2, E 800, t0 60) as a `bend` spec, in
      * both supports and update signs, resampled to 40 growth units */
     static const char *const variants[] = {"", "fem_support = clamped\nfem_stiffness = symmetric\n",
-                                           "fem_support = clamped\nfem_stiffness = symmetric\n"
-                                           "fem_update = sagging\nfem_primary_tropism = 1\n"};
+                                           ("fem_support = clamped\nfem_stiffness = symmetric\n"
+                                            "fem_update = sagging\nfem_primary_tropism = 1\n")};
     for (int v = 0; v < 3; v++) {
         char text[512];
         snprintf(text, sizeof text,
