@@ -257,6 +257,38 @@ size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, doub
 size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle);
 /// out = J^-1 b with the factorisation (out and b may not alias).
 void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out);
+/* The forward sweep's rotation exponential and renormalisation (solve_common.c), shared with
+ * the approx pass, which sets the frames bit for bit as the sweep would and then skips it. */
+/* exp of a local rotation vector as a quaternion: short series for small angles (error below
+ * 3e-17 for |r| < 0.2), sin/cos otherwise */
+static inline cbm_quat cbm__mech_qexp(cbm_vec3 r)
+{
+    double a2 = r.x * r.x + r.y * r.y + r.z * r.z;
+    double c, k;
+    if (a2 < 0.04) {
+        double h2 = 0.25 * a2;
+        c = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))));
+        k = 0.5 * (1.0 + h2 * (-1.0 / 6.0 +
+                               h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0)))));
+    } else {
+        double a = sqrt(a2);
+        c = cos(0.5 * a);
+        k = sin(0.5 * a) / a;
+    }
+    cbm_quat q = {c, r.x * k, r.y * k, r.z * k};
+    return q;
+}
+
+static inline cbm_quat cbm__mech_qnorm(cbm_quat q)
+{
+    double n2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+    /* one Newton step of 1/sqrt around 1 is enough to keep |q| = 1 to round-off, since the
+     * product of unit quaternions drifts by O(1e-16) per step */
+    double s = 1.5 - 0.5 * n2;
+    cbm_quat r = {q.w * s, q.x * s, q.y * s, q.z * s};
+    return r;
+}
+
 /* ---- stability.c ---- */
 
 /// Total potential energy of the current state (after a forward sweep, loads as prepared):

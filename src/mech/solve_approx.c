@@ -44,36 +44,6 @@ typedef struct approx_scratch {
     size_t n;
 } approx_scratch;
 
-/* The forward sweep's own rotation exponential and renormalisation (solve_common.c), repeated
- * here so that the frames set while bending are bit for bit the ones cbm__mech_forward would set
- * again from the same Omega: the approx pass then skips that sweep (a third of its time on a
- * chain). */
-static inline cbm_quat fwd_qexp(cbm_vec3 r)
-{
-    double a2 = r.x * r.x + r.y * r.y + r.z * r.z;
-    double c, k;
-    if (a2 < 0.04) {
-        double h2 = 0.25 * a2;
-        c = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))));
-        k = 0.5 * (1.0 + h2 * (-1.0 / 6.0 +
-                               h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0)))));
-    } else {
-        double a = sqrt(a2);
-        c = cos(0.5 * a);
-        k = sin(0.5 * a) / a;
-    }
-    cbm_quat q = {c, r.x * k, r.y * k, r.z * k};
-    return q;
-}
-
-static inline cbm_quat fwd_qnorm(cbm_quat q)
-{
-    double n2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
-    double s = 1.5 - 0.5 * n2;
-    cbm_quat r = {q.w * s, q.x * s, q.y * s, q.z * s};
-    return r;
-}
-
 static bool starts_axis(const cbm_plant *p, size_t i)
 {
     return p->parent[i] < 0 || !(p->cont[i] & 1);
@@ -210,7 +180,7 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
             break;
         cbm_vec3 bend = v3_scale(q_rotate(q_conj(qa), sc.ax[i]), sc.inc[i] / w->dual[i]);
         p->omega[i] = v3_add(w->rj[i], bend);
-        p->q[i] = fwd_qnorm(q_mul(qa, fwd_qexp(v3_scale(p->omega[i], w->dual[i]))));
+        p->q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(v3_scale(p->omega[i], w->dual[i]))));
         p->pos[i] = pos;
         p->force[i] = v3(0, 0, 0);
         p->moment[i] = v3(0, 0, 0);

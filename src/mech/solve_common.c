@@ -301,26 +301,6 @@ void cbm__mech_prepare(cbm_plant *p)
 
 /* ---- the passes ---- */
 
-/* exp of a local rotation vector as a quaternion: short series for small angles (error below
- * 3e-17 for |r| < 0.2), sin/cos otherwise */
-static inline cbm_quat qexp(cbm_vec3 r)
-{
-    double a2 = r.x * r.x + r.y * r.y + r.z * r.z;
-    double c, k;
-    if (a2 < 0.04) {
-        double h2 = 0.25 * a2;
-        c = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))));
-        k = 0.5 * (1.0 + h2 * (-1.0 / 6.0 +
-                               h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0)))));
-    } else {
-        double a = sqrt(a2);
-        c = cos(0.5 * a);
-        k = sin(0.5 * a) / a;
-    }
-    cbm_quat q = {c, r.x * k, r.y * k, r.z * k};
-    return q;
-}
-
 static inline void q_frame(cbm_quat q, cbm_vec3 *h, cbm_vec3 *l, cbm_vec3 *u)
 {
     double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
@@ -329,16 +309,6 @@ static inline void q_frame(cbm_quat q, cbm_vec3 *h, cbm_vec3 *l, cbm_vec3 *u)
     *h = v3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy));
     *l = v3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx));
     *u = v3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy));
-}
-
-static inline cbm_quat qnorm(cbm_quat q)
-{
-    double n2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
-    /* one Newton step of 1/sqrt around 1 is enough to keep |q| = 1 to round-off, since the
-     * product of unit quaternions drifts by O(1e-16) per step */
-    double s = 1.5 - 0.5 * n2;
-    cbm_quat r = {q.w * s, q.x * s, q.y * s, q.z * s};
-    return r;
 }
 
 double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff)
@@ -391,7 +361,7 @@ static inline void forward_seg(cbm_plant *p, size_t i)
     cbm_quat b = p->branch[i];
     if (b.w != 1.0)
         qa = q_mul(qa, b);
-    q[i] = qnorm(q_mul(qa, qexp(v3_scale(p->omega[i], p->work.dual[i]))));
+    q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(v3_scale(p->omega[i], p->work.dual[i]))));
     pos[i] = pp;
     p->force[i] = v3(0, 0, 0);
     p->moment[i] = v3(0, 0, 0);
