@@ -37,4 +37,29 @@ static inline cbm_plant *dyn_rod(cbm_context *ctx, int n, double L, double r, do
     return p;
 }
 
+/* A branched plant of n segments under gravity, clamped at 1.2 rad, solved: a main axis with a
+ * lateral every third segment, elliptical sections 2 x 1.5 cm, 50 g on every fourth segment
+ * (test_dyn_loads.c, test_dyn_modal.c). */
+static inline cbm_plant *dyn_branched(cbm_context *ctx, int n)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(1.2);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_segment_def d = cbm_segment_def_default();
+    d.core.a = 0.02;
+    d.core.b = 0.015;
+    for (int i = 0; i < n; i++) {
+        d.parent = i == 0 ? -1 : (i % 3 == 0 ? i / 2 : i - 1);
+        d.lateral = i % 3 == 0 && i > 0;
+        d.deviation = d.lateral ? 0.6 : 0.05;
+        d.divergence = 2.4 * i;
+        d.point_mass = i % 4 == 0 ? 0.05 : 0.0;
+        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
+    }
+    cbm_solve_def sd = cbm_solve_def_default();
+    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
+    return p;
+}
+
 #endif

@@ -9,30 +9,6 @@
 
 #include <stdlib.h>
 
-/* A branched plant of n segments under gravity: a main axis with a lateral every third segment,
- * elliptical sections, point masses on every fourth (as test_dyn_loads.c's, any size). */
-static cbm_plant *branched(cbm_context *ctx, int n)
-{
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(1.2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    cbm_segment_def d = cbm_segment_def_default();
-    d.core.a = 0.02;
-    d.core.b = 0.015;
-    for (int i = 0; i < n; i++) {
-        d.parent = i == 0 ? -1 : (i % 3 == 0 ? i / 2 : i - 1);
-        d.lateral = i % 3 == 0 && i > 0;
-        d.deviation = d.lateral ? 0.6 : 0.05;
-        d.divergence = 2.4 * i;
-        d.point_mass = i % 4 == 0 ? 0.05 : 0.0;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    cbm_solve_def sd = cbm_solve_def_default();
-    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
-    return p;
-}
-
 static cbm_motion *motion(cbm_plant *p, const cbm_motion_def *md)
 {
     cbm_motion *m = NULL;
@@ -47,7 +23,7 @@ static cbm_motion *motion(cbm_plant *p, const cbm_motion_def *md)
 TEST(modal_all_modes_matches_full)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant *p = branched(ctx, 40);
+    cbm_plant *p = dyn_branched(ctx, 40);
     for (int variant = 0; variant < 3; variant++) {
         cbm_motion_def md = cbm_motion_def_default();
         md.dt = 2e-3;
@@ -120,7 +96,7 @@ TEST(modal_all_modes_matches_full)
 TEST(modal_energy_conserved)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant *p = branched(ctx, 60);
+    cbm_plant *p = dyn_branched(ctx, 60);
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = 5e-3;
     md.method = CBM_MOTION_MODAL;
@@ -172,7 +148,7 @@ TEST(modal_truncation_loads)
 {
     cbm_context *ctx = test_ctx();
     int n = 300, steps = 1000;
-    cbm_plant *p = branched(ctx, n);
+    cbm_plant *p = dyn_branched(ctx, n);
     size_t ks[] = {5, 10, 20, 40, 80};
     double errs[2][5], rms[2][5];
     cbm_vec3 *uf = calloc((size_t)steps, sizeof *uf);
@@ -229,7 +205,7 @@ TEST(modal_truncation_wind)
 {
     cbm_context *ctx = test_ctx();
     int n = 300;
-    cbm_plant *p = branched(ctx, n);
+    cbm_plant *p = dyn_branched(ctx, n);
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = 2e-3;
     md.damping_ratio = 0.01;
@@ -289,7 +265,7 @@ TEST(modal_truncation_wind)
 TEST(modal_cut_and_bad_input)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant *p = branched(ctx, 40);
+    cbm_plant *p = dyn_branched(ctx, 40);
     double f[30];
     CHECK_OK(cbm_plant_modes(p, 30, f, NULL));
     cbm_motion_def md = cbm_motion_def_default();
