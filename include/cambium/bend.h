@@ -59,6 +59,10 @@ typedef struct cbm_bend_spec {
     double impulse_time;     ///< s, time at which impulse_force acts (for one step)
     double impulse_force;    ///< N, downward at the tip for one step; 0 = none
     double initial_tip_load; ///< N, downward: start from the deflection under it, released at 0
+    int motion;              ///< 0 full (default), 1 modal (cbm_motion_method's values)
+    long motion_modes;       ///< motion = modal: the lowest K modes (0: from motion_cut_hz)
+    double motion_cut_hz;    ///< motion = modal, motion_modes 0: every mode below (Hz)
+    long static_correction;  ///< motion = modal: 1 adds the truncated modes' static response
     /// rad/m, kappa^c of the rings of secondary growth: each is moulded on the current rate plus
     /// this curvature towards the vertical (Tresierras 2009 (3.14); docs/growth.md); 0 = none
     double control_curvature;

@@ -43,8 +43,9 @@ CBM_API cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double 
 typedef enum cbm_motion_method {
     /// All 3n joint rotations: O(n) per step (the default).
     CBM_MOTION_FULL = 0,
-    /// The lowest K modes only (computed once at creation, O(K n)): O(K) per step without wind
-    /// and with gusts O(K^3); the forces are projected on the modes, the wind's drag linearised
+    /// The lowest K modes only (computed once at creation, O(K n)): O(K) per step without wind,
+    /// with gusts O(K^3) (with a gust field of G grid points O(K^2 G + K^3)); the forces are
+    /// projected on the modes, the wind's drag linearised
     /// about the still plant (quasi-steady, with its aerodynamic damping); the full shape is
     /// rebuilt only when asked (cbm_motion_rotations, cbm_motion_displacement). An approximation:
     /// the truncated modes' response is dropped (docs/dynamics.md states its error).
@@ -64,6 +65,10 @@ typedef struct cbm_motion_def {
     size_t modes;
     /// CBM_MOTION_MODAL with modes 0: every mode below this frequency (Hz, > 0). Default 0.
     double mode_cut_hz;
+    /// CBM_MOTION_MODAL: add the truncated modes' quasi-static response to the load (the
+    /// mode-acceleration method, docs/dynamics.md "Static correction") to the rebuilt shape
+    /// (cbm_motion_rotations, cbm_motion_displacement); O(n) an output, not a step. Default false.
+    bool static_correction;
 } cbm_motion_def;
 
 /// Defaults: dt 1e-3 s, no damping.

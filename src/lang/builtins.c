@@ -84,6 +84,7 @@ static const cbm__builtin BUILTINS[] = {
     {"Frequency", FN_FREQUENCY, 1, LC},
     {"Sway", FN_SWAY, 4, LC},
     {"SwayDrag", FN_SWAY, 6, LC},
+    {"SwayModes", FN_SWAYMODES, 2, LC},
     {"Gravity", FN_GRAVITY, 3, LC},
     {"Ground", FN_GROUND, 3, LC},
     {"Contact", FN_CONTACT, 2, LC},

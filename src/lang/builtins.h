@@ -89,6 +89,7 @@ typedef enum cbm__fn {
     FN_STABILITY,
     FN_FREQUENCY,
     FN_SWAY,
+    FN_SWAYMODES,
     FN_GRAVITY,
     FN_GROUND,
     FN_CONTACT,

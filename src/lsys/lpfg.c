@@ -284,6 +284,18 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         m->growth.reaction_increment = a[2];
         m->growth.reaction_youngs = a[3];
         return;
+    case FN_SWAYMODES:
+        /* the modal motion of the next Sway()s (docs/language.md, docs/dynamics.md) */
+        if (!(a[0] >= 0 && a[0] <= 1e9 && a[0] == floor(a[0])) || !(a[1] == 0 || a[1] == 1) ||
+            (a[0] == 0 && a[1] == 1)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "SwayModes(K: 0 (the full motion) or the number of modes, static "
+                     "correction: 0 or 1 (with K > 0))");
+            return;
+        }
+        m->dyn_args[7] = a[0];
+        m->dyn_args[8] = a[1];
+        return;
     case FN_REACTIONBOUND:
         /* the largest a/b reaction wood makes (docs/growth.md): real stems stay within 1.5 */
         if (!(isfinite(a[0]) && (a[0] == 0 || a[0] >= 1))) {

@@ -27,8 +27,9 @@ typedef struct cbm__mechlang {
     struct cbm__mechkept *kept;
     bool keep;
     /* Sway(duration, dt, wind, gust) of the next CBM__ML_SWAY; SwayDrag's coherence decay and
-     * leaf area per kg after them, and 1 in the last for SwayDrag (0: Sway) */
-    double dyn_args[7];
+     * leaf area per kg after them, and 1 in the next for SwayDrag (0: Sway); then the setting
+     * SwayModes(K, static correction 0/1) (K = 0: the full motion) */
+    double dyn_args[9];
     cbm_lsys_sway_fn sway_fn; /* observer of Sway() (cbm_lsys_set_sway_observer), NULL: none */
     void *sway_ud;
 } cbm__mechlang;

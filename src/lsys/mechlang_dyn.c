@@ -1,7 +1,7 @@
 /* The dialect's dynamics of its mechanical plant (docs/language.md, "Mechanics"): Frequency(k),
  * Sway(duration, dt, wind, gust) and SwayDrag(duration, dt, wind, gust, coherence, leaf area per
- * kg), over the library's cbm_plant_modes and cbm_motion (docs/dynamics.md), about the plant's
- * stored state.
+ * kg), by the modal motion after SwayModes(K, static correction), over the library's
+ * cbm_plant_modes and cbm_motion (docs/dynamics.md), about the plant's stored state.
  *
  * SwayDrag's organs: the dialect's point masses carry a mass and, where declared, the radius of
  * the organ's sphere (`mass: Grape(mass, radius)`), not whether they are leaves or fruit. A node
@@ -72,6 +72,11 @@ cbm_status cbm__mechlang_sway(cbm_context *ctx, const cbm_plant *p, const double
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = args[1];
     md.damping_ratio = 0.03;
+    if (args[7] > 0) { /* SwayModes(K, correction) */
+        md.method = CBM_MOTION_MODAL;
+        md.modes = (size_t)args[7];
+        md.static_correction = args[8] == 1.0;
+    }
     cbm_motion *m = NULL;
     cbm_status st = cbm_motion_create(p, &md, &m);
     cbm_wind_def wd = cbm_wind_def_default();

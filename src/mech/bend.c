@@ -26,6 +26,7 @@
  * the most proximal segment whose stress exceeds it is removed with everything it carries.
  */
 #include "cambium/bend.h"
+#include "cambium/dynamics.h"
 #include "core/core.h"
 #include "core/vecmath.h"
 #include "mech/growth_internal.h"
@@ -78,20 +79,20 @@ static const char *const w_fem_support[] = {"free", "clamped", NULL};
 static const char *const w_approx_load[] = {"thesis", "calibrated", NULL};
 static const char *const w_fem_update[] = {"listing", "sagging", NULL};
 static const char *const w_fem_stiffness[] = {"printed", "symmetric", NULL};
+static const char *const w_motion[] = {"full", "modal", NULL};
 /* K_WORD keys: the allowed words, NULL-terminated; the value stored is the word's index (an
  * int or an enum of the same values) */
 static const struct {
     const char *key;
     const char *const *words;
-} word_keys[] = {{"fem_path", w_fem_path},
-                 {"fem_support", w_fem_support},
-                 {"approx_load", w_approx_load},
-                 {"fem_update", w_fem_update},
-                 {"fem_stiffness", w_fem_stiffness}};
+} word_keys[] = {{"fem_path", w_fem_path},           {"fem_support", w_fem_support},
+                 {"approx_load", w_approx_load},     {"fem_update", w_fem_update},
+                 {"fem_stiffness", w_fem_stiffness}, {"motion", w_motion}};
 _Static_assert(CBM_FEM_PATH_THESIS == 1 && CBM_FEM_SUPPORT_CLAMPED == 1 &&
                    CBM_APPROX_LOAD_CALIBRATED == 1 && sizeof(cbm_fem_path) == sizeof(int) &&
                    sizeof(cbm_fem_support) == sizeof(int) && sizeof(cbm_approx_load) == sizeof(int),
                "the word tables follow the enums");
+_Static_assert(CBM_MOTION_MODAL == 1, "motion's words follow cbm_motion_method");
 
 #define OFF(f) offsetof(cbm_bend_spec, f)
 static const key_desc keys[] = {
@@ -134,6 +135,10 @@ static const key_desc keys[] = {
     {"impulse_time", K_NUM, OFF(impulse_time), 0, 1e6, false},
     {"impulse_force", K_NUM, OFF(impulse_force), -1e12, 1e12, false},
     {"initial_tip_load", K_NUM, OFF(initial_tip_load), -1e12, 1e12, false},
+    {"motion", K_WORD, OFF(motion), 0, 0, false},
+    {"motion_modes", K_INT, OFF(motion_modes), 0, 1e9, false},
+    {"motion_cut_hz", K_NUM, OFF(motion_cut_hz), 0, 1e12, true},
+    {"static_correction", K_INT, OFF(static_correction), 0, 1, false},
     {"fem_increments", K_INT, OFF(fem_increments), 1, 1e7, false},
     {"fem_shear_ratio", K_NUM, OFF(fem_shear_ratio), 0, 1e3, false},
     {"fem_sigma", K_NUM, OFF(fem_sigma), 0, 1, false},
@@ -446,6 +451,18 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
             err(&r, 0, 0,
                 "dt, damping_ratio, impulse_time, impulse_force and initial_tip_load need "
                 "duration > 0");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.motion == 0 && (s.motion_modes > 0 || s.motion_cut_hz > 0 || s.static_correction)) {
+            err(&r, 0, 0, "motion_modes, motion_cut_hz and static_correction need motion = modal");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.motion == 1 && s.duration == 0) {
+            err(&r, 0, 0, "motion = modal needs duration > 0");
+            r.status = CBM_E_SEMANTIC;
+        }
+        if (s.motion == 1 && s.motion_modes == 0 && !(s.motion_cut_hz > 0)) {
+            err(&r, 0, 0, "motion = modal needs motion_modes > 0 or motion_cut_hz > 0");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.dt > 0 && s.duration / s.dt > 1e8) {

@@ -17,6 +17,12 @@ cbm_status cbm_bend_motion(const cbm_plant *plant, const cbm_bend_spec *spec, cb
     cbm_motion_def md = cbm_motion_def_default();
     md.damping_ratio = spec->damping_ratio;
     md.dt = spec->dt;
+    if (spec->motion == 1) {
+        md.method = CBM_MOTION_MODAL;
+        md.modes = spec->motion_modes > 0 ? (size_t)spec->motion_modes : 0;
+        md.mode_cut_hz = spec->motion_cut_hz;
+        md.static_correction = spec->static_correction != 0;
+    }
     if (!(md.dt > 0.0)) {
         /* from the highest frequency of interest: the 6th mode (three bending modes in each
          * plane of a round rod), 20 steps per its period */

@@ -125,6 +125,33 @@ static inline double field_value(const double *gv, const int32_t *idx, const dou
     return wt[0] * gv[idx[0]] + wt[1] * gv[idx[1]] + wt[2] * gv[idx[2]] + wt[3] * gv[idx[3]];
 }
 
+/* The drag wrenches of segment i (moment about the origin, force; 6 each) for the air speeds
+ * ut at its midpoint and ute at its distal node, its twist z and the base velocity vb: wood's at
+ * the midpoint into ww, the organs' at the distal node into wo; false (wo untouched) when the
+ * segment carries no organ drag. */
+static inline bool seg_wrenches(const cbm__drag *g, const cbm__dyn *d, size_t i, double ut,
+                                double ute, const double *z, cbm_vec3 vb, double *ww, double *wo)
+{
+    cbm_vec3 om = v3(z[0], z[1], z[2]), v0 = v3_add(v3(z[3], z[4], z[5]), vb);
+    cbm_vec3 c = g->c[i], h = g->h[i];
+    cbm_vec3 rel = v3_sub(v3_scale(g->dir, ut * g->uc[i]), v3_add(v0, v3_cross(om, c)));
+    cbm_vec3 rn = v3_madd(rel, h, -v3_dot(rel, h));
+    cbm_vec3 F = v3_scale(rn, g->kw[i] * v3_norm(rn));
+    cbm_vec3 M = v3_cross(c, F);
+    ww[0] = M.x, ww[1] = M.y, ww[2] = M.z, ww[3] = F.x, ww[4] = F.y, ww[5] = F.z;
+    double kf = g->fruit ? g->fruit[i] : 0.0, kl = g->leaf ? g->leaf[i] : 0.0;
+    if (!(g->ko[i] > 0.0 || kf > 0.0 || kl > 0.0))
+        return false;
+    cbm_vec3 e = d->e[i];
+    cbm_vec3 ro = v3_sub(v3_scale(g->dir, ute * g->ue[i]), v3_add(v0, v3_cross(om, e)));
+    double wn = v3_norm(ro);
+    double k = g->ko[i] + kf + kl * cbm__leaf_reconfiguration(g->vogel, g->vogel_speed, wn);
+    cbm_vec3 Fo = v3_scale(ro, k * wn);
+    cbm_vec3 Mo = v3_cross(e, Fo);
+    wo[0] = Mo.x, wo[1] = Mo.y, wo[2] = Mo.z, wo[3] = Fo.x, wo[4] = Fo.y, wo[5] = Fo.z;
+    return true;
+}
+
 void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v, cbm_vec3 vb,
                      double *f)
 {
@@ -137,31 +164,20 @@ void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v,
             ut = g->u_ref + field_value(gv, g->gi + 8 * i, g->gw + 8 * i);
             ute = g->u_ref + field_value(gv, g->gi + 8 * i + 4, g->gw + 8 * i + 4);
         }
-        const double *z = g->z + 6 * i;
-        cbm_vec3 om = v3(z[0], z[1], z[2]), v0 = v3_add(v3(z[3], z[4], z[5]), vb);
-        double *w = g->w + 6 * i;
-        cbm_vec3 c = g->c[i], h = g->h[i];
-        cbm_vec3 rel = v3_sub(v3_scale(g->dir, ut * g->uc[i]), v3_add(v0, v3_cross(om, c)));
-        cbm_vec3 rn = v3_madd(rel, h, -v3_dot(rel, h));
-        cbm_vec3 F = v3_scale(rn, g->kw[i] * v3_norm(rn));
-        cbm_vec3 M = v3_cross(c, F);
-        double kf = g->fruit ? g->fruit[i] : 0.0, kl = g->leaf ? g->leaf[i] : 0.0;
-        if (g->ko[i] > 0.0 || kf > 0.0 || kl > 0.0) {
-            cbm_vec3 e = d->e[i];
-            cbm_vec3 ro = v3_sub(v3_scale(g->dir, ute * g->ue[i]), v3_add(v0, v3_cross(om, e)));
-            double wn = v3_norm(ro);
-            double k = g->ko[i] + kf + kl * cbm__leaf_reconfiguration(g->vogel, g->vogel_speed, wn);
-            cbm_vec3 Fo = v3_scale(ro, k * wn);
-            F = v3_add(F, Fo);
-            M = v3_add(M, v3_cross(e, Fo));
-        }
-        w[0] = M.x;
-        w[1] = M.y;
-        w[2] = M.z;
-        w[3] = F.x;
-        w[4] = F.y;
-        w[5] = F.z;
+        double *w = g->w + 6 * i, wo[6];
+        if (seg_wrenches(g, d, i, ut, ute, g->z + 6 * i, vb, w, wo))
+            for (int j = 0; j < 6; j++)
+                w[j] += wo[j];
     }
     memset(f, 0, 3 * n * sizeof(double));
     cbm__dyn_wrench_force(d, g->w, f);
+}
+
+void cbm__drag_wrenches(cbm__drag *g, const cbm__dyn *d, const double *v, cbm_vec3 vb, double *ww,
+                        double *wo)
+{
+    cbm__dyn_twists(d, v, g->z);
+    for (size_t i = 0; i < g->n; i++)
+        if (!seg_wrenches(g, d, i, g->u_ref, g->u_ref, g->z + 6 * i, vb, ww + 6 * i, wo + 6 * i))
+            memset(wo + 6 * i, 0, 6 * sizeof(double));
 }

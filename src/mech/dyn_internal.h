@@ -226,6 +226,11 @@ void cbm__drag_free(cbm_context *ctx, cbm__drag *g);
 /// f = the generalised drag forces at time t for joint rates v and base velocity vb.
 void cbm__drag_force(cbm__drag *g, const cbm__dyn *d, double t, const double *v, cbm_vec3 vb,
                      double *f);
+/// The mean wind's drag wrenches per segment (6 each, as cbm__dyn_wrench_force takes them), of
+/// the wood at the midpoints into ww and of the organs at the distal nodes into wo, for joint
+/// rates v and base velocity vb (the gust field's share per grid point: modal.c).
+void cbm__drag_wrenches(cbm__drag *g, const cbm__dyn *d, const double *v, cbm_vec3 vb, double *ww,
+                        double *wo);
 
 /* The modal reduction of a motion (modal.c, CBM_MOTION_MODAL): K mass-normalised modes phi_r
  * (M-orthonormal, phi_r^T K phi_r = w_r^2), the modal coordinates eta (q = sum eta_r phi_r) and
@@ -249,6 +254,7 @@ typedef struct cbm__modal {
     double *a, *r; /* k x k: the step's matrix (Cholesky factor); k: work */
     double *qbuf;  /* 3n: the rebuilt rotations */
     bool q_stale;
+    struct cbm__modal_ext *x; /* the gust field's projections, the static correction (modal.c) */
 } cbm__modal;
 
 /* A motion (motion.c; its modal reduction in modal.c). */
@@ -276,7 +282,7 @@ struct cbm_motion {
 
 /* The modal motion (modal.c): the public cbm_motion_* calls hand over when m->modal is set. */
 cbm_status cbm__modal_create(const cbm_plant *plant, cbm_motion *m, size_t count, double cut_hz,
-                             double damping_ratio);
+                             double damping_ratio, bool static_correction);
 void cbm__modal_free(cbm_context *ctx, cbm__modal *md, size_t nq);
 cbm_status cbm__modal_step(cbm_motion *m);
 cbm_status cbm__modal_add_force(cbm_motion *m, size_t seg, cbm_vec3 force);

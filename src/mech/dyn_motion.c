@@ -16,7 +16,7 @@
 
 cbm_motion_def cbm_motion_def_default(void)
 {
-    cbm_motion_def d = {1e-3, 0.0, 0.0, 0.0, CBM_MOTION_FULL, 0, 0.0};
+    cbm_motion_def d = {1e-3, 0.0, 0.0, 0.0, CBM_MOTION_FULL, 0, 0.0, false};
     return d;
 }
 
@@ -212,6 +212,8 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
     if (md.method != CBM_MOTION_FULL && md.method != CBM_MOTION_MODAL)
         return cbm__fail(ctx, CBM_E_INVALID, "motion: unknown method %d", (int)md.method);
     bool modal = md.method == CBM_MOTION_MODAL;
+    if (md.static_correction && !modal)
+        return cbm__fail(ctx, CBM_E_INVALID, "motion: static_correction is for the modal method");
     double alpha = md.rayleigh_alpha, beta = md.rayleigh_beta;
     if (md.damping_ratio > 0.0 && !modal) {
         double f[2];
@@ -256,7 +258,8 @@ cbm_status cbm_motion_create(const cbm_plant *plant, const cbm_motion_def *def, 
         return CBM_E_NOMEM;
     }
     /* the modal motion needs no factorisation: its modes come from their own Lanczos run */
-    st = modal ? cbm__modal_create(plant, m, md.modes, md.mode_cut_hz, md.damping_ratio)
+    st = modal ? cbm__modal_create(plant, m, md.modes, md.mode_cut_hz, md.damping_ratio,
+                                   md.static_correction)
                : refactor(m);
     if (st != CBM_OK) {
         cbm_motion_destroy(m);
@@ -438,14 +441,6 @@ cbm_status cbm_motion_set_wind(cbm_motion *m, const cbm_wind_def *wind, double u
         return CBM_E_INVALID;
     cbm__drag nd;
     CBM_TRY(cbm__drag_build(&m->d, wind, u_ref, gust, &nd));
-    if (m->modal && nd.gust.np > 0) {
-        /* the modal loads are projected once, for one gust factor over the whole plant */
-        cbm__drag_free(m->d.ctx, &nd);
-        return cbm__fail(m->d.ctx, CBM_E_INVALID,
-                         "motion: the modal motion takes a gust series, not a gust field "
-                         "(coherence_decay = %g): use the full motion or coherence_decay = 0",
-                         gust ? gust->coherence_decay : 0.0);
-    }
     if (m->modal) {
         cbm_status st = cbm__modal_set_wind(m, &nd);
         cbm__drag_free(m->d.ctx, &m->drag);

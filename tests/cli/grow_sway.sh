@@ -37,6 +37,16 @@ paste -d, "$tmp/motion.csv" "$tmp/modal.csv" | awk -F, 'NR > 1 && $4 == 0 {
     d = ($6 - $14) ^ 2 + ($7 - $15) ^ 2 + ($8 - $16) ^ 2; u = $6 ^ 2 + $7 ^ 2 + $8 ^ 2
     if (d > dm) dm = d; if (u > um) um = u }
     END { if (!(um > 0 && dm <= 1e-4 * um)) { print "modal error", sqrt(dm), "of", sqrt(um); exit 1 } }'
+# --sway-modes with a gust field (--gust-coherence): the field's drag projected per grid point;
+# the stem's tip within 2 % of the full motion's with the same field at every frame (measured
+# 0.03 % with 30 modes; docs/dynamics.md, "Modal reduction")
+"$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 --gust-coherence 8 --gust-grid 4 -o "$tmp/ffull.csv"
+"$bin" grow fruit-tree -y 2 --quiet --sway 1 --wind 12 --gust-coherence 8 --gust-grid 4 --sway-modes 30 -o "$tmp/fmodal.csv"
+paste -d, "$tmp/ffull.csv" "$tmp/fmodal.csv" | awk -F, 'NR > 1 && $4 == 0 {
+    d = ($6 - $14) ^ 2 + ($7 - $15) ^ 2 + ($8 - $16) ^ 2; u = $6 ^ 2 + $7 ^ 2 + $8 ^ 2
+    if (d > dm) dm = d; if (u > um) um = u }
+    END { if (!(um > 0 && dm <= 4e-4 * um)) { print "modal field error", sqrt(dm), "of", sqrt(um); exit 1 }
+          printf "modal field: %.3g %% of the largest tip displacement\n", 100 * sqrt(dm / um) }'
 # no wind: nothing moves
 "$bin" grow fruit-tree -y 2 --quiet --sway 0.2 --wind 0 -o "$tmp/still.csv"
 awk -F, 'NR > 1 && ($6 != 0 || $7 != 0 || $8 != 0) { print; exit 1 }' "$tmp/still.csv"
@@ -59,6 +69,5 @@ expect2 --sway 1 -o "motion:$tmp/x.png"
 expect2 --organ-area 5 -o "$tmp/x.csv"
 expect2 --sway-modes 10 -o "$tmp/x.csv"
 expect2 --sway 1 --sway-modes 2.5 -o "$tmp/x.glb"
-expect2 --sway 1 --sway-modes 10 --gust-coherence 10 -o "$tmp/x.glb"
 expect2 --sway 1 --organ-area -1 -o "$tmp/x.glb"
 test ! -e "$tmp/x.csv" && test ! -e "$tmp/x.glb"

@@ -623,9 +623,6 @@ int cmd_grow(int argc, char **argv)
             return cli_usage_error("grow", "--sway-modes must be a whole number");
         if (swaying && sway.dt > sway.seconds)
             return cli_usage_error("grow", "--sway-dt must not exceed --sway");
-        if (sway.modes > 0 && sway.coherence > 0)
-            return cli_usage_error("grow", "--sway-modes does not go with --gust-coherence (the "
-                                           "modal motion takes one gust series)");
         if (organ_drag && sway.organ_area > 0)
             return cli_usage_error("grow", "--organ-drag does not go with --organ-area");
     }
