@@ -205,10 +205,11 @@ static bench_result bench_run(int n, double rho, double E, double duration)
  *   example's own FFT, with bins 8 % wide, cannot see it).
  * The predicted peer period is ours times both factors; the neglected terms are the clamp's
  * O((dl / L)^2) (1e-4 at 100 elements), the second order of the shear (1e-6) and our own
- * discretisation (5e-5 at 100 segments): tolerance 3e-4. The peer starts from the mode of the
- * full length on a rod that bends like a shorter one, so its motion is not one pure mode: its
- * largest deflection is checked against ours times the period ratio (amplitude = tip speed /
- * omega) to the order of that shape mismatch, dl / 2L (5e-3 at 100 elements). */
+ * error (7e-5 at 100 segments: the frequency's 5e-5 and the time step's 2e-5): tolerance 3e-4. The
+ * peer starts from the mode of the full length on a rod that bends like a shorter one, so its
+ * motion is not one pure mode: its largest deflection is checked against ours times the period
+ * ratio (amplitude = tip speed / omega) to the order of that shape mismatch, dl / 2L (5e-3 at 100
+ * elements). */
 static void peer_prediction(const pyel_ref *r, const bench_result *b, double *period,
                             double *amplitude)
 {
