@@ -152,11 +152,31 @@ static char *glb_json(const char *path, size_t *file_len)
 
 /* The value of the k-th element of the accessor an attribute names, found through the JSON
  * (accessors and bufferViews are written as flat arrays of objects in a fixed key order). */
+static void glb_element(const char *path, const char *attr, int nth, size_t k, float *vf,
+                        uint16_t *vh);
+
 static float glb_attribute_of(const char *path, const char *attr, int nth, size_t k)
+{
+    float v = NAN;
+    uint16_t h = 0;
+    glb_element(path, attr, nth, k, &v, &h);
+    return v;
+}
+
+/* The k-th 16-bit element of the accessor the nth attribute so named names (indices). */
+static unsigned glb_u16_of(const char *path, const char *attr, int nth, size_t k)
+{
+    float v = NAN;
+    uint16_t h = 0xffff;
+    glb_element(path, attr, nth, k, &v, &h);
+    return h;
+}
+
+static void glb_element(const char *path, const char *attr, int nth, size_t k, float *vf,
+                        uint16_t *vh)
 {
     size_t len = 0;
     char *b = io_read_all(path, &len), *json = b ? b + 20 : NULL;
-    float v = NAN;
     char key[64];
     snprintf(key, sizeof key, "\"%s\":", attr);
     const char *at = json ? strstr(json, key) : NULL;
@@ -176,13 +196,14 @@ static float glb_attribute_of(const char *path, const char *attr, int nth, size_
         if (w) {
             long off = strtol(w + 25, NULL, 10);
             uint32_t jl = rd32((const unsigned char *)b + 12);
-            size_t pos = 28 + jl + (size_t)off + 4 * k;
-            if (pos + 4 <= len)
-                v = rdf((const unsigned char *)b + pos);
+            size_t pos = 28 + jl + (size_t)off;
+            if (pos + 4 * k + 4 <= len)
+                *vf = rdf((const unsigned char *)b + pos + 4 * k);
+            if (pos + 2 * k + 2 <= len)
+                memcpy(vh, b + pos + 2 * k, 2);
         }
     }
     free(b);
-    return v;
 }
 
 /* The same in the first attribute so named. */
@@ -388,6 +409,11 @@ TEST(glb_surface_placements)
     check_placed(g, sm, 0, pos, nrm, 4, 0);
     check_placed(g, sm, 4, pos, nrm, 4, 1);
     CHECK(glb_attribute_of(g, "SCALE", 0, 2) < 0.0f && glb_attribute_of(g, "SCALE", 1, 2) > 0.0f);
+    /* the mirroring node's shape has its triangles reversed (a viewer reverses them again) */
+    CHECK(glb_u16_of(g, "indices", 0, 0) == 0 && glb_u16_of(g, "indices", 0, 1) == 2 &&
+          glb_u16_of(g, "indices", 0, 2) == 1 && glb_u16_of(g, "indices", 0, 5) == 2);
+    CHECK(glb_u16_of(g, "indices", 1, 0) == 0 && glb_u16_of(g, "indices", 1, 1) == 1 &&
+          glb_u16_of(g, "indices", 1, 2) == 2 && glb_u16_of(g, "indices", 1, 5) == 3);
     CHECK_STATUS(cbm_scene_write(ctx, si, io_path("placed.obj"), NULL), CBM_E_UNSUPPORTED);
     cbm_scene_clear(si);
     CHECK(cbm_scene_placement_count(si) == 0 && cbm_scene_shape_count(si) == 0);
