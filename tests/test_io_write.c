@@ -152,14 +152,36 @@ static char *glb_json(const char *path, size_t *file_len)
 
 /* The value of the k-th element of the accessor an attribute names, found through the JSON
  * (accessors and bufferViews are written as flat arrays of objects in a fixed key order). */
-static float glb_attribute(const char *path, const char *attr, size_t k)
+static void glb_element(const char *path, const char *attr, int nth, size_t k, float *vf,
+                        uint16_t *vh);
+
+static float glb_attribute_of(const char *path, const char *attr, int nth, size_t k)
+{
+    float v = NAN;
+    uint16_t h = 0;
+    glb_element(path, attr, nth, k, &v, &h);
+    return v;
+}
+
+/* The k-th 16-bit element of the accessor the nth attribute so named names (indices). */
+static unsigned glb_u16_of(const char *path, const char *attr, int nth, size_t k)
+{
+    float v = NAN;
+    uint16_t h = 0xffff;
+    glb_element(path, attr, nth, k, &v, &h);
+    return h;
+}
+
+static void glb_element(const char *path, const char *attr, int nth, size_t k, float *vf,
+                        uint16_t *vh)
 {
     size_t len = 0;
     char *b = io_read_all(path, &len), *json = b ? b + 20 : NULL;
-    float v = NAN;
     char key[64];
     snprintf(key, sizeof key, "\"%s\":", attr);
     const char *at = json ? strstr(json, key) : NULL;
+    for (int i = 0; i < nth && at; i++)
+        at = strstr(at + 1, key);
     const char *acc = json ? strstr(json, "\"accessors\":[") : NULL;
     const char *views = json ? strstr(json, "\"bufferViews\":[") : NULL;
     if (at && acc && views) {
@@ -174,13 +196,20 @@ static float glb_attribute(const char *path, const char *attr, size_t k)
         if (w) {
             long off = strtol(w + 25, NULL, 10);
             uint32_t jl = rd32((const unsigned char *)b + 12);
-            size_t pos = 28 + jl + (size_t)off + 4 * k;
-            if (pos + 4 <= len)
-                v = rdf((const unsigned char *)b + pos);
+            size_t pos = 28 + jl + (size_t)off;
+            if (pos + 4 * k + 4 <= len)
+                *vf = rdf((const unsigned char *)b + pos + 4 * k);
+            if (pos + 2 * k + 2 <= len)
+                memcpy(vh, b + pos + 2 * k, 2);
         }
     }
     free(b);
-    return v;
+}
+
+/* The same in the first attribute so named. */
+static float glb_attribute(const char *path, const char *attr, size_t k)
+{
+    return glb_attribute_of(path, attr, 0, k);
 }
 
 TEST(glb_per_segment_attributes)
@@ -278,6 +307,116 @@ TEST(glb_tube_instances)
     CHECK_STATUS(cbm_scene_write(ctx, si, io_path("inst.ply"), NULL), CBM_E_UNSUPPORTED);
     cbm_scene_clear(si);
     CHECK(cbm_scene_instance_count(si) == 0 && cbm_scene_instancing(si));
+    cbm_scene_destroy(si);
+    cbm_scene_destroy(sm);
+    test_ctx_end(ctx);
+}
+
+/* Placed shapes (the turtle's predefined surfaces): a scene in instancing mode keeps the shape
+ * once and each placement; the .glb's TRS of each placement applied to the shape gives the
+ * triangles an ordinary scene gets (points and normals, a mirroring and a proper placement), and
+ * the other writers refuse the scene. */
+static void check_placed(const char *g, const cbm_scene *sm, size_t v0, const cbm_vec3 *pos,
+                         const cbm_vec3 *nrm, size_t nv, size_t node)
+{
+    float t[3], q[4], sc[3];
+    /* the accessors of the node-th instanced node */
+    for (int k = 0; k < 3; k++)
+        t[k] = glb_attribute_of(g, "TRANSLATION", node, (size_t)k);
+    for (int k = 0; k < 4; k++)
+        q[k] = glb_attribute_of(g, "ROTATION", node, (size_t)k);
+    for (int k = 0; k < 3; k++)
+        sc[k] = glb_attribute_of(g, "SCALE", node, (size_t)k);
+    double x = q[0], y = q[1], z = q[2], w = q[3];
+    double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
+                      {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
+                      {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}};
+    const cbm_scene_vertex *v = cbm_scene_vertices(sm);
+    for (size_t i = 0; i < nv; i++) {
+        double lp[3] = {sc[0] * pos[i].x, sc[1] * pos[i].y, sc[2] * pos[i].z};
+        double ln[3] = {nrm[i].x / sc[0], nrm[i].y / sc[1], nrm[i].z / sc[2]}, wn[3], len = 0;
+        for (int r = 0; r < 3; r++) {
+            double pw = t[r] + m[r][0] * lp[0] + m[r][1] * lp[1] + m[r][2] * lp[2];
+            CHECK_MSG(fabs(pw - v[v0 + i].p[r]) < 1e-6, "vertex %zu: %g vs %g", i, pw,
+                      (double)v[v0 + i].p[r]);
+            wn[r] = m[r][0] * ln[0] + m[r][1] * ln[1] + m[r][2] * ln[2];
+            len += wn[r] * wn[r];
+        }
+        for (int r = 0; r < 3; r++)
+            CHECK(fabs(wn[r] / sqrt(len) - v[v0 + i].n[r]) < 1e-6);
+    }
+}
+
+TEST(glb_surface_placements)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *si = NULL, *sm = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &si));
+    CHECK_OK(cbm_scene_create(ctx, &sm));
+    cbm_scene_set_instancing(si, true);
+    /* a bent quad, no symmetry: two triangles, normals tilted */
+    const cbm_vec3 pos[4] = {{0, 0, 0}, {1, 0, 0.2}, {1, 2, 0.1}, {-0.3, 1.5, 0}};
+    cbm_vec3 nrm[4] = {{0.1, 0, 1}, {0, 0.2, 1}, {-0.1, 0.1, 1}, {0, 0, 1}};
+    for (int i = 0; i < 4; i++) {
+        double l = sqrt(nrm[i].x * nrm[i].x + nrm[i].y * nrm[i].y + nrm[i].z * nrm[i].z);
+        nrm[i] = (cbm_vec3){nrm[i].x / l, nrm[i].y / l, nrm[i].z / l};
+    }
+    const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+    /* the turtle's frame: H, U, L = U x H; placements (L sx, H sy, U sz) mirror */
+    cbm_vec3 h = {1.0 / 3, 2.0 / 3, 2.0 / 3}, u = {2.0 / 3, 1.0 / 3, -2.0 / 3};
+    cbm_vec3 l = {u.y * h.z - u.z * h.y, u.z * h.x - u.x * h.z, u.x * h.y - u.y * h.x};
+    const double sx[2] = {0.5, 0.25}, sy[2] = {2.0, 1.5}, sz[2] = {0.3, -0.4};
+    cbm_part p = cbm_part_default();
+    p.organ = CBM_ORGAN_LEAF;
+    for (int k = 0; k < 2; k++) {
+        cbm_scene *s = k ? sm : si;
+        uint32_t id = 9;
+        CHECK(!cbm_scene_find_shape(s, 42, &id));
+        CHECK_OK(cbm_scene_add_shape(s, 42, pos, nrm, 4, tri, 2, &id));
+        CHECK(id == 0 && cbm_scene_find_shape(s, 42, &id) && id == 0);
+        for (int j = 0; j < 2; j++) {
+            CHECK_OK(cbm_scene_begin_part(s, &p, NULL));
+            cbm_vec3 o = {1 + j, 2, 3};
+            CHECK_OK(cbm_scene_place_shape(s, 0, o,
+                                           (cbm_vec3){l.x * sx[j], l.y * sx[j], l.z * sx[j]},
+                                           (cbm_vec3){h.x * sy[j], h.y * sy[j], h.z * sy[j]},
+                                           (cbm_vec3){u.x * sz[j], u.y * sz[j], u.z * sz[j]}));
+        }
+    }
+    CHECK_STATUS(cbm_scene_place_shape(si, 1, (cbm_vec3){0, 0, 0}, l, h, u), CBM_E_INVALID);
+    CHECK_EQ_INT(cbm_scene_placement_count(si), 2);
+    CHECK_EQ_INT(cbm_scene_triangle_count(si), 0);
+    CHECK_EQ_INT(cbm_scene_placement_count(sm), 0);
+    CHECK_EQ_INT(cbm_scene_triangle_count(sm), 4);
+    CHECK_EQ_INT(cbm_scene_vertex_count(sm), 8);
+    /* the placements' bounds hold the triangles' points */
+    cbm_vec3 lo, hi;
+    CHECK(cbm_scene_bounds(si, &lo, &hi));
+    const cbm_scene_vertex *v = cbm_scene_vertices(sm);
+    for (size_t i = 0; i < 8; i++)
+        CHECK(v[i].p[0] >= lo.x - 1e-6 && v[i].p[1] >= lo.y - 1e-6 && v[i].p[2] >= lo.z - 1e-6 &&
+              v[i].p[0] <= hi.x + 1e-6 && v[i].p[1] <= hi.y + 1e-6 && v[i].p[2] <= hi.z + 1e-6);
+
+    const char *g = io_path("placed.glb");
+    CHECK_OK(cbm_scene_write(ctx, si, g, NULL));
+    size_t len = 0;
+    char *j = glb_json(g, &len);
+    CHECK(j && strstr(j, "\"extensionsRequired\":[\"EXT_mesh_gpu_instancing\"]"));
+    /* one node per placement here: the first mirrors, the second does not */
+    const char *n1 = j ? strstr(j, "\"name\":\"leaf surfaces\"") : NULL;
+    CHECK(n1 && strstr(n1 + 1, "\"name\":\"leaf surfaces\""));
+    free(j);
+    check_placed(g, sm, 0, pos, nrm, 4, 0);
+    check_placed(g, sm, 4, pos, nrm, 4, 1);
+    CHECK(glb_attribute_of(g, "SCALE", 0, 2) < 0.0f && glb_attribute_of(g, "SCALE", 1, 2) > 0.0f);
+    /* the mirroring node's shape has its triangles reversed (a viewer reverses them again) */
+    CHECK(glb_u16_of(g, "indices", 0, 0) == 0 && glb_u16_of(g, "indices", 0, 1) == 2 &&
+          glb_u16_of(g, "indices", 0, 2) == 1 && glb_u16_of(g, "indices", 0, 5) == 2);
+    CHECK(glb_u16_of(g, "indices", 1, 0) == 0 && glb_u16_of(g, "indices", 1, 1) == 1 &&
+          glb_u16_of(g, "indices", 1, 2) == 2 && glb_u16_of(g, "indices", 1, 5) == 3);
+    CHECK_STATUS(cbm_scene_write(ctx, si, io_path("placed.obj"), NULL), CBM_E_UNSUPPORTED);
+    cbm_scene_clear(si);
+    CHECK(cbm_scene_placement_count(si) == 0 && cbm_scene_shape_count(si) == 0);
     cbm_scene_destroy(si);
     cbm_scene_destroy(sm);
     test_ctx_end(ctx);

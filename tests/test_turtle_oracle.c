@@ -235,6 +235,107 @@ TEST(lilac)
     run_model(&m, true);
 }
 
+/* The lilac's petals and calyxes (predefined surfaces) in a scene in instancing mode: each is a
+ * placement of its surface's mesh, and the placement's map applied to the mesh gives the
+ * triangles the turtle adds without instancing (same part, same order), points to 4e-7 of the
+ * scene's size and normals (inverse transpose) to 1e-6 (found: 1.0e-7 and 8.5e-8). The .glb's TRS
+ * of a placement is checked against its map in test_io_write (glb_surface_placements). */
+TEST(lilac_surface_placements)
+{
+    if (test_skip_without_oracles())
+        return;
+    cbm_context *ctx = test_ctx();
+    cbm_view *view = NULL;
+    CHECK_OK(cbm_view_load(ctx, ORACLE "cpfg-lilac/model/plant.v", &view));
+    char *text = oracle_slurp(ORACLE "cpfg-lilac/ref/final.homo.str", NULL);
+    CHECK(view && text);
+    if (!view || !text) {
+        free(text);
+        cbm_view_destroy(view);
+        test_ctx_end(ctx);
+        return;
+    }
+    CHECK_OK(cbm_view_load_side_file(view, ORACLE "cpfg-lilac/model/materials.mat"));
+    modlist L;
+    parse_string(text, &L);
+    free(text);
+    cbm_scene *sc[2] = {NULL, NULL};
+    for (int k = 0; k < 2; k++) {
+        CHECK_OK(cbm_scene_create(ctx, &sc[k]));
+        cbm_scene_set_instancing(sc[k], k == 1);
+        cbm_turtle *t = NULL;
+        cbm_turtle_def def = {true};
+        CHECK_OK(cbm_turtle_interpret(ctx, view, &def, L.m, L.n, sc[k], &t));
+        cbm_turtle_destroy(t);
+    }
+    cbm_scene *sm = sc[0], *si = sc[1];
+    size_t np = cbm_scene_placement_count(si), nparts = cbm_scene_part_count(sm);
+    CHECK(np > 100 && cbm_scene_shape_count(si) == 2);
+    CHECK_EQ_INT(cbm_scene_part_count(si), nparts);
+    /* the first triangle of each part of the triangle scene */
+    size_t ntm = cbm_scene_triangle_count(sm);
+    const uint32_t *tpm = cbm_scene_triangle_parts(sm), *trm = cbm_scene_triangles(sm);
+    size_t *first = malloc((nparts + 1) * sizeof *first);
+    for (size_t i = 0; first && i <= nparts; i++)
+        first[i] = SIZE_MAX;
+    for (size_t t = ntm; first && t-- > 0;)
+        first[tpm[t]] = t;
+    cbm_vec3 lo, hi;
+    CHECK(cbm_scene_bounds(sm, &lo, &hi));
+    double size = fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z)), worst_p = 0, worst_n = 0;
+    const cbm_scene_placement *pl = cbm_scene_placements(si);
+    const cbm_scene_vertex *vm = cbm_scene_vertices(sm);
+    size_t checked = 0;
+    for (size_t i = 0; first && i < np; i++) {
+        const float *pos, *nrm;
+        const uint32_t *tri;
+        size_t nv, nt;
+        CHECK_OK(cbm_scene_shape_mesh(si, pl[i].shape, &pos, &nrm, &nv, &tri, &nt));
+        size_t t0 = first[pl[i].part];
+        CHECK(t0 != SIZE_MAX && t0 + nt <= ntm);
+        if (t0 == SIZE_MAX || t0 + nt > ntm)
+            break;
+        /* the inverse transpose, up to a positive factor: cofactors signed by the determinant */
+        const float *x = pl[i].x, *y = pl[i].y, *z = pl[i].z;
+        double c[3][3];
+        for (int r = 0; r < 3; r++) {
+            int a = (r + 1) % 3, b = (r + 2) % 3;
+            c[0][r] = (double)y[a] * z[b] - (double)y[b] * z[a];
+            c[1][r] = (double)z[a] * x[b] - (double)z[b] * x[a];
+            c[2][r] = (double)x[a] * y[b] - (double)x[b] * y[a];
+        }
+        double det = x[0] * c[0][0] + x[1] * c[0][1] + x[2] * c[0][2];
+        for (size_t t = 0; t < nt; t++) {
+            CHECK(tpm[t0 + t] == pl[i].part);
+            for (int k = 0; k < 3; k++) {
+                const float *q = pos + 3 * tri[3 * t + (size_t)k];
+                const float *n = nrm + 3 * tri[3 * t + (size_t)k];
+                const cbm_scene_vertex *w = &vm[trm[3 * (t0 + t) + (size_t)k]];
+                double wn[3], len = 0;
+                for (int r = 0; r < 3; r++) {
+                    double p = pl[i].o[r] + (double)x[r] * q[0] + (double)y[r] * q[1] +
+                               (double)z[r] * q[2];
+                    worst_p = fmax(worst_p, fabs(p - w->p[r]));
+                    wn[r] = (det < 0 ? -1 : 1) * (c[0][r] * n[0] + c[1][r] * n[1] + c[2][r] * n[2]);
+                    len += wn[r] * wn[r];
+                }
+                for (int r = 0; r < 3; r++)
+                    worst_n = fmax(worst_n, fabs(wn[r] / sqrt(len) - w->n[r]));
+            }
+            checked++;
+        }
+    }
+    CHECK(checked > 1000);
+    CHECK_MSG(worst_p <= 4e-7 * size, "points: %g (size %g)", worst_p, size);
+    CHECK_MSG(worst_n <= 1e-6, "normals: %g", worst_n);
+    free(first);
+    cbm_scene_destroy(sm);
+    cbm_scene_destroy(si);
+    modlist_free(&L);
+    cbm_view_destroy(view);
+    test_ctx_end(ctx);
+}
+
 /* func(id, x) against cpfg: in cpfg-monopodial the homomorphism maps I(t) to
  * F(0.5 func(1, t/20)) and L(t) to ;F(1.5 func(2, t/20)), so the F parameters of cpfg's string
  * after the homomorphism (6 significant digits) give cpfg's function values at the t of

@@ -137,6 +137,37 @@ CBM_API bool cbm_scene_instancing(const cbm_scene *scene);
 CBM_API size_t cbm_scene_instance_count(const cbm_scene *scene);
 CBM_API const cbm_scene_instance *cbm_scene_instances(const cbm_scene *scene);
 
+/// A ready mesh kept once in the scene (a shape: a predefined surface, e.g. a petal) and placed
+/// many times, each placement an affine map of it: the .glb writer writes the shape once and each
+/// placement as an instance (translation, rotation, scale), where the triangles would copy its
+/// vertices each time.
+typedef struct cbm_scene_placement {
+    float o[3];             ///< where the shape's origin goes, m
+    float x[3], y[3], z[3]; ///< images of the shape's axes (the linear map's columns, orthogonal)
+    uint32_t part;          ///< index of the part
+    uint32_t shape;         ///< index of the shape
+} cbm_scene_placement;
+
+/// The shape of key `key` (the caller's name for one mesh, e.g. a surface's address) added since
+/// the scene was created or cleared: *id receives its index; false if none.
+CBM_API bool cbm_scene_find_shape(const cbm_scene *scene, uint64_t key, uint32_t *id);
+/// Keeps a mesh (unit normals given) as shape `key`; *id receives its index.
+CBM_API cbm_status cbm_scene_add_shape(cbm_scene *scene, uint64_t key, const cbm_vec3 *pos,
+                                       const cbm_vec3 *nrm, size_t nverts, const uint32_t *tri,
+                                       size_t ntri, uint32_t *id);
+/// Places shape `shape` in the current part: vertex q goes to o + x q.x + y q.y + z q.z, normal n
+/// to the normalised inverse transpose of (x y z) times n. In instancing mode with orthogonal,
+/// non-zero x, y, z it is kept as a placement; otherwise its triangles are added.
+CBM_API cbm_status cbm_scene_place_shape(cbm_scene *scene, uint32_t shape, cbm_vec3 o, cbm_vec3 x,
+                                         cbm_vec3 y, cbm_vec3 z);
+CBM_API size_t cbm_scene_shape_count(const cbm_scene *scene);
+/// The mesh of a shape: 3 floats a vertex for positions and normals, 3 indices a triangle.
+CBM_API cbm_status cbm_scene_shape_mesh(const cbm_scene *scene, uint32_t shape, const float **pos,
+                                        const float **nrm, size_t *nverts, const uint32_t **tri,
+                                        size_t *ntri);
+CBM_API size_t cbm_scene_placement_count(const cbm_scene *scene);
+CBM_API const cbm_scene_placement *cbm_scene_placements(const cbm_scene *scene);
+
 CBM_API size_t cbm_scene_vertex_count(const cbm_scene *scene);
 CBM_API const cbm_scene_vertex *cbm_scene_vertices(const cbm_scene *scene);
 CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
@@ -148,8 +179,8 @@ CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
 CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
 /// Mutable access, e.g. to fill stress after a solve.
 CBM_API cbm_part *cbm_scene_part(cbm_scene *scene, uint32_t id);
-/// Axis-aligned bounds of all vertices, line ends and instances (their ends widened by their
-/// larger semi-axis); false if the scene is empty.
+/// Axis-aligned bounds of all vertices, line ends, instances (their ends widened by their
+/// larger semi-axis) and placements (the placed box of their shape); false if the scene is empty.
 CBM_API bool cbm_scene_bounds(const cbm_scene *scene, cbm_vec3 *lo, cbm_vec3 *hi);
 
 #ifdef __cplusplus

@@ -11,6 +11,13 @@
 #include <float.h>
 #include <math.h>
 
+/* A shape: its key, its slices of the shape arrays, its box (for the placements' bounds). */
+typedef struct shape_rec {
+    uint64_t key;
+    size_t v0, nv, t0, nt;
+    float lo[3], hi[3];
+} shape_rec;
+
 struct cbm_scene {
     cbm_context *ctx;
     CBM_ARRAY(cbm_scene_vertex) verts;
@@ -19,6 +26,10 @@ struct cbm_scene {
     CBM_ARRAY(cbm_part) parts;
     CBM_ARRAY(cbm_scene_line) lines;
     CBM_ARRAY(cbm_scene_instance) inst;
+    CBM_ARRAY(shape_rec) shapes;
+    CBM_ARRAY(float) shape_pos, shape_nrm; /* 3 a vertex, the shapes one after the other */
+    CBM_ARRAY(uint32_t) shape_tri;         /* 3 a triangle, indices local to the shape */
+    CBM_ARRAY(cbm_scene_placement) place;
     bool line_mode, instancing;
     /* tube in progress */
     int tube_sides;
@@ -81,12 +92,18 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->parts);
     CBM_ARRAY_FREE(ctx, s->lines);
     CBM_ARRAY_FREE(ctx, s->inst);
+    CBM_ARRAY_FREE(ctx, s->shapes);
+    CBM_ARRAY_FREE(ctx, s->shape_pos);
+    CBM_ARRAY_FREE(ctx, s->shape_nrm);
+    CBM_ARRAY_FREE(ctx, s->shape_tri);
+    CBM_ARRAY_FREE(ctx, s->place);
     cbm__free(ctx, s, sizeof *s);
 }
 
 void cbm_scene_clear(cbm_scene *s)
 {
     s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
+    s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
 }
 
@@ -486,6 +503,142 @@ cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 
     return CBM_OK;
 }
 
+/* ---- shapes and their placements ---- */
+
+bool cbm_scene_find_shape(const cbm_scene *s, uint64_t key, uint32_t *id)
+{
+    for (size_t i = 0; s && i < s->shapes.len; i++)
+        if (s->shapes.data[i].key == key) {
+            if (id)
+                *id = (uint32_t)i;
+            return true;
+        }
+    return false;
+}
+
+cbm_status cbm_scene_add_shape(cbm_scene *s, uint64_t key, const cbm_vec3 *pos, const cbm_vec3 *nrm,
+                               size_t nverts, const uint32_t *tri, size_t ntri, uint32_t *id)
+{
+    if (!s || !pos || !nrm || !nverts || (!tri && ntri) || nverts > UINT32_MAX)
+        return CBM_E_INVALID;
+    for (size_t i = 0; i < 3 * ntri; i++)
+        if (tri[i] >= nverts)
+            return CBM_E_INVALID;
+    shape_rec r = {key,
+                   s->shape_pos.len / 3,
+                   nverts,
+                   s->shape_tri.len / 3,
+                   ntri,
+                   {FLT_MAX, FLT_MAX, FLT_MAX},
+                   {-FLT_MAX, -FLT_MAX, -FLT_MAX}};
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->shape_pos, s->shape_pos.len + 3 * nverts));
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->shape_nrm, s->shape_nrm.len + 3 * nverts));
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->shape_tri, s->shape_tri.len + 3 * ntri));
+    for (size_t i = 0; i < nverts; i++) {
+        if (!v3_isfinite(pos[i]))
+            return CBM_E_NONFINITE;
+        const double p[3] = {pos[i].x, pos[i].y, pos[i].z};
+        cbm_vec3 n = v3_normalize(nrm[i]);
+        const double q[3] = {n.x, n.y, n.z};
+        for (int k = 0; k < 3; k++) {
+            float f = (float)p[k];
+            s->shape_pos.data[s->shape_pos.len++] = f;
+            s->shape_nrm.data[s->shape_nrm.len++] = (float)q[k];
+            r.lo[k] = f < r.lo[k] ? f : r.lo[k];
+            r.hi[k] = f > r.hi[k] ? f : r.hi[k];
+        }
+    }
+    for (size_t i = 0; i < 3 * ntri; i++)
+        s->shape_tri.data[s->shape_tri.len++] = tri[i];
+    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->shapes, r));
+    if (id)
+        *id = (uint32_t)(s->shapes.len - 1);
+    return CBM_OK;
+}
+
+/* Columns a placement can keep: finite, non-zero and orthogonal (then the map is a rotation, a
+ * scale and perhaps a mirror, as an instance's TRS needs). */
+static bool placeable(cbm_vec3 o, cbm_vec3 x, cbm_vec3 y, cbm_vec3 z)
+{
+    double nx = v3_norm(x), ny = v3_norm(y), nz = v3_norm(z);
+    return v3_isfinite(o) && isfinite(nx) && isfinite(ny) && isfinite(nz) && nx > 0.0 && ny > 0.0 &&
+           nz > 0.0 && fabs(v3_dot(x, y)) <= 1e-6 * nx * ny &&
+           fabs(v3_dot(y, z)) <= 1e-6 * ny * nz && fabs(v3_dot(z, x)) <= 1e-6 * nz * nx;
+}
+
+cbm_status cbm_scene_place_shape(cbm_scene *s, uint32_t shape, cbm_vec3 o, cbm_vec3 x, cbm_vec3 y,
+                                 cbm_vec3 z)
+{
+    if (!s || shape >= s->shapes.len)
+        return CBM_E_INVALID;
+    CBM_TRY(ensure_part(s));
+    if (s->instancing && placeable(o, x, y, z)) {
+        cbm_scene_placement pl = {
+            {(float)o.x, (float)o.y, (float)o.z}, {(float)x.x, (float)x.y, (float)x.z},
+            {(float)y.x, (float)y.y, (float)y.z}, {(float)z.x, (float)z.y, (float)z.z},
+            (uint32_t)(s->parts.len - 1),         shape};
+        return CBM_ARRAY_PUSH(s->ctx, s->place, pl);
+    }
+    /* the triangles: normals by the cofactors of (x y z), the inverse transpose up to a factor */
+    const shape_rec *r = &s->shapes.data[shape];
+    cbm_vec3 cx = v3_cross(y, z), cy = v3_cross(z, x), cz = v3_cross(x, y);
+    double det = v3_dot(x, cx);
+    if (det < 0.0)
+        cx = v3_scale(cx, -1.0), cy = v3_scale(cy, -1.0), cz = v3_scale(cz, -1.0);
+    uint32_t base = (uint32_t)s->verts.len;
+    for (size_t i = 0; i < r->nv; i++) {
+        const float *q = s->shape_pos.data + 3 * (r->v0 + i),
+                    *n = s->shape_nrm.data + 3 * (r->v0 + i);
+        cbm_vec3 p =
+            v3_add(o, v3_add(v3_add(v3_scale(x, q[0]), v3_scale(y, q[1])), v3_scale(z, q[2])));
+        if (!v3_isfinite(p))
+            return CBM_E_NONFINITE;
+        cbm_vec3 m = v3_normalize(
+            v3_add(v3_add(v3_scale(cx, n[0]), v3_scale(cy, n[1])), v3_scale(cz, n[2])));
+        CBM_TRY(push_vertex(s, p, m));
+    }
+    for (size_t t = 0; t < r->nt; t++) {
+        const uint32_t *tr = s->shape_tri.data + 3 * (r->t0 + t);
+        CBM_TRY(push_tri(s, base + tr[0], base + tr[1], base + tr[2]));
+    }
+    return CBM_OK;
+}
+
+size_t cbm_scene_shape_count(const cbm_scene *s)
+{
+    return s ? s->shapes.len : 0;
+}
+
+cbm_status cbm_scene_shape_mesh(const cbm_scene *s, uint32_t shape, const float **pos,
+                                const float **nrm, size_t *nverts, const uint32_t **tri,
+                                size_t *ntri)
+{
+    if (!s || shape >= s->shapes.len)
+        return CBM_E_INVALID;
+    const shape_rec *r = &s->shapes.data[shape];
+    if (pos)
+        *pos = s->shape_pos.data + 3 * r->v0;
+    if (nrm)
+        *nrm = s->shape_nrm.data + 3 * r->v0;
+    if (nverts)
+        *nverts = r->nv;
+    if (tri)
+        *tri = s->shape_tri.data + 3 * r->t0;
+    if (ntri)
+        *ntri = r->nt;
+    return CBM_OK;
+}
+
+size_t cbm_scene_placement_count(const cbm_scene *s)
+{
+    return s ? s->place.len : 0;
+}
+
+const cbm_scene_placement *cbm_scene_placements(const cbm_scene *s)
+{
+    return s ? s->place.data : NULL;
+}
+
 size_t cbm_scene_vertex_count(const cbm_scene *s)
 {
     return s->verts.len;
@@ -569,7 +722,7 @@ static void grow_bounds(const float *p, double l[3], double h[3])
 
 bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
 {
-    if (s->verts.len == 0 && s->lines.len == 0 && s->inst.len == 0)
+    if (s->verts.len == 0 && s->lines.len == 0 && s->inst.len == 0 && s->place.len == 0)
         return false;
     double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (size_t i = 0; i < s->verts.len; i++)
@@ -590,6 +743,18 @@ bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
                 q[k] += 2 * r;
                 grow_bounds(q, l, h);
             }
+    }
+    for (size_t i = 0; i < s->place.len; i++) {
+        const cbm_scene_placement *pl = &s->place.data[i];
+        const shape_rec *r = &s->shapes.data[pl->shape];
+        for (int c = 0; c < 8; c++) {
+            float q[3] = {c & 1 ? r->hi[0] : r->lo[0], c & 2 ? r->hi[1] : r->lo[1],
+                          c & 4 ? r->hi[2] : r->lo[2]};
+            float w[3];
+            for (int k = 0; k < 3; k++)
+                w[k] = pl->o[k] + pl->x[k] * q[0] + pl->y[k] * q[1] + pl->z[k] * q[2];
+            grow_bounds(w, l, h);
+        }
     }
     if (lo)
         *lo = v3(l[0], l[1], l[2]);

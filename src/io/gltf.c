@@ -46,8 +46,9 @@ typedef struct view {
 typedef struct mesh {
     size_t pos, nrm, col, stress, age, react, order, seg, idx;
     int material;
-    size_t cmat1; /* instanced (POSITION, NORMAL and indices only): colour material + 1 */
-    size_t unit1; /* instanced: its unit cylinder + 1 */
+    size_t cmat1;  /* instanced (POSITION, NORMAL and indices only): colour material + 1 */
+    size_t unit1;  /* instanced: its unit cylinder + 1 */
+    size_t smesh1; /* instanced: its shape mesh + 1 */
 } mesh;
 
 /* The per-instance accessors of an instanced node (EXT_mesh_gpu_instancing). */
@@ -63,6 +64,14 @@ typedef struct unit_mesh {
     size_t pos, nrm, idx;
 } unit_mesh;
 
+/* A shape of the scene (a predefined surface) written once for its placements, its triangles
+ * reversed for the mirroring ones (flip), whose winding a viewer reverses. Per scene. */
+typedef struct shape_mesh {
+    uint32_t shape;
+    bool flip;
+    size_t pos, nrm, idx;
+} shape_mesh;
+
 /* A material of instanced meshes: the organ's, coloured by baseColorFactor (no COLOR_0). */
 typedef struct color_mat {
     int organ;
@@ -70,10 +79,13 @@ typedef struct color_mat {
     float rgba[4];
 } color_mat;
 
-/* Instances of one group, side count and colour: one instanced node. */
+/* Instances of one group, side count and colour, or placements of one group, shape, mirroring
+ * and colour: one instanced node. */
 typedef struct bucket {
     uint64_t key;
-    float taper;
+    float taper;   /* tubes; 0 for placements */
+    int64_t shape; /* placements: the shape; -1 for tubes */
+    bool flip;     /* placements: mirroring */
     int grp, sides;
     uint32_t part0;
     size_t count, start;
@@ -114,6 +126,8 @@ typedef struct glb {
     CBM_ARRAY(float) fbuf;
     CBM_ARRAY(inst_attrs) insts;
     CBM_ARRAY(unit_mesh) units;
+    CBM_ARRAY(shape_mesh) smeshes; /* of the scene being added */
+    size_t smesh_mesh0;            /* its first mesh: the older ones are other scenes' */
     CBM_ARRAY(color_mat) cmats;
     CBM_ARRAY(bucket) buckets;
     CBM_ARRAY(uint32_t) ibucket, iorder, htab; /* scratch of the instance grouping */
@@ -258,11 +272,12 @@ static uint32_t color_key(const float *c)
 
 /* Sorts the kept instances of the scene into buckets (group, sides, colour), each bucket's
  * instances contiguous in g->iorder, the buckets numbered in order of first appearance. */
-static size_t bucket_hash(uint64_t key, float taper, size_t cap)
+static size_t bucket_hash(uint64_t key, float taper, int64_t shape, size_t cap)
 {
     uint32_t tb;
     memcpy(&tb, &taper, sizeof tb);
-    return (size_t)(((key ^ ((uint64_t)tb << 17)) * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+    key ^= ((uint64_t)tb << 17) ^ ((uint64_t)shape << 7);
+    return (size_t)((key * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
 }
 
 /* The bucket table at twice its capacity, every bucket placed again. */
@@ -273,7 +288,8 @@ static cbm_status grow_bucket_table(glb *g, size_t *cap)
     uint32_t *ht = g->htab.data;
     memset(ht, 0xff, *cap * sizeof *ht);
     for (size_t b = 0; b < g->buckets.len; b++) {
-        size_t h = bucket_hash(g->buckets.data[b].key, g->buckets.data[b].taper, *cap);
+        const bucket *bk = &g->buckets.data[b];
+        size_t h = bucket_hash(bk->key, bk->taper, 2 * bk->shape + bk->flip, *cap);
         while (ht[h] != UINT32_MAX)
             h = (h + 1) & (*cap - 1);
         ht[h] = (uint32_t)b;
@@ -281,36 +297,50 @@ static cbm_status grow_bucket_table(glb *g, size_t *cap)
     return CBM_OK;
 }
 
+/* Whether a placement mirrors (its columns' determinant is negative). */
+static bool mirrors(const cbm_scene_placement *p)
+{
+    cbm_vec3 x = v3(p->x[0], p->x[1], p->x[2]), y = v3(p->y[0], p->y[1], p->y[2]),
+             z = v3(p->z[0], p->z[1], p->z[2]);
+    return v3_dot(x, v3_cross(y, z)) < 0.0;
+}
+
+/* The tubes' instances are items 0 .. ni-1, the placements ni .. ni+np-1. */
 static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
 {
-    size_t ni = cbm_scene_instance_count(s);
+    size_t ni = cbm_scene_instance_count(s), npl = cbm_scene_placement_count(s);
     const cbm_scene_instance *in = cbm_scene_instances(s);
+    const cbm_scene_placement *pl = cbm_scene_placements(s);
     const cbm_part *parts = cbm_scene_parts(s);
     g->buckets.len = 0;
-    if (!ni)
+    if (!ni && !npl)
         return CBM_OK;
     size_t cap = 0; /* sized by the buckets, not the instances: a few in most drawings */
     CBM_TRY(grow_bucket_table(g, &cap));
-    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->ibucket, ni));
-    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni));
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->ibucket, ni + npl));
+    CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni + npl));
     uint32_t *ib = g->ibucket.data;
-    for (size_t i = 0; i < ni; i++) {
-        const cbm_part *p = &parts[in[i].part];
+    for (size_t i = 0; i < ni + npl; i++) {
+        uint32_t part = i < ni ? in[i].part : pl[i - ni].part;
+        const cbm_part *p = &parts[part];
         ib[i] = UINT32_MAX;
         if (!cbm__part_kept(p, g->o))
             continue;
         int grp = group_of(p);
-        uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)in[i].sides << 32) |
-                       color_key(col + 4 * (size_t)in[i].part);
-        float tp = in[i].taper;
+        int sides = i < ni ? in[i].sides : 0;
+        uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)sides << 32) | color_key(col + 4 * part);
+        float tp = i < ni ? in[i].taper : 0.0f;
+        int64_t shape = i < ni ? -1 : (int64_t)pl[i - ni].shape;
+        bool flip = i >= ni && mirrors(&pl[i - ni]);
         uint32_t *ht = g->htab.data;
-        size_t h = bucket_hash(key, tp, cap);
+        size_t h = bucket_hash(key, tp, 2 * shape + flip, cap);
         while (ht[h] != UINT32_MAX &&
-               (g->buckets.data[ht[h]].key != key || g->buckets.data[ht[h]].taper != tp))
+               (g->buckets.data[ht[h]].key != key || g->buckets.data[ht[h]].taper != tp ||
+                g->buckets.data[ht[h]].shape != shape || g->buckets.data[ht[h]].flip != flip))
             h = (h + 1) & (cap - 1);
         uint32_t id = ht[h];
         if (id == UINT32_MAX) {
-            bucket b = {key, tp, grp, in[i].sides, in[i].part, 0, 0};
+            bucket b = {key, tp, shape, flip, grp, sides, part, 0, 0};
             CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->buckets, b));
             id = ht[h] = (uint32_t)(g->buckets.len - 1);
             if (2 * g->buckets.len > cap)
@@ -324,7 +354,7 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
         g->buckets.data[b].start = at;
         at += g->buckets.data[b].count;
     }
-    for (size_t i = 0; i < ni; i++)
+    for (size_t i = 0; i < ni + npl; i++)
         if (ib[i] != UINT32_MAX)
             g->iorder.data[g->buckets.data[ib[i]].start++] = (uint32_t)i;
     for (size_t b = 0; b < g->buckets.len; b++)
@@ -332,12 +362,57 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
     return CBM_OK;
 }
 
-/* The instanced mesh of a unit cylinder in a colour material (shared by every node using it). */
-static cbm_status instanced_mesh(glb *g, int organ, int sides, float taper, const float *rgba,
-                                 size_t *id)
+/* A shape of the scene as it is kept (positions, unit normals), its triangles reversed when
+ * flip; written once a scene. */
+static cbm_status shape_of_scene(glb *g, const cbm_scene *s, uint32_t shape, bool flip, size_t *id)
 {
-    size_t unit = 0, cm = 0;
-    CBM_TRY(unit_cylinder(g, sides, taper, &unit));
+    for (size_t i = 0; i < g->smeshes.len; i++)
+        if (g->smeshes.data[i].shape == shape && g->smeshes.data[i].flip == flip) {
+            *id = i;
+            return CBM_OK;
+        }
+    const float *pos, *nrm;
+    const uint32_t *tri;
+    size_t nv, nt;
+    CBM_TRY(cbm_scene_shape_mesh(s, shape, &pos, &nrm, &nv, &tri, &nt));
+    shape_mesh m = {shape, flip, 0, 0, 0};
+    CBM_TRY(add_accessor(g, pos, nv, 3, GL_FLOAT, GL_ARRAY_BUFFER, true, &m.pos));
+    CBM_TRY(add_accessor(g, nrm, nv, 3, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.nrm));
+    bool small = nv <= 65536;
+    size_t bytes = 3 * nt * (small ? sizeof(uint16_t) : sizeof(uint32_t));
+    void *ix = cbm__alloc(g->ctx, bytes ? bytes : 1);
+    if (!ix)
+        return CBM_E_NOMEM;
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++) {
+            /* reversed: a, c, b */
+            uint32_t v = tri[3 * t + (size_t)(flip && k ? 3 - k : k)];
+            if (small)
+                ((uint16_t *)ix)[3 * t + (size_t)k] = (uint16_t)v;
+            else
+                ((uint32_t *)ix)[3 * t + (size_t)k] = v;
+        }
+    cbm_status st = add_accessor(g, ix, 3 * nt, 1, small ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT,
+                                 GL_ELEMENT_ARRAY_BUFFER, false, &m.idx);
+    cbm__free(g->ctx, ix, bytes ? bytes : 1);
+    CBM_TRY(st);
+    CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->smeshes, m));
+    *id = g->smeshes.len - 1;
+    return CBM_OK;
+}
+
+/* The instanced mesh of a unit cylinder (shape < 0) or of a shape of the scene in a colour
+ * material (shared by every node using it). */
+static cbm_status instanced_mesh(glb *g, const cbm_scene *s, int organ, const bucket *bk,
+                                 const float *rgba, size_t *id)
+{
+    size_t unit = 0, sm = 0, cm = 0, m0 = 0;
+    if (bk->shape < 0)
+        CBM_TRY(unit_cylinder(g, bk->sides, bk->taper, &unit));
+    else {
+        CBM_TRY(shape_of_scene(g, s, (uint32_t)bk->shape, bk->flip, &sm));
+        m0 = g->smesh_mesh0;
+    }
     uint32_t key = color_key(rgba);
     while (cm < g->cmats.len && (g->cmats.data[cm].organ != organ || g->cmats.data[cm].key != key))
         cm++;
@@ -345,22 +420,103 @@ static cbm_status instanced_mesh(glb *g, int organ, int sides, float taper, cons
         color_mat c = {organ, key, {rgba[0], rgba[1], rgba[2], rgba[3]}};
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->cmats, c));
     }
-    for (size_t i = 0; i < g->meshes.len; i++)
-        if (g->meshes.data[i].unit1 == unit + 1 && g->meshes.data[i].cmat1 == cm + 1) {
+    size_t unit1 = bk->shape < 0 ? unit + 1 : 0, smesh1 = bk->shape < 0 ? 0 : sm + 1;
+    for (size_t i = m0; i < g->meshes.len; i++)
+        if (g->meshes.data[i].unit1 == unit1 && g->meshes.data[i].smesh1 == smesh1 &&
+            g->meshes.data[i].cmat1 == cm + 1) {
             *id = i;
             return CBM_OK;
         }
     mesh m;
     memset(&m, 0, sizeof m);
-    m.pos = g->units.data[unit].pos;
-    m.nrm = g->units.data[unit].nrm;
-    m.idx = g->units.data[unit].idx;
+    if (unit1) {
+        m.pos = g->units.data[unit].pos;
+        m.nrm = g->units.data[unit].nrm;
+        m.idx = g->units.data[unit].idx;
+    } else {
+        m.pos = g->smeshes.data[sm].pos;
+        m.nrm = g->smeshes.data[sm].nrm;
+        m.idx = g->smeshes.data[sm].idx;
+    }
     m.material = organ;
     m.cmat1 = cm + 1;
-    m.unit1 = unit + 1;
+    m.unit1 = unit1;
+    m.smesh1 = smesh1;
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->meshes, m));
     *id = g->meshes.len - 1;
     return CBM_OK;
+}
+
+/* TRANSLATION, ROTATION and SCALE of n tube instances (the unit tube's H along the axis, U the
+ * sections' U). */
+static cbm_status tube_trs(glb *g, const cbm_scene_instance *in, const uint32_t *ord, size_t n,
+                           bool fill, inst_attrs *ia)
+{
+    float *f = g->fbuf.data;
+    for (size_t i = 0; fill && i < n; i++)
+        memcpy(f + 3 * i, in[ord[i]].p0, 3 * sizeof(float));
+    CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->tr));
+    for (size_t i = 0; fill && i < n; i++) {
+        const cbm_scene_instance *q = &in[ord[i]];
+        cbm_vec3 p0 = v3(q->p0[0], q->p0[1], q->p0[2]), p1 = v3(q->p1[0], q->p1[1], q->p1[2]);
+        cbm_vec3 h = v3_normalize(v3_sub(p1, p0)), u = v3(q->u[0], q->u[1], q->u[2]);
+        u = v3_normalize(v3_madd(u, h, -v3_dot(u, h)));
+        cbm_quat r = cbm__quat_of_columns(u, h, v3_cross(u, h));
+        float *d = f + 4 * i;
+        d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
+    }
+    CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia->rot));
+    for (size_t i = 0; fill && i < n; i++) {
+        const cbm_scene_instance *q = &in[ord[i]];
+        double dx = (double)q->p1[0] - q->p0[0], dy = (double)q->p1[1] - q->p0[1],
+               dz = (double)q->p1[2] - q->p0[2];
+        f[3 * i] = q->a;
+        f[3 * i + 1] = (float)sqrt(dx * dx + dy * dy + dz * dz);
+        f[3 * i + 2] = q->b;
+    }
+    return add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->scale);
+}
+
+/* The rotation and signed scales of a placement's orthogonal columns x, y, z: R = (x', y', z')
+ * with x' = x / |x|, y' = y made orthogonal to x' and unit, z' = x' x y' (proper), and
+ * (x y z) = R diag(sx, sy, sz), sz < 0 for a mirroring placement. */
+static void placement_rs(const cbm_scene_placement *p, cbm_quat *r, double sc[3])
+{
+    cbm_vec3 x = v3(p->x[0], p->x[1], p->x[2]), y = v3(p->y[0], p->y[1], p->y[2]),
+             z = v3(p->z[0], p->z[1], p->z[2]);
+    sc[0] = v3_norm(x);
+    cbm_vec3 cx = v3_scale(x, 1.0 / sc[0]);
+    cbm_vec3 yp = v3_madd(y, cx, -v3_dot(y, cx));
+    sc[1] = v3_norm(yp);
+    cbm_vec3 cy = v3_scale(yp, 1.0 / sc[1]), cz = v3_cross(cx, cy);
+    sc[2] = v3_dot(z, cz);
+    *r = cbm__quat_of_columns(cx, cy, cz);
+}
+
+/* TRANSLATION, ROTATION and SCALE of n placements (items ni.. of the sorted order). */
+static cbm_status placement_trs(glb *g, const cbm_scene_placement *pl, const uint32_t *ord,
+                                size_t ni, size_t n, bool fill, inst_attrs *ia)
+{
+    float *f = g->fbuf.data;
+    for (size_t i = 0; fill && i < n; i++)
+        memcpy(f + 3 * i, pl[ord[i] - ni].o, 3 * sizeof(float));
+    CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->tr));
+    for (size_t i = 0; fill && i < n; i++) {
+        cbm_quat r;
+        double sc[3];
+        placement_rs(&pl[ord[i] - ni], &r, sc);
+        float *d = f + 4 * i;
+        d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
+    }
+    CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia->rot));
+    for (size_t i = 0; fill && i < n; i++) {
+        cbm_quat r;
+        double sc[3];
+        placement_rs(&pl[ord[i] - ni], &r, sc);
+        for (int k = 0; k < 3; k++)
+            f[3 * i + (size_t)k] = (float)sc[k];
+    }
+    return add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->scale);
 }
 
 /* One instanced node per bucket of group grp; their ids appended to g->children. */
@@ -368,6 +524,8 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
                                      const char *group_name, size_t *count)
 {
     const cbm_scene_instance *in = cbm_scene_instances(s);
+    const cbm_scene_placement *pl = cbm_scene_placements(s);
+    size_t ni = cbm_scene_instance_count(s);
     const cbm_part *parts = cbm_scene_parts(s);
     bool fill = g->mode != BIN_MEASURE; /* no bounds needed: nothing to compute when measuring */
     *count = 0;
@@ -378,36 +536,19 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
         size_t n = bk->count, mid = 0;
         const uint32_t *ord = g->iorder.data + bk->start;
         int organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
-        CBM_TRY(instanced_mesh(g, organ, bk->sides, bk->taper, col + 4 * (size_t)bk->part0, &mid));
+        CBM_TRY(instanced_mesh(g, s, organ, bk, col + 4 * (size_t)bk->part0, &mid));
         CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->fbuf, 4 * n));
         float *f = g->fbuf.data;
         inst_attrs ia;
-        for (size_t i = 0; fill && i < n; i++)
-            memcpy(f + 3 * i, in[ord[i]].p0, 3 * sizeof(float));
-        CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia.tr));
-        for (size_t i = 0; fill && i < n; i++) {
-            const cbm_scene_instance *q = &in[ord[i]];
-            cbm_vec3 p0 = v3(q->p0[0], q->p0[1], q->p0[2]), p1 = v3(q->p1[0], q->p1[1], q->p1[2]);
-            cbm_vec3 h = v3_normalize(v3_sub(p1, p0)), u = v3(q->u[0], q->u[1], q->u[2]);
-            u = v3_normalize(v3_madd(u, h, -v3_dot(u, h)));
-            cbm_quat r = cbm__quat_of_columns(u, h, v3_cross(u, h));
-            float *d = f + 4 * i;
-            d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
-        }
-        CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia.rot));
-        for (size_t i = 0; fill && i < n; i++) {
-            const cbm_scene_instance *q = &in[ord[i]];
-            double dx = (double)q->p1[0] - q->p0[0], dy = (double)q->p1[1] - q->p0[1],
-                   dz = (double)q->p1[2] - q->p0[2];
-            f[3 * i] = q->a;
-            f[3 * i + 1] = (float)sqrt(dx * dx + dy * dy + dz * dz);
-            f[3 * i + 2] = q->b;
-        }
-        CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia.scale));
+        if (bk->shape >= 0)
+            CBM_TRY(placement_trs(g, pl, ord, ni, n, fill, &ia));
+        else
+            CBM_TRY(tube_trs(g, in, ord, n, fill, &ia));
+        f = g->fbuf.data;
         size_t *dst[5] = {&ia.stress, &ia.age, &ia.react, &ia.order, &ia.seg};
         for (int k = 0; k < 5; k++) {
             for (size_t i = 0; fill && i < n; i++)
-                f[i] = part_value(&parts[in[ord[i]].part], k);
+                f[i] = part_value(&parts[ord[i] < ni ? in[ord[i]].part : pl[ord[i] - ni].part], k);
             CBM_TRY(add_accessor(g, f, n, 1, GL_FLOAT, 0, false, dst[k]));
         }
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->insts, ia));
@@ -416,7 +557,8 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
         nd.mesh = (long)mid;
         nd.organ = nd.order = -1;
         nd.inst1 = g->insts.len;
-        snprintf(nd.name, sizeof nd.name, "%.40s tubes", group_name);
+        snprintf(nd.name, sizeof nd.name, "%.38s %s", group_name,
+                 bk->shape >= 0 ? "surfaces" : "tubes");
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->nodes, nd));
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->children, g->nodes.len - 1));
         (*count)++;
@@ -450,6 +592,8 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
     cbm_status st;
     bool reuse = g->reuse && g->kept_col && g->kept_np == np;
+    g->smeshes.len = 0; /* shapes are the scene's */
+    g->smesh_mesh0 = g->meshes.len;
     if (reuse)
         col = g->kept_col;
     if ((!reuse && (st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK) ||
@@ -678,7 +822,7 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
             cbm_json_begin_object(j, "attributes");
             cbm_json_int(j, "POSITION", (int64_t)m->pos);
             cbm_json_int(j, "NORMAL", (int64_t)m->nrm);
-            if (!m->unit1) {
+            if (!m->cmat1) {
                 cbm_json_int(j, "COLOR_0", (int64_t)m->col);
                 cbm_json_int(j, "_STRESS_RATIO", (int64_t)m->stress);
                 cbm_json_int(j, "_AGE", (int64_t)m->age);
@@ -854,6 +998,7 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.idx);
     CBM_ARRAY_FREE(ctx, a->g.fbuf);
     CBM_ARRAY_FREE(ctx, a->g.insts);
+    CBM_ARRAY_FREE(ctx, a->g.smeshes);
     CBM_ARRAY_FREE(ctx, a->g.units);
     CBM_ARRAY_FREE(ctx, a->g.cmats);
     CBM_ARRAY_FREE(ctx, a->g.buckets);
@@ -1046,7 +1191,7 @@ static void rewind_glb(cbm_animation *a)
 {
     glb *g = &a->g;
     g->acc.len = g->views.len = g->meshes.len = g->nodes.len = g->children.len = 0;
-    g->insts.len = g->units.len = g->cmats.len = 0;
+    g->insts.len = g->units.len = g->cmats.len = g->smeshes.len = 0;
     a->frames.len = 0;
     g->bin_len = 0;
     memset(g->organ_used, 0, sizeof g->organ_used);

@@ -34,6 +34,11 @@ cbm_status cbm_scene_write_as(cbm_context *ctx, const cbm_scene *scene, const ch
                          "%s: the scene holds %zu tube instances, which only .glb writes; "
                          "interpret the model with instancing off",
                          path, cbm_scene_instance_count(scene));
+    if (scene && !same_ci(format, "glb") && cbm_scene_placement_count(scene) > 0)
+        return cbm__fail(ctx, CBM_E_UNSUPPORTED,
+                         "%s: the scene holds %zu placed surfaces, which only .glb writes; "
+                         "interpret the model with instancing off",
+                         path, cbm_scene_placement_count(scene));
     if (same_ci(format, "glb"))
         return cbm_write_glb(ctx, scene, path, opts);
     if (!scene && opts->frame_count > 0 && opts->frames)

@@ -334,9 +334,12 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
     /* surface coordinates (already relative to the contact point): X along L, Y along H, Z
      * along U */
     size_t nv = sf->pos.len;
+    /* a scene in instancing mode keeps the surface once and this placement of it (the .glb
+     * writer's instances), not a copy of its vertices */
+    bool placed = t->scene && cbm_scene_instancing(t->scene) && nv > 0;
     t->scratch.len = 0;
     CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, nv * 2));
-    for (size_t i = 0; i < nv; i++) {
+    for (size_t i = 0; i < nv && (t->record || !placed); i++) {
         cbm_vec3 q = sf->pos.data[i];
         cbm_vec3 w = v3_add(
             s->pos, v3_add(v3_add(v3_scale(s->l, q.x * k * sx), v3_scale(s->h, q.y * k * sy)),
@@ -376,8 +379,16 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
     if (t->scene) {
         cbm_part part = cbm__turtle_make_part(t, CBM_ORGAN_LEAF, s->color);
         CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
-        CBM_TRY(cbm_scene_add_mesh(t->scene, t->scratch.data, t->scratch.data + nv, nv,
-                                   sf->tri.data, sf->tri.len / 3));
+        uint32_t shape = 0;
+        if (placed && !cbm_scene_find_shape(t->scene, (uint64_t)(uintptr_t)sf, &shape))
+            CBM_TRY(cbm_scene_add_shape(t->scene, (uint64_t)(uintptr_t)sf, sf->pos.data,
+                                        sf->nrm.data, nv, sf->tri.data, sf->tri.len / 3, &shape));
+        if (placed)
+            CBM_TRY(cbm_scene_place_shape(t->scene, shape, s->pos, v3_scale(s->l, k * sx),
+                                          v3_scale(s->h, k * sy), v3_scale(s->u, k * sz)));
+        else
+            CBM_TRY(cbm_scene_add_mesh(t->scene, t->scratch.data, t->scratch.data + nv, nv,
+                                       sf->tri.data, sf->tri.len / 3));
     }
     /* the turtle moves to the surface's end point (cpfg: x, z scaled as y when not index 0) */
     cbm_vec3 e = sf->end;
