@@ -4,9 +4,10 @@
  * Why Lanczos with our own tree factorisation rather than ARPACK: the operator (K - sigma M)^-1 M
  * is applied in O(n) by the tree elimination of tree.c (one backward and one forward sweep per
  * solve, one each way per product with M), so a plain Lanczos run with full reorthogonalisation
- * needs nothing else (per step one solve, two products with M, the three-term recurrence and one
- * Gram-Schmidt pass over the basis; at 10^5 segments the pass and the page faults of the basis
- * cost about as much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
+ * needs nothing else (per step one solve, M times its result from the solve's twists, the
+ * three-term recurrence, one Gram-Schmidt pass over the basis and one product with M after it: five
+ * sweeps over the tree; at 10^5 segments the pass and the page faults of the basis cost about as
+ * much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
  * the Krylov basis stays small (m = 3 count + 30, doubled if the Ritz values have not converged),
  * and the library keeps no Fortran dependency (ARPACK would add one to every build for a dozen
  * lines of iteration here).
