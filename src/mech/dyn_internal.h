@@ -138,6 +138,9 @@ void cbm__dyn_apply(cbm__dyn *d, double sk, double sm, const double *v, double *
 size_t cbm__dyn_factor(cbm__dyn *d, double sk, double sm);
 /// x = (sk K + sm M)^-1 b with the last factorisation (x and b may alias; u is used as work).
 void cbm__dyn_solve(cbm__dyn *d, const double *b, double *x);
+/// y = M x for the x of the last cbm__dyn_solve: its twists are still in d->z, so only the sweep
+/// from the tips is needed (the product after a solve, in the Lanczos steps of modes.c).
+void cbm__dyn_mass_solved(cbm__dyn *d, double *y);
 /// f += the generalised force of a force F (world) at the distal node of seg.
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f);
 /// Displacement of the distal node of seg for the rotations q.

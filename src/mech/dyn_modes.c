@@ -4,9 +4,10 @@
  * Why Lanczos with our own tree factorisation rather than ARPACK: the operator (K - sigma M)^-1 M
  * is applied in O(n) by the tree elimination of tree.c (one backward and one forward sweep per
  * solve, one each way per product with M), so a plain Lanczos run with full reorthogonalisation
- * needs nothing else (per step one solve, two products with M, the three-term recurrence and one
- * Gram-Schmidt pass over the basis; at 10^5 segments the pass and the page faults of the basis
- * cost about as much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
+ * needs nothing else (per step one solve, M times its result from the solve's twists, the
+ * three-term recurrence, one Gram-Schmidt pass over the basis and one product with M after it: five
+ * sweeps over the tree; at 10^5 segments the pass and the page faults of the basis cost about as
+ * much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
  * the Krylov basis stays small (m = 3 count + 30, doubled if the Ritz values have not converged),
  * and the library keeps no Fortran dependency (ARPACK would add one to every build for a dozen
  * lines of iteration here).
@@ -16,10 +17,33 @@
  * theta of K^-1 M are the lowest lambda = 1 / theta. The small tridiagonal matrix is
  * diagonalised by cyclic Jacobi rotations (m is at most a few hundred).
  */
+#define _DEFAULT_SOURCE /* madvise */
 #include "mech/dyn_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+/* Asks the kernel to back the 2 MiB-aligned part of [p, p + bytes) with huge pages. The basis is
+ * written once and streamed through at every step: with 4 KiB pages its first touch costs a page
+ * fault per 4 KiB (at 10^5 segments some 36,000, each a trap to the hypervisor on the virtual
+ * machines these runs are measured on) and its passes a TLB miss per 4 KiB. A hint only: ignored
+ * where the kernel has no transparent huge pages, and no effect on the results. */
+static void advise_huge(void *p, size_t bytes)
+{
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    const uintptr_t huge = (uintptr_t)2 << 20;
+    uintptr_t a = ((uintptr_t)p + huge - 1) & ~(huge - 1), e = ((uintptr_t)p + bytes) & ~(huge - 1);
+    if (e > a)
+        (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
+}
 
 /* eigenvalues (w) and eigenvectors (columns of v, row-major m x m) of the symmetric a (destroyed)
  */
@@ -66,8 +90,7 @@ static void jacobi(double *a, size_t m, double *w, double *v)
         w[i] = a[i * m + i];
 }
 
-/* The dot product in four partial sums: one sum is bound by the latency of the additions (a
- * quarter of the rate the basis streams from memory at); the vectors' length is 3 n. */
+/* The dot product in four partial sums: one sum is bound by the latency of the additions. */
 static double dot(const double *restrict a, const double *restrict b, size_t n)
 {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
@@ -90,31 +113,112 @@ static void axpy(double c, const double *restrict v, double *restrict w, size_t 
         w[i] -= c * v[i];
 }
 
-/* w -= the M-projection of w on v[0..cols) by classical Gram-Schmidt, repeated once when the pass
- * removed more than 1 - 1/sqrt(2) of w's M-norm (the criterion of Daniel, Gragg, Kaufman and
- * Stewart: a second pass then restores orthogonality to round-off, a third is never needed); mw =
- * M w after. Each pass reads the basis twice, which at 10^5 segments costs more than the tree
- * sweeps: the second pass is skipped when it would change nothing. When diag is not NULL it
- * receives the coefficient of column cols - 1 summed over the passes. */
-static void m_orthogonalise(cbm__dyn *d, const double *v, size_t cols, double *w, double *mw,
-                            double *diag)
+/* The Krylov basis (3n rows, up to cap columns) in row blocks: block b holds rows [b BLK, b BLK +
+ * BLK) of every column, column after column. The Gram-Schmidt pass is then a product of the
+ * basis with one vector and another of its transpose, each of which reads the basis once at the
+ * speed of the memory bus while the few thousand bytes of the vectors' block stay in the L1 cache;
+ * stored column by column the pass read each column twice and streamed the vectors once per
+ * column (at 10^5 segments 2.4 MB each), about two and a half times the bytes. */
+#define BLK 512
+typedef struct basis {
+    double *v;
+    size_t rows, cap, nb;
+} basis;
+
+static double *blk(const basis *b, size_t k)
+{
+    return b->v + k * BLK * b->cap;
+}
+
+static size_t blk_len(const basis *b, size_t k)
+{
+    return k + 1 < b->nb ? BLK : b->rows - k * BLK;
+}
+
+/* column j = s w */
+static void col_set(basis *b, size_t j, double s, const double *w)
+{
+    for (size_t k = 0; k < b->nb; k++) {
+        double *c = blk(b, k) + j * BLK;
+        const double *wk = w + k * BLK;
+        size_t len = blk_len(b, k);
+        for (size_t r = 0; r < len; r++)
+            c[r] = s * wk[r];
+    }
+}
+
+/* w -= c (column j) */
+static void col_axpy(const basis *b, size_t j, double c, double *w)
+{
+    for (size_t k = 0; k < b->nb; k++)
+        axpy(c, blk(b, k) + j * BLK, w + k * BLK, blk_len(b, k));
+}
+
+/* c[0..cols) = V^T mw */
+static void basis_tmul(const basis *b, size_t cols, const double *mw, double *c)
+{
+    for (size_t i = 0; i < cols; i++)
+        c[i] = 0.0;
+    for (size_t k = 0; k < b->nb; k++) {
+        const double *vk = blk(b, k), *mk = mw + k * BLK;
+        size_t len = blk_len(b, k);
+        for (size_t i = 0; i < cols; i++)
+            c[i] += dot(vk + i * BLK, mk, len);
+    }
+}
+
+/* w -= V c over cols columns */
+static void basis_sub(const basis *b, size_t cols, const double *c, double *w)
+{
+    for (size_t k = 0; k < b->nb; k++) {
+        const double *vk = blk(b, k);
+        double *wk = w + k * BLK;
+        size_t len = blk_len(b, k);
+        for (size_t i = 0; i < cols; i++)
+            axpy(c[i], vk + i * BLK, wk, len);
+    }
+}
+
+/* out = sum_k s[k m] (column k) over the first m columns (a Ritz vector: s strided by m) */
+static void basis_combine(const basis *b, size_t m, const double *s, size_t stride, double *out)
+{
+    for (size_t k = 0; k < b->nb; k++) {
+        const double *vk = blk(b, k);
+        double *ok = out + k * BLK;
+        size_t len = blk_len(b, k);
+        for (size_t r = 0; r < len; r++)
+            ok[r] = 0.0;
+        for (size_t i = 0; i < m; i++)
+            axpy(-s[i * stride], vk + i * BLK, ok, len);
+    }
+}
+
+/* w -= the M-projection of w on the first cols columns of the basis by classical Gram-Schmidt,
+ * repeated once when the pass removed more than 1 - 1/sqrt(2) of w's M-norm (the criterion of
+ * Daniel, Gragg, Kaufman and Stewart: a second pass then restores orthogonality to round-off, a
+ * third is never needed); mw holds M w on entry and on return, and the result is w' M w. M w is
+ * recomputed after each pass: carried as M w_before, off by the M V c the pass removed, its error
+ * re-enters the next step multiplied by about alpha / beta and grows (tried: the tenth frequency
+ * of the 10^5-segment tree came out 5e-4 high while the residual test passed). When diag is not
+ * NULL it receives the coefficient of column cols - 1 summed over the passes; c is scratch (cols
+ * doubles). */
+static double m_orthogonalise(cbm__dyn *d, const basis *b, size_t cols, double *w, double *mw,
+                              double *diag, double *c)
 {
     size_t N = 3 * d->n;
-    cbm__dyn_apply(d, 0.0, 1.0, w, mw);
-    double before = dot(w, mw, N);
+    double before = dot(w, mw, N), after = before;
     for (int pass = 0; pass < 2; pass++) {
-        for (size_t i = 0; i < cols; i++) {
-            double c = dot(v + i * N, mw, N);
-            if (diag && i + 1 == cols)
-                *diag = pass == 0 ? c : *diag + c;
-            axpy(c, v + i * N, w, N);
-        }
+        basis_tmul(b, cols, mw, c);
+        if (diag)
+            *diag = pass == 0 ? c[cols - 1] : *diag + c[cols - 1];
+        basis_sub(b, cols, c, w);
         cbm__dyn_apply(d, 0.0, 1.0, w, mw);
-        double after = dot(w, mw, N);
+        after = dot(w, mw, N);
         if (after >= 0.5 * before)
             break;
         before = after;
     }
+    return after;
 }
 
 /* a reproducible start vector with every component in [0.5, 1.5) (xorshift state s) */
@@ -177,32 +281,43 @@ static bool ritz_converged(size_t m, size_t want, double bm, const double *ev, c
  * its eigenvalues those of the whole space spanned; it stops when no new direction is left, or
  * when the lowest `want` Ritz pairs have converged (t, ev, th, ord: scratch for ritz). M v_j is
  * carried from the step before (M w / b) instead of being recomputed. */
-static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, double *v, double *al, double *be,
-                      double *w, double *mw, double *mv, double *t, double *ev, double *th,
-                      size_t *ord)
+static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *al, double *be,
+                      double *w, double *mw, double *mv, double *mvp, double *c, double *t,
+                      double *ev, double *th, size_t *ord)
 {
     size_t N = 3 * d->n;
     uint64_t s = 0x9E3779B97F4A7C15ull;
     start_vector(&s, w, N);
     cbm__dyn_apply(d, 0.0, 1.0, w, mw);
     double nrm = sqrt(dot(w, mw, N));
-    for (size_t i = 0; i < N; i++) {
-        v[i] = w[i] / nrm;
+    col_set(v, 0, 1.0 / nrm, w);
+    for (size_t i = 0; i < N; i++)
         mv[i] = mw[i] / nrm;
-    }
     size_t j = 0;
     for (; j < mmax; j++) {
         cbm__dyn_solve(d, mv, w);
+        cbm__dyn_mass_solved(d, mw);
         /* the three-term recurrence (v_{j-1}' M w = beta_{j-1}, v_j' M w = (M v_j)' w), then the
          * full reorthogonalisation in the M inner product, which now removes only round-off and
-         * so needs one pass where it needed two */
-        if (j > 0)
-            axpy(be[j - 1], v + (j - 1) * N, w, N);
-        double a = dot(mv, w, N), corr;
-        axpy(a, v + j * N, w, N);
-        m_orthogonalise(d, v, j + 1, w, mw, &corr);
+         * so needs one pass where it needed two. M w follows w through the recurrence from the
+         * M v carried (mvp: M v_{j-1}), which saves the sweep from the base a fresh product
+         * costs. */
+        double xx = dot(w, mw, N), a;
+        if (j > 0) {
+            col_axpy(v, j - 1, be[j - 1], w);
+            axpy(be[j - 1], mvp, mw, N);
+        }
+        a = dot(mv, w, N);
+        col_axpy(v, j, a, w);
+        axpy(a, mv, mw, N);
+        /* M w so tracked is off by round-off of M x's size, and the Gram-Schmidt coefficients
+         * with it: when the recurrence cancelled most of x (the Krylov space about to close, as
+         * with repeated frequencies), that is no longer round-off of w: M w afresh */
+        if (!(dot(w, mw, N) > 1e-4 * xx))
+            cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+        double corr;
+        double b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, &corr, c), 0.0));
         al[j] = a + corr;
-        double b = sqrt(fmax(dot(w, mw, N), 0.0));
         be[j] = b;
         if (j + 1 == mmax || !isfinite(b)) {
             j++;
@@ -214,8 +329,7 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, double *v, double *
             start_vector(&s, w, N);
             cbm__dyn_apply(d, 0.0, 1.0, w, mw);
             double n0 = sqrt(dot(w, mw, N));
-            m_orthogonalise(d, v, j + 1, w, mw, NULL);
-            b = sqrt(fmax(dot(w, mw, N), 0.0));
+            b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, NULL, c), 0.0));
             if (!(b > 1e-8 * n0)) {
                 j++;
                 break;
@@ -227,11 +341,12 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, double *v, double *
                 break;
             }
         }
-        double rb = 1.0 / b;
-        for (size_t k = 0; k < N; k++) {
-            v[(j + 1) * N + k] = w[k] * rb;
+        double rb = 1.0 / b, *tmp = mvp;
+        mvp = mv;
+        mv = tmp;
+        col_set(v, j + 1, rb, w);
+        for (size_t k = 0; k < N; k++)
             mv[k] = mw[k] * rb;
-        }
     }
     return j;
 }
@@ -269,20 +384,26 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
         size_t ma = mmax; /* the sizes allocated (mmax may grow below) */
         /* the basis is written column by column before it is read: not cleared, so that the
          * pages of the columns an early stop leaves unused are never touched */
-        double *v = cbm__alloc(ctx, (mmax + 1) * N * sizeof(double));
+        basis v = {NULL, N, mmax + 1, (N + BLK - 1) / BLK};
+        size_t vbytes = v.nb * BLK * v.cap * sizeof(double);
+        v.v = cbm__alloc(ctx, vbytes);
+        if (v.v)
+            advise_huge(v.v, vbytes);
+        double *gc = cbm__alloc(ctx, (mmax + 1) * sizeof(double));
         double *w = cbm__alloc(ctx, N * sizeof(double));
         double *mw = cbm__alloc(ctx, N * sizeof(double));
         double *mv = cbm__alloc(ctx, N * sizeof(double));
+        double *mvp = cbm__alloc(ctx, N * sizeof(double));
         double *al = cbm__calloc(ctx, mmax, sizeof(double));
         double *be = cbm__calloc(ctx, mmax, sizeof(double));
         double *t = cbm__calloc(ctx, mmax * mmax, sizeof(double));
         double *ev = cbm__alloc(ctx, mmax * mmax * sizeof(double));
         double *th = cbm__alloc(ctx, mmax * sizeof(double));
         size_t *ord = cbm__alloc(ctx, mmax * sizeof(size_t));
-        if (!v || !w || !mw || !mv || !al || !be || !t || !ev || !th || !ord)
+        if (!v.v || !gc || !w || !mw || !mv || !mvp || !al || !be || !t || !ev || !th || !ord)
             st = CBM_E_NOMEM;
         else {
-            size_t m = lanczos(&d, mmax, want, v, al, be, w, mw, mv, t, ev, th, ord);
+            size_t m = lanczos(&d, mmax, want, &v, al, be, w, mw, mv, mvp, gc, t, ev, th, ord);
             ritz(al, be, m, t, ev, th, ord);
             size_t got = want < m ? want : m;
             bool ok = m == N || got == want;
@@ -293,15 +414,8 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
                     size_t c = ord[i];
                     double lam = 1.0 / th[c];
                     freqs_hz[i] = sqrt(fmax(lam, 0.0)) / (2.0 * 3.14159265358979323846);
-                    if (shapes) {
-                        double *ph = shapes + i * N;
-                        memset(ph, 0, N * sizeof(double));
-                        for (size_t k = 0; k < m; k++) {
-                            double s = ev[k * m + c];
-                            for (size_t r = 0; r < N; r++)
-                                ph[r] += s * v[k * N + r];
-                        }
-                    }
+                    if (shapes)
+                        basis_combine(&v, m, ev + c, m, shapes + i * N);
                 }
                 st = CBM_OK;
             } else if (mmax == N)
@@ -309,10 +423,12 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
             else
                 mmax = 2 * mmax > N ? N : 2 * mmax;
         }
-        cbm__free(ctx, v, (ma + 1) * N * sizeof(double));
+        cbm__free(ctx, v.v, vbytes);
+        cbm__free(ctx, gc, (ma + 1) * sizeof(double));
         cbm__free(ctx, w, N * sizeof(double));
         cbm__free(ctx, mw, N * sizeof(double));
         cbm__free(ctx, mv, N * sizeof(double));
+        cbm__free(ctx, mvp, N * sizeof(double));
         cbm__free(ctx, al, ma * sizeof(double));
         cbm__free(ctx, be, ma * sizeof(double));
         cbm__free(ctx, t, ma * ma * sizeof(double));

@@ -431,6 +431,24 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *xout)
     }
 }
 
+void cbm__dyn_mass_solved(cbm__dyn *d, double *y)
+{
+    size_t n = d->n;
+    double *z = d->z, *acc = d->acc;
+    memset(acc, 0, 6 * n * sizeof(double));
+    for (size_t k = n; k-- > 0;) {
+        double w[6];
+        if (k >= CBM__AHEAD)
+            CBM__DYN_AHEAD(d->parent, n, k - CBM__AHEAD, acc);
+        cbm__dyn_pz(d->pc + 10 * k, z + 6 * k, acc + 6 * k, w);
+        cbm__dyn_stw(d->x + k, w, y + 3 * k);
+        int64_t pa = d->parent[k];
+        if (pa >= 0)
+            for (int i = 0; i < 6; i++)
+                acc[6 * pa + i] += w[i];
+    }
+}
+
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f)
 {
     cbm_vec3 e = d->e[seg];
