@@ -8,6 +8,7 @@
 
 #include "cambium/approx.h"
 #include "cambium/elastica.h"
+#include "cambium/lsys.h"
 #include "mech/approx_internal.h"
 
 #include <stdlib.h>
@@ -673,6 +674,9 @@ TEST(approx_fast_root_vs_reference)
                 evals += ef;
             }
         }
+    printf("fast root: %ld cases (T < 8), %.2f evaluations on average, %.3g rad from the "
+           "reference at worst\n",
+           n, (double)evals / (double)n, worst);
     CHECK((double)evals / (double)n < 8.0);
     CHECK(worst > 0.0); /* two different methods: not the same bits */
 }
@@ -752,5 +756,115 @@ TEST(approx_profile_closed_form)
     if (getenv("CBM_APPROX_VERBOSE"))
         printf("10^5 segments: %g deg\n", e);
     CHECK_MSG(e < 1e-9, "10^5 segments: %g deg", e);
+    test_ctx_end(ctx);
+}
+
+/* An L+C model's plant after one Equilibrium() with SolverMethod(2) and the given line in Start
+ * (the branch: a tapered stem leaning 60 degrees with a lateral and a fruit's point mass). */
+static cbm_plant *lc_approx_plant(cbm_context *ctx, const char *line)
+{
+    char src[1400];
+    snprintf(src, sizeof src,
+             "#include <lpfgall.h>\n"
+             "derivation length: 1;\n"
+             "module I(MechSegment);\n"
+             "module Fruit(double);\n"
+             "mechanics: I;\n"
+             "mass: Fruit(mass);\n"
+             "MechSegment S(double a) { MechSegment s; s.length = 0.1; s.a = a; s.b = a; "
+             "s.E = 1e9; s.density = 800; return s; }\n"
+             "Start: { SolverMethod(2); %s }\n"
+             "EndEach: { Equilibrium(); }\n"
+             "Axiom: Left(60) I(S(0.006)) I(S(0.005)) I(S(0.004)) SB Right(45) I(S(0.002)) "
+             "I(S(0.0015)) Fruit(0.05) EB I(S(0.003)) I(S(0.002)) Fruit(0.1);\n",
+             line);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.text = src;
+    def.path = "load.l";
+    cbm_lsys *ls = NULL;
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        CHECK_OK(cbm_lsys_mech_plant(ls, &p));
+    }
+    cbm_lsys_destroy(ls);
+    return p;
+}
+
+static double vec_diff(cbm_vec3 a, cbm_vec3 b)
+{
+    return fmax(fabs(a.x - b.x), fmax(fabs(a.y - b.y), fabs(a.z - b.z)));
+}
+
+/* Largest difference of the joints' rotation rates and distal nodes of two plants (0: the same
+ * bits), and whether they have the same segment count. */
+static double plant_diff(cbm_plant *a, cbm_plant *b)
+{
+    if (!a || !b || cbm_plant_segment_count(a) != cbm_plant_segment_count(b))
+        return INFINITY;
+    double d = 0.0;
+    for (size_t i = 0; i < cbm_plant_segment_count(a); i++) {
+        cbm_segment_state sa, sb;
+        CHECK_OK(cbm_plant_segment(a, i, &sa));
+        CHECK_OK(cbm_plant_segment(b, i, &sb));
+        d = fmax(d, vec_diff(sa.omega, sb.omega));
+        d = fmax(d, vec_diff(sa.distal, sb.distal));
+    }
+    return d;
+}
+
+/* ApproxLoad(n) of the L+C dialect: n the value of cbm_approx_load. ApproxLoad(0) bends as the
+ * API with approx_load = CBM_APPROX_LOAD_TIP (the same bits), ApproxLoad(1) as the dialect's
+ * default (calibrated) and another shape; a value it does not know stops the run naming the
+ * place. */
+TEST(approx_lc_load_equals_api)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_plant *pd = lc_approx_plant(ctx, "");
+    cbm_plant *p0 = lc_approx_plant(ctx, "ApproxLoad(0);");
+    cbm_plant *p1 = lc_approx_plant(ctx, "ApproxLoad(1);");
+    cbm_plant *api = lc_approx_plant(ctx, "");
+    CHECK(pd && p0 && p1 && api);
+    if (pd && p0 && p1 && api) {
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.solver = CBM_MECH_APPROX;
+        sd.approx_load = CBM_APPROX_LOAD_TIP;
+        CHECK_OK(cbm_plant_solve(api, &sd, NULL));
+        double d_api = plant_diff(p0, api), d_def = plant_diff(pd, p1), d_load = plant_diff(pd, p0);
+        printf("ApproxLoad(0) vs the API's tip load: %g; ApproxLoad(1) vs default: %g; the two "
+               "loads: %g\n",
+               d_api, d_def, d_load);
+        CHECK(d_api == 0.0);
+        CHECK(d_def == 0.0);
+        CHECK(d_load > 1e-3 && isfinite(d_load));
+    }
+    cbm_plant_destroy(pd);
+    cbm_plant_destroy(p0);
+    cbm_plant_destroy(p1);
+    cbm_plant_destroy(api);
+    const char *bad[] = {"ApproxLoad(2);", "ApproxLoad(-1);", "ApproxLoad(0.5);"};
+    for (int j = 0; j < 3; j++) {
+        test_diags g;
+        cbm_context *dc = test_diag_ctx(&g);
+        CHECK(dc != NULL);
+        char src[400];
+        snprintf(src, sizeof src,
+                 "#include <lpfgall.h>\nderivation length: 1;\nmodule A();\n"
+                 "Start: { %s }\nAxiom: A;\n",
+                 bad[j]);
+        cbm_lsys_def def = cbm_lsys_def_default();
+        def.text = src;
+        def.path = "bad.l";
+        cbm_lsys *ls = NULL;
+        CHECK_OK(cbm_lsys_load(dc, &def, &ls));
+        if (ls)
+            CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_INVALID);
+        printf("%-18s -> %s", bad[j], g.text);
+        CHECK(!strncmp(g.text, "bad.l:4:10: ", 12) && strstr(g.text, "ApproxLoad(n): n is 0"));
+        cbm_lsys_destroy(ls);
+        test_ctx_end(dc);
+    }
     test_ctx_end(ctx);
 }

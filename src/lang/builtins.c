@@ -94,6 +94,7 @@ static const cbm__builtin BUILTINS[] = {
     {"RingRate", FN_RINGRATE, 2, LC},
     {"Solver", FN_SOLVER, 3, LC},
     {"SolverMethod", FN_SOLVERMETHOD, 1, LC},
+    {"ApproxLoad", FN_APPROXLOAD, 1, LC},
     {"ReactionWood", FN_REACTION, 4, LC},
     {"ReactionBound", FN_REACTIONBOUND, 1, LC},
     {"RAND_MAX", FN_NONE, 0, LC},

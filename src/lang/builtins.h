@@ -99,6 +99,7 @@ typedef enum cbm__fn {
     FN_RINGRATE,
     FN_SOLVER,
     FN_SOLVERMETHOD,
+    FN_APPROXLOAD,
     FN_REACTION,
     FN_REACTIONBOUND,
     FN_NONE, /* a reserved name (RAND_MAX is a constant) */

@@ -272,6 +272,17 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
             m->solve.solver = (cbm_mech_solver)(int)a[0];
         return;
     }
+    case FN_APPROXLOAD:
+        /* the value of cbm_approx_load: 0 the thesis's tip load, 1 calibrated (L+C's default,
+         * mechlang.c; docs/methods.md) */
+        if (!(a[0] == CBM_APPROX_LOAD_TIP || a[0] == CBM_APPROX_LOAD_CALIBRATED)) {
+            rt_error(lp, CBM_E_INVALID,
+                     "ApproxLoad(n): n is 0 (thesis: the tip load) or 1 "
+                     "(calibrated, the default)");
+            return;
+        }
+        m->solve.approx_load = (cbm_approx_load)(int)a[0];
+        return;
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
             rt_error(lp, CBM_E_INVALID,

@@ -87,9 +87,10 @@ cbm_approx_rod cbm_approx_rod_default(void)
     return r;
 }
 
-double cbm_approx_omega_linear(double t0, double kh)
+/* The linearised omega from c = cos t0 and s = sin t0 (the root below has them from the half
+ * angle without two more transcendental calls). */
+static double omega_linear_cs(double c, double s, double kh)
 {
-    double c = cos(t0), s = sin(t0);
     if (!(kh > 0.0) || s == 0.0)
         return 0.0;
     if (fabs(c) < 1e-300)
@@ -105,6 +106,11 @@ double cbm_approx_omega_linear(double t0, double kh)
     /* cos(i x) = cosh x: omega = s (cosh x - 1) / (|c| cosh x), no cancellation either */
     double h = sinh(0.5 * x);
     return s * 2.0 * h * h / (-c * cosh(x));
+}
+
+double cbm_approx_omega_linear(double t0, double kh)
+{
+    return omega_linear_cs(cos(t0), sin(t0), kh);
 }
 
 /* ---- the thesis's listing ---- */
@@ -307,19 +313,20 @@ static jacobi3 jacobi(double u, double m, double mc)
     }
     double v2 = v * v, m2 = m * m, m3 = m2 * m, m4 = m2 * m2;
     jacobi3 r;
-    r.sn = v * (1.0 - v2 * ((1.0 + m) / 6.0 -
-                            v2 * ((1.0 + 14.0 * m + m2) / 120.0 -
-                                  v2 * ((1.0 + 135.0 * m + 135.0 * m2 + m3) / 5040.0 -
-                                        v2 * (1.0 + 1228.0 * m + 5478.0 * m2 + 1228.0 * m3 + m4) /
-                                            362880.0))));
-    r.cn =
-        1.0 - v2 * (0.5 - v2 * ((1.0 + 4.0 * m) / 24.0 -
-                                v2 * ((1.0 + 44.0 * m + 16.0 * m2) / 720.0 -
-                                      v2 * (1.0 + 408.0 * m + 912.0 * m2 + 64.0 * m3) / 40320.0)));
-    r.dn = 1.0 - m * v2 *
-                     (0.5 - v2 * ((4.0 + m) / 24.0 -
-                                  v2 * ((16.0 + 44.0 * m + m2) / 720.0 -
-                                        v2 * (64.0 + 912.0 * m + 408.0 * m2 + m3) / 40320.0)));
+    r.sn = v * (1.0 - v2 * ((1.0 + m) * (1.0 / 6.0) -
+                            v2 * ((1.0 + 14.0 * m + m2) * (1.0 / 120.0) -
+                                  v2 * ((1.0 + 135.0 * m + 135.0 * m2 + m3) * (1.0 / 5040.0) -
+                                        v2 * (1.0 + 1228.0 * m + 5478.0 * m2 + 1228.0 * m3 + m4) *
+                                            (1.0 / 362880.0)))));
+    r.cn = 1.0 - v2 * (0.5 - v2 * ((1.0 + 4.0 * m) * (1.0 / 24.0) -
+                                   v2 * ((1.0 + 44.0 * m + 16.0 * m2) * (1.0 / 720.0) -
+                                         v2 * (1.0 + 408.0 * m + 912.0 * m2 + 64.0 * m3) *
+                                             (1.0 / 40320.0))));
+    r.dn =
+        1.0 - m * v2 *
+                  (0.5 - v2 * ((4.0 + m) * (1.0 / 24.0) -
+                               v2 * ((16.0 + 44.0 * m + m2) * (1.0 / 720.0) -
+                                     v2 * (64.0 + 912.0 * m + 408.0 * m2 + m3) * (1.0 / 40320.0))));
     /* the duplication in forms without cancellation as m -> 1 (mc = 1 - m given, not formed):
      * 1 - m s^4 = c^2 (1 + s^2) + mc s^4, d^2 - m s^2 c^2 = c^2 d^2 + mc s^2, and
      * c^2 - s^2 d^2 = c^4 - mc s^4 (small only where cn itself is) */
@@ -376,11 +383,12 @@ static double tip_residual(double t0, double s0, double omega, double target)
  * >= pi/2) lies below the physical root and is bisected away. Stops when the step falls below
  * 1e-13 rad. false if it does not converge in 60 evaluations (the caller then takes the
  * elliptic-integral root); ~6 evaluations of ~5 duplications each in the plants' range. */
-bool cbm__approx_omega_fast(double t0, double target, int *evals, double *out)
+static bool omega_fast(double t0, double s0, double c0, double target, int *evals, double *out)
 {
-    double lo = 0.0, hi = PI - t0, s0 = sin(0.5 * t0);
+    double lo = 0.0, hi = PI - t0;
     bool check_k = target >= 0.5 * PI;
-    double x0 = cbm_approx_omega_linear(t0, target);
+    /* cos t0 = (c0 - s0)(c0 + s0) and sin t0 = 2 s0 c0 from the half angle's */
+    double x0 = omega_linear_cs((c0 - s0) * (c0 + s0), 2.0 * s0 * c0, target);
     if (!(x0 > 0.0 && x0 < hi))
         x0 = 0.5 * hi;
     int n = 0;
@@ -389,14 +397,25 @@ bool cbm__approx_omega_fast(double t0, double target, int *evals, double *out)
         x0 = 0.5 * (lo + hi);
         n++;
     }
-    double g0 = tip_residual(t0, s0, x0, target);
+    double k = sin(0.5 * (t0 + x0)), kc = cos(0.5 * (t0 + x0)), m = k * k;
+    jacobi3 j0 = jacobi(target, m, kc * kc);
+    double g0 = k * j0.cn - s0 * j0.dn;
     n++;
     if (g0 < 0.0)
         lo = x0;
     else
         hi = x0;
-    /* the linearised omega overestimates: the second point below it, or above if it was short */
-    double x1 = g0 > 0.0 ? 0.9 * x0 : fmin(1.1 * x0, 0.5 * (x0 + hi));
+    /* The second point: a Newton step with the derivative of the residual from the leading
+     * terms in T of cn and dn in m, dcn/dm ~ T^4/6, ddn/dm ~ -T^2/2 + (2 + m) T^4/12, with dk =
+     * kc/2 domega and dm = k kc domega: close where the linearised omega is (T small), and the
+     * bracket guards the rest. Failing that, 10 % below the linearised omega (which
+     * overestimates) or above it if it was short. */
+    double t2 = target * target, t4 = t2 * t2;
+    double dg =
+        0.5 * kc * j0.cn + k * kc * (k * t4 / 6.0 - s0 * (-0.5 * t2 + (2.0 + m) * t4 / 12.0));
+    double x1 = dg > 0.0 ? x0 - g0 / dg : NAN;
+    if (!(x1 > lo && x1 < hi) || x1 == x0)
+        x1 = g0 > 0.0 ? 0.9 * x0 : fmin(1.1 * x0, 0.5 * (x0 + hi));
     while (n < 60) {
         n++;
         if (check_k && complete_k(cos(0.5 * (t0 + x1))) <= target) {
@@ -431,6 +450,11 @@ bool cbm__approx_omega_fast(double t0, double target, int *evals, double *out)
     return false;
 }
 
+bool cbm__approx_omega_fast(double t0, double target, int *evals, double *out)
+{
+    return omega_fast(t0, sin(0.5 * t0), cos(0.5 * t0), target, evals, out);
+}
+
 double cbm__approx_omega_reference(double t0, double target, int *evals)
 {
     cbm_approx_route route;
@@ -445,9 +469,12 @@ static inline double atan_small(double y, double x)
     if (!(fabs(y) <= 0.0625 * x))
         return atan2(y, x);
     double t = y / x, t2 = t * t, t4 = t2 * t2;
-    /* Estrin's pairs: half the dependent multiplications of Horner's rule */
-    double a = 1.0 - t2 / 3.0, b = 1.0 / 5.0 - t2 / 7.0, c = 1.0 / 9.0 - t2 / 11.0;
-    double q = a + t4 * (b + t4 * (c + t4 / 13.0));
+    /* Estrin's pairs: half the dependent multiplications of Horner's rule; the reciprocals as
+     * constants (a division by 3.0 is not turned into a multiplication without -ffast-math,
+     * and four of them were half the time of this function) */
+    double a = 1.0 - t2 * (1.0 / 3.0), b = 1.0 / 5.0 - t2 * (1.0 / 7.0);
+    double c = 1.0 / 9.0 - t2 * (1.0 / 11.0);
+    double q = a + t4 * (b + t4 * (c + t4 * (1.0 / 13.0)));
     return t * q;
 }
 
@@ -528,11 +555,11 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
     double t0 = d->t0 / RAD, k0 = d->k0;
     double sig_end = (double)disc / (1.0 - d->coni);
     double w = 0.0;
+    double s0 = sin(0.5 * t0), c0 = cos(0.5 * t0);
     info->route = CBM_APPROX_ROUTE_NONE;
     if (k0 > 0.0) {
         double target = k0 * sig_end;
-        bool fast =
-            t0 > 0.0 && t0 < PI && cbm__approx_omega_fast(t0, target, &info->evaluations, &w);
+        bool fast = t0 > 0.0 && t0 < PI && omega_fast(t0, s0, c0, target, &info->evaluations, &w);
         if (fast)
             info->route = CBM_APPROX_ROUTE_ROOT;
         else
@@ -545,10 +572,19 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
             res[i] = 0.0;
         return;
     }
-    double k = sin(0.5 * (t0 + w)), m = k * k, kc = cos(0.5 * (t0 + w)), mc = kc * kc;
-    double s0 = sin(0.5 * t0), c0 = cos(0.5 * t0);
-    /* cos^2 phi0 = sin(omega/2) sin(t0 + omega/2) / k^2 (no cancellation) */
-    double cphi2 = fmax(0.0, sin(0.5 * w) * sin(t0 + 0.5 * w)) / m;
+    /* k = sin((t0 + omega)/2) and k' by the addition theorem from the half angles (one sincos
+     * instead of four calls); k' so formed is a difference, so where it is small (near the
+     * hanging direction, where the profile depends on its last digits) it is taken directly */
+    double sw = sin(0.5 * w), cw = cos(0.5 * w);
+    double k = s0 * cw + c0 * sw, kc = c0 * cw - s0 * sw;
+    if (kc < 0.25) {
+        k = sin(0.5 * (t0 + w));
+        kc = cos(0.5 * (t0 + w));
+    }
+    double m = k * k, mc = kc * kc;
+    /* cos^2 phi0 = sin(omega/2) sin(t0 + omega/2) / k^2 (no cancellation), sin(t0 + omega/2) =
+     * sin(t0/2 + (t0 + omega)/2) = s0 k' + c0 k, a sum of positive terms */
+    double cphi2 = fmax(0.0, sw * (s0 * kc + c0 * k)) / m;
     jacobi3 cur = {s0 / k, sqrt(cphi2), c0};
     double prev_s = s0, prev_c = c0; /* sin and cos of the previous psi/2 */
     double inv_h = d->coni / (double)disc;
@@ -623,7 +659,8 @@ cbm_status cbm_approx_angles(cbm_context *ctx, const cbm_approx_def *d, double *
     if (!(d->p >= 0.0 && d->p <= 1.0))
         return cbm__fail(ctx, CBM_E_INVALID, "approx: p must be in [0, 1]");
     double sig_end = (double)d->disc / (1.0 - d->coni);
-    inf.omega_linear = cbm_approx_omega_linear(d->t0 / RAD, d->k0 * sig_end) * RAD;
+    if (info) /* only reported: the plants' axes (info NULL) skip its four calls */
+        inf.omega_linear = cbm_approx_omega_linear(d->t0 / RAD, d->k0 * sig_end) * RAD;
     cbm_status s = CBM_OK;
     if (d->mode == CBM_APPROX_THESIS)
         s = thesis_angles(ctx, d, res, &inf);
