@@ -881,6 +881,12 @@ static int cxv(cg *g, int32_t ni, int dst)
         if (vec_bin(g, ni, dst))
             return dst;
         break;
+    case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
+        if (!lc_is_vec(n->type) || !lc_is_vec(node(g, n->a)->type))
+            break;
+        copy_run(g, dst, cxv(g, n->a, dst), sz, false);
+        conv_run(g, n->type, dst);
+        return dst;
     case N_CALLB:
         if (vec_builtin(g, ni, dst))
             return dst;
