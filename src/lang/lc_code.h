@@ -160,12 +160,13 @@ typedef struct lc_program {
  * A production body compiles when its statements do (as a function's) and its values are
  * scalars or runs of them: a struct or vector local, global, field, constructor, assignment or
  * conditional is copied register by register, and `produce`/`nproduce` writes each module from
- * a run of registers through vm->produce. An expression the compiler does not handle (vector
- * arithmetic, the built-ins other than the math ones, contexts, calls of functions left to the
- * walker) is evaluated by the tree walker on the body's frame (O_EVAL through vm->eval), so the
- * body still compiles; statements it does not handle (switch) leave the whole body to the
- * walker. The run of a body returns 1 when it produced (the production applied), 0 when it
- * ended without. */
+ * a run of registers through vm->produce. Vector arithmetic of V3f and V3d, their conversions
+ * and Dot, Cross, Length and Normalize are instructions over the components. An expression the
+ * compiler does not handle (the other non-math built-ins, contexts, quaternions and frames,
+ * calls of functions left to the walker) is evaluated by the tree walker on the body's frame
+ * (O_EVAL through vm->eval), so the body still compiles; statements it does not handle
+ * (switch) leave the whole body to the walker. The run of a body returns 1 when it produced
+ * (the production applied), 0 when it ended without. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
 
