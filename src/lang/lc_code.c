@@ -360,7 +360,10 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             vm->call_depth--;
             if (vm->err != CBM_OK)
                 return 0;
-            fr[ip->d] = r;
+            if (cf->rsize) /* a run result, left in the callee's frame */
+                memcpy(fr + ip->d, nf + cf->rslot, (size_t)cf->rsize * sizeof(double));
+            else
+                fr[ip->d] = r;
             break;
         }
         case O_PROD:
@@ -582,17 +585,16 @@ static int lvalue(const cg *g, int32_t ni, bool *global)
     return place(g, ni, global);
 }
 
-/* In a production body, expression ni (of size doubles) left to the tree walker into the run
- * at dst; elsewhere the function is not compiled. */
+/* Expression ni (of size doubles) left to the tree walker into the run at dst. */
 static int delegate(cg *g, int32_t ni, int dst, int size)
 {
-    if (!g->body) {
-        g->fail = true;
-        return dst;
-    }
     emit(g, O_EVAL, dst, ni, size);
     return dst;
 }
+
+static int call(cg *g, int32_t ni, int dst);
+static bool vec_bin(cg *g, int32_t ni, int dst);
+static bool vec_builtin(cg *g, int32_t ni, int dst);
 
 /* Compiles expression ni; returns the register holding its value: a variable's own register,
  * or hint (a temporary of the caller) where it computed it. */
@@ -641,8 +643,11 @@ static int cx(cg *g, int32_t ni, int hint)
     }
     case N_BIN: {
         int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
-        if (!lc_is_scalar(ta) || !lc_is_scalar(tb))
+        if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
+            if (scalar && vec_bin(g, ni, hint)) /* a dot product */
+                return hint;
             break;
+        }
         int ra = cx(g, n->a, tmp(g));
         if (ra < g->fsize && writes(g, n->b)) { /* read before the right operand runs */
             int t = tmp(g);
@@ -711,8 +716,11 @@ static int cx(cg *g, int32_t ni, int hint)
         return hint;
     }
     case N_CALLB: {
-        if (n->fn >= FN_MATH_END)
+        if (n->fn >= FN_MATH_END) {
+            if (scalar && vec_builtin(g, ni, hint)) /* Dot, Length */
+                return hint;
             break;
+        }
         for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
             if (!lc_is_scalar(node(g, x)->type))
                 return delegate(g, ni, hint, 1);
@@ -748,29 +756,10 @@ static int cx(cg *g, int32_t ni, int hint)
         ins(g, i)->fn = n->fn;
         return hint;
     }
-    case N_CALLU: {
-        const lc_function *f = &g->m->funcs.data[n->slot];
-        if (!g->p->fn[n->slot].compiled || (!scalar && n->type != T_VOID))
+    case N_CALLU:
+        if (!scalar && n->type != T_VOID)
             break;
-        int base = g->top;
-        int np = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next, np++)
-            if (!lc_is_scalar(node(g, x)->type) || np >= f->np || !lc_is_scalar(f->ptype[np]))
-                return delegate(g, ni, hint, n->type == T_VOID ? 0 : 1);
-        g->top += np;
-        if (g->top > g->fc->nreg)
-            g->fc->nreg = g->top;
-        int a = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
-            if (!lc_is_scalar(node(g, x)->type) || a >= f->np || !lc_is_scalar(f->ptype[a])) {
-                g->fail = true;
-                return hint;
-            }
-            mov(g, base + a, cx(g, x, base + a));
-        }
-        emit(g, O_CALL, hint, n->slot, base);
-        return hint;
-    }
+        return call(g, ni, hint);
     default:
         break;
     }
@@ -886,10 +875,181 @@ static int cxv(cg *g, int32_t ni, int dst)
         patch(g, jend, here(g));
         return dst;
     }
+    case N_CALLU:
+        return call(g, ni, dst);
+    case N_BIN:
+        if (vec_bin(g, ni, dst))
+            return dst;
+        break;
+    case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
+        if (!lc_is_vec(n->type) || !lc_is_vec(node(g, n->a)->type))
+            break;
+        copy_run(g, dst, cxv(g, n->a, dst), sz, false);
+        conv_run(g, n->type, dst);
+        return dst;
+    case N_CALLB:
+        if (vec_builtin(g, ni, dst))
+            return dst;
+        break;
     default:
         break;
     }
     return delegate(g, ni, dst, sz);
+}
+
+/* Vector arithmetic on V3f and V3d as the tree walker's ev (and its Dot and Cross) computes
+ * it: both operands whole (the left first), the components in doubles, then the result of type
+ * `type` rounded (V3f components to float32): of two vectors +, -, % (cross) and otherwise *
+ * (dot, a scalar); a vector times (otherwise divided by) a scalar; a scalar times a vector. The
+ * result to the run at dst; false (nothing emitted) when it is no such operation. */
+static bool vec_op(cg *g, int32_t ia, int32_t ib, int fn, int type, int dst)
+{
+    int ta = node(g, ia)->type, tb = node(g, ib)->type;
+    bool va = lc_is_vec(ta), vb = lc_is_vec(tb);
+    if ((!va && !lc_is_scalar(ta)) || (!vb && !lc_is_scalar(tb)) || (!va && !vb))
+        return false;
+    bool dot = va && vb && fn != B_ADD && fn != B_SUB && fn != B_REM;
+    if (dot ? !lc_is_scalar(type) : !lc_is_vec(type))
+        return false;
+    int save = g->top;
+    int ra = va ? cxv(g, ia, tmpn(g, 3)) : cx(g, ia, tmp(g));
+    if (ra < g->fsize && writes(g, ib)) { /* read before the right operand runs */
+        int t = tmpn(g, va ? 3 : 1);
+        copy_run(g, t, ra, va ? 3 : 1, false);
+        ra = t;
+    }
+    int rb = vb ? cxv(g, ib, tmpn(g, 3)) : cx(g, ib, tmp(g));
+    /* into temporaries when dst is a variable's run, which an operand may be */
+    int r = dst < g->tbase ? tmpn(g, 3) : dst;
+    if (dot) {
+        int t = tmp(g);
+        emit(g, O_MULD, r, ra, rb);
+        emit(g, O_MULD, t, ra + 1, rb + 1);
+        emit(g, O_ADDD, r, r, t);
+        emit(g, O_MULD, t, ra + 2, rb + 2);
+        emit(g, O_ADDD, r, r, t);
+    } else if (va && vb && fn == B_REM) {
+        int t = tmp(g);
+        for (int i = 0; i < 3; i++) {
+            int j = (i + 1) % 3, k = (i + 2) % 3;
+            emit(g, O_MULD, r + i, ra + j, rb + k);
+            emit(g, O_MULD, t, ra + k, rb + j);
+            emit(g, O_SUBD, r + i, r + i, t);
+        }
+    } else
+        for (int i = 0; i < 3; i++) {
+            int op = va && vb ? (fn == B_ADD ? O_ADDD : O_SUBD)
+                     : va     ? (fn == B_MUL ? O_MULD : O_DIVD)
+                              : O_MULD;
+            emit(g, op, r + i, va ? ra + i : ra, vb ? rb + i : rb);
+        }
+    copy_run(g, dst, r, dot ? 1 : 3, false);
+    conv_run(g, type, dst);
+    g->top = save;
+    return true;
+}
+
+static bool vec_bin(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    return vec_op(g, n->a, n->b, n->fn, n->type, dst);
+}
+
+/* The vector built-ins Dot, Cross, Length and Normalize of V3f and V3d as call_builtin computes
+ * them (Normalize of a zero vector: zeros); false (nothing emitted) for the others. */
+static bool vec_builtin(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    int32_t x = n->a;
+    if (x < 0 || !lc_is_vec(node(g, x)->type))
+        return false;
+    int32_t x1 = node(g, x)->next;
+    if (n->fn == FN_DOT || n->fn == FN_CROSS)
+        return x1 >= 0 && lc_is_vec(node(g, x1)->type) &&
+               vec_op(g, x, x1, n->fn == FN_DOT ? B_MUL : B_REM, n->type, dst);
+    if (!(n->fn == FN_LENGTH && lc_is_scalar(n->type)) &&
+        !(n->fn == FN_NORMALIZE && lc_is_vec(n->type)))
+        return false;
+    int save = g->top;
+    int rv = cxv(g, x, tmpn(g, 3));
+    int l = tmp(g), t = tmp(g);
+    emit(g, O_MULD, l, rv, rv);
+    emit(g, O_MULD, t, rv + 1, rv + 1);
+    emit(g, O_ADDD, l, l, t);
+    emit(g, O_MULD, t, rv + 2, rv + 2);
+    emit(g, O_ADDD, l, l, t);
+    emit(g, O_SQRT, l, l, 0);
+    if (n->fn == FN_LENGTH) {
+        copy_run(g, dst, l, 1, false);
+        conv_run(g, n->type, dst);
+        g->top = save;
+        return true;
+    }
+    int r = dst < g->tbase ? tmpn(g, 3) : dst;
+    int32_t jzero = emit(g, O_JNGT, -1, l, konst(g, 0.0, t));
+    for (int i = 0; i < 3; i++)
+        emit(g, O_DIVD, r + i, rv + i, l);
+    int32_t jend = emit(g, O_JMP, 0, -1, 0);
+    patch(g, jzero, here(g));
+    for (int i = 0; i < 3; i++)
+        ins(g, emit(g, O_CONST, r + i, 0, 0))->k = 0;
+    patch(g, jend, here(g));
+    copy_run(g, dst, r, 3, false);
+    conv_run(g, n->type, dst);
+    g->top = save;
+    return true;
+}
+
+/* A call of user function ni, as the tree walker's call_user: the arguments computed in order
+ * into a run of temporaries (the callee's frame: each parameter a run of its size), the call,
+ * then each reference parameter's run copied back to its variable in the order of the
+ * parameters; a scalar result to dst, a run result copied from the callee's frame to the run at
+ * dst by O_CALL. A function left to the walker is called by the walker (O_EVAL). */
+static int call(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    const lc_function *f = &g->m->funcs.data[n->slot];
+    const lc_fcode *cf = &g->p->fn[n->slot];
+    int rs = n->type == T_VOID ? 0 : lc_type_size(g->m, n->type);
+    bool ok = cf->compiled;
+    int a = 0;
+    for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
+        const lc_node *xn = node(g, x);
+        ok = a < f->np && lc_type_size(g->m, xn->type) == lc_type_size(g->m, f->ptype[a]) &&
+             (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
+    }
+    if (!ok || a != f->np)
+        return delegate(g, ni, dst, rs);
+    int save = g->top;
+    int base = tmpn(g, cf->npd);
+    int off = 0;
+    a = 0;
+    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
+        int xs = lc_type_size(g->m, f->ptype[a]);
+        int s2 = g->top;
+        if (lc_is_scalar(node(g, x)->type))
+            mov(g, base + off, cx(g, x, base + off));
+        else
+            copy_run(g, base + off, cxv(g, x, base + off), xs, false);
+        g->top = s2;
+        off += xs;
+    }
+    if (off != cf->npd) {
+        g->fail = true;
+        return dst;
+    }
+    emit(g, O_CALL, dst, n->slot, base);
+    off = 0;
+    a = 0;
+    for (int32_t x = n->a; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
+        int xs = lc_type_size(g->m, f->ptype[a]);
+        const lc_node *xn = node(g, x);
+        for (int i = 0; i < xs && f->pref[a]; i++)
+            emit(g, xn->op == N_GLOBAL ? O_GST : O_MOV, xn->slot + i, base + off + i, 0);
+        off += xs;
+    }
+    g->top = save;
+    return dst;
 }
 
 /* `produce` (or `nproduce`) of the modules [first, first + n) of the model's sms: each
@@ -1072,9 +1232,16 @@ static void cs(cg *g, int32_t ni)
                 emit(g, O_RET0, 0, 0, 0);
             } else if (n->a < 0)
                 emit(g, O_RET0, 0, 0, 0);
-            else if (!lc_is_scalar(n->type))
-                g->fail = true;
-            else {
+            else if (!lc_is_scalar(n->type)) { /* the run result, rounded as exec does */
+                int sz = lc_type_size(g->m, n->type);
+                if (sz != g->fc->rsize) {
+                    g->fail = true;
+                    break;
+                }
+                copy_run(g, g->fc->rslot, cxv(g, n->a, tmpn(g, sz)), sz, false);
+                conv_run(g, n->type, g->fc->rslot);
+                emit(g, O_RET0, 0, 0, 0);
+            } else {
                 int r = cx(g, n->a, tmp(g));
                 if (n->type != T_DOUBLE) {
                     int t = tmp(g);
@@ -1142,6 +1309,8 @@ static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int
         for (int c = 0; c < nkonst; c++)
             ins(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = konst[c];
         cs(&g, body);
+        for (int i = 0; i < fc->rsize; i++) /* falling off the end: a result of zeros */
+            ins(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
         emit(&g, O_RET0, 0, 0, 0);
         if (g.fail)
             break;
@@ -1157,12 +1326,10 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
 {
     const lc_function *fn = &m->funcs.data[f];
     p->fn[f].ins.len = 0;
-    if ((fn->ret != T_VOID && !lc_is_scalar(fn->ret)) || fn->body < 0)
+    if (fn->body < 0)
         return false;
-    for (int i = 0; i < fn->np; i++)
-        if (!lc_is_scalar(fn->ptype[i]) || fn->pref[i])
-            return false;
-    return compile_code(ctx, m, p, f, fn->body, fn->fsize, false, nomem);
+    /* the run result's registers count as locals (after the function's own) */
+    return compile_code(ctx, m, p, f, fn->body, fn->fsize + p->fn[f].rsize, false, nomem);
 }
 
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
@@ -1182,8 +1349,17 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
     p->n = n;
     /* every function is assumed compiled, and those that cannot be, with their callers, are
      * taken out until nothing changes */
-    for (size_t f = 0; f < nfunc; f++)
-        p->fn[f].compiled = true;
+    for (size_t f = 0; f < nfunc; f++) {
+        const lc_function *fn = &m->funcs.data[f];
+        lc_fcode *fc = &p->fn[f];
+        fc->compiled = true;
+        for (int i = 0; i < fn->np; i++) {
+            fc->npd += lc_type_size(m, fn->ptype[i]);
+            fc->refs = fc->refs || fn->pref[i];
+        }
+        fc->rslot = fn->fsize;
+        fc->rsize = fn->ret == T_VOID || lc_is_scalar(fn->ret) ? 0 : lc_type_size(m, fn->ret);
+    }
     for (bool changed = true; changed;) {
         changed = false;
         for (size_t f = 0; f < nfunc; f++) {

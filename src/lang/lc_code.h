@@ -15,9 +15,11 @@
  * one operation, the call depth is bounded). A runtime error reports the position of the
  * statement being executed, as the tree walker does.
  *
- * A function is compiled when its parameters and result are scalars (or void), no parameter is
- * a reference, and its body uses only scalar expressions, the math built-ins, calls of compiled
- * functions and the statements other than switch; the others run in the tree walker. */
+ * A function is compiled when its statements are those other than switch. Its parameters and
+ * result may be scalars or runs (structs, vectors), its parameters references (T& x: the caller
+ * copies the parameter's run back to the variable after the call, as the tree walker does); an
+ * expression the compiler does not handle is evaluated by the tree walker on the function's
+ * frame (O_EVAL), as in a production body. */
 #ifndef CBM_LANG_LC_CODE_H
 #define CBM_LANG_LC_CODE_H
 
@@ -88,7 +90,7 @@ enum {
     O_SPEND, /* a loop iteration */
     O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to b if a != 0 */
     O_JMPS,  /* the same without a test (for (;;)): to a */
-    O_CALL,  /* d = function a on the frame at register b */
+    O_CALL,  /* d = function a on the frame at register b (a run result: its run to d..) */
     O_RET,   /* the value of a */
     O_RET0,
     /* a comparison and the jump on its falsehood in one (if, while, for): to d unless a op b */
@@ -130,6 +132,12 @@ typedef struct lc_fcode {
     int fsize;     /* the locals (and parameters, formals) the frame holds on entry */
     int nreg;      /* frame doubles: locals, then temporaries */
     bool compiled; /* false: the tree walker runs the function */
+    /* a function over runs: its parameters' doubles (a struct or vector parameter is a run of
+     * registers, from register 0 in order); a result of several doubles (rsize, 0: a scalar or
+     * void) is left in the run of the callee's frame at rslot (after its locals, so that its
+     * reference parameters, copied back by the caller after the call, are still whole) */
+    int npd, rslot, rsize;
+    bool refs; /* a reference parameter: the caller copies its run back to the argument */
 } lc_fcode;
 
 /* The register code of a model's functions, by function index, then of its production bodies:
@@ -152,12 +160,13 @@ typedef struct lc_program {
  * A production body compiles when its statements do (as a function's) and its values are
  * scalars or runs of them: a struct or vector local, global, field, constructor, assignment or
  * conditional is copied register by register, and `produce`/`nproduce` writes each module from
- * a run of registers through vm->produce. An expression the compiler does not handle (vector
- * arithmetic, the built-ins other than the math ones, contexts, calls of functions left to the
- * walker) is evaluated by the tree walker on the body's frame (O_EVAL through vm->eval), so the
- * body still compiles; statements it does not handle (switch) leave the whole body to the
- * walker. The run of a body returns 1 when it produced (the production applied), 0 when it
- * ended without. */
+ * a run of registers through vm->produce. Vector arithmetic of V3f and V3d, their conversions
+ * and Dot, Cross, Length and Normalize are instructions over the components. An expression the
+ * compiler does not handle (the other non-math built-ins, contexts, quaternions and frames,
+ * calls of functions left to the walker) is evaluated by the tree walker on the body's frame
+ * (O_EVAL through vm->eval), so the body still compiles; statements it does not handle
+ * (switch) leave the whole body to the walker. The run of a body returns 1 when it produced
+ * (the production applied), 0 when it ended without. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
 

@@ -231,6 +231,24 @@ static void put_const(src *s, int d, double k)
 
 static const char *const cmp_c[] = {"<", ">", "<=", ">=", "==", "!="};
 
+/* Before a function over runs returns: its run result and its reference parameters stored
+ * to its frame, where the caller reads them (the registers are C locals). */
+static void put_frame_out(src *s, const lc_program *p, const lc_model *m, int f)
+{
+    if ((size_t)f >= m->funcs.len)
+        return;
+    const lc_function *fn = &m->funcs.data[f];
+    const lc_fcode *fc = &p->fn[f];
+    for (int i = 0; i < fc->rsize; i++)
+        put(s, "fr[%d] = r%d; ", fc->rslot + i, fc->rslot + i);
+    for (int i = 0, off = 0; i < fn->np && fc->refs; i++) {
+        int sz = lc_type_size(m, fn->ptype[i]);
+        for (int k = 0; k < sz && fn->pref[i]; k++)
+            put(s, "fr[%d] = r%d; ", off + k, off + k);
+        off += sz;
+    }
+}
+
 static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const lc_ins *x)
 {
     char a[64], g[48];
@@ -367,16 +385,29 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
         /* the arguments are in the caller's registers b..; the callee's frame is fr + b as in
          * the loop, so the frame stack and its limit are the same */
         const lc_function *cf = &m->funcs.data[x->a];
+        const lc_fcode *cc = &p->fn[x->a];
         put(s, "{ double *nf = fr + %d;", x->b);
-        for (int i = 0; i < cf->np; i++)
+        for (int i = 0; i < cc->npd; i++)
             put(s, " nf[%d] = r%d;", i, x->b + i);
         put(s,
             " if (*R->call_depth >= R->max_call_depth || (size_t)(nf - R->stack) + %d + 1 > "
             "R->stack_cap) { R->fault(R, at, %d); return 0; }"
             " if (!R->spend_call(R, at)) return 0;"
             " ++*R->call_depth; double v = f%d(nf, R, at); --*R->call_depth;"
-            " if (R->failed) return 0; r%d = v; }",
-            p->fn[x->a].nreg, F_DEEP, x->a, x->d);
+            " if (R->failed) return 0;",
+            cc->nreg, F_DEEP, x->a);
+        /* a run result and the reference parameters come back through the callee's frame */
+        for (int i = 0; i < cc->rsize; i++)
+            put(s, " r%d = nf[%d];", x->d + i, cc->rslot + i);
+        if (!cc->rsize)
+            put(s, " r%d = v;", x->d);
+        for (int i = 0, off = 0; i < cf->np; i++) {
+            int sz = lc_type_size(m, cf->ptype[i]);
+            for (int k = 0; k < sz && cf->pref[i]; k++)
+                put(s, " r%d = nf[%d];", x->b + off + k, off + k);
+            off += sz;
+        }
+        put(s, " }");
         break;
     }
     case O_PROD: { /* the module's parameters from its run of registers */
@@ -402,9 +433,11 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
         put(s, " }");
         break;
     case O_RET:
+        put_frame_out(s, p, m, f);
         put(s, "return r%d;", x->a);
         break;
     default: /* O_RET0 */
+        put_frame_out(s, p, m, f);
         put(s, "return 0;");
         break;
     }

@@ -542,25 +542,36 @@ static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     double *nf = lp->vm.stack + lp->vm.sp;
     size_t save = lp->vm.sp;
     const lc_fcode *fc = lp->prog.n ? &lp->prog.fn[n->slot] : NULL;
-    if (fc && fc->compiled) { /* scalar parameters and result: the register code runs it */
+    if (fc && fc->compiled && !lp->walk_bodies) { /* the register code runs it */
         if (lp->vm.sp + (size_t)fc->nreg + 1 > lp->vm.stack_cap) {
             rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
             memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
             return;
         }
         lp->vm.sp += (size_t)fc->nreg;
-        int32_t x = n->a;
-        for (int i = 0; x >= 0; x = lp->m.nodes.data[x].next, i++)
-            ev(ls, x, fr, nf + i);
+        int off = 0, i = 0;
+        for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
+            ev(ls, x, fr, nf + off);
+            off += lc_type_size(&lp->m, f->ptype[i]);
+        }
         lp->vm.call_depth++;
         int32_t at = lp->vm.at;
         double r = cbm__lc_run(&lp->prog, n->slot, nf, &lp->vm);
         lp->vm.at = at;
         lp->vm.call_depth--;
-        lp->vm.sp = save;
         memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-        if (f->ret != T_VOID)
+        if (fc->rsize) /* a run result: in the callee's frame */
+            memcpy(out, nf + fc->rslot, (size_t)fc->rsize * sizeof(double));
+        else if (f->ret != T_VOID)
             out[0] = r;
+        off = i = 0;
+        for (int32_t x = n->a; x >= 0 && fc->refs; x = lp->m.nodes.data[x].next, i++) {
+            int sz = lc_type_size(&lp->m, f->ptype[i]);
+            if (f->pref[i])
+                memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
+            off += sz;
+        }
+        lp->vm.sp = save;
         return;
     }
     lp->vm.sp += (size_t)f->fsize;
@@ -1814,9 +1825,12 @@ void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_
     *compiled = *total = *walked = 0;
     if (!p->fn)
         return;
-    for (size_t f = p->body0[LC_MAIN]; f < p->n; f++) {
-        *compiled += p->fn[f].compiled;
-        ++*total;
+    /* walked: the expressions left to the walker in the compiled functions and bodies */
+    for (size_t f = 0; f < p->n; f++) {
+        if (f >= p->body0[LC_MAIN]) {
+            *compiled += p->fn[f].compiled;
+            ++*total;
+        }
         for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
             *walked += p->fn[f].ins.data[i].op == O_EVAL;
     }
