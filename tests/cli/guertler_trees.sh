@@ -74,7 +74,7 @@ for seed in 1 2; do
             -o "segments:$out.csv" >"$out.txt"
         grep -q ' 0 unconverged equilibria' "$out.txt"
         h=$(info "$out.csv" height_m)
-        awk -v h="$h" -v w="$(info "$out.csv" crown_width_m)" 'BEGIN { exit !(h > 1.2 && w > 0.4) }'
+        awk -v h="$h" -v w="$(info "$out.csv" crown_width_m)" 'BEGIN { exit !(h > 1.2 && w > 0.25) }'
         echo "$h" >"$out.h"
     done
     awk -v a="$(cat "$tmp/be-$seed-0.h")" -v b="$(cat "$tmp/be-$seed-1.h")" \
