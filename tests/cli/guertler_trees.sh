@@ -6,7 +6,9 @@
 #     lowest whorl's branches droop below their insertion, E rises with age (base > new shoot);
 #   sympodial: 2^k axes of order k, branch angles 30 deg, the tree stands lower than on rigid wood;
 #   beech: the carbon balance decides: thrice the wood's respiration sheds branches and leaves a
-#     thinner stem, the leader's branches alternate sides (distichous);
+#     thinner stem, the leader's branches alternate sides (distichous); at ten years a broad
+#     crown (width over 0.8 of the height), a plausible height, bounded segments varying with
+#     the seed;
 # and the two solvers give the same tree (height within 1 %).
 set -euo pipefail
 bin=$1
@@ -96,6 +98,27 @@ for seed in 1 2; do
     awk -v a="$(info "$tmp/be-$seed-0.csv" base_diameter_m)" -v b="$(info "$tmp/starved.csv" base_diameter_m)" \
         'BEGIN { exit !(b < 0.95 * a) }'
 done
+
+# the beech at ten years (its last summer) over seeds 1-3 stays in a plausible envelope: a
+# ten-year open-grown beech stands about 3-4 m (the leader's law gives 3.0-3.4 m: 2.5-4.5 m);
+# its crown is broad, width at least 0.8 of the height (the model measures 0.87-1.16; the
+# slender sapling this replaced measured 0.65-0.72); no NaN in the measures; segments bounded
+# (no runaway: 1,200-3,300 measured, 500-6,000 allowed) and varying with the seed
+counts=""
+for seed in 1 2 3; do
+    out="$tmp/b10-$seed"
+    "$bin" run "$src/models/guertler-beech.l" -D SEED=$seed -o "segments:$out.csv" >"$out.txt"
+    grep -q ' 0 unconverged equilibria' "$out.txt"
+    "$bin" info --json "$out.csv" >"$out.json"
+    ! grep -qi 'nan' "$out.json"
+    h=$(info "$out.csv" height_m)
+    w=$(info "$out.csv" crown_width_m)
+    n=$(info "$out.csv" segments)
+    awk -v h="$h" -v w="$w" -v n="$n" \
+        'BEGIN { exit !(h > 2.5 && h < 4.5 && w > 0.8 * h && n > 500 && n < 6000) }'
+    counts="$counts $n"
+done
+test "$(echo $counts | tr ' ' '\n' | sort -u | wc -l)" -ge 2
 
 # the method: a value SolverMethod() does not know is an error naming the place, and nothing is written
 if "$bin" run "$src/models/guertler-sympodial.l" -D METHOD=9 -o "$tmp/bad.str" 2>"$tmp/err"; then exit 1; fi
