@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Gürtler's trees (models/guertler-*.l): grows each over seeds 1-SEEDS with both solvers
-# (METHOD 0 relax, 1 fast), measures every tree with `cambium info --json` and writes the spread
+# (METHOD 0 relax, 1 fast), the beech also with approx (2) and fem (3) over seeds 1-METHOD_SEEDS,
+# measures every tree with `cambium info --json` and writes the spread
 # (median, min-max) of segments, height, crown width and the share of segments that pass through
 # another into docs/models.md between `<!-- guertler-trees: begin -->` and
 # `<!-- guertler-trees: end -->`, and draws the pictures docs/images/guertler-*.png (seed 1,
@@ -9,11 +10,13 @@
 # Usage (from the repository root, after `make`):
 #   tools/guertler-trees.sh            rewrite the table and the pictures
 #   tools/guertler-trees.sh --print    print the table on stdout, change nothing
-# SEEDS=N (default 20), CAMBIUM=path/to/cambium (default build/bin/cambium). Needs python3.
+# SEEDS=N (default 20), METHOD_SEEDS=N (default 5), CAMBIUM=path/to/cambium (default
+# build/bin/cambium). Needs python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CAMBIUM:-build/bin/cambium}
 nseeds=${SEEDS:-20}
+mseeds=${METHOD_SEEDS:-5}
 doc=docs/models.md
 [ -x "$bin" ] || { echo "guertler-trees: $bin not found (run make first)" >&2; exit 1; }
 tmp=$(mktemp -d)
@@ -22,10 +25,14 @@ trap 'rm -rf "$tmp"' EXIT
 models="guertler-spruce guertler-sympodial"
 [ -f models/guertler-beech.l ] && models="$models guertler-beech"
 for m in $models; do
-    for method in 0 1; do
+    methods="0 1"
+    [ "$m" = guertler-beech ] && methods="0 1 2 3"
+    for method in $methods; do
         for s in $(seq 1 "$nseeds"); do
             # the sympodial tree has no randomness: one seed says it all
             if [ "$m" = guertler-sympodial ] && [ "$s" -gt 1 ]; then break; fi
+            # approx and fem: a few seeds (the beech only)
+            if [ "$method" -ge 2 ] && [ "$s" -gt "$mseeds" ]; then break; fi
             "$bin" run "models/$m.l" -D SEED="$s" -D METHOD="$method" \
                 -o "segments:$tmp/t.csv" >"$tmp/t.txt"
             if grep -q ' [1-9][0-9]* unconverged' "$tmp/t.txt"; then
@@ -44,7 +51,7 @@ print("|---|---|---|---|---|---|---|---|")
 def spread(v, f):
     return (f % statistics.median(v)) + " (" + (f % min(v)) + "–" + (f % max(v)) + ")"
 for m in models:
-    for method, name in ((1, "fast"), (0, "relax")):
+    for method, name in ((1, "fast"), (0, "relax"), (2, "approx"), (3, "fem")):
         rows = [json.load(open(p))["measures"] for p in sorted(glob.glob(f"{tmp}/{m}-{method}-*.json"))]
         if not rows:
             continue
@@ -72,5 +79,7 @@ EOF
 "$bin" run models/guertler-sympodial.l -o docs/images/guertler-sympodial.png --view front --size 700x600
 if [ -f models/guertler-beech.l ]; then
     "$bin" run models/guertler-beech.l -o docs/images/guertler-beech.png --size 700x700
+    "$bin" run models/guertler-beech.l -o docs/images/guertler-beech-front.png --view front --size 600x600
+    "$bin" run models/guertler-beech.l -o docs/images/guertler-beech-top.png --view top --size 600x600
 fi
 echo "guertler-trees: table in $doc, pictures in docs/images/" >&2
