@@ -192,10 +192,10 @@ TEST(cpfg_runtime_errors_name_the_walkers_node)
         e.error_node = -1;
         e.while_budget = 50;
         cbm__eval_stmt(&e, blocks[k]);
-        CHECK_MSG(e.error != CBM_OK && e.error_msg && strstr(e.error_msg, want[k]),
-                  "block %d: %s", k, e.error_msg ? e.error_msg : "(none)");
-        CHECK_MSG(e.error_node >= 0 && e.nodes[e.error_node].op == op[k], "block %d: node %d",
-                  k, (int)e.error_node);
+        CHECK_MSG(e.error != CBM_OK && e.error_msg && strstr(e.error_msg, want[k]), "block %d: %s",
+                  k, e.error_msg ? e.error_msg : "(none)");
+        CHECK_MSG(e.error_node >= 0 && e.nodes[e.error_node].op == op[k], "block %d: node %d", k,
+                  (int)e.error_node);
     }
     CHECK(g[0] == 50); /* the loop stopped at its budget: 50 iterations ran */
     cbm__eval_free(&e);

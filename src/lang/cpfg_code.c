@@ -30,10 +30,19 @@
 #include <stdio.h>
 #include <string.h>
 
+/* A root's function, and the one instruction of a function that is a single load (a constant,
+ * a parameter, a global) and its return, so that the run finds it without two indirections */
+typedef struct entry {
+    int32_t f;    /* function index + 1, 0: none yet */
+    uint8_t load; /* O_CONST, O_PLD or O_GLD: the function is that load; else 0 */
+    int32_t a;
+    double k;
+} entry;
+
 struct cbm__ecode {
     CBM_ARRAY(lc_fcode) fn;
-    CBM_ARRAY(int32_t) entry; /* 2 * root + (statement chain): function index + 1, 0: none yet */
-    double *frame;            /* the registers of the run (frame_cap doubles) */
+    CBM_ARRAY(entry) entry; /* by 2 * root + (statement chain) */
+    double *frame;          /* the registers of the run (frame_cap doubles) */
     size_t frame_cap;
     size_t ins, runs;
     lc_vm vm;
@@ -145,9 +154,9 @@ static void expr(cc *c, int32_t i, int d)
     case OP_EQ:
     case OP_NE: {
         static const uint8_t ops[] = {
-            [OP_ADD] = O_ADDD, [OP_SUB] = O_SUBD, [OP_MUL] = O_MULD, [OP_DIV] = O_DIVD,
-            [OP_REM] = O_CMATH, [OP_POW] = O_CMATH, [OP_LT] = O_LT,  [OP_GT] = O_GT,
-            [OP_LE] = O_LE,     [OP_GE] = O_GE,     [OP_EQ] = O_EQ,  [OP_NE] = O_NE};
+            [OP_ADD] = O_ADDD,  [OP_SUB] = O_SUBD,  [OP_MUL] = O_MULD, [OP_DIV] = O_DIVD,
+            [OP_REM] = O_CMATH, [OP_POW] = O_CMATH, [OP_LT] = O_LT,    [OP_GT] = O_GT,
+            [OP_LE] = O_LE,     [OP_GE] = O_GE,     [OP_EQ] = O_EQ,    [OP_NE] = O_NE};
         expr(c, n->a, d);
         r = reg(c);
         expr(c, n->b, r);
@@ -308,8 +317,8 @@ static int compile(cbm__eval *e, int32_t root, bool stmt)
     }
     if (!c.nomem && (size_t)c.fc->nreg + 1 > ec->frame_cap) {
         size_t cap = (size_t)c.fc->nreg + 16;
-        double *f = cbm__realloc(e->ctx, ec->frame, ec->frame_cap * sizeof(double),
-                                 cap * sizeof(double));
+        double *f =
+            cbm__realloc(e->ctx, ec->frame, ec->frame_cap * sizeof(double), cap * sizeof(double));
         if (f) {
             ec->frame = f;
             ec->frame_cap = cap;
@@ -421,43 +430,57 @@ static double host_call(lc_vm *vm, const lc_ins *ip, double *fr)
 }
 
 /* ---------------------------------------------------------------- running */
-static double run(cbm__eval *e, int32_t root, bool stmt)
+static double out_of_memory(cbm__eval *e, int32_t root)
+{
+    if (e->error == CBM_OK) {
+        e->error = CBM_E_NOMEM;
+        e->error_msg = "out of memory compiling an expression";
+        e->error_node = root;
+    }
+    return 0;
+}
+
+/* The function of root `slot` (2 * node + statement chain), compiled now if it is not yet;
+ * -1 when out of memory. Out of line: the run's path stays short. */
+static __attribute__((noinline)) int first_run(cbm__eval *e, int32_t root, bool stmt)
 {
     cbm__ecode *ec = e->code;
     if (!ec) {
         ec = e->code = cbm__calloc(e->ctx, 1, sizeof *ec);
         if (!ec)
-            goto nomem;
+            return -1;
         ec->vm.host_call = host_call;
-        ec->vm.host = e;
     }
     size_t slot = 2 * (size_t)root + stmt;
     if (slot >= ec->entry.len) {
         if (CBM_ARRAY_RESERVE(e->ctx, ec->entry, slot + 1) != CBM_OK)
-            goto nomem;
+            return -1;
         memset(ec->entry.data + ec->entry.len, 0,
                (slot + 1 - ec->entry.len) * sizeof *ec->entry.data);
         ec->entry.len = slot + 1;
     }
-    int f = ec->entry.data[slot] - 1;
-    if (f < 0) {
-        f = compile(e, root, stmt);
+    entry *en = &ec->entry.data[slot];
+    if (en->f == 0) {
+        int f = compile(e, root, stmt);
         if (f < 0)
-            goto nomem;
-        ec->entry.data[slot] = f + 1;
+            return -1;
+        en->f = f + 1;
+        const lc_fcode *fc = &ec->fn.data[f];
+        const lc_ins *in = fc->ins.data;
+        if (fc->ins.len == 2 && (in->op == O_CONST || in->op == O_PLD || in->op == O_GLD)) {
+            en->load = in->op;
+            en->a = in->a;
+            en->k = in->k;
+        }
     }
+    return en->f - 1;
+}
+
+/* An error of the run goes to the environment unless one is pending there. */
+static __attribute__((noinline)) double run_failed(cbm__eval *e)
+{
+    cbm__ecode *ec = e->code;
     lc_vm *vm = &ec->vm;
-    vm->host = e;
-    vm->glob = e->globals;
-    vm->par = e->params;
-    vm->budget = e->while_budget;
-    vm->at = -1;
-    const lc_program p = {.fn = ec->fn.data, .n = ec->fn.len};
-    ec->runs++;
-    double v = cbm__lc_run(&p, f, ec->frame, vm);
-    e->while_budget = vm->budget;
-    if (vm->err == CBM_OK)
-        return v;
     if (e->error == CBM_OK) {
         e->error = vm->err;
         memcpy(ec->msg, vm->errmsg, sizeof ec->msg);
@@ -466,13 +489,46 @@ static double run(cbm__eval *e, int32_t root, bool stmt)
     }
     vm->err = CBM_OK;
     return 0;
-nomem:
-    if (e->error == CBM_OK) {
-        e->error = CBM_E_NOMEM;
-        e->error_msg = "out of memory compiling an expression";
-        e->error_node = root;
+}
+
+/* Function f on the loop. */
+static __attribute__((noinline)) double run_code(cbm__eval *e, cbm__ecode *ec, int f)
+{
+    lc_vm *vm = &ec->vm;
+    vm->host = e;
+    vm->glob = e->globals;
+    vm->par = e->params;
+    vm->budget = e->while_budget;
+    vm->at = -1;
+    const lc_program p = {.fn = ec->fn.data, .n = ec->fn.len};
+    double v = cbm__lc_run(&p, f, ec->frame, vm);
+    e->while_budget = vm->budget;
+    return vm->err == CBM_OK ? v : run_failed(e);
+}
+
+static inline __attribute__((always_inline)) double run(cbm__eval *e, int32_t root, bool stmt)
+{
+    cbm__ecode *ec = e->code;
+    size_t slot = 2 * (size_t)root + stmt;
+    if (!ec || slot >= ec->entry.len || ec->entry.data[slot].f == 0) {
+        if (first_run(e, root, stmt) < 0)
+            return out_of_memory(e, root);
+        ec = e->code;
     }
-    return 0;
+    ec->runs++;
+    const entry *en = &ec->entry.data[slot];
+    /* a function of one load (a constant, a parameter, a global) and its return, most of a
+     * successor's parameters: that instruction is run here, without entering the loop */
+    switch (en->load) {
+    case O_CONST:
+        return en->k;
+    case O_PLD:
+        return e->params[en->a];
+    case O_GLD:
+        return e->globals[en->a];
+    default:
+        return run_code(e, ec, en->f - 1);
+    }
 }
 
 double cbm__eval_expr(cbm__eval *e, int32_t n)
