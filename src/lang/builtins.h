@@ -3,7 +3,7 @@
  *
  * To add a built-in: an FN_ value here (mechanics ones between FN_EQUILIBRIUM and
  * FN_REACTIONBOUND), a row of the table, and its evaluation: in cbm__builtin_math when it is a
- * function of its numbers alone, else in the evaluator of the dialect (lang/expr_eval.c,
+ * function of its numbers alone, else in the evaluator of the dialect (lang/cpfg_code.c,
  * lsys/lpfg.c) and, for the L+C dialect, its argument and result types in lang/lc_parse.c
  * (call_expr).
  */

@@ -1,5 +1,5 @@
 /* Expressions and statements of the cpfg dialect, parsed into a flat node array (evaluated by
- * expr_eval.c).
+ * cpfg_code.c, which compiles them to the register code of lc_code.h).
  *
  * The grammar follows cpfg's (lsys_input.y): from lowest to highest precedence `?:` (right),
  * `||`, `&&`, `== !=` (also `<>`), `< <= > >=`, `+ -`, `* / %`, `^` (power, left-associative

@@ -5,7 +5,8 @@
  *                 line map back to the original files;
  *   compiler.c    the cursor over that text shared by both parsers, and file:line:col messages;
  *   expr_parse.c  cpfg-dialect expressions and statement blocks into a flat node array;
- *   expr_eval.c   their evaluation;
+ *   cpfg_code.c   their evaluation: compiled to the register code of lc_code.h and run by its
+ *                 loop, the one evaluator of both dialects;
  *   lc.h, lc_parse.c  the L+C dialect's typed front end and its compiled model (run by
  *                 lsys/lpfg.c);
  *   builtins.c    the one table of built-in functions of both dialects, and the math ones;
@@ -97,6 +98,8 @@ typedef struct cbm__array {
     size_t count;
 } cbm__array;
 
+typedef struct cbm__ecode cbm__ecode; /* cpfg_code.c: the register code of the roots run */
+
 /* The evaluation environment shared by a model. */
 typedef struct cbm__eval {
     cbm_context *ctx;
@@ -113,6 +116,7 @@ typedef struct cbm__eval {
     const char *error_msg;
     int32_t error_node; /* node of the first runtime error, -1: none known */
     bool stopped;
+    cbm__ecode *code; /* compiled on first use of each root; cbm__eval_free releases it */
 } cbm__eval;
 
 /* ---- the compiler: a cursor over the preprocessed text plus the node array ---- */
@@ -172,7 +176,14 @@ int32_t cbm__node_num(cbm__compiler *c, double v);
 /// Constant value of a node if it has no variables and no calls.
 bool cbm__node_const(const cbm__compiler *c, int32_t n, double *v);
 
+/// The value of expression n (a statement chain runs and gives 0). The root is compiled to the
+/// register code (lang/lc_code.h) on its first evaluation and run by cbm__lc_run; a runtime
+/// error sets e->error, e->error_msg and e->error_node.
 double cbm__eval_expr(cbm__eval *e, int32_t n);
+/// Releases the compiled code of an environment (e->code; nothing else of e).
+void cbm__eval_free(cbm__eval *e);
+/// Roots compiled (expressions and statement chains), their instructions, and runs so far.
+void cbm__eval_stats(const cbm__eval *e, size_t *roots, size_t *ins, size_t *runs);
 
 /// A value converted to an integer without undefined behaviour: NaN gives 0, values beyond
 /// +-2^62 are clamped, the rest truncated toward zero as C does.
@@ -186,6 +197,8 @@ static inline long long cbm__to_ll(double v)
         return -4600000000000000000LL;
     return (long long)v;
 }
+/// Runs the statement chain n (a bare expression ends it), compiled as cbm__eval_expr's roots;
+/// nothing runs while e->error is set.
 void cbm__eval_stmt(cbm__eval *e, int32_t n);
 
 /* ---- printf of models (format.c) ---- */

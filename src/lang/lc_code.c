@@ -378,6 +378,31 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             if (!eval(ip, fr, p->fn[f].nreg, vm))
                 return 0;
             break;
+        /* the cpfg dialect (lang/cpfg_code.c) */
+        case O_PLD:
+            fr[ip->d] = vm->par[ip->a];
+            break;
+        case O_PST:
+            vm->par[ip->d] = fr[ip->a];
+            break;
+        case O_CMATH:
+            fr[ip->d] = cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], true);
+            break;
+        case O_WSPEND:
+            if (--vm->budget < 0) {
+                vm->at = at;
+                cbm__lc_error(vm, CBM_E_LIMIT,
+                              "while loops ran for more iterations in one step than the limit "
+                              "(--max-loop-iterations, --max-operations)");
+                return 0;
+            }
+            break;
+        case O_HOST:
+            vm->at = at;
+            fr[ip->d] = vm->host_call(vm, ip, fr);
+            if (vm->err != CBM_OK)
+                return 0;
+            break;
         case O_RET:
             return fr[ip->a];
         default: /* O_RET0 */

@@ -25,6 +25,8 @@
 
 #include "lang/lc.h"
 
+struct lc_ins;
+
 /* The runtime state both evaluators share: globals, the frame stack, the budgets and the first
  * runtime error. */
 typedef struct lc_vm {
@@ -47,6 +49,11 @@ typedef struct lc_vm {
      * MAXSZ + 1 doubles); false after an error */
     bool (*eval)(void *ud, int32_t ni, double *fr, int nreg, double *out);
     void *host; /* the ud of produce and eval */
+    /* the cpfg dialect (lang/cpfg_code.c): the production's formal parameters (O_PLD, O_PST)
+     * and the host's built-ins, arrays and printf (O_HOST: ip->fn says which, ip->at is the
+     * node whose position a runtime error names; the result goes to fr[ip->d]) */
+    double *par;
+    double (*host_call)(struct lc_vm *vm, const struct lc_ins *ip, double *fr);
 } lc_vm;
 
 /* The instructions (lc_code.c runs them, lc_native.c translates them to C). */
@@ -116,7 +123,13 @@ enum {
     /* production bodies */
     O_PROD, /* appends module sm d with its parameters in registers a.. (vm->produce) */
     O_DONE, /* `produce` ends the body: the production applied (the run returns 1) */
-    O_EVAL  /* node a evaluated by the tree walker (vm->eval), its first b doubles to d.. */
+    O_EVAL, /* node a evaluated by the tree walker (vm->eval), its first b doubles to d.. */
+    /* the cpfg dialect (lang/cpfg_code.c) */
+    O_PLD,    /* d = vm->par[a] */
+    O_PST,    /* vm->par[d] = a */
+    O_CMATH,  /* d = math built-in fn(a, b) with trigonometry in degrees */
+    O_WSPEND, /* an iteration of a while loop from vm->budget (the cpfg message) */
+    O_HOST    /* d = vm->host_call(ip, fr) */
 };
 
 typedef struct lc_ins {

@@ -126,6 +126,7 @@ void cbm_lsys_destroy(cbm_lsys *ls)
     CBM_ARRAY_FREE(ctx, ls->brk_stack);
     CBM_ARRAY_FREE(ctx, ls->appl);
     CBM_ARRAY_FREE(ctx, ls->applp);
+    cbm__eval_free(&ls->ev);
     cbm__compiler_free(&ls->comp);
     cbm__free(ctx, ls, sizeof *ls);
 }

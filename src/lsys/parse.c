@@ -425,6 +425,7 @@ static int eval_int(parser *p, int32_t e, size_t pos, const char *what, int lo, 
         ev.globals = zeros;
         ev.while_budget = 1000000;
         v = cbm__eval_expr(&ev, e);
+        cbm__eval_free(&ev);
     }
     if (!(v >= lo && v <= hi)) {
         cbm__cerr(p->c, pos, "%s must be between %d and %d, found %g", what, lo, hi, v);

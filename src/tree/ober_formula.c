@@ -1,6 +1,6 @@
 /* The formulas of Oberlaender's parametric tree: every formula of a definition is compiled by
  * the model language's own parser (lang/expr_parse.c, cpfg dialect plus the growth functions,
- * CBM__TREE) into one node array and evaluated by its evaluator (lang/expr_eval.c), so a formula
+ * CBM__TREE) into one node array and evaluated by its evaluator (lang/cpfg_code.c), so a formula
  * has the language's operators, ?:, math and seeded random functions. The variables of the
  * thesis's Table 2 are the parser's formal parameters; a formula may read the variables of its
  * level and of the levels above it (tree < shoot < bud, eq. 10), anything else is an error at
@@ -112,6 +112,7 @@ static const cbm_ober_formula *formula_of(const cbm_ober_def *d, int f)
 
 void cbm__ober_prog_free(ober_prog *p)
 {
+    cbm__eval_free(&p->ev);
     if (p->have_c)
         cbm__compiler_free(&p->c);
     p->have_c = false;
