@@ -436,9 +436,13 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
         put_frame_out(s, p, m, f);
         put(s, "return r%d;", x->a);
         break;
-    default: /* O_RET0 */
+    case O_RET0:
         put_frame_out(s, p, m, f);
         put(s, "return 0;");
+        break;
+    default: /* the cpfg dialect's instructions, never in an L+C program: a compile error, so
+              * a program that had one would keep running on the register code */
+        put(s, "\n#error \"instruction %d has no native translation\"\n", (int)x->op);
         break;
     }
 }
