@@ -43,6 +43,15 @@ done
 # cambium plot: a column plot of the parts table, both formats
 "$bin" plot "$out/tree.csv" -x age_years -y stress_ratio --panel order --style points \
   -o "$out/plot-parts.svg" -o "$out/plot-parts.png"
+# predefined surfaces (petals, calyxes) placed as instances of one mesh each: the lilac of the
+# vlab oracles, where ../shared is present (CI has it)
+lilac=../shared/oracles/vlab/cpfg-lilac/model
+if [ -d "$lilac" ]; then
+  absbin=$(realpath "$bin") absout=$(realpath "$out")
+  (cd "$lilac" && "$absbin" run plant.l materials.mat plant.v -o "$absout/run-lilac-surfaces.glb")
+else
+  echo "== $lilac absent: the surface instances are not validated"
+fi
 echo "== glTF validator"
 "$bin" grow fruit-tree -y 3 --quiet --sway 2 --wind 15 -o "$out/grow-sway.glb" -o "$out/grow-sway.csv"
 NODE_PATH="$val/node_modules" node .ci/gltf-validate.js "$out"/*.glb
