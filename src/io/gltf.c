@@ -538,13 +538,12 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
         int organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
         CBM_TRY(instanced_mesh(g, s, organ, bk, col + 4 * (size_t)bk->part0, &mid));
         CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->fbuf, 4 * n));
-        float *f = g->fbuf.data;
         inst_attrs ia;
         if (bk->shape >= 0)
             CBM_TRY(placement_trs(g, pl, ord, ni, n, fill, &ia));
         else
             CBM_TRY(tube_trs(g, in, ord, n, fill, &ia));
-        f = g->fbuf.data;
+        float *f = g->fbuf.data;
         size_t *dst[5] = {&ia.stress, &ia.age, &ia.react, &ia.order, &ia.seg};
         for (int k = 0; k < 5; k++) {
             for (size_t i = 0; fill && i < n; i++)

@@ -35,10 +35,10 @@
 static void advise_huge(void *p, size_t bytes)
 {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    const uintptr_t huge = (uintptr_t)2 << 20;
-    uintptr_t a = ((uintptr_t)p + huge - 1) & ~(huge - 1), e = ((uintptr_t)p + bytes) & ~(huge - 1);
-    if (e > a)
-        (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+    const size_t huge = (size_t)2 << 20;
+    size_t off = (size_t)(-(uintptr_t)p & (huge - 1)); /* from p up to the next 2 MiB boundary */
+    if (bytes > off && (bytes - off) >= huge)
+        (void)madvise((char *)p + off, (bytes - off) & ~(huge - 1), MADV_HUGEPAGE);
 #else
     (void)p;
     (void)bytes;
