@@ -323,30 +323,44 @@ static void wind_load(const cbm__modal *md, double s, const double *ed, cbm_vec3
     }
 }
 
+/* The central differences of the drag along the modes step a 1e-4 fraction of the wind (or
+ * 1 m/s), vref, at the plant's farthest node, reach (at least 1 mm): the drag is smooth there
+ * but for |w| w at w = 0, where the central difference of a function odd in the step is exact.
+ * Mode ph's step scales it by the mode's largest component. */
+static void fd_setup(const cbm_motion *m, const cbm__drag *nd, double *vref, double *reach)
+{
+    double h = 0.0;
+    for (size_t i = 0; i < m->d.n; i++)
+        h = fmax(h, v3_norm(m->d.e[i]));
+    *vref = 1e-4 * fmax(nd->u_ref, 1.0);
+    *reach = fmax(h, 1e-3);
+}
+
+static double fd_step(const double *ph, size_t nq, double vref, double reach)
+{
+    double pmax = 0.0;
+    for (size_t i = 0; i < nq; i++)
+        pmax = fmax(pmax, fabs(ph[i]));
+    return vref / (pmax * reach);
+}
+
 /* The projections of the drag nd linearised about the still plant in its mean wind. */
 static void wind_projections(cbm_motion *m, cbm__drag *nd)
 {
     cbm__modal *md = m->modal;
-    size_t k = md->k, nq = m->nq, n = m->d.n;
+    size_t k = md->k, nq = m->nq;
     int32_t ng = nd->gust.n;
     nd->gust.n = 0; /* the mean wind */
     cbm_vec3 zero = v3(0, 0, 0);
     memset(m->y, 0, nq * sizeof(double));
     cbm__drag_force(nd, &m->d, 0.0, m->y, zero, m->g);
     project(md, nq, m->g, md->pw);
-    /* central differences, the steps scaled to a 1e-4 fraction of the wind (or 1 m/s) at the
-     * plant's farthest node: the drag is smooth there but for |w| w at w = 0, where the central
-     * difference of a function odd in the step is exact */
-    double h = 0.0;
-    for (size_t i = 0; i < n; i++)
-        h = fmax(h, v3_norm(m->d.e[i]));
-    double vref = 1e-4 * fmax(nd->u_ref, 1.0);
+    /* central differences along each mode (fd_step) */
+    double vref, reach;
+    fd_setup(m, nd, &vref, &reach);
     for (size_t c = 0; c < k; c++) {
         const double *ph = md->phi + c * nq;
-        double pmax = 0.0;
-        for (size_t i = 0; i < nq; i++)
-            pmax = fmax(pmax, fabs(ph[i]));
-        double eps = vref / (pmax * fmax(h, 1e-3));
+        double eps = fd_step(ph, nq, vref, reach);
         for (size_t i = 0; i < nq; i++)
             m->y[i] = eps * ph[i];
         cbm__drag_force(nd, &m->d, 0.0, m->y, zero, m->g);
@@ -492,18 +506,12 @@ static cbm_status field_projections(cbm_motion *m, cbm__drag *nd)
     memset(m->y, 0, nq * sizeof(double));
     cbm__drag_wrenches(nd, &m->d, m->y, zero, ww, wo);
     field_split(md, nd, zt, ww, wo, x->pl, NULL, 0, 0, 1.0, md->r);
-    /* the damping's and the base's shares by central differences, the steps as
-     * wind_projections takes them */
-    double h = 0.0;
-    for (size_t i = 0; i < n; i++)
-        h = fmax(h, v3_norm(m->d.e[i]));
-    double vref = 1e-4 * fmax(nd->u_ref, 1.0);
+    /* the damping's and the base's shares by central differences along each mode (fd_step) */
+    double vref, reach;
+    fd_setup(m, nd, &vref, &reach);
     for (size_t c = 0; c < k; c++) {
         const double *ph = md->phi + c * nq;
-        double pmax = 0.0;
-        for (size_t i = 0; i < nq; i++)
-            pmax = fmax(pmax, fabs(ph[i]));
-        double eps = vref / (pmax * fmax(h, 1e-3));
+        double eps = fd_step(ph, nq, vref, reach);
         for (size_t i = 0; i < nq; i++)
             m->y[i] = eps * ph[i];
         cbm__drag_wrenches(nd, &m->d, m->y, zero, ww, wo);
