@@ -39,7 +39,7 @@ static inline cbm_plant *dyn_rod(cbm_context *ctx, int n, double L, double r, do
 
 /* A branched plant of n segments under gravity, clamped at 1.2 rad, solved: a main axis with a
  * lateral every third segment, elliptical sections 2 x 1.5 cm, 50 g on every fourth segment
- * (test_dyn_loads.c, test_dyn_modal.c). */
+ * (test_dyn_loads.c, test_dyn_modal.c, test_dyn_modes.c). */
 static inline cbm_plant *dyn_branched(cbm_context *ctx, int n)
 {
     cbm_plant_def pd = cbm_plant_def_default();

@@ -68,23 +68,7 @@ TEST(cantilever_second_order)
 TEST(operators_consistent)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(1.2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    cbm_segment_def d = cbm_segment_def_default();
-    d.core.a = 0.02;
-    d.core.b = 0.015;
-    for (int i = 0; i < 30; i++) {
-        d.parent = i == 0 ? -1 : (i % 3 == 0 ? i / 2 : i - 1);
-        d.lateral = i % 3 == 0 && i > 0;
-        d.deviation = d.lateral ? 0.6 : 0.05;
-        d.divergence = 2.4 * i;
-        d.point_mass = i % 4 == 0 ? 0.05 : 0.0;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    cbm_solve_def sd = cbm_solve_def_default();
-    CHECK_OK(cbm_plant_solve(p, &sd, NULL));
+    cbm_plant *p = dyn_branched(ctx, 30);
     cbm__dyn dy;
     CHECK_OK(cbm__dyn_build(p, &dy));
     size_t N = 90;
