@@ -868,3 +868,57 @@ TEST(approx_lc_load_equals_api)
     }
     test_ctx_end(ctx);
 }
+
+/* The small-load series of the corrected mode ((K0 sigma_end)^2 <= 0.02, approx.c) against the
+ * elliptic root and closed-form profile it stands in for there: omega and every increment over
+ * t0 0.5-179.5 degrees, eps up to the threshold, cylinders and cones, 1 to 200 segments, with
+ * and without the reversal. The two are different methods (not the same bits) that must agree
+ * to the series' truncation error (stated in docs/validation.md). And a plant's axes, which
+ * take the series from sin t0 and cos t0 of their frame, against the API on the same axis. */
+TEST(approx_series_vs_elliptic)
+{
+    cbm_context *ctx = test_ctx();
+    static double ser[201], ell[201];
+    static const long discs[] = {1, 2, 3, 5, 8, 20, 200};
+    static const double conis[] = {0.0, 0.3, 0.9};
+    double worst_w = 0.0, worst_inc = 0.0;
+    long n = 0;
+    for (double t0d = 0.5; t0d < 180.0; t0d += 1.7)
+        for (double e = 1e-8; e <= 0.02; e *= 1.9)
+            for (size_t a = 0; a < sizeof discs / sizeof *discs; a++)
+                for (size_t b = 0; b < sizeof conis / sizeof *conis; b++) {
+                    cbm_approx_def d = cbm_approx_def_default();
+                    d.disc = discs[a];
+                    d.coni = conis[b];
+                    d.t0 = t0d;
+                    d.p = (a & 1) ? 0.6 : 1.0;
+                    d.k0 = sqrt(e) * (1.0 - d.coni) / (double)d.disc;
+                    cbm_approx_info in;
+                    CHECK_OK(cbm_approx_angles(ctx, &d, ser, (size_t)d.disc + 1, &in));
+                    double we = 0.0;
+                    cbm__approx_angles_elliptic(&d, ell, &we);
+                    worst_w = fmax(worst_w, fabs(in.omega - we));
+                    for (long i = 1; i <= d.disc; i++)
+                        worst_inc = fmax(worst_inc, fabs(ser[i] - ell[i]));
+                    n++;
+                }
+    printf("series vs elliptic: %ld cases, omega %.3g deg, increments %.3g deg at worst\n", n,
+           worst_w, worst_inc);
+    CHECK(worst_w < 1e-10);
+    CHECK(worst_inc < 1e-10);
+    CHECK(worst_w > 0.0); /* two methods, not the same bits */
+    /* the plant's entry (sin t0, cos t0 given) against the API's (t0 given) */
+    cbm_approx_def d = cbm_approx_def_default();
+    d.disc = 7;
+    d.coni = 0.2;
+    d.t0 = 63.0;
+    d.k0 = 0.01;
+    CHECK_OK(cbm_approx_angles(ctx, &d, ser, 8, NULL));
+    double t0 = 63.0 * PI / 180.0;
+    CHECK(cbm__approx_series(&d, sin(t0), cos(t0), ell));
+    for (int i = 1; i <= 7; i++)
+        CHECK_NEAR(ell[i], ser[i], 1e-14);
+    d.k0 = 0.1; /* eps = (0.1 * 7 / 0.8)^2 = 0.77: past the series */
+    CHECK(!cbm__approx_series(&d, sin(t0), cos(t0), ell));
+    test_ctx_end(ctx);
+}

@@ -547,9 +547,109 @@ static void pendulum_profile(const cbm_approx_def *d, double t0, double w, doubl
     }
 }
 
+/* ---- the small-load series (the corrected mode where K0 sigma_end is small) ---- */
+
+/* theta = psi - t0 solves theta'' = -eps sin(t0 + theta) on x = sigma / sigma_end in [0, 1],
+ * theta(0) = 0, theta'(1) = 0, eps = (K0 sigma_end)^2: the same boundary-value problem the
+ * elliptic functions solve. Its expansion theta = sum_n eps^n a_n(x) (a_n a polynomial of degree
+ * 2n in x whose coefficients are polynomials in S = sin t0 and C = cos t0, each found from the
+ * previous ones by integrating twice; derived with a computer algebra system) is taken to n = 6
+ * and gathered into one polynomial theta(x) = sum_j c_j x^j, j = 1..12. The Green operator of
+ * this problem has sup-norm 1/2 and |d sin| <= 1, so the Picard map is a contraction with
+ * constant eps/2 and the terms fall like (eps/2)^n: at eps <= SERIES_EPS the first omitted
+ * term, and so the error, is below 1e-13 rad (tests/test_approx.c checks it against the
+ * elliptic root and profile on a grid of t0 and eps). No transcendental call, no root: on trees
+ * of short, lightly loaded axes this is most axes (docs/performance.md, "Method A"). */
+#define SERIES_EPS 0.02
+
+static void series_coefs(double S, double C, double e, double c[13])
+{
+    double C2 = C * C, C3 = C2 * C, C4 = C2 * C2, C5 = C4 * C;
+    double e1 = e, e2 = e * e, e3 = e2 * e, e4 = e2 * e2, e5 = e4 * e, e6 = e3 * e3;
+    c[0] = 0.0;
+    c[1] = S * e1 *
+           (1 + e * ((1.0 / 3.0) * C +
+                     e * ((1.0 / 5.0) * C2 - 1.0 / 15.0 +
+                          e * ((46.0 / 315.0) * C3 - 29.0 / 315.0 * C +
+                               e * ((67.0 / 567.0) * C4 - 103.0 / 945.0 * C2 + 4.0 / 315.0 +
+                                    e * ((5297.0 / 51975.0) * C5 - 3854.0 / 31185.0 * C3 +
+                                         (529.0 / 17325.0) * C))))));
+    c[2] = S * e1 * (-1.0 / 2.0);
+    c[3] = S * e2 *
+           (-1.0 / 6.0 * C +
+            e * (-1.0 / 18.0 * C2 +
+                 e * (-1.0 / 30.0 * C3 + (1.0 / 90.0) * C +
+                      e * (-23.0 / 945.0 * C4 + (29.0 / 1890.0) * C2 +
+                           e * (-67.0 / 3402.0 * C5 + (103.0 / 5670.0) * C3 - 2.0 / 945.0 * C)))));
+    c[4] = S * e2 *
+           ((1.0 / 24.0) * C +
+            e * (1.0 / 24.0 - 1.0 / 24.0 * C2 +
+                 e * (-1.0 / 36.0 * C3 + (1.0 / 36.0) * C +
+                      e * (-23.0 / 1080.0 * C4 + (29.0 / 1080.0) * C2 - 1.0 / 180.0 +
+                           e * (-67.0 / 3780.0 * C5 + (103.0 / 3780.0) * C3 - 1.0 / 105.0 * C)))));
+    c[5] = S * e3 *
+           ((1.0 / 30.0) * C2 - 1.0 / 40.0 +
+            e * ((1.0 / 360.0) * C3 +
+                 e * (-1.0 / 600.0 * C4 + (1.0 / 900.0) * C2 + 1.0 / 600.0 +
+                      e * (-11.0 / 3780.0 * C5 + (103.0 / 37800.0) * C3 + (1.0 / 1575.0) * C))));
+    c[6] = S * e3 *
+           (1.0 / 240.0 - 1.0 / 180.0 * C2 +
+            e * ((11.0 / 720.0) * C3 - 11.0 / 720.0 * C +
+                 e * ((19.0 / 2160.0) * C4 - 1.0 / 135.0 * C2 - 1.0 / 720.0 +
+                      e * ((193.0 / 32400.0) * C5 - 199.0 / 32400.0 * C3 + (1.0 / 5400.0) * C))));
+    c[7] = S * e4 *
+           (-17.0 / 2520.0 * C3 + (11.0 / 1680.0) * C +
+            e * ((11.0 / 3780.0) * C4 - 1.0 / 168.0 * C2 + 1.0 / 336.0 +
+                 e * ((13.0 / 3600.0) * C5 - 113.0 / 18900.0 * C3 + (59.0 / 25200.0) * C)));
+    c[8] = S * e4 *
+           ((17.0 / 20160.0) * C3 - 11.0 / 13440.0 * C +
+            e * (-1.0 / 224.0 * C4 + (43.0 / 6720.0) * C2 - 13.0 / 6720.0 +
+                 e * (-1.0 / 640.0 * C5 + (29.0 / 20160.0) * C3 + (1.0 / 8064.0) * C)));
+    c[9] = S * e5 *
+           ((31.0 / 22680.0) * C4 - 19.0 / 10080.0 * C2 + 1.0 / 1920.0 +
+            e * (-113.0 / 68040.0 * C5 + (67.0 / 20160.0) * C3 - 67.0 / 40320.0 * C));
+    c[10] = S * e5 *
+            (-31.0 / 226800.0 * C4 + (19.0 / 100800.0) * C2 - 1.0 / 19200.0 +
+             e * ((67.0 / 56700.0) * C5 - 3827.0 / 1814400.0 * C3 + (187.0 / 201600.0) * C));
+    c[11] = S * e6 * (-691.0 / 2494800.0 * C5 + (403.0 / 831600.0) * C3 - 307.0 / 1478400.0 * C);
+    c[12] =
+        S * e6 * ((691.0 / 29937600.0) * C5 - 403.0 / 9979200.0 * C3 + (307.0 / 17740800.0) * C);
+}
+
+/* The increments of the profile at the segments' midpoints (as corrected_angles sets them) from
+ * the series; returns omega = theta(1) (rad). S = sin t0 and C = cos t0 come from the caller
+ * (a plant has them as a cross and a dot product of unit vectors). */
+static double series_angles(const cbm_approx_def *d, double S, double C, double e, double *res)
+{
+    double c[13];
+    series_coefs(S, C, e, c);
+    long disc = d->disc;
+    double sig_end = (double)disc / (1.0 - d->coni);
+    double inv_end = 1.0 / sig_end, inv_h = d->coni / (double)disc;
+    double prev = 0.0;
+    for (long i = 0; i < disc; i++) {
+        double smid = (double)i + 0.5;
+        double x = (d->coni == 0.0 ? smid : smid / (1.0 - smid * inv_h)) * inv_end;
+        double th = c[12];
+        for (int j = 11; j >= 1; j--)
+            th = th * x + c[j];
+        th *= x;
+        double inc = th - prev;
+        prev = th;
+        if ((double)i > (double)disc * d->p)
+            inc = -inc;
+        res[i + 1] = inc * RAD;
+    }
+    double w = 0.0;
+    for (int j = 12; j >= 1; j--)
+        w += c[j];
+    return w;
+}
+
 #define FROM_TIP 12.0
 
-static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_info *info)
+static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_info *info,
+                             bool series)
 {
     long disc = d->disc;
     double t0 = d->t0 / RAD, k0 = d->k0;
@@ -557,6 +657,14 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
     double w = 0.0;
     double s0 = sin(0.5 * t0), c0 = cos(0.5 * t0);
     info->route = CBM_APPROX_ROUTE_NONE;
+    if (series && k0 > 0.0 && t0 > 0.0 && t0 < PI && k0 * sig_end * k0 * sig_end <= SERIES_EPS) {
+        double target = k0 * sig_end;
+        res[0] = d->t0;
+        w = series_angles(d, 2.0 * s0 * c0, (c0 - s0) * (c0 + s0), target * target, res);
+        info->route = CBM_APPROX_ROUTE_ROOT;
+        info->omega = w * RAD;
+        return;
+    }
     if (k0 > 0.0) {
         double target = k0 * sig_end;
         bool fast = t0 > 0.0 && t0 < PI && omega_fast(t0, s0, c0, target, &info->evaluations, &w);
@@ -665,7 +773,7 @@ cbm_status cbm_approx_angles(cbm_context *ctx, const cbm_approx_def *d, double *
     if (d->mode == CBM_APPROX_THESIS)
         s = thesis_angles(ctx, d, res, &inf);
     else if (d->mode == CBM_APPROX_CORRECTED)
-        corrected_angles(d, res, &inf);
+        corrected_angles(d, res, &inf, true);
     else
         return cbm__fail(ctx, CBM_E_INVALID, "approx: unknown mode %d", (int)d->mode);
     double tip = 0.0;
@@ -675,6 +783,23 @@ cbm_status cbm_approx_angles(cbm_context *ctx, const cbm_approx_def *d, double *
     if (info)
         *info = inf;
     return s;
+}
+
+bool cbm__approx_series(const cbm_approx_def *d, double sin_t0, double cos_t0, double *res)
+{
+    double t = d->k0 * (double)d->disc / (1.0 - d->coni);
+    if (!(d->k0 > 0.0) || !(t * t <= SERIES_EPS) || !(sin_t0 > 0.0))
+        return false;
+    (void)series_angles(d, sin_t0, cos_t0, t * t, res);
+    return true;
+}
+
+void cbm__approx_angles_elliptic(const cbm_approx_def *d, double *res, double *omega)
+{
+    cbm_approx_info inf;
+    memset(&inf, 0, sizeof inf);
+    corrected_angles(d, res, &inf, false);
+    *omega = inf.omega;
 }
 
 /* ---- conversion (5.1-5.2) ---- */

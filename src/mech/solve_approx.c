@@ -25,6 +25,7 @@
  * The frames are set while bending, exactly as the forward sweep would set them; afterwards one
  * backward sweep computes forces and moments; stats.residual says how far the
  * shape is from the equilibrium of the segment model (it is not one). */
+#include "mech/approx_internal.h"
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
 
@@ -67,6 +68,16 @@ static cbm_quat joint_base(const cbm_plant *p, size_t i, cbm_vec3 *pos)
     return qa;
 }
 
+/* The generator's increments (degrees, in sc->res[1..m]) onto the axis's chain. */
+static cbm_status set_increments(approx_scratch *sc, size_t m, cbm_vec3 axis)
+{
+    for (size_t k = 0; k < m; k++) {
+        sc->inc[sc->chain[k]] = sc->res[k + 1] * (CBM_PI / 180.0);
+        sc->ax[sc->chain[k]] = axis;
+    }
+    return CBM_OK;
+}
+
 /* Generator parameters of the axis starting at segment i (frame before its joint: qa) and the
  * increments of its chain into the scratch arrays. */
 static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch *sc, size_t i,
@@ -84,9 +95,8 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     cbm_quat q0 = q_mul(qa, q_from_rotvec(v3_scale(w->rj[i], w->dual[i])));
     cbm_vec3 h0 = q_h(q0);
     double cosv = -v3_dot(h0, gdir);
-    double t0 = acos(fmax(-1.0, fmin(1.0, cosv)));
     cbm_vec3 axis = v3_cross(h0, gdir);
-    double an = v3_norm(axis);
+    double an = v3_norm(axis); /* sin t0 (h0 and gdir are unit vectors) */
     /* vertical: any horizontal axis; the segment's L keeps it deterministic */
     axis = an > 1e-12 ? v3_scale(axis, 1.0 / an) : q_rotate(q0, v3(0, 1, 0));
     /* taper through the centroids' semi-axes, extrapolated half a segment to each end */
@@ -110,7 +120,6 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     double hseg = len / (double)m;
     cbm_approx_def ad = cbm_approx_def_default();
     ad.disc = (long)m;
-    ad.t0 = t0 * (180.0 / CBM_PI);
     ad.k0 = f > 0.0 && ei > 0.0 ? hseg * sqrt(f / ei) : 0.0;
     ad.coni = coni;
     if (d->approx_load == CBM_APPROX_LOAD_CALIBRATED) {
@@ -134,6 +143,13 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     }
     ad.p = d->approx_p;
     ad.mode = d->approx_mode;
+    /* the corrected mode's small loads (most axes of a tree of short axes): the series from
+     * sin t0 and cos t0 as they are here, no acos, no root (approx.c) */
+    if (ad.mode == CBM_APPROX_CORRECTED && isfinite(ad.k0) && an > 1e-12 &&
+        cbm__approx_series(&ad, an, fmax(-1.0, fmin(1.0, cosv)), sc->res))
+        return set_increments(sc, m, axis);
+    double t0 = acos(fmax(-1.0, fmin(1.0, cosv)));
+    ad.t0 = t0 * (180.0 / CBM_PI);
     if (!isfinite(ad.k0) || !isfinite(ad.t0))
         return cbm__fail(p->ctx, CBM_E_NONFINITE,
                          "approx: axis from segment %zu: K0 or t0 is not "
@@ -142,11 +158,7 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     cbm_status s = cbm_approx_angles(p->ctx, &ad, sc->res, m + 1, NULL);
     if (s != CBM_OK)
         return cbm__fail(p->ctx, s, "approx: axis from segment %zu failed", i);
-    for (size_t k = 0; k < m; k++) {
-        sc->inc[sc->chain[k]] = sc->res[k + 1] * (CBM_PI / 180.0);
-        sc->ax[sc->chain[k]] = axis;
-    }
-    return CBM_OK;
+    return set_increments(sc, m, axis);
 }
 
 cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solve_stats *st)
