@@ -26,7 +26,8 @@ static bool parse_model(const char *a, void *target, char *why, size_t n)
 
 cli_opt cli_grow_model_row(const char **model)
 {
-    return (cli_opt){.name = "MODEL", .kind = CLI_POSITIONAL, .target = model, .parse = parse_model};
+    return (cli_opt){
+        .name = "MODEL", .kind = CLI_POSITIONAL, .target = model, .parse = parse_model};
 }
 
 cli_opt cli_grow_years_row(long *years)
