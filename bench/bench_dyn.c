@@ -18,6 +18,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "bench_util.h"
 #include "cambium/dynamics.h"
 
 #include <math.h>
@@ -26,23 +27,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#define PI 3.14159265358979323846
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* CPU time of the process: on a shared machine the wall clock also counts the other processes */
-static double cpu(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* Bytes a still-air undamped step (dyn_motion.c, fused_step) reads per segment: the backward
  * sweep the parent index 8, the inertia 80, the right-hand side's twist 48, the carried sum 48,
@@ -76,54 +60,6 @@ static double stream_read(size_t bytes, double *sink)
     }
     free(a);
     return best;
-}
-
-static cbm_plant *make_tree(cbm_context *ctx, size_t n)
-{
-    cbm_context_seed(ctx, 7);
-    int64_t *par = malloc(n * sizeof *par);
-    double *count = malloc(n * sizeof *count);
-    unsigned char *seen = calloc(n, 1);
-    cbm_plant *p = NULL;
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.capacity = n;
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    if (!par || !count || !seen || cbm_plant_create(ctx, &pd, &p) != CBM_OK)
-        goto done;
-    par[0] = -1;
-    for (size_t i = 1; i < n; i++)
-        par[i] = cbm_context_uniform(ctx) < 0.8 ? (int64_t)i - 1
-                                                : (int64_t)(cbm_context_uniform(ctx) * (double)i);
-    for (size_t i = 0; i < n; i++)
-        count[i] = 1;
-    for (size_t i = n; i-- > 1;)
-        count[par[i]] += count[i];
-    for (size_t i = 0; i < n && p; i++) {
-        cbm_segment_def d = cbm_segment_def_default();
-        d.parent = par[i];
-        d.length = 0.02;
-        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
-        d.core.youngs_modulus = 1e10;
-        d.core.shear_modulus = 1e10 / 16;
-        d.core.density = 700;
-        if (i > 0 && seen[par[i]]) {
-            d.divergence = 2.39996 * (double)i;
-            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
-            d.roll = -d.divergence;
-        }
-        if (i > 0)
-            seen[par[i]] = 1;
-        d.point_mass = count[i] == 1 ? 0.005 : 0.0;
-        if (cbm_plant_add_segment(p, &d, NULL) != CBM_OK) {
-            cbm_plant_destroy(p);
-            p = NULL;
-        }
-    }
-done:
-    free(seen);
-    free(par);
-    free(count);
-    return p;
 }
 
 int main(int argc, char **argv)
@@ -164,7 +100,7 @@ int main(int argc, char **argv)
         cbm_context_def cd = cbm_context_def_default();
         if (cbm_context_create(&cd, &ctx) != CBM_OK)
             return 1;
-        cbm_plant *p = make_tree(ctx, sizes[k]);
+        cbm_plant *p = bench_random_tree(ctx, sizes[k], sizes[k], 1e10, 0.005);
         cbm_solve_def sd = cbm_solve_def_default();
         if (!p || cbm_plant_solve(p, &sd, NULL) != CBM_OK) {
             fprintf(stderr, "bench_dyn: no equilibrium for %zu segments\n", sizes[k]);

@@ -11,6 +11,7 @@
  * Usage: bench_fem [--reps N] [--max N] [--thesis-max N] [--out file.csv] */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "bench_util.h"
 #include "cambium/fem_thesis.h"
 
 #include <math.h>
@@ -18,23 +19,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#define PI 3.14159265358979323846
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* CPU time of the process: on a shared machine the wall clock also counts other jobs' turns */
-static double cpu(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* Guertler's branch: 4 m long (elements of Le = 4 / n_FE, so the physics stays the same across
  * the sweep), tip radius r_end, base radius r_start after n_FE steps (ring thickness
@@ -75,59 +59,6 @@ static int grow_branch(cbm_context *ctx, size_t nfe, cbm_plant **out)
         }
     *out = p;
     return 0;
-}
-
-static cbm_plant *make_tree(cbm_context *ctx, size_t n)
-{
-    cbm_context_seed(ctx, 7);
-    int64_t *par = malloc(n * sizeof *par);
-    double *count = malloc(n * sizeof *count);
-    unsigned char *seen = calloc(n, 1);
-    if (!par || !count || !seen) {
-        free(par);
-        free(count);
-        free(seen);
-        return NULL;
-    }
-    par[0] = -1;
-    for (size_t i = 1; i < n; i++)
-        par[i] = cbm_context_uniform(ctx) < 0.8 ? (int64_t)i - 1
-                                                : (int64_t)(cbm_context_uniform(ctx) * (double)i);
-    for (size_t i = 0; i < n; i++)
-        count[i] = 1;
-    for (size_t i = n; i-- > 1;)
-        count[par[i]] += count[i];
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.capacity = 2 * n;
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    if (cbm_plant_create(ctx, &pd, &p) != CBM_OK)
-        p = NULL;
-    for (size_t i = 0; i < n && p; i++) {
-        cbm_segment_def d = cbm_segment_def_default();
-        d.parent = par[i];
-        d.length = 0.02;
-        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
-        d.core.youngs_modulus = 1e10;
-        d.core.shear_modulus = 1e10 / 16;
-        d.core.density = 700;
-        if (i > 0 && seen[par[i]]) {
-            d.divergence = 2.39996 * (double)i;
-            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
-            d.roll = -d.divergence;
-        }
-        if (i > 0)
-            seen[par[i]] = 1;
-        d.point_mass = count[i] == 1 ? 0.005 : 0.0;
-        if (cbm_plant_add_segment(p, &d, NULL) != CBM_OK) {
-            cbm_plant_destroy(p);
-            p = NULL;
-        }
-    }
-    free(seen);
-    free(par);
-    free(count);
-    return p;
 }
 
 /* One growth step: a 0.1 mm ring everywhere, a 2 cm element at every tip. */
@@ -256,7 +187,7 @@ int main(int argc, char **argv)
         cbm_context *c2 = NULL;
         if (cbm_context_create(NULL, &c2) != CBM_OK)
             return 1;
-        cbm_plant *p = make_tree(c2, n);
+        cbm_plant *p = bench_random_tree(c2, n, 2 * n, 1e10, 0.005);
         if (!p || cbm_plant_evaluate(p, NULL) != CBM_OK)
             return 1;
         size_t tips = 0, base = cbm_context_bytes(c2);

@@ -11,6 +11,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "bench_util.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -26,13 +27,6 @@ static const char FIG28[] =
     "Lsystem: 1\nderivation length: 13\nAxiom: !(1)F(200)/(45)A\n"
     "A --> !(vr)F(50)[&(a)F(50)A]/(d1)[&(a)F(50)A]/(d2)[&(a)F(50)A]\n"
     "F(l) --> F(l*lr)\n!(w) --> !(w*vr)\nendlsystem\n";
-
-static double now(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 static int run(FILE *csv, const char *name, const char *text, bool float32)
 {

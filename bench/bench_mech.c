@@ -26,6 +26,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "bench_util.h"
 #include "mech/mech_internal.h" /* cbm__mech_tree_threads */
 
 #include <math.h>
@@ -33,15 +34,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-#define PI 3.14159265358979323846
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* CPU seconds of the process (every thread) */
 static double cpu_now(void)
@@ -75,66 +67,6 @@ static cbm_plant *make_chain(cbm_context *ctx, size_t n, double alpha, double el
             return NULL;
         }
     }
-    return p;
-}
-
-static cbm_plant *make_tree(cbm_context *ctx, size_t n, double E, double leaf)
-{
-    cbm_context_seed(ctx, 7);
-    int64_t *par = malloc(n * sizeof *par);
-    double *count = malloc(n * sizeof *count);
-    if (!par || !count) {
-        free(par);
-        free(count);
-        return NULL;
-    }
-    par[0] = -1;
-    for (size_t i = 1; i < n; i++) {
-        if (cbm_context_uniform(ctx) < 0.8)
-            par[i] = (int64_t)i - 1;
-        else
-            par[i] = (int64_t)(cbm_context_uniform(ctx) * (double)i);
-    }
-    for (size_t i = 0; i < n; i++)
-        count[i] = 1;
-    for (size_t i = n; i-- > 1;)
-        count[par[i]] += count[i];
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.capacity = n;
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    if (cbm_plant_create(ctx, &pd, &p) != CBM_OK) {
-        free(par);
-        free(count);
-        return NULL;
-    }
-    /* number of children seen so far, to tell continuations from laterals */
-    unsigned char *seen = calloc(n, 1);
-    for (size_t i = 0; i < n && p; i++) {
-        cbm_segment_def d = cbm_segment_def_default();
-        d.parent = par[i];
-        d.length = 0.02;
-        double r = 0.002 * sqrt(count[i]);
-        d.core.a = d.core.b = r;
-        d.core.youngs_modulus = E;
-        d.core.shear_modulus = E / 16;
-        d.core.density = 700;
-        if (i > 0 && seen[par[i]]) {
-            d.divergence = 2.39996 * (double)i;
-            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
-            d.roll = -d.divergence;
-        }
-        if (i > 0)
-            seen[par[i]] = 1;
-        d.point_mass = count[i] == 1 ? leaf : 0.0;
-        if (cbm_plant_add_segment(p, &d, NULL) != CBM_OK) {
-            cbm_plant_destroy(p);
-            p = NULL;
-        }
-    }
-    free(seen);
-    free(par);
-    free(count);
     return p;
 }
 
@@ -272,8 +204,8 @@ int main(int argc, char **argv)
             cbm_plant *p = wl == 0   ? make_chain(pc, n, 5.0, 0.0, 0.0)
                            : wl == 1 ? make_chain(pc, n, 50.0, 0.0, 0.0)
                            : wl == 2 ? make_chain(pc, n, 7.5, PI / 2, 0.01)
-                           : wl == 3 ? make_tree(pc, n, 1e10, 0.005)
-                                     : make_tree(pc, n, 3e8, 0.02);
+                           : wl == 3 ? bench_random_tree(pc, n, n, 1e10, 0.005)
+                                     : bench_random_tree(pc, n, n, 3e8, 0.02);
             if (!p) {
                 fprintf(stderr, "bench_mech: cannot build %zu segments\n", n);
                 cbm_context_destroy(pc);

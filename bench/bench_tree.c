@@ -10,18 +10,12 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "cambium/cambium.h"
+#include "bench_util.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static size_t total_rings(const cbm_plant *p)
 {

@@ -6,18 +6,12 @@
  * what,steps,modules,seconds,ns_per_module,peak_bytes.
  * Usage: bench_turtle [max_steps (default 7)] [exec: only the plain exec runs, for profiling] */
 #define _POSIX_C_SOURCE 200809L
+#include "bench_util.h"
 #include "turtle/tint.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* The Koch string after n steps, as turtle commands. */
 static unsigned char *koch(int n, size_t *len)

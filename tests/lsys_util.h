@@ -7,6 +7,7 @@
 
 #include "cambium/lsys.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,6 +25,19 @@ static inline void tb_put(tbuf *b, const char *s, size_t n)
     memcpy(b->s + b->n, s, n);
     b->n += n;
     b->s[b->n] = 0;
+}
+
+/* Loads models/<name> of the repository, with one -D NAME=VALUE when define is not NULL. */
+static inline cbm_status lsys_load_shipped(cbm_context *ctx, const char *name, const char *define,
+                                           cbm_lsys **ls)
+{
+    char path[2048];
+    snprintf(path, sizeof path, "%s/models/%s", test_source_dir(), name);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.defines = define ? &define : NULL;
+    def.define_count = define ? 1 : 0;
+    return cbm_lsys_load(ctx, &def, ls);
 }
 
 /* The symbol of the L+C module called `name`, -1 if none. */

@@ -25,6 +25,43 @@ char *oracle_slurp(const char *path, size_t *len)
     return b;
 }
 
+/* Each test case's model: directory, L-system, view, colours, the string after the homomorphism,
+ * the kinds compared (-1: all) and the tolerance of the scene bounds against final.obj.gz. */
+static const struct {
+    const char *test;
+    oracle_model model;
+} cpfg_models[] = {
+    {"quadratic_koch",
+     {"cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3}},
+    {"compound_homo", {"cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3}},
+    {"compound_param", {"cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3}},
+    {"continuous_decomp",
+     {"cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3}},
+    {"florigen_param",
+     {"cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3}},
+    {"hormone_up", {"cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3}},
+    {"monopodial", {"cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-3}},
+    {"sympodial", {"cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, -1, 2e-3}},
+    {"random_moss",
+     {"cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, -1, -1}},
+    {"weeping_birch",
+     {"cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3}},
+    {"query_position", {"cpfg-query-position", "plant.l", "plant.v", "plant.map", false, -1, -1}},
+    /* OBJ: cpfg's OBJ export mirrors predefined surfaces in x; its .ray output does not */
+    {"leaf_rnd", {"cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-2}},
+    {"tropisms", {"cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, -1, 1e-3}},
+    {"lilac", {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1, 1e-3}},
+};
+
+const oracle_model *oracle_cpfg_model(const char *test_name)
+{
+    for (size_t k = 0; k < sizeof cpfg_models / sizeof cpfg_models[0]; k++)
+        if (!strcmp(cpfg_models[k].test, test_name))
+            return &cpfg_models[k].model;
+    fprintf(stderr, "oracle_cpfg_model: no model for the test '%s'\n", test_name);
+    abort();
+}
+
 /* Parses cpfg's string notation (single-character symbols with optional parameters; newlines
  * ignored) into modules. */
 

@@ -24,6 +24,11 @@ typedef struct oracle_model {
     double obj_tol; /* scene bounds against cpfg's final.obj.gz; < 0: not comparable */
 } oracle_model;
 
+/// The cpfg models both oracle tests run (test_turtle_oracle.c on cpfg's strings,
+/// test_run_oracle.c on our own derivation), by the name of their test case: one row each in
+/// oracle_geometry.c, so that the two tests cannot drift apart. An unknown name aborts.
+const oracle_model *oracle_cpfg_model(const char *test_name);
+
 /// Compares the turtle's box (and, with compare_prims, its primitive record) and the scene's
 /// bounds with cpfg's; nmod is the number of modules interpreted (for the report line).
 void oracle_check_geometry(const oracle_model *md, cbm_turtle *t, cbm_scene *scene, size_t nmod,

@@ -32,6 +32,18 @@ static double shape_change(const cbm_elastica_growth_frame *a, const cbm_elastic
     return e;
 }
 
+/* A horizontal rod of uniform section that neither lengthens nor thickens: the set-up of the
+ * cases where only the stiffness changes. */
+static cbm_elastica_growth_def still_rod(void)
+{
+    cbm_elastica_growth_def d = cbm_elastica_growth_def_default();
+    d.theta_base = 0;
+    d.tip_growth = 0;
+    d.layer = 0;
+    d.taper = CBM_ELASTICA_TAPER_UNIFORM;
+    return d;
+}
+
 /* (3.35)-(3.36): kappa^g = kappa_o^g + K_SS + K_AS + K_I / D at every cell and step, with a
  * control curvature and an induced curvature acting */
 TEST(elastica_growth_decomposition)
@@ -99,11 +111,7 @@ TEST(elastica_growth_stress_free_accretion)
 TEST(elastica_growth_remodeling_closed_form)
 {
     cbm_context *ctx = test_ctx();
-    cbm_elastica_growth_def d = cbm_elastica_growth_def_default();
-    d.theta_base = 0;
-    d.tip_growth = 0;
-    d.layer = 0;
-    d.taper = CBM_ELASTICA_TAPER_UNIFORM;
+    cbm_elastica_growth_def d = still_rod();
     d.youngs = 1;
     d.youngs_final = 13;
     d.youngs_tau = 10;
@@ -142,11 +150,7 @@ TEST(elastica_growth_remodeling_closed_form)
 TEST(elastica_growth_decreasing_stiffness)
 {
     cbm_context *ctx = test_ctx();
-    cbm_elastica_growth_def d = cbm_elastica_growth_def_default();
-    d.theta_base = 0;
-    d.tip_growth = 0;
-    d.layer = 0;
-    d.taper = CBM_ELASTICA_TAPER_UNIFORM;
+    cbm_elastica_growth_def d = still_rod();
     d.rest_curvature0 = 0.5;
     d.youngs_final = 0.5;
     d.youngs_tau = 1;

@@ -7,6 +7,7 @@
  * relaxation and Newton at the same equilibrium on a bunch; Newton's passes bounded; no
  * allocation in the solver loop; growth of the pair room when all spheres overlap; the OOM
  * loop; errors. */
+#include "lsys_util.h"
 #include "mech_testlib.h"
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -600,15 +601,9 @@ typedef struct grapes_result {
 static cbm_status run_grapes(cbm_context *ctx, const char *name, const char *define,
                              grapes_result *r)
 {
-    char path[2048];
-    snprintf(path, sizeof path, "%s/models/%s", test_source_dir(), name);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = path;
-    def.defines = define ? &define : NULL;
-    def.define_count = define ? 1 : 0;
     cbm_lsys *ls = NULL;
     memset(r, 0, sizeof *r);
-    cbm_status st = cbm_lsys_load(ctx, &def, &ls);
+    cbm_status st = lsys_load_shipped(ctx, name, define, &ls);
     if (st != CBM_OK)
         return st;
     st = cbm_lsys_reset(ls);

@@ -14,20 +14,11 @@
 
 #define MS 26 /* doubles of a MechSegment */
 
-static cbm_status load_model(cbm_context *ctx, const char *name, cbm_lsys **ls)
-{
-    char p[2048];
-    snprintf(p, sizeof p, "%s/models/%s", test_source_dir(), name);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = p;
-    return cbm_lsys_load(ctx, &def, ls);
-}
-
 TEST(mechlang_export_plant_is_the_stored_state)
 {
     cbm_context *ctx = test_ctx();
     cbm_lsys *ls = NULL;
-    CHECK_OK(load_model(ctx, "jirasek-hanging.l", &ls));
+    CHECK_OK(lsys_load_shipped(ctx, "jirasek-hanging.l", NULL, &ls));
     if (!ls) {
         test_ctx_end(ctx);
         return;
@@ -101,7 +92,7 @@ static cbm_status oom_export(cbm_context *ctx, void *ud)
 {
     (void)ud;
     cbm_lsys *ls = NULL;
-    cbm_status s = load_model(ctx, "jirasek-cherries.l", &ls);
+    cbm_status s = lsys_load_shipped(ctx, "jirasek-cherries.l", NULL, &ls);
     if (s != CBM_OK)
         return s;
     s = cbm_lsys_reset(ls);

@@ -86,6 +86,14 @@ static void check_v(cbm_vec3 a, double x, double y, double z, double tol)
     CHECK_NEAR(a.z, z, tol);
 }
 
+/* Ends a case: its turtle, its view and its context, in that order. */
+static void end_run(cbm_context *ctx, cbm_view *v, cbm_turtle *t)
+{
+    cbm_turtle_destroy(t);
+    cbm_view_destroy(v);
+    test_ctx_end(ctx);
+}
+
 TEST(lookup)
 {
     CHECK_EQ_INT(cbm__turtle_lookup("F", 1), CBM_T_F);
@@ -146,9 +154,7 @@ TEST(turn_pitch_roll)
     check_v(H, -1, 0, 0, TOL); /* | gives H = -y, L = +x; two -45 give H = -L = -x */
     check_v(L, 0, 0, 1, TOL);  /* L = -y, rolled left by 90: L' = -U */
     check_v(U, 0, -1, 0, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(move_and_segments)
@@ -173,9 +179,7 @@ TEST(move_and_segments)
     CHECK(cbm_turtle_box(t, &lo, &hi));
     check_v(lo, 0, 0, 0, TOL);
     check_v(hi, 3.5, 2.5, 0, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(width_semantics)
@@ -196,9 +200,7 @@ TEST(width_semantics)
     CHECK_NEAR(pr[2].r0, 1.5, TOL);
     CHECK_NEAR(pr[2].r1, 0.25, TOL); /* cone: !(0.5) came before the next node */
     CHECK_NEAR(pr[3].r0, 0.25, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(colors)
@@ -221,9 +223,7 @@ TEST(colors)
     cbm_turtle_state(t, NULL, NULL, NULL, NULL, NULL, &c);
     CHECK_EQ_INT(c, 255); /* wraps as cpfg's 256-entry map */
     CHECK_EQ_INT(cbm_turtle_prims(t)[0].color, 255);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(branches_and_cut)
@@ -247,9 +247,7 @@ TEST(branches_and_cut)
     cbm_turtle_state(t, &P, &H, NULL, NULL, NULL, NULL);
     check_v(P, 0, 2, 0, TOL);
     CHECK_EQ_INT(cbm_turtle_prim_count(t), 5);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(polygons)
@@ -273,9 +271,7 @@ TEST(polygons)
         }
     /* the nested polygon has 2 vertices and is dropped; the outer one has 3 (., f(2), f) */
     CHECK_EQ_INT(npoly, 2);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(queries)
@@ -289,9 +285,7 @@ TEST(queries)
     CHECK_NEAR(p.par[3][0], -1.0, TOL);
     CHECK_NEAR(p.par[3][2], 0.0, TOL); /* only 2 parameters: the third is untouched */
     CHECK_NEAR(p.par[4][2], -1.0, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(at_commands)
@@ -318,9 +312,7 @@ TEST(at_commands)
     CHECK(cbm_turtle_box(t, &lo, &hi));
     check_v(lo, -1, 0, 0, TOL); /* disc corners x, y +- 2 around (1,2,3); sphere +- 1 */
     check_v(hi, 3, 4, 4, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(single_symbol_modules)
@@ -342,9 +334,7 @@ TEST(single_symbol_modules)
     CHECK_EQ_INT(cbm_turtle_prim_count(t), 3); /* F, the sphere, F; @Z is no command */
     CHECK_EQ_INT(pr[1].kind, CBM_PRIM_SPHERE);
     CHECK_NEAR(pr[1].r0, 2.0, TOL);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(twist_adjust)
@@ -366,9 +356,7 @@ TEST(twist_adjust)
     t = run(ctx, &v, NULL, &p, "F &(90) /(90) @Tf @Tp");
     cbm_turtle_state(t, NULL, &H, &L, &U, NULL, NULL);
     check_v(U, 1, 0, 0, 1e-12); /* rolled: U' = -L, L = -x before the roll */
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(abop_tropism)
@@ -388,9 +376,7 @@ TEST(abop_tropism)
     t = run(ctx, &v, "tropism direction: 0,-1,0\ninitial elasticity: 0.5\n", &p, "+(90) _(0) F");
     cbm_turtle_state(t, NULL, &H, NULL, NULL, NULL, NULL);
     check_v(H, -1, 0, 0, 1e-12);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(cpfg_tropism)
@@ -418,9 +404,7 @@ TEST(cpfg_tropism)
     t = run(ctx, &v, "tropism: T: 1 0 0 A: 90 E: 0.1\n", &p, "F");
     cbm_turtle_state(t, NULL, &H, NULL, NULL, NULL, NULL);
     check_v(H, 0, 1, 0, 1e-12);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 static cbm_turtle *run_scene(cbm_context *ctx, const cbm_view *v, prog *p, const char *src,
@@ -446,9 +430,7 @@ TEST(torque)
     check_v(H, 0, 1, 0, 1e-12);
     check_v(U, -sin(0.5), 0, -cos(0.5), 1e-12);
     check_v(L, -cos(0.5), 0, sin(0.5), 1e-12);
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(generalized_cylinder)
@@ -847,9 +829,7 @@ TEST(spline_cylinder_bspline_square)
         for (int i = 0; i < 4; i++)
             CHECK_EQ_INT(pr[i].count, 3 * 2 * 8 * 2);
     }
-    cbm_turtle_destroy(t);
-    cbm_view_destroy(v);
-    test_ctx_end(ctx);
+    end_run(ctx, v, t);
 }
 
 TEST(spline_cylinder_hermite_square)

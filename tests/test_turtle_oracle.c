@@ -144,66 +144,52 @@ static void run_model(const oracle_model *md, bool compare_prims)
 
 TEST(quadratic_koch)
 {
-    oracle_model m = {
-        "cpfg-quadratic-koch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("quadratic_koch"), true);
 }
 
 TEST(compound_homo)
 {
-    oracle_model m = {"cpfg-compound-homo", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("compound_homo"), true);
 }
 
 TEST(compound_param)
 {
-    oracle_model m = {"cpfg-compound-param", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("compound_param"), true);
 }
 
 TEST(continuous_decomp)
 {
-    oracle_model m = {"cpfg-continuous-decomp", "leaf.l", "leaf.v", "leaf.map", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("continuous_decomp"), true);
 }
 
 TEST(florigen_param)
 {
-    oracle_model m = {
-        "cpfg-florigen-param", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("florigen_param"), true);
 }
 
 TEST(hormone_up)
 {
-    oracle_model m = {"cpfg-hormone-up", "fractal.l", "fractal.v", "fractal.map", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("hormone_up"), true);
 }
 
 TEST(monopodial)
 {
-    oracle_model m = {"cpfg-monopodial", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("monopodial"), true);
 }
 
 TEST(sympodial)
 {
-    oracle_model m = {"cpfg-sympodial", "plant.l", "plant.v", "material.mat", true, -1, 2e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("sympodial"), true);
 }
 
 TEST(random_moss)
 {
-    oracle_model m = {
-        "cpfg-random-moss-abop1.27", "plant.l", "plant.v", "plant.map", false, -1, -1};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("random_moss"), true);
 }
 
 TEST(weeping_birch)
 {
-    oracle_model m = {
-        "cpfg-weeping-birch", "fractal.l", "fractal.v", "fractal.map", false, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("weeping_birch"), true);
 }
 
 /* cpfg's oracle has no string after the homomorphism of this model, whose spheres and cylinders
@@ -211,28 +197,24 @@ TEST(weeping_birch)
  * contain ours. */
 TEST(query_position)
 {
-    oracle_model m = {"cpfg-query-position", "plant.l", "plant.v", "plant.map", false,
-                      CBM_PRIM_DISC,         -1};
+    oracle_model m = *oracle_cpfg_model("query_position");
+    m.only_kind = CBM_PRIM_DISC;
     run_model(&m, true);
 }
 
 TEST(leaf_rnd)
 {
-    /* OBJ: cpfg's OBJ export mirrors predefined surfaces in x; its .ray output does not */
-    oracle_model m = {"cpfg-leaf-rnd", "leaf.l", "leaf.v", "material.mat", true, -1, 1e-2};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("leaf_rnd"), true);
 }
 
 TEST(tropisms)
 {
-    oracle_model m = {"cpfg-tropisms", "lsystem.l", "view.v", "materials.mat", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("tropisms"), true);
 }
 
 TEST(lilac)
 {
-    oracle_model m = {"cpfg-lilac", "plant.l", "plant.v", "materials.mat", true, -1, 1e-3};
-    run_model(&m, true);
+    run_model(oracle_cpfg_model("lilac"), true);
 }
 
 /* The lilac's petals and calyxes (predefined surfaces) in a scene in instancing mode: each is a

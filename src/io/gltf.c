@@ -15,6 +15,7 @@
  * same vertex count in every frame (a growing plant does not have it), and KHR_node_visibility
  * is not yet supported widely, while STEP scale animations play in three.js, Blender, Babylon.js
  * and the Khronos sample viewer. Without playback, the static pose shows the last frame. */
+#include "glb.h"
 #include "writers.h"
 
 #include "cambium/io.h"
@@ -31,17 +32,8 @@
 #define GL_ELEMENT_ARRAY_BUFFER 34963
 #define MAX_ORDER_GROUPS        32
 
-typedef struct accessor {
-    size_t view, count;
-    int ctype, ncomp;
-    bool minmax;
-    float min[3], max[3];
-} accessor;
-
-typedef struct view {
-    size_t offset, length;
-    int target; /* 0 for none */
-} view;
+typedef cbm__gltf_accessor accessor;
+typedef cbm__gltf_view view;
 
 typedef struct mesh {
     size_t pos, nrm, col, stress, age, react, order, seg, idx;
@@ -140,7 +132,7 @@ typedef struct glb {
 
 static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
 {
-    size_t off = (g->bin_len + 3) & ~(size_t)3;
+    size_t off = cbm__glb_pad4(g->bin_len);
     if (g->mode == BIN_MEMORY) {
         CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
         memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
@@ -163,26 +155,10 @@ static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, s
 static cbm_status add_accessor(glb *g, const void *data, size_t count, int ncomp, int ctype,
                                int target, bool minmax, size_t *id)
 {
+    size_t csize = ctype == GL_UNSIGNED_SHORT ? 2 : 4, v = 0;
+    CBM_TRY(add_view(g, data, count * (size_t)ncomp * csize, target, &v));
     accessor a;
-    memset(&a, 0, sizeof a);
-    size_t csize = ctype == GL_UNSIGNED_SHORT ? 2 : 4;
-    CBM_TRY(add_view(g, data, count * (size_t)ncomp * csize, target, &a.view));
-    a.count = count;
-    a.ncomp = ncomp;
-    a.ctype = ctype;
-    a.minmax = minmax;
-    if (minmax) {
-        const float *f = data;
-        for (int k = 0; k < ncomp; k++) {
-            a.min[k] = INFINITY;
-            a.max[k] = -INFINITY;
-        }
-        for (size_t i = 0; i < count; i++)
-            for (int k = 0; k < ncomp; k++) {
-                a.min[k] = fminf(a.min[k], f[i * (size_t)ncomp + (size_t)k]);
-                a.max[k] = fmaxf(a.max[k], f[i * (size_t)ncomp + (size_t)k]);
-            }
-    }
+    cbm__gltf_accessor_set(&a, v, data, count, ncomp, ctype, minmax);
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
     *id = g->acc.len - 1;
     return CBM_OK;
@@ -725,18 +701,9 @@ done:
     return st;
 }
 
-static void json_floats(cbm_json *j, const char *key, const float *f, int n)
-{
-    cbm_json_begin_array(j, key);
-    for (int k = 0; k < n; k++)
-        cbm_json_number(j, NULL, f[k]);
-    cbm_json_end_array(j);
-}
-
 static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t anim_first,
                        size_t nframes)
 {
-    static const char *const types[5] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
     cbm_json_begin_object(j, NULL);
     cbm_json_begin_object(j, "asset");
     cbm_json_string(j, "version", "2.0");
@@ -775,7 +742,7 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
         }
         if (n->hidden) {
             const float z[3] = {0, 0, 0};
-            json_floats(j, "scale", z, 3);
+            cbm__gltf_json_floats(j, "scale", z, 3);
         }
         if (n->inst1) {
             const inst_attrs *ia = &g->insts.data[n->inst1 - 1];
@@ -852,7 +819,7 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
             cbm_json_string(j, "name", cbm_organ_name((cbm_organ)k));
             cbm_json_begin_object(j, "pbrMetallicRoughness");
             const float white[4] = {1, 1, 1, 1};
-            json_floats(j, "baseColorFactor", white, 4);
+            cbm__gltf_json_floats(j, "baseColorFactor", white, 4);
             cbm_json_number(j, "metallicFactor", 0.0);
             cbm_json_number(j, "roughnessFactor", k == CBM_ORGAN_FRUIT ? 0.45 : 0.85);
             cbm_json_end_object(j);
@@ -865,7 +832,7 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
             cbm_json_begin_object(j, NULL);
             cbm_json_string(j, "name", cbm_organ_name((cbm_organ)cm->organ));
             cbm_json_begin_object(j, "pbrMetallicRoughness");
-            json_floats(j, "baseColorFactor", cm->rgba, 4);
+            cbm__gltf_json_floats(j, "baseColorFactor", cm->rgba, 4);
             cbm_json_number(j, "metallicFactor", 0.0);
             cbm_json_number(j, "roughnessFactor", cm->organ == CBM_ORGAN_FRUIT ? 0.45 : 0.85);
             cbm_json_end_object(j);
@@ -876,40 +843,8 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
         }
         cbm_json_end_array(j);
     }
-    if (g->acc.len) {
-        cbm_json_begin_array(j, "accessors");
-        for (size_t i = 0; i < g->acc.len; i++) {
-            const accessor *a = &g->acc.data[i];
-            cbm_json_begin_object(j, NULL);
-            cbm_json_int(j, "bufferView", (int64_t)a->view);
-            cbm_json_int(j, "componentType", a->ctype);
-            cbm_json_int(j, "count", (int64_t)a->count);
-            cbm_json_string(j, "type", types[a->ncomp]);
-            if (a->minmax) {
-                json_floats(j, "min", a->min, a->ncomp);
-                json_floats(j, "max", a->max, a->ncomp);
-            }
-            cbm_json_end_object(j);
-        }
-        cbm_json_end_array(j);
-        cbm_json_begin_array(j, "bufferViews");
-        for (size_t i = 0; i < g->views.len; i++) {
-            const view *v = &g->views.data[i];
-            cbm_json_begin_object(j, NULL);
-            cbm_json_int(j, "buffer", 0);
-            cbm_json_int(j, "byteOffset", (int64_t)v->offset);
-            cbm_json_int(j, "byteLength", (int64_t)v->length);
-            if (v->target)
-                cbm_json_int(j, "target", v->target);
-            cbm_json_end_object(j);
-        }
-        cbm_json_end_array(j);
-        cbm_json_begin_array(j, "buffers");
-        cbm_json_begin_object(j, NULL);
-        cbm_json_int(j, "byteLength", (int64_t)((g->bin_len + 3) & ~(size_t)3));
-        cbm_json_end_object(j);
-        cbm_json_end_array(j);
-    }
+    if (g->acc.len)
+        cbm__gltf_json_buffers(j, g->acc.data, g->acc.len, g->views.data, g->views.len, g->bin_len);
     if (anim_input >= 0) {
         cbm_json_begin_array(j, "animations");
         cbm_json_begin_object(j, NULL);
@@ -938,14 +873,6 @@ static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t
         cbm_json_end_array(j);
     }
     cbm_json_end_object(j);
-}
-
-static void le32(uint8_t *b, uint32_t v)
-{
-    b[0] = (uint8_t)v;
-    b[1] = (uint8_t)(v >> 8);
-    b[2] = (uint8_t)(v >> 16);
-    b[3] = (uint8_t)(v >> 24);
 }
 
 struct cbm_animation {
@@ -1095,46 +1022,10 @@ static cbm_status finish(cbm_animation *a, size_t *root, long *anim_input, size_
 }
 
 /* Opens the file and writes the GLB header, the JSON chunk and the BIN chunk's header for a BIN
- * of g->bin_len bytes; the caller writes BIN, then bin_tail. */
+ * of g->bin_len bytes (none when BIN is empty); the caller writes BIN, then cbm__glb_bin_tail. */
 static cbm_status open_glb(glb *g, const char *path, const char *text, size_t tlen, cbm_out **out)
 {
-    size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin_len + 3) & ~(size_t)3;
-    size_t total = 12 + 8 + jpad + (bpad ? 8 + bpad : 0);
-    *out = NULL;
-    if (total > UINT32_MAX)
-        return cbm__fail(g->ctx, CBM_E_LIMIT, "%s: scene too large for a .glb (%zu bytes > 4 GiB)",
-                         path, total);
-    CBM_TRY(cbm_out_open(g->ctx, path, out));
-    uint8_t h[12];
-    /* the 4-byte magic, not a string */
-    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-    memcpy(h, "glTF", 4);
-    le32(h + 4, 2);
-    le32(h + 8, (uint32_t)total);
-    cbm_out_write(*out, h, 12);
-    le32(h, (uint32_t)jpad);
-    /* a 4-byte chunk type, not a string */
-    // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-    memcpy(h + 4, "JSON", 4);
-    cbm_out_write(*out, h, 8);
-    cbm_out_write(*out, text, tlen);
-    cbm_out_write(*out, "   ", jpad - tlen);
-    if (bpad) {
-        le32(h, (uint32_t)bpad);
-        /* a 4-byte chunk type, not a string */
-        // NOLINTNEXTLINE(bugprone-not-null-terminated-result)
-        memcpy(h + 4, "BIN\0", 4);
-        cbm_out_write(*out, h, 8);
-    }
-    return CBM_OK;
-}
-
-/* The zeros that pad BIN to a multiple of 4 bytes. */
-static void bin_tail(const glb *g, cbm_out *out)
-{
-    const uint8_t zero[4] = {0, 0, 0, 0};
-    size_t bpad = (g->bin_len + 3) & ~(size_t)3;
-    cbm_out_write(out, zero, bpad - g->bin_len);
+    return cbm__glb_open(g->ctx, path, "scene", text, tlen, g->bin_len, g->bin_len > 0, out);
 }
 
 /* The frame nodes and the JSON text of a finished animation (j holds the text). */
@@ -1164,7 +1055,7 @@ cbm_status cbm_animation_write(cbm_animation *a, const char *path)
         st = open_glb(g, path, text, tlen, &out);
     if (st == CBM_OK) {
         cbm_out_write(out, g->bin.data, g->bin.len);
-        bin_tail(g, out);
+        cbm__glb_bin_tail(out, g->bin_len);
         st = cbm_out_commit(out);
     }
     cbm_json_destroy(j);
@@ -1244,7 +1135,7 @@ cbm_status cbm_write_glb(cbm_context *ctx, const cbm_scene *scene, const char *p
             st = cbm__fail(ctx, CBM_E_INTERNAL, "%s: BIN chunk of %zu bytes measured as %zu", path,
                            g->bin_len, measured);
         if (st == CBM_OK) {
-            bin_tail(g, out);
+            cbm__glb_bin_tail(out, g->bin_len);
             st = cbm_out_commit(out);
         } else {
             cbm_out_abort(out);

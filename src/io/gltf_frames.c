@@ -15,8 +15,9 @@
  * three.js, Blender, Babylon.js and the Khronos sample viewer.
  *
  * Parts with equal shape and colour share one mesh and one material. The writer uses the io
- * layer's JSON builder and atomic output (cbm_json, cbm_out) and its own small buffer and
- * accessor bookkeeping, leaving gltf.c (the scene and growth-animation writer) unchanged. */
+ * layer's JSON builder and atomic output (cbm_json, cbm_out), and the accessors, buffer views and
+ * GLB framing it shares with gltf.c (the scene and growth-animation writer) in glb.c; it keeps
+ * its BIN in memory. */
 #include "cambium/turtle_motion.h"
 
 #include "cambium/io.h"
@@ -24,6 +25,7 @@
 
 #include "../core/core.h"
 #include "../core/vecmath.h"
+#include "glb.h"
 #include "writers.h"
 
 #include <math.h>
@@ -283,17 +285,8 @@ cbm_status cbm_turtle_motion_write_csv(const cbm_turtle_motion *m, const char *p
 
 /* ---- glTF ---- */
 
-typedef struct acc {
-    size_t view, count;
-    int ctype, ncomp;
-    bool minmax;
-    float min[4], max[4];
-} acc;
-
-typedef struct gview {
-    size_t offset, length;
-    int target;
-} gview;
+typedef cbm__gltf_accessor acc;
+typedef cbm__gltf_view gview;
 
 typedef struct gmesh {
     size_t body; /* the first body with this shape and colour */
@@ -310,7 +303,7 @@ typedef struct gw {
 static cbm_status put(gw *g, const void *data, size_t count, int ncomp, int ctype, int target,
                       bool minmax, size_t *id)
 {
-    size_t bytes = count * (size_t)ncomp * 4, off = (g->bin.len + 3) & ~(size_t)3;
+    size_t bytes = count * (size_t)ncomp * 4, off = cbm__glb_pad4(g->bin.len);
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
     memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
     memcpy(g->bin.data + off, data, bytes);
@@ -318,23 +311,7 @@ static cbm_status put(gw *g, const void *data, size_t count, int ncomp, int ctyp
     gview v = {off, bytes, target};
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->views, v));
     acc a;
-    memset(&a, 0, sizeof a);
-    a.view = g->views.len - 1;
-    a.count = count;
-    a.ncomp = ncomp;
-    a.ctype = ctype;
-    a.minmax = minmax;
-    if (minmax) {
-        const float *f = data;
-        for (int c = 0; c < ncomp; c++) {
-            a.min[c] = INFINITY;
-            a.max[c] = -INFINITY;
-            for (size_t i = 0; i < count; i++) {
-                a.min[c] = fminf(a.min[c], f[i * (size_t)ncomp + (size_t)c]);
-                a.max[c] = fmaxf(a.max[c], f[i * (size_t)ncomp + (size_t)c]);
-            }
-        }
-    }
+    cbm__gltf_accessor_set(&a, g->views.len - 1, data, count, ncomp, ctype, minmax);
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->accs, a));
     *id = g->accs.len - 1;
     return CBM_OK;
@@ -418,45 +395,15 @@ static cbm_status body_mesh(gw *g, const body *b, gmesh *gm)
     return put(g, idx, ni, 1, GL_UNSIGNED_INT, 34963, false, &gm->idx);
 }
 
-static void floats(cbm_json *j, const char *key, const float *f, int n)
-{
-    cbm_json_begin_array(j, key);
-    for (int k = 0; k < n; k++)
-        cbm_json_number(j, NULL, f[k]);
-    cbm_json_end_array(j);
-}
-
-static void le32(uint8_t *b, uint32_t v)
-{
-    for (int k = 0; k < 4; k++)
-        b[k] = (uint8_t)(v >> (8 * k));
-}
-
+/* The BIN chunk is written even when empty (a motion of no part and one frame), as it always was.
+ */
 static cbm_status write_container(cbm_context *ctx, const char *path, const char *text, size_t tlen,
                                   const gw *g)
 {
-    size_t jpad = (tlen + 3) & ~(size_t)3, bpad = (g->bin.len + 3) & ~(size_t)3;
-    size_t total = 12 + 8 + jpad + 8 + bpad;
-    if (total > UINT32_MAX)
-        return cbm__fail(ctx, CBM_E_LIMIT, "%s: motion too large for a .glb (%zu bytes)", path,
-                         total);
     cbm_out *out;
-    CBM_TRY(cbm_out_open(ctx, path, &out));
-    uint8_t h[12] = {'g', 'l', 'T', 'F'};
-    le32(h + 4, 2);
-    le32(h + 8, (uint32_t)total);
-    cbm_out_write(out, h, 12);
-    uint8_t c[8] = {0, 0, 0, 0, 'J', 'S', 'O', 'N'};
-    le32(c, (uint32_t)jpad);
-    cbm_out_write(out, c, 8);
-    cbm_out_write(out, text, tlen);
-    cbm_out_write(out, "   ", jpad - tlen);
-    uint8_t d[8] = {0, 0, 0, 0, 'B', 'I', 'N', 0};
-    le32(d, (uint32_t)bpad);
-    cbm_out_write(out, d, 8);
+    CBM_TRY(cbm__glb_open(ctx, path, "motion", text, tlen, g->bin.len, true, &out));
     cbm_out_write(out, g->bin.data, g->bin.len);
-    const uint8_t zero[4] = {0, 0, 0, 0};
-    cbm_out_write(out, zero, bpad - g->bin.len);
+    cbm__glb_bin_tail(out, g->bin.len);
     return cbm_out_commit(out);
 }
 
@@ -464,7 +411,6 @@ static void write_json(cbm_json *j, const cbm_turtle_motion *m, const gw *g, con
                        size_t nmesh, const size_t *mesh_of, size_t nmat, const size_t *mat_body,
                        long anim_in, const size_t *anim_out)
 {
-    static const char *const types[5] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
     size_t nb = m->bodies.len, nf = m->times.len;
     cbm_json_begin_object(j, NULL);
     cbm_json_begin_object(j, "asset");
@@ -489,10 +435,10 @@ static void write_json(cbm_json *j, const cbm_turtle_motion *m, const gw *g, con
         cbm_json_string(j, "name", name);
         cbm_json_int(j, "mesh", (int64_t)mesh_of[i]);
         const float t[3] = {(float)d[0], (float)d[1], (float)d[2]};
-        floats(j, "translation", t, 3);
+        cbm__gltf_json_floats(j, "translation", t, 3);
         if (!m->bodies.data[i].sphere) {
             const float r[4] = {(float)d[7], (float)d[8], (float)d[9], (float)d[6]}; /* x y z w */
-            floats(j, "rotation", r, 4);
+            cbm__gltf_json_floats(j, "rotation", r, 4);
         }
         cbm_json_end_object(j);
     }
@@ -531,7 +477,7 @@ static void write_json(cbm_json *j, const cbm_turtle_motion *m, const gw *g, con
     for (size_t i = 0; i < nmat; i++) {
         cbm_json_begin_object(j, NULL);
         cbm_json_begin_object(j, "pbrMetallicRoughness");
-        floats(j, "baseColorFactor", m->bodies.data[mat_body[i]].rgba, 4);
+        cbm__gltf_json_floats(j, "baseColorFactor", m->bodies.data[mat_body[i]].rgba, 4);
         cbm_json_number(j, "metallicFactor", 0.0);
         cbm_json_number(j, "roughnessFactor", 0.8);
         cbm_json_end_object(j);
@@ -567,38 +513,7 @@ static void write_json(cbm_json *j, const cbm_turtle_motion *m, const gw *g, con
         cbm_json_end_object(j);
         cbm_json_end_array(j);
     }
-    cbm_json_begin_array(j, "accessors");
-    for (size_t i = 0; i < g->accs.len; i++) {
-        const acc *a = &g->accs.data[i];
-        cbm_json_begin_object(j, NULL);
-        cbm_json_int(j, "bufferView", (int64_t)a->view);
-        cbm_json_int(j, "componentType", a->ctype);
-        cbm_json_int(j, "count", (int64_t)a->count);
-        cbm_json_string(j, "type", types[a->ncomp]);
-        if (a->minmax) {
-            floats(j, "min", a->min, a->ncomp);
-            floats(j, "max", a->max, a->ncomp);
-        }
-        cbm_json_end_object(j);
-    }
-    cbm_json_end_array(j);
-    cbm_json_begin_array(j, "bufferViews");
-    for (size_t i = 0; i < g->views.len; i++) {
-        const gview *v = &g->views.data[i];
-        cbm_json_begin_object(j, NULL);
-        cbm_json_int(j, "buffer", 0);
-        cbm_json_int(j, "byteOffset", (int64_t)v->offset);
-        cbm_json_int(j, "byteLength", (int64_t)v->length);
-        if (v->target)
-            cbm_json_int(j, "target", v->target);
-        cbm_json_end_object(j);
-    }
-    cbm_json_end_array(j);
-    cbm_json_begin_array(j, "buffers");
-    cbm_json_begin_object(j, NULL);
-    cbm_json_int(j, "byteLength", (int64_t)((g->bin.len + 3) & ~(size_t)3));
-    cbm_json_end_object(j);
-    cbm_json_end_array(j);
+    cbm__gltf_json_buffers(j, g->accs.data, g->accs.len, g->views.data, g->views.len, g->bin.len);
     cbm_json_end_object(j);
 }
 

@@ -3,6 +3,7 @@
  * (.csv), the MTG (.mtg) and the year-by-year summary (.json); with --every K a .glb holds a
  * growth animation of one frame every K growth steps. With --seeds A-B it grows the model once
  * per seed and writes the distribution of the year-by-year figures over the seeds (.json). */
+#include "cli_grow.h"
 #include "cli_light.h"
 #include "cli_output.h"
 #include "commands.h"
@@ -52,40 +53,24 @@ static cbm_status write_wind(cbm_context *ctx, const cbm_plant *p, const cli_swa
 
 static void help(const cli_opts *t)
 {
-    printf("usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
-           "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
-           "                    [--modes N] [--sway SECONDS [--wind M_S] [--gust I]]\n"
-           "                    [--params] [--report] [--seeds A-B] [limits]\n"
-           "                    [output options]\n\n"
-           "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
-           "wild or crooked aspen, from a parameter file or a built-in model (default\n"
-           "fruit-tree; see docs/models.md). Outputs by extension: .png .svg .glb .obj .ply\n"
-           "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
-           "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
-           "summary). FORMAT:PATH names a scene format explicitly. -o wind:FILE.csv writes the\n"
-           "critical wind speed of the stem and of each first-order branch; -o light:FILE.csv\n"
-           "the light of each leaf (--light). With --sway, .glb outputs are the grown tree\n"
-           "swaying in a gusty wind (an animation) and .csv (or motion:FILE.csv) the\n"
-           "displacements of the stem's and first-order branches' tips.\n\n");
-    cli_options_rows(stdout, t);
-    printf("\nbuilt-in models:");
-    for (const char *const *n = cbm_tree_builtin_names(); *n; n++)
-        printf(" %s", *n);
-    printf("\n");
-    cli_options_groups(stdout, t);
-}
-
-/* The model: one parameter file or built-in name. */
-static bool parse_model(const char *a, void *target, char *why, size_t n)
-{
-    const char **model = target;
-    if (!strcmp(a, "-"))
-        snprintf(why, n, "unknown option {value}");
-    else if (*model)
-        snprintf(why, n, "more than one model: '%s' and '{value}'", *model);
-    else
-        *model = a;
-    return !*why;
+    cli_grow_help(
+        t,
+        "usage: cambium grow [MODEL.tree | NAME] [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
+        "                    [-o FILE]... [--every K] [--summer] [--timing] [--quiet]\n"
+        "                    [--modes N] [--sway SECONDS [--wind M_S] [--gust I]]\n"
+        "                    [--params] [--report] [--seeds A-B] [limits]\n"
+        "                    [output options]\n\n"
+        "Grows the general fruit tree of Taylor-Hell (2005) with full mechanics, or the\n"
+        "wild or crooked aspen, from a parameter file or a built-in model (default\n"
+        "fruit-tree; see docs/models.md). Outputs by extension: .png .svg .glb .obj .ply\n"
+        "(the tree with leaves and fruit; .glb with --every K: a growth animation, one\n"
+        "frame every K growth steps), .csv (segments table), .mtg, .json (year-by-year\n"
+        "summary). FORMAT:PATH names a scene format explicitly. -o wind:FILE.csv writes the\n"
+        "critical wind speed of the stem and of each first-order branch; -o light:FILE.csv\n"
+        "the light of each leaf (--light). With --sway, .glb outputs are the grown tree\n"
+        "swaying in a gusty wind (an animation) and .csv (or motion:FILE.csv) the\n"
+        "displacements of the stem's and first-order branches' tips.\n\n",
+        cbm_tree_builtin_names());
 }
 
 static bool parse_seed(const char *v, void *target, char *why, size_t n)
@@ -383,12 +368,6 @@ static int grow_seeds(cbm_context *ctx, const cbm_tree_def *def, const char *mod
     return rc;
 }
 
-static bool ends_with(const char *s, const char *suf)
-{
-    size_t a = strlen(s), b = strlen(suf);
-    return a >= b && !strcmp(s + a - b, suf);
-}
-
 /* --timing: where the time went. `derive` is the growth itself (the tree's steps: equilibrium,
  * rings and ageing, growth and bookkeeping), `interpret` the scene building, `write` the
  * writers. */
@@ -440,21 +419,10 @@ int cmd_grow(int argc, char **argv)
     const char *light_csv = NULL;
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
-        {.name = "MODEL", .kind = CLI_POSITIONAL, .target = &model, .parse = parse_model},
-        {.name = "-y|-n|--years",
-         .kind = CLI_LONG,
-         .target = &years,
-         .min = 0,
-         .max = 1000,
-         .bad = "{opt} must be 0..1000",
-         .arg = "N",
-         .help = "years to grow (default: the model's 'years')"},
-        {.name = "-D",
-         .kind = CLI_LIST,
-         .target = &def_list,
-         .attached = true,
-         .arg = "NAME=VALUE",
-         .help = "set a parameter (as in a parameter file; angles in degrees)"},
+        cli_grow_model_row(&model),
+        cli_grow_years_row(&years),
+        cli_grow_defines_row(&def_list,
+                             "set a parameter (as in a parameter file; angles in degrees)"),
         {.name = "--seed",
          .kind = CLI_CUSTOM,
          .target = &seed,
@@ -551,10 +519,7 @@ int cmd_grow(int argc, char **argv)
          .kind = CLI_SET,
          .target = &quiet,
          .help = "no per-year lines on stdout"},
-        {.name = "--params",
-         .kind = CLI_SET,
-         .target = &params,
-         .help = "print every parameter (parameter-file syntax) and exit"},
+        cli_grow_params_row(&params),
         {.name = "--seeds",
          .kind = CLI_CUSTOM,
          .target = seeds,
@@ -699,7 +664,7 @@ int cmd_grow(int argc, char **argv)
     cbm_animation *anim[MAX_OUTPUTS] = {NULL};
     cbm_tree_def d = cbm_tree_def_default();
     cbm_status st;
-    if (ends_with(model, ".tree"))
+    if (cli_grow_ends_with(model, ".tree"))
         st = cbm_tree_def_read(ctx, &d, model);
     else
         st = cbm_tree_def_builtin(ctx, model, &d);
@@ -719,14 +684,10 @@ int cmd_grow(int argc, char **argv)
         char name[128];
         const char *dv = k < ndef ? defs[k] : NULL, *val;
         if (dv) {
-            const char *eq = strchr(dv, '=');
-            if (!eq || eq == dv || (size_t)(eq - dv) >= sizeof name) {
-                rc = cli_usage_error("grow", "-D expects NAME=VALUE, got '%s'", dv);
+            if (!(val = cli_grow_define(dv, name, sizeof name))) {
+                rc = CLI_USAGE;
                 goto done;
             }
-            memcpy(name, dv, (size_t)(eq - dv));
-            name[eq - dv] = '\0';
-            val = eq + 1;
         } else {
             strcpy(name, "seed");
             val = seed;

@@ -4,6 +4,7 @@
  * germination staggered over --stagger years) and writes the stand (pictures and meshes), the
  * per-tree per-year report (.json), and plot:FILE.svg|png, the carbon tax and the height of each
  * tree over the years (the thesis's Fig. 25). */
+#include "cli_grow.h"
 #include "cli_output.h"
 #include "commands.h"
 
@@ -15,12 +16,6 @@
 
 #define MAX_OUTPUTS 16
 #define MAX_DEFS    128
-
-static bool has_suffix(const char *s, const char *suf)
-{
-    size_t a = strlen(s), b = strlen(suf);
-    return a >= b && !strcmp(s + a - b, suf);
-}
 
 bool cli_grow_is_ober(int argc, char **argv)
 {
@@ -37,7 +32,7 @@ bool cli_grow_is_ober(int argc, char **argv)
         for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
             if (!strcmp(a, *n))
                 return true;
-        if (has_suffix(a, ".tree")) {
+        if (cli_grow_ends_with(a, ".tree")) {
             size_t len = 0;
             char *text = cli_read_regular_file(a, (size_t)1 << 24, &len);
             bool yes = text && cbm_ober_text_is_family(text, len);
@@ -50,31 +45,18 @@ bool cli_grow_is_ober(int argc, char **argv)
 
 static void help(const cli_opts *t)
 {
-    printf("usage: cambium grow OBER-MODEL [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
-           "                    [--stand NxM] [--spacing D] [--stagger N] [-o FILE]...\n"
-           "                    [--params] [--quiet] [output options]\n\n"
-           "Grows Oberlaender's parametric tree (a built-in ober-* model or a .tree file\n"
-           "starting with 'family = oberlaender'; docs/models.md): one tree or a stand.\n"
-           "Outputs by extension: .png .svg .glb .obj .ply (the stand), .json (the report of\n"
-           "every tree and year), .mtg (the stand as one MTG, a plant per tree),\n"
-           "plot:FILE.svg or plot:FILE.png (carbon tax and height over the years), and with\n"
-           "--mechanics mech:FILE (the trees bent by the statics, any scene format).\n\n");
-    cli_options_rows(stdout, t);
-    printf("\nbuilt-in models:");
-    for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
-        printf(" %s", *n);
-    printf("\n");
-    cli_options_groups(stdout, t);
-}
-
-static bool parse_model(const char *a, void *target, char *why, size_t n)
-{
-    const char **model = target;
-    if (*model)
-        snprintf(why, n, "more than one model: '%s' and '{value}'", *model);
-    else
-        *model = a;
-    return !*why;
+    cli_grow_help(
+        t,
+        "usage: cambium grow OBER-MODEL [-y YEARS] [-D NAME=VALUE]... [--seed N]\n"
+        "                    [--stand NxM] [--spacing D] [--stagger N] [-o FILE]...\n"
+        "                    [--params] [--quiet] [output options]\n\n"
+        "Grows Oberlaender's parametric tree (a built-in ober-* model or a .tree file\n"
+        "starting with 'family = oberlaender'; docs/models.md): one tree or a stand.\n"
+        "Outputs by extension: .png .svg .glb .obj .ply (the stand), .json (the report of\n"
+        "every tree and year), .mtg (the stand as one MTG, a plant per tree),\n"
+        "plot:FILE.svg or plot:FILE.png (carbon tax and height over the years), and with\n"
+        "--mechanics mech:FILE (the trees bent by the statics, any scene format).\n\n",
+        cbm_ober_builtin_names());
 }
 
 /* --stand NxM */
@@ -250,21 +232,9 @@ int cmd_grow_ober(int argc, char **argv)
     cbm_write_options o = cbm_write_options_default();
     cli_opt rows[] = {
         {.name = "--help|-h", .kind = CLI_HELP},
-        {.name = "MODEL", .kind = CLI_POSITIONAL, .target = &model, .parse = parse_model},
-        {.name = "-y|-n|--years",
-         .kind = CLI_LONG,
-         .target = &years,
-         .min = 0,
-         .max = 1000,
-         .bad = "{opt} must be 0..1000",
-         .arg = "N",
-         .help = "years to grow (default: the model's 'years')"},
-        {.name = "-D",
-         .kind = CLI_LIST,
-         .target = &def_list,
-         .attached = true,
-         .arg = "NAME=VALUE",
-         .help = "set a parameter or formula (as in a parameter file)"},
+        cli_grow_model_row(&model),
+        cli_grow_years_row(&years),
+        cli_grow_defines_row(&def_list, "set a parameter or formula (as in a parameter file)"),
         {.name = "--seed",
          .kind = CLI_LONG,
          .target = &seedv,
@@ -300,10 +270,7 @@ int cmd_grow_ober(int argc, char **argv)
          .kind = CLI_SET,
          .target = &mechanics,
          .help = "solve the final trees' statics (.json 'mechanics', mech:FILE)"},
-        {.name = "--params",
-         .kind = CLI_SET,
-         .target = &params,
-         .help = "print every parameter (parameter-file syntax) and exit"},
+        cli_grow_params_row(&params),
         {.kind = CLI_GROUP, .target = cli_output_options(&o)},
         {0}};
     cli_opts table = {.cmd = "grow",
@@ -352,22 +319,20 @@ int cmd_grow_ober(int argc, char **argv)
     cbm_plant **plants = NULL;
     double *yearly = NULL; /* --mechanics: per year and tree, max and mean tip difference */
     cbm_ober_def d = cbm_ober_def_default();
-    cbm_status st = has_suffix(model, ".tree") ? cbm_ober_def_read(ctx, &d, model)
-                                               : cbm_ober_def_builtin(ctx, model, &d);
+    cbm_status st = cli_grow_ends_with(model, ".tree") ? cbm_ober_def_read(ctx, &d, model)
+                                                       : cbm_ober_def_builtin(ctx, model, &d);
     if (st != CBM_OK) {
         rc = st == CBM_E_SYNTAX ? CLI_FAIL : cli_fail(ctx, st, model);
         goto done;
     }
     for (int k = 0; k < def_list.count; k++) {
         char name[128];
-        const char *eq = strchr(defs[k], '=');
-        if (!eq || eq == defs[k] || (size_t)(eq - defs[k]) >= sizeof name) {
-            rc = cli_usage_error("grow", "-D expects NAME=VALUE, got '%s'", defs[k]);
+        const char *value = cli_grow_define(defs[k], name, sizeof name);
+        if (!value) {
+            rc = CLI_USAGE;
             goto done;
         }
-        memcpy(name, defs[k], (size_t)(eq - defs[k]));
-        name[eq - defs[k]] = '\0';
-        st = cbm_ober_def_set(ctx, &d, name, eq + 1, NULL);
+        st = cbm_ober_def_set(ctx, &d, name, value, NULL);
         if (st != CBM_OK) {
             rc = cli_usage_error("grow", "-D %s", cbm_context_last_error(ctx));
             goto done;
