@@ -10,13 +10,13 @@
 # Usage (from the repository root, after `make`):
 #   tools/guertler-trees.sh            rewrite the table and the pictures
 #   tools/guertler-trees.sh --print    print the table on stdout, change nothing
-# SEEDS=N (default 20), METHOD_SEEDS=N (default 3: the table in docs/models.md was made so),
+# SEEDS=N (default 20), METHOD_SEEDS=N (default 5: the table in docs/models.md was made so),
 # CAMBIUM=path/to/cambium (default build/bin/cambium). Needs python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=${CAMBIUM:-build/bin/cambium}
 nseeds=${SEEDS:-20}
-mseeds=${METHOD_SEEDS:-3}
+mseeds=${METHOD_SEEDS:-5}
 doc=docs/models.md
 [ -x "$bin" ] || { echo "guertler-trees: $bin not found (run make first)" >&2; exit 1; }
 tmp=$(mktemp -d)

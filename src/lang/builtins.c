@@ -85,6 +85,7 @@ static const cbm__builtin BUILTINS[] = {
     {"Sway", FN_SWAY, 4, LC},
     {"SwayDrag", FN_SWAY, 6, LC},
     {"SwayModes", FN_SWAYMODES, 2, LC},
+    {"Light", FN_LIGHT, 2, LC},
     {"Gravity", FN_GRAVITY, 3, LC},
     {"Ground", FN_GROUND, 3, LC},
     {"Contact", FN_CONTACT, 2, LC},

@@ -90,6 +90,7 @@ typedef enum cbm__fn {
     FN_FREQUENCY,
     FN_SWAY,
     FN_SWAYMODES,
+    FN_LIGHT, /* the light of the declared leaves (lsys/lightlang.c) */
     FN_GRAVITY,
     FN_GROUND,
     FN_CONTACT,

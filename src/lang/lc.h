@@ -156,6 +156,9 @@ typedef struct lc_mech_decl {
     int seg_off;         /* double offset of its MechSegment parameter */
     int mass_off[128];   /* per module code: double offset of the mass parameter, -1: not a mass */
     int radius_off[128]; /* per code: double offset of the contact radius (m), -1: none */
+    /* `light: Leaf(area, light)`: per code the offsets of the leaf's area (m^2) and of the
+     * parameter Light() writes (-1: not a leaf; lsys/lightlang.c) */
+    int light_area_off[128], light_out_off[128];
 } lc_mech_decl;
 
 /* A compiled model: types, modules, the node array of every expression and statement, the

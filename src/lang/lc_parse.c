@@ -762,7 +762,8 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 rt = T_VOID;
             else if (b->fn == FN_EQUILIBRIUM || b->fn == FN_ADDRINGS || b->fn == FN_BREAK)
                 rt = T_INT;
-            else if (b->fn == FN_STABILITY || b->fn == FN_FREQUENCY || b->fn == FN_SWAY)
+            else if (b->fn == FN_STABILITY || b->fn == FN_FREQUENCY || b->fn == FN_SWAY ||
+                     b->fn == FN_LIGHT)
                 rt = T_DOUBLE;
             else if (b->fn == FN_CURGROUP || b->fn == FN_RAND)
                 rt = T_INT;
@@ -1867,6 +1868,92 @@ static void mech_decl(lc_parser *L, bool mass)
         recover(L);
 }
 
+/* `light: Leaf(area, light), ...;`: the roles of a leaf module's parameters (lsys/lightlang.c):
+ * `area` (m^2, a number the model sets), `light` (a number Light() writes) and `_` (not used),
+ * in parameter order; both roles are needed. */
+static void light_decl(lc_parser *L)
+{
+    lc_model *lp = L->lp;
+    for (;;) {
+        size_t n = ident(L), pos = L->c->pos;
+        if (!n) {
+            expected(L, "a module name");
+            recover(L);
+            return;
+        }
+        int m = find_mod(lp, L->t + pos, n);
+        L->c->pos += n;
+        if (m < 0) {
+            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
+            recover(L);
+            return;
+        }
+        const lc_module *md = &lp->mods.data[m];
+        int aoff = -1, loff = -1, off = 0;
+        if (!expect(L, "(")) {
+            recover(L);
+            return;
+        }
+        for (int k = 0;; k++) {
+            size_t rn = ident(L), rpos = L->c->pos;
+            if (!rn) {
+                expected(L, "area, light or _");
+                recover(L);
+                return;
+            }
+            L->c->pos += rn;
+            int *dst = NULL;
+            if (rn == 4 && !strncmp(L->t + rpos, "area", 4))
+                dst = &aoff;
+            else if (rn == 5 && !strncmp(L->t + rpos, "light", 5))
+                dst = &loff;
+            else if (!(rn == 1 && L->t[rpos] == '_')) {
+                cbm__cerr(L->c, rpos, "unknown role '%.*s' of a leaf parameter (area, light or _)",
+                          (int)rn, L->t + rpos);
+                recover(L);
+                return;
+            }
+            if (k >= md->np) {
+                cbm__cerr(L->c, rpos, "module '%s' has %d parameter%s", md->name, md->np,
+                          md->np == 1 ? "" : "s");
+                recover(L);
+                return;
+            }
+            if (dst && (*dst >= 0 || !lc_is_scalar(md->ptype[k]))) {
+                if (*dst >= 0)
+                    cbm__cerr(L->c, rpos, "'%.*s' given twice", (int)rn, L->t + rpos);
+                else
+                    cbm__cerr(L->c, rpos,
+                              "parameter %d of '%s' must be a number to be its %.*s, not %s", k + 1,
+                              md->name, (int)rn, L->t + rpos, lp->types.data[md->ptype[k]].name);
+                recover(L);
+                return;
+            }
+            if (dst)
+                *dst = off;
+            off += lc_type_size(lp, md->ptype[k]);
+            if (!accept(L, ","))
+                break;
+        }
+        if (!expect(L, ")")) {
+            recover(L);
+            return;
+        }
+        if (aoff < 0 || loff < 0) {
+            cbm__cerr(L->c, L->c->pos - 1,
+                      "leaf module '%s' needs an 'area' and a 'light' parameter", md->name);
+            recover(L);
+            return;
+        }
+        lp->mech_decl.light_area_off[md->code] = aoff;
+        lp->mech_decl.light_out_off[md->code] = loff;
+        if (!accept(L, ","))
+            break;
+    }
+    if (!expect(L, ";"))
+        recover(L);
+}
+
 /* `pred-with-contexts : { body }` */
 static void parse_production(lc_parser *L, lc_rules *set, int group)
 {
@@ -2168,6 +2255,8 @@ static cbm_status setup_builtins(lc_parser *L)
     lp->mech_decl.seg_code = -1;
     for (int i = 0; i < 128; i++)
         lp->mech_decl.mass_off[i] = lp->mech_decl.radius_off[i] = -1;
+    for (int i = 0; i < 128; i++)
+        lp->mech_decl.light_area_off[i] = lp->mech_decl.light_out_off[i] = -1;
     for (int i = 0; i < 128; i++) {
         lp->bycode[i] = -1;
         lp->considered[i] = true;
@@ -2226,6 +2315,8 @@ static void parse_top(lc_parser *L)
             mech_decl(L, false);
         } else if (label(L, "mass")) {
             mech_decl(L, true);
+        } else if (label(L, "light")) {
+            light_decl(L);
         } else if (label(L, "Start")) {
             parse_block_item(L, 0);
         } else if (label(L, "StartEach")) {

@@ -324,6 +324,26 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
                  "Start, StartEach, EndEach or End");
         return;
     }
+    if (n->fn == FN_LIGHT) {
+        /* the leaves' light (lightlang.c); the string's structure is unchanged */
+        if (!(a[0] >= 0 && a[0] <= CBM_SKY_SOC && a[0] == floor(a[0])) ||
+            !(a[1] >= 1 && a[1] <= 16 && a[1] == floor(a[1]))) {
+            rt_error(lp, CBM_E_INVALID,
+                     "Light(sky, samples): sky 0 dome, 1 field, 2 uniform overcast, 3 standard "
+                     "overcast; samples 1..16");
+            return;
+        }
+        cbm_status s =
+            cbm__lightlang_run(ls->ctx, m, &ls->cur, (int)a[0], (int)a[1], out, msg, sizeof msg);
+        if (s != CBM_OK) {
+            char full[160];
+            snprintf(full, sizeof full, "Light(): %s", msg);
+            rt_error(lp, s, full);
+            out[0] = 0;
+        }
+        ls->homo_valid = false;
+        return;
+    }
     if (n->fn == FN_FREQUENCY && !(a[0] >= 1 && a[0] <= 1000 && a[0] == floor(a[0]))) {
         rt_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
         return;
@@ -1635,6 +1655,8 @@ static void mech_declare(cbm_lsys *ls)
     lp->mech.seg_off = d->seg_off;
     memcpy(lp->mech.mass_off, d->mass_off, sizeof d->mass_off);
     memcpy(lp->mech.radius_off, d->radius_off, sizeof d->radius_off);
+    memcpy(lp->mech.light_area_off, d->light_area_off, sizeof d->light_area_off);
+    memcpy(lp->mech.light_out_off, d->light_out_off, sizeof d->light_out_off);
 }
 
 cbm_status cbm__lpfg_reset(cbm_lsys *ls)

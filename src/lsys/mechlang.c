@@ -72,6 +72,8 @@ void cbm__mechlang_init(cbm__mechlang *m)
     m->seg_code = -1;
     for (int i = 0; i < 128; i++)
         m->mass_off[i] = m->radius_off[i] = -1;
+    for (int i = 0; i < 128; i++)
+        m->light_area_off[i] = m->light_out_off[i] = -1;
     m->turtle['+'] = TR_LEFT;
     m->turtle['-'] = TR_RIGHT;
     m->turtle['&'] = TR_DOWN;

@@ -3,6 +3,7 @@
 #ifndef CBM_LSYS_MECHLANG_H
 #define CBM_LSYS_MECHLANG_H
 
+#include "cambium/light.h"
 #include "cambium/mech.h"
 #include "lang/mechsegment.h"
 #include "lsys/lsys_internal.h"
@@ -12,8 +13,9 @@ typedef struct cbm__mechlang {
     int seg_off;         /* double offset of its MechSegment parameter */
     int mass_off[128];   /* per module code: double offset of the mass parameter, -1: not a mass */
     int radius_off[128]; /* per code: double offset of the contact radius (m), -1: none */
-    int turtle[128];     /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
-    int sb, eb;          /* codes of SB and EB */
+    int light_area_off[128], light_out_off[128]; /* per code: a leaf's area and light, -1 */
+    int turtle[128]; /* per code: the turtle rotation it stands for (see mechlang.c), 0: none */
+    int sb, eb;      /* codes of SB and EB */
     cbm_vec3 gravity;
     double ground_y, ground_k, ground_s; /* ground (m), stiffness (N/m; 0: none), smoothing (m) */
     double contact_k, contact_s;         /* organ contact stiffness (N/m; 0: none), smoothing (m) */
@@ -76,5 +78,13 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op
  * and a message in err on failure. */
 cbm_status cbm__mechlang_plant(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant **out,
                                char *err, size_t errn);
+
+/* Light(sky, samples) (lightlang.c): the light every leaf module of s (declared `light:`)
+ * intercepts under the sky (cbm_sky_kind), written into its light parameter, in m^2 of
+ * unshaded horizontal leaf; *total their sum. A leaf is a horizontal square of its area,
+ * centred on the distal node of the mechanical segment it follows, at the positions the last
+ * mechanics operation wrote. Errors go to err with the status. */
+cbm_status cbm__lightlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s, int sky,
+                              int samples, double *total, char *err, size_t errn);
 
 #endif

@@ -5,8 +5,8 @@
 #   spruce: every whorl node carries 5-8 first-order laterals, whorl sizes vary over seeds, the
 #     lowest whorl's branches droop below their insertion, E rises with age (base > new shoot);
 #   sympodial: 2^k axes of order k, branch angles 30 deg, the tree stands lower than on rigid wood;
-#   beech: the carbon balance decides: thrice the wood's respiration sheds branches and leaves a
-#     thinner stem, the leader's branches alternate sides (distichous); at ten years a broad
+#   beech: the carbon balance decides: thrice the wood's respiration sheds more branches and
+#     leaves a thinner stem, the leader's branches alternate sides (distichous); at ten years a broad
 #     crown (width over 0.8 of the height), a plausible height, bounded segments varying with
 #     the seed;
 # and the two solvers give the same tree (height within 1 %).
@@ -95,19 +95,22 @@ for seed in 1 2; do
     # the carbon balance: thrice the wood's respiration sheds branches, the stem grows thinner
     "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D MAINT=1e-6 \
         -o "segments:$tmp/starved.csv" >"$tmp/starved.txt"
-    grep -q ' 0 branches shed' "$tmp/be-$seed-0.txt"
-    ! grep -q ' 0 branches shed' "$tmp/starved.txt"
+    # (with light a shaded shoot may starve and go at the chosen respiration too: 0-1 branches
+    # at 5 years on seeds 1-2, 4-5 when starved)
+    shed() { sed -n 's/.* \([0-9][0-9]*\) branches shed.*/\1/p' "$1"; }
+    test "$(shed "$tmp/starved.txt")" -gt "$(shed "$tmp/be-$seed-0.txt")"
     awk -v a="$(info "$tmp/be-$seed-0.csv" base_diameter_m)" -v b="$(info "$tmp/starved.csv" base_diameter_m)" \
         'BEGIN { exit !(b < 0.95 * a) }'
 done
 
 # the beech at ten years (its last summer) over seeds 1-3 stays in a plausible envelope: a
 # ten-year open-grown beech stands about 3-4 m (the leader's law gives 3.0-3.4 m: 2.5-4.5 m);
-# its crown is broad, width at least 0.8 of the height (the model measures 1.05-1.25 on seeds
-# 1-3; the slender sapling of before measured 0.63 and 0.69 on seeds 1-2); no NaN in the
-# measures; segments bounded (no runaway: 4,500-6,000 measured on seeds 1-3 now that the buds
-# flush the spring after they are set and branches branch; 1,500-12,000 allowed; without the
-# orders' falling vigour they ran to 70,000) and varying with the seed
+# its crown is broad, width at least 0.8 of the height (the slender sapling of before measured
+# 0.63 and 0.69 on seeds 1-2); no NaN in the
+# measures; segments bounded (no runaway: 3,000-4,700 measured on seeds 1-20 with light, where
+# shaded shoots weaken and some are shed; 4,300-7,700 before; 1,500-12,000 allowed; without the
+# orders' falling vigour they ran to 70,000) and varying with the seed. With light the height is
+# 2.66-3.19 m on seeds 1-20 and the crown 0.9-1.2 times the height
 counts=""
 for seed in 1 2 3; do
     out="$tmp/b10-$seed"
