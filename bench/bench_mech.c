@@ -1,7 +1,8 @@
 /* Benchmark of the statics solvers (docs/performance.md): chains and random branched trees from
  * 10^3 to 10^6 segments, passes and seconds for the fast solver and for the relaxation at its
- * best factor, the time of one pass, and a memory-stream baseline (reading and writing as many
- * bytes as one pass touches). Writes a CSV.
+ * best factor, the time of one pass, and two memory-stream baselines (reading and writing as
+ * many bytes as one relaxation pass touches, and as the fast solver's passes touch with the
+ * factorisation's blocks; docs/performance.md). Writes a CSV.
  *
  * usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out FILE.csv] [--tol T]
  *                   [--threads N] [--fast-only]
@@ -187,7 +188,8 @@ int main(int argc, char **argv)
     }
     FILE *f = cbm_out_stream(o);
     const char *hdr = "workload,segments,solver,alpha,status,passes,seconds,residual,"
-                      "seconds_per_pass,stream_seconds,pass_over_stream,peak_mb,cpu_seconds\n";
+                      "seconds_per_pass,stream_seconds,pass_over_stream,peak_mb,cpu_seconds,"
+                      "stream_fast_seconds,pass_over_stream_fast\n";
     fputs(hdr, f);
     printf("%s", hdr);
     const double alphas[] = {0.1, 0.2, 0.3, 0.5, 0.7, 0.9, 1.0};
@@ -211,8 +213,11 @@ int main(int argc, char **argv)
                 cbm_context_destroy(pc);
                 break;
             }
-            /* bytes one pass reads and writes (see docs/performance.md) */
+            /* bytes one relaxation pass reads and writes, and those of the fast solver: the
+             * same plus the factorisation's five 3x3 blocks written (360) and about 70 more
+             * read (see docs/performance.md) */
             double stream = stream_seconds(n * 320, n * 176);
+            double stream_fast = stream_seconds(n * (320 + 70), n * (176 + 360));
             run rows[10];
             int nr = 0;
             double rel_alpha[10];
@@ -240,11 +245,12 @@ int main(int argc, char **argv)
                 char line[512];
                 double spp = rows[k].seconds / (double)rows[k].passes;
                 snprintf(line, sizeof line,
-                         "%s,%zu,%s,%g,%s,%zu,%.6g,%.3g,%.6g,%.6g,%.3g,%.1f,%.6g\n", names[wl], n,
-                         k == 0 ? "fast" : "relax", rel_alpha[k], cbm_status_name(rows[k].status),
-                         rows[k].passes, rows[k].seconds, rows[k].residual, spp, stream,
-                         spp / stream, (double)cbm_context_peak_bytes(pc) / 1048576.0,
-                         rows[k].cpu_seconds);
+                         "%s,%zu,%s,%g,%s,%zu,%.6g,%.3g,%.6g,%.6g,%.3g,%.1f,%.6g,%.6g,%.3g\n",
+                         names[wl], n, k == 0 ? "fast" : "relax", rel_alpha[k],
+                         cbm_status_name(rows[k].status), rows[k].passes, rows[k].seconds,
+                         rows[k].residual, spp, stream, spp / stream,
+                         (double)cbm_context_peak_bytes(pc) / 1048576.0, rows[k].cpu_seconds,
+                         stream_fast, spp / stream_fast);
                 fputs(line, f);
                 printf("%s", line);
                 fflush(stdout);

@@ -6,6 +6,8 @@
  * bit; a chain, which stays serial, too. */
 #include "test.h"
 
+#include "cambium/lsys.h"
+#include "cambium/tree.h"
 #include "mech/mech_internal.h"
 
 #include <stdlib.h>
@@ -162,4 +164,140 @@ TEST(thread_count_setting)
     const char *bad = "threads = -2\n";
     CHECK(cbm_bend_spec_parse(ctx, bad, strlen(bad), "t.spec", &s) != CBM_OK);
     cbm_context_destroy(ctx);
+}
+
+/* Bit for bit, two plants' Omega, moments and distal nodes (false on different sizes). */
+static bool same_plant_bits(const cbm_plant *a, const cbm_plant *b)
+{
+    if (!a || !b || a->n != b->n || a->n == 0)
+        return false;
+    size_t n = a->n;
+    return !memcmp(a->omega, b->omega, n * sizeof *a->omega) &&
+           !memcmp(a->moment, b->moment, n * sizeof *a->moment) &&
+           !memcmp(a->pos, b->pos, n * sizeof *a->pos);
+}
+
+/* The built-in trees set the thread count with the tree parameter solve_threads (`cambium grow
+ * -D solve_threads=N`): it reaches every equilibrium (the plant's setting after the run), the
+ * split over threads is forced for this size, and the grown tree is the same to the bit with 1
+ * and 2 threads. A bad value is refused naming the parameter. */
+TEST(tree_model_solve_threads_same_bits)
+{
+    cbm__mech_tree_min_segments(0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_tree *t[2] = {NULL, NULL};
+    for (int k = 0; k < 2 && ctx; k++) {
+        cbm_tree_def d;
+        CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree", &d));
+        CHECK_OK(cbm_tree_def_set(ctx, &d, "solve_threads", k == 0 ? "1" : "2"));
+        d.years = 6;
+        CHECK_OK(cbm_tree_create(ctx, &d, &t[k]));
+        if (t[k])
+            CHECK_OK(cbm_tree_run(t[k]));
+    }
+    const cbm_plant *p1 = t[0] ? cbm_tree_plant(t[0]) : NULL;
+    const cbm_plant *p2 = t[1] ? cbm_tree_plant(t[1]) : NULL;
+    CHECK(p1 && p2);
+    if (p1 && p2) {
+        /* the split of the last equilibrium, cached in the workspace (solve_tree.c) */
+        printf("fruit tree, 6 years: %zu segments; threads %d and %d, split into %d and %d\n",
+               p1->n, p1->threads, p2->threads, p1->work.tsplit, p2->work.tsplit);
+        CHECK_EQ_INT(p1->threads, 1);
+        CHECK_EQ_INT(p2->threads, 2);
+        CHECK_EQ_INT(p2->work.tsplit, 2);
+        CHECK(same_plant_bits(p1, p2));
+    }
+    cbm_tree_destroy(t[0]);
+    cbm_tree_destroy(t[1]);
+    cbm_tree_def d = cbm_tree_def_default();
+    CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "-1") == CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);
+    CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "1.5") == CBM_E_INVALID);
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_min_segments(50000);
+}
+
+/* A binary tree of 2^9 - 1 axes grown by L+C, an equilibrium after every step. */
+static cbm_plant *lc_tree(cbm_context *ctx, const char *start, cbm_lsys **out)
+{
+    char src[1200];
+    snprintf(src, sizeof src,
+             "#include <lpfgall.h>\n"
+             "derivation length: 8;\n"
+             "module I(MechSegment);\n"
+             "module A(int);\n"
+             "module Fruit(double);\n"
+             "mechanics: I;\n"
+             "mass: Fruit(mass);\n"
+             "MechSegment S(double a) { MechSegment s; s.length = 0.05; s.a = a; s.b = a; "
+             "s.E = 1e9; s.density = 800; return s; }\n"
+             "Start: { %s }\n"
+             "EndEach: { Equilibrium(); }\n"
+             "Axiom: Left(30) A(0);\n"
+             "A(k) : { produce I(S(0.004 / (1 + k))) I(S(0.004 / (1 + k))) "
+             "SB Right(40) A(k + 1) EB SB Left(35) A(k + 1) EB Fruit(0.01); }\n",
+             start);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.text = src;
+    def.path = "threads.l";
+    cbm_lsys *ls = NULL;
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    if (ls) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        for (int k = 0; k < 8; k++)
+            CHECK_OK(cbm_lsys_step(ls));
+        CHECK_OK(cbm_lsys_mech_plant(ls, &p));
+    }
+    *out = ls;
+    return p;
+}
+
+/* L+C sets the thread count with SolverThreads(n) (0: one per processor): the same bits with 1
+ * and 2 threads, the split forced; a bad n stops the run naming the place. */
+TEST(lc_solver_threads_same_bits)
+{
+    cbm__mech_tree_min_segments(0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_lsys *l1 = NULL, *l2 = NULL;
+    cbm_plant *p1 = lc_tree(ctx, "SolverThreads(1);", &l1);
+    cbm_plant *p2 = lc_tree(ctx, "SolverThreads(2);", &l2);
+    CHECK(p1 && p2);
+    if (p1 && p2) {
+        /* the plants returned are new (not solved); the shape splits over 2 threads */
+        p2->threads = 2;
+        printf("L+C tree: %zu segments, split into %d\n", p1->n, cbm__mech_tree_split(p2));
+        CHECK_EQ_INT(cbm__mech_tree_split(p2), 2);
+        CHECK(same_plant_bits(p1, p2));
+    }
+    cbm_plant_destroy(p1);
+    cbm_plant_destroy(p2);
+    cbm_lsys_destroy(l1);
+    cbm_lsys_destroy(l2);
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_min_segments(50000);
+    const char *bad[] = {"SolverThreads(-1);", "SolverThreads(1.5);", "SolverThreads(2000);"};
+    for (int j = 0; j < 3; j++) {
+        test_diags g;
+        cbm_context *dc = test_diag_ctx(&g);
+        CHECK(dc != NULL);
+        char src[400];
+        snprintf(src, sizeof src,
+                 "#include <lpfgall.h>\nderivation length: 1;\nmodule A();\n"
+                 "Start: { %s }\nAxiom: A;\n",
+                 bad[j]);
+        cbm_lsys_def def = cbm_lsys_def_default();
+        def.text = src;
+        def.path = "bad.l";
+        cbm_lsys *ls = NULL;
+        CHECK_OK(cbm_lsys_load(dc, &def, &ls));
+        if (ls)
+            CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_INVALID);
+        printf("%-20s -> %s", bad[j], g.text);
+        CHECK(!strncmp(g.text, "bad.l:4:10: ", 12) && strstr(g.text, "SolverThreads(n)"));
+        cbm_lsys_destroy(ls);
+        test_ctx_end(dc);
+    }
 }

@@ -115,6 +115,9 @@ typedef struct cbm_tree_def {
     /// solver passes per equilibrium at most (400); a step that needs more goes on from the best
     /// iterate (counted in cbm_tree_summary.unconverged) and the next step continues from it
     int solve_max_passes;
+    /// threads of each equilibrium's sweeps (cbm_solve_def.threads; 0, the default: one per
+    /// processor); the results are the same to the bit for any number
+    int solve_threads;
     /// the bending method of every equilibrium (default fast; relax, approx: docs/methods.md)
     cbm_mech_solver solver;
     /// with solver = approx, how an axis's load enters the generator (default calibrated: the

@@ -96,6 +96,7 @@ static const cbm__builtin BUILTINS[] = {
     {"Solver", FN_SOLVER, 3, LC},
     {"SolverMethod", FN_SOLVERMETHOD, 1, LC},
     {"ApproxLoad", FN_APPROXLOAD, 1, LC},
+    {"SolverThreads", FN_SOLVERTHREADS, 1, LC},
     {"ReactionWood", FN_REACTION, 4, LC},
     {"ReactionBound", FN_REACTIONBOUND, 1, LC},
     {"RAND_MAX", FN_NONE, 0, LC},

@@ -101,6 +101,7 @@ typedef enum cbm__fn {
     FN_SOLVER,
     FN_SOLVERMETHOD,
     FN_APPROXLOAD,
+    FN_SOLVERTHREADS,
     FN_REACTION,
     FN_REACTIONBOUND,
     FN_NONE, /* a reserved name (RAND_MAX is a constant) */

@@ -758,7 +758,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 b->fn == FN_TROPISM || b->fn == FN_PIPEMODEL || b->fn == FN_WOOD ||
                 b->fn == FN_RINGRATE || b->fn == FN_SOLVER || b->fn == FN_SOLVERMETHOD ||
                 b->fn == FN_REACTION || b->fn == FN_REACTIONBOUND || b->fn == FN_SWAYMODES ||
-                b->fn == FN_APPROXLOAD)
+                b->fn == FN_APPROXLOAD || b->fn == FN_SOLVERTHREADS)
                 rt = T_VOID;
             else if (b->fn == FN_EQUILIBRIUM || b->fn == FN_ADDRINGS || b->fn == FN_BREAK)
                 rt = T_INT;

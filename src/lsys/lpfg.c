@@ -283,6 +283,15 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
         }
         m->solve.approx_load = (cbm_approx_load)(int)a[0];
         return;
+    case FN_SOLVERTHREADS:
+        /* cbm_solve_def.threads of every later Equilibrium(): results never depend on it */
+        if (!(a[0] >= 0 && a[0] <= 1024 && a[0] == floor(a[0]))) {
+            rt_error(lp, CBM_E_INVALID,
+                     "SolverThreads(n): n is a whole number 0 .. 1024 (0: one per processor)");
+            return;
+        }
+        m->solve.threads = (int)a[0];
+        return;
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
             rt_error(lp, CBM_E_INVALID,

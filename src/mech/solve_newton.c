@@ -853,15 +853,19 @@ static nk_result leave_unstable(nk *k, double sigma_min)
  * (largest frame turn 0.1 rad), each push relaxed by the damped motion (leave_unstable()), and the
  * stable equilibrium of least total potential energy kept; if neither push ends stable the
  * equilibrium found is kept and reported. The diagnosis of a stable state costs one
- * factorisation (not counted in `passes`, so that stable solves report what they did before);
+ * factorisation (not counted in `passes`, so that stable solves report what they did before),
+ * none when `factored` says the workspace already holds the unmodified factorisation of this
+ * very state (stage_stability's last one, nothing moved since: the same bits, one sweep less);
  * the pushes are counted. */
-static nk_result stability_modes(nk *k)
+static nk_result stability_modes(nk *k, bool factored)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
     cbm_solve_stats *st = k->st;
-    size_t nonpd = 0;
-    cbm__mech_tree_factor(p, 0.0, &nonpd);
+    if (!factored) {
+        size_t nonpd = 0;
+        cbm__mech_tree_factor(p, 0.0, &nonpd);
+    }
     size_t modes = w->fneg;
     st->unstable_modes = 0;
     st->lowest_eigenvalue = NAN;
@@ -935,13 +939,16 @@ static nk_result stage_stability(nk *k)
     cbm__mech_work *w = &p->work;
     cbm_solve_stats *st = k->st;
     nk_result r = NK_DONE;
+    bool factored = false; /* the workspace holds the factorisation of the current state */
     for (int attempt = 0; attempt < 4; attempt++) {
         size_t nonpd = 0;
         cbm__mech_tree_factor(p, 0.0, &nonpd);
         st->passes++;
         st->unstable_joints = nonpd;
-        if (nonpd == 0 || attempt == 3 || st->passes + 4 >= k->max_passes)
+        if (nonpd == 0 || attempt == 3 || st->passes + 4 >= k->max_passes) {
+            factored = true;
             break;
+        }
         memcpy(w->save, p->omega, p->n * sizeof *w->save);
         cbm__mech_tree_perturb_unstable(p, 0.05);
         st->continuation_steps++;
@@ -969,7 +976,7 @@ static nk_result stage_stability(nk *k)
         k->stage = CBM_SOLVE_STAGE_STABILITY;
     }
     if (r == NK_DONE)
-        r = stability_modes(k);
+        r = stability_modes(k, factored);
     return r;
 }
 

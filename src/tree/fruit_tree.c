@@ -464,6 +464,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     t->solve.warm_start = true;
     t->solve.max_passes = (size_t)def->solve_max_passes;
     t->solve.solver = def->solver;
+    t->solve.threads = def->solve_threads;
     /* approx in growth: the rings memorise its shapes, and the thesis's tip load buckles
      * stems (docs/methods.md, "In growth"); calibrated unless the parameters say thesis */
     t->solve.approx_load = def->approx_load;

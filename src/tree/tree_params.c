@@ -103,6 +103,7 @@ static cbm_tree_def thesis_def(void)
     d.ageing = CBM_AGEING_RINGS;
     d.solve_tolerance = 1e-6;
     d.solve_max_passes = 3000;
+    d.solve_threads = 0;
     d.solver = CBM_MECH_NEWTON;
     d.approx_load = CBM_APPROX_LOAD_CALIBRATED;
     d.leaves = true;
@@ -252,6 +253,7 @@ static const param params[] = {
     P(ageing, K_AGE, 0, 0),
     P(solve_tolerance, K_DOUBLE, 1e-14, 0.1),
     P(solve_max_passes, K_INT, 3, 100000000),
+    P(solve_threads, K_INT, 0, 1024),
     P(solver, K_SOLVER, 0, 0),
     P(approx_load, K_ALOAD, 0, 0),
     P(leaves, K_BOOL, 0, 0),
