@@ -623,6 +623,9 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
+    /* a group's vertices are at most 3 a triangle and at most the scene's: the per-vertex
+     * scratch (4 floats and an index a vertex) by the smaller, not 12 floats a triangle */
+    size_t cap_gv = nv < cap_v ? (nv ? nv : 1) : cap_v;
     cbm_status st;
     bool reuse = g->reuse && g->kept_col && g->kept_np == np;
     g->smeshes.len = 0; /* shapes are the scene's */
@@ -633,9 +636,9 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_gv)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
+        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_gv)) != CBM_OK)
         goto done;
     /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
     for (size_t i = 0; i < 4 * np && !reuse; i++)
