@@ -144,6 +144,15 @@ cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id
     return CBM_OK;
 }
 
+/* Equal bit for bit (NaN equals the same NaN; 0 and -0 differ, as the writers' bytes do). */
+static bool same_bits(double a, double b)
+{
+    uint64_t x, y;
+    memcpy(&x, &a, sizeof x);
+    memcpy(&y, &b, sizeof y);
+    return x == y;
+}
+
 /* Equal but for the segment id, field by field (NaNs of the unknown quantities equal bit for
  * bit: they are cbm_part_default's). */
 static bool same_but_segment(const cbm_part *a, const cbm_part *b)
@@ -152,11 +161,9 @@ static bool same_but_segment(const cbm_part *a, const cbm_part *b)
            a->material == b->material &&
            // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
            memcmp(a->color, b->color, sizeof a->color) == 0 &&
-           memcmp(&a->stress_ratio, &b->stress_ratio, sizeof(double)) == 0 &&
-           memcmp(&a->stress, &b->stress, sizeof(double)) == 0 &&
-           memcmp(&a->age, &b->age, sizeof(double)) == 0 &&
-           memcmp(&a->reaction_wood, &b->reaction_wood, sizeof(double)) == 0 &&
-           memcmp(&a->light, &b->light, sizeof(double)) == 0;
+           same_bits(a->stress_ratio, b->stress_ratio) && same_bits(a->stress, b->stress) &&
+           same_bits(a->age, b->age) && same_bits(a->reaction_wood, b->reaction_wood) &&
+           same_bits(a->light, b->light);
 }
 
 cbm_status cbm_scene_begin_part_shared(cbm_scene *s, const cbm_part *part)
