@@ -312,6 +312,71 @@ TEST(glb_tube_instances)
     test_ctx_end(ctx);
 }
 
+/* Shared parts (cbm_scene_begin_part_shared): segments that differ only by their id share one
+ * part and keep their ids in their instances; any other geometry stores its part; the .glb is
+ * the same bytes as with a part per segment. 20,000 instances: several of the writer's chunks. */
+TEST(glb_shared_parts)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *sh = NULL, *pl = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &sh));
+    CHECK_OK(cbm_scene_create(ctx, &pl));
+    cbm_scene_set_instancing(sh, true);
+    cbm_scene_set_instancing(pl, true);
+    const size_t n = 20000;
+    for (int k = 0; k < 2; k++) {
+        cbm_scene *s = k ? pl : sh;
+        for (size_t i = 0; i < n; i++) {
+            cbm_part p = cbm_part_default();
+            p.order = (int32_t)(i / 5000);
+            p.segment = (int64_t)(i + 100);
+            p.color[1] = (float)(i / 777) * 0.01f; /* runs of 777 of one colour */
+            CHECK_OK(k ? cbm_scene_begin_part(s, &p, NULL) : cbm_scene_begin_part_shared(s, &p));
+            cbm_frame f = {{0, 1, 0}, {1, 0, 0}, {0, 0, -1}};
+            double x = 0.01 * (double)i;
+            cbm_section s0 = {{x, 0, 0}, f, 0.002, 0.001}, s1 = {{x, 0.5, 0}, f, 0.002, 0.001};
+            CHECK_OK(cbm_scene_add_tube(s, &s0, &s1, 8, false));
+            if (i % 4999 == 3) { /* a polygon in the same part: stored with its segment */
+                cbm_vec3 q[3] = {{x, 0, 0}, {x + 0.1, 0, 0}, {x, 0, 0.1}};
+                CHECK_OK(cbm_scene_add_polygon(s, q, 3));
+            }
+        }
+    }
+    CHECK_EQ_INT(cbm_scene_instance_count(sh), n);
+    CHECK_EQ_INT(cbm_scene_part_count(pl), n);
+    size_t np = cbm_scene_part_count(sh);
+    CHECK(np < 50);
+    const cbm_scene_instance *in = cbm_scene_instances(sh);
+    const cbm_part *parts = cbm_scene_parts(sh);
+    for (size_t i = 0; i < n; i++) {
+        CHECK(in[i].segment == (float)(i + 100));
+        CHECK(parts[in[i].part].order == (int32_t)(i / 5000));
+    }
+    /* the polygons' triangles belong to parts of their own segments */
+    const uint32_t *tp = cbm_scene_triangle_parts(sh);
+    size_t nt = cbm_scene_triangle_count(sh);
+    CHECK(nt > 0);
+    for (size_t t = 0; t < nt; t++)
+        CHECK((parts[tp[t]].segment - 103) % 4999 == 0);
+    CHECK_OK(cbm_scene_write(ctx, sh, io_path("shared.glb"), NULL));
+    CHECK_OK(cbm_scene_write(ctx, pl, io_path("plain.glb"), NULL));
+    size_t la = 0, lb = 0;
+    char *a = io_read_all(io_path("shared.glb"), &la), *b = io_read_all(io_path("plain.glb"), &lb);
+    CHECK(a && b && la == lb && memcmp(a, b, la) == 0);
+    free(a);
+    free(b);
+    /* without instancing every part is stored */
+    cbm_scene_clear(sh);
+    cbm_scene_set_instancing(sh, false);
+    cbm_part p = cbm_part_default();
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &p));
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &p));
+    CHECK_EQ_INT(cbm_scene_part_count(sh), 2);
+    cbm_scene_destroy(sh);
+    cbm_scene_destroy(pl);
+    test_ctx_end(ctx);
+}
+
 /* Placed shapes (the turtle's predefined surfaces): a scene in instancing mode keeps the shape
  * once and each placement; the .glb's TRS of each placement applied to the shape gives the
  * triangles an ordinary scene gets (points and normals, a mirroring and a proper placement), and

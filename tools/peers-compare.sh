@@ -158,6 +158,15 @@ copy_model() {
     echo "$dst"
 }
 
+# Whether -k FILTER keeps one of the cases named after it (so that lpfg compiles only the models
+# of the cases that run)
+wanted() {
+    local n
+    [ -z "$filter" ] && return 0
+    for n in "$@"; do [[ $n == *"$filter"* ]] && return 0; done
+    return 1
+}
+
 # lpfg: compile the model of directory $1 once (untimed; a run without -o leaves lsys.so in the
 # model's folder); args after it: the side files
 lpfg_compile() {
@@ -178,12 +187,12 @@ d=$(copy_model "$oracles/cpfg-quadratic-koch/model" koch-cpfg-6 6 fractal.l)
 compare "Koch curve, 6 steps, geometry" cpfg "$d" "$d" -- run fractal.l fractal.map fractal.v \
     -o c.glb -- cpfg -g -m fractal.map -ray p.ray fractal.l fractal.v
 d=$(copy_model "$oracles/lpfg-quadratic-koch/model" koch-lpfg 8 lsystem.l)
-if lpfg_compile "$d" color.map view.v anim.a; then
+if wanted "Koch curve (L+C), 8 steps, string" && lpfg_compile "$d" color.map view.v anim.a; then
     compare "Koch curve (L+C), 8 steps, string" lpfg "$d" "$d" -- run lsystem.l color.map \
         view.v anim.a -o c.str -- lpfg -b -o "$d/lsys.so" -out p.str lsystem.l color.map view.v anim.a
 fi
 d=$(copy_model "$oracles/lpfg-quadratic-koch/model" koch-lpfg-6 6 lsystem.l)
-if lpfg_compile "$d" color.map view.v anim.a; then
+if wanted "Koch curve (L+C), 6 steps, geometry" && lpfg_compile "$d" color.map view.v anim.a; then
     compare "Koch curve (L+C), 6 steps, geometry" lpfg "$d" "$d" -- run lsystem.l color.map \
         view.v anim.a -o c.glb -- lpfg -o "$d/lsys.so" -out p.obj lsystem.l color.map view.v anim.a
 fi
@@ -243,6 +252,7 @@ for o in "$oracles"/*/; do
             cpfg -g "${mapopt[@]}" -ray p.ray "$model" "$view"
     else
         sides=("${files[@]:1}")
+        wanted "oracle $name, string" "oracle $name, geometry" || continue
         lpfg_compile "$d" "${sides[@]}" || continue
         compare "oracle $name, string" lpfg "$d" "$d" -- run lsystem.l "${sides[@]}" -o c.str -- \
             lpfg -b -o "$d/lsys.so" -out p.str lsystem.l "${sides[@]}"

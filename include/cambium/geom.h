@@ -78,6 +78,14 @@ CBM_API void cbm_scene_clear(cbm_scene *scene);
 /// Starts a new part; later geometry belongs to it. *id (optional) receives its index.
 CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, uint32_t *id);
 
+/// Starts a part like cbm_scene_begin_part, except that in instancing mode, when the last part
+/// equals `part` but for its segment id, no part is stored: the tube instances added next point
+/// to the last part and keep `part->segment` as their own (cbm_scene_instance.segment), and any
+/// other geometry stores the part first as cbm_scene_begin_part would have. This spares a part
+/// record (88 bytes) per instanced segment. For producers that do not change their parts after
+/// adding them (the part may be shared by other segments' instances).
+CBM_API cbm_status cbm_scene_begin_part_shared(cbm_scene *scene, const cbm_part *part);
+
 /// Generalized cylinder: begin, then one ring per section (each ring is joined to the previous
 /// one with `sides` quads), then end. `caps` closes the two ends with flat discs.
 CBM_API cbm_status cbm_scene_tube_begin(cbm_scene *scene, int sides, bool caps);
@@ -126,6 +134,8 @@ typedef struct cbm_scene_instance {
     float taper;        ///< the section at p1 over the one at p0 (1: a cylinder)
     uint32_t part;      ///< index of the part
     int32_t sides;      ///< sides of the rings it stands for
+    float segment;      ///< its segment id as the .glb writes it (float; -1 if none): the part's,
+                        ///< or its own when it shares the part (cbm_scene_begin_part_shared)
 } cbm_scene_instance;
 
 /// Instancing mode: cbm_scene_add_tube keeps straight uncapped tubes whose end section is the

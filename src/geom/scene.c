@@ -31,6 +31,11 @@ struct cbm_scene {
     CBM_ARRAY(uint32_t) shape_tri;         /* 3 a triangle, indices local to the shape */
     CBM_ARRAY(cbm_scene_placement) place;
     bool line_mode, instancing;
+    /* A shared part (cbm_scene_begin_part_shared): the segment id of the part begun last, which
+     * differs from the stored last part's when seg_pending; the next geometry other than an
+     * instance stores the part with it first (ensure_part). */
+    int64_t cur_seg;
+    bool seg_pending;
     /* tube in progress */
     int tube_sides;
     bool tube_cap0, tube_cap1, tube_open; /* caps at the start, at the end */
@@ -105,14 +110,24 @@ void cbm_scene_clear(cbm_scene *s)
     s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
     s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
+    s->seg_pending = false;
 }
 
+/* A part for geometry other than an instance: the default one in an empty scene, the shared
+ * part of another segment stored as its own. */
 static cbm_status ensure_part(cbm_scene *s)
 {
-    if (s->parts.len > 0)
+    if (s->parts.len > 0 && !s->seg_pending)
         return CBM_OK;
-    cbm_part p = cbm_part_default();
-    return CBM_ARRAY_PUSH(s->ctx, s->parts, p);
+    cbm_part p = s->parts.len > 0 ? s->parts.data[s->parts.len - 1] : cbm_part_default();
+    if (s->seg_pending)
+        p.segment = s->cur_seg;
+    if (s->parts.len >= UINT32_MAX)
+        return CBM_E_LIMIT;
+    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, p));
+    s->seg_pending = false;
+    s->cur_seg = p.segment;
+    return CBM_OK;
 }
 
 cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id)
@@ -122,8 +137,44 @@ cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id
     if (s->parts.len >= UINT32_MAX)
         return CBM_E_LIMIT;
     CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *part));
+    s->cur_seg = part->segment;
+    s->seg_pending = false;
     if (id)
         *id = (uint32_t)(s->parts.len - 1);
+    return CBM_OK;
+}
+
+/* Equal bit for bit (NaN equals the same NaN; 0 and -0 differ, as the writers' bytes do). */
+static bool same_bits(double a, double b)
+{
+    uint64_t x, y;
+    memcpy(&x, &a, sizeof x);
+    memcpy(&y, &b, sizeof y);
+    return x == y;
+}
+
+/* Equal but for the segment id, field by field (NaNs of the unknown quantities equal bit for
+ * bit: they are cbm_part_default's). */
+static bool same_but_segment(const cbm_part *a, const cbm_part *b)
+{
+    return a->organ == b->organ && a->order == b->order && a->parent == b->parent &&
+           a->material == b->material &&
+           // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
+           memcmp(a->color, b->color, sizeof a->color) == 0 &&
+           same_bits(a->stress_ratio, b->stress_ratio) && same_bits(a->stress, b->stress) &&
+           same_bits(a->age, b->age) && same_bits(a->reaction_wood, b->reaction_wood) &&
+           same_bits(a->light, b->light);
+}
+
+cbm_status cbm_scene_begin_part_shared(cbm_scene *s, const cbm_part *part)
+{
+    if (!s || !part)
+        return CBM_E_INVALID;
+    if (!s->instancing || s->parts.len == 0 ||
+        !same_but_segment(&s->parts.data[s->parts.len - 1], part))
+        return cbm_scene_begin_part(s, part, NULL);
+    s->cur_seg = part->segment;
+    s->seg_pending = part->segment != s->parts.data[s->parts.len - 1].segment;
     return CBM_OK;
 }
 
@@ -319,7 +370,8 @@ cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_sec
 {
     double taper = 1.0;
     if (s && s0 && s1 && !s->tube_open && instanceable(s, s0, s1, sides, caps, &taper)) {
-        CBM_TRY(ensure_part(s));
+        if (s->parts.len == 0)
+            CBM_TRY(ensure_part(s));
         cbm_scene_instance in = {{(float)s0->center.x, (float)s0->center.y, (float)s0->center.z},
                                  {(float)s1->center.x, (float)s1->center.y, (float)s1->center.z},
                                  {(float)s0->frame.u.x, (float)s0->frame.u.y, (float)s0->frame.u.z},
@@ -327,7 +379,9 @@ cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_sec
                                  (float)fabs(s0->b),
                                  (float)taper,
                                  (uint32_t)(s->parts.len - 1),
-                                 sides};
+                                 sides,
+                                 /* as the writer writes the part's id: through a double */
+                                 s->cur_seg >= 0 ? (float)(double)s->cur_seg : -1.0f};
         return CBM_ARRAY_PUSH(s->ctx, s->inst, in);
     }
     CBM_TRY(cbm_scene_tube_begin(s, sides, caps));

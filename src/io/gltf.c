@@ -130,25 +130,43 @@ typedef struct glb {
     size_t kept_np;
 } glb;
 
-static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
+/* A view of `bytes` at the next 4-aligned offset of BIN, its padding written; its bytes follow
+ * with bin_put. */
+static cbm_status open_view(glb *g, size_t bytes, int target, size_t *id)
 {
     size_t off = cbm__glb_pad4(g->bin_len);
     if (g->mode == BIN_MEMORY) {
         CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
         memset(g->bin.data + g->bin.len, 0, off - g->bin.len);
-        if (bytes)
-            memcpy(g->bin.data + off, data, bytes);
-        g->bin.len = off + bytes;
+        g->bin.len = off;
     } else if (g->mode == BIN_STREAM) {
         const uint8_t zero[4] = {0, 0, 0, 0};
         cbm_out_write(g->sink, zero, off - g->bin_len); /* errors surface at commit */
-        if (bytes)
-            cbm_out_write(g->sink, data, bytes);
     }
     g->bin_len = off + bytes;
     view v = {off, bytes, target};
     CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->views, v));
     *id = g->views.len - 1;
+    return CBM_OK;
+}
+
+/* Bytes of the view opened last (reserved by open_view). */
+static void bin_put(glb *g, const void *data, size_t bytes)
+{
+    if (!bytes)
+        return;
+    if (g->mode == BIN_MEMORY) {
+        memcpy(g->bin.data + g->bin.len, data, bytes);
+        g->bin.len += bytes;
+    } else if (g->mode == BIN_STREAM) {
+        cbm_out_write(g->sink, data, bytes);
+    }
+}
+
+static cbm_status add_view(glb *g, const void *data, size_t bytes, int target, size_t *id)
+{
+    CBM_TRY(open_view(g, bytes, target, id));
+    bin_put(g, data, bytes);
     return CBM_OK;
 }
 
@@ -423,34 +441,13 @@ static cbm_status instanced_mesh(glb *g, const cbm_scene *s, int organ, const bu
     return CBM_OK;
 }
 
-/* TRANSLATION, ROTATION and SCALE of n tube instances (the unit tube's H along the axis, U the
- * sections' U). */
-static cbm_status tube_trs(glb *g, const cbm_scene_instance *in, const uint32_t *ord, size_t n,
-                           bool fill, inst_attrs *ia)
+/* The rotation of a tube instance: the unit tube's H along the axis, U the sections' U. */
+static cbm_quat tube_rotation(const cbm_scene_instance *q)
 {
-    float *f = g->fbuf.data;
-    for (size_t i = 0; fill && i < n; i++)
-        memcpy(f + 3 * i, in[ord[i]].p0, 3 * sizeof(float));
-    CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->tr));
-    for (size_t i = 0; fill && i < n; i++) {
-        const cbm_scene_instance *q = &in[ord[i]];
-        cbm_vec3 p0 = v3(q->p0[0], q->p0[1], q->p0[2]), p1 = v3(q->p1[0], q->p1[1], q->p1[2]);
-        cbm_vec3 h = v3_normalize(v3_sub(p1, p0)), u = v3(q->u[0], q->u[1], q->u[2]);
-        u = v3_normalize(v3_madd(u, h, -v3_dot(u, h)));
-        cbm_quat r = cbm__quat_of_columns(u, h, v3_cross(u, h));
-        float *d = f + 4 * i;
-        d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
-    }
-    CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia->rot));
-    for (size_t i = 0; fill && i < n; i++) {
-        const cbm_scene_instance *q = &in[ord[i]];
-        double dx = (double)q->p1[0] - q->p0[0], dy = (double)q->p1[1] - q->p0[1],
-               dz = (double)q->p1[2] - q->p0[2];
-        f[3 * i] = q->a;
-        f[3 * i + 1] = (float)sqrt(dx * dx + dy * dy + dz * dz);
-        f[3 * i + 2] = q->b;
-    }
-    return add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->scale);
+    cbm_vec3 p0 = v3(q->p0[0], q->p0[1], q->p0[2]), p1 = v3(q->p1[0], q->p1[1], q->p1[2]);
+    cbm_vec3 h = v3_normalize(v3_sub(p1, p0)), u = v3(q->u[0], q->u[1], q->u[2]);
+    u = v3_normalize(v3_madd(u, h, -v3_dot(u, h)));
+    return cbm__quat_of_columns(u, h, v3_cross(u, h));
 }
 
 /* The rotation and signed scales of a placement's orthogonal columns x, y, z: R = (x', y', z')
@@ -469,41 +466,88 @@ static void placement_rs(const cbm_scene_placement *p, cbm_quat *r, double sc[3]
     *r = cbm__quat_of_columns(cx, cy, cz);
 }
 
-/* TRANSLATION, ROTATION and SCALE of n placements (items ni.. of the sorted order). */
-static cbm_status placement_trs(glb *g, const cbm_scene_placement *pl, const uint32_t *ord,
-                                size_t ni, size_t n, bool fill, inst_attrs *ia)
+/* Per-instance attributes in file order: TRANSLATION, ROTATION, SCALE, then the part values
+ * _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER, _SEGMENT. */
+enum { INST_ATTRS = 8, INST_CHUNK = 8192 };
+
+static int inst_attr_ncomp(int q)
 {
-    float *f = g->fbuf.data;
-    for (size_t i = 0; fill && i < n; i++)
-        memcpy(f + 3 * i, pl[ord[i] - ni].o, 3 * sizeof(float));
-    CBM_TRY(add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->tr));
-    for (size_t i = 0; fill && i < n; i++) {
-        cbm_quat r;
-        double sc[3];
-        placement_rs(&pl[ord[i] - ni], &r, sc);
-        float *d = f + 4 * i;
-        d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
+    return q == 1 ? 4 : q < 3 ? 3 : 1;
+}
+
+/* Attribute q of item `it` (a tube instance if it < ni, else placement it - ni) into d. */
+static void inst_attr(const cbm_scene *s, uint32_t it, size_t ni, int q, float *d)
+{
+    const cbm_scene_instance *in = it < ni ? &cbm_scene_instances(s)[it] : NULL;
+    const cbm_scene_placement *pl = in ? NULL : &cbm_scene_placements(s)[it - ni];
+    if (q >= 3) {
+        /* a tube instance keeps its own segment id: its part may be shared */
+        d[0] = in && q == 7 ? in->segment
+                            : part_value(&cbm_scene_parts(s)[in ? in->part : pl->part], q - 3);
+        return;
     }
-    CBM_TRY(add_accessor(g, f, n, 4, GL_FLOAT, 0, false, &ia->rot));
-    for (size_t i = 0; fill && i < n; i++) {
-        cbm_quat r;
-        double sc[3];
-        placement_rs(&pl[ord[i] - ni], &r, sc);
-        for (int k = 0; k < 3; k++)
-            f[3 * i + (size_t)k] = (float)sc[k];
+    if (q == 0) {
+        memcpy(d, in ? in->p0 : pl->o, 3 * sizeof(float));
+        return;
     }
-    return add_accessor(g, f, n, 3, GL_FLOAT, 0, false, &ia->scale);
+    cbm_quat r;
+    double sc[3];
+    if (in) {
+        if (q == 1) {
+            r = tube_rotation(in);
+        } else {
+            double dx = (double)in->p1[0] - in->p0[0], dy = (double)in->p1[1] - in->p0[1],
+                   dz = (double)in->p1[2] - in->p0[2];
+            d[0] = in->a;
+            d[1] = (float)sqrt(dx * dx + dy * dy + dz * dz);
+            d[2] = in->b;
+            return;
+        }
+    } else {
+        placement_rs(pl, &r, sc);
+        if (q == 2) {
+            for (int k = 0; k < 3; k++)
+                d[k] = (float)sc[k];
+            return;
+        }
+    }
+    d[0] = (float)r.x, d[1] = (float)r.y, d[2] = (float)r.z, d[3] = (float)r.w;
+}
+
+/* The per-instance accessors of n items (ord): each written in chunks of INST_CHUNK items, so
+ * that the scratch is a few pages rather than 16 bytes an instance. */
+static cbm_status inst_accessors(glb *g, const cbm_scene *s, const uint32_t *ord, size_t n,
+                                 inst_attrs *ia)
+{
+    size_t ni = cbm_scene_instance_count(s);
+    size_t *dst[INST_ATTRS] = {&ia->tr,  &ia->rot,   &ia->scale, &ia->stress,
+                               &ia->age, &ia->react, &ia->order, &ia->seg};
+    bool fill = g->mode != BIN_MEASURE; /* no bounds needed: nothing to compute when measuring */
+    for (int q = 0; q < INST_ATTRS; q++) {
+        int nc = inst_attr_ncomp(q);
+        accessor a;
+        memset(&a, 0, sizeof a);
+        CBM_TRY(open_view(g, n * (size_t)nc * sizeof(float), 0, &a.view));
+        a.count = n;
+        a.ncomp = nc;
+        a.ctype = GL_FLOAT;
+        for (size_t c0 = 0; fill && c0 < n; c0 += INST_CHUNK) {
+            size_t m = n - c0 < INST_CHUNK ? n - c0 : INST_CHUNK;
+            float *f = g->fbuf.data;
+            for (size_t i = 0; i < m; i++)
+                inst_attr(s, ord[c0 + i], ni, q, f + (size_t)nc * i);
+            bin_put(g, f, m * (size_t)nc * sizeof(float));
+        }
+        CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
+        *dst[q] = g->acc.len - 1;
+    }
+    return CBM_OK;
 }
 
 /* One instanced node per bucket of group grp; their ids appended to g->children. */
 static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *col, int grp,
                                      const char *group_name, size_t *count)
 {
-    const cbm_scene_instance *in = cbm_scene_instances(s);
-    const cbm_scene_placement *pl = cbm_scene_placements(s);
-    size_t ni = cbm_scene_instance_count(s);
-    const cbm_part *parts = cbm_scene_parts(s);
-    bool fill = g->mode != BIN_MEASURE; /* no bounds needed: nothing to compute when measuring */
     *count = 0;
     for (size_t b = 0; b < g->buckets.len; b++) {
         const bucket *bk = &g->buckets.data[b];
@@ -513,19 +557,9 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
         const uint32_t *ord = g->iorder.data + bk->start;
         int organ = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp;
         CBM_TRY(instanced_mesh(g, s, organ, bk, col + 4 * (size_t)bk->part0, &mid));
-        CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->fbuf, 4 * n));
+        CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->fbuf, 4 * (n < INST_CHUNK ? n : INST_CHUNK)));
         inst_attrs ia;
-        if (bk->shape >= 0)
-            CBM_TRY(placement_trs(g, pl, ord, ni, n, fill, &ia));
-        else
-            CBM_TRY(tube_trs(g, in, ord, n, fill, &ia));
-        float *f = g->fbuf.data;
-        size_t *dst[5] = {&ia.stress, &ia.age, &ia.react, &ia.order, &ia.seg};
-        for (int k = 0; k < 5; k++) {
-            for (size_t i = 0; fill && i < n; i++)
-                f[i] = part_value(&parts[ord[i] < ni ? in[ord[i]].part : pl[ord[i] - ni].part], k);
-            CBM_TRY(add_accessor(g, f, n, 1, GL_FLOAT, 0, false, dst[k]));
-        }
+        CBM_TRY(inst_accessors(g, s, ord, n, &ia));
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->insts, ia));
         node nd;
         memset(&nd, 0, sizeof nd);
@@ -565,6 +599,9 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
+    /* a group's vertices are at most 3 a triangle and at most the scene's: the per-vertex
+     * scratch (4 floats and an index a vertex) by the smaller, not 12 floats a triangle */
+    size_t cap_gv = nv < cap_v ? (nv ? nv : 1) : cap_v;
     cbm_status st;
     bool reuse = g->reuse && g->kept_col && g->kept_np == np;
     g->smeshes.len = 0; /* shapes are the scene's */
@@ -575,9 +612,9 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_v)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_gv)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_v)) != CBM_OK)
+        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_gv)) != CBM_OK)
         goto done;
     /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
     for (size_t i = 0; i < 4 * np && !reuse; i++)

@@ -322,7 +322,13 @@ cbm_status cbm__turtle_emit_segment_e(cbm_turtle *t, cbm_vec3 p0, cbm_vec3 p1, d
         return cbm_scene_add_line(t->scene, p0, p1, w0 > 0.0 ? w0 : w1);
     }
     cbm_part part = cbm__turtle_make_part(t, CBM_ORGAN_BRANCH, color);
-    CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+    /* the cpfg dialect's parts are not changed after the pass (an L+C model's may take its
+     * mechanics' stress by segment: cbm_model_interpret), so a run of segments of one order and
+     * colour drawn as instances shares one part */
+    if (t->lpfg)
+        CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
+    else
+        CBM_TRY(cbm_scene_begin_part_shared(t->scene, &part));
     cbm_vec3 dir = v3_normalize(d);
     cbm_frame f = section_frame(dir, u);
     if (style == CBM__LS_POLYGON) {
