@@ -366,7 +366,7 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *a
         bool second = again; /* this is the sweep after one: the next need not */
         again = false;
         if (sweep) {
-            double corr;
+            double corr = 0.0;
             double b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, &corr, c), 0.0));
             al[j] = a + corr;
             be[j] = b;
