@@ -141,6 +141,11 @@ void cbm__dyn_solve(cbm__dyn *d, const double *b, double *x);
 /// y = M x for the x of the last cbm__dyn_solve: its twists are still in d->z, so only the sweep
 /// from the tips is needed (the product after a solve, in the Lanczos steps of modes.c).
 void cbm__dyn_mass_solved(cbm__dyn *d, double *y);
+/// cbm_plant_modes with the Lanczos run's basis swept (Gram-Schmidt) at every step when full
+/// (else only where the orthogonality estimates ask, dyn_modes.c); steps and sweeps (either may be
+/// NULL) receive the steps of the last run and how many of them swept.
+cbm_status cbm__plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz, double *shapes,
+                            bool full, size_t *steps, size_t *sweeps);
 /// f += the generalised force of a force F (world) at the distal node of seg.
 void cbm__dyn_point_force(const cbm__dyn *d, size_t seg, cbm_vec3 F, double *f);
 /// Displacement of the distal node of seg for the rotations q.

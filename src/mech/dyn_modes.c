@@ -3,11 +3,12 @@
  *
  * Why Lanczos with our own tree factorisation rather than ARPACK: the operator (K - sigma M)^-1 M
  * is applied in O(n) by the tree elimination of tree.c (one backward and one forward sweep per
- * solve, one each way per product with M), so a plain Lanczos run with full reorthogonalisation
- * needs nothing else (per step one solve, M times its result from the solve's twists, the
- * three-term recurrence, one Gram-Schmidt pass over the basis and one product with M after it: five
- * sweeps over the tree; at 10^5 segments the pass and the page faults of the basis cost about as
- * much as the sweeps, docs/performance.md); for the few tens of modes anyone asks for
+ * solve, one each way per product with M), so a plain Lanczos run needs nothing else (per step
+ * one solve, the three-term recurrence and one product with M: four sweeps over the tree; a
+ * Gram-Schmidt pass over the basis and another product with M only at the steps where the
+ * estimated loss of orthogonality asks for it: partial reorthogonalisation, below; at 10^5
+ * segments a pass at every step cost more than the sweeps, docs/performance.md); for the few tens
+ * of modes anyone asks for
  * the Krylov basis stays small (m = 3 count + 30, doubled if the Ritz values have not converged),
  * and the library keeps no Fortran dependency (ARPACK would add one to every build for a dozen
  * lines of iteration here).
@@ -274,51 +275,108 @@ static bool ritz_converged(size_t m, size_t want, double bm, const double *ev, c
 #define EARLY_TOL   1e-12
 #define CHECK_EVERY 4
 
+/* Partial reorthogonalisation (Simon, "The Lanczos algorithm with partial reorthogonalization",
+ * Math. Comp. 42, 1984). The full Gram-Schmidt pass at every step read the whole basis twice (at
+ * 10^5 segments and 60 steps some 8.6 GB through the memory bus in a run, more than the sweeps
+ * over the tree) though it mostly removed round-off. Instead the M inner products omega_k =
+ * v_k' M v_{j+1} of the new vector with the basis are estimated from the recurrence they obey,
+ *   beta_j omega_{j+1,k} = beta_k omega_{j,k+1} + (alpha_k - alpha_j) omega_{j,k}
+ *                          + beta_{k-1} omega_{j,k-1} - beta_{j-1} omega_{j-1,k},
+ * each with a round-off term of its sign added (PRO_EPS times the estimate of |A| over beta_j), and
+ * the basis is swept only when one of them exceeds PRO_TOL: then at that step and the next (the
+ * new vector's successor inherits the loss through the three-term recurrence), after which the
+ * estimates restart at round-off. Lanczos with a basis orthogonal to PRO_TOL gives the Ritz values
+ * of a fully orthogonal one to round-off (Simon's theorem: T is the projection of A on the span to
+ * O(eps |A|)); PRO_TOL is set below sqrt(eps) ~ 1.5e-8 so that the Ritz vectors, combined from the
+ * basis, stay M-orthonormal to the 1e-9 the tests ask of them. */
+#define PRO_TOL 1e-10
+#define PRO_EPS 1e-15
+
+/* the estimates on[0..j+1] of v_k' M v_{j+1} from oc (v_k' M v_j, 0..j) and op (v_k' M v_{j-1},
+ * 0..j-1), with alpha al[0..j], beta be[0..j] (be[j] the new vector's), anorm the estimate of
+ * |A|; returns max |on[k]| over k <= j */
+static double pro_update(size_t j, const double *al, const double *be, double anorm,
+                         const double *op, const double *oc, double *on)
+{
+    double bj = be[j], psi = PRO_EPS * anorm / bj, mx = 0.0;
+    for (size_t k = 0; k < j; k++) {
+        double t = be[k] * oc[k + 1] + (al[k] - al[j]) * oc[k];
+        if (k > 0)
+            t += be[k - 1] * oc[k - 1];
+        if (j > 0)
+            t -= be[j - 1] * op[k];
+        t = t / bj;
+        t += t >= 0 ? psi : -psi;
+        on[k] = t;
+        mx = fmax(mx, fabs(t));
+    }
+    on[j] = psi;
+    on[j + 1] = 1.0;
+    return fmax(mx, psi);
+}
+
 /* One Lanczos run of at most mmax steps; returns the steps done (the basis in v, the tridiagonal
  * in al, be). When the Krylov space closes (an invariant subspace: it happens with exactly
  * repeated frequencies, or when the run reaches all N degrees of freedom) the run restarts from a
  * new start vector M-orthogonal to the basis, with be = 0 at the seam, so T stays tridiagonal and
  * its eigenvalues those of the whole space spanned; it stops when no new direction is left, or
  * when the lowest `want` Ritz pairs have converged (t, ev, th, ord: scratch for ritz). M v_j is
- * carried from the step before (M w / b) instead of being recomputed. */
+ * carried from the step before (M w / b, M w fresh), om scratch of 3 (mmax + 1) doubles for the
+ * orthogonality estimates; full: sweep at every step (the reference of the tests); *sweeps
+ * receives the number of steps that swept the basis. */
 static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *al, double *be,
                       double *w, double *mw, double *mv, double *mvp, double *c, double *t,
-                      double *ev, double *th, size_t *ord)
+                      double *ev, double *th, size_t *ord, double *om, bool full, size_t *sweeps)
 {
     size_t N = 3 * d->n;
     uint64_t s = 0x9E3779B97F4A7C15ull;
+    double *op = om, *oc = om + (mmax + 1), *on = om + 2 * (mmax + 1), anorm = 0.0;
+    bool again = false; /* the step after a reorthogonalisation sweeps too */
+    *sweeps = 0;
     start_vector(&s, w, N);
     cbm__dyn_apply(d, 0.0, 1.0, w, mw);
     double nrm = sqrt(dot(w, mw, N));
     col_set(v, 0, 1.0 / nrm, w);
     for (size_t i = 0; i < N; i++)
         mv[i] = mw[i] / nrm;
+    oc[0] = 1.0;
     size_t j = 0;
     for (; j < mmax; j++) {
         cbm__dyn_solve(d, mv, w);
-        cbm__dyn_mass_solved(d, mw);
-        /* the three-term recurrence (v_{j-1}' M w = beta_{j-1}, v_j' M w = (M v_j)' w), then the
-         * full reorthogonalisation in the M inner product, which now removes only round-off and
-         * so needs one pass where it needed two. M w follows w through the recurrence from the
-         * M v carried (mvp: M v_{j-1}), which saves the sweep from the base a fresh product
-         * costs. */
-        double xx = dot(w, mw, N), a;
-        if (j > 0) {
+        /* the three-term recurrence (v_{j-1}' M w = beta_{j-1}, v_j' M w = (M v_j)' w), then M w
+         * afresh: carried through the recurrence from the M v's its error re-enters the next
+         * step multiplied by about alpha / beta and grows (tried: the tenth frequency of the
+         * 10^5-segment tree came out 5e-4 high while the residual test passed) */
+        double a;
+        if (j > 0)
             col_axpy(v, j - 1, be[j - 1], w);
-            axpy(be[j - 1], mvp, mw, N);
-        }
         a = dot(mv, w, N);
         col_axpy(v, j, a, w);
-        axpy(a, mv, mw, N);
-        /* M w so tracked is off by round-off of M x's size, and the Gram-Schmidt coefficients
-         * with it: when the recurrence cancelled most of x (the Krylov space about to close, as
-         * with repeated frequencies), that is no longer round-off of w: M w afresh */
-        if (!(dot(w, mw, N) > 1e-4 * xx))
-            cbm__dyn_apply(d, 0.0, 1.0, w, mw);
-        double corr;
-        double b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, &corr, c), 0.0));
-        al[j] = a + corr;
-        be[j] = b;
+        cbm__dyn_apply(d, 0.0, 1.0, w, mw);
+        double bb = dot(w, mw, N), bprev = j > 0 ? be[j - 1] : 0.0;
+        al[j] = a;
+        be[j] = sqrt(fmax(bb, 0.0));
+        anorm = fmax(anorm, fabs(a) + be[j] + bprev);
+        /* the recurrence cancelled more than 99.99 % of x's M-norm (x' M x = a^2 + beta_{j-1}^2 +
+         * b^2 in exact arithmetic): the Krylov space is about to close, as with repeated
+         * frequencies, and what is left of w is mostly round-off of the basis: sweep */
+        bool sweep = full || again || !(bb > 1e-4 * (a * a + bprev * bprev + bb)) || !(be[j] > 0.0);
+        if (!sweep)
+            sweep = pro_update(j, al, be, anorm, op, oc, on) > PRO_TOL;
+        bool second = again; /* this is the sweep after one: the next need not */
+        again = false;
+        if (sweep) {
+            double corr = 0.0;
+            double b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, &corr, c), 0.0));
+            al[j] = a + corr;
+            be[j] = b;
+            (*sweeps)++;
+            again = !second;
+            for (size_t k = 0; k <= j; k++)
+                on[k] = PRO_EPS;
+            on[j + 1] = 1.0;
+        }
+        double b = be[j];
         if (j + 1 == mmax || !isfinite(b)) {
             j++;
             break;
@@ -330,10 +388,15 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *a
             cbm__dyn_apply(d, 0.0, 1.0, w, mw);
             double n0 = sqrt(dot(w, mw, N));
             b = sqrt(fmax(m_orthogonalise(d, v, j + 1, w, mw, NULL, c), 0.0));
+            (*sweeps)++;
             if (!(b > 1e-8 * n0)) {
                 j++;
                 break;
             }
+            again = true;
+            for (size_t k = 0; k <= j; k++)
+                on[k] = PRO_EPS;
+            on[j + 1] = 1.0;
         } else if (j + 1 >= want && (j + 1) % CHECK_EVERY == 0) {
             ritz(al, be, j + 1, t, ev, th, ord);
             if (ritz_converged(j + 1, want, b, ev, th, ord, EARLY_TOL)) {
@@ -347,11 +410,16 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *a
         col_set(v, j + 1, rb, w);
         for (size_t k = 0; k < N; k++)
             mv[k] = mw[k] * rb;
+        tmp = op;
+        op = oc;
+        oc = on;
+        on = tmp;
     }
     return j;
 }
 
-cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz, double *shapes)
+cbm_status cbm__plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz, double *shapes,
+                            bool full, size_t *steps, size_t *sweeps)
 {
     if (!plant || !freqs_hz || count == 0)
         return CBM_E_INVALID;
@@ -400,10 +468,21 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
         double *ev = cbm__alloc(ctx, mmax * mmax * sizeof(double));
         double *th = cbm__alloc(ctx, mmax * sizeof(double));
         size_t *ord = cbm__alloc(ctx, mmax * sizeof(size_t));
-        if (!v.v || !gc || !w || !mw || !mv || !mvp || !al || !be || !t || !ev || !th || !ord)
+        double *om = cbm__alloc(ctx, 3 * (mmax + 1) * sizeof(double));
+        if (!v.v || !gc || !w || !mw || !mv || !mvp || !al || !be || !t || !ev || !th || !ord ||
+            !om)
             st = CBM_E_NOMEM;
         else {
-            size_t m = lanczos(&d, mmax, want, &v, al, be, w, mw, mv, mvp, gc, t, ev, th, ord);
+            size_t sw = 0;
+            /* a basis of every direction: the shapes are then the whole eigenbasis, which the
+             * modal motion (its static correction) relies on being M-orthonormal to round-off,
+             * and the run is short anyway: sweep at every step */
+            size_t m = lanczos(&d, mmax, want, &v, al, be, w, mw, mv, mvp, gc, t, ev, th, ord, om,
+                               full || mmax == N, &sw);
+            if (steps)
+                *steps = m;
+            if (sweeps)
+                *sweeps = sw;
             ritz(al, be, m, t, ev, th, ord);
             size_t got = want < m ? want : m;
             bool ok = m == N || got == want;
@@ -435,9 +514,15 @@ cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_h
         cbm__free(ctx, ev, ma * ma * sizeof(double));
         cbm__free(ctx, th, ma * sizeof(double));
         cbm__free(ctx, ord, ma * sizeof(size_t));
+        cbm__free(ctx, om, 3 * (ma + 1) * sizeof(double));
     }
     cbm__dyn_free(&d);
     if (st == CBM_E_INTERNAL || st == CBM_E_NOT_CONVERGED)
         return cbm__fail(ctx, CBM_E_NOT_CONVERGED, "modes: the Lanczos iteration did not converge");
     return st;
+}
+
+cbm_status cbm_plant_modes(const cbm_plant *plant, size_t count, double *freqs_hz, double *shapes)
+{
+    return cbm__plant_modes(plant, count, freqs_hz, shapes, false, NULL, NULL);
 }
