@@ -737,7 +737,9 @@ static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, c
  * are host calls (O_HOST) since the fruit tree went from 6 to 1 (its Equilibrium call) and
  * sympodial from 3 to 0; switch compiles, so c-library.l's counts its switch function's
  * expressions no more as a walked call (13 to 5) and taylor-hell-constructs.l's Reorient
- * compiles, its two quaternion expressions walked (2 to 4). */
+ * compiles, its two quaternion expressions walked (2 to 4). The blocks (Start ... End) compile
+ * too, and their walked expressions count: the fruit tree's mechanics settings and calls in
+ * Start and EndEach (1 to 11). */
 TEST(lpfg_bodies_match_walker)
 {
     static const struct {
@@ -763,7 +765,7 @@ TEST(lpfg_bodies_match_walker)
         {"tests/lpfg/two-branch-context.l", 1, false, 3, 3, 0},
         {"tests/lpfg/value-semantics.l", 1, false, 2, 2, 5},
         {"bench/lc/compute.l", 12, false, 1, 1, 0},
-        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 1},
+        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 11},
         {"lpfg-compound-param", -1, true, 4, 4, 0},
         {"lpfg-hormone-up", -1, true, 4, 4, 0},
         {"lpfg-innewcontext", -1, true, 3, 3, 3},
@@ -811,6 +813,41 @@ TEST(lpfg_bodies_match_walker)
     test_ctx_end(ctx);
 }
 
+/* cbm_lsys_walker_fallbacks (`cambium run --timing`): what the tree walker still runs. A body
+ * with a context and a switch, a function, a Start block: everything compiles, the context is
+ * the one walked expression; a cpfg-dialect model gives false. */
+TEST(lpfg_walker_fallbacks)
+{
+    static const char *const text =
+        "#include <lpfgall.h>\nmodule A(int);\nmodule B(int);\nint g = 0;\n"
+        "int twice(int x) { switch (x) { case 0: return 0; default: return 2 * x; } }\n"
+        "Start: { g = twice(drand48() < 2); }\n"
+        "Axiom: B(1) A(0);\n"
+        "A(x) : { int y = 0; if (InLeftContext(B(y))) produce A(twice(y) + g); }\n";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    size_t b = 9, bt = 9, f = 9, ft = 9, e = 9;
+    CHECK(cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e));
+    CHECK_MSG(b == 0 && bt == 2 && f == 0 && ft == 1 && e == 1,
+              "bodies %zu of %zu, functions %zu of %zu, expressions %zu", b, bt, f, ft, e);
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    char *got = lpfg_string(ctx, ls, false, ' ');
+    CHECK_MSG(got && !strcmp(got, "B(1) A(4)"), "got '%s'", got ? got : "");
+    free(got);
+    cbm_lsys_destroy(ls);
+    def.path = "m.ls";
+    def.text = "Lsystem: 1\nderivation length: 1\nAxiom: F\nF --> FF\nendlsystem\n";
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    CHECK(!cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e) && bt == 0 && e == 0);
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
+}
+
 /* One step of model text with the bodies run by the walker, the register code or native code:
  * its status and diagnostics in *g, the string after it in *str (the caller frees it);
  * CBM_E_UNSUPPORTED when native code cannot be had. */
@@ -855,7 +892,8 @@ static cbm_status body_step(const char *text, int by, test_diags *g, char **str,
  * function called from the body, an error in compiled functions with struct parameters (one a
  * reference) and vector arithmetic, an error inside an expression left to the walker (O_EVAL:
  * a quaternion), an error in a compiled switch, func() without function files (a host call,
- * O_HOST). A body with a switch compiles (counted) and gives the same string. */
+ * O_HOST), an error in a compiled EndEach block. A body with a switch compiles (counted) and
+ * gives the same string. */
 TEST(lpfg_bodies_errors_and_fallback)
 {
     static const struct {
@@ -912,6 +950,11 @@ TEST(lpfg_bodies_errors_and_fallback)
          "    double y = drand48();\n"
          "    produce A(y + func(F, x)); }\n",
          "m.l:6:5: ", "needs function files", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nint z = 0;\nAxiom: A(1);\n"
+         "A(x) : { produce A(x + 1); }\n"
+         "EndEach: {\n"
+         "    z = drand48() < 2 ? 7 / z : 0; }\n",
+         "m.l:7:5: ", "integer division by zero", CBM_E_RUNTIME, 1},
         {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1) A(2) A(3);\n"
          "A(x) : {\n"
          "    switch (x) {\n"

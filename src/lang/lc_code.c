@@ -1495,8 +1495,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
         p->body0[k] = n;
         n += sets[k]->prods.len;
     }
-    if (!n)
-        return CBM_OK;
+    p->block0 = n;
+    n += 4;
     p->fn = cbm__calloc(ctx, n, sizeof *p->fn);
     if (!p->fn)
         return CBM_E_NOMEM;
@@ -1541,6 +1541,17 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             if (!p->fn[f].compiled)
                 p->fn[f].ins.len = 0;
         }
+    /* the blocks: statements on a frame of their own, as bodies that produce nothing */
+    for (int b = 0; b < 4; b++) {
+        size_t f = p->block0 + (size_t)b;
+        bool nomem = false;
+        p->fn[f].compiled = m->blocks[b] >= 0 && compile_code(ctx, m, p, (int)f, m->blocks[b],
+                                                              m->block_fsize[b], true, &nomem);
+        if (nomem)
+            return CBM_E_NOMEM;
+        if (!p->fn[f].compiled)
+            p->fn[f].ins.len = 0;
+    }
     return CBM_OK;
 }
 

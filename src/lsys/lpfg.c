@@ -1373,9 +1373,15 @@ static cbm_status run_block(cbm_lsys *ls, int which)
     lpfg *lp = ls->lp;
     if (lp->m.blocks[which] < 0)
         return CBM_OK;
-    lp->vm.sp = (size_t)lp->m.block_fsize[which];
     lp->ret = NULL;
-    exec(ls, lp->m.blocks[which], lp->vm.stack);
+    size_t f = lp->prog.block0 + (size_t)which;
+    if (!lp->walk_bodies && lp->prog.fn && lp->prog.fn[f].compiled) { /* the register code */
+        lp->vm.sp = (size_t)lp->prog.fn[f].nreg;
+        (void)cbm__lc_run(&lp->prog, (int)f, lp->vm.stack, &lp->vm);
+    } else {
+        lp->vm.sp = (size_t)lp->m.block_fsize[which];
+        exec(ls, lp->m.blocks[which], lp->vm.stack);
+    }
     return lp->vm.err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
 }
 
@@ -1847,7 +1853,7 @@ void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_
         return;
     /* walked: the expressions left to the walker in the compiled functions and bodies */
     for (size_t f = 0; f < p->n; f++) {
-        if (f >= p->body0[LC_MAIN]) {
+        if (f >= p->body0[LC_MAIN] && f < p->block0) {
             *compiled += p->fn[f].compiled;
             ++*total;
         }
@@ -1866,6 +1872,11 @@ bool cbm_lsys_walker_fallbacks(const cbm_lsys *ls, size_t *bodies, size_t *bodie
     cbm__lpfg_bodies(ls, &compiled, bodies_total, expressions);
     *bodies = *bodies_total - compiled;
     const lc_program *p = &ls->lp->prog;
+    for (int b = 0; b < 4; b++) /* the blocks present count as bodies */
+        if (ls->lp->m.blocks[b] >= 0) {
+            ++*bodies_total;
+            *bodies += !(p->fn && p->fn[p->block0 + (size_t)b].compiled);
+        }
     *functions_total = ls->lp->m.funcs.len;
     for (size_t f = 0; f < *functions_total; f++)
         *functions += !(p->fn && f < p->n && p->fn[f].compiled);

@@ -761,7 +761,7 @@ int cmd_run(int argc, char **argv)
     size_t bw, bt, fw, ft, ew; /* the L+C dialect's fallbacks to the tree walker */
     if (timing && cbm_lsys_walker_fallbacks(r.ls, &bw, &bt, &fw, &ft, &ew))
         fprintf(stderr,
-                "tree walker: %zu of %zu production bodies, %zu of %zu functions, %zu "
+                "tree walker: %zu of %zu production bodies and blocks, %zu of %zu functions, %zu "
                 "expressions of the compiled ones\n",
                 bw, bt, fw, ft, ew);
     sway.ctx = ctx;
