@@ -203,6 +203,14 @@ TEST(lpfg_struct_functions)
 {
     run_model("struct-functions.l");
 }
+TEST(lpfg_random_host)
+{
+    run_model("random-host.l");
+}
+TEST(lpfg_switch)
+{
+    run_model("switch.l");
+}
 TEST(lpfg_groups_globals)
 {
     run_model("groups-globals.l");
@@ -724,9 +732,14 @@ static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, c
  * in the register code and in native code: every model of tests/lpfg, the six lpfg oracle
  * models (with ../shared), compute.l and 48 steps of the L+C fruit tree (structs, nproduce,
  * groups, new contexts, globals). Which bodies compile, and how many of their expressions are
- * left to the walker (O_EVAL: contexts, vector arithmetic, random numbers, calls of functions
- * with struct or reference parameters), is checked per model, so that a change that leaves
- * more to the walker is seen. */
+ * left to the walker (O_EVAL: contexts, quaternion and frame arithmetic, mechanics calls), is
+ * checked per model, so that a change that leaves more to the walker is seen. Random numbers
+ * are host calls (O_HOST) since the fruit tree went from 6 to 1 (its Equilibrium call) and
+ * sympodial from 3 to 0; switch compiles, so c-library.l's counts its switch function's
+ * expressions no more as a walked call (13 to 5) and taylor-hell-constructs.l's Reorient
+ * compiles, its two quaternion expressions walked (2 to 4). The blocks (Start ... End) compile
+ * too, and their walked expressions count: the fruit tree's mechanics settings and calls in
+ * Start and EndEach (1 to 11). */
 TEST(lpfg_bodies_match_walker)
 {
     static const struct {
@@ -736,7 +749,7 @@ TEST(lpfg_bodies_match_walker)
         size_t compiled, total, walked; /* bodies compiled, of all; expressions walked */
     } models[] = {
         {"tests/lpfg/backward-sum.l", 1, false, 1, 1, 3},
-        {"tests/lpfg/c-library.l", 1, false, 5, 5, 13},
+        {"tests/lpfg/c-library.l", 1, false, 5, 5, 5},
         {"tests/lpfg/compiled-functions.l", 6, false, 1, 1, 0},
         {"tests/lpfg/consider.l", 1, false, 2, 2, 0},
         {"tests/lpfg/decomposition-interp.l", 2, false, 3, 3, 0},
@@ -746,17 +759,19 @@ TEST(lpfg_bodies_match_walker)
         {"tests/lpfg/in-left-context.l", 1, false, 1, 1, 2},
         {"tests/lpfg/struct-vectors.l", 1, false, 1, 1, 0},
         {"tests/lpfg/struct-functions.l", 1, false, 1, 1, 0},
-        {"tests/lpfg/taylor-hell-constructs.l", 3, false, 7, 7, 2},
+        {"tests/lpfg/random-host.l", 4, false, 1, 1, 0},
+        {"tests/lpfg/switch.l", 1, false, 1, 1, 0},
+        {"tests/lpfg/taylor-hell-constructs.l", 3, false, 7, 7, 4},
         {"tests/lpfg/two-branch-context.l", 1, false, 3, 3, 0},
         {"tests/lpfg/value-semantics.l", 1, false, 2, 2, 5},
         {"bench/lc/compute.l", 12, false, 1, 1, 0},
-        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 6},
+        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 11},
         {"lpfg-compound-param", -1, true, 4, 4, 0},
         {"lpfg-hormone-up", -1, true, 4, 4, 0},
         {"lpfg-innewcontext", -1, true, 3, 3, 3},
         {"lpfg-newcontext", -1, true, 6, 6, 0},
         {"lpfg-quadratic-koch", -1, true, 1, 1, 0},
-        {"lpfg-sympodial", -1, true, 6, 6, 3},
+        {"lpfg-sympodial", -1, true, 6, 6, 0},
     };
     cbm_context *ctx = test_ctx();
     bool native_ok = true;
@@ -795,6 +810,41 @@ TEST(lpfg_bodies_match_walker)
         free(code);
         free(native);
     }
+    test_ctx_end(ctx);
+}
+
+/* cbm_lsys_walker_fallbacks (`cambium run --timing`): what the tree walker still runs. A body
+ * with a context and a switch, a function, a Start block: everything compiles, the context is
+ * the one walked expression; a cpfg-dialect model gives false. */
+TEST(lpfg_walker_fallbacks)
+{
+    static const char *const text =
+        "#include <lpfgall.h>\nmodule A(int);\nmodule B(int);\nint g = 0;\n"
+        "int twice(int x) { switch (x) { case 0: return 0; default: return 2 * x; } }\n"
+        "Start: { g = twice(drand48() < 2); }\n"
+        "Axiom: B(1) A(0);\n"
+        "A(x) : { int y = 0; if (InLeftContext(B(y))) produce A(twice(y) + g); }\n";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = "m.l";
+    def.text = text;
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    size_t b = 9, bt = 9, f = 9, ft = 9, e = 9;
+    CHECK(cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e));
+    CHECK_MSG(b == 0 && bt == 2 && f == 0 && ft == 1 && e == 1,
+              "bodies %zu of %zu, functions %zu of %zu, expressions %zu", b, bt, f, ft, e);
+    CHECK_OK(cbm_lsys_reset(ls));
+    CHECK_OK(cbm_lsys_step(ls));
+    char *got = lpfg_string(ctx, ls, false, ' ');
+    CHECK_MSG(got && !strcmp(got, "B(1) A(4)"), "got '%s'", got ? got : "");
+    free(got);
+    cbm_lsys_destroy(ls);
+    def.path = "m.ls";
+    def.text = "Lsystem: 1\nderivation length: 1\nAxiom: F\nF --> FF\nendlsystem\n";
+    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    CHECK(!cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e) && bt == 0 && e == 0);
+    cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
 }
 
@@ -841,8 +891,9 @@ static cbm_status body_step(const char *text, int by, test_diags *g, char **str,
  * that is not finite (named at its argument), the loop budget, the call depth of a compiled
  * function called from the body, an error in compiled functions with struct parameters (one a
  * reference) and vector arithmetic, an error inside an expression left to the walker (O_EVAL:
- * the call of a function with a switch).
- * A body with a switch stays in the walker whole (counted) and gives the same string. */
+ * a quaternion), an error in a compiled switch, func() without function files (a host call,
+ * O_HOST), an error in a compiled EndEach block. A body with a switch compiles (counted) and
+ * gives the same string. */
 TEST(lpfg_bodies_errors_and_fallback)
 {
     static const struct {
@@ -886,6 +937,24 @@ TEST(lpfg_bodies_errors_and_fallback)
          "Axiom: A(1);\n"
          "A(x) : { produce A(g(x - 1)); }\n",
          "m.l:3:71: ", "integer remainder by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+         "A(x) : { Quaternion q = MakeQuaternion(V3f(0, 0, 1), 7 % (x - 1)); produce A(x); }\n",
+         "m.l:4:10: ", "integer remainder by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+         "A(x) : {\n"
+         "    switch (x) { case 0: break; case 1: x = 3 / (x - 1); }\n"
+         "    produce A(x); }\n",
+         "m.l:5:41: ", "integer division by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(double);\nAxiom: A(1);\n"
+         "A(x) : {\n"
+         "    double y = drand48();\n"
+         "    produce A(y + func(F, x)); }\n",
+         "m.l:6:5: ", "needs function files", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nint z = 0;\nAxiom: A(1);\n"
+         "A(x) : { produce A(x + 1); }\n"
+         "EndEach: {\n"
+         "    z = drand48() < 2 ? 7 / z : 0; }\n",
+         "m.l:7:5: ", "integer division by zero", CBM_E_RUNTIME, 1},
         {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1) A(2) A(3);\n"
          "A(x) : {\n"
          "    switch (x) {\n"
@@ -894,7 +963,7 @@ TEST(lpfg_bodies_errors_and_fallback)
          "    default: produce A(x * x);\n"
          "    }\n"
          "    produce A(-x); }\n",
-         NULL, NULL, CBM_OK, 0},
+         NULL, NULL, CBM_OK, 1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         test_diags walker, code, native;

@@ -424,6 +424,7 @@ typedef struct cg {
     bool nomem;
     bool body;         /* a production body: produce, and return gives no value */
     int loops;         /* enclosing loops */
+    int switches;      /* enclosing switches (break leaves the innermost loop or switch) */
     int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
     lc_ins scratch;    /* what ins() gives after running out of memory */
     /* the constants, each in a register of its own after the locals, loaded on entry */
@@ -617,6 +618,56 @@ static int delegate(cg *g, int32_t ni, int dst, int size)
     return dst;
 }
 
+/* The built-ins that act on the run's state, called through the host (O_HOST, vm->host_call):
+ * random numbers (the one stream of lang/random.c, drawn in the walker's order), func, the
+ * derivation's direction and group, stop. */
+static bool host_fn(int fn)
+{
+    switch (fn) {
+    case FN_RAN:
+    case FN_NRAN:
+    case FN_DRAND:
+    case FN_RAND:
+    case FN_SRAND:
+    case FN_FUNC:
+    case FN_FORWARD:
+    case FN_BACKWARD:
+    case FN_USEGROUP:
+    case FN_CURGROUP:
+    case FN_STOP:
+        return true;
+    default:
+        return false;
+    }
+}
+
+/* Built-in ni of host_fn: its (at most two, scalar) arguments left to right into a run of
+ * temporaries, then O_HOST with the node in k, whose value the host converts to the node's
+ * type as the walker does. */
+static int host(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    int na = 0;
+    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, na++)
+        if (!lc_is_scalar(node(g, x)->type) || na == 2)
+            return delegate(g, ni, dst, lc_is_scalar(n->type) ? 1 : 0);
+    int save = g->top;
+    int base = g->top;
+    for (int i = 0; i < na; i++)
+        (void)tmp(g);
+    int i = 0;
+    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, i++) {
+        int s2 = g->top;
+        mov(g, base + i, cx(g, x, base + i));
+        g->top = s2;
+    }
+    lc_ins *x = ins(g, emit(g, O_HOST, dst, base, na));
+    x->fn = (uint16_t)n->fn;
+    x->k = (double)ni;
+    g->top = save;
+    return dst;
+}
+
 static int call(cg *g, int32_t ni, int dst);
 static bool vec_bin(cg *g, int32_t ni, int dst);
 static bool vec_builtin(cg *g, int32_t ni, int dst);
@@ -741,6 +792,8 @@ static int cx(cg *g, int32_t ni, int hint)
         return hint;
     }
     case N_CALLB: {
+        if (host_fn(n->fn))
+            return host(g, ni, hint);
         if (n->fn >= FN_MATH_END) {
             if (scalar && vec_builtin(g, ni, hint)) /* Dot, Length */
                 return hint;
@@ -1190,10 +1243,81 @@ static void loop(cg *g, const lc_node *n)
     g->cont = cont;
 }
 
+static void stmt(cg *g, int32_t ni);
+
 /* Compiles the statement chain from ni, as exec runs it. */
 static void cs(cg *g, int32_t ni)
 {
-    for (; ni >= 0 && !g->fail; ni = node(g, ni)->next) {
+    for (; ni >= 0 && !g->fail; ni = node(g, ni)->next)
+        stmt(g, ni);
+}
+
+/* switch as exec runs it: the value once, then the labels of the cases of its body's chain
+ * (the cases directly in it: a case nested deeper is no target, as in exec) compared with it
+ * in their order up to the first equal one, whose case is jumped to; else the default (the
+ * last one), else the end. The body runs from there through the chain; break leaves it,
+ * continue goes to the enclosing loop. */
+#define LC_MAX_CASES 256
+static void switch_(cg *g, const lc_node *n)
+{
+    if (!lc_is_scalar(node(g, n->a)->type)) {
+        g->fail = true;
+        return;
+    }
+    int32_t body = node(g, n->b)->op == S_BLOCK ? node(g, n->b)->a : n->b;
+    int32_t jump[LC_MAX_CASES];
+    int nc = 0;
+    int32_t dflt = -1; /* the default's case node */
+    int v = tmp(g);
+    mov(g, v, cx(g, n->a, v));
+    for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
+        const lc_node *cn = node(g, c);
+        if (cn->op != S_CASE)
+            continue;
+        if (cn->a < 0) {
+            dflt = c;
+            continue;
+        }
+        if (nc == LC_MAX_CASES || !lc_is_scalar(node(g, cn->a)->type)) {
+            g->fail = true;
+            return;
+        }
+        int save = g->top;
+        int t = tmp(g);
+        int r = cx(g, cn->a, t);
+        emit(g, O_EQ, t, v, r);
+        jump[nc++] = emit(g, O_JNZ, 0, t, -1);
+        g->top = save;
+    }
+    int32_t jd = emit(g, O_JMP, 0, -1, 0); /* to the default, or past the body */
+    int32_t brk = g->brk;
+    g->brk = -1;
+    g->switches++;
+    int k = 0;
+    for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
+        const lc_node *cn = node(g, c);
+        if (cn->op == S_CASE) {
+            int32_t at = here(g);
+            if (cn->a >= 0)
+                patch(g, jump[k++], at);
+            if (c == dflt) {
+                patch(g, jd, at);
+                jd = -1;
+            }
+        } else
+            stmt(g, c);
+    }
+    g->switches--;
+    int32_t end = here(g);
+    patch(g, jd, end);
+    patch(g, g->brk, end);
+    g->brk = brk;
+}
+
+/* Compiles statement ni. */
+static void stmt(cg *g, int32_t ni)
+{
+    {
         const lc_node *n = node(g, ni);
         g->pending_at = n->pos; /* exec sets the position at every statement */
         int save = g->top;
@@ -1276,9 +1400,14 @@ static void cs(cg *g, int32_t ni)
                 emit(g, O_RET, 0, r, 0);
             }
             break;
+        case S_SWITCH:
+            switch_(g, n);
+            break;
+        case S_CASE: /* a case not directly in its switch's body: no target, as in exec */
+            break;
         case S_BREAK:
         case S_CONTINUE:
-            if (!g->loops) {
+            if (!g->loops && (n->op == S_CONTINUE || !g->switches)) {
                 g->fail = true;
                 break;
             }
@@ -1295,7 +1424,7 @@ static void cs(cg *g, int32_t ni)
             else
                 produce(g, n);
             break;
-        default: /* switch: the tree walker's */
+        default:
             g->fail = true;
             break;
         }
@@ -1366,8 +1495,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
         p->body0[k] = n;
         n += sets[k]->prods.len;
     }
-    if (!n)
-        return CBM_OK;
+    p->block0 = n;
+    n += 4;
     p->fn = cbm__calloc(ctx, n, sizeof *p->fn);
     if (!p->fn)
         return CBM_E_NOMEM;
@@ -1412,6 +1541,17 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             if (!p->fn[f].compiled)
                 p->fn[f].ins.len = 0;
         }
+    /* the blocks: statements on a frame of their own, as bodies that produce nothing */
+    for (int b = 0; b < 4; b++) {
+        size_t f = p->block0 + (size_t)b;
+        bool nomem = false;
+        p->fn[f].compiled = m->blocks[b] >= 0 && compile_code(ctx, m, p, (int)f, m->blocks[b],
+                                                              m->block_fsize[b], true, &nomem);
+        if (nomem)
+            return CBM_E_NOMEM;
+        if (!p->fn[f].compiled)
+            p->fn[f].ins.len = 0;
+    }
     return CBM_OK;
 }
 

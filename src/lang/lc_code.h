@@ -15,7 +15,7 @@
  * one operation, the call depth is bounded). A runtime error reports the position of the
  * statement being executed, as the tree walker does.
  *
- * A function is compiled when its statements are those other than switch. Its parameters and
+ * Every function compiles (switch too). Its parameters and
  * result may be scalars or runs (structs, vectors), its parameters references (T& x: the caller
  * copies the parameter's run back to the variable after the call, as the tree walker does); an
  * expression the compiler does not handle is evaluated by the tree walker on the function's
@@ -129,7 +129,9 @@ enum {
     O_PST,    /* vm->par[d] = a */
     O_CMATH,  /* d = math built-in fn(a, b) with trigonometry in degrees */
     O_WSPEND, /* an iteration of a while loop from vm->budget (the cpfg message) */
-    O_HOST    /* d = vm->host_call(ip, fr) */
+    O_HOST    /* d = vm->host_call(ip, fr); also the L+C dialect's random numbers, func,
+               * Forward/Backward, UseGroup/CurrentGroup and stop: fn the built-in, its b
+               * arguments in registers a.., k the call's node (lsys/lpfg.c lpfg_host) */
 };
 
 typedef struct lc_ins {
@@ -155,7 +157,8 @@ typedef struct lc_fcode {
 
 /* The register code of a model's functions, by function index, then of its production bodies:
  * those of the main rules from body0[0], of the decomposition rules from body0[1], of the
- * interpretation rules from body0[2], each by production index. */
+ * interpretation rules from body0[2], each by production index; then the four blocks (Start,
+ * StartEach, EndEach, End) from block0, compiled as bodies without produce. */
 typedef struct lc_native lc_native; /* lc_native.c */
 
 enum { LC_MAIN, LC_DECOMP, LC_INTERP };
@@ -164,6 +167,7 @@ typedef struct lc_program {
     lc_fcode *fn;
     size_t n;
     size_t body0[3];
+    size_t block0;     /* the Start, StartEach, EndEach and End blocks, from fn[block0] */
     lc_native *native; /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
 
@@ -175,18 +179,18 @@ typedef struct lc_program {
  * conditional is copied register by register, and `produce`/`nproduce` writes each module from
  * a run of registers through vm->produce. Vector arithmetic of V3f and V3d, their conversions
  * and Dot, Cross, Length and Normalize are instructions over the components. An expression the
- * compiler does not handle (the other non-math built-ins, contexts, quaternions and frames,
- * calls of functions left to the walker) is evaluated by the tree walker on the body's frame
- * (O_EVAL through vm->eval), so the body still compiles; statements it does not handle
- * (switch) leave the whole body to the walker. The run of a body returns 1 when it produced
- * (the production applied), 0 when it ended without. */
+ * compiler does not handle (the other vector and the mechanics built-ins, contexts, quaternions
+ * and frames, calls of functions left to the walker) is evaluated by the tree walker on the
+ * body's frame (O_EVAL through vm->eval), so the body still compiles. Random numbers and the
+ * built-ins of the run's state are host calls (O_HOST). The run of a body returns 1 when it
+ * produced (the production applied), 0 when it ended without. The blocks compile as bodies. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
 
 /* The production body p of rule set `set` (LC_MAIN ...): its index in p->fn, -1: none. */
 static inline int cbm__lc_body(const lc_program *p, int set, size_t prod)
 {
-    size_t end = set == LC_INTERP ? p->n : p->body0[set + 1];
+    size_t end = set == LC_INTERP ? p->block0 : p->body0[set + 1];
     return p->fn && p->body0[set] + prod < end ? (int)(p->body0[set] + prod) : -1;
 }
 

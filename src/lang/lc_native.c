@@ -60,6 +60,7 @@ extern char **environ;
         double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
         int (*prod)(struct lc_rt *, int32_t, int, const double *);                                 \
         int (*eval)(struct lc_rt *, int32_t, int32_t, double *, int, double *);                    \
+        double (*host)(struct lc_rt *, int32_t, int, int, int32_t, double *);                      \
     };
 LC_RT_STRUCT
 #define LC_STR_(...) #__VA_ARGS__
@@ -141,6 +142,25 @@ static int rt_eval(struct lc_rt *R, int32_t at, int32_t ni, double *fr, int nreg
     return 0;
 }
 
+/* O_HOST: the register code's instruction rebuilt around the arguments' copy v, so that the
+ * host (vm->host_call) sees what the loop would give it */
+static double rt_host(struct lc_rt *R, int32_t at, int fn, int nargs, int32_t node, double *v)
+{
+    lc_vm *vm = R->vm;
+    lc_ins x;
+    memset(&x, 0, sizeof x);
+    x.op = O_HOST;
+    x.fn = (uint16_t)fn;
+    x.b = nargs;
+    x.k = (double)node;
+    x.at = at;
+    vm->at = at;
+    double r = vm->host_call(vm, &x, v);
+    if (vm->err != CBM_OK)
+        R->failed = 1;
+    return r;
+}
+
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
     struct lc_rt R = {vm->glob,
@@ -158,7 +178,8 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_math,
                       rt_bin,
                       rt_prod,
-                      rt_eval};
+                      rt_eval,
+                      rt_host};
     return p->native->fn[f](fr, &R, vm->at);
 }
 
@@ -431,6 +452,13 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
         for (int i = 0; i < x->b; i++)
             put(s, " r%d = v[%d];", x->d + i, i);
         put(s, " }");
+        break;
+    case O_HOST: /* the L+C host's built-ins (random numbers, func, ...): node k */
+        put(s, "{ double v[2] = {0, 0};");
+        for (int i = 0; i < x->b && i < 2; i++)
+            put(s, " v[%d] = r%d;", i, x->a + i);
+        put(s, " r%d = R->host(R, at, %d, %d, %d, v); if (R->failed) return 0; }", x->d, x->fn,
+            x->b, (int)x->k);
         break;
     case O_RET:
         put_frame_out(s, p, m, f);

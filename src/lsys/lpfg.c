@@ -402,6 +402,74 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     out[0] = r;
 }
 
+/* The built-ins that act on the run's state (random numbers, func, derivation control, stop)
+ * at arguments a (0 for a missing one), converted to the node's type: the walker's and the
+ * register code's (O_HOST through lpfg_host) one implementation, so both draw the same stream. */
+static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
+{
+    lpfg *lp = ls->lp;
+    double r = 0;
+    switch ((cbm__fn)n->fn) {
+    case FN_RAN:
+        r = cbm__rand48_next(&ls->ev.rnd.r48) * a[0];
+        break;
+    case FN_NRAN: {
+        double v, f;
+        cbm__random_normal(&ls->ev.rnd, &v, &f);
+        r = a[0] + a[1] * v * f;
+        break;
+    }
+    case FN_DRAND:
+        r = cbm__rand48_next(&ls->ev.rnd.r48);
+        break;
+    case FN_RAND:
+        r = cbm__crand_next(&lp->crand);
+        break;
+    case FN_SRAND: {
+        long long s = cbm__to_ll(a[0]);
+        cbm__crand_seed(&lp->crand, (uint32_t)s);
+        cbm__random_seed(&ls->ev.rnd, s);
+        break;
+    }
+    case FN_FUNC:
+        if (!ls->func)
+            rt_error(lp, CBM_E_RUNTIME,
+                     "func(name, x) needs function files (.func or .fset) on the command line");
+        else
+            r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
+        break;
+    case FN_FORWARD:
+        lp->backward = false;
+        break;
+    case FN_BACKWARD:
+        lp->backward = true;
+        break;
+    case FN_USEGROUP:
+        lp->group = (int)cbm__to_ll(a[0]);
+        break;
+    case FN_CURGROUP:
+        r = lp->group;
+        break;
+    case FN_STOP:
+        ls->ev.stopped = true;
+        break;
+    default:
+        break;
+    }
+    return lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type, r);
+}
+
+/* O_HOST of the register code (lc_vm.host_call): built-in node ip->k at its ip->b arguments in
+ * registers ip->a.. */
+static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
+{
+    cbm_lsys *ls = vm->host;
+    double a[2] = {0, 0};
+    for (int i = 0; i < ip->b && i < 2; i++)
+        a[i] = fr[ip->a + i];
+    return host_builtin(ls, &ls->lp->m.nodes.data[(int32_t)ip->k], a);
+}
+
 static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
@@ -503,55 +571,7 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
                                 cbm__builtin_math(n->fn, a[0], a[1], false));
         return;
     }
-    double r = 0;
-    switch ((cbm__fn)n->fn) {
-    case FN_RAN:
-        r = cbm__rand48_next(&ls->ev.rnd.r48) * a[0];
-        break;
-    case FN_NRAN: {
-        double v, f;
-        cbm__random_normal(&ls->ev.rnd, &v, &f);
-        r = a[0] + a[1] * v * f;
-        break;
-    }
-    case FN_DRAND:
-        r = cbm__rand48_next(&ls->ev.rnd.r48);
-        break;
-    case FN_RAND:
-        r = cbm__crand_next(&lp->crand);
-        break;
-    case FN_SRAND: {
-        long long s = cbm__to_ll(a[0]);
-        cbm__crand_seed(&lp->crand, (uint32_t)s);
-        cbm__random_seed(&ls->ev.rnd, s);
-        break;
-    }
-    case FN_FUNC:
-        if (!ls->func)
-            rt_error(lp, CBM_E_RUNTIME,
-                     "func(name, x) needs function files (.func or .fset) on the command line");
-        else
-            r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
-        break;
-    case FN_FORWARD:
-        lp->backward = false;
-        break;
-    case FN_BACKWARD:
-        lp->backward = true;
-        break;
-    case FN_USEGROUP:
-        lp->group = (int)cbm__to_ll(a[0]);
-        break;
-    case FN_CURGROUP:
-        r = lp->group;
-        break;
-    case FN_STOP:
-        ls->ev.stopped = true;
-        break;
-    default:
-        break;
-    }
-    out[0] = lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type, r);
+    out[0] = host_builtin(ls, n, a);
 }
 
 static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
@@ -1382,9 +1402,15 @@ static cbm_status run_block(cbm_lsys *ls, int which)
     lpfg *lp = ls->lp;
     if (lp->m.blocks[which] < 0)
         return CBM_OK;
-    lp->vm.sp = (size_t)lp->m.block_fsize[which];
     lp->ret = NULL;
-    exec(ls, lp->m.blocks[which], lp->vm.stack);
+    size_t f = lp->prog.block0 + (size_t)which;
+    if (!lp->walk_bodies && lp->prog.fn && lp->prog.fn[f].compiled) { /* the register code */
+        lp->vm.sp = (size_t)lp->prog.fn[f].nreg;
+        (void)cbm__lc_run(&lp->prog, (int)f, lp->vm.stack, &lp->vm);
+    } else {
+        lp->vm.sp = (size_t)lp->m.block_fsize[which];
+        exec(ls, lp->m.blocks[which], lp->vm.stack);
+    }
     return lp->vm.err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
 }
 
@@ -1858,13 +1884,34 @@ void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_
         return;
     /* walked: the expressions left to the walker in the compiled functions and bodies */
     for (size_t f = 0; f < p->n; f++) {
-        if (f >= p->body0[LC_MAIN]) {
+        if (f >= p->body0[LC_MAIN] && f < p->block0) {
             *compiled += p->fn[f].compiled;
             ++*total;
         }
         for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
             *walked += p->fn[f].ins.data[i].op == O_EVAL;
     }
+}
+
+bool cbm_lsys_walker_fallbacks(const cbm_lsys *ls, size_t *bodies, size_t *bodies_total,
+                               size_t *functions, size_t *functions_total, size_t *expressions)
+{
+    *bodies = *bodies_total = *functions = *functions_total = *expressions = 0;
+    if (!ls || !ls->lp)
+        return false;
+    size_t compiled;
+    cbm__lpfg_bodies(ls, &compiled, bodies_total, expressions);
+    *bodies = *bodies_total - compiled;
+    const lc_program *p = &ls->lp->prog;
+    for (int b = 0; b < 4; b++) /* the blocks present count as bodies */
+        if (ls->lp->m.blocks[b] >= 0) {
+            ++*bodies_total;
+            *bodies += !(p->fn && p->fn[p->block0 + (size_t)b].compiled);
+        }
+    *functions_total = ls->lp->m.funcs.len;
+    for (size_t f = 0; f < *functions_total; f++)
+        *functions += !(p->fn && f < p->n && p->fn[f].compiled);
+    return true;
 }
 
 bool cbm__lpfg_body_compiled(const cbm_lsys *ls, int set, size_t index)
@@ -1991,6 +2038,7 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     lp->vm.produce = produce_compiled;
     lp->vm.eval = eval_walker;
     lp->vm.host = ls;
+    lp->vm.host_call = lpfg_host;
     for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
         if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
             lp->prog.fn[f].compiled = false;
