@@ -141,4 +141,29 @@ static inline size_t compare_tol(const char *a, const char *b, double rel, doubl
     return a[i] == b[j] ? (size_t)-1 : i;
 }
 
+/* A control-block built-in given a bad argument: loads `Start: { stmt }` in a one-module L+C
+ * model "bad.l", requires the reset to fail with a message at bad.l:4:10 that contains want. */
+static inline void lc_check_start_error(const char *stmt, const char *want)
+{
+    test_diags g;
+    cbm_context *dc = test_diag_ctx(&g);
+    CHECK(dc != NULL);
+    char src[400];
+    snprintf(src, sizeof src,
+             "#include <lpfgall.h>\nderivation length: 1;\nmodule A();\n"
+             "Start: { %s }\nAxiom: A;\n",
+             stmt);
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.text = src;
+    def.path = "bad.l";
+    cbm_lsys *ls = NULL;
+    CHECK_OK(cbm_lsys_load(dc, &def, &ls));
+    if (ls)
+        CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_INVALID);
+    printf("%-20s -> %s", stmt, g.text);
+    CHECK(!strncmp(g.text, "bad.l:4:10: ", 12) && strstr(g.text, want));
+    cbm_lsys_destroy(ls);
+    test_ctx_end(dc);
+}
+
 #endif
