@@ -1289,6 +1289,8 @@ static void switch_(cg *g, const lc_node *n)
         jump[nc++] = emit(g, O_JNZ, 0, t, -1);
         g->top = save;
     }
+    if (g->fail)
+        return;
     int32_t jd = emit(g, O_JMP, 0, -1, 0); /* to the default, or past the body */
     int32_t brk = g->brk;
     g->brk = -1;
@@ -1298,7 +1300,7 @@ static void switch_(cg *g, const lc_node *n)
         const lc_node *cn = node(g, c);
         if (cn->op == S_CASE) {
             int32_t at = here(g);
-            if (cn->a >= 0)
+            if (cn->a >= 0 && k < nc) /* the same cases as above, in order: k < nc */
                 patch(g, jump[k++], at);
             if (c == dflt) {
                 patch(g, jd, at);
