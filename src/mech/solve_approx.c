@@ -50,6 +50,11 @@ static bool starts_axis(const cbm_plant *p, size_t i)
     return p->parent[i] < 0 || !(p->cont[i] & 1);
 }
 
+static bool rest_free(cbm_vec3 r)
+{
+    return r.x == 0.0 && r.y == 0.0 && r.z == 0.0;
+}
+
 /* The parent's frame turned by segment i's branching rotation, and i's proximal node. */
 static cbm_quat joint_base(const cbm_plant *p, size_t i, cbm_vec3 *pos)
 {
@@ -92,7 +97,9 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     }
     double g = v3_norm(p->gravity);
     cbm_vec3 gdir = g > 0.0 ? v3_scale(p->gravity, 1.0 / g) : v3(0, -1, 0);
-    cbm_quat q0 = q_mul(qa, q_from_rotvec(v3_scale(w->rj[i], w->dual[i])));
+    /* a joint without rest rotation (most of a tree's): the frame is qa itself, bit for bit */
+    cbm_quat q0 =
+        rest_free(w->rj[i]) ? qa : q_mul(qa, q_from_rotvec(v3_scale(w->rj[i], w->dual[i])));
     cbm_vec3 h0 = q_h(q0);
     double cosv = -v3_dot(h0, gdir);
     cbm_vec3 axis = v3_cross(h0, gdir);
@@ -161,6 +168,52 @@ static cbm_status bend_axis(cbm_plant *p, const cbm_solve_def *d, approx_scratch
     return set_increments(sc, m, axis);
 }
 
+/* Whether segment c continues its parent's axis with the parent's local bending axis: the
+ * parent's joint turns only about that axis (no rest rotation) and c's branching rotation is the
+ * identity, so the axis, fixed in the world along the chain, has the same local coordinates in
+ * both frames. */
+static bool carries_axis(const cbm_plant *p, size_t c)
+{
+    int64_t pa = p->parent[c];
+    return pa >= 0 && (p->cont[c] & 1) && p->fchild[pa] == (int64_t)c &&
+           rest_free(p->work.rj[pa]) && p->branch[c].w == 1.0;
+}
+
+/* The corrected mode's sweep (the thesis mode keeps the general one below, bit for bit): the
+ * local bending axis is found by one rotation per axis and handed down the chain in sc->ax where
+ * carries_axis holds (in place of the world axis, which that segment no longer needs).
+ * Differs from the general loop by round-off (test approx_corrected_sweep). */
+static cbm_status bend_corrected(cbm_plant *p, const cbm_solve_def *d, approx_scratch *sc)
+{
+    const cbm__mech_work *w = &p->work;
+    for (size_t i = 0; i < p->n; i++) {
+        cbm_vec3 pos;
+        cbm_quat qa = joint_base(p, i, &pos);
+        cbm_vec3 la;
+        if (starts_axis(p, i)) {
+            cbm_status s = bend_axis(p, d, sc, i, qa);
+            if (s != CBM_OK)
+                return s;
+            la = q_rotate(q_conj(qa), sc->ax[i]);
+        } else if (carries_axis(p, i)) {
+            la = sc->ax[i];
+        } else {
+            la = q_rotate(q_conj(qa), sc->ax[i]);
+        }
+        /* omega dual through omega, as the general loop: the ApproxLoad routes compare bits */
+        p->omega[i] = v3_add(w->rj[i], v3_scale(la, sc->inc[i] / w->dual[i]));
+        cbm_vec3 rot = v3_scale(p->omega[i], w->dual[i]);
+        p->q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(rot)));
+        p->pos[i] = pos;
+        p->force[i] = v3(0, 0, 0);
+        p->moment[i] = v3(0, 0, 0);
+        int64_t c = p->fchild[i];
+        if (c >= 0 && carries_axis(p, (size_t)c))
+            sc->ax[c] = la;
+    }
+    return CBM_OK;
+}
+
 cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solve_stats *st)
 {
     if (!(d->approx_p >= 0.0 && d->approx_p <= 1.0))
@@ -183,7 +236,9 @@ cbm_status cbm__mech_solve_approx(cbm_plant *p, const cbm_solve_def *d, cbm_solv
     sc.chain = (size_t *)(void *)wk->dm; /* n of its 3n words */
     cbm_status s = wk->cap >= n && sc.ax && sc.inc && sc.chain ? CBM_OK : CBM_E_NOMEM;
     const cbm__mech_work *w = &p->work;
-    for (size_t i = 0; i < n && s == CBM_OK; i++) {
+    if (d->approx_mode == CBM_APPROX_CORRECTED)
+        s = bend_corrected(p, d, &sc);
+    for (size_t i = 0; i < n && s == CBM_OK && d->approx_mode == CBM_APPROX_THESIS; i++) {
         cbm_vec3 pos;
         cbm_quat qa = joint_base(p, i, &pos);
         if (starts_axis(p, i))
