@@ -114,6 +114,62 @@ TEST(func_needs_function_files)
     test_ctx_end(ctx);
 }
 
+/* cbm_model_describe: the counts of every L-system of a cpfg file (sub-L-systems summed, the
+ * deepest homomorphism, stochastic from any of them, blocks), and an L+C model's own rules and
+ * declared modules. */
+TEST(describe_counts_both_dialects)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_status st;
+    cbm_model *m = load_text(ctx,
+                             "#define STEPS 4\n"
+                             "Lsystem: 1\nderivation length: STEPS\nAxiom: A?(2,1)\n"
+                             "A --> AB\nB --> A\nhomomorphism\nmaximum depth: 2\nB --> F\n"
+                             "endlsystem\n"
+                             "Lsystem: 2\nStart: {x = 1;}\nAxiom: C\nC --> CC : 0.5\n"
+                             "C --> D : 0.5\ndecomposition\nmaximum depth: 3\nD --> EE\n"
+                             "homomorphism\nmaximum depth: 5\nE --> F\nC --> F\nendlsystem\n",
+                             NULL, 0, &st);
+    CHECK_OK(st);
+    if (m) {
+        cbm_model_summary sm;
+        cbm_model_describe(m, &sm);
+        CHECK_EQ_INT(sm.lsystems, 2);
+        CHECK_EQ_INT((int)sm.productions, 4);
+        CHECK_EQ_INT((int)sm.decompositions, 1);
+        CHECK_EQ_INT((int)sm.homomorphisms, 3);
+        CHECK_EQ_INT(sm.decomposition_depth, 3);
+        CHECK_EQ_INT(sm.homomorphism_depth, 5);
+        CHECK(sm.stochastic);     /* from the second L-system */
+        CHECK(!sm.has_start_end); /* the Start: of a sub-L-system is not the file's */
+        CHECK(!sm.lc_dialect && !sm.mechanics);
+        CHECK_EQ_INT(sm.derivation_length, 4);
+        CHECK_EQ_INT((int)sm.modules_declared, 0);
+        cbm_model_destroy(m);
+    }
+    m = load_text(ctx,
+                  "#include <lpfgall.h>\nmodule A(int);\nmodule B();\nderivation length: 3;\n"
+                  "Axiom: A(1);\nA(n) : { produce A(n + 1) B(); }\n"
+                  "interpretation:\nmaximum depth: 2;\nB() : { produce F(1); }\n",
+                  NULL, 0, &st);
+    CHECK_OK(st);
+    if (m) {
+        cbm_model_summary sm;
+        cbm_model_describe(m, &sm);
+        CHECK(sm.lc_dialect && !sm.mechanics);
+        CHECK_EQ_INT(sm.lsystems, 1);
+        CHECK_EQ_INT((int)sm.productions, 1);
+        CHECK_EQ_INT((int)sm.homomorphisms, 1);
+        CHECK_EQ_INT(sm.homomorphism_depth, 2);
+        CHECK_EQ_INT((int)sm.decompositions, 0);
+        CHECK_EQ_INT(sm.derivation_length, 3);
+        CHECK(sm.modules_declared > 2); /* A and B with the turtle's modules */
+        CHECK(!sm.stochastic && !sm.has_start_end);
+        cbm_model_destroy(m);
+    }
+    test_ctx_end(ctx);
+}
+
 TEST(side_file_errors)
 {
     cbm_context *ctx = test_ctx();

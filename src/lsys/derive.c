@@ -1016,8 +1016,14 @@ static bool cpfg_has_interpretation(const cbm_lsys *ls)
 }
 
 /* The step protocol of the cpfg dialect (the L+C one is in lpfg.c). */
-const cbm__dialect cbm__cpfg_dialect = {cpfg_reset, cpfg_step, cpfg_interpretation,
-                                        cpfg_has_interpretation, cbm__cpfg_write_str};
+const cbm__dialect cbm__cpfg_dialect = {.reset = cpfg_reset,
+                                        .step = cpfg_step,
+                                        .interpret = cpfg_interpretation,
+                                        .has_interpretation = cpfg_has_interpretation,
+                                        .write_str = cbm__cpfg_write_str,
+                                        .describe = cbm__cpfg_describe,
+                                        .func_names = cbm__cpfg_func_names,
+                                        .set_func_ids = cbm__cpfg_set_func_ids};
 
 /* The entry points: the dialect's step protocol (lsys_internal.h). */
 cbm_status cbm_lsys_reset(cbm_lsys *ls)

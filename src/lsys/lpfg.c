@@ -1864,16 +1864,17 @@ cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const do
     return CBM_OK;
 }
 
-void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
-                        int *decomp_depth, int *interp_depth, size_t *modules)
+void cbm__lpfg_describe(const cbm_lsys *ls, cbm_model_summary *out)
 {
     const lpfg *lp = ls->lp;
-    *prods = lp->m.main.prods.len;
-    *decomp = lp->m.decomp.present ? lp->m.decomp.prods.len : 0;
-    *interp = lp->m.interp.present ? lp->m.interp.prods.len : 0;
-    *decomp_depth = lp->m.decomp.present ? lp->m.decomp.depth : 0;
-    *interp_depth = lp->m.interp.present ? lp->m.interp.depth : 0;
-    *modules = lp->m.mods.len;
+    out->lc_dialect = true;
+    out->mechanics = cbm_lsys_has_mechanics(ls);
+    out->productions = lp->m.main.prods.len;
+    out->decompositions = lp->m.decomp.present ? lp->m.decomp.prods.len : 0;
+    out->homomorphisms = lp->m.interp.present ? lp->m.interp.prods.len : 0;
+    out->decomposition_depth = lp->m.decomp.present ? lp->m.decomp.depth : 0;
+    out->homomorphism_depth = lp->m.interp.present ? lp->m.interp.depth : 0;
+    out->modules_declared = lp->m.mods.len;
 }
 
 void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_t *walked)
@@ -2091,5 +2092,11 @@ bool cbm__lpfg_has_interpretation(const cbm_lsys *ls)
 }
 
 /* The step protocol of the L+C dialect (lsys_internal.h). */
-const cbm__dialect cbm__lpfg_dialect = {cbm__lpfg_reset, cbm__lpfg_step, cbm__lpfg_interpretation,
-                                        cbm__lpfg_has_interpretation, cbm__lpfg_write_str};
+const cbm__dialect cbm__lpfg_dialect = {.reset = cbm__lpfg_reset,
+                                        .step = cbm__lpfg_step,
+                                        .interpret = cbm__lpfg_interpretation,
+                                        .has_interpretation = cbm__lpfg_has_interpretation,
+                                        .write_str = cbm__lpfg_write_str,
+                                        .describe = cbm__lpfg_describe,
+                                        .func_names = cbm__lpfg_func_names,
+                                        .set_func_ids = cbm__lpfg_set_func_ids};

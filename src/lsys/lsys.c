@@ -1,7 +1,8 @@
 /* Loading and releasing an L-system model: preprocess, parse, then index the productions by
  * the first symbol of their predecessor (declaration order kept within a symbol, which is the
  * order cpfg tries them in), list the L-systems of the file (the main one and its
- * sub-L-systems, lsys_internal.h) and allocate the run state (globals, parameter frame). */
+ * sub-L-systems, lsys_internal.h) and allocate the run state (globals, parameter frame). Also
+ * what the package header lsys/lsys.h gives the model (src/lsys_model) of a loaded L-system. */
 #include "lang/lc.h"
 #include "cambium/mech.h"
 #include "lsys/lsys_internal.h"
@@ -227,4 +228,49 @@ cbm_status cbm_lsys_load(cbm_context *ctx, const cbm_lsys_def *def, cbm_lsys **o
     ls->cur_gen = 1;
     *out = ls;
     return CBM_OK;
+}
+
+bool cbm__lsys_may_query(const cbm_lsys *ls)
+{
+    for (size_t i = 0; i < ls->smods.len; i++)
+        if ((ls->smods.data[i].sym & 0x7f) == '?')
+            return true;
+    return false;
+}
+
+const uint8_t *cbm__lsys_symbols(const cbm_lsys *ls, size_t *n)
+{
+    *n = ls->cur.n;
+    return ls->cur.sym;
+}
+
+/* The cpfg dialect's rules: those of every L-system of the file. */
+void cbm__cpfg_describe(const cbm_lsys *ls, cbm_model_summary *out)
+{
+    out->productions = ls->main.prods.len;
+    out->decompositions = ls->decomp.prods.len;
+    out->homomorphisms = ls->homo.prods.len;
+    out->decomposition_depth = ls->decomp.present ? ls->decomp.depth : 0;
+    out->homomorphism_depth = ls->homo.present ? ls->homo.depth : 0;
+    for (size_t i = 0; i < ls->subs.len; i++) {
+        const sublsys *sub = &ls->subs.data[i];
+        out->productions += sub->main.prods.len;
+        out->decompositions += sub->decomp.prods.len;
+        out->homomorphisms += sub->homo.prods.len;
+        out->stochastic |= sub->stochastic;
+        if (sub->decomp.present && sub->decomp.depth > out->decomposition_depth)
+            out->decomposition_depth = sub->decomp.depth;
+        if (sub->homo.present && sub->homo.depth > out->homomorphism_depth)
+            out->homomorphism_depth = sub->homo.depth;
+    }
+}
+
+void cbm__lsys_describe(const cbm_lsys *ls, cbm_model_summary *out)
+{
+    out->derivation_length = ls->derivation_length;
+    out->stochastic = ls->stochastic;
+    out->has_start_end =
+        ls->start_block >= 0 || ls->end_block >= 0 || ls->start_each >= 0 || ls->end_each >= 0;
+    out->lsystems = 1 + (int)ls->subs.len;
+    ls->dialect->describe(ls, out);
 }

@@ -19,6 +19,7 @@
 
 #include "cambium/lsys.h"
 #include "lang/lang.h"
+#include "lsys/lsys.h"
 
 #include <stdio.h>
 
@@ -157,18 +158,28 @@ struct cbm_lsys {
 };
 
 /* The step protocol where the two dialects differ: the public entry points (cbm_lsys_reset,
- * _step, _apply_homomorphism, _has_homomorphism, _write_str) call the model's dialect through
- * this table instead of testing which dialect it is. The cpfg dialect's is in derive.c and
- * write.c, the L+C dialect's in lpfg.c. */
+ * _step, _apply_homomorphism, _has_homomorphism, _write_str, _func_names, _set_func_ids) and
+ * cbm__lsys_describe call the model's dialect through this table instead of testing which
+ * dialect it is. The cpfg dialect's is in derive.c, write.c and lsys.c, the L+C dialect's in
+ * lpfg.c. */
 typedef struct cbm__dialect {
     cbm_status (*reset)(cbm_lsys *ls);              /* Start, the axiom */
     cbm_status (*step)(cbm_lsys *ls);               /* one derivation step */
     cbm_status (*interpret)(cbm_lsys *ls);          /* homomorphism / interpretation rules */
     bool (*has_interpretation)(const cbm_lsys *ls); /* the model has such rules */
     cbm_status (*write_str)(const cbm_lsys *ls, bool homomorphism, cbm_out *o); /* `.str` */
+    /* its rules and modules in a model's summary (the fields cbm__lsys_describe leaves) */
+    void (*describe)(const cbm_lsys *ls, cbm_model_summary *out);
+    /* the names of func(name, x) and the function ids they call (the cpfg dialect's func(id,
+     * x) takes the id itself: no names) */
+    size_t (*func_names)(const cbm_lsys *ls, const char *const **names);
+    cbm_status (*set_func_ids)(cbm_lsys *ls, const int *ids, size_t n);
 } cbm__dialect;
 extern const cbm__dialect cbm__cpfg_dialect, cbm__lpfg_dialect;
 cbm_status cbm__cpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o);
+void cbm__cpfg_describe(const cbm_lsys *ls, cbm_model_summary *out);
+size_t cbm__cpfg_func_names(const cbm_lsys *ls, const char *const **names);
+cbm_status cbm__cpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
 
 void cbm__lstr_free(cbm_context *ctx, lstr *s);
 
@@ -240,15 +251,10 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
 const char *cbm__lpfg_module_name(const cbm_lsys *ls, int symbol);
 size_t cbm__lpfg_func_names(const cbm_lsys *ls, const char *const **names);
 cbm_status cbm__lpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n);
-/* Counts of an L+C model for cbm_model_describe: productions, decomposition and interpretation
- * rules with their depths, declared modules (turtle modules included). */
-void cbm__lpfg_describe(const cbm_lsys *ls, size_t *prods, size_t *decomp, size_t *interp,
-                        int *decomp_depth, int *interp_depth, size_t *modules);
-/* Models with mechanics: for each module of the string (or of its interpretation, through the
- * modules they came from) its MechSegment fields (lsys/mechlang.h offsets), NULL for other
- * modules; *out is an array of *n pointers from the context (free with cbm__free), NULL when the
- * model has no mechanics. */
-cbm_status cbm__lpfg_mech_fields(const cbm_lsys *ls, bool homomorphism, const double ***out,
-                                 size_t *n);
+/* An L+C model in a model's summary: the dialect, whether it has mechanics, its productions,
+ * decomposition and interpretation rules with their depths, declared modules (turtle modules
+ * included). */
+void cbm__lpfg_describe(const cbm_lsys *ls, cbm_model_summary *out);
+/* cbm__lpfg_mech_fields: the package header lsys/lsys.h */
 
 #endif

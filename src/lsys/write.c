@@ -147,16 +147,27 @@ const char *cbm_lsys_module_name(const cbm_lsys *ls, int symbol)
 
 size_t cbm_lsys_func_names(const cbm_lsys *ls, const char *const **names)
 {
-    if (!ls->lp) {
-        *names = NULL;
-        return 0;
-    }
-    return cbm__lpfg_func_names(ls, names);
+    return ls->dialect->func_names(ls, names);
 }
 
 cbm_status cbm_lsys_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
 {
-    if (!ls || !ls->lp)
+    if (!ls)
         return n ? CBM_E_INVALID : CBM_OK;
-    return cbm__lpfg_set_func_ids(ls, ids, n);
+    return ls->dialect->set_func_ids(ls, ids, n);
+}
+
+/* The cpfg dialect's func(id, x) names its function by the id: no names to bind. */
+size_t cbm__cpfg_func_names(const cbm_lsys *ls, const char *const **names)
+{
+    (void)ls;
+    *names = NULL;
+    return 0;
+}
+
+cbm_status cbm__cpfg_set_func_ids(cbm_lsys *ls, const int *ids, size_t n)
+{
+    (void)ls;
+    (void)ids;
+    return n ? CBM_E_INVALID : CBM_OK;
 }

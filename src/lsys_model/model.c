@@ -23,8 +23,8 @@
 #include "cambium/model.h"
 
 #include "core/core.h"
-#include "lsys/lsys_internal.h"
-#include "lsys/mechlang.h"
+#include "lang/mechsegment.h"
+#include "lsys/lsys.h"
 #include "turtle/turtle.h"
 
 #include <math.h>
@@ -258,8 +258,7 @@ cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model 
         cbm_model_destroy(m);
         return s;
     }
-    for (size_t i = 0; i < m->ls->smods.len && !m->may_query; i++)
-        m->may_query = (m->ls->smods.data[i].sym & 0x7f) == '?';
+    m->may_query = cbm__lsys_may_query(m->ls);
     /* without function files func() stays an error naming what is missing */
     if (cbm_funcset_count(cbm_view_functions(m->view)) > 0) {
         cbm_lsys_set_func(m->ls, cbm_view_func_callback, m->view);
@@ -314,8 +313,8 @@ bool cbm_model_has_queries(const cbm_model *m)
 {
     if (!m || !m->may_query)
         return false;
-    const lstr *str = &m->ls->cur;
-    const uint8_t *p = str->sym, *end = str->sym + str->n;
+    size_t n = 0;
+    const uint8_t *p = cbm__lsys_symbols(m->ls, &n), *end = p + n;
     while (p < end && (p = memchr(p, '?', (size_t)(end - p))) != NULL) {
         p++;
         int next = p < end ? (*p & 0x7f) : 0;
@@ -400,34 +399,6 @@ void cbm_model_describe(const cbm_model *m, cbm_model_summary *out)
     memset(out, 0, sizeof *out);
     if (!m)
         return;
-    const cbm_lsys *ls = m->ls;
-    out->derivation_length = ls->derivation_length;
-    out->productions = ls->main.prods.len;
-    out->decompositions = ls->decomp.prods.len;
-    out->homomorphisms = ls->homo.prods.len;
-    out->decomposition_depth = ls->decomp.present ? ls->decomp.depth : 0;
-    out->homomorphism_depth = ls->homo.present ? ls->homo.depth : 0;
-    out->stochastic = ls->stochastic;
-    out->has_start_end =
-        ls->start_block >= 0 || ls->end_block >= 0 || ls->start_each >= 0 || ls->end_each >= 0;
+    cbm__lsys_describe(m->ls, out);
     out->functions = cbm_funcset_count(cbm_view_functions(m->view));
-    out->lsystems = 1 + (int)ls->subs.len;
-    if (ls->lp) {
-        out->lc_dialect = true;
-        out->mechanics = cbm_lsys_has_mechanics(ls);
-        cbm__lpfg_describe(ls, &out->productions, &out->decompositions, &out->homomorphisms,
-                           &out->decomposition_depth, &out->homomorphism_depth,
-                           &out->modules_declared);
-    }
-    for (size_t i = 0; i < ls->subs.len; i++) {
-        const sublsys *sub = &ls->subs.data[i];
-        out->productions += sub->main.prods.len;
-        out->decompositions += sub->decomp.prods.len;
-        out->homomorphisms += sub->homo.prods.len;
-        out->stochastic |= sub->stochastic;
-        if (sub->decomp.present && sub->decomp.depth > out->decomposition_depth)
-            out->decomposition_depth = sub->decomp.depth;
-        if (sub->homo.present && sub->homo.depth > out->homomorphism_depth)
-            out->homomorphism_depth = sub->homo.depth;
-    }
 }
