@@ -23,6 +23,14 @@ done
 # values reach their targets
 "$bin" grow -Dyears=2 --params | grep -qx "years = 2" || fail "grow -DNAME=VALUE"
 "$bin" grow -D years=3 --params | grep -qx "years = 3" || fail "grow -D NAME=VALUE"
+# a command that hands its line on by the model it names finds the model after options with
+# values: run's -D and --seed before a built-in tree (run hands it to grow), grow's -y and
+# --size before an Oberlaender tree (grow hands it to Oberlaender's grow)
+"$bin" run --seed 3 -D years=2 fruit-tree --params | grep -qx "years = 2" ||
+    fail "run with options before a tree model"
+"$bin" grow --size 100x100 -y 4 ober-rauh --params >"$T/ober" || fail "grow OPTIONS ober-rauh"
+grep -qx "family = oberlaender" "$T/ober" && grep -qx "years = 4" "$T/ober" ||
+    fail "grow with options before an Oberlaender model"
 "$bin" demo --segments 40 --sides 5 -o "$T/d.obj" || fail "demo with values"
 [ -s "$T/d.obj" ] || fail "demo wrote nothing"
 

@@ -402,8 +402,6 @@ static void print_timing(cbm_context *ctx, const cbm_tree *t, bool summer, doubl
 
 int cmd_grow(int argc, char **argv)
 {
-    if (cli_grow_is_ober(argc, argv)) /* Oberlaender's parametric tree: its own command */
-        return cmd_grow_ober(argc, argv);
     const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, "at most {max} outputs"};
     cli_list def_list = {defs, 0, MAX_DEFS, "at most {max} -D options"};
@@ -553,6 +551,8 @@ int cmd_grow(int argc, char **argv)
                       .unknown = "unknown option {opt}",
                       .unknown_last = "unknown option or missing value: {opt}",
                       .missing = "unknown option or missing value: {opt}"};
+    if (cli_grow_is_ober(&table, argc, argv)) /* Oberlaender's parametric tree: its own command */
+        return cmd_grow_ober(argc, argv);
     int prc = cli_options_parse(&table, argc, argv);
     if (prc != CLI_OK)
         return prc == CLI_HELP_SHOWN ? CLI_OK : prc;

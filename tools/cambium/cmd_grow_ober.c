@@ -17,18 +17,11 @@
 #define MAX_OUTPUTS 16
 #define MAX_DEFS    128
 
-bool cli_grow_is_ober(int argc, char **argv)
+bool cli_grow_is_ober(cli_opts *t, int argc, char **argv)
 {
-    for (int i = 1; i < argc; i++) {
+    for (int i = cli_options_next_word(t, argc, argv, 1); i < argc;
+         i = cli_options_next_word(t, argc, argv, i + 1)) {
         const char *a = argv[i];
-        if (a[0] == '-') {
-            /* options that take a separate value: skip it */
-            if (!strcmp(a, "-o") || !strcmp(a, "-y") || !strcmp(a, "-n") || !strcmp(a, "-D") ||
-                !strcmp(a, "--years") || !strcmp(a, "--seed") || !strcmp(a, "--every") ||
-                !strcmp(a, "--modes") || !strcmp(a, "--seeds"))
-                i++;
-            continue;
-        }
         for (const char *const *n = cbm_ober_builtin_names(); *n; n++)
             if (!strcmp(a, *n))
                 return true;

@@ -525,29 +525,24 @@ static void json_end(run *r)
 }
 
 /* `cambium run fruit-tree` and `cambium run X.tree` run a built-in tree model: the same job as
- * `cambium grow`, under the command DESIGN.md names for every model. */
-static bool names_tree_model(int argc, char **argv)
+ * `cambium grow`, under the command DESIGN.md names for every model. The model is the first word
+ * of the line that is not an option of run's table nor its value. */
+static bool names_tree_model(cli_opts *t, int argc, char **argv)
 {
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        size_t n = strlen(a);
-        if (a[0] == '-') {
-            if (!strcmp(a, "-o") || !strcmp(a, "-D") || !strcmp(a, "-n"))
-                i++; /* skip the value */
-            continue;
-        }
-        if (n > 5 && !strcmp(a + n - 5, ".tree"))
-            return true;
-        if (!strchr(a, '.') && !strchr(a, '/')) {
-            cbm_context *ctx = cli_context();
-            cbm_tree_def def;
-            bool builtin = cbm_tree_def_builtin(ctx, a, &def) == CBM_OK;
-            cli_context_end(ctx);
-            return builtin;
-        }
+    int i = cli_options_next_word(t, argc, argv, 1);
+    if (i >= argc)
         return false;
-    }
-    return false;
+    const char *a = argv[i];
+    size_t n = strlen(a);
+    if (n > 5 && !strcmp(a + n - 5, ".tree"))
+        return true;
+    if (strchr(a, '.') || strchr(a, '/'))
+        return false;
+    cbm_context *ctx = cli_context();
+    cbm_tree_def def;
+    bool builtin = cbm_tree_def_builtin(ctx, a, &def) == CBM_OK;
+    cli_context_end(ctx);
+    return builtin;
 }
 
 /* The L+C model's functions as native code, cached in $XDG_CACHE_HOME/cambium (or
@@ -570,8 +565,6 @@ static void native_code(cbm_lsys *ls, bool timing)
 
 int cmd_run(int argc, char **argv)
 {
-    if (names_tree_model(argc, argv))
-        return cmd_grow(argc, argv);
     run_args ra = {0};
     long steps = -1, every = 0, seed = -1, motion_every = 1;
     double step_time = 0.04;
@@ -682,6 +675,8 @@ int cmd_run(int argc, char **argv)
                       .help = usage,
                       .width = 18,
                       .unknown = "unknown option '{opt}'"};
+    if (names_tree_model(&table, argc, argv))
+        return cmd_grow(argc, argv);
     int prc = cli_options_parse(&table, argc, argv);
     if (prc != CLI_OK)
         return prc == CLI_HELP_SHOWN ? CLI_OK : prc;

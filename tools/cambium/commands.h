@@ -14,9 +14,12 @@ int cmd_elastica(int argc, char **argv);
 int cmd_compare(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 /* grow for Oberlaender's parametric tree (cmd_grow_ober.c): cmd_grow hands over when the model
- * is one (cli_grow_is_ober) */
+ * is one (cli_grow_is_ober: a word of the line, read through grow's option table t, that names
+ * a built-in ober-* model or a .tree file of that family) */
+#include "options.h"
+
 #include <stdbool.h>
-bool cli_grow_is_ober(int argc, char **argv);
+bool cli_grow_is_ober(cli_opts *t, int argc, char **argv);
 int cmd_grow_ober(int argc, char **argv);
 
 /* The forester's summary of a tree (cmd_info.c), also printed by `grow --report` and written in

@@ -185,6 +185,21 @@ int cli_options_parse(cli_opts *t, int argc, char **argv)
     return CLI_OK;
 }
 
+int cli_options_next_word(cli_opts *t, int argc, char **argv, int from)
+{
+    for (int i = from; i < argc; i++) {
+        const char *word = argv[i];
+        if (word[0] != '-' || !word[1])
+            return i;
+        cli_opts *owner = NULL;
+        const char *value = NULL;
+        const cli_opt *o = find(t, word, &owner, &value);
+        if (o && !value && o->kind != CLI_HELP && o->kind != CLI_SET && o->kind != CLI_CLEAR)
+            i++; /* its value */
+    }
+    return argc;
+}
+
 bool cli_list_add(cli_list *l, const char *item)
 {
     if (l->count >= l->max)

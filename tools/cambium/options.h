@@ -74,6 +74,11 @@ enum { CLI_HELP_SHOWN = -1 };
 /// Parses argv[1..argc) through t: CLI_OK, CLI_USAGE after a usage error (printed), or
 /// CLI_HELP_SHOWN after --help.
 int cli_options_parse(cli_opts *t, int argc, char **argv);
+/// The index of the first word of argv[from..argc) that is neither an option of t nor an
+/// option's value, as cli_options_parse would read the line but storing nothing (argc if there
+/// is none); an option t does not know counts as a flag. For a command that hands its line to
+/// another by the model it names (run to grow, grow to Oberlaender's grow) before parsing it.
+int cli_options_next_word(cli_opts *t, int argc, char **argv, int from);
 /// The option lines of t, then those of its groups, each group under its title.
 void cli_options_help(FILE *f, const cli_opts *t);
 /// The two halves of cli_options_help, for a help that says more between them.
