@@ -72,7 +72,7 @@ static size_t emit(cc *c, int op, int d, int a, int b, int fn, int32_t at, doubl
 }
 
 /* The jump at instruction j lands at the next instruction to come (O_JMP: a, O_JZ/O_JNZ: b). */
-static void land(cc *c, size_t j)
+static void jump_lands_here(cc *c, size_t j)
 {
     if (c->nomem)
         return;
@@ -83,7 +83,7 @@ static void land(cc *c, size_t j)
         in->b = (int32_t)c->fc->ins.len;
 }
 
-static int reg(cc *c)
+static int new_register(cc *c)
 {
     int r = c->top++;
     if (c->top > c->fc->nreg)
@@ -91,19 +91,19 @@ static int reg(cc *c)
     return r;
 }
 
-static void stmts(cc *c, int32_t i);
-static void expr(cc *c, int32_t i, int d);
+static void compile_stmts(cc *c, int32_t i);
+static void compile_expr(cc *c, int32_t i, int d);
 
 /* The element offset of array node i (an ARRAY or ASSIGN_ARRAY node) with its indices from
  * chain idx into a new register: an index checked at a time, as cpfg does. */
 static int array_offset(cc *c, int32_t i, int32_t idx)
 {
-    int o = reg(c);
+    int o = new_register(c);
     emit(c, O_CONST, o, 0, 0, 0, -1, 0.0);
     int k = 0;
     for (int32_t j = idx; j >= 0; j = c->nodes[j].next, k++) {
-        int r = reg(c);
-        expr(c, j, r);
+        int r = new_register(c);
+        compile_expr(c, j, r);
         emit(c, O_HOST, o, r, k, H_AIDX, i, 0.0);
         c->top = r;
     }
@@ -116,7 +116,7 @@ static bool binary_math(int fn)
 }
 
 /* Expression node i into register d (temporaries above c->top, which is above d). */
-static void expr(cc *c, int32_t i, int d)
+static void compile_expr(cc *c, int32_t i, int d)
 {
     const cbm__node *n = &c->nodes[i];
     int save = c->top;
@@ -138,7 +138,7 @@ static void expr(cc *c, int32_t i, int d)
     }
     case OP_NEG:
     case OP_NOT:
-        expr(c, n->a, d);
+        compile_expr(c, n->a, d);
         emit(c, n->op == OP_NEG ? O_NEG : O_NOT, d, d, 0, 0, -1, 0.0);
         break;
     case OP_ADD:
@@ -157,9 +157,9 @@ static void expr(cc *c, int32_t i, int d)
             [OP_ADD] = O_ADDD,  [OP_SUB] = O_SUBD,  [OP_MUL] = O_MULD, [OP_DIV] = O_DIVD,
             [OP_REM] = O_CMATH, [OP_POW] = O_CMATH, [OP_LT] = O_LT,    [OP_GT] = O_GT,
             [OP_LE] = O_LE,     [OP_GE] = O_GE,     [OP_EQ] = O_EQ,    [OP_NE] = O_NE};
-        expr(c, n->a, d);
-        r = reg(c);
-        expr(c, n->b, r);
+        compile_expr(c, n->a, d);
+        r = new_register(c);
+        compile_expr(c, n->b, r);
         emit(c, ops[n->op], d, d, r,
              n->op == OP_REM   ? FN_FMOD
              : n->op == OP_POW ? FN_POW
@@ -169,22 +169,22 @@ static void expr(cc *c, int32_t i, int d)
     }
     case OP_AND:
     case OP_OR: {
-        expr(c, n->a, d);
+        compile_expr(c, n->a, d);
         emit(c, O_BOOL, d, d, 0, 0, -1, 0.0);
         size_t j = emit(c, n->op == OP_AND ? O_JZ : O_JNZ, 0, d, 0, 0, -1, 0.0);
-        expr(c, n->b, d);
+        compile_expr(c, n->b, d);
         emit(c, O_BOOL, d, d, 0, 0, -1, 0.0);
-        land(c, j);
+        jump_lands_here(c, j);
         break;
     }
     case OP_COND: {
-        expr(c, n->a, d);
+        compile_expr(c, n->a, d);
         size_t jz = emit(c, O_JZ, 0, d, 0, 0, -1, 0.0);
-        expr(c, n->b, d);
+        compile_expr(c, n->b, d);
         size_t jmp = emit(c, O_JMP, 0, 0, 0, 0, -1, 0.0);
-        land(c, jz);
-        expr(c, n->c, d);
-        land(c, jmp);
+        jump_lands_here(c, jz);
+        compile_expr(c, n->c, d);
+        jump_lands_here(c, jmp);
         break;
     }
     case OP_CALL: {
@@ -197,14 +197,14 @@ static void expr(cc *c, int32_t i, int d)
             max = CBM__FMT_MAX_ARGS;
         }
         for (; j >= 0 && k < max; j = c->nodes[j].next, k++) {
-            r = reg(c);
+            r = new_register(c);
             if (c->nodes[j].op != OP_STR)
-                expr(c, j, r);
+                compile_expr(c, j, r);
         }
         if (n->fn < FN_MATH_END) {
             /* the walker passed 0 for a missing argument; one-argument functions ignore b */
             while (k < (binary_math(n->fn) ? 2 : 1)) {
-                r = reg(c);
+                r = new_register(c);
                 emit(c, O_CONST, r, 0, 0, 0, -1, 0.0);
                 k++;
             }
@@ -222,7 +222,7 @@ static void expr(cc *c, int32_t i, int d)
     case OP_DO:
     case OP_SEQ:
         /* a statement where an expression is asked: the walker ran its chain and gave 0 */
-        stmts(c, i);
+        compile_stmts(c, i);
         emit(c, O_CONST, d, 0, 0, 0, -1, 0.0);
         break;
     default: /* OP_COMMA, OP_NOP, OP_STR: not made by the parser where a value is read */
@@ -233,62 +233,62 @@ static void expr(cc *c, int32_t i, int d)
 }
 
 /* The statement chain from i: a bare expression ends it. */
-static void stmts(cc *c, int32_t i)
+static void compile_stmts(cc *c, int32_t i)
 {
     for (; i >= 0 && !c->nomem; i = c->nodes[i].next) {
         const cbm__node *n = &c->nodes[i];
         int save = c->top, r;
         switch ((cbm__op)n->op) {
         case OP_SEQ:
-            stmts(c, n->a);
+            compile_stmts(c, n->a);
             break;
         case OP_ASSIGN:
         case OP_ASSIGN_PARAM:
-            r = reg(c);
-            expr(c, n->a, r);
+            r = new_register(c);
+            compile_expr(c, n->a, r);
             emit(c, n->op == OP_ASSIGN ? O_GST : O_PST, n->slot, r, 0, 0, -1, 0.0);
             break;
         case OP_ASSIGN_ARRAY: {
-            r = reg(c);
-            expr(c, n->a, r); /* the value first, then the indices */
+            r = new_register(c);
+            compile_expr(c, n->a, r); /* the value first, then the indices */
             int o = array_offset(c, i, n->b);
             emit(c, O_HOST, o, o, r, H_ASTORE, i, 0.0);
             break;
         }
         case OP_IF: {
-            r = reg(c);
-            expr(c, n->a, r);
+            r = new_register(c);
+            compile_expr(c, n->a, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
             c->top = save;
-            stmts(c, n->b);
+            compile_stmts(c, n->b);
             if (n->c >= 0) {
                 size_t jmp = emit(c, O_JMP, 0, 0, 0, 0, -1, 0.0);
-                land(c, jz);
-                stmts(c, n->c);
-                land(c, jmp);
+                jump_lands_here(c, jz);
+                compile_stmts(c, n->c);
+                jump_lands_here(c, jmp);
             } else {
-                land(c, jz);
+                jump_lands_here(c, jz);
             }
             break;
         }
         case OP_WHILE:
         case OP_DO: {
             if (n->op == OP_DO)
-                stmts(c, n->b);
+                compile_stmts(c, n->b);
             int32_t test = (int32_t)c->fc->ins.len;
-            r = reg(c);
-            expr(c, n->a, r);
+            r = new_register(c);
+            compile_expr(c, n->a, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
             c->top = save;
             emit(c, O_WSPEND, 0, 0, 0, 0, i, 0.0);
-            stmts(c, n->b);
+            compile_stmts(c, n->b);
             emit(c, O_JMP, 0, test, 0, 0, -1, 0.0);
-            land(c, jz);
+            jump_lands_here(c, jz);
             break;
         }
         default:
-            r = reg(c);
-            expr(c, i, r);
+            r = new_register(c);
+            compile_expr(c, i, r);
             break;
         }
         c->top = save;
@@ -308,11 +308,11 @@ static int compile(cbm__eval *e, int32_t root, bool stmt)
     cc c = {.ctx = e->ctx, .nodes = e->nodes, .fc = &ec->fn.data[ec->fn.len - 1]};
     c.fc->compiled = true;
     if (stmt) {
-        stmts(&c, root);
+        compile_stmts(&c, root);
         emit(&c, O_RET0, 0, 0, 0, 0, -1, 0.0);
     } else {
-        int r = reg(&c);
-        expr(&c, root, r);
+        int r = new_register(&c);
+        compile_expr(&c, root, r);
         emit(&c, O_RET, 0, r, 0, 0, -1, 0.0);
     }
     if (!c.nomem && (size_t)c.fc->nreg + 1 > ec->frame_cap) {

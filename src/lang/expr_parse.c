@@ -126,7 +126,7 @@ static bool check_printf(cbm__compiler *c, size_t pos, int32_t first, int nargs)
     return true;
 }
 
-static int32_t node2(cbm__compiler *c, int op, int32_t a, int32_t b)
+static int32_t binary_node(cbm__compiler *c, int op, int32_t a, int32_t b)
 {
     if (a < 0 || b < 0)
         return -1;
@@ -373,13 +373,13 @@ static int32_t parse_unary(cbm__compiler *c, bool nl)
     char ch = c->text[c->pos];
     if (ch == '-' && c->text[c->pos + 1] != '-') {
         c->pos++;
-        r = node2(c, OP_NEG, parse_unary(c, nl), 0);
+        r = binary_node(c, OP_NEG, parse_unary(c, nl), 0);
     } else if (ch == '+') {
         c->pos++;
         r = parse_unary(c, nl);
     } else if (ch == '!' && c->text[c->pos + 1] != '=') {
         c->pos++;
-        r = node2(c, OP_NOT, parse_unary(c, nl), 0);
+        r = binary_node(c, OP_NOT, parse_unary(c, nl), 0);
     } else {
         r = parse_primary(c, nl);
     }
@@ -433,7 +433,7 @@ static int32_t parse_binary(cbm__compiler *c, bool nl, int level)
         }
         chain++;
         c->pos += n;
-        left = node2(c, op, left, parse_binary(c, nl, level + 1));
+        left = binary_node(c, op, left, parse_binary(c, nl, level + 1));
     }
 }
 
@@ -452,7 +452,7 @@ static int32_t parse_cond(cbm__compiler *c, bool nl)
         return -1;
     }
     int32_t b = parse_ternary(c, nl);
-    int32_t n = node2(c, OP_COND, cond, a);
+    int32_t n = binary_node(c, OP_COND, cond, a);
     if (n >= 0 && b >= 0) {
         c->nodes.data[n].c = b;
         return n;
@@ -530,7 +530,7 @@ static int32_t parse_paren_cond(cbm__compiler *c, bool *ok, const char *open_wha
     return cond;
 }
 
-static int32_t parse_statement1(cbm__compiler *c, bool *ok);
+static int32_t parse_statement_inner(cbm__compiler *c, bool *ok);
 
 /* A statement; if, while and do nest (an else-if chain is as deep as it is long). */
 static int32_t parse_statement(cbm__compiler *c, bool *ok)
@@ -539,12 +539,12 @@ static int32_t parse_statement(cbm__compiler *c, bool *ok)
         *ok = false;
         return -1;
     }
-    int32_t r = parse_statement1(c, ok);
+    int32_t r = parse_statement_inner(c, ok);
     c->depth--;
     return r;
 }
 
-static int32_t parse_statement1(cbm__compiler *c, bool *ok)
+static int32_t parse_statement_inner(cbm__compiler *c, bool *ok)
 {
     cbm__skip(c, true);
     size_t start = c->pos;

@@ -163,7 +163,7 @@ typedef struct outbuf {
     char b[1024];
 } outbuf;
 
-static void put(outbuf *o, const char *s, size_t n)
+static void out_put(outbuf *o, const char *s, size_t n)
 {
     if (o->n + n > sizeof o->b) {
         cbm__output(o->ctx, o->b, o->n);
@@ -187,17 +187,17 @@ void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args,
     while (*p) {
         const char *q = strchr(p, '%');
         if (!q) {
-            put(&o, p, strlen(p));
+            out_put(&o, p, strlen(p));
             break;
         }
-        put(&o, p, (size_t)(q - p));
+        out_put(&o, p, (size_t)(q - p));
         char conv = 0, err[8];
         size_t len = conversion(q + 1, &conv, err, sizeof err);
         if (!len) /* checked at compile time; never here */
             break;
         p = q + 1 + len;
         if (conv == '%') {
-            put(&o, "%", 1);
+            out_put(&o, "%", 1);
             continue;
         }
         /* the spec: '%', flags, width and precision, the modifier this value needs, conv */
@@ -241,7 +241,7 @@ void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args,
         case CBM__FMT_STR:
             w = snprintf(tmp, sizeof tmp, spec, str);
             if (w >= (int)sizeof tmp) { /* a long literal: print it whole */
-                put(&o, str, strlen(str));
+                out_put(&o, str, strlen(str));
                 w = 0;
             }
             break;
@@ -250,7 +250,7 @@ void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args,
         }
 #pragma GCC diagnostic pop
         if (w > 0)
-            put(&o, tmp, (size_t)w < sizeof tmp ? (size_t)w : sizeof tmp - 1);
+            out_put(&o, tmp, (size_t)w < sizeof tmp ? (size_t)w : sizeof tmp - 1);
     }
     if (o.n)
         cbm__output(ctx, o.b, o.n);

@@ -78,12 +78,12 @@ static bool accept(lc_parser *L, const char *s)
     return true;
 }
 
-static bool isid0(int ch)
+static bool is_ident_start(int ch)
 {
     return isalpha(ch) || ch == '_';
 }
 
-static bool isid(int ch)
+static bool is_ident_char(int ch)
 {
     return isalnum(ch) || ch == '_';
 }
@@ -93,10 +93,10 @@ static size_t ident(lc_parser *L)
 {
     skip(L);
     const char *s = L->t + L->c->pos;
-    if (!isid0((unsigned char)s[0]))
+    if (!is_ident_start((unsigned char)s[0]))
         return 0;
     size_t n = 1;
-    while (isid((unsigned char)s[n]))
+    while (is_ident_char((unsigned char)s[n]))
         n++;
     return n;
 }
@@ -294,7 +294,7 @@ static int add_mod(lc_parser *L, const char *name, size_t len, const int *ptypes
     return (int)lp->mods.len - 1;
 }
 
-static int32_t node(lc_parser *L, lc_node n)
+static int32_t add_node(lc_parser *L, lc_node n)
 {
     if (fatal(L))
         return -1;
@@ -307,7 +307,7 @@ static int32_t node(lc_parser *L, lc_node n)
     return (int32_t)L->lp->nodes.len - 1;
 }
 
-static lc_node mk(int op, int type)
+static lc_node blank_node(int op, int type)
 {
     lc_node n;
     memset(&n, 0, sizeof n);
@@ -363,14 +363,14 @@ static int declare_local(lc_parser *L, const char *name, size_t len, int type)
 
 /* ---------------------------------------------------------------- expressions */
 static int32_t expr(lc_parser *L);
-static int32_t expr1(lc_parser *L);
+static int32_t comma_expr(lc_parser *L);
 static int32_t assign_expr(lc_parser *L);
 
-static int32_t num(lc_parser *L, double v, int type)
+static int32_t num_node(lc_parser *L, double v, int type)
 {
-    lc_node n = mk(N_NUM, type);
+    lc_node n = blank_node(N_NUM, type);
     n.v = v;
-    return node(L, n);
+    return add_node(L, n);
 }
 
 /* Converts expression e to type t (implicit conversion), reporting a mismatch at pos. */
@@ -382,14 +382,14 @@ static int32_t coerce(lc_parser *L, int32_t e, int t, size_t pos)
     if (et == t)
         return e;
     if (lc_is_scalar(et) && lc_is_scalar(t)) {
-        lc_node n = mk(N_CAST, t);
+        lc_node n = blank_node(N_CAST, t);
         n.a = e;
-        return node(L, n);
+        return add_node(L, n);
     }
     if (lc_is_vec(et) && lc_is_vec(t)) {
-        lc_node n = mk(N_CAST, t);
+        lc_node n = blank_node(N_CAST, t);
         n.a = e;
-        return node(L, n);
+        return add_node(L, n);
     }
     cbm__cerr(L->c, pos, "cannot convert %s to %s", L->lp->types.data[et].name,
               L->lp->types.data[t].name);
@@ -451,9 +451,9 @@ static int32_t printf_call(lc_parser *L, size_t pos)
             size_t off;
             if (!cbm__string_lit(c, &off))
                 return -1;
-            lc_node x = mk(N_STR, T_VOID);
+            lc_node x = blank_node(N_STR, T_VOID);
             x.slot = (int32_t)off;
-            e = node(L, x);
+            e = add_node(L, x);
         } else {
             e = assign_expr(L);
         }
@@ -482,11 +482,11 @@ static int32_t printf_call(lc_parser *L, size_t pos)
                   nconv == 1 ? "" : "s", n, n == 1 ? "" : "s");
         return -1;
     }
-    lc_node x = mk(N_CALLB, T_INT);
+    lc_node x = blank_node(N_CALLB, T_INT);
     x.fn = FN_PRINTF;
     x.slot = (int32_t)fmt;
     x.a = first;
-    return node(L, x);
+    return add_node(L, x);
 }
 
 /* brace initializer `{a, b, ...}` for a value of type t */
@@ -515,9 +515,9 @@ static int32_t brace_init(lc_parser *L, int t)
     }
     if (!expect(L, "}"))
         return -1;
-    lc_node n = mk(N_CTOR, t);
+    lc_node n = blank_node(N_CTOR, t);
     n.a = first;
-    return node(L, n);
+    return add_node(L, n);
 }
 
 static lc_local *find_var(lc_parser *L, const char *s, size_t n)
@@ -560,11 +560,11 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 cbm__cerr(L->c, pos, "%s is only allowed in a production", CTXF[k]);
                 return -1;
             }
-            lc_node x = mk(N_INCTX, T_BOOL);
+            lc_node x = blank_node(N_INCTX, T_BOOL);
             x.fn = (uint8_t)k;
             x.a = p.first;
             x.b = p.n;
-            return node(L, x);
+            return add_node(L, x);
         }
     /* vector and struct constructors */
     int t = find_type(L, s, n);
@@ -581,7 +581,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             for (int i = 0; i < 3; i++) {
                 int32_t e;
                 if (na == 0)
-                    e = num(L, 0, ft);
+                    e = num_node(L, 0, ft);
                 else {
                     e = args;
                     args = ND(args).next;
@@ -592,13 +592,13 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                     return -1;
                 chain(L, &first, &last, e);
             }
-            lc_node x = mk(N_CTOR, t);
+            lc_node x = blank_node(N_CTOR, t);
             x.a = first;
-            return node(L, x);
+            return add_node(L, x);
         }
         if (lp->types.data[t].nf > 0 && na == 0) { /* Name(): a zero value */
-            lc_node x = mk(N_CTOR, t);
-            return node(L, x);
+            lc_node x = blank_node(N_CTOR, t);
+            return add_node(L, x);
         }
         if (lp->types.data[t].nf > 0 && na == lp->types.data[t].nf) { /* Name(f1, f2, ...) */
             int32_t first = -1, last = -1;
@@ -611,9 +611,9 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                     return -1;
                 chain(L, &first, &last, e);
             }
-            lc_node x = mk(N_CTOR, t);
+            lc_node x = blank_node(N_CTOR, t);
             x.a = first;
-            return node(L, x);
+            return add_node(L, x);
         }
         cbm__cerr(L->c, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
         return -1;
@@ -649,11 +649,11 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         int32_t x = coerce(L, assign_expr(L), T_DOUBLE, L->c->pos);
         if (x < 0 || !expect(L, ")"))
             return -1;
-        lc_node c = mk(N_CALLB, T_DOUBLE);
+        lc_node c = blank_node(N_CALLB, T_DOUBLE);
         c.fn = FN_FUNC;
         c.a = x;
         c.slot = (int32_t)id + 1;
-        return node(L, c);
+        return add_node(L, c);
     }
     for (size_t i = 0; i < lp->funcs.len; i++) {
         lc_function *f = &lp->funcs.data[i];
@@ -683,10 +683,10 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 return -1;
             chain(L, &first, &last, e);
         }
-        lc_node c = mk(N_CALLU, f->ret);
+        lc_node c = blank_node(N_CALLU, f->ret);
         c.a = first;
         c.slot = (int32_t)i;
-        return node(L, c);
+        return add_node(L, c);
     }
     const cbm__builtin *b = cbm__builtin_find(s, n, CBM__LC);
     if (b) {
@@ -771,10 +771,10 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 rt = b->arity == 2 ? lc_arith_type(ND(args).type, ND(ND(args).next).type)
                                    : (ND(args).type == T_BOOL ? T_INT : ND(args).type);
         }
-        lc_node c = mk(N_CALLB, rt);
+        lc_node c = blank_node(N_CALLB, rt);
         c.fn = (uint8_t)b->fn;
         c.a = args;
-        return node(L, c);
+        return add_node(L, c);
     }
     cbm__cerr(L->c, pos, "unknown function '%.*s'", (int)n, s);
     return -1;
@@ -817,7 +817,7 @@ static int32_t primary(lc_parser *L)
             end++;
         }
         L->c->pos = (size_t)(end - L->t);
-        r = num(L, v, t);
+        r = num_node(L, v, t);
     } else if (s[0] == '(') {
         L->c->pos++;
         size_t save = L->c->pos;
@@ -825,13 +825,13 @@ static int32_t primary(lc_parser *L)
         if (t >= 0 && accept(L, ")")) { /* cast */
             int32_t e = primary(L);
             if (e >= 0) {
-                lc_node n = mk(N_CAST, t);
+                lc_node n = blank_node(N_CAST, t);
                 n.a = e;
                 if (!(lc_is_scalar(t) && lc_is_scalar(ND(e).type)) && ND(e).type != t) {
                     cbm__cerr(L->c, pos, "invalid cast");
                     r = -1;
                 } else
-                    r = node(L, n);
+                    r = add_node(L, n);
             }
         } else {
             L->c->pos = save;
@@ -844,17 +844,17 @@ static int32_t primary(lc_parser *L)
         if (s[0] == '-' && s[1] == '-') {
             L->c->pos++;
             int32_t e = primary(L);
-            lc_node n = mk(N_INCDEC, e >= 0 ? ND(e).type : 0);
+            lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
             n.a = e;
             n.fn = 1;
-            r = e >= 0 ? node(L, n) : -1;
+            r = e >= 0 ? add_node(L, n) : -1;
         } else if (s[0] == '+' && s[1] == '+') {
             L->c->pos++;
             int32_t e = primary(L);
-            lc_node n = mk(N_INCDEC, e >= 0 ? ND(e).type : 0);
+            lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
             n.a = e;
             n.fn = 0;
-            r = e >= 0 ? node(L, n) : -1;
+            r = e >= 0 ? add_node(L, n) : -1;
         } else {
             int32_t e = primary(L);
             if (e >= 0 && s[0] == '+')
@@ -866,40 +866,40 @@ static int32_t primary(lc_parser *L)
                 else if (s[0] == '-' && !lc_is_scalar(et) && !lc_is_vec(et))
                     cbm__cerr(L->c, pos, "'-' needs a number or a vector");
                 else {
-                    lc_node n = mk(s[0] == '-' ? N_NEG : N_NOT,
-                                   s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
+                    lc_node n = blank_node(s[0] == '-' ? N_NEG : N_NOT,
+                                           s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
                     n.a = e;
-                    r = node(L, n);
+                    r = add_node(L, n);
                 }
             }
         }
         L->depth--;
         return r;
-    } else if (isid0((unsigned char)s[0])) {
+    } else if (is_ident_start((unsigned char)s[0])) {
         size_t n = ident(L);
         L->c->pos += n;
         skip(L);
         if (n == 4 && !strncmp(s, "true", 4))
-            r = num(L, 1, T_BOOL);
+            r = num_node(L, 1, T_BOOL);
         else if (n == 5 && !strncmp(s, "false", 5))
-            r = num(L, 0, T_BOOL);
+            r = num_node(L, 0, T_BOOL);
         else if (n == 8 && !strncmp(s, "RAND_MAX", 8))
-            r = num(L, 2147483647, T_INT);
+            r = num_node(L, 2147483647, T_INT);
         else if ((n == 4 && !strncmp(s, "M_PI", 4)))
-            r = num(L, 3.14159265358979323846, T_DOUBLE);
+            r = num_node(L, 3.14159265358979323846, T_DOUBLE);
         else if (L->t[L->c->pos] == '(')
             r = call_expr(L, s, n, pos);
         else {
             lc_local *v = find_var(L, s, n);
             lc_global *g = v ? NULL : find_gvar(L, s, n);
             if (v) {
-                lc_node x = mk(N_LOCAL, v->type);
+                lc_node x = blank_node(N_LOCAL, v->type);
                 x.slot = v->slot;
-                r = node(L, x);
+                r = add_node(L, x);
             } else if (g) {
-                lc_node x = mk(N_GLOBAL, g->type);
+                lc_node x = blank_node(N_GLOBAL, g->type);
                 x.slot = g->slot;
-                r = node(L, x);
+                r = add_node(L, x);
             } else
                 cbm__cerr(L->c, pos, "unknown name '%.*s'", (int)n, s);
         }
@@ -938,20 +938,20 @@ static int32_t primary(lc_parser *L)
                     r = -1;
                     break;
                 }
-                lc_node c = mk(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
+                lc_node c = blank_node(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
                 c.fn = (uint8_t)(len ? FN_LENGTH : FN_NORMALIZE);
                 c.a = r;
                 if (nor && n == 9 && (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL)) {
                     /* v.Normalize() normalizes v in place */
-                    int32_t cn = node(L, c);
-                    lc_node as = mk(N_ASSIGN, t);
+                    int32_t cn = add_node(L, c);
+                    lc_node as = blank_node(N_ASSIGN, t);
                     lc_node lv = ND(r);
-                    int32_t l2 = node(L, lv);
+                    int32_t l2 = add_node(L, lv);
                     as.a = l2;
                     as.b = cn;
-                    r = node(L, as);
+                    r = add_node(L, as);
                 } else
-                    r = node(L, c);
+                    r = add_node(L, c);
                 continue;
             }
             int off = -1, ft = -1;
@@ -977,17 +977,17 @@ static int32_t primary(lc_parser *L)
                 ND(r).slot += off;
                 ND(r).type = (int16_t)ft;
             } else {
-                lc_node x = mk(N_FIELD, ft);
+                lc_node x = blank_node(N_FIELD, ft);
                 x.a = r;
                 x.slot = off;
-                r = node(L, x);
+                r = add_node(L, x);
             }
         } else if (!strncmp(L->t + p2, "++", 2) || !strncmp(L->t + p2, "--", 2)) {
             L->c->pos += 2;
-            lc_node x = mk(N_INCDEC, ND(r).type);
+            lc_node x = blank_node(N_INCDEC, ND(r).type);
             x.a = r;
             x.fn = L->t[p2] == '+' ? 2 : 3;
-            r = node(L, x);
+            r = add_node(L, x);
         } else
             break;
     }
@@ -1030,7 +1030,7 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
     if (a < 0 || b < 0)
         return -1;
     int ta = ND(a).type, tb = ND(b).type;
-    lc_node n = mk(N_BIN, 0);
+    lc_node n = blank_node(N_BIN, 0);
     n.a = a;
     n.b = b;
     n.fn = (uint8_t)op->op;
@@ -1041,7 +1041,7 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
         }
         n.op = op->op == -2 ? N_OR : N_AND;
         n.type = T_BOOL;
-        return node(L, n);
+        return add_node(L, n);
     }
     if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
         n.type = (int16_t)(op->op >= B_LT ? T_BOOL : lc_arith_type(ta, tb));
@@ -1049,42 +1049,42 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
             cbm__cerr(L->c, pos, "'%%' needs integers (use fmod)");
             return -1;
         }
-        return node(L, n);
+        return add_node(L, n);
     }
     int vt = lc_is_vec(ta) ? ta : tb;
     if (lc_is_vec(ta) && lc_is_vec(tb)) {
         vt = (ta == T_V3D || tb == T_V3D) ? T_V3D : T_V3F;
         if (op->op == B_ADD || op->op == B_SUB || op->op == B_REM) {
             n.type = (int16_t)vt;
-            return node(L, n);
+            return add_node(L, n);
         }
         if (op->op == B_MUL) { /* dot product */
             n.type = vt == T_V3F ? T_FLOAT : T_DOUBLE;
-            return node(L, n);
+            return add_node(L, n);
         }
     } else if (lc_is_vec(ta) && lc_is_scalar(tb) && (op->op == B_MUL || op->op == B_DIV)) {
         n.type = (int16_t)vt;
-        return node(L, n);
+        return add_node(L, n);
     } else if (lc_is_scalar(ta) && lc_is_vec(tb) && op->op == B_MUL) {
         n.type = (int16_t)vt;
-        return node(L, n);
+        return add_node(L, n);
     }
     if ((ta == T_LOCVEC || tb == T_LOCVEC) && op->op <= B_DIV &&
         (ta == tb || lc_is_scalar(ta) || lc_is_scalar(tb)) &&
         !(lc_is_scalar(ta) && op->op != B_MUL)) {
         n.type = T_LOCVEC; /* componentwise, numbers broadcast */
-        return node(L, n);
+        return add_node(L, n);
     }
     if (ta == T_QUAT && op->op == B_MUL && (tb == T_QUAT || lc_is_vec(tb) || tb == T_TVEC)) {
         n.type = (int16_t)tb; /* composition, or rotation of a vector or a frame */
-        return node(L, n);
+        return add_node(L, n);
     }
     cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s, L->lp->types.data[ta].name,
               L->lp->types.data[tb].name);
     return -1;
 }
 
-static int32_t binexpr(lc_parser *L, int minprec)
+static int32_t binary_expr(lc_parser *L, int minprec)
 {
     int32_t a = primary(L);
     int chain = 0; /* a+b+c... is a left-deep tree: each operator nests */
@@ -1101,25 +1101,25 @@ static int32_t binexpr(lc_parser *L, int minprec)
         chain++;
         size_t pos = L->c->pos;
         L->c->pos += strlen(op->s);
-        int32_t b = binexpr(L, op->prec + 1);
+        int32_t b = binary_expr(L, op->prec + 1);
         a = binary(L, a, op, b, pos);
     }
 }
 
-static int32_t ternary1(lc_parser *L);
+static int32_t ternary_inner(lc_parser *L);
 
 static int32_t ternary(lc_parser *L)
 {
     if (!deeper(L))
         return -1;
-    int32_t r = ternary1(L);
+    int32_t r = ternary_inner(L);
     L->depth--;
     return r;
 }
 
-static int32_t ternary1(lc_parser *L)
+static int32_t ternary_inner(lc_parser *L)
 {
-    int32_t c = binexpr(L, 1);
+    int32_t c = binary_expr(L, 1);
     if (c < 0 || !accept(L, "?"))
         return c;
     size_t pos = L->c->pos;
@@ -1137,11 +1137,11 @@ static int32_t ternary1(lc_parser *L)
         cbm__cerr(L->c, pos, "the branches of '?:' have different types");
         return -1;
     }
-    lc_node n = mk(N_COND, t);
+    lc_node n = blank_node(N_COND, t);
     n.a = c;
     n.b = coerce(L, a, t, pos);
     n.c = coerce(L, b, t, pos);
-    return node(L, n);
+    return add_node(L, n);
 }
 
 static bool is_lvalue(lc_parser *L, int32_t e)
@@ -1177,13 +1177,13 @@ static int32_t assign_expr(lc_parser *L)
         int lt = ND(l).type;
         if (k > 0) { /* l op= r  is  l = l op r */
             lc_node cp = ND(l);
-            int32_t l2 = node(L, cp);
+            int32_t l2 = add_node(L, cp);
             binop bo = {AOPS[k], 0, ABIN[k]};
             r = binary(L, l2, &bo, r, p2);
             if (r < 0)
                 return -1;
         }
-        lc_node x = mk(N_ASSIGN, lt);
+        lc_node x = blank_node(N_ASSIGN, lt);
         x.a = l;
         x.b = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
         if (x.b >= 0 && ND(x.b).type != lt) {
@@ -1191,7 +1191,7 @@ static int32_t assign_expr(lc_parser *L)
                       L->lp->types.data[lt].name);
             return -1;
         }
-        return x.b >= 0 ? node(L, x) : -1;
+        return x.b >= 0 ? add_node(L, x) : -1;
     }
     return l;
 }
@@ -1200,23 +1200,23 @@ static int32_t expr(lc_parser *L)
 {
     skip(L);
     size_t start = L->c->pos;
-    int32_t a = expr1(L);
+    int32_t a = comma_expr(L);
     if (a >= 0)
         ND(a).pos = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
     return a;
 }
 
-static int32_t expr1(lc_parser *L)
+static int32_t comma_expr(lc_parser *L)
 {
     int32_t a = assign_expr(L);
     while (a >= 0 && accept(L, ",")) {
         int32_t b = assign_expr(L);
         if (b < 0)
             return -1;
-        lc_node n = mk(N_COMMA, ND(b).type);
+        lc_node n = blank_node(N_COMMA, ND(b).type);
         n.a = a;
         n.b = b;
-        a = node(L, n);
+        a = add_node(L, n);
     }
     return a;
 }
@@ -1310,7 +1310,7 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                         na++;
                         continue;
                     }
-                    lc_node x = mk(N_LOCAL, md->ptype[na]);
+                    lc_node x = blank_node(N_LOCAL, md->ptype[na]);
                     if (declare)
                         x.slot = declare_local(L, L->t + fp, k, md->ptype[na]);
                     else {
@@ -1327,7 +1327,7 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                         }
                         x.slot = v->slot;
                     }
-                    int32_t e = node(L, x);
+                    int32_t e = add_node(L, x);
                     if (e < 0)
                         return -1;
                     chain(L, &first, &last, e);
@@ -1387,9 +1387,9 @@ static int32_t block(lc_parser *L)
     }
     L->vars.len = nvars;
     L->fsize = fs;
-    lc_node b = mk(S_BLOCK, 0);
+    lc_node b = blank_node(S_BLOCK, 0);
     b.a = first;
-    return ok ? node(L, b) : -1;
+    return ok ? add_node(L, b) : -1;
 }
 
 /* declaration statement after its type: `a = 1, b, c = {..};` */
@@ -1421,10 +1421,10 @@ static int32_t declaration(lc_parser *L, int t)
                 return -1;
             }
         }
-        lc_node d = mk(S_DECL, t);
+        lc_node d = blank_node(S_DECL, t);
         d.slot = declare_local(L, L->t + pos, n, t);
         d.a = init;
-        int32_t s = node(L, d);
+        int32_t s = add_node(L, d);
         if (s < 0)
             return -1;
         chain(L, &first, &last, s);
@@ -1447,9 +1447,9 @@ static int32_t statement(lc_parser *L)
     if (peek(L, "{")) {
         r = block(L);
     } else if (accept(L, ";")) {
-        r = node(L, mk(S_NOP, 0));
+        r = add_node(L, blank_node(S_NOP, 0));
     } else if (accept_kw(L, "if")) {
-        lc_node n = mk(S_IF, 0);
+        lc_node n = blank_node(S_IF, 0);
         if (expect(L, "(")) {
             n.a = coerce(L, expr(L), T_BOOL, pos);
             if (n.a >= 0 && expect(L, ")")) {
@@ -1457,32 +1457,32 @@ static int32_t statement(lc_parser *L)
                 if (accept_kw(L, "else"))
                     n.c = statement(L);
                 if (n.b >= 0)
-                    r = node(L, n);
+                    r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "while")) {
-        lc_node n = mk(S_WHILE, 0);
+        lc_node n = blank_node(S_WHILE, 0);
         if (expect(L, "(")) {
             n.a = coerce(L, expr(L), T_BOOL, pos);
             if (n.a >= 0 && expect(L, ")")) {
                 n.b = statement(L);
                 if (n.b >= 0)
-                    r = node(L, n);
+                    r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "do")) {
-        lc_node n = mk(S_DO, 0);
+        lc_node n = blank_node(S_DO, 0);
         n.b = statement(L);
         if (n.b >= 0 && accept_kw(L, "while") && expect(L, "(")) {
             n.a = coerce(L, expr(L), T_BOOL, pos);
             if (n.a >= 0 && expect(L, ")") && expect(L, ";"))
-                r = node(L, n);
+                r = add_node(L, n);
         } else if (n.b >= 0)
             expected(L, "'while'");
     } else if (accept_kw(L, "for")) {
         size_t nvars = L->vars.len;
         int fs = L->fsize;
-        lc_node n = mk(S_FOR, 0);
+        lc_node n = blank_node(S_FOR, 0);
         bool ok = expect(L, "(");
         if (ok && !accept(L, ";")) {
             int ty = parse_type(L);
@@ -1491,9 +1491,9 @@ static int32_t statement(lc_parser *L)
             else {
                 int32_t e = expr(L);
                 if (e >= 0) {
-                    lc_node s = mk(S_EXPR, 0);
+                    lc_node s = blank_node(S_EXPR, 0);
                     s.a = e;
-                    n.a = node(L, s);
+                    n.a = add_node(L, s);
                 }
                 ok = e >= 0 && expect(L, ";");
             }
@@ -1510,12 +1510,12 @@ static int32_t statement(lc_parser *L)
         if (ok) {
             n.d = statement(L);
             if (n.d >= 0)
-                r = node(L, n);
+                r = add_node(L, n);
         }
         L->vars.len = nvars;
         L->fsize = fs;
     } else if (accept_kw(L, "return")) {
-        lc_node n = mk(S_RETURN, L->in_prod ? T_VOID : L->ret_type);
+        lc_node n = blank_node(S_RETURN, L->in_prod ? T_VOID : L->ret_type);
         if (!peek(L, ";")) {
             if (L->ret_type == T_VOID || L->in_prod) {
                 cbm__cerr(L->c, pos, "return with a value here");
@@ -1530,9 +1530,9 @@ static int32_t statement(lc_parser *L)
             cbm__cerr(L->c, pos, "return needs a value");
         }
         if (expect(L, ";"))
-            r = node(L, n);
+            r = add_node(L, n);
     } else if (accept_kw(L, "switch")) {
-        lc_node n = mk(S_SWITCH, 0);
+        lc_node n = blank_node(S_SWITCH, 0);
         if (expect(L, "(")) {
             n.a = coerce(L, expr(L), T_DOUBLE, pos);
             if (n.a >= 0 && expect(L, ")")) {
@@ -1540,22 +1540,22 @@ static int32_t statement(lc_parser *L)
                 n.b = statement(L);
                 L->in_switch--;
                 if (n.b >= 0)
-                    r = node(L, n);
+                    r = add_node(L, n);
             }
         }
     } else if (L->in_switch && (accept_kw(L, "case") || accept_kw(L, "default"))) {
-        lc_node n = mk(S_CASE, 0);
+        lc_node n = blank_node(S_CASE, 0);
         bool dflt = L->t[pos] == 'd';
         if (!dflt)
             n.a = coerce(L, expr(L), T_DOUBLE, pos);
         if ((dflt || n.a >= 0) && expect(L, ":"))
-            r = node(L, n);
+            r = add_node(L, n);
     } else if (accept_kw(L, "break")) {
         if (expect(L, ";"))
-            r = node(L, mk(S_BREAK, 0));
+            r = add_node(L, blank_node(S_BREAK, 0));
     } else if (accept_kw(L, "continue")) {
         if (expect(L, ";"))
-            r = node(L, mk(S_CONTINUE, 0));
+            r = add_node(L, blank_node(S_CONTINUE, 0));
     } else if (peek(L, "nproduce") || accept_kw(L, "produce")) {
         bool partial = accept_kw(L, "nproduce");
         if (!L->in_prod) {
@@ -1564,11 +1564,11 @@ static int32_t statement(lc_parser *L)
         } else {
             lc_pattern p;
             if (succ_list(L, &p) == 0 && expect(L, ";")) {
-                lc_node n = mk(S_PRODUCE, 0);
+                lc_node n = blank_node(S_PRODUCE, 0);
                 n.a = p.first;
                 n.b = p.n;
                 n.fn = partial;
-                r = node(L, n);
+                r = add_node(L, n);
             } else
                 recover_stmt(L);
         }
@@ -1577,9 +1577,9 @@ static int32_t statement(lc_parser *L)
     } else {
         int32_t e = expr(L);
         if (e >= 0 && expect(L, ";")) {
-            lc_node s = mk(S_EXPR, 0);
+            lc_node s = blank_node(S_EXPR, 0);
             s.a = e;
-            r = node(L, s);
+            r = add_node(L, s);
         } else if (!fatal(L))
             recover_stmt(L);
     }
@@ -2180,7 +2180,7 @@ static bool label(lc_parser *L, const char *kw)
         }
         i++, k++;
     }
-    if (isid((unsigned char)s[i])) {
+    if (is_ident_char((unsigned char)s[i])) {
         L->c->pos = save;
         return false;
     }
@@ -2412,7 +2412,7 @@ bool cbm__lc_detect(const cbm__pp *pp)
         return true;
     const char *t = pp->text.data;
     for (const char *p = t; (p = strstr(p, "produce")) != NULL; p += 7)
-        if ((p == t || !isid((unsigned char)p[-1])) && !isid((unsigned char)p[7]))
+        if ((p == t || !is_ident_char((unsigned char)p[-1])) && !is_ident_char((unsigned char)p[7]))
             return true;
     for (const char *p = t; (p = strstr(p, "module")) != NULL; p += 6)
         if ((p == t || p[-1] == '\n') && (p[6] == ' ' || p[6] == '\t'))

@@ -54,7 +54,7 @@ static bool is_id(int c)
     return isalnum(c) || c == '_';
 }
 
-static void sb_put(pp_state *st, sbuf *b, const char *s, size_t n)
+static void buf_append(pp_state *st, sbuf *b, const char *s, size_t n)
 {
     if (st->status != CBM_OK)
         return;
@@ -77,7 +77,7 @@ static void sb_put(pp_state *st, sbuf *b, const char *s, size_t n)
     b->data[b->len] = 0;
 }
 
-static char *dup_n(cbm_context *ctx, const char *s, size_t n)
+static char *copy_text(cbm_context *ctx, const char *s, size_t n)
 {
     char *d = cbm__alloc(ctx, n + 1);
     if (d) {
@@ -109,7 +109,7 @@ static void free_macro(cbm_context *ctx, macro *m)
 }
 
 CBM_PRINTF(5, 6)
-static void err(pp_state *st, int file, int line, int col, const char *fmt, ...)
+static void pp_error(pp_state *st, int file, int line, int col, const char *fmt, ...)
 {
     st->pp->errors++;
     va_list ap;
@@ -126,7 +126,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
     while (*p == ' ' || *p == '\t')
         p++;
     if (!is_id0((unsigned char)*p)) {
-        err(st, file, line, (int)(p - s) + 1, "%s", "expected a macro name after #define");
+        pp_error(st, file, line, (int)(p - s) + 1, "%s", "expected a macro name after #define");
         return;
     }
     const char *name = p;
@@ -147,7 +147,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                 break;
             }
             if (!is_id0((unsigned char)*p)) {
-                err(st, file, line, 1, "%s", "expected a parameter name in the #define");
+                pp_error(st, file, line, 1, "%s", "expected a parameter name in the #define");
                 free_macro(ctx, &m);
                 return;
             }
@@ -156,7 +156,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                 p++;
             char **np = cbm__realloc(ctx, m.params, (size_t)m.nparams * sizeof(char *),
                                      (size_t)(m.nparams + 1) * sizeof(char *));
-            char *pn = dup_n(ctx, a, (size_t)(p - a));
+            char *pn = copy_text(ctx, a, (size_t)(p - a));
             if (!np || !pn) {
                 char **arr = np ? np : m.params;
                 for (int i = 0; i < m.nparams; i++)
@@ -181,7 +181,7 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
                 p++;
                 break;
             }
-            err(st, file, line, 1, "%s", "expected ',' or ')' in the #define parameters");
+            pp_error(st, file, line, 1, "%s", "expected ',' or ')' in the #define parameters");
             free_macro(ctx, &m);
             return;
         }
@@ -191,8 +191,8 @@ static void define(pp_state *st, const char *s, bool locked, int file, int line)
     size_t blen = strlen(p);
     while (blen && isspace((unsigned char)p[blen - 1]))
         blen--;
-    m.name = dup_n(ctx, name, nlen);
-    m.body = dup_n(ctx, p, blen);
+    m.name = copy_text(ctx, name, nlen);
+    m.body = copy_text(ctx, p, blen);
     if (!m.name || !m.body) {
         free_macro(ctx, &m);
         st->status = CBM_E_NOMEM;
@@ -231,16 +231,16 @@ static void substitute(pp_state *st, const macro *m, sbuf *args, sbuf *out)
                 if (strlen(m->params[i]) == (size_t)(p - a) && !memcmp(m->params[i], a, p - a))
                     k = i;
             if (k >= 0)
-                sb_put(st, out, args[k].data ? args[k].data : "", args[k].len);
+                buf_append(st, out, args[k].data ? args[k].data : "", args[k].len);
             else
-                sb_put(st, out, a, (size_t)(p - a));
+                buf_append(st, out, a, (size_t)(p - a));
         } else if (isdigit((unsigned char)*p)) {
             const char *a = p;
             while (is_id((unsigned char)*p) || *p == '.')
                 p++;
-            sb_put(st, out, a, (size_t)(p - a));
+            buf_append(st, out, a, (size_t)(p - a));
         } else {
-            sb_put(st, out, p, 1);
+            buf_append(st, out, p, 1);
             p++;
         }
     }
@@ -252,19 +252,19 @@ static void limit_error(pp_state *st, int file, int line, int col, const char *m
     st->limit_reported = true;
     size_t mb = cbm_context_limits(st->pp->ctx)->max_pp_bytes >> 20;
     if (macro_name)
-        err(st, file, line, col,
-            "the expansion of macro '%s' makes the model larger than %zu MB (--max-expansion)",
-            macro_name, mb);
+        pp_error(st, file, line, col,
+                 "the expansion of macro '%s' makes the model larger than %zu MB (--max-expansion)",
+                 macro_name, mb);
     else
-        err(st, file, line, col, "the preprocessed model is larger than %zu MB (--max-expansion)",
-            mb);
+        pp_error(st, file, line, col,
+                 "the preprocessed model is larger than %zu MB (--max-expansion)", mb);
 }
 
 static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, int file, int line)
 {
     cbm_context *ctx = st->pp->ctx;
     if (depth > cbm_context_limits(ctx)->max_expr_depth) {
-        err(st, file, line, 1, "%s", "macro expansion nested too deeply");
+        pp_error(st, file, line, 1, "%s", "macro expansion nested too deeply");
         return;
     }
     size_t i = 0;
@@ -278,7 +278,7 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
             if (m)
                 m->known = true;
             if (!m || m->active) {
-                sb_put(st, out, s + a, i - a);
+                buf_append(st, out, s + a, i - a);
                 continue;
             }
             if (m->locked && !st->used_define)
@@ -292,13 +292,13 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
             }
             sbuf rep = {0};
             if (m->nparams < 0) {
-                sb_put(st, &rep, m->body, strlen(m->body));
+                buf_append(st, &rep, m->body, strlen(m->body));
             } else {
                 size_t j = i;
                 while (j < n && (s[j] == ' ' || s[j] == '\t'))
                     j++;
                 if (j >= n || s[j] != '(') { /* a function-like macro name without arguments */
-                    sb_put(st, out, s + a, i - a);
+                    buf_append(st, out, s + a, i - a);
                     continue;
                 }
                 j++;
@@ -324,8 +324,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                     }
                 }
                 if (!closed) {
-                    err(st, file, line, (int)a + 1, "unterminated arguments of macro '%s'",
-                        m->name);
+                    pp_error(st, file, line, (int)a + 1, "unterminated arguments of macro '%s'",
+                             m->name);
                     return;
                 }
                 ends[np - 1] = j;
@@ -337,8 +337,8 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                         np = 0;
                 }
                 if (np != m->nparams) {
-                    err(st, file, line, (int)a + 1, "wrong number of arguments to macro '%s'",
-                        m->name);
+                    pp_error(st, file, line, (int)a + 1, "wrong number of arguments to macro '%s'",
+                             m->name);
                     i = j + 1;
                     continue;
                 }
@@ -351,7 +351,7 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                         as++, al--;
                     while (al && isspace((unsigned char)as[al - 1]))
                         al--;
-                    sb_put(st, &args[k], "", 0);
+                    buf_append(st, &args[k], "", 0);
                     expand(st, as, al, &args[k], depth + 1, file, line);
                 }
                 substitute(st, m, args, &rep);
@@ -372,16 +372,16 @@ static void expand(pp_state *st, const char *s, size_t n, sbuf *out, int depth, 
                    (is_id((unsigned char)s[i]) || s[i] == '.' ||
                     ((s[i] == '+' || s[i] == '-') && (s[i - 1] == 'e' || s[i - 1] == 'E'))))
                 i++;
-            sb_put(st, out, s + a, i - a);
+            buf_append(st, out, s + a, i - a);
         } else if (c == '"') {
             size_t a = i++;
             while (i < n && s[i] != '"' && s[i] != '\n')
                 i += (s[i] == '\\' && i + 1 < n) ? 2 : 1;
             if (i < n && s[i] == '"')
                 i++;
-            sb_put(st, out, s + a, i - a);
+            buf_append(st, out, s + a, i - a);
         } else {
-            sb_put(st, out, s + i, 1);
+            buf_append(st, out, s + i, 1);
             i++;
         }
     }
@@ -504,7 +504,7 @@ static cbm_status read_file(cbm_context *ctx, const char *path, char **out, read
     }
     b.data[b.len] = 0;
     /* hand over exactly strlen+1 bytes so cbm__strfree can release it */
-    char *d = dup_n(ctx, b.data, b.len);
+    char *d = copy_text(ctx, b.data, b.len);
     CBM_ARRAY_FREE(ctx, b);
     if (!d)
         return CBM_E_NOMEM;
@@ -536,8 +536,8 @@ static bool include_allowed(const cbm__pp *pp, const char *path)
 static void emit_line(pp_state *st, const char *s, size_t n, int file, int line)
 {
     cbm__pp *pp = st->pp;
-    sb_put(st, (sbuf *)&pp->text, s, n);
-    sb_put(st, (sbuf *)&pp->text, "\n", 1);
+    buf_append(st, (sbuf *)&pp->text, s, n);
+    buf_append(st, (sbuf *)&pp->text, "\n", 1);
     cbm__pp_line l = {file, line, -1};
     if (st->used_define && st->status == CBM_OK) {
         /* errors on this line will say which -D it expands (kept with the file names) */
@@ -570,7 +570,7 @@ static void include(pp_state *st, const char *arg, int file, int line)
     char close = *arg == '"' ? '"' : *arg == '<' ? '>' : 0;
     const char *e = close ? strchr(arg + 1, close) : NULL;
     if (!e) {
-        err(st, file, line, 1, "%s", "expected \"file\" after #include");
+        pp_error(st, file, line, 1, "%s", "expected \"file\" after #include");
         return;
     }
     /* the built-in library of the L+C dialect and the C headers its models include */
@@ -584,7 +584,7 @@ static void include(pp_state *st, const char *arg, int file, int line)
             return;
         }
     if (st->include_depth >= 16) {
-        err(st, file, line, 1, "%s", "#include nested too deeply");
+        pp_error(st, file, line, 1, "%s", "#include nested too deeply");
         return;
     }
     const char *cur = st->pp->files.data[file];
@@ -604,8 +604,9 @@ static void include(pp_state *st, const char *arg, int file, int line)
     struct stat stt;
     cbm_status s = CBM_E_IO;
     if (stat(path, &stt) == 0 && !include_allowed(st->pp, path)) {
-        err(st, file, line, 1,
-            "#include \"%s\": outside the model's folder (a model includes its own files)", path);
+        pp_error(st, file, line, 1,
+                 "#include \"%s\": outside the model's folder (a model includes its own files)",
+                 path);
         cbm__strfree(ctx, path);
         return;
     }
@@ -614,10 +615,10 @@ static void include(pp_state *st, const char *arg, int file, int line)
         if (s == CBM_E_NOMEM)
             st->status = s;
         else if (s == CBM_E_SYNTAX)
-            err(st, file, line, 1, "included file '%s' has a NUL byte at line %d, column %d", path,
-                re.line, re.col);
+            pp_error(st, file, line, 1, "included file '%s' has a NUL byte at line %d, column %d",
+                     path, re.line, re.col);
         else
-            err(st, file, line, 1, "cannot read included file '%s': %s", path, re.why);
+            pp_error(st, file, line, 1, "cannot read included file '%s': %s", path, re.why);
         cbm__strfree(ctx, path);
         return;
     }
@@ -644,7 +645,7 @@ static void process(pp_state *st, const char *raw, int file)
         return;
     }
     if (open_line)
-        err(st, file, open_line, open_col, "%s", "unterminated comment: '/*' without '*/'");
+        pp_error(st, file, open_line, open_col, "%s", "unterminated comment: '/*' without '*/'");
     /* conditional stack: each level is "taking lines" or not */
     bool take[64];
     bool seen_else[64];
@@ -661,14 +662,14 @@ static void process(pp_state *st, const char *raw, int file)
             const char *e = strchr(p, '\n');
             size_t n = e ? (size_t)(e - p) : strlen(p);
             bool cont = n > 0 && p[n - 1] == '\\';
-            sb_put(st, &logical, p, cont ? n - 1 : n);
+            buf_append(st, &logical, p, cont ? n - 1 : n);
             p += n + (e ? 1 : 0);
             if (!cont || !*p)
                 break;
             extra++;
         }
         if (!logical.data)
-            sb_put(st, &logical, "", 0);
+            buf_append(st, &logical, "", 0);
         if (st->status != CBM_OK)
             break;
         line = first + extra + 1;
@@ -695,7 +696,7 @@ static void process(pp_state *st, const char *raw, int file)
                     char *endp = NULL;
                     long val = ex.data ? strtol(ex.data, &endp, 0) : 0;
                     if (!ex.data || endp == ex.data)
-                        err(st, file, first, 1, "%s", "#if expects an integer constant");
+                        pp_error(st, file, first, 1, "%s", "#if expects an integer constant");
                     v = val != 0;
                     CBM_ARRAY_FREE(ctx, ex);
                 } else {
@@ -710,7 +711,7 @@ static void process(pp_state *st, const char *raw, int file)
                         v = !v;
                 }
                 if (level >= 63) {
-                    err(st, file, first, 1, "%s", "conditionals nested too deeply");
+                    pp_error(st, file, first, 1, "%s", "conditionals nested too deeply");
                 } else {
                     level++;
                     take[level] = active && v;
@@ -718,14 +719,14 @@ static void process(pp_state *st, const char *raw, int file)
                 }
             } else if (IS("else")) {
                 if (level == 0 || seen_else[level])
-                    err(st, file, first, 1, "%s", "#else without #if");
+                    pp_error(st, file, first, 1, "%s", "#else without #if");
                 else {
                     seen_else[level] = true;
                     take[level] = take[level - 1] && !take[level];
                 }
             } else if (IS("endif")) {
                 if (level == 0)
-                    err(st, file, first, 1, "%s", "#endif without #if");
+                    pp_error(st, file, first, 1, "%s", "#endif without #if");
                 else
                     level--;
             } else if (!active) {
@@ -753,14 +754,14 @@ static void process(pp_state *st, const char *raw, int file)
             } else if (dn == 0 || isdigit((unsigned char)*d)) {
                 /* "# 12 file" line markers and empty directives are ignored */
             } else {
-                err(st, file, first, (int)(d - logical.data) + 1, "unknown directive '#%s'",
-                    dn < 20 ? d : "?");
+                pp_error(st, file, first, (int)(d - logical.data) + 1, "unknown directive '#%s'",
+                         dn < 20 ? d : "?");
             }
 #undef IS
             emit_line(st, "", 0, file, first);
         } else if (active) {
             sbuf ex = {0};
-            sb_put(st, &ex, "", 0);
+            buf_append(st, &ex, "", 0);
             expand(st, logical.data, logical.len, &ex, 0, file, first);
             emit_line(st, ex.data ? ex.data : "", ex.len, file, first);
             CBM_ARRAY_FREE(ctx, ex);
@@ -771,7 +772,7 @@ static void process(pp_state *st, const char *raw, int file)
             emit_line(st, "", 0, file, first + k + 1);
     }
     if (level != 0 && st->status == CBM_OK)
-        err(st, file, line, 1, "%s", "missing #endif");
+        pp_error(st, file, line, 1, "%s", "missing #endif");
     CBM_ARRAY_FREE(ctx, logical);
     cbm__free(ctx, src, src_size);
 }
@@ -831,14 +832,14 @@ cbm_status cbm__pp_run(cbm_context *ctx, const char *path, const char *text,
      * would otherwise be ignored silently) */
     for (size_t i = 0; i < st.macros.len && st.status == CBM_OK; i++)
         if (st.macros.data[i].locked && !st.macros.data[i].known)
-            err(&st, 0, 0, 0, "-D %s: the model does not define %s", st.macros.data[i].name,
-                st.macros.data[i].name);
+            pp_error(&st, 0, 0, 0, "-D %s: the model does not define %s", st.macros.data[i].name,
+                     st.macros.data[i].name);
     cbm__strfree(ctx, owned);
     for (size_t i = 0; i < st.macros.len; i++)
         free_macro(ctx, &st.macros.data[i]);
     CBM_ARRAY_FREE(ctx, st.macros);
     if (st.status == CBM_OK && !pp->text.data)
-        sb_put(&st, (sbuf *)&pp->text, "", 0);
+        buf_append(&st, (sbuf *)&pp->text, "", 0);
     if (st.status != CBM_OK) {
         cbm__pp_free(pp);
         return st.status;

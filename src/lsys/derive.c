@@ -54,7 +54,7 @@ static inline void pos_prev(const lstr *s, lpos *p)
         p->k -= s->pc[--p->j];
 }
 
-static inline size_t esz(const lstr *s)
+static inline size_t param_size(const lstr *s)
 {
     return s->f32 ? sizeof(float) : sizeof(double);
 }
@@ -81,7 +81,7 @@ void cbm__lstr_free(cbm_context *ctx, lstr *s)
     cbm__free(ctx, s->sym, s->cap);
     cbm__free(ctx, s->pc, s->pccap);
     bool f32 = s->f32;
-    cbm__free(ctx, s->par, s->parcap * esz(s));
+    cbm__free(ctx, s->par, s->parcap * param_size(s));
     memset(s, 0, sizeof *s);
     s->f32 = f32;
 }
@@ -93,7 +93,7 @@ static cbm_status lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, 
     if (s->npm + npm > s->pccap)
         CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
     if (s->npar + npar > s->parcap)
-        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, esz(s), s->npar + npar));
+        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, param_size(s), s->npar + npar));
     return CBM_OK;
 }
 
@@ -110,8 +110,8 @@ static cbm_status copy_module(cbm_context *ctx, const lstr *src, lpos *p, lstr *
     dst->sym[dst->n++] = src->sym[p->i];
     if (np) {
         dst->pc[dst->npm++] = (uint8_t)np;
-        memcpy((char *)dst->par + dst->npar * esz(dst), (const char *)src->par + p->k * esz(src),
-               (size_t)np * esz(src));
+        memcpy((char *)dst->par + dst->npar * param_size(dst),
+               (const char *)src->par + p->k * param_size(src), (size_t)np * param_size(src));
         dst->npar += (size_t)np;
     }
     pos_next(src, p);
@@ -561,7 +561,7 @@ static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
     /* with sub-L-systems, the L-system stack: at most one entry per module, doubling */
     double lstack = ls->subcalls ? 4.0 * (double)ls->cur.n : 0.0;
     double need = (double)cbm_context_bytes(ls->ctx) +
-                  2.0 * (2.0 * nsym + npar * (double)esz(&ls->cur)) + (double)(1u << 20) +
+                  2.0 * (2.0 * nsym + npar * (double)param_size(&ls->cur)) + (double)(1u << 20) +
                   16.0 * nprods + lstack;
     return !lim->max_bytes || need <= (double)lim->max_bytes;
 }
@@ -653,7 +653,7 @@ static void release_consumed(release *r, const lstr *cur, const lpos *p)
 {
     release_range(r, cur->sym, p->i, &r->done[0]);
     release_range(r, cur->pc, p->j, &r->done[1]);
-    release_range(r, cur->par, p->k * esz(cur), &r->done[2]);
+    release_range(r, cur->par, p->k * param_size(cur), &r->done[2]);
     r->at = p->i + RELEASE_EVERY;
 }
 
