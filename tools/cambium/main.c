@@ -1,4 +1,4 @@
-/* cambium, the command-line tool: dispatches to the subcommands (run, bend, buckle, info) and
+/* cambium, the command-line tool: dispatches to the subcommands (CBM_COMMANDS, commands.h) and
  * holds the helpers they share. Uses only the public API. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
