@@ -8,9 +8,13 @@
  *   cpfg_code.c   their evaluation: compiled to the register code of lc_code.h and run by its
  *                 loop, the one evaluator of both dialects;
  *   lc.h, lc_parse.c  the L+C dialect's typed front end and its compiled model (run by
- *                 lsys/lpfg.c);
- *   builtins.c    the one table of built-in functions of both dialects, and the math ones;
- *   random.c      the random generators and distributions of both dialects;
+ *                 lsys/lpfg.c); mechsegment.h the layout of its built-in MechSegment;
+ *   lc_code.h, lc_code.c  the register code both dialects compile to, the L+C compiler to it
+ *                 and the loop that runs it (cbm__lc_run);
+ *   lc_native.c   that code translated to C, compiled by the system's cc and cached;
+ *   builtins.c, builtins.h  the one table of built-in functions of both dialects, and the math
+ *                 ones;
+ *   random.c, random.h  the random generators and distributions of both dialects;
  *   format.c      printf of models.
  */
 #ifndef CBM_LANG_H
