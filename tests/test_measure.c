@@ -297,6 +297,12 @@ TEST(summary_hand_made_tree)
     CHECK_NEAR(m.stress_ratio.q90, 0.74, 1e-12); /* 0.7 + 0.4 (0.8 - 0.7) */
     CHECK_NEAR(m.stress_above_half, 3.0 / 7.0, 1e-12);
     CHECK_EQ_INT(m.intersecting, 0);
+    /* the lowest point: the trunk's base; a lateral hanging below the ground lowers it */
+    CHECK_NEAR(m.lowest, 0.0, 1e-15);
+    s[n - 1].p1 = V(-sx, -0.25, 0);
+    CHECK_OK(cbm_measure_segments(ctx, &def, s, n, &m));
+    CHECK_NEAR(m.lowest, -0.25, 1e-15);
+    CHECK_NEAR(m.height, 2 + sy, 1e-12); /* from the base: the root's proximal end */
     test_ctx_end(ctx);
 }
 

@@ -52,9 +52,12 @@ typedef struct cbm_measure_quantiles {
 
 typedef struct cbm_tree_measures {
     size_t segments;
-    size_t axes;         ///< roots and laterals (each starts an axis)
-    int max_order;       ///< branch order of the deepest axis (0: the trunk alone)
-    double height;       ///< m, highest point of any segment above the base (the lowest root point)
+    size_t axes;   ///< roots and laterals (each starts an axis)
+    int max_order; ///< branch order of the deepest axis (0: the trunk alone)
+    double height; ///< m, highest point of any segment above the base (the lowest root point)
+    /// m, the lowest point of any segment end (world y, not above the base: below 0 a segment
+    /// ends below the ground of a plant rooted at the origin)
+    double lowest;
     double total_length; ///< m, sum of the segment lengths
     /// m: trunk diameter (2 r, interpolated along the segment) at breast height, or at the
     /// base when the trunk does not reach it (then diameter_at_base). The trunk is the first

@@ -268,7 +268,8 @@ cbm_status cbm_measure_segments(cbm_context *ctx, const cbm_measure_def *def,
     m.segments = n;
     if (n == 0) {
         cbm_measure_quantiles none = {0, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
-        m.height = m.diameter = m.base_diameter = m.crown_width = m.crown_base_height = NAN;
+        m.height = m.lowest = m.diameter = m.base_diameter = m.crown_width = m.crown_base_height =
+            NAN;
         m.trunk_modulus = m.trunk_density = m.buckling_height = m.buckling_ratio = NAN;
         m.pipe_exponent = m.branch_angle = m.stress_ratio = none;
         m.stress_above_half = m.intersecting_fraction = NAN;
@@ -302,12 +303,13 @@ cbm_status cbm_measure_segments(cbm_context *ctx, const cbm_measure_def *def,
         if (s[i].parent >= 0 && !s[i].lateral && w.cont[s[i].parent] == SIZE_MAX)
             w.cont[s[i].parent] = i;
     /* height, crown width, lengths */
-    double base = INFINITY, top = -INFINITY;
+    double base = INFINITY, top = -INFINITY, low = INFINITY;
     double xlo = INFINITY, xhi = -INFINITY, zlo = INFINITY, zhi = -INFINITY;
     for (size_t i = 0; i < n; i++) {
         if (s[i].parent < 0 && s[i].p0.y < base)
             base = s[i].p0.y;
         top = fmax(top, fmax(s[i].p0.y, s[i].p1.y));
+        low = fmin(low, fmin(s[i].p0.y, s[i].p1.y));
         xlo = fmin(xlo, s[i].p1.x), xhi = fmax(xhi, s[i].p1.x);
         zlo = fmin(zlo, s[i].p1.z), zhi = fmax(zhi, s[i].p1.z);
         w.sub[i] = v3_norm(v3_sub(s[i].p1, s[i].p0));
@@ -317,6 +319,7 @@ cbm_status cbm_measure_segments(cbm_context *ctx, const cbm_measure_def *def,
         if (s[i].parent >= 0)
             w.sub[s[i].parent] += w.sub[i];
     m.height = top - base;
+    m.lowest = low;
     m.crown_width = fmax(xhi - xlo, zhi - zlo);
     summary_axes(s, n, &w, &m);
     summary_trunk(&d, s, n, &w, base, &m);

@@ -83,15 +83,17 @@ for seed in 1 2; do
     done
     awk -v a="$(cat "$tmp/be-$seed-0.h")" -v b="$(cat "$tmp/be-$seed-1.h")" \
         'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d < 0.01 * a) }'
-    # distichous: consecutive first-order laterals of the stem point to opposite sides (azimuths
-    # more than 120 deg apart) on at least 70 % of pairs (the leader's plane turns between years)
+    # distichous: the first-order laterals of consecutive stem nodes point to opposite sides
+    # (azimuths more than 120 deg apart) on at least 70 % of pairs (the leader's plane turns
+    # between years; some weak buds stay dormant, so not every node has a lateral)
     awk -F, 'function az(i) { return atan2($9 - $6, $7 - $4) * 180 / 3.14159265 }
-        NR > 1 { ord[$1] = $3 }
+        NR > 1 { ord[$1] = $3; if ($3 == 0) node[$1] = ++nodes }
         NR > 1 && $3 == 1 && ord[$2] == 0 { a = az(); any++
-            if (any > 1) { d = a - last; if (d < 0) d = -d; if (d > 180) d = 360 - d
-                           n++; if (d > 120) opp++ }
-            last = a }
-        END { exit !(any >= 6 && opp >= 0.7 * n) }' "$tmp/be-$seed-0.csv"
+            if (any > 1 && node[$2] == last_node + 1) {
+                d = a - last; if (d < 0) d = -d; if (d > 180) d = 360 - d
+                n++; if (d > 120) opp++ }
+            last = a; last_node = node[$2] }
+        END { exit !(any >= 6 && n >= 4 && opp >= 0.7 * n) }' "$tmp/be-$seed-0.csv"
     # the carbon balance: thrice the wood's respiration sheds branches, the stem grows thinner
     "$bin" run "$src/models/guertler-beech.l" -D YEARS=5 -D SEED=$seed -D MAINT=1e-6 \
         -o "segments:$tmp/starved.csv" >"$tmp/starved.txt"

@@ -500,6 +500,7 @@ void cli_measures_print(const cbm_tree_measures *m)
         printf("%.3f m", m->crown_base_height);
     else
         printf("none (no branch of 5 %% of the axis length)");
+    printf(", lowest point %.3f m", m->lowest);
     printf("; %zu segments, %zu axes, branch orders 0..%d, axis length %.3g m\n", m->segments,
            m->axes, m->max_order, m->total_length);
     if (isfinite(m->buckling_height))
@@ -556,6 +557,7 @@ void cli_measures_json(cbm_json *j, const char *key, const cbm_tree_measures *m)
     cbm_json_int(j, "axes", (int64_t)m->axes);
     cbm_json_int(j, "max_order", m->max_order);
     cbm_json_number(j, "height_m", m->height);
+    cbm_json_number(j, "lowest_m", m->lowest);
     cbm_json_number(j, "axis_length_m", m->total_length);
     cbm_json_number(j, "diameter_m", m->diameter);
     cbm_json_string(j, "diameter_at", m->diameter_at_base ? "base" : "breast height");
@@ -649,6 +651,7 @@ static cbm_tree_measures measures_from_json(const char *obj)
     m.axes = (size_t)fmax(0.0, json_number_in(obj, e, "axes"));
     m.max_order = (int)fmax(0.0, json_number_in(obj, e, "max_order"));
     m.height = json_number_in(obj, e, "height_m");
+    m.lowest = json_number_in(obj, e, "lowest_m");
     m.total_length = json_number_in(obj, e, "axis_length_m");
     m.diameter = json_number_in(obj, e, "diameter_m");
     const char *at = strstr(obj, "\"diameter_at\":\"base\"");
