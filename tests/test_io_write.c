@@ -313,8 +313,9 @@ TEST(glb_tube_instances)
 }
 
 /* Shared parts (cbm_scene_begin_part_shared): segments that differ only by their id share one
- * part and keep their ids in their instances; any other geometry stores its part; the .glb is
- * the same bytes as with a part per segment. 20,000 instances: several of the writer's chunks. */
+ * part, the last one or any begun before (orders interleaved, as a tree's are along its string),
+ * and keep their ids in their instances; any other geometry stores its part; the .glb is the
+ * same bytes as with a part per segment. 20,000 instances: several of the writer's chunks. */
 TEST(glb_shared_parts)
 {
     cbm_context *ctx = test_ctx();
@@ -328,7 +329,7 @@ TEST(glb_shared_parts)
         cbm_scene *s = k ? pl : sh;
         for (size_t i = 0; i < n; i++) {
             cbm_part p = cbm_part_default();
-            p.order = (int32_t)(i / 5000);
+            p.order = (int32_t)(i / 5000 + i % 3);
             p.segment = (int64_t)(i + 100);
             p.color[1] = (float)(i / 777) * 0.01f; /* runs of 777 of one colour */
             CHECK_OK(k ? cbm_scene_begin_part(s, &p, NULL) : cbm_scene_begin_part_shared(s, &p));
@@ -345,12 +346,12 @@ TEST(glb_shared_parts)
     CHECK_EQ_INT(cbm_scene_instance_count(sh), n);
     CHECK_EQ_INT(cbm_scene_part_count(pl), n);
     size_t np = cbm_scene_part_count(sh);
-    CHECK(np < 50);
+    CHECK(np < 120); /* 26 colours by 3 orders and the polygons' (a part a segment: 20,000) */
     const cbm_scene_instance *in = cbm_scene_instances(sh);
     const cbm_part *parts = cbm_scene_parts(sh);
     for (size_t i = 0; i < n; i++) {
         CHECK(in[i].segment == (float)(i + 100));
-        CHECK(parts[in[i].part].order == (int32_t)(i / 5000));
+        CHECK(parts[in[i].part].order == (int32_t)(i / 5000 + i % 3));
     }
     /* the polygons' triangles belong to parts of their own segments */
     const uint32_t *tp = cbm_scene_triangle_parts(sh);
@@ -365,6 +366,15 @@ TEST(glb_shared_parts)
     CHECK(a && b && la == lb && memcmp(a, b, la) == 0);
     free(a);
     free(b);
+    /* a cleared scene shares from its own parts only */
+    cbm_scene_clear(sh);
+    cbm_part q = cbm_part_default();
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    q.order = 1;
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    q.order = -1;
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    CHECK_EQ_INT(cbm_scene_part_count(sh), 2);
     /* without instancing every part is stored */
     cbm_scene_clear(sh);
     cbm_scene_set_instancing(sh, false);

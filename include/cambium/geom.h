@@ -78,12 +78,14 @@ CBM_API void cbm_scene_clear(cbm_scene *scene);
 /// Starts a new part; later geometry belongs to it. *id (optional) receives its index.
 CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, uint32_t *id);
 
-/// Starts a part like cbm_scene_begin_part, except that in instancing mode, when the last part
-/// equals `part` but for its segment id, no part is stored: the tube instances added next point
-/// to the last part and keep `part->segment` as their own (cbm_scene_instance.segment), and any
-/// other geometry stores the part first as cbm_scene_begin_part would have. This spares a part
-/// record (88 bytes) per instanced segment. For producers that do not change their parts after
-/// adding them (the part may be shared by other segments' instances).
+/// Starts a part like cbm_scene_begin_part, except that in instancing mode, when a part of the
+/// scene (the current one, or any begun before: a hash table finds it) equals `part` but for
+/// its segment id, no part is stored: the tube instances added next point to that part and keep
+/// `part->segment` as their own (cbm_scene_instance.segment), and any other geometry stores the
+/// part first as cbm_scene_begin_part would have. This spares a part record (88 bytes) per
+/// instanced segment, also where branches of a few orders alternate along the string. For
+/// producers that do not change their parts after adding them (the part may be shared by other
+/// segments' instances).
 CBM_API cbm_status cbm_scene_begin_part_shared(cbm_scene *scene, const cbm_part *part);
 
 /// Generalized cylinder: begin, then one ring per section (each ring is joined to the previous

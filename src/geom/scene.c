@@ -31,11 +31,17 @@ struct cbm_scene {
     CBM_ARRAY(uint32_t) shape_tri;         /* 3 a triangle, indices local to the shape */
     CBM_ARRAY(cbm_scene_placement) place;
     bool line_mode, instancing;
-    /* A shared part (cbm_scene_begin_part_shared): the segment id of the part begun last, which
-     * differs from the stored last part's when seg_pending; the next geometry other than an
-     * instance stores the part with it first (ensure_part). */
+    /* The current part: the one later geometry belongs to (with shared parts, not always the
+     * last one stored). A shared part (cbm_scene_begin_part_shared): the segment id of the part
+     * begun last, which differs from the current part's when seg_pending; the next geometry
+     * other than an instance stores the part with it first (ensure_part). */
+    uint32_t cur_part;
     int64_t cur_seg;
     bool seg_pending;
+    /* The parts a shared part may be: an open-addressing table of part indices (UINT32_MAX:
+     * empty), hashed on every field but the segment id, at most half full. */
+    CBM_ARRAY(uint32_t) share;
+    size_t share_used;
     /* tube in progress */
     int tube_sides;
     bool tube_cap0, tube_cap1, tube_open; /* caps at the start, at the end */
@@ -102,6 +108,7 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->shape_nrm);
     CBM_ARRAY_FREE(ctx, s->shape_tri);
     CBM_ARRAY_FREE(ctx, s->place);
+    CBM_ARRAY_FREE(ctx, s->share);
     cbm__free(ctx, s, sizeof *s);
 }
 
@@ -111,6 +118,28 @@ void cbm_scene_clear(cbm_scene *s)
     s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
     s->seg_pending = false;
+    s->cur_part = 0;
+    if (s->share.len)
+        memset(s->share.data, 0xff, s->share.len * sizeof *s->share.data);
+    s->share_used = 0;
+}
+
+/* Whether an array indexed by uint32_t (vertices, parts, lines) has no room for one more. */
+static bool index_full(size_t len)
+{
+    return len >= UINT32_MAX - 1;
+}
+
+/* Stores a part and makes it the current one. */
+static cbm_status push_part(cbm_scene *s, const cbm_part *p)
+{
+    if (index_full(s->parts.len))
+        return CBM_E_LIMIT;
+    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *p));
+    s->cur_part = (uint32_t)(s->parts.len - 1);
+    s->cur_seg = p->segment;
+    s->seg_pending = false;
+    return CBM_OK;
 }
 
 /* A part for geometry other than an instance: the default one in an empty scene, the shared
@@ -119,28 +148,19 @@ static cbm_status ensure_part(cbm_scene *s)
 {
     if (s->parts.len > 0 && !s->seg_pending)
         return CBM_OK;
-    cbm_part p = s->parts.len > 0 ? s->parts.data[s->parts.len - 1] : cbm_part_default();
+    cbm_part p = s->parts.len > 0 ? s->parts.data[s->cur_part] : cbm_part_default();
     if (s->seg_pending)
         p.segment = s->cur_seg;
-    if (s->parts.len >= UINT32_MAX)
-        return CBM_E_LIMIT;
-    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, p));
-    s->seg_pending = false;
-    s->cur_seg = p.segment;
-    return CBM_OK;
+    return push_part(s, &p);
 }
 
 cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id)
 {
     if (!s || !part)
         return CBM_E_INVALID;
-    if (s->parts.len >= UINT32_MAX)
-        return CBM_E_LIMIT;
-    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *part));
-    s->cur_seg = part->segment;
-    s->seg_pending = false;
+    CBM_TRY(push_part(s, part));
     if (id)
-        *id = (uint32_t)(s->parts.len - 1);
+        *id = s->cur_part;
     return CBM_OK;
 }
 
@@ -166,21 +186,100 @@ static bool same_but_segment(const cbm_part *a, const cbm_part *b)
            same_bits(a->light, b->light);
 }
 
+static uint64_t mix(uint64_t h, uint64_t x)
+{
+    return (h ^ x) * 0x100000001B3ull + (x >> 29);
+}
+
+static uint64_t double_bits(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+/* A hash of every field of a part but the segment id (equal bits, equal hash: same_but_segment). */
+static size_t share_hash(const cbm_part *p, size_t cap)
+{
+    uint32_t c[4];
+    memcpy(c, p->color, sizeof c);
+    uint64_t h = 0xCBF29CE484222325ull;
+    h = mix(h, (uint64_t)p->organ | (uint64_t)(uint32_t)p->order << 32);
+    h = mix(h, (uint64_t)p->parent);
+    h = mix(h, (uint64_t)(uint32_t)p->material);
+    h = mix(h, (uint64_t)c[0] | (uint64_t)c[1] << 32);
+    h = mix(h, (uint64_t)c[2] | (uint64_t)c[3] << 32);
+    h = mix(h, double_bits(p->stress_ratio));
+    h = mix(h, double_bits(p->stress));
+    h = mix(h, double_bits(p->age));
+    h = mix(h, double_bits(p->reaction_wood));
+    h = mix(h, double_bits(p->light));
+    return (size_t)((h * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+}
+
+/* The slot of a part equal to `part` but for its segment id in the share table, or of the
+ * empty slot where it goes. */
+static uint32_t *share_slot(cbm_scene *s, const cbm_part *part)
+{
+    size_t cap = s->share.len, h = share_hash(part, cap);
+    while (s->share.data[h] != UINT32_MAX &&
+           !same_but_segment(&s->parts.data[s->share.data[h]], part))
+        h = (h + 1) & (cap - 1);
+    return &s->share.data[h];
+}
+
+/* The share table at twice its size (at least 64 slots), every entry placed again. */
+static cbm_status share_grow(cbm_scene *s)
+{
+    size_t old = s->share.len, cap = old ? 2 * old : 64;
+    uint32_t *keep = NULL;
+    if (old) {
+        keep = cbm__alloc(s->ctx, old * sizeof *keep);
+        if (!keep)
+            return CBM_E_NOMEM;
+        memcpy(keep, s->share.data, old * sizeof *keep);
+    }
+    cbm_status st = CBM_ARRAY_RESERVE(s->ctx, s->share, cap);
+    if (st == CBM_OK) {
+        s->share.len = cap;
+        memset(s->share.data, 0xff, cap * sizeof *s->share.data);
+        for (size_t i = 0; i < old; i++)
+            if (keep[i] != UINT32_MAX)
+                *share_slot(s, &s->parts.data[keep[i]]) = keep[i];
+    }
+    cbm__free(s->ctx, keep, old * sizeof *keep);
+    return st;
+}
+
 cbm_status cbm_scene_begin_part_shared(cbm_scene *s, const cbm_part *part)
 {
     if (!s || !part)
         return CBM_E_INVALID;
-    if (!s->instancing || s->parts.len == 0 ||
-        !same_but_segment(&s->parts.data[s->parts.len - 1], part))
+    if (!s->instancing)
         return cbm_scene_begin_part(s, part, NULL);
+    /* the current part first (a run of segments), then any part begun before */
+    uint32_t k = s->cur_part;
+    if (s->parts.len == 0 || !same_but_segment(&s->parts.data[k], part)) {
+        if (2 * (s->share_used + 1) > s->share.len)
+            CBM_TRY(share_grow(s));
+        uint32_t *slot = share_slot(s, part);
+        if (*slot == UINT32_MAX) {
+            CBM_TRY(push_part(s, part));
+            *slot = s->cur_part;
+            s->share_used++;
+            return CBM_OK;
+        }
+        k = *slot;
+    }
+    s->cur_part = k;
     s->cur_seg = part->segment;
-    s->seg_pending = part->segment != s->parts.data[s->parts.len - 1].segment;
+    s->seg_pending = part->segment != s->parts.data[k].segment;
     return CBM_OK;
 }
 
 static cbm_status push_vertex(cbm_scene *s, cbm_vec3 p, cbm_vec3 n)
 {
-    if (s->verts.len >= UINT32_MAX - 1)
+    if (index_full(s->verts.len))
         return CBM_E_LIMIT;
     cbm_scene_vertex v = {{(float)p.x, (float)p.y, (float)p.z},
                           {(float)n.x, (float)n.y, (float)n.z}};
@@ -194,7 +293,7 @@ static cbm_status push_tri(cbm_scene *s, uint32_t a, uint32_t b, uint32_t c)
     s->tris.data[s->tris.len++] = a;
     s->tris.data[s->tris.len++] = b;
     s->tris.data[s->tris.len++] = c;
-    s->tpart.data[s->tpart.len++] = (uint32_t)(s->parts.len - 1);
+    s->tpart.data[s->tpart.len++] = s->cur_part;
     return CBM_OK;
 }
 
@@ -378,7 +477,7 @@ cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_sec
                                  (float)fabs(s0->a),
                                  (float)fabs(s0->b),
                                  (float)taper,
-                                 (uint32_t)(s->parts.len - 1),
+                                 s->cur_part,
                                  sides,
                                  /* as the writer writes the part's id: through a double */
                                  s->cur_seg >= 0 ? (float)(double)s->cur_seg : -1.0f};
@@ -627,10 +726,12 @@ cbm_status cbm_scene_place_shape(cbm_scene *s, uint32_t shape, cbm_vec3 o, cbm_v
         return CBM_E_INVALID;
     CBM_TRY(ensure_part(s));
     if (s->instancing && placeable(o, x, y, z)) {
-        cbm_scene_placement pl = {
-            {(float)o.x, (float)o.y, (float)o.z}, {(float)x.x, (float)x.y, (float)x.z},
-            {(float)y.x, (float)y.y, (float)y.z}, {(float)z.x, (float)z.y, (float)z.z},
-            (uint32_t)(s->parts.len - 1),         shape};
+        cbm_scene_placement pl = {{(float)o.x, (float)o.y, (float)o.z},
+                                  {(float)x.x, (float)x.y, (float)x.z},
+                                  {(float)y.x, (float)y.y, (float)y.z},
+                                  {(float)z.x, (float)z.y, (float)z.z},
+                                  s->cur_part,
+                                  shape};
         return CBM_ARRAY_PUSH(s->ctx, s->place, pl);
     }
     /* the triangles: normals by the cofactors of (x y z), the inverse transpose up to a factor */
@@ -743,13 +844,13 @@ cbm_status cbm_scene_add_line(cbm_scene *s, cbm_vec3 p0, cbm_vec3 p1, double wid
 {
     if (!s || !(width >= 0.0) || !isfinite(width))
         return CBM_E_INVALID;
-    if (s->lines.len >= UINT32_MAX)
+    if (index_full(s->lines.len))
         return CBM_E_LIMIT;
     CBM_TRY(ensure_part(s));
     cbm_scene_line l = {{(float)p0.x, (float)p0.y, (float)p0.z},
                         {(float)p1.x, (float)p1.y, (float)p1.z},
                         (float)width,
-                        (uint32_t)(s->parts.len - 1)};
+                        s->cur_part};
     return CBM_ARRAY_PUSH(s->ctx, s->lines, l);
 }
 
