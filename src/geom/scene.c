@@ -25,7 +25,12 @@ struct cbm_scene {
     CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
     CBM_ARRAY(cbm_part) parts;
     CBM_ARRAY(cbm_scene_line) lines;
-    CBM_ARRAY(cbm_scene_instance) inst;
+    /* The tube instances, encoded one after the other (encode_instance), a fully written one
+     * every INST_KEY instances, whose byte offsets are inst_key; inst_last: the last added. */
+    CBM_ARRAY(uint8_t) inst;
+    CBM_ARRAY(size_t) inst_key;
+    size_t ninst;
+    cbm_scene_instance inst_last;
     CBM_ARRAY(shape_rec) shapes;
     CBM_ARRAY(float) shape_pos, shape_nrm; /* 3 a vertex, the shapes one after the other */
     CBM_ARRAY(uint32_t) shape_tri;         /* 3 a triangle, indices local to the shape */
@@ -103,6 +108,7 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->parts);
     CBM_ARRAY_FREE(ctx, s->lines);
     CBM_ARRAY_FREE(ctx, s->inst);
+    CBM_ARRAY_FREE(ctx, s->inst_key);
     CBM_ARRAY_FREE(ctx, s->shapes);
     CBM_ARRAY_FREE(ctx, s->shape_pos);
     CBM_ARRAY_FREE(ctx, s->shape_nrm);
@@ -115,6 +121,7 @@ void cbm_scene_destroy(cbm_scene *s)
 void cbm_scene_clear(cbm_scene *s)
 {
     s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
+    s->inst_key.len = s->ninst = 0;
     s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
     s->seg_pending = false;
@@ -456,12 +463,138 @@ bool cbm_scene_instancing(const cbm_scene *s)
 
 size_t cbm_scene_instance_count(const cbm_scene *s)
 {
-    return s ? s->inst.len : 0;
+    return s ? s->ninst : 0;
 }
 
-const cbm_scene_instance *cbm_scene_instances(const cbm_scene *s)
+/* An instance in the byte stream: a flags byte saying which fields are the previous instance's
+ * (left out), then those written, p1 last. A branch's segments follow one another along the
+ * string, so most instances start where the previous one ended, in its frame, width and part:
+ * 14 bytes (p1, the segment id as a 1-byte step) instead of 60. Bit for bit: the stream gives
+ * back the floats it was given. */
+enum {
+    INST_KEY = 256,     /* a fully written instance every INST_KEY: where a reader can start */
+    INST_P0_LAST = 1,   /* p0 is the previous p1 */
+    INST_U_LAST = 2,    /* u is the previous u */
+    INST_AB_LAST = 4,   /* a, b are the previous */
+    INST_KIND_LAST = 8, /* taper, part, sides are the previous */
+    INST_SEG_STEP = 16, /* segment is the previous plus a signed byte (else a float) */
+    INST_MAX_BYTES = 1 + 12 + 12 + 8 + 12 + 4 + 12
+};
+
+static bool same_floats(const float *a, const float *b, size_t n)
 {
-    return s ? s->inst.data : NULL;
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+static uint8_t *put(uint8_t *d, const void *v, size_t n)
+{
+    memcpy(d, v, n);
+    return d + n;
+}
+
+static cbm_status encode_instance(cbm_scene *s, const cbm_scene_instance *in)
+{
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->inst, s->inst.len + INST_MAX_BYTES));
+    const cbm_scene_instance *l = &s->inst_last;
+    unsigned flags = 0;
+    float step = in->segment - l->segment;
+    if (s->ninst % INST_KEY == 0) {
+        CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->inst_key, s->inst.len));
+    } else {
+        flags |= same_floats(in->p0, l->p1, 3) ? INST_P0_LAST : 0u;
+        flags |= same_floats(in->u, l->u, 3) ? INST_U_LAST : 0u;
+        flags |= in->a == l->a && in->b == l->b ? INST_AB_LAST : 0u;
+        flags |= in->taper == l->taper && in->part == l->part && in->sides == l->sides
+                     ? INST_KIND_LAST
+                     : 0u;
+        /* a whole step of a byte that gives back the same float, bit for bit */
+        float back = l->segment + step;
+        flags |=
+            fabsf(step) <= 127.0f && step == truncf(step) && same_floats(&back, &in->segment, 1)
+                ? INST_SEG_STEP
+                : 0u;
+    }
+    uint8_t *d = s->inst.data + s->inst.len, *d0 = d;
+    *d++ = (uint8_t)flags;
+    if (!(flags & INST_P0_LAST))
+        d = put(d, in->p0, sizeof in->p0);
+    if (!(flags & INST_U_LAST))
+        d = put(d, in->u, sizeof in->u);
+    if (!(flags & INST_AB_LAST)) {
+        d = put(d, &in->a, sizeof in->a);
+        d = put(d, &in->b, sizeof in->b);
+    }
+    if (!(flags & INST_KIND_LAST)) {
+        d = put(d, &in->taper, sizeof in->taper);
+        d = put(d, &in->part, sizeof in->part);
+        d = put(d, &in->sides, sizeof in->sides);
+    }
+    if (flags & INST_SEG_STEP)
+        *d++ = (uint8_t)(int8_t)step;
+    else
+        d = put(d, &in->segment, sizeof in->segment);
+    d = put(d, in->p1, sizeof in->p1);
+    s->inst.len += (size_t)(d - d0);
+    s->inst_last = *in;
+    s->ninst++;
+    return CBM_OK;
+}
+
+static const uint8_t *get(const uint8_t *d, void *v, size_t n)
+{
+    memcpy(v, d, n);
+    return d + n;
+}
+
+/* The instance at byte `off` into *l, which holds the previous one; the offset of the next. */
+static size_t decode_instance(const cbm_scene *s, size_t off, cbm_scene_instance *l)
+{
+    const uint8_t *d = s->inst.data + off, *d0 = d;
+    unsigned flags = *d++;
+    if (flags & INST_P0_LAST)
+        memcpy(l->p0, l->p1, sizeof l->p0);
+    else
+        d = get(d, l->p0, sizeof l->p0);
+    if (!(flags & INST_U_LAST))
+        d = get(d, l->u, sizeof l->u);
+    if (!(flags & INST_AB_LAST)) {
+        d = get(d, &l->a, sizeof l->a);
+        d = get(d, &l->b, sizeof l->b);
+    }
+    if (!(flags & INST_KIND_LAST)) {
+        d = get(d, &l->taper, sizeof l->taper);
+        d = get(d, &l->part, sizeof l->part);
+        d = get(d, &l->sides, sizeof l->sides);
+    }
+    if (flags & INST_SEG_STEP)
+        l->segment += (float)(int8_t)*d++;
+    else
+        d = get(d, &l->segment, sizeof l->segment);
+    d = get(d, l->p1, sizeof l->p1);
+    return off + (size_t)(d - d0);
+}
+
+cbm_status cbm_scene_instance_read(const cbm_scene *s, size_t i, cbm_scene_instance_cursor *c,
+                                   cbm_scene_instance *out)
+{
+    if (!s || !c || !out || i >= s->ninst)
+        return CBM_E_INVALID;
+    size_t key = i / INST_KEY * INST_KEY;
+    if (i < c->next || key > c->next || c->offset > s->inst.len) {
+        c->next = key;
+        c->offset = s->inst_key.data[key / INST_KEY];
+    }
+    while (c->next <= i) {
+        c->offset = decode_instance(s, c->offset, &c->last);
+        c->next++;
+    }
+    *out = c->last;
+    return CBM_OK;
+}
+
+size_t cbm_scene_instance_bytes(const cbm_scene *s)
+{
+    return s ? s->inst.len + s->inst_key.len * sizeof *s->inst_key.data : 0;
 }
 
 cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1, int sides,
@@ -481,7 +614,7 @@ cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_sec
                                  sides,
                                  /* as the writer writes the part's id: through a double */
                                  s->cur_seg >= 0 ? (float)(double)s->cur_seg : -1.0f};
-        return CBM_ARRAY_PUSH(s->ctx, s->inst, in);
+        return encode_instance(s, &in);
     }
     CBM_TRY(cbm_scene_tube_begin(s, sides, caps));
     CBM_TRY(cbm_scene_tube_ring(s, s0));
@@ -877,7 +1010,7 @@ static void grow_bounds(const float *p, double l[3], double h[3])
 
 bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
 {
-    if (s->verts.len == 0 && s->lines.len == 0 && s->inst.len == 0 && s->place.len == 0)
+    if (s->verts.len == 0 && s->lines.len == 0 && s->ninst == 0 && s->place.len == 0)
         return false;
     double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (size_t i = 0; i < s->verts.len; i++)
@@ -886,8 +1019,11 @@ bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
         grow_bounds(s->lines.data[i].p0, l, h);
         grow_bounds(s->lines.data[i].p1, l, h);
     }
-    for (size_t i = 0; i < s->inst.len; i++) {
-        const cbm_scene_instance *in = &s->inst.data[i];
+    cbm_scene_instance_cursor cur = {0};
+    for (size_t i = 0; i < s->ninst; i++) {
+        cbm_scene_instance inst;
+        (void)cbm_scene_instance_read(s, i, &cur, &inst);
+        const cbm_scene_instance *in = &inst;
         float r = in->a > in->b ? in->a : in->b;
         for (int e = 0; e < 2; e++)
             for (int k = 0; k < 3; k++) {

@@ -303,8 +303,9 @@ static bool mirrors(const cbm_scene_placement *p)
 static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
 {
     size_t ni = cbm_scene_instance_count(s), npl = cbm_scene_placement_count(s);
-    const cbm_scene_instance *in = cbm_scene_instances(s);
     const cbm_scene_placement *pl = cbm_scene_placements(s);
+    cbm_scene_instance_cursor cur = {0};
+    cbm_scene_instance in = {0};
     const cbm_part *parts = cbm_scene_parts(s);
     g->buckets.len = 0;
     if (!ni && !npl)
@@ -315,15 +316,17 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni + npl));
     uint32_t *ib = g->ibucket.data;
     for (size_t i = 0; i < ni + npl; i++) {
-        uint32_t part = i < ni ? in[i].part : pl[i - ni].part;
+        if (i < ni)
+            CBM_TRY(cbm_scene_instance_read(s, i, &cur, &in));
+        uint32_t part = i < ni ? in.part : pl[i - ni].part;
         const cbm_part *p = &parts[part];
         ib[i] = UINT32_MAX;
         if (!cbm__part_kept(p, g->o))
             continue;
         int grp = group_of(p);
-        int sides = i < ni ? in[i].sides : 0;
+        int sides = i < ni ? in.sides : 0;
         uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)sides << 32) | color_key(col + 4 * part);
-        float tp = i < ni ? in[i].taper : 0.0f;
+        float tp = i < ni ? in.taper : 0.0f;
         int64_t shape = i < ni ? -1 : (int64_t)pl[i - ni].shape;
         bool flip = i >= ni && mirrors(&pl[i - ni]);
         uint32_t *ht = g->htab.data;
@@ -475,11 +478,17 @@ static int inst_attr_ncomp(int q)
     return q == 1 ? 4 : q < 3 ? 3 : 1;
 }
 
-/* Attribute q of item `it` (a tube instance if it < ni, else placement it - ni) into d. */
-static void inst_attr(const cbm_scene *s, uint32_t it, size_t ni, int q, float *d)
+/* Attribute q of item `it` (a tube instance if it < ni, read with cursor c, else placement
+ * it - ni) into d. */
+static void inst_attr(const cbm_scene *s, cbm_scene_instance_cursor *c, uint32_t it, size_t ni,
+                      int q, float *d)
 {
-    const cbm_scene_instance *in = it < ni ? &cbm_scene_instances(s)[it] : NULL;
-    const cbm_scene_placement *pl = in ? NULL : &cbm_scene_placements(s)[it - ni];
+    cbm_scene_instance tube;
+    const cbm_scene_instance *in =
+        it < ni && cbm_scene_instance_read(s, it, c, &tube) == CBM_OK ? &tube : NULL;
+    const cbm_scene_placement *pl = it < ni ? NULL : &cbm_scene_placements(s)[it - ni];
+    if (!in && !pl) /* not reached: it < ni */
+        return;
     if (q >= 3) {
         /* a tube instance keeps its own segment id: its part may be shared */
         d[0] = in && q == 7 ? in->segment
@@ -531,11 +540,13 @@ static cbm_status inst_accessors(glb *g, const cbm_scene *s, const uint32_t *ord
         a.count = n;
         a.ncomp = nc;
         a.ctype = GL_FLOAT;
+        /* the bucket's instances in increasing order: the cursor reads on */
+        cbm_scene_instance_cursor cur = {0};
         for (size_t c0 = 0; fill && c0 < n; c0 += INST_CHUNK) {
             size_t m = n - c0 < INST_CHUNK ? n - c0 : INST_CHUNK;
             float *f = g->fbuf.data;
             for (size_t i = 0; i < m; i++)
-                inst_attr(s, ord[c0 + i], ni, q, f + (size_t)nc * i);
+                inst_attr(s, &cur, ord[c0 + i], ni, q, f + (size_t)nc * i);
             bin_put(g, f, m * (size_t)nc * sizeof(float));
         }
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
