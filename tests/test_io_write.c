@@ -349,7 +349,7 @@ TEST(glb_shared_parts)
     CHECK_EQ_INT(cbm_scene_instance_count(sh), n);
     CHECK_EQ_INT(cbm_scene_part_count(pl), n);
     size_t np = cbm_scene_part_count(sh);
-    CHECK(np < 120); /* 26 colours by 3 orders and the polygons' (a part a segment: 20,000) */
+    CHECK(np < 110); /* 26 colours by 3 orders (a part a segment: 20,000) */
     const cbm_part *parts = cbm_scene_parts(sh);
     cbm_scene_instance_cursor cur = {0};
     for (size_t i = 0; i < n; i++) {
@@ -358,12 +358,16 @@ TEST(glb_shared_parts)
         CHECK(in.segment == (float)(i + 100));
         CHECK(parts[in.part].order == (int32_t)(i / 5000 + i % 3));
     }
-    /* the polygons' triangles belong to parts of their own segments */
+    /* the polygons' triangles share the parts and keep their own segments */
     const uint32_t *tp = cbm_scene_triangle_parts(sh);
+    const float *ts = cbm_scene_triangle_segments(sh);
     size_t nt = cbm_scene_triangle_count(sh);
-    CHECK(nt > 0);
-    for (size_t t = 0; t < nt; t++)
-        CHECK((parts[tp[t]].segment - 103) % 4999 == 0);
+    CHECK(nt > 0 && ts && !cbm_scene_triangle_segments(pl));
+    for (size_t t = 0; ts && t < nt; t++) {
+        CHECK(((int64_t)ts[t] - 103) % 4999 == 0);
+        CHECK(parts[tp[t]].order ==
+              (int32_t)(((int64_t)ts[t] - 100) / 5000 + ((int64_t)ts[t] - 100) % 3));
+    }
     CHECK_OK(cbm_scene_write(ctx, sh, io_path("shared.glb"), NULL));
     CHECK_OK(cbm_scene_write(ctx, pl, io_path("plain.glb"), NULL));
     size_t la = 0, lb = 0;

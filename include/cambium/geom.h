@@ -81,8 +81,9 @@ CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, 
 /// Starts a part like cbm_scene_begin_part, except that in instancing mode, when a part of the
 /// scene (the current one, or any begun before: a hash table finds it) equals `part` but for
 /// its segment id, no part is stored: the tube instances added next point to that part and keep
-/// `part->segment` as their own (cbm_scene_instance.segment), and any other geometry stores the
-/// part first as cbm_scene_begin_part would have. This spares a part record (88 bytes) per
+/// `part->segment` as their own (cbm_scene_instance.segment), triangles share it too and keep
+/// their segment id in cbm_scene_triangle_segments, and lines and placed shapes store the part
+/// first as cbm_scene_begin_part would have. This spares a part record (88 bytes) per
 /// instanced segment, also where branches of a few orders alternate along the string. For
 /// producers that do not change their parts after adding them (the part may be shared by other
 /// segments' instances).
@@ -204,6 +205,11 @@ CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
 CBM_API const uint32_t *cbm_scene_triangles(const cbm_scene *scene);
 /// The part of each triangle.
 CBM_API const uint32_t *cbm_scene_triangle_parts(const cbm_scene *scene);
+/// The segment id of each triangle as the .glb writes it (a float, -1 if none), or NULL when
+/// every triangle's is its part's. Triangles added after cbm_scene_begin_part_shared found a
+/// part of another segment (instancing mode) share that part and keep their own segment id
+/// here: 4 bytes a triangle instead of an 88-byte part a segment.
+CBM_API const float *cbm_scene_triangle_segments(const cbm_scene *scene);
 CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
 CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
 /// Mutable access, e.g. to fill stress after a solve.

@@ -23,6 +23,10 @@ struct cbm_scene {
     CBM_ARRAY(cbm_scene_vertex) verts;
     CBM_ARRAY(uint32_t) tris;  /* 3 per triangle */
     CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
+    /* With shared parts: 1 per triangle, its segment id as the .glb writes it (a float, -1 if
+     * none), from the first triangle whose segment is not its part's (tseg_on) */
+    CBM_ARRAY(float) tseg;
+    bool tseg_on;
     CBM_ARRAY(cbm_part) parts;
     CBM_ARRAY(cbm_scene_line) lines;
     /* The tube instances, encoded one after the other (encode_instance), a fully written one
@@ -105,6 +109,7 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->verts);
     CBM_ARRAY_FREE(ctx, s->tris);
     CBM_ARRAY_FREE(ctx, s->tpart);
+    CBM_ARRAY_FREE(ctx, s->tseg);
     CBM_ARRAY_FREE(ctx, s->parts);
     CBM_ARRAY_FREE(ctx, s->lines);
     CBM_ARRAY_FREE(ctx, s->inst);
@@ -121,7 +126,8 @@ void cbm_scene_destroy(cbm_scene *s)
 void cbm_scene_clear(cbm_scene *s)
 {
     s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
-    s->inst_key.len = s->ninst = 0;
+    s->inst_key.len = s->ninst = s->tseg.len = 0;
+    s->tseg_on = false;
     s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
     s->seg_pending = false;
@@ -159,6 +165,33 @@ static cbm_status ensure_part(cbm_scene *s)
     if (s->seg_pending)
         p.segment = s->cur_seg;
     return push_part(s, &p);
+}
+
+/* A segment id as the .glb writes it. */
+static float segment_float(int64_t seg)
+{
+    return seg >= 0 ? (float)(double)seg : -1.0f;
+}
+
+/* From now on every triangle keeps its segment id; those before take their parts'. */
+static cbm_status start_tri_segments(cbm_scene *s)
+{
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tseg, s->tpart.len + 1));
+    for (size_t t = 0; t < s->tpart.len; t++)
+        s->tseg.data[t] = segment_float(s->parts.data[s->tpart.data[t]].segment);
+    s->tseg.len = s->tpart.len;
+    s->tseg_on = true;
+    return CBM_OK;
+}
+
+/* The part for triangles: in instancing mode, the shared part itself, the triangles keeping
+ * their segment id (4 bytes a triangle instead of an 88-byte part a segment); else as
+ * ensure_part. */
+static cbm_status ensure_tri_part(cbm_scene *s)
+{
+    if (!s->instancing || !s->seg_pending || s->parts.len == 0)
+        return ensure_part(s);
+    return s->tseg_on ? CBM_OK : start_tri_segments(s);
 }
 
 cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id)
@@ -297,6 +330,12 @@ static cbm_status push_tri(cbm_scene *s, uint32_t a, uint32_t b, uint32_t c)
 {
     CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tris, s->tris.len + 3));
     CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tpart, s->tpart.len + 1));
+    if (s->seg_pending && !s->tseg_on)
+        CBM_TRY(start_tri_segments(s));
+    if (s->tseg_on) {
+        CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tseg, s->tseg.len + 1));
+        s->tseg.data[s->tseg.len++] = segment_float(s->cur_seg);
+    }
     s->tris.data[s->tris.len++] = a;
     s->tris.data[s->tris.len++] = b;
     s->tris.data[s->tris.len++] = c;
@@ -315,7 +354,7 @@ cbm_status cbm__scene_tube_begin_caps(cbm_scene *s, int sides, bool cap_start, b
 {
     if (!s || sides < 3 || sides > 1024)
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     s->tube_sides = sides;
     s->tube_cap0 = cap_start;
     s->tube_cap1 = cap_end;
@@ -628,7 +667,7 @@ cbm_status cbm_scene_add_sphere(cbm_scene *s, cbm_vec3 c, double r, int slices)
 {
     if (!s || slices < 3 || slices > 1024 || !(r >= 0.0) || !v3_isfinite(c))
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     int stacks = slices / 2 < 2 ? 2 : slices / 2;
     uint32_t base = (uint32_t)s->verts.len;
     for (int i = 0; i <= stacks; i++) {
@@ -666,7 +705,7 @@ cbm_status cbm_scene_add_polygon(cbm_scene *s, const cbm_vec3 *pts, size_t n)
         return CBM_E_INVALID;
     if (n < 3)
         return CBM_OK; /* nothing to draw */
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     cbm_vec3 nrm = v3(0, 0, 0);
     for (size_t i = 0; i < n; i++) {
         cbm_vec3 a = pts[i], b = pts[(i + 1) % n];
@@ -750,7 +789,7 @@ cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 
 {
     if (!s || (!pos && nverts) || (!tri && ntri))
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     for (size_t i = 0; i < 3 * ntri; i++)
         if (tri[i] >= nverts)
             return CBM_E_INVALID;
@@ -946,6 +985,10 @@ const uint32_t *cbm_scene_triangles(const cbm_scene *s)
 const uint32_t *cbm_scene_triangle_parts(const cbm_scene *s)
 {
     return s->tpart.data;
+}
+const float *cbm_scene_triangle_segments(const cbm_scene *s)
+{
+    return s && s->tseg_on ? s->tseg.data : NULL;
 }
 size_t cbm_scene_part_count(const cbm_scene *s)
 {
