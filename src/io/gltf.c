@@ -126,6 +126,10 @@ typedef struct glb {
     /* a direct write of one scene: the measuring pass keeps the parts' colours and the sorted
      * instances (keep), which the streaming pass of the same, unchanged scene reuses (reuse) */
     bool keep, reuse;
+    /* the part values _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER that every part of the scene
+     * has alike (part_same[q]), the instances' attribute written without reading them */
+    bool part_same[4];
+    float part_val[4];
     float *kept_col;
     size_t kept_np;
 } glb;
@@ -542,11 +546,15 @@ static cbm_status inst_accessors(glb *g, const cbm_scene *s, const uint32_t *ord
         a.ctype = GL_FLOAT;
         /* the bucket's instances in increasing order: the cursor reads on */
         cbm_scene_instance_cursor cur = {0};
+        bool same = q >= 3 && q < 7 && g->part_same[q - 3];
         for (size_t c0 = 0; fill && c0 < n; c0 += INST_CHUNK) {
             size_t m = n - c0 < INST_CHUNK ? n - c0 : INST_CHUNK;
             float *f = g->fbuf.data;
             for (size_t i = 0; i < m; i++)
-                inst_attr(s, &cur, ord[c0 + i], ni, q, f + (size_t)nc * i);
+                if (same)
+                    f[i] = g->part_val[q - 3];
+                else
+                    inst_attr(s, &cur, ord[c0 + i], ni, q, f + (size_t)nc * i);
             bin_put(g, f, m * (size_t)nc * sizeof(float));
         }
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
@@ -661,6 +669,17 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
     if (!reuse && (st = sort_instances(g, s, col)) != CBM_OK)
         goto done;
+    for (int q = 0; q < 4; q++) {
+        uint32_t b0 = 0, b;
+        g->part_val[q] = np ? part_value(&parts[0], q) : 0.0f;
+        memcpy(&b0, &g->part_val[q], sizeof b0);
+        g->part_same[q] = true;
+        for (size_t i = 1; i < np && g->part_same[q]; i++) {
+            float v = part_value(&parts[i], q);
+            memcpy(&b, &v, sizeof b);
+            g->part_same[q] = b == b0;
+        }
+    }
     if (g->keep && !reuse) {
         g->kept_col = col; /* freed with the writer */
         g->kept_np = np;
