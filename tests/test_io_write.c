@@ -265,8 +265,11 @@ TEST(glb_tube_instances)
     CHECK_EQ_INT(cbm_scene_instance_count(si), 1);
     CHECK_EQ_INT(cbm_scene_instance_count(sm), 0);
     CHECK_EQ_INT(cbm_scene_triangle_count(sm), cbm_scene_triangle_count(si) + 16);
-    const cbm_scene_instance *in = cbm_scene_instances(si);
-    CHECK(in[0].sides == 8 && in[0].part == 0 && in[0].a == 0.04f && in[0].b == 0.02f);
+    cbm_scene_instance_cursor cur = {0};
+    cbm_scene_instance in0;
+    CHECK_OK(cbm_scene_instance_read(si, 0, &cur, &in0));
+    CHECK(in0.sides == 8 && in0.part == 0 && in0.a == 0.04f && in0.b == 0.02f);
+    CHECK(cbm_scene_instance_read(si, 1, &cur, &in0) == CBM_E_INVALID);
     cbm_vec3 lo, hi;
     CHECK(cbm_scene_bounds(si, &lo, &hi));
     CHECK(lo.x <= 1 - 0.04 + 1e-6 && hi.z >= 4 + 0.04 - 1e-6);
@@ -313,8 +316,9 @@ TEST(glb_tube_instances)
 }
 
 /* Shared parts (cbm_scene_begin_part_shared): segments that differ only by their id share one
- * part and keep their ids in their instances; any other geometry stores its part; the .glb is
- * the same bytes as with a part per segment. 20,000 instances: several of the writer's chunks. */
+ * part, the last one or any begun before (orders interleaved, as a tree's are along its string),
+ * and keep their ids in their instances; any other geometry stores its part; the .glb is the
+ * same bytes as with a part per segment. 20,000 instances: several of the writer's chunks. */
 TEST(glb_shared_parts)
 {
     cbm_context *ctx = test_ctx();
@@ -328,9 +332,10 @@ TEST(glb_shared_parts)
         cbm_scene *s = k ? pl : sh;
         for (size_t i = 0; i < n; i++) {
             cbm_part p = cbm_part_default();
-            p.order = (int32_t)(i / 5000);
+            p.order = (int32_t)(i / 5000 + i % 3);
             p.segment = (int64_t)(i + 100);
-            p.color[1] = (float)(i / 777) * 0.01f; /* runs of 777 of one colour */
+            size_t run = i / 777; /* runs of 777 of one colour */
+            p.color[1] = (float)run * 0.01f;
             CHECK_OK(k ? cbm_scene_begin_part(s, &p, NULL) : cbm_scene_begin_part_shared(s, &p));
             cbm_frame f = {{0, 1, 0}, {1, 0, 0}, {0, 0, -1}};
             double x = 0.01 * (double)i;
@@ -345,19 +350,25 @@ TEST(glb_shared_parts)
     CHECK_EQ_INT(cbm_scene_instance_count(sh), n);
     CHECK_EQ_INT(cbm_scene_part_count(pl), n);
     size_t np = cbm_scene_part_count(sh);
-    CHECK(np < 50);
-    const cbm_scene_instance *in = cbm_scene_instances(sh);
+    CHECK(np < 110); /* 26 colours by 3 orders (a part a segment: 20,000) */
     const cbm_part *parts = cbm_scene_parts(sh);
+    cbm_scene_instance_cursor cur = {0};
     for (size_t i = 0; i < n; i++) {
-        CHECK(in[i].segment == (float)(i + 100));
-        CHECK(parts[in[i].part].order == (int32_t)(i / 5000));
+        cbm_scene_instance in;
+        CHECK_OK(cbm_scene_instance_read(sh, i, &cur, &in));
+        CHECK(in.segment == (float)(i + 100));
+        CHECK(parts[in.part].order == (int32_t)(i / 5000 + i % 3));
     }
-    /* the polygons' triangles belong to parts of their own segments */
+    /* the polygons' triangles share the parts and keep their own segments */
     const uint32_t *tp = cbm_scene_triangle_parts(sh);
+    const float *ts = cbm_scene_triangle_segments(sh);
     size_t nt = cbm_scene_triangle_count(sh);
-    CHECK(nt > 0);
-    for (size_t t = 0; t < nt; t++)
-        CHECK((parts[tp[t]].segment - 103) % 4999 == 0);
+    CHECK(nt > 0 && ts && !cbm_scene_triangle_segments(pl));
+    for (size_t t = 0; ts && t < nt; t++) {
+        CHECK(((int64_t)ts[t] - 103) % 4999 == 0);
+        CHECK(parts[tp[t]].order ==
+              (int32_t)(((int64_t)ts[t] - 100) / 5000 + ((int64_t)ts[t] - 100) % 3));
+    }
     CHECK_OK(cbm_scene_write(ctx, sh, io_path("shared.glb"), NULL));
     CHECK_OK(cbm_scene_write(ctx, pl, io_path("plain.glb"), NULL));
     size_t la = 0, lb = 0;
@@ -365,6 +376,15 @@ TEST(glb_shared_parts)
     CHECK(a && b && la == lb && memcmp(a, b, la) == 0);
     free(a);
     free(b);
+    /* a cleared scene shares from its own parts only */
+    cbm_scene_clear(sh);
+    cbm_part q = cbm_part_default();
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    q.order = 1;
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    q.order = -1;
+    CHECK_OK(cbm_scene_begin_part_shared(sh, &q));
+    CHECK_EQ_INT(cbm_scene_part_count(sh), 2);
     /* without instancing every part is stored */
     cbm_scene_clear(sh);
     cbm_scene_set_instancing(sh, false);
@@ -374,6 +394,115 @@ TEST(glb_shared_parts)
     CHECK_EQ_INT(cbm_scene_part_count(sh), 2);
     cbm_scene_destroy(sh);
     cbm_scene_destroy(pl);
+    test_ctx_end(ctx);
+}
+
+/* The scene's encoding of its instances gives back every field bit for bit, read in order, in
+ * reverse and at random: chains of segments (a field the previous one's), jumps (every field
+ * new), segment ids by small steps, large ones, -1; a chain costs 14 bytes an instance. */
+static bool float_bits_equal(const float *a, const float *b, int n)
+{
+    for (int k = 0; k < n; k++) {
+        uint32_t x, y;
+        memcpy(&x, &a[k], sizeof x);
+        memcpy(&y, &b[k], sizeof y);
+        if (x != y)
+            return false;
+    }
+    return true;
+}
+
+TEST(scene_instance_stream)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_scene *s = NULL;
+    CHECK_OK(cbm_scene_create(ctx, &s));
+    cbm_scene_set_instancing(s, true);
+    enum { N = 3000 };
+    static cbm_scene_instance want[N];
+    static int32_t want_order[N];
+    uint64_t r = 12345;
+    cbm_vec3 at = {0, 0, 0};
+    int64_t seg = 0;
+    const cbm_frame frames[3] = {{{0, 1, 0}, {1, 0, 0}, {0, 0, -1}},
+                                 {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}},
+                                 {{0, 0, -1}, {0, 1, 0}, {1, 0, 0}}};
+    int fr = 0;
+    double a = 0.01, len = 0.3;
+    for (size_t i = 0; i < N; i++) {
+        r = r * 6364136223846793005ull + 1442695040888963407ull;
+        unsigned bits = (unsigned)(r >> 40);
+        if (i >= 1000 && i < 1300) /* a plain chain */
+            bits = 0;
+        if (bits & 1) /* a jump */
+            at = (cbm_vec3){(double)(bits % 97) * 0.37, (double)(bits % 13) * -1.1, 0.5};
+        if (bits & 2)
+            fr = (fr + 1) % 3;
+        if (bits & 4)
+            a = 0.001 * (double)(bits % 50 + 1);
+        seg += bits & 8 ? (int64_t)(bits % 100000) - 20000 : (int64_t)(bits % 9) - 3;
+        int64_t id = bits & 16 && i % 7 == 0 ? -1 : seg;
+        cbm_part p = cbm_part_default();
+        p.order = (int32_t)(bits >> 5 & 3);
+        p.segment = id;
+        CHECK_OK(cbm_scene_begin_part_shared(s, &p));
+        double taper = bits & 32 ? 0.5 : 1.0;
+        if (bits & 64)
+            len = 0.01 * (double)(bits % 77 + 1);
+        const cbm_vec3 h = frames[fr].h;
+        cbm_vec3 end = {at.x + h.x * len, at.y + h.y * len, at.z + h.z * len};
+        cbm_section s0 = {at, frames[fr], a, 0.5 * a},
+                    s1 = {end, frames[fr], a * taper, 0.5 * a * taper};
+        int sides = bits & 128 ? 6 : 8;
+        CHECK_OK(cbm_scene_add_tube(s, &s0, &s1, sides, false));
+        cbm_scene_instance w = {
+            {(float)at.x, (float)at.y, (float)at.z},
+            {(float)end.x, (float)end.y, (float)end.z},
+            {(float)frames[fr].u.x, (float)frames[fr].u.y, (float)frames[fr].u.z},
+            (float)a,
+            (float)(0.5 * a),
+            (float)taper,
+            0,
+            sides,
+            id >= 0 ? (float)(double)id : -1.0f};
+        want[i] = w;
+        want_order[i] = p.order;
+        at = end;
+    }
+    CHECK_EQ_INT(cbm_scene_instance_count(s), N);
+    const cbm_part *parts = cbm_scene_parts(s);
+    cbm_scene_instance_cursor c = {0};
+    bool same = true;
+    for (size_t k = 0; k < 3 * N; k++) {
+        /* in order, then in reverse, then at random */
+        size_t i = k < N ? k : k < 2 * N ? 2 * N - 1 - k : (size_t)((k * 2654435761u) % N);
+        cbm_scene_instance got;
+        CHECK_OK(cbm_scene_instance_read(s, i, &c, &got));
+        same = same && float_bits_equal(got.p0, want[i].p0, 3) &&
+               float_bits_equal(got.p1, want[i].p1, 3) && float_bits_equal(got.u, want[i].u, 3) &&
+               got.a == want[i].a && got.b == want[i].b && got.taper == want[i].taper &&
+               got.sides == want[i].sides && float_bits_equal(&got.segment, &want[i].segment, 1) &&
+               parts[got.part].order == want_order[i];
+        if (!same) {
+            fprintf(stderr, "instance %zu differs\n", i);
+            break;
+        }
+    }
+    CHECK(same);
+    /* a chain: 14 bytes an instance and a key every 256 */
+    cbm_scene_clear(s);
+    cbm_part p = cbm_part_default();
+    for (size_t i = 0; i < 4096; i++) {
+        p.segment = (int64_t)(2 * i);
+        CHECK_OK(cbm_scene_begin_part_shared(s, &p));
+        cbm_section s0 = {{0, (double)i, 0}, frames[0], 0.01, 0.01},
+                    s1 = {{0, (double)i + 1, 0}, frames[0], 0.01, 0.01};
+        CHECK_OK(cbm_scene_add_tube(s, &s0, &s1, 8, false));
+    }
+    size_t bytes = cbm_scene_instance_bytes(s);
+    CHECK(bytes < 4096 * 15);
+    CHECK(cbm_scene_instance_read(s, 4096, &c, &want[0]) == CBM_E_INVALID);
+    cbm_scene_destroy(s);
     test_ctx_end(ctx);
 }
 

@@ -78,12 +78,15 @@ CBM_API void cbm_scene_clear(cbm_scene *scene);
 /// Starts a new part; later geometry belongs to it. *id (optional) receives its index.
 CBM_API cbm_status cbm_scene_begin_part(cbm_scene *scene, const cbm_part *part, uint32_t *id);
 
-/// Starts a part like cbm_scene_begin_part, except that in instancing mode, when the last part
-/// equals `part` but for its segment id, no part is stored: the tube instances added next point
-/// to the last part and keep `part->segment` as their own (cbm_scene_instance.segment), and any
-/// other geometry stores the part first as cbm_scene_begin_part would have. This spares a part
-/// record (88 bytes) per instanced segment. For producers that do not change their parts after
-/// adding them (the part may be shared by other segments' instances).
+/// Starts a part like cbm_scene_begin_part, except that in instancing mode, when a part of the
+/// scene (the current one, or any begun before: a hash table finds it) equals `part` but for
+/// its segment id, no part is stored: the tube instances added next point to that part and keep
+/// `part->segment` as their own (cbm_scene_instance.segment), triangles share it too and keep
+/// their segment id in cbm_scene_triangle_segments, and lines and placed shapes store the part
+/// first as cbm_scene_begin_part would have. This spares a part record (88 bytes) per
+/// instanced segment, also where branches of a few orders alternate along the string. For
+/// producers that do not change their parts after adding them (the part may be shared by other
+/// segments' instances).
 CBM_API cbm_status cbm_scene_begin_part_shared(cbm_scene *scene, const cbm_part *part);
 
 /// Generalized cylinder: begin, then one ring per section (each ring is joined to the previous
@@ -125,8 +128,10 @@ CBM_API const cbm_scene_line *cbm_scene_lines(const cbm_scene *scene);
 
 /// A straight tube of elliptical sections, the end one the start one scaled, kept as an instance
 /// of one unit cylinder or frustum instead of triangles (a scene in instancing mode): the .glb
-/// writer writes it as such (EXT_mesh_gpu_instancing), 60 bytes where the triangles of an
-/// 8-sided tube take ~1.1 kB.
+/// writer writes it as such (EXT_mesh_gpu_instancing). The scene keeps its instances encoded,
+/// the fields equal to the previous instance's left out (14 bytes for a segment continuing the
+/// previous one in its frame, width and part, at most 62), where the triangles of an 8-sided
+/// tube take ~1.1 kB; cbm_scene_instance_read gives them back as this record.
 typedef struct cbm_scene_instance {
     float p0[3], p1[3]; ///< the axis's ends, m
     float u[3];         ///< unit U of the sections, perpendicular to the axis (L = U x H)
@@ -145,7 +150,22 @@ typedef struct cbm_scene_instance {
 CBM_API void cbm_scene_set_instancing(cbm_scene *scene, bool on);
 CBM_API bool cbm_scene_instancing(const cbm_scene *scene);
 CBM_API size_t cbm_scene_instance_count(const cbm_scene *scene);
-CBM_API const cbm_scene_instance *cbm_scene_instances(const cbm_scene *scene);
+/// Where a reader of the instances is (cbm_scene_instance_read): start with one zeroed
+/// (`cbm_scene_instance_cursor c = {0};`); its fields are the reader's.
+typedef struct cbm_scene_instance_cursor {
+    size_t next;             ///< index of the instance that follows the one read last
+    size_t offset;           ///< its place in the scene's encoding
+    cbm_scene_instance last; ///< the instance read last
+} cbm_scene_instance_cursor;
+/// Instance i (< cbm_scene_instance_count) into *out, bit for bit as it was added. Reading in
+/// increasing order costs a few nanoseconds an instance; a jump back or far ahead starts from a
+/// fully written instance at most 255 before i. A cursor is valid for one scene until it
+/// changes; readers of the same scene use cursors of their own.
+CBM_API cbm_status cbm_scene_instance_read(const cbm_scene *scene, size_t i,
+                                           cbm_scene_instance_cursor *cursor,
+                                           cbm_scene_instance *out);
+/// Bytes the scene's encoding of its instances takes (without the unused capacity).
+CBM_API size_t cbm_scene_instance_bytes(const cbm_scene *scene);
 
 /// A ready mesh kept once in the scene (a shape: a predefined surface, e.g. a petal) and placed
 /// many times, each placement an affine map of it: the .glb writer writes the shape once and each
@@ -185,6 +205,11 @@ CBM_API size_t cbm_scene_triangle_count(const cbm_scene *scene);
 CBM_API const uint32_t *cbm_scene_triangles(const cbm_scene *scene);
 /// The part of each triangle.
 CBM_API const uint32_t *cbm_scene_triangle_parts(const cbm_scene *scene);
+/// The segment id of each triangle as the .glb writes it (a float, -1 if none), or NULL when
+/// every triangle's is its part's. Triangles added after cbm_scene_begin_part_shared found a
+/// part of another segment (instancing mode) share that part and keep their own segment id
+/// here: 4 bytes a triangle instead of an 88-byte part a segment.
+CBM_API const float *cbm_scene_triangle_segments(const cbm_scene *scene);
 CBM_API size_t cbm_scene_part_count(const cbm_scene *scene);
 CBM_API const cbm_part *cbm_scene_parts(const cbm_scene *scene);
 /// Mutable access, e.g. to fill stress after a solve.

@@ -23,19 +23,34 @@ struct cbm_scene {
     CBM_ARRAY(cbm_scene_vertex) verts;
     CBM_ARRAY(uint32_t) tris;  /* 3 per triangle */
     CBM_ARRAY(uint32_t) tpart; /* 1 per triangle */
+    /* With shared parts: 1 per triangle, its segment id as the .glb writes it (a float, -1 if
+     * none), from the first triangle whose segment is not its part's (tseg_on) */
+    CBM_ARRAY(float) tseg;
+    bool tseg_on;
     CBM_ARRAY(cbm_part) parts;
     CBM_ARRAY(cbm_scene_line) lines;
-    CBM_ARRAY(cbm_scene_instance) inst;
+    /* The tube instances, encoded one after the other (encode_instance), a fully written one
+     * every INST_KEY instances, whose byte offsets are inst_key; inst_last: the last added. */
+    CBM_ARRAY(uint8_t) inst;
+    CBM_ARRAY(size_t) inst_key;
+    size_t ninst;
+    cbm_scene_instance inst_last;
     CBM_ARRAY(shape_rec) shapes;
     CBM_ARRAY(float) shape_pos, shape_nrm; /* 3 a vertex, the shapes one after the other */
     CBM_ARRAY(uint32_t) shape_tri;         /* 3 a triangle, indices local to the shape */
     CBM_ARRAY(cbm_scene_placement) place;
     bool line_mode, instancing;
-    /* A shared part (cbm_scene_begin_part_shared): the segment id of the part begun last, which
-     * differs from the stored last part's when seg_pending; the next geometry other than an
-     * instance stores the part with it first (ensure_part). */
+    /* The current part: the one later geometry belongs to (with shared parts, not always the
+     * last one stored). A shared part (cbm_scene_begin_part_shared): the segment id of the part
+     * begun last, which differs from the current part's when seg_pending; the next geometry
+     * other than an instance stores the part with it first (ensure_part). */
+    uint32_t cur_part;
     int64_t cur_seg;
     bool seg_pending;
+    /* The parts a shared part may be: an open-addressing table of part indices (UINT32_MAX:
+     * empty), hashed on every field but the segment id, at most half full. */
+    CBM_ARRAY(uint32_t) share;
+    size_t share_used;
     /* tube in progress */
     int tube_sides;
     bool tube_cap0, tube_cap1, tube_open; /* caps at the start, at the end */
@@ -94,23 +109,50 @@ void cbm_scene_destroy(cbm_scene *s)
     CBM_ARRAY_FREE(ctx, s->verts);
     CBM_ARRAY_FREE(ctx, s->tris);
     CBM_ARRAY_FREE(ctx, s->tpart);
+    CBM_ARRAY_FREE(ctx, s->tseg);
     CBM_ARRAY_FREE(ctx, s->parts);
     CBM_ARRAY_FREE(ctx, s->lines);
     CBM_ARRAY_FREE(ctx, s->inst);
+    CBM_ARRAY_FREE(ctx, s->inst_key);
     CBM_ARRAY_FREE(ctx, s->shapes);
     CBM_ARRAY_FREE(ctx, s->shape_pos);
     CBM_ARRAY_FREE(ctx, s->shape_nrm);
     CBM_ARRAY_FREE(ctx, s->shape_tri);
     CBM_ARRAY_FREE(ctx, s->place);
+    CBM_ARRAY_FREE(ctx, s->share);
     cbm__free(ctx, s, sizeof *s);
 }
 
 void cbm_scene_clear(cbm_scene *s)
 {
     s->verts.len = s->tris.len = s->tpart.len = s->parts.len = s->lines.len = s->inst.len = 0;
+    s->inst_key.len = s->ninst = s->tseg.len = 0;
+    s->tseg_on = false;
     s->shapes.len = s->shape_pos.len = s->shape_nrm.len = s->shape_tri.len = s->place.len = 0;
     s->tube_open = false;
     s->seg_pending = false;
+    s->cur_part = 0;
+    if (s->share.len)
+        memset(s->share.data, 0xff, s->share.len * sizeof *s->share.data);
+    s->share_used = 0;
+}
+
+/* Whether an array indexed by uint32_t (vertices, parts, lines) has no room for one more. */
+static bool index_full(size_t len)
+{
+    return len >= UINT32_MAX - 1;
+}
+
+/* Stores a part and makes it the current one. */
+static cbm_status push_part(cbm_scene *s, const cbm_part *p)
+{
+    if (index_full(s->parts.len))
+        return CBM_E_LIMIT;
+    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *p));
+    s->cur_part = (uint32_t)(s->parts.len - 1);
+    s->cur_seg = p->segment;
+    s->seg_pending = false;
+    return CBM_OK;
 }
 
 /* A part for geometry other than an instance: the default one in an empty scene, the shared
@@ -119,28 +161,46 @@ static cbm_status ensure_part(cbm_scene *s)
 {
     if (s->parts.len > 0 && !s->seg_pending)
         return CBM_OK;
-    cbm_part p = s->parts.len > 0 ? s->parts.data[s->parts.len - 1] : cbm_part_default();
+    cbm_part p = s->parts.len > 0 ? s->parts.data[s->cur_part] : cbm_part_default();
     if (s->seg_pending)
         p.segment = s->cur_seg;
-    if (s->parts.len >= UINT32_MAX)
-        return CBM_E_LIMIT;
-    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, p));
-    s->seg_pending = false;
-    s->cur_seg = p.segment;
+    return push_part(s, &p);
+}
+
+/* A segment id as the .glb writes it. */
+static float segment_float(int64_t seg)
+{
+    return seg >= 0 ? (float)(double)seg : -1.0f;
+}
+
+/* From now on every triangle keeps its segment id; those before take their parts'. */
+static cbm_status start_tri_segments(cbm_scene *s)
+{
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tseg, s->tpart.len + 1));
+    for (size_t t = 0; t < s->tpart.len; t++)
+        s->tseg.data[t] = segment_float(s->parts.data[s->tpart.data[t]].segment);
+    s->tseg.len = s->tpart.len;
+    s->tseg_on = true;
     return CBM_OK;
+}
+
+/* The part for triangles: in instancing mode, the shared part itself, the triangles keeping
+ * their segment id (4 bytes a triangle instead of an 88-byte part a segment); else as
+ * ensure_part. */
+static cbm_status ensure_tri_part(cbm_scene *s)
+{
+    if (!s->instancing || !s->seg_pending || s->parts.len == 0)
+        return ensure_part(s);
+    return s->tseg_on ? CBM_OK : start_tri_segments(s);
 }
 
 cbm_status cbm_scene_begin_part(cbm_scene *s, const cbm_part *part, uint32_t *id)
 {
     if (!s || !part)
         return CBM_E_INVALID;
-    if (s->parts.len >= UINT32_MAX)
-        return CBM_E_LIMIT;
-    CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->parts, *part));
-    s->cur_seg = part->segment;
-    s->seg_pending = false;
+    CBM_TRY(push_part(s, part));
     if (id)
-        *id = (uint32_t)(s->parts.len - 1);
+        *id = s->cur_part;
     return CBM_OK;
 }
 
@@ -166,21 +226,100 @@ static bool same_but_segment(const cbm_part *a, const cbm_part *b)
            same_bits(a->light, b->light);
 }
 
+static uint64_t mix(uint64_t h, uint64_t x)
+{
+    return (h ^ x) * 0x100000001B3ull + (x >> 29);
+}
+
+static uint64_t double_bits(double x)
+{
+    uint64_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+/* A hash of every field of a part but the segment id (equal bits, equal hash: same_but_segment). */
+static size_t share_hash(const cbm_part *p, size_t cap)
+{
+    uint32_t c[4];
+    memcpy(c, p->color, sizeof c);
+    uint64_t h = 0xCBF29CE484222325ull;
+    h = mix(h, (uint64_t)p->organ | (uint64_t)(uint32_t)p->order << 32);
+    h = mix(h, (uint64_t)p->parent);
+    h = mix(h, (uint64_t)(uint32_t)p->material);
+    h = mix(h, (uint64_t)c[0] | (uint64_t)c[1] << 32);
+    h = mix(h, (uint64_t)c[2] | (uint64_t)c[3] << 32);
+    h = mix(h, double_bits(p->stress_ratio));
+    h = mix(h, double_bits(p->stress));
+    h = mix(h, double_bits(p->age));
+    h = mix(h, double_bits(p->reaction_wood));
+    h = mix(h, double_bits(p->light));
+    return (size_t)((h * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+}
+
+/* The slot of a part equal to `part` but for its segment id in the share table, or of the
+ * empty slot where it goes. */
+static uint32_t *share_slot(cbm_scene *s, const cbm_part *part)
+{
+    size_t cap = s->share.len, h = share_hash(part, cap);
+    while (s->share.data[h] != UINT32_MAX &&
+           !same_but_segment(&s->parts.data[s->share.data[h]], part))
+        h = (h + 1) & (cap - 1);
+    return &s->share.data[h];
+}
+
+/* The share table at twice its size (at least 64 slots), every entry placed again. */
+static cbm_status share_grow(cbm_scene *s)
+{
+    size_t old = s->share.len, cap = old ? 2 * old : 64;
+    uint32_t *keep = NULL;
+    if (old) {
+        keep = cbm__alloc(s->ctx, old * sizeof *keep);
+        if (!keep)
+            return CBM_E_NOMEM;
+        memcpy(keep, s->share.data, old * sizeof *keep);
+    }
+    cbm_status st = CBM_ARRAY_RESERVE(s->ctx, s->share, cap);
+    if (st == CBM_OK) {
+        s->share.len = cap;
+        memset(s->share.data, 0xff, cap * sizeof *s->share.data);
+        for (size_t i = 0; i < old; i++)
+            if (keep[i] != UINT32_MAX)
+                *share_slot(s, &s->parts.data[keep[i]]) = keep[i];
+    }
+    cbm__free(s->ctx, keep, old * sizeof *keep);
+    return st;
+}
+
 cbm_status cbm_scene_begin_part_shared(cbm_scene *s, const cbm_part *part)
 {
     if (!s || !part)
         return CBM_E_INVALID;
-    if (!s->instancing || s->parts.len == 0 ||
-        !same_but_segment(&s->parts.data[s->parts.len - 1], part))
+    if (!s->instancing)
         return cbm_scene_begin_part(s, part, NULL);
+    /* the current part first (a run of segments), then any part begun before */
+    uint32_t k = s->cur_part;
+    if (s->parts.len == 0 || !same_but_segment(&s->parts.data[k], part)) {
+        if (2 * (s->share_used + 1) > s->share.len)
+            CBM_TRY(share_grow(s));
+        uint32_t *slot = share_slot(s, part);
+        if (*slot == UINT32_MAX) {
+            CBM_TRY(push_part(s, part));
+            *slot = s->cur_part;
+            s->share_used++;
+            return CBM_OK;
+        }
+        k = *slot;
+    }
+    s->cur_part = k;
     s->cur_seg = part->segment;
-    s->seg_pending = part->segment != s->parts.data[s->parts.len - 1].segment;
+    s->seg_pending = part->segment != s->parts.data[k].segment;
     return CBM_OK;
 }
 
 static cbm_status push_vertex(cbm_scene *s, cbm_vec3 p, cbm_vec3 n)
 {
-    if (s->verts.len >= UINT32_MAX - 1)
+    if (index_full(s->verts.len))
         return CBM_E_LIMIT;
     cbm_scene_vertex v = {{(float)p.x, (float)p.y, (float)p.z},
                           {(float)n.x, (float)n.y, (float)n.z}};
@@ -191,10 +330,16 @@ static cbm_status push_tri(cbm_scene *s, uint32_t a, uint32_t b, uint32_t c)
 {
     CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tris, s->tris.len + 3));
     CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tpart, s->tpart.len + 1));
+    if (s->seg_pending && !s->tseg_on)
+        CBM_TRY(start_tri_segments(s));
+    if (s->tseg_on) {
+        CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->tseg, s->tseg.len + 1));
+        s->tseg.data[s->tseg.len++] = segment_float(s->cur_seg);
+    }
     s->tris.data[s->tris.len++] = a;
     s->tris.data[s->tris.len++] = b;
     s->tris.data[s->tris.len++] = c;
-    s->tpart.data[s->tpart.len++] = (uint32_t)(s->parts.len - 1);
+    s->tpart.data[s->tpart.len++] = s->cur_part;
     return CBM_OK;
 }
 
@@ -209,7 +354,7 @@ cbm_status cbm__scene_tube_begin_caps(cbm_scene *s, int sides, bool cap_start, b
 {
     if (!s || sides < 3 || sides > 1024)
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     s->tube_sides = sides;
     s->tube_cap0 = cap_start;
     s->tube_cap1 = cap_end;
@@ -357,12 +502,138 @@ bool cbm_scene_instancing(const cbm_scene *s)
 
 size_t cbm_scene_instance_count(const cbm_scene *s)
 {
-    return s ? s->inst.len : 0;
+    return s ? s->ninst : 0;
 }
 
-const cbm_scene_instance *cbm_scene_instances(const cbm_scene *s)
+/* An instance in the byte stream: a flags byte saying which fields are the previous instance's
+ * (left out), then those written, p1 last. A branch's segments follow one another along the
+ * string, so most instances start where the previous one ended, in its frame, width and part:
+ * 14 bytes (p1, the segment id as a 1-byte step) instead of 60. Bit for bit: the stream gives
+ * back the floats it was given. */
+enum {
+    INST_KEY = 256,     /* a fully written instance every INST_KEY: where a reader can start */
+    INST_P0_LAST = 1,   /* p0 is the previous p1 */
+    INST_U_LAST = 2,    /* u is the previous u */
+    INST_AB_LAST = 4,   /* a, b are the previous */
+    INST_KIND_LAST = 8, /* taper, part, sides are the previous */
+    INST_SEG_STEP = 16, /* segment is the previous plus a signed byte (else a float) */
+    INST_MAX_BYTES = 1 + 12 + 12 + 8 + 12 + 4 + 12
+};
+
+static bool same_floats(const float *a, const float *b, size_t n)
 {
-    return s ? s->inst.data : NULL;
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+static uint8_t *put(uint8_t *d, const void *v, size_t n)
+{
+    memcpy(d, v, n);
+    return d + n;
+}
+
+static cbm_status encode_instance(cbm_scene *s, const cbm_scene_instance *in)
+{
+    CBM_TRY(CBM_ARRAY_RESERVE(s->ctx, s->inst, s->inst.len + INST_MAX_BYTES));
+    const cbm_scene_instance *l = &s->inst_last;
+    unsigned flags = 0;
+    float step = in->segment - l->segment;
+    if (s->ninst % INST_KEY == 0) {
+        CBM_TRY(CBM_ARRAY_PUSH(s->ctx, s->inst_key, s->inst.len));
+    } else {
+        flags |= same_floats(in->p0, l->p1, 3) ? INST_P0_LAST : 0u;
+        flags |= same_floats(in->u, l->u, 3) ? INST_U_LAST : 0u;
+        flags |= in->a == l->a && in->b == l->b ? INST_AB_LAST : 0u;
+        flags |= in->taper == l->taper && in->part == l->part && in->sides == l->sides
+                     ? INST_KIND_LAST
+                     : 0u;
+        /* a whole step of a byte that gives back the same float, bit for bit */
+        float back = l->segment + step;
+        flags |=
+            fabsf(step) <= 127.0f && step == truncf(step) && same_floats(&back, &in->segment, 1)
+                ? INST_SEG_STEP
+                : 0u;
+    }
+    uint8_t *d = s->inst.data + s->inst.len, *d0 = d;
+    *d++ = (uint8_t)flags;
+    if (!(flags & INST_P0_LAST))
+        d = put(d, in->p0, sizeof in->p0);
+    if (!(flags & INST_U_LAST))
+        d = put(d, in->u, sizeof in->u);
+    if (!(flags & INST_AB_LAST)) {
+        d = put(d, &in->a, sizeof in->a);
+        d = put(d, &in->b, sizeof in->b);
+    }
+    if (!(flags & INST_KIND_LAST)) {
+        d = put(d, &in->taper, sizeof in->taper);
+        d = put(d, &in->part, sizeof in->part);
+        d = put(d, &in->sides, sizeof in->sides);
+    }
+    if (flags & INST_SEG_STEP)
+        *d++ = (uint8_t)(int8_t)step;
+    else
+        d = put(d, &in->segment, sizeof in->segment);
+    d = put(d, in->p1, sizeof in->p1);
+    s->inst.len += (size_t)(d - d0);
+    s->inst_last = *in;
+    s->ninst++;
+    return CBM_OK;
+}
+
+static const uint8_t *get(const uint8_t *d, void *v, size_t n)
+{
+    memcpy(v, d, n);
+    return d + n;
+}
+
+/* The instance at byte `off` into *l, which holds the previous one; the offset of the next. */
+static size_t decode_instance(const cbm_scene *s, size_t off, cbm_scene_instance *l)
+{
+    const uint8_t *d = s->inst.data + off, *d0 = d;
+    unsigned flags = *d++;
+    if (flags & INST_P0_LAST)
+        memcpy(l->p0, l->p1, sizeof l->p0);
+    else
+        d = get(d, l->p0, sizeof l->p0);
+    if (!(flags & INST_U_LAST))
+        d = get(d, l->u, sizeof l->u);
+    if (!(flags & INST_AB_LAST)) {
+        d = get(d, &l->a, sizeof l->a);
+        d = get(d, &l->b, sizeof l->b);
+    }
+    if (!(flags & INST_KIND_LAST)) {
+        d = get(d, &l->taper, sizeof l->taper);
+        d = get(d, &l->part, sizeof l->part);
+        d = get(d, &l->sides, sizeof l->sides);
+    }
+    if (flags & INST_SEG_STEP)
+        l->segment += (float)(int8_t)*d++;
+    else
+        d = get(d, &l->segment, sizeof l->segment);
+    d = get(d, l->p1, sizeof l->p1);
+    return off + (size_t)(d - d0);
+}
+
+cbm_status cbm_scene_instance_read(const cbm_scene *s, size_t i, cbm_scene_instance_cursor *c,
+                                   cbm_scene_instance *out)
+{
+    if (!s || !c || !out || i >= s->ninst)
+        return CBM_E_INVALID;
+    size_t key = i / INST_KEY * INST_KEY;
+    if (i < c->next || key > c->next || c->offset > s->inst.len) {
+        c->next = key;
+        c->offset = s->inst_key.data[key / INST_KEY];
+    }
+    while (c->next <= i) {
+        c->offset = decode_instance(s, c->offset, &c->last);
+        c->next++;
+    }
+    *out = c->last;
+    return CBM_OK;
+}
+
+size_t cbm_scene_instance_bytes(const cbm_scene *s)
+{
+    return s ? s->inst.len + s->inst_key.len * sizeof *s->inst_key.data : 0;
 }
 
 cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_section *s1, int sides,
@@ -378,11 +649,11 @@ cbm_status cbm_scene_add_tube(cbm_scene *s, const cbm_section *s0, const cbm_sec
                                  (float)fabs(s0->a),
                                  (float)fabs(s0->b),
                                  (float)taper,
-                                 (uint32_t)(s->parts.len - 1),
+                                 s->cur_part,
                                  sides,
                                  /* as the writer writes the part's id: through a double */
                                  s->cur_seg >= 0 ? (float)(double)s->cur_seg : -1.0f};
-        return CBM_ARRAY_PUSH(s->ctx, s->inst, in);
+        return encode_instance(s, &in);
     }
     CBM_TRY(cbm_scene_tube_begin(s, sides, caps));
     CBM_TRY(cbm_scene_tube_ring(s, s0));
@@ -396,7 +667,7 @@ cbm_status cbm_scene_add_sphere(cbm_scene *s, cbm_vec3 c, double r, int slices)
 {
     if (!s || slices < 3 || slices > 1024 || !(r >= 0.0) || !v3_isfinite(c))
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     int stacks = slices / 2 < 2 ? 2 : slices / 2;
     uint32_t base = (uint32_t)s->verts.len;
     for (int i = 0; i <= stacks; i++) {
@@ -434,7 +705,7 @@ cbm_status cbm_scene_add_polygon(cbm_scene *s, const cbm_vec3 *pts, size_t n)
         return CBM_E_INVALID;
     if (n < 3)
         return CBM_OK; /* nothing to draw */
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     cbm_vec3 nrm = v3(0, 0, 0);
     for (size_t i = 0; i < n; i++) {
         cbm_vec3 a = pts[i], b = pts[(i + 1) % n];
@@ -518,7 +789,7 @@ cbm_status cbm_scene_add_mesh(cbm_scene *s, const cbm_vec3 *pos, const cbm_vec3 
 {
     if (!s || (!pos && nverts) || (!tri && ntri))
         return CBM_E_INVALID;
-    CBM_TRY(ensure_part(s));
+    CBM_TRY(ensure_tri_part(s));
     for (size_t i = 0; i < 3 * ntri; i++)
         if (tri[i] >= nverts)
             return CBM_E_INVALID;
@@ -627,10 +898,12 @@ cbm_status cbm_scene_place_shape(cbm_scene *s, uint32_t shape, cbm_vec3 o, cbm_v
         return CBM_E_INVALID;
     CBM_TRY(ensure_part(s));
     if (s->instancing && placeable(o, x, y, z)) {
-        cbm_scene_placement pl = {
-            {(float)o.x, (float)o.y, (float)o.z}, {(float)x.x, (float)x.y, (float)x.z},
-            {(float)y.x, (float)y.y, (float)y.z}, {(float)z.x, (float)z.y, (float)z.z},
-            (uint32_t)(s->parts.len - 1),         shape};
+        cbm_scene_placement pl = {{(float)o.x, (float)o.y, (float)o.z},
+                                  {(float)x.x, (float)x.y, (float)x.z},
+                                  {(float)y.x, (float)y.y, (float)y.z},
+                                  {(float)z.x, (float)z.y, (float)z.z},
+                                  s->cur_part,
+                                  shape};
         return CBM_ARRAY_PUSH(s->ctx, s->place, pl);
     }
     /* the triangles: normals by the cofactors of (x y z), the inverse transpose up to a factor */
@@ -713,6 +986,10 @@ const uint32_t *cbm_scene_triangle_parts(const cbm_scene *s)
 {
     return s->tpart.data;
 }
+const float *cbm_scene_triangle_segments(const cbm_scene *s)
+{
+    return s && s->tseg_on ? s->tseg.data : NULL;
+}
 size_t cbm_scene_part_count(const cbm_scene *s)
 {
     return s->parts.len;
@@ -743,13 +1020,13 @@ cbm_status cbm_scene_add_line(cbm_scene *s, cbm_vec3 p0, cbm_vec3 p1, double wid
 {
     if (!s || !(width >= 0.0) || !isfinite(width))
         return CBM_E_INVALID;
-    if (s->lines.len >= UINT32_MAX)
+    if (index_full(s->lines.len))
         return CBM_E_LIMIT;
     CBM_TRY(ensure_part(s));
     cbm_scene_line l = {{(float)p0.x, (float)p0.y, (float)p0.z},
                         {(float)p1.x, (float)p1.y, (float)p1.z},
                         (float)width,
-                        (uint32_t)(s->parts.len - 1)};
+                        s->cur_part};
     return CBM_ARRAY_PUSH(s->ctx, s->lines, l);
 }
 
@@ -776,7 +1053,7 @@ static void grow_bounds(const float *p, double l[3], double h[3])
 
 bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
 {
-    if (s->verts.len == 0 && s->lines.len == 0 && s->inst.len == 0 && s->place.len == 0)
+    if (s->verts.len == 0 && s->lines.len == 0 && s->ninst == 0 && s->place.len == 0)
         return false;
     double l[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, h[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
     for (size_t i = 0; i < s->verts.len; i++)
@@ -785,8 +1062,11 @@ bool cbm_scene_bounds(const cbm_scene *s, cbm_vec3 *lo, cbm_vec3 *hi)
         grow_bounds(s->lines.data[i].p0, l, h);
         grow_bounds(s->lines.data[i].p1, l, h);
     }
-    for (size_t i = 0; i < s->inst.len; i++) {
-        const cbm_scene_instance *in = &s->inst.data[i];
+    cbm_scene_instance_cursor cur = {0};
+    for (size_t i = 0; i < s->ninst; i++) {
+        cbm_scene_instance inst;
+        (void)cbm_scene_instance_read(s, i, &cur, &inst);
+        const cbm_scene_instance *in = &inst;
         float r = in->a > in->b ? in->a : in->b;
         for (int e = 0; e < 2; e++)
             for (int k = 0; k < 3; k++) {

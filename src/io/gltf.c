@@ -126,6 +126,10 @@ typedef struct glb {
     /* a direct write of one scene: the measuring pass keeps the parts' colours and the sorted
      * instances (keep), which the streaming pass of the same, unchanged scene reuses (reuse) */
     bool keep, reuse;
+    /* the part values _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER that every part of the scene
+     * has alike (part_same[q]), the instances' attribute written without reading them */
+    bool part_same[4];
+    float part_val[4];
     float *kept_col;
     size_t kept_np;
 } glb;
@@ -303,8 +307,9 @@ static bool mirrors(const cbm_scene_placement *p)
 static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
 {
     size_t ni = cbm_scene_instance_count(s), npl = cbm_scene_placement_count(s);
-    const cbm_scene_instance *in = cbm_scene_instances(s);
     const cbm_scene_placement *pl = cbm_scene_placements(s);
+    cbm_scene_instance_cursor cur = {0};
+    cbm_scene_instance in = {0};
     const cbm_part *parts = cbm_scene_parts(s);
     g->buckets.len = 0;
     if (!ni && !npl)
@@ -315,15 +320,17 @@ static cbm_status sort_instances(glb *g, const cbm_scene *s, const float *col)
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->iorder, ni + npl));
     uint32_t *ib = g->ibucket.data;
     for (size_t i = 0; i < ni + npl; i++) {
-        uint32_t part = i < ni ? in[i].part : pl[i - ni].part;
+        if (i < ni)
+            CBM_TRY(cbm_scene_instance_read(s, i, &cur, &in));
+        uint32_t part = i < ni ? in.part : pl[i - ni].part;
         const cbm_part *p = &parts[part];
         ib[i] = UINT32_MAX;
         if (!cbm__part_kept(p, g->o))
             continue;
         int grp = group_of(p);
-        int sides = i < ni ? in[i].sides : 0;
+        int sides = i < ni ? in.sides : 0;
         uint64_t key = ((uint64_t)grp << 48) | ((uint64_t)sides << 32) | color_key(col + 4 * part);
-        float tp = i < ni ? in[i].taper : 0.0f;
+        float tp = i < ni ? in.taper : 0.0f;
         int64_t shape = i < ni ? -1 : (int64_t)pl[i - ni].shape;
         bool flip = i >= ni && mirrors(&pl[i - ni]);
         uint32_t *ht = g->htab.data;
@@ -475,11 +482,17 @@ static int inst_attr_ncomp(int q)
     return q == 1 ? 4 : q < 3 ? 3 : 1;
 }
 
-/* Attribute q of item `it` (a tube instance if it < ni, else placement it - ni) into d. */
-static void inst_attr(const cbm_scene *s, uint32_t it, size_t ni, int q, float *d)
+/* Attribute q of item `it` (a tube instance if it < ni, read with cursor c, else placement
+ * it - ni) into d. */
+static void inst_attr(const cbm_scene *s, cbm_scene_instance_cursor *c, uint32_t it, size_t ni,
+                      int q, float *d)
 {
-    const cbm_scene_instance *in = it < ni ? &cbm_scene_instances(s)[it] : NULL;
-    const cbm_scene_placement *pl = in ? NULL : &cbm_scene_placements(s)[it - ni];
+    cbm_scene_instance tube;
+    const cbm_scene_instance *in =
+        it < ni && cbm_scene_instance_read(s, it, c, &tube) == CBM_OK ? &tube : NULL;
+    const cbm_scene_placement *pl = it < ni ? NULL : &cbm_scene_placements(s)[it - ni];
+    if (!in && !pl) /* not reached: it < ni */
+        return;
     if (q >= 3) {
         /* a tube instance keeps its own segment id: its part may be shared */
         d[0] = in && q == 7 ? in->segment
@@ -531,11 +544,17 @@ static cbm_status inst_accessors(glb *g, const cbm_scene *s, const uint32_t *ord
         a.count = n;
         a.ncomp = nc;
         a.ctype = GL_FLOAT;
+        /* the bucket's instances in increasing order: the cursor reads on */
+        cbm_scene_instance_cursor cur = {0};
+        bool same = q >= 3 && q < 7 && g->part_same[q - 3];
         for (size_t c0 = 0; fill && c0 < n; c0 += INST_CHUNK) {
             size_t m = n - c0 < INST_CHUNK ? n - c0 : INST_CHUNK;
             float *f = g->fbuf.data;
             for (size_t i = 0; i < m; i++)
-                inst_attr(s, ord[c0 + i], ni, q, f + (size_t)nc * i);
+                if (same)
+                    f[i] = g->part_val[q - 3];
+                else
+                    inst_attr(s, &cur, ord[c0 + i], ni, q, f + (size_t)nc * i);
             bin_put(g, f, m * (size_t)nc * sizeof(float));
         }
         CBM_TRY(CBM_ARRAY_PUSH(g->ctx, g->acc, a));
@@ -575,8 +594,21 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
     return CBM_OK;
 }
 
-static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col,
-                                 const uint32_t *vpart, int grp, float *fbuf);
+/* The per-vertex attributes of a group mesh in file order: POSITION, NORMAL, COLOR_0, then the
+ * part values _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER, _SEGMENT; written in chunks of
+ * VERT_CHUNK vertices (and the indices in chunks of 3 VERT_CHUNK), so that the scratch is a few
+ * pages rather than 16 bytes a vertex and 12 a triangle. */
+enum { VERT_ATTRS = 8, VERT_CHUNK = 8192 };
+
+/* Per vertex: its part (the part of the last triangle using it) and, for a scene whose
+ * triangles keep their own segment ids, that triangle's (else NULL). */
+typedef struct vertex_src {
+    const uint32_t *part;
+    const float *seg;
+} vertex_src;
+
+static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, const vertex_src *vs,
+                                 int grp, float *fbuf);
 
 /* One node per non-empty group of the scene, with the mesh of its triangles and an instanced
  * child node per bucket of its instances; the group nodes' ids appended to children. */
@@ -593,14 +625,16 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     for (size_t t = 0; t < nt; t++)
         if (cbm__part_kept(&parts[tp[t]], o))
             ntg[group_of(&parts[tp[t]])]++;
-    float *col = NULL, *fbuf = NULL;
+    float *col = NULL, *fbuf = NULL, *vseg = NULL;
     uint32_t *vpart = NULL;
+    const float *tseg = cbm_scene_triangle_segments(s);
+    vertex_src vs = {NULL, NULL};
     size_t maxt = 0;
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
     size_t cap_v = maxt > 0 ? 3 * maxt : 1;
-    /* a group's vertices are at most 3 a triangle and at most the scene's: the per-vertex
-     * scratch (4 floats and an index a vertex) by the smaller, not 12 floats a triangle */
+    /* a group's vertices are at most 3 a triangle and at most the scene's: the index of each
+     * by the smaller; the attributes and the indices go in chunks */
     size_t cap_gv = nv < cap_v ? (nv ? nv : 1) : cap_v;
     cbm_status st;
     bool reuse = g->reuse && g->kept_col && g->kept_np == np;
@@ -611,16 +645,41 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     if ((!reuse && (st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK) ||
         (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
         goto done;
+    if (tseg) {
+        /* the segment of the triangle cbm__vertex_parts took the part of: the last one */
+        const uint32_t *tri = cbm_scene_triangles(s);
+        if (!(vseg = cbm__alloc(ctx, (nv ? nv : 1) * sizeof *vseg))) {
+            st = CBM_E_NOMEM;
+            goto done;
+        }
+        for (size_t t = 0; t < nt; t++)
+            for (int k = 0; k < 3; k++)
+                vseg[tri[3 * t + (size_t)k]] = tseg[t];
+    }
+    vs.part = vpart;
+    vs.seg = vseg;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_gv)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->idx, cap_v)) != CBM_OK ||
-        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * cap_gv)) != CBM_OK)
+        (st = CBM_ARRAY_RESERVE(ctx, g->idx, 3 * VERT_CHUNK)) != CBM_OK ||
+        (st = CBM_ARRAY_RESERVE(ctx, g->fbuf, 4 * (cap_gv < VERT_CHUNK ? cap_gv : VERT_CHUNK))) !=
+            CBM_OK)
         goto done;
     /* COLOR_0 is clamped to [0, 1]: once per part, not once per vertex */
     for (size_t i = 0; i < 4 * np && !reuse; i++)
         col[i] = fminf(1.0f, fmaxf(0.0f, col[i]));
     if (!reuse && (st = sort_instances(g, s, col)) != CBM_OK)
         goto done;
+    for (int q = 0; q < 4; q++) {
+        uint32_t b0 = 0, b;
+        g->part_val[q] = np ? part_value(&parts[0], q) : 0.0f;
+        memcpy(&b0, &g->part_val[q], sizeof b0);
+        g->part_same[q] = true;
+        for (size_t i = 1; i < np && g->part_same[q]; i++) {
+            float v = part_value(&parts[i], q);
+            memcpy(&b, &v, sizeof b);
+            g->part_same[q] = b == b0;
+        }
+    }
     if (g->keep && !reuse) {
         g->kept_col = col; /* freed with the writer */
         g->kept_np = np;
@@ -646,7 +705,7 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         else
             snprintf(nd.name, sizeof nd.name, "%s", cbm_organ_name((cbm_organ)nd.organ));
         fbuf = g->fbuf.data; /* the instances may have moved it */
-        if (ntg[grp] && (st = add_group_mesh(g, s, col, vpart, grp, fbuf)) != CBM_OK)
+        if (ntg[grp] && (st = add_group_mesh(g, s, col, &vs, grp, fbuf)) != CBM_OK)
             goto done;
         if (ntg[grp])
             nd.mesh = (long)g->meshes.len - 1;
@@ -666,76 +725,111 @@ done:
     if (col != g->kept_col)
         cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
     cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
+    cbm__free(ctx, vseg, (nv ? nv : 1) * sizeof *vseg);
     return st;
 }
 
+/* Attribute q (VERT_ATTRS) of the group's vertices verts[0 .. n-1] into f. */
+static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *vs,
+                        const uint32_t *verts, size_t n, int q, float *f)
+{
+    const uint32_t *vpart = vs->part;
+    const cbm_scene_vertex *v = cbm_scene_vertices(s);
+    const cbm_part *parts = cbm_scene_parts(s);
+    for (size_t i = 0; i < n; i++) {
+        if (q == 0) {
+            memcpy(f + 3 * i, v[verts[i]].p, 3 * sizeof(float));
+        } else if (q == 1) {
+            const float *nr = v[verts[i]].n;
+            double len =
+                sqrt((double)nr[0] * nr[0] + (double)nr[1] * nr[1] + (double)nr[2] * nr[2]);
+            for (int k = 0; k < 3; k++)
+                f[3 * i + (size_t)k] = len > 0 ? (float)(nr[k] / len) : (k == 1 ? 1.0f : 0.0f);
+        } else if (q == 2) {
+            memcpy(f + 4 * i, col + 4 * (size_t)vpart[verts[i]], 4 * sizeof(float));
+        } else if (q == 7 && vs->seg) {
+            f[i] = vs->seg[verts[i]];
+        } else {
+            f[i] = part_value(&parts[vpart[verts[i]]], q - 3);
+        }
+    }
+}
+
 /* The triangles of group grp as one mesh (appended to g->meshes). */
-static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col,
-                                 const uint32_t *vpart, int grp, float *fbuf)
+static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, const vertex_src *vs,
+                                 int grp, float *fbuf)
 {
     cbm_context *ctx = g->ctx;
     const cbm_write_options *o = g->o;
     size_t nv = cbm_scene_vertex_count(s), nt = cbm_scene_triangle_count(s);
     const cbm_part *parts = cbm_scene_parts(s);
-    const cbm_scene_vertex *v = cbm_scene_vertices(s);
     const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
     uint32_t *remap = g->remap.data, *verts = g->verts.data, *idx = g->idx.data;
-    cbm_status st = CBM_OK;
-    {
-        memset(remap, 0xff, (nv ? nv : 1) * sizeof *remap);
-        size_t nvg = 0, ni = 0;
-        for (size_t t = 0; t < nt; t++) {
-            const cbm_part *p = &parts[tp[t]];
-            if (!cbm__part_kept(p, o) || group_of(p) != grp)
-                continue;
-            for (int k = 0; k < 3; k++) {
-                uint32_t vi = tri[3 * t + (size_t)k];
-                if (remap[vi] == UINT32_MAX) {
-                    remap[vi] = (uint32_t)nvg;
-                    verts[nvg++] = vi;
-                }
-                idx[ni++] = remap[vi];
+    memset(remap, 0xff, (nv ? nv : 1) * sizeof *remap);
+    size_t nvg = 0, ni = 0;
+    for (size_t t = 0; t < nt; t++) {
+        const cbm_part *p = &parts[tp[t]];
+        if (!cbm__part_kept(p, o) || group_of(p) != grp)
+            continue;
+        for (int k = 0; k < 3; k++) {
+            uint32_t vi = tri[3 * t + (size_t)k];
+            if (remap[vi] == UINT32_MAX) {
+                remap[vi] = (uint32_t)nvg;
+                verts[nvg++] = vi;
             }
         }
-        mesh m;
-        memset(&m, 0, sizeof m);
-        m.material = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp; /* organ; renumbered */
-        g->organ_used[m.material] = true;
-        for (size_t i = 0; i < nvg; i++)
-            memcpy(fbuf + 3 * i, v[verts[i]].p, 3 * sizeof(float));
-        if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, true, &m.pos)) != CBM_OK)
-            goto done;
-        bool fill = g->mode != BIN_MEASURE; /* measuring needs the bounds of POSITION only */
-        for (size_t i = 0; fill && i < nvg; i++) {
-            const float *n = v[verts[i]].n;
-            double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
-            for (int k = 0; k < 3; k++)
-                fbuf[3 * i + (size_t)k] = len > 0 ? (float)(n[k] / len) : (k == 1 ? 1.0f : 0.0f);
-        }
-        if ((st = add_accessor(g, fbuf, nvg, 3, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.nrm)) !=
-            CBM_OK)
-            goto done;
-        for (size_t i = 0; fill && i < nvg; i++)
-            for (int k = 0; k < 4; k++)
-                fbuf[4 * i + (size_t)k] = col[4 * vpart[verts[i]] + (size_t)k];
-        if ((st = add_accessor(g, fbuf, nvg, 4, GL_FLOAT, GL_ARRAY_BUFFER, false, &m.col)) !=
-            CBM_OK)
-            goto done;
-        size_t *dst[5] = {&m.stress, &m.age, &m.react, &m.order, &m.seg};
-        for (int q = 0; q < 5; q++) {
-            for (size_t i = 0; fill && i < nvg; i++)
-                fbuf[i] = part_value(&parts[vpart[verts[i]]], q);
-            if ((st = add_accessor(g, fbuf, nvg, 1, GL_FLOAT, GL_ARRAY_BUFFER, false, dst[q])) !=
-                CBM_OK)
-                goto done;
-        }
-        if ((st = add_accessor(g, idx, ni, 1, GL_UNSIGNED_INT, GL_ELEMENT_ARRAY_BUFFER, false,
-                               &m.idx)) != CBM_OK ||
-            (st = CBM_ARRAY_PUSH(ctx, g->meshes, m)) != CBM_OK)
-            goto done;
+        ni += 3;
     }
-done:
-    return st;
+    mesh m;
+    memset(&m, 0, sizeof m);
+    m.material = grp >= CBM_ORGAN_COUNT ? CBM_ORGAN_BRANCH : grp; /* organ; renumbered */
+    g->organ_used[m.material] = true;
+    size_t *dst[VERT_ATTRS] = {&m.pos, &m.nrm,   &m.col,   &m.stress,
+                               &m.age, &m.react, &m.order, &m.seg};
+    for (int q = 0; q < VERT_ATTRS; q++) {
+        int nc = q == 2 ? 4 : q < 2 ? 3 : 1;
+        bool bounds = q == 0; /* POSITION's; measuring needs them and nothing else */
+        accessor a;
+        cbm__gltf_accessor_set(&a, 0, NULL, nvg, nc, GL_FLOAT, false);
+        a.minmax = bounds;
+        for (int k = 0; k < nc; k++) {
+            a.min[k] = INFINITY;
+            a.max[k] = -INFINITY;
+        }
+        CBM_TRY(open_view(g, nvg * (size_t)nc * sizeof(float), GL_ARRAY_BUFFER, &a.view));
+        for (size_t c0 = 0; (bounds || g->mode != BIN_MEASURE) && c0 < nvg; c0 += VERT_CHUNK) {
+            size_t n = nvg - c0 < VERT_CHUNK ? nvg - c0 : VERT_CHUNK;
+            vertex_attr(s, col, vs, verts + c0, n, q, fbuf);
+            for (size_t i = 0; bounds && i < n; i++)
+                for (int k = 0; k < nc; k++) {
+                    a.min[k] = fminf(a.min[k], fbuf[i * (size_t)nc + (size_t)k]);
+                    a.max[k] = fmaxf(a.max[k], fbuf[i * (size_t)nc + (size_t)k]);
+                }
+            bin_put(g, fbuf, n * (size_t)nc * sizeof(float));
+        }
+        CBM_TRY(CBM_ARRAY_PUSH(ctx, g->acc, a));
+        *dst[q] = g->acc.len - 1;
+    }
+    /* the indices: the group's triangles again, through the complete remap */
+    accessor a;
+    cbm__gltf_accessor_set(&a, 0, NULL, ni, 1, GL_UNSIGNED_INT, false);
+    CBM_TRY(open_view(g, ni * sizeof(uint32_t), GL_ELEMENT_ARRAY_BUFFER, &a.view));
+    size_t n = 0;
+    for (size_t t = 0; g->mode != BIN_MEASURE && t < nt; t++) {
+        const cbm_part *p = &parts[tp[t]];
+        if (!cbm__part_kept(p, o) || group_of(p) != grp)
+            continue;
+        for (int k = 0; k < 3; k++)
+            idx[n++] = remap[tri[3 * t + (size_t)k]];
+        if (n + 3 > 3 * VERT_CHUNK) {
+            bin_put(g, idx, n * sizeof *idx);
+            n = 0;
+        }
+    }
+    bin_put(g, idx, n * sizeof *idx);
+    CBM_TRY(CBM_ARRAY_PUSH(ctx, g->acc, a));
+    m.idx = g->acc.len - 1;
+    return CBM_ARRAY_PUSH(ctx, g->meshes, m);
 }
 
 static void write_json(glb *g, cbm_json *j, size_t root, long anim_input, size_t anim_first,
