@@ -1,62 +1,33 @@
 /* The tree factorisation and solve split a branched plant over threads (solve_tree.c,
  * "Threads"): the results must be the same to the bit for any number of threads. A random tree
  * (each segment continues its predecessor with probability 0.8, else branches off a random
- * earlier one, as bench_mech's `tree`) is solved from rest with 1, 2 and 3 threads, the split
- * forced even for this size, and every angle, moment, position and statistic compared bit for
- * bit; a chain, which stays serial, too. */
+ * earlier one: bench_mech's `tree`, bench/random_tree.h) is solved from rest with 1, 2 and 3
+ * threads, the split forced even for this size, and every angle, moment, position and
+ * statistic compared bit for bit; a chain, which stays serial, too. */
 #include "test.h"
 
 #include "cambium/lsys.h"
 #include "lsys_util.h"
 #include "cambium/tree.h"
 #include "mech/mech_internal.h"
+#include "random_tree.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-
+/* The benches' random tree (bench/random_tree.h) with seed 11; a chain leans at 0.3 rad. */
 static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E, double leaf, bool chain)
 {
-    cbm_context_seed(ctx, 11);
-    int64_t *par = malloc(n * sizeof *par);
-    double *count = malloc(n * sizeof *count);
-    unsigned char *seen = calloc(n, 1);
-    par[0] = -1;
-    for (size_t i = 1; i < n; i++)
-        par[i] = chain || cbm_context_uniform(ctx) < 0.8
-                     ? (int64_t)i - 1
-                     : (int64_t)(cbm_context_uniform(ctx) * (double)i);
-    for (size_t i = 0; i < n; i++)
-        count[i] = 1;
-    for (size_t i = n; i-- > 1;)
-        count[par[i]] += count[i];
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.capacity = n;
-    pd.base_orientation = cbm_mech_clamp_orientation(chain ? 0.3 : PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    for (size_t i = 0; i < n && p; i++) {
-        cbm_segment_def d = cbm_segment_def_default();
-        d.parent = par[i];
-        d.length = 0.02;
-        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
-        d.core.youngs_modulus = E;
-        d.core.shear_modulus = E / 16;
-        d.core.density = 700;
-        if (i > 0 && seen[par[i]]) {
-            d.divergence = 2.39996 * (double)i;
-            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
-            d.roll = -d.divergence;
-        }
-        if (i > 0)
-            seen[par[i]] = 1;
-        d.point_mass = count[i] == 1 ? leaf : 0.0;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    free(seen);
-    free(par);
-    free(count);
+    random_tree_def d = random_tree_def_default();
+    d.n = d.capacity = n;
+    d.E = E;
+    d.leaf = leaf;
+    d.seed = 11;
+    d.chain = chain;
+    if (chain)
+        d.base_angle = 0.3;
+    cbm_plant *p = random_tree_create(ctx, &d);
+    CHECK(p != NULL);
     return p;
 }
 
