@@ -779,14 +779,9 @@ static cbm_plant *lc_approx_plant(cbm_context *ctx, const char *line)
              "Axiom: Left(60) I(S(0.006)) I(S(0.005)) I(S(0.004)) SB Right(45) I(S(0.002)) "
              "I(S(0.0015)) Fruit(0.05) EB I(S(0.003)) I(S(0.002)) Fruit(0.1);\n",
              line);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.text = src;
-    def.path = "load.l";
-    cbm_lsys *ls = NULL;
     cbm_plant *p = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "load.l", src);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK_OK(cbm_lsys_step(ls));
         CHECK_OK(cbm_lsys_mech_plant(ls, &p));
     }

@@ -79,9 +79,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     def.path = "s.l";
     def.text = model;
     def.seed = 99;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     CHECK_OK(cbm_lsys_step(ls));
     tbuf got = {0};
     format_string(ls, false, false, &got);
@@ -104,8 +102,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     ls = NULL;
     def.text = "Lsystem: 1\nderivation length: 12\nAxiom: F\nF --> FF : 1\nF --> A : 0\n"
                "endlsystem\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     for (int i = 0; i < 12; i++)
         CHECK_OK(cbm_lsys_step(ls));
     CHECK_EQ_INT(cbm_lsys_module_count(ls), 4096); /* probability 0 never chosen */

@@ -442,15 +442,10 @@ static double language_lowest(cbm_context *ctx, const char *ground)
              "Axiom: Down(90) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S())"
              " I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S());\n",
              ground);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "ground.l";
-    def.text = text;
-    cbm_lsys *ls = NULL;
     double low = NAN;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "ground.l", text);
     if (!ls)
         return NAN;
-    CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, false, &c);

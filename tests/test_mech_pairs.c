@@ -664,9 +664,7 @@ TEST(pairs_language)
     cbm_lsys_def def = cbm_lsys_def_default();
     def.text = src;
     def.path = "fruit.l";
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     CHECK_OK(cbm_lsys_step(ls));
     cbm_plant *p = NULL;
     CHECK_OK(cbm_lsys_mech_plant(ls, &p));
