@@ -850,7 +850,8 @@ TEST(approx_lc_load_equals_api)
  * elliptic root and closed-form profile it stands in for there: omega and every increment over
  * t0 0.5-179.5 degrees, eps up to the threshold, cylinders and cones, 1 to 200 segments, with
  * and without the reversal. The two are different methods (not the same bits) that must agree
- * to the series' truncation error (stated in docs/validation.md). And a plant's axes, which
+ * to the series' truncation error (stated in docs/validation.md); each says it took the route
+ * `series`, with no evaluation (past the series: `root`, with some). And a plant's axes, which
  * take the series from sin t0 and cos t0 of their frame, against the API on the same axis. */
 TEST(approx_series_vs_elliptic)
 {
@@ -872,6 +873,9 @@ TEST(approx_series_vs_elliptic)
                     d.k0 = sqrt(e) * (1.0 - d.coni) / (double)d.disc;
                     cbm_approx_info in;
                     CHECK_OK(cbm_approx_angles(ctx, &d, ser, (size_t)d.disc + 1, &in));
+                    CHECK_MSG(in.route == CBM_APPROX_ROUTE_SERIES && in.evaluations == 0,
+                              "t0 %g eps %g: route %s, %d evaluations", t0d, e,
+                              cbm_approx_route_name(in.route), in.evaluations);
                     double we = 0.0;
                     cbm__approx_angles_elliptic(&d, ell, &we);
                     worst_w = fmax(worst_w, fabs(in.omega - we));
@@ -897,6 +901,13 @@ TEST(approx_series_vs_elliptic)
         CHECK_NEAR(ell[i], ser[i], 1e-14);
     d.k0 = 0.1; /* eps = (0.1 * 7 / 0.8)^2 = 0.77: past the series */
     CHECK(!cbm__approx_series(&d, sin(t0), cos(t0), ell));
+    /* the route each took, and the evaluations of the root */
+    cbm_approx_info in;
+    CHECK_OK(cbm_approx_angles(ctx, &d, ser, 8, &in));
+    CHECK_MSG(in.route == CBM_APPROX_ROUTE_ROOT && in.evaluations > 0, "route %s, %d evaluations",
+              cbm_approx_route_name(in.route), in.evaluations);
+    CHECK(!strcmp(cbm_approx_route_name(CBM_APPROX_ROUTE_SERIES), "series"));
+    CHECK(!strcmp(cbm_approx_route_name((cbm_approx_route)6), "unknown"));
     test_ctx_end(ctx);
 }
 
