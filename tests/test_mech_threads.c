@@ -8,6 +8,7 @@
 
 #include "cambium/lsys.h"
 #include "lsys_util.h"
+#include "cambium/ober.h"
 #include "cambium/tree.h"
 #include "mech/mech_internal.h"
 #include "random_tree.h"
@@ -186,6 +187,73 @@ TEST(tree_model_solve_threads_same_bits)
     CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "-1") == CBM_E_INVALID);
     CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);
     CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "1.5") == CBM_E_INVALID);
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_min_segments(50000);
+}
+
+/* The Oberlaender trees take the same parameter (`cambium grow ober-* -D solve_threads=N`): it
+ * reaches mechanicsFeedback's equilibria (the grown shoots the same to the bit with 1 and 2
+ * threads, the split forced) and cbm_ober_mechanics' (the solved plant's setting, its split and
+ * its bits). A bad value is refused naming the parameter, with the fruit tree's range. */
+TEST(ober_solve_threads_same_bits)
+{
+    cbm__mech_tree_min_segments(0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_ober_stand *s[2] = {NULL, NULL};
+    cbm_plant *p[2] = {NULL, NULL};
+    for (int k = 0; k < 2 && ctx; k++) {
+        cbm_ober_def d;
+        CHECK_OK(cbm_ober_def_builtin(ctx, "ober-troll", &d));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "maxOrder", "2", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "mechanicsFeedback", "1", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "solve_threads", k == 0 ? "1" : "2", NULL));
+        CHECK_EQ_INT(d.solve_threads, k + 1);
+        d.years = 6;
+        CHECK_OK(cbm_ober_create(ctx, &d, &s[k]));
+        if (!s[k])
+            continue;
+        CHECK_OK(cbm_ober_run(s[k]));
+        cbm_ober_mech_def md = cbm_ober_mech_def_default();
+        cbm_ober_mech_result r;
+        CHECK_OK(cbm_ober_mechanics(s[k], 0, &md, &r, &p[k]));
+    }
+    size_t n = s[0] && s[1] ? cbm_ober_shoot_count(s[0]) : 0;
+    CHECK(n > 20 && cbm_ober_shoot_count(s[1]) == n);
+    for (size_t i = 0; i < n; i++) {
+        cbm_ober_shoot a, b;
+        CHECK_OK(cbm_ober_shoot_info(s[0], i, &a));
+        CHECK_OK(cbm_ober_shoot_info(s[1], i, &b));
+        CHECK_MSG(!memcmp(&a.base, &b.base, sizeof a.base) && !memcmp(&a.tip, &b.tip, sizeof a.tip),
+                  "shoot %zu differs", i);
+    }
+    CHECK(p[0] && p[1]);
+    if (p[0] && p[1]) {
+        printf("ober-troll, 6 years, mechanicsFeedback: %zu shoots, %zu segments; threads %d and "
+               "%d, split into %d and %d\n",
+               n, p[0]->n, p[0]->threads, p[1]->threads, p[0]->work.tsplit, p[1]->work.tsplit);
+        CHECK_EQ_INT(p[0]->threads, 1);
+        CHECK_EQ_INT(p[1]->threads, 2);
+        CHECK_EQ_INT(p[1]->work.tsplit, 2);
+        CHECK(same_plant_bits(p[0], p[1]));
+    }
+    for (int k = 0; k < 2; k++) {
+        cbm_plant_destroy(p[k]);
+        cbm_ober_destroy(s[k]);
+    }
+    cbm_ober_def d = cbm_ober_def_default();
+    CHECK_EQ_INT(d.solve_threads, 0);
+    static const char *const bad[] = {"-1", "1.5", "1025", "two"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK_MSG(cbm_ober_def_set(ctx, &d, "solve_threads", bad[i], NULL) == CBM_E_INVALID,
+                  "solve_threads = %s accepted", bad[i]);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL, "%s",
+                  cbm_context_last_error(ctx));
+    }
+    CHECK_EQ_INT(d.solve_threads, 0);
+    d.solve_threads = -1;
+    CHECK(cbm_ober_def_check(ctx, &d) == CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);
     cbm_context_destroy(ctx);
     cbm__mech_tree_min_segments(50000);
 }
