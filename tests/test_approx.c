@@ -387,10 +387,7 @@ TEST(approx_growth_ring_freezes_shape)
 TEST(approx_plant_lateral)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e9;
     d.core.a = d.core.b = 0.02;
@@ -918,10 +915,7 @@ TEST(approx_series_vs_elliptic)
 TEST(approx_corrected_sweep)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 3);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e8;
     d.core.a = d.core.b = 0.01;

@@ -134,10 +134,7 @@ TEST(contact_tangent_matches_finite_differences)
  * that part of it lies below the plane halfway up. */
 static cbm_plant *bent_tree(cbm_context *ctx, int n)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.3);
     if (!p)
         return NULL;
     for (int i = 0; i < n; i++) {
@@ -480,10 +477,7 @@ TEST(contact_language_ground)
  * ground at the trunk's foot (k = 1e3 N/m, smoothing 2 mm). */
 static cbm_plant *rosette(cbm_context *ctx)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     if (!p)
         return NULL;
     cbm_segment_def d = cbm_segment_def_default();
