@@ -121,8 +121,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     ls = NULL;
     def.text = "Lsystem: 1\nderivation length: 7\nAxiom: F\nF --> FA : 1\nF --> FB : 3\n"
                "endlsystem\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     int na = 0, nb = 0;
     for (int i = 0; i < 7; i++)
         CHECK_OK(cbm_lsys_step(ls));
@@ -150,8 +149,7 @@ TEST(stochastic_frequencies)
     for (int rep = 0; rep < 500; rep++) {
         cbm_lsys *ls = NULL;
         def.seed = rep;
-        CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-        CHECK_OK(cbm_lsys_reset(ls));
+        ls = lsys_from_def(ctx, &def);
         CHECK_OK(cbm_lsys_step(ls));
         CHECK_OK(cbm_lsys_step(ls));
         cbm_lsys_cursor c;
@@ -462,8 +460,7 @@ TEST(expression_depth_and_loops_are_bounded)
     def.text = "Lsystem: 1\nderivation length: 1\nAxiom: A\n"
                "A : {x=0; while (1) {x=x+1;}} --> B\nendlsystem\n";
     def.max_loop_iterations = 1000000;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     CHECK_STATUS(cbm_lsys_step(ls), CBM_E_LIMIT);
     CHECK(strstr(cbm_context_last_error(ctx), "while loop") != NULL);
     cbm_lsys_destroy(ls);
