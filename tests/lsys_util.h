@@ -75,6 +75,25 @@ static inline cbm_lsys *lsys_text_reset_at(cbm_context *ctx, const char *path, c
     return lsys_load_reset_at(ctx, &def, file, line);
 }
 
+/* The model `text`, named `path` in its messages, loaded, reset and derived `steps` steps,
+ * stopping at the first failure: its status (unchecked: for tests that expect failures, out of
+ * memory among them). *ls receives the model (NULL when the load failed); the caller destroys
+ * it. */
+static inline cbm_status lsys_derive(cbm_context *ctx, const char *path, const char *text,
+                                     int steps, cbm_lsys **ls)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.text = text;
+    *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(*ls);
+    for (int i = 0; i < steps && s == CBM_OK; i++)
+        s = cbm_lsys_step(*ls);
+    return s;
+}
+
 /* The symbol of the L+C module called `name`, -1 if none. */
 static inline int lsys_symbol(const cbm_lsys *ls, const char *name)
 {

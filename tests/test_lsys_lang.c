@@ -22,11 +22,7 @@ static cbm_status load_text(cbm_context *ctx, const char *text, bool float32, cb
 static char *derive_text(cbm_context *ctx, const char *text, int n)
 {
     cbm_lsys *ls = NULL;
-    if (load_text(ctx, text, false, &ls) != CBM_OK)
-        return NULL;
-    cbm_status s = cbm_lsys_reset(ls);
-    for (int i = 0; i < n && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "test.l", text, n, &ls);
     tbuf b = {0};
     if (s == CBM_OK)
         format_string(ls, false, false, &b);
@@ -501,19 +497,15 @@ TEST(step_limit)
 static cbm_status oom_run(cbm_context *ctx, void *ud)
 {
     (void)ud;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "oom.l";
-    def.text = "#define R(x) (x*2)\nLsystem: 1\ndefine: {array t[3] = {1,2,3};}\n"
-               "derivation length: 3\nignore: +\nAxiom: A(1)\n"
-               "B(x) < A(y) : {z=t[1];} y > 0 --> A(R(y)+z)[+B(y)]\n"
-               "A(y) --> B(y)A(y)\n"
-               "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
-               "endlsystem\n";
+    const char *text =
+        "#define R(x) (x*2)\nLsystem: 1\ndefine: {array t[3] = {1,2,3};}\n"
+        "derivation length: 3\nignore: +\nAxiom: A(1)\n"
+        "B(x) < A(y) : {z=t[1];} y > 0 --> A(R(y)+z)[+B(y)]\n"
+        "A(y) --> B(y)A(y)\n"
+        "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
+        "endlsystem\n";
     cbm_lsys *ls = NULL;
-    CBM_TRY(cbm_lsys_load(ctx, &def, &ls));
-    cbm_status s = cbm_lsys_reset(ls);
-    for (int i = 0; i < 3 && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "oom.l", text, 3, &ls);
     if (s == CBM_OK)
         s = cbm_lsys_apply_homomorphism(ls);
     cbm_lsys_destroy(ls);
