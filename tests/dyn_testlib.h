@@ -42,10 +42,7 @@ static inline cbm_plant *dyn_rod(cbm_context *ctx, int n, double L, double r, do
  * (test_dyn_loads.c, test_dyn_modal.c, test_dyn_modes.c). */
 static inline cbm_plant *dyn_branched(cbm_context *ctx, int n)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(1.2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 1.2);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.a = 0.02;
     d.core.b = 0.015;

@@ -40,6 +40,60 @@ static inline cbm_status lsys_load_shipped(cbm_context *ctx, const char *name, c
     return cbm_lsys_load(ctx, &def, ls);
 }
 
+/* The model of def loaded and reset to its axiom, each checked at the caller's line; NULL when
+ * either failed (the test has failed then). lsys_from_text: the model `text`, named `path` in
+ * its messages, with the other settings at their defaults. */
+#define lsys_from_def(ctx, def) lsys_load_reset_at((ctx), (def), __FILE__, __LINE__)
+#define lsys_from_text(ctx, path, text)                                                            \
+    lsys_text_reset_at((ctx), (path), (text), __FILE__, __LINE__)
+static inline cbm_lsys *lsys_load_reset_at(cbm_context *ctx, const cbm_lsys_def *def,
+                                           const char *file, int line)
+{
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, def, &ls);
+    if (s == CBM_OK) {
+        s = cbm_lsys_reset(ls);
+        if (s != CBM_OK) {
+            cbm_test_fail(file, line, "%s: reset: %s: %s", def->path, cbm_status_name(s),
+                          cbm_context_last_error(ctx));
+            cbm_lsys_destroy(ls);
+            return NULL;
+        }
+    } else {
+        cbm_test_fail(file, line, "%s: %s: %s", def->path, cbm_status_name(s),
+                      cbm_context_last_error(ctx));
+    }
+    return ls;
+}
+
+static inline cbm_lsys *lsys_text_reset_at(cbm_context *ctx, const char *path, const char *text,
+                                           const char *file, int line)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.text = text;
+    return lsys_load_reset_at(ctx, &def, file, line);
+}
+
+/* The model `text`, named `path` in its messages, loaded, reset and derived `steps` steps,
+ * stopping at the first failure: its status (unchecked: for tests that expect failures, out of
+ * memory among them). *ls receives the model (NULL when the load failed); the caller destroys
+ * it. */
+static inline cbm_status lsys_derive(cbm_context *ctx, const char *path, const char *text,
+                                     int steps, cbm_lsys **ls)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.text = text;
+    *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_reset(*ls);
+    for (int i = 0; i < steps && s == CBM_OK; i++)
+        s = cbm_lsys_step(*ls);
+    return s;
+}
+
 /* The symbol of the L+C module called `name`, -1 if none. */
 static inline int lsys_symbol(const cbm_lsys *ls, const char *name)
 {

@@ -12,6 +12,17 @@
 
 #define PI 3.14159265358979323846
 
+/* A new plant without segments, clamped at `elev` rad above the horizontal; NULL (the test has
+ * failed) when it cannot be made. */
+static inline cbm_plant *clamped_plant(cbm_context *ctx, double elev)
+{
+    cbm_plant_def pd = cbm_plant_def_default();
+    pd.base_orientation = cbm_mech_clamp_orientation(elev);
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    return p;
+}
+
 /* A straight rod of n equal segments clamped at `elev` rad above the horizontal, radius given by
  * radius(s) at each segment's centroid (taper), optional tip force/moment. */
 typedef double (*radius_fn)(double s, double L);

@@ -387,10 +387,7 @@ TEST(approx_growth_ring_freezes_shape)
 TEST(approx_plant_lateral)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e9;
     d.core.a = d.core.b = 0.02;
@@ -779,14 +776,9 @@ static cbm_plant *lc_approx_plant(cbm_context *ctx, const char *line)
              "Axiom: Left(60) I(S(0.006)) I(S(0.005)) I(S(0.004)) SB Right(45) I(S(0.002)) "
              "I(S(0.0015)) Fruit(0.05) EB I(S(0.003)) I(S(0.002)) Fruit(0.1);\n",
              line);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.text = src;
-    def.path = "load.l";
-    cbm_lsys *ls = NULL;
     cbm_plant *p = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "load.l", src);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK_OK(cbm_lsys_step(ls));
         CHECK_OK(cbm_lsys_mech_plant(ls, &p));
     }
@@ -855,7 +847,8 @@ TEST(approx_lc_load_equals_api)
  * elliptic root and closed-form profile it stands in for there: omega and every increment over
  * t0 0.5-179.5 degrees, eps up to the threshold, cylinders and cones, 1 to 200 segments, with
  * and without the reversal. The two are different methods (not the same bits) that must agree
- * to the series' truncation error (stated in docs/validation.md). And a plant's axes, which
+ * to the series' truncation error (stated in docs/validation.md); each says it took the route
+ * `series`, with no evaluation (past the series: `root`, with some). And a plant's axes, which
  * take the series from sin t0 and cos t0 of their frame, against the API on the same axis. */
 TEST(approx_series_vs_elliptic)
 {
@@ -877,6 +870,9 @@ TEST(approx_series_vs_elliptic)
                     d.k0 = sqrt(e) * (1.0 - d.coni) / (double)d.disc;
                     cbm_approx_info in;
                     CHECK_OK(cbm_approx_angles(ctx, &d, ser, (size_t)d.disc + 1, &in));
+                    CHECK_MSG(in.route == CBM_APPROX_ROUTE_SERIES && in.evaluations == 0,
+                              "t0 %g eps %g: route %s, %d evaluations", t0d, e,
+                              cbm_approx_route_name(in.route), in.evaluations);
                     double we = 0.0;
                     cbm__approx_angles_elliptic(&d, ell, &we);
                     worst_w = fmax(worst_w, fabs(in.omega - we));
@@ -902,6 +898,13 @@ TEST(approx_series_vs_elliptic)
         CHECK_NEAR(ell[i], ser[i], 1e-14);
     d.k0 = 0.1; /* eps = (0.1 * 7 / 0.8)^2 = 0.77: past the series */
     CHECK(!cbm__approx_series(&d, sin(t0), cos(t0), ell));
+    /* the route each took, and the evaluations of the root */
+    cbm_approx_info in;
+    CHECK_OK(cbm_approx_angles(ctx, &d, ser, 8, &in));
+    CHECK_MSG(in.route == CBM_APPROX_ROUTE_ROOT && in.evaluations > 0, "route %s, %d evaluations",
+              cbm_approx_route_name(in.route), in.evaluations);
+    CHECK(!strcmp(cbm_approx_route_name(CBM_APPROX_ROUTE_SERIES), "series"));
+    CHECK(!strcmp(cbm_approx_route_name((cbm_approx_route)6), "unknown"));
     test_ctx_end(ctx);
 }
 
@@ -912,10 +915,7 @@ TEST(approx_series_vs_elliptic)
 TEST(approx_corrected_sweep)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 3);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e8;
     d.core.a = d.core.b = 0.01;

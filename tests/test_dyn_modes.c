@@ -372,10 +372,7 @@ TEST(critical_wind)
 {
     cbm_context *ctx = test_ctx();
     double L = 5.0, r = 0.05, mor = 40e6;
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = L / 50;
     d.core.youngs_modulus = 1e16;
@@ -458,10 +455,7 @@ TEST(critical_wind_hwind_pine)
     double H = 20.0, dbh = 0.20, d0 = dbh / sqrt(1.0 - 1.3 / H);
     int n = 200, ncrown = 80;
     double vol = PI * d0 * d0 / 4.0 * H / 2.0, rho = 248.32 / vol;
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = H / n;
     d.core.youngs_modulus = 7e9;
@@ -581,10 +575,7 @@ static void check_all_modes(cbm_context *ctx, cbm_plant *p)
 TEST(cluster_no_mode_missed)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.5 * PI);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.5 * PI);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = 0.1;
     d.core.a = d.core.b = 0.02;

@@ -12,10 +12,7 @@ TEST(growth_branch_breaks_at_predicted_length)
     /* sigma = (w L^2 / 2) r / (pi r^4 / 4), w = rho pi r^2 g  =>  L* = sqrt(MOR r / (2 rho g)) */
     double lstar = sqrt(mor * r / (2 * rho * g));
     size_t want = (size_t)ceil(lstar / h);
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.0);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = h;
     d.core.youngs_modulus = 1e11; /* stiff: small deflection */
@@ -55,10 +52,7 @@ TEST(growth_branch_breaks_at_predicted_length)
 TEST(growth_breakage_removes_what_it_carries)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e10;
     d.core.a = d.core.b = 0.02;
@@ -121,10 +115,7 @@ TEST(growth_breakage_removes_what_it_carries)
 TEST(growth_break_at_thin_segment)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.0);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e10;
     d.core.modulus_of_rupture = 3e7;
@@ -154,10 +145,7 @@ TEST(growth_break_at_thin_segment)
  * wood forms and it does not break. */
 static void fruit_season(cbm_context *ctx, double mor, size_t *broken, size_t *rw_rings)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.2);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = 0.05;
     d.core.youngs_modulus = 1e9;

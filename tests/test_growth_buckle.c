@@ -98,10 +98,7 @@ TEST(growth_table_6_1_six_woods)
  * upright; two segments beyond it, it settles bent. */
 static double relax_tip_offset(cbm_context *ctx, size_t n, const cbm_buckle_def *d)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def sd = cbm_segment_def_default();
     sd.length = d->segment;
     sd.core.youngs_modulus = d->youngs_modulus;
@@ -172,10 +169,7 @@ TEST(growth_buckle_sequential_growth_agrees)
     d.density = 745;
     cbm_buckle_result r;
     CHECK_OK(cbm_mech_buckle(ctx, &d, &r));
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def sd = cbm_segment_def_default();
     sd.length = d.segment;
     sd.core.youngs_modulus = d.youngs_modulus;

@@ -209,10 +209,7 @@ TEST(growth_tropism_raises_growing_stem)
     cbm_context *ctx = test_ctx();
     double tip_y[2];
     for (int k = 0; k < 2; k++) {
-        cbm_plant_def pd = cbm_plant_def_default();
-        pd.base_orientation = cbm_mech_clamp_orientation(0.5);
-        cbm_plant *p = NULL;
-        CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+        cbm_plant *p = clamped_plant(ctx, 0.5);
         cbm_tropism t = cbm_tropism_default();
         t.strength = k ? 0.5 : 0.0;
         cbm_segment_def d = cbm_segment_def_default();
@@ -235,10 +232,7 @@ TEST(growth_tropism_raises_growing_stem)
 /* A small tree: trunk 0-1-2, laterals on 0 and 1, sub-lateral. */
 static cbm_plant *small_tree(cbm_context *ctx, double aspect)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     static const int64_t par[] = {-1, 0, 1, 0, 1, 4, 3};
     static const double rad[] = {0.004, 0.004, 0.004, 0.003, 0.003, 0.002, 0.002};
     for (int i = 0; i < 7; i++) {
@@ -410,10 +404,7 @@ TEST(growth_out_of_memory)
 TEST(growth_upright_roll)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
     CHECK_OK(cbm_plant_evaluate(p, NULL));
@@ -494,10 +485,7 @@ TEST(growth_rates_match_segment_query)
 TEST(growth_s_shaped_stem)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(70.0 * PI / 180.0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 70.0 * PI / 180.0);
     const double a0 = 0.002;
     cbm_tropism t = cbm_tropism_default();
     t.strength = 0.05;

@@ -79,10 +79,7 @@ static size_t check_sections(cbm_plant *p)
  * leans). */
 static cbm_plant *small_tree(cbm_context *ctx)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.3);
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 2e8;
     d.core.shear_modulus = 2e8 / 16;

@@ -144,10 +144,7 @@ static void lean_years(cbm_context *ctx, double threshold, double beta, int year
 {
     const int n = 20;
     const double a0 = 0.003;
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(30.0 * PI / 180.0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 30.0 * PI / 180.0);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = 0.1;
     d.core.youngs_modulus = 1e9;

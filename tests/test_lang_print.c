@@ -1,5 +1,6 @@
 /* printf in models (both dialects) through the context's output sink, its compile-time checks
  * with locations, and the C int semantics of the L+C dialect (32-bit wrap, out-of-range casts). */
+#include "lsys_util.h"
 #include "test.h"
 
 #include <cambium/lsys.h>
@@ -52,16 +53,8 @@ static cbm_context *capture_ctx(captured *c)
 /* loads `text` as model m.l, runs `steps` steps; the status of the load */
 static cbm_status run_model(cbm_context *ctx, const char *text, int steps)
 {
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "m.l";
-    def.text = text;
     cbm_lsys *ls = NULL;
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
-    if (s != CBM_OK)
-        return s;
-    s = cbm_lsys_reset(ls);
-    for (int i = 0; i < steps && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "m.l", text, steps, &ls);
     cbm_lsys_destroy(ls);
     return s;
 }

@@ -7,6 +7,7 @@
 #include "cambium/light.h"
 #include "cambium/lsys.h"
 #include "lang/mechsegment.h"
+#include "lsys_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -34,15 +35,10 @@ static int run_model(cbm_context *ctx, int sky, double light[3], cbm_light_leaf 
 {
     char src[1200];
     snprintf(src, sizeof src, MODEL, sky);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.text = src;
-    def.path = "light.l";
-    cbm_lsys *ls = NULL;
     int n = 0;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "light.l", src);
     if (!ls)
         return 0;
-    CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     cbm_lsys_cursor c;
     double seg[MS_SIZE] = {0}, stack[4][MS_SIZE];

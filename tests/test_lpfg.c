@@ -421,10 +421,8 @@ TEST(lpfg_compiled_function_errors)
                "    int d = n - 1;\n"                   /* 4 */
                "    return 10 / d; }\n"                 /* 5: 10 / 0 */
                "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK_STATUS(cbm_lsys_step(ls), CBM_E_RUNTIME);
         CHECK_MSG(strstr(g.text, "m.l:5:5: ") && strstr(g.text, "integer division by zero"), "%s",
                   g.text);
@@ -434,9 +432,8 @@ TEST(lpfg_compiled_function_errors)
                "int f(int n) { while (n > 0) n = n + 1; return n; }\n"
                "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
     def.max_loop_iterations = 1000;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    ls = lsys_from_def(ctx, &def);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK_STATUS(cbm_lsys_step(ls), CBM_E_LIMIT);
         CHECK_MSG(strstr(g.text, "more loop iterations in one step than the limit"), "%s", g.text);
         cbm_lsys_destroy(ls);
@@ -617,18 +614,15 @@ TEST(lpfg_runtime_limits)
     def.text = "#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
                "A(x) : { while (x > 0) x = x + 1; produce A(x); }\n";
     def.max_loop_iterations = 1000;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
         cbm_lsys_destroy(ls);
     }
     def.text = "#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
                "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    ls = lsys_from_def(ctx, &def);
     if (ls) {
-        CHECK_OK(cbm_lsys_reset(ls));
         CHECK(cbm_lsys_step(ls) == CBM_E_LIMIT);
         cbm_lsys_destroy(ls);
     }
@@ -661,9 +655,7 @@ TEST(lpfg_struct_many_fields)
     cbm_lsys_def def = cbm_lsys_def_default();
     def.path = "big.l";
     def.text = t;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     CHECK_OK(cbm_lsys_step(ls));
     CHECK_OK(cbm_lsys_step(ls));
     cbm_lsys_cursor c;

@@ -22,11 +22,7 @@ static cbm_status load_text(cbm_context *ctx, const char *text, bool float32, cb
 static char *derive_text(cbm_context *ctx, const char *text, int n)
 {
     cbm_lsys *ls = NULL;
-    if (load_text(ctx, text, false, &ls) != CBM_OK)
-        return NULL;
-    cbm_status s = cbm_lsys_reset(ls);
-    for (int i = 0; i < n && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "test.l", text, n, &ls);
     tbuf b = {0};
     if (s == CBM_OK)
         format_string(ls, false, false, &b);
@@ -79,9 +75,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     def.path = "s.l";
     def.text = model;
     def.seed = 99;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     CHECK_OK(cbm_lsys_step(ls));
     tbuf got = {0};
     format_string(ls, false, false, &got);
@@ -104,8 +98,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     ls = NULL;
     def.text = "Lsystem: 1\nderivation length: 12\nAxiom: F\nF --> FF : 1\nF --> A : 0\n"
                "endlsystem\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     for (int i = 0; i < 12; i++)
         CHECK_OK(cbm_lsys_step(ls));
     CHECK_EQ_INT(cbm_lsys_module_count(ls), 4096); /* probability 0 never chosen */
@@ -124,8 +117,7 @@ TEST(stochastic_choice_draws_drand48_per_module)
     ls = NULL;
     def.text = "Lsystem: 1\nderivation length: 7\nAxiom: F\nF --> FA : 1\nF --> FB : 3\n"
                "endlsystem\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     int na = 0, nb = 0;
     for (int i = 0; i < 7; i++)
         CHECK_OK(cbm_lsys_step(ls));
@@ -153,8 +145,7 @@ TEST(stochastic_frequencies)
     for (int rep = 0; rep < 500; rep++) {
         cbm_lsys *ls = NULL;
         def.seed = rep;
-        CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-        CHECK_OK(cbm_lsys_reset(ls));
+        ls = lsys_from_def(ctx, &def);
         CHECK_OK(cbm_lsys_step(ls));
         CHECK_OK(cbm_lsys_step(ls));
         cbm_lsys_cursor c;
@@ -465,8 +456,7 @@ TEST(expression_depth_and_loops_are_bounded)
     def.text = "Lsystem: 1\nderivation length: 1\nAxiom: A\n"
                "A : {x=0; while (1) {x=x+1;}} --> B\nendlsystem\n";
     def.max_loop_iterations = 1000000;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    ls = lsys_from_def(ctx, &def);
     CHECK_STATUS(cbm_lsys_step(ls), CBM_E_LIMIT);
     CHECK(strstr(cbm_context_last_error(ctx), "while loop") != NULL);
     cbm_lsys_destroy(ls);
@@ -507,19 +497,15 @@ TEST(step_limit)
 static cbm_status oom_run(cbm_context *ctx, void *ud)
 {
     (void)ud;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "oom.l";
-    def.text = "#define R(x) (x*2)\nLsystem: 1\ndefine: {array t[3] = {1,2,3};}\n"
-               "derivation length: 3\nignore: +\nAxiom: A(1)\n"
-               "B(x) < A(y) : {z=t[1];} y > 0 --> A(R(y)+z)[+B(y)]\n"
-               "A(y) --> B(y)A(y)\n"
-               "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
-               "endlsystem\n";
+    const char *text =
+        "#define R(x) (x*2)\nLsystem: 1\ndefine: {array t[3] = {1,2,3};}\n"
+        "derivation length: 3\nignore: +\nAxiom: A(1)\n"
+        "B(x) < A(y) : {z=t[1];} y > 0 --> A(R(y)+z)[+B(y)]\n"
+        "A(y) --> B(y)A(y)\n"
+        "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
+        "endlsystem\n";
     cbm_lsys *ls = NULL;
-    CBM_TRY(cbm_lsys_load(ctx, &def, &ls));
-    cbm_status s = cbm_lsys_reset(ls);
-    for (int i = 0; i < 3 && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "oom.l", text, 3, &ls);
     if (s == CBM_OK)
         s = cbm_lsys_apply_homomorphism(ls);
     cbm_lsys_destroy(ls);

@@ -260,21 +260,14 @@ TEST(a_call_is_not_a_query)
 static cbm_status oom_run(cbm_context *ctx, void *ud)
 {
     (void)ud;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "oom.l";
-    def.text = "Lsystem: 1\nderivation length: 3\nAxiom: A(1)\n"
-               "A(x) --> I?(2,0.5)B(x)$A(x+1)\nhomomorphism\nI --> F\nendlsystem\n"
-               "Lsystem: 2\nignore: +\nAxiom: B(1)\nStartEach: {n = n + 1;}\n"
-               "B(x) --> +C(x)?(3)D$\nC(x) --> C(x+n)\n"
-               "decomposition\nC(x) --> E(x)\nhomomorphism\nseed: 3\nE(x) --> F(ran(x))\n"
-               "endlsystem\nLsystem: 3\nAxiom: D\nD --> DD\nendlsystem\n";
+    const char *text = "Lsystem: 1\nderivation length: 3\nAxiom: A(1)\n"
+                       "A(x) --> I?(2,0.5)B(x)$A(x+1)\nhomomorphism\nI --> F\nendlsystem\n"
+                       "Lsystem: 2\nignore: +\nAxiom: B(1)\nStartEach: {n = n + 1;}\n"
+                       "B(x) --> +C(x)?(3)D$\nC(x) --> C(x+n)\n"
+                       "decomposition\nC(x) --> E(x)\nhomomorphism\nseed: 3\nE(x) --> F(ran(x))\n"
+                       "endlsystem\nLsystem: 3\nAxiom: D\nD --> DD\nendlsystem\n";
     cbm_lsys *ls = NULL;
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
-    if (s != CBM_OK)
-        return s;
-    s = cbm_lsys_reset(ls);
-    for (int i = 0; i < 3 && s == CBM_OK; i++)
-        s = cbm_lsys_step(ls);
+    cbm_status s = lsys_derive(ctx, "oom.l", text, 3, &ls);
     if (s == CBM_OK)
         s = cbm_lsys_apply_homomorphism(ls);
     cbm_lsys_destroy(ls);

@@ -22,10 +22,7 @@ static void check_writer(bool float32)
     def.path = "write.l";
     def.text = MODEL;
     def.float32 = float32;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    if (ls)
-        CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     for (int i = 0; i < 12 && ls; i++)
         CHECK_OK(cbm_lsys_step(ls));
     /* 4096 A, 4095 B, 4095 C: more distinct numbers than the memo's 4096 slots */

@@ -355,10 +355,7 @@ TEST(summary_bad_tables)
 TEST(summary_of_a_plant)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = 0.5;
     d.core.youngs_modulus = 8e9;

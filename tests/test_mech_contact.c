@@ -134,10 +134,7 @@ TEST(contact_tangent_matches_finite_differences)
  * that part of it lies below the plane halfway up. */
 static cbm_plant *bent_tree(cbm_context *ctx, int n)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.3);
     if (!p)
         return NULL;
     for (int i = 0; i < n; i++) {
@@ -442,15 +439,10 @@ static double language_lowest(cbm_context *ctx, const char *ground)
              "Axiom: Down(90) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S())"
              " I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S()) I(S());\n",
              ground);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "ground.l";
-    def.text = text;
-    cbm_lsys *ls = NULL;
     double low = NAN;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "ground.l", text);
     if (!ls)
         return NAN;
-    CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     cbm_lsys_cursor c;
     cbm_lsys_cursor_begin(ls, false, &c);
@@ -485,10 +477,7 @@ TEST(contact_language_ground)
  * ground at the trunk's foot (k = 1e3 N/m, smoothing 2 mm). */
 static cbm_plant *rosette(cbm_context *ctx)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     if (!p)
         return NULL;
     cbm_segment_def d = cbm_segment_def_default();

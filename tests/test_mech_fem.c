@@ -15,10 +15,7 @@ static cbm_solve_def fem_solve(size_t increments)
 
 static cbm_plant *rod(cbm_context *ctx, int n, double L, double r, double E, double rho)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.0);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.0);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = L / n;
     d.core.youngs_modulus = E;
@@ -72,10 +69,7 @@ TEST(fem_branched_agrees_with_statics_small_load)
     cbm_vec3 tips[2][3];
     for (int which = 0; which < 2; which++) {
         int n = which ? 240 : 12; /* segments per axis: FEM coarse, statics fine */
-        cbm_plant_def pd = cbm_plant_def_default();
-        pd.base_orientation = cbm_mech_clamp_orientation(PI / 3);
-        cbm_plant *p = NULL;
-        CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+        cbm_plant *p = clamped_plant(ctx, PI / 3);
         cbm_segment_def d = cbm_segment_def_default();
         d.core.youngs_modulus = 5e11;
         d.core.shear_modulus = 5e11 / 2.6;
@@ -293,10 +287,7 @@ TEST(fem_maturation_curvature_rate)
 TEST(fem_growth_counts_and_tropism)
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     cbm_segment_def d = cbm_segment_def_default();
     d.length = 0.1;
     d.core.youngs_modulus = 1e8;

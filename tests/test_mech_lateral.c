@@ -8,10 +8,7 @@
  * is added before the continuation (declared) or after it (automatic). Returns the plant. */
 static cbm_plant *axis_with_lateral(cbm_context *ctx, bool lateral_first)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(0.2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, 0.2);
     if (!p)
         return NULL;
     cbm_segment_def d = cbm_segment_def_default();

@@ -55,10 +55,7 @@ static cbm_plant *pair_of_stems(cbm_context *ctx, int n, double L, double a, dou
  * by `spread` rad at even divergence angles, a fruit of radius r and mass `fm` on each. */
 static cbm_plant *bunch(cbm_context *ctx, int k, int m, double spread, double r, double fm)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(-0.5 * PI + 0.3);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, -0.5 * PI + 0.3);
     if (!p)
         return NULL;
     cbm_segment_def d = cbm_segment_def_default();
@@ -664,9 +661,7 @@ TEST(pairs_language)
     cbm_lsys_def def = cbm_lsys_def_default();
     def.text = src;
     def.path = "fruit.l";
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_def(ctx, &def);
     CHECK_OK(cbm_lsys_step(ls));
     cbm_plant *p = NULL;
     CHECK_OK(cbm_lsys_mech_plant(ls, &p));

@@ -11,10 +11,7 @@
  * branching angles, radius shrinking with depth, point masses and tip forces on some. */
 static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E)
 {
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2);
     if (!p)
         return NULL;
     for (size_t i = 0; i < n; i++) {
@@ -366,10 +363,7 @@ static cbm_plant *floppy_tree(cbm_context *ctx, int trial)
     double E = pow(10, 5.5 + 4.5 * ((trial * 37) % 60) / 60.0);
     size_t n = 50 + (size_t)((trial * 53) % 400);
     cbm_context_seed(ctx, 100 + (uint64_t)trial);
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation((trial % 5) * 0.4);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, (trial % 5) * 0.4);
     for (size_t i = 0; i < n; i++) {
         cbm_segment_def d = cbm_segment_def_default();
         if (i > 0) {

@@ -84,10 +84,7 @@ TEST(mech_stage_cold_starts)
 static void stem_steps(cbm_mech_warm_path path, size_t seen[CBM_SOLVE_STAGE_COUNT])
 {
     cbm_context *ctx = test_ctx();
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.base_orientation = cbm_mech_clamp_orientation(PI / 2 - 20 * PI / 180);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
+    cbm_plant *p = clamped_plant(ctx, PI / 2 - 20 * PI / 180);
     for (int i = 0; i < 8; i++) {
         cbm_segment_def d = cbm_segment_def_default();
         d.parent = i - 1;

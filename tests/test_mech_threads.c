@@ -1,62 +1,34 @@
 /* The tree factorisation and solve split a branched plant over threads (solve_tree.c,
  * "Threads"): the results must be the same to the bit for any number of threads. A random tree
  * (each segment continues its predecessor with probability 0.8, else branches off a random
- * earlier one, as bench_mech's `tree`) is solved from rest with 1, 2 and 3 threads, the split
- * forced even for this size, and every angle, moment, position and statistic compared bit for
- * bit; a chain, which stays serial, too. */
+ * earlier one: bench_mech's `tree`, bench/random_tree.h) is solved from rest with 1, 2 and 3
+ * threads, the split forced even for this size, and every angle, moment, position and
+ * statistic compared bit for bit; a chain, which stays serial, too. */
 #include "test.h"
 
 #include "cambium/lsys.h"
 #include "lsys_util.h"
+#include "cambium/ober.h"
 #include "cambium/tree.h"
 #include "mech/mech_internal.h"
+#include "random_tree.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#define PI 3.14159265358979323846
-
+/* The benches' random tree (bench/random_tree.h) with seed 11; a chain leans at 0.3 rad. */
 static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E, double leaf, bool chain)
 {
-    cbm_context_seed(ctx, 11);
-    int64_t *par = malloc(n * sizeof *par);
-    double *count = malloc(n * sizeof *count);
-    unsigned char *seen = calloc(n, 1);
-    par[0] = -1;
-    for (size_t i = 1; i < n; i++)
-        par[i] = chain || cbm_context_uniform(ctx) < 0.8
-                     ? (int64_t)i - 1
-                     : (int64_t)(cbm_context_uniform(ctx) * (double)i);
-    for (size_t i = 0; i < n; i++)
-        count[i] = 1;
-    for (size_t i = n; i-- > 1;)
-        count[par[i]] += count[i];
-    cbm_plant_def pd = cbm_plant_def_default();
-    pd.capacity = n;
-    pd.base_orientation = cbm_mech_clamp_orientation(chain ? 0.3 : PI / 2);
-    cbm_plant *p = NULL;
-    CHECK_OK(cbm_plant_create(ctx, &pd, &p));
-    for (size_t i = 0; i < n && p; i++) {
-        cbm_segment_def d = cbm_segment_def_default();
-        d.parent = par[i];
-        d.length = 0.02;
-        d.core.a = d.core.b = 0.002 * sqrt(count[i]);
-        d.core.youngs_modulus = E;
-        d.core.shear_modulus = E / 16;
-        d.core.density = 700;
-        if (i > 0 && seen[par[i]]) {
-            d.divergence = 2.39996 * (double)i;
-            d.deviation = (30 + 30 * cbm_context_uniform(ctx)) * PI / 180;
-            d.roll = -d.divergence;
-        }
-        if (i > 0)
-            seen[par[i]] = 1;
-        d.point_mass = count[i] == 1 ? leaf : 0.0;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
-    free(seen);
-    free(par);
-    free(count);
+    random_tree_def d = random_tree_def_default();
+    d.n = d.capacity = n;
+    d.E = E;
+    d.leaf = leaf;
+    d.seed = 11;
+    d.chain = chain;
+    if (chain)
+        d.base_angle = 0.3;
+    cbm_plant *p = random_tree_create(ctx, &d);
+    CHECK(p != NULL);
     return p;
 }
 
@@ -215,6 +187,82 @@ TEST(tree_model_solve_threads_same_bits)
     CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "-1") == CBM_E_INVALID);
     CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);
     CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "1.5") == CBM_E_INVALID);
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_min_segments(50000);
+}
+
+/* Two vectors the same to the bit. */
+static bool same_vec_bits(cbm_vec3 a, cbm_vec3 b)
+{
+    const double x[6] = {a.x, a.y, a.z, b.x, b.y, b.z};
+    uint64_t u[6];
+    memcpy(u, x, sizeof u);
+    return u[0] == u[3] && u[1] == u[4] && u[2] == u[5];
+}
+
+/* The Oberlaender trees take the same parameter (`cambium grow ober-* -D solve_threads=N`): it
+ * reaches mechanicsFeedback's equilibria (the grown shoots the same to the bit with 1 and 2
+ * threads, the split forced) and cbm_ober_mechanics' (the solved plant's setting, its split and
+ * its bits). A bad value is refused naming the parameter, with the fruit tree's range. */
+TEST(ober_solve_threads_same_bits)
+{
+    cbm__mech_tree_min_segments(0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_ober_stand *s[2] = {NULL, NULL};
+    cbm_plant *p[2] = {NULL, NULL};
+    for (int k = 0; k < 2 && ctx; k++) {
+        cbm_ober_def d;
+        CHECK_OK(cbm_ober_def_builtin(ctx, "ober-troll", &d));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "maxOrder", "2", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "mechanicsFeedback", "1", NULL));
+        CHECK_OK(cbm_ober_def_set(ctx, &d, "solve_threads", k == 0 ? "1" : "2", NULL));
+        CHECK_EQ_INT(d.solve_threads, k + 1);
+        d.years = 6;
+        CHECK_OK(cbm_ober_create(ctx, &d, &s[k]));
+        if (!s[k])
+            continue;
+        CHECK_OK(cbm_ober_run(s[k]));
+        cbm_ober_mech_def md = cbm_ober_mech_def_default();
+        cbm_ober_mech_result r;
+        CHECK_OK(cbm_ober_mechanics(s[k], 0, &md, &r, &p[k]));
+    }
+    size_t n = s[0] && s[1] ? cbm_ober_shoot_count(s[0]) : 0;
+    CHECK(n > 20 && cbm_ober_shoot_count(s[1]) == n);
+    for (size_t i = 0; i < n; i++) {
+        cbm_ober_shoot a, b;
+        CHECK_OK(cbm_ober_shoot_info(s[0], i, &a));
+        CHECK_OK(cbm_ober_shoot_info(s[1], i, &b));
+        CHECK_MSG(same_vec_bits(a.base, b.base) && same_vec_bits(a.tip, b.tip), "shoot %zu differs",
+                  i);
+    }
+    CHECK(p[0] && p[1]);
+    if (p[0] && p[1]) {
+        printf("ober-troll, 6 years, mechanicsFeedback: %zu shoots, %zu segments; threads %d and "
+               "%d, split into %d and %d\n",
+               n, p[0]->n, p[0]->threads, p[1]->threads, p[0]->work.tsplit, p[1]->work.tsplit);
+        CHECK_EQ_INT(p[0]->threads, 1);
+        CHECK_EQ_INT(p[1]->threads, 2);
+        CHECK_EQ_INT(p[1]->work.tsplit, 2);
+        CHECK(same_plant_bits(p[0], p[1]));
+    }
+    for (int k = 0; k < 2; k++) {
+        cbm_plant_destroy(p[k]);
+        cbm_ober_destroy(s[k]);
+    }
+    cbm_ober_def d = cbm_ober_def_default();
+    CHECK_EQ_INT(d.solve_threads, 0);
+    static const char *const bad[] = {"-1", "1.5", "1025", "two"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK_MSG(cbm_ober_def_set(ctx, &d, "solve_threads", bad[i], NULL) == CBM_E_INVALID,
+                  "solve_threads = %s accepted", bad[i]);
+        CHECK_MSG(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL, "%s",
+                  cbm_context_last_error(ctx));
+    }
+    CHECK_EQ_INT(d.solve_threads, 0);
+    d.solve_threads = -1;
+    CHECK(cbm_ober_def_check(ctx, &d) == CBM_E_INVALID);
+    CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);
     cbm_context_destroy(ctx);
     cbm__mech_tree_min_segments(50000);
 }

@@ -112,9 +112,7 @@ static cbm_vec3 tip_of(const double *g)
 TEST(mechlang_language_and_native_agree)
 {
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "chain.l", CHAIN, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "chain.l", CHAIN);
     CHECK_OK(cbm_lsys_step(ls));
     double g[8][MS];
     int sym = lsys_symbol(ls, "I");
@@ -139,20 +137,28 @@ TEST(mechlang_language_and_native_agree)
     test_ctx_end(ctx);
 }
 
+/* The path of models/<name> (a static buffer: the next call overwrites it). */
+static const char *model_path(const char *name)
+{
+    static char p[2048];
+    snprintf(p, sizeof p, "%s/models/%s", test_source_dir(), name);
+    return p;
+}
+
 static cbm_status load_model(cbm_context *ctx, const char *name, cbm_lsys **ls)
 {
-    char p[2048];
-    snprintf(p, sizeof p, "%s/models/%s", test_source_dir(), name);
-    return load(ctx, p, NULL, ls);
+    return load(ctx, model_path(name), NULL, ls);
 }
+
+/* models/<name> loaded and reset, both checked at the caller's line (lsys_from_text reads the
+ * file when there is no text). */
+#define model_reset(ctx, name) lsys_from_text((ctx), model_path(name), NULL)
 
 /* Fig. 2: the heading goes below the horizontal and the tip comes back above it. */
 TEST(mechlang_jirasek_s_branch)
 {
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load_model(ctx, "jirasek-s-branch.l", &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = model_reset(ctx, "jirasek-s-branch.l");
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
         CHECK_OK(cbm_lsys_step(ls));
     static double g[64][MS];
@@ -189,9 +195,7 @@ TEST(mechlang_jirasek_s_branch)
 TEST(mechlang_jirasek_cherries)
 {
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load_model(ctx, "jirasek-cherries.l", &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = model_reset(ctx, "jirasek-cherries.l");
     double prev[3] = {2, 2, 2};
     static double g[64][MS];
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++) {
@@ -234,9 +238,7 @@ TEST(mechlang_state_survives_rewriting)
                             "I(s) : { produce I(s); }\n"
                             "A(n) : { produce A(n + 1); }\n";
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "rewrite.l", M, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "rewrite.l", M);
     CHECK_OK(cbm_lsys_step(ls));
     double a[4][MS], b[4][MS];
     int sym = lsys_symbol(ls, "I");
@@ -278,9 +280,7 @@ TEST(mechlang_reaction_wood)
         char text[1024];
         snprintf(text, sizeof text, "%s%s", RW, END[k]);
         cbm_context *ctx = test_ctx();
-        cbm_lsys *ls = NULL;
-        CHECK_OK(load(ctx, "rw.l", text, &ls));
-        CHECK_OK(cbm_lsys_reset(ls));
+        cbm_lsys *ls = lsys_from_text(ctx, "rw.l", text);
         CHECK_OK(cbm_lsys_step(ls));
         CHECK_EQ_INT(segments(ls, lsys_symbol(ls, "I"), a[k], 4), 3);
         cbm_lsys_destroy(ls);
@@ -303,9 +303,7 @@ TEST(mechlang_age_wood)
     snprintf(text, sizeof text, "%s%s", RW,
              "EndEach: { Wood(1e9, 2e9, 10, 900, 0); AgeWood(4); AgeWood(1); Equilibrium(); }\n");
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "age.l", text, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "age.l", text);
     CHECK_OK(cbm_lsys_step(ls));
     double g[4][MS];
     CHECK_EQ_INT(segments(ls, lsys_symbol(ls, "I"), g, 4), 3);
@@ -338,9 +336,7 @@ TEST(mechlang_break)
                             "Axiom: I(S(0.02, 5e7)) SB Down(90) I(S(0.004, 1e6)) I(S(0.004, 5e7))\n"
                             "       Fruit(1) EB I(S(0.02, 5e7)) Fruit(0.1);\n";
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "break.l", M, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "break.l", M);
     CHECK_OK(cbm_lsys_step(ls));
     double g[4][MS];
     int sym = lsys_symbol(ls, "I");
@@ -386,9 +382,7 @@ TEST(mechlang_runtime_errors)
         "#include <lpfgall.h>\nderivation length: 1;\nmodule I(MechSegment);\n"
         "mechanics: I;\nAxiom: I(MechSegment());\nEndEach: { Equilibrium(); }\n";
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "zero.l", M, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "zero.l", M);
     CHECK(cbm_lsys_step(ls) != CBM_OK);
     const char *msg = cbm_context_last_error(ctx);
     CHECK_MSG(strstr(msg, "mechanical segment 1: length must be > 0") != NULL, "%s", msg);
@@ -421,9 +415,7 @@ static cbm_status run_text(cbm_context *ctx, const char *path, const char *text,
 TEST(mechlang_jirasek_hanging)
 {
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load_model(ctx, "jirasek-hanging.l", &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = model_reset(ctx, "jirasek-hanging.l");
     for (int i = 0; i < cbm_lsys_derivation_length(ls); i++)
         CHECK_OK(cbm_lsys_step(ls));
     int sym = lsys_symbol(ls, "I"), sb = lsys_symbol(ls, "SB"), eb = lsys_symbol(ls, "EB");
@@ -709,9 +701,7 @@ TEST(mechlang_kept_plant_break_cuts)
 {
     /* the model above cuts its fruit branch in some step (the kept plant is dropped then) */
     cbm_context *ctx = test_ctx();
-    cbm_lsys *ls = NULL;
-    CHECK_OK(load(ctx, "keep.l", KEEP, &ls));
-    CHECK_OK(cbm_lsys_reset(ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "keep.l", KEEP);
     while (cbm_lsys_steps_done(ls) < cbm_lsys_derivation_length(ls))
         CHECK_OK(cbm_lsys_step(ls));
     double g[8][MS];

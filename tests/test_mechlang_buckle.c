@@ -38,9 +38,7 @@ TEST(mechlang_buckle_table_6_1)
         def.path = path;
         def.defines = defs;
         def.define_count = 2;
-        cbm_lsys *ls = NULL;
-        CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-        CHECK_OK(cbm_lsys_reset(ls));
+        cbm_lsys *ls = lsys_from_def(ctx, &def);
         int steps = cbm_lsys_derivation_length(ls);
         for (int i = 0; i < steps && !cbm_lsys_stopped(ls); i++)
             CHECK_OK(cbm_lsys_step(ls));

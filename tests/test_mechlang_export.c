@@ -122,13 +122,9 @@ static void check_axes(const char *axiom, const char *orders, const char *conts)
              "MechSegment S() { MechSegment s; s.length = 0.1; s.a = 0.003; s.b = 0.003; "
              "s.E = 1e9; s.density = 700; return s; }\nAxiom: %s;\n",
              axiom);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "axes.l";
-    def.text = text;
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+    cbm_lsys *ls = lsys_from_text(ctx, "axes.l", text);
     cbm_plant *pl = NULL;
-    if (ls && cbm_lsys_reset(ls) == CBM_OK)
+    if (ls)
         CHECK_OK(cbm_lsys_mech_plant(ls, &pl));
     size_t n = pl ? cbm_plant_segment_count(pl) : 0;
     CHECK_EQ_INT(n, strlen(orders));

@@ -47,10 +47,13 @@ typedef enum cbm_approx_route {
     CBM_APPROX_ROUTE_CLOSED,      ///< thesis: closed form (2.31)
     CBM_APPROX_ROUTE_CLOSED_COSH, ///< thesis: closed form with cosh past 90 degrees (2.32)
     CBM_APPROX_ROUTE_BISECTION,   ///< thesis: the listing's coarse bisection
-    CBM_APPROX_ROUTE_ROOT         ///< corrected: accurate root of (2.26)
+    CBM_APPROX_ROUTE_ROOT,        ///< corrected: accurate root of (2.26)
+    /// corrected: the small-load series, where (K0 disc / (1 - coni))^2 <= 0.02 (no root, no
+    /// evaluation; docs/methods.md)
+    CBM_APPROX_ROUTE_SERIES
 } cbm_approx_route;
 
-/// "none", "closed", "closed-cosh", "bisection", "root"; "unknown" out of range.
+/// "none", "closed", "closed-cosh", "bisection", "root", "series"; "unknown" out of range.
 CBM_API const char *cbm_approx_route_name(cbm_approx_route r);
 
 /// The generator's inputs, GetRotationAnglesApprox(disc, t0, K0, coni, p).

@@ -90,6 +90,9 @@ typedef struct cbm_ober_def {
     double mech_e;         ///< mechE, Pa: green wood's Young's modulus (8e9)
     double mech_density;   ///< mechDensity, kg/m^3: green wood (800)
     double mech_leaf_mass; ///< mechLeafMass, kg/m^2 of leaf (0.2)
+    /// solve_threads: threads of each equilibrium's sweeps, mechanicsFeedback's and
+    /// cbm_ober_mechanics' (cbm_solve_def.threads; 0, the default: one per processor)
+    int solve_threads;
     /* the stand */
     int stand_x, stand_y; ///< trees on a grid of stand_x by stand_y (1 x 1: one tree)
     double spacing;       ///< m between neighbouring trees of the grid
@@ -229,8 +232,8 @@ typedef struct cbm_ober_mech_result {
 /// pipe-model radius, the shape without the gravitropism joint as the rest shape, leaves as point
 /// masses), solves its statics under gravity and compares the shoot tips with the kinematic
 /// shape. On a tree grown with mechanicsFeedback the rest shape also carries the bends the
-/// wood memorised (docs/models.md). *plant_out (optional) receives the solved plant (the caller
-/// destroys it).
+/// wood memorised (docs/models.md). The solve runs on the stand's solve_threads. *plant_out
+/// (optional) receives the solved plant (the caller destroys it).
 CBM_API cbm_status cbm_ober_mechanics(const cbm_ober_stand *stand, size_t tree,
                                       const cbm_ober_mech_def *def, cbm_ober_mech_result *out,
                                       cbm_plant **plant_out);

@@ -1751,29 +1751,62 @@ static void symbol_list(lc_parser *L, bool consider)
         recover(L);
 }
 
-/* The roles of a point-mass module's parameters, `mass: Grape(mass, radius)`: `mass` (kg),
- * `radius` (m, the organ's contact sphere) or `_` (not used), in parameter order. Offsets (in
- * doubles) into *moff and *roff (-1: absent). false after an error. */
-static bool mass_roles(lc_parser *L, const lc_module *md, int *moff, int *roff)
+/* The roles a declaration gives a module's parameters, `mass: Grape(mass, radius)` or
+ * `light: Leaf(area, light)`: two role names and `_` (not used), in parameter order. */
+typedef struct {
+    const char *kind;    /* the module's kind, for messages */
+    const char *role[2]; /* the role names */
+} decl_roles;
+
+/* `mass` (kg) and `radius` (m, the organ's contact sphere) of a point mass (lsys/mechlang.c). */
+static const decl_roles mass_roles = {"point-mass", {"mass", "radius"}};
+/* `area` (m^2, a number the model sets) and `light` (a number Light() writes) of a leaf
+ * (lsys/lightlang.c). */
+static const decl_roles light_roles = {"leaf", {"area", "light"}};
+
+/* The module name that opens an entry of a declaration list (`mechanics:`, `mass:`, `light:`),
+ * its position in *pos: the module's index, -1 for an unknown module (reported, the name
+ * skipped) or -2 when no name is there (reported, the declaration skipped). */
+static int decl_module(lc_parser *L, size_t *pos)
+{
+    size_t n = ident(L);
+    *pos = L->c->pos;
+    if (!n) {
+        expected(L, "a module name");
+        recover(L);
+        return -2;
+    }
+    int m = find_mod(L->lp, L->t + *pos, n);
+    L->c->pos += n;
+    if (m < 0)
+        cbm__cerr(L->c, *pos, "unknown module '%.*s'", (int)n, L->t + *pos);
+    return m;
+}
+
+/* The roles of module md's parameters after its `(`, through the `)`: the offsets (in doubles)
+ * of the parameters with r's two roles into off[0] and off[1] (-1: absent; each role a number,
+ * given once). false after an error. */
+static bool parse_roles(lc_parser *L, const lc_module *md, const decl_roles *r, int off[2])
 {
     lc_model *lp = L->lp;
-    int off = 0;
+    int at = 0;
+    off[0] = off[1] = -1;
     for (int k = 0;; k++) {
         size_t n = ident(L), pos = L->c->pos;
         if (!n) {
-            expected(L, "mass, radius or _");
+            char what[48];
+            snprintf(what, sizeof what, "%s, %s or _", r->role[0], r->role[1]);
+            expected(L, what);
             return false;
         }
         L->c->pos += n;
         int *dst = NULL;
-        if (n == 4 && !strncmp(L->t + pos, "mass", 4))
-            dst = moff;
-        else if (n == 6 && !strncmp(L->t + pos, "radius", 6))
-            dst = roff;
-        else if (!(n == 1 && L->t[pos] == '_')) {
-            cbm__cerr(L->c, pos,
-                      "unknown role '%.*s' of a point-mass parameter (mass, radius or _)", (int)n,
-                      L->t + pos);
+        for (int j = 0; j < 2; j++)
+            if (strlen(r->role[j]) == n && !strncmp(L->t + pos, r->role[j], n))
+                dst = &off[j];
+        if (!dst && !(n == 1 && L->t[pos] == '_')) {
+            cbm__cerr(L->c, pos, "unknown role '%.*s' of a %s parameter (%s, %s or _)", (int)n,
+                      L->t + pos, r->kind, r->role[0], r->role[1]);
             return false;
         }
         if (k >= md->np) {
@@ -1791,18 +1824,12 @@ static bool mass_roles(lc_parser *L, const lc_module *md, int *moff, int *roff)
             return false;
         }
         if (dst)
-            *dst = off;
-        off += lc_type_size(lp, md->ptype[k]);
+            *dst = at;
+        at += lc_type_size(lp, md->ptype[k]);
         if (!accept(L, ","))
             break;
     }
-    if (!expect(L, ")"))
-        return false;
-    if (*moff < 0) {
-        cbm__cerr(L->c, L->c->pos - 1, "point-mass module '%s' needs a 'mass' parameter", md->name);
-        return false;
-    }
-    return true;
+    return expect(L, ")");
 }
 
 /* `mechanics: Module;` (its MechSegment parameter is the segment) and `mass: A, B;` (the first
@@ -1812,27 +1839,27 @@ static void mech_decl(lc_parser *L, bool mass)
 {
     lc_model *lp = L->lp;
     for (;;) {
-        size_t n = ident(L), pos = L->c->pos;
-        if (!n) {
-            expected(L, "a module name");
-            recover(L);
+        size_t pos;
+        int m = decl_module(L, &pos);
+        if (m == -2)
             return;
-        }
-        int m = find_mod(lp, L->t + pos, n);
-        L->c->pos += n;
-        if (m < 0) {
-            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
-        } else {
+        if (m >= 0) {
             const lc_module *md = &lp->mods.data[m];
-            int off = 0, found = -1, roff = -1;
+            int off = 0, found = -1;
             if (mass && accept(L, "(")) {
-                int moff = -1;
-                if (!mass_roles(L, md, &moff, &roff)) {
+                int roff[2];
+                if (!parse_roles(L, md, &mass_roles, roff)) {
                     recover(L);
                     return;
                 }
-                lp->mech_decl.mass_off[md->code] = moff;
-                lp->mech_decl.radius_off[md->code] = roff;
+                if (roff[0] < 0) {
+                    cbm__cerr(L->c, L->c->pos - 1,
+                              "point-mass module '%s' needs a 'mass' parameter", md->name);
+                    recover(L);
+                    return;
+                }
+                lp->mech_decl.mass_off[md->code] = roff[0];
+                lp->mech_decl.radius_off[md->code] = roff[1];
                 if (!accept(L, ","))
                     break;
                 continue;
@@ -1868,85 +1895,32 @@ static void mech_decl(lc_parser *L, bool mass)
         recover(L);
 }
 
-/* `light: Leaf(area, light), ...;`: the roles of a leaf module's parameters (lsys/lightlang.c):
- * `area` (m^2, a number the model sets), `light` (a number Light() writes) and `_` (not used),
- * in parameter order; both roles are needed. */
+/* `light: Leaf(area, light), ...;`: the roles of a leaf module's parameters (see light_roles);
+ * both roles are needed. */
 static void light_decl(lc_parser *L)
 {
     lc_model *lp = L->lp;
     for (;;) {
-        size_t n = ident(L), pos = L->c->pos;
-        if (!n) {
-            expected(L, "a module name");
-            recover(L);
-            return;
-        }
-        int m = find_mod(lp, L->t + pos, n);
-        L->c->pos += n;
+        size_t pos;
+        int m = decl_module(L, &pos), off[2];
         if (m < 0) {
-            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
-            recover(L);
+            if (m == -1)
+                recover(L);
             return;
         }
         const lc_module *md = &lp->mods.data[m];
-        int aoff = -1, loff = -1, off = 0;
-        if (!expect(L, "(")) {
+        if (!expect(L, "(") || !parse_roles(L, md, &light_roles, off)) {
             recover(L);
             return;
         }
-        for (int k = 0;; k++) {
-            size_t rn = ident(L), rpos = L->c->pos;
-            if (!rn) {
-                expected(L, "area, light or _");
-                recover(L);
-                return;
-            }
-            L->c->pos += rn;
-            int *dst = NULL;
-            if (rn == 4 && !strncmp(L->t + rpos, "area", 4))
-                dst = &aoff;
-            else if (rn == 5 && !strncmp(L->t + rpos, "light", 5))
-                dst = &loff;
-            else if (!(rn == 1 && L->t[rpos] == '_')) {
-                cbm__cerr(L->c, rpos, "unknown role '%.*s' of a leaf parameter (area, light or _)",
-                          (int)rn, L->t + rpos);
-                recover(L);
-                return;
-            }
-            if (k >= md->np) {
-                cbm__cerr(L->c, rpos, "module '%s' has %d parameter%s", md->name, md->np,
-                          md->np == 1 ? "" : "s");
-                recover(L);
-                return;
-            }
-            if (dst && (*dst >= 0 || !lc_is_scalar(md->ptype[k]))) {
-                if (*dst >= 0)
-                    cbm__cerr(L->c, rpos, "'%.*s' given twice", (int)rn, L->t + rpos);
-                else
-                    cbm__cerr(L->c, rpos,
-                              "parameter %d of '%s' must be a number to be its %.*s, not %s", k + 1,
-                              md->name, (int)rn, L->t + rpos, lp->types.data[md->ptype[k]].name);
-                recover(L);
-                return;
-            }
-            if (dst)
-                *dst = off;
-            off += lc_type_size(lp, md->ptype[k]);
-            if (!accept(L, ","))
-                break;
-        }
-        if (!expect(L, ")")) {
-            recover(L);
-            return;
-        }
-        if (aoff < 0 || loff < 0) {
+        if (off[0] < 0 || off[1] < 0) {
             cbm__cerr(L->c, L->c->pos - 1,
                       "leaf module '%s' needs an 'area' and a 'light' parameter", md->name);
             recover(L);
             return;
         }
-        lp->mech_decl.light_area_off[md->code] = aoff;
-        lp->mech_decl.light_out_off[md->code] = loff;
+        lp->mech_decl.light_area_off[md->code] = off[0];
+        lp->mech_decl.light_out_off[md->code] = off[1];
         if (!accept(L, ","))
             break;
     }

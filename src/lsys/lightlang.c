@@ -44,25 +44,16 @@ cbm_status cbm__lightlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s,
     }
     CBM_ARRAY(cbm_light_leaf) leaves = {0};
     CBM_ARRAY(double *) out = {0}; /* each leaf's light parameter */
-    CBM_ARRAY(const double *) stack = {0};
+    cbm__mwalk_stack stack = {0};
     double *absorbed = NULL;
     cbm_status st = CBM_OK;
-    double *par = s->par;
-    const double *last = NULL;
-    size_t j = 0, k = 0;
-    for (size_t i = 0; i < s->n && st == CBM_OK; i++) {
-        int code = s->sym[i] & 0x7f;
-        int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
-        double *p = par + k;
-        if (s->sym[i] & LSYS_PARAM_BIT) {
-            j++;
-            k += (size_t)np;
-        }
-        if (code == m->sb) {
-            st = CBM_ARRAY_PUSH(ctx, stack, last);
-        } else if (code == m->eb) {
-            if (stack.len)
-                last = stack.data[--stack.len];
+    const double *last = NULL; /* the MechSegment of the last segment on the path */
+    cbm__mwalk w = cbm__mwalk_start(m, s, (void *)&last, sizeof last, &stack);
+    while (st == CBM_OK && cbm__mwalk_next(ctx, &w)) {
+        int code = w.code, np = w.np;
+        double *p = w.p;
+        if (code == m->sb || code == m->eb) {
+            continue; /* the path is the walk's */
         } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
             last = p + m->seg_off;
         } else if (m->light_area_off[code] >= 0 && np > m->light_area_off[code] &&
@@ -107,6 +98,8 @@ cbm_status cbm__lightlang_run(cbm_context *ctx, const cbm__mechlang *m, lstr *s,
                 st = CBM_ARRAY_PUSH(ctx, out, p + m->light_out_off[code]);
         }
     }
+    if (st == CBM_OK)
+        st = w.st;
     if (st == CBM_OK && leaves.len) {
         absorbed = cbm__calloc(ctx, leaves.len, sizeof *absorbed);
         if (!absorbed)

@@ -145,20 +145,16 @@ static void euler_xzx(cbm_quat q, double *div, double *dev, double *roll)
 typedef struct view {
     CBM_ARRAY(double *) seg;  /* the MechSegment of each plant segment */
     CBM_ARRAY(size_t) mod;    /* module index of each segment in the string */
-    CBM_ARRAY(int64_t) stack; /* branch stack: last segment */
-    CBM_ARRAY(cbm_quat) qstack;
-    CBM_ARRAY(uint8_t) bstack; /* branch stack: "a branch opened since the last segment" */
-    CBM_ARRAY(uint8_t) axis;   /* per segment: bit 0 on its parent's axis, bit 1 has such a child */
-    CBM_ARRAY(int32_t) order;  /* per segment: branch order (bracket nesting along the path) */
+    cbm__mwalk_stack path;    /* the walks' bracket stack */
+    CBM_ARRAY(uint8_t) axis;  /* per segment: bit 0 on its parent's axis, bit 1 has such a child */
+    CBM_ARRAY(int32_t) order; /* per segment: branch order (bracket nesting along the path) */
 } view;
 
 static void view_free(cbm_context *ctx, view *v)
 {
     CBM_ARRAY_FREE(ctx, v->seg);
     CBM_ARRAY_FREE(ctx, v->mod);
-    CBM_ARRAY_FREE(ctx, v->stack);
-    CBM_ARRAY_FREE(ctx, v->qstack);
-    CBM_ARRAY_FREE(ctx, v->bstack);
+    CBM_ARRAY_FREE(ctx, v->path);
     CBM_ARRAY_FREE(ctx, v->axis);
     CBM_ARRAY_FREE(ctx, v->order);
 }
@@ -172,35 +168,27 @@ static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
 /* First pass over the string: which segment continues its parent's axis. A segment after an SB
  * opened since its parent segment starts a lateral axis; the segment written after the branches
  * continues the axis (I [I ...] I: the last I). */
-static cbm_status axes(cbm_context *ctx, const cbm__mechlang *m, const lstr *s, view *v)
+static cbm_status axes(cbm_context *ctx, const cbm__mechlang *m, lstr *s, view *v)
 {
-    size_t j = 0;
-    int64_t last = -1;
-    uint8_t branched = 0;
-    v->stack.len = v->bstack.len = v->axis.len = 0;
-    for (size_t i = 0; i < s->n; i++) {
-        int code = s->sym[i] & 0x7f;
-        int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j++] : 0;
-        if (code == m->sb) {
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->bstack, branched));
-            branched = 1;
-        } else if (code == m->eb) {
-            if (v->stack.len) {
-                last = v->stack.data[--v->stack.len];
-                branched = v->bstack.data[--v->bstack.len];
-            }
-        } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
-            uint8_t a = (uint8_t)(last < 0 || !branched);
-            if (a && last >= 0)
-                v->axis.data[last] |= 2;
+    struct {
+        int64_t last;     /* the last segment on the path */
+        uint8_t branched; /* a branch opened since it */
+    } path = {-1, 0};
+    v->axis.len = 0;
+    cbm__mwalk w = cbm__mwalk_start(m, s, &path, sizeof path, &v->path);
+    while (cbm__mwalk_next(ctx, &w)) {
+        if (w.code == m->sb) {
+            path.branched = 1;
+        } else if (w.code == m->seg_code && w.np >= m->seg_off + MS_SIZE) {
+            uint8_t a = (uint8_t)(path.last < 0 || !path.branched);
+            if (a && path.last >= 0)
+                v->axis.data[path.last] |= 2;
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->axis, a));
-            last = (int64_t)v->axis.len - 1;
-            branched = 0;
+            path.last = (int64_t)v->axis.len - 1;
+            path.branched = 0;
         }
     }
-    v->stack.len = v->bstack.len = 0;
-    return CBM_OK;
+    return w.st;
 }
 
 /* The one ring of a segment of parameters g (index ix): the stored equivalent ring. */
@@ -229,43 +217,33 @@ static cbm_status core_of(const double *g, size_t ix, cbm_ring *r, char *err, si
 static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_plant *pl, view *v,
                         char *err, size_t errn)
 {
-    double *par = s->par;
-    size_t j = 0, k = 0;
-    int64_t last = -1;
-    cbm_quat rel = q_identity();
+    struct {
+        int64_t last; /* the last segment on the path */
+        cbm_quat rel; /* the turtle's rotations since it, in its frame */
+    } path = {-1, q_identity()};
     CBM_TRY(axes(ctx, m, s, v));
-    for (size_t i = 0; i < s->n; i++) {
-        int code = s->sym[i] & 0x7f;
-        int np = (s->sym[i] & LSYS_PARAM_BIT) ? s->pc[j] : 0;
-        double *p = par + k;
-        if (s->sym[i] & LSYS_PARAM_BIT) {
-            j++;
-            k += (size_t)np;
-        }
-        if (code == m->sb) {
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->stack, last));
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->qstack, rel));
-        } else if (code == m->eb) {
-            if (v->stack.len) {
-                last = v->stack.data[--v->stack.len];
-                rel = v->qstack.data[--v->qstack.len];
-            }
-        } else if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
+    cbm__mwalk w = cbm__mwalk_start(m, s, &path, sizeof path, &v->path);
+    while (cbm__mwalk_next(ctx, &w)) {
+        int code = w.code, np = w.np;
+        double *p = w.p;
+        if (code == m->sb || code == m->eb)
+            continue; /* the path is the walk's */
+        if (code == m->seg_code && np >= m->seg_off + MS_SIZE) {
             double *g = p + m->seg_off;
             size_t ix = v->seg.len;
             if (!(g[MS_LENGTH] > 0) || !isfinite(g[MS_LENGTH]))
                 return seg_error(err, errn, ix, "length must be > 0 (m)");
             cbm_segment_def d = cbm_segment_def_default();
             CBM_TRY(core_of(g, ix, &d.core, err, errn));
-            d.parent = last;
+            d.parent = path.last;
             /* a lateral leaves the joint with the parent's distal half to the axis; where the
              * parent has no axial child its first lateral takes that joint (the axis turns into
              * it, as when an apex dies), keeping its lateral order */
             bool axial = (v->axis.data[ix] & 1) != 0;
-            d.lateral = !axial && last >= 0 && (v->axis.data[last] & 2);
-            d.order = last < 0 ? 0 : v->order.data[last] + (axial ? 0 : 1);
+            d.lateral = !axial && path.last >= 0 && (v->axis.data[path.last] & 2);
+            d.order = path.last < 0 ? 0 : v->order.data[path.last] + (axial ? 0 : 1);
             d.length = g[MS_LENGTH];
-            euler_xzx(q_normalize(rel), &d.divergence, &d.deviation, &d.roll);
+            euler_xzx(q_normalize(path.rel), &d.divergence, &d.deviation, &d.roll);
             d.omega = v3(g[MS_OMEGA], g[MS_OMEGA + 1], g[MS_OMEGA + 2]);
             d.point_mass = 0;
             cbm_status st = cbm_plant_add_segment(pl, &d, NULL);
@@ -275,22 +253,22 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
                 return st;
             }
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->seg, g));
-            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, i));
+            CBM_TRY(CBM_ARRAY_PUSH(ctx, v->mod, w.at));
             CBM_TRY(CBM_ARRAY_PUSH(ctx, v->order, d.order));
-            last = (int64_t)ix;
-            rel = q_identity();
+            path.last = (int64_t)ix;
+            path.rel = q_identity();
         } else if (m->turtle[code] && np >= (m->turtle[code] == TR_TURN ? 0 : 1)) {
-            rel = q_mul(rel, rot_of(m->turtle[code], np ? p[0] : 0));
-        } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && last >= 0) {
+            path.rel = q_mul(path.rel, rot_of(m->turtle[code], np ? p[0] : 0));
+        } else if (m->mass_off[code] >= 0 && np > m->mass_off[code] && path.last >= 0) {
             double mass = p[m->mass_off[code]];
             if (!(mass >= 0) || !isfinite(mass)) {
                 snprintf(err, errn, "point mass %g kg after mechanical segment %lld", mass,
-                         (long long)last + 1);
+                         (long long)path.last + 1);
                 return CBM_E_INVALID;
             }
             cbm_segment_state st;
-            CBM_TRY(cbm_plant_segment(pl, (size_t)last, &st));
-            CBM_TRY(cbm_plant_set_load(pl, (size_t)last, st.point_mass + mass, st.tip_force,
+            CBM_TRY(cbm_plant_segment(pl, (size_t)path.last, &st));
+            CBM_TRY(cbm_plant_set_load(pl, (size_t)path.last, st.point_mass + mass, st.tip_force,
                                        st.tip_moment));
             int ro = m->radius_off[code];
             if (ro >= 0 && np > ro) {
@@ -298,15 +276,15 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
                 double r = p[ro];
                 if (!(r >= 0) || !isfinite(r)) {
                     snprintf(err, errn, "contact radius %g m after mechanical segment %lld", r,
-                             (long long)last + 1);
+                             (long long)path.last + 1);
                     return CBM_E_INVALID;
                 }
                 if (r > st.contact_radius)
-                    CBM_TRY(cbm_plant_set_contact_radius(pl, (size_t)last, r));
+                    CBM_TRY(cbm_plant_set_contact_radius(pl, (size_t)path.last, r));
             }
         }
     }
-    return CBM_OK;
+    return w.st;
 }
 
 /* New segments (negative age): rest rate from the tropism, Omega = rest. */

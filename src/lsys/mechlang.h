@@ -8,6 +8,8 @@
 #include "lang/mechsegment.h"
 #include "lsys/lsys_internal.h"
 
+#include <string.h>
+
 typedef struct cbm__mechlang {
     int seg_code;        /* module code carrying the segment, -1: none declared */
     int seg_off;         /* double offset of its MechSegment parameter */
@@ -35,6 +37,65 @@ typedef struct cbm__mechlang {
     cbm_lsys_sway_fn sway_fn; /* observer of Sway() (cbm_lsys_set_sway_observer), NULL: none */
     void *sway_ud;
 } cbm__mechlang;
+
+/* A walk over the modules of a string (parameters in double) that keeps a path state across
+ * the brackets: the caller's state (size bytes at `state`, e.g. the last mechanical segment
+ * before the module on its path from the root) is pushed at each SB and restored at its EB (an
+ * unmatched EB keeps it), before the bracket is shown to the caller. mechlang.c builds the
+ * plant and lightlang.c places the leaves with it.
+ *     cbm__mwalk w = cbm__mwalk_start(m, s, &path, sizeof path, &stack);
+ *     while (cbm__mwalk_next(ctx, &w)) { ... w.code, w.np, w.p ... }
+ *     (w.st: CBM_E_NOMEM when a push failed and the walk stopped)
+ * The stack's memory is the caller's, to keep between walks (CBM_ARRAY_FREE when done). */
+typedef CBM_ARRAY(unsigned char) cbm__mwalk_stack;
+typedef struct cbm__mwalk {
+    const cbm__mechlang *m;
+    lstr *s;
+    void *state;
+    size_t size;
+    cbm__mwalk_stack *stack; /* the states pushed at the open SBs */
+    size_t i, j, k;          /* the next module, parameter count and parameter */
+    size_t at;               /* the module shown: its index, */
+    int code, np;            /* code (7 bits) and parameter count */
+    double *p;               /* and parameters */
+    cbm_status st;
+} cbm__mwalk;
+
+static inline cbm__mwalk cbm__mwalk_start(const cbm__mechlang *m, lstr *s, void *state, size_t size,
+                                          cbm__mwalk_stack *stack)
+{
+    stack->len = 0;
+    return (cbm__mwalk){.m = m, .s = s, .state = state, .size = size, .stack = stack};
+}
+
+/* Shows the next module; false at the end of the string or after a failed push. */
+static inline bool cbm__mwalk_next(cbm_context *ctx, cbm__mwalk *w)
+{
+    const lstr *s = w->s;
+    if (w->i >= s->n || w->st != CBM_OK)
+        return false;
+    uint8_t sym = s->sym[w->i];
+    w->at = w->i++;
+    w->code = sym & 0x7f;
+    w->np = (sym & LSYS_PARAM_BIT) ? s->pc[w->j] : 0;
+    w->p = (double *)s->par + w->k;
+    if (sym & LSYS_PARAM_BIT) {
+        w->j++;
+        w->k += (size_t)w->np;
+    }
+    if (w->code == w->m->sb) {
+        cbm__mwalk_stack *k = w->stack;
+        w->st = CBM_ARRAY_RESERVE(ctx, *k, k->len + w->size);
+        if (w->st != CBM_OK)
+            return false;
+        memcpy(k->data + k->len, w->state, w->size);
+        k->len += w->size;
+    } else if (w->code == w->m->eb && w->stack->len) {
+        w->stack->len -= w->size;
+        memcpy(w->state, w->stack->data + w->stack->len, w->size);
+    }
+    return true;
+}
 
 /* The plant's dynamics for the dialect (mechlang_dyn.c): the k-th lowest natural frequency (Hz)
  * and the peak displacement (m) of any node over a sway in the wind of args (duration s, dt s,

@@ -56,7 +56,8 @@ bool cbm_approx_mode_parse(const char *name, cbm_approx_mode *out)
 
 const char *cbm_approx_route_name(cbm_approx_route r)
 {
-    static const char *const names[] = {"none", "closed", "closed-cosh", "bisection", "root"};
+    static const char *const names[] = {"none",      "closed", "closed-cosh",
+                                        "bisection", "root",   "series"};
     if ((unsigned)r >= sizeof names / sizeof names[0])
         return "unknown";
     return names[r];
@@ -662,7 +663,7 @@ static void corrected_angles(const cbm_approx_def *d, double *res, cbm_approx_in
         double target = k0 * sig_end;
         res[0] = d->t0;
         w = series_angles(d, 2.0 * s0 * c0, (c0 - s0) * (c0 + s0), target * target, res);
-        info->route = CBM_APPROX_ROUTE_ROOT;
+        info->route = CBM_APPROX_ROUTE_SERIES;
         info->omega = w * RAD;
         return;
     }

@@ -325,8 +325,8 @@ static double pro_update(size_t j, const double *al, const double *be, double an
  * orthogonality estimates; full: sweep at every step (the reference of the tests); *sweeps
  * receives the number of steps that swept the basis. */
 static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *al, double *be,
-                      double *w, double *mw, double *mv, double *mvp, double *c, double *t,
-                      double *ev, double *th, size_t *ord, double *om, bool full, size_t *sweeps)
+                      double *w, double *mw, double *mv, double *c, double *t, double *ev,
+                      double *th, size_t *ord, double *om, bool full, size_t *sweeps)
 {
     size_t N = 3 * d->n;
     uint64_t s = 0x9E3779B97F4A7C15ull;
@@ -404,9 +404,7 @@ static size_t lanczos(cbm__dyn *d, size_t mmax, size_t want, basis *v, double *a
                 break;
             }
         }
-        double rb = 1.0 / b, *tmp = mvp;
-        mvp = mv;
-        mv = tmp;
+        double rb = 1.0 / b, *tmp;
         col_set(v, j + 1, rb, w);
         for (size_t k = 0; k < N; k++)
             mv[k] = mw[k] * rb;
@@ -461,7 +459,6 @@ cbm_status cbm__plant_modes(const cbm_plant *plant, size_t count, double *freqs_
         double *w = cbm__alloc(ctx, N * sizeof(double));
         double *mw = cbm__alloc(ctx, N * sizeof(double));
         double *mv = cbm__alloc(ctx, N * sizeof(double));
-        double *mvp = cbm__alloc(ctx, N * sizeof(double));
         double *al = cbm__calloc(ctx, mmax, sizeof(double));
         double *be = cbm__calloc(ctx, mmax, sizeof(double));
         double *t = cbm__calloc(ctx, mmax * mmax, sizeof(double));
@@ -469,15 +466,14 @@ cbm_status cbm__plant_modes(const cbm_plant *plant, size_t count, double *freqs_
         double *th = cbm__alloc(ctx, mmax * sizeof(double));
         size_t *ord = cbm__alloc(ctx, mmax * sizeof(size_t));
         double *om = cbm__alloc(ctx, 3 * (mmax + 1) * sizeof(double));
-        if (!v.v || !gc || !w || !mw || !mv || !mvp || !al || !be || !t || !ev || !th || !ord ||
-            !om)
+        if (!v.v || !gc || !w || !mw || !mv || !al || !be || !t || !ev || !th || !ord || !om)
             st = CBM_E_NOMEM;
         else {
             size_t sw = 0;
             /* a basis of every direction: the shapes are then the whole eigenbasis, which the
              * modal motion (its static correction) relies on being M-orthonormal to round-off,
              * and the run is short anyway: sweep at every step */
-            size_t m = lanczos(&d, mmax, want, &v, al, be, w, mw, mv, mvp, gc, t, ev, th, ord, om,
+            size_t m = lanczos(&d, mmax, want, &v, al, be, w, mw, mv, gc, t, ev, th, ord, om,
                                full || mmax == N, &sw);
             if (steps)
                 *steps = m;
@@ -507,7 +503,6 @@ cbm_status cbm__plant_modes(const cbm_plant *plant, size_t count, double *freqs_
         cbm__free(ctx, w, N * sizeof(double));
         cbm__free(ctx, mw, N * sizeof(double));
         cbm__free(ctx, mv, N * sizeof(double));
-        cbm__free(ctx, mvp, N * sizeof(double));
         cbm__free(ctx, al, ma * sizeof(double));
         cbm__free(ctx, be, ma * sizeof(double));
         cbm__free(ctx, t, ma * ma * sizeof(double));

@@ -113,15 +113,10 @@ static inline double newmark(double qn, double *q, double *v, double *a, const d
 
 /* GCC at -O2 (the project's build) schedules this loop about 20 % slower than at -O3 without
  * vectorisation (measured with bench_dyn at 2,500 segments, where the step is in the cache and
- * compute-bound: docs/performance.md); the latter's transformations are asked for this function
- * alone. Vectorisation stays off (it was slower, and lanes would not change the arithmetic
- * anyway: no reassociation, -ffp-contract=off), so the results are the same to the bit. */
-#if defined(__GNUC__) && !defined(__clang__)
-#define CBM__STEP_OPT __attribute__((optimize("O3", "no-tree-vectorize")))
-#else
-#define CBM__STEP_OPT
-#endif
-CBM__STEP_OPT static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1)
+ * compute-bound: docs/performance.md); CMakeLists.txt compiles this file so with GCC.
+ * Vectorisation stays off (it was slower, and lanes would not change the arithmetic anyway: no
+ * reassociation, -ffp-contract=off), so the results are the same to the bit. */
+static bool fused_step(cbm_motion *m, double a0, double a1, double c0, double c1)
 {
     const double nm[5] = {a0, a1, c0, c1, 0.5 * m->dt};
     const cbm__dyn *d = &m->d;

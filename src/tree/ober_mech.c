@@ -211,6 +211,7 @@ cbm_status cbm_ober_mechanics(const cbm_ober_stand *s, size_t tree, const cbm_ob
     out->segments = cbm_plant_segment_count(p);
     out->mass = cbm_plant_total_mass(p);
     cbm_solve_def sv = cbm_solve_def_default();
+    sv.threads = s->def.solve_threads;
     cbm_solve_stats stats;
     memset(&stats, 0, sizeof stats);
     cbm_status ss = cbm_plant_solve(p, &sv, &stats);
@@ -322,6 +323,7 @@ cbm_status cbm__ober_feedback(cbm_ober_stand *s)
         if ((st = build_plant(s, t, &md, f, first, taken, &p, &shoots)) != CBM_OK)
             break;
         cbm_solve_def sv = cbm_solve_def_default();
+        sv.threads = s->def.solve_threads;
         cbm_solve_stats stats;
         memset(&stats, 0, sizeof stats);
         cbm_status ss = cbm_plant_solve(p, &sv, &stats);

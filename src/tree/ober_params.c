@@ -78,6 +78,7 @@ cbm_ober_def cbm_ober_def_default(void)
     d.mech_e = 8e9; /* as cbm_ober_mech_def_default() */
     d.mech_density = 800;
     d.mech_leaf_mass = 0.2;
+    d.solve_threads = 0; /* one per processor */
     d.stand_x = d.stand_y = 1;
     d.spacing = 3;
     return d;
@@ -143,6 +144,7 @@ static const param PARAMS[] = {
     {"mechE", K_REAL, O(mech_e), 0, 1e5, 1e15},
     {"mechDensity", K_REAL, O(mech_density), 0, 0, 1e5},
     {"mechLeafMass", K_REAL, O(mech_leaf_mass), 0, 0, 1e3},
+    {"solve_threads", K_INT, O(solve_threads), 0, 0, 1024}, /* as the fruit tree's */
     {"standX", K_INT, O(stand_x), 0, 1, 20},
     {"standY", K_INT, O(stand_y), 0, 1, 20},
     {"spacing", K_REAL, O(spacing), 0, 0.01, 1e3},

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # cambium grow with Oberlaender's parametric tree: the built-in presets equal the shipped
 # models/ober-*.tree files; a stand with every output kind; formula and option errors name
-# the file, line and column or the option; exit codes.
+# the file, line and column or the option; the solver's threads; exit codes.
 set -euo pipefail
 bin=$1
 tmp=$(mktemp -d)
@@ -47,6 +47,21 @@ rc=$?
 set -e
 test $rc -eq 1
 grep -q 'bad.tree:3:25: error: bendingLambda: unknown variable .bogus.' "$tmp/err.txt"
+# the solver's threads (-D solve_threads=N, as the fruit tree's): the same report with 1 and 2,
+# a bad count refused naming it, exit 2
+"$bin" grow ober-troll -y 4 -D mechanicsFeedback=1 -D solve_threads=1 --mechanics --quiet \
+    -o "$tmp/t1.json"
+"$bin" grow ober-troll -y 4 -D mechanicsFeedback=1 -D solve_threads=2 --mechanics --quiet \
+    -o "$tmp/t2.json"
+cmp <(grep -v seconds "$tmp/t1.json") <(grep -v seconds "$tmp/t2.json")
+for v in -1 1.5 1025; do
+    set +e
+    "$bin" grow ober-troll -y 1 -D solve_threads=$v 2>"$tmp/err.txt"
+    rc=$?
+    set -e
+    test $rc -eq 2
+    grep -q 'solve_threads' "$tmp/err.txt"
+done
 set +e
 "$bin" grow ober-rauh --stand 0x3 2>"$tmp/err.txt"
 rc=$?

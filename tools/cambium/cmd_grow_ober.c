@@ -216,10 +216,10 @@ static cbm_status write_plot(cbm_context *ctx, const cbm_ober_stand *s, const ch
 
 int cmd_grow_ober(int argc, char **argv)
 {
-    const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS], *seed = NULL;
+    const char *model = NULL, *outs[MAX_OUTPUTS], *defs[MAX_DEFS];
     cli_list out_list = {outs, 0, MAX_OUTPUTS, "at most {max} outputs"};
     cli_list def_list = {defs, 0, MAX_DEFS, "at most {max} -D options"};
-    long years = -1, stand[2] = {0, 0}, stagger = -1, seedv = -1;
+    long years = -1, stand[2] = {0, 0}, stagger = -1, seed = -1;
     double spacing = -1;
     bool quiet = false, params = false, mechanics = false;
     cbm_write_options o = cbm_write_options_default();
@@ -230,7 +230,7 @@ int cmd_grow_ober(int argc, char **argv)
         cli_grow_defines_row(&def_list, "set a parameter or formula (as in a parameter file)"),
         {.name = "--seed",
          .kind = CLI_LONG,
-         .target = &seedv,
+         .target = &seed,
          .min = 0,
          .max = 0x7fffffffL,
          .bad = "--seed must be a non-negative integer",
@@ -273,7 +273,6 @@ int cmd_grow_ober(int argc, char **argv)
                       .unknown = "unknown option {opt} (for an Oberlaender tree)",
                       .unknown_last = "unknown option or missing value: {opt}",
                       .missing = "unknown option or missing value: {opt}"};
-    (void)seed;
     int prc = cli_options_parse(&table, argc, argv);
     if (prc != CLI_OK)
         return prc == CLI_HELP_SHOWN ? CLI_OK : prc;
@@ -331,8 +330,8 @@ int cmd_grow_ober(int argc, char **argv)
             goto done;
         }
     }
-    if (seedv >= 0)
-        d.seed = (uint64_t)seedv;
+    if (seed >= 0)
+        d.seed = (uint64_t)seed;
     if (years >= 0)
         d.years = (int)years;
     if (stand[0] > 0)
