@@ -41,7 +41,7 @@ typedef struct cbm__mech_work {
     double *fdinv;    /* tree factorisation, 9 doubles per segment each: D^-1 */
     double *fq;       /* Q = R^T (W + [M]x) */
     double *fa;       /* a = R J_r(d Omega) d */
-    double *fwad;     /* W a D^-1 */
+    double *fwad;     /* W a D^-1 (with fwad_ok; else scratch: Phi of a thread's subtree root) */
     double *fw;       /* W accumulators */
     size_t fneg;      /* negative eigenvalues of the pivots' symmetric parts, last factorisation */
     /* tree factorisation with ground contact (allocated once a plant has a ground): 9 doubles
@@ -64,6 +64,8 @@ typedef struct cbm__mech_work {
      * counts, and tmp the backward half of the solve J x = -res (fhalf); cleared by every sweep
      * or solve that could change them */
     bool fready, fhalf;
+    bool fwad_ok; /* fwad holds W a D^-1 of the factorisation (the sweeps store it with ground
+                   * contact only; cbm__mech_tree_apply computes it when it needs it) */
     size_t fsing, fnonpd;
 } cbm__mech_work;
 

@@ -528,8 +528,10 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
         all.fs = (cbm__mech_fsweep){.p = p, .b = res, .out = w->tmp, .neg_b = true};
     double ss = 0.0;
     int t = cbm__mech_tree_split(p);
-    if (fuse)
+    if (fuse) {
         cbm__mech_factor_clear(p, t, true);
+        w->fwad_ok = false; /* not stored by the sweep (cbm__mech_factor_one) */
+    }
     if (t <= 1) {
         const int64_t *par = p->parent;
         double *f = (double *)p->force, *m = (double *)p->moment;
@@ -571,7 +573,7 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
                 m[pa] = v3_add(m[pa], m[i]);
                 if (fuse) {
                     double *a = w->fw + 9 * (size_t)pa;
-                    const double *b = w->fw + 9 * i;
+                    const double *b = w->fwad + 9 * i; /* Phi (cbm__mech_factor_one) */
                     for (int k = 0; k < 9; k++)
                         a[k] += b[k];
                     w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);

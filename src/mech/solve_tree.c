@@ -135,7 +135,8 @@ typedef cbm__mech_fsweep sweep;
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void forward_all(cbm_plant *p, cbm_vec3 *out, int t);
-static void solve_back(const sweep *sw, size_t i, const m3 *Rt, bool act, bool defer);
+static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
+                       bool defer);
 
 /* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
  * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
@@ -222,7 +223,7 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
     const double mu = sw->mu;
     m3 R = rot(p->q[i]), Rt = transpose(R.m);
     if (sw->only_solve) {
-        solve_back(sw, i, &Rt, ground && w->fact[i], defer);
+        solve_back(sw, i, &Rt, w->fwad + 9 * i, ground && w->fact[i], defer);
         return;
     }
     {
@@ -288,8 +289,11 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
             Di[4] = 1.0 / c.y;
             Di[8] = 1.0 / c.z;
         }
-        m3 AD = mmul(A, Di);
-        double *WAD = w->fwad + 9 * i;
+        /* W a D^-1 stays in a local: it is stored (fwad) with ground contact only, and
+         * otherwise computed again from W (kept in fw), a and D^-1 when a solve alone needs it
+         * (wad_all), with the same products: 72 bytes a segment less to write per sweep */
+        m3 AD = mmul(A, Di), WADm;
+        double *WAD = ground ? w->fwad + 9 * i : WADm.m;
         mmul_to(WAD, W, AD.m);
         /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
         m3 Phi = mmul(WAD, Q);
@@ -297,8 +301,8 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
         for (int k = 0; k < 9; k++)
             Phi.m[k] += W[k];
         int64_t pa = p->parent[i];
-        if (defer)
-            memcpy(W, Phi.m, sizeof Phi.m); /* W is not read again */
+        if (defer) /* for the sweep of the top; W stays */
+            memcpy(w->fwad + 9 * i, Phi.m, sizeof Phi.m);
         else if (pa >= 0)
             madd(w->fw + 9 * (size_t)pa, Phi.m);
         if (act) {
@@ -317,8 +321,20 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
             }
         }
         if (sw->b && sw->out)
-            solve_back(sw, i, &Rt, act, defer);
+            solve_back(sw, i, &Rt, WAD, act, defer);
     }
+}
+
+/* W a D^-1 of every segment from W (fw), a and D^-1, the products of cbm__mech_factor_one: the
+ * same bits as the sweep computed (it keeps them only with ground contact). */
+static void wad_all(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    for (size_t i = 0; i < p->n; i++) {
+        m3 AD = mmul(w->fa + 9 * i, w->fdinv + 9 * i);
+        mmul_to(w->fwad + 9 * i, w->fw + 9 * i, AD.m);
+    }
+    w->fwad_ok = true;
 }
 
 /* ---- Threads
@@ -530,8 +546,8 @@ static void sweeps(sweep *sw)
                 cbm__mech_factor_one(sw, i, false);
             } else if (e & PART_ROOT) {
                 int64_t pa = p->parent[i]; /* in the top */
-                if (!sw->only_solve)
-                    madd(w->fw + 9 * (size_t)pa, w->fw + 9 * i);
+                if (!sw->only_solve)       /* Phi, kept in fwad */
+                    madd(w->fw + 9 * (size_t)pa, w->fwad + 9 * i);
                 if (solve)
                     w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
             }
@@ -623,6 +639,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         }
     }
     sweep sw = {.p = p, .b = b, .out = out, .mu = mu, .ground = ground};
+    w->fwad_ok = ground;
     sweeps(&sw);
     if (nonpd_out)
         *nonpd_out = sw.nonpd;
@@ -683,6 +700,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     const size_t n = p->n;
     const bool ground = p->ground && w->fcap >= n;
     w->fhalf = false; /* dm and perhaps tmp are written; the factorisation stays */
+    if (!w->fwad_ok)
+        wad_all(p);
     for (size_t i = 0; i < n; i++)
         w->dm[i] = w->dfc[i] = v3(0, 0, 0);
     sweep sw = {.p = p, .b = b, .out = out, .ground = ground, .only_solve = true};
@@ -692,7 +711,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
  * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
  * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
-static void solve_back(const sweep *sw, size_t i, const m3 *Rt, bool act, bool defer)
+static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
+                       bool defer)
 {
     const cbm_vec3 *b = sw->b;
     cbm_vec3 *out = sw->out;
@@ -713,7 +733,7 @@ static void solve_back(const sweep *sw, size_t i, const m3 *Rt, bool act, bool d
     int64_t pa = p->parent[i];
     if (pa < 0)
         return;
-    cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), m0);
+    cbm_vec3 psi = v3_add(mvec(wad, ui), m0);
     if (defer) {
         w->dm[i] = psi; /* not read again */
         return;
