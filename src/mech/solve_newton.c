@@ -184,20 +184,20 @@ static bool evaluate(nk *k)
     return evaluate_as(k, false);
 }
 
-/* (J + mu S) work.tmp = -res by the tree factorisation (work.step = -res): after a fused
- * evaluation at mu = 0 its forward half alone. Returns the singular pivots, *nonpd those not
- * positive definite. */
+/* (J + mu S) work.tmp = -res by the tree factorisation (work.step = -res, the right-hand
+ * side): after a fused evaluation at mu = 0 its forward half alone (work.step untouched). Returns
+ * the singular pivots, *nonpd those not positive definite. */
 static size_t residual_solve(nk *k, double mu, size_t *nonpd)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
+    size_t sing = 0;
+    if (mu == 0.0 && cbm__mech_tree_solve_fused(p, &sing, nonpd))
+        return sing; /* the fused sweep read -res itself: step is not needed */
     double *step = (double *)w->step;
     const double *res = (const double *)w->res;
     for (size_t q = 0; q < k->n3; q++)
         step[q] = -res[q];
-    size_t sing = 0;
-    if (mu == 0.0 && cbm__mech_tree_solve_fused(p, &sing, nonpd))
-        return sing;
     return cbm__mech_tree_solve(p, w->step, w->tmp, mu, nonpd);
 }
 
