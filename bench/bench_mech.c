@@ -5,9 +5,10 @@
  * factorisation's blocks; docs/performance.md). Writes a CSV.
  *
  * usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out FILE.csv] [--tol T]
- *                   [--threads N] [--fast-only]
+ *                   [--threads N] [--repeat N] [--fast-only]
  * (--threads: of the tree factorisation, 0 = one per processor, the default; 1 = serial;
- * --fast-only: no relaxation rows)
+ * --repeat: timed solves per row, from the same start, the row's seconds being their median
+ * (default 1; for profiles and quieter figures); --fast-only: no relaxation rows)
  * (the relaxation factor is tuned over 0.1 .. 1 on sizes up to 10^4 and on the smallest size,
  * then the best one is used for the larger sizes)
  *
@@ -124,6 +125,13 @@ typedef struct run {
 } run;
 
 static int threads = 0; /* the solver's default: one per processor */
+static int repeat = 1;  /* timed solves per row (--repeat): the row reports their median */
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
 
 static run solve(cbm_plant *p, cbm_mech_solver s, double alpha, double tol, size_t max_passes)
 {
@@ -140,11 +148,19 @@ static run solve(cbm_plant *p, cbm_mech_solver s, double alpha, double tol, size
     cbm_solve_def w = d;
     w.max_passes = 8;
     (void)cbm_plant_solve(p, &w, NULL);
-    double t0 = now(), c0 = cpu_now();
     run r;
-    r.status = cbm_plant_solve(p, &d, &st);
-    r.seconds = now() - t0;
-    r.cpu_seconds = cpu_now() - c0;
+    double wall[64], cpu[64];
+    int reps = repeat < 1 ? 1 : repeat > 64 ? 64 : repeat;
+    for (int k = 0; k < reps; k++) {
+        double t0 = now(), c0 = cpu_now();
+        r.status = cbm_plant_solve(p, &d, &st);
+        wall[k] = now() - t0;
+        cpu[k] = cpu_now() - c0;
+    }
+    qsort(wall, (size_t)reps, sizeof *wall, cmp_double);
+    qsort(cpu, (size_t)reps, sizeof *cpu, cmp_double);
+    r.seconds = wall[reps / 2];
+    r.cpu_seconds = cpu[reps / 2];
     r.passes = st.passes;
     r.residual = st.residual;
     return r;
@@ -170,11 +186,13 @@ int main(int argc, char **argv)
             tol = atof(argv[++i]);
         else if (!strcmp(argv[i], "--threads") && i + 1 < argc)
             threads = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
+            repeat = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--fast-only"))
             fast_only = true;
         else {
             fprintf(stderr, "usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out "
-                            "FILE.csv] [--tol T] [--threads N] [--fast-only]\n");
+                            "FILE.csv] [--tol T] [--threads N] [--repeat N] [--fast-only]\n");
             return 2;
         }
     }
@@ -213,11 +231,13 @@ int main(int argc, char **argv)
                 cbm_context_destroy(pc);
                 break;
             }
-            /* bytes one relaxation pass reads and writes, and those of the fast solver: the
-             * same plus the factorisation's five 3x3 blocks written (360) and about 70 more
-             * read (see docs/performance.md) */
+            /* bytes one relaxation pass reads and writes, and those of a pass of the fast
+             * solver's `tree` solve, counted from the arrays each of its sweeps touches (one
+             * prepare, three evaluations with the fused factorisation, two forward solves, two
+             * steps' vector operations: 2,121 bytes read and 2,160 written a segment over its
+             * 4 passes; docs/performance.md, "The bytes of a fast solve") */
             double stream = stream_seconds(n * 320, n * 176);
-            double stream_fast = stream_seconds(n * (320 + 70), n * (176 + 360));
+            double stream_fast = stream_seconds(n * 530, n * 540);
             run rows[10];
             int nr = 0;
             double rel_alpha[10];

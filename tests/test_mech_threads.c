@@ -1,6 +1,7 @@
 /* The tree factorisation and solve split a branched plant over threads (solve_tree.c,
- * "Threads"): the results must be the same to the bit for any number of threads. A random tree
- * (each segment continues its predecessor with probability 0.8, else branches off a random
+ * "Threads"): the results must be the same to the bit for any number of threads, and with or
+ * without the fast solver's evaluations fused with the factorisation (solve_newton.c). A random
+ * tree (each segment continues its predecessor with probability 0.8, else branches off a random
  * earlier one: bench_mech's `tree`, bench/random_tree.h) is solved from rest with 1, 2 and 3
  * threads, the split forced even for this size, and every angle, moment, position and
  * statistic compared bit for bit; a chain, which stays serial, too. */
@@ -38,9 +39,10 @@ typedef struct result {
     cbm_vec3 *omega, *moment, *pos;
 } result;
 
-static result solve_with(size_t n, double E, double leaf, bool chain, int threads)
+static result solve_with(size_t n, double E, double leaf, bool chain, int threads, bool fuse)
 {
     result r = {0};
+    cbm__mech_newton_fuse(fuse);
     cbm__mech_tree_min_segments(0);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
@@ -66,6 +68,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
     }
     cbm_context_destroy(ctx);
     cbm__mech_tree_min_segments(50000); /* the default */
+    cbm__mech_newton_fuse(true);
     return r;
 }
 
@@ -76,24 +79,28 @@ static void result_free(result *r)
     free(r->pos);
 }
 
+/* The solves with 2 and 3 threads (fused evaluations), then with 1 and 2 threads without the
+ * fused evaluations (solve_newton.c, evaluate_as), against the serial fused one. */
 static void check_same(size_t n, double E, double leaf, bool chain)
 {
-    result one = solve_with(n, E, leaf, chain, 1);
+    result one = solve_with(n, E, leaf, chain, 1, true);
     CHECK(one.n == n && one.passes > 0);
-    for (int t = 2; t <= 3; t++) {
-        result r = solve_with(n, E, leaf, chain, t);
+    for (int t = 2; t <= 5; t++) {
+        bool fuse = t <= 3;
+        int threads = fuse ? t : t - 3;
+        result r = solve_with(n, E, leaf, chain, threads, fuse);
         CHECK(r.n == n);
         CHECK_EQ_INT(r.passes, one.passes);
         CHECK_EQ_INT(r.newton, one.newton);
         CHECK_EQ_INT(r.krylov, one.krylov);
         CHECK(memcmp(&r.residual, &one.residual, sizeof r.residual) == 0);
         if (r.omega && one.omega) {
-            CHECK_MSG(!memcmp(r.omega, one.omega, n * sizeof *r.omega), "%d threads: Omega differs",
-                      t);
+            CHECK_MSG(!memcmp(r.omega, one.omega, n * sizeof *r.omega),
+                      "%d threads, fused %d: Omega differs", threads, fuse);
             CHECK_MSG(!memcmp(r.moment, one.moment, n * sizeof *r.moment),
-                      "%d threads: moments differ", t);
-            CHECK_MSG(!memcmp(r.pos, one.pos, n * sizeof *r.pos), "%d threads: positions differ",
-                      t);
+                      "%d threads, fused %d: moments differ", threads, fuse);
+            CHECK_MSG(!memcmp(r.pos, one.pos, n * sizeof *r.pos),
+                      "%d threads, fused %d: positions differ", threads, fuse);
         }
         result_free(&r);
     }
@@ -159,15 +166,17 @@ TEST(tree_model_solve_threads_same_bits)
     cbm__mech_tree_min_segments(0);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
-    cbm_tree *t[2] = {NULL, NULL};
-    for (int k = 0; k < 2 && ctx; k++) {
+    cbm_tree *t[3] = {NULL, NULL, NULL};
+    for (int k = 0; k < 3 && ctx; k++) {
         cbm_tree_def d;
         CHECK_OK(cbm_tree_def_builtin(ctx, "fruit-tree", &d));
-        CHECK_OK(cbm_tree_def_set(ctx, &d, "solve_threads", k == 0 ? "1" : "2"));
+        CHECK_OK(cbm_tree_def_set(ctx, &d, "solve_threads", k == 1 ? "2" : "1"));
         d.years = 6;
+        cbm__mech_newton_fuse(k != 2); /* the third without the fused evaluations */
         CHECK_OK(cbm_tree_create(ctx, &d, &t[k]));
         if (t[k])
             CHECK_OK(cbm_tree_run(t[k]));
+        cbm__mech_newton_fuse(true);
     }
     const cbm_plant *p1 = t[0] ? cbm_tree_plant(t[0]) : NULL;
     const cbm_plant *p2 = t[1] ? cbm_tree_plant(t[1]) : NULL;
@@ -181,8 +190,11 @@ TEST(tree_model_solve_threads_same_bits)
         CHECK_EQ_INT(p2->work.tsplit, 2);
         CHECK(same_plant_bits(p1, p2));
     }
+    const cbm_plant *p3 = t[2] ? cbm_tree_plant(t[2]) : NULL;
+    CHECK_MSG(same_plant_bits(p1, p3), "the fused evaluations changed the grown tree");
     cbm_tree_destroy(t[0]);
     cbm_tree_destroy(t[1]);
+    cbm_tree_destroy(t[2]);
     cbm_tree_def d = cbm_tree_def_default();
     CHECK(cbm_tree_def_set(ctx, &d, "solve_threads", "-1") == CBM_E_INVALID);
     CHECK(strstr(cbm_context_last_error(ctx), "solve_threads") != NULL);

@@ -41,7 +41,7 @@ typedef struct cbm__mech_work {
     double *fdinv;    /* tree factorisation, 9 doubles per segment each: D^-1 */
     double *fq;       /* Q = R^T (W + [M]x) */
     double *fa;       /* a = R J_r(d Omega) d */
-    double *fwad;     /* W a D^-1 */
+    double *fwad;     /* W a D^-1 (with fwad_ok; else scratch: Phi of a thread's subtree root) */
     double *fw;       /* W accumulators */
     size_t fneg;      /* negative eigenvalues of the pivots' symmetric parts, last factorisation */
     /* tree factorisation with ground contact (allocated once a plant has a ground): 9 doubles
@@ -59,6 +59,14 @@ typedef struct cbm__mech_work {
      * changes, a re-carved workspace when it is replaced) */
     int tsplit, tsplit_req;
     size_t tsplit_min;
+    /* the last evaluation was fused with the factorisation (cbm__mech_backward_factor): the
+     * tree arrays hold the factorisation (mu = 0) of the evaluated state (fready), with its
+     * counts, and tmp the backward half of the solve J x = -res (fhalf); cleared by every sweep
+     * or solve that could change them */
+    bool fready, fhalf;
+    bool fwad_ok; /* fwad holds W a D^-1 of the factorisation (the sweeps store it with ground
+                   * contact only; cbm__mech_tree_apply computes it when it needs it) */
+    size_t fsing, fnonpd;
 } cbm__mech_work;
 
 /* Threads of the tree sweeps (solve_tree.c, "Threads"): the count comes from cbm_solve_def.threads
@@ -75,6 +83,25 @@ static inline uint32_t cbm__part_thread(uint32_t e)
 {
     return e >> CBM__PART_SHIFT & 7u;
 }
+/* One backward sweep of the tree factorisation (solve_tree.c): with b and out, the backward half
+ * of the solve J out = b too (fused), with only_solve that half alone over an existing
+ * factorisation; neg_b: the right-hand side is -b (b the residual). */
+typedef struct cbm__mech_fsweep {
+    cbm_plant *p;
+    const cbm_vec3 *b;
+    cbm_vec3 *out;
+    double mu;
+    bool ground, only_solve, neg_b;
+    size_t singular, nonpd; /* counted by the sweep */
+    size_t negative;        /* negative eigenvalues of the pivots' symmetric parts (stability) */
+} cbm__mech_fsweep;
+/// The factorisation at segment i (and the backward half of the solve there); with defer (a
+/// subtree's root swept by a thread) what it hands to its parent stays in fw[i] and dm[i].
+void cbm__mech_factor_one(cbm__mech_fsweep *sw, size_t i, bool defer);
+/// Zeroes the factorisation's accumulators (work.fw, and work.dm with dfc when solving) before
+/// a backward sweep, over t threads.
+void cbm__mech_factor_clear(cbm_plant *p, int t, bool solving);
+
 /* Prefetches of the sweeps: a lateral's parent lies anywhere in memory, and a sweep would wait
  * for its accumulators (a quarter of the factorisation's time at 10^6 segments, measured with
  * perf); the parent of the segment CBM__PF ahead is fetched meanwhile. No effect on the results.
@@ -252,6 +279,21 @@ size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd);
 /// Factorises and solves (J + mu S) out = b in one backward and one forward sweep.
 size_t cbm__mech_tree_solve(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu,
                             size_t *nonpd);
+/// Backward sweep fused with the factorisation: cbm__mech_backward(p, 0, res, mmax, sumsq) that
+/// also factorises the Newton matrix (mu = 0) at the state it evaluates and runs the backward
+/// half of the solve J x = -res into work.tmp, segment by segment in the one sweep; the same
+/// results to the bit as the three apart. Sets work.fready and work.fhalf (needs the tree
+/// arrays: a Krylov workspace; no ground, no organ contact).
+double cbm__mech_backward_factor(cbm_plant *p, cbm_vec3 *res, double *mmax, double *sumsq);
+/// After a fused evaluation (work.fhalf): the forward half of J x = -res into work.tmp, i.e.
+/// what cbm__mech_tree_solve(p, -res, work.tmp, 0, nonpd) would give; returns the singular
+/// pivots and *nonpd as that. False (nothing done) when the workspace holds no such half.
+bool cbm__mech_tree_solve_fused(cbm_plant *p, size_t *singular, size_t *nonpd);
+/// Clears work.fready and work.fhalf (the state or the workspace changed).
+static inline void cbm__mech_fused_clear(cbm_plant *p)
+{
+    p->work.fready = p->work.fhalf = false;
+}
 /// After an unmodified factorisation, perturbs Omega at every joint whose pivot block is not
 /// positive definite (by `angle` rad); returns their number.
 size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle);
@@ -386,6 +428,10 @@ cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t 
                                  cbm_solve_stats *st);
 cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
                                   cbm_solve_stats *st);
+
+/// Whether the fast solver's evaluations fuse the tree factorisation (default on; the results
+/// are the same to the bit either way: tests switch it off to compare).
+void cbm__mech_newton_fuse(bool on);
 
 /* ---- solve_approx.c ---- */
 

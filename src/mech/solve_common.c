@@ -273,6 +273,7 @@ static void cmass_job(void *arg)
 void cbm__mech_prepare(cbm_plant *p)
 {
     const size_t n = p->n;
+    cbm__mech_fused_clear(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
         prepare_range(p, 0, n);
@@ -374,6 +375,9 @@ typedef struct pass_job {
     double alpha;
     cbm_vec3 *res;
     double rmax, mmax, emax, sum, ss;
+    /* the fused factorisation (cbm__mech_backward_factor), the thread's own counts; or none */
+    cbm__mech_fsweep fs;
+    bool fuse;
 } pass_job;
 
 static void forward_job(void *arg)
@@ -386,6 +390,7 @@ static void forward_job(void *arg)
     for (size_t i = 0; i < p->n; i++) {
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, q, 4);
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
+        CBM__PREFETCH_PARENT_FWD(par, i, p->n, p->len, 1);
         if (cbm__part_thread(part[i]) == j->me)
             forward_seg(p, i);
     }
@@ -394,6 +399,7 @@ static void forward_job(void *arg)
 void cbm__mech_forward(cbm_plant *p)
 {
     const size_t n = p->n;
+    cbm__mech_fused_clear(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
         const int64_t *par = p->parent;
@@ -401,6 +407,8 @@ void cbm__mech_forward(cbm_plant *p)
         for (size_t i = 0; i < n; i++) {
             CBM__PREFETCH_PARENT_FWD(par, i, n, q, 4);
             CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
+            /* the parent's length too: half of this sweep's time waited on it (perf) */
+            CBM__PREFETCH_PARENT_FWD(par, i, n, p->len, 1);
             forward_seg(p, i);
         }
         return;
@@ -481,35 +489,65 @@ static void backward_job(void *arg)
     const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
     const int64_t *par = p->parent;
     double *f = (double *)p->force, *m = (double *)p->moment;
+    double *fw = p->work.fw, *dm = (double *)p->work.dm;
     for (size_t i = p->n; i-- > 0;) {
         CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
         CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
+        if (j->fuse) {
+            CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+            CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
+        }
         uint32_t e = part[i];
-        if (cbm__part_thread(e) == j->me)
-            backward_seg(p, i, j, ground, pairs, (e & CBM__PART_ROOT) != 0, &zz[i]);
+        if (cbm__part_thread(e) == j->me) {
+            bool defer = (e & CBM__PART_ROOT) != 0;
+            backward_seg(p, i, j, ground, pairs, defer, &zz[i]);
+            if (j->fuse)
+                cbm__mech_factor_one(&j->fs, i, defer);
+        }
     }
 }
 
-double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax_out,
-                          double *sumsq_out)
+/* The backward sweep; with fuse, the tree factorisation (mu = 0) and the backward half of the
+ * solve J x = -res fused into it: at each segment, right after its force, moment and residual,
+ * the factorisation's step of that segment (its inputs are complete there, its children having
+ * been swept before it), so every array receives the same terms in the same order as in the
+ * sweeps apart. */
+static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax_out,
+                            double *sumsq_out, bool fuse)
 {
     const size_t n = p->n;
+    cbm__mech_work *w = &p->work;
     const bool ground = p->ground;
     /* organ-organ contact (contact.c): the pair forces at the distal nodes of this shape */
     const bool pairs = p->contacts.on && p->contacts.cap >= p->n;
     if (pairs)
         cbm__mech_pairs_eval(p);
-    pass_job all = {.p = p, .alpha = alpha, .res = res};
+    cbm__mech_fused_clear(p);
+    pass_job all = {.p = p, .alpha = alpha, .res = res, .fuse = fuse};
+    if (fuse)
+        all.fs = (cbm__mech_fsweep){.p = p, .b = res, .out = w->tmp, .neg_b = true};
     double ss = 0.0;
     int t = cbm__mech_tree_split(p);
+    if (fuse) {
+        cbm__mech_factor_clear(p, t, true);
+        w->fwad_ok = false; /* not stored by the sweep (cbm__mech_factor_one) */
+    }
     if (t <= 1) {
         const int64_t *par = p->parent;
         double *f = (double *)p->force, *m = (double *)p->moment;
+        double *fw = w->fw, *dm = (double *)w->dm;
         for (size_t i = n; i-- > 0;) {
             CBM__PREFETCH_PARENT_BWD(par, i, f, 3);
             CBM__PREFETCH_PARENT_BWD(par, i, m, 3);
             double z2;
-            backward_seg(p, i, &all, ground, pairs, false, &z2);
+            if (fuse) {
+                CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
+                CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
+                backward_seg(p, i, &all, ground, pairs, false, &z2);
+                cbm__mech_factor_one(&all.fs, i, false);
+            } else {
+                backward_seg(p, i, &all, ground, pairs, false, &z2);
+            }
             ss += z2;
         }
     } else {
@@ -520,17 +558,26 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
         }
         cbm__mech_run_threads(t, backward_job, jobs, sizeof *jobs);
         /* the top, adding each subtree's root where the serial sweep would have */
-        const uint32_t *part = p->work.tpart;
-        double *zz = p->work.zz;
+        const uint32_t *part = w->tpart;
+        double *zz = w->zz;
         cbm_vec3 *f = p->force, *m = p->moment;
         for (size_t i = n; i-- > 0;) {
             uint32_t e = part[i];
             if (cbm__part_thread(e) == 0) {
                 backward_seg(p, i, &all, ground, pairs, false, &zz[i]);
+                if (fuse)
+                    cbm__mech_factor_one(&all.fs, i, false);
             } else if (e & CBM__PART_ROOT) {
                 int64_t pa = p->parent[i];
                 f[pa] = v3_add(f[pa], f[i]);
                 m[pa] = v3_add(m[pa], m[i]);
+                if (fuse) {
+                    double *a = w->fw + 9 * (size_t)pa;
+                    const double *b = w->fwad + 9 * i; /* Phi (cbm__mech_factor_one) */
+                    for (int k = 0; k < 9; k++)
+                        a[k] += b[k];
+                    w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
+                }
             }
         }
         for (int k = 0; k < t; k++) {
@@ -538,17 +585,40 @@ double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mma
             all.rmax = jobs[k].rmax > all.rmax ? jobs[k].rmax : all.rmax;
             all.mmax = jobs[k].mmax > all.mmax ? jobs[k].mmax : all.mmax;
             all.emax = jobs[k].emax > all.emax ? jobs[k].emax : all.emax;
+            all.fs.singular += jobs[k].fs.singular;
+            all.fs.nonpd += jobs[k].fs.nonpd;
+            all.fs.negative += jobs[k].fs.negative;
         }
         for (size_t i = n; i-- > 0;) /* the serial order of the sum */
             ss += zz[i];
     }
     if (!isfinite(all.sum))
         return NAN;
+    if (fuse) {
+        w->fready = w->fhalf = true;
+        w->fsing = all.fs.singular;
+        w->fnonpd = all.fs.nonpd;
+        w->fneg = all.fs.negative;
+    }
     double mmax = all.mmax == 0.0 ? all.emax : all.mmax;
     *mmax_out = sqrt(mmax);
     if (sumsq_out)
         *sumsq_out = ss;
     return sqrt(all.rmax);
+}
+
+double cbm__mech_backward(cbm_plant *p, double alpha, cbm_vec3 *res, double *mmax_out,
+                          double *sumsq_out)
+{
+    return backward_impl(p, alpha, res, mmax_out, sumsq_out, false);
+}
+
+double cbm__mech_backward_factor(cbm_plant *p, cbm_vec3 *res, double *mmax, double *sumsq)
+{
+    /* the fused sweep knows neither the ground's nor the organ pairs' terms of the
+     * factorisation: those evaluate alone */
+    bool fuse = res && !p->ground && !p->contacts.on && p->work.fdinv && p->work.krylov_cap > 0;
+    return backward_impl(p, 0.0, res, mmax, sumsq, fuse);
 }
 
 double cbm__mech_relres(double rmax, double mmax, double *char_moment)
@@ -584,6 +654,7 @@ cbm_status cbm__mech_report_nonfinite(cbm_plant *p)
 void cbm__mech_jvp(cbm_plant *p, const cbm_vec3 *v, cbm_vec3 *out)
 {
     cbm__mech_work *w = &p->work;
+    w->fhalf = false; /* dm and perhaps tmp are written; the factorisation stays */
     const size_t n = p->n;
     const int64_t *restrict par = p->parent;
     const double *restrict dual = w->dual;

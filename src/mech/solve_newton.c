@@ -136,9 +136,18 @@ typedef struct nk {
     bool transient_path;   /* the pseudo-transient stage is on the pipeline */
     cbm_solve_stage stage; /* the stage running (the one that converged once r is NK_DONE) */
     const char *why;       /* why the solve failed, where a stage knows it */
+    bool fuse;             /* evaluations fuse the factorisation (cbm__mech_backward_factor) */
     bool push;             /* push an unstable equilibrium off to a stable one */
     bool want_eig;         /* compute the lowest eigenvalue of a stable equilibrium too */
 } nk;
+
+/* the fused evaluations (evaluate_as); tests switch them off to compare the bits */
+static bool fuse_on = true;
+
+void cbm__mech_newton_fuse(bool on)
+{
+    fuse_on = on;
+}
 
 static double dot(const double *a, const double *b, size_t n)
 {
@@ -148,13 +157,19 @@ static double dot(const double *a, const double *b, size_t n)
     return s;
 }
 
-/* Evaluates R at the current Omega into work.res; false if non-finite. */
-static bool evaluate(nk *k)
+/* Evaluates R at the current Omega into work.res; false if non-finite. With factor (and
+ * k->fuse) the backward sweep also factorises the Newton matrix there and runs the backward
+ * half of the Newton step's solve (cbm__mech_backward_factor), for the solve that usually
+ * follows (residual_solve, or the factorisation of stage_stability) to finish in its forward
+ * half: a pass less, the same bits. Where no such solve follows (a line search's rejected
+ * trial, the last evaluation of a continuation level) that work is lost. */
+static bool evaluate_as(nk *k, bool factor)
 {
     cbm_plant *p = k->p;
     cbm__mech_forward(p);
     double ss = 0.0;
-    double r = cbm__mech_backward(p, 0.0, p->work.res, &k->mmax, &ss);
+    double r = factor && k->fuse ? cbm__mech_backward_factor(p, p->work.res, &k->mmax, &ss)
+                                 : cbm__mech_backward(p, 0.0, p->work.res, &k->mmax, &ss);
     k->st->passes++;
     if (!isfinite(r))
         return false;
@@ -162,6 +177,28 @@ static bool evaluate(nk *k)
     k->norm = sqrt(ss);
     k->rel = cbm__mech_relres(r, k->mmax, &k->st->char_moment);
     return true;
+}
+
+static bool evaluate(nk *k)
+{
+    return evaluate_as(k, false);
+}
+
+/* (J + mu S) work.tmp = -res by the tree factorisation (work.step = -res, the right-hand
+ * side): after a fused evaluation at mu = 0 its forward half alone (work.step untouched). Returns
+ * the singular pivots, *nonpd those not positive definite. */
+static size_t residual_solve(nk *k, double mu, size_t *nonpd)
+{
+    cbm_plant *p = k->p;
+    cbm__mech_work *w = &p->work;
+    size_t sing = 0;
+    if (mu == 0.0 && cbm__mech_tree_solve_fused(p, &sing, nonpd))
+        return sing; /* the fused sweep read -res itself: step is not needed */
+    double *step = (double *)w->step;
+    const double *res = (const double *)w->res;
+    for (size_t q = 0; q < k->n3; q++)
+        step[q] = -res[q];
+    return cbm__mech_tree_solve(p, w->step, w->tmp, mu, nonpd);
 }
 
 /* z = P^-1 v (the preconditioner) */
@@ -349,7 +386,7 @@ static nk_result line_search(nk *k, double lam, double *out)
             om[q] += lam * step[q];
         if (k->st->passes + 1 >= k->max_passes)
             return NK_BUDGET;
-        bool fin = evaluate(k);
+        bool fin = evaluate_as(k, true);
         if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
             *out = lam;
             return NK_DONE;
@@ -358,7 +395,7 @@ static nk_result line_search(nk *k, double lam, double *out)
             om[q] -= lam * step[q];
         lam *= 0.5;
     }
-    if (!evaluate(k)) /* restore the state of the unmoved Omega */
+    if (!evaluate_as(k, true)) /* restore the state of the unmoved Omega */
         return NK_NONFINITE;
     return NK_STALL;
 }
@@ -389,10 +426,8 @@ static nk_result tree_step(nk *k, int it, bool abort_large, bool *direct, bool *
     /* factor and solve J step = -res in one pass; trusted when no pivot was singular (the
      * factorisation is then exact and GMRES would stop after one iteration with this very
      * step); otherwise the factorisation preconditions FGMRES */
-    for (size_t q = 0; q < n3; q++)
-        step[q] = -((const double *)w->res)[q];
     size_t nonpd = 0;
-    size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+    size_t sing = residual_solve(k, 0.0, &nonpd);
     k->st->passes++;
     /* from a warm start, a plain Newton step that descends the potential energy is taken even
      * where the pivot test fires: the test reads the symmetric part of pivots of the
@@ -416,7 +451,7 @@ static nk_result tree_step(nk *k, int it, bool abort_large, bool *direct, bool *
             return NK_BUDGET;
         mu = m1;
         k->mu = mu;
-        sing = cbm__mech_tree_solve(p, w->step, w->tmp, mu, &nonpd);
+        sing = residual_solve(k, mu, &nonpd);
         k->st->passes++;
     }
     memcpy(step, w->tmp, n3 * sizeof *step);
@@ -460,10 +495,8 @@ static nk_result plain_step_retry(nk *k, double eta, int m, double *lam0, double
     double *step = (double *)w->step;
     if (k->st->passes + 3 >= k->max_passes)
         return NK_BUDGET;
-    for (size_t q = 0; q < n3; q++)
-        step[q] = -((const double *)w->res)[q];
     size_t nonpd = 0;
-    size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, 0.0, &nonpd);
+    size_t sing = residual_solve(k, 0.0, &nonpd);
     k->st->passes++;
     memcpy(step, w->tmp, n3 * sizeof *step);
     if (sing == 0 && !cbm__mech_pairs_active(p)) {
@@ -481,7 +514,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     const double *step = (const double *)p->work.step;
-    if (!evaluate(k))
+    if (!evaluate_as(k, true))
         return NK_NONFINITE;
     double eta = 0.1, prev = k->norm;
     int small = 0;
@@ -565,7 +598,6 @@ static nk_result transient(nk *k, double tol)
     size_t n3 = k->n3;
     double *step = (double *)w->step;
     double *om = (double *)p->omega;
-    const double *res = (const double *)w->res;
     if (!evaluate(k))
         return NK_NONFINITE;
     double sigma = 1.0;
@@ -576,10 +608,8 @@ static nk_result transient(nk *k, double tol)
             return NK_BUDGET;
         double s = sigma;
         for (;;) {
-            for (size_t q = 0; q < n3; q++)
-                step[q] = -res[q];
             size_t nonpd = 0;
-            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, s, &nonpd);
+            size_t sing = residual_solve(k, s, &nonpd);
             k->st->passes++;
             if (sing == 0 &&
                 (nonpd == 0 || (k->conservative && energy_slope(k, (const double *)w->tmp) < 0.0)))
@@ -811,9 +841,8 @@ static nk_result leave_unstable(nk *k, double sigma_min)
     cbm__mech_work *w = &p->work;
     size_t n3 = k->n3;
     double *om = (double *)p->omega;
-    const double *res = (const double *)w->res;
     for (int it = 0; it < PTC_MAX_STEPS; it++) {
-        if (!evaluate(k))
+        if (!evaluate_as(k, true)) /* factorised below */
             return NK_NONFINITE;
         if (k->rel < k->tol)
             return NK_DONE; /* an equilibrium: the caller reads its stability */
@@ -826,9 +855,7 @@ static nk_result leave_unstable(nk *k, double sigma_min)
             return newton_level(k, k->tol, k->m, false);
         double s = sigma_min;
         for (;;) {
-            for (size_t q = 0; q < n3; q++)
-                ((double *)w->step)[q] = -res[q];
-            size_t sing = cbm__mech_tree_solve(p, w->step, w->tmp, s, &nonpd);
+            size_t sing = residual_solve(k, s, &nonpd);
             k->st->passes++;
             if (sing == 0 && nonpd == 0)
                 break;
@@ -1036,9 +1063,9 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.stage = CBM_SOLVE_STAGE_NONE;
     cbm__mech_work *w = &p->work;
 
-    p->load_scale = 1.0;
-    cbm__mech_prepare(p);
+    p->load_scale = 1.0; /* cbm_plant_solve prepared the joint arrays at this load */
     st->continuation_steps = 1;
+    k.fuse = k.tree && fuse_on;
     /* a start away from the rest state is a warm start (the previous equilibrium under
      * changed loads) */
     k.plain = false;
@@ -1064,5 +1091,6 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     p->load_scale = 1.0;
     if (r == NK_DONE && k.tree)
         r = stage_stability(&k);
+    cbm__mech_fused_clear(p); /* nothing outside the solve reads the fused factorisation */
     return finish(&k, r);
 }

@@ -131,9 +131,12 @@ static inline m3 transpose(const double *a)
     return r;
 }
 
+typedef cbm__mech_fsweep sweep;
+
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
-static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
-                       bool act, bool defer);
+static void forward_all(cbm_plant *p, cbm_vec3 *out, int t);
+static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
+                       bool defer);
 
 /* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
  * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
@@ -208,24 +211,11 @@ static void contact_pre(const cbm_plant *p, size_t i, cbm_vec3 h, double *W, m3 
     }
 }
 
-/* What one backward sweep (factor_sweep) computes: the factorisation, with b and out the
- * backward half of the solve J out = b too (fused), or with only_solve that half alone over an
- * existing factorisation (cbm__mech_tree_apply). */
-typedef struct sweep {
-    cbm_plant *p;
-    const cbm_vec3 *b;
-    cbm_vec3 *out;
-    double mu;
-    bool ground, only_solve;
-    size_t singular, nonpd; /* counted by the sweep */
-    size_t negative;        /* negative eigenvalues of the pivots' symmetric parts (stability) */
-} sweep;
-
 /* The factorisation of segment i (its children's Phi, and with ground their Gamma, Lambda and
  * Xi, are in its accumulators) and, with sw->b, the backward half of the solve there. With
  * defer (a subtree a thread sweeps, see "Threads" below) Phi is left in fw[i] and psi in dm[i]
  * for the sweep of the top to add into the parent, in the serial order. */
-static void factor_one(sweep *sw, size_t i, bool defer)
+void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
 {
     cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
@@ -233,7 +223,7 @@ static void factor_one(sweep *sw, size_t i, bool defer)
     const double mu = sw->mu;
     m3 R = rot(p->q[i]), Rt = transpose(R.m);
     if (sw->only_solve) {
-        solve_back(p, i, sw->b, sw->out, &Rt, ground && w->fact[i], defer);
+        solve_back(sw, i, &Rt, w->fwad + 9 * i, ground && w->fact[i], defer);
         return;
     }
     {
@@ -299,8 +289,11 @@ static void factor_one(sweep *sw, size_t i, bool defer)
             Di[4] = 1.0 / c.y;
             Di[8] = 1.0 / c.z;
         }
-        m3 AD = mmul(A, Di);
-        double *WAD = w->fwad + 9 * i;
+        /* W a D^-1 stays in a local: it is stored (fwad) with ground contact only, and
+         * otherwise computed again from W (kept in fw), a and D^-1 when a solve alone needs it
+         * (wad_all), with the same products: 72 bytes a segment less to write per sweep */
+        m3 AD = mmul(A, Di), WADm;
+        double *WAD = ground ? w->fwad + 9 * i : WADm.m;
         mmul_to(WAD, W, AD.m);
         /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
         m3 Phi = mmul(WAD, Q);
@@ -308,8 +301,8 @@ static void factor_one(sweep *sw, size_t i, bool defer)
         for (int k = 0; k < 9; k++)
             Phi.m[k] += W[k];
         int64_t pa = p->parent[i];
-        if (defer)
-            memcpy(W, Phi.m, sizeof Phi.m); /* W is not read again */
+        if (defer) /* for the sweep of the top; W stays */
+            memcpy(w->fwad + 9 * i, Phi.m, sizeof Phi.m);
         else if (pa >= 0)
             madd(w->fw + 9 * (size_t)pa, Phi.m);
         if (act) {
@@ -328,8 +321,20 @@ static void factor_one(sweep *sw, size_t i, bool defer)
             }
         }
         if (sw->b && sw->out)
-            solve_back(p, i, sw->b, sw->out, &Rt, act, defer);
+            solve_back(sw, i, &Rt, WAD, act, defer);
     }
+}
+
+/* W a D^-1 of every segment from W (fw), a and D^-1, the products of cbm__mech_factor_one: the
+ * same bits as the sweep computed (it keeps them only with ground contact). */
+static void wad_all(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    for (size_t i = 0; i < p->n; i++) {
+        m3 AD = mmul(w->fa + 9 * i, w->fdinv + 9 * i);
+        mmul_to(w->fwad + 9 * i, w->fw + 9 * i, AD.m);
+    }
+    w->fwad_ok = true;
 }
 
 /* ---- Threads
@@ -488,7 +493,7 @@ static void tree_job_run(void *arg)
         if (solve)
             CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
         if ((part[i] >> PART_SHIFT & 7u) == me)
-            factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
+            cbm__mech_factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
     }
 }
 
@@ -529,7 +534,7 @@ static void sweeps(sweep *sw)
                 CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
             if (solve)
                 CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
-            factor_one(sw, i, false);
+            cbm__mech_factor_one(sw, i, false);
         }
     } else {
         tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative);
@@ -538,28 +543,34 @@ static void sweeps(sweep *sw)
         for (size_t i = n; i-- > 0;) {
             uint32_t e = part[i];
             if ((e >> PART_SHIFT & 7u) == 0) {
-                factor_one(sw, i, false);
+                cbm__mech_factor_one(sw, i, false);
             } else if (e & PART_ROOT) {
                 int64_t pa = p->parent[i]; /* in the top */
-                if (!sw->only_solve)
-                    madd(w->fw + 9 * (size_t)pa, w->fw + 9 * i);
+                if (!sw->only_solve)       /* Phi, kept in fwad */
+                    madd(w->fw + 9 * (size_t)pa, w->fwad + 9 * i);
                 if (solve)
                     w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
             }
         }
     }
-    if (!(sw->b && sw->out))
-        return;
+    if (sw->b && sw->out)
+        forward_all(p, sw->out, t);
+}
+
+/* The forward half of the solve into out, serial or over t threads. */
+static void forward_all(cbm_plant *p, cbm_vec3 *out, int t)
+{
     if (t <= 1) {
-        forward_solve(p, sw->out);
+        forward_solve(p, out);
         return;
     }
-    const uint32_t *part = w->tpart;
-    for (size_t i = 0; i < n; i++)
+    const uint32_t *part = p->work.tpart;
+    for (size_t i = 0; i < p->n; i++)
         if ((part[i] >> PART_SHIFT & 7u) == 0)
-            forward_one(p, i, sw->out, false);
+            forward_one(p, i, out, false);
+    sweep sw = {.p = p, .out = out};
     size_t none = 0;
-    tree_parallel(sw, t, true, &none, &none, &none);
+    tree_parallel(&sw, t, true, &none, &none, &none);
 }
 
 /* Zeroes a[lo .. hi) (the accumulators before a sweep, in ranges over the threads). */
@@ -574,15 +585,10 @@ static void zero_run(void *arg)
     memset(j->a + j->lo, 0, (j->hi - j->lo) * sizeof(double));
 }
 
-/* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
- * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
- * D was singular and replaced by S. */
-static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
+void cbm__mech_factor_clear(cbm_plant *p, int t, bool solving)
 {
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
-    const bool ground = p->ground && w->fcap >= n;
-    int t = ground ? 1 : cbm__mech_tree_split(p);
     if (t <= 1) {
         memset(w->fw, 0, 9 * n * sizeof(double));
     } else {
@@ -592,6 +598,30 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
                                  9 * n * (size_t)(k + 1) / (size_t)t};
         cbm__mech_run_threads(t, zero_run, jobs, sizeof *jobs);
     }
+    if (solving) /* the force accumulators (dfc) are read with ground contact only */
+        memset(w->dm, 0, n * sizeof *w->dm);
+    if (solving && p->ground && w->fcap >= n)
+        memset(w->dfc, 0, n * sizeof *w->dfc);
+}
+
+/* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
+ * factor-and-solve is one backward and one forward sweep). Returns the number of joints whose
+ * D was singular and replaced by S. */
+static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, size_t *nonpd_out)
+{
+    cbm__mech_work *w = &p->work;
+    const size_t n = p->n;
+    const bool ground = p->ground && w->fcap >= n;
+    if (!b && mu == 0.0 && w->fready) {
+        /* the fused evaluation of this very state factorised it already: the same bits */
+        w->fhalf = false;
+        if (nonpd_out)
+            *nonpd_out = w->fnonpd;
+        return w->fsing;
+    }
+    cbm__mech_fused_clear(p);
+    int t = ground ? 1 : cbm__mech_tree_split(p);
+    cbm__mech_factor_clear(p, t, b && out);
     if (ground) {
         memset(w->fact, 0, n);
         for (size_t i = 0; i < n; i++) {
@@ -608,16 +638,26 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
             }
         }
     }
-    cbm_vec3 *acc = w->dm, *accf = w->dfc;
-    if (b && out)
-        for (size_t i = 0; i < n; i++)
-            acc[i] = accf[i] = v3(0, 0, 0);
-    sweep sw = {p, b, out, mu, ground, false, 0, 0, 0};
+    sweep sw = {.p = p, .b = b, .out = out, .mu = mu, .ground = ground};
+    w->fwad_ok = ground;
     sweeps(&sw);
     if (nonpd_out)
         *nonpd_out = sw.nonpd;
     w->fneg = sw.negative;
     return sw.singular;
+}
+
+bool cbm__mech_tree_solve_fused(cbm_plant *p, size_t *singular, size_t *nonpd)
+{
+    cbm__mech_work *w = &p->work;
+    if (!w->fready || !w->fhalf)
+        return false;
+    w->fhalf = false;
+    forward_all(p, w->tmp, cbm__mech_tree_split(p));
+    *singular = w->fsing;
+    if (nonpd)
+        *nonpd = w->fnonpd;
+    return true;
 }
 
 size_t cbm__mech_tree_factor(cbm_plant *p, double mu, size_t *nonpd)
@@ -638,6 +678,7 @@ size_t cbm__mech_tree_perturb_unstable(cbm_plant *p, double angle)
      * `angle` rad over the joint's length */
     cbm__mech_work *w = &p->work;
     size_t k = 0;
+    cbm__mech_fused_clear(p); /* Omega moves */
     for (size_t i = 0; i < p->n; i++) {
         double d[9];
         const double *di = w->fdinv + 9 * i;
@@ -658,20 +699,26 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     cbm__mech_work *w = &p->work;
     const size_t n = p->n;
     const bool ground = p->ground && w->fcap >= n;
+    w->fhalf = false; /* dm and perhaps tmp are written; the factorisation stays */
+    if (!w->fwad_ok)
+        wad_all(p);
     for (size_t i = 0; i < n; i++)
         w->dm[i] = w->dfc[i] = v3(0, 0, 0);
-    sweep sw = {p, b, out, 0.0, ground, true, 0, 0, 0};
+    sweep sw = {.p = p, .b = b, .out = out, .ground = ground, .only_solve = true};
     sweeps(&sw);
 }
 
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
  * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
  * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
-static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out, const m3 *Rt,
-                       bool act, bool defer)
+static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
+                       bool defer)
 {
+    const cbm_vec3 *b = sw->b;
+    cbm_vec3 *out = sw->out;
     if (!b || !out)
         return; /* no right-hand side: nothing to solve (callers pass both) */
+    cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
     cbm_vec3 m0 = w->dm[i]; /* sum of the children's psi (+ the contact term below) */
     cbm_vec3 f0 = act ? w->dfc[i] : v3(0, 0, 0);
@@ -680,12 +727,13 @@ static void solve_back(cbm_plant *p, size_t i, const cbm_vec3 *b, cbm_vec3 *out,
         cbm_vec3 h = v3(Rt->m[0], Rt->m[1], Rt->m[2]);
         m0 = v3_add(m0, v3_scale(v3_cross(h, f0), p->len[i]));
     }
-    cbm_vec3 ui = v3_add(b[i], mvec(Rt->m, m0));
+    cbm_vec3 bi = sw->neg_b ? v3_scale(b[i], -1.0) : b[i];
+    cbm_vec3 ui = v3_add(bi, mvec(Rt->m, m0));
     out[i] = ui;
     int64_t pa = p->parent[i];
     if (pa < 0)
         return;
-    cbm_vec3 psi = v3_add(mvec(w->fwad + 9 * i, ui), m0);
+    cbm_vec3 psi = v3_add(mvec(wad, ui), m0);
     if (defer) {
         w->dm[i] = psi; /* not read again */
         return;
