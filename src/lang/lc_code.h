@@ -130,9 +130,16 @@ enum {
     O_CMATH,  /* d = math built-in fn(a, b) with trigonometry in degrees */
     O_WSPEND, /* an iteration of a while loop from vm->budget (the cpfg message) */
     O_HOST    /* d = vm->host_call(ip, fr); also the L+C dialect's random numbers, func,
-               * Forward/Backward, UseGroup/CurrentGroup and stop: fn the built-in, its b
-               * arguments in registers a.., k the call's node (lsys/lpfg.c lpfg_host) */
+               * Forward/Backward, UseGroup/CurrentGroup, stop, printf and the mechanics and
+               * light built-ins: fn the built-in, its b (scalar) arguments in registers a..,
+               * k the call's node (lsys/lpfg.c lpfg_host); fn LC_HOST_CONTEXT: the context
+               * (InLeftContext ...) of node k matched, its formals bound in the frame fr */
 };
+
+/* O_HOST's fn for a context (N_INCTX): the host matches it and binds its formals in the frame */
+#define LC_HOST_CONTEXT 0xFFFF
+/* the most (scalar) arguments of an O_HOST call (printf's, the mechanics built-ins') */
+#define LC_HOST_MAXARGS 16
 
 typedef struct lc_ins {
     uint8_t op, t; /* t: a type (conversions) or an operator (O_BIN) */
@@ -162,13 +169,20 @@ typedef struct lc_fcode {
 typedef struct lc_native lc_native; /* lc_native.c */
 
 enum { LC_MAIN, LC_DECOMP, LC_INTERP };
+enum { LC_X_DECOMP_DEPTH, LC_X_INTERP_DEPTH, LC_X_DLEN, LC_X_N };
 
 typedef struct lc_program {
     lc_fcode *fn;
     size_t n;
     size_t body0[3];
-    size_t block0;     /* the Start, StartEach, EndEach and End blocks, from fn[block0] */
-    lc_native *native; /* the compiled functions as native code (lc_native.c), NULL: none */
+    size_t block0; /* the Start, StartEach, EndEach and End blocks, from fn[block0] */
+    /* run once: each global's initialiser from fn[init0] (by global; empty when it has none),
+     * then the axiom (fn[init0 + globals], a body that produces without ending), then the
+     * expressions of the decomposition's and the interpretation's maximum depth and of the
+     * derivation length (fn[expr0 + LC_X_...], each returning its value) */
+    size_t init0, axiom, expr0;
+    bool xpresent[LC_X_N]; /* which of the expressions the model has */
+    lc_native *native;     /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
 
 /* Compiles every function and every production body that can be compiled; CBM_E_NOMEM only

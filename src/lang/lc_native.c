@@ -454,8 +454,13 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
         put(s, " }");
         break;
     case O_HOST: /* the L+C host's built-ins (random numbers, func, ...): node k */
-        put(s, "{ double v[2] = {0, 0};");
-        for (int i = 0; i < x->b && i < 2; i++)
+        if (x->fn == LC_HOST_CONTEXT) { /* binds formals in the frame (put_function) */
+            put(s, "r%d = R->host(R, at, %d, 0, %d, fr); if (R->failed) return 0;", x->d, x->fn,
+                (int)x->k);
+            break;
+        }
+        put(s, "{ double v[%d] = {0};", x->b > 0 ? x->b : 1);
+        for (int i = 0; i < x->b; i++)
             put(s, " v[%d] = r%d;", i, x->a + i);
         put(s, " r%d = R->host(R, at, %d, %d, %d, v); if (R->failed) return 0; }", x->d, x->fn,
             x->b, (int)x->k);
@@ -481,11 +486,12 @@ static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
     int fsize = fc->fsize;
     put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
     /* the locals start as the frame holds them (the loop reads the frame itself); where the
-     * tree walker evaluates an expression (O_EVAL) it reads and writes them there, so they stay
-     * in the frame */
+     * tree walker evaluates an expression (O_EVAL) or the host matches a context (binding its
+     * formals) it reads and writes them there, so they stay in the frame */
     bool in_frame = false;
     for (size_t i = 0; i < fc->ins.len; i++)
-        in_frame = in_frame || fc->ins.data[i].op == O_EVAL;
+        in_frame = in_frame || fc->ins.data[i].op == O_EVAL ||
+                   (fc->ins.data[i].op == O_HOST && fc->ins.data[i].fn == LC_HOST_CONTEXT);
     for (int r = 0; r < fc->nreg; r++)
         put(s,
             r >= fsize  ? "    double r%d = 0;\n"

@@ -179,17 +179,15 @@ static void eval_discard(cbm_lsys *ls, int32_t ni, double *fr, double *buf)
         ev(ls, ni, fr, buf);
 }
 
-/* The mechanics built-ins (lsys/mechlang.c) over the current string. */
-static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
+/* The mechanics built-ins (lsys/mechlang.c) over the current string, at their na arguments
+ * (at most 6; 0 for a missing one); the result to out[0]. */
+static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na, double *out)
 {
     lpfg *lp = ls->lp;
     out[0] = 0; /* every path that stops on an error leaves a defined value */
     double a[6] = {0, 0, 0, 0, 0, 0};
-    int na = 0;
-    for (int32_t x = n->a; x >= 0 && na < 6; x = lp->m.nodes.data[x].next)
-        a[na++] = evs(ls, x, fr);
-    if (lp->vm.err != CBM_OK)
-        return;
+    na = na < 6 ? na : 6;
+    memcpy(a, arg, (size_t)na * sizeof(double));
     cbm__mechlang *m = &lp->mech;
     char msg[128];
     switch ((cbm__fn)n->fn) {
@@ -402,6 +400,22 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     out[0] = r;
 }
 
+/* printf (node n) with its arguments' values v (a string argument's is unused: its text is the
+ * node's) to the context's output sink. */
+static void print(cbm_lsys *ls, const lc_node *n, const double *v)
+{
+    lpfg *lp = ls->lp;
+    cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
+    int k = 0;
+    const char *strings = ls->comp.strings.data;
+    for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
+        const lc_node *an = &lp->m.nodes.data[x];
+        args[k].s = an->op == N_STR ? strings + an->slot : NULL;
+        args[k].v = an->op == N_STR ? 0 : v[k];
+    }
+    cbm__fmt_print(ls->ctx, strings + n->slot, args, k);
+}
+
 /* The built-ins that act on the run's state (random numbers, func, derivation control, stop)
  * at arguments a (0 for a missing one), converted to the node's type: the walker's and the
  * register code's (O_HOST through lpfg_host) one implementation, so both draw the same stream. */
@@ -464,25 +478,36 @@ static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
 static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
 {
     cbm_lsys *ls = vm->host;
+    lpfg *lp = ls->lp;
+    const lc_node *n = &lp->m.nodes.data[(int32_t)ip->k];
+    const double *arg = fr + ip->a;
+    if (ip->fn == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
+        return ctx_match(ls, n->fn, n->a, n->b, fr);
+    if (n->fn == FN_PRINTF) {
+        print(ls, n, arg);
+        return 0;
+    }
+    if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTIONBOUND) {
+        double out = 0;
+        call_mech(ls, n, arg, ip->b, &out);
+        return out;
+    }
     double a[2] = {0, 0};
     for (int i = 0; i < ip->b && i < 2; i++)
-        a[i] = fr[ip->a + i];
-    return host_builtin(ls, &ls->lp->m.nodes.data[(int32_t)ip->k], a);
+        a[i] = arg[i];
+    return host_builtin(ls, n, a);
 }
 
 static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
 {
     lpfg *lp = ls->lp;
     if (n->fn == FN_PRINTF) {
-        cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
+        double v[CBM__FMT_MAX_ARGS] = {0};
         int k = 0;
-        const char *strings = ls->comp.strings.data;
-        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
-            const lc_node *an = &lp->m.nodes.data[x];
-            args[k].s = an->op == N_STR ? strings + an->slot : NULL;
-            args[k].v = an->op == N_STR ? 0 : evs(ls, x, fr);
-        }
-        cbm__fmt_print(ls->ctx, strings + n->slot, args, k);
+        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++)
+            if (lp->m.nodes.data[x].op != N_STR)
+                v[k] = evs(ls, x, fr);
+        print(ls, n, v);
         out[0] = 0;
         return;
     }
@@ -561,7 +586,13 @@ static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out
         return;
     }
     if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTIONBOUND) {
-        call_mech(ls, n, fr, out);
+        double v[6] = {0, 0, 0, 0, 0, 0};
+        int na = 0;
+        for (x = n->a; x >= 0 && na < 6; x = lp->m.nodes.data[x].next)
+            v[na++] = evs(ls, x, fr);
+        out[0] = 0;
+        if (lp->vm.err == CBM_OK)
+            call_mech(ls, n, v, na, out);
         return;
     }
     for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
@@ -1396,6 +1427,22 @@ static cbm_status run_error(cbm_lsys *ls, const char *what)
     return cbm__fail(ls->ctx, s, "%s: %s", what, lp->vm.errmsg);
 }
 
+/* Runs root fn[f] of the program (a global's initialiser, the axiom, an expression of the
+ * header) on the stack when it is compiled (and the walker is not asked for); its value to *v
+ * when v is given. false: not run. */
+static bool run_root(cbm_lsys *ls, size_t f, double *v)
+{
+    lpfg *lp = ls->lp;
+    if (lp->walk_bodies || !lp->prog.fn || f >= lp->prog.n || !lp->prog.fn[f].compiled)
+        return false;
+    lp->vm.sp = (size_t)lp->prog.fn[f].nreg;
+    double r = cbm__lc_run(&lp->prog, (int)f, lp->vm.stack, &lp->vm);
+    if (v)
+        *v = r;
+    lp->vm.sp = 0;
+    return true;
+}
+
 static cbm_status run_block(cbm_lsys *ls, int which)
 {
     static const char *const NAMES[] = {"Start", "StartEach", "EndEach", "End"};
@@ -1719,7 +1766,8 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
         const lc_global *v = &lp->m.gvars.data[g];
         lp->vm.sp = 0;
         lp->ret = NULL;
-        if (v->init >= 0) {
+        lp->vm.at = v->init >= 0 ? lp->m.nodes.data[v->init].pos : -1;
+        if (v->init >= 0 && !run_root(ls, lp->prog.init0 + g, NULL)) {
             ev(ls, v->init, lp->vm.stack, lp->vm.glob + v->slot);
             lc_conv_value(&lp->m, v->type, lp->vm.glob + v->slot);
         }
@@ -1730,7 +1778,10 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     lp->vm.sp = 0;
     lp->out = &ls->cur;
-    cbm_status ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->vm.stack);
+    cbm_status ps = CBM_OK;
+    lp->vm.at = -1;
+    if (!run_root(ls, lp->prog.axiom, NULL))
+        ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->vm.stack);
     if (lp->vm.err != CBM_OK)
         return run_error(ls, "axiom");
     CBM_TRY(ps);
@@ -1908,6 +1959,14 @@ bool cbm_lsys_walker_fallbacks(const cbm_lsys *ls, size_t *bodies, size_t *bodie
             ++*bodies_total;
             *bodies += !(p->fn && p->fn[p->block0 + (size_t)b].compiled);
         }
+    /* and so do the globals' initialisers, the axiom and the header's expressions */
+    const lc_model *m = &ls->lp->m;
+    for (size_t f = p->fn ? p->init0 : 0; f < p->n; f++)
+        if (f < p->axiom ? m->gvars.data[f - p->init0].init >= 0
+                         : f == p->axiom || p->xpresent[f - p->expr0]) {
+            ++*bodies_total;
+            *bodies += !p->fn[f].compiled;
+        }
     *functions_total = ls->lp->m.funcs.len;
     for (size_t f = 0; f < *functions_total; f++)
         *functions += !(p->fn && f < p->n && p->fn[f].compiled);
@@ -1998,12 +2057,21 @@ void cbm__lpfg_free(cbm_lsys *ls)
     ls->lp = NULL;
 }
 
-static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt)
+/* The value of expression e, compiled as root fn[f] (or walked in the test mode), at load. */
+static double eval_root(cbm_lsys *ls, size_t f, int32_t e)
+{
+    double v;
+    ls->lp->vm.sp = 0;
+    if (!run_root(ls, f, &v))
+        v = evs(ls, e, ls->lp->vm.stack);
+    return v;
+}
+
+static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt, int which)
 {
     if (s->depth <= -2) {
         int32_t e = -2 - s->depth;
-        ls->lp->vm.sp = 0;
-        double v = evs(ls, e, ls->lp->vm.stack);
+        double v = eval_root(ls, ls->lp->prog.expr0 + (size_t)which, e);
         return !(v >= 0) ? 0 : v > 1e6 ? 1000000 : (int)v; /* NaN: 0 */
     }
     return dflt;
@@ -2050,8 +2118,8 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
         if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->vm.stack_cap)
             return cbm__fail(ctx, CBM_E_LIMIT, "a production has too many local variables");
     int maxd = cbm_context_limits(ctx)->max_decomp_depth;
-    lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1);
-    lp->m.interp.depth = eval_depth(ls, &lp->m.interp, 1);
+    lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1, LC_X_DECOMP_DEPTH);
+    lp->m.interp.depth = eval_depth(ls, &lp->m.interp, 1, LC_X_INTERP_DEPTH);
     if (lp->m.decomp.depth > maxd || lp->m.interp.depth > maxd)
         return cbm__fail(ctx, CBM_E_LIMIT, "maximum depth exceeds the limit of %d", maxd);
     int depth = lp->m.decomp.depth > lp->m.interp.depth ? lp->m.decomp.depth : lp->m.interp.depth;
@@ -2062,8 +2130,7 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     }
     ls->derivation_length = 0;
     if (lp->m.dlen_expr >= 0) {
-        lp->vm.sp = 0;
-        double v = evs(ls, lp->m.dlen_expr, lp->vm.stack);
+        double v = eval_root(ls, lp->prog.expr0 + LC_X_DLEN, lp->m.dlen_expr);
         ls->derivation_length = v < 0 ? 0 : v > 1e9 ? 1000000000 : (int)v;
     }
     return CBM_OK;
