@@ -101,17 +101,6 @@ static double inc(const lc_ins *ip, double *p)
     return ip->fn >= 2 ? old : *p;
 }
 
-/* O_EVAL: out of line, so that its buffer is not in the frame of every (recursive) run */
-static __attribute__((noinline)) bool eval(const lc_ins *ip, double *fr, int nreg, lc_vm *vm)
-{
-    double v[MAXSZ + 1];
-    if (!vm->eval(vm->host, ip->a, fr, nreg, v))
-        return false;
-    for (int i = 0; i < ip->b; i++)
-        fr[ip->d + i] = v[i];
-    return true;
-}
-
 /* A loop iteration: one operation and one iteration from the budgets */
 #define SPEND_ONE()                                                                                \
     do {                                                                                           \
@@ -373,11 +362,6 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             break;
         case O_DONE:
             return 1;
-        case O_EVAL:
-            vm->at = at;
-            if (!eval(ip, fr, p->fn[f].nreg, vm))
-                return 0;
-            break;
         /* the cpfg dialect (lang/cpfg_code.c) */
         case O_PLD:
             fr[ip->d] = vm->par[ip->a];
@@ -623,10 +607,11 @@ static int lvalue(const cg *g, int32_t ni, bool *global)
     return place(g, ni, global);
 }
 
-/* Expression ni (of size doubles) left to the tree walker into the run at dst. */
-static int delegate(cg *g, int32_t ni, int dst, int size)
+/* An expression the register code has no translation for: the function does not compile (the
+ * model is refused when it is loaded, lsys/lpfg.c check_compiled). */
+static int unsupported(cg *g, int dst)
 {
-    emit(g, O_EVAL, dst, ni, size);
+    g->fail = true;
     return dst;
 }
 
@@ -829,7 +814,7 @@ static int cx(cg *g, int32_t ni, int hint)
         }
         for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
             if (!lc_is_scalar(node(g, x)->type))
-                return delegate(g, ni, hint, 1);
+                return unsupported(g, hint);
         int r[2] = {-1, -1}, na = 0;
         for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
@@ -879,7 +864,7 @@ static int cx(cg *g, int32_t ni, int hint)
         g->fail = true;
         return hint;
     }
-    return delegate(g, ni, hint, scalar ? 1 : 0);
+    return unsupported(g, hint);
 }
 
 static void cs(cg *g, int32_t ni);
@@ -1016,7 +1001,7 @@ static int cxv(cg *g, int32_t ni, int dst)
     }
     if (n->op == N_FIELD) /* a field of a value that is no variable: the value, then the field */
         return field_of(g, ni, dst, sz);
-    return delegate(g, ni, dst, sz);
+    return unsupported(g, dst);
 }
 
 /* Vector arithmetic on V3f and V3d as the tree walker's ev (and its Dot and Cross) computes
@@ -1376,13 +1361,12 @@ static bool frame_builtin(cg *g, int32_t ni, int dst)
  * into a run of temporaries (the callee's frame: each parameter a run of its size), the call,
  * then each reference parameter's run copied back to its variable in the order of the
  * parameters; a scalar result to dst, a run result copied from the callee's frame to the run at
- * dst by O_CALL. A function left to the walker is called by the walker (O_EVAL). */
+ * dst by O_CALL. */
 static int call(cg *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     const lc_function *f = &g->m->funcs.data[n->slot];
     const lc_fcode *cf = &g->p->fn[n->slot];
-    int rs = n->type == T_VOID ? 0 : lc_type_size(g->m, n->type);
     bool ok = cf->compiled;
     int a = 0;
     for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
@@ -1391,7 +1375,7 @@ static int call(cg *g, int32_t ni, int dst)
              (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
     }
     if (!ok || a != f->np)
-        return delegate(g, ni, dst, rs);
+        return unsupported(g, dst);
     int save = g->top;
     int base = tmpn(g, cf->npd);
     int off = 0;

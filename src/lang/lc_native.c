@@ -59,7 +59,6 @@ extern char **environ;
         double (*math)(int, double, double);                                                       \
         double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
         int (*prod)(struct lc_rt *, int32_t, int, const double *);                                 \
-        int (*eval)(struct lc_rt *, int32_t, int32_t, double *, int, double *);                    \
         double (*host)(struct lc_rt *, int32_t, int, int, int32_t, double *);                      \
     };
 LC_RT_STRUCT
@@ -132,16 +131,6 @@ static int rt_prod(struct lc_rt *R, int32_t at, int sm, const double *v)
     return 0;
 }
 
-static int rt_eval(struct lc_rt *R, int32_t at, int32_t ni, double *fr, int nreg, double *out)
-{
-    lc_vm *vm = R->vm;
-    vm->at = at;
-    if (vm->eval(vm->host, ni, fr, nreg, out))
-        return 1;
-    R->failed = 1;
-    return 0;
-}
-
 /* O_HOST: the register code's instruction rebuilt around the arguments' copy v, so that the
  * host (vm->host_call) sees what the loop would give it */
 static double rt_host(struct lc_rt *R, int32_t at, int fn, int nargs, int32_t node, double *v)
@@ -178,7 +167,6 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_math,
                       rt_bin,
                       rt_prod,
-                      rt_eval,
                       rt_host};
     return p->native->fn[f](fr, &R, vm->at);
 }
@@ -446,13 +434,6 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
     case O_DONE:
         put(s, "return 1;");
         break;
-    case O_EVAL: /* the walker reads and writes the locals in the frame (put_function) */
-        put(s, "{ double v[%d]; if (!R->eval(R, at, %d, fr, %d, v)) return 0;", MAXSZ + 1, x->a,
-            p->fn[f].nreg);
-        for (int i = 0; i < x->b; i++)
-            put(s, " r%d = v[%d];", x->d + i, i);
-        put(s, " }");
-        break;
     case O_HOST: /* the L+C host's built-ins (random numbers, func, ...): node k */
         if (x->fn == LC_HOST_CONTEXT) { /* binds formals in the frame (put_function) */
             put(s, "r%d = R->host(R, at, %d, 0, %d, fr); if (R->failed) return 0;", x->d, x->fn,
@@ -486,12 +467,12 @@ static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
     int fsize = fc->fsize;
     put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
     /* the locals start as the frame holds them (the loop reads the frame itself); where the
-     * tree walker evaluates an expression (O_EVAL) or the host matches a context (binding its
-     * formals) it reads and writes them there, so they stay in the frame */
+     * host matches a context (binding its formals) it writes them there, so they stay in the
+     * frame */
     bool in_frame = false;
     for (size_t i = 0; i < fc->ins.len; i++)
-        in_frame = in_frame || fc->ins.data[i].op == O_EVAL ||
-                   (fc->ins.data[i].op == O_HOST && fc->ins.data[i].fn == LC_HOST_CONTEXT);
+        in_frame =
+            in_frame || (fc->ins.data[i].op == O_HOST && fc->ins.data[i].fn == LC_HOST_CONTEXT);
     for (int r = 0; r < fc->nreg; r++)
         put(s,
             r >= fsize  ? "    double r%d = 0;\n"
