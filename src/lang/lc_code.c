@@ -116,7 +116,7 @@ static double inc(const lc_ins *ip, double *p)
 
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
-    if (p->native) /* the same functions as native code (lc_native.c) */
+    if (cbm__lc_native_has(p, f)) /* the same function as native code (lc_native.c) */
         return cbm__lc_native_run(p, f, fr, vm);
     const lc_ins *code = p->fn[f].ins.data, *ip = code;
     double *glob = vm->glob;

@@ -215,6 +215,8 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
                          const char **why);
 void cbm__lc_native_free(cbm_context *ctx, lc_program *p);
+/* Whether fn[f] runs as native code (the roots that run once never do: lc_native.c). */
+bool cbm__lc_native_has(const lc_program *p, int f);
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 
 /* The first runtime error of a run wins; its position is vm->at. */

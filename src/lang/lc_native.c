@@ -633,6 +633,19 @@ static void *open_so(const char *so_path, const char *key, size_t n, lc_native_f
     return so;
 }
 
+/* Whether fn[f] is translated: compiled, and no root that runs once (a global's initialiser,
+ * the axiom, an expression of the header), which the register code runs as fast as it matters
+ * and whose size (an axiom of 400000 modules) would only cost the C compiler's time. */
+static bool translated(const lc_program *p, size_t f)
+{
+    return f < p->init0 && p->fn[f].compiled;
+}
+
+bool cbm__lc_native_has(const lc_program *p, int f)
+{
+    return p->native && p->native->fn[f];
+}
+
 bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
                          const char **why)
 {
@@ -641,7 +654,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
         return true;
     size_t ncompiled = 0;
     for (size_t f = 0; f < p->n; f++)
-        ncompiled += p->fn[f].compiled;
+        ncompiled += translated(p, f);
     if (!ncompiled || !cache_dir) {
         *why = "no function or production body of the model compiles to native code";
         return false;
@@ -649,10 +662,10 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     src s = {ctx, {NULL, 0, 0}, false};
     put(&s, "%s", prelude);
     for (size_t f = 0; f < p->n; f++)
-        if (p->fn[f].compiled)
+        if (translated(p, f))
             put(&s, "static double f%zu(double *fr, struct lc_rt *R, int32_t at);\n", f);
     for (size_t f = 0; f < p->n; f++)
-        if (p->fn[f].compiled)
+        if (translated(p, f))
             put_function(&s, p, m, (int)f);
     uint64_t h = fnv1a(14695981039346656037ULL, s.t.data ? s.t.data : "", s.t.len);
     for (size_t i = 0; i < N_CC_FLAGS; i++)
@@ -662,7 +675,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     put(&s, "const char cbm_lc_key[] = \"%s\";\nconst int cbm_lc_count = %zu;\n", key, p->n);
     put(&s, "double (*const cbm_lc_table[%zu])(double *, struct lc_rt *, int32_t) = {", p->n);
     for (size_t f = 0; f < p->n; f++)
-        put(&s, p->fn[f].compiled ? "f%zu," : "0,", f);
+        put(&s, translated(p, f) ? "f%zu," : "0,", f);
     put(&s, "};\n");
     bool ok = false;
     char so_path[4096], tmp_so[4096], c_path[4096];

@@ -1,5 +1,6 @@
-/* The L+C-style (lpfg) dialect of the L-system engine: the evaluator of a compiled model
- * (lang/lc.h, compiled by lang/lc_parse.c) and its derivation over the packed module string.
+/* The L+C-style (lpfg) dialect of the L-system engine: the host of a compiled model (lang/lc.h,
+ * compiled by lang/lc_parse.c, run as register code or native code, lang/lc_code.h) and its
+ * derivation over the packed module string.
  *
  * Derivation (one step): StartEach; the string is scanned left to right (Forward(), default) or
  * right to left (Backward()); for each module the productions of the active group whose
@@ -321,8 +322,8 @@ static void print(cbm_lsys *ls, const lc_node *n, const double *v)
 }
 
 /* The built-ins that act on the run's state (random numbers, func, derivation control, stop)
- * at arguments a (0 for a missing one), converted to the node's type: the walker's and the
- * register code's (O_HOST through lpfg_host) one implementation, so both draw the same stream. */
+ * at arguments a (0 for a missing one), converted to the node's type (O_HOST through
+ * lpfg_host). */
 static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
 {
     lpfg *lp = ls->lp;
