@@ -1316,7 +1316,9 @@ void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total)
 {
     const lc_program *p = &ls->lp->prog;
     *compiled = *total = 0;
-    for (size_t f = p->fn ? p->body0[LC_MAIN] : 0; f < p->block0; f++) {
+    if (!p->fn)
+        return;
+    for (size_t f = p->body0[LC_MAIN]; f < p->block0; f++) {
         *compiled += p->fn[f].compiled;
         ++*total;
     }
