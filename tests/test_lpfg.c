@@ -237,6 +237,10 @@ TEST(lpfg_taylor_hell_constructs)
 {
     run_model("taylor-hell-constructs.l");
 }
+TEST(lpfg_frames_globals)
+{
+    run_model("frames-globals.l");
+}
 
 /* VecRotate returns a new value (its argument unchanged), as do Normalize(v), v.Normalized(),
  * CrossProd and DotProd; v.Normalize() changes v; copies and by-value parameters are copies */
@@ -678,14 +682,13 @@ TEST(lpfg_struct_many_fields)
 
 /* ---- production bodies in the register code (lang/lc_code.h) ---- */
 
-enum { BY_WALKER, BY_CODE, BY_NATIVE };
+enum { BY_CODE, BY_NATIVE };
 
 /* The string (and, when the model has one, its interpretation) after `steps` steps (at most;
- * fewer when the model stops) with the production bodies run by the tree walker, the register
- * code or native code; NULL when native code cannot be had (*why). *compiled and *total: the
- * bodies compiled, of all; *walked: their expressions left to the walker. */
+ * fewer when the model stops) in the register code or native code; NULL when native code
+ * cannot be had (*why). *compiled and *total: the bodies compiled, of all. */
 static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, const char **why,
-                        size_t *compiled, size_t *total, size_t *walked)
+                        size_t *compiled, size_t *total)
 {
     cbm_lsys_def def = cbm_lsys_def_default();
     def.path = path;
@@ -694,8 +697,7 @@ static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, c
     CHECK_MSG(s == CBM_OK, "%s: %s", path, cbm_context_last_error(ctx));
     if (s != CBM_OK)
         return NULL;
-    cbm__lpfg_bodies(ls, compiled, total, walked);
-    cbm__lpfg_walk_bodies(ls, by == BY_WALKER);
+    cbm__lpfg_bodies(ls, compiled, total);
     char *got = NULL;
     if (by != BY_NATIVE || cbm_lsys_compile_native(ls, test_tmp_dir(), why)) {
         CHECK_OK(cbm_lsys_reset(ls));
@@ -720,50 +722,69 @@ static char *run_bodies(cbm_context *ctx, const char *path, int steps, int by, c
     return got;
 }
 
-/* Compiled production bodies give the tree walker's strings and interpretations byte for byte,
- * in the register code and in native code: every model of tests/lpfg, the six lpfg oracle
- * models (with ../shared), compute.l and 48 steps of the L+C fruit tree (structs, nproduce,
- * groups, new contexts, globals). Which bodies compile, and how many of their expressions are
- * left to the walker (O_EVAL: contexts, quaternion and frame arithmetic, mechanics calls), is
- * checked per model, so that a change that leaves more to the walker is seen. Random numbers
- * are host calls (O_HOST) since the fruit tree went from 6 to 1 (its Equilibrium call) and
- * sympodial from 3 to 0; switch compiles, so c-library.l's counts its switch function's
- * expressions no more as a walked call (13 to 5) and taylor-hell-constructs.l's Reorient
- * compiles, its two quaternion expressions walked (2 to 4). The blocks (Start ... End) compile
- * too, and their walked expressions count: the fruit tree's mechanics settings and calls in
- * Start and EndEach (1 to 11). */
+/* FNV-1a (64 bits) of a string: the digests of lpfg_bodies_match_walker */
+static uint64_t digest(const char *t)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    for (; t && *t; t++)
+        h = (h ^ (unsigned char)*t) * 0x100000001b3ull;
+    return h;
+}
+
+/* The register code and native code give the strings and interpretations of the tree walker
+ * they replaced, byte for byte: every model of tests/lpfg, every L+C model of models/ (16 steps
+ * of the buckling column, 48 of the fruit trees), compute.l and the six lpfg oracle models (with
+ * ../shared). The walker's string (and interpretation) of each is kept as its FNV-1a digest,
+ * recorded on 2026-11-27 by this test while the walker still ran (commit 0224ed7, where the
+ * test compared them in full); native code is compared with the register code in full. Every
+ * production body compiles (the counts are checked, so that a body that stops compiling is
+ * seen). A digest that changes is a change of output: say why before recording the new one. */
 TEST(lpfg_bodies_match_walker)
 {
     static const struct {
         const char *file;
         int steps;
         bool oracle;
-        size_t compiled, total, walked; /* bodies compiled, of all; expressions walked */
+        size_t compiled, total; /* bodies compiled, of all */
+        uint64_t walker;        /* FNV-1a of the tree walker's string */
     } models[] = {
-        {"tests/lpfg/backward-sum.l", 1, false, 1, 1, 3},
-        {"tests/lpfg/c-library.l", 1, false, 5, 5, 5},
-        {"tests/lpfg/compiled-functions.l", 6, false, 1, 1, 0},
-        {"tests/lpfg/consider.l", 1, false, 2, 2, 0},
-        {"tests/lpfg/decomposition-interp.l", 2, false, 3, 3, 0},
-        {"tests/lpfg/forward-signal.l", 1, false, 1, 1, 0},
-        {"tests/lpfg/group0-cut-nproduce.l", 2, false, 3, 3, 0},
-        {"tests/lpfg/groups-globals.l", 3, false, 6, 6, 0},
-        {"tests/lpfg/in-left-context.l", 1, false, 1, 1, 2},
-        {"tests/lpfg/struct-vectors.l", 1, false, 1, 1, 0},
-        {"tests/lpfg/struct-functions.l", 1, false, 1, 1, 0},
-        {"tests/lpfg/random-host.l", 4, false, 1, 1, 0},
-        {"tests/lpfg/switch.l", 1, false, 1, 1, 0},
-        {"tests/lpfg/taylor-hell-constructs.l", 3, false, 7, 7, 4},
-        {"tests/lpfg/two-branch-context.l", 1, false, 3, 3, 0},
-        {"tests/lpfg/value-semantics.l", 1, false, 2, 2, 5},
-        {"bench/lc/compute.l", 12, false, 1, 1, 0},
-        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 11},
-        {"lpfg-compound-param", -1, true, 4, 4, 0},
-        {"lpfg-hormone-up", -1, true, 4, 4, 0},
-        {"lpfg-innewcontext", -1, true, 3, 3, 3},
-        {"lpfg-newcontext", -1, true, 6, 6, 0},
-        {"lpfg-quadratic-koch", -1, true, 1, 1, 0},
-        {"lpfg-sympodial", -1, true, 6, 6, 0},
+        {"tests/lpfg/backward-sum.l", 1, false, 1, 1, 0x636148b3c40e52f3ull},
+        {"tests/lpfg/c-library.l", 1, false, 5, 5, 0xbe4c72fc751a7861ull},
+        {"tests/lpfg/compiled-functions.l", 6, false, 1, 1, 0x6b1bce1b44283208ull},
+        {"tests/lpfg/consider.l", 1, false, 2, 2, 0x9cec3097fcc5a9acull},
+        {"tests/lpfg/decomposition-interp.l", 2, false, 3, 3, 0x086cabb490f6f5fbull},
+        {"tests/lpfg/forward-signal.l", 1, false, 1, 1, 0xef8e5efa7586fe2cull},
+        {"tests/lpfg/frames-globals.l", 1, false, 1, 1, 0xebe54a5dee959efdull},
+        {"tests/lpfg/group0-cut-nproduce.l", 2, false, 3, 3, 0x58028d972a24e5c4ull},
+        {"tests/lpfg/groups-globals.l", 3, false, 6, 6, 0x6f3048df2048ced9ull},
+        {"tests/lpfg/in-left-context.l", 1, false, 1, 1, 0x234f8794e73689eaull},
+        {"tests/lpfg/struct-vectors.l", 1, false, 1, 1, 0x418268ecc95b2f97ull},
+        {"tests/lpfg/struct-functions.l", 1, false, 1, 1, 0x4115168b8a178191ull},
+        {"tests/lpfg/random-host.l", 4, false, 1, 1, 0x4594857202edae2cull},
+        {"tests/lpfg/switch.l", 1, false, 1, 1, 0xbfc6c2ca5111ba85ull},
+        {"tests/lpfg/taylor-hell-constructs.l", 3, false, 7, 7, 0xcf41e9a094cf8069ull},
+        {"tests/lpfg/two-branch-context.l", 1, false, 3, 3, 0x06a007f4db3f61d7ull},
+        {"tests/lpfg/value-semantics.l", 1, false, 2, 2, 0x3fdc420cee86b4c6ull},
+        {"bench/lc/compute.l", 12, false, 1, 1, 0x7c4f37d8ef7624dcull},
+        {"models/taylor-hell-fruit-tree.l", 48, false, 30, 30, 0x1dcb444add576cc7ull},
+        {"models/taylor-hell-fruit-tree-thesis.l", 48, false, 30, 30, 0x63f27669ce498918ull},
+        {"models/taylor-hell-buckling.l", 16, false, 3, 3, 0x758eba90458e467cull},
+        {"models/taylor-hell-pendula.l", -1, false, 7, 7, 0x5381c86a1abfb944ull},
+        {"models/guertler-beech.l", -1, false, 8, 8, 0x9038d4a6fd628ac5ull},
+        {"models/guertler-spruce.l", -1, false, 6, 6, 0x42a8a9e199371482ull},
+        {"models/guertler-sympodial.l", -1, false, 3, 3, 0x784fb1b0f78a574eull},
+        {"models/jirasek-cherries.l", -1, false, 6, 6, 0xed2f8dd2f8551b71ull},
+        {"models/jirasek-cycad.l", -1, false, 7, 7, 0x7af350788f91958full},
+        {"models/jirasek-grapes.l", -1, false, 7, 7, 0x9e6efeeec0d57a4dull},
+        {"models/jirasek-ground.l", -1, false, 3, 3, 0xb99415bce2b1dfd3ull},
+        {"models/jirasek-hanging.l", -1, false, 5, 5, 0xeafb967de01390b1ull},
+        {"models/jirasek-s-branch.l", -1, false, 3, 3, 0x8cff6b7a5bdfce49ull},
+        {"lpfg-compound-param", -1, true, 4, 4, 0x71d77e84992dc413ull},
+        {"lpfg-hormone-up", -1, true, 4, 4, 0x71fc0ed36f27cf31ull},
+        {"lpfg-innewcontext", -1, true, 3, 3, 0x23b9675e310367eeull},
+        {"lpfg-newcontext", -1, true, 6, 6, 0x0e8ae3a8d35e3599ull},
+        {"lpfg-quadratic-koch", -1, true, 1, 1, 0xb9872a76c168e6b4ull},
+        {"lpfg-sympodial", -1, true, 6, 6, 0x4ff15def2f9ff352ull},
     };
     cbm_context *ctx = test_ctx();
     bool native_ok = true;
@@ -776,39 +797,35 @@ TEST(lpfg_bodies_match_walker)
         } else
             snprintf(path, sizeof path, "%s/%s", test_source_dir(), models[k].file);
         const char *why = NULL;
-        size_t compiled = 0, total = 0, walked = 0;
-        char *walker =
-            run_bodies(ctx, path, models[k].steps, BY_WALKER, NULL, &compiled, &total, &walked);
-        char *code =
-            run_bodies(ctx, path, models[k].steps, BY_CODE, NULL, &compiled, &total, &walked);
-        CHECK_MSG(compiled == models[k].compiled && total == models[k].total &&
-                      walked == models[k].walked,
-                  "%s: %zu of %zu production bodies compiled, %zu expressions left to the walker "
-                  "(expected %zu of %zu, %zu)",
-                  models[k].file, compiled, total, walked, models[k].compiled, models[k].total,
-                  models[k].walked);
-        CHECK_MSG(walker && code && !strcmp(walker, code),
-                  "%s: the register code's string differs from the tree walker's", models[k].file);
-        char *native = native_ok ? run_bodies(ctx, path, models[k].steps, BY_NATIVE, &why,
-                                              &compiled, &total, &walked)
-                                 : NULL;
+        size_t compiled = 0, total = 0;
+        char *code = run_bodies(ctx, path, models[k].steps, BY_CODE, NULL, &compiled, &total);
+        CHECK_MSG(compiled == models[k].compiled && total == models[k].total,
+                  "%s: %zu of %zu production bodies compiled (expected %zu of %zu)", models[k].file,
+                  compiled, total, models[k].compiled, models[k].total);
+        CHECK_MSG(code && digest(code) == models[k].walker,
+                  "%s: the register code's string differs from the tree walker's (digest "
+                  "0x%016llx, the walker's 0x%016llx)",
+                  models[k].file, (unsigned long long)digest(code),
+                  (unsigned long long)models[k].walker);
+        char *native =
+            native_ok ? run_bodies(ctx, path, models[k].steps, BY_NATIVE, &why, &compiled, &total)
+                      : NULL;
         if (!native && why && strstr(why, "compiler"))
             native_ok = false; /* no cc: the register code is still checked */
         else if (native_ok && !(compiled == 0 && !native && why && strstr(why, "no function")))
-            CHECK_MSG(native && walker && !strcmp(walker, native),
-                      "%s: native code's string differs from the tree walker's (%s)",
+            CHECK_MSG(native && code && !strcmp(code, native),
+                      "%s: native code's string differs from the register code's (%s)",
                       models[k].file, why ? why : "");
-        free(walker);
         free(code);
         free(native);
     }
     test_ctx_end(ctx);
 }
 
-/* cbm_lsys_walker_fallbacks (`cambium run --timing`): what the tree walker still runs. A body
- * with a context and a switch, a function, a Start block: everything compiles, the context is
- * the one walked expression; a cpfg-dialect model gives false. */
-TEST(lpfg_walker_fallbacks)
+/* Everything compiles: a body with a context and a switch, a function, a Start block, a
+ * global's initialiser; a function the register code cannot hold (a switch of more than 256
+ * cases) refuses the model at load, named at its position, as there is no other evaluator. */
+TEST(lpfg_everything_compiles)
 {
     static const char *const text =
         "#include <lpfgall.h>\nmodule A(int);\nmodule B(int);\nint g = 0;\n"
@@ -822,25 +839,44 @@ TEST(lpfg_walker_fallbacks)
     def.text = text;
     cbm_lsys *ls = NULL;
     CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    size_t b = 9, bt = 9, f = 9, ft = 9, e = 9;
-    CHECK(cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e));
-    CHECK_MSG(b == 0 && bt == 2 && f == 0 && ft == 1 && e == 1,
-              "bodies %zu of %zu, functions %zu of %zu, expressions %zu", b, bt, f, ft, e);
+    size_t b = 9, bt = 9;
+    cbm__lpfg_bodies(ls, &b, &bt);
+    CHECK_MSG(b == 1 && bt == 1, "bodies %zu of %zu", b, bt);
     CHECK_OK(cbm_lsys_reset(ls));
     CHECK_OK(cbm_lsys_step(ls));
     char *got = lpfg_string(ctx, ls, false, ' ');
     CHECK_MSG(got && !strcmp(got, "B(1) A(4)"), "got '%s'", got ? got : "");
     free(got);
     cbm_lsys_destroy(ls);
-    def.path = "m.ls";
-    def.text = "Lsystem: 1\nderivation length: 1\nAxiom: F\nF --> FF\nendlsystem\n";
-    CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
-    CHECK(!cbm_lsys_walker_fallbacks(ls, &b, &bt, &f, &ft, &e) && bt == 0 && e == 0);
-    cbm_lsys_destroy(ls);
     test_ctx_end(ctx);
+    /* 257 cases */
+    size_t cap = 16384, n = 0;
+    char *big = malloc(cap);
+    CHECK(big != NULL);
+    if (!big)
+        return;
+    n += (size_t)snprintf(big + n, cap - n,
+                          "#include <lpfgall.h>\nmodule A(int);\nint f(int x)\n{\n"
+                          "    switch (x) {");
+    for (int c = 0; c < 257; c++)
+        n += (size_t)snprintf(big + n, cap - n, " case %d: return %d;", c, c);
+    snprintf(big + n, cap - n, " }\n    return 0;\n}\nAxiom: A(1);\nA(x) : { produce A(f(x)); }\n");
+    test_diags g;
+    ctx = test_diag_ctx(&g);
+    CHECK(ctx != NULL);
+    if (ctx) {
+        def.text = big;
+        ls = NULL;
+        CHECK_STATUS(cbm_lsys_load(ctx, &def, &ls), CBM_E_LIMIT);
+        CHECK(ls == NULL);
+        CHECK_MSG(strstr(g.text, "m.l:3:") && strstr(g.text, "this function cannot be compiled"),
+                  "%s", g.text);
+        cbm_context_destroy(ctx);
+    }
+    free(big);
 }
 
-/* One step of model text with the bodies run by the walker, the register code or native code:
+/* One step of model text in the register code or native code:
  * its status and diagnostics in *g, the string after it in *str (the caller frees it);
  * CBM_E_UNSUPPORTED when native code cannot be had. */
 static cbm_status body_step(const char *text, int by, test_diags *g, char **str, size_t *compiled)
@@ -858,11 +894,9 @@ static cbm_status body_step(const char *text, int by, test_diags *g, char **str,
     cbm_status s = cbm_lsys_load(ctx, &def, &ls);
     CHECK_OK(s);
     const char *why = NULL;
-    size_t total = 0, walked = 0;
-    if (s == CBM_OK) {
-        cbm__lpfg_bodies(ls, compiled, &total, &walked);
-        cbm__lpfg_walk_bodies(ls, by == BY_WALKER);
-    }
+    size_t total = 0;
+    if (s == CBM_OK)
+        cbm__lpfg_bodies(ls, compiled, &total);
     if (s == CBM_OK && by == BY_NATIVE && !cbm_lsys_compile_native(ls, test_tmp_dir(), &why)) {
         CHECK_MSG(why && (strstr(why, "compiler") || (!*compiled && strstr(why, "no function"))),
                   "%s", why ? why : "?");
@@ -878,15 +912,15 @@ static cbm_status body_step(const char *text, int by, test_diags *g, char **str,
     return s;
 }
 
-/* Errors in compiled production bodies stop at the same statement with the same message as in
- * the tree walker, in the register code and in native code: a division by zero, a parameter
- * that is not finite (named at its argument), the loop budget, the call depth of a compiled
- * function called from the body, an error in compiled functions with struct parameters (one a
- * reference) and vector arithmetic, an error inside an expression left to the walker (O_EVAL:
- * a quaternion), an error in a compiled switch, func() without function files (a host call,
- * O_HOST), an error in a compiled EndEach block. A body with a switch compiles (counted) and
- * gives the same string. */
-TEST(lpfg_bodies_errors_and_fallback)
+/* Errors in compiled production bodies stop at the statement and with the message the tree
+ * walker gave (checked against it while it ran), in the register code and in native code alike:
+ * a division by zero, a parameter that is not finite (named at its argument), the loop budget,
+ * the call depth of a compiled function called from the body, an error in compiled functions
+ * with struct parameters (one a reference) and vector arithmetic, an error inside quaternion
+ * arithmetic, an error in a compiled switch, func() without function files (a host call,
+ * O_HOST), an error in a compiled EndEach block, a mechanics call's error (a host call). A body
+ * with a switch compiles (counted) and gives the walker's string. */
+TEST(lpfg_bodies_errors)
 {
     static const struct {
         const char *text, *where, *what;
@@ -947,6 +981,11 @@ TEST(lpfg_bodies_errors_and_fallback)
          "EndEach: {\n"
          "    z = drand48() < 2 ? 7 / z : 0; }\n",
          "m.l:7:5: ", "integer division by zero", CBM_E_RUNTIME, 1},
+        {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
+         "A(x) : { produce A(x + 1); }\n"
+         "EndEach: {\n"
+         "    Ground(0, -1, 0); }\n",
+         "m.l:6:5: ", "Ground(height y0 m, stiffness k >= 0", CBM_E_INVALID, 1},
         {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1) A(2) A(3);\n"
          "A(x) : {\n"
          "    switch (x) {\n"
@@ -955,32 +994,61 @@ TEST(lpfg_bodies_errors_and_fallback)
          "    default: produce A(x * x);\n"
          "    }\n"
          "    produce A(-x); }\n",
-         NULL, NULL, CBM_OK, 1},
+         "A(10) A(-2) A(9)", NULL, CBM_OK, 1},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        test_diags walker, code, native;
-        char *sw = NULL, *sc = NULL, *sn = NULL;
+        test_diags code, native;
+        char *sc = NULL, *sn = NULL;
         size_t compiled = 9;
-        CHECK_STATUS(body_step(cases[k].text, BY_WALKER, &walker, &sw, &compiled), cases[k].status);
         CHECK_STATUS(body_step(cases[k].text, BY_CODE, &code, &sc, &compiled), cases[k].status);
         CHECK_MSG(compiled == cases[k].compiled, "case %zu: %zu bodies compiled", k, compiled);
-        if (cases[k].where)
-            CHECK_MSG(strstr(walker.text, cases[k].where) && strstr(walker.text, cases[k].what),
-                      "case %zu: %s", k, walker.text);
-        CHECK_MSG(!strcmp(walker.text, code.text), "walker: %s\nregister code: %s", walker.text,
-                  code.text);
-        CHECK_MSG((!sw && !sc) || (sw && sc && !strcmp(sw, sc)), "case %zu: '%s' / '%s'", k,
-                  sw ? sw : "", sc ? sc : "");
+        if (cases[k].what) /* an error: where and what */
+            CHECK_MSG(strstr(code.text, cases[k].where) && strstr(code.text, cases[k].what),
+                      "case %zu: %s", k, code.text);
+        else /* the string */
+            CHECK_MSG(sc && !strcmp(sc, cases[k].where), "case %zu: '%s'", k, sc ? sc : "");
         cbm_status s = body_step(cases[k].text, BY_NATIVE, &native, &sn, &compiled);
         if (s != CBM_E_UNSUPPORTED) {
             CHECK_STATUS(s, cases[k].status);
-            CHECK_MSG(!strcmp(walker.text, native.text), "walker: %s\nnative code: %s", walker.text,
-                      native.text);
-            CHECK_MSG((!sw && !sn) || (sw && sn && !strcmp(sw, sn)), "case %zu: '%s' / '%s'", k,
-                      sw ? sw : "", sn ? sn : "");
+            CHECK_MSG(!strcmp(code.text, native.text), "register code: %s\nnative code: %s",
+                      code.text, native.text);
+            CHECK_MSG((!sc && !sn) || (sc && sn && !strcmp(sc, sn)), "case %zu: '%s' / '%s'", k,
+                      sc ? sc : "", sn ? sn : "");
         }
-        free(sw);
         free(sc);
         free(sn);
+    }
+}
+
+/* Runtime errors of what runs once, compiled as roots of the program: a global's initialiser
+ * (named by the global, at the initialiser) and an argument of the axiom (at the argument). */
+TEST(lpfg_root_errors)
+{
+    static const struct {
+        const char *text, *where, *what;
+    } cases[] = {
+        {"#include <lpfgall.h>\nmodule A(int);\nint z = 1;\nint g = 7 / (z - 1);\n"
+         "Axiom: A(g);\nA(x) : { produce A(x); }\n",
+         "m.l:4:", "g: integer division by zero"},
+        {"#include <lpfgall.h>\nmodule A(int);\nint z = 1;\n"
+         "Axiom: A(1) A(7 % (z - 1));\nA(x) : { produce A(x); }\n",
+         "m.l:4:26: ", "axiom: integer remainder by zero"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        test_diags g;
+        cbm_context *ctx = test_diag_ctx(&g);
+        CHECK(ctx != NULL);
+        if (!ctx)
+            return;
+        cbm_lsys_def def = cbm_lsys_def_default();
+        def.path = "m.l";
+        def.text = cases[k].text;
+        cbm_lsys *ls = NULL;
+        CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+        CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_RUNTIME);
+        CHECK_MSG(strstr(g.text, cases[k].where) && strstr(g.text, cases[k].what), "case %zu: %s",
+                  k, g.text);
+        cbm_lsys_destroy(ls);
+        cbm_context_destroy(ctx);
     }
 }

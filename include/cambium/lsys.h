@@ -56,15 +56,6 @@ CBM_API void cbm_lsys_destroy(cbm_lsys *ls);
 /// directory. Call it after cbm_lsys_load, before the first step.
 CBM_API bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why);
 
-/// What of an L+C model the tree walker still runs instead of the register code (or native
-/// code): production bodies (and the Start, StartEach, EndEach and End blocks present) and
-/// functions left to it whole (of their totals), and expressions
-/// of the compiled ones it evaluates for them (contexts, frame and quaternion arithmetic, the
-/// mechanics calls). false (all zero) for a cpfg-dialect model.
-CBM_API bool cbm_lsys_walker_fallbacks(const cbm_lsys *ls, size_t *bodies, size_t *bodies_total,
-                                       size_t *functions, size_t *functions_total,
-                                       size_t *expressions);
-
 /// The model's `derivation length:` (steps).
 CBM_API int cbm_lsys_derivation_length(const cbm_lsys *ls);
 /// Starts over: runs the Start: block, builds the axiom (step 0).

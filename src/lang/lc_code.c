@@ -101,17 +101,6 @@ static double inc(const lc_ins *ip, double *p)
     return ip->fn >= 2 ? old : *p;
 }
 
-/* O_EVAL: out of line, so that its buffer is not in the frame of every (recursive) run */
-static __attribute__((noinline)) bool eval(const lc_ins *ip, double *fr, int nreg, lc_vm *vm)
-{
-    double v[MAXSZ + 1];
-    if (!vm->eval(vm->host, ip->a, fr, nreg, v))
-        return false;
-    for (int i = 0; i < ip->b; i++)
-        fr[ip->d + i] = v[i];
-    return true;
-}
-
 /* A loop iteration: one operation and one iteration from the budgets */
 #define SPEND_ONE()                                                                                \
     do {                                                                                           \
@@ -127,7 +116,7 @@ static __attribute__((noinline)) bool eval(const lc_ins *ip, double *fr, int nre
 
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
-    if (p->native) /* the same functions as native code (lc_native.c) */
+    if (cbm__lc_native_has(p, f)) /* the same function as native code (lc_native.c) */
         return cbm__lc_native_run(p, f, fr, vm);
     const lc_ins *code = p->fn[f].ins.data, *ip = code;
     double *glob = vm->glob;
@@ -373,11 +362,6 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             break;
         case O_DONE:
             return 1;
-        case O_EVAL:
-            vm->at = at;
-            if (!eval(ip, fr, p->fn[f].nreg, vm))
-                return 0;
-            break;
         /* the cpfg dialect (lang/cpfg_code.c) */
         case O_PLD:
             fr[ip->d] = vm->par[ip->a];
@@ -423,6 +407,7 @@ typedef struct cg {
     bool fail;          /* not compilable (or out of memory: nomem) */
     bool nomem;
     bool body;         /* a production body: produce, and return gives no value */
+    bool arg_pos;      /* produce: each argument's first instruction carries its position */
     int loops;         /* enclosing loops */
     int switches;      /* enclosing switches (break leaves the innermost loop or switch) */
     int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
@@ -489,6 +474,16 @@ static int tmp(cg *g)
     return r;
 }
 
+/* n consecutive temporaries (a run for a value of several doubles) */
+static int tmpn(cg *g, int n)
+{
+    int r = g->top;
+    g->top += n;
+    if (g->top > g->fc->nreg)
+        g->fc->nreg = g->top;
+    return r;
+}
+
 /* Whether evaluating ni may change a variable (so that an operand read before it must be
  * copied first). Conservative: anything but pure scalar arithmetic counts. */
 static bool writes(const cg *g, int32_t ni)
@@ -527,6 +522,7 @@ static bool writes(const cg *g, int32_t ni)
 }
 
 static int cx(cg *g, int32_t ni, int hint);
+static int cxv(cg *g, int32_t ni, int dst);
 
 /* The register of constant v (loaded on entry), or v loaded into hint when there are many. */
 static int konst(cg *g, double v, int hint)
@@ -611,16 +607,18 @@ static int lvalue(const cg *g, int32_t ni, bool *global)
     return place(g, ni, global);
 }
 
-/* Expression ni (of size doubles) left to the tree walker into the run at dst. */
-static int delegate(cg *g, int32_t ni, int dst, int size)
+/* An expression the register code has no translation for: the function does not compile (the
+ * model is refused when it is loaded, lsys/lpfg.c check_compiled). */
+static int unsupported(cg *g, int dst)
 {
-    emit(g, O_EVAL, dst, ni, size);
+    g->fail = true;
     return dst;
 }
 
 /* The built-ins that act on the run's state, called through the host (O_HOST, vm->host_call):
  * random numbers (the one stream of lang/random.c, drawn in the walker's order), func, the
- * derivation's direction and group, stop. */
+ * derivation's direction and group, stop, printf, and the mechanics and light built-ins
+ * (lsys/mechlang.c, lightlang.c: settings and operations on the whole string). */
 static bool host_fn(int fn)
 {
     switch (fn) {
@@ -635,28 +633,31 @@ static bool host_fn(int fn)
     case FN_USEGROUP:
     case FN_CURGROUP:
     case FN_STOP:
+    case FN_PRINTF:
         return true;
     default:
-        return false;
+        return fn >= FN_EQUILIBRIUM && fn <= FN_REACTIONBOUND;
     }
 }
 
-/* Built-in ni of host_fn: its (at most two, scalar) arguments left to right into a run of
- * temporaries, then O_HOST with the node in k, whose value the host converts to the node's
- * type as the walker does. */
+/* Built-in ni of host_fn: its scalar arguments left to right into a run of temporaries (a
+ * string of printf has its register, unused: the host reads the node), then O_HOST with the
+ * node in k, whose value the host converts to the node's type as the walker does. */
 static int host(cg *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int na = 0;
     for (int32_t x = n->a; x >= 0; x = node(g, x)->next, na++)
-        if (!lc_is_scalar(node(g, x)->type) || na == 2)
-            return delegate(g, ni, dst, lc_is_scalar(n->type) ? 1 : 0);
+        if ((!lc_is_scalar(node(g, x)->type) && node(g, x)->op != N_STR) || na == LC_HOST_MAXARGS) {
+            g->fail = true;
+            return dst;
+        }
     int save = g->top;
-    int base = g->top;
-    for (int i = 0; i < na; i++)
-        (void)tmp(g);
+    int base = tmpn(g, na);
     int i = 0;
     for (int32_t x = n->a; x >= 0; x = node(g, x)->next, i++) {
+        if (node(g, x)->op == N_STR)
+            continue;
         int s2 = g->top;
         mov(g, base + i, cx(g, x, base + i));
         g->top = s2;
@@ -671,6 +672,9 @@ static int host(cg *g, int32_t ni, int dst)
 static int call(cg *g, int32_t ni, int dst);
 static bool vec_bin(cg *g, int32_t ni, int dst);
 static bool vec_builtin(cg *g, int32_t ni, int dst);
+static bool frame_bin(cg *g, int32_t ni, int dst);
+static bool frame_builtin(cg *g, int32_t ni, int dst);
+static int field_of(cg *g, int32_t ni, int dst, int sz);
 
 /* Compiles expression ni; returns the register holding its value: a variable's own register,
  * or hint (a temporary of the caller) where it computed it. */
@@ -695,6 +699,8 @@ static int cx(cg *g, int32_t ni, int hint)
     case N_FIELD: {
         bool global;
         int slot = scalar ? place(g, ni, &global) : -1;
+        if (slot < 0 && scalar)
+            return field_of(g, ni, hint, 1);
         if (slot < 0)
             break;
         if (!global)
@@ -763,11 +769,18 @@ static int cx(cg *g, int32_t ni, int hint)
         patch(g, jend, here(g));
         return hint;
     }
-    case N_COMMA:
+    case N_COMMA: {
         if (!scalar)
             break;
-        (void)cx(g, n->a, tmp(g));
+        int save = g->top;
+        const lc_node *a = node(g, n->a);
+        if (lc_is_scalar(a->type) || a->type == T_VOID)
+            (void)cx(g, n->a, tmp(g));
+        else
+            (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, a->type)));
+        g->top = save;
         return cx(g, n->b, hint);
+    }
     case N_ASSIGN: {
         bool global;
         int slot = lvalue(g, n->a, &global);
@@ -801,7 +814,7 @@ static int cx(cg *g, int32_t ni, int hint)
         }
         for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
             if (!lc_is_scalar(node(g, x)->type))
-                return delegate(g, ni, hint, 1);
+                return unsupported(g, hint);
         int r[2] = {-1, -1}, na = 0;
         for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
@@ -838,6 +851,12 @@ static int cx(cg *g, int32_t ni, int hint)
         if (!scalar && n->type != T_VOID)
             break;
         return call(g, ni, hint);
+    case N_INCTX: { /* the host matches the context and binds its formals in the frame */
+        lc_ins *x = ins(g, emit(g, O_HOST, hint, 0, 0));
+        x->fn = LC_HOST_CONTEXT;
+        x->k = (double)ni;
+        return hint;
+    }
     default:
         break;
     }
@@ -845,20 +864,10 @@ static int cx(cg *g, int32_t ni, int hint)
         g->fail = true;
         return hint;
     }
-    return delegate(g, ni, hint, scalar ? 1 : 0);
+    return unsupported(g, hint);
 }
 
 static void cs(cg *g, int32_t ni);
-
-/* n consecutive temporaries (a run for a value of several doubles) */
-static int tmpn(cg *g, int n)
-{
-    int r = g->top;
-    g->top += n;
-    if (g->top > g->fc->nreg)
-        g->fc->nreg = g->top;
-    return r;
-}
 
 /* Copies the run of n registers (or globals: from_global) at r to the run at d. */
 static void copy_run(cg *g, int d, int r, int n, bool from_global)
@@ -956,23 +965,43 @@ static int cxv(cg *g, int32_t ni, int dst)
     case N_CALLU:
         return call(g, ni, dst);
     case N_BIN:
-        if (vec_bin(g, ni, dst))
+        if (vec_bin(g, ni, dst) || frame_bin(g, ni, dst))
             return dst;
         break;
     case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
-        if (!lc_is_vec(n->type) || !lc_is_vec(node(g, n->a)->type))
+        if (lc_type_size(g->m, node(g, n->a)->type) != sz)
             break;
         copy_run(g, dst, cxv(g, n->a, dst), sz, false);
         conv_run(g, n->type, dst);
         return dst;
     case N_CALLB:
-        if (vec_builtin(g, ni, dst))
+        if (vec_builtin(g, ni, dst) || frame_builtin(g, ni, dst))
             return dst;
         break;
+    case N_NEG: { /* each component negated, as ev */
+        if (lc_type_size(g->m, node(g, n->a)->type) != sz)
+            break;
+        int r = cxv(g, n->a, dst);
+        for (int i = 0; i < sz; i++)
+            emit(g, O_NEG, dst + i, r + i, 0);
+        return dst;
+    }
+    case N_COMMA: {
+        int save = g->top;
+        const lc_node *a = node(g, n->a);
+        if (lc_is_scalar(a->type) || a->type == T_VOID)
+            (void)cx(g, n->a, tmp(g));
+        else
+            (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, a->type)));
+        g->top = save;
+        return cxv(g, n->b, dst);
+    }
     default:
         break;
     }
-    return delegate(g, ni, dst, sz);
+    if (n->op == N_FIELD) /* a field of a value that is no variable: the value, then the field */
+        return field_of(g, ni, dst, sz);
+    return unsupported(g, dst);
 }
 
 /* Vector arithmetic on V3f and V3d as the tree walker's ev (and its Dot and Cross) computes
@@ -1078,17 +1107,266 @@ static bool vec_builtin(cg *g, int32_t ni, int dst)
     return true;
 }
 
+/* ---- quaternions, frames (TurtleVec) and LocVec, as the tree walker's ev and call_builtin
+ * compute them: the operands whole into temporaries first (left to right), the components in
+ * doubles with C's order of operations, the result copied to dst and rounded to its type. */
+
+/* The run of value x (of sz doubles) in fresh temporaries, so that no later write changes it. */
+static int arg_run(cg *g, int32_t x, int sz)
+{
+    int t = tmpn(g, sz);
+    if (sz == 1)
+        mov(g, t, cx(g, x, t));
+    else
+        copy_run(g, t, cxv(g, x, t), sz, false);
+    return t;
+}
+
+/* r[0..2] = u x v, as the walker's cross products: u1 v2 - u2 v1 ...; t a temporary */
+static void cross3(cg *g, int r, int u, int v, int t)
+{
+    for (int i = 0; i < 3; i++) {
+        int j = (i + 1) % 3, k = (i + 2) % 3;
+        emit(g, O_MULD, r + i, u + j, v + k);
+        emit(g, O_MULD, t, u + k, v + j);
+        emit(g, O_SUBD, r + i, r + i, t);
+    }
+}
+
+/* d = u0 w0 + u1 w1 + u2 w2 (left to right); t a temporary other than d */
+static void dot3(cg *g, int d, int u, int w, int t)
+{
+    emit(g, O_MULD, d, u, w);
+    emit(g, O_MULD, t, u + 1, w + 1);
+    emit(g, O_ADDD, d, d, t);
+    emit(g, O_MULD, t, u + 2, w + 2);
+    emit(g, O_ADDD, d, d, t);
+}
+
+/* d = (l > 0 ? l : 1) */
+static void or_one(cg *g, int d, int l)
+{
+    int k = tmp(g);
+    int32_t j = emit(g, O_JNGT, -1, l, konst(g, 0.0, k));
+    emit(g, O_MOV, d, l, 0);
+    int32_t e = emit(g, O_JMP, 0, -1, 0);
+    patch(g, j, here(g));
+    mov(g, d, konst(g, 1.0, k));
+    patch(g, e, here(g));
+}
+
+/* The result run r of sz doubles to dst, rounded to type t. */
+static void result(cg *g, int dst, int r, int sz, int t)
+{
+    copy_run(g, dst, r, sz, false);
+    conv_run(g, t, dst);
+}
+
+/* Field ni of a value that is no variable (a call's result ...): the value into temporaries,
+ * then its field's doubles to dst, as ev. */
+static int field_of(cg *g, int32_t ni, int dst, int sz)
+{
+    const lc_node *n = node(g, ni);
+    int save = g->top;
+    int bs = lc_type_size(g->m, node(g, n->a)->type);
+    if (n->slot + sz > bs) {
+        g->fail = true;
+        return dst;
+    }
+    int r = arg_run(g, n->a, bs);
+    copy_run(g, dst, r + n->slot, sz, false);
+    g->top = save;
+    return dst;
+}
+
+/* The Hamilton product's terms: out[i] = sum of sign * q[qi] * b[bi], in the walker's order */
+static const signed char HAMILTON[4][4][3] = {
+    {{0, 0, 1}, {1, 1, -1}, {2, 2, -1}, {3, 3, -1}},
+    {{0, 1, 1}, {1, 0, 1}, {2, 3, 1}, {3, 2, -1}},
+    {{0, 2, 1}, {1, 3, -1}, {2, 0, 1}, {3, 1, 1}},
+    {{0, 3, 1}, {1, 2, 1}, {2, 1, -1}, {3, 0, 1}},
+};
+
+/* Quaternion times quaternion (Hamilton), quaternion times vector or TurtleVec (each vector
+ * rotated: v + 2w (u x v) + 2 u x (u x v)), LocVec arithmetic (+, -, *, / by components, a
+ * scalar operand broadcast); false (nothing emitted) for the others. */
+static bool frame_bin(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+    int sa = lc_type_size(g->m, ta), sb = lc_type_size(g->m, tb);
+    int sz = lc_type_size(g->m, n->type);
+    int save = g->top;
+    if (n->type == T_LOCVEC) {
+        if ((sa != 1 && sa != 3) || (sb != 1 && sb != 3) || sz != 3)
+            return false;
+        int a = arg_run(g, n->a, sa), b = arg_run(g, n->b, sb), r = tmpn(g, 3);
+        int op = n->fn == B_ADD   ? O_ADDD
+                 : n->fn == B_SUB ? O_SUBD
+                 : n->fn == B_MUL ? O_MULD
+                                  : O_DIVD;
+        for (int i = 0; i < 3; i++)
+            emit(g, op, r + i, a + (sa == 1 ? 0 : i), b + (sb == 1 ? 0 : i));
+        result(g, dst, r, 3, n->type);
+        g->top = save;
+        return true;
+    }
+    if (ta != T_QUAT)
+        return false;
+    if (tb == T_QUAT) {
+        if (sa != 4 || sb != 4 || sz != 4)
+            return false;
+        int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, 4), r = tmpn(g, 4), t = tmp(g);
+        for (int i = 0; i < 4; i++)
+            for (int k = 0; k < 4; k++) {
+                const signed char *h = HAMILTON[i][k];
+                emit(g, O_MULD, k ? t : r + i, q + h[0], b + h[1]);
+                if (k)
+                    emit(g, h[2] > 0 ? O_ADDD : O_SUBD, r + i, r + i, t);
+            }
+        result(g, dst, r, 4, n->type);
+        g->top = save;
+        return true;
+    }
+    int nv = tb == T_TVEC ? 3 : 1;
+    if (sa != 4 || sb != 3 * nv || sz != 3 * nv || (tb != T_TVEC && !lc_is_vec(tb)))
+        return false;
+    int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, sb), r = tmpn(g, sz);
+    int t = tmpn(g, 3), c = tmpn(g, 3), x = tmp(g), two = tmp(g);
+    two = konst(g, 2.0, two);
+    for (int v = 0; v < nv; v++) {
+        int p = b + 3 * v;
+        cross3(g, t, q + 1, p, x);
+        for (int i = 0; i < 3; i++)
+            emit(g, O_MULD, t + i, two, t + i);
+        cross3(g, c, q + 1, t, x);
+        for (int i = 0; i < 3; i++) {
+            emit(g, O_MULD, x, q, t + i);
+            emit(g, O_ADDD, r + 3 * v + i, p + i, x);
+            emit(g, O_ADDD, r + 3 * v + i, r + 3 * v + i, c + i);
+        }
+    }
+    result(g, dst, r, sz, n->type);
+    g->top = save;
+    return true;
+}
+
+/* MakeQuaternion, VecRotate (Rodrigues' rotation of a vector or of each vector of a
+ * TurtleVec), ToLocal, ToWorld and Normalize of a TurtleVec; false (nothing emitted) for the
+ * others. */
+static bool frame_builtin(cg *g, int32_t ni, int dst)
+{
+    const lc_node *n = node(g, ni);
+    int32_t x = n->a;
+    if (x < 0)
+        return false;
+    int32_t x1 = node(g, x)->next;
+    int sz = lc_type_size(g->m, n->type);
+    int s0 = lc_type_size(g->m, node(g, x)->type);
+    int save = g->top;
+    switch (n->fn) {
+    case FN_MAKEQ: {
+        if (s0 != 3 || x1 < 0 || sz != 4)
+            return false;
+        int u = arg_run(g, x, 3), ang = arg_run(g, x1, 1), r = tmpn(g, 4);
+        int l = tmp(g), t = tmp(g), h = tmp(g), sn = tmp(g);
+        dot3(g, l, u, u, t);
+        emit(g, O_SQRT, l, l, 0);
+        emit(g, O_DIVD, h, ang, konst(g, 2.0, t));
+        emit(g, O_SIN, sn, h, 0);
+        or_one(g, t, l);
+        emit(g, O_DIVD, sn, sn, t);
+        emit(g, O_COS, r, h, 0);
+        for (int i = 0; i < 3; i++)
+            emit(g, O_MULD, r + 1 + i, u + i, sn);
+        result(g, dst, r, 4, n->type);
+        break;
+    }
+    case FN_VECROT: {
+        int32_t x2 = x1 >= 0 ? node(g, x1)->next : -1;
+        int nv = n->type == T_TVEC ? 3 : 1;
+        if (x2 < 0 || s0 != 3 * nv || sz != s0 || lc_type_size(g->m, node(g, x1)->type) != 3)
+            return false;
+        int u = arg_run(g, x, s0), w = arg_run(g, x1, 3), ang = arg_run(g, x2, 1);
+        int r = tmpn(g, sz), ax = tmpn(g, 3), cr = tmpn(g, 3);
+        int l = tmp(g), t = tmp(g), c = tmp(g), sn = tmp(g), omc = tmp(g), d = tmp(g);
+        dot3(g, l, w, w, t);
+        emit(g, O_SQRT, l, l, 0);
+        or_one(g, t, l);
+        for (int i = 0; i < 3; i++)
+            emit(g, O_DIVD, ax + i, w + i, t);
+        emit(g, O_COS, c, ang, 0);
+        emit(g, O_SIN, sn, ang, 0);
+        emit(g, O_SUBD, omc, konst(g, 1.0, t), c);
+        for (int v = 0; v < nv; v++) {
+            int p = u + 3 * v;
+            dot3(g, d, ax, p, t);
+            cross3(g, cr, ax, p, t);
+            for (int i = 0; i < 3; i++) {
+                int o = r + 3 * v + i;
+                emit(g, O_MULD, o, p + i, c);
+                emit(g, O_MULD, t, cr + i, sn);
+                emit(g, O_ADDD, o, o, t);
+                emit(g, O_MULD, t, ax + i, d);
+                emit(g, O_MULD, t, t, omc);
+                emit(g, O_ADDD, o, o, t);
+            }
+        }
+        result(g, dst, r, sz, n->type);
+        break;
+    }
+    case FN_TOLOCAL:
+    case FN_TOWORLD: {
+        if (s0 != 3 || x1 < 0 || lc_type_size(g->m, node(g, x1)->type) != 9 || sz != 3)
+            return false;
+        int v = arg_run(g, x, 3), f = arg_run(g, x1, 9), r = tmpn(g, 3), t = tmp(g);
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) {
+                int fk = n->fn == FN_TOLOCAL ? f + 3 * i + k : f + 3 * k + i;
+                emit(g, O_MULD, k ? t : r + i, v + k, fk);
+                if (k)
+                    emit(g, O_ADDD, r + i, r + i, t);
+            }
+        result(g, dst, r, 3, n->type);
+        break;
+    }
+    case FN_NORMALIZE: {
+        if (n->type != T_TVEC || s0 != 9 || sz != 9)
+            return false;
+        int u = arg_run(g, x, 9), r = tmpn(g, 9), l = tmp(g), t = tmp(g);
+        for (int v = 0; v < 3; v++) {
+            int p = u + 3 * v;
+            dot3(g, l, p, p, t);
+            emit(g, O_SQRT, l, l, 0);
+            int32_t jz = emit(g, O_JNGT, -1, l, konst(g, 0.0, t));
+            for (int i = 0; i < 3; i++)
+                emit(g, O_DIVD, r + p - u + i, p + i, l);
+            int32_t je = emit(g, O_JMP, 0, -1, 0);
+            patch(g, jz, here(g));
+            for (int i = 0; i < 3; i++)
+                ins(g, emit(g, O_CONST, r + p - u + i, 0, 0))->k = 0;
+            patch(g, je, here(g));
+        }
+        result(g, dst, r, 9, n->type);
+        break;
+    }
+    default:
+        return false;
+    }
+    g->top = save;
+    return true;
+}
+
 /* A call of user function ni, as the tree walker's call_user: the arguments computed in order
  * into a run of temporaries (the callee's frame: each parameter a run of its size), the call,
  * then each reference parameter's run copied back to its variable in the order of the
  * parameters; a scalar result to dst, a run result copied from the callee's frame to the run at
- * dst by O_CALL. A function left to the walker is called by the walker (O_EVAL). */
+ * dst by O_CALL. */
 static int call(cg *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     const lc_function *f = &g->m->funcs.data[n->slot];
     const lc_fcode *cf = &g->p->fn[n->slot];
-    int rs = n->type == T_VOID ? 0 : lc_type_size(g->m, n->type);
     bool ok = cf->compiled;
     int a = 0;
     for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
@@ -1097,7 +1375,7 @@ static int call(cg *g, int32_t ni, int dst)
              (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
     }
     if (!ok || a != f->np)
-        return delegate(g, ni, dst, rs);
+        return unsupported(g, dst);
     int save = g->top;
     int base = tmpn(g, cf->npd);
     int off = 0;
@@ -1148,6 +1426,8 @@ static void produce(cg *g, const lc_node *n)
                 return;
             }
             int s2 = g->top;
+            if (g->arg_pos) /* the axiom: a runtime error names the argument */
+                g->pending_at = node(g, x)->pos;
             int r = cxv(g, x, base + off);
             copy_run(g, base + off, r, xs, false);
             g->top = s2;
@@ -1434,10 +1714,47 @@ static void stmt(cg *g, int32_t ni)
     }
 }
 
-/* Compiles the statements `body` with fsize doubles of locals into p->fn[f]; false when they
- * cannot be compiled. */
+/* What compile_code compiles: statements, a global's initialiser, the axiom, an expression. */
+enum { K_STMTS, K_INIT, K_AXIOM, K_EXPR };
+
+/* The root of kind K_INIT (global number `body`), K_AXIOM or K_EXPR (node `body`) on a frame of
+ * no locals: the initialiser's value computed into temporaries, rounded to the global's type and
+ * stored, as reset stores it; the axiom's modules produced (as nproduce: the run goes on); the
+ * expression's value returned. */
+static void root(cg *g, int kind, int32_t body)
+{
+    if (kind == K_INIT) {
+        const lc_global *v = &g->m->gvars.data[body];
+        int sz = lc_type_size(g->m, v->type);
+        int t = tmpn(g, sz);
+        g->pending_at = node(g, v->init)->pos; /* a runtime error names the initialiser */
+        copy_run(g, t, cxv(g, v->init, t), sz, false);
+        conv_run(g, v->type, t);
+        for (int i = 0; i < sz; i++)
+            emit(g, O_GST, v->slot + i, t + i, 0);
+    } else if (kind == K_AXIOM) {
+        lc_node n;
+        memset(&n, 0, sizeof n);
+        n.op = S_PRODUCE;
+        n.a = g->m->axiom.first;
+        n.b = g->m->axiom.n;
+        n.fn = 1;
+        g->arg_pos = true;
+        produce(g, &n);
+    } else {
+        if (!lc_is_scalar(node(g, body)->type)) {
+            g->fail = true;
+            return;
+        }
+        int t = tmp(g);
+        emit(g, O_RET, 0, cx(g, body, t), 0);
+    }
+}
+
+/* Compiles the statements `body` (or the root of another kind) with fsize doubles of locals
+ * into p->fn[f]; false when they cannot be compiled. */
 static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int f, int32_t body,
-                         int fsize, bool is_body, bool *nomem)
+                         int fsize, bool is_body, int kind, bool *nomem)
 {
     lc_fcode *fc = &p->fn[f];
     fc->ins.len = 0;
@@ -1464,7 +1781,10 @@ static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int
         fc->nreg = g.top;
         for (int c = 0; c < nkonst; c++)
             ins(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = konst[c];
-        cs(&g, body);
+        if (kind == K_STMTS)
+            cs(&g, body);
+        else
+            root(&g, kind, body);
         for (int i = 0; i < fc->rsize; i++) /* falling off the end: a result of zeros */
             ins(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
         emit(&g, O_RET0, 0, 0, 0);
@@ -1485,7 +1805,7 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
     if (fn->body < 0)
         return false;
     /* the run result's registers count as locals (after the function's own) */
-    return compile_code(ctx, m, p, f, fn->body, fn->fsize + p->fn[f].rsize, false, nomem);
+    return compile_code(ctx, m, p, f, fn->body, fn->fsize + p->fn[f].rsize, false, K_STMTS, nomem);
 }
 
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
@@ -1499,6 +1819,11 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
     }
     p->block0 = n;
     n += 4;
+    p->init0 = n;
+    n += m->gvars.len;
+    p->axiom = n++;
+    p->expr0 = n;
+    n += LC_X_N;
     p->fn = cbm__calloc(ctx, n, sizeof *p->fn);
     if (!p->fn)
         return CBM_E_NOMEM;
@@ -1536,8 +1861,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             const lc_production *pr = &sets[k]->prods.data[q];
             size_t f = p->body0[k] + q;
             bool nomem = false;
-            p->fn[f].compiled =
-                pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body, pr->fsize, true, &nomem);
+            p->fn[f].compiled = pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body,
+                                                              pr->fsize, true, K_STMTS, &nomem);
             if (nomem)
                 return CBM_E_NOMEM;
             if (!p->fn[f].compiled)
@@ -1547,8 +1872,28 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
     for (int b = 0; b < 4; b++) {
         size_t f = p->block0 + (size_t)b;
         bool nomem = false;
-        p->fn[f].compiled = m->blocks[b] >= 0 && compile_code(ctx, m, p, (int)f, m->blocks[b],
-                                                              m->block_fsize[b], true, &nomem);
+        p->fn[f].compiled =
+            m->blocks[b] >= 0 &&
+            compile_code(ctx, m, p, (int)f, m->blocks[b], m->block_fsize[b], true, K_STMTS, &nomem);
+        if (nomem)
+            return CBM_E_NOMEM;
+        if (!p->fn[f].compiled)
+            p->fn[f].ins.len = 0;
+    }
+    /* what runs once: the globals' initialisers, the axiom, the depths and derivation length */
+    const int32_t expr[LC_X_N] = {m->decomp.depth <= -2 ? -2 - m->decomp.depth : -1,
+                                  m->interp.depth <= -2 ? -2 - m->interp.depth : -1, m->dlen_expr};
+    for (int x = 0; x < LC_X_N; x++)
+        p->xpresent[x] = expr[x] >= 0;
+    for (size_t f = p->init0; f < p->n; f++) {
+        int kind = f < p->axiom ? K_INIT : f == p->axiom ? K_AXIOM : K_EXPR;
+        int32_t r = kind == K_INIT    ? (int32_t)(f - p->init0)
+                    : kind == K_AXIOM ? 0
+                                      : expr[f - p->expr0];
+        if ((kind == K_INIT && m->gvars.data[r].init < 0) || r < 0)
+            continue;
+        bool nomem = false;
+        p->fn[f].compiled = compile_code(ctx, m, p, (int)f, r, 0, true, kind, &nomem);
         if (nomem)
             return CBM_E_NOMEM;
         if (!p->fn[f].compiled)

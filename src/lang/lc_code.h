@@ -1,25 +1,25 @@
-/* The L+C dialect's register code: the functions of a compiled model (lang/lc.h) whose values
- * are all scalars (int, float, double, bool) translated to a compact register code, and the loop
- * that runs it (lc_code.c).
+/* The L+C dialect's register code, its one evaluator: the functions, production bodies, blocks,
+ * global initialisers, axiom and header expressions of a compiled model (lang/lc.h) translated
+ * to a compact register code, and the loop that runs it (lc_code.c).
  *
  * Why a register code and not native code through the system C compiler (as lpfg does): the
  * run needs no compiler, no temporary files, no dlopen and no cache to keep valid, so it behaves
- * the same on every machine and under ASan; and the tree walker it replaces is slow because of
+ * the same on every machine and under ASan; and the tree walker it replaced was slow because of
  * its recursion and its buffers, not because it interprets. A function's locals and parameters
  * are registers of its frame (their slots), temporaries follow them; an instruction names its
  * registers, so `s += sin(x * i) / i` is three instructions, not a walk of six nodes.
  *
- * Arithmetic is lpfg's as the tree walker computes it (cbm__lc_bin_scalar is shared by both):
+ * Arithmetic is lpfg's as the tree walker computed it (cbm__lc_bin_scalar):
  * int operations in 32 bits with the wrap, float results rounded to float32, the same messages
  * for division by zero and the budgets of cbm_limits (a loop iteration and a call each spend
  * one operation, the call depth is bounded). A runtime error reports the position of the
- * statement being executed, as the tree walker does.
+ * statement being executed, as the tree walker did.
  *
- * Every function compiles (switch too). Its parameters and
- * result may be scalars or runs (structs, vectors), its parameters references (T& x: the caller
- * copies the parameter's run back to the variable after the call, as the tree walker does); an
- * expression the compiler does not handle is evaluated by the tree walker on the function's
- * frame (O_EVAL), as in a production body. */
+ * Every function compiles (switch too). Its parameters and result may be scalars or runs
+ * (structs, vectors, quaternions, frames), its parameters references (T& x: the caller copies
+ * the parameter's run back to the variable after the call, as the tree walker did). What acts
+ * on the run's state (random numbers, contexts, the mechanics, printf) is a host call
+ * (O_HOST). */
 #ifndef CBM_LANG_LC_CODE_H
 #define CBM_LANG_LC_CODE_H
 
@@ -27,8 +27,8 @@
 
 struct lc_ins;
 
-/* The runtime state both evaluators share: globals, the frame stack, the budgets and the first
- * runtime error. */
+/* The runtime state of a run: globals, the frame stack, the budgets and the first runtime
+ * error. */
 typedef struct lc_vm {
     double *glob;
     double *stack;
@@ -44,11 +44,7 @@ typedef struct lc_vm {
      * sms) with its parameters v (the module's size in doubles) to the string being produced;
      * false after reporting an error (a parameter not finite, out of memory) */
     bool (*produce)(void *ud, int sm, const double *v);
-    /* an expression the register code leaves to the tree walker: node ni evaluated on frame fr
-     * (whose registers end at fr + nreg, where the walker's frames start) into out (room for
-     * MAXSZ + 1 doubles); false after an error */
-    bool (*eval)(void *ud, int32_t ni, double *fr, int nreg, double *out);
-    void *host; /* the ud of produce and eval */
+    void *host; /* the ud of produce, and the host of host_call */
     /* the cpfg dialect (lang/cpfg_code.c): the production's formal parameters (O_PLD, O_PST)
      * and the host's built-ins, arrays and printf (O_HOST: ip->fn says which, ip->at is the
      * node whose position a runtime error names; the result goes to fr[ip->d]) */
@@ -123,16 +119,22 @@ enum {
     /* production bodies */
     O_PROD, /* appends module sm d with its parameters in registers a.. (vm->produce) */
     O_DONE, /* `produce` ends the body: the production applied (the run returns 1) */
-    O_EVAL, /* node a evaluated by the tree walker (vm->eval), its first b doubles to d.. */
     /* the cpfg dialect (lang/cpfg_code.c) */
     O_PLD,    /* d = vm->par[a] */
     O_PST,    /* vm->par[d] = a */
     O_CMATH,  /* d = math built-in fn(a, b) with trigonometry in degrees */
     O_WSPEND, /* an iteration of a while loop from vm->budget (the cpfg message) */
     O_HOST    /* d = vm->host_call(ip, fr); also the L+C dialect's random numbers, func,
-               * Forward/Backward, UseGroup/CurrentGroup and stop: fn the built-in, its b
-               * arguments in registers a.., k the call's node (lsys/lpfg.c lpfg_host) */
+               * Forward/Backward, UseGroup/CurrentGroup, stop, printf and the mechanics and
+               * light built-ins: fn the built-in, its b (scalar) arguments in registers a..,
+               * k the call's node (lsys/lpfg.c lpfg_host); fn LC_HOST_CONTEXT: the context
+               * (InLeftContext ...) of node k matched, its formals bound in the frame fr */
 };
+
+/* O_HOST's fn for a context (N_INCTX): the host matches it and binds its formals in the frame */
+#define LC_HOST_CONTEXT 0xFFFF
+/* the most (scalar) arguments of an O_HOST call (printf's, the mechanics built-ins') */
+#define LC_HOST_MAXARGS 16
 
 typedef struct lc_ins {
     uint8_t op, t; /* t: a type (conversions) or an operator (O_BIN) */
@@ -146,7 +148,7 @@ typedef struct lc_fcode {
     CBM_ARRAY(lc_ins) ins;
     int fsize;     /* the locals (and parameters, formals) the frame holds on entry */
     int nreg;      /* frame doubles: locals, then temporaries */
-    bool compiled; /* false: the tree walker runs the function */
+    bool compiled; /* false: could not be compiled (the model is refused) or has no body */
     /* a function over runs: its parameters' doubles (a struct or vector parameter is a run of
      * registers, from register 0 in order); a result of several doubles (rsize, 0: a scalar or
      * void) is left in the run of the callee's frame at rslot (after its locals, so that its
@@ -158,31 +160,37 @@ typedef struct lc_fcode {
 /* The register code of a model's functions, by function index, then of its production bodies:
  * those of the main rules from body0[0], of the decomposition rules from body0[1], of the
  * interpretation rules from body0[2], each by production index; then the four blocks (Start,
- * StartEach, EndEach, End) from block0, compiled as bodies without produce. */
+ * StartEach, EndEach, End) from block0, compiled as bodies without produce; then what runs
+ * once (init0, axiom, expr0). */
 typedef struct lc_native lc_native; /* lc_native.c */
 
 enum { LC_MAIN, LC_DECOMP, LC_INTERP };
+enum { LC_X_DECOMP_DEPTH, LC_X_INTERP_DEPTH, LC_X_DLEN, LC_X_N };
 
 typedef struct lc_program {
     lc_fcode *fn;
     size_t n;
     size_t body0[3];
-    size_t block0;     /* the Start, StartEach, EndEach and End blocks, from fn[block0] */
-    lc_native *native; /* the compiled functions as native code (lc_native.c), NULL: none */
+    size_t block0; /* the Start, StartEach, EndEach and End blocks, from fn[block0] */
+    /* run once: each global's initialiser from fn[init0] (by global; empty when it has none),
+     * then the axiom (fn[init0 + globals], a body that produces without ending), then the
+     * expressions of the decomposition's and the interpretation's maximum depth and of the
+     * derivation length (fn[expr0 + LC_X_...], each returning its value) */
+    size_t init0, axiom, expr0;
+    bool xpresent[LC_X_N]; /* which of the expressions the model has */
+    lc_native *native;     /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
 
-/* Compiles every function and every production body that can be compiled; CBM_E_NOMEM only
- * (a function or body that cannot be compiled is left to the tree walker).
+/* Compiles every function, production body, block and root that can be compiled; CBM_E_NOMEM
+ * only (what cannot be compiled is marked so: lsys/lpfg.c refuses the model).
  *
  * A production body compiles when its statements do (as a function's) and its values are
  * scalars or runs of them: a struct or vector local, global, field, constructor, assignment or
  * conditional is copied register by register, and `produce`/`nproduce` writes each module from
  * a run of registers through vm->produce. Vector arithmetic of V3f and V3d, their conversions
- * and Dot, Cross, Length and Normalize are instructions over the components. An expression the
- * compiler does not handle (the other vector and the mechanics built-ins, contexts, quaternions
- * and frames, calls of functions left to the walker) is evaluated by the tree walker on the
- * body's frame (O_EVAL through vm->eval), so the body still compiles. Random numbers and the
- * built-ins of the run's state are host calls (O_HOST). The run of a body returns 1 when it
+ * and Dot, Cross, Length and Normalize, quaternion, frame and LocVec arithmetic, MakeQuaternion,
+ * VecRotate, ToLocal and ToWorld are instructions over the components. Random numbers, contexts,
+ * printf and the mechanics built-ins are host calls (O_HOST). The run of a body returns 1 when it
  * produced (the production applied), 0 when it ended without. The blocks compile as bodies. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
@@ -207,6 +215,8 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
                          const char **why);
 void cbm__lc_native_free(cbm_context *ctx, lc_program *p);
+/* Whether fn[f] runs as native code (the roots that run once never do: lc_native.c). */
+bool cbm__lc_native_has(const lc_program *p, int f);
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 
 /* The first runtime error of a run wins; its position is vm->at. */

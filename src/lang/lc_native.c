@@ -59,7 +59,6 @@ extern char **environ;
         double (*math)(int, double, double);                                                       \
         double (*bin)(struct lc_rt *, int32_t, int, int, double, double);                          \
         int (*prod)(struct lc_rt *, int32_t, int, const double *);                                 \
-        int (*eval)(struct lc_rt *, int32_t, int32_t, double *, int, double *);                    \
         double (*host)(struct lc_rt *, int32_t, int, int, int32_t, double *);                      \
     };
 LC_RT_STRUCT
@@ -132,16 +131,6 @@ static int rt_prod(struct lc_rt *R, int32_t at, int sm, const double *v)
     return 0;
 }
 
-static int rt_eval(struct lc_rt *R, int32_t at, int32_t ni, double *fr, int nreg, double *out)
-{
-    lc_vm *vm = R->vm;
-    vm->at = at;
-    if (vm->eval(vm->host, ni, fr, nreg, out))
-        return 1;
-    R->failed = 1;
-    return 0;
-}
-
 /* O_HOST: the register code's instruction rebuilt around the arguments' copy v, so that the
  * host (vm->host_call) sees what the loop would give it */
 static double rt_host(struct lc_rt *R, int32_t at, int fn, int nargs, int32_t node, double *v)
@@ -178,7 +167,6 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_math,
                       rt_bin,
                       rt_prod,
-                      rt_eval,
                       rt_host};
     return p->native->fn[f](fr, &R, vm->at);
 }
@@ -446,16 +434,14 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
     case O_DONE:
         put(s, "return 1;");
         break;
-    case O_EVAL: /* the walker reads and writes the locals in the frame (put_function) */
-        put(s, "{ double v[%d]; if (!R->eval(R, at, %d, fr, %d, v)) return 0;", MAXSZ + 1, x->a,
-            p->fn[f].nreg);
-        for (int i = 0; i < x->b; i++)
-            put(s, " r%d = v[%d];", x->d + i, i);
-        put(s, " }");
-        break;
     case O_HOST: /* the L+C host's built-ins (random numbers, func, ...): node k */
-        put(s, "{ double v[2] = {0, 0};");
-        for (int i = 0; i < x->b && i < 2; i++)
+        if (x->fn == LC_HOST_CONTEXT) { /* binds formals in the frame (put_function) */
+            put(s, "r%d = R->host(R, at, %d, 0, %d, fr); if (R->failed) return 0;", x->d, x->fn,
+                (int)x->k);
+            break;
+        }
+        put(s, "{ double v[%d] = {0};", x->b > 0 ? x->b : 1);
+        for (int i = 0; i < x->b; i++)
             put(s, " v[%d] = r%d;", i, x->a + i);
         put(s, " r%d = R->host(R, at, %d, %d, %d, v); if (R->failed) return 0; }", x->d, x->fn,
             x->b, (int)x->k);
@@ -481,11 +467,12 @@ static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
     int fsize = fc->fsize;
     put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
     /* the locals start as the frame holds them (the loop reads the frame itself); where the
-     * tree walker evaluates an expression (O_EVAL) it reads and writes them there, so they stay
-     * in the frame */
+     * host matches a context (binding its formals) it writes them there, so they stay in the
+     * frame */
     bool in_frame = false;
     for (size_t i = 0; i < fc->ins.len; i++)
-        in_frame = in_frame || fc->ins.data[i].op == O_EVAL;
+        in_frame =
+            in_frame || (fc->ins.data[i].op == O_HOST && fc->ins.data[i].fn == LC_HOST_CONTEXT);
     for (int r = 0; r < fc->nreg; r++)
         put(s,
             r >= fsize  ? "    double r%d = 0;\n"
@@ -646,6 +633,19 @@ static void *open_so(const char *so_path, const char *key, size_t n, lc_native_f
     return so;
 }
 
+/* Whether fn[f] is translated: compiled, and no root that runs once (a global's initialiser,
+ * the axiom, an expression of the header), which the register code runs as fast as it matters
+ * and whose size (an axiom of 400000 modules) would only cost the C compiler's time. */
+static bool translated(const lc_program *p, size_t f)
+{
+    return f < p->init0 && p->fn[f].compiled;
+}
+
+bool cbm__lc_native_has(const lc_program *p, int f)
+{
+    return p->native && p->native->fn[f];
+}
+
 bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, const char *cache_dir,
                          const char **why)
 {
@@ -654,7 +654,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
         return true;
     size_t ncompiled = 0;
     for (size_t f = 0; f < p->n; f++)
-        ncompiled += p->fn[f].compiled;
+        ncompiled += translated(p, f);
     if (!ncompiled || !cache_dir) {
         *why = "no function or production body of the model compiles to native code";
         return false;
@@ -662,10 +662,10 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     src s = {ctx, {NULL, 0, 0}, false};
     put(&s, "%s", prelude);
     for (size_t f = 0; f < p->n; f++)
-        if (p->fn[f].compiled)
+        if (translated(p, f))
             put(&s, "static double f%zu(double *fr, struct lc_rt *R, int32_t at);\n", f);
     for (size_t f = 0; f < p->n; f++)
-        if (p->fn[f].compiled)
+        if (translated(p, f))
             put_function(&s, p, m, (int)f);
     uint64_t h = fnv1a(14695981039346656037ULL, s.t.data ? s.t.data : "", s.t.len);
     for (size_t i = 0; i < N_CC_FLAGS; i++)
@@ -675,7 +675,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     put(&s, "const char cbm_lc_key[] = \"%s\";\nconst int cbm_lc_count = %zu;\n", key, p->n);
     put(&s, "double (*const cbm_lc_table[%zu])(double *, struct lc_rt *, int32_t) = {", p->n);
     for (size_t f = 0; f < p->n; f++)
-        put(&s, p->fn[f].compiled ? "f%zu," : "0,", f);
+        put(&s, translated(p, f) ? "f%zu," : "0,", f);
     put(&s, "};\n");
     bool ok = false;
     char so_path[4096], tmp_so[4096], c_path[4096];

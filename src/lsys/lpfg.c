@@ -1,5 +1,6 @@
-/* The L+C-style (lpfg) dialect of the L-system engine: the evaluator of a compiled model
- * (lang/lc.h, compiled by lang/lc_parse.c) and its derivation over the packed module string.
+/* The L+C-style (lpfg) dialect of the L-system engine: the host of a compiled model (lang/lc.h,
+ * compiled by lang/lc_parse.c, run as register code or native code, lang/lc_code.h) and its
+ * derivation over the packed module string.
  *
  * Derivation (one step): StartEach; the string is scanned left to right (Forward(), default) or
  * right to left (Backward()); for each module the productions of the active group whose
@@ -67,8 +68,7 @@ struct lpfg {
     /* models with mechanics: the module of the string each module of the interpretation came
      * from (empty: the interpretation is the string itself) */
     CBM_ARRAY(size_t) origin;
-    bool rewriting;   /* inside a derivation pass: mechanics calls are refused */
-    bool walk_bodies; /* the tree walker runs every production body (tests compare) */
+    bool rewriting; /* inside a derivation pass: mechanics calls are refused */
 };
 
 /* ---------------------------------------------------------------- evaluation */
@@ -82,114 +82,17 @@ static bool spend(lpfg *lp, bool loop)
     return cbm__lc_spend(&lp->vm, loop);
 }
 
-static double *lv_ptr(lpfg *lp, const lc_node *n, double *fr)
-{
-    return n->op == N_LOCAL ? fr + n->slot : lp->vm.glob + n->slot;
-}
-
-static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out);
-static int exec(cbm_lsys *ls, int32_t ni, double *fr);
 static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
 
-/* The value of an expression's first double: the scalar nodes (and fields of variables) read
- * directly, as ev would give them, without ev's buffer; the rest through ev into a buffer large
- * enough for any value. */
-static double evs(cbm_lsys *ls, int32_t ni, double *fr)
-{
-    lpfg *lp = ls->lp;
-    const lc_node *n = &lp->m.nodes.data[ni];
-    switch (n->op) {
-    case N_NUM:
-        return n->v;
-    case N_LOCAL:
-        return fr[n->slot];
-    case N_GLOBAL:
-        return lp->vm.glob[n->slot];
-    case N_FIELD: {
-        const lc_node *base = &lp->m.nodes.data[n->a];
-        if (base->op == N_LOCAL || base->op == N_GLOBAL)
-            return lv_ptr(lp, base, fr)[n->slot];
-        break;
-    }
-    case N_NEG:
-        if (lc_is_scalar(n->type))
-            return -evs(ls, n->a, fr);
-        break;
-    case N_NOT:
-        return evs(ls, n->a, fr) == 0;
-    case N_CAST:
-        if (lc_is_scalar(n->type))
-            return lc_conv_scalar(n->type, evs(ls, n->a, fr));
-        break;
-    case N_BIN: {
-        int ta = lp->m.nodes.data[n->a].type, tb = lp->m.nodes.data[n->b].type;
-        if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
-            double a = evs(ls, n->a, fr), b = evs(ls, n->b, fr);
-            int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
-            if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
-                ct = T_DOUBLE;
-            return cbm__lc_bin_scalar(n->fn, ct, a, b, &lp->vm);
-        }
-        break;
-    }
-    case N_AND:
-        return evs(ls, n->a, fr) != 0 && evs(ls, n->b, fr) != 0;
-    case N_OR:
-        return evs(ls, n->a, fr) != 0 || evs(ls, n->b, fr) != 0;
-    case N_COND:
-        return evs(ls, evs(ls, n->a, fr) != 0 ? n->b : n->c, fr);
-    case N_ASSIGN:
-        if (lc_is_scalar(n->type)) {
-            double v = evs(ls, n->b, fr); /* of the lvalue's type (coerced at compile time) */
-            *lv_ptr(lp, &lp->m.nodes.data[n->a], fr) = v;
-            return v;
-        }
-        break;
-    case N_INCDEC: {
-        double *p = lv_ptr(lp, &lp->m.nodes.data[n->a], fr);
-        double old = *p;
-        *p = lc_conv_scalar(n->type, *p + ((n->fn & 1) ? -1 : 1));
-        return n->fn >= 2 ? old : *p;
-    }
-    case N_CALLB:
-        if (n->fn < FN_MATH_END) { /* as call_builtin computes them */
-            double a[2] = {0, 0};
-            int32_t x = n->a;
-            for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
-                a[i] = evs(ls, x, fr);
-            return lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type,
-                                  cbm__builtin_math(n->fn, a[0], a[1], false));
-        }
-        break;
-    default:
-        break;
-    }
-    double v[MAXSZ + 1];
-    ev(ls, ni, fr, v);
-    return v[0];
-}
-
-/* Evaluates an expression for its effects (a statement, a for loop's step): a scalar one
- * through evs, without the buffer. */
-static void eval_discard(cbm_lsys *ls, int32_t ni, double *fr, double *buf)
-{
-    if (lc_is_scalar(ls->lp->m.nodes.data[ni].type))
-        (void)evs(ls, ni, fr);
-    else
-        ev(ls, ni, fr, buf);
-}
-
-/* The mechanics built-ins (lsys/mechlang.c) over the current string. */
-static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
+/* The mechanics built-ins (lsys/mechlang.c) over the current string, at their na arguments
+ * (at most 6; 0 for a missing one); the result to out[0]. */
+static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na, double *out)
 {
     lpfg *lp = ls->lp;
     out[0] = 0; /* every path that stops on an error leaves a defined value */
     double a[6] = {0, 0, 0, 0, 0, 0};
-    int na = 0;
-    for (int32_t x = n->a; x >= 0 && na < 6; x = lp->m.nodes.data[x].next)
-        a[na++] = evs(ls, x, fr);
-    if (lp->vm.err != CBM_OK)
-        return;
+    na = na < 6 ? na : 6;
+    memcpy(a, arg, (size_t)na * sizeof(double));
     cbm__mechlang *m = &lp->mech;
     char msg[128];
     switch ((cbm__fn)n->fn) {
@@ -402,9 +305,25 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
     out[0] = r;
 }
 
+/* printf (node n) with its arguments' values v (a string argument's is unused: its text is the
+ * node's) to the context's output sink. */
+static void print(cbm_lsys *ls, const lc_node *n, const double *v)
+{
+    lpfg *lp = ls->lp;
+    cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
+    int k = 0;
+    const char *strings = ls->comp.strings.data;
+    for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
+        const lc_node *an = &lp->m.nodes.data[x];
+        args[k].s = an->op == N_STR ? strings + an->slot : NULL;
+        args[k].v = an->op == N_STR ? 0 : v[k];
+    }
+    cbm__fmt_print(ls->ctx, strings + n->slot, args, k);
+}
+
 /* The built-ins that act on the run's state (random numbers, func, derivation control, stop)
- * at arguments a (0 for a missing one), converted to the node's type: the walker's and the
- * register code's (O_HOST through lpfg_host) one implementation, so both draw the same stream. */
+ * at arguments a (0 for a missing one), converted to the node's type (O_HOST through
+ * lpfg_host). */
 static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
 {
     lpfg *lp = ls->lp;
@@ -464,353 +383,24 @@ static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
 static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
 {
     cbm_lsys *ls = vm->host;
-    double a[2] = {0, 0};
-    for (int i = 0; i < ip->b && i < 2; i++)
-        a[i] = fr[ip->a + i];
-    return host_builtin(ls, &ls->lp->m.nodes.data[(int32_t)ip->k], a);
-}
-
-static void call_builtin(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
-{
     lpfg *lp = ls->lp;
+    const lc_node *n = &lp->m.nodes.data[(int32_t)ip->k];
+    const double *arg = fr + ip->a;
+    if (ip->fn == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
+        return ctx_match(ls, n->fn, n->a, n->b, fr);
     if (n->fn == FN_PRINTF) {
-        cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
-        int k = 0;
-        const char *strings = ls->comp.strings.data;
-        for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
-            const lc_node *an = &lp->m.nodes.data[x];
-            args[k].s = an->op == N_STR ? strings + an->slot : NULL;
-            args[k].v = an->op == N_STR ? 0 : evs(ls, x, fr);
-        }
-        cbm__fmt_print(ls->ctx, strings + n->slot, args, k);
-        out[0] = 0;
-        return;
-    }
-    double a[2] = {0, 0};
-    int32_t x = n->a;
-    if (n->fn == FN_DOT || n->fn == FN_CROSS || n->fn == FN_MAKEQ || n->fn == FN_VECROT) {
-        double u[9], w[3], ang = 0;
-        int32_t x1 = lp->m.nodes.data[x].next;
-        ev(ls, x, fr, u);
-        ev(ls, x1, fr, w);
-        if (n->fn == FN_VECROT)
-            ang = evs(ls, lp->m.nodes.data[x1].next, fr);
-        else if (n->fn == FN_MAKEQ)
-            ang = w[0];
-        if (n->fn == FN_DOT)
-            out[0] = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
-        else if (n->fn == FN_CROSS) {
-            out[0] = u[1] * w[2] - u[2] * w[1];
-            out[1] = u[2] * w[0] - u[0] * w[2];
-            out[2] = u[0] * w[1] - u[1] * w[0];
-        } else if (n->fn == FN_MAKEQ) {
-            double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-            double sn = sin(ang / 2) / (l > 0 ? l : 1);
-            out[0] = cos(ang / 2);
-            for (int i = 0; i < 3; i++)
-                out[i + 1] = u[i] * sn;
-        } else { /* Rodrigues' rotation of each vector about the unit axis; like lpfg, a new
-                  * value: the argument is not changed (it may be any expression) */
-            double l = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-            double ax[3] = {w[0] / (l > 0 ? l : 1), w[1] / (l > 0 ? l : 1), w[2] / (l > 0 ? l : 1)};
-            double c = cos(ang), sn = sin(ang);
-            int nv = n->type == T_TVEC ? 3 : 1;
-            for (int v = 0; v < nv; v++) {
-                double *p = u + 3 * v, d = ax[0] * p[0] + ax[1] * p[1] + ax[2] * p[2];
-                double cr[3] = {ax[1] * p[2] - ax[2] * p[1], ax[2] * p[0] - ax[0] * p[2],
-                                ax[0] * p[1] - ax[1] * p[0]};
-                for (int i = 0; i < 3; i++)
-                    out[3 * v + i] = p[i] * c + cr[i] * sn + ax[i] * d * (1 - c);
-            }
-        }
-        lc_conv_value(&lp->m, n->type, out);
-        return;
-    }
-    if (n->fn == FN_TOLOCAL || n->fn == FN_TOWORLD) {
-        double v[3], f[9];
-        ev(ls, x, fr, v);
-        ev(ls, lp->m.nodes.data[x].next, fr, f);
-        for (int i = 0; i < 3; i++)
-            out[i] = n->fn == FN_TOLOCAL
-                         ? v[0] * f[3 * i] + v[1] * f[3 * i + 1] + v[2] * f[3 * i + 2]
-                         : v[0] * f[i] + v[1] * f[3 + i] + v[2] * f[6 + i];
-        lc_conv_value(&lp->m, n->type, out);
-        return;
-    }
-    if (n->fn == FN_NORMALIZE && n->type == T_TVEC) {
-        ev(ls, x, fr, out);
-        for (int v = 0; v < 3; v++) {
-            double *p = out + 3 * v, l = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-            for (int i = 0; i < 3; i++)
-                p[i] = l > 0 ? p[i] / l : 0;
-        }
-        lc_conv_value(&lp->m, n->type, out);
-        return;
-    }
-    if (n->fn == FN_LENGTH || n->fn == FN_NORMALIZE) {
-        double v[3];
-        ev(ls, x, fr, v);
-        double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (n->fn == FN_LENGTH)
-            out[0] = lc_conv_scalar(n->type, l);
-        else {
-            for (int i = 0; i < 3; i++)
-                out[i] = l > 0 ? v[i] / l : 0;
-            lc_conv_value(&lp->m, n->type, out);
-        }
-        return;
+        print(ls, n, arg);
+        return 0;
     }
     if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTIONBOUND) {
-        call_mech(ls, n, fr, out);
-        return;
+        double out = 0;
+        call_mech(ls, n, arg, ip->b, &out);
+        return out;
     }
-    for (int i = 0; i < 2 && x >= 0; i++, x = lp->m.nodes.data[x].next)
-        a[i] = evs(ls, x, fr);
-    if (n->fn < FN_MATH_END) {
-        out[0] = lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type,
-                                cbm__builtin_math(n->fn, a[0], a[1], false));
-        return;
-    }
-    out[0] = host_builtin(ls, n, a);
-}
-
-static void call_user(cbm_lsys *ls, const lc_node *n, double *fr, double *out)
-{
-    lpfg *lp = ls->lp;
-    const lc_function *f = &lp->m.funcs.data[n->slot];
-    if (lp->vm.call_depth >= cbm_context_limits(ls->ctx)->max_call_depth ||
-        lp->vm.sp + (size_t)f->fsize + 1 > lp->vm.stack_cap) {
-        rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
-        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-        return;
-    }
-    if (!spend(lp, false)) {
-        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-        return;
-    }
-    double *nf = lp->vm.stack + lp->vm.sp;
-    size_t save = lp->vm.sp;
-    const lc_fcode *fc = lp->prog.n ? &lp->prog.fn[n->slot] : NULL;
-    if (fc && fc->compiled && !lp->walk_bodies) { /* the register code runs it */
-        if (lp->vm.sp + (size_t)fc->nreg + 1 > lp->vm.stack_cap) {
-            rt_error(lp, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
-            memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-            return;
-        }
-        lp->vm.sp += (size_t)fc->nreg;
-        int off = 0, i = 0;
-        for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
-            ev(ls, x, fr, nf + off);
-            off += lc_type_size(&lp->m, f->ptype[i]);
-        }
-        lp->vm.call_depth++;
-        int32_t at = lp->vm.at;
-        double r = cbm__lc_run(&lp->prog, n->slot, nf, &lp->vm);
-        lp->vm.at = at;
-        lp->vm.call_depth--;
-        memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-        if (fc->rsize) /* a run result: in the callee's frame */
-            memcpy(out, nf + fc->rslot, (size_t)fc->rsize * sizeof(double));
-        else if (f->ret != T_VOID)
-            out[0] = r;
-        off = i = 0;
-        for (int32_t x = n->a; x >= 0 && fc->refs; x = lp->m.nodes.data[x].next, i++) {
-            int sz = lc_type_size(&lp->m, f->ptype[i]);
-            if (f->pref[i])
-                memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
-            off += sz;
-        }
-        lp->vm.sp = save;
-        return;
-    }
-    lp->vm.sp += (size_t)f->fsize;
-    int off = 0;
-    int i = 0;
-    for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
-        ev(ls, x, fr, nf + off);
-        off += lc_type_size(&lp->m, f->ptype[i]);
-    }
-    lp->vm.call_depth++;
-    double *saved = lp->ret;
-    int32_t at = lp->vm.at;
-    memset(out, 0, (size_t)lc_type_size(&lp->m, f->ret) * sizeof(double));
-    lp->ret = out;
-    exec(ls, f->body, nf);
-    lp->vm.at = at;
-    off = 0;
-    i = 0;
-    for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next, i++) {
-        int sz = lc_type_size(&lp->m, f->ptype[i]);
-        if (f->pref[i])
-            memcpy(lv_ptr(lp, &lp->m.nodes.data[x], fr), nf + off, (size_t)sz * sizeof(double));
-        off += sz;
-    }
-    lp->ret = saved;
-    lp->vm.call_depth--;
-    lp->vm.sp = save;
-}
-
-static void ev(cbm_lsys *ls, int32_t ni, double *fr, double *out)
-{
-    lpfg *lp = ls->lp;
-    const lc_node *n = &lp->m.nodes.data[ni];
-    switch (n->op) {
-    case N_NUM:
-        out[0] = n->v;
-        return;
-    case N_LOCAL:
-    case N_GLOBAL:
-        memcpy(out, lv_ptr(lp, n, fr), (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-        return;
-    case N_FIELD: {
-        const lc_node *base = &lp->m.nodes.data[n->a];
-        if (base->op == N_LOCAL || base->op == N_GLOBAL) { /* no copy of the whole value */
-            memcpy(out, lv_ptr(lp, base, fr) + n->slot,
-                   (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-            return;
-        }
-        double tmp[MAXSZ + 1];
-        ev(ls, n->a, fr, tmp);
-        memcpy(out, tmp + n->slot, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-        return;
-    }
-    case N_NEG: {
-        ev(ls, n->a, fr, out);
-        for (int i = 0; i < lc_type_size(&lp->m, n->type); i++)
-            out[i] = -out[i];
-        return;
-    }
-    case N_NOT:
-        out[0] = evs(ls, n->a, fr) == 0;
-        return;
-    case N_CAST:
-        ev(ls, n->a, fr, out);
-        lc_conv_value(&lp->m, n->type, out);
-        return;
-    case N_BIN: {
-        int ta = lp->m.nodes.data[n->a].type, tb = lp->m.nodes.data[n->b].type;
-        if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
-            double a = evs(ls, n->a, fr), b = evs(ls, n->b, fr);
-            int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
-            if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
-                ct = T_DOUBLE;
-            out[0] = cbm__lc_bin_scalar(n->fn, ct, a, b, &lp->vm);
-            return;
-        }
-        if (n->type == T_LOCVEC) {
-            double a[3], b[3];
-            ev(ls, n->a, fr, a);
-            ev(ls, n->b, fr, b);
-            for (int i = 0; i < 3; i++) {
-                double x = a[lc_is_scalar(ta) ? 0 : i], y = b[lc_is_scalar(tb) ? 0 : i];
-                out[i] = n->fn == B_ADD   ? x + y
-                         : n->fn == B_SUB ? x - y
-                         : n->fn == B_MUL ? x * y
-                                          : x / y;
-            }
-            lc_conv_value(&lp->m, n->type, out);
-            return;
-        }
-        if (ta == T_QUAT) {
-            double q[4], b[9];
-            ev(ls, n->a, fr, q);
-            ev(ls, n->b, fr, b);
-            if (tb == T_QUAT) { /* Hamilton product */
-                out[0] = q[0] * b[0] - q[1] * b[1] - q[2] * b[2] - q[3] * b[3];
-                out[1] = q[0] * b[1] + q[1] * b[0] + q[2] * b[3] - q[3] * b[2];
-                out[2] = q[0] * b[2] - q[1] * b[3] + q[2] * b[0] + q[3] * b[1];
-                out[3] = q[0] * b[3] + q[1] * b[2] - q[2] * b[1] + q[3] * b[0];
-            } else { /* v' = v + 2w (u x v) + 2 u x (u x v), u = (x, y, z) */
-                int nv = tb == T_TVEC ? 3 : 1;
-                for (int v = 0; v < nv; v++) {
-                    const double *p = b + 3 * v, *u = q + 1;
-                    double t[3] = {2 * (u[1] * p[2] - u[2] * p[1]), 2 * (u[2] * p[0] - u[0] * p[2]),
-                                   2 * (u[0] * p[1] - u[1] * p[0])};
-                    double c[3] = {u[1] * t[2] - u[2] * t[1], u[2] * t[0] - u[0] * t[2],
-                                   u[0] * t[1] - u[1] * t[0]};
-                    for (int i = 0; i < 3; i++)
-                        out[3 * v + i] = p[i] + q[0] * t[i] + c[i];
-                }
-            }
-            lc_conv_value(&lp->m, n->type, out);
-            return;
-        }
-        double a[3], b[3];
-        ev(ls, n->a, fr, a);
-        ev(ls, n->b, fr, b);
-        if (lc_is_vec(ta) && lc_is_vec(tb)) {
-            if (n->fn == B_ADD)
-                for (int i = 0; i < 3; i++)
-                    out[i] = a[i] + b[i];
-            else if (n->fn == B_SUB)
-                for (int i = 0; i < 3; i++)
-                    out[i] = a[i] - b[i];
-            else if (n->fn == B_REM) {
-                out[0] = a[1] * b[2] - a[2] * b[1];
-                out[1] = a[2] * b[0] - a[0] * b[2];
-                out[2] = a[0] * b[1] - a[1] * b[0];
-            } else
-                out[0] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        } else if (lc_is_vec(ta)) {
-            for (int i = 0; i < 3; i++)
-                out[i] = n->fn == B_MUL ? a[i] * b[0] : a[i] / b[0];
-        } else {
-            for (int i = 0; i < 3; i++)
-                out[i] = a[0] * b[i];
-        }
-        lc_conv_value(&lp->m, n->type, out);
-        return;
-    }
-    case N_AND:
-        out[0] = evs(ls, n->a, fr) != 0 && evs(ls, n->b, fr) != 0;
-        return;
-    case N_OR:
-        out[0] = evs(ls, n->a, fr) != 0 || evs(ls, n->b, fr) != 0;
-        return;
-    case N_COND:
-        ev(ls, evs(ls, n->a, fr) != 0 ? n->b : n->c, fr, out);
-        return;
-    case N_COMMA:
-        ev(ls, n->a, fr, out);
-        ev(ls, n->b, fr, out);
-        return;
-    case N_ASSIGN: {
-        const lc_node *l = &lp->m.nodes.data[n->a];
-        int sz = lc_type_size(&lp->m, n->type);
-        ev(ls, n->b, fr, out); /* of the lvalue's type (coerced at compile time) */
-        memcpy(lv_ptr(lp, l, fr), out, (size_t)sz * sizeof(double));
-        return;
-    }
-    case N_INCDEC: {
-        double *p = lv_ptr(lp, &lp->m.nodes.data[n->a], fr);
-        double old = *p;
-        *p = lc_conv_scalar(n->type, *p + ((n->fn & 1) ? -1 : 1));
-        out[0] = n->fn >= 2 ? old : *p;
-        return;
-    }
-    case N_CALLB:
-        call_builtin(ls, n, fr, out);
-        return;
-    case N_CALLU:
-        call_user(ls, n, fr, out);
-        return;
-    case N_CTOR: {
-        int off = 0;
-        if (n->a < 0)
-            memset(out, 0, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-        for (int32_t x = n->a; x >= 0; x = lp->m.nodes.data[x].next) {
-            ev(ls, x, fr, out + off);
-            off += lc_type_size(&lp->m, lp->m.nodes.data[x].type);
-        }
-        return;
-    }
-    case N_INCTX:
-        out[0] = ctx_match(ls, n->fn, n->a, n->b, fr);
-        return;
-    default:
-        out[0] = 0;
-        return;
-    }
+    double a[2] = {0, 0};
+    for (int i = 0; i < ip->b && i < 2; i++)
+        a[i] = arg[i];
+    return host_builtin(ls, n, a);
 }
 
 /* ---------------------------------------------------------------- the module string */
@@ -1199,30 +789,6 @@ static bool nonfinite(cbm_lsys *ls, int32_t pos, const char *module)
     return true;
 }
 
-static cbm_status produce(cbm_lsys *ls, int32_t first, int32_t n, double *fr)
-{
-    lpfg *lp = ls->lp;
-    lstr *out = lp->out;
-    for (int32_t i = 0; i < n; i++) {
-        const lc_modref *sm = &lp->m.sms.data[first + i];
-        const lc_module *m = &lp->m.mods.data[sm->mod];
-        double v[MAXSZ + 1];
-        int off = 0, a = 0;
-        /* the arguments were converted to the parameter types at compile time, and every value
-         * of a static type is representable in it (results are rounded where computed) */
-        for (int32_t x = sm->args; x >= 0; x = lp->m.nodes.data[x].next, a++) {
-            ev(ls, x, fr, v + off);
-            int sz = lc_type_size(&lp->m, m->ptype[a]);
-            for (int q = 0; q < sz; q++)
-                if (!isfinite(v[off + q]) && !nonfinite(ls, lp->m.nodes.data[x].pos, m->name))
-                    return lp->vm.err;
-            off += sz;
-        }
-        CBM_TRY(push_mod(ls->ctx, out, m->code, v, m->size));
-    }
-    return CBM_OK;
-}
-
 /* `produce` of a compiled body (lc_vm.produce): module sm with its parameters v, computed and
  * converted by the register code; checked and appended as produce() does. */
 static bool produce_compiled(void *ud, int smi, const double *v)
@@ -1247,134 +813,6 @@ static bool produce_compiled(void *ud, int smi, const double *v)
     return true;
 }
 
-/* An expression of a compiled body left to the tree walker (lc_vm.eval): its frames above the
- * body's registers. */
-static bool eval_walker(void *ud, int32_t ni, double *fr, int nreg, double *out)
-{
-    cbm_lsys *ls = ud;
-    lpfg *lp = ls->lp;
-    size_t save = lp->vm.sp;
-    lp->vm.sp = (size_t)(fr - lp->vm.stack) + (size_t)nreg;
-    ev(ls, ni, fr, out);
-    lp->vm.sp = save;
-    return lp->vm.err == CBM_OK;
-}
-
-enum { X_NORMAL, X_BREAK, X_CONTINUE, X_RETURN };
-
-static int exec(cbm_lsys *ls, int32_t ni, double *fr)
-{
-    lpfg *lp = ls->lp;
-    for (; ni >= 0; ni = lp->m.nodes.data[ni].next) {
-        if (lp->vm.err != CBM_OK)
-            return X_RETURN;
-        const lc_node *n = &lp->m.nodes.data[ni];
-        lp->vm.at = n->pos;
-        double tmp[MAXSZ + 1];
-        int r;
-        switch (n->op) {
-        case S_EXPR:
-            eval_discard(ls, n->a, fr, tmp);
-            break;
-        case S_DECL:
-            if (n->a >= 0) {
-                ev(ls, n->a, fr, fr + n->slot);
-                lc_conv_value(&lp->m, n->type, fr + n->slot);
-            } else
-                memset(fr + n->slot, 0, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-            break;
-        case S_BLOCK:
-            r = exec(ls, n->a, fr);
-            if (r != X_NORMAL)
-                return r;
-            break;
-        case S_IF:
-            if (evs(ls, n->a, fr) != 0)
-                r = exec(ls, n->b, fr);
-            else
-                r = n->c >= 0 ? exec(ls, n->c, fr) : X_NORMAL;
-            if (r != X_NORMAL)
-                return r;
-            break;
-        case S_WHILE:
-        case S_DO:
-        case S_FOR: {
-            if (n->op == S_FOR && n->a >= 0)
-                exec(ls, n->a, fr);
-            bool first = n->op == S_DO;
-            for (;;) {
-                if (!first) {
-                    int32_t c = n->op == S_FOR ? n->b : n->a;
-                    if (c >= 0 && evs(ls, c, fr) == 0)
-                        break;
-                }
-                first = false;
-                if (!spend(lp, true))
-                    return X_RETURN;
-                r = exec(ls, n->op == S_FOR ? n->d : n->b, fr);
-                if (r == X_BREAK)
-                    break;
-                if (r == X_RETURN)
-                    return r;
-                if (lp->vm.err != CBM_OK)
-                    return X_RETURN;
-                if (n->op == S_FOR && n->c >= 0)
-                    eval_discard(ls, n->c, fr, tmp);
-                if (n->op == S_DO && evs(ls, n->a, fr) == 0)
-                    break;
-                if (n->op == S_DO)
-                    first = true;
-            }
-            break;
-        }
-        case S_RETURN:
-            if (n->a >= 0) {
-                ev(ls, n->a, fr, tmp);
-                lc_conv_value(&lp->m, n->type, tmp);
-                if (lp->ret)
-                    memcpy(lp->ret, tmp, (size_t)lc_type_size(&lp->m, n->type) * sizeof(double));
-            }
-            return X_RETURN;
-        case S_SWITCH: {
-            double v = evs(ls, n->a, fr);
-            int32_t body = lp->m.nodes.data[n->b].op == S_BLOCK ? lp->m.nodes.data[n->b].a : n->b;
-            int32_t hit = -1, dflt = -1;
-            for (int32_t c = body; c >= 0 && hit < 0; c = lp->m.nodes.data[c].next) {
-                const lc_node *cn = &lp->m.nodes.data[c];
-                if (cn->op != S_CASE)
-                    continue;
-                if (cn->a < 0)
-                    dflt = c;
-                else if (evs(ls, cn->a, fr) == v)
-                    hit = c;
-            }
-            if (hit < 0)
-                hit = dflt;
-            r = hit >= 0 ? exec(ls, hit, fr) : X_NORMAL;
-            if (r == X_RETURN || r == X_CONTINUE)
-                return r;
-            break;
-        }
-        case S_BREAK:
-            return X_BREAK;
-        case S_CONTINUE:
-            return X_CONTINUE;
-        case S_PRODUCE: {
-            cbm_status s = produce(ls, n->a, n->b, fr);
-            if (s != CBM_OK)
-                rt_error(lp, s, "out of memory");
-            if (n->fn) /* nproduce: part of the successor, the body goes on */
-                break;
-            lp->produced = true;
-            return X_RETURN;
-        }
-        default:
-            break;
-        }
-    }
-    return X_NORMAL;
-}
-
 /* ---------------------------------------------------------------- derivation */
 /* The execution budgets of a step (and of the Start block, global initialisers and axiom). */
 static void budgets(cbm_lsys *ls)
@@ -1396,21 +834,25 @@ static cbm_status run_error(cbm_lsys *ls, const char *what)
     return cbm__fail(ls->ctx, s, "%s: %s", what, lp->vm.errmsg);
 }
 
+/* Runs fn[f] of the program (a block, a global's initialiser, the axiom, an expression of the
+ * header: each compiled when the model was loaded, lpfg_parse checks it) on the stack; its
+ * value. */
+static double run_root(cbm_lsys *ls, size_t f)
+{
+    lpfg *lp = ls->lp;
+    lp->vm.sp = (size_t)lp->prog.fn[f].nreg;
+    double r = cbm__lc_run(&lp->prog, (int)f, lp->vm.stack, &lp->vm);
+    lp->vm.sp = 0;
+    return r;
+}
+
 static cbm_status run_block(cbm_lsys *ls, int which)
 {
     static const char *const NAMES[] = {"Start", "StartEach", "EndEach", "End"};
     lpfg *lp = ls->lp;
     if (lp->m.blocks[which] < 0)
         return CBM_OK;
-    lp->ret = NULL;
-    size_t f = lp->prog.block0 + (size_t)which;
-    if (!lp->walk_bodies && lp->prog.fn && lp->prog.fn[f].compiled) { /* the register code */
-        lp->vm.sp = (size_t)lp->prog.fn[f].nreg;
-        (void)cbm__lc_run(&lp->prog, (int)f, lp->vm.stack, &lp->vm);
-    } else {
-        lp->vm.sp = (size_t)lp->m.block_fsize[which];
-        exec(ls, lp->m.blocks[which], lp->vm.stack);
-    }
+    (void)run_root(ls, lp->prog.block0 + (size_t)which);
     return lp->vm.err != CBM_OK ? run_error(ls, NAMES[which]) : CBM_OK;
 }
 
@@ -1436,7 +878,6 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                 continue;
             double *fr = lp->vm.stack;
             lp->vm.sp = (size_t)pr->fsize;
-            lp->ret = NULL;
             walk first = walk_at(src, i, j, k, 1);
             bool ok = true;
             for (int32_t a = 0; a < anchor && ok; a++) {
@@ -1478,12 +919,11 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
             if (!spend(lp, false))
                 return 0;
-            int bi = lp->walk_bodies ? -1 : cbm__lc_body(&lp->prog, which, p);
+            int bi = cbm__lc_body(&lp->prog, which, p);
             if (bi >= 0 && lp->prog.fn[bi].compiled) { /* the register (or native) code */
                 lp->vm.sp = (size_t)lp->prog.fn[bi].nreg;
                 lp->produced = cbm__lc_run(&lp->prog, bi, fr, &lp->vm) != 0;
-            } else
-                exec(ls, pr->body, fr);
+            } /* else no body: nothing produced */
             if (lp->vm.err != CBM_OK)
                 return 0;
             if (lp->produced)
@@ -1717,23 +1157,19 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->m.gvars.len; g++) {
         const lc_global *v = &lp->m.gvars.data[g];
-        lp->vm.sp = 0;
-        lp->ret = NULL;
-        if (v->init >= 0) {
-            ev(ls, v->init, lp->vm.stack, lp->vm.glob + v->slot);
-            lc_conv_value(&lp->m, v->type, lp->vm.glob + v->slot);
-        }
+        lp->vm.at = -1;
+        if (v->init >= 0)
+            (void)run_root(ls, lp->prog.init0 + g);
         if (lp->vm.err != CBM_OK)
             return run_error(ls, lp->m.gvars.data[g].name);
     }
     CBM_TRY(run_block(ls, 0));
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
-    lp->vm.sp = 0;
     lp->out = &ls->cur;
-    cbm_status ps = produce(ls, lp->m.axiom.first, lp->m.axiom.n, lp->vm.stack);
+    lp->vm.at = -1;
+    (void)run_root(ls, lp->prog.axiom);
     if (lp->vm.err != CBM_OK)
         return run_error(ls, "axiom");
-    CBM_TRY(ps);
     return decompose_cur(ls);
 }
 
@@ -1877,53 +1313,16 @@ void cbm__lpfg_describe(const cbm_lsys *ls, cbm_model_summary *out)
     out->modules_declared = lp->m.mods.len;
 }
 
-void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_t *walked)
+void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total)
 {
     const lc_program *p = &ls->lp->prog;
-    *compiled = *total = *walked = 0;
+    *compiled = *total = 0;
     if (!p->fn)
         return;
-    /* walked: the expressions left to the walker in the compiled functions and bodies */
-    for (size_t f = 0; f < p->n; f++) {
-        if (f >= p->body0[LC_MAIN] && f < p->block0) {
-            *compiled += p->fn[f].compiled;
-            ++*total;
-        }
-        for (size_t i = 0; p->fn[f].compiled && i < p->fn[f].ins.len; i++)
-            *walked += p->fn[f].ins.data[i].op == O_EVAL;
+    for (size_t f = p->body0[LC_MAIN]; f < p->block0; f++) {
+        *compiled += p->fn[f].compiled;
+        ++*total;
     }
-}
-
-bool cbm_lsys_walker_fallbacks(const cbm_lsys *ls, size_t *bodies, size_t *bodies_total,
-                               size_t *functions, size_t *functions_total, size_t *expressions)
-{
-    *bodies = *bodies_total = *functions = *functions_total = *expressions = 0;
-    if (!ls || !ls->lp)
-        return false;
-    size_t compiled;
-    cbm__lpfg_bodies(ls, &compiled, bodies_total, expressions);
-    *bodies = *bodies_total - compiled;
-    const lc_program *p = &ls->lp->prog;
-    for (int b = 0; b < 4; b++) /* the blocks present count as bodies */
-        if (ls->lp->m.blocks[b] >= 0) {
-            ++*bodies_total;
-            *bodies += !(p->fn && p->fn[p->block0 + (size_t)b].compiled);
-        }
-    *functions_total = ls->lp->m.funcs.len;
-    for (size_t f = 0; f < *functions_total; f++)
-        *functions += !(p->fn && f < p->n && p->fn[f].compiled);
-    return true;
-}
-
-bool cbm__lpfg_body_compiled(const cbm_lsys *ls, int set, size_t index)
-{
-    int f = cbm__lc_body(&ls->lp->prog, set, index);
-    return f >= 0 && ls->lp->prog.fn[f].compiled;
-}
-
-void cbm__lpfg_walk_bodies(cbm_lsys *ls, bool on)
-{
-    ls->lp->walk_bodies = on;
 }
 
 bool cbm_lsys_compile_native(cbm_lsys *ls, const char *cache_dir, const char **why)
@@ -1999,12 +1398,56 @@ void cbm__lpfg_free(cbm_lsys *ls)
     ls->lp = NULL;
 }
 
-static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt)
+/* Every function with a body, production body, block, initialiser, the axiom and the header's
+ * expressions must have compiled: there is no other evaluator. What did not is named at its
+ * position (the register code's limits: 256 cases in a switch, 65535 doubles in a frame). */
+static cbm_status check_compiled(cbm_lsys *ls)
+{
+    const lpfg *lp = ls->lp;
+    const lc_model *m = &lp->m;
+    const lc_program *p = &lp->prog;
+    for (size_t f = 0; f < p->n; f++) {
+        if (p->fn[f].compiled)
+            continue;
+        const char *what = NULL;
+        size_t pos = 0;
+        if (f < m->funcs.len) {
+            if (m->funcs.data[f].body >= 0)
+                what = "function", pos = m->funcs.data[f].pos;
+        } else if (f < p->block0) {
+            const lc_rules *set = f < p->body0[LC_DECOMP]   ? &m->main
+                                  : f < p->body0[LC_INTERP] ? &m->decomp
+                                                            : &m->interp;
+            int k = set == &m->main ? LC_MAIN : set == &m->decomp ? LC_DECOMP : LC_INTERP;
+            const lc_production *pr = &set->prods.data[f - p->body0[k]];
+            if (pr->body >= 0)
+                what = "production", pos = pr->pos;
+        } else if (f < p->init0) {
+            int32_t b = m->blocks[f - p->block0];
+            if (b >= 0)
+                what = "block", pos = (size_t)m->nodes.data[b].pos;
+        } else if (f < p->axiom) {
+            int32_t e = m->gvars.data[f - p->init0].init;
+            if (e >= 0)
+                what = "initialiser", pos = (size_t)m->nodes.data[e].pos;
+        } else if (f == p->axiom)
+            what = "axiom";
+        else if (p->xpresent[f - p->expr0])
+            what = "expression";
+        if (what)
+            return cbm__compiler_fail(&ls->comp, CBM_E_LIMIT, pos,
+                                      "this %s cannot be compiled to the register code (more "
+                                      "than 256 cases in a switch, or a frame of more than "
+                                      "65535 doubles)",
+                                      what);
+    }
+    return CBM_OK;
+}
+
+static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt, int which)
 {
     if (s->depth <= -2) {
-        int32_t e = -2 - s->depth;
-        ls->lp->vm.sp = 0;
-        double v = evs(ls, e, ls->lp->vm.stack);
+        double v = run_root(ls, ls->lp->prog.expr0 + (size_t)which);
         return !(v >= 0) ? 0 : v > 1e6 ? 1000000 : (int)v; /* NaN: 0 */
     }
     return dflt;
@@ -2037,12 +1480,12 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     lp->vm.max_call_depth = cbm_context_limits(ctx)->max_call_depth;
     lp->vm.stack_cap = 1u << 16;
     lp->vm.produce = produce_compiled;
-    lp->vm.eval = eval_walker;
     lp->vm.host = ls;
     lp->vm.host_call = lpfg_host;
     for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
         if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
             lp->prog.fn[f].compiled = false;
+    CBM_TRY(check_compiled(ls));
     lp->vm.stack = cbm__calloc(ctx, lp->vm.stack_cap, sizeof(double));
     lp->vm.glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
     if (!lp->vm.stack || !lp->vm.glob)
@@ -2051,8 +1494,8 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
         if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->vm.stack_cap)
             return cbm__fail(ctx, CBM_E_LIMIT, "a production has too many local variables");
     int maxd = cbm_context_limits(ctx)->max_decomp_depth;
-    lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1);
-    lp->m.interp.depth = eval_depth(ls, &lp->m.interp, 1);
+    lp->m.decomp.depth = eval_depth(ls, &lp->m.decomp, 1, LC_X_DECOMP_DEPTH);
+    lp->m.interp.depth = eval_depth(ls, &lp->m.interp, 1, LC_X_INTERP_DEPTH);
     if (lp->m.decomp.depth > maxd || lp->m.interp.depth > maxd)
         return cbm__fail(ctx, CBM_E_LIMIT, "maximum depth exceeds the limit of %d", maxd);
     int depth = lp->m.decomp.depth > lp->m.interp.depth ? lp->m.decomp.depth : lp->m.interp.depth;
@@ -2063,8 +1506,7 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     }
     ls->derivation_length = 0;
     if (lp->m.dlen_expr >= 0) {
-        lp->vm.sp = 0;
-        double v = evs(ls, lp->m.dlen_expr, lp->vm.stack);
+        double v = run_root(ls, lp->prog.expr0 + LC_X_DLEN);
         ls->derivation_length = v < 0 ? 0 : v > 1e9 ? 1000000000 : (int)v;
     }
     return CBM_OK;

@@ -237,13 +237,11 @@ void cbm__lpfg_free(cbm_lsys *ls);
  * operation builds a new one, as a reference for tests). */
 void cbm__lpfg_mech_keep(cbm_lsys *ls, bool keep);
 cbm_status cbm__lpfg_reset(cbm_lsys *ls);
-/* The production bodies compiled to the register code (lang/lc_code.h), of all (the others run
- * in the tree walker), and the expressions in compiled bodies and functions the walker
- * evaluates (O_EVAL); whether body `index` of rule set `set` (LC_MAIN, LC_DECOMP, LC_INTERP) is
- * compiled; the tree walker for every body and function (on: the tests compare both). */
-void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total, size_t *walked);
+/* The production bodies compiled to the register code (lang/lc_code.h), of all (a production
+ * without a body has none); whether body `index` of rule set `set` (LC_MAIN, LC_DECOMP,
+ * LC_INTERP) is compiled. */
+void cbm__lpfg_bodies(const cbm_lsys *ls, size_t *compiled, size_t *total);
 bool cbm__lpfg_body_compiled(const cbm_lsys *ls, int set, size_t index);
-void cbm__lpfg_walk_bodies(cbm_lsys *ls, bool on);
 cbm_status cbm__lpfg_step(cbm_lsys *ls);
 cbm_status cbm__lpfg_interpretation(cbm_lsys *ls);
 bool cbm__lpfg_has_interpretation(const cbm_lsys *ls);

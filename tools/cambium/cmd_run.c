@@ -753,12 +753,6 @@ int cmd_run(int argc, char **argv)
     r.ls = cbm_model_lsys(r.model);
     if (!no_native)
         native_code(r.ls, timing);
-    size_t bw, bt, fw, ft, ew; /* the L+C dialect's fallbacks to the tree walker */
-    if (timing && cbm_lsys_walker_fallbacks(r.ls, &bw, &bt, &fw, &ft, &ew))
-        fprintf(stderr,
-                "tree walker: %zu of %zu production bodies and blocks, %zu of %zu functions, %zu "
-                "expressions of the compiled ones\n",
-                bw, bt, fw, ft, ew);
     sway.ctx = ctx;
     if (sway.nglb + sway.ncsv > 0) {
         if (!cbm_lsys_has_mechanics(r.ls)) {
