@@ -524,6 +524,19 @@ static bool writes(const cg *g, int32_t ni)
 static int cx(cg *g, int32_t ni, int hint);
 static int cxv(cg *g, int32_t ni, int dst);
 
+/* The left operand of a comma: compiled for its effects into temporaries that are then given
+ * back, a scalar (or void) into one register, a vector or struct into a run of its size. */
+static void compile_for_effect(cg *g, int32_t ni)
+{
+    int save = g->top;
+    const lc_node *a = node(g, ni);
+    if (lc_is_scalar(a->type) || a->type == T_VOID)
+        (void)cx(g, ni, tmp(g));
+    else
+        (void)cxv(g, ni, tmpn(g, lc_type_size(g->m, a->type)));
+    g->top = save;
+}
+
 /* The register of constant v (loaded on entry), or v loaded into hint when there are many. */
 static int konst(cg *g, double v, int hint)
 {
@@ -772,13 +785,7 @@ static int cx(cg *g, int32_t ni, int hint)
     case N_COMMA: {
         if (!scalar)
             break;
-        int save = g->top;
-        const lc_node *a = node(g, n->a);
-        if (lc_is_scalar(a->type) || a->type == T_VOID)
-            (void)cx(g, n->a, tmp(g));
-        else
-            (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, a->type)));
-        g->top = save;
+        compile_for_effect(g, n->a);
         return cx(g, n->b, hint);
     }
     case N_ASSIGN: {
@@ -987,13 +994,7 @@ static int cxv(cg *g, int32_t ni, int dst)
         return dst;
     }
     case N_COMMA: {
-        int save = g->top;
-        const lc_node *a = node(g, n->a);
-        if (lc_is_scalar(a->type) || a->type == T_VOID)
-            (void)cx(g, n->a, tmp(g));
-        else
-            (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, a->type)));
-        g->top = save;
+        compile_for_effect(g, n->a);
         return cxv(g, n->b, dst);
     }
     default:
