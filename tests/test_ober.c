@@ -362,6 +362,20 @@ TEST(ober_formula_errors)
     CHECK_OK(cbm_ober_def_parse(ctx, &e, buf, need, "formatted"));
     CHECK(e.n_shoot_poss == 2 && e.shoot_poss[1] == 180 && !strcmp(e.orientation.text, "-0.01"));
     free(buf);
+    /* one formula for every order reads back as one slot, not as slot 0 over the defaults'
+     * slots 1 and 2 (a file the fuzzer found: its trees of order 1 and 2 grew differently) */
+    d = cbm_ober_def_default();
+    const char *t6 = "family = oberlaender\nspecificLengthLambda = 0.5 * 1\n";
+    CHECK_OK(cbm_ober_def_parse(ctx, &d, t6, strlen(t6), "u.tree"));
+    CHECK(d.n_specific_length == 1);
+    need = cbm_ober_def_format(&d, NULL, 0);
+    buf = malloc(need + 1);
+    cbm_ober_def_format(&d, buf, need + 1);
+    e = cbm_ober_def_default();
+    CHECK_OK(cbm_ober_def_parse(ctx, &e, buf, need, "formatted"));
+    CHECK(e.n_specific_length == 1 && !strcmp(e.specific_length[0].text, "0.5 * 1"));
+    CHECK(e.n_num_nodes == d.n_num_nodes);
+    free(buf);
     test_ctx_end(ctx);
 }
 

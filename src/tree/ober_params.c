@@ -532,10 +532,16 @@ size_t cbm_ober_def_format(const cbm_ober_def *d, char *buf, size_t size)
                 ((const cbm_ober_formula *)(const void *)base)->text);
             break;
         case K_ORDERS: {
+            /* slot 0 unindexed, which sets every slot and the count to 1, so the slots read
+             * back are exactly these whatever the defaults hold beyond them */
             int cnt = *(const int *)(const void *)((const char *)d + pm->count_off);
-            for (int k = 0; k < cnt; k++)
-                put(buf, size, &n, "%s[%d] = %s\n", pm->name, k,
-                    ((const cbm_ober_formula *)(const void *)base)[k].text);
+            const cbm_ober_formula *f = (const cbm_ober_formula *)(const void *)base;
+            for (int k = 0; k < cnt; k++) {
+                if (k == 0)
+                    put(buf, size, &n, "%s = %s\n", pm->name, f[0].text);
+                else
+                    put(buf, size, &n, "%s[%d] = %s\n", pm->name, k, f[k].text);
+            }
             break;
         }
         case K_LIST: {
