@@ -7,7 +7,7 @@
  * Usage: bench_turtle [max_steps (default 7)] [exec: only the plain exec runs, for profiling] */
 #define _POSIX_C_SOURCE 200809L
 #include "bench_util.h"
-#include "turtle/tint.h"
+#include "turtle/view_internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>

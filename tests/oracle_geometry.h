@@ -10,7 +10,7 @@
 
 #include "test.h"
 
-#include "turtle/tint.h"
+#include "turtle/view_internal.h"
 
 #define ORACLE CBM_TEST_SOURCE_DIR "/../shared/oracles/vlab/"
 

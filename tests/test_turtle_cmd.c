@@ -4,7 +4,7 @@
 #include "test.h"
 
 #include "core/vecmath.h"
-#include "turtle/tint.h"
+#include "turtle/view_internal.h"
 
 #include <stdlib.h>
 #include <string.h>

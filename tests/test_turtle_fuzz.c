@@ -7,7 +7,7 @@
 #include "test.h"
 
 #include "core/vecmath.h"
-#include "turtle/tint.h"
+#include "turtle/view_internal.h"
 
 #include <dirent.h>
 #include <stdlib.h>

@@ -1,5 +1,6 @@
-/* The glTF 2.0 binary container and buffer bookkeeping shared by the glTF writers (glb.h). */
-#include "glb.h"
+/* The glTF 2.0 binary container and buffer bookkeeping shared by the glTF writers (glb_internal.h).
+ */
+#include "glb_internal.h"
 
 #include <math.h>
 

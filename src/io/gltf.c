@@ -15,7 +15,7 @@
  * same vertex count in every frame (a growing plant does not have it), and KHR_node_visibility
  * is not yet supported widely, while STEP scale animations play in three.js, Blender, Babylon.js
  * and the Khronos sample viewer. Without playback, the static pose shows the last frame. */
-#include "glb.h"
+#include "glb_internal.h"
 #include "writers.h"
 
 #include "cambium/io.h"

@@ -25,7 +25,7 @@
 
 #include "../core/core.h"
 #include "../core/vecmath.h"
-#include "glb.h"
+#include "glb_internal.h"
 #include "writers.h"
 
 #include <math.h>

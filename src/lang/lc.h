@@ -33,7 +33,7 @@ enum {
     T_QUAT,
     T_TVEC,
     T_LOCVEC,
-    T_MSEG, /* MechSegment (lsys/mechlang.h) */
+    T_MSEG, /* MechSegment (lsys/mechlang_internal.h) */
     T_NBUILTIN
 };
 #define MAXF   16 /* parameters per module or function */
@@ -150,7 +150,7 @@ typedef struct lc_global {
 } lc_global;
 
 /* The mechanics declarations of a model (`mechanics: M;`, `mass: A, B;`); the runtime copies
- * them into its mechanics settings (lsys/mechlang.h). */
+ * them into its mechanics settings (lsys/mechlang_internal.h). */
 typedef struct lc_mech_decl {
     int seg_code;        /* module code carrying the MechSegment, -1: none declared */
     int seg_off;         /* double offset of its MechSegment parameter */

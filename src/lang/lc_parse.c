@@ -2207,7 +2207,7 @@ static cbm_status setup_builtins(lc_parser *L)
         if (!tv->fname[i])
             return CBM_E_NOMEM;
     }
-    /* MechSegment: the fields at the offsets of lsys/mechlang.h */
+    /* MechSegment: the fields at the offsets of lsys/mechlang_internal.h */
     static const char *const MF[] = {
         "length", "a",   "b", "E", "G",      "density",      "mor",          "rest",
         "omega",  "pos", "H", "U", "stress", "stress_ratio", "carried_mass", "age"};

@@ -14,7 +14,7 @@
  * area 0 casts nothing and receives 0. The result, in m^2 of unshaded horizontal leaf, goes
  * into the leaf's light parameter, which the next derivation's productions read. */
 #define _POSIX_C_SOURCE 200809L
-#include "lsys/mechlang.h"
+#include "lsys/mechlang_internal.h"
 
 #include "core/core.h"
 

@@ -19,7 +19,7 @@
 #include "lang/lc.h"
 #include "lang/lc_code.h"
 #include "lsys/lsys_internal.h"
-#include "lsys/mechlang.h"
+#include "lsys/mechlang_internal.h"
 
 #include <ctype.h>
 #include <math.h>

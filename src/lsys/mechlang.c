@@ -47,7 +47,7 @@
  * with the signs in rot_of(). The clamp frame is the turtle's initial frame (H = +y, U = -z).
  */
 #define _POSIX_C_SOURCE 200809L
-#include "lsys/mechlang.h"
+#include "lsys/mechlang_internal.h"
 
 #include "core/core.h"
 #include "core/vecmath.h"

@@ -8,7 +8,7 @@
  * with a sphere is fruit, its drag that of the sphere (the library's sphere of the fruit's mass
  * and density has the same radius: the mass is passed as density x volume); a node without one
  * carries leaves, their area the point mass times the leaf area per kg (0: no leaf drag). */
-#include "lsys/mechlang.h"
+#include "lsys/mechlang_internal.h"
 
 #include "cambium/dynamics.h"
 #include "core/core.h"

@@ -16,7 +16,7 @@
  * samples from the view file), and function galleries (.fset: "funcgalleryver 1 1", "items: N",
  * then N functions in the "fver 1 1" form).
  */
-#include "tint.h"
+#include "view_internal.h"
 
 #include "../core/vecmath.h"
 

@@ -5,7 +5,7 @@
 #ifndef CBM_TURTLE_INTERNAL_H
 #define CBM_TURTLE_INTERNAL_H
 
-#include "tint.h"
+#include "view_internal.h"
 
 #include "../core/vecmath.h"
 

@@ -12,7 +12,7 @@
  * colour. Colours are converted from sRGB bytes to linear RGB for the scene. Without either,
  * index i is a grey of value i/255, except indices 1-15: a palette of plant colours.
  */
-#include "tint.h"
+#include "view_internal.h"
 
 #include "../core/vecmath.h"
 

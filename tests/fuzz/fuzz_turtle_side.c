@@ -4,7 +4,7 @@
  * cylinders, polygons and tropisms. Runs under a 64 MB byte limit; aborts if bytes leak.
  * Its corpus (tests/fuzz/corpus/fuzz_turtle_side) is replayed by tests/test_turtle_fuzz.c. */
 #include "cambium/cambium.h"
-#include "turtle/tint.h"
+#include "turtle/view_internal.h"
 
 #include <stdlib.h>
 #include <string.h>

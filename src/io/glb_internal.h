@@ -3,8 +3,8 @@
  * parts). Each writer keeps its own way of filling BIN (gltf.c measures, then streams; the motion
  * writer keeps it in memory); the accessors, the buffer views, their JSON and the GLB framing are
  * written here once (Khronos glTF 2.0 specification, sections 3.6-3.7 and 4.4). */
-#ifndef CBM_IO_GLB_H
-#define CBM_IO_GLB_H
+#ifndef CBM_IO_GLB_INTERNAL_H
+#define CBM_IO_GLB_INTERNAL_H
 
 #include "cambium/io.h"
 #include "cambium/write.h"

@@ -1,7 +1,7 @@
 /* Mechanics inside the L+C dialect: the statics engine run over the module string (mechlang.c).
  */
-#ifndef CBM_LSYS_MECHLANG_H
-#define CBM_LSYS_MECHLANG_H
+#ifndef CBM_LSYS_MECHLANG_INTERNAL_H
+#define CBM_LSYS_MECHLANG_INTERNAL_H
 
 #include "cambium/light.h"
 #include "cambium/mech.h"

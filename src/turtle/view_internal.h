@@ -1,8 +1,8 @@
 /* Private declarations of the turtle module: the view settings, the side files they name
  * (function files, surfaces, contours, colour maps, materials) and the readers shared by the
  * files of src/turtle. */
-#ifndef CBM_TURTLE_INT_H
-#define CBM_TURTLE_INT_H
+#ifndef CBM_TURTLE_VIEW_INTERNAL_H
+#define CBM_TURTLE_VIEW_INTERNAL_H
 
 #include "cambium/turtle.h"
 #include "turtle.h"
