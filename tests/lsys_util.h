@@ -40,6 +40,15 @@ static inline cbm_status lsys_load_shipped(cbm_context *ctx, const char *name, c
     return cbm_lsys_load(ctx, &def, ls);
 }
 
+/* The settings of model `text`, named `path` in its messages, the others at their defaults. */
+static inline cbm_lsys_def lsys_text_def(const char *path, const char *text)
+{
+    cbm_lsys_def def = cbm_lsys_def_default();
+    def.path = path;
+    def.text = text;
+    return def;
+}
+
 /* The model of def loaded and reset to its axiom, each checked at the caller's line; NULL when
  * either failed (the test has failed then). lsys_from_text: the model `text`, named `path` in
  * its messages, with the other settings at their defaults. */
@@ -69,10 +78,27 @@ static inline cbm_lsys *lsys_load_reset_at(cbm_context *ctx, const cbm_lsys_def 
 static inline cbm_lsys *lsys_text_reset_at(cbm_context *ctx, const char *path, const char *text,
                                            const char *file, int line)
 {
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = path;
-    def.text = text;
+    cbm_lsys_def def = lsys_text_def(path, text);
     return lsys_load_reset_at(ctx, &def, file, line);
+}
+
+/* The model of def loaded into a new context whose diagnostics go to *g (test_diag_ctx): the
+ * status of the load, unchecked (for tests that expect errors). *ctx receives the context, which
+ * the caller destroys; when it cannot be made, the test fails at the caller's line, *ctx is NULL
+ * and CBM_E_NOMEM is returned. *ls receives the model (NULL when the load failed). */
+#define lsys_load_diags(g, def, ctx, ls)                                                           \
+    lsys_load_diags_at((g), (def), (ctx), (ls), __FILE__, __LINE__)
+static inline cbm_status lsys_load_diags_at(test_diags *g, const cbm_lsys_def *def,
+                                            cbm_context **ctx, cbm_lsys **ls, const char *file,
+                                            int line)
+{
+    *ls = NULL;
+    *ctx = test_diag_ctx(g);
+    if (!*ctx) {
+        cbm_test_fail(file, line, "no context for the diagnostics");
+        return CBM_E_NOMEM;
+    }
+    return cbm_lsys_load(*ctx, def, ls);
 }
 
 /* The model `text`, named `path` in its messages, loaded, reset and derived `steps` steps,
@@ -82,9 +108,7 @@ static inline cbm_lsys *lsys_text_reset_at(cbm_context *ctx, const char *path, c
 static inline cbm_status lsys_derive(cbm_context *ctx, const char *path, const char *text,
                                      int steps, cbm_lsys **ls)
 {
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = path;
-    def.text = text;
+    cbm_lsys_def def = lsys_text_def(path, text);
     *ls = NULL;
     cbm_status s = cbm_lsys_load(ctx, &def, ls);
     if (s == CBM_OK)
@@ -199,19 +223,16 @@ static inline size_t compare_tol(const char *a, const char *b, double rel, doubl
  * model "bad.l", requires the reset to fail with a message at bad.l:4:10 that contains want. */
 static inline void lc_check_start_error(const char *stmt, const char *want)
 {
-    test_diags g;
-    cbm_context *dc = test_diag_ctx(&g);
-    CHECK(dc != NULL);
     char src[400];
     snprintf(src, sizeof src,
              "#include <lpfgall.h>\nderivation length: 1;\nmodule A();\n"
              "Start: { %s }\nAxiom: A;\n",
              stmt);
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.text = src;
-    def.path = "bad.l";
-    cbm_lsys *ls = NULL;
-    CHECK_OK(cbm_lsys_load(dc, &def, &ls));
+    test_diags g;
+    cbm_context *dc;
+    cbm_lsys *ls;
+    cbm_lsys_def def = lsys_text_def("bad.l", src);
+    CHECK_OK(lsys_load_diags(&g, &def, &dc, &ls));
     if (ls)
         CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_INVALID);
     printf("%-20s -> %s", stmt, g.text);

@@ -336,14 +336,8 @@ TEST(lpfg_errors)
 
 TEST(lpfg_errors_with_locations)
 {
-    test_diags g;
-    cbm_context *ctx = test_diag_ctx(&g);
-    CHECK(ctx != NULL);
-    if (!ctx)
-        return;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "m.l";
-    def.text = "#include <lpfgall.h>\n"                       /* 1 */
+    const cbm_lsys_def def = lsys_text_def(
+        "m.l", "#include <lpfgall.h>\n"                       /* 1 */
                "struct P { float a; };\n"                     /* 2 */
                "module A(int);\n"                             /* 3 */
                "module C(P);\n"                               /* 4 */
@@ -352,9 +346,11 @@ TEST(lpfg_errors_with_locations)
                "A(x) : { y = 2; produce A(x); }\n"            /* 7: unknown name */
                "C(p) : { p.b = 1; produce C(p); }\n"          /* 8: no field */
                "A(x) : { V3f v; v = v + 1; produce A(x); }\n" /* 9: invalid operands */
-               "A(x) : { produce A(x) }\n";                   /* 10: missing ; */
-    cbm_lsys *ls = NULL;
-    CHECK_STATUS(cbm_lsys_load(ctx, &def, &ls), CBM_E_SYNTAX);
+               "A(x) : { produce A(x) }\n");                  /* 10: missing ; */
+    test_diags g;
+    cbm_context *ctx;
+    cbm_lsys *ls;
+    CHECK_STATUS(lsys_load_diags(&g, &def, &ctx, &ls), CBM_E_SYNTAX);
     CHECK(ls == NULL);
     CHECK_MSG(g.count >= 6, "%d diagnostics:\n%s", g.count, g.text);
     CHECK_MSG(strstr(g.text, "m.l:5:8: module A has 1 parameter, 2 given"), "%s", g.text);
@@ -418,13 +414,11 @@ TEST(lpfg_compiled_function_errors)
     CHECK(ctx != NULL);
     if (!ctx)
         return;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "m.l";
-    def.text = "#include <lpfgall.h>\nmodule A(int);\n" /* 1, 2 */
-               "int f(int n) {\n"                       /* 3 */
-               "    int d = n - 1;\n"                   /* 4 */
-               "    return 10 / d; }\n"                 /* 5: 10 / 0 */
-               "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n";
+    cbm_lsys_def def = lsys_text_def("m.l", "#include <lpfgall.h>\nmodule A(int);\n" /* 1, 2 */
+                                            "int f(int n) {\n"                       /* 3 */
+                                            "    int d = n - 1;\n"                   /* 4 */
+                                            "    return 10 / d; }\n"                 /* 5: 10 / 0 */
+                                            "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n");
     cbm_lsys *ls = lsys_from_def(ctx, &def);
     if (ls) {
         CHECK_STATUS(cbm_lsys_step(ls), CBM_E_RUNTIME);
@@ -541,73 +535,6 @@ TEST(lpfg_native_cc_timeout)
     CHECK(setenv("PATH", saved, 1) == 0);
     CHECK(unsetenv("CBM_CC_TIMEOUT") == 0);
     test_ctx_end(ctx);
-}
-
-/* One step of model text with the functions in the register code or native code: its status
- * and diagnostics in *g; CBM_E_UNSUPPORTED when native code cannot be had. */
-static cbm_status step_diags(const char *text, bool native, test_diags *g)
-{
-    cbm_context *ctx = test_diag_ctx(g);
-    CHECK(ctx != NULL);
-    if (!ctx)
-        return CBM_E_NOMEM;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "m.l";
-    def.text = text;
-    def.max_loop_iterations = 1000;
-    cbm_lsys *ls = NULL;
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
-    CHECK_OK(s);
-    const char *why = NULL;
-    if (s == CBM_OK && native && !cbm_lsys_compile_native(ls, test_tmp_dir(), &why)) {
-        CHECK_MSG(why && strstr(why, "compiler"), "%s", why ? why : "?");
-        s = CBM_E_UNSUPPORTED;
-    } else if (s == CBM_OK) {
-        CHECK_OK(cbm_lsys_reset(ls));
-        s = cbm_lsys_step(ls);
-    }
-    cbm_lsys_destroy(ls);
-    cbm_context_destroy(ctx);
-    return s;
-}
-
-/* Native code stops at the same statement with the same message as the register code: a
- * division by zero names its line and column, loops spend the step's budget, recursion is
- * bounded by the call depth. */
-TEST(lpfg_native_errors)
-{
-    static const struct {
-        const char *text, *where, *what;
-        cbm_status status;
-    } cases[] = {
-        {"#include <lpfgall.h>\nmodule A(int);\n"
-         "int f(int n) {\n"
-         "    int d = n - 1;\n"
-         "    return 10 % d; }\n"
-         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
-         "m.l:5:5: ", "integer remainder by zero", CBM_E_RUNTIME},
-        {"#include <lpfgall.h>\nmodule A(int);\n"
-         "int f(int n) { while (n > 0) n = n + 1; return n; }\n"
-         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
-         "m.l:3:", "more loop iterations in one step than the limit", CBM_E_LIMIT},
-        {"#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
-         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
-         "m.l:3:", "function calls nested too deeply", CBM_E_LIMIT},
-    };
-    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        test_diags code, native;
-        CHECK_STATUS(step_diags(cases[k].text, false, &code), cases[k].status);
-        cbm_status s = step_diags(cases[k].text, true, &native);
-        if (s == CBM_E_UNSUPPORTED) {
-            test_skip("no C compiler (cc) for native code");
-            return;
-        }
-        CHECK_STATUS(s, cases[k].status);
-        CHECK_MSG(strstr(code.text, cases[k].where) && strstr(code.text, cases[k].what), "%s",
-                  code.text);
-        CHECK_MSG(!strcmp(code.text, native.text), "register code: %s\nnative code: %s", code.text,
-                  native.text);
-    }
 }
 
 TEST(lpfg_runtime_limits)
@@ -885,16 +812,13 @@ TEST(lpfg_everything_compiles)
 static cbm_status body_step(const char *text, int by, test_diags *g, char **str, size_t *compiled)
 {
     *str = NULL;
-    cbm_context *ctx = test_diag_ctx(g);
-    CHECK(ctx != NULL);
-    if (!ctx)
-        return CBM_E_NOMEM;
-    cbm_lsys_def def = cbm_lsys_def_default();
-    def.path = "m.l";
-    def.text = text;
+    cbm_lsys_def def = lsys_text_def("m.l", text);
     def.max_loop_iterations = 1000;
-    cbm_lsys *ls = NULL;
-    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    cbm_context *ctx;
+    cbm_lsys *ls;
+    cbm_status s = lsys_load_diags(g, &def, &ctx, &ls);
+    if (!ctx)
+        return s;
     CHECK_OK(s);
     const char *why = NULL;
     size_t total = 0;
@@ -913,6 +837,55 @@ static cbm_status body_step(const char *text, int by, test_diags *g, char **str,
     cbm_lsys_destroy(ls);
     cbm_context_destroy(ctx);
     return s;
+}
+
+/* body_step without the string: the status and the diagnostics of one step. */
+static cbm_status step_diags(const char *text, int by, test_diags *g)
+{
+    char *str = NULL;
+    size_t compiled = 0;
+    cbm_status s = body_step(text, by, g, &str, &compiled);
+    free(str);
+    return s;
+}
+
+/* Native code stops at the same statement with the same message as the register code: a
+ * division by zero names its line and column, loops spend the step's budget, recursion is
+ * bounded by the call depth. */
+TEST(lpfg_native_errors)
+{
+    static const struct {
+        const char *text, *where, *what;
+        cbm_status status;
+    } cases[] = {
+        {"#include <lpfgall.h>\nmodule A(int);\n"
+         "int f(int n) {\n"
+         "    int d = n - 1;\n"
+         "    return 10 % d; }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:5:5: ", "integer remainder by zero", CBM_E_RUNTIME},
+        {"#include <lpfgall.h>\nmodule A(int);\n"
+         "int f(int n) { while (n > 0) n = n + 1; return n; }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:3:", "more loop iterations in one step than the limit", CBM_E_LIMIT},
+        {"#include <lpfgall.h>\nmodule A(int);\nint f(int n) { return f(n + 1); }\n"
+         "Axiom: A(1);\nA(x) : { produce A(f(x)); }\n",
+         "m.l:3:", "function calls nested too deeply", CBM_E_LIMIT},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        test_diags code, native;
+        CHECK_STATUS(step_diags(cases[k].text, BY_CODE, &code), cases[k].status);
+        cbm_status s = step_diags(cases[k].text, BY_NATIVE, &native);
+        if (s == CBM_E_UNSUPPORTED) {
+            test_skip("no C compiler (cc) for native code");
+            return;
+        }
+        CHECK_STATUS(s, cases[k].status);
+        CHECK_MSG(strstr(code.text, cases[k].where) && strstr(code.text, cases[k].what), "%s",
+                  code.text);
+        CHECK_MSG(!strcmp(code.text, native.text), "register code: %s\nnative code: %s", code.text,
+                  native.text);
+    }
 }
 
 /* Errors in compiled production bodies stop at the statement and with the message the tree
@@ -1038,16 +1011,14 @@ TEST(lpfg_root_errors)
          "m.l:4:26: ", "axiom: integer remainder by zero"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const cbm_lsys_def def = lsys_text_def("m.l", cases[k].text);
         test_diags g;
-        cbm_context *ctx = test_diag_ctx(&g);
-        CHECK(ctx != NULL);
+        cbm_context *ctx;
+        cbm_lsys *ls;
+        cbm_status s = lsys_load_diags(&g, &def, &ctx, &ls);
         if (!ctx)
             return;
-        cbm_lsys_def def = cbm_lsys_def_default();
-        def.path = "m.l";
-        def.text = cases[k].text;
-        cbm_lsys *ls = NULL;
-        CHECK_OK(cbm_lsys_load(ctx, &def, &ls));
+        CHECK_OK(s);
         CHECK_STATUS(cbm_lsys_reset(ls), CBM_E_RUNTIME);
         CHECK_MSG(strstr(g.text, cases[k].where) && strstr(g.text, cases[k].what), "case %zu: %s",
                   k, g.text);
