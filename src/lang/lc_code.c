@@ -94,7 +94,7 @@ double cbm__lc_bin_scalar(int op, int t, double a, double b, lc_vm *vm)
     return lc_conv_scalar(t, r);
 }
 
-static double inc(const lc_ins *ip, double *p)
+static double step_incdec(const lc_ins *ip, double *p)
 {
     double old = *p;
     *p = lc_conv_scalar(ip->t, *p + ((ip->fn & 1) ? -1 : 1));
@@ -296,10 +296,10 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                 return 0;
             break;
         case O_INC:
-            fr[ip->d] = inc(ip, fr + ip->a);
+            fr[ip->d] = step_incdec(ip, fr + ip->a);
             break;
         case O_GINC:
-            fr[ip->d] = inc(ip, glob + ip->a);
+            fr[ip->d] = step_incdec(ip, glob + ip->a);
             break;
         case O_MATH1:
             fr[ip->d] = lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], 0, false));
@@ -396,34 +396,36 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 }
 
 /* ---------------------------------------------------------------- compiler */
-typedef struct cg {
+typedef struct codegen {
     cbm_context *ctx;
-    const lc_model *m;
-    const lc_program *p;
-    lc_fcode *fc;
-    int fsize, top;
+    const lc_model *model;
+    const lc_program *program;
+    lc_fcode *code;     /* the function being written */
+    int frame_size;     /* the locals' registers */
+    int temp_top;       /* the next free temporary */
     int32_t pending_at; /* the statement whose first instruction is still to come */
     size_t label_at;    /* instructions before a label bound last (jumps land there) */
-    bool fail;          /* not compilable (or out of memory: nomem) */
-    bool nomem;
-    bool body;         /* a production body: produce, and return gives no value */
-    bool arg_pos;      /* produce: each argument's first instruction carries its position */
-    int loops;         /* enclosing loops */
-    int switches;      /* enclosing switches (break leaves the innermost loop or switch) */
-    int32_t brk, cont; /* chains of the jumps to patch at the innermost loop's end / step */
-    lc_ins scratch;    /* what ins() gives after running out of memory */
+    bool fail;          /* not compilable (or out of memory: out_of_memory) */
+    bool out_of_memory;
+    bool is_body;           /* a production body: produce, and return gives no value */
+    bool arg_pos;           /* produce: each argument's first instruction carries its position */
+    int loops;              /* enclosing loops */
+    int switches;           /* enclosing switches (break leaves the innermost loop or switch) */
+    int32_t break_jumps;    /* the chain of jumps to patch at the innermost loop's end */
+    int32_t continue_jumps; /* the chain of jumps to patch at its step */
+    lc_ins scratch;         /* what instr_at() gives after running out of memory */
     /* the constants, each in a register of its own after the locals, loaded on entry */
-    double konst[64];
-    int nkonst;
-    int tbase; /* the first temporary */
-} cg;
+    double consts[64];
+    int nconsts;
+    int temp_base; /* the first temporary */
+} codegen;
 
-static const lc_node *node(const cg *g, int32_t ni)
+static const lc_node *node(const codegen *g, int32_t ni)
 {
-    return &g->m->nodes.data[ni];
+    return &g->model->nodes.data[ni];
 }
 
-static int32_t emit(cg *g, int op, int d, int a, int b)
+static int32_t emit(codegen *g, int op, int d, int a, int b)
 {
     lc_ins x;
     memset(&x, 0, sizeof x);
@@ -433,60 +435,60 @@ static int32_t emit(cg *g, int op, int d, int a, int b)
     x.b = b;
     x.at = g->pending_at;
     g->pending_at = -1;
-    if (CBM_ARRAY_PUSH(g->ctx, g->fc->ins, x) != CBM_OK) {
-        g->fail = g->nomem = true;
+    if (CBM_ARRAY_PUSH(g->ctx, g->code->ins, x) != CBM_OK) {
+        g->fail = g->out_of_memory = true;
         return -1;
     }
-    return (int32_t)g->fc->ins.len - 1;
+    return (int32_t)g->code->ins.len - 1;
 }
 
-static lc_ins *ins(cg *g, int32_t i)
+static lc_ins *instr_at(codegen *g, int32_t i)
 {
-    return i >= 0 && !g->nomem ? &g->fc->ins.data[i] : &g->scratch;
+    return i >= 0 && !g->out_of_memory ? &g->code->ins.data[i] : &g->scratch;
 }
 
 /* The position where the next instruction goes, as a jump target: a statement started before
  * it gets its own instruction, so that a jump to here does not set its position. */
-static int32_t here(cg *g)
+static int32_t label_here(codegen *g)
 {
     if (g->pending_at >= 0)
         emit(g, O_NOP, 0, 0, 0);
-    g->label_at = g->fc->ins.len;
-    return (int32_t)g->fc->ins.len;
+    g->label_at = g->code->ins.len;
+    return (int32_t)g->code->ins.len;
 }
 
 /* Patches a chain of jumps (linked through their target field) to target. */
-static void patch(cg *g, int32_t chain, int32_t target)
+static void patch_jumps(codegen *g, int32_t chain, int32_t target)
 {
-    while (chain >= 0 && !g->nomem) {
-        lc_ins *x = ins(g, chain);
+    while (chain >= 0 && !g->out_of_memory) {
+        lc_ins *x = instr_at(g, chain);
         int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->d : x->op == O_JMP ? &x->a : &x->b;
         chain = *f;
         *f = target;
     }
 }
 
-static int tmp(cg *g)
+static int new_temp(codegen *g)
 {
-    int r = g->top++;
-    if (g->top > g->fc->nreg)
-        g->fc->nreg = g->top;
+    int r = g->temp_top++;
+    if (g->temp_top > g->code->nreg)
+        g->code->nreg = g->temp_top;
     return r;
 }
 
 /* n consecutive temporaries (a run for a value of several doubles) */
-static int tmpn(cg *g, int n)
+static int new_temps(codegen *g, int n)
 {
-    int r = g->top;
-    g->top += n;
-    if (g->top > g->fc->nreg)
-        g->fc->nreg = g->top;
+    int r = g->temp_top;
+    g->temp_top += n;
+    if (g->temp_top > g->code->nreg)
+        g->code->nreg = g->temp_top;
     return r;
 }
 
 /* Whether evaluating ni may change a variable (so that an operand read before it must be
  * copied first). Conservative: anything but pure scalar arithmetic counts. */
-static bool writes(const cg *g, int32_t ni)
+static bool may_write(const codegen *g, int32_t ni)
 {
     if (ni < 0)
         return false;
@@ -500,18 +502,18 @@ static bool writes(const cg *g, int32_t ni)
     case N_NEG:
     case N_NOT:
     case N_CAST:
-        return writes(g, n->a);
+        return may_write(g, n->a);
     case N_BIN:
     case N_AND:
     case N_OR:
     case N_COMMA:
-        return writes(g, n->a) || writes(g, n->b);
+        return may_write(g, n->a) || may_write(g, n->b);
     case N_COND:
-        return writes(g, n->a) || writes(g, n->b) || writes(g, n->c);
+        return may_write(g, n->a) || may_write(g, n->b) || may_write(g, n->c);
     case N_CALLB:
         if (n->fn < FN_MATH_END) {
             for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
-                if (writes(g, x))
+                if (may_write(g, x))
                     return true;
             return false;
         }
@@ -521,39 +523,39 @@ static bool writes(const cg *g, int32_t ni)
     }
 }
 
-static int cx(cg *g, int32_t ni, int hint);
-static int cxv(cg *g, int32_t ni, int dst);
+static int compile_scalar(codegen *g, int32_t ni, int hint);
+static int compile_value(codegen *g, int32_t ni, int dst);
 
 /* The left operand of a comma: compiled for its effects into temporaries that are then given
  * back, a scalar (or void) into one register, a vector or struct into a run of its size. */
-static void compile_for_effect(cg *g, int32_t ni)
+static void compile_for_effect(codegen *g, int32_t ni)
 {
-    int save = g->top;
+    int save = g->temp_top;
     const lc_node *a = node(g, ni);
     if (lc_is_scalar(a->type) || a->type == T_VOID)
-        (void)cx(g, ni, tmp(g));
+        (void)compile_scalar(g, ni, new_temp(g));
     else
-        (void)cxv(g, ni, tmpn(g, lc_type_size(g->m, a->type)));
-    g->top = save;
+        (void)compile_value(g, ni, new_temps(g, lc_type_size(g->model, a->type)));
+    g->temp_top = save;
 }
 
 /* The register of constant v (loaded on entry), or v loaded into hint when there are many. */
-static int konst(cg *g, double v, int hint)
+static int const_reg(codegen *g, double v, int hint)
 {
-    for (int c = 0; c < g->nkonst; c++) {
+    for (int c = 0; c < g->nconsts; c++) {
         /* the same bits, not the same value: -0.0 and 0.0 are different constants */
         uint64_t a, b;
-        memcpy(&a, &g->konst[c], sizeof a);
+        memcpy(&a, &g->consts[c], sizeof a);
         memcpy(&b, &v, sizeof b);
         if (a == b)
-            return g->fsize + c;
+            return g->frame_size + c;
     }
-    if (g->nkonst < (int)(sizeof g->konst / sizeof g->konst[0])) {
-        g->konst[g->nkonst] = v;
-        return g->fsize + g->nkonst++;
+    if (g->nconsts < (int)(sizeof g->consts / sizeof g->consts[0])) {
+        g->consts[g->nconsts] = v;
+        return g->frame_size + g->nconsts++;
     }
     int32_t i = emit(g, O_CONST, hint, 0, 0);
-    ins(g, i)->k = v;
+    instr_at(g, i)->k = v;
     return hint;
 }
 
@@ -566,13 +568,13 @@ static bool computes(int op)
 
 /* Moves the value of register r into d (nothing when it is there). A value just computed into
  * a temporary is computed into d instead when no jump lands between. */
-static void mov(cg *g, int d, int r)
+static void emit_move(codegen *g, int d, int r)
 {
     if (d == r || g->fail)
         return;
-    size_t len = g->fc->ins.len;
-    if (r >= g->tbase && len > 0 && g->label_at != len) {
-        lc_ins *last = &g->fc->ins.data[len - 1];
+    size_t len = g->code->ins.len;
+    if (r >= g->temp_base && len > 0 && g->label_at != len) {
+        lc_ins *last = &g->code->ins.data[len - 1];
         if (last->d == r && computes(last->op) && g->pending_at < 0) {
             last->d = d;
             return;
@@ -582,7 +584,7 @@ static void mov(cg *g, int d, int r)
 }
 
 /* A binary operator on scalars, as the tree walker chooses its arithmetic type. */
-static int bin_op(int fn, int t, int *ty)
+static int scalar_bin_opcode(int fn, int t, int *ty)
 {
     *ty = t;
     if (fn >= B_LT)
@@ -600,7 +602,7 @@ static int bin_op(int fn, int t, int *ty)
 
 /* The first double of variable or field ni (a field of a field of a variable ...), -1: ni is
  * no such place. */
-static int place(const cg *g, int32_t ni, bool *global)
+static int place(const codegen *g, int32_t ni, bool *global)
 {
     const lc_node *l = node(g, ni);
     if (l->op == N_LOCAL || l->op == N_GLOBAL) {
@@ -613,7 +615,7 @@ static int place(const cg *g, int32_t ni, bool *global)
     return base < 0 ? -1 : base + l->slot;
 }
 
-static int lvalue(const cg *g, int32_t ni, bool *global)
+static int lvalue(const codegen *g, int32_t ni, bool *global)
 {
     if (!lc_is_scalar(node(g, ni)->type))
         return -1;
@@ -622,7 +624,7 @@ static int lvalue(const cg *g, int32_t ni, bool *global)
 
 /* An expression the register code has no translation for: the function does not compile (the
  * model is refused when it is loaded, lsys/lpfg.c check_compiled). */
-static int unsupported(cg *g, int dst)
+static int unsupported(codegen *g, int dst)
 {
     g->fail = true;
     return dst;
@@ -656,7 +658,7 @@ static bool host_fn(int fn)
 /* Built-in ni of host_fn: its scalar arguments left to right into a run of temporaries (a
  * string of printf has its register, unused: the host reads the node), then O_HOST with the
  * node in k, whose value the host converts to the node's type as the walker does. */
-static int host(cg *g, int32_t ni, int dst)
+static int compile_host_call(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int na = 0;
@@ -665,33 +667,33 @@ static int host(cg *g, int32_t ni, int dst)
             g->fail = true;
             return dst;
         }
-    int save = g->top;
-    int base = tmpn(g, na);
+    int save = g->temp_top;
+    int base = new_temps(g, na);
     int i = 0;
     for (int32_t x = n->a; x >= 0; x = node(g, x)->next, i++) {
         if (node(g, x)->op == N_STR)
             continue;
-        int s2 = g->top;
-        mov(g, base + i, cx(g, x, base + i));
-        g->top = s2;
+        int s2 = g->temp_top;
+        emit_move(g, base + i, compile_scalar(g, x, base + i));
+        g->temp_top = s2;
     }
-    lc_ins *x = ins(g, emit(g, O_HOST, dst, base, na));
+    lc_ins *x = instr_at(g, emit(g, O_HOST, dst, base, na));
     x->fn = (uint16_t)n->fn;
     x->k = (double)ni;
-    g->top = save;
+    g->temp_top = save;
     return dst;
 }
 
-static int call(cg *g, int32_t ni, int dst);
-static bool vec_bin(cg *g, int32_t ni, int dst);
-static bool vec_builtin(cg *g, int32_t ni, int dst);
-static bool frame_bin(cg *g, int32_t ni, int dst);
-static bool frame_builtin(cg *g, int32_t ni, int dst);
-static int field_of(cg *g, int32_t ni, int dst, int sz);
+static int compile_call(codegen *g, int32_t ni, int dst);
+static bool vec_bin(codegen *g, int32_t ni, int dst);
+static bool vec_builtin(codegen *g, int32_t ni, int dst);
+static bool frame_bin(codegen *g, int32_t ni, int dst);
+static bool frame_builtin(codegen *g, int32_t ni, int dst);
+static int field_of(codegen *g, int32_t ni, int dst, int sz);
 
 /* Compiles expression ni; returns the register holding its value: a variable's own register,
  * or hint (a temporary of the caller) where it computed it. */
-static int cx(cg *g, int32_t ni, int hint)
+static int compile_scalar(codegen *g, int32_t ni, int hint)
 {
     if (g->fail)
         return hint;
@@ -699,7 +701,7 @@ static int cx(cg *g, int32_t ni, int hint)
     bool scalar = lc_is_scalar(n->type);
     switch (n->op) {
     case N_NUM:
-        return konst(g, n->v, hint);
+        return const_reg(g, n->v, hint);
     case N_LOCAL:
         if (!scalar)
             break;
@@ -729,11 +731,11 @@ static int cx(cg *g, int32_t ni, int hint)
         if (n->op == N_CAST && node(g, n->a)->op == N_NUM) { /* a converted number: a number */
             lc_node k = *node(g, n->a);
             k.v = lc_conv_scalar(n->type, k.v);
-            return konst(g, k.v, hint);
+            return const_reg(g, k.v, hint);
         }
-        int r = cx(g, n->a, hint);
+        int r = compile_scalar(g, n->a, hint);
         int32_t i = emit(g, n->op == N_NEG ? O_NEG : n->op == N_NOT ? O_NOT : O_CONV, hint, r, 0);
-        ins(g, i)->t = (uint8_t)n->type;
+        instr_at(g, i)->t = (uint8_t)n->type;
         return hint;
     }
     case N_BIN: {
@@ -743,62 +745,62 @@ static int cx(cg *g, int32_t ni, int hint)
                 return hint;
             break;
         }
-        int ra = cx(g, n->a, tmp(g));
-        if (ra < g->fsize && writes(g, n->b)) { /* read before the right operand runs */
-            int t = tmp(g);
+        int ra = compile_scalar(g, n->a, new_temp(g));
+        if (ra < g->frame_size && may_write(g, n->b)) { /* read before the right operand runs */
+            int t = new_temp(g);
             emit(g, O_MOV, t, ra, 0);
             ra = t;
         }
-        int rb = cx(g, n->b, tmp(g));
+        int rb = compile_scalar(g, n->b, new_temp(g));
         int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
         if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
             ct = T_DOUBLE;
         int ty;
-        int op = bin_op(n->fn, ct, &ty);
+        int op = scalar_bin_opcode(n->fn, ct, &ty);
         int32_t i = emit(g, op, hint, ra, rb);
-        ins(g, i)->t = (uint8_t)ty;
-        ins(g, i)->fn = n->fn;
+        instr_at(g, i)->t = (uint8_t)ty;
+        instr_at(g, i)->fn = n->fn;
         return hint;
     }
     case N_AND:
     case N_OR: {
-        int r = cx(g, n->a, tmp(g));
+        int r = compile_scalar(g, n->a, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
         int32_t j = emit(g, n->op == N_AND ? O_JZ : O_JNZ, 0, hint, -1);
-        r = cx(g, n->b, tmp(g));
+        r = compile_scalar(g, n->b, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
-        patch(g, j, here(g));
+        patch_jumps(g, j, label_here(g));
         return hint;
     }
     case N_COND: {
         if (!scalar)
             break;
-        int r = cx(g, n->a, tmp(g));
+        int r = compile_scalar(g, n->a, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        mov(g, hint, cx(g, n->b, hint));
+        emit_move(g, hint, compile_scalar(g, n->b, hint));
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
-        patch(g, jelse, here(g));
-        mov(g, hint, cx(g, n->c, hint));
-        patch(g, jend, here(g));
+        patch_jumps(g, jelse, label_here(g));
+        emit_move(g, hint, compile_scalar(g, n->c, hint));
+        patch_jumps(g, jend, label_here(g));
         return hint;
     }
     case N_COMMA: {
         if (!scalar)
             break;
         compile_for_effect(g, n->a);
-        return cx(g, n->b, hint);
+        return compile_scalar(g, n->b, hint);
     }
     case N_ASSIGN: {
         bool global;
         int slot = lvalue(g, n->a, &global);
         if (!scalar || slot < 0)
             break;
-        int r = cx(g, n->b, hint);
+        int r = compile_scalar(g, n->b, hint);
         if (global) {
             emit(g, O_GST, slot, r, 0);
             return r;
         }
-        mov(g, slot, r);
+        emit_move(g, slot, r);
         return slot;
     }
     case N_INCDEC: {
@@ -807,13 +809,13 @@ static int cx(cg *g, int32_t ni, int hint)
         if (slot < 0)
             break;
         int32_t i = emit(g, global ? O_GINC : O_INC, hint, slot, 0);
-        ins(g, i)->t = (uint8_t)n->type;
-        ins(g, i)->fn = n->fn;
+        instr_at(g, i)->t = (uint8_t)n->type;
+        instr_at(g, i)->fn = n->fn;
         return hint;
     }
     case N_CALLB: {
         if (host_fn(n->fn))
-            return host(g, ni, hint);
+            return compile_host_call(g, ni, hint);
         if (n->fn >= FN_MATH_END) {
             if (scalar && vec_builtin(g, ni, hint)) /* Dot, Length */
                 return hint;
@@ -828,18 +830,18 @@ static int cx(cg *g, int32_t ni, int hint)
                 g->fail = true;
                 return hint;
             }
-            r[na] = cx(g, x, tmp(g));
-            if (na == 0 && r[0] < g->fsize && node(g, x)->next >= 0 &&
-                writes(g, node(g, x)->next)) {
-                int t = tmp(g);
+            r[na] = compile_scalar(g, x, new_temp(g));
+            if (na == 0 && r[0] < g->frame_size && node(g, x)->next >= 0 &&
+                may_write(g, node(g, x)->next)) {
+                int t = new_temp(g);
                 emit(g, O_MOV, t, r[0], 0);
                 r[0] = t;
             }
         }
         if (na == 0) { /* no argument: both are 0 */
-            r[0] = tmp(g);
+            r[0] = new_temp(g);
             int32_t i = emit(g, O_CONST, r[0], 0, 0);
-            ins(g, i)->k = 0;
+            instr_at(g, i)->k = 0;
         }
         int t = n->type == T_VOID ? T_DOUBLE : n->type;
         int op = na == 2 ? O_MATH2 : O_MATH1;
@@ -850,16 +852,16 @@ static int cx(cg *g, int32_t ni, int hint)
                  : n->fn == FN_EXP  ? O_EXP
                                     : op;
         int32_t i = emit(g, op, hint, r[0], r[1]);
-        ins(g, i)->t = (uint8_t)t;
-        ins(g, i)->fn = n->fn;
+        instr_at(g, i)->t = (uint8_t)t;
+        instr_at(g, i)->fn = n->fn;
         return hint;
     }
     case N_CALLU:
         if (!scalar && n->type != T_VOID)
             break;
-        return call(g, ni, hint);
+        return compile_call(g, ni, hint);
     case N_INCTX: { /* the host matches the context and binds its formals in the frame */
-        lc_ins *x = ins(g, emit(g, O_HOST, hint, 0, 0));
+        lc_ins *x = instr_at(g, emit(g, O_HOST, hint, 0, 0));
         x->fn = LC_HOST_CONTEXT;
         x->k = (double)ni;
         return hint;
@@ -874,47 +876,47 @@ static int cx(cg *g, int32_t ni, int hint)
     return unsupported(g, hint);
 }
 
-static void cs(cg *g, int32_t ni);
+static void compile_stmts(codegen *g, int32_t ni);
 
 /* Copies the run of n registers (or globals: from_global) at r to the run at d. */
-static void copy_run(cg *g, int d, int r, int n, bool from_global)
+static void copy_run(codegen *g, int d, int r, int n, bool from_global)
 {
     for (int i = 0; i < n && (d != r || from_global); i++)
         emit(g, from_global ? O_GLD : O_MOV, d + i, r + i, 0);
 }
 
 /* Rounds the run of a value of type t at register r in place, as lc_conv_value. */
-static void conv_run(cg *g, int t, int r)
+static void conv_run(codegen *g, int t, int r)
 {
     if (lc_is_scalar(t)) {
         if (t != T_DOUBLE)
-            ins(g, emit(g, O_CONV, r, r, 0))->t = (uint8_t)t;
+            instr_at(g, emit(g, O_CONV, r, r, 0))->t = (uint8_t)t;
         return;
     }
     if (t == T_V3F) {
         for (int i = 0; i < 3; i++)
-            ins(g, emit(g, O_CONV, r + i, r + i, 0))->t = T_FLOAT;
+            instr_at(g, emit(g, O_CONV, r + i, r + i, 0))->t = T_FLOAT;
         return;
     }
     if (t == T_V3D)
         return;
-    const lc_type *ty = &g->m->types.data[t];
+    const lc_type *ty = &g->model->types.data[t];
     for (int f = 0; f < ty->nf; f++)
         conv_run(g, ty->ftype[f], r + ty->foff[f]);
 }
 
 /* Compiles expression ni of any type: the first register of the run holding its value (a
- * local's own run, or dst, a run of the caller of the value's size). Scalars are cx's; the
- * values of several doubles are copied: variables, fields, constructors, assignments,
+ * local's own run, or dst, a run of the caller of the value's size). Scalars are compile_scalar's;
+ * the values of several doubles are copied: variables, fields, constructors, assignments,
  * conditionals. */
-static int cxv(cg *g, int32_t ni, int dst)
+static int compile_value(codegen *g, int32_t ni, int dst)
 {
     if (g->fail)
         return dst;
     const lc_node *n = node(g, ni);
     if (lc_is_scalar(n->type))
-        return cx(g, ni, dst);
-    int sz = lc_type_size(g->m, n->type);
+        return compile_scalar(g, ni, dst);
+    int sz = lc_type_size(g->model, n->type);
     switch (n->op) {
     case N_LOCAL:
     case N_GLOBAL:
@@ -931,20 +933,20 @@ static int cxv(cg *g, int32_t ni, int dst)
     case N_CTOR: {
         if (n->a < 0) {
             for (int i = 0; i < sz; i++)
-                ins(g, emit(g, O_CONST, dst + i, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->k = 0;
             return dst;
         }
         int off = 0;
         for (int32_t x = n->a; x >= 0; x = node(g, x)->next) {
-            int xs = lc_type_size(g->m, node(g, x)->type);
+            int xs = lc_type_size(g->model, node(g, x)->type);
             if (off + xs > sz) {
                 g->fail = true;
                 return dst;
             }
-            int save = g->top;
-            int r = cxv(g, x, dst + off);
+            int save = g->temp_top;
+            int r = compile_value(g, x, dst + off);
             copy_run(g, dst + off, r, xs, false);
-            g->top = save;
+            g->temp_top = save;
             off += xs;
         }
         return dst;
@@ -952,33 +954,33 @@ static int cxv(cg *g, int32_t ni, int dst)
     case N_ASSIGN: {
         bool global;
         int slot = place(g, n->a, &global);
-        if (slot < 0 || lc_type_size(g->m, node(g, n->a)->type) != sz)
+        if (slot < 0 || lc_type_size(g->model, node(g, n->a)->type) != sz)
             break;
-        int r = cxv(g, n->b, dst);
+        int r = compile_value(g, n->b, dst);
         for (int i = 0; i < sz; i++)
             emit(g, global ? O_GST : O_MOV, slot + i, r + i, 0);
         return r;
     }
     case N_COND: {
-        int r = cx(g, n->a, tmp(g));
+        int r = compile_scalar(g, n->a, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        copy_run(g, dst, cxv(g, n->b, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->b, dst), sz, false);
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
-        patch(g, jelse, here(g));
-        copy_run(g, dst, cxv(g, n->c, dst), sz, false);
-        patch(g, jend, here(g));
+        patch_jumps(g, jelse, label_here(g));
+        copy_run(g, dst, compile_value(g, n->c, dst), sz, false);
+        patch_jumps(g, jend, label_here(g));
         return dst;
     }
     case N_CALLU:
-        return call(g, ni, dst);
+        return compile_call(g, ni, dst);
     case N_BIN:
         if (vec_bin(g, ni, dst) || frame_bin(g, ni, dst))
             return dst;
         break;
     case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
-        if (lc_type_size(g->m, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
             break;
-        copy_run(g, dst, cxv(g, n->a, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->a, dst), sz, false);
         conv_run(g, n->type, dst);
         return dst;
     case N_CALLB:
@@ -986,16 +988,16 @@ static int cxv(cg *g, int32_t ni, int dst)
             return dst;
         break;
     case N_NEG: { /* each component negated, as ev */
-        if (lc_type_size(g->m, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
             break;
-        int r = cxv(g, n->a, dst);
+        int r = compile_value(g, n->a, dst);
         for (int i = 0; i < sz; i++)
             emit(g, O_NEG, dst + i, r + i, 0);
         return dst;
     }
     case N_COMMA: {
         compile_for_effect(g, n->a);
-        return cxv(g, n->b, dst);
+        return compile_value(g, n->b, dst);
     }
     default:
         break;
@@ -1010,7 +1012,7 @@ static int cxv(cg *g, int32_t ni, int dst)
  * `type` rounded (V3f components to float32): of two vectors +, -, % (cross) and otherwise *
  * (dot, a scalar); a vector times (otherwise divided by) a scalar; a scalar times a vector. The
  * result to the run at dst; false (nothing emitted) when it is no such operation. */
-static bool vec_op(cg *g, int32_t ia, int32_t ib, int fn, int type, int dst)
+static bool vec_op(codegen *g, int32_t ia, int32_t ib, int fn, int type, int dst)
 {
     int ta = node(g, ia)->type, tb = node(g, ib)->type;
     bool va = lc_is_vec(ta), vb = lc_is_vec(tb);
@@ -1019,25 +1021,25 @@ static bool vec_op(cg *g, int32_t ia, int32_t ib, int fn, int type, int dst)
     bool dot = va && vb && fn != B_ADD && fn != B_SUB && fn != B_REM;
     if (dot ? !lc_is_scalar(type) : !lc_is_vec(type))
         return false;
-    int save = g->top;
-    int ra = va ? cxv(g, ia, tmpn(g, 3)) : cx(g, ia, tmp(g));
-    if (ra < g->fsize && writes(g, ib)) { /* read before the right operand runs */
-        int t = tmpn(g, va ? 3 : 1);
+    int save = g->temp_top;
+    int ra = va ? compile_value(g, ia, new_temps(g, 3)) : compile_scalar(g, ia, new_temp(g));
+    if (ra < g->frame_size && may_write(g, ib)) { /* read before the right operand runs */
+        int t = new_temps(g, va ? 3 : 1);
         copy_run(g, t, ra, va ? 3 : 1, false);
         ra = t;
     }
-    int rb = vb ? cxv(g, ib, tmpn(g, 3)) : cx(g, ib, tmp(g));
+    int rb = vb ? compile_value(g, ib, new_temps(g, 3)) : compile_scalar(g, ib, new_temp(g));
     /* into temporaries when dst is a variable's run, which an operand may be */
-    int r = dst < g->tbase ? tmpn(g, 3) : dst;
+    int r = dst < g->temp_base ? new_temps(g, 3) : dst;
     if (dot) {
-        int t = tmp(g);
+        int t = new_temp(g);
         emit(g, O_MULD, r, ra, rb);
         emit(g, O_MULD, t, ra + 1, rb + 1);
         emit(g, O_ADDD, r, r, t);
         emit(g, O_MULD, t, ra + 2, rb + 2);
         emit(g, O_ADDD, r, r, t);
     } else if (va && vb && fn == B_REM) {
-        int t = tmp(g);
+        int t = new_temp(g);
         for (int i = 0; i < 3; i++) {
             int j = (i + 1) % 3, k = (i + 2) % 3;
             emit(g, O_MULD, r + i, ra + j, rb + k);
@@ -1053,11 +1055,11 @@ static bool vec_op(cg *g, int32_t ia, int32_t ib, int fn, int type, int dst)
         }
     copy_run(g, dst, r, dot ? 1 : 3, false);
     conv_run(g, type, dst);
-    g->top = save;
+    g->temp_top = save;
     return true;
 }
 
-static bool vec_bin(cg *g, int32_t ni, int dst)
+static bool vec_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     return vec_op(g, n->a, n->b, n->fn, n->type, dst);
@@ -1065,7 +1067,7 @@ static bool vec_bin(cg *g, int32_t ni, int dst)
 
 /* The vector built-ins Dot, Cross, Length and Normalize of V3f and V3d as call_builtin computes
  * them (Normalize of a zero vector: zeros); false (nothing emitted) for the others. */
-static bool vec_builtin(cg *g, int32_t ni, int dst)
+static bool vec_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int32_t x = n->a;
@@ -1078,9 +1080,9 @@ static bool vec_builtin(cg *g, int32_t ni, int dst)
     if (!(n->fn == FN_LENGTH && lc_is_scalar(n->type)) &&
         !(n->fn == FN_NORMALIZE && lc_is_vec(n->type)))
         return false;
-    int save = g->top;
-    int rv = cxv(g, x, tmpn(g, 3));
-    int l = tmp(g), t = tmp(g);
+    int save = g->temp_top;
+    int rv = compile_value(g, x, new_temps(g, 3));
+    int l = new_temp(g), t = new_temp(g);
     emit(g, O_MULD, l, rv, rv);
     emit(g, O_MULD, t, rv + 1, rv + 1);
     emit(g, O_ADDD, l, l, t);
@@ -1090,21 +1092,21 @@ static bool vec_builtin(cg *g, int32_t ni, int dst)
     if (n->fn == FN_LENGTH) {
         copy_run(g, dst, l, 1, false);
         conv_run(g, n->type, dst);
-        g->top = save;
+        g->temp_top = save;
         return true;
     }
-    int r = dst < g->tbase ? tmpn(g, 3) : dst;
-    int32_t jzero = emit(g, O_JNGT, -1, l, konst(g, 0.0, t));
+    int r = dst < g->temp_base ? new_temps(g, 3) : dst;
+    int32_t jzero = emit(g, O_JNGT, -1, l, const_reg(g, 0.0, t));
     for (int i = 0; i < 3; i++)
         emit(g, O_DIVD, r + i, rv + i, l);
     int32_t jend = emit(g, O_JMP, 0, -1, 0);
-    patch(g, jzero, here(g));
+    patch_jumps(g, jzero, label_here(g));
     for (int i = 0; i < 3; i++)
-        ins(g, emit(g, O_CONST, r + i, 0, 0))->k = 0;
-    patch(g, jend, here(g));
+        instr_at(g, emit(g, O_CONST, r + i, 0, 0))->k = 0;
+    patch_jumps(g, jend, label_here(g));
     copy_run(g, dst, r, 3, false);
     conv_run(g, n->type, dst);
-    g->top = save;
+    g->temp_top = save;
     return true;
 }
 
@@ -1113,18 +1115,18 @@ static bool vec_builtin(cg *g, int32_t ni, int dst)
  * doubles with C's order of operations, the result copied to dst and rounded to its type. */
 
 /* The run of value x (of sz doubles) in fresh temporaries, so that no later write changes it. */
-static int arg_run(cg *g, int32_t x, int sz)
+static int arg_run(codegen *g, int32_t x, int sz)
 {
-    int t = tmpn(g, sz);
+    int t = new_temps(g, sz);
     if (sz == 1)
-        mov(g, t, cx(g, x, t));
+        emit_move(g, t, compile_scalar(g, x, t));
     else
-        copy_run(g, t, cxv(g, x, t), sz, false);
+        copy_run(g, t, compile_value(g, x, t), sz, false);
     return t;
 }
 
 /* r[0..2] = u x v, as the walker's cross products: u1 v2 - u2 v1 ...; t a temporary */
-static void cross3(cg *g, int r, int u, int v, int t)
+static void cross3(codegen *g, int r, int u, int v, int t)
 {
     for (int i = 0; i < 3; i++) {
         int j = (i + 1) % 3, k = (i + 2) % 3;
@@ -1135,7 +1137,7 @@ static void cross3(cg *g, int r, int u, int v, int t)
 }
 
 /* d = u0 w0 + u1 w1 + u2 w2 (left to right); t a temporary other than d */
-static void dot3(cg *g, int d, int u, int w, int t)
+static void dot3(codegen *g, int d, int u, int w, int t)
 {
     emit(g, O_MULD, d, u, w);
     emit(g, O_MULD, t, u + 1, w + 1);
@@ -1145,19 +1147,19 @@ static void dot3(cg *g, int d, int u, int w, int t)
 }
 
 /* d = (l > 0 ? l : 1) */
-static void or_one(cg *g, int d, int l)
+static void positive_or_one(codegen *g, int d, int l)
 {
-    int k = tmp(g);
-    int32_t j = emit(g, O_JNGT, -1, l, konst(g, 0.0, k));
+    int k = new_temp(g);
+    int32_t j = emit(g, O_JNGT, -1, l, const_reg(g, 0.0, k));
     emit(g, O_MOV, d, l, 0);
     int32_t e = emit(g, O_JMP, 0, -1, 0);
-    patch(g, j, here(g));
-    mov(g, d, konst(g, 1.0, k));
-    patch(g, e, here(g));
+    patch_jumps(g, j, label_here(g));
+    emit_move(g, d, const_reg(g, 1.0, k));
+    patch_jumps(g, e, label_here(g));
 }
 
 /* The result run r of sz doubles to dst, rounded to type t. */
-static void result(cg *g, int dst, int r, int sz, int t)
+static void store_result(codegen *g, int dst, int r, int sz, int t)
 {
     copy_run(g, dst, r, sz, false);
     conv_run(g, t, dst);
@@ -1165,18 +1167,18 @@ static void result(cg *g, int dst, int r, int sz, int t)
 
 /* Field ni of a value that is no variable (a call's result ...): the value into temporaries,
  * then its field's doubles to dst, as ev. */
-static int field_of(cg *g, int32_t ni, int dst, int sz)
+static int field_of(codegen *g, int32_t ni, int dst, int sz)
 {
     const lc_node *n = node(g, ni);
-    int save = g->top;
-    int bs = lc_type_size(g->m, node(g, n->a)->type);
+    int save = g->temp_top;
+    int bs = lc_type_size(g->model, node(g, n->a)->type);
     if (n->slot + sz > bs) {
         g->fail = true;
         return dst;
     }
     int r = arg_run(g, n->a, bs);
     copy_run(g, dst, r + n->slot, sz, false);
-    g->top = save;
+    g->temp_top = save;
     return dst;
 }
 
@@ -1191,25 +1193,25 @@ static const signed char HAMILTON[4][4][3] = {
 /* Quaternion times quaternion (Hamilton), quaternion times vector or TurtleVec (each vector
  * rotated: v + 2w (u x v) + 2 u x (u x v)), LocVec arithmetic (+, -, *, / by components, a
  * scalar operand broadcast); false (nothing emitted) for the others. */
-static bool frame_bin(cg *g, int32_t ni, int dst)
+static bool frame_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
-    int sa = lc_type_size(g->m, ta), sb = lc_type_size(g->m, tb);
-    int sz = lc_type_size(g->m, n->type);
-    int save = g->top;
+    int sa = lc_type_size(g->model, ta), sb = lc_type_size(g->model, tb);
+    int sz = lc_type_size(g->model, n->type);
+    int save = g->temp_top;
     if (n->type == T_LOCVEC) {
         if ((sa != 1 && sa != 3) || (sb != 1 && sb != 3) || sz != 3)
             return false;
-        int a = arg_run(g, n->a, sa), b = arg_run(g, n->b, sb), r = tmpn(g, 3);
+        int a = arg_run(g, n->a, sa), b = arg_run(g, n->b, sb), r = new_temps(g, 3);
         int op = n->fn == B_ADD   ? O_ADDD
                  : n->fn == B_SUB ? O_SUBD
                  : n->fn == B_MUL ? O_MULD
                                   : O_DIVD;
         for (int i = 0; i < 3; i++)
             emit(g, op, r + i, a + (sa == 1 ? 0 : i), b + (sb == 1 ? 0 : i));
-        result(g, dst, r, 3, n->type);
-        g->top = save;
+        store_result(g, dst, r, 3, n->type);
+        g->temp_top = save;
         return true;
     }
     if (ta != T_QUAT)
@@ -1217,7 +1219,7 @@ static bool frame_bin(cg *g, int32_t ni, int dst)
     if (tb == T_QUAT) {
         if (sa != 4 || sb != 4 || sz != 4)
             return false;
-        int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, 4), r = tmpn(g, 4), t = tmp(g);
+        int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, 4), r = new_temps(g, 4), t = new_temp(g);
         for (int i = 0; i < 4; i++)
             for (int k = 0; k < 4; k++) {
                 const signed char *h = HAMILTON[i][k];
@@ -1225,16 +1227,16 @@ static bool frame_bin(cg *g, int32_t ni, int dst)
                 if (k)
                     emit(g, h[2] > 0 ? O_ADDD : O_SUBD, r + i, r + i, t);
             }
-        result(g, dst, r, 4, n->type);
-        g->top = save;
+        store_result(g, dst, r, 4, n->type);
+        g->temp_top = save;
         return true;
     }
     int nv = tb == T_TVEC ? 3 : 1;
     if (sa != 4 || sb != 3 * nv || sz != 3 * nv || (tb != T_TVEC && !lc_is_vec(tb)))
         return false;
-    int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, sb), r = tmpn(g, sz);
-    int t = tmpn(g, 3), c = tmpn(g, 3), x = tmp(g), two = tmp(g);
-    two = konst(g, 2.0, two);
+    int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, sb), r = new_temps(g, sz);
+    int t = new_temps(g, 3), c = new_temps(g, 3), x = new_temp(g), two = new_temp(g);
+    two = const_reg(g, 2.0, two);
     for (int v = 0; v < nv; v++) {
         int p = b + 3 * v;
         cross3(g, t, q + 1, p, x);
@@ -1247,58 +1249,59 @@ static bool frame_bin(cg *g, int32_t ni, int dst)
             emit(g, O_ADDD, r + 3 * v + i, r + 3 * v + i, c + i);
         }
     }
-    result(g, dst, r, sz, n->type);
-    g->top = save;
+    store_result(g, dst, r, sz, n->type);
+    g->temp_top = save;
     return true;
 }
 
 /* MakeQuaternion, VecRotate (Rodrigues' rotation of a vector or of each vector of a
  * TurtleVec), ToLocal, ToWorld and Normalize of a TurtleVec; false (nothing emitted) for the
  * others. */
-static bool frame_builtin(cg *g, int32_t ni, int dst)
+static bool frame_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int32_t x = n->a;
     if (x < 0)
         return false;
     int32_t x1 = node(g, x)->next;
-    int sz = lc_type_size(g->m, n->type);
-    int s0 = lc_type_size(g->m, node(g, x)->type);
-    int save = g->top;
+    int sz = lc_type_size(g->model, n->type);
+    int s0 = lc_type_size(g->model, node(g, x)->type);
+    int save = g->temp_top;
     switch (n->fn) {
     case FN_MAKEQ: {
         if (s0 != 3 || x1 < 0 || sz != 4)
             return false;
-        int u = arg_run(g, x, 3), ang = arg_run(g, x1, 1), r = tmpn(g, 4);
-        int l = tmp(g), t = tmp(g), h = tmp(g), sn = tmp(g);
+        int u = arg_run(g, x, 3), ang = arg_run(g, x1, 1), r = new_temps(g, 4);
+        int l = new_temp(g), t = new_temp(g), h = new_temp(g), sn = new_temp(g);
         dot3(g, l, u, u, t);
         emit(g, O_SQRT, l, l, 0);
-        emit(g, O_DIVD, h, ang, konst(g, 2.0, t));
+        emit(g, O_DIVD, h, ang, const_reg(g, 2.0, t));
         emit(g, O_SIN, sn, h, 0);
-        or_one(g, t, l);
+        positive_or_one(g, t, l);
         emit(g, O_DIVD, sn, sn, t);
         emit(g, O_COS, r, h, 0);
         for (int i = 0; i < 3; i++)
             emit(g, O_MULD, r + 1 + i, u + i, sn);
-        result(g, dst, r, 4, n->type);
+        store_result(g, dst, r, 4, n->type);
         break;
     }
     case FN_VECROT: {
         int32_t x2 = x1 >= 0 ? node(g, x1)->next : -1;
         int nv = n->type == T_TVEC ? 3 : 1;
-        if (x2 < 0 || s0 != 3 * nv || sz != s0 || lc_type_size(g->m, node(g, x1)->type) != 3)
+        if (x2 < 0 || s0 != 3 * nv || sz != s0 || lc_type_size(g->model, node(g, x1)->type) != 3)
             return false;
         int u = arg_run(g, x, s0), w = arg_run(g, x1, 3), ang = arg_run(g, x2, 1);
-        int r = tmpn(g, sz), ax = tmpn(g, 3), cr = tmpn(g, 3);
-        int l = tmp(g), t = tmp(g), c = tmp(g), sn = tmp(g), omc = tmp(g), d = tmp(g);
+        int r = new_temps(g, sz), ax = new_temps(g, 3), cr = new_temps(g, 3);
+        int l = new_temp(g), t = new_temp(g), c = new_temp(g), sn = new_temp(g), omc = new_temp(g),
+            d = new_temp(g);
         dot3(g, l, w, w, t);
         emit(g, O_SQRT, l, l, 0);
-        or_one(g, t, l);
+        positive_or_one(g, t, l);
         for (int i = 0; i < 3; i++)
             emit(g, O_DIVD, ax + i, w + i, t);
         emit(g, O_COS, c, ang, 0);
         emit(g, O_SIN, sn, ang, 0);
-        emit(g, O_SUBD, omc, konst(g, 1.0, t), c);
+        emit(g, O_SUBD, omc, const_reg(g, 1.0, t), c);
         for (int v = 0; v < nv; v++) {
             int p = u + 3 * v;
             dot3(g, d, ax, p, t);
@@ -1313,14 +1316,14 @@ static bool frame_builtin(cg *g, int32_t ni, int dst)
                 emit(g, O_ADDD, o, o, t);
             }
         }
-        result(g, dst, r, sz, n->type);
+        store_result(g, dst, r, sz, n->type);
         break;
     }
     case FN_TOLOCAL:
     case FN_TOWORLD: {
-        if (s0 != 3 || x1 < 0 || lc_type_size(g->m, node(g, x1)->type) != 9 || sz != 3)
+        if (s0 != 3 || x1 < 0 || lc_type_size(g->model, node(g, x1)->type) != 9 || sz != 3)
             return false;
-        int v = arg_run(g, x, 3), f = arg_run(g, x1, 9), r = tmpn(g, 3), t = tmp(g);
+        int v = arg_run(g, x, 3), f = arg_run(g, x1, 9), r = new_temps(g, 3), t = new_temp(g);
         for (int i = 0; i < 3; i++)
             for (int k = 0; k < 3; k++) {
                 int fk = n->fn == FN_TOLOCAL ? f + 3 * i + k : f + 3 * k + i;
@@ -1328,33 +1331,33 @@ static bool frame_builtin(cg *g, int32_t ni, int dst)
                 if (k)
                     emit(g, O_ADDD, r + i, r + i, t);
             }
-        result(g, dst, r, 3, n->type);
+        store_result(g, dst, r, 3, n->type);
         break;
     }
     case FN_NORMALIZE: {
         if (n->type != T_TVEC || s0 != 9 || sz != 9)
             return false;
-        int u = arg_run(g, x, 9), r = tmpn(g, 9), l = tmp(g), t = tmp(g);
+        int u = arg_run(g, x, 9), r = new_temps(g, 9), l = new_temp(g), t = new_temp(g);
         for (int v = 0; v < 3; v++) {
             int p = u + 3 * v;
             dot3(g, l, p, p, t);
             emit(g, O_SQRT, l, l, 0);
-            int32_t jz = emit(g, O_JNGT, -1, l, konst(g, 0.0, t));
+            int32_t jz = emit(g, O_JNGT, -1, l, const_reg(g, 0.0, t));
             for (int i = 0; i < 3; i++)
                 emit(g, O_DIVD, r + p - u + i, p + i, l);
             int32_t je = emit(g, O_JMP, 0, -1, 0);
-            patch(g, jz, here(g));
+            patch_jumps(g, jz, label_here(g));
             for (int i = 0; i < 3; i++)
-                ins(g, emit(g, O_CONST, r + p - u + i, 0, 0))->k = 0;
-            patch(g, je, here(g));
+                instr_at(g, emit(g, O_CONST, r + p - u + i, 0, 0))->k = 0;
+            patch_jumps(g, je, label_here(g));
         }
-        result(g, dst, r, 9, n->type);
+        store_result(g, dst, r, 9, n->type);
         break;
     }
     default:
         return false;
     }
-    g->top = save;
+    g->temp_top = save;
     return true;
 }
 
@@ -1363,32 +1366,32 @@ static bool frame_builtin(cg *g, int32_t ni, int dst)
  * then each reference parameter's run copied back to its variable in the order of the
  * parameters; a scalar result to dst, a run result copied from the callee's frame to the run at
  * dst by O_CALL. */
-static int call(cg *g, int32_t ni, int dst)
+static int compile_call(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    const lc_function *f = &g->m->funcs.data[n->slot];
-    const lc_fcode *cf = &g->p->fn[n->slot];
+    const lc_function *f = &g->model->funcs.data[n->slot];
+    const lc_fcode *cf = &g->program->fn[n->slot];
     bool ok = cf->compiled;
     int a = 0;
     for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
         const lc_node *xn = node(g, x);
-        ok = a < f->np && lc_type_size(g->m, xn->type) == lc_type_size(g->m, f->ptype[a]) &&
+        ok = a < f->np && lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
              (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
     }
     if (!ok || a != f->np)
         return unsupported(g, dst);
-    int save = g->top;
-    int base = tmpn(g, cf->npd);
+    int save = g->temp_top;
+    int base = new_temps(g, cf->npd);
     int off = 0;
     a = 0;
     for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
-        int xs = lc_type_size(g->m, f->ptype[a]);
-        int s2 = g->top;
+        int xs = lc_type_size(g->model, f->ptype[a]);
+        int s2 = g->temp_top;
         if (lc_is_scalar(node(g, x)->type))
-            mov(g, base + off, cx(g, x, base + off));
+            emit_move(g, base + off, compile_scalar(g, x, base + off));
         else
-            copy_run(g, base + off, cxv(g, x, base + off), xs, false);
-        g->top = s2;
+            copy_run(g, base + off, compile_value(g, x, base + off), xs, false);
+        g->temp_top = s2;
         off += xs;
     }
     if (off != cf->npd) {
@@ -1399,39 +1402,39 @@ static int call(cg *g, int32_t ni, int dst)
     off = 0;
     a = 0;
     for (int32_t x = n->a; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
-        int xs = lc_type_size(g->m, f->ptype[a]);
+        int xs = lc_type_size(g->model, f->ptype[a]);
         const lc_node *xn = node(g, x);
         for (int i = 0; i < xs && f->pref[a]; i++)
             emit(g, xn->op == N_GLOBAL ? O_GST : O_MOV, xn->slot + i, base + off + i, 0);
         off += xs;
     }
-    g->top = save;
+    g->temp_top = save;
     return dst;
 }
 
 /* `produce` (or `nproduce`) of the modules [first, first + n) of the model's sms: each
  * module's parameters computed into a run of temporaries and appended; `produce` ends the
  * body. */
-static void produce(cg *g, const lc_node *n)
+static void compile_produce(codegen *g, const lc_node *n)
 {
     for (int32_t i = 0; i < n->b && !g->fail; i++) {
-        const lc_modref *sm = &g->m->sms.data[n->a + i];
-        const lc_module *mod = &g->m->mods.data[sm->mod];
-        int save = g->top;
-        int base = tmpn(g, mod->size);
+        const lc_modref *sm = &g->model->sms.data[n->a + i];
+        const lc_module *mod = &g->model->mods.data[sm->mod];
+        int save = g->temp_top;
+        int base = new_temps(g, mod->size);
         int off = 0, a = 0;
         for (int32_t x = sm->args; x >= 0; x = node(g, x)->next, a++) {
-            int xs = a < mod->np ? lc_type_size(g->m, mod->ptype[a]) : -1;
-            if (xs != lc_type_size(g->m, node(g, x)->type) || off + xs > mod->size) {
+            int xs = a < mod->np ? lc_type_size(g->model, mod->ptype[a]) : -1;
+            if (xs != lc_type_size(g->model, node(g, x)->type) || off + xs > mod->size) {
                 g->fail = true;
                 return;
             }
-            int s2 = g->top;
+            int s2 = g->temp_top;
             if (g->arg_pos) /* the axiom: a runtime error names the argument */
                 g->pending_at = node(g, x)->pos;
-            int r = cxv(g, x, base + off);
+            int r = compile_value(g, x, base + off);
             copy_run(g, base + off, r, xs, false);
-            g->top = s2;
+            g->temp_top = s2;
             off += xs;
         }
         if (off != mod->size) {
@@ -1439,7 +1442,7 @@ static void produce(cg *g, const lc_node *n)
             return;
         }
         emit(g, O_PROD, n->a + i, base, 0);
-        g->top = save;
+        g->temp_top = save;
     }
     if (!n->fn)
         emit(g, O_DONE, 0, 0, 0);
@@ -1447,15 +1450,15 @@ static void produce(cg *g, const lc_node *n)
 
 /* Compiles condition c and a jump taken when it is false (to patch); a comparison computed
  * last into its temporary becomes a compare-and-jump. */
-static int32_t jump_false(cg *g, int32_t c)
+static int32_t jump_false(codegen *g, int32_t c)
 {
-    int save = g->top;
-    int t = tmp(g);
-    int r = cx(g, c, t);
-    g->top = save;
-    size_t len = g->fc->ins.len;
+    int save = g->temp_top;
+    int t = new_temp(g);
+    int r = compile_scalar(g, c, t);
+    g->temp_top = save;
+    size_t len = g->code->ins.len;
     if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
-        lc_ins *last = &g->fc->ins.data[len - 1];
+        lc_ins *last = &g->code->ins.data[len - 1];
         if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
             last->op = (uint8_t)(O_JNLT + (last->op - O_LT));
             last->d = -1;
@@ -1466,15 +1469,15 @@ static int32_t jump_false(cg *g, int32_t c)
 }
 
 /* Compiles condition c and a jump to target taken when it holds. */
-static void jump_true(cg *g, int32_t c, int32_t target)
+static void jump_true(codegen *g, int32_t c, int32_t target)
 {
-    int save = g->top;
-    int t = tmp(g);
-    int r = cx(g, c, t);
-    g->top = save;
-    size_t len = g->fc->ins.len;
+    int save = g->temp_top;
+    int t = new_temp(g);
+    int r = compile_scalar(g, c, t);
+    g->temp_top = save;
+    size_t len = g->code->ins.len;
     if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
-        lc_ins *last = &g->fc->ins.data[len - 1];
+        lc_ins *last = &g->code->ins.data[len - 1];
         if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
             last->op = (uint8_t)(O_JLT + (last->op - O_LT));
             last->d = target;
@@ -1487,13 +1490,13 @@ static void jump_true(cg *g, int32_t c, int32_t target)
 /* A loop with its test at the bottom: init; jump to the test; top: body; step; test: spend
  * and jump to top when it holds (a do loop spends its first iteration before top). The order
  * of evaluation is exec's (test, spend, body, step). */
-static void loop(cg *g, const lc_node *n)
+static void compile_loop(codegen *g, const lc_node *n)
 {
-    int32_t brk = g->brk, cont = g->cont;
-    g->brk = g->cont = -1;
+    int32_t outer_breaks = g->break_jumps, outer_continues = g->continue_jumps;
+    g->break_jumps = g->continue_jumps = -1;
     g->loops++;
     if (n->op == S_FOR && n->a >= 0)
-        cs(g, n->a);
+        compile_stmts(g, n->a);
     int32_t c = n->op == S_FOR ? n->b : n->a;
     if (c >= 0 && !lc_is_scalar(node(g, c)->type)) {
         g->fail = true;
@@ -1502,35 +1505,35 @@ static void loop(cg *g, const lc_node *n)
     int32_t to_test = n->op != S_DO && c >= 0 ? emit(g, O_JMP, 0, -1, 0) : -1;
     if (n->op == S_DO || c < 0)
         emit(g, O_SPEND, 0, 0, 0);
-    int32_t top = here(g);
-    cs(g, n->op == S_FOR ? n->d : n->b);
-    patch(g, g->cont, here(g));
-    int save = g->top;
+    int32_t top = label_here(g);
+    compile_stmts(g, n->op == S_FOR ? n->d : n->b);
+    patch_jumps(g, g->continue_jumps, label_here(g));
+    int save = g->temp_top;
     if (n->op == S_FOR && n->c >= 0) {
         if (!lc_is_scalar(node(g, n->c)->type))
             g->fail = true;
         else
-            (void)cx(g, n->c, tmp(g));
+            (void)compile_scalar(g, n->c, new_temp(g));
     }
-    g->top = save;
-    patch(g, to_test, here(g));
+    g->temp_top = save;
+    patch_jumps(g, to_test, label_here(g));
     if (c >= 0)
         jump_true(g, c, top);
     else
         emit(g, O_JMPS, 0, top, 0);
-    patch(g, g->brk, here(g));
+    patch_jumps(g, g->break_jumps, label_here(g));
     g->loops--;
-    g->brk = brk;
-    g->cont = cont;
+    g->break_jumps = outer_breaks;
+    g->continue_jumps = outer_continues;
 }
 
-static void stmt(cg *g, int32_t ni);
+static void compile_stmt(codegen *g, int32_t ni);
 
 /* Compiles the statement chain from ni, as exec runs it. */
-static void cs(cg *g, int32_t ni)
+static void compile_stmts(codegen *g, int32_t ni)
 {
     for (; ni >= 0 && !g->fail; ni = node(g, ni)->next)
-        stmt(g, ni);
+        compile_stmt(g, ni);
 }
 
 /* switch as exec runs it: the value once, then the labels of the cases of its body's chain
@@ -1539,7 +1542,7 @@ static void cs(cg *g, int32_t ni)
  * last one), else the end. The body runs from there through the chain; break leaves it,
  * continue goes to the enclosing loop. */
 #define LC_MAX_CASES 256
-static void switch_(cg *g, const lc_node *n)
+static void compile_switch(codegen *g, const lc_node *n)
 {
     if (!lc_is_scalar(node(g, n->a)->type)) {
         g->fail = true;
@@ -1549,8 +1552,8 @@ static void switch_(cg *g, const lc_node *n)
     int32_t jump[LC_MAX_CASES];
     int nc = 0;
     int32_t dflt = -1; /* the default's case node */
-    int v = tmp(g);
-    mov(g, v, cx(g, n->a, v));
+    int v = new_temp(g);
+    emit_move(g, v, compile_scalar(g, n->a, v));
     for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
         const lc_node *cn = node(g, c);
         if (cn->op != S_CASE)
@@ -1563,76 +1566,76 @@ static void switch_(cg *g, const lc_node *n)
             g->fail = true;
             return;
         }
-        int save = g->top;
-        int t = tmp(g);
-        int r = cx(g, cn->a, t);
+        int save = g->temp_top;
+        int t = new_temp(g);
+        int r = compile_scalar(g, cn->a, t);
         emit(g, O_EQ, t, v, r);
         jump[nc++] = emit(g, O_JNZ, 0, t, -1);
-        g->top = save;
+        g->temp_top = save;
     }
     if (g->fail)
         return;
     int32_t jd = emit(g, O_JMP, 0, -1, 0); /* to the default, or past the body */
-    int32_t brk = g->brk;
-    g->brk = -1;
+    int32_t outer_breaks = g->break_jumps;
+    g->break_jumps = -1;
     g->switches++;
     int k = 0;
     for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
         const lc_node *cn = node(g, c);
         if (cn->op == S_CASE) {
-            int32_t at = here(g);
+            int32_t at = label_here(g);
             if (cn->a >= 0 && k < nc) /* the same cases as above, in order: k < nc */
-                patch(g, jump[k++], at);
+                patch_jumps(g, jump[k++], at);
             if (c == dflt) {
-                patch(g, jd, at);
+                patch_jumps(g, jd, at);
                 jd = -1;
             }
         } else
-            stmt(g, c);
+            compile_stmt(g, c);
     }
     g->switches--;
-    int32_t end = here(g);
-    patch(g, jd, end);
-    patch(g, g->brk, end);
-    g->brk = brk;
+    int32_t end = label_here(g);
+    patch_jumps(g, jd, end);
+    patch_jumps(g, g->break_jumps, end);
+    g->break_jumps = outer_breaks;
 }
 
 /* Compiles statement ni. */
-static void stmt(cg *g, int32_t ni)
+static void compile_stmt(codegen *g, int32_t ni)
 {
     {
         const lc_node *n = node(g, ni);
         g->pending_at = n->pos; /* exec sets the position at every statement */
-        int save = g->top;
+        int save = g->temp_top;
         switch (n->op) {
         case S_EXPR: {
             const lc_node *e = node(g, n->a);
             if (lc_is_scalar(e->type) || e->type == T_VOID)
-                (void)cx(g, n->a, tmp(g));
+                (void)compile_scalar(g, n->a, new_temp(g));
             else
-                (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, e->type)));
+                (void)compile_value(g, n->a, new_temps(g, lc_type_size(g->model, e->type)));
             break;
         }
         case S_DECL:
             if (!lc_is_scalar(n->type)) { /* into its run, then rounded as exec does */
-                int sz = lc_type_size(g->m, n->type);
+                int sz = lc_type_size(g->model, n->type);
                 if (n->a >= 0) {
-                    copy_run(g, n->slot, cxv(g, n->a, n->slot), sz, false);
+                    copy_run(g, n->slot, compile_value(g, n->a, n->slot), sz, false);
                     conv_run(g, n->type, n->slot);
                 } else
                     for (int i = 0; i < sz; i++)
-                        ins(g, emit(g, O_CONST, n->slot + i, 0, 0))->k = 0;
+                        instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->k = 0;
             } else if (n->a >= 0) {
-                int r = cx(g, n->a, tmp(g));
+                int r = compile_scalar(g, n->a, new_temp(g));
                 if (n->type == T_DOUBLE)
-                    mov(g, n->slot, r);
+                    emit_move(g, n->slot, r);
                 else
-                    ins(g, emit(g, O_CONV, n->slot, r, 0))->t = (uint8_t)n->type;
+                    instr_at(g, emit(g, O_CONV, n->slot, r, 0))->t = (uint8_t)n->type;
             } else
-                ins(g, emit(g, O_CONST, n->slot, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->k = 0;
             break;
         case S_BLOCK:
-            cs(g, n->a);
+            compile_stmts(g, n->a);
             break;
         case S_IF: {
             if (!lc_is_scalar(node(g, n->a)->type)) {
@@ -1640,51 +1643,52 @@ static void stmt(cg *g, int32_t ni)
                 break;
             }
             int32_t jelse = jump_false(g, n->a);
-            cs(g, n->b);
+            compile_stmts(g, n->b);
             if (n->c >= 0) {
                 int32_t jend = emit(g, O_JMP, 0, -1, 0);
-                patch(g, jelse, here(g));
-                cs(g, n->c);
-                patch(g, jend, here(g));
+                patch_jumps(g, jelse, label_here(g));
+                compile_stmts(g, n->c);
+                patch_jumps(g, jend, label_here(g));
             } else
-                patch(g, jelse, here(g));
+                patch_jumps(g, jelse, label_here(g));
             break;
         }
         case S_WHILE:
         case S_DO:
         case S_FOR:
-            loop(g, n);
+            compile_loop(g, n);
             break;
         case S_RETURN:
-            if (g->body) { /* a body's return: its value is dropped, nothing produced */
+            if (g->is_body) { /* a body's return: its value is dropped, nothing produced */
                 if (n->a >= 0 && lc_is_scalar(node(g, n->a)->type))
-                    (void)cx(g, n->a, tmp(g));
+                    (void)compile_scalar(g, n->a, new_temp(g));
                 else if (n->a >= 0)
-                    (void)cxv(g, n->a, tmpn(g, lc_type_size(g->m, node(g, n->a)->type)));
+                    (void)compile_value(g, n->a,
+                                        new_temps(g, lc_type_size(g->model, node(g, n->a)->type)));
                 emit(g, O_RET0, 0, 0, 0);
             } else if (n->a < 0)
                 emit(g, O_RET0, 0, 0, 0);
             else if (!lc_is_scalar(n->type)) { /* the run result, rounded as exec does */
-                int sz = lc_type_size(g->m, n->type);
-                if (sz != g->fc->rsize) {
+                int sz = lc_type_size(g->model, n->type);
+                if (sz != g->code->rsize) {
                     g->fail = true;
                     break;
                 }
-                copy_run(g, g->fc->rslot, cxv(g, n->a, tmpn(g, sz)), sz, false);
-                conv_run(g, n->type, g->fc->rslot);
+                copy_run(g, g->code->rslot, compile_value(g, n->a, new_temps(g, sz)), sz, false);
+                conv_run(g, n->type, g->code->rslot);
                 emit(g, O_RET0, 0, 0, 0);
             } else {
-                int r = cx(g, n->a, tmp(g));
+                int r = compile_scalar(g, n->a, new_temp(g));
                 if (n->type != T_DOUBLE) {
-                    int t = tmp(g);
-                    ins(g, emit(g, O_CONV, t, r, 0))->t = (uint8_t)n->type;
+                    int t = new_temp(g);
+                    instr_at(g, emit(g, O_CONV, t, r, 0))->t = (uint8_t)n->type;
                     r = t;
                 }
                 emit(g, O_RET, 0, r, 0);
             }
             break;
         case S_SWITCH:
-            switch_(g, n);
+            compile_switch(g, n);
             break;
         case S_CASE: /* a case not directly in its switch's body: no target, as in exec */
             break;
@@ -1695,60 +1699,60 @@ static void stmt(cg *g, int32_t ni)
                 break;
             }
             if (n->op == S_BREAK)
-                g->brk = emit(g, O_JMP, 0, g->brk, 0);
+                g->break_jumps = emit(g, O_JMP, 0, g->break_jumps, 0);
             else
-                g->cont = emit(g, O_JMP, 0, g->cont, 0);
+                g->continue_jumps = emit(g, O_JMP, 0, g->continue_jumps, 0);
             break;
         case S_NOP:
             break;
         case S_PRODUCE:
-            if (!g->body)
+            if (!g->is_body)
                 g->fail = true;
             else
-                produce(g, n);
+                compile_produce(g, n);
             break;
         default:
             g->fail = true;
             break;
         }
-        g->top = save;
+        g->temp_top = save;
     }
 }
 
 /* What compile_code compiles: statements, a global's initialiser, the axiom, an expression. */
-enum { K_STMTS, K_INIT, K_AXIOM, K_EXPR };
+enum { ROOT_STMTS, ROOT_INIT, ROOT_AXIOM, ROOT_EXPR };
 
-/* The root of kind K_INIT (global number `body`), K_AXIOM or K_EXPR (node `body`) on a frame of
- * no locals: the initialiser's value computed into temporaries, rounded to the global's type and
- * stored, as reset stores it; the axiom's modules produced (as nproduce: the run goes on); the
- * expression's value returned. */
-static void root(cg *g, int kind, int32_t body)
+/* The root of kind ROOT_INIT (global number `body`), ROOT_AXIOM or ROOT_EXPR (node `body`) on a
+ * frame of no locals: the initialiser's value computed into temporaries, rounded to the global's
+ * type and stored, as reset stores it; the axiom's modules produced (as nproduce: the run goes on);
+ * the expression's value returned. */
+static void compile_root(codegen *g, int kind, int32_t body)
 {
-    if (kind == K_INIT) {
-        const lc_global *v = &g->m->gvars.data[body];
-        int sz = lc_type_size(g->m, v->type);
-        int t = tmpn(g, sz);
+    if (kind == ROOT_INIT) {
+        const lc_global *v = &g->model->gvars.data[body];
+        int sz = lc_type_size(g->model, v->type);
+        int t = new_temps(g, sz);
         g->pending_at = node(g, v->init)->pos; /* a runtime error names the initialiser */
-        copy_run(g, t, cxv(g, v->init, t), sz, false);
+        copy_run(g, t, compile_value(g, v->init, t), sz, false);
         conv_run(g, v->type, t);
         for (int i = 0; i < sz; i++)
             emit(g, O_GST, v->slot + i, t + i, 0);
-    } else if (kind == K_AXIOM) {
+    } else if (kind == ROOT_AXIOM) {
         lc_node n;
         memset(&n, 0, sizeof n);
         n.op = S_PRODUCE;
-        n.a = g->m->axiom.first;
-        n.b = g->m->axiom.n;
+        n.a = g->model->axiom.first;
+        n.b = g->model->axiom.n;
         n.fn = 1;
         g->arg_pos = true;
-        produce(g, &n);
+        compile_produce(g, &n);
     } else {
         if (!lc_is_scalar(node(g, body)->type)) {
             g->fail = true;
             return;
         }
-        int t = tmp(g);
-        emit(g, O_RET, 0, cx(g, body, t), 0);
+        int t = new_temp(g);
+        emit(g, O_RET, 0, compile_scalar(g, body, t), 0);
     }
 }
 
@@ -1761,40 +1765,40 @@ static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int
     fc->ins.len = 0;
     fc->fsize = fsize;
     /* twice: the first pass finds the constants, the second loads them on entry */
-    cg g;
-    double konst[64] = {0};
-    int nkonst = 0;
+    codegen g;
+    double consts[64] = {0};
+    int nconsts = 0;
     for (int pass = 0; pass < 2; pass++) {
         fc->ins.len = 0;
         memset(&g, 0, sizeof g);
         g.ctx = ctx;
-        g.m = m;
-        g.p = p;
-        g.fc = fc;
-        g.body = is_body;
-        g.fsize = fsize;
+        g.model = m;
+        g.program = p;
+        g.code = fc;
+        g.is_body = is_body;
+        g.frame_size = fsize;
         g.pending_at = -1;
         g.label_at = (size_t)-1;
-        g.brk = g.cont = -1;
-        g.nkonst = nkonst;
-        memcpy(g.konst, konst, sizeof konst);
-        g.tbase = g.top = fsize + nkonst;
-        fc->nreg = g.top;
-        for (int c = 0; c < nkonst; c++)
-            ins(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = konst[c];
-        if (kind == K_STMTS)
-            cs(&g, body);
+        g.break_jumps = g.continue_jumps = -1;
+        g.nconsts = nconsts;
+        memcpy(g.consts, consts, sizeof consts);
+        g.temp_base = g.temp_top = fsize + nconsts;
+        fc->nreg = g.temp_top;
+        for (int c = 0; c < nconsts; c++)
+            instr_at(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = consts[c];
+        if (kind == ROOT_STMTS)
+            compile_stmts(&g, body);
         else
-            root(&g, kind, body);
+            compile_root(&g, kind, body);
         for (int i = 0; i < fc->rsize; i++) /* falling off the end: a result of zeros */
-            ins(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
+            instr_at(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
         emit(&g, O_RET0, 0, 0, 0);
         if (g.fail)
             break;
-        nkonst = g.nkonst;
-        memcpy(konst, g.konst, sizeof konst);
+        nconsts = g.nconsts;
+        memcpy(consts, g.consts, sizeof consts);
     }
-    *nomem = g.nomem;
+    *nomem = g.out_of_memory;
     return !g.fail;
 }
 
@@ -1806,7 +1810,8 @@ static bool compile_function(cbm_context *ctx, const lc_model *m, lc_program *p,
     if (fn->body < 0)
         return false;
     /* the run result's registers count as locals (after the function's own) */
-    return compile_code(ctx, m, p, f, fn->body, fn->fsize + p->fn[f].rsize, false, K_STMTS, nomem);
+    return compile_code(ctx, m, p, f, fn->body, fn->fsize + p->fn[f].rsize, false, ROOT_STMTS,
+                        nomem);
 }
 
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
@@ -1863,7 +1868,7 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             size_t f = p->body0[k] + q;
             bool nomem = false;
             p->fn[f].compiled = pr->body >= 0 && compile_code(ctx, m, p, (int)f, pr->body,
-                                                              pr->fsize, true, K_STMTS, &nomem);
+                                                              pr->fsize, true, ROOT_STMTS, &nomem);
             if (nomem)
                 return CBM_E_NOMEM;
             if (!p->fn[f].compiled)
@@ -1874,8 +1879,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
         size_t f = p->block0 + (size_t)b;
         bool nomem = false;
         p->fn[f].compiled =
-            m->blocks[b] >= 0 &&
-            compile_code(ctx, m, p, (int)f, m->blocks[b], m->block_fsize[b], true, K_STMTS, &nomem);
+            m->blocks[b] >= 0 && compile_code(ctx, m, p, (int)f, m->blocks[b], m->block_fsize[b],
+                                              true, ROOT_STMTS, &nomem);
         if (nomem)
             return CBM_E_NOMEM;
         if (!p->fn[f].compiled)
@@ -1887,11 +1892,11 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
     for (int x = 0; x < LC_X_N; x++)
         p->xpresent[x] = expr[x] >= 0;
     for (size_t f = p->init0; f < p->n; f++) {
-        int kind = f < p->axiom ? K_INIT : f == p->axiom ? K_AXIOM : K_EXPR;
-        int32_t r = kind == K_INIT    ? (int32_t)(f - p->init0)
-                    : kind == K_AXIOM ? 0
-                                      : expr[f - p->expr0];
-        if ((kind == K_INIT && m->gvars.data[r].init < 0) || r < 0)
+        int kind = f < p->axiom ? ROOT_INIT : f == p->axiom ? ROOT_AXIOM : ROOT_EXPR;
+        int32_t r = kind == ROOT_INIT    ? (int32_t)(f - p->init0)
+                    : kind == ROOT_AXIOM ? 0
+                                         : expr[f - p->expr0];
+        if ((kind == ROOT_INIT && m->gvars.data[r].init < 0) || r < 0)
             continue;
         bool nomem = false;
         p->fn[f].compiled = compile_code(ctx, m, p, (int)f, r, 0, true, kind, &nomem);

@@ -57,7 +57,7 @@
 #include <string.h>
 #include <time.h>
 
-static double now(void)
+static double monotonic_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -168,7 +168,7 @@ static cbm_status seg_error(char *err, size_t errn, size_t k, const char *what)
 /* First pass over the string: which segment continues its parent's axis. A segment after an SB
  * opened since its parent segment starts a lateral axis; the segment written after the branches
  * continues the axis (I [I ...] I: the last I). */
-static cbm_status axes(cbm_context *ctx, const cbm__mechlang *m, lstr *s, view *v)
+static cbm_status find_axes(cbm_context *ctx, const cbm__mechlang *m, lstr *s, view *v)
 {
     struct {
         int64_t last;     /* the last segment on the path */
@@ -221,7 +221,7 @@ static cbm_status build(cbm_context *ctx, const cbm__mechlang *m, lstr *s, cbm_p
         int64_t last; /* the last segment on the path */
         cbm_quat rel; /* the turtle's rotations since it, in its frame */
     } path = {-1, q_identity()};
-    CBM_TRY(axes(ctx, m, s, v));
+    CBM_TRY(find_axes(ctx, m, s, v));
     cbm__mwalk w = cbm__mwalk_start(m, s, &path, sizeof path, &v->path);
     while (cbm__mwalk_next(ctx, &w)) {
         int code = w.code, np = w.np;
@@ -597,9 +597,9 @@ cbm_status cbm__mechlang_run(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op
         memset(&scratch, 0, sizeof scratch);
         timing = &scratch;
     }
-    double t0 = now();
+    double t0 = monotonic_seconds();
     cbm_status st = run_op(ctx, m, s, op, arg, result, err, errn, timing);
-    double dt = now() - t0;
+    double dt = monotonic_seconds() - t0;
     timing->operations++;
     if (op == CBM__ML_EQUILIBRIUM)
         timing->equilibrium += dt;
@@ -640,9 +640,9 @@ static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, do
         memset(&ss, 0, sizeof ss);
         cbm_solve_def sd = m->solve;
         sd.warm_start = true;
-        double t0 = now();
+        double t0 = monotonic_seconds();
         st = cbm_plant_solve(pl, &sd, &ss);
-        timing->solve += now() - t0;
+        timing->solve += monotonic_seconds() - t0;
         timing->passes += ss.passes;
         *result = (double)ss.passes;
         if (st == CBM_E_NOT_CONVERGED && m->go_on) { /* the best iterate; the model goes on */
