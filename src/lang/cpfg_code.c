@@ -33,10 +33,10 @@
 /* A root's function, and the one instruction of a function that is a single load (a constant,
  * a parameter, a global) and its return, so that the run finds it without two indirections */
 typedef struct entry {
-    int32_t f;    /* function index + 1, 0: none yet */
-    uint8_t load; /* O_CONST, O_PLD or O_GLD: the function is that load; else 0 */
-    int32_t a;
-    double k;
+    int32_t fn_plus_one; /* function index + 1, 0: none yet */
+    uint8_t load;        /* O_CONST, O_PLD or O_GLD: the function is that load; else 0 */
+    int32_t operand;     /* the load's parameter or global */
+    double value;        /* the load's constant */
 } entry;
 
 struct cbm__ecode {
@@ -53,50 +53,50 @@ struct cbm__ecode {
 enum { H_AIDX = FN_COUNT + 1, H_ALOAD, H_ASTORE };
 
 /* ---------------------------------------------------------------- compiler */
-typedef struct cc {
+typedef struct codegen {
     cbm_context *ctx;
     const cbm__node *nodes;
-    lc_fcode *fc;
-    int top; /* the next free register */
-    bool nomem;
-} cc;
+    lc_fcode *code; /* the function being written */
+    int temp_top;   /* the next free register */
+    bool out_of_memory;
+} codegen;
 
-static size_t emit(cc *c, int op, int d, int a, int b, int fn, int32_t at, double k)
+static size_t emit(codegen *c, int op, int d, int a, int b, int fn, int32_t at, double k)
 {
     lc_ins in = {.op = (uint8_t)op, .fn = (uint16_t)fn, .d = d, .a = a, .b = b, .at = at, .k = k};
-    if (CBM_ARRAY_PUSH(c->ctx, c->fc->ins, in) != CBM_OK) {
-        c->nomem = true;
+    if (CBM_ARRAY_PUSH(c->ctx, c->code->ins, in) != CBM_OK) {
+        c->out_of_memory = true;
         return 0;
     }
-    return c->fc->ins.len - 1;
+    return c->code->ins.len - 1;
 }
 
 /* The jump at instruction j lands at the next instruction to come (O_JMP: a, O_JZ/O_JNZ: b). */
-static void jump_lands_here(cc *c, size_t j)
+static void jump_lands_here(codegen *c, size_t j)
 {
-    if (c->nomem)
+    if (c->out_of_memory)
         return;
-    lc_ins *in = &c->fc->ins.data[j];
+    lc_ins *in = &c->code->ins.data[j];
     if (in->op == O_JMP)
-        in->a = (int32_t)c->fc->ins.len;
+        in->a = (int32_t)c->code->ins.len;
     else
-        in->b = (int32_t)c->fc->ins.len;
+        in->b = (int32_t)c->code->ins.len;
 }
 
-static int new_register(cc *c)
+static int new_register(codegen *c)
 {
-    int r = c->top++;
-    if (c->top > c->fc->nreg)
-        c->fc->nreg = c->top;
+    int r = c->temp_top++;
+    if (c->temp_top > c->code->nreg)
+        c->code->nreg = c->temp_top;
     return r;
 }
 
-static void compile_stmts(cc *c, int32_t i);
-static void compile_expr(cc *c, int32_t i, int d);
+static void compile_stmts(codegen *c, int32_t i);
+static void compile_expr(codegen *c, int32_t i, int d);
 
 /* The element offset of array node i (an ARRAY or ASSIGN_ARRAY node) with its indices from
  * chain idx into a new register: an index checked at a time, as cpfg does. */
-static int array_offset(cc *c, int32_t i, int32_t idx)
+static int array_offset(codegen *c, int32_t i, int32_t idx)
 {
     int o = new_register(c);
     emit(c, O_CONST, o, 0, 0, 0, -1, 0.0);
@@ -105,7 +105,7 @@ static int array_offset(cc *c, int32_t i, int32_t idx)
         int r = new_register(c);
         compile_expr(c, j, r);
         emit(c, O_HOST, o, r, k, H_AIDX, i, 0.0);
-        c->top = r;
+        c->temp_top = r;
     }
     return o;
 }
@@ -115,11 +115,11 @@ static bool binary_math(int fn)
     return fn == FN_ATAN2 || fn == FN_POW || fn == FN_FMOD || fn == FN_MIN || fn == FN_MAX;
 }
 
-/* Expression node i into register d (temporaries above c->top, which is above d). */
-static void compile_expr(cc *c, int32_t i, int d)
+/* Expression node i into register d (temporaries above c->temp_top, which is above d). */
+static void compile_expr(codegen *c, int32_t i, int d)
 {
     const cbm__node *n = &c->nodes[i];
-    int save = c->top;
+    int save = c->temp_top;
     int r;
     switch ((cbm__op)n->op) {
     case OP_NUM:
@@ -190,7 +190,7 @@ static void compile_expr(cc *c, int32_t i, int d)
     case OP_CALL: {
         /* the arguments left to right into a run of registers: at most 8 (16 for printf,
          * whose string arguments take a register each but no code), as the walker read them */
-        int base = c->top, k = 0;
+        int base = c->temp_top, k = 0;
         int32_t j = n->a, max = 8;
         if (n->fn == FN_PRINTF) {
             j = j >= 0 ? c->nodes[j].next : -1; /* after the format */
@@ -229,15 +229,15 @@ static void compile_expr(cc *c, int32_t i, int d)
         emit(c, O_CONST, d, 0, 0, 0, -1, 0.0);
         break;
     }
-    c->top = save;
+    c->temp_top = save;
 }
 
 /* The statement chain from i: a bare expression ends it. */
-static void compile_stmts(cc *c, int32_t i)
+static void compile_stmts(codegen *c, int32_t i)
 {
-    for (; i >= 0 && !c->nomem; i = c->nodes[i].next) {
+    for (; i >= 0 && !c->out_of_memory; i = c->nodes[i].next) {
         const cbm__node *n = &c->nodes[i];
-        int save = c->top, r;
+        int save = c->temp_top, r;
         switch ((cbm__op)n->op) {
         case OP_SEQ:
             compile_stmts(c, n->a);
@@ -259,7 +259,7 @@ static void compile_stmts(cc *c, int32_t i)
             r = new_register(c);
             compile_expr(c, n->a, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
-            c->top = save;
+            c->temp_top = save;
             compile_stmts(c, n->b);
             if (n->c >= 0) {
                 size_t jmp = emit(c, O_JMP, 0, 0, 0, 0, -1, 0.0);
@@ -275,11 +275,11 @@ static void compile_stmts(cc *c, int32_t i)
         case OP_DO: {
             if (n->op == OP_DO)
                 compile_stmts(c, n->b);
-            int32_t test = (int32_t)c->fc->ins.len;
+            int32_t test = (int32_t)c->code->ins.len;
             r = new_register(c);
             compile_expr(c, n->a, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
-            c->top = save;
+            c->temp_top = save;
             emit(c, O_WSPEND, 0, 0, 0, 0, i, 0.0);
             compile_stmts(c, n->b);
             emit(c, O_JMP, 0, test, 0, 0, -1, 0.0);
@@ -291,7 +291,7 @@ static void compile_stmts(cc *c, int32_t i)
             compile_expr(c, i, r);
             break;
         }
-        c->top = save;
+        c->temp_top = save;
         if (n->op != OP_SEQ && n->op < OP_ASSIGN)
             return; /* a bare expression is not part of a chain */
     }
@@ -305,8 +305,8 @@ static int compile(cbm__eval *e, int32_t root, bool stmt)
     lc_fcode z = {0};
     if (CBM_ARRAY_PUSH(e->ctx, ec->fn, z) != CBM_OK)
         return -1;
-    cc c = {.ctx = e->ctx, .nodes = e->nodes, .fc = &ec->fn.data[ec->fn.len - 1]};
-    c.fc->compiled = true;
+    codegen c = {.ctx = e->ctx, .nodes = e->nodes, .code = &ec->fn.data[ec->fn.len - 1]};
+    c.code->compiled = true;
     if (stmt) {
         compile_stmts(&c, root);
         emit(&c, O_RET0, 0, 0, 0, 0, -1, 0.0);
@@ -315,23 +315,23 @@ static int compile(cbm__eval *e, int32_t root, bool stmt)
         compile_expr(&c, root, r);
         emit(&c, O_RET, 0, r, 0, 0, -1, 0.0);
     }
-    if (!c.nomem && (size_t)c.fc->nreg + 1 > ec->frame_cap) {
-        size_t cap = (size_t)c.fc->nreg + 16;
+    if (!c.out_of_memory && (size_t)c.code->nreg + 1 > ec->frame_cap) {
+        size_t cap = (size_t)c.code->nreg + 16;
         double *f =
             cbm__realloc(e->ctx, ec->frame, ec->frame_cap * sizeof(double), cap * sizeof(double));
         if (f) {
             ec->frame = f;
             ec->frame_cap = cap;
         } else {
-            c.nomem = true;
+            c.out_of_memory = true;
         }
     }
-    if (c.nomem) {
-        CBM_ARRAY_FREE(e->ctx, c.fc->ins);
+    if (c.out_of_memory) {
+        CBM_ARRAY_FREE(e->ctx, c.code->ins);
         ec->fn.len--;
         return -1;
     }
-    ec->ins += c.fc->ins.len;
+    ec->ins += c.code->ins.len;
     return (int)(ec->fn.len - 1);
 }
 
@@ -460,20 +460,20 @@ static __attribute__((noinline)) int first_run(cbm__eval *e, int32_t root, bool 
         ec->entry.len = slot + 1;
     }
     entry *en = &ec->entry.data[slot];
-    if (en->f == 0) {
+    if (en->fn_plus_one == 0) {
         int f = compile(e, root, stmt);
         if (f < 0)
             return -1;
-        en->f = f + 1;
+        en->fn_plus_one = f + 1;
         const lc_fcode *fc = &ec->fn.data[f];
         const lc_ins *in = fc->ins.data;
         if (fc->ins.len == 2 && (in->op == O_CONST || in->op == O_PLD || in->op == O_GLD)) {
             en->load = in->op;
-            en->a = in->a;
-            en->k = in->k;
+            en->operand = in->a;
+            en->value = in->k;
         }
     }
-    return en->f - 1;
+    return en->fn_plus_one - 1;
 }
 
 /* An error of the run goes to the environment unless one is pending there. */
@@ -506,11 +506,11 @@ static __attribute__((noinline)) double run_code(cbm__eval *e, cbm__ecode *ec, i
     return vm->err == CBM_OK ? v : run_failed(e);
 }
 
-static inline __attribute__((always_inline)) double run(cbm__eval *e, int32_t root, bool stmt)
+static inline __attribute__((always_inline)) double run_root(cbm__eval *e, int32_t root, bool stmt)
 {
     cbm__ecode *ec = e->code;
     size_t slot = 2 * (size_t)root + stmt;
-    if (!ec || slot >= ec->entry.len || ec->entry.data[slot].f == 0) {
+    if (!ec || slot >= ec->entry.len || ec->entry.data[slot].fn_plus_one == 0) {
         if (first_run(e, root, stmt) < 0)
             return out_of_memory(e, root);
         ec = e->code;
@@ -521,25 +521,25 @@ static inline __attribute__((always_inline)) double run(cbm__eval *e, int32_t ro
      * successor's parameters: that instruction is run here, without entering the loop */
     switch (en->load) {
     case O_CONST:
-        return en->k;
+        return en->value;
     case O_PLD:
-        return e->params[en->a];
+        return e->params[en->operand];
     case O_GLD:
-        return e->globals[en->a];
+        return e->globals[en->operand];
     default:
-        return run_code(e, ec, en->f - 1);
+        return run_code(e, ec, en->fn_plus_one - 1);
     }
 }
 
 double cbm__eval_expr(cbm__eval *e, int32_t n)
 {
-    return run(e, n, false);
+    return run_root(e, n, false);
 }
 
 void cbm__eval_stmt(cbm__eval *e, int32_t n)
 {
     if (n >= 0 && e->error == CBM_OK)
-        (void)run(e, n, true);
+        (void)run_root(e, n, true);
 }
 
 void cbm__eval_free(cbm__eval *e)

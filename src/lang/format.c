@@ -159,22 +159,22 @@ int cbm__fmt_scan(const char *fmt, uint8_t *kinds, int max, char *err, size_t er
 
 typedef struct outbuf {
     cbm_context *ctx;
-    size_t n;
-    char b[1024];
+    size_t len; /* bytes waiting in buf */
+    char buf[1024];
 } outbuf;
 
 static void out_put(outbuf *o, const char *s, size_t n)
 {
-    if (o->n + n > sizeof o->b) {
-        cbm__output(o->ctx, o->b, o->n);
-        o->n = 0;
+    if (o->len + n > sizeof o->buf) {
+        cbm__output(o->ctx, o->buf, o->len);
+        o->len = 0;
     }
-    if (n > sizeof o->b) {
+    if (n > sizeof o->buf) {
         cbm__output(o->ctx, s, n);
         return;
     }
-    memcpy(o->b + o->n, s, n);
-    o->n += n;
+    memcpy(o->buf + o->len, s, n);
+    o->len += n;
 }
 
 void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args, int nargs)
@@ -252,6 +252,6 @@ void cbm__fmt_print(cbm_context *ctx, const char *fmt, const cbm__fmt_arg *args,
         if (w > 0)
             out_put(&o, tmp, (size_t)w < sizeof tmp ? (size_t)w : sizeof tmp - 1);
     }
-    if (o.n)
-        cbm__output(ctx, o.b, o.n);
+    if (o.len)
+        cbm__output(ctx, o.buf, o.len);
 }

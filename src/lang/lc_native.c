@@ -172,25 +172,26 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 }
 
 /* ---------------------------------------------------------------- the C source */
-typedef struct src {
+typedef struct c_source {
     cbm_context *ctx;
-    CBM_ARRAY(char) t;
-    bool nomem;
-} src;
+    CBM_ARRAY(char) text; /* the C text written so far */
+    bool out_of_memory;
+} c_source;
 
-static void put(src *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(src *s, const char *fmt, ...)
+static void put(c_source *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void put(c_source *s, const char *fmt, ...)
 {
     va_list ap, ap2;
     va_start(ap, fmt);
     va_copy(ap2, ap);
     int n = vsnprintf(NULL, 0, fmt, ap);
     va_end(ap);
-    if (n < 0 || s->nomem || CBM_ARRAY_RESERVE(s->ctx, s->t, s->t.len + (size_t)n + 1) != CBM_OK)
-        s->nomem = true;
+    if (n < 0 || s->out_of_memory ||
+        CBM_ARRAY_RESERVE(s->ctx, s->text, s->text.len + (size_t)n + 1) != CBM_OK)
+        s->out_of_memory = true;
     else {
-        (void)vsnprintf(s->t.data + s->t.len, (size_t)n + 1, fmt, ap2);
-        s->t.len += (size_t)n;
+        (void)vsnprintf(s->text.data + s->text.len, (size_t)n + 1, fmt, ap2);
+        s->text.len += (size_t)n;
     }
     va_end(ap2);
 }
@@ -213,7 +214,7 @@ static const char prelude[] =
                       "else { R->limit(R, at); return 0; } } while (0)\n";
 
 /* "%s" of a value of register text e converted to type t, as lc_conv_scalar */
-static void put_conv(src *s, int t, const char *e)
+static void put_conv(c_source *s, int t, const char *e)
 {
     switch (t) {
     case T_INT:
@@ -231,7 +232,7 @@ static void put_conv(src *s, int t, const char *e)
     }
 }
 
-static void put_const(src *s, int d, double k)
+static void put_const(c_source *s, int d, double k)
 {
     uint64_t b;
     memcpy(&b, &k, sizeof b);
@@ -242,7 +243,7 @@ static const char *const cmp_c[] = {"<", ">", "<=", ">=", "==", "!="};
 
 /* Before a function over runs returns: its run result and its reference parameters stored
  * to its frame, where the caller reads them (the registers are C locals). */
-static void put_frame_out(src *s, const lc_program *p, const lc_model *m, int f)
+static void put_frame_out(c_source *s, const lc_program *p, const lc_model *m, int f)
 {
     if ((size_t)f >= m->funcs.len)
         return;
@@ -258,7 +259,7 @@ static void put_frame_out(src *s, const lc_program *p, const lc_model *m, int f)
     }
 }
 
-static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const lc_ins *x)
+static void put_ins(c_source *s, const lc_program *p, const lc_model *m, int f, const lc_ins *x)
 {
     char a[64], g[48];
     snprintf(a, sizeof a, "r%d", x->a);
@@ -461,7 +462,7 @@ static void put_ins(src *s, const lc_program *p, const lc_model *m, int f, const
     }
 }
 
-static void put_function(src *s, const lc_program *p, const lc_model *m, int f)
+static void put_function(c_source *s, const lc_program *p, const lc_model *m, int f)
 {
     const lc_fcode *fc = &p->fn[f];
     int fsize = fc->fsize;
@@ -546,7 +547,7 @@ static double cc_timeout_s(void)
     return e && end != e && t > 0.0 && t <= 3600.0 ? t : 120.0;
 }
 
-static double now_s(void)
+static double monotonic_seconds(void)
 {
     struct timespec ts;
     (void)clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -596,14 +597,14 @@ static bool run_cc(const char *c_path, const char *so_path, bool *timed_out)
     if (!ok)
         return false;
     int st;
-    double deadline = now_s() + cc_timeout_s();
+    double deadline = monotonic_seconds() + cc_timeout_s();
     for (;;) {
         pid_t r = waitpid(pid, &st, WNOHANG);
         if (r == pid)
             break;
         if (r < 0 && errno != EINTR)
             return false;
-        if (now_s() > deadline) {
+        if (monotonic_seconds() > deadline) {
             (void)kill(-pid, SIGKILL);
             while (waitpid(pid, &st, 0) < 0 && errno == EINTR)
                 ;
@@ -659,7 +660,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
         *why = "no function or production body of the model compiles to native code";
         return false;
     }
-    src s = {ctx, {NULL, 0, 0}, false};
+    c_source s = {ctx, {NULL, 0, 0}, false};
     put(&s, "%s", prelude);
     for (size_t f = 0; f < p->n; f++)
         if (translated(p, f))
@@ -667,7 +668,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     for (size_t f = 0; f < p->n; f++)
         if (translated(p, f))
             put_function(&s, p, m, (int)f);
-    uint64_t h = fnv1a(14695981039346656037ULL, s.t.data ? s.t.data : "", s.t.len);
+    uint64_t h = fnv1a(14695981039346656037ULL, s.text.data ? s.text.data : "", s.text.len);
     for (size_t i = 0; i < N_CC_FLAGS; i++)
         h = fnv1a(h, cc_flags[i], strlen(cc_flags[i]) + 1);
     char key[17];
@@ -680,7 +681,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     bool ok = false;
     char so_path[4096], tmp_so[4096], c_path[4096];
     long pid = (long)getpid();
-    if (s.nomem) {
+    if (s.out_of_memory) {
         *why = "out of memory";
         goto done;
     }
@@ -701,7 +702,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
             goto done;
         }
         FILE *c = fopen(c_path, "w");
-        bool written = c && fwrite(s.t.data, 1, s.t.len, c) == s.t.len;
+        bool written = c && fwrite(s.text.data, 1, s.text.len, c) == s.text.len;
         if (c && fclose(c) != 0)
             written = false;
         if (!written) {
@@ -735,7 +736,7 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
     p->native->fn = fn;
     ok = true;
 done:
-    CBM_ARRAY_FREE(ctx, s.t);
+    CBM_ARRAY_FREE(ctx, s.text);
     return ok;
 }
 

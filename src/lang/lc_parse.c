@@ -17,13 +17,14 @@ typedef struct lc_local {
 } lc_local;
 
 typedef struct lc_parser {
-    lc_model *lp;
-    cbm__compiler *c;
-    const char *t;
+    lc_model *model;    /* what the parser builds */
+    cbm__compiler *cur; /* the cursor: position, line and messages (lang/compiler.c) */
+    const char *text;   /* the model's text */
     CBM_ARRAY(lc_local) vars;
-    int fsize, fmax;
-    int ret_type; /* in a function */
-    bool in_prod; /* produce allowed */
+    int frame_size; /* the doubles of the locals in scope */
+    int frame_max;  /* the most of them at once: the frame of the body or function */
+    int ret_type;   /* in a function */
+    bool in_prod;   /* produce allowed */
     int in_switch;
     int depth;
 } lc_parser;
@@ -57,24 +58,24 @@ static const char *const TURTLE[][3] = {
 /* ---------------------------------------------------------------- lexing */
 static void skip(lc_parser *L)
 {
-    const char *t = L->t;
-    size_t p = L->c->pos;
+    const char *t = L->text;
+    size_t p = L->cur->pos;
     while (t[p] && isspace((unsigned char)t[p]))
         p++;
-    L->c->pos = p;
+    L->cur->pos = p;
 }
 
 static bool peek(lc_parser *L, const char *s)
 {
     skip(L);
-    return !strncmp(L->t + L->c->pos, s, strlen(s));
+    return !strncmp(L->text + L->cur->pos, s, strlen(s));
 }
 
 static bool accept(lc_parser *L, const char *s)
 {
     if (!peek(L, s))
         return false;
-    L->c->pos += strlen(s);
+    L->cur->pos += strlen(s);
     return true;
 }
 
@@ -92,7 +93,7 @@ static bool is_ident_char(int ch)
 static size_t ident(lc_parser *L)
 {
     skip(L);
-    const char *s = L->t + L->c->pos;
+    const char *s = L->text + L->cur->pos;
     if (!is_ident_start((unsigned char)s[0]))
         return 0;
     size_t n = 1;
@@ -104,15 +105,15 @@ static size_t ident(lc_parser *L)
 static bool accept_kw(lc_parser *L, const char *kw)
 {
     size_t n = ident(L);
-    if (n != strlen(kw) || strncmp(L->t + L->c->pos, kw, n))
+    if (n != strlen(kw) || strncmp(L->text + L->cur->pos, kw, n))
         return false;
-    L->c->pos += n;
+    L->cur->pos += n;
     return true;
 }
 
 static void describe(lc_parser *L, char *buf, size_t n)
 {
-    const char *s = L->t + L->c->pos;
+    const char *s = L->text + L->cur->pos;
     if (!*s) {
         snprintf(buf, n, "end of file");
         return;
@@ -126,7 +127,7 @@ static void describe(lc_parser *L, char *buf, size_t n)
 
 static bool fatal(lc_parser *L)
 {
-    return L->c->fatal || (L->c->status != CBM_OK && L->c->status != CBM_E_SYNTAX);
+    return L->cur->fatal || (L->cur->status != CBM_OK && L->cur->status != CBM_E_SYNTAX);
 }
 
 static void expected(lc_parser *L, const char *what)
@@ -134,10 +135,10 @@ static void expected(lc_parser *L, const char *what)
     char buf[64];
     skip(L);
     describe(L, buf, sizeof buf);
-    size_t pos = L->c->pos;
-    while (pos > 0 && !L->t[pos]) /* at the end: point at the last character */
+    size_t pos = L->cur->pos;
+    while (pos > 0 && !L->text[pos]) /* at the end: point at the last character */
         pos--;
-    cbm__cerr(L->c, pos, "expected %s, found %s", what, buf);
+    cbm__cerr(L->cur, pos, "expected %s, found %s", what, buf);
 }
 
 static bool expect(lc_parser *L, const char *s)
@@ -153,8 +154,8 @@ static bool expect(lc_parser *L, const char *s)
 /* Skips to after the next `;` or the end of the next balanced `{...}` at this level. */
 static void recover(lc_parser *L)
 {
-    const char *t = L->t;
-    size_t p = L->c->pos;
+    const char *t = L->text;
+    size_t p = L->cur->pos;
     int level = 0;
     while (t[p]) {
         char ch = t[p++];
@@ -168,15 +169,15 @@ static void recover(lc_parser *L)
         } else if (ch == ';' && level == 0)
             break;
     }
-    L->c->pos = p;
+    L->cur->pos = p;
 }
 
 /* Statement-level recovery: skips to after the next `;` or balanced block, but stops before a
  * `}` that closes the enclosing block. */
 static void recover_stmt(lc_parser *L)
 {
-    const char *t = L->t;
-    size_t p = L->c->pos;
+    const char *t = L->text;
+    size_t p = L->cur->pos;
     int level = 0;
     while (t[p]) {
         char ch = t[p];
@@ -193,14 +194,14 @@ static void recover_stmt(lc_parser *L)
         } else if (ch == ';' && level == 0)
             break;
     }
-    L->c->pos = p;
+    L->cur->pos = p;
 }
 
 /* ---------------------------------------------------------------- tables */
 static int find_type(lc_parser *L, const char *s, size_t n)
 {
-    for (size_t i = 1; i < L->lp->types.len; i++) {
-        const char *nm = L->lp->types.data[i].name;
+    for (size_t i = 1; i < L->model->types.len; i++) {
+        const char *nm = L->model->types.data[i].name;
         if (strlen(nm) == n && !strncmp(nm, s, n))
             return (int)i;
     }
@@ -258,18 +259,18 @@ static int alloc_code(lc_model *lp, const char *name, const char *want)
 static int add_mod(lc_parser *L, const char *name, size_t len, const int *ptypes, int np,
                    const char *want, size_t pos)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     lc_module m;
     memset(&m, 0, sizeof m);
     int code = alloc_code(lp, len == 1 ? (char[2]){name[0], 0} : "xx", want);
     if (code < 0) {
-        cbm__cerr(L->c, pos, "too many module types (at most 126)");
+        cbm__cerr(L->cur, pos, "too many module types (at most 126)");
         return -1;
     }
-    m.name = cbm__alloc(L->c->ctx, len + 1);
+    m.name = cbm__alloc(L->cur->ctx, len + 1);
     if (!m.name) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         return -1;
     }
     memcpy(m.name, name, len);
@@ -281,13 +282,13 @@ static int add_mod(lc_parser *L, const char *name, size_t len, const int *ptypes
         m.size += lc_type_size(lp, ptypes[i]);
     }
     if (m.size > MAXSZ) {
-        cbm__cerr(L->c, pos, "module '%s' has more than %d scalar parameters", m.name, MAXSZ);
+        cbm__cerr(L->cur, pos, "module '%s' has more than %d scalar parameters", m.name, MAXSZ);
         m.size = MAXSZ;
     }
-    if (CBM_ARRAY_PUSH(L->c->ctx, lp->mods, m) != CBM_OK) {
-        cbm__strfree(L->c->ctx, m.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    if (CBM_ARRAY_PUSH(L->cur->ctx, lp->mods, m) != CBM_OK) {
+        cbm__strfree(L->cur->ctx, m.name);
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         return -1;
     }
     lp->bycode[code] = (int16_t)(lp->mods.len - 1);
@@ -298,13 +299,13 @@ static int32_t add_node(lc_parser *L, lc_node n)
 {
     if (fatal(L))
         return -1;
-    n.pos = (int32_t)(L->c->pos < INT32_MAX ? L->c->pos : INT32_MAX);
-    if (CBM_ARRAY_PUSH(L->c->ctx, L->lp->nodes, n) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    n.pos = (int32_t)(L->cur->pos < INT32_MAX ? L->cur->pos : INT32_MAX);
+    if (CBM_ARRAY_PUSH(L->cur->ctx, L->model->nodes, n) != CBM_OK) {
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         return -1;
     }
-    return (int32_t)L->lp->nodes.len - 1;
+    return (int32_t)L->model->nodes.len - 1;
 }
 
 static lc_node blank_node(int op, int type)
@@ -317,7 +318,7 @@ static lc_node blank_node(int op, int type)
     return n;
 }
 
-#define ND(i) (L->lp->nodes.data[i])
+#define ND(i) (L->model->nodes.data[i])
 
 /* Appends node e to the chain first..last (linked through `next`). */
 static void chain(lc_parser *L, int32_t *first, int32_t *last, int32_t e)
@@ -333,30 +334,30 @@ static void chain(lc_parser *L, int32_t *first, int32_t *last, int32_t e)
 /* Parses a type name (with optional `const`/`struct`); -1 if there is none (nothing consumed) */
 static int parse_type(lc_parser *L)
 {
-    size_t save = L->c->pos;
+    size_t save = L->cur->pos;
     accept_kw(L, "const");
     accept_kw(L, "struct");
     size_t n = ident(L);
     if (n) {
-        int t = find_type(L, L->t + L->c->pos, n);
+        int t = find_type(L, L->text + L->cur->pos, n);
         if (t >= 0) {
-            L->c->pos += n;
+            L->cur->pos += n;
             return t;
         }
     }
-    L->c->pos = save;
+    L->cur->pos = save;
     return -1;
 }
 
 static int declare_local(lc_parser *L, const char *name, size_t len, int type)
 {
-    lc_local v = {name, len, type, L->fsize};
-    L->fsize += lc_type_size(L->lp, type);
-    if (L->fsize > L->fmax)
-        L->fmax = L->fsize;
-    if (CBM_ARRAY_PUSH(L->c->ctx, L->vars, v) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    lc_local v = {name, len, type, L->frame_size};
+    L->frame_size += lc_type_size(L->model, type);
+    if (L->frame_size > L->frame_max)
+        L->frame_max = L->frame_size;
+    if (CBM_ARRAY_PUSH(L->cur->ctx, L->vars, v) != CBM_OK) {
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
     }
     return v.slot;
 }
@@ -391,8 +392,8 @@ static int32_t coerce(lc_parser *L, int32_t e, int t, size_t pos)
         n.a = e;
         return add_node(L, n);
     }
-    cbm__cerr(L->c, pos, "cannot convert %s to %s", L->lp->types.data[et].name,
-              L->lp->types.data[t].name);
+    cbm__cerr(L->cur, pos, "cannot convert %s to %s", L->model->types.data[et].name,
+              L->model->types.data[t].name);
     return -1;
 }
 
@@ -422,12 +423,12 @@ static int parse_args(lc_parser *L, int32_t *first)
  * are numbers or string literals (for %s). */
 static int32_t printf_call(lc_parser *L, size_t pos)
 {
-    cbm__compiler *c = L->c;
+    cbm__compiler *c = L->cur;
     if (!expect(L, "("))
         return -1;
     skip(L);
     size_t fmt;
-    if (L->t[c->pos] != '"') {
+    if (L->text[c->pos] != '"') {
         cbm__cerr(c, pos, "printf needs a format string as its first argument");
         return -1;
     }
@@ -446,7 +447,7 @@ static int32_t printf_call(lc_parser *L, size_t pos)
         skip(L);
         size_t apos = c->pos;
         int32_t e;
-        bool str = L->t[c->pos] == '"';
+        bool str = L->text[c->pos] == '"';
         if (str) {
             size_t off;
             if (!cbm__string_lit(c, &off))
@@ -492,10 +493,10 @@ static int32_t printf_call(lc_parser *L, size_t pos)
 /* brace initializer `{a, b, ...}` for a value of type t */
 static int32_t brace_init(lc_parser *L, int t)
 {
-    size_t pos = L->c->pos;
+    size_t pos = L->cur->pos;
     if (!expect(L, "{"))
         return -1;
-    const lc_type *ty = &L->lp->types.data[t];
+    const lc_type *ty = &L->model->types.data[t];
     int nf = lc_is_vec(t) ? 3 : ty->nf;
     if (lc_is_scalar(t)) {
         int32_t e = coerce(L, assign_expr(L), t, pos);
@@ -507,7 +508,7 @@ static int32_t brace_init(lc_parser *L, int t)
         if (f && !expect(L, ","))
             return -1;
         int ft = lc_is_vec(t) ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : ty->ftype[f];
-        size_t p = L->c->pos;
+        size_t p = L->cur->pos;
         int32_t e = peek(L, "{") ? brace_init(L, ft) : coerce(L, assign_expr(L), ft, p);
         if (e < 0)
             return -1;
@@ -530,8 +531,8 @@ static lc_local *find_var(lc_parser *L, const char *s, size_t n)
 
 static lc_global *find_gvar(lc_parser *L, const char *s, size_t n)
 {
-    for (size_t i = 0; i < L->lp->gvars.len; i++) {
-        lc_global *g = &L->lp->gvars.data[i];
+    for (size_t i = 0; i < L->model->gvars.len; i++) {
+        lc_global *g = &L->model->gvars.data[i];
         if (strlen(g->name) == n && !strncmp(g->name, s, n))
             return g;
     }
@@ -543,7 +544,7 @@ static bool is_lvalue(lc_parser *L, int32_t e);
 
 static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     /* In*Context(pattern) */
     static const char *const CTXF[] = {"InLeftContext", "InNewLeftContext", "InNewRightContext",
                                        "InRightContext"};
@@ -557,7 +558,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             if (!expect(L, ")"))
                 return -1;
             if (!L->in_prod) {
-                cbm__cerr(L->c, pos, "%s is only allowed in a production", CTXF[k]);
+                cbm__cerr(L->cur, pos, "%s is only allowed in a production", CTXF[k]);
                 return -1;
             }
             lc_node x = blank_node(N_INCTX, T_BOOL);
@@ -615,7 +616,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             x.a = first;
             return add_node(L, x);
         }
-        cbm__cerr(L->c, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
+        cbm__cerr(L->cur, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
         return -1;
     }
     if (n == 4 && !strncmp(s, "func", 4)) { /* func(name, x) */
@@ -626,19 +627,19 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             expected(L, "a function name");
             return -1;
         }
-        const char *fname = L->t + L->c->pos;
-        L->c->pos += k;
+        const char *fname = L->text + L->cur->pos;
+        L->cur->pos += k;
         size_t id = 0;
         for (; id < lp->funcnames.len; id++)
             if (strlen(lp->funcnames.data[id]) == k && !strncmp(lp->funcnames.data[id], fname, k))
                 break;
         if (id == lp->funcnames.len) {
-            char *nm = cbm__alloc(L->c->ctx, k + 1);
-            if (!nm || CBM_ARRAY_PUSH(L->c->ctx, lp->funcnames, nm) != CBM_OK) {
+            char *nm = cbm__alloc(L->cur->ctx, k + 1);
+            if (!nm || CBM_ARRAY_PUSH(L->cur->ctx, lp->funcnames, nm) != CBM_OK) {
                 if (nm)
-                    cbm__free(L->c->ctx, nm, k + 1);
-                L->c->status = CBM_E_NOMEM;
-                L->c->fatal = true;
+                    cbm__free(L->cur->ctx, nm, k + 1);
+                L->cur->status = CBM_E_NOMEM;
+                L->cur->fatal = true;
                 return -1;
             }
             memcpy(nm, fname, k);
@@ -646,7 +647,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         }
         if (!expect(L, ","))
             return -1;
-        int32_t x = coerce(L, assign_expr(L), T_DOUBLE, L->c->pos);
+        int32_t x = coerce(L, assign_expr(L), T_DOUBLE, L->cur->pos);
         if (x < 0 || !expect(L, ")"))
             return -1;
         lc_node c = blank_node(N_CALLB, T_DOUBLE);
@@ -664,7 +665,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         if (na < 0)
             return -1;
         if (na != f->np) {
-            cbm__cerr(L->c, pos, "%s() takes %d argument%s, %d given", f->name, f->np,
+            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", f->name, f->np,
                       f->np == 1 ? "" : "s", na);
             return -1;
         }
@@ -674,7 +675,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             args = ND(e).next;
             ND(e).next = -1;
             if (f->pref[a] && (!is_lvalue(L, e) || ND(e).type != f->ptype[a])) {
-                cbm__cerr(L->c, pos, "argument %d of %s() must be a variable of type %s", a + 1,
+                cbm__cerr(L->cur, pos, "argument %d of %s() must be a variable of type %s", a + 1,
                           f->name, lp->types.data[f->ptype[a]].name);
                 return -1;
             }
@@ -698,7 +699,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         if (na < 0)
             return -1;
         if (b->arity >= 0 && na != b->arity) {
-            cbm__cerr(L->c, pos, "%s() takes %d argument%s, %d given", b->name, b->arity,
+            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", b->name, b->arity,
                       b->arity == 1 ? "" : "s", na);
             return -1;
         }
@@ -706,7 +707,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         if (b->fn == FN_TOLOCAL || b->fn == FN_TOWORLD) {
             int t0 = ND(args).type, t1 = ND(ND(args).next).type;
             if (t1 != T_TVEC || (b->fn == FN_TOLOCAL ? !lc_is_vec(t0) : t0 != T_LOCVEC)) {
-                cbm__cerr(L->c, pos, "%s() takes a %s and a TurtleVec", b->name,
+                cbm__cerr(L->cur, pos, "%s() takes a %s and a TurtleVec", b->name,
                           b->fn == FN_TOLOCAL ? "vector" : "LocVec");
                 return -1;
             }
@@ -728,25 +729,25 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                                      : (t0 == T_V3D || t1 == T_V3D ? T_V3D : T_V3F);
             }
             if (!ok) {
-                cbm__cerr(L->c, pos, "invalid arguments to %s()%s", b->name,
+                cbm__cerr(L->cur, pos, "invalid arguments to %s()%s", b->name,
                           b->fn == FN_VECROT ? " (a vector or TurtleVec, an axis, an angle)" : "");
                 return -1;
             }
         } else if (b->fn == FN_LENGTH || b->fn == FN_NORMALIZE) {
             int at = ND(args).type;
             if (!lc_is_vec(at) && !(b->fn == FN_NORMALIZE && at == T_TVEC)) {
-                cbm__cerr(L->c, pos, "%s() needs a vector", b->name);
+                cbm__cerr(L->cur, pos, "%s() needs a vector", b->name);
                 return -1;
             }
             rt = b->fn == FN_NORMALIZE ? at : (at == T_V3F ? T_FLOAT : T_DOUBLE);
         } else {
             for (int32_t a = args; a >= 0; a = ND(a).next)
                 if (!lc_is_scalar(ND(a).type)) {
-                    cbm__cerr(L->c, pos, "%s() needs numbers", b->name);
+                    cbm__cerr(L->cur, pos, "%s() needs numbers", b->name);
                     return -1;
                 }
             if (b->fn >= FN_EQUILIBRIUM && b->fn <= FN_REACTIONBOUND && L->in_prod) {
-                cbm__cerr(L->c, pos,
+                cbm__cerr(L->cur, pos,
                           "%s() changes the whole string: call it in Start, StartEach, EndEach "
                           "or End",
                           b->name);
@@ -776,7 +777,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         c.a = args;
         return add_node(L, c);
     }
-    cbm__cerr(L->c, pos, "unknown function '%.*s'", (int)n, s);
+    cbm__cerr(L->cur, pos, "unknown function '%.*s'", (int)n, s);
     return -1;
 }
 
@@ -784,12 +785,12 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
  * the limit is exceeded. Parsing and evaluation recurse once per level. */
 static bool deeper(lc_parser *L)
 {
-    if (++L->depth > cbm_context_limits(L->c->ctx)->max_expr_depth) {
+    if (++L->depth > cbm_context_limits(L->cur->ctx)->max_expr_depth) {
         L->depth--;
-        cbm__cerr(L->c, L->c->pos,
+        cbm__cerr(L->cur, L->cur->pos,
                   "expression or statement nested too deeply (limit %d, --max-expr-depth)",
-                  cbm_context_limits(L->c->ctx)->max_expr_depth);
-        L->c->fatal = true;
+                  cbm_context_limits(L->cur->ctx)->max_expr_depth);
+        L->cur->fatal = true;
         return false;
     }
     return true;
@@ -798,8 +799,8 @@ static bool deeper(lc_parser *L)
 static int32_t primary(lc_parser *L)
 {
     skip(L);
-    size_t pos = L->c->pos;
-    const char *s = L->t + pos;
+    size_t pos = L->cur->pos;
+    const char *s = L->text + pos;
     if (!deeper(L))
         return -1;
     int32_t r = -1;
@@ -816,11 +817,11 @@ static int32_t primary(lc_parser *L)
             v = (float)v;
             end++;
         }
-        L->c->pos = (size_t)(end - L->t);
+        L->cur->pos = (size_t)(end - L->text);
         r = num_node(L, v, t);
     } else if (s[0] == '(') {
-        L->c->pos++;
-        size_t save = L->c->pos;
+        L->cur->pos++;
+        size_t save = L->cur->pos;
         int t = parse_type(L);
         if (t >= 0 && accept(L, ")")) { /* cast */
             int32_t e = primary(L);
@@ -828,28 +829,28 @@ static int32_t primary(lc_parser *L)
                 lc_node n = blank_node(N_CAST, t);
                 n.a = e;
                 if (!(lc_is_scalar(t) && lc_is_scalar(ND(e).type)) && ND(e).type != t) {
-                    cbm__cerr(L->c, pos, "invalid cast");
+                    cbm__cerr(L->cur, pos, "invalid cast");
                     r = -1;
                 } else
                     r = add_node(L, n);
             }
         } else {
-            L->c->pos = save;
+            L->cur->pos = save;
             r = expr(L);
             if (r >= 0 && !expect(L, ")"))
                 r = -1;
         }
     } else if (s[0] == '-' || s[0] == '!' || s[0] == '+') {
-        L->c->pos++;
+        L->cur->pos++;
         if (s[0] == '-' && s[1] == '-') {
-            L->c->pos++;
+            L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
             n.a = e;
             n.fn = 1;
             r = e >= 0 ? add_node(L, n) : -1;
         } else if (s[0] == '+' && s[1] == '+') {
-            L->c->pos++;
+            L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
             n.a = e;
@@ -862,9 +863,9 @@ static int32_t primary(lc_parser *L)
             else if (e >= 0) {
                 int et = ND(e).type;
                 if (s[0] == '!' && !lc_is_scalar(et))
-                    cbm__cerr(L->c, pos, "'!' needs a number");
+                    cbm__cerr(L->cur, pos, "'!' needs a number");
                 else if (s[0] == '-' && !lc_is_scalar(et) && !lc_is_vec(et))
-                    cbm__cerr(L->c, pos, "'-' needs a number or a vector");
+                    cbm__cerr(L->cur, pos, "'-' needs a number or a vector");
                 else {
                     lc_node n = blank_node(s[0] == '-' ? N_NEG : N_NOT,
                                            s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
@@ -877,7 +878,7 @@ static int32_t primary(lc_parser *L)
         return r;
     } else if (is_ident_start((unsigned char)s[0])) {
         size_t n = ident(L);
-        L->c->pos += n;
+        L->cur->pos += n;
         skip(L);
         if (n == 4 && !strncmp(s, "true", 4))
             r = num_node(L, 1, T_BOOL);
@@ -887,7 +888,7 @@ static int32_t primary(lc_parser *L)
             r = num_node(L, 2147483647, T_INT);
         else if ((n == 4 && !strncmp(s, "M_PI", 4)))
             r = num_node(L, 3.14159265358979323846, T_DOUBLE);
-        else if (L->t[L->c->pos] == '(')
+        else if (L->text[L->cur->pos] == '(')
             r = call_expr(L, s, n, pos);
         else {
             lc_local *v = find_var(L, s, n);
@@ -901,7 +902,7 @@ static int32_t primary(lc_parser *L)
                 x.slot = g->slot;
                 r = add_node(L, x);
             } else
-                cbm__cerr(L->c, pos, "unknown name '%.*s'", (int)n, s);
+                cbm__cerr(L->cur, pos, "unknown name '%.*s'", (int)n, s);
         }
     } else {
         expected(L, "an expression");
@@ -911,17 +912,17 @@ static int32_t primary(lc_parser *L)
         if (r < 0)
             break;
         skip(L);
-        size_t p2 = L->c->pos;
-        if (L->t[p2] == '.' && !isdigit((unsigned char)L->t[p2 + 1])) {
-            L->c->pos++;
+        size_t p2 = L->cur->pos;
+        if (L->text[p2] == '.' && !isdigit((unsigned char)L->text[p2 + 1])) {
+            L->cur->pos++;
             size_t n = ident(L);
-            const char *f = L->t + L->c->pos;
+            const char *f = L->text + L->cur->pos;
             if (!n) {
                 expected(L, "a field name");
                 r = -1;
                 break;
             }
-            L->c->pos += n;
+            L->cur->pos += n;
             int t = ND(r).type;
             if (peek(L, "(") && lc_is_vec(t)) { /* v.Length(), v.Normalize() */
                 int32_t none;
@@ -934,7 +935,7 @@ static int32_t primary(lc_parser *L)
                 bool nor = (n == 9 && !strncmp(f, "Normalize", 9)) ||
                            (n == 10 && !strncmp(f, "Normalized", 10));
                 if (!len && !nor) {
-                    cbm__cerr(L->c, p2, "unknown vector method '%.*s'", (int)n, f);
+                    cbm__cerr(L->cur, p2, "unknown vector method '%.*s'", (int)n, f);
                     r = -1;
                     break;
                 }
@@ -960,8 +961,8 @@ static int32_t primary(lc_parser *L)
                     off = f[0] - 'x';
                     ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
                 }
-            } else if (L->lp->types.data[t].nf > 0) {
-                const lc_type *ty = &L->lp->types.data[t];
+            } else if (L->model->types.data[t].nf > 0) {
+                const lc_type *ty = &L->model->types.data[t];
                 for (int k = 0; k < ty->nf; k++)
                     if (strlen(ty->fname[k]) == n && !strncmp(ty->fname[k], f, n)) {
                         off = ty->foff[k];
@@ -969,7 +970,8 @@ static int32_t primary(lc_parser *L)
                     }
             }
             if (off < 0) {
-                cbm__cerr(L->c, p2, "no field '%.*s' in %s", (int)n, f, L->lp->types.data[t].name);
+                cbm__cerr(L->cur, p2, "no field '%.*s' in %s", (int)n, f,
+                          L->model->types.data[t].name);
                 r = -1;
                 break;
             }
@@ -982,11 +984,11 @@ static int32_t primary(lc_parser *L)
                 x.slot = off;
                 r = add_node(L, x);
             }
-        } else if (!strncmp(L->t + p2, "++", 2) || !strncmp(L->t + p2, "--", 2)) {
-            L->c->pos += 2;
+        } else if (!strncmp(L->text + p2, "++", 2) || !strncmp(L->text + p2, "--", 2)) {
+            L->cur->pos += 2;
             lc_node x = blank_node(N_INCDEC, ND(r).type);
             x.a = r;
-            x.fn = L->t[p2] == '+' ? 2 : 3;
+            x.fn = L->text[p2] == '+' ? 2 : 3;
             r = add_node(L, x);
         } else
             break;
@@ -1008,7 +1010,7 @@ static const binop BINOPS[] = {{"||", 1, -2},   {"&&", 2, -1},   {"==", 3, B_EQ}
 static const binop *peek_binop(lc_parser *L)
 {
     skip(L);
-    const char *s = L->t + L->c->pos;
+    const char *s = L->text + L->cur->pos;
     for (size_t i = 0; i < sizeof BINOPS / sizeof BINOPS[0]; i++) {
         size_t n = strlen(BINOPS[i].s);
         if (strncmp(s, BINOPS[i].s, n))
@@ -1036,7 +1038,7 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
     n.fn = (uint8_t)op->op;
     if (op->op < 0) {
         if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
-            cbm__cerr(L->c, pos, "'%s' needs numbers", op->s);
+            cbm__cerr(L->cur, pos, "'%s' needs numbers", op->s);
             return -1;
         }
         n.op = op->op == -2 ? N_OR : N_AND;
@@ -1046,7 +1048,7 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
     if (lc_is_scalar(ta) && lc_is_scalar(tb)) {
         n.type = (int16_t)(op->op >= B_LT ? T_BOOL : lc_arith_type(ta, tb));
         if (op->op == B_REM && n.type != T_INT) {
-            cbm__cerr(L->c, pos, "'%%' needs integers (use fmod)");
+            cbm__cerr(L->cur, pos, "'%%' needs integers (use fmod)");
             return -1;
         }
         return add_node(L, n);
@@ -1079,8 +1081,8 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
         n.type = (int16_t)tb; /* composition, or rotation of a vector or a frame */
         return add_node(L, n);
     }
-    cbm__cerr(L->c, pos, "invalid operands to '%s' (%s and %s)", op->s, L->lp->types.data[ta].name,
-              L->lp->types.data[tb].name);
+    cbm__cerr(L->cur, pos, "invalid operands to '%s' (%s and %s)", op->s,
+              L->model->types.data[ta].name, L->model->types.data[tb].name);
     return -1;
 }
 
@@ -1099,8 +1101,8 @@ static int32_t binary_expr(lc_parser *L, int minprec)
             return -1;
         }
         chain++;
-        size_t pos = L->c->pos;
-        L->c->pos += strlen(op->s);
+        size_t pos = L->cur->pos;
+        L->cur->pos += strlen(op->s);
         int32_t b = binary_expr(L, op->prec + 1);
         a = binary(L, a, op, b, pos);
     }
@@ -1122,7 +1124,7 @@ static int32_t ternary_inner(lc_parser *L)
     int32_t c = binary_expr(L, 1);
     if (c < 0 || !accept(L, "?"))
         return c;
-    size_t pos = L->c->pos;
+    size_t pos = L->cur->pos;
     int32_t a = assign_expr(L);
     if (a < 0 || !expect(L, ":"))
         return -1;
@@ -1134,7 +1136,7 @@ static int32_t ternary_inner(lc_parser *L)
     if (lc_is_scalar(ta) && lc_is_scalar(tb))
         t = lc_arith_type(ta, tb);
     else if (ta != tb) {
-        cbm__cerr(L->c, pos, "the branches of '?:' have different types");
+        cbm__cerr(L->cur, pos, "the branches of '?:' have different types");
         return -1;
     }
     lc_node n = blank_node(N_COND, t);
@@ -1151,7 +1153,7 @@ static bool is_lvalue(lc_parser *L, int32_t e)
 
 static int32_t assign_expr(lc_parser *L)
 {
-    size_t pos = L->c->pos;
+    size_t pos = L->cur->pos;
     int32_t l = ternary(L);
     if (l < 0)
         return -1;
@@ -1160,14 +1162,15 @@ static int32_t assign_expr(lc_parser *L)
     static const int ABIN[] = {-1, B_ADD, B_SUB, B_MUL, B_DIV, B_REM};
     for (int k = 5; k >= 0; k--) {
         size_t n = strlen(AOPS[k]);
-        if (strncmp(L->t + L->c->pos, AOPS[k], n) || (k == 0 && L->t[L->c->pos + 1] == '='))
+        if (strncmp(L->text + L->cur->pos, AOPS[k], n) ||
+            (k == 0 && L->text[L->cur->pos + 1] == '='))
             continue;
         if (!is_lvalue(L, l)) {
-            cbm__cerr(L->c, pos, "the left side of '%s' is not assignable", AOPS[k]);
+            cbm__cerr(L->cur, pos, "the left side of '%s' is not assignable", AOPS[k]);
             return -1;
         }
-        L->c->pos += n;
-        size_t p2 = L->c->pos;
+        L->cur->pos += n;
+        size_t p2 = L->cur->pos;
         if (!deeper(L))
             return -1;
         int32_t r = assign_expr(L);
@@ -1187,8 +1190,8 @@ static int32_t assign_expr(lc_parser *L)
         x.a = l;
         x.b = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
         if (x.b >= 0 && ND(x.b).type != lt) {
-            cbm__cerr(L->c, p2, "cannot assign %s to %s", L->lp->types.data[ND(x.b).type].name,
-                      L->lp->types.data[lt].name);
+            cbm__cerr(L->cur, p2, "cannot assign %s to %s", L->model->types.data[ND(x.b).type].name,
+                      L->model->types.data[lt].name);
             return -1;
         }
         return x.b >= 0 ? add_node(L, x) : -1;
@@ -1199,7 +1202,7 @@ static int32_t assign_expr(lc_parser *L)
 static int32_t expr(lc_parser *L)
 {
     skip(L);
-    size_t start = L->c->pos;
+    size_t start = L->cur->pos;
     int32_t a = comma_expr(L);
     if (a >= 0)
         ND(a).pos = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
@@ -1225,21 +1228,21 @@ static int32_t comma_expr(lc_parser *L)
 /* `Name(args) Name(args) ...` up to `;` (successor) */
 static int succ_list(lc_parser *L, lc_pattern *p)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     p->first = (int32_t)lp->sms.len;
     p->n = 0;
     for (;;) {
         size_t n = ident(L);
         if (!n)
             break;
-        size_t pos = L->c->pos;
-        int m = find_mod(lp, L->t + pos, n);
+        size_t pos = L->cur->pos;
+        int m = find_mod(lp, L->text + pos, n);
         if (m < 0) {
-            cbm__cerr(L->c, pos, "unknown module '%.*s' (declare it with `module`)", (int)n,
-                      L->t + pos);
+            cbm__cerr(L->cur, pos, "unknown module '%.*s' (declare it with `module`)", (int)n,
+                      L->text + pos);
             return -1;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         int32_t args = -1;
         int na = 0;
         if (peek(L, "("))
@@ -1248,7 +1251,7 @@ static int succ_list(lc_parser *L, lc_pattern *p)
             return -1;
         const lc_module *md = &lp->mods.data[m];
         if (na != md->np) {
-            cbm__cerr(L->c, pos, "module %s has %d parameter%s, %d given", md->name, md->np,
+            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, %d given", md->name, md->np,
                       md->np == 1 ? "" : "s", na);
             return -1;
         }
@@ -1263,9 +1266,9 @@ static int succ_list(lc_parser *L, lc_pattern *p)
             chain(L, &first, &last, e);
         }
         lc_modref sm = {m, first};
-        if (CBM_ARRAY_PUSH(L->c->ctx, lp->sms, sm) != CBM_OK) {
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
+        if (CBM_ARRAY_PUSH(L->cur->ctx, lp->sms, sm) != CBM_OK) {
+            L->cur->status = CBM_E_NOMEM;
+            L->cur->fatal = true;
             return -1;
         }
         p->n++;
@@ -1277,22 +1280,22 @@ static int succ_list(lc_parser *L, lc_pattern *p)
  * locals; else they name existing variables (In*Context). */
 static int pattern(lc_parser *L, lc_pattern *p, bool declare)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     p->first = (int32_t)lp->sms.len;
     p->n = 0;
     for (;;) {
         size_t n = ident(L);
         if (!n)
             break;
-        size_t pos = L->c->pos;
-        int m = find_mod(lp, L->t + pos, n);
+        size_t pos = L->cur->pos;
+        int m = find_mod(lp, L->text + pos, n);
         if (m < 0) {
             if (p->n && declare)
                 break;
-            cbm__cerr(L->c, pos, "unknown module '%.*s'", (int)n, L->t + pos);
+            cbm__cerr(L->cur, pos, "unknown module '%.*s'", (int)n, L->text + pos);
             return -1;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         const lc_module *md = &lp->mods.data[m];
         int32_t first = -1, last = -1;
         int na = 0;
@@ -1300,28 +1303,28 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
             if (!accept(L, ")")) {
                 do {
                     size_t k = ident(L);
-                    size_t fp = L->c->pos;
+                    size_t fp = L->cur->pos;
                     if (!k) {
                         expected(L, "a parameter name");
                         return -1;
                     }
-                    L->c->pos += k;
+                    L->cur->pos += k;
                     if (na >= md->np) {
                         na++;
                         continue;
                     }
                     lc_node x = blank_node(N_LOCAL, md->ptype[na]);
                     if (declare)
-                        x.slot = declare_local(L, L->t + fp, k, md->ptype[na]);
+                        x.slot = declare_local(L, L->text + fp, k, md->ptype[na]);
                     else {
-                        lc_local *v = find_var(L, L->t + fp, k);
+                        lc_local *v = find_var(L, L->text + fp, k);
                         if (!v) {
-                            cbm__cerr(L->c, fp, "unknown variable '%.*s'", (int)k, L->t + fp);
+                            cbm__cerr(L->cur, fp, "unknown variable '%.*s'", (int)k, L->text + fp);
                             return -1;
                         }
                         if (v->type != md->ptype[na]) {
-                            cbm__cerr(L->c, fp, "'%.*s' has type %s, module %s wants %s", (int)k,
-                                      L->t + fp, lp->types.data[v->type].name, md->name,
+                            cbm__cerr(L->cur, fp, "'%.*s' has type %s, module %s wants %s", (int)k,
+                                      L->text + fp, lp->types.data[v->type].name, md->name,
                                       lp->types.data[md->ptype[na]].name);
                             return -1;
                         }
@@ -1338,14 +1341,14 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
             }
         }
         if (na != md->np) {
-            cbm__cerr(L->c, pos, "module %s has %d parameter%s, the pattern names %d", md->name,
+            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, the pattern names %d", md->name,
                       md->np, md->np == 1 ? "" : "s", na);
             return -1;
         }
         lc_modref sm = {m, first};
-        if (CBM_ARRAY_PUSH(L->c->ctx, lp->sms, sm) != CBM_OK) {
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
+        if (CBM_ARRAY_PUSH(L->cur->ctx, lp->sms, sm) != CBM_OK) {
+            L->cur->status = CBM_E_NOMEM;
+            L->cur->fatal = true;
             return -1;
         }
         p->n++;
@@ -1361,24 +1364,24 @@ static int32_t block(lc_parser *L)
     if (!expect(L, "{"))
         return -1;
     size_t nvars = L->vars.len;
-    int fs = L->fsize;
+    int fs = L->frame_size;
     int32_t first = -1, last = -1;
     bool ok = true;
     while (!accept(L, "}")) {
-        if (!L->t[L->c->pos] || fatal(L)) {
+        if (!L->text[L->cur->pos] || fatal(L)) {
             expected(L, "'}'");
             return -1;
         }
-        size_t before = L->c->pos;
+        size_t before = L->cur->pos;
         int32_t s = statement(L);
         if (s < 0) {
             ok = false;
             if (fatal(L))
                 return -1;
-            if (L->c->pos == before) /* always make progress */
+            if (L->cur->pos == before) /* always make progress */
                 recover_stmt(L);
-            if (L->c->pos == before && L->t[L->c->pos] != '}')
-                L->c->pos++;
+            if (L->cur->pos == before && L->text[L->cur->pos] != '}')
+                L->cur->pos++;
             continue;
         }
         chain(L, &first, &last, s);
@@ -1386,7 +1389,7 @@ static int32_t block(lc_parser *L)
             last = ND(last).next;
     }
     L->vars.len = nvars;
-    L->fsize = fs;
+    L->frame_size = fs;
     lc_node b = blank_node(S_BLOCK, 0);
     b.a = first;
     return ok ? add_node(L, b) : -1;
@@ -1398,22 +1401,22 @@ static int32_t declaration(lc_parser *L, int t)
     int32_t first = -1, last = -1;
     do {
         size_t n = ident(L);
-        size_t pos = L->c->pos;
+        size_t pos = L->cur->pos;
         if (!n) {
             expected(L, "a variable name");
             recover_stmt(L);
             return -1;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         int32_t init = -1;
         if (accept(L, "=")) {
-            size_t p2 = L->c->pos;
+            size_t p2 = L->cur->pos;
             init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
             if (init >= 0 && t < T_NBUILTIN)
                 init = coerce(L, init, t, p2);
             if (init >= 0 && ND(init).type != t) {
-                cbm__cerr(L->c, p2, "cannot initialize %s with %s", L->lp->types.data[t].name,
-                          L->lp->types.data[ND(init).type].name);
+                cbm__cerr(L->cur, p2, "cannot initialize %s with %s", L->model->types.data[t].name,
+                          L->model->types.data[ND(init).type].name);
                 init = -1;
             }
             if (init < 0) {
@@ -1422,7 +1425,7 @@ static int32_t declaration(lc_parser *L, int t)
             }
         }
         lc_node d = blank_node(S_DECL, t);
-        d.slot = declare_local(L, L->t + pos, n, t);
+        d.slot = declare_local(L, L->text + pos, n, t);
         d.a = init;
         int32_t s = add_node(L, d);
         if (s < 0)
@@ -1439,7 +1442,7 @@ static int32_t declaration(lc_parser *L, int t)
 static int32_t statement(lc_parser *L)
 {
     skip(L);
-    size_t pos = L->c->pos;
+    size_t pos = L->cur->pos;
     if (!deeper(L))
         return -1;
     int32_t r = -1;
@@ -1481,7 +1484,7 @@ static int32_t statement(lc_parser *L)
             expected(L, "'while'");
     } else if (accept_kw(L, "for")) {
         size_t nvars = L->vars.len;
-        int fs = L->fsize;
+        int fs = L->frame_size;
         lc_node n = blank_node(S_FOR, 0);
         bool ok = expect(L, "(");
         if (ok && !accept(L, ";")) {
@@ -1513,12 +1516,12 @@ static int32_t statement(lc_parser *L)
                 r = add_node(L, n);
         }
         L->vars.len = nvars;
-        L->fsize = fs;
+        L->frame_size = fs;
     } else if (accept_kw(L, "return")) {
         lc_node n = blank_node(S_RETURN, L->in_prod ? T_VOID : L->ret_type);
         if (!peek(L, ";")) {
             if (L->ret_type == T_VOID || L->in_prod) {
-                cbm__cerr(L->c, pos, "return with a value here");
+                cbm__cerr(L->cur, pos, "return with a value here");
                 recover_stmt(L);
                 L->depth--;
                 return -1;
@@ -1527,7 +1530,7 @@ static int32_t statement(lc_parser *L)
             if (n.a < 0 && L->ret_type >= T_NBUILTIN)
                 n.a = -1;
         } else if (L->ret_type != T_VOID && !L->in_prod) {
-            cbm__cerr(L->c, pos, "return needs a value");
+            cbm__cerr(L->cur, pos, "return needs a value");
         }
         if (expect(L, ";"))
             r = add_node(L, n);
@@ -1545,7 +1548,7 @@ static int32_t statement(lc_parser *L)
         }
     } else if (L->in_switch && (accept_kw(L, "case") || accept_kw(L, "default"))) {
         lc_node n = blank_node(S_CASE, 0);
-        bool dflt = L->t[pos] == 'd';
+        bool dflt = L->text[pos] == 'd';
         if (!dflt)
             n.a = coerce(L, expr(L), T_DOUBLE, pos);
         if ((dflt || n.a >= 0) && expect(L, ":"))
@@ -1559,7 +1562,7 @@ static int32_t statement(lc_parser *L)
     } else if (peek(L, "nproduce") || accept_kw(L, "produce")) {
         bool partial = accept_kw(L, "nproduce");
         if (!L->in_prod) {
-            cbm__cerr(L->c, pos, "produce outside a production");
+            cbm__cerr(L->cur, pos, "produce outside a production");
             recover_stmt(L);
         } else {
             lc_pattern p;
@@ -1592,12 +1595,12 @@ static int32_t statement(lc_parser *L)
 /* ---------------------------------------------------------------- top level */
 static int32_t const_int(lc_parser *L, const char *what)
 {
-    size_t pos = L->c->pos;
+    size_t pos = L->cur->pos;
     int32_t e = expr(L);
     if (e < 0)
         return -1;
     if (!lc_is_scalar(ND(e).type)) {
-        cbm__cerr(L->c, pos, "%s must be a number", what);
+        cbm__cerr(L->cur, pos, "%s must be a number", what);
         return -1;
     }
     return e;
@@ -1605,7 +1608,7 @@ static int32_t const_int(lc_parser *L, const char *what)
 
 static void parse_struct(lc_parser *L, size_t pos)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     size_t n = ident(L);
     if (!n) {
         expected(L, "a struct name");
@@ -1613,13 +1616,13 @@ static void parse_struct(lc_parser *L, size_t pos)
         return;
     }
     char name[64];
-    snprintf(name, sizeof name, "%.*s", (int)(n < 63 ? n : 63), L->t + L->c->pos);
-    if (find_type(L, L->t + L->c->pos, n) >= 0) {
-        cbm__cerr(L->c, L->c->pos, "type '%s' is already defined", name);
+    snprintf(name, sizeof name, "%.*s", (int)(n < 63 ? n : 63), L->text + L->cur->pos);
+    if (find_type(L, L->text + L->cur->pos, n) >= 0) {
+        cbm__cerr(L->cur, L->cur->pos, "type '%s' is already defined", name);
         recover(L);
         return;
     }
-    L->c->pos += n;
+    L->cur->pos += n;
     lc_type ty;
     memset(&ty, 0, sizeof ty);
     if (!expect(L, "{")) {
@@ -1641,19 +1644,19 @@ static void parse_struct(lc_parser *L, size_t pos)
                 goto fail;
             }
             if (ty.nf >= MAXFLD) {
-                cbm__cerr(L->c, L->c->pos, "more than %d fields in struct %s", MAXFLD, name);
+                cbm__cerr(L->cur, L->cur->pos, "more than %d fields in struct %s", MAXFLD, name);
                 recover(L);
                 goto fail;
             }
-            char *fn = cbm__alloc(L->c->ctx, k + 1);
+            char *fn = cbm__alloc(L->cur->ctx, k + 1);
             if (!fn) {
-                L->c->status = CBM_E_NOMEM;
-                L->c->fatal = true;
+                L->cur->status = CBM_E_NOMEM;
+                L->cur->fatal = true;
                 goto fail;
             }
-            memcpy(fn, L->t + L->c->pos, k);
+            memcpy(fn, L->text + L->cur->pos, k);
             fn[k] = 0;
-            L->c->pos += k;
+            L->cur->pos += k;
             ty.fname[ty.nf] = fn;
             ty.ftype[ty.nf] = ft;
             ty.foff[ty.nf] = ty.size;
@@ -1667,33 +1670,33 @@ static void parse_struct(lc_parser *L, size_t pos)
     }
     accept(L, ";");
     if (ty.size > MAXSZ) {
-        cbm__cerr(L->c, pos, "struct %s is too large (more than %d numbers)", name, MAXSZ);
+        cbm__cerr(L->cur, pos, "struct %s is too large (more than %d numbers)", name, MAXSZ);
         goto fail;
     }
-    ty.name = cbm__strdup(L->c->ctx, name);
-    if (!ty.name || CBM_ARRAY_PUSH(L->c->ctx, lp->types, ty) != CBM_OK) {
-        cbm__strfree(L->c->ctx, ty.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    ty.name = cbm__strdup(L->cur->ctx, name);
+    if (!ty.name || CBM_ARRAY_PUSH(L->cur->ctx, lp->types, ty) != CBM_OK) {
+        cbm__strfree(L->cur->ctx, ty.name);
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         goto fail;
     }
     return;
 fail:
     for (int i = 0; i < ty.nf; i++)
-        cbm__strfree(L->c->ctx, ty.fname[i]);
+        cbm__strfree(L->cur->ctx, ty.fname[i]);
 }
 
 static void parse_module_decl(lc_parser *L)
 {
     do {
         size_t n = ident(L);
-        size_t pos = L->c->pos;
+        size_t pos = L->cur->pos;
         if (!n) {
             expected(L, "a module name");
             recover(L);
             return;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         int pt[MAXF], np = 0;
         if (expect(L, "(") && !accept(L, ")")) {
             do {
@@ -1704,26 +1707,26 @@ static void parse_module_decl(lc_parser *L)
                     return;
                 }
                 if (np >= MAXF) {
-                    cbm__cerr(L->c, pos, "more than %d parameters", MAXF);
+                    cbm__cerr(L->cur, pos, "more than %d parameters", MAXF);
                     recover(L);
                     return;
                 }
                 pt[np++] = t;
                 size_t k = ident(L); /* optional parameter name */
-                if (k && find_type(L, L->t + L->c->pos, k) < 0)
-                    L->c->pos += k;
+                if (k && find_type(L, L->text + L->cur->pos, k) < 0)
+                    L->cur->pos += k;
             } while (accept(L, ","));
             if (!expect(L, ")")) {
                 recover(L);
                 return;
             }
         }
-        int m = find_mod(L->lp, L->t + pos, n);
+        int m = find_mod(L->model, L->text + pos, n);
         if (m >= 0) {
-            cbm__cerr(L->c, pos, "module '%.*s' is already declared", (int)n, L->t + pos);
+            cbm__cerr(L->cur, pos, "module '%.*s' is already declared", (int)n, L->text + pos);
             continue;
         }
-        add_mod(L, L->t + pos, n, pt, np, NULL, pos);
+        add_mod(L, L->text + pos, n, pt, np, NULL, pos);
     } while (accept(L, ","));
     if (!expect(L, ";"))
         recover(L);
@@ -1731,7 +1734,7 @@ static void parse_module_decl(lc_parser *L)
 
 static void symbol_list(lc_parser *L, bool consider)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     if (consider)
         for (int i = 0; i < 128; i++)
             lp->considered[i] = false;
@@ -1739,12 +1742,12 @@ static void symbol_list(lc_parser *L, bool consider)
         size_t n = ident(L);
         if (!n)
             break;
-        int m = find_mod(lp, L->t + L->c->pos, n);
+        int m = find_mod(lp, L->text + L->cur->pos, n);
         if (m < 0)
-            cbm__cerr(L->c, L->c->pos, "unknown module '%.*s'", (int)n, L->t + L->c->pos);
+            cbm__cerr(L->cur, L->cur->pos, "unknown module '%.*s'", (int)n, L->text + L->cur->pos);
         else
             lp->considered[lp->mods.data[m].code] = consider;
-        L->c->pos += n;
+        L->cur->pos += n;
         accept(L, ",");
     }
     if (!expect(L, ";"))
@@ -1770,16 +1773,16 @@ static const decl_roles light_roles = {"leaf", {"area", "light"}};
 static int decl_module(lc_parser *L, size_t *pos)
 {
     size_t n = ident(L);
-    *pos = L->c->pos;
+    *pos = L->cur->pos;
     if (!n) {
         expected(L, "a module name");
         recover(L);
         return -2;
     }
-    int m = find_mod(L->lp, L->t + *pos, n);
-    L->c->pos += n;
+    int m = find_mod(L->model, L->text + *pos, n);
+    L->cur->pos += n;
     if (m < 0)
-        cbm__cerr(L->c, *pos, "unknown module '%.*s'", (int)n, L->t + *pos);
+        cbm__cerr(L->cur, *pos, "unknown module '%.*s'", (int)n, L->text + *pos);
     return m;
 }
 
@@ -1788,39 +1791,39 @@ static int decl_module(lc_parser *L, size_t *pos)
  * given once). false after an error. */
 static bool parse_roles(lc_parser *L, const lc_module *md, const decl_roles *r, int off[2])
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     int at = 0;
     off[0] = off[1] = -1;
     for (int k = 0;; k++) {
-        size_t n = ident(L), pos = L->c->pos;
+        size_t n = ident(L), pos = L->cur->pos;
         if (!n) {
             char what[48];
             snprintf(what, sizeof what, "%s, %s or _", r->role[0], r->role[1]);
             expected(L, what);
             return false;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         int *dst = NULL;
         for (int j = 0; j < 2; j++)
-            if (strlen(r->role[j]) == n && !strncmp(L->t + pos, r->role[j], n))
+            if (strlen(r->role[j]) == n && !strncmp(L->text + pos, r->role[j], n))
                 dst = &off[j];
-        if (!dst && !(n == 1 && L->t[pos] == '_')) {
-            cbm__cerr(L->c, pos, "unknown role '%.*s' of a %s parameter (%s, %s or _)", (int)n,
-                      L->t + pos, r->kind, r->role[0], r->role[1]);
+        if (!dst && !(n == 1 && L->text[pos] == '_')) {
+            cbm__cerr(L->cur, pos, "unknown role '%.*s' of a %s parameter (%s, %s or _)", (int)n,
+                      L->text + pos, r->kind, r->role[0], r->role[1]);
             return false;
         }
         if (k >= md->np) {
-            cbm__cerr(L->c, pos, "module '%s' has %d parameter%s", md->name, md->np,
+            cbm__cerr(L->cur, pos, "module '%s' has %d parameter%s", md->name, md->np,
                       md->np == 1 ? "" : "s");
             return false;
         }
         if (dst && *dst >= 0) {
-            cbm__cerr(L->c, pos, "'%.*s' given twice", (int)n, L->t + pos);
+            cbm__cerr(L->cur, pos, "'%.*s' given twice", (int)n, L->text + pos);
             return false;
         }
         if (dst && !lc_is_scalar(md->ptype[k])) {
-            cbm__cerr(L->c, pos, "parameter %d of '%s' must be a number to be its %.*s, not %s",
-                      k + 1, md->name, (int)n, L->t + pos, lp->types.data[md->ptype[k]].name);
+            cbm__cerr(L->cur, pos, "parameter %d of '%s' must be a number to be its %.*s, not %s",
+                      k + 1, md->name, (int)n, L->text + pos, lp->types.data[md->ptype[k]].name);
             return false;
         }
         if (dst)
@@ -1837,7 +1840,7 @@ static bool parse_roles(lc_parser *L, const lc_module *md, const decl_roles *r, 
  * mass_roles). */
 static void mech_decl(lc_parser *L, bool mass)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     for (;;) {
         size_t pos;
         int m = decl_module(L, &pos);
@@ -1853,7 +1856,7 @@ static void mech_decl(lc_parser *L, bool mass)
                     return;
                 }
                 if (roff[0] < 0) {
-                    cbm__cerr(L->c, L->c->pos - 1,
+                    cbm__cerr(L->cur, L->cur->pos - 1,
                               "point-mass module '%s' needs a 'mass' parameter", md->name);
                     recover(L);
                     return;
@@ -1870,16 +1873,16 @@ static void mech_decl(lc_parser *L, bool mass)
                 off += lc_type_size(lp, md->ptype[i]);
             }
             if (found < 0 && mass)
-                cbm__cerr(L->c, pos,
+                cbm__cerr(L->cur, pos,
                           "the first parameter of point-mass module '%s' must be a number "
                           "(its mass, kg)%s%s",
                           md->name, md->np ? ", not " : "",
                           md->np ? lp->types.data[md->ptype[0]].name : "");
             else if (found < 0)
-                cbm__cerr(L->c, pos, "mechanical module '%s' needs a MechSegment parameter",
+                cbm__cerr(L->cur, pos, "mechanical module '%s' needs a MechSegment parameter",
                           md->name);
             else if (!mass && lp->mech_decl.seg_code >= 0 && lp->mech_decl.seg_code != md->code)
-                cbm__cerr(L->c, pos, "only one module can carry the mechanical segment");
+                cbm__cerr(L->cur, pos, "only one module can carry the mechanical segment");
             else if (mass) {
                 lp->mech_decl.mass_off[md->code] = found;
                 lp->mech_decl.radius_off[md->code] = -1;
@@ -1899,7 +1902,7 @@ static void mech_decl(lc_parser *L, bool mass)
  * both roles are needed. */
 static void light_decl(lc_parser *L)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     for (;;) {
         size_t pos;
         int m = decl_module(L, &pos), off[2];
@@ -1914,7 +1917,7 @@ static void light_decl(lc_parser *L)
             return;
         }
         if (off[0] < 0 || off[1] < 0) {
-            cbm__cerr(L->c, L->c->pos - 1,
+            cbm__cerr(L->cur, L->cur->pos - 1,
                       "leaf module '%s' needs an 'area' and a 'light' parameter", md->name);
             recover(L);
             return;
@@ -1931,14 +1934,14 @@ static void light_decl(lc_parser *L)
 /* `pred-with-contexts : { body }` */
 static void parse_production(lc_parser *L, lc_rules *set, int group)
 {
-    lc_model *lp = L->lp;
-    size_t pos = L->c->pos;
+    lc_model *lp = L->model;
+    size_t pos = L->cur->pos;
     lc_production pr;
     memset(&pr, 0, sizeof pr);
     pr.pos = pos;
     pr.group = group;
     L->vars.len = 0;
-    L->fsize = L->fmax = 0;
+    L->frame_size = L->frame_max = 0;
     L->in_prod = true;
     L->ret_type = T_VOID;
     lc_pattern pats[5];
@@ -1946,7 +1949,7 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     int ops[5];
     for (;;) {
         if (npats == 5) {
-            cbm__cerr(L->c, L->c->pos, "too many context parts");
+            cbm__cerr(L->cur, L->cur->pos, "too many context parts");
             recover(L);
             return;
         }
@@ -1961,18 +1964,18 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
         }
         npats++;
         skip(L);
-        const char *s = L->t + L->c->pos;
+        const char *s = L->text + L->cur->pos;
         if (s[0] == '<' && s[1] == '<')
-            ops[npats - 1] = 1, L->c->pos += 2;
+            ops[npats - 1] = 1, L->cur->pos += 2;
         else if (s[0] == '<')
-            ops[npats - 1] = 0, L->c->pos += 1;
+            ops[npats - 1] = 0, L->cur->pos += 1;
         else if (s[0] == '>' && s[1] == '>')
-            ops[npats - 1] = 2, L->c->pos += 2;
+            ops[npats - 1] = 2, L->cur->pos += 2;
         else if (s[0] == '>')
-            ops[npats - 1] = 3, L->c->pos += 1;
+            ops[npats - 1] = 3, L->cur->pos += 1;
         else if (s[0] == ':') {
             ops[npats - 1] = -1;
-            L->c->pos++;
+            L->cur->pos++;
             break;
         } else {
             expected(L, "'<', '<<', '>>', '>' or ':'");
@@ -1985,14 +1988,14 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     while (ip < npats && (ops[ip] == 0 || ops[ip] == 1)) {
         int k = ops[ip] == 0 ? CX_LC : CX_NLC;
         if (pr.cx[k].n) {
-            cbm__cerr(L->c, pos, "two %s contexts", k == CX_LC ? "left" : "new left");
+            cbm__cerr(L->cur, pos, "two %s contexts", k == CX_LC ? "left" : "new left");
             recover(L);
             return;
         }
         pr.cx[k] = pats[ip++];
     }
     if (ip >= npats) {
-        cbm__cerr(L->c, pos, "production without a predecessor");
+        cbm__cerr(L->cur, pos, "production without a predecessor");
         recover(L);
         return;
     }
@@ -2002,7 +2005,7 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     for (int k = ip + 1; k < npats; k++) {
         int cx = prev == 2 ? CX_NRC : prev == 3 ? CX_RC : -1;
         if (cx < 0 || pr.cx[cx].n) {
-            cbm__cerr(L->c, pos, "misplaced context");
+            cbm__cerr(L->cur, pos, "misplaced context");
             recover(L);
             return;
         }
@@ -2010,7 +2013,7 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
         prev = ops[k];
     }
     if (pr.cx[CX_NLC].n && pr.cx[CX_NRC].n) {
-        cbm__cerr(L->c, pos, "a production cannot have both new left and new right context");
+        cbm__cerr(L->cur, pos, "a production cannot have both new left and new right context");
         recover(L);
         return;
     }
@@ -2021,35 +2024,35 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
         return;
     }
     pr.body = block(L);
-    pr.fsize = L->fmax;
+    pr.fsize = L->frame_max;
     L->in_prod = false;
     if (pr.body < 0)
         return;
-    if (CBM_ARRAY_PUSH(L->c->ctx, set->prods, pr) != CBM_OK) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    if (CBM_ARRAY_PUSH(L->cur->ctx, set->prods, pr) != CBM_OK) {
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
     }
 }
 
 static void parse_function(lc_parser *L, int rt, size_t pos)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     size_t n = ident(L);
     lc_function f;
     memset(&f, 0, sizeof f);
     f.ret = rt;
     f.pos = pos;
-    f.name = cbm__alloc(L->c->ctx, n + 1);
+    f.name = cbm__alloc(L->cur->ctx, n + 1);
     if (!f.name) {
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         return;
     }
-    memcpy(f.name, L->t + L->c->pos, n);
+    memcpy(f.name, L->text + L->cur->pos, n);
     f.name[n] = 0;
-    L->c->pos += n;
+    L->cur->pos += n;
     L->vars.len = 0;
-    L->fsize = L->fmax = 0;
+    L->frame_size = L->frame_max = 0;
     expect(L, "(");
     if (!accept(L, ")") && !accept_kw(L, "void")) {
         do {
@@ -2059,23 +2062,23 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
             if (t < 0 || !k || f.np >= MAXF) {
                 expected(L, "a parameter (type and name)");
                 recover(L);
-                cbm__strfree(L->c->ctx, f.name);
+                cbm__strfree(L->cur->ctx, f.name);
                 return;
             }
             f.pref[f.np] = ref;
             f.ptype[f.np++] = t;
-            declare_local(L, L->t + L->c->pos, k, t);
-            L->c->pos += k;
+            declare_local(L, L->text + L->cur->pos, k, t);
+            L->cur->pos += k;
         } while (accept(L, ","));
         expect(L, ")");
     } else
         accept(L, ")");
     /* register before the body: recursion */
     f.body = -1;
-    if (CBM_ARRAY_PUSH(L->c->ctx, lp->funcs, f) != CBM_OK) {
-        cbm__strfree(L->c->ctx, f.name);
-        L->c->status = CBM_E_NOMEM;
-        L->c->fatal = true;
+    if (CBM_ARRAY_PUSH(L->cur->ctx, lp->funcs, f) != CBM_OK) {
+        cbm__strfree(L->cur->ctx, f.name);
+        L->cur->status = CBM_E_NOMEM;
+        L->cur->fatal = true;
         return;
     }
     size_t fi = lp->funcs.len - 1;
@@ -2083,15 +2086,15 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
     L->in_prod = false;
     int32_t b = block(L);
     lp->funcs.data[fi].body = b;
-    lp->funcs.data[fi].fsize = L->fmax;
+    lp->funcs.data[fi].fsize = L->frame_max;
     L->ret_type = T_VOID;
 }
 
 static void parse_global(lc_parser *L, int t)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     L->vars.len = 0;
-    L->fsize = L->fmax = 0;
+    L->frame_size = L->frame_max = 0;
     do {
         size_t n = ident(L);
         if (!n) {
@@ -2099,16 +2102,16 @@ static void parse_global(lc_parser *L, int t)
             recover(L);
             return;
         }
-        size_t pos = L->c->pos;
-        if (find_gvar(L, L->t + pos, n)) {
-            cbm__cerr(L->c, pos, "'%.*s' is already defined", (int)n, L->t + pos);
+        size_t pos = L->cur->pos;
+        if (find_gvar(L, L->text + pos, n)) {
+            cbm__cerr(L->cur, pos, "'%.*s' is already defined", (int)n, L->text + pos);
             recover(L);
             return;
         }
-        L->c->pos += n;
+        L->cur->pos += n;
         int32_t init = -1;
         if (accept(L, "=")) {
-            size_t p2 = L->c->pos;
+            size_t p2 = L->cur->pos;
             init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
             if (init >= 0 && t < T_NBUILTIN)
                 init = coerce(L, init, t, p2);
@@ -2118,15 +2121,15 @@ static void parse_global(lc_parser *L, int t)
             }
         }
         lc_global g = {NULL, t, lp->nglobal, init};
-        g.name = cbm__alloc(L->c->ctx, n + 1);
-        if (!g.name || CBM_ARRAY_PUSH(L->c->ctx, lp->gvars, g) != CBM_OK) {
+        g.name = cbm__alloc(L->cur->ctx, n + 1);
+        if (!g.name || CBM_ARRAY_PUSH(L->cur->ctx, lp->gvars, g) != CBM_OK) {
             if (g.name)
-                cbm__free(L->c->ctx, g.name, n + 1);
-            L->c->status = CBM_E_NOMEM;
-            L->c->fatal = true;
+                cbm__free(L->cur->ctx, g.name, n + 1);
+            L->cur->status = CBM_E_NOMEM;
+            L->cur->fatal = true;
             return;
         }
-        memcpy(g.name, L->t + pos, n);
+        memcpy(g.name, L->text + pos, n);
         g.name[n] = 0;
         lp->nglobal += lc_type_size(lp, t);
     } while (accept(L, ","));
@@ -2136,9 +2139,9 @@ static void parse_global(lc_parser *L, int t)
 
 static bool label(lc_parser *L, const char *kw)
 {
-    size_t save = L->c->pos;
+    size_t save = L->cur->pos;
     skip(L);
-    const char *s = L->t + L->c->pos;
+    const char *s = L->text + L->cur->pos;
     size_t i = 0, k = 0;
     while (kw[k] != '\0') {
         if (kw[k] == ' ') {
@@ -2149,29 +2152,29 @@ static bool label(lc_parser *L, const char *kw)
         }
         char a = s[i], b = kw[k];
         if (k == 0 ? tolower((unsigned char)a) != tolower((unsigned char)b) : a != b) {
-            L->c->pos = save;
+            L->cur->pos = save;
             return false;
         }
         i++, k++;
     }
     if (is_ident_char((unsigned char)s[i])) {
-        L->c->pos = save;
+        L->cur->pos = save;
         return false;
     }
-    L->c->pos += i;
+    L->cur->pos += i;
     skip(L);
-    if (L->t[L->c->pos] != ':') {
-        L->c->pos = save;
+    if (L->text[L->cur->pos] != ':') {
+        L->cur->pos = save;
         return false;
     }
-    L->c->pos++;
+    L->cur->pos++;
     return true;
 }
 
 static cbm_status setup_builtins(lc_parser *L)
 {
-    lc_model *lp = L->lp;
-    cbm_context *ctx = L->c->ctx;
+    lc_model *lp = L->model;
+    cbm_context *ctx = L->cur->ctx;
     static const char *const TN[] = {"void",      "int",    "float",      "double",
                                      "bool",      "V3f",    "V3d",        "Quaternion",
                                      "TurtleVec", "LocVec", "MechSegment"};
@@ -2240,7 +2243,7 @@ static cbm_status setup_builtins(lc_parser *L)
         for (const char *p = TURTLE[i][2]; *p; p++)
             pt[np++] = *p == 'i' ? T_INT : *p == 'v' ? T_V3F : T_FLOAT;
         if (add_mod(L, TURTLE[i][0], strlen(TURTLE[i][0]), pt, np, TURTLE[i][1], 0) < 0)
-            return L->c->status != CBM_OK ? L->c->status : CBM_E_NOMEM;
+            return L->cur->status != CBM_OK ? L->cur->status : CBM_E_NOMEM;
     }
     /* V3f and its synonyms */
     lp->sb = find_mod(lp, "SB", 2);
@@ -2251,26 +2254,26 @@ static cbm_status setup_builtins(lc_parser *L)
 static void parse_block_item(lc_parser *L, int which)
 {
     L->vars.len = 0;
-    L->fsize = L->fmax = 0;
+    L->frame_size = L->frame_max = 0;
     L->in_prod = false;
     L->ret_type = T_VOID;
     int32_t b = block(L);
     if (b >= 0) {
-        L->lp->blocks[which] = b;
-        L->lp->block_fsize[which] = L->fmax;
+        L->model->blocks[which] = b;
+        L->model->block_fsize[which] = L->frame_max;
     }
 }
 
 static void parse_top(lc_parser *L)
 {
-    lc_model *lp = L->lp;
+    lc_model *lp = L->model;
     lc_rules *set = &lp->main;
     int group = 0;
     for (;;) {
         skip(L);
-        if (fatal(L) || !L->t[L->c->pos])
+        if (fatal(L) || !L->text[L->cur->pos])
             return;
-        size_t pos = L->c->pos;
+        size_t pos = L->cur->pos;
         int t;
         if (label(L, "derivation length")) {
             lp->dlen_expr = const_int(L, "derivation length");
@@ -2278,7 +2281,7 @@ static void parse_top(lc_parser *L)
                 recover(L);
         } else if (label(L, "Axiom")) {
             L->vars.len = 0;
-            L->fsize = L->fmax = 0;
+            L->frame_size = L->frame_max = 0;
             if (succ_list(L, &lp->axiom) < 0 || !expect(L, ";"))
                 recover(L);
         } else if (label(L, "ignore")) {
@@ -2318,14 +2321,14 @@ static void parse_top(lc_parser *L)
             if (!expect(L, ";"))
                 recover(L);
         } else if (accept_kw(L, "group")) {
-            size_t p2 = L->c->pos;
+            size_t p2 = L->cur->pos;
             int32_t e = const_int(L, "group");
             if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
-                cbm__cerr(L->c, p2, "group %g is out of range (an int)", ND(e).v);
+                cbm__cerr(L->cur, p2, "group %g is out of range (an int)", ND(e).v);
             else if (e >= 0 && ND(e).op == N_NUM)
                 group = (int)ND(e).v;
             else if (e >= 0)
-                cbm__cerr(L->c, p2, "group needs a number");
+                cbm__cerr(L->cur, p2, "group needs a number");
             expect(L, ":");
         } else if (accept_kw(L, "endgroup")) {
             group = 0;
@@ -2333,15 +2336,15 @@ static void parse_top(lc_parser *L)
         } else if (accept_kw(L, "module")) {
             parse_module_decl(L);
         } else if (accept_kw(L, "struct") && !peek(L, "{")) {
-            size_t save = L->c->pos;
+            size_t save = L->cur->pos;
             size_t n = ident(L);
-            L->c->pos += n;
+            L->cur->pos += n;
             bool def = peek(L, "{");
-            L->c->pos = save;
+            L->cur->pos = save;
             if (def)
                 parse_struct(L, pos);
             else {
-                L->c->pos = pos;
+                L->cur->pos = pos;
                 t = parse_type(L);
                 if (t < 0) {
                     expected(L, "a struct name");
@@ -2350,16 +2353,16 @@ static void parse_top(lc_parser *L)
                     parse_global(L, t);
             }
         } else if (accept_kw(L, "typedef")) {
-            cbm__cerr(L->c, pos, "typedef is not supported; declare `struct Name { ... };`");
+            cbm__cerr(L->cur, pos, "typedef is not supported; declare `struct Name { ... };`");
             recover(L);
         } else if ((t = parse_type(L)) >= 0 || accept_kw(L, "void")) {
             if (t < 0)
                 t = T_VOID;
             size_t n = ident(L);
-            size_t save = L->c->pos;
-            L->c->pos += n;
+            size_t save = L->cur->pos;
+            L->cur->pos += n;
             bool fn = n && peek(L, "(");
-            L->c->pos = save;
+            L->cur->pos = save;
             if (fn)
                 parse_function(L, t, pos);
             else if (t == T_VOID) {
@@ -2369,7 +2372,7 @@ static void parse_top(lc_parser *L)
                 parse_global(L, t);
         } else {
             size_t n = ident(L);
-            if (n && find_mod(lp, L->t + L->c->pos, n) >= 0)
+            if (n && find_mod(lp, L->text + L->cur->pos, n) >= 0)
                 parse_production(L, set, group);
             else {
                 expected(L, "a module declaration, a production or a section");
@@ -2406,9 +2409,9 @@ cbm_status cbm__lc_compile(cbm__compiler *c, const char *text, lc_model *m)
     m->dlen_expr = -1;
     lc_parser L;
     memset(&L, 0, sizeof L);
-    L.lp = m;
-    L.c = c;
-    L.t = text;
+    L.model = m;
+    L.cur = c;
+    L.text = text;
     cbm_status s = setup_builtins(&L);
     if (s == CBM_OK) {
         parse_top(&L);
