@@ -71,6 +71,16 @@ static size_t line_index(const cbm__compiler *c, size_t pos)
     return lo;
 }
 
+/* The error at text position pos, located (*file, *line, *col). */
+static void report_error(const cbm__compiler *c, size_t pos, const char **file, int *line, int *col,
+                         const char *fmt, va_list ap) __attribute__((format(printf, 6, 0)));
+static void report_error(const cbm__compiler *c, size_t pos, const char **file, int *line, int *col,
+                         const char *fmt, va_list ap)
+{
+    cbm__compiler_locate(c, pos, file, line, col);
+    cbm__vdiag(c->ctx, CBM_ERROR, *file, *line, *col, fmt, ap);
+}
+
 void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
 {
     c->errors++;
@@ -81,10 +91,9 @@ void cbm__cerr(cbm__compiler *c, size_t pos, const char *fmt, ...)
     }
     const char *file;
     int line, col;
-    cbm__compiler_locate(c, pos, &file, &line, &col);
     va_list ap;
     va_start(ap, fmt);
-    cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
+    report_error(c, pos, &file, &line, &col, fmt, ap);
     va_end(ap);
     /* the line expands a value given on the command line: say so, the error may be there */
     size_t lo = line_index(c, pos);
@@ -124,10 +133,9 @@ cbm_status cbm__compiler_fail(const cbm__compiler *c, cbm_status s, size_t pos, 
 {
     const char *file;
     int line, col;
-    cbm__compiler_locate(c, pos, &file, &line, &col);
     va_list ap;
     va_start(ap, fmt);
-    cbm__vdiag(c->ctx, CBM_ERROR, file, line, col, fmt, ap);
+    report_error(c, pos, &file, &line, &col, fmt, ap);
     va_end(ap);
     return s;
 }

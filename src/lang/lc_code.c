@@ -1448,22 +1448,35 @@ static void compile_produce(codegen *g, const lc_node *n)
         emit(g, O_DONE, 0, 0, 0);
 }
 
-/* Compiles condition c and a jump taken when it is false (to patch); a comparison computed
- * last into its temporary becomes a compare-and-jump. */
-static int32_t jump_false(codegen *g, int32_t c)
+/* Compiles condition c into a temporary: the register of its value, and in *cmp the comparison
+ * that computed it last into that temporary, which the caller may turn into a compare-and-jump
+ * (NULL when there is none, or a jump may land on the instruction after it). */
+static int compile_condition(codegen *g, int32_t c, lc_ins **cmp)
 {
     int save = g->temp_top;
     int t = new_temp(g);
     int r = compile_scalar(g, c, t);
     g->temp_top = save;
+    *cmp = NULL;
     size_t len = g->code->ins.len;
     if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
         lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
-            last->op = (uint8_t)(O_JNLT + (last->op - O_LT));
-            last->d = -1;
-            return (int32_t)len - 1;
-        }
+        if (last->d == t && last->op >= O_LT && last->op <= O_NE)
+            *cmp = last;
+    }
+    return r;
+}
+
+/* Compiles condition c and a jump taken when it is false (to patch); a comparison computed
+ * last into its temporary becomes a compare-and-jump. */
+static int32_t jump_false(codegen *g, int32_t c)
+{
+    lc_ins *cmp;
+    int r = compile_condition(g, c, &cmp);
+    if (cmp) {
+        cmp->op = (uint8_t)(O_JNLT + (cmp->op - O_LT));
+        cmp->d = -1;
+        return (int32_t)g->code->ins.len - 1;
     }
     return emit(g, O_JZ, 0, r, -1);
 }
@@ -1471,18 +1484,12 @@ static int32_t jump_false(codegen *g, int32_t c)
 /* Compiles condition c and a jump to target taken when it holds. */
 static void jump_true(codegen *g, int32_t c, int32_t target)
 {
-    int save = g->temp_top;
-    int t = new_temp(g);
-    int r = compile_scalar(g, c, t);
-    g->temp_top = save;
-    size_t len = g->code->ins.len;
-    if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
-        lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == t && last->op >= O_LT && last->op <= O_NE) {
-            last->op = (uint8_t)(O_JLT + (last->op - O_LT));
-            last->d = target;
-            return;
-        }
+    lc_ins *cmp;
+    int r = compile_condition(g, c, &cmp);
+    if (cmp) {
+        cmp->op = (uint8_t)(O_JLT + (cmp->op - O_LT));
+        cmp->d = target;
+        return;
     }
     emit(g, O_JNZS, 0, r, target);
 }

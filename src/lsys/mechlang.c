@@ -530,6 +530,15 @@ static cbm_status collapse(cbm_plant *pl, const view *v, char *err, size_t errn)
     return CBM_OK;
 }
 
+/* After rings were added or the wood aged: the plant evaluated, the sections written back to the
+ * string, each segment's rings collapsed to the equivalent ring. */
+static cbm_status settle_wood(cbm_plant *pl, const view *v, char *err, size_t errn)
+{
+    CBM_TRY(cbm_plant_evaluate(pl, NULL));
+    CBM_TRY(write_back(pl, v, true));
+    return collapse(pl, v, err, errn);
+}
+
 /* A model and string the mechanics can run on; else a message in err. */
 static cbm_status usable(const cbm__mechlang *m, const lstr *s, char *err, size_t errn)
 {
@@ -659,19 +668,11 @@ static cbm_status run_op(cbm_context *ctx, cbm__mechlang *m, lstr *s, int op, do
             st = cbm_plant_grow_rings(pl, &m->growth, &gs);
         *result = (double)gs.rings_added;
         if (st == CBM_OK)
-            st = cbm_plant_evaluate(pl, NULL);
-        if (st == CBM_OK)
-            st = write_back(pl, &v, true);
-        if (st == CBM_OK)
-            st = collapse(pl, &v, err, errn);
+            st = settle_wood(pl, &v, err, errn);
     } else if (st == CBM_OK && op == CBM__ML_AGE) {
         st = cbm_plant_age_wood(pl, &m->growth, arg);
         if (st == CBM_OK)
-            st = cbm_plant_evaluate(pl, NULL);
-        if (st == CBM_OK)
-            st = write_back(pl, &v, true);
-        if (st == CBM_OK)
-            st = collapse(pl, &v, err, errn);
+            st = settle_wood(pl, &v, err, errn);
         *result = (double)v.seg.len;
     } else if (st == CBM_OK && (op == CBM__ML_FREQUENCY || op == CBM__ML_SWAY)) {
         /* the dynamics about the stored state; the string is not changed */
