@@ -118,6 +118,19 @@ static inline cbm_status lsys_derive(cbm_context *ctx, const char *path, const c
     return s;
 }
 
+/* lsys_derive, then the homomorphism applied, the model released: the first failure's status
+ * (unchecked: for the out-of-memory loops). */
+static inline cbm_status lsys_derive_homomorphism(cbm_context *ctx, const char *path,
+                                                  const char *text, int steps)
+{
+    cbm_lsys *ls = NULL;
+    cbm_status s = lsys_derive(ctx, path, text, steps, &ls);
+    if (s == CBM_OK)
+        s = cbm_lsys_apply_homomorphism(ls);
+    cbm_lsys_destroy(ls);
+    return s;
+}
+
 /* The symbol of the L+C module called `name`, -1 if none. */
 static inline int lsys_symbol(const cbm_lsys *ls, const char *name)
 {

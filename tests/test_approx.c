@@ -14,8 +14,9 @@
 
 #include <stdlib.h>
 
-static double run(cbm_context *ctx, long disc, double t0, double k0, double coni, double p,
-                  cbm_approx_mode mode, double *res, cbm_approx_info *info)
+/* The generator's settings for an axis of disc segments from angle t0 (degrees). */
+static cbm_approx_def axis_def(long disc, double t0, double k0, double coni, double p,
+                               cbm_approx_mode mode)
 {
     cbm_approx_def d = cbm_approx_def_default();
     d.disc = disc;
@@ -24,6 +25,13 @@ static double run(cbm_context *ctx, long disc, double t0, double k0, double coni
     d.coni = coni;
     d.p = p;
     d.mode = mode;
+    return d;
+}
+
+static double run(cbm_context *ctx, long disc, double t0, double k0, double coni, double p,
+                  cbm_approx_mode mode, double *res, cbm_approx_info *info)
+{
+    cbm_approx_def d = axis_def(disc, t0, k0, coni, p, mode);
     CHECK_OK(cbm_approx_angles(ctx, &d, res, (size_t)disc + 1, info));
     return info->tip_angle;
 }
@@ -439,12 +447,7 @@ static approx_err approx_vs(cbm_context *ctx, long disc, double t0, double coni,
 {
     double res[201];
     cbm_approx_info in;
-    cbm_approx_def d = cbm_approx_def_default();
-    d.disc = disc;
-    d.t0 = t0;
-    d.k0 = sqrt(factor * W) / (double)disc;
-    d.coni = coni;
-    d.mode = mode;
+    cbm_approx_def d = axis_def(disc, t0, sqrt(factor * W) / (double)disc, coni, 1.0, mode);
     approx_err e = {NAN, NAN};
     cbm_status st = cbm_approx_angles(ctx, &d, res, (size_t)disc + 1, &in);
     /* the listing's closed form can aim past the hanging direction (t0 + omega > 180): its
@@ -470,12 +473,7 @@ static double in_closed_omega(cbm_context *ctx, long disc, double t0, double con
 {
     double res[201];
     cbm_approx_info in;
-    cbm_approx_def d = cbm_approx_def_default();
-    d.disc = disc;
-    d.t0 = t0;
-    d.k0 = sqrt(W) / (double)disc;
-    d.coni = coni;
-    d.mode = CBM_APPROX_THESIS;
+    cbm_approx_def d = axis_def(disc, t0, sqrt(W) / (double)disc, coni, 1.0, CBM_APPROX_THESIS);
     (void)cbm_approx_angles(ctx, &d, res, (size_t)disc + 1, &in);
     cbm_context_clear_errors(ctx);
     return in.omega;

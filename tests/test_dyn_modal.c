@@ -19,6 +19,29 @@ static cbm_motion *motion(cbm_plant *p, const cbm_motion_def *md)
     return m;
 }
 
+/* The wind of the modal wind tests: uniform along z, 2 m^2 of organs per kg, gusts of intensity
+ * 0.2 drawn from seed 3. */
+static void gusty_wind(cbm_wind_def *w, cbm_gust_def *g)
+{
+    *w = cbm_wind_def_default();
+    w->direction = v3(0, 0, 1);
+    w->profile = CBM_WIND_UNIFORM;
+    w->organ_area_per_kg = 2.0;
+    *g = cbm_gust_def_default();
+    g->intensity = 0.2;
+    g->seed = 3;
+}
+
+/* m under that wind at 15 m/s, started from the static deflection under its mean. */
+static void start_gusty_wind(cbm_motion *m)
+{
+    cbm_wind_def w;
+    cbm_gust_def g;
+    gusty_wind(&w, &g);
+    CHECK_OK(cbm_motion_set_wind(m, &w, 15.0, &g));
+    CHECK_OK(cbm_motion_start_wind_static(m));
+}
+
 /* With all 3n modes the modal motion is the full one in other coordinates: 400 steps with
  * impulses, tugs and a base shake, undamped, with a damping ratio and with both Rayleigh terms
  * after a restart from a state, agree to 1e-7 of the largest rotation (the modes of a 120-DOF
@@ -212,21 +235,13 @@ TEST(modal_truncation_wind)
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = 2e-3;
     md.damping_ratio = 0.01;
-    cbm_wind_def w = cbm_wind_def_default();
-    w.direction = v3(0, 0, 1);
-    w.profile = CBM_WIND_UNIFORM;
-    w.organ_area_per_kg = 2.0;
-    cbm_gust_def g = cbm_gust_def_default();
-    g.intensity = 0.2;
-    g.seed = 3;
     size_t ks[] = {5, 10, 20, 40};
     double errs[4];
     int steps = 1000;
     cbm_vec3 *uf = calloc((size_t)steps, sizeof *uf);
     cbm_motion *fm = motion(p, &md);
     if (fm) {
-        CHECK_OK(cbm_motion_set_wind(fm, &w, 15.0, &g));
-        CHECK_OK(cbm_motion_start_wind_static(fm));
+        start_gusty_wind(fm);
     }
     for (int s = 0; fm && uf && s < steps; s++) {
         CHECK_OK(cbm_motion_step(fm));
@@ -238,8 +253,7 @@ TEST(modal_truncation_wind)
         cbm_motion *mm = motion(p, &md);
         if (!mm)
             break;
-        CHECK_OK(cbm_motion_set_wind(mm, &w, 15.0, &g));
-        CHECK_OK(cbm_motion_start_wind_static(mm));
+        start_gusty_wind(mm);
         double umax = 0.0, dmax = 0.0, dyn = 0.0;
         for (int s = 0; s < steps; s++) {
             CHECK_OK(cbm_motion_step(mm));
@@ -314,13 +328,9 @@ TEST(modal_gust_field)
     cbm_motion_def md = cbm_motion_def_default();
     md.dt = 2e-3;
     md.damping_ratio = 0.01;
-    cbm_wind_def w = cbm_wind_def_default();
-    w.direction = v3(0, 0, 1);
-    w.profile = CBM_WIND_UNIFORM;
-    w.organ_area_per_kg = 2.0;
-    cbm_gust_def g = cbm_gust_def_default();
-    g.intensity = 0.2;
-    g.seed = 3;
+    cbm_wind_def w;
+    cbm_gust_def g;
+    gusty_wind(&w, &g);
     /* (a) */
     md.method = CBM_MOTION_MODAL;
     md.modes = 20;
@@ -434,15 +444,7 @@ static double corrected_error(cbm_plant *p, int n, int kind, size_t k, bool sc, 
     if (!m)
         return INFINITY;
     if (kind) {
-        cbm_wind_def w = cbm_wind_def_default();
-        w.direction = v3(0, 0, 1);
-        w.profile = CBM_WIND_UNIFORM;
-        w.organ_area_per_kg = 2.0;
-        cbm_gust_def g = cbm_gust_def_default();
-        g.intensity = 0.2;
-        g.seed = 3;
-        CHECK_OK(cbm_motion_set_wind(m, &w, 15.0, &g));
-        CHECK_OK(cbm_motion_start_wind_static(m));
+        start_gusty_wind(m);
     }
     double umax = 0.0, dmax = 0.0;
     for (int s = 0; s < steps; s++) {
@@ -522,15 +524,7 @@ TEST(modal_static_correction)
         if (!fm)
             break;
         if (kind) {
-            cbm_wind_def w = cbm_wind_def_default();
-            w.direction = v3(0, 0, 1);
-            w.profile = CBM_WIND_UNIFORM;
-            w.organ_area_per_kg = 2.0;
-            cbm_gust_def g = cbm_gust_def_default();
-            g.intensity = 0.2;
-            g.seed = 3;
-            CHECK_OK(cbm_motion_set_wind(fm, &w, 15.0, &g));
-            CHECK_OK(cbm_motion_start_wind_static(fm));
+            start_gusty_wind(fm);
         }
         for (int s = 0; s < steps; s++) {
             if (!kind)

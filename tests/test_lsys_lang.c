@@ -504,12 +504,7 @@ static cbm_status oom_run(cbm_context *ctx, void *ud)
         "A(y) --> B(y)A(y)\n"
         "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
         "endlsystem\n";
-    cbm_lsys *ls = NULL;
-    cbm_status s = lsys_derive(ctx, "oom.l", text, 3, &ls);
-    if (s == CBM_OK)
-        s = cbm_lsys_apply_homomorphism(ls);
-    cbm_lsys_destroy(ls);
-    return s;
+    return lsys_derive_homomorphism(ctx, "oom.l", text, 3);
 }
 
 TEST(out_of_memory_at_every_allocation)

@@ -266,12 +266,7 @@ static cbm_status oom_run(cbm_context *ctx, void *ud)
                        "B(x) --> +C(x)?(3)D$\nC(x) --> C(x+n)\n"
                        "decomposition\nC(x) --> E(x)\nhomomorphism\nseed: 3\nE(x) --> F(ran(x))\n"
                        "endlsystem\nLsystem: 3\nAxiom: D\nD --> DD\nendlsystem\n";
-    cbm_lsys *ls = NULL;
-    cbm_status s = lsys_derive(ctx, "oom.l", text, 3, &ls);
-    if (s == CBM_OK)
-        s = cbm_lsys_apply_homomorphism(ls);
-    cbm_lsys_destroy(ls);
-    return s;
+    return lsys_derive_homomorphism(ctx, "oom.l", text, 3);
 }
 
 TEST(out_of_memory_at_every_allocation)
