@@ -23,6 +23,16 @@ static inline cbm_plant *clamped_plant(cbm_context *ctx, double elev)
     return p;
 }
 
+/* Appends n segments of *d to p, each the child of the segment added before it (the first, the
+ * child of the plant's last segment: the root on an empty plant). */
+static inline void add_axis(cbm_plant *p, cbm_segment_def *d, int n)
+{
+    for (int i = 0; i < n; i++) {
+        d->parent = (int64_t)cbm_plant_segment_count(p) - 1;
+        CHECK_OK(cbm_plant_add_segment(p, d, NULL));
+    }
+}
+
 /* A straight rod of n equal segments clamped at `elev` rad above the horizontal, radius given by
  * radius(s) at each segment's centroid (taper), optional tip force/moment. */
 typedef double (*radius_fn)(double s, double L);

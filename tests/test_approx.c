@@ -399,10 +399,7 @@ TEST(approx_plant_lateral)
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e9;
     d.core.a = d.core.b = 0.02;
-    for (int i = 0; i < 10; i++) {
-        d.parent = i - 1;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
+    add_axis(p, &d, 10);
     d.core.a = d.core.b = 0.005;
     d.deviation = PI / 3;
     d.parent = 4;
@@ -410,10 +407,7 @@ TEST(approx_plant_lateral)
     CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
     d.deviation = 0;
     d.lateral = false;
-    for (int i = 0; i < 9; i++) {
-        d.parent = 10 + i;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
+    add_axis(p, &d, 9); /* the lateral's axis, from segment 10 */
     cbm_solve_def sd = cbm_solve_def_default();
     sd.solver = CBM_MECH_APPROX;
     cbm_solve_stats st;
@@ -934,10 +928,7 @@ TEST(approx_corrected_sweep)
         CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
         d.lateral = false;
         d.deviation = 0.0;
-        for (int k = 0; k < 4; k++) {
-            d.parent = (int64_t)cbm_plant_segment_count(p) - 1;
-            CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-        }
+        add_axis(p, &d, 4);
     }
     cbm_solve_def sd = cbm_solve_def_default();
     sd.solver = CBM_MECH_APPROX;

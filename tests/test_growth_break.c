@@ -56,10 +56,7 @@ TEST(growth_breakage_removes_what_it_carries)
     cbm_segment_def d = cbm_segment_def_default();
     d.core.youngs_modulus = 1e10;
     d.core.a = d.core.b = 0.02;
-    for (int i = 0; i < 5; i++) { /* trunk 0..4 */
-        d.parent = i - 1;
-        CHECK_OK(cbm_plant_add_segment(p, &d, NULL));
-    }
+    add_axis(p, &d, 5); /* trunk 0..4 */
     d.core.a = d.core.b = 0.005;
     d.core.modulus_of_rupture = 5e7;
     d.parent = 2; /* branch 5, 6, 7 from the third trunk segment */
