@@ -23,6 +23,7 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -33,19 +34,6 @@ typedef struct walk {
     size_t j, k;
     int dir;
 } walk;
-
-/* The bracket matching of a string walked by a right context: for every SB (in the order of the
- * string) the walk position of its EB, so that skipping a branch is a jump, not a scan, and
- * right contexts stay linear in the bracket depth. Extended lazily up to the string's end: the
- * current string is fixed during a step, the new string only grows. */
-typedef struct brtab {
-    const lstr *s; /* the string it describes, NULL: none */
-    int dir;       /* the walks it serves: +1 the current string, -1 the new (reversed) one */
-    walk at;       /* the scan: modules before it.i are in the table */
-    CBM_ARRAY(size_t) open; /* index of every SB, increasing */
-    CBM_ARRAY(walk) close;  /* the EB matching it; i = -1: none */
-    CBM_ARRAY(walk) stack;  /* the brackets waiting for their match */
-} brtab;
 
 typedef struct lpfg lpfg;
 struct lpfg {
@@ -60,7 +48,6 @@ struct lpfg {
     bool produced; /* produce executed */
     int prod_ix;
     walk scan[CX_N];
-    brtab brk[2]; /* during generate: [0] the current string, [1] the new one going Backward */
     lstr succ;
     CBM_ARRAY(lstr) scratch;
     bool nonfinite_warned;
@@ -72,7 +59,7 @@ struct lpfg {
 };
 
 /* ---------------------------------------------------------------- evaluation */
-static void rt_error(lpfg *lp, cbm_status s, const char *msg)
+static void runtime_error(lpfg *lp, cbm_status s, const char *msg)
 {
     cbm__lc_error(&lp->vm, s, msg);
 }
@@ -82,7 +69,7 @@ static bool spend(lpfg *lp, bool loop)
     return cbm__lc_spend(&lp->vm, loop);
 }
 
-static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
+static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
 
 /* The mechanics built-ins (lsys/mechlang.c) over the current string, at their na arguments
  * (at most 6; 0 for a missing one); the result to out[0]. */
@@ -101,8 +88,8 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_GROUND:
         if (!isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1]) || !(a[2] >= 0) || !isfinite(a[2])) {
-            rt_error(lp, CBM_E_INVALID,
-                     "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
             return;
         }
         m->ground_y = a[0];
@@ -111,7 +98,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_CONTACT:
         if (!(a[0] >= 0) || !isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1])) {
-            rt_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
+            runtime_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
             return;
         }
         m->contact_k = a[0];
@@ -123,15 +110,16 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_PIPEMODEL:
         if (!(a[0] > 0) || !(a[1] >= 0))
-            rt_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
+            runtime_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
         m->growth.pipe_exponent = a[0];
         m->growth.leaf_area = a[1];
         return;
     case FN_WOOD:
         if (!(a[0] > 0) || !(a[1] >= a[0]) || !(a[2] >= 0) || !(a[3] >= 0) || !(a[4] >= 0)) {
-            rt_error(lp, CBM_E_INVALID,
-                     "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
-                     "modulus of rupture >= 0)");
+            runtime_error(
+                lp, CBM_E_INVALID,
+                "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
+                "modulus of rupture >= 0)");
             return;
         }
         m->growth.youngs_juvenile = a[0];
@@ -142,7 +130,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_RINGRATE:
         if (!(a[0] > 0 && a[0] <= 1) || !(a[1] >= 0) || !isfinite(a[1])) {
-            rt_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
+            runtime_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
             return;
         }
         m->growth.pipe_rate = a[0];
@@ -151,9 +139,10 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_SOLVER:
         if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
             !(a[2] == 0 || a[2] == 1)) {
-            rt_error(lp, CBM_E_INVALID,
-                     "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
-                     "1)");
+            runtime_error(
+                lp, CBM_E_INVALID,
+                "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
+                "1)");
             return;
         }
         m->solve.tolerance = a[0];
@@ -167,7 +156,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
             cbm_mech_solver_names(names, sizeof names);
             snprintf(why, sizeof why, "SolverMethod(n): n is 0 .. %d, in the order %s",
                      CBM_MECH_SOLVER_COUNT - 1, names);
-            rt_error(lp, CBM_E_INVALID, why);
+            runtime_error(lp, CBM_E_INVALID, why);
             return;
         }
         /* a method imposed by the caller (cbm_lsys_def.solver) wins over the model's */
@@ -179,9 +168,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         /* the value of cbm_approx_load: 0 the thesis's tip load, 1 calibrated (L+C's default,
          * mechlang.c; docs/methods.md) */
         if (!(a[0] == CBM_APPROX_LOAD_TIP || a[0] == CBM_APPROX_LOAD_CALIBRATED)) {
-            rt_error(lp, CBM_E_INVALID,
-                     "ApproxLoad(n): n is 0 (thesis: the tip load) or 1 "
-                     "(calibrated, the default)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "ApproxLoad(n): n is 0 (thesis: the tip load) or 1 "
+                          "(calibrated, the default)");
             return;
         }
         m->solve.approx_load = (cbm_approx_load)(int)a[0];
@@ -189,17 +178,17 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_SOLVERTHREADS:
         /* cbm_solve_def.threads of every later Equilibrium(): results never depend on it */
         if (!(a[0] >= 0 && a[0] <= 1024 && a[0] == floor(a[0]))) {
-            rt_error(lp, CBM_E_INVALID,
-                     "SolverThreads(n): n is a whole number 0 .. 1024 (0: one per processor)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "SolverThreads(n): n is a whole number 0 .. 1024 (0: one per processor)");
             return;
         }
         m->solve.threads = (int)a[0];
         return;
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
-            rt_error(lp, CBM_E_INVALID,
-                     "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
-                     "E_reaction >= 0 Pa)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
+                          "E_reaction >= 0 Pa)");
             return;
         }
         m->growth.reaction_threshold = a[0];
@@ -211,9 +200,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         /* the modal motion of the next Sway()s (docs/language.md, docs/dynamics.md) */
         if (!(a[0] >= 0 && a[0] <= 1e9 && a[0] == floor(a[0])) || !(a[1] == 0 || a[1] == 1) ||
             (a[0] == 0 && a[1] == 1)) {
-            rt_error(lp, CBM_E_INVALID,
-                     "SwayModes(K: 0 (the full motion) or the number of modes, static "
-                     "correction: 0 or 1 (with K > 0))");
+            runtime_error(lp, CBM_E_INVALID,
+                          "SwayModes(K: 0 (the full motion) or the number of modes, static "
+                          "correction: 0 or 1 (with K > 0))");
             return;
         }
         m->dyn_args[7] = a[0];
@@ -222,7 +211,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_REACTIONBOUND:
         /* the largest a/b reaction wood makes (docs/growth.md): real stems stay within 1.5 */
         if (!(isfinite(a[0]) && (a[0] == 0 || a[0] >= 1))) {
-            rt_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
+            runtime_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
             return;
         }
         m->growth.reaction_max_aspect = a[0];
@@ -231,18 +220,19 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         break;
     }
     if (lp->rewriting) {
-        rt_error(lp, CBM_E_INVALID,
-                 "mechanics operations are refused during a derivation pass; call them in "
-                 "Start, StartEach, EndEach or End");
+        runtime_error(lp, CBM_E_INVALID,
+                      "mechanics operations are refused during a derivation pass; call them in "
+                      "Start, StartEach, EndEach or End");
         return;
     }
     if (n->fn == FN_LIGHT) {
         /* the leaves' light (lightlang.c); the string's structure is unchanged */
         if (!(a[0] >= 0 && a[0] <= CBM_SKY_SOC && a[0] == floor(a[0])) ||
             !(a[1] >= 1 && a[1] <= 16 && a[1] == floor(a[1]))) {
-            rt_error(lp, CBM_E_INVALID,
-                     "Light(sky, samples): sky 0 dome, 1 field, 2 uniform overcast, 3 standard "
-                     "overcast; samples 1..16");
+            runtime_error(
+                lp, CBM_E_INVALID,
+                "Light(sky, samples): sky 0 dome, 1 field, 2 uniform overcast, 3 standard "
+                "overcast; samples 1..16");
             return;
         }
         cbm_status s =
@@ -250,28 +240,28 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         if (s != CBM_OK) {
             char full[160];
             snprintf(full, sizeof full, "Light(): %s", msg);
-            rt_error(lp, s, full);
+            runtime_error(lp, s, full);
             out[0] = 0;
         }
         ls->homo_valid = false;
         return;
     }
     if (n->fn == FN_FREQUENCY && !(a[0] >= 1 && a[0] <= 1000 && a[0] == floor(a[0]))) {
-        rt_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
+        runtime_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
         return;
     }
     if (n->fn == FN_SWAY) {
         if (!(a[0] > 0 && a[1] > 0 && a[1] <= a[0] && a[0] / a[1] <= 1e7 && a[2] >= 0 &&
               a[3] >= 0 && isfinite(a[0]) && isfinite(a[2]) && isfinite(a[3]))) {
-            rt_error(lp, CBM_E_INVALID,
-                     "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
-                     ">= 0, gust intensity >= 0)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
+                          ">= 0, gust intensity >= 0)");
             return;
         }
         if (na == 6 && !(a[4] >= 0 && a[5] >= 0 && isfinite(a[4]) && isfinite(a[5]))) {
-            rt_error(lp, CBM_E_INVALID,
-                     "SwayDrag(duration, dt, wind, gust, gust coherence decay >= 0, leaf area "
-                     ">= 0 m^2/kg)");
+            runtime_error(lp, CBM_E_INVALID,
+                          "SwayDrag(duration, dt, wind, gust, gust coherence decay >= 0, leaf area "
+                          ">= 0 m^2/kg)");
             return;
         }
         memcpy(m->dyn_args, a, 6 * sizeof(double));
@@ -298,7 +288,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
                  : n->fn == FN_SWAY      ? (na == 6 ? "SwayDrag" : "Sway")
                                          : "Break",
                  msg);
-        rt_error(lp, s, full);
+        runtime_error(lp, s, full);
         return;
     }
     ls->homo_valid = false;
@@ -352,8 +342,9 @@ static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
     }
     case FN_FUNC:
         if (!ls->func)
-            rt_error(lp, CBM_E_RUNTIME,
-                     "func(name, x) needs function files (.func or .fset) on the command line");
+            runtime_error(
+                lp, CBM_E_RUNTIME,
+                "func(name, x) needs function files (.func or .fset) on the command line");
         else
             r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
         break;
@@ -387,7 +378,7 @@ static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
     const lc_node *n = &lp->m.nodes.data[(int32_t)ip->k];
     const double *arg = fr + ip->a;
     if (ip->fn == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
-        return ctx_match(ls, n->fn, n->a, n->b, fr);
+        return match_context(ls, n->fn, n->a, n->b, fr);
     if (n->fn == FN_PRINTF) {
         print(ls, n, arg);
         return 0;
@@ -404,20 +395,10 @@ static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
 }
 
 /* ---------------------------------------------------------------- the module string */
-static cbm_status room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, size_t npar)
+/* appends module `code` with its np parameters p to s */
+static cbm_status push_module(cbm_context *ctx, lstr *s, int code, const double *p, int np)
 {
-    if (s->n + nsym > s->cap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->sym, &s->cap, 1, s->n + nsym));
-    if (s->npm + npm > s->pccap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
-    if (s->npar + npar > s->parcap)
-        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, sizeof(double), s->npar + npar));
-    return CBM_OK;
-}
-
-static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p, int np)
-{
-    CBM_TRY(room(ctx, s, 1, 1, (size_t)np));
+    CBM_TRY(cbm__lstr_room(ctx, s, 1, 1, (size_t)np));
     s->sym[s->n++] = (uint8_t)(code | (np ? LSYS_PARAM_BIT : 0));
     if (np) {
         s->pc[s->npm++] = (uint8_t)np;
@@ -429,58 +410,25 @@ static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p,
     return CBM_OK;
 }
 
-/* appends the modules of src [from i] to dst, reversed when rev */
-static cbm_status append_str(cbm_context *ctx, lstr *dst, const lstr *src, bool rev)
-{
-    if (!src->n)
-        return CBM_OK;
-    CBM_TRY(room(ctx, dst, src->n, src->npm, src->npar));
-    if (!rev) {
-        memcpy(dst->sym + dst->n, src->sym, src->n);
-        if (src->npm)
-            memcpy(dst->pc + dst->npm, src->pc, src->npm);
-        if (src->npar)
-            memcpy((double *)dst->par + dst->npar, src->par, src->npar * sizeof(double));
-        dst->n += src->n;
-        dst->npm += src->npm;
-        dst->npar += src->npar;
-        return CBM_OK;
-    }
-    size_t j = src->npm, k = src->npar;
-    for (size_t i = src->n; i-- > 0;) {
-        uint8_t s = src->sym[i];
-        dst->sym[dst->n++] = s;
-        if (s & LSYS_PARAM_BIT) {
-            uint8_t np = src->pc[--j];
-            k -= np;
-            dst->pc[dst->npm++] = np;
-            memcpy((double *)dst->par + dst->npar, (const double *)src->par + k,
-                   np * sizeof(double));
-            dst->npar += np;
-        }
-    }
-    return CBM_OK;
-}
-
 /* walker */
-static inline bool w_ok(const walk *w)
+static inline bool walk_inside(const walk *w)
 {
     return w->i >= 0 && (size_t)w->i < w->s->n;
 }
 
-static inline int w_code(const walk *w)
+static inline int walk_symbol(const walk *w)
 {
     return w->s->sym[w->i] & 0x7f;
 }
 
-static inline void w_phys_next(walk *w)
+static inline void walk_next_in_memory(walk *w)
 {
     if (w->s->sym[w->i] & LSYS_PARAM_BIT)
         w->k += w->s->pc[w->j++];
     w->i++;
 }
 
-static inline void w_phys_prev(walk *w)
+static inline void walk_prev_in_memory(walk *w)
 {
     w->i--;
     if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
@@ -488,18 +436,18 @@ static inline void w_phys_prev(walk *w)
 }
 
 /* logical steps; false when leaving the string */
-static inline bool w_adv(walk *w)
+static inline bool walk_forward(walk *w)
 {
-    if (!w_ok(w))
+    if (!walk_inside(w))
         return false;
     if (w->dir > 0)
-        w_phys_next(w);
+        walk_next_in_memory(w);
     else
-        w_phys_prev(w);
-    return w_ok(w);
+        walk_prev_in_memory(w);
+    return walk_inside(w);
 }
 
-static inline bool w_back(walk *w)
+static inline bool walk_backward(walk *w)
 {
     if (w->dir > 0) {
         if (w->i <= 0) {
@@ -508,7 +456,7 @@ static inline bool w_back(walk *w)
         }
         if (w->i > (ptrdiff_t)w->s->n)
             return false;
-        w_phys_prev(w);
+        walk_prev_in_memory(w);
     } else {
         if (w->i >= (ptrdiff_t)w->s->n - 1) {
             w->i = (ptrdiff_t)w->s->n;
@@ -517,7 +465,7 @@ static inline bool w_back(walk *w)
         if (w->i < 0) { /* before the logical start: re-enter at the physical end */
             return false;
         }
-        w_phys_next(w);
+        walk_next_in_memory(w);
     }
     return true;
 }
@@ -535,7 +483,7 @@ static walk walk_end(const lstr *s, int dir)
         return walk_at(s, s->n, s->npm, s->npar, 1);
     walk w = walk_at(s, s->n, s->npm, s->npar, -1);
     if (s->n)
-        w_phys_prev(&w);
+        walk_prev_in_memory(&w);
     else
         w.i = -1;
     return w;
@@ -546,8 +494,8 @@ static walk walk_end(const lstr *s, int dir)
 static bool find_closing(walk *w, int opener, int closer, bool forward)
 {
     int depth = 0;
-    while (w_ok(w)) {
-        int c = w_code(w);
+    while (walk_inside(w)) {
+        int c = walk_symbol(w);
         if (c == opener)
             depth++;
         else if (c == closer) {
@@ -555,156 +503,89 @@ static bool find_closing(walk *w, int opener, int closer, bool forward)
                 return true;
             depth--;
         }
-        if (!(forward ? w_adv(w) : w_back(w)))
+        if (!(forward ? walk_forward(w) : walk_backward(w)))
             return false;
     }
     return false;
 }
 
-/* Scans t's string up to its end; false when memory refuses (the table is then dropped and
- * the walks scan). Going forward an SB waits for its EB; in the reversed new string an EB comes
- * first and waits for the SB appended later. */
-static bool brtab_extend(cbm_context *ctx, brtab *t, int sbc, int ebc)
+/* w is at an SB: moves it to the EB that closes the branch; false when there is none. A jump
+ * through the bracket table of the string when there is one (generate_pass), a scan otherwise. */
+static bool skip_branch(cbm_lsys *ls, walk *w, int sbc, int ebc)
 {
-    walk *p = &t->at;
-    while ((size_t)p->i < t->s->n) {
-        int c = w_code(p);
-        walk none = *p;
-        none.i = -1;
-        bool ok = true;
-        if (c == sbc) {
-            walk m = none;
-            if (t->dir < 0 && t->stack.len)
-                m = t->stack.data[--t->stack.len];
-            ok = CBM_ARRAY_PUSH(ctx, t->open, (size_t)p->i) == CBM_OK &&
-                 CBM_ARRAY_PUSH(ctx, t->close, m) == CBM_OK;
-            if (ok && t->dir > 0) {
-                walk ord = none; /* the SB's order in `open` */
-                ord.i = (ptrdiff_t)t->open.len - 1;
-                ok = CBM_ARRAY_PUSH(ctx, t->stack, ord) == CBM_OK;
-            }
-        } else if (c == ebc) {
-            if (t->dir < 0)
-                ok = CBM_ARRAY_PUSH(ctx, t->stack, *p) == CBM_OK;
-            else if (t->stack.len)
-                t->close.data[t->stack.data[--t->stack.len].i] = *p;
-        }
-        if (!ok) {
-            t->s = NULL;
+    lpos close;
+    if (cbm__brackets_jump(ls->ctx, &ls->brackets[w->dir > 0 ? 0 : 1], w->s, w->dir, (size_t)w->i,
+                           &close)) {
+        if (close.i == SIZE_MAX) { /* unmatched: the walk leaves the string */
+            w->i = -1;
             return false;
         }
-        w_phys_next(p);
+        *w = walk_at(w->s, close.i, close.j, close.k, w->dir);
+        return true;
     }
-    return true;
-}
-
-/* w is at an SB: the EB that matches it, through the table; false: no table for this walk. */
-static bool brtab_jump(lpfg *lp, cbm_context *ctx, walk *w, int sbc, int ebc)
-{
-    brtab *t = &lp->brk[w->dir > 0 ? 0 : 1];
-    if (!t->s || t->s != w->s || t->dir != w->dir || !brtab_extend(ctx, t, sbc, ebc))
-        return false;
-    size_t lo = 0, hi = t->open.len;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (t->open.data[mid] < (size_t)w->i)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    if (lo == t->open.len || t->open.data[lo] != (size_t)w->i)
-        return false;
-    *w = t->close.data[lo];
-    return true;
-}
-
-static void brtab_start(lpfg *lp, int k, const lstr *s, int dir)
-{
-    brtab *t = &lp->brk[k];
-    t->s = s;
-    t->dir = dir;
-    t->at = walk_at(s, 0, 0, 0, dir);
-    t->open.len = t->close.len = t->stack.len = 0;
-}
-
-static void brtab_free(cbm_context *ctx, brtab *t)
-{
-    CBM_ARRAY_FREE(ctx, t->open);
-    CBM_ARRAY_FREE(ctx, t->close);
-    CBM_ARRAY_FREE(ctx, t->stack);
-    t->s = NULL;
-}
-
-/* w is at an SB: moves it to the EB that closes the branch; false when there is none */
-static bool skip_branch(const cbm_lsys *ls, walk *w, int sbc, int ebc)
-{
-    walk at = *w;
-    if (brtab_jump(ls->lp, ls->ctx, w, sbc, ebc))
-        return w->i >= 0; /* i = -1: unmatched, the walk leaves the string */
-    *w = at;
-    w_adv(w);
+    walk_forward(w);
     return find_closing(w, sbc, ebc, true);
 }
 
 /* find_closing forward, jumping over the branches inside through the bracket table */
-static bool find_eob(const cbm_lsys *ls, walk *w, int sbc, int ebc)
+static bool find_end_of_branch(cbm_lsys *ls, walk *w, int sbc, int ebc)
 {
-    while (w_ok(w)) {
-        int c = w_code(w);
+    while (walk_inside(w)) {
+        int c = walk_symbol(w);
         if (c == ebc)
             return true;
         if (c == sbc && !skip_branch(ls, w, sbc, ebc))
             return false;
-        if (!w_adv(w))
+        if (!walk_forward(w))
             return false;
     }
     return false;
 }
 
-static bool find_bob(walk *w, int sbc, int ebc)
+static bool find_start_of_branch(walk *w, int sbc, int ebc)
 {
     return find_closing(w, ebc, sbc, false);
 }
 
-static bool accept_right(const cbm_lsys *ls, walk *w, int code)
+static bool accept_right(cbm_lsys *ls, walk *w, int code)
 {
     const lpfg *lp = ls->lp;
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!w_ok(w))
+    if (!walk_inside(w))
         return false;
-    if (code == ebc && !find_eob(ls, w, sbc, ebc))
+    if (code == ebc && !find_end_of_branch(ls, w, sbc, ebc))
         return false;
-    while (w_ok(w) && w_code(w) != code) {
-        int c = w_code(w);
+    while (walk_inside(w) && walk_symbol(w) != code) {
+        int c = walk_symbol(w);
         if (!lp->m.considered[c])
-            w_adv(w);
+            walk_forward(w);
         else if (c == sbc) {
             if (!skip_branch(ls, w, sbc, ebc))
                 return false;
-            w_adv(w);
+            walk_forward(w);
         } else
             break;
     }
-    return w_ok(w) && w_code(w) == code;
+    return walk_inside(w) && walk_symbol(w) == code;
 }
 
 static bool accept_left(const lpfg *lp, walk *w, int code)
 {
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!w_back(w))
+    if (!walk_backward(w))
         return false;
-    while (w_ok(w) && w_code(w) != code) {
-        int c = w_code(w);
+    while (walk_inside(w) && walk_symbol(w) != code) {
+        int c = walk_symbol(w);
         if (!lp->m.considered[c] || c == sbc) {
-            if (!w_back(w))
+            if (!walk_backward(w))
                 return false;
         } else if (c == ebc) {
-            if (!w_back(w) || !find_bob(w, sbc, ebc) || !w_back(w))
+            if (!walk_backward(w) || !find_start_of_branch(w, sbc, ebc) || !walk_backward(w))
                 return false;
         } else
             break;
     }
-    return w_ok(w) && w_code(w) == code;
+    return walk_inside(w) && walk_symbol(w) == code;
 }
 
 static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
@@ -723,7 +604,7 @@ static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
 
 /* Matches pattern [first, first+n) of context k from the scanner's position; on success the
  * scanner moves past it and the formals are bound. */
-static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
+static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
 {
     lpfg *lp = ls->lp;
     walk w = lp->scan[k];
@@ -734,7 +615,7 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
             const lc_modref *m = &lp->m.sms.data[first + i];
             if (!accept_right(ls, &w, lp->m.mods.data[m->mod].code))
                 return false;
-            w_adv(&w);
+            walk_forward(&w);
         }
         /* bind after the whole pattern matched */
         walk b = lp->scan[k];
@@ -742,7 +623,7 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_right(ls, &b, lp->m.mods.data[m->mod].code);
             bind(ls, &b, m->args, fr);
-            w_adv(&b);
+            walk_forward(&b);
         }
     } else {
         for (int32_t i = n; i-- > 0;) {
@@ -772,7 +653,7 @@ static bool nonfinite(cbm_lsys *ls, int32_t pos, const char *module)
         snprintf(msg, sizeof msg,
                  "a parameter of %.60s is not a finite number (--allow-nonfinite keeps it)",
                  module);
-        rt_error(lp, CBM_E_RUNTIME, msg);
+        runtime_error(lp, CBM_E_RUNTIME, msg);
         lp->vm.err_pos = pos;
         return false;
     }
@@ -805,9 +686,9 @@ static bool produce_compiled(void *ud, int smi, const double *v)
                 return false;
         off += sz;
     }
-    cbm_status s = push_mod(ls->ctx, lp->out, m->code, v, m->size);
+    cbm_status s = push_module(ls->ctx, lp->out, m->code, v, m->size);
     if (s != CBM_OK) {
-        rt_error(lp, s, "out of memory");
+        runtime_error(lp, s, "out of memory");
         return false;
     }
     return true;
@@ -815,7 +696,7 @@ static bool produce_compiled(void *ud, int smi, const double *v)
 
 /* ---------------------------------------------------------------- derivation */
 /* The execution budgets of a step (and of the Start block, global initialisers and axiom). */
-static void budgets(cbm_lsys *ls)
+static void set_budgets(cbm_lsys *ls)
 {
     const cbm_limits *lim = cbm_context_limits(ls->ctx);
     ls->lp->vm.budget = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
@@ -884,17 +765,17 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                 if (first.i == 0)
                     ok = false;
                 else
-                    w_phys_prev(&first);
+                    walk_prev_in_memory(&first);
             }
             walk w = first;
             for (int32_t a = 0; a < np && ok; a++) {
                 const lc_modref *pm = &lp->m.sms.data[pr->pred.first + a];
-                if (!w_ok(&w) || w_code(&w) != lp->m.mods.data[pm->mod].code) {
+                if (!walk_inside(&w) || walk_symbol(&w) != lp->m.mods.data[pm->mod].code) {
                     ok = false;
                     break;
                 }
                 bind(ls, &w, pm->args, fr);
-                w_phys_next(&w);
+                walk_next_in_memory(&w);
             }
             if (!ok)
                 continue;
@@ -908,7 +789,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                 lp->scan[CX_NRC] = walk_end(nxt, -1);
             for (int c = 0; c < CX_N && ok; c++)
                 if (pr->cx[c].n)
-                    ok = ctx_match(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
+                    ok = match_context(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
             if (!ok)
                 continue;
             size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
@@ -933,12 +814,11 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
     return 0;
 }
 
-static cbm_status copy_at(cbm_context *ctx, const lstr *src, size_t i, size_t j, size_t k,
-                          lstr *dst)
+static cbm_status copy_module_at(cbm_context *ctx, const lstr *src, size_t i, size_t j, size_t k,
+                                 lstr *dst)
 {
-    int np = (src->sym[i] & LSYS_PARAM_BIT) ? src->pc[j] : 0;
-    /* a string without parameters has no parameter array (NULL + 0 is undefined) */
-    return push_mod(ctx, dst, src->sym[i] & 0x7f, np ? (const double *)src->par + k : NULL, np);
+    lpos p = {i, j, k};
+    return cbm__lstr_copy_module(ctx, src, &p, dst);
 }
 
 static cbm_status check_size(cbm_lsys *ls, const lstr *s)
@@ -973,9 +853,9 @@ static cbm_status decompose(cbm_lsys *ls, const lc_rules *set, const lstr *src, 
             if (level + 1 < set->depth)
                 CBM_TRY(decompose(ls, set, tmp, out, level + 1));
             else
-                CBM_TRY(append_str(ls->ctx, out, tmp, false));
+                CBM_TRY(cbm__lstr_append(ls->ctx, out, tmp, false));
         } else
-            CBM_TRY(copy_at(ls->ctx, src, i, j, k, out));
+            CBM_TRY(copy_module_at(ls->ctx, src, i, j, k, out));
         CBM_TRY(check_size(ls, out));
         for (size_t o = from; track && o < out->n; o++)
             CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, lp->origin, source));
@@ -1050,16 +930,16 @@ static cbm_status generate_pass(cbm_lsys *ls)
             c++;
         }
         if (!done)
-            CBM_TRY(copy_at(ls->ctx, src, i, j, k, nxt));
+            CBM_TRY(copy_module_at(ls->ctx, src, i, j, k, nxt));
         else if (back)
-            CBM_TRY(append_str(ls->ctx, nxt, succ, true));
+            CBM_TRY(cbm__lstr_append(ls->ctx, nxt, succ, true));
         CBM_TRY(check_size(ls, nxt));
         if (!back && (src->sym[i] & LSYS_PARAM_BIT))
             k += src->pc[j++];
     }
     if (back) { /* the output was built reversed */
         succ->n = succ->npm = succ->npar = 0;
-        CBM_TRY(append_str(ls->ctx, succ, nxt, true));
+        CBM_TRY(cbm__lstr_append(ls->ctx, succ, nxt, true));
         lstr t = *nxt;
         *nxt = *succ;
         *succ = t;
@@ -1073,11 +953,13 @@ static cbm_status generate_pass(cbm_lsys *ls)
 /* The derivation pass, with the bracket tables of the strings its right contexts walk */
 static cbm_status generate(cbm_lsys *ls)
 {
-    lpfg *lp = ls->lp;
-    brtab_start(lp, 0, &ls->cur, 1);
-    brtab_start(lp, 1, &ls->next, -1);
+    const lpfg *lp = ls->lp;
+    uint8_t sbc = (uint8_t)lp->m.mods.data[lp->m.sb].code;
+    uint8_t ebc = (uint8_t)lp->m.mods.data[lp->m.eb].code;
+    cbm__brackets_start(&ls->brackets[0], &ls->cur, 1, sbc, ebc);
+    cbm__brackets_start(&ls->brackets[1], &ls->next, -1, sbc, ebc);
     cbm_status s = generate_pass(ls);
-    lp->brk[0].s = lp->brk[1].s = NULL;
+    ls->brackets[0].s = ls->brackets[1].s = NULL;
     return s;
 }
 
@@ -1087,7 +969,7 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
-    budgets(ls);
+    set_budgets(ls);
     CBM_TRY(run_block(ls, 1));
     lp->rewriting = true;
     cbm_status s = generate(ls);
@@ -1141,7 +1023,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     lp->vm.err = CBM_OK;
     lp->vm.at = lp->vm.err_pos = -1;
     lp->nonfinite_warned = false;
-    budgets(ls);
+    set_budgets(ls);
     lp->backward = false;
     lp->group = 0;
     lp->vm.call_depth = 0;
@@ -1178,10 +1060,10 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     ls->homo_str.n = ls->homo_str.npm = ls->homo_str.npar = 0;
     lp->origin.len = 0;
-    budgets(ls);
+    set_budgets(ls);
     cbm_status s;
     if (!lp->m.interp.present || !lp->m.interp.prods.len)
-        s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
+        s = cbm__lstr_append(ls->ctx, &ls->homo_str, &ls->cur, false);
     else {
         lp->rewriting = true;
         s = decompose(ls, &lp->m.interp, &ls->cur, &ls->homo_str, 0);
@@ -1382,8 +1264,6 @@ void cbm__lpfg_free(cbm_lsys *ls)
     if (!lp)
         return;
     cbm_context *ctx = ls->ctx;
-    brtab_free(ctx, &lp->brk[0]);
-    brtab_free(ctx, &lp->brk[1]);
     cbm__mechlang_free(ctx, &lp->mech);
     CBM_ARRAY_FREE(ctx, lp->origin);
     cbm__free(ctx, lp->vm.glob, (size_t)(lp->m.nglobal + 1) * sizeof(double));
