@@ -64,7 +64,7 @@ static void runtime_error(lpfg *lp, cbm_status s, const char *msg)
     cbm__lc_error(&lp->vm, s, msg);
 }
 
-static bool spend(lpfg *lp, bool loop)
+static bool spend_operation(lpfg *lp, bool loop)
 {
     return cbm__lc_spend(&lp->vm, loop);
 }
@@ -410,7 +410,9 @@ static cbm_status push_module(cbm_context *ctx, lstr *s, int code, const double 
     return CBM_OK;
 }
 
-/* walker */
+/* The walk (a position and a reading direction, struct walk above): whether it is on a module
+ * of its string, that module's symbol, a step in memory order, a step in its direction
+ * (walk_forward) or against it (walk_backward). */
 static inline bool walk_inside(const walk *w)
 {
     return w->i >= 0 && (size_t)w->i < w->s->n;
@@ -542,11 +544,15 @@ static bool find_end_of_branch(cbm_lsys *ls, walk *w, int sbc, int ebc)
     return false;
 }
 
+/* find_closing against the walk's direction: to the SB that opens the current branch */
 static bool find_start_of_branch(walk *w, int sbc, int ebc)
 {
     return find_closing(w, ebc, sbc, false);
 }
 
+/* Moves w (reading rightwards) to the next module a right context sees, which must be `code`:
+ * modules not considered are passed over, branches the pattern does not enter are skipped, a
+ * pattern EB() first goes to the end of the current branch. */
 static bool accept_right(cbm_lsys *ls, walk *w, int code)
 {
     const lpfg *lp = ls->lp;
@@ -569,6 +575,9 @@ static bool accept_right(cbm_lsys *ls, walk *w, int code)
     return walk_inside(w) && walk_symbol(w) == code;
 }
 
+/* Moves w (reading leftwards) to the previous module a left context sees, which must be
+ * `code`: modules not considered and SBs are passed over (a branch is climbed out of), whole
+ * branches are skipped. */
 static bool accept_left(const lpfg *lp, walk *w, int code)
 {
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
@@ -588,7 +597,7 @@ static bool accept_left(const lpfg *lp, walk *w, int code)
     return walk_inside(w) && walk_symbol(w) == code;
 }
 
-static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
+static void bind_formals(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
 {
     lpfg *lp = ls->lp;
     if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
@@ -622,7 +631,7 @@ static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double 
         for (int32_t i = 0; i < n; i++) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_right(ls, &b, lp->m.mods.data[m->mod].code);
-            bind(ls, &b, m->args, fr);
+            bind_formals(ls, &b, m->args, fr);
             walk_forward(&b);
         }
     } else {
@@ -635,7 +644,7 @@ static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double 
         for (int32_t i = n; i-- > 0;) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_left(lp, &b, lp->m.mods.data[m->mod].code);
-            bind(ls, &b, m->args, fr);
+            bind_formals(ls, &b, m->args, fr);
         }
     }
     lp->scan[k] = w;
@@ -774,7 +783,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                     ok = false;
                     break;
                 }
-                bind(ls, &w, pm->args, fr);
+                bind_formals(ls, &w, pm->args, fr);
                 walk_next_in_memory(&w);
             }
             if (!ok)
@@ -798,7 +807,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             /* a production applied is an operation: a decomposition that doubles to its
              * maximum depth stops at the budget */
             lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
-            if (!spend(lp, false))
+            if (!spend_operation(lp, false))
                 return 0;
             int bi = cbm__lc_body(&lp->prog, which, p);
             if (bi >= 0 && lp->prog.fn[bi].compiled) { /* the register (or native) code */
