@@ -71,116 +71,94 @@ static bool match_predecessor(cbm_lsys *ls, const prod *pr, const lstr *s, lpos 
     return true;
 }
 
-/* r is at a '[' of s: moves it after the matching ']' (or to the end). A jump through the
- * bracket table for the current string (built on the first such skip in it), a scan
- * otherwise. */
-static void skip_branch(cbm_lsys *ls, const lstr *s, lpos *r)
+/* The bracket table of s when s is the current string (started on the first branch a context
+ * skips in it, kept while the string is unchanged, homomorphism included), else NULL: the walks
+ * then scan. */
+static cbm__brackets *brackets_of(cbm_lsys *ls, const lstr *s)
 {
-    if (s == &ls->cur) {
-        cbm__brackets *t = &ls->brackets[0];
-        if (t->s != &ls->cur || ls->brackets_gen != ls->cur_gen) {
-            cbm__brackets_start(t, &ls->cur, 1, '[', ']');
-            ls->brackets_gen = ls->cur_gen;
-        }
-        lpos close;
-        if (cbm__brackets_jump(ls->ctx, t, s, 1, r->i, &close)) {
-            if (close.i == SIZE_MAX) { /* unmatched: the branch runs to the end */
-                *r = (lpos){s->n, s->npm, s->npar};
-            } else {
-                *r = close;
-                cbm__pos_next(s, r);
-            }
-            return;
-        }
+    if (s != &ls->cur)
+        return NULL;
+    cbm__brackets *t = &ls->brackets[0];
+    if (t->s != &ls->cur || ls->brackets_gen != ls->cur_gen) {
+        cbm__brackets_start(t, &ls->cur, 1, '[', ']');
+        ls->brackets_gen = ls->cur_gen;
     }
-    cbm__pos_next(s, r);
-    int level = 0;
-    while (r->i < s->n) {
-        uint8_t d = s->sym[r->i] & 0x7f;
-        if (d == '[')
-            level++;
-        else if (d == ']' && level-- == 0)
-            break;
-        cbm__pos_next(s, r);
-    }
-    if (r->i < s->n)
-        cbm__pos_next(s, r);
+    return t;
 }
 
-/* Right context from r (the module after the predecessor). */
+/* Whether the module w is on has symbol `sym` and np parameters. */
+static inline bool walk_is(const cbm__walk *w, int sym, int np)
+{
+    const lpos at = {(size_t)w->i, w->j, w->k};
+    return cbm__walk_symbol(w) == sym && cbm__module_params(w->s, &at) == np;
+}
+
+/* Right context from r (the module after the predecessor), through the walks of step.c: ignored
+ * modules are passed over (even one the pattern names), a branch the pattern does not open is
+ * skipped, `=` goes to the end of the branch and leaves its ']' (or to the end of the string
+ * when there is none, or a '[' in the way is not closed). Parameters are bound as the pattern is
+ * read. */
 static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
 {
     const fmodule *m = ls->fmods.data + pr->rc;
+    cbm__brackets *t = NULL;
+    cbm__walk w = cbm__walk_at(s, r.i, r.j, r.k, 1);
     int32_t k = 0;
     while (k < pr->nrc) {
-        if (m[k].sym == '=') { /* skip to the end of the branch, over the branches in it */
-            while (r.i < s->n) {
-                uint8_t c = s->sym[r.i] & 0x7f;
-                if (c == ']')
-                    break;
-                if (c == '[')
-                    skip_branch(ls, s, &r);
-                else
-                    cbm__pos_next(s, &r);
-            }
+        if (m[k].sym == '=') {
+            t = t ? t : brackets_of(ls, s);
+            if (!cbm__walk_to_branch_end(ls->ctx, t, &w, '[', ']'))
+                w.i = (ptrdiff_t)s->n; /* no ']': to the end */
             k++;
             continue;
         }
-        if (r.i >= s->n)
+        if (!cbm__walk_inside(&w))
             return false;
-        uint8_t c = s->sym[r.i] & 0x7f;
+        int c = cbm__walk_symbol(&w);
         if (ls->ign[c]) {
-            cbm__pos_next(s, &r);
+            cbm__walk_forward(&w);
         } else if (m[k].sym != '[' && c == '[') {
-            skip_branch(ls, s, &r);
+            t = t ? t : brackets_of(ls, s);
+            if (!cbm__walk_skip_branch(ls->ctx, t, &w, '[', ']'))
+                return false;      /* unmatched: the branch runs to the end, the pattern does not */
+            cbm__walk_forward(&w); /* past the ']' */
         } else {
-            if (c != m[k].sym || cbm__module_params(s, &r) != m[k].np)
+            if (!walk_is(&w, m[k].sym, m[k].np))
                 return false;
             if (m[k].np) {
-                cbm__params_load(s, r.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
                 slot += m[k].np;
             }
-            cbm__pos_next(s, &r);
+            cbm__walk_forward(&w);
             k++;
         }
     }
     return true;
 }
 
-/* Left context ending just before l. */
+/* Left context ending just before l: ignored modules and '[' are passed over (a branch is
+ * climbed out of), whole branches are skipped. */
 static bool match_left_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
 {
     const fmodule *m = ls->fmods.data + pr->lc;
     int slot = 0;
     for (int32_t k = 0; k < pr->nlc; k++)
         slot += m[k].np;
+    cbm__walk w = cbm__walk_at(s, l.i, l.j, l.k, 1);
     int32_t k = pr->nlc - 1;
     while (k >= 0) {
-        if (l.i == 0)
+        if (!cbm__walk_backward(&w))
             return false;
-        uint8_t c = s->sym[l.i - 1] & 0x7f;
-        if (c == ']') {
-            cbm__pos_prev(s, &l);
-            int level = 0;
-            for (;;) {
-                if (l.i == 0)
-                    return false;
-                cbm__pos_prev(s, &l);
-                uint8_t d = s->sym[l.i] & 0x7f;
-                if (d == ']')
-                    level++;
-                else if (d == '[' && level-- == 0)
-                    break;
-            }
-        } else if (c == '[' || ls->ign[c]) {
-            cbm__pos_prev(s, &l);
-        } else {
-            cbm__pos_prev(s, &l);
-            if (c != m[k].sym || cbm__module_params(s, &l) != m[k].np)
+        int c = cbm__walk_symbol(&w);
+        if (c == ']') { /* to its '[' */
+            if (!cbm__walk_backward(&w) || !cbm__walk_to_branch_start(&w, '[', ']'))
+                return false;
+        } else if (c != '[' && !ls->ign[c]) {
+            if (!walk_is(&w, m[k].sym, m[k].np))
                 return false;
             slot -= m[k].np;
             if (m[k].np)
-                cbm__params_load(s, l.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
             k--;
         }
     }

@@ -27,14 +27,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-/* a walker over a packed string: dir +1 reads it left to right, -1 right to left */
-typedef struct walk {
-    const lstr *s;
-    ptrdiff_t i;
-    size_t j, k;
-    int dir;
-} walk;
-
 typedef struct lpfg lpfg;
 struct lpfg {
     lc_model m;       /* the compiled model (lang/lc.h) */
@@ -47,7 +39,7 @@ struct lpfg {
     lstr *out;     /* where produce appends */
     bool produced; /* produce executed */
     int prod_ix;
-    walk scan[CX_N];
+    cbm__walk scan[CX_N];
     lstr succ;
     CBM_ARRAY(lstr) scratch;
     bool nonfinite_warned;
@@ -410,194 +402,75 @@ static cbm_status push_module(cbm_context *ctx, lstr *s, int code, const double 
     return CBM_OK;
 }
 
-/* The walk (a position and a reading direction, struct walk above): whether it is on a module
- * of its string, that module's symbol, a step in memory order, a step in its direction
- * (walk_forward) or against it (walk_backward). */
-static inline bool walk_inside(const walk *w)
-{
-    return w->i >= 0 && (size_t)w->i < w->s->n;
-}
-
-static inline int walk_symbol(const walk *w)
-{
-    return w->s->sym[w->i] & 0x7f;
-}
-
-static inline void walk_next_in_memory(walk *w)
-{
-    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
-        w->k += w->s->pc[w->j++];
-    w->i++;
-}
-
-static inline void walk_prev_in_memory(walk *w)
-{
-    w->i--;
-    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
-        w->k -= w->s->pc[--w->j];
-}
-
-/* logical steps; false when leaving the string */
-static inline bool walk_forward(walk *w)
-{
-    if (!walk_inside(w))
-        return false;
-    if (w->dir > 0)
-        walk_next_in_memory(w);
-    else
-        walk_prev_in_memory(w);
-    return walk_inside(w);
-}
-
-static inline bool walk_backward(walk *w)
-{
-    if (w->dir > 0) {
-        if (w->i <= 0) {
-            w->i = -1;
-            return false;
-        }
-        if (w->i > (ptrdiff_t)w->s->n)
-            return false;
-        walk_prev_in_memory(w);
-    } else {
-        if (w->i >= (ptrdiff_t)w->s->n - 1) {
-            w->i = (ptrdiff_t)w->s->n;
-            return false;
-        }
-        if (w->i < 0) { /* before the logical start: re-enter at the physical end */
-            return false;
-        }
-        walk_next_in_memory(w);
-    }
-    return true;
-}
-
-static walk walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
-{
-    walk w = {s, (ptrdiff_t)i, j, k, dir};
-    return w;
-}
-
 /* position after the last module (dir +1), or at the last module (dir -1: logical start) */
-static walk walk_end(const lstr *s, int dir)
+static cbm__walk walk_end(const lstr *s, int dir)
 {
     if (dir > 0)
-        return walk_at(s, s->n, s->npm, s->npar, 1);
-    walk w = walk_at(s, s->n, s->npm, s->npar, -1);
+        return cbm__walk_at(s, s->n, s->npm, s->npar, 1);
+    cbm__walk w = cbm__walk_at(s, s->n, s->npm, s->npar, -1);
     if (s->n)
-        walk_prev_in_memory(&w);
+        cbm__walk_prev_in_memory(&w);
     else
         w.i = -1;
     return w;
 }
 
-/* Walks to the bracket that closes the current nesting level: forward to its ']' (opener '['),
- * or backward to its '[' (opener ']'). Brackets opened on the way are skipped whole. */
-static bool find_closing(walk *w, int opener, int closer, bool forward)
+/* The bracket table of the string a right context walks (generate_pass sets them; outside it
+ * they describe no string and the walks scan). */
+static cbm__brackets *brackets_of(cbm_lsys *ls, const cbm__walk *w)
 {
-    int depth = 0;
-    while (walk_inside(w)) {
-        int c = walk_symbol(w);
-        if (c == opener)
-            depth++;
-        else if (c == closer) {
-            if (depth == 0)
-                return true;
-            depth--;
-        }
-        if (!(forward ? walk_forward(w) : walk_backward(w)))
-            return false;
-    }
-    return false;
-}
-
-/* w is at an SB: moves it to the EB that closes the branch; false when there is none. A jump
- * through the bracket table of the string when there is one (generate_pass), a scan otherwise. */
-static bool skip_branch(cbm_lsys *ls, walk *w, int sbc, int ebc)
-{
-    lpos close;
-    if (cbm__brackets_jump(ls->ctx, &ls->brackets[w->dir > 0 ? 0 : 1], w->s, w->dir, (size_t)w->i,
-                           &close)) {
-        if (close.i == SIZE_MAX) { /* unmatched: the walk leaves the string */
-            w->i = -1;
-            return false;
-        }
-        *w = walk_at(w->s, close.i, close.j, close.k, w->dir);
-        return true;
-    }
-    walk_forward(w);
-    return find_closing(w, sbc, ebc, true);
-}
-
-/* find_closing forward, jumping over the branches inside through the bracket table */
-static bool find_end_of_branch(cbm_lsys *ls, walk *w, int sbc, int ebc)
-{
-    while (walk_inside(w)) {
-        int c = walk_symbol(w);
-        if (c == ebc)
-            return true;
-        if (c == sbc && !skip_branch(ls, w, sbc, ebc))
-            return false;
-        if (!walk_forward(w))
-            return false;
-    }
-    return false;
-}
-
-/* find_closing against the walk's direction: to the SB that opens the current branch */
-static bool find_start_of_branch(walk *w, int sbc, int ebc)
-{
-    return find_closing(w, ebc, sbc, false);
+    return &ls->brackets[w->dir > 0 ? 0 : 1];
 }
 
 /* Moves w (reading rightwards) to the next module a right context sees, which must be `code`:
  * modules not considered are passed over, branches the pattern does not enter are skipped, a
  * pattern EB() first goes to the end of the current branch. */
-static bool accept_right(cbm_lsys *ls, walk *w, int code)
+static bool accept_right(cbm_lsys *ls, cbm__walk *w, int code)
 {
     const lpfg *lp = ls->lp;
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!walk_inside(w))
+    if (!cbm__walk_inside(w))
         return false;
-    if (code == ebc && !find_end_of_branch(ls, w, sbc, ebc))
+    if (code == ebc && !cbm__walk_to_branch_end(ls->ctx, brackets_of(ls, w), w, sbc, ebc))
         return false;
-    while (walk_inside(w) && walk_symbol(w) != code) {
-        int c = walk_symbol(w);
+    while (cbm__walk_inside(w) && cbm__walk_symbol(w) != code) {
+        int c = cbm__walk_symbol(w);
         if (!lp->m.considered[c])
-            walk_forward(w);
+            cbm__walk_forward(w);
         else if (c == sbc) {
-            if (!skip_branch(ls, w, sbc, ebc))
+            if (!cbm__walk_skip_branch(ls->ctx, brackets_of(ls, w), w, sbc, ebc))
                 return false;
-            walk_forward(w);
+            cbm__walk_forward(w);
         } else
             break;
     }
-    return walk_inside(w) && walk_symbol(w) == code;
+    return cbm__walk_inside(w) && cbm__walk_symbol(w) == code;
 }
 
 /* Moves w (reading leftwards) to the previous module a left context sees, which must be
  * `code`: modules not considered and SBs are passed over (a branch is climbed out of), whole
  * branches are skipped. */
-static bool accept_left(const lpfg *lp, walk *w, int code)
+static bool accept_left(const lpfg *lp, cbm__walk *w, int code)
 {
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!walk_backward(w))
+    if (!cbm__walk_backward(w))
         return false;
-    while (walk_inside(w) && walk_symbol(w) != code) {
-        int c = walk_symbol(w);
+    while (cbm__walk_inside(w) && cbm__walk_symbol(w) != code) {
+        int c = cbm__walk_symbol(w);
         if (!lp->m.considered[c] || c == sbc) {
-            if (!walk_backward(w))
+            if (!cbm__walk_backward(w))
                 return false;
         } else if (c == ebc) {
-            if (!walk_backward(w) || !find_start_of_branch(w, sbc, ebc) || !walk_backward(w))
+            if (!cbm__walk_backward(w) || !cbm__walk_to_branch_start(w, sbc, ebc) ||
+                !cbm__walk_backward(w))
                 return false;
         } else
             break;
     }
-    return walk_inside(w) && walk_symbol(w) == code;
+    return cbm__walk_inside(w) && cbm__walk_symbol(w) == code;
 }
 
-static void bind_formals(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
+static void bind_formals(cbm_lsys *ls, const cbm__walk *w, int32_t formals, double *fr)
 {
     lpfg *lp = ls->lp;
     if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
@@ -616,7 +489,7 @@ static void bind_formals(cbm_lsys *ls, const walk *w, int32_t formals, double *f
 static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
 {
     lpfg *lp = ls->lp;
-    walk w = lp->scan[k];
+    cbm__walk w = lp->scan[k];
     if (!w.s)
         return false;
     if (k == CX_RC || k == CX_NRC) {
@@ -624,15 +497,15 @@ static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double 
             const lc_modref *m = &lp->m.sms.data[first + i];
             if (!accept_right(ls, &w, lp->m.mods.data[m->mod].code))
                 return false;
-            walk_forward(&w);
+            cbm__walk_forward(&w);
         }
         /* bind after the whole pattern matched */
-        walk b = lp->scan[k];
+        cbm__walk b = lp->scan[k];
         for (int32_t i = 0; i < n; i++) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_right(ls, &b, lp->m.mods.data[m->mod].code);
             bind_formals(ls, &b, m->args, fr);
-            walk_forward(&b);
+            cbm__walk_forward(&b);
         }
     } else {
         for (int32_t i = n; i-- > 0;) {
@@ -640,7 +513,7 @@ static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double 
             if (!accept_left(lp, &w, lp->m.mods.data[m->mod].code))
                 return false;
         }
-        walk b = lp->scan[k];
+        cbm__walk b = lp->scan[k];
         for (int32_t i = n; i-- > 0;) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_left(lp, &b, lp->m.mods.data[m->mod].code);
@@ -768,32 +641,33 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                 continue;
             double *fr = lp->vm.stack;
             lp->vm.sp = (size_t)pr->fsize;
-            walk first = walk_at(src, i, j, k, 1);
+            cbm__walk first = cbm__walk_at(src, i, j, k, 1);
             bool ok = true;
             for (int32_t a = 0; a < anchor && ok; a++) {
                 if (first.i == 0)
                     ok = false;
                 else
-                    walk_prev_in_memory(&first);
+                    cbm__walk_prev_in_memory(&first);
             }
-            walk w = first;
+            cbm__walk w = first;
             for (int32_t a = 0; a < np && ok; a++) {
                 const lc_modref *pm = &lp->m.sms.data[pr->pred.first + a];
-                if (!walk_inside(&w) || walk_symbol(&w) != lp->m.mods.data[pm->mod].code) {
+                if (!cbm__walk_inside(&w) ||
+                    cbm__walk_symbol(&w) != lp->m.mods.data[pm->mod].code) {
                     ok = false;
                     break;
                 }
                 bind_formals(ls, &w, pm->args, fr);
-                walk_next_in_memory(&w);
+                cbm__walk_next_in_memory(&w);
             }
             if (!ok)
                 continue;
             lp->scan[CX_LC] = first;
             lp->scan[CX_RC] = w;
-            memset(&lp->scan[CX_NLC], 0, sizeof(walk));
-            memset(&lp->scan[CX_NRC], 0, sizeof(walk));
+            memset(&lp->scan[CX_NLC], 0, sizeof(cbm__walk));
+            memset(&lp->scan[CX_NRC], 0, sizeof(cbm__walk));
             if (nxt && !lp->backward)
-                lp->scan[CX_NLC] = walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
+                lp->scan[CX_NLC] = cbm__walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
             else if (nxt)
                 lp->scan[CX_NRC] = walk_end(nxt, -1);
             for (int c = 0; c < CX_N && ok; c++)

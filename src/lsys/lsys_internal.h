@@ -21,6 +21,7 @@
 #include "lang/lang.h"
 #include "lsys/lsys.h"
 
+#include <stddef.h>
 #include <stdio.h>
 
 #define LSYS_PARAM_BIT  0x80u
@@ -149,6 +150,95 @@ void cbm__brackets_start(cbm__brackets *t, const lstr *s, int dir, uint8_t open,
 bool cbm__brackets_jump(cbm_context *ctx, cbm__brackets *t, const lstr *s, int dir, size_t at,
                         lpos *close);
 void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t);
+
+/* A walk over a packed string, for context matching: a position and a reading direction, dir
+ * +1 left to right, -1 right to left (the L+C dialect's new string, built reversed going
+ * Backward()). i runs from -1 (before the first module in memory) to n (after the last). */
+typedef struct cbm__walk {
+    const lstr *s;
+    ptrdiff_t i;
+    size_t j, k;
+    int dir;
+} cbm__walk;
+
+static inline cbm__walk cbm__walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
+{
+    cbm__walk w = {s, (ptrdiff_t)i, j, k, dir};
+    return w;
+}
+
+/* whether w is on a module of its string */
+static inline bool cbm__walk_inside(const cbm__walk *w)
+{
+    return w->i >= 0 && (size_t)w->i < w->s->n;
+}
+
+/* the symbol of the module w is on */
+static inline int cbm__walk_symbol(const cbm__walk *w)
+{
+    return w->s->sym[w->i] & 0x7f;
+}
+
+/* a step in memory order, whatever the direction */
+static inline void cbm__walk_next_in_memory(cbm__walk *w)
+{
+    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
+        w->k += w->s->pc[w->j++];
+    w->i++;
+}
+
+static inline void cbm__walk_prev_in_memory(cbm__walk *w)
+{
+    w->i--;
+    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
+        w->k -= w->s->pc[--w->j];
+}
+
+/* a step in the walk's direction; false when it leaves the string */
+static inline bool cbm__walk_forward(cbm__walk *w)
+{
+    if (!cbm__walk_inside(w))
+        return false;
+    if (w->dir > 0)
+        cbm__walk_next_in_memory(w);
+    else
+        cbm__walk_prev_in_memory(w);
+    return cbm__walk_inside(w);
+}
+
+/* a step against the walk's direction; false when it leaves the string (or is out of it) */
+static inline bool cbm__walk_backward(cbm__walk *w)
+{
+    if (w->dir > 0) {
+        if (w->i <= 0) {
+            w->i = -1;
+            return false;
+        }
+        if (w->i > (ptrdiff_t)w->s->n)
+            return false;
+        cbm__walk_prev_in_memory(w);
+    } else {
+        if (w->i >= (ptrdiff_t)w->s->n - 1) {
+            w->i = (ptrdiff_t)w->s->n;
+            return false;
+        }
+        if (w->i < 0) /* before the logical start */
+            return false;
+        cbm__walk_next_in_memory(w);
+    }
+    return true;
+}
+
+/* w is on an opening bracket: moves it to the closing bracket of that branch, through table t
+ * when it describes w's string in w's direction (t may be NULL), else by a scan. False when
+ * the branch is not closed. */
+bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* Moves w forward to the closing bracket of the branch it is in, over the branches inside;
+ * false when there is none. */
+bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* Moves w backward to the opening bracket of the branch it is in, over the branches inside;
+ * false when there is none. */
+bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close);
 
 /* A module of a predecessor or context: symbol and parameter count. Formal parameter names are
  * slots of the production's frame in the order they appear (left context, predecessor, right
