@@ -86,11 +86,10 @@ static cbm__brackets *brackets_of(cbm_lsys *ls, const lstr *s)
     return t;
 }
 
-/* Whether the module w is on has symbol `sym` and np parameters. */
-static inline bool walk_is(const cbm__walk *w, int sym, int np)
+/* The parameter count of the module w is on. */
+static inline int walk_params(const cbm__walk *w)
 {
-    const lpos at = {(size_t)w->i, w->j, w->k};
-    return cbm__walk_symbol(w) == sym && cbm__module_params(w->s, &at) == np;
+    return (w->s->sym[w->i] & LSYS_PARAM_BIT) ? w->s->pc[w->j] : 0;
 }
 
 /* Right context from r (the module after the predecessor), through the walks of step.c: ignored
@@ -112,24 +111,24 @@ static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpo
             k++;
             continue;
         }
-        if (!cbm__walk_inside(&w))
+        if ((size_t)w.i >= s->n) /* (never before the start: the walk only goes right) */
             return false;
         int c = cbm__walk_symbol(&w);
         if (ls->ign[c]) {
-            cbm__walk_forward(&w);
+            cbm__walk_next_in_memory(&w);
         } else if (m[k].sym != '[' && c == '[') {
             t = t ? t : brackets_of(ls, s);
             if (!cbm__walk_skip_branch(ls->ctx, t, &w, '[', ']'))
-                return false;      /* unmatched: the branch runs to the end, the pattern does not */
-            cbm__walk_forward(&w); /* past the ']' */
+                return false; /* unmatched: the branch runs to the end, the pattern does not */
+            cbm__walk_next_in_memory(&w); /* past the ']' (the walk reads left to right) */
         } else {
-            if (!walk_is(&w, m[k].sym, m[k].np))
+            if (c != m[k].sym || walk_params(&w) != m[k].np)
                 return false;
             if (m[k].np) {
                 cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
                 slot += m[k].np;
             }
-            cbm__walk_forward(&w);
+            cbm__walk_next_in_memory(&w);
             k++;
         }
     }
@@ -147,14 +146,18 @@ static bool match_left_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos
     cbm__walk w = cbm__walk_at(s, l.i, l.j, l.k, 1);
     int32_t k = pr->nlc - 1;
     while (k >= 0) {
-        if (!cbm__walk_backward(&w))
+        if (w.i <= 0)
             return false;
+        cbm__walk_prev_in_memory(&w);
         int c = cbm__walk_symbol(&w);
         if (c == ']') { /* to its '[' */
-            if (!cbm__walk_backward(&w) || !cbm__walk_to_branch_start(&w, '[', ']'))
+            if (w.i == 0)
+                return false;
+            cbm__walk_prev_in_memory(&w);
+            if (!cbm__walk_to_branch_start(&w, '[', ']'))
                 return false;
         } else if (c != '[' && !ls->ign[c]) {
-            if (!walk_is(&w, m[k].sym, m[k].np))
+            if (c != m[k].sym || walk_params(&w) != m[k].np)
                 return false;
             slot -= m[k].np;
             if (m[k].np)

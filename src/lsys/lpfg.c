@@ -51,7 +51,7 @@ struct lpfg {
 };
 
 /* ---------------------------------------------------------------- evaluation */
-static void runtime_error(lpfg *lp, cbm_status s, const char *msg)
+static void rt_error(lpfg *lp, cbm_status s, const char *msg)
 {
     cbm__lc_error(&lp->vm, s, msg);
 }
@@ -80,8 +80,8 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_GROUND:
         if (!isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1]) || !(a[2] >= 0) || !isfinite(a[2])) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
+            rt_error(lp, CBM_E_INVALID,
+                     "Ground(height y0 m, stiffness k >= 0 N/m, smoothing >= 0 m)");
             return;
         }
         m->ground_y = a[0];
@@ -90,7 +90,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_CONTACT:
         if (!(a[0] >= 0) || !isfinite(a[0]) || !(a[1] >= 0) || !isfinite(a[1])) {
-            runtime_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
+            rt_error(lp, CBM_E_INVALID, "Contact(stiffness k >= 0 N/m, smoothing >= 0 m)");
             return;
         }
         m->contact_k = a[0];
@@ -102,16 +102,15 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_PIPEMODEL:
         if (!(a[0] > 0) || !(a[1] >= 0))
-            runtime_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
+            rt_error(lp, CBM_E_INVALID, "PipeModel(exponent > 0, leaf area >= 0 m^2)");
         m->growth.pipe_exponent = a[0];
         m->growth.leaf_area = a[1];
         return;
     case FN_WOOD:
         if (!(a[0] > 0) || !(a[1] >= a[0]) || !(a[2] >= 0) || !(a[3] >= 0) || !(a[4] >= 0)) {
-            runtime_error(
-                lp, CBM_E_INVALID,
-                "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
-                "modulus of rupture >= 0)");
+            rt_error(lp, CBM_E_INVALID,
+                     "Wood(E_juvenile > 0, E_adult >= E_juvenile, adult age >= 0, density >= 0, "
+                     "modulus of rupture >= 0)");
             return;
         }
         m->growth.youngs_juvenile = a[0];
@@ -122,7 +121,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         return;
     case FN_RINGRATE:
         if (!(a[0] > 0 && a[0] <= 1) || !(a[1] >= 0) || !isfinite(a[1])) {
-            runtime_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
+            rt_error(lp, CBM_E_INVALID, "RingRate(kappa in (0, 1], min_ring >= 0 m)");
             return;
         }
         m->growth.pipe_rate = a[0];
@@ -131,10 +130,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_SOLVER:
         if (!(a[0] > 0) || !isfinite(a[0]) || !(a[1] >= 0) || !(a[1] <= 1e12) ||
             !(a[2] == 0 || a[2] == 1)) {
-            runtime_error(
-                lp, CBM_E_INVALID,
-                "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
-                "1)");
+            rt_error(lp, CBM_E_INVALID,
+                     "Solver(tolerance > 0, max passes >= 0 (0: the context's limit), go on 0 or "
+                     "1)");
             return;
         }
         m->solve.tolerance = a[0];
@@ -148,7 +146,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
             cbm_mech_solver_names(names, sizeof names);
             snprintf(why, sizeof why, "SolverMethod(n): n is 0 .. %d, in the order %s",
                      CBM_MECH_SOLVER_COUNT - 1, names);
-            runtime_error(lp, CBM_E_INVALID, why);
+            rt_error(lp, CBM_E_INVALID, why);
             return;
         }
         /* a method imposed by the caller (cbm_lsys_def.solver) wins over the model's */
@@ -160,9 +158,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         /* the value of cbm_approx_load: 0 the thesis's tip load, 1 calibrated (L+C's default,
          * mechlang.c; docs/methods.md) */
         if (!(a[0] == CBM_APPROX_LOAD_TIP || a[0] == CBM_APPROX_LOAD_CALIBRATED)) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "ApproxLoad(n): n is 0 (thesis: the tip load) or 1 "
-                          "(calibrated, the default)");
+            rt_error(lp, CBM_E_INVALID,
+                     "ApproxLoad(n): n is 0 (thesis: the tip load) or 1 "
+                     "(calibrated, the default)");
             return;
         }
         m->solve.approx_load = (cbm_approx_load)(int)a[0];
@@ -170,17 +168,17 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_SOLVERTHREADS:
         /* cbm_solve_def.threads of every later Equilibrium(): results never depend on it */
         if (!(a[0] >= 0 && a[0] <= 1024 && a[0] == floor(a[0]))) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "SolverThreads(n): n is a whole number 0 .. 1024 (0: one per processor)");
+            rt_error(lp, CBM_E_INVALID,
+                     "SolverThreads(n): n is a whole number 0 .. 1024 (0: one per processor)");
             return;
         }
         m->solve.threads = (int)a[0];
         return;
     case FN_REACTION:
         if (!(a[0] >= 0) || !(a[1] >= 0 && a[1] <= 1) || !(a[2] >= 0) || !(a[3] >= 0)) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
-                          "E_reaction >= 0 Pa)");
+            rt_error(lp, CBM_E_INVALID,
+                     "ReactionWood(threshold >= 0 rad/m, beta in [0, 1], increment >= 0 m, "
+                     "E_reaction >= 0 Pa)");
             return;
         }
         m->growth.reaction_threshold = a[0];
@@ -192,9 +190,9 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         /* the modal motion of the next Sway()s (docs/language.md, docs/dynamics.md) */
         if (!(a[0] >= 0 && a[0] <= 1e9 && a[0] == floor(a[0])) || !(a[1] == 0 || a[1] == 1) ||
             (a[0] == 0 && a[1] == 1)) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "SwayModes(K: 0 (the full motion) or the number of modes, static "
-                          "correction: 0 or 1 (with K > 0))");
+            rt_error(lp, CBM_E_INVALID,
+                     "SwayModes(K: 0 (the full motion) or the number of modes, static "
+                     "correction: 0 or 1 (with K > 0))");
             return;
         }
         m->dyn_args[7] = a[0];
@@ -203,7 +201,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
     case FN_REACTIONBOUND:
         /* the largest a/b reaction wood makes (docs/growth.md): real stems stay within 1.5 */
         if (!(isfinite(a[0]) && (a[0] == 0 || a[0] >= 1))) {
-            runtime_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
+            rt_error(lp, CBM_E_INVALID, "ReactionBound(max a/b: 0 (no bound) or >= 1)");
             return;
         }
         m->growth.reaction_max_aspect = a[0];
@@ -212,19 +210,18 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         break;
     }
     if (lp->rewriting) {
-        runtime_error(lp, CBM_E_INVALID,
-                      "mechanics operations are refused during a derivation pass; call them in "
-                      "Start, StartEach, EndEach or End");
+        rt_error(lp, CBM_E_INVALID,
+                 "mechanics operations are refused during a derivation pass; call them in "
+                 "Start, StartEach, EndEach or End");
         return;
     }
     if (n->fn == FN_LIGHT) {
         /* the leaves' light (lightlang.c); the string's structure is unchanged */
         if (!(a[0] >= 0 && a[0] <= CBM_SKY_SOC && a[0] == floor(a[0])) ||
             !(a[1] >= 1 && a[1] <= 16 && a[1] == floor(a[1]))) {
-            runtime_error(
-                lp, CBM_E_INVALID,
-                "Light(sky, samples): sky 0 dome, 1 field, 2 uniform overcast, 3 standard "
-                "overcast; samples 1..16");
+            rt_error(lp, CBM_E_INVALID,
+                     "Light(sky, samples): sky 0 dome, 1 field, 2 uniform overcast, 3 standard "
+                     "overcast; samples 1..16");
             return;
         }
         cbm_status s =
@@ -232,28 +229,28 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
         if (s != CBM_OK) {
             char full[160];
             snprintf(full, sizeof full, "Light(): %s", msg);
-            runtime_error(lp, s, full);
+            rt_error(lp, s, full);
             out[0] = 0;
         }
         ls->homo_valid = false;
         return;
     }
     if (n->fn == FN_FREQUENCY && !(a[0] >= 1 && a[0] <= 1000 && a[0] == floor(a[0]))) {
-        runtime_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
+        rt_error(lp, CBM_E_INVALID, "Frequency(k): k must be an integer 1..1000");
         return;
     }
     if (n->fn == FN_SWAY) {
         if (!(a[0] > 0 && a[1] > 0 && a[1] <= a[0] && a[0] / a[1] <= 1e7 && a[2] >= 0 &&
               a[3] >= 0 && isfinite(a[0]) && isfinite(a[2]) && isfinite(a[3]))) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
-                          ">= 0, gust intensity >= 0)");
+            rt_error(lp, CBM_E_INVALID,
+                     "Sway(duration s > 0, 0 < dt <= duration (at most 1e7 steps), wind m/s "
+                     ">= 0, gust intensity >= 0)");
             return;
         }
         if (na == 6 && !(a[4] >= 0 && a[5] >= 0 && isfinite(a[4]) && isfinite(a[5]))) {
-            runtime_error(lp, CBM_E_INVALID,
-                          "SwayDrag(duration, dt, wind, gust, gust coherence decay >= 0, leaf area "
-                          ">= 0 m^2/kg)");
+            rt_error(lp, CBM_E_INVALID,
+                     "SwayDrag(duration, dt, wind, gust, gust coherence decay >= 0, leaf area "
+                     ">= 0 m^2/kg)");
             return;
         }
         memcpy(m->dyn_args, a, 6 * sizeof(double));
@@ -280,7 +277,7 @@ static void call_mech(cbm_lsys *ls, const lc_node *n, const double *arg, int na,
                  : n->fn == FN_SWAY      ? (na == 6 ? "SwayDrag" : "Sway")
                                          : "Break",
                  msg);
-        runtime_error(lp, s, full);
+        rt_error(lp, s, full);
         return;
     }
     ls->homo_valid = false;
@@ -334,9 +331,8 @@ static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
     }
     case FN_FUNC:
         if (!ls->func)
-            runtime_error(
-                lp, CBM_E_RUNTIME,
-                "func(name, x) needs function files (.func or .fset) on the command line");
+            rt_error(lp, CBM_E_RUNTIME,
+                     "func(name, x) needs function files (.func or .fset) on the command line");
         else
             r = ls->func(ls->func_ud, lp->m.funcids.data[n->slot - 1], a[0]);
         break;
@@ -535,7 +531,7 @@ static bool nonfinite(cbm_lsys *ls, int32_t pos, const char *module)
         snprintf(msg, sizeof msg,
                  "a parameter of %.60s is not a finite number (--allow-nonfinite keeps it)",
                  module);
-        runtime_error(lp, CBM_E_RUNTIME, msg);
+        rt_error(lp, CBM_E_RUNTIME, msg);
         lp->vm.err_pos = pos;
         return false;
     }
@@ -570,7 +566,7 @@ static bool produce_compiled(void *ud, int smi, const double *v)
     }
     cbm_status s = push_module(ls->ctx, lp->out, m->code, v, m->size);
     if (s != CBM_OK) {
-        runtime_error(lp, s, "out of memory");
+        rt_error(lp, s, "out of memory");
         return false;
     }
     return true;

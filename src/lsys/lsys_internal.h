@@ -236,9 +236,56 @@ bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int
 /* Moves w forward to the closing bracket of the branch it is in, over the branches inside;
  * false when there is none. */
 bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* Walks to the bracket that closes the current nesting level: forward to its closing bracket
+ * (opener: the opening one), or backward to its opening one (opener: the closing one).
+ * Branches met on the way are passed whole. A scan in memory order, up or down whatever the
+ * walk's direction (the left contexts of a bracketed string spend their time here). */
+static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, bool forward)
+{
+    const lstr *s = w->s;
+    const ptrdiff_t n = (ptrdiff_t)s->n;
+    ptrdiff_t i = w->i;
+    size_t j = w->j, k = w->k;
+    int depth = 0;
+    if (forward == (w->dir > 0)) { /* up in memory */
+        for (; i >= 0 && i < n; i++) {
+            uint8_t b = s->sym[i];
+            int c = b & 0x7f;
+            if (c == opener) {
+                depth++;
+            } else if (c == closer && depth-- == 0) {
+                w->i = i, w->j = j, w->k = k;
+                return true;
+            }
+            if (b & LSYS_PARAM_BIT)
+                k += s->pc[j++];
+        }
+    } else { /* down */
+        if (i >= n)
+            i = -1;
+        for (; i >= 0; i--) {
+            uint8_t b = s->sym[i];
+            int c = b & 0x7f;
+            if (c == opener) {
+                depth++;
+            } else if (c == closer && depth-- == 0) {
+                w->i = i, w->j = j, w->k = k;
+                return true;
+            }
+            if (i > 0 && (s->sym[i - 1] & LSYS_PARAM_BIT))
+                k -= s->pc[--j];
+        }
+    }
+    w->i = i < 0 ? -1 : n;
+    return false;
+}
+
 /* Moves w backward to the opening bracket of the branch it is in, over the branches inside;
  * false when there is none. */
-bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close);
+static inline bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close)
+{
+    return cbm__walk_find_closing(w, close, open, false);
+}
 
 /* A module of a predecessor or context: symbol and parameter count. Formal parameter names are
  * slots of the production's frame in the order they appear (left context, predecessor, right

@@ -1,7 +1,7 @@
 /* The parts of a derivation step both dialects share (lsys_internal.h): appending one string to
  * another, the bracket table that turns skipping a branch into a jump, and the walks of context
- * matching over branches. The walking and copying of single modules are inline in
- * lsys_internal.h, since a step calls them per module. */
+ * matching over branches. The walking and copying of single modules and the scan to a branch's
+ * bracket are inline in lsys_internal.h, since a step calls them per module. */
 #include "lsys/lsys_internal.h"
 
 #include <stdint.h>
@@ -111,27 +111,6 @@ void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t)
     t->s = NULL;
 }
 
-/* Walks to the bracket that closes the current nesting level: forward to its closing bracket
- * (opener: the opening one), or backward to its opening one (opener: the closing one).
- * Branches met on the way are passed whole. */
-static bool find_closing(cbm__walk *w, int opener, int closer, bool forward)
-{
-    int depth = 0;
-    while (cbm__walk_inside(w)) {
-        int c = cbm__walk_symbol(w);
-        if (c == opener)
-            depth++;
-        else if (c == closer) {
-            if (depth == 0)
-                return true;
-            depth--;
-        }
-        if (!(forward ? cbm__walk_forward(w) : cbm__walk_backward(w)))
-            return false;
-    }
-    return false;
-}
-
 bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close)
 {
     lpos at;
@@ -144,7 +123,7 @@ bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int
         return true;
     }
     cbm__walk_forward(w);
-    return find_closing(w, open, close, true);
+    return cbm__walk_find_closing(w, open, close, true);
 }
 
 bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close)
@@ -159,9 +138,4 @@ bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, i
             return false;
     }
     return false;
-}
-
-bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close)
-{
-    return find_closing(w, close, open, false);
 }
