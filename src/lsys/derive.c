@@ -36,238 +36,132 @@
 #include "lsys/lsys_internal.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #if defined(__linux__)
 #include <sys/mman.h>
 #include <unistd.h>
 #endif
 
-static inline void pos_next(const lstr *s, lpos *p)
-{
-    if (s->sym[p->i++] & LSYS_PARAM_BIT)
-        p->k += s->pc[p->j++];
-}
-
-static inline void pos_prev(const lstr *s, lpos *p)
-{
-    if (s->sym[--p->i] & LSYS_PARAM_BIT)
-        p->k -= s->pc[--p->j];
-}
-
-static inline size_t param_size(const lstr *s)
-{
-    return s->f32 ? sizeof(float) : sizeof(double);
-}
-
-/* Loads n parameters from position k of s into dst (doubles). */
-static inline void par_load(const lstr *s, size_t k, double *dst, int n)
-{
-    if (s->f32) {
-        const float *p = (const float *)s->par + k;
-        for (int i = 0; i < n; i++)
-            dst[i] = p[i];
-    } else {
-        memcpy(dst, (const double *)s->par + k, (size_t)n * sizeof(double));
-    }
-}
-
-static inline int mod_np(const lstr *s, const lpos *p)
-{
-    return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
-}
-
 void cbm__lstr_free(cbm_context *ctx, lstr *s)
 {
     cbm__free(ctx, s->sym, s->cap);
     cbm__free(ctx, s->pc, s->pccap);
     bool f32 = s->f32;
-    cbm__free(ctx, s->par, s->parcap * param_size(s));
+    cbm__free(ctx, s->par, s->parcap * cbm__param_size(s));
     memset(s, 0, sizeof *s);
     s->f32 = f32;
 }
 
-static cbm_status lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, size_t npar)
-{
-    if (s->n + nsym > s->cap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->sym, &s->cap, 1, s->n + nsym));
-    if (s->npm + npm > s->pccap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
-    if (s->npar + npar > s->parcap)
-        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, param_size(s), s->npar + npar));
-    return CBM_OK;
-}
-
-static inline void lstr_clear(lstr *s)
-{
-    s->n = s->npm = s->npar = 0;
-}
-
-/* Copies the module at p of src to dst and advances p. */
-static cbm_status copy_module(cbm_context *ctx, const lstr *src, lpos *p, lstr *dst)
-{
-    int np = mod_np(src, p);
-    CBM_TRY(lstr_room(ctx, dst, 1, 1, (size_t)np));
-    dst->sym[dst->n++] = src->sym[p->i];
-    if (np) {
-        dst->pc[dst->npm++] = (uint8_t)np;
-        memcpy((char *)dst->par + dst->npar * param_size(dst),
-               (const char *)src->par + p->k * param_size(src), (size_t)np * param_size(src));
-        dst->npar += (size_t)np;
-    }
-    pos_next(src, p);
-    return CBM_OK;
-}
-
 /* ---- matching ---- */
-static bool match_pred(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos *end, int slot)
+static bool match_predecessor(cbm_lsys *ls, const prod *pr, const lstr *s, lpos p, lpos *end,
+                              int slot)
 {
     const fmodule *m = ls->fmods.data + pr->pred;
     for (int32_t i = 0; i < pr->npred; i++) {
-        if (p.i >= s->n || (s->sym[p.i] & 0x7f) != m[i].sym || mod_np(s, &p) != m[i].np)
+        if (p.i >= s->n || (s->sym[p.i] & 0x7f) != m[i].sym || cbm__module_params(s, &p) != m[i].np)
             return false;
         if (m[i].np) {
-            par_load(s, p.k, ls->frame + slot, m[i].np);
+            cbm__params_load(s, p.k, ls->frame + slot, m[i].np);
             slot += m[i].np;
         }
-        pos_next(s, &p);
+        cbm__pos_next(s, &p);
     }
     *end = p;
     return true;
 }
 
-/* Right context from r (the module after the predecessor). */
-/* Builds the bracket matching of the current string; false when memory refuses (the caller
- * then scans). */
-static bool build_brackets(cbm_lsys *ls)
+/* The bracket table of s when s is the current string (started on the first branch a context
+ * skips in it, kept while the string is unchanged, homomorphism included), else NULL: the walks
+ * then scan. */
+static cbm__brackets *brackets_of(cbm_lsys *ls, const lstr *s)
 {
-    const lstr *s = &ls->cur;
-    ls->brk_open.len = ls->brk_close.len = ls->brk_stack.len = 0;
-    lpos p = {0, 0, 0};
-    while (p.i < s->n) {
-        uint8_t c = s->sym[p.i] & 0x7f;
-        if (c == '[') {
-            size_t ord = ls->brk_open.len;
-            lpos none = {0, 0, 0};
-            if (CBM_ARRAY_PUSH(ls->ctx, ls->brk_open, p.i) != CBM_OK ||
-                CBM_ARRAY_PUSH(ls->ctx, ls->brk_close, none) != CBM_OK ||
-                CBM_ARRAY_PUSH(ls->ctx, ls->brk_stack, ord) != CBM_OK)
-                return false;
-        }
-        pos_next(s, &p);
-        if (c == ']' && ls->brk_stack.len)
-            ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
+    if (s != &ls->cur)
+        return NULL;
+    cbm__brackets *t = &ls->brackets[0];
+    if (t->s != &ls->cur || ls->brackets_gen != ls->cur_gen) {
+        cbm__brackets_start(t, &ls->cur, 1, '[', ']');
+        ls->brackets_gen = ls->cur_gen;
     }
-    while (ls->brk_stack.len) /* unmatched: the branch runs to the end */
-        ls->brk_close.data[ls->brk_stack.data[--ls->brk_stack.len]] = p;
-    ls->brk_gen = ls->cur_gen;
-    return true;
+    return t;
 }
 
-/* r is at a '[' of s: moves it after the matching ']' (or to the end). A jump through the
- * bracket table for the current string, a scan otherwise. */
-static void skip_branch(cbm_lsys *ls, const lstr *s, lpos *r)
+/* The parameter count of the module w is on. */
+static inline int walk_params(const cbm__walk *w)
 {
-    if (s == &ls->cur && (ls->brk_gen == ls->cur_gen || build_brackets(ls))) {
-        size_t lo = 0, hi = ls->brk_open.len;
-        while (lo < hi) {
-            size_t mid = lo + (hi - lo) / 2;
-            if (ls->brk_open.data[mid] < r->i)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        if (lo < ls->brk_open.len && ls->brk_open.data[lo] == r->i) {
-            *r = ls->brk_close.data[lo];
-            return;
-        }
-    }
-    pos_next(s, r);
-    int level = 0;
-    while (r->i < s->n) {
-        uint8_t d = s->sym[r->i] & 0x7f;
-        if (d == '[')
-            level++;
-        else if (d == ']' && level-- == 0)
-            break;
-        pos_next(s, r);
-    }
-    if (r->i < s->n)
-        pos_next(s, r);
+    return (w->s->sym[w->i] & LSYS_PARAM_BIT) ? w->s->pc[w->j] : 0;
 }
 
-static bool match_rc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
+/* Right context from r (the module after the predecessor), through the walks of step.c: ignored
+ * modules are passed over (even one the pattern names), a branch the pattern does not open is
+ * skipped, `=` goes to the end of the branch and leaves its ']' (or to the end of the string
+ * when there is none, or a '[' in the way is not closed). Parameters are bound as the pattern is
+ * read. */
+static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
 {
     const fmodule *m = ls->fmods.data + pr->rc;
+    cbm__brackets *t = NULL;
+    cbm__walk w = cbm__walk_at(s, r.i, r.j, r.k, 1);
     int32_t k = 0;
     while (k < pr->nrc) {
-        if (m[k].sym == '=') { /* skip to the end of the branch, over the branches in it */
-            while (r.i < s->n) {
-                uint8_t c = s->sym[r.i] & 0x7f;
-                if (c == ']')
-                    break;
-                if (c == '[')
-                    skip_branch(ls, s, &r);
-                else
-                    pos_next(s, &r);
-            }
+        if (m[k].sym == '=') {
+            t = t ? t : brackets_of(ls, s);
+            if (!cbm__walk_to_branch_end(ls->ctx, t, &w, '[', ']'))
+                w.i = (ptrdiff_t)s->n; /* no ']': to the end */
             k++;
             continue;
         }
-        if (r.i >= s->n)
+        if ((size_t)w.i >= s->n) /* (never before the start: the walk only goes right) */
             return false;
-        uint8_t c = s->sym[r.i] & 0x7f;
+        int c = cbm__walk_symbol(&w);
         if (ls->ign[c]) {
-            pos_next(s, &r);
+            cbm__walk_next_in_memory(&w);
         } else if (m[k].sym != '[' && c == '[') {
-            skip_branch(ls, s, &r);
+            t = t ? t : brackets_of(ls, s);
+            if (!cbm__walk_skip_branch(ls->ctx, t, &w, '[', ']'))
+                return false; /* unmatched: the branch runs to the end, the pattern does not */
+            cbm__walk_next_in_memory(&w); /* past the ']' (the walk reads left to right) */
         } else {
-            if (c != m[k].sym || mod_np(s, &r) != m[k].np)
+            if (c != m[k].sym || walk_params(&w) != m[k].np)
                 return false;
             if (m[k].np) {
-                par_load(s, r.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
                 slot += m[k].np;
             }
-            pos_next(s, &r);
+            cbm__walk_next_in_memory(&w);
             k++;
         }
     }
     return true;
 }
 
-/* Left context ending just before l. */
-static bool match_lc(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
+/* Left context ending just before l: ignored modules and '[' are passed over (a branch is
+ * climbed out of), whole branches are skipped. */
+static bool match_left_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
 {
     const fmodule *m = ls->fmods.data + pr->lc;
     int slot = 0;
     for (int32_t k = 0; k < pr->nlc; k++)
         slot += m[k].np;
+    cbm__walk w = cbm__walk_at(s, l.i, l.j, l.k, 1);
     int32_t k = pr->nlc - 1;
     while (k >= 0) {
-        if (l.i == 0)
+        if (w.i <= 0)
             return false;
-        uint8_t c = s->sym[l.i - 1] & 0x7f;
-        if (c == ']') {
-            pos_prev(s, &l);
-            int level = 0;
-            for (;;) {
-                if (l.i == 0)
-                    return false;
-                pos_prev(s, &l);
-                uint8_t d = s->sym[l.i] & 0x7f;
-                if (d == ']')
-                    level++;
-                else if (d == '[' && level-- == 0)
-                    break;
-            }
-        } else if (c == '[' || ls->ign[c]) {
-            pos_prev(s, &l);
-        } else {
-            pos_prev(s, &l);
-            if (c != m[k].sym || mod_np(s, &l) != m[k].np)
+        cbm__walk_prev_in_memory(&w);
+        int c = cbm__walk_symbol(&w);
+        if (c == ']') { /* to its '[' */
+            if (w.i == 0)
+                return false;
+            cbm__walk_prev_in_memory(&w);
+            if (!cbm__walk_to_branch_start(&w, '[', ']'))
+                return false;
+        } else if (c != '[' && !ls->ign[c]) {
+            if (c != m[k].sym || walk_params(&w) != m[k].np)
                 return false;
             slot -= m[k].np;
             if (m[k].np)
-                par_load(s, l.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
             k--;
         }
     }
@@ -290,11 +184,11 @@ static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *e
     int pslots = 0;
     for (int32_t k = 0; k < pr->npred; k++)
         pslots += ls->fmods.data[pr->pred + k].np;
-    if (!match_pred(ls, pr, src, p, end, lslots))
+    if (!match_predecessor(ls, pr, src, p, end, lslots))
         return false;
-    if (pr->nrc && !match_rc(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
+    if (pr->nrc && !match_right_context(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
         return false;
-    if (pr->nlc && !match_lc(ls, pr, ctxs, lc ? *lc : p))
+    if (pr->nlc && !match_left_context(ls, pr, ctxs, lc ? *lc : p))
         return false;
     ls->ev.params = ls->frame;
     if (pr->pre >= 0)
@@ -338,14 +232,14 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
     if (pr->nsucc == 0)
         return CBM_OK;
     if (pr->const_succ) {
-        CBM_TRY(lstr_room(ls->ctx, dst, (size_t)pr->nsucc, 0, 0));
+        CBM_TRY(cbm__lstr_room(ls->ctx, dst, (size_t)pr->nsucc, 0, 0));
         memcpy(dst->sym + dst->n, ls->const_bytes.data + pr->succ_bytes, (size_t)pr->nsucc);
         dst->n += (size_t)pr->nsucc;
         return CBM_OK;
     }
     const smod *m = ls->smods.data + pr->succ;
     for (int32_t i = 0; i < pr->nsucc; i++) {
-        CBM_TRY(lstr_room(ls->ctx, dst, 1, 1, m[i].np));
+        CBM_TRY(cbm__lstr_room(ls->ctx, dst, 1, 1, m[i].np));
         if (m[i].np == 0) {
             dst->sym[dst->n++] = m[i].sym;
             continue;
@@ -401,14 +295,14 @@ static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpo
     if (depth >= set->depth) {
         if (set->depth > 0) {
             *applied = true;
-            return copy_module(ls->ctx, src, p, dst);
+            return cbm__lstr_copy_module(ls->ctx, src, p, dst);
         }
         *applied = false;
         return CBM_OK;
     }
     if (!pr) {
         *applied = depth > 0;
-        return depth > 0 ? copy_module(ls->ctx, src, p, dst) : CBM_OK;
+        return depth > 0 ? cbm__lstr_copy_module(ls->ctx, src, p, dst) : CBM_OK;
     }
     *applied = true;
     /* a production applied in a decomposition or homomorphism is an operation: one that
@@ -418,7 +312,7 @@ static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpo
                                   "more productions applied in one step than the limit "
                                   "(--max-operations)");
     lstr *buf = &ls->scratch.data[depth];
-    lstr_clear(buf);
+    cbm__lstr_clear(buf);
     CBM_TRY(append_succ(ls, pr, buf));
     if (!runtime_ok(ls))
         return ls->ev.error;
@@ -500,7 +394,7 @@ static cbm_status follow_markers(cbm_lsys *ls, const lstr *s, lpos a, size_t b, 
         uint8_t c = s->sym[a.i];
         if (c == ('?' | LSYS_PARAM_BIT)) {
             double v;
-            par_load(s, a.k, &v, 1);
+            cbm__params_load(s, a.k, &v, 1);
             int k = v >= -2e9 && v <= 2e9 ? cbm__lsys_find(ls, (int)v) : -1;
             if (k < 0) {
                 char where[32] = "homomorphism";
@@ -517,7 +411,7 @@ static cbm_status follow_markers(cbm_lsys *ls, const lstr *s, lpos a, size_t b, 
         } else if (c == '$' && ls->lstack.len > 0) {
             *cursys = ls->lstack.data[--ls->lstack.len];
         }
-        pos_next(s, &a);
+        cbm__pos_next(s, &a);
     }
     return CBM_OK;
 }
@@ -531,7 +425,7 @@ static cbm_status decompose_succ(cbm_lsys *ls, const prodset *dset, const lpos *
         bool a;
         CBM_TRY(rewrite(ls, dset, buf, &q, &ls->next, &ls->cur, lc, rc, 0, &a));
         if (!a)
-            CBM_TRY(copy_module(ls->ctx, buf, &q, &ls->next));
+            CBM_TRY(cbm__lstr_copy_module(ls->ctx, buf, &q, &ls->next));
     }
     return CBM_OK;
 }
@@ -561,8 +455,8 @@ static bool release_fits(const cbm_lsys *ls, double nsym, double npar)
     /* with sub-L-systems, the L-system stack: at most one entry per module, doubling */
     double lstack = ls->subcalls ? 4.0 * (double)ls->cur.n : 0.0;
     double need = (double)cbm_context_bytes(ls->ctx) +
-                  2.0 * (2.0 * nsym + npar * (double)param_size(&ls->cur)) + (double)(1u << 20) +
-                  16.0 * nprods + lstack;
+                  2.0 * (2.0 * nsym + npar * (double)cbm__param_size(&ls->cur)) +
+                  (double)(1u << 20) + 16.0 * nprods + lstack;
     return !lim->max_bytes || need <= (double)lim->max_bytes;
 }
 
@@ -653,7 +547,7 @@ static void release_consumed(release *r, const lstr *cur, const lpos *p)
 {
     release_range(r, cur->sym, p->i, &r->done[0]);
     release_range(r, cur->pc, p->j, &r->done[1]);
-    release_range(r, cur->par, p->k * param_size(cur), &r->done[2]);
+    release_range(r, cur->par, p->k * cbm__param_size(cur), &r->done[2]);
     r->at = p->i + RELEASE_EVERY;
 }
 
@@ -667,7 +561,7 @@ static cbm_status derive(cbm_lsys *ls)
     release_begin(ls, &rel);
     cbm_status s = derive_scan(ls, &rel);
     if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
-        lstr_clear(&ls->cur);
+        cbm__lstr_clear(&ls->cur);
         ls->cur_gen++;
         ls->homo_valid = false;
     }
@@ -679,7 +573,7 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
     cbm_context *ctx = ls->ctx;
     const lstr *cur = &ls->cur;
     lstr *next = &ls->next;
-    lstr_clear(next);
+    cbm__lstr_clear(next);
     const prodset *set = &ls->main, *dset = &ls->decomp;
     bool decomp = ls->decomp.present, stoch = ls->stochastic;
     /* sub-L-systems: the L-system of the module at hand (index in ls->sys) */
@@ -723,11 +617,11 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
                     int pslots = 0;
                     for (int32_t k = 0; k < pr->npred; k++)
                         pslots += ls->fmods.data[pr->pred + k].np;
-                    match_pred(ls, pr, cur, p, &end, lslots);
+                    match_predecessor(ls, pr, cur, p, &end, lslots);
                     if (pr->nrc)
-                        match_rc(ls, pr, cur, end, lslots + pslots);
+                        match_right_context(ls, pr, cur, end, lslots + pslots);
                     if (pr->nlc)
-                        match_lc(ls, pr, cur, p);
+                        match_left_context(ls, pr, cur, p);
                     break;
                 }
             }
@@ -738,7 +632,7 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
             return CBM_E_RUNTIME;
         if (pr) {
             if (decomp) {
-                lstr_clear(&ls->succ);
+                cbm__lstr_clear(&ls->succ);
                 CBM_TRY(append_succ(ls, pr, &ls->succ));
                 lpos lc = p;
                 CBM_TRY(decompose_succ(ls, dset, &lc, &end));
@@ -752,14 +646,14 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
             bool done = false;
             if (decomp) {
                 lpos lc = p, rc = p;
-                pos_next(cur, &rc);
+                cbm__pos_next(cur, &rc);
                 CBM_TRY(rewrite(ls, dset, cur, &p, next, cur, &lc, &rc, 0, &done));
             }
             if (!done) {
-                if (s == '%' && mod_np(cur, &p) == 0) {
+                if (s == '%' && cbm__module_params(cur, &p) == 0) {
                     /* cut: skip to the end of the branch (the ']' is kept), or to the '$'
                      * that ends the sub-L-system the cut is in (kept too) */
-                    pos_next(cur, &p);
+                    cbm__pos_next(cur, &p);
                     int level = 0, slevel = 0;
                     while (p.i < cur->n) {
                         uint8_t b = cur->sym[p.i];
@@ -772,11 +666,11 @@ static cbm_status derive_scan(cbm_lsys *ls, release *rel)
                             slevel++;
                         else if (b == '$' && slevel-- == 0)
                             break;
-                        pos_next(cur, &p);
+                        cbm__pos_next(cur, &p);
                     }
                     cut = true;
                 } else {
-                    CBM_TRY(copy_module(ctx, cur, &p, next));
+                    CBM_TRY(cbm__lstr_copy_module(ctx, cur, &p, next));
                 }
             }
         }
@@ -874,7 +768,7 @@ static cbm_status cpfg_reset(cbm_lsys *ls)
     }
     ls->drand.x = seeded ? (((seed & 0xFFFFFFFFu) << 16) | 0x330E) : 0;
     CBM_TRY(run_blocks(ls, 0, "Start"));
-    lstr_clear(&ls->cur);
+    cbm__lstr_clear(&ls->cur);
     ls->cur_gen++;
     prod ax = {
         .pre = -1, .cond = -1, .post = -1, .prob = -1, .succ = ls->axiom, .nsucc = ls->naxiom};
@@ -892,7 +786,7 @@ static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out);
 static cbm_status cpfg_interpretation(cbm_lsys *ls)
 {
     lstr *out = &ls->homo_str;
-    lstr_clear(out);
+    cbm__lstr_clear(out);
     CBM_TRY(prepare_scratch(ls, ls->max_depth));
     ls->ops = cbm_context_limits(ls->ctx)->max_operations;
     const lstr *cur = &ls->cur;
@@ -942,7 +836,7 @@ static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out)
         bool done = false;
         if (L->homo->present) {
             lpos lc = p, rc = p;
-            pos_next(cur, &rc);
+            cbm__pos_next(cur, &rc);
             bool own = L->homo->seed_expr >= 0;
             cbm__rand48 t = ls->ev.rnd.r48;
             if (own)
@@ -956,7 +850,7 @@ static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out)
                 return runtime_fail(ls, s, "homomorphism");
         }
         if (!done)
-            CBM_TRY(copy_module(ls->ctx, cur, &p, out));
+            CBM_TRY(cbm__lstr_copy_module(ls->ctx, cur, &p, out));
         if (out->n > cbm_context_limits(ls->ctx)->max_modules)
             return cbm__fail(ls->ctx, CBM_E_LIMIT,
                              "the homomorphism would exceed %zu modules (max_modules)",
@@ -975,13 +869,13 @@ static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out)
         bool done = false;
         if (ls->homo.present) {
             lpos lc = p, rc = p;
-            pos_next(cur, &rc);
+            cbm__pos_next(cur, &rc);
             cbm_status s = rewrite(ls, &ls->homo, cur, &p, out, cur, &lc, &rc, 0, &done);
             if (s != CBM_OK)
                 return runtime_fail(ls, s, "homomorphism");
         }
         if (!done)
-            CBM_TRY(copy_module(ls->ctx, cur, &p, out));
+            CBM_TRY(cbm__lstr_copy_module(ls->ctx, cur, &p, out));
         if (out->n > cbm_context_limits(ls->ctx)->max_modules)
             return cbm__fail(ls->ctx, CBM_E_LIMIT,
                              "the homomorphism would exceed %zu modules (max_modules)",
@@ -1081,7 +975,7 @@ bool cbm_lsys_cursor_next(const cbm_lsys *ls, bool homomorphism, cbm_lsys_cursor
     if (b & LSYS_PARAM_BIT) {
         c->nparams = s->pc[c->pmodule];
         if (s->f32) {
-            par_load(s, c->param, c->buf, c->nparams);
+            cbm__params_load(s, c->param, c->buf, c->nparams);
             c->params = c->buf;
         } else {
             c->params = (const double *)s->par + c->param;
@@ -1127,22 +1021,22 @@ static void return_queries(cbm_lsys *ls)
     for (;;) {
         /* a '?' with parameters is a sub-L-system call, not a query */
         while (a.i < img->n && !(a.i > 0 && img->sym[a.i - 1] == '?'))
-            pos_next(img, &a);
+            cbm__pos_next(img, &a);
         while (b.i < str->n && !(b.i > 0 && str->sym[b.i - 1] == '?'))
-            pos_next(str, &b);
+            cbm__pos_next(str, &b);
         if (a.i >= img->n || b.i >= str->n)
             return;
-        int na = mod_np(img, &a), nb = mod_np(str, &b);
+        int na = cbm__module_params(img, &a), nb = cbm__module_params(str, &b);
         double v[LSYS_MAX_PARAMS];
-        par_load(img, a.k, v, na < nb ? na : nb);
+        cbm__params_load(img, a.k, v, na < nb ? na : nb);
         for (int j = 0; j < na && j < nb; j++) {
             if (str->f32)
                 ((float *)str->par)[b.k + (size_t)j] = (float)v[j];
             else
                 ((double *)str->par)[b.k + (size_t)j] = v[j];
         }
-        pos_next(img, &a);
-        pos_next(str, &b);
+        cbm__pos_next(img, &a);
+        cbm__pos_next(str, &b);
     }
 }
 

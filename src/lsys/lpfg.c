@@ -23,29 +23,9 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-
-/* a walker over a packed string: dir +1 reads it left to right, -1 right to left */
-typedef struct walk {
-    const lstr *s;
-    ptrdiff_t i;
-    size_t j, k;
-    int dir;
-} walk;
-
-/* The bracket matching of a string walked by a right context: for every SB (in the order of the
- * string) the walk position of its EB, so that skipping a branch is a jump, not a scan, and
- * right contexts stay linear in the bracket depth. Extended lazily up to the string's end: the
- * current string is fixed during a step, the new string only grows. */
-typedef struct brtab {
-    const lstr *s; /* the string it describes, NULL: none */
-    int dir;       /* the walks it serves: +1 the current string, -1 the new (reversed) one */
-    walk at;       /* the scan: modules before it.i are in the table */
-    CBM_ARRAY(size_t) open; /* index of every SB, increasing */
-    CBM_ARRAY(walk) close;  /* the EB matching it; i = -1: none */
-    CBM_ARRAY(walk) stack;  /* the brackets waiting for their match */
-} brtab;
 
 typedef struct lpfg lpfg;
 struct lpfg {
@@ -59,8 +39,7 @@ struct lpfg {
     lstr *out;     /* where produce appends */
     bool produced; /* produce executed */
     int prod_ix;
-    walk scan[CX_N];
-    brtab brk[2]; /* during generate: [0] the current string, [1] the new one going Backward */
+    cbm__walk scan[CX_N];
     lstr succ;
     CBM_ARRAY(lstr) scratch;
     bool nonfinite_warned;
@@ -77,12 +56,12 @@ static void rt_error(lpfg *lp, cbm_status s, const char *msg)
     cbm__lc_error(&lp->vm, s, msg);
 }
 
-static bool spend(lpfg *lp, bool loop)
+static bool spend_operation(lpfg *lp, bool loop)
 {
     return cbm__lc_spend(&lp->vm, loop);
 }
 
-static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
+static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr);
 
 /* The mechanics built-ins (lsys/mechlang.c) over the current string, at their na arguments
  * (at most 6; 0 for a missing one); the result to out[0]. */
@@ -387,7 +366,7 @@ static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
     const lc_node *n = &lp->m.nodes.data[(int32_t)ip->k];
     const double *arg = fr + ip->a;
     if (ip->fn == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
-        return ctx_match(ls, n->fn, n->a, n->b, fr);
+        return match_context(ls, n->fn, n->a, n->b, fr);
     if (n->fn == FN_PRINTF) {
         print(ls, n, arg);
         return 0;
@@ -404,20 +383,10 @@ static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
 }
 
 /* ---------------------------------------------------------------- the module string */
-static cbm_status room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm, size_t npar)
+/* appends module `code` with its np parameters p to s */
+static cbm_status push_module(cbm_context *ctx, lstr *s, int code, const double *p, int np)
 {
-    if (s->n + nsym > s->cap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->sym, &s->cap, 1, s->n + nsym));
-    if (s->npm + npm > s->pccap)
-        CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
-    if (s->npar + npar > s->parcap)
-        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, sizeof(double), s->npar + npar));
-    return CBM_OK;
-}
-
-static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p, int np)
-{
-    CBM_TRY(room(ctx, s, 1, 1, (size_t)np));
+    CBM_TRY(cbm__lstr_room(ctx, s, 1, 1, (size_t)np));
     s->sym[s->n++] = (uint8_t)(code | (np ? LSYS_PARAM_BIT : 0));
     if (np) {
         s->pc[s->npm++] = (uint8_t)np;
@@ -429,285 +398,75 @@ static cbm_status push_mod(cbm_context *ctx, lstr *s, int code, const double *p,
     return CBM_OK;
 }
 
-/* appends the modules of src [from i] to dst, reversed when rev */
-static cbm_status append_str(cbm_context *ctx, lstr *dst, const lstr *src, bool rev)
-{
-    if (!src->n)
-        return CBM_OK;
-    CBM_TRY(room(ctx, dst, src->n, src->npm, src->npar));
-    if (!rev) {
-        memcpy(dst->sym + dst->n, src->sym, src->n);
-        if (src->npm)
-            memcpy(dst->pc + dst->npm, src->pc, src->npm);
-        if (src->npar)
-            memcpy((double *)dst->par + dst->npar, src->par, src->npar * sizeof(double));
-        dst->n += src->n;
-        dst->npm += src->npm;
-        dst->npar += src->npar;
-        return CBM_OK;
-    }
-    size_t j = src->npm, k = src->npar;
-    for (size_t i = src->n; i-- > 0;) {
-        uint8_t s = src->sym[i];
-        dst->sym[dst->n++] = s;
-        if (s & LSYS_PARAM_BIT) {
-            uint8_t np = src->pc[--j];
-            k -= np;
-            dst->pc[dst->npm++] = np;
-            memcpy((double *)dst->par + dst->npar, (const double *)src->par + k,
-                   np * sizeof(double));
-            dst->npar += np;
-        }
-    }
-    return CBM_OK;
-}
-
-/* walker */
-static inline bool w_ok(const walk *w)
-{
-    return w->i >= 0 && (size_t)w->i < w->s->n;
-}
-
-static inline int w_code(const walk *w)
-{
-    return w->s->sym[w->i] & 0x7f;
-}
-
-static inline void w_phys_next(walk *w)
-{
-    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
-        w->k += w->s->pc[w->j++];
-    w->i++;
-}
-
-static inline void w_phys_prev(walk *w)
-{
-    w->i--;
-    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
-        w->k -= w->s->pc[--w->j];
-}
-
-/* logical steps; false when leaving the string */
-static inline bool w_adv(walk *w)
-{
-    if (!w_ok(w))
-        return false;
-    if (w->dir > 0)
-        w_phys_next(w);
-    else
-        w_phys_prev(w);
-    return w_ok(w);
-}
-
-static inline bool w_back(walk *w)
-{
-    if (w->dir > 0) {
-        if (w->i <= 0) {
-            w->i = -1;
-            return false;
-        }
-        if (w->i > (ptrdiff_t)w->s->n)
-            return false;
-        w_phys_prev(w);
-    } else {
-        if (w->i >= (ptrdiff_t)w->s->n - 1) {
-            w->i = (ptrdiff_t)w->s->n;
-            return false;
-        }
-        if (w->i < 0) { /* before the logical start: re-enter at the physical end */
-            return false;
-        }
-        w_phys_next(w);
-    }
-    return true;
-}
-
-static walk walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
-{
-    walk w = {s, (ptrdiff_t)i, j, k, dir};
-    return w;
-}
-
 /* position after the last module (dir +1), or at the last module (dir -1: logical start) */
-static walk walk_end(const lstr *s, int dir)
+static cbm__walk walk_end(const lstr *s, int dir)
 {
     if (dir > 0)
-        return walk_at(s, s->n, s->npm, s->npar, 1);
-    walk w = walk_at(s, s->n, s->npm, s->npar, -1);
+        return cbm__walk_at(s, s->n, s->npm, s->npar, 1);
+    cbm__walk w = cbm__walk_at(s, s->n, s->npm, s->npar, -1);
     if (s->n)
-        w_phys_prev(&w);
+        cbm__walk_prev_in_memory(&w);
     else
         w.i = -1;
     return w;
 }
 
-/* Walks to the bracket that closes the current nesting level: forward to its ']' (opener '['),
- * or backward to its '[' (opener ']'). Brackets opened on the way are skipped whole. */
-static bool find_closing(walk *w, int opener, int closer, bool forward)
+/* The bracket table of the string a right context walks (generate_pass sets them; outside it
+ * they describe no string and the walks scan). */
+static cbm__brackets *brackets_of(cbm_lsys *ls, const cbm__walk *w)
 {
-    int depth = 0;
-    while (w_ok(w)) {
-        int c = w_code(w);
-        if (c == opener)
-            depth++;
-        else if (c == closer) {
-            if (depth == 0)
-                return true;
-            depth--;
-        }
-        if (!(forward ? w_adv(w) : w_back(w)))
-            return false;
-    }
-    return false;
+    return &ls->brackets[w->dir > 0 ? 0 : 1];
 }
 
-/* Scans t's string up to its end; false when memory refuses (the table is then dropped and
- * the walks scan). Going forward an SB waits for its EB; in the reversed new string an EB comes
- * first and waits for the SB appended later. */
-static bool brtab_extend(cbm_context *ctx, brtab *t, int sbc, int ebc)
-{
-    walk *p = &t->at;
-    while ((size_t)p->i < t->s->n) {
-        int c = w_code(p);
-        walk none = *p;
-        none.i = -1;
-        bool ok = true;
-        if (c == sbc) {
-            walk m = none;
-            if (t->dir < 0 && t->stack.len)
-                m = t->stack.data[--t->stack.len];
-            ok = CBM_ARRAY_PUSH(ctx, t->open, (size_t)p->i) == CBM_OK &&
-                 CBM_ARRAY_PUSH(ctx, t->close, m) == CBM_OK;
-            if (ok && t->dir > 0) {
-                walk ord = none; /* the SB's order in `open` */
-                ord.i = (ptrdiff_t)t->open.len - 1;
-                ok = CBM_ARRAY_PUSH(ctx, t->stack, ord) == CBM_OK;
-            }
-        } else if (c == ebc) {
-            if (t->dir < 0)
-                ok = CBM_ARRAY_PUSH(ctx, t->stack, *p) == CBM_OK;
-            else if (t->stack.len)
-                t->close.data[t->stack.data[--t->stack.len].i] = *p;
-        }
-        if (!ok) {
-            t->s = NULL;
-            return false;
-        }
-        w_phys_next(p);
-    }
-    return true;
-}
-
-/* w is at an SB: the EB that matches it, through the table; false: no table for this walk. */
-static bool brtab_jump(lpfg *lp, cbm_context *ctx, walk *w, int sbc, int ebc)
-{
-    brtab *t = &lp->brk[w->dir > 0 ? 0 : 1];
-    if (!t->s || t->s != w->s || t->dir != w->dir || !brtab_extend(ctx, t, sbc, ebc))
-        return false;
-    size_t lo = 0, hi = t->open.len;
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (t->open.data[mid] < (size_t)w->i)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    if (lo == t->open.len || t->open.data[lo] != (size_t)w->i)
-        return false;
-    *w = t->close.data[lo];
-    return true;
-}
-
-static void brtab_start(lpfg *lp, int k, const lstr *s, int dir)
-{
-    brtab *t = &lp->brk[k];
-    t->s = s;
-    t->dir = dir;
-    t->at = walk_at(s, 0, 0, 0, dir);
-    t->open.len = t->close.len = t->stack.len = 0;
-}
-
-static void brtab_free(cbm_context *ctx, brtab *t)
-{
-    CBM_ARRAY_FREE(ctx, t->open);
-    CBM_ARRAY_FREE(ctx, t->close);
-    CBM_ARRAY_FREE(ctx, t->stack);
-    t->s = NULL;
-}
-
-/* w is at an SB: moves it to the EB that closes the branch; false when there is none */
-static bool skip_branch(const cbm_lsys *ls, walk *w, int sbc, int ebc)
-{
-    walk at = *w;
-    if (brtab_jump(ls->lp, ls->ctx, w, sbc, ebc))
-        return w->i >= 0; /* i = -1: unmatched, the walk leaves the string */
-    *w = at;
-    w_adv(w);
-    return find_closing(w, sbc, ebc, true);
-}
-
-/* find_closing forward, jumping over the branches inside through the bracket table */
-static bool find_eob(const cbm_lsys *ls, walk *w, int sbc, int ebc)
-{
-    while (w_ok(w)) {
-        int c = w_code(w);
-        if (c == ebc)
-            return true;
-        if (c == sbc && !skip_branch(ls, w, sbc, ebc))
-            return false;
-        if (!w_adv(w))
-            return false;
-    }
-    return false;
-}
-
-static bool find_bob(walk *w, int sbc, int ebc)
-{
-    return find_closing(w, ebc, sbc, false);
-}
-
-static bool accept_right(const cbm_lsys *ls, walk *w, int code)
+/* Moves w (reading rightwards) to the next module a right context sees, which must be `code`:
+ * modules not considered are passed over, branches the pattern does not enter are skipped, a
+ * pattern EB() first goes to the end of the current branch. */
+static bool accept_right(cbm_lsys *ls, cbm__walk *w, int code)
 {
     const lpfg *lp = ls->lp;
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!w_ok(w))
+    if (!cbm__walk_inside(w))
         return false;
-    if (code == ebc && !find_eob(ls, w, sbc, ebc))
+    if (code == ebc && !cbm__walk_to_branch_end(ls->ctx, brackets_of(ls, w), w, sbc, ebc))
         return false;
-    while (w_ok(w) && w_code(w) != code) {
-        int c = w_code(w);
+    while (cbm__walk_inside(w) && cbm__walk_symbol(w) != code) {
+        int c = cbm__walk_symbol(w);
         if (!lp->m.considered[c])
-            w_adv(w);
+            cbm__walk_forward(w);
         else if (c == sbc) {
-            if (!skip_branch(ls, w, sbc, ebc))
+            if (!cbm__walk_skip_branch(ls->ctx, brackets_of(ls, w), w, sbc, ebc))
                 return false;
-            w_adv(w);
+            cbm__walk_forward(w);
         } else
             break;
     }
-    return w_ok(w) && w_code(w) == code;
+    return cbm__walk_inside(w) && cbm__walk_symbol(w) == code;
 }
 
-static bool accept_left(const lpfg *lp, walk *w, int code)
+/* Moves w (reading leftwards) to the previous module a left context sees, which must be
+ * `code`: modules not considered and SBs are passed over (a branch is climbed out of), whole
+ * branches are skipped. */
+static bool accept_left(const lpfg *lp, cbm__walk *w, int code)
 {
     int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    if (!w_back(w))
+    if (!cbm__walk_backward(w))
         return false;
-    while (w_ok(w) && w_code(w) != code) {
-        int c = w_code(w);
+    while (cbm__walk_inside(w) && cbm__walk_symbol(w) != code) {
+        int c = cbm__walk_symbol(w);
         if (!lp->m.considered[c] || c == sbc) {
-            if (!w_back(w))
+            if (!cbm__walk_backward(w))
                 return false;
         } else if (c == ebc) {
-            if (!w_back(w) || !find_bob(w, sbc, ebc) || !w_back(w))
+            if (!cbm__walk_backward(w) || !cbm__walk_to_branch_start(w, sbc, ebc) ||
+                !cbm__walk_backward(w))
                 return false;
         } else
             break;
     }
-    return w_ok(w) && w_code(w) == code;
+    return cbm__walk_inside(w) && cbm__walk_symbol(w) == code;
 }
 
-static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
+static void bind_formals(cbm_lsys *ls, const cbm__walk *w, int32_t formals, double *fr)
 {
     lpfg *lp = ls->lp;
     if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
@@ -723,10 +482,10 @@ static void bind(cbm_lsys *ls, const walk *w, int32_t formals, double *fr)
 
 /* Matches pattern [first, first+n) of context k from the scanner's position; on success the
  * scanner moves past it and the formals are bound. */
-static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
+static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
 {
     lpfg *lp = ls->lp;
-    walk w = lp->scan[k];
+    cbm__walk w = lp->scan[k];
     if (!w.s)
         return false;
     if (k == CX_RC || k == CX_NRC) {
@@ -734,15 +493,15 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
             const lc_modref *m = &lp->m.sms.data[first + i];
             if (!accept_right(ls, &w, lp->m.mods.data[m->mod].code))
                 return false;
-            w_adv(&w);
+            cbm__walk_forward(&w);
         }
         /* bind after the whole pattern matched */
-        walk b = lp->scan[k];
+        cbm__walk b = lp->scan[k];
         for (int32_t i = 0; i < n; i++) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_right(ls, &b, lp->m.mods.data[m->mod].code);
-            bind(ls, &b, m->args, fr);
-            w_adv(&b);
+            bind_formals(ls, &b, m->args, fr);
+            cbm__walk_forward(&b);
         }
     } else {
         for (int32_t i = n; i-- > 0;) {
@@ -750,11 +509,11 @@ static bool ctx_match(cbm_lsys *ls, int k, int32_t first, int32_t n, double *fr)
             if (!accept_left(lp, &w, lp->m.mods.data[m->mod].code))
                 return false;
         }
-        walk b = lp->scan[k];
+        cbm__walk b = lp->scan[k];
         for (int32_t i = n; i-- > 0;) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             accept_left(lp, &b, lp->m.mods.data[m->mod].code);
-            bind(ls, &b, m->args, fr);
+            bind_formals(ls, &b, m->args, fr);
         }
     }
     lp->scan[k] = w;
@@ -805,7 +564,7 @@ static bool produce_compiled(void *ud, int smi, const double *v)
                 return false;
         off += sz;
     }
-    cbm_status s = push_mod(ls->ctx, lp->out, m->code, v, m->size);
+    cbm_status s = push_module(ls->ctx, lp->out, m->code, v, m->size);
     if (s != CBM_OK) {
         rt_error(lp, s, "out of memory");
         return false;
@@ -815,7 +574,7 @@ static bool produce_compiled(void *ud, int smi, const double *v)
 
 /* ---------------------------------------------------------------- derivation */
 /* The execution budgets of a step (and of the Start block, global initialisers and axiom). */
-static void budgets(cbm_lsys *ls)
+static void set_budgets(cbm_lsys *ls)
 {
     const cbm_limits *lim = cbm_context_limits(ls->ctx);
     ls->lp->vm.budget = ls->loop_budget > 0 ? ls->loop_budget : lim->max_loop_iterations;
@@ -878,37 +637,38 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
                 continue;
             double *fr = lp->vm.stack;
             lp->vm.sp = (size_t)pr->fsize;
-            walk first = walk_at(src, i, j, k, 1);
+            cbm__walk first = cbm__walk_at(src, i, j, k, 1);
             bool ok = true;
             for (int32_t a = 0; a < anchor && ok; a++) {
                 if (first.i == 0)
                     ok = false;
                 else
-                    w_phys_prev(&first);
+                    cbm__walk_prev_in_memory(&first);
             }
-            walk w = first;
+            cbm__walk w = first;
             for (int32_t a = 0; a < np && ok; a++) {
                 const lc_modref *pm = &lp->m.sms.data[pr->pred.first + a];
-                if (!w_ok(&w) || w_code(&w) != lp->m.mods.data[pm->mod].code) {
+                if (!cbm__walk_inside(&w) ||
+                    cbm__walk_symbol(&w) != lp->m.mods.data[pm->mod].code) {
                     ok = false;
                     break;
                 }
-                bind(ls, &w, pm->args, fr);
-                w_phys_next(&w);
+                bind_formals(ls, &w, pm->args, fr);
+                cbm__walk_next_in_memory(&w);
             }
             if (!ok)
                 continue;
             lp->scan[CX_LC] = first;
             lp->scan[CX_RC] = w;
-            memset(&lp->scan[CX_NLC], 0, sizeof(walk));
-            memset(&lp->scan[CX_NRC], 0, sizeof(walk));
+            memset(&lp->scan[CX_NLC], 0, sizeof(cbm__walk));
+            memset(&lp->scan[CX_NRC], 0, sizeof(cbm__walk));
             if (nxt && !lp->backward)
-                lp->scan[CX_NLC] = walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
+                lp->scan[CX_NLC] = cbm__walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
             else if (nxt)
                 lp->scan[CX_NRC] = walk_end(nxt, -1);
             for (int c = 0; c < CX_N && ok; c++)
                 if (pr->cx[c].n)
-                    ok = ctx_match(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
+                    ok = match_context(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
             if (!ok)
                 continue;
             size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
@@ -917,7 +677,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             /* a production applied is an operation: a decomposition that doubles to its
              * maximum depth stops at the budget */
             lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
-            if (!spend(lp, false))
+            if (!spend_operation(lp, false))
                 return 0;
             int bi = cbm__lc_body(&lp->prog, which, p);
             if (bi >= 0 && lp->prog.fn[bi].compiled) { /* the register (or native) code */
@@ -933,12 +693,11 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
     return 0;
 }
 
-static cbm_status copy_at(cbm_context *ctx, const lstr *src, size_t i, size_t j, size_t k,
-                          lstr *dst)
+static cbm_status copy_module_at(cbm_context *ctx, const lstr *src, size_t i, size_t j, size_t k,
+                                 lstr *dst)
 {
-    int np = (src->sym[i] & LSYS_PARAM_BIT) ? src->pc[j] : 0;
-    /* a string without parameters has no parameter array (NULL + 0 is undefined) */
-    return push_mod(ctx, dst, src->sym[i] & 0x7f, np ? (const double *)src->par + k : NULL, np);
+    lpos p = {i, j, k};
+    return cbm__lstr_copy_module(ctx, src, &p, dst);
 }
 
 static cbm_status check_size(cbm_lsys *ls, const lstr *s)
@@ -973,9 +732,9 @@ static cbm_status decompose(cbm_lsys *ls, const lc_rules *set, const lstr *src, 
             if (level + 1 < set->depth)
                 CBM_TRY(decompose(ls, set, tmp, out, level + 1));
             else
-                CBM_TRY(append_str(ls->ctx, out, tmp, false));
+                CBM_TRY(cbm__lstr_append(ls->ctx, out, tmp, false));
         } else
-            CBM_TRY(copy_at(ls->ctx, src, i, j, k, out));
+            CBM_TRY(copy_module_at(ls->ctx, src, i, j, k, out));
         CBM_TRY(check_size(ls, out));
         for (size_t o = from; track && o < out->n; o++)
             CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, lp->origin, source));
@@ -1050,16 +809,16 @@ static cbm_status generate_pass(cbm_lsys *ls)
             c++;
         }
         if (!done)
-            CBM_TRY(copy_at(ls->ctx, src, i, j, k, nxt));
+            CBM_TRY(copy_module_at(ls->ctx, src, i, j, k, nxt));
         else if (back)
-            CBM_TRY(append_str(ls->ctx, nxt, succ, true));
+            CBM_TRY(cbm__lstr_append(ls->ctx, nxt, succ, true));
         CBM_TRY(check_size(ls, nxt));
         if (!back && (src->sym[i] & LSYS_PARAM_BIT))
             k += src->pc[j++];
     }
     if (back) { /* the output was built reversed */
         succ->n = succ->npm = succ->npar = 0;
-        CBM_TRY(append_str(ls->ctx, succ, nxt, true));
+        CBM_TRY(cbm__lstr_append(ls->ctx, succ, nxt, true));
         lstr t = *nxt;
         *nxt = *succ;
         *succ = t;
@@ -1073,11 +832,13 @@ static cbm_status generate_pass(cbm_lsys *ls)
 /* The derivation pass, with the bracket tables of the strings its right contexts walk */
 static cbm_status generate(cbm_lsys *ls)
 {
-    lpfg *lp = ls->lp;
-    brtab_start(lp, 0, &ls->cur, 1);
-    brtab_start(lp, 1, &ls->next, -1);
+    const lpfg *lp = ls->lp;
+    uint8_t sbc = (uint8_t)lp->m.mods.data[lp->m.sb].code;
+    uint8_t ebc = (uint8_t)lp->m.mods.data[lp->m.eb].code;
+    cbm__brackets_start(&ls->brackets[0], &ls->cur, 1, sbc, ebc);
+    cbm__brackets_start(&ls->brackets[1], &ls->next, -1, sbc, ebc);
     cbm_status s = generate_pass(ls);
-    lp->brk[0].s = lp->brk[1].s = NULL;
+    ls->brackets[0].s = ls->brackets[1].s = NULL;
     return s;
 }
 
@@ -1087,7 +848,7 @@ cbm_status cbm__lpfg_step(cbm_lsys *ls)
     if (ls->steps >= (int)cbm_context_limits(ls->ctx)->max_steps)
         return cbm__fail(ls->ctx, CBM_E_LIMIT, "more than %zu derivation steps (max_steps)",
                          cbm_context_limits(ls->ctx)->max_steps);
-    budgets(ls);
+    set_budgets(ls);
     CBM_TRY(run_block(ls, 1));
     lp->rewriting = true;
     cbm_status s = generate(ls);
@@ -1141,7 +902,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     lp->vm.err = CBM_OK;
     lp->vm.at = lp->vm.err_pos = -1;
     lp->nonfinite_warned = false;
-    budgets(ls);
+    set_budgets(ls);
     lp->backward = false;
     lp->group = 0;
     lp->vm.call_depth = 0;
@@ -1178,10 +939,10 @@ cbm_status cbm__lpfg_interpretation(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     ls->homo_str.n = ls->homo_str.npm = ls->homo_str.npar = 0;
     lp->origin.len = 0;
-    budgets(ls);
+    set_budgets(ls);
     cbm_status s;
     if (!lp->m.interp.present || !lp->m.interp.prods.len)
-        s = append_str(ls->ctx, &ls->homo_str, &ls->cur, false);
+        s = cbm__lstr_append(ls->ctx, &ls->homo_str, &ls->cur, false);
     else {
         lp->rewriting = true;
         s = decompose(ls, &lp->m.interp, &ls->cur, &ls->homo_str, 0);
@@ -1382,8 +1143,6 @@ void cbm__lpfg_free(cbm_lsys *ls)
     if (!lp)
         return;
     cbm_context *ctx = ls->ctx;
-    brtab_free(ctx, &lp->brk[0]);
-    brtab_free(ctx, &lp->brk[1]);
     cbm__mechlang_free(ctx, &lp->mech);
     CBM_ARRAY_FREE(ctx, lp->origin);
     cbm__free(ctx, lp->vm.glob, (size_t)(lp->m.nglobal + 1) * sizeof(double));

@@ -122,9 +122,8 @@ void cbm_lsys_destroy(cbm_lsys *ls)
         cbm__lstr_free(ctx, &ls->scratch.data[i]);
     CBM_ARRAY_FREE(ctx, ls->scratch);
     cbm__lpfg_free(ls);
-    CBM_ARRAY_FREE(ctx, ls->brk_open);
-    CBM_ARRAY_FREE(ctx, ls->brk_close);
-    CBM_ARRAY_FREE(ctx, ls->brk_stack);
+    cbm__brackets_free(ctx, &ls->brackets[0]);
+    cbm__brackets_free(ctx, &ls->brackets[1]);
     CBM_ARRAY_FREE(ctx, ls->appl);
     CBM_ARRAY_FREE(ctx, ls->applp);
     cbm__eval_free(&ls->ev);

@@ -21,6 +21,7 @@
 #include "lang/lang.h"
 #include "lsys/lsys.h"
 
+#include <stddef.h>
 #include <stdio.h>
 
 #define LSYS_PARAM_BIT  0x80u
@@ -40,6 +41,251 @@ typedef struct lstr {
 typedef struct lpos {
     size_t i, j, k;
 } lpos;
+
+/* ---- The parts of a step both dialects share (here and step.c) ----
+ * Walking the packed string (a module, its parameter count, its parameters), making room in
+ * it, copying and appending modules, and the bracket table that makes skipping a branch a jump.
+ * What the dialects do differently (matching a production, producing its successor,
+ * decomposition, interpretation) stays in derive.c and lpfg.c (docs/design.md, "The step"). */
+
+/* the bytes of one parameter of s */
+static inline size_t cbm__param_size(const lstr *s)
+{
+    return s->f32 ? sizeof(float) : sizeof(double);
+}
+
+/* p to the next module of s */
+static inline void cbm__pos_next(const lstr *s, lpos *p)
+{
+    if (s->sym[p->i++] & LSYS_PARAM_BIT)
+        p->k += s->pc[p->j++];
+}
+
+/* p to the previous module of s */
+static inline void cbm__pos_prev(const lstr *s, lpos *p)
+{
+    if (s->sym[--p->i] & LSYS_PARAM_BIT)
+        p->k -= s->pc[--p->j];
+}
+
+/* the parameter count of the module at p */
+static inline int cbm__module_params(const lstr *s, const lpos *p)
+{
+    return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
+}
+
+/* n parameters from parameter index k of s into dst, as doubles */
+static inline void cbm__params_load(const lstr *s, size_t k, double *dst, int n)
+{
+    if (s->f32) {
+        const float *p = (const float *)s->par + k;
+        for (int i = 0; i < n; i++)
+            dst[i] = p[i];
+    } else {
+        memcpy(dst, (const double *)s->par + k, (size_t)n * sizeof(double));
+    }
+}
+
+static inline void cbm__lstr_clear(lstr *s)
+{
+    s->n = s->npm = s->npar = 0;
+}
+
+/* room for nsym more modules, npm more parameter counts and npar more parameters */
+static inline cbm_status cbm__lstr_room(cbm_context *ctx, lstr *s, size_t nsym, size_t npm,
+                                        size_t npar)
+{
+    if (s->n + nsym > s->cap)
+        CBM_TRY(cbm__grow(ctx, (void **)&s->sym, &s->cap, 1, s->n + nsym));
+    if (s->npm + npm > s->pccap)
+        CBM_TRY(cbm__grow(ctx, (void **)&s->pc, &s->pccap, 1, s->npm + npm));
+    if (s->npar + npar > s->parcap)
+        CBM_TRY(cbm__grow(ctx, &s->par, &s->parcap, cbm__param_size(s), s->npar + npar));
+    return CBM_OK;
+}
+
+/* appends the module at *p of src to dst (both of the same parameter width) and moves *p to
+ * the next module */
+static inline cbm_status cbm__lstr_copy_module(cbm_context *ctx, const lstr *src, lpos *p,
+                                               lstr *dst)
+{
+    int np = cbm__module_params(src, p);
+    CBM_TRY(cbm__lstr_room(ctx, dst, 1, 1, (size_t)np));
+    dst->sym[dst->n++] = src->sym[p->i];
+    if (np) {
+        size_t w = cbm__param_size(src);
+        dst->pc[dst->npm++] = (uint8_t)np;
+        memcpy((char *)dst->par + dst->npar * w, (const char *)src->par + p->k * w, (size_t)np * w);
+        dst->npar += (size_t)np;
+    }
+    cbm__pos_next(src, p);
+    return CBM_OK;
+}
+
+/* appends every module of src to dst, in reverse order when reversed */
+cbm_status cbm__lstr_append(cbm_context *ctx, lstr *dst, const lstr *src, bool reversed);
+
+/* The bracket matching of a string a right context walks: for every opening bracket (in the
+ * order of the string) the position of the bracket that closes it, so that skipping a branch
+ * is a jump, not a scan, and right contexts stay linear in the bracket depth. Extended lazily
+ * up to the string's end at every look-up: a string being read is fixed, one being produced
+ * only grows. dir +1 describes a string read left to right; dir -1 one built reversed (the L+C
+ * dialect's new string going Backward(), where a closing bracket comes before its opening one
+ * and waits for it). */
+typedef struct cbm__brackets {
+    const lstr *s;            /* the string it describes, NULL: none */
+    int dir;                  /* +1 or -1, above */
+    uint8_t open, close;      /* the bracket symbols: '[' ']', or the L+C dialect's SB EB codes */
+    lpos at;                  /* modules before at.i are in the table */
+    CBM_ARRAY(size_t) opened; /* module index of every opening bracket, increasing */
+    CBM_ARRAY(lpos) closed;   /* the closing bracket that matches it; i == SIZE_MAX: none */
+    CBM_ARRAY(lpos) waiting;  /* brackets waiting for their match (.i: an index in opened) */
+} cbm__brackets;
+
+/* The table describes string s read in direction dir (forgetting what it held). */
+void cbm__brackets_start(cbm__brackets *t, const lstr *s, int dir, uint8_t open, uint8_t close);
+/* The opening bracket at module `at` of s: the position of the bracket that closes it in
+ * *close (i == SIZE_MAX when none does). False when the table does not describe s in direction
+ * dir, or memory refuses (the table is then dropped and the caller scans). */
+bool cbm__brackets_jump(cbm_context *ctx, cbm__brackets *t, const lstr *s, int dir, size_t at,
+                        lpos *close);
+void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t);
+
+/* A walk over a packed string, for context matching: a position and a reading direction, dir
+ * +1 left to right, -1 right to left (the L+C dialect's new string, built reversed going
+ * Backward()). i runs from -1 (before the first module in memory) to n (after the last). */
+typedef struct cbm__walk {
+    const lstr *s;
+    ptrdiff_t i;
+    size_t j, k;
+    int dir;
+} cbm__walk;
+
+static inline cbm__walk cbm__walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
+{
+    cbm__walk w = {s, (ptrdiff_t)i, j, k, dir};
+    return w;
+}
+
+/* whether w is on a module of its string */
+static inline bool cbm__walk_inside(const cbm__walk *w)
+{
+    return w->i >= 0 && (size_t)w->i < w->s->n;
+}
+
+/* the symbol of the module w is on */
+static inline int cbm__walk_symbol(const cbm__walk *w)
+{
+    return w->s->sym[w->i] & 0x7f;
+}
+
+/* a step in memory order, whatever the direction */
+static inline void cbm__walk_next_in_memory(cbm__walk *w)
+{
+    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
+        w->k += w->s->pc[w->j++];
+    w->i++;
+}
+
+static inline void cbm__walk_prev_in_memory(cbm__walk *w)
+{
+    w->i--;
+    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
+        w->k -= w->s->pc[--w->j];
+}
+
+/* a step in the walk's direction; false when it leaves the string */
+static inline bool cbm__walk_forward(cbm__walk *w)
+{
+    if (!cbm__walk_inside(w))
+        return false;
+    if (w->dir > 0)
+        cbm__walk_next_in_memory(w);
+    else
+        cbm__walk_prev_in_memory(w);
+    return cbm__walk_inside(w);
+}
+
+/* a step against the walk's direction; false when it leaves the string (or is out of it) */
+static inline bool cbm__walk_backward(cbm__walk *w)
+{
+    if (w->dir > 0) {
+        if (w->i <= 0) {
+            w->i = -1;
+            return false;
+        }
+        if (w->i > (ptrdiff_t)w->s->n)
+            return false;
+        cbm__walk_prev_in_memory(w);
+    } else {
+        if (w->i >= (ptrdiff_t)w->s->n - 1) {
+            w->i = (ptrdiff_t)w->s->n;
+            return false;
+        }
+        if (w->i < 0) /* before the logical start */
+            return false;
+        cbm__walk_next_in_memory(w);
+    }
+    return true;
+}
+
+/* w is on an opening bracket: moves it to the closing bracket of that branch, through table t
+ * when it describes w's string in w's direction (t may be NULL), else by a scan. False when
+ * the branch is not closed. */
+bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* Moves w forward to the closing bracket of the branch it is in, over the branches inside;
+ * false when there is none. */
+bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* Walks to the bracket that closes the current nesting level: forward to its closing bracket
+ * (opener: the opening one), or backward to its opening one (opener: the closing one).
+ * Branches met on the way are passed whole. A scan in memory order, up or down whatever the
+ * walk's direction (the left contexts of a bracketed string spend their time here). */
+static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, bool forward)
+{
+    const lstr *s = w->s;
+    const ptrdiff_t n = (ptrdiff_t)s->n;
+    ptrdiff_t i = w->i;
+    size_t j = w->j, k = w->k;
+    int depth = 0;
+    if (forward == (w->dir > 0)) { /* up in memory */
+        for (; i >= 0 && i < n; i++) {
+            uint8_t b = s->sym[i];
+            int c = b & 0x7f;
+            if (c == opener) {
+                depth++;
+            } else if (c == closer && depth-- == 0) {
+                w->i = i, w->j = j, w->k = k;
+                return true;
+            }
+            if (b & LSYS_PARAM_BIT)
+                k += s->pc[j++];
+        }
+    } else { /* down */
+        if (i >= n)
+            i = -1;
+        for (; i >= 0; i--) {
+            uint8_t b = s->sym[i];
+            int c = b & 0x7f;
+            if (c == opener) {
+                depth++;
+            } else if (c == closer && depth-- == 0) {
+                w->i = i, w->j = j, w->k = k;
+                return true;
+            }
+            if (i > 0 && (s->sym[i - 1] & LSYS_PARAM_BIT))
+                k -= s->pc[--j];
+        }
+    }
+    w->i = i < 0 ? -1 : n;
+    return false;
+}
+
+/* Moves w backward to the opening bracket of the branch it is in, over the branches inside;
+ * false when there is none. */
+static inline bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close)
+{
+    return cbm__walk_find_closing(w, close, open, false);
+}
 
 /* A module of a predecessor or context: symbol and parameter count. Formal parameter names are
  * slots of the production's frame in the order they appear (left context, predecessor, right
@@ -111,13 +357,11 @@ struct cbm_lsys {
     long loop_budget;      /* the model's max_loop_iterations, 0: the context's limit */
     bool nonfinite_warned; /* the warning of limits.allow_nonfinite was given */
     long ops;              /* productions applied in decomposition / homomorphism: budget left */
-    /* bracket matching of the current string, built on the first right-context match that
-     * skips a branch in it (brk_gen == cur_gen): skipping a branch is then a jump, not a scan,
-     * so right contexts stay linear in the bracket depth */
-    CBM_ARRAY(size_t) brk_open; /* module index of every '[', in order */
-    CBM_ARRAY(lpos) brk_close;  /* the position after its ']' (the end when unmatched) */
-    CBM_ARRAY(size_t) brk_stack;
-    unsigned cur_gen, brk_gen; /* cur_gen changes whenever the current string does */
+    /* the bracket tables of the strings a right context walks (step.c): the cpfg dialect's
+     * current string in [0] (valid while brackets_gen == cur_gen); the L+C dialect's current
+     * string in [0] and its new string, built reversed going Backward(), in [1] */
+    cbm__brackets brackets[2];
+    unsigned cur_gen, brackets_gen; /* cur_gen changes whenever the current string does */
     double (*func)(void *ud, int id, double x);
     void *func_ud;
     cbm_lsys_interpret_fn interp;
