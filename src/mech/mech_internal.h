@@ -34,7 +34,7 @@ typedef struct cbm__mech_work {
     cbm_vec3 *dfc;    /* tangent: world force accumulators (ground contact) */
     cbm_vec3 *tmp;    /* a vector of the Krylov space */
     uint32_t *tpart;  /* the tree's split for the threads of solve_tree.c (subtree sizes, bins) */
-    uint8_t *kin;     /* per segment: CBM__KIN_* (cbm__mech_prepare), which accumulators to clear */
+    uint8_t *kin;     /* per segment: CBM__KIN_* (cbm__mech_prepare), its place among siblings */
     double *zz;       /* per joint: its term of the line search's merit (threaded backward sweep) */
     cbm_vec3 *best;   /* Omega of the best state found by the stability stage */
     cbm_vec3 *basis;  /* krylov_cap vectors of 3n doubles */
@@ -71,11 +71,11 @@ typedef struct cbm__mech_work {
 } cbm__mech_work;
 
 /* work.kin, set by cbm__mech_prepare from the topology: the backward sweeps add what a segment
- * hands to its parent into the parent's accumulators (W and psi of the tree factorisation), in
- * decreasing index. Instead of clearing every accumulator before a sweep (a write of the whole
- * array), the first child to arrive (the parent's child of highest index) stores 0.0 + its term,
- * which is the same bits as the cleared accumulator plus the term, and a segment without children
- * reads zero instead of its accumulator. */
+ * hands to its parent into the parent's accumulators (force and moment of the evaluation, W and
+ * psi of the tree factorisation), in decreasing index. Instead of clearing every accumulator before
+ * a sweep (a write of the whole array), the first child to arrive (the parent's child of highest
+ * index) stores 0.0 + its term, which is the same bits as the cleared accumulator plus the term,
+ * and a segment without children reads zero instead of its accumulator. */
 #define CBM__KIN_CHILDREN 1u /* some segment has this one as its parent */
 #define CBM__KIN_FIRST    2u /* the child of highest index of its parent */
 /* acc = acc + x, or 0.0 + x for the first term (the same bits as acc cleared, then added to) */
