@@ -94,7 +94,7 @@
     X(lever)                                                                                       \
     X(ftip)                                                                                        \
     X(mtip)                                                                                        \
-    X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart) X(best) X(zz)
+    X(res) X(step) X(save) X(start) X(dth) X(dm) X(dpos) X(dfc) X(tmp) X(tpart) X(best) X(zz) X(kin)
 /* the tree factorisation: 9 doubles per segment each (with a Krylov workspace) */
 #define TREE_ARRAYS(X) X(fdinv) X(fq) X(fa) X(fwad) X(fw)
 /* the tree factorisation with ground contact: 9 doubles per segment each (fcap segments) */
@@ -270,10 +270,27 @@ static void cmass_job(void *arg)
     }
 }
 
+/* work.kin from the topology (see CBM__KIN_CHILDREN): in decreasing index, the first child met
+ * of a parent is its child of highest index, the one a backward sweep reaches first. */
+static void kin_compute(cbm_plant *p)
+{
+    uint8_t *restrict kin = p->work.kin;
+    const int64_t *restrict par = p->parent;
+    memset(kin, 0, p->n);
+    for (size_t i = p->n; i-- > 0;) {
+        int64_t pa = par[i];
+        if (pa >= 0 && !(kin[pa] & CBM__KIN_CHILDREN)) {
+            kin[pa] |= CBM__KIN_CHILDREN;
+            kin[i] |= CBM__KIN_FIRST;
+        }
+    }
+}
+
 void cbm__mech_prepare(cbm_plant *p)
 {
     const size_t n = p->n;
     cbm__mech_fused_clear(p);
+    kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
         prepare_range(p, 0, n);
@@ -342,8 +359,9 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
  * depend on the order, and the line search's merit is summed from per-joint terms (work.zz) in
  * the serial order afterwards: the results are the same to the bit for any number of threads. */
 
-/* Forward sweep at segment i: its frame and proximal node from its parent's. */
-static inline void forward_seg(cbm_plant *p, size_t i)
+/* Forward sweep at segment i: its frame and proximal node from its parent's; with clear, its
+ * force and moment zeroed (an evaluation's backward sweep sets them without: work.kin). */
+static inline void forward_seg(cbm_plant *p, size_t i, bool clear)
 {
     const int64_t *restrict par = p->parent;
     const double *restrict len = p->len;
@@ -364,13 +382,16 @@ static inline void forward_seg(cbm_plant *p, size_t i)
         qa = q_mul(qa, b);
     q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(v3_scale(p->omega[i], p->work.dual[i]))));
     pos[i] = pp;
-    p->force[i] = v3(0, 0, 0);
-    p->moment[i] = v3(0, 0, 0);
+    if (clear) {
+        p->force[i] = v3(0, 0, 0);
+        p->moment[i] = v3(0, 0, 0);
+    }
 }
 
 typedef struct pass_job {
     cbm_plant *p;
     uint32_t me; /* the thread's number in the split (1 ..) */
+    bool clear;  /* forward: zero the forces and moments too */
     /* backward: the settings and what the thread's share found */
     double alpha;
     cbm_vec3 *res;
@@ -392,11 +413,11 @@ static void forward_job(void *arg)
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, p->len, 1);
         if (cbm__part_thread(part[i]) == j->me)
-            forward_seg(p, i);
+            forward_seg(p, i, j->clear);
     }
 }
 
-void cbm__mech_forward(cbm_plant *p)
+static void forward_impl(cbm_plant *p, bool clear)
 {
     const size_t n = p->n;
     cbm__mech_fused_clear(p);
@@ -409,18 +430,28 @@ void cbm__mech_forward(cbm_plant *p)
             CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
             /* the parent's length too: half of this sweep's time waited on it (perf) */
             CBM__PREFETCH_PARENT_FWD(par, i, n, p->len, 1);
-            forward_seg(p, i);
+            forward_seg(p, i, clear);
         }
         return;
     }
     const uint32_t *part = p->work.tpart;
     for (size_t i = 0; i < n; i++)
         if (cbm__part_thread(part[i]) == 0)
-            forward_seg(p, i);
+            forward_seg(p, i, clear);
     pass_job jobs[8];
     for (int k = 0; k < t; k++)
-        jobs[k] = (pass_job){.p = p, .me = (uint32_t)k + 1};
+        jobs[k] = (pass_job){.p = p, .me = (uint32_t)k + 1, .clear = clear};
     cbm__mech_run_threads(t, forward_job, jobs, sizeof *jobs);
+}
+
+void cbm__mech_forward(cbm_plant *p)
+{
+    forward_impl(p, true);
+}
+
+void cbm__mech_forward_eval(cbm_plant *p)
+{
+    forward_impl(p, false);
 }
 
 /* Backward sweep at segment i (its children's force and moment are in its accumulators): its
@@ -434,7 +465,11 @@ static inline void backward_seg(cbm_plant *p, size_t i, pass_job *j, bool ground
     cbm_vec3 *restrict m = p->moment;
     cbm_vec3 h, l, u;
     q_frame(p->q[i], &h, &l, &u);
-    cbm_vec3 fd = v3_add(f[i], w->ftip[i]);
+    const uint8_t kin = w->kin[i];
+    /* the children's sums (none: zero, the accumulators need no clearing: work.kin) */
+    const bool leaf = !(kin & CBM__KIN_CHILDREN);
+    const cbm_vec3 zero = v3(0, 0, 0);
+    cbm_vec3 fd = v3_add(leaf ? zero : f[i], w->ftip[i]);
     if (ground)
         fd.y += cbm__mech_contact(p, i, h, NULL);
     if (pairs)
@@ -442,14 +477,15 @@ static inline void backward_seg(cbm_plant *p, size_t i, pass_job *j, bool ground
     cbm_vec3 wo = w->wown[i];
     double li = p->len[i];
     cbm_vec3 arm = v3_add(v3_scale(fd, li), v3_scale(wo, w->lever[i]));
-    cbm_vec3 mi = v3_add(v3_add(m[i], v3_cross(h, arm)), w->mtip[i]);
+    cbm_vec3 mi = v3_add(v3_add(leaf ? zero : m[i], v3_cross(h, arm)), w->mtip[i]);
     cbm_vec3 fi = v3_add(fd, wo);
     f[i] = fi;
     m[i] = mi;
     int64_t pa = p->parent[i];
     if (pa >= 0 && !defer) {
-        f[pa] = v3_add(f[pa], fi);
-        m[pa] = v3_add(m[pa], mi);
+        bool first = (kin & CBM__KIN_FIRST) != 0;
+        cbm__kin_add3(&f[pa].x, &fi.x, first);
+        cbm__kin_add3(&m[pa].x, &mi.x, first);
     }
     cbm_vec3 ml = v3(v3_dot(mi, h), v3_dot(mi, l), v3_dot(mi, u));
     cbm_vec3 c = w->cj[i], o = p->omega[i], r0 = w->rj[i];
@@ -529,7 +565,7 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
     double ss = 0.0;
     int t = cbm__mech_tree_split(p);
     if (fuse) {
-        cbm__mech_factor_clear(p, t, true);
+        cbm__mech_factor_clear(p, true);
         w->fwad_ok = false; /* not stored by the sweep (cbm__mech_factor_one) */
     }
     if (t <= 1) {
@@ -569,14 +605,13 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
                     cbm__mech_factor_one(&all.fs, i, false);
             } else if (e & CBM__PART_ROOT) {
                 int64_t pa = p->parent[i];
-                f[pa] = v3_add(f[pa], f[i]);
-                m[pa] = v3_add(m[pa], m[i]);
+                bool first = (w->kin[i] & CBM__KIN_FIRST) != 0;
+                cbm__kin_add3(&f[pa].x, &f[i].x, first);
+                cbm__kin_add3(&m[pa].x, &m[i].x, first);
                 if (fuse) {
-                    double *a = w->fw + 9 * (size_t)pa;
-                    const double *b = w->fwad + 9 * i; /* Phi (cbm__mech_factor_one) */
-                    for (int k = 0; k < 9; k++)
-                        a[k] += b[k];
-                    w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
+                    /* Phi (cbm__mech_factor_one), kept in fwad */
+                    cbm__kin_add9(w->fw + 9 * (size_t)pa, w->fwad + 9 * i, first);
+                    cbm__kin_add3(&w->dm[pa].x, &w->dm[i].x, first);
                 }
             }
         }
@@ -790,14 +825,14 @@ cbm_status cbm_plant_evaluate(cbm_plant *p, double *residual)
     CBM_TRY(cbm__mech_work_reserve(p, 0));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
-    cbm__mech_forward(p);
+    cbm__mech_forward_eval(p);
     double mmax = 0.0;
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     if (p->contacts.npairs > p->contacts.pcap) {
         /* more touching organ pairs than room: grow it (outside any iteration) and redo */
         CBM_TRY(cbm__mech_work_reserve(p, 0));
         cbm__mech_prepare(p);
-        cbm__mech_forward(p);
+        cbm__mech_forward_eval(p);
         r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     }
     if (!isfinite(r))

@@ -166,7 +166,7 @@ static double dot(const double *a, const double *b, size_t n)
 static bool evaluate_as(nk *k, bool factor)
 {
     cbm_plant *p = k->p;
-    cbm__mech_forward(p);
+    cbm__mech_forward_eval(p);
     double ss = 0.0;
     double r = factor && k->fuse ? cbm__mech_backward_factor(p, p->work.res, &k->mmax, &ss)
                                  : cbm__mech_backward(p, 0.0, p->work.res, &k->mmax, &ss);
@@ -802,7 +802,7 @@ static nk_result stage_relax_bursts(nk *k)
     for (int burst = 0; r == NK_STALL && burst < 8; burst++) {
         double before = k->norm;
         for (int it = 0; it < 25 && st->passes + 2 < k->max_passes; it++) {
-            cbm__mech_forward(p);
+            cbm__mech_forward_eval(p);
             double mm;
             double rr = cbm__mech_backward(p, ra, NULL, &mm, NULL);
             st->passes++;

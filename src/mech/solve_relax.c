@@ -19,7 +19,7 @@ cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t 
     for (;;) {
         if (st->passes + 1 >= max_passes)
             break;
-        cbm__mech_forward(p);
+        cbm__mech_forward_eval(p);
         double r = cbm__mech_backward(p, alpha, NULL, &mmax, NULL);
         st->passes++;
         if (!isfinite(r))
@@ -31,7 +31,7 @@ cbm_status cbm__mech_solve_relax(cbm_plant *p, const cbm_solve_def *def, size_t 
             break;
     }
     /* evaluation pass: results consistent with the final Omega */
-    cbm__mech_forward(p);
+    cbm__mech_forward_eval(p);
     double r = cbm__mech_backward(p, 0.0, NULL, &mmax, NULL);
     st->passes++;
     if (!isfinite(r))

@@ -230,15 +230,18 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
         cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
         cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
                             v3_scale(w->wown[i], w->lever[i]));
-        /* G = [V]x [H]x = H V^T - (V.H) I */
+        /* G = [V]x [H]x = H V^T - (V.H) I; W = the children's Phi (none: zero) + G */
         double *W = w->fw + 9 * i;
         double vh = v3_dot(V, h);
         const double hv[3] = {h.x, h.y, h.z}, vv[3] = {V.x, V.y, V.z};
+        const uint8_t kin = w->kin[i];
+        const bool leaf = !(kin & CBM__KIN_CHILDREN);
 #pragma GCC unroll 9
         for (int r0 = 0; r0 < 3; r0++)
 #pragma GCC unroll 9
             for (int c0 = 0; c0 < 3; c0++)
-                W[3 * r0 + c0] += hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0);
+                W[3 * r0 + c0] =
+                    (leaf ? 0.0 : W[3 * r0 + c0]) + (hv[r0] * vv[c0] - (r0 == c0 ? vh : 0.0));
         const bool act = ground && w->fact[i];
         m3 Xi, Z, Y;
         if (act)
@@ -304,7 +307,7 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
         if (defer) /* for the sweep of the top; W stays */
             memcpy(w->fwad + 9 * i, Phi.m, sizeof Phi.m);
         else if (pa >= 0)
-            madd(w->fw + 9 * (size_t)pa, Phi.m);
+            cbm__kin_add9(w->fw + 9 * (size_t)pa, Phi.m, (kin & CBM__KIN_FIRST) != 0);
         if (act) {
             /* Gamma = W a D^-1 P + Y, Lambda = Z + (Z a D^-1) Q, Xi = (Z a D^-1) P + Xi' */
             m3 P = mmul(Rt.m, Y.m), ZAD = mmul(Z.m, AD.m);
@@ -546,10 +549,11 @@ static void sweeps(sweep *sw)
                 cbm__mech_factor_one(sw, i, false);
             } else if (e & PART_ROOT) {
                 int64_t pa = p->parent[i]; /* in the top */
-                if (!sw->only_solve)       /* Phi, kept in fwad */
-                    madd(w->fw + 9 * (size_t)pa, w->fwad + 9 * i);
+                bool first = (w->kin[i] & CBM__KIN_FIRST) != 0;
+                if (!sw->only_solve) /* Phi, kept in fwad */
+                    cbm__kin_add9(w->fw + 9 * (size_t)pa, w->fwad + 9 * i, first);
                 if (solve)
-                    w->dm[pa] = v3_add(w->dm[pa], w->dm[i]);
+                    cbm__kin_add3(&w->dm[pa].x, &w->dm[i].x, first);
             }
         }
     }
@@ -573,35 +577,13 @@ static void forward_all(cbm_plant *p, cbm_vec3 *out, int t)
     tree_parallel(&sw, t, true, &none, &none, &none);
 }
 
-/* Zeroes a[lo .. hi) (the accumulators before a sweep, in ranges over the threads). */
-typedef struct zero_job {
-    double *a;
-    size_t lo, hi;
-} zero_job;
-
-static void zero_run(void *arg)
+void cbm__mech_factor_clear(cbm_plant *p, bool solving)
 {
-    zero_job *j = arg;
-    memset(j->a + j->lo, 0, (j->hi - j->lo) * sizeof(double));
-}
-
-void cbm__mech_factor_clear(cbm_plant *p, int t, bool solving)
-{
+    /* W and psi need no clearing (work.kin); the ground's force accumulators are still cleared,
+     * read with ground contact only */
     cbm__mech_work *w = &p->work;
-    const size_t n = p->n;
-    if (t <= 1) {
-        memset(w->fw, 0, 9 * n * sizeof(double));
-    } else {
-        zero_job jobs[MAX_THREADS];
-        for (int k = 0; k < t; k++)
-            jobs[k] = (zero_job){w->fw, 9 * n * (size_t)k / (size_t)t,
-                                 9 * n * (size_t)(k + 1) / (size_t)t};
-        cbm__mech_run_threads(t, zero_run, jobs, sizeof *jobs);
-    }
-    if (solving) /* the force accumulators (dfc) are read with ground contact only */
-        memset(w->dm, 0, n * sizeof *w->dm);
-    if (solving && p->ground && w->fcap >= n)
-        memset(w->dfc, 0, n * sizeof *w->dfc);
+    if (solving && p->ground && w->fcap >= p->n)
+        memset(w->dfc, 0, p->n * sizeof *w->dfc);
 }
 
 /* The factorisation; with b != NULL also the backward half of the solve J out = b (fused, so a
@@ -620,8 +602,7 @@ static size_t factor(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out, double mu, 
         return w->fsing;
     }
     cbm__mech_fused_clear(p);
-    int t = ground ? 1 : cbm__mech_tree_split(p);
-    cbm__mech_factor_clear(p, t, b && out);
+    cbm__mech_factor_clear(p, b && out);
     if (ground) {
         memset(w->fact, 0, n);
         for (size_t i = 0; i < n; i++) {
@@ -702,8 +683,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
     w->fhalf = false; /* dm and perhaps tmp are written; the factorisation stays */
     if (!w->fwad_ok)
         wad_all(p);
-    for (size_t i = 0; i < n; i++)
-        w->dm[i] = w->dfc[i] = v3(0, 0, 0);
+    if (ground) /* psi needs no clearing (work.kin) */
+        memset(w->dfc, 0, n * sizeof *w->dfc);
     sweep sw = {.p = p, .b = b, .out = out, .ground = ground, .only_solve = true};
     sweeps(&sw);
 }
@@ -720,7 +701,9 @@ static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wa
         return; /* no right-hand side: nothing to solve (callers pass both) */
     cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
-    cbm_vec3 m0 = w->dm[i]; /* sum of the children's psi (+ the contact term below) */
+    const uint8_t kin = w->kin[i];
+    /* sum of the children's psi (+ the contact term below) */
+    cbm_vec3 m0 = (kin & CBM__KIN_CHILDREN) ? w->dm[i] : v3(0, 0, 0);
     cbm_vec3 f0 = act ? w->dfc[i] : v3(0, 0, 0);
     if (act) {
         /* m0 = sum psi - B sum chi = sum psi + l H x sum chi */
@@ -738,7 +721,7 @@ static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wa
         w->dm[i] = psi; /* not read again */
         return;
     }
-    w->dm[pa] = v3_add(w->dm[pa], psi);
+    cbm__kin_add3(&w->dm[pa].x, &psi.x, (kin & CBM__KIN_FIRST) != 0);
     if (act) {
         cbm_vec3 chi = v3_add(mvec(w->fzad + 9 * i, ui), f0);
         w->dfc[pa] = v3_add(w->dfc[pa], chi);
