@@ -18,31 +18,9 @@ typedef struct tname {
         (s), sizeof(s) - 1, (cmd)                                                                  \
     }
 
+/* The commands of two and three characters (those of one are in single[] below), looked up
+ * for the multi-character modules of L+C and for cpfg's @ and ? prefixes with their symbol. */
 static const tname names[] = {
-    TNAME("F", CBM_T_F),
-    TNAME("f", CBM_T_f),
-    TNAME("G", CBM_T_G),
-    TNAME("g", CBM_T_g),
-    TNAME("+", CBM_T_LEFT),
-    TNAME("-", CBM_T_RIGHT),
-    TNAME("&", CBM_T_PITCH_DOWN),
-    TNAME("^", CBM_T_PITCH_UP),
-    TNAME("\\", CBM_T_ROLL_LEFT),
-    TNAME("/", CBM_T_ROLL_RIGHT),
-    TNAME("|", CBM_T_TURN_AROUND),
-    TNAME("[", CBM_T_PUSH),
-    TNAME("]", CBM_T_POP),
-    TNAME("!", CBM_T_WIDTH),
-    TNAME("'", CBM_T_COLOR_INC),
-    TNAME(";", CBM_T_COLOR_INC),
-    TNAME(",", CBM_T_COLOR_DEC),
-    TNAME("#", CBM_T_WIDTH_INC),
-    TNAME("~", CBM_T_SURFACE),
-    TNAME("%", CBM_T_CUT),
-    TNAME("{", CBM_T_POLY_BEGIN),
-    TNAME("}", CBM_T_POLY_END),
-    TNAME(".", CBM_T_POLY_VERTEX),
-    TNAME("_", CBM_T_ELASTICITY),
     TNAME("@v", CBM_T_ROLL_HORIZ),
     TNAME("@O", CBM_T_SPHERE),
     TNAME("@o", CBM_T_CIRCLE),
