@@ -117,6 +117,7 @@ typedef struct glb {
      * streaming one: its pages are touched once, not once a pass */
     CBM_ARRAY(uint32_t) remap, verts, idx;
     CBM_ARRAY(uint8_t) tgroup; /* per triangle: its group, or NO_GROUP when not kept */
+    CBM_ARRAY(float) pval;     /* per part: its PART_VALUES part values (part_value) */
     CBM_ARRAY(float) fbuf;
     CBM_ARRAY(inst_attrs) insts;
     CBM_ARRAY(unit_mesh) units;
@@ -201,6 +202,8 @@ static float known(double x)
 }
 
 /* The per-part attributes in file order: _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER, _SEGMENT. */
+enum { PART_VALUES = 5 };
+
 static float part_value(const cbm_part *p, int q)
 {
     double x = q == 0   ? p->stress_ratio
@@ -603,10 +606,12 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
 enum { VERT_ATTRS = 8, VERT_CHUNK = 8192 };
 
 /* Per vertex: its part (the part of the last triangle using it) and, for a scene whose
- * triangles keep their own segment ids, that triangle's (else NULL). */
+ * triangles keep their own segment ids, that triangle's (else NULL); per part, its values
+ * (PART_VALUES a part, computed once a scene rather than once a vertex). */
 typedef struct vertex_src {
     const uint32_t *part;
     const float *seg;
+    const float *pval;
 } vertex_src;
 
 static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, const vertex_src *vs,
@@ -637,7 +642,7 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     float *col = NULL, *fbuf = NULL, *vseg = NULL;
     uint32_t *vpart = NULL;
     const float *tseg = cbm_scene_triangle_segments(s);
-    vertex_src vs = {NULL, NULL};
+    vertex_src vs = {NULL, NULL, NULL};
     size_t maxt = 0;
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
@@ -665,8 +670,14 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             for (int k = 0; k < 3; k++)
                 vseg[tri[3 * t + (size_t)k]] = tseg[t];
     }
+    if ((st = CBM_ARRAY_RESERVE(ctx, g->pval, PART_VALUES * (np ? np : 1))) != CBM_OK)
+        goto done;
+    for (size_t i = 0; i < np; i++)
+        for (int q = 0; q < PART_VALUES; q++)
+            g->pval.data[PART_VALUES * i + (size_t)q] = part_value(&parts[i], q);
     vs.part = vpart;
     vs.seg = vseg;
+    vs.pval = g->pval.data;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_gv)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->idx, 3 * VERT_CHUNK)) != CBM_OK ||
@@ -680,11 +691,11 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         goto done;
     for (int q = 0; q < 4; q++) {
         uint32_t b0 = 0, b;
-        g->part_val[q] = np ? part_value(&parts[0], q) : 0.0f;
+        g->part_val[q] = np ? vs.pval[q] : 0.0f;
         memcpy(&b0, &g->part_val[q], sizeof b0);
         g->part_same[q] = true;
         for (size_t i = 1; i < np && g->part_same[q]; i++) {
-            float v = part_value(&parts[i], q);
+            float v = vs.pval[PART_VALUES * i + (size_t)q];
             memcpy(&b, &v, sizeof b);
             g->part_same[q] = b == b0;
         }
@@ -744,7 +755,6 @@ static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *
 {
     const uint32_t *vpart = vs->part;
     const cbm_scene_vertex *v = cbm_scene_vertices(s);
-    const cbm_part *parts = cbm_scene_parts(s);
     for (size_t i = 0; i < n; i++) {
         if (q == 0) {
             memcpy(f + 3 * i, v[verts[i]].p, 3 * sizeof(float));
@@ -759,7 +769,7 @@ static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *
         } else if (q == 7 && vs->seg) {
             f[i] = vs->seg[verts[i]];
         } else {
-            f[i] = part_value(&parts[vpart[verts[i]]], q - 3);
+            f[i] = vs->pval[PART_VALUES * (size_t)vpart[verts[i]] + (size_t)(q - 3)];
         }
     }
 }
@@ -1060,6 +1070,7 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->frames);
     CBM_ARRAY_FREE(ctx, a->g.remap);
     CBM_ARRAY_FREE(ctx, a->g.tgroup);
+    CBM_ARRAY_FREE(ctx, a->g.pval);
     CBM_ARRAY_FREE(ctx, a->g.verts);
     CBM_ARRAY_FREE(ctx, a->g.idx);
     CBM_ARRAY_FREE(ctx, a->g.fbuf);
