@@ -9,6 +9,11 @@ if(CBM_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined
                       -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
+  # ASan intercepts __cxa_throw and looks the real one up when the process starts; Embree,
+  # loaded later with dlopen (src/core/dynlib.h), throws (and catches) C++ exceptions, which
+  # would reach an interceptor without its target. The C++ runtime linked from the start gives
+  # it one (sanitizer builds only).
+  add_link_options(-Wl,--push-state,--no-as-needed,-lstdc++,--pop-state)
 endif()
 
 # Reproducible floating point: no contraction into FMA, never -ffast-math.
