@@ -3,8 +3,8 @@
  * the X client libraries) for plots and the text of pictures. Linked at build time, these are
  * twenty-odd shared objects the loader maps and relocates before main, in every run, also in the
  * runs (most of them: a derivation, a mesh, a table) that never cast a ray or draw a letter; on
- * the machine of docs/performance.md that start cost more than a whole small model's derivation
- * and mesh. Their headers are still used at build time, so the types and the functions'
+ * the machine of docs/performance.md that start cost about as much as a small model's whole
+ * derivation and mesh. Their headers are still used at build time, so the types and the functions'
  * signatures are the libraries' own (each table's fields are declared with the types of the
  * functions they point to).
  *
