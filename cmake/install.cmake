@@ -20,10 +20,9 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/examples/linking
         DESTINATION ${CMAKE_INSTALL_DOCDIR}/examples)
 
 # cambium.pc: the shared library by default; `pkg-config --static` adds what libcambium.a needs
-# (the libraries of the Debian packages of cmake/dependencies.cmake; cairo through its own .pc,
-# Requires.private). No public Requires: the public headers include only the C library's, so a
-# program needs no other package's flags (pkg-config still adds cairo's to --cflags, and needs
-# cairo.pc present, because of Requires.private; README, "Installing and linking"). The prefix is
+# (the linked libraries of cmake/dependencies.cmake and libdl; Embree and cairo are loaded at run
+# time, not linked). No Requires: the public headers include only the C library's, so a program
+# needs no other package's flags (README, "Installing and linking"). The prefix is
 # the one given at install time (`cmake --install --prefix`, `make install PREFIX=...`), so the
 # file is finished by the install step itself.
 set(CBM_PC_PREFIX "%PREFIX%")

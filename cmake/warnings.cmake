@@ -9,6 +9,14 @@ if(CBM_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-sanitize-recover=undefined
                       -fno-omit-frame-pointer)
   add_link_options(-fsanitize=address,undefined)
+  # Sanitizer builds link Embree (and with it the C++ runtime) from the start, as the library
+  # did before it loaded Embree with dlopen (src/core/dynlib.h; dlopen then finds it loaded).
+  # Loaded later, it defeats two things of the sanitizers: ASan's __cxa_throw interceptor looks
+  # its target up at the start (Embree throws and catches C++ exceptions inside), and
+  # LeakSanitizer neither sees the blocks Embree keeps in its thread-local storage nor survives
+  # its exit scan with Embree's worker threads alive (test_ober's light tests: "Tracer caught
+  # signal 11"). The release build does not link it.
+  add_link_options(-Wl,--push-state,--no-as-needed,-lembree3,-lstdc++,--pop-state)
 endif()
 
 # Reproducible floating point: no contraction into FMA, never -ffast-math.

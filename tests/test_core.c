@@ -1,10 +1,13 @@
 /* Core services: status names, allocation accounting and limits, arena, arrays, generator,
- * vector and quaternion math, atomic output files, the scene. */
+ * vector and quaternion math, atomic output files, libraries loaded at run time, the scene. */
 #include "test.h"
 
 #include "core/core.h"
+#include "core/dynlib.h"
 #include "core/vecmath.h"
 
+#include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -148,6 +151,53 @@ TEST(atomic_output)
     if (access("/dev/full", W_OK) == 0) {
         /* cannot create a temp beside /dev/full; write through the stream instead */
     }
+    test_ctx_end(ctx);
+}
+
+/* The C library's math, loaded as the renderer loads Embree: a table typed by the functions. */
+typedef struct math_api {
+    __typeof__(cos) *cos;
+    __typeof__(hypot) *hypot;
+} math_api;
+
+TEST(libraries_loaded_at_run_time)
+{
+    cbm_context *ctx = test_ctx();
+    math_api m = {NULL, NULL};
+    static const cbm__dynsym syms[] = {{"cos", offsetof(math_api, cos)},
+                                       {"hypot", offsetof(math_api, hypot)}};
+    cbm__dynlib lib = CBM__DYNLIB_INIT("libm.so.6", "libc6", syms, &m);
+    CHECK_OK(cbm__dynlib_load(ctx, &lib, "test"));
+    CHECK(m.cos && m.hypot);
+    if (m.cos && m.hypot) {
+        volatile double three = 3.0; /* a call through the table, not a folded constant */
+        CHECK(m.cos(0.0) == 1.0);
+        CHECK(m.hypot(three, 4.0) == 5.0);
+    }
+    CHECK_OK(cbm__dynlib_load(ctx, &lib, "test")); /* loaded: the table as it is */
+
+    /* a library that is not installed: the status and a message naming it and its package,
+     * the same at every later call; the table untouched */
+    math_api none = {NULL, NULL};
+    cbm__dynlib missing =
+        CBM__DYNLIB_INIT("libcambium-no-such-library.so.9", "no-such-package", syms, &none);
+    for (int k = 0; k < 2; k++) {
+        CHECK_STATUS(cbm__dynlib_load(ctx, &missing, "renderer"), CBM_E_UNSUPPORTED);
+        const char *e = cbm_context_last_error(ctx);
+        CHECK(e && strstr(e, "renderer: cannot load libcambium-no-such-library.so.9 (Debian "
+                             "package no-such-package)"));
+    }
+    CHECK(!none.cos && !none.hypot);
+    CHECK_STATUS(cbm__dynlib_load(NULL, &missing, "renderer"), CBM_E_UNSUPPORTED);
+
+    /* a library without one of the functions: refused whole, the function named */
+    static const cbm__dynsym partial_syms[] = {{"cos", offsetof(math_api, cos)},
+                                               {"cbm_no_such_function", offsetof(math_api, hypot)}};
+    math_api half = {NULL, NULL};
+    cbm__dynlib partial = CBM__DYNLIB_INIT("libm.so.6", "libc6", partial_syms, &half);
+    CHECK_STATUS(cbm__dynlib_load(ctx, &partial, "plot"), CBM_E_UNSUPPORTED);
+    CHECK(strstr(cbm_context_last_error(ctx), "has no function cbm_no_such_function"));
+    CHECK(!half.cos && !half.hypot);
     test_ctx_end(ctx);
 }
 

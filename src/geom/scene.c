@@ -670,11 +670,20 @@ cbm_status cbm_scene_add_sphere(cbm_scene *s, cbm_vec3 c, double r, int slices)
     CBM_TRY(ensure_tri_part(s));
     int stacks = slices / 2 < 2 ? 2 : slices / 2;
     uint32_t base = (uint32_t)s->verts.len;
+    /* the meridians' cosines and sines once a sphere, not once a ring (the same values) */
+    double cph[64], sph[64];
+    int ncs = slices < 64 ? slices : 64;
+    for (int j = 0; j < ncs; j++) {
+        double ph = 2.0 * CBM_PI * j / slices;
+        cph[j] = cos(ph);
+        sph[j] = sin(ph);
+    }
     for (int i = 0; i <= stacks; i++) {
         double th = CBM_PI * i / stacks, st = sin(th), ct = cos(th);
         for (int j = 0; j < slices; j++) {
             double ph = 2.0 * CBM_PI * j / slices;
-            cbm_vec3 n = v3(st * cos(ph), ct, st * sin(ph));
+            cbm_vec3 n =
+                j < ncs ? v3(st * cph[j], ct, st * sph[j]) : v3(st * cos(ph), ct, st * sin(ph));
             CBM_TRY(push_vertex(s, v3_madd(c, n, r), n));
         }
     }

@@ -31,6 +31,7 @@
 #define GL_ARRAY_BUFFER         34962
 #define GL_ELEMENT_ARRAY_BUFFER 34963
 #define MAX_ORDER_GROUPS        32
+#define NO_GROUP                0xff
 
 typedef cbm__gltf_accessor accessor;
 typedef cbm__gltf_view view;
@@ -115,6 +116,8 @@ typedef struct glb {
     /* scratch of add_scene_groups, kept from frame to frame and from the measuring pass to the
      * streaming one: its pages are touched once, not once a pass */
     CBM_ARRAY(uint32_t) remap, verts, idx;
+    CBM_ARRAY(uint8_t) tgroup; /* per triangle: its group, or NO_GROUP when not kept */
+    CBM_ARRAY(float) pval;     /* per part: its PART_VALUES part values (part_value) */
     CBM_ARRAY(float) fbuf;
     CBM_ARRAY(inst_attrs) insts;
     CBM_ARRAY(unit_mesh) units;
@@ -199,6 +202,8 @@ static float known(double x)
 }
 
 /* The per-part attributes in file order: _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER, _SEGMENT. */
+enum { PART_VALUES = 5 };
+
 static float part_value(const cbm_part *p, int q)
 {
     double x = q == 0   ? p->stress_ratio
@@ -601,14 +606,16 @@ static cbm_status add_instance_nodes(glb *g, const cbm_scene *s, const float *co
 enum { VERT_ATTRS = 8, VERT_CHUNK = 8192 };
 
 /* Per vertex: its part (the part of the last triangle using it) and, for a scene whose
- * triangles keep their own segment ids, that triangle's (else NULL). */
+ * triangles keep their own segment ids, that triangle's (else NULL); per part, its values
+ * (PART_VALUES a part, computed once a scene rather than once a vertex). */
 typedef struct vertex_src {
     const uint32_t *part;
     const float *seg;
+    const float *pval;
 } vertex_src;
 
 static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, const vertex_src *vs,
-                                 int grp, float *fbuf);
+                                 const uint8_t *tgroup, int grp, float *fbuf);
 
 /* One node per non-empty group of the scene, with the mesh of its triangles and an instanced
  * child node per bucket of its instances; the group nodes' ids appended to children. */
@@ -621,14 +628,21 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     const cbm_part *parts = cbm_scene_parts(s);
     const uint32_t *tp = cbm_scene_triangle_parts(s);
     enum { NG = CBM_ORGAN_COUNT + MAX_ORDER_GROUPS };
+    _Static_assert(NG < NO_GROUP, "a group is a byte");
     size_t ntg[NG] = {0};
-    for (size_t t = 0; t < nt; t++)
-        if (cbm__part_kept(&parts[tp[t]], o))
-            ntg[group_of(&parts[tp[t]])]++;
+    /* each triangle's group, once: every group's mesh then scans bytes, not parts */
+    CBM_TRY(CBM_ARRAY_RESERVE(ctx, g->tgroup, nt ? nt : 1));
+    uint8_t *tg = g->tgroup.data;
+    for (size_t t = 0; t < nt; t++) {
+        const cbm_part *p = &parts[tp[t]];
+        tg[t] = cbm__part_kept(p, o) ? (uint8_t)group_of(p) : NO_GROUP;
+        if (tg[t] != NO_GROUP)
+            ntg[tg[t]]++;
+    }
     float *col = NULL, *fbuf = NULL, *vseg = NULL;
     uint32_t *vpart = NULL;
     const float *tseg = cbm_scene_triangle_segments(s);
-    vertex_src vs = {NULL, NULL};
+    vertex_src vs = {NULL, NULL, NULL};
     size_t maxt = 0;
     for (int k = 0; k < NG; k++)
         maxt = ntg[k] > maxt ? ntg[k] : maxt;
@@ -656,8 +670,14 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
             for (int k = 0; k < 3; k++)
                 vseg[tri[3 * t + (size_t)k]] = tseg[t];
     }
+    if ((st = CBM_ARRAY_RESERVE(ctx, g->pval, PART_VALUES * (np ? np : 1))) != CBM_OK)
+        goto done;
+    for (size_t i = 0; i < np; i++)
+        for (int q = 0; q < PART_VALUES; q++)
+            g->pval.data[PART_VALUES * i + (size_t)q] = part_value(&parts[i], q);
     vs.part = vpart;
     vs.seg = vseg;
+    vs.pval = g->pval.data;
     if ((st = CBM_ARRAY_RESERVE(ctx, g->remap, nv ? nv : 1)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->verts, cap_gv)) != CBM_OK ||
         (st = CBM_ARRAY_RESERVE(ctx, g->idx, 3 * VERT_CHUNK)) != CBM_OK ||
@@ -671,11 +691,11 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         goto done;
     for (int q = 0; q < 4; q++) {
         uint32_t b0 = 0, b;
-        g->part_val[q] = np ? part_value(&parts[0], q) : 0.0f;
+        g->part_val[q] = np ? vs.pval[q] : 0.0f;
         memcpy(&b0, &g->part_val[q], sizeof b0);
         g->part_same[q] = true;
         for (size_t i = 1; i < np && g->part_same[q]; i++) {
-            float v = part_value(&parts[i], q);
+            float v = vs.pval[PART_VALUES * i + (size_t)q];
             memcpy(&b, &v, sizeof b);
             g->part_same[q] = b == b0;
         }
@@ -705,7 +725,7 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
         else
             snprintf(nd.name, sizeof nd.name, "%s", cbm_organ_name((cbm_organ)nd.organ));
         fbuf = g->fbuf.data; /* the instances may have moved it */
-        if (ntg[grp] && (st = add_group_mesh(g, s, col, &vs, grp, fbuf)) != CBM_OK)
+        if (ntg[grp] && (st = add_group_mesh(g, s, col, &vs, tg, grp, fbuf)) != CBM_OK)
             goto done;
         if (ntg[grp])
             nd.mesh = (long)g->meshes.len - 1;
@@ -735,7 +755,6 @@ static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *
 {
     const uint32_t *vpart = vs->part;
     const cbm_scene_vertex *v = cbm_scene_vertices(s);
-    const cbm_part *parts = cbm_scene_parts(s);
     for (size_t i = 0; i < n; i++) {
         if (q == 0) {
             memcpy(f + 3 * i, v[verts[i]].p, 3 * sizeof(float));
@@ -750,26 +769,23 @@ static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *
         } else if (q == 7 && vs->seg) {
             f[i] = vs->seg[verts[i]];
         } else {
-            f[i] = part_value(&parts[vpart[verts[i]]], q - 3);
+            f[i] = vs->pval[PART_VALUES * (size_t)vpart[verts[i]] + (size_t)(q - 3)];
         }
     }
 }
 
 /* The triangles of group grp as one mesh (appended to g->meshes). */
 static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, const vertex_src *vs,
-                                 int grp, float *fbuf)
+                                 const uint8_t *tgroup, int grp, float *fbuf)
 {
     cbm_context *ctx = g->ctx;
-    const cbm_write_options *o = g->o;
     size_t nv = cbm_scene_vertex_count(s), nt = cbm_scene_triangle_count(s);
-    const cbm_part *parts = cbm_scene_parts(s);
-    const uint32_t *tri = cbm_scene_triangles(s), *tp = cbm_scene_triangle_parts(s);
+    const uint32_t *tri = cbm_scene_triangles(s);
     uint32_t *remap = g->remap.data, *verts = g->verts.data, *idx = g->idx.data;
     memset(remap, 0xff, (nv ? nv : 1) * sizeof *remap);
     size_t nvg = 0, ni = 0;
     for (size_t t = 0; t < nt; t++) {
-        const cbm_part *p = &parts[tp[t]];
-        if (!cbm__part_kept(p, o) || group_of(p) != grp)
+        if (tgroup[t] != grp)
             continue;
         for (int k = 0; k < 3; k++) {
             uint32_t vi = tri[3 * t + (size_t)k];
@@ -800,10 +816,13 @@ static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, c
         for (size_t c0 = 0; (bounds || g->mode != BIN_MEASURE) && c0 < nvg; c0 += VERT_CHUNK) {
             size_t n = nvg - c0 < VERT_CHUNK ? nvg - c0 : VERT_CHUNK;
             vertex_attr(s, col, vs, verts + c0, n, q, fbuf);
+            /* fminf and fmaxf as glibc's, without a call per value: the bound kept on a tie
+             * (+0 against -0) and against a NaN */
             for (size_t i = 0; bounds && i < n; i++)
                 for (int k = 0; k < nc; k++) {
-                    a.min[k] = fminf(a.min[k], fbuf[i * (size_t)nc + (size_t)k]);
-                    a.max[k] = fmaxf(a.max[k], fbuf[i * (size_t)nc + (size_t)k]);
+                    float x = fbuf[i * (size_t)nc + (size_t)k];
+                    a.min[k] = x < a.min[k] ? x : a.min[k];
+                    a.max[k] = x > a.max[k] ? x : a.max[k];
                 }
             bin_put(g, fbuf, n * (size_t)nc * sizeof(float));
         }
@@ -816,8 +835,7 @@ static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, c
     CBM_TRY(open_view(g, ni * sizeof(uint32_t), GL_ELEMENT_ARRAY_BUFFER, &a.view));
     size_t n = 0;
     for (size_t t = 0; g->mode != BIN_MEASURE && t < nt; t++) {
-        const cbm_part *p = &parts[tp[t]];
-        if (!cbm__part_kept(p, o) || group_of(p) != grp)
+        if (tgroup[t] != grp)
             continue;
         for (int k = 0; k < 3; k++)
             idx[n++] = remap[tri[3 * t + (size_t)k]];
@@ -1051,6 +1069,8 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.children);
     CBM_ARRAY_FREE(ctx, a->frames);
     CBM_ARRAY_FREE(ctx, a->g.remap);
+    CBM_ARRAY_FREE(ctx, a->g.tgroup);
+    CBM_ARRAY_FREE(ctx, a->g.pval);
     CBM_ARRAY_FREE(ctx, a->g.verts);
     CBM_ARRAY_FREE(ctx, a->g.idx);
     CBM_ARRAY_FREE(ctx, a->g.fbuf);

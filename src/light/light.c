@@ -188,7 +188,7 @@ static bool occluded(RTCScene rs, cbm_vec3 o, cbm_vec3 d, double tfar)
     r.mask = 0xFFFFFFFFu;
     r.id = 0;
     r.flags = 0;
-    rtcOccluded1(rs, &ic, &r);
+    cbm__rtc.rtcOccluded1(rs, &ic, &r);
     return r.tfar < 0.0f;
 }
 
@@ -429,7 +429,7 @@ static void flush_batch(const light_job *j, scratch *w, size_t nl, size_t np, si
     if (m > 0) {
         struct RTCIntersectContext ic;
         rtcInitIntersectContext(&ic);
-        rtcOccluded1M(j->rs, &ic, w->rays, m, sizeof *w->rays);
+        cbm__rtc.rtcOccluded1M(j->rs, &ic, w->rays, m, sizeof *w->rays);
         *rays += m;
         for (unsigned q = 0; q < m; q++)
             w->vis[w->tag[q]] = !(w->rays[q].tfar < 0.0f);
@@ -646,13 +646,13 @@ static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *
             return cbm__fail(ctx, CBM_E_LIMIT,
                              "light: the periodic tile is too small for the scene's leaves");
     }
-    RTCScene rs = rtcNewScene(dev);
+    RTCScene rs = cbm__rtc.rtcNewScene(dev);
     if (total > 0) {
-        RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_QUAD);
-        float *vb = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                            3 * sizeof(float), 4 * total);
-        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4,
-                                               4 * sizeof(unsigned), total);
+        RTCGeometry g = cbm__rtc.rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_QUAD);
+        float *vb = cbm__rtc.rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4 * total);
+        unsigned *ib = cbm__rtc.rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT4, 4 * sizeof(unsigned), total);
         if (vb && ib) {
             size_t m = 0;
             for (size_t k = 0; k < np; k++) {
@@ -678,11 +678,11 @@ static cbm_status build_scene(cbm_context *ctx, RTCDevice dev, const light_job *
             }
             CBM_ASSERT(m == total);
         }
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(rs, g, 0);
-        rtcReleaseGeometry(g);
+        cbm__rtc.rtcCommitGeometry(g);
+        cbm__rtc.rtcAttachGeometryByID(rs, g, 0);
+        cbm__rtc.rtcReleaseGeometry(g);
     }
-    rtcCommitScene(rs);
+    cbm__rtc.rtcCommitScene(rs);
     *out = rs;
     return cbm__rtc_status(ctx, dev, "light", "building the light scene");
 }
@@ -822,9 +822,9 @@ cbm_status cbm_light_intercept(cbm_context *ctx, const cbm_light_def *def,
     }
 done:
     if (rs)
-        rtcReleaseScene(rs);
+        cbm__rtc.rtcReleaseScene(rs);
     if (dev)
-        rtcReleaseDevice(dev);
+        cbm__rtc.rtcReleaseDevice(dev);
     cbm__free(ctx, src, nsrc * sizeof *src);
     cbm__free(ctx, j.scratch_mem, (size_t)nthreads * SCRATCH(j.points, nsrc) + 16);
     cbm__free(ctx, order, (n_leaves ? n_leaves : 1) * sizeof *order);

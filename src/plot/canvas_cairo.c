@@ -15,18 +15,19 @@ static cairo_t *cr_of(cbm__canvas *c)
 
 static void set_rgb(cairo_t *cr, const cbm__rgb *c, double alpha)
 {
-    cairo_set_source_rgba(cr, c->r, c->g, c->b, alpha);
+    cbm__cairo.cairo_set_source_rgba(cr, c->r, c->g, c->b, alpha);
 }
 
 static void set_stroke(cairo_t *cr, const cbm__stroke *s)
 {
     set_rgb(cr, &s->color, 1.0);
-    cairo_set_line_width(cr, s->width);
+    cbm__cairo.cairo_set_line_width(cr, s->width);
     double dash[2];
     int n = cbm__plot_dashes(s->line, s->width, dash);
-    cairo_set_dash(cr, dash, n, 0.0);
-    cairo_set_line_cap(cr, s->line == CBM_PLOT_DOTTED ? CAIRO_LINE_CAP_ROUND : CAIRO_LINE_CAP_BUTT);
-    cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+    cbm__cairo.cairo_set_dash(cr, dash, n, 0.0);
+    cbm__cairo.cairo_set_line_cap(cr, s->line == CBM_PLOT_DOTTED ? CAIRO_LINE_CAP_ROUND
+                                                                 : CAIRO_LINE_CAP_BUTT);
+    cbm__cairo.cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
 }
 
 static void group_begin(cbm__canvas *c, const char *cls, const char *label)
@@ -42,62 +43,62 @@ static void group_end(cbm__canvas *c)
 static void clip_begin(cbm__canvas *c, double x, double y, double w, double h)
 {
     cairo_t *cr = cr_of(c);
-    cairo_save(cr);
-    cairo_rectangle(cr, x, y, w, h);
-    cairo_clip(cr);
+    cbm__cairo.cairo_save(cr);
+    cbm__cairo.cairo_rectangle(cr, x, y, w, h);
+    cbm__cairo.cairo_clip(cr);
 }
 
 static void clip_end(cbm__canvas *c)
 {
-    cairo_restore(cr_of(c));
+    cbm__cairo.cairo_restore(cr_of(c));
 }
 
 static void rect(cbm__canvas *c, double x, double y, double w, double h, const cbm__rgb *fill,
                  double fill_alpha, const cbm__stroke *stroke)
 {
     cairo_t *cr = cr_of(c);
-    cairo_new_path(cr);
-    cairo_rectangle(cr, x, y, w, h);
+    cbm__cairo.cairo_new_path(cr);
+    cbm__cairo.cairo_rectangle(cr, x, y, w, h);
     if (fill) {
         set_rgb(cr, fill, fill_alpha);
-        cairo_fill_preserve(cr);
+        cbm__cairo.cairo_fill_preserve(cr);
     }
     if (stroke) {
         set_stroke(cr, stroke);
-        cairo_set_line_join(cr, CAIRO_LINE_JOIN_MITER);
-        cairo_stroke(cr);
+        cbm__cairo.cairo_set_line_join(cr, CAIRO_LINE_JOIN_MITER);
+        cbm__cairo.cairo_stroke(cr);
     }
-    cairo_new_path(cr);
+    cbm__cairo.cairo_new_path(cr);
 }
 
 static void segments(cbm__canvas *c, const double *p, size_t n, const cbm__stroke *s)
 {
     cairo_t *cr = cr_of(c);
-    cairo_new_path(cr);
+    cbm__cairo.cairo_new_path(cr);
     for (size_t i = 0; i < n; i++) {
-        cairo_move_to(cr, p[4 * i], p[4 * i + 1]);
-        cairo_line_to(cr, p[4 * i + 2], p[4 * i + 3]);
+        cbm__cairo.cairo_move_to(cr, p[4 * i], p[4 * i + 1]);
+        cbm__cairo.cairo_line_to(cr, p[4 * i + 2], p[4 * i + 3]);
     }
     set_stroke(cr, s);
-    cairo_stroke(cr);
+    cbm__cairo.cairo_stroke(cr);
 }
 
 static void polylines(cbm__canvas *c, const double *xy, const size_t *runs, size_t nruns,
                       const cbm__stroke *s)
 {
     cairo_t *cr = cr_of(c);
-    cairo_new_path(cr);
+    cbm__cairo.cairo_new_path(cr);
     size_t at = 0;
     for (size_t r = 0; r < nruns; r++) {
         for (size_t i = 0; i < runs[r]; i++, at++) {
             if (i == 0)
-                cairo_move_to(cr, xy[2 * at], xy[2 * at + 1]);
+                cbm__cairo.cairo_move_to(cr, xy[2 * at], xy[2 * at + 1]);
             else
-                cairo_line_to(cr, xy[2 * at], xy[2 * at + 1]);
+                cbm__cairo.cairo_line_to(cr, xy[2 * at], xy[2 * at + 1]);
         }
     }
     set_stroke(cr, s);
-    cairo_stroke(cr);
+    cbm__cairo.cairo_stroke(cr);
 }
 
 /* The outline of a marker of radius r at (x, y), as a new sub-path. */
@@ -105,37 +106,37 @@ static void marker_path(cairo_t *cr, cbm_plot_marker m, double x, double y, doub
 {
     switch (m) {
     case CBM_PLOT_MARKER_CIRCLE:
-        cairo_new_sub_path(cr);
-        cairo_arc(cr, x, y, r, 0.0, 2.0 * CBM_PI);
-        cairo_close_path(cr);
+        cbm__cairo.cairo_new_sub_path(cr);
+        cbm__cairo.cairo_arc(cr, x, y, r, 0.0, 2.0 * CBM_PI);
+        cbm__cairo.cairo_close_path(cr);
         break;
     case CBM_PLOT_MARKER_SQUARE:
-        cairo_rectangle(cr, x - 0.85 * r, y - 0.85 * r, 1.7 * r, 1.7 * r);
+        cbm__cairo.cairo_rectangle(cr, x - 0.85 * r, y - 0.85 * r, 1.7 * r, 1.7 * r);
         break;
     case CBM_PLOT_MARKER_TRIANGLE:
-        cairo_move_to(cr, x, y - 1.15 * r);
-        cairo_line_to(cr, x + r, y + 0.6 * r);
-        cairo_line_to(cr, x - r, y + 0.6 * r);
-        cairo_close_path(cr);
+        cbm__cairo.cairo_move_to(cr, x, y - 1.15 * r);
+        cbm__cairo.cairo_line_to(cr, x + r, y + 0.6 * r);
+        cbm__cairo.cairo_line_to(cr, x - r, y + 0.6 * r);
+        cbm__cairo.cairo_close_path(cr);
         break;
     case CBM_PLOT_MARKER_DIAMOND:
-        cairo_move_to(cr, x, y - 1.2 * r);
-        cairo_line_to(cr, x + r, y);
-        cairo_line_to(cr, x, y + 1.2 * r);
-        cairo_line_to(cr, x - r, y);
-        cairo_close_path(cr);
+        cbm__cairo.cairo_move_to(cr, x, y - 1.2 * r);
+        cbm__cairo.cairo_line_to(cr, x + r, y);
+        cbm__cairo.cairo_line_to(cr, x, y + 1.2 * r);
+        cbm__cairo.cairo_line_to(cr, x - r, y);
+        cbm__cairo.cairo_close_path(cr);
         break;
     case CBM_PLOT_MARKER_CROSS:
-        cairo_move_to(cr, x - r, y - r);
-        cairo_line_to(cr, x + r, y + r);
-        cairo_move_to(cr, x - r, y + r);
-        cairo_line_to(cr, x + r, y - r);
+        cbm__cairo.cairo_move_to(cr, x - r, y - r);
+        cbm__cairo.cairo_line_to(cr, x + r, y + r);
+        cbm__cairo.cairo_move_to(cr, x - r, y + r);
+        cbm__cairo.cairo_line_to(cr, x + r, y - r);
         break;
     case CBM_PLOT_MARKER_PLUS:
-        cairo_move_to(cr, x - r, y);
-        cairo_line_to(cr, x + r, y);
-        cairo_move_to(cr, x, y - r);
-        cairo_line_to(cr, x, y + r);
+        cbm__cairo.cairo_move_to(cr, x - r, y);
+        cbm__cairo.cairo_line_to(cr, x + r, y);
+        cbm__cairo.cairo_move_to(cr, x, y - r);
+        cbm__cairo.cairo_line_to(cr, x, y + r);
         break;
     default:
         break;
@@ -146,17 +147,17 @@ static void markers(cbm__canvas *c, const double *xy, size_t n, cbm_plot_marker 
                     const cbm__rgb *color, double line_width)
 {
     cairo_t *cr = cr_of(c);
-    cairo_new_path(cr);
+    cbm__cairo.cairo_new_path(cr);
     for (size_t i = 0; i < n; i++)
         marker_path(cr, m, xy[2 * i], xy[2 * i + 1], r);
     set_rgb(cr, color, 1.0);
-    cairo_set_dash(cr, NULL, 0, 0.0);
+    cbm__cairo.cairo_set_dash(cr, NULL, 0, 0.0);
     if (m == CBM_PLOT_MARKER_CROSS || m == CBM_PLOT_MARKER_PLUS) {
-        cairo_set_line_width(cr, line_width);
-        cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
-        cairo_stroke(cr);
+        cbm__cairo.cairo_set_line_width(cr, line_width);
+        cbm__cairo.cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+        cbm__cairo.cairo_stroke(cr);
     } else {
-        cairo_fill(cr);
+        cbm__cairo.cairo_fill(cr);
     }
 }
 
@@ -166,15 +167,15 @@ static void text(cbm__canvas *c, double x, double y, const char *t, double size,
     cairo_t *cr = cr_of(c);
     double w = cbm__font_width(cr, t, size);
     double dx = anchor == CBM__ANCHOR_MIDDLE ? -0.5 * w : anchor == CBM__ANCHOR_END ? -w : 0.0;
-    cairo_save(cr);
-    cairo_translate(cr, x, y);
+    cbm__cairo.cairo_save(cr);
+    cbm__cairo.cairo_translate(cr, x, y);
     if (vertical)
-        cairo_rotate(cr, -0.5 * CBM_PI);
-    cairo_move_to(cr, dx, 0.0);
+        cbm__cairo.cairo_rotate(cr, -0.5 * CBM_PI);
+    cbm__cairo.cairo_move_to(cr, dx, 0.0);
     set_rgb(cr, color, 1.0);
-    cairo_show_text(cr, t);
-    cairo_restore(cr);
-    cairo_new_path(cr);
+    cbm__cairo.cairo_show_text(cr, t);
+    cbm__cairo.cairo_restore(cr);
+    cbm__cairo.cairo_new_path(cr);
 }
 
 static const cbm__canvas_ops cairo_ops = {group_begin, group_end, clip_begin, clip_end, rect,
@@ -183,31 +184,33 @@ static const cbm__canvas_ops cairo_ops = {group_begin, group_end, clip_begin, cl
 cbm_status cbm__plot_render_cairo(const cbm_plot *p, cbm_image **out)
 {
     *out = NULL;
-    cairo_surface_t *surf = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, p->width, p->height);
-    cairo_t *cr = cairo_create(surf);
-    cairo_surface_destroy(surf); /* the context keeps it */
-    if (cairo_status(cr) != CAIRO_STATUS_SUCCESS) {
-        cairo_destroy(cr);
+    CBM_TRY(cbm__cairo_load(p->ctx, "plot"));
+    cairo_surface_t *surf =
+        cbm__cairo.cairo_image_surface_create(CAIRO_FORMAT_ARGB32, p->width, p->height);
+    cairo_t *cr = cbm__cairo.cairo_create(surf);
+    cbm__cairo.cairo_surface_destroy(surf); /* the context keeps it */
+    if (cbm__cairo.cairo_status(cr) != CAIRO_STATUS_SUCCESS) {
+        cbm__cairo.cairo_destroy(cr);
         return cbm__fail(p->ctx, CBM_E_NOMEM, "plot: cannot create a %d x %d picture", p->width,
                          p->height);
     }
-    cairo_set_antialias(cr, CAIRO_ANTIALIAS_GRAY);
+    cbm__cairo.cairo_set_antialias(cr, CAIRO_ANTIALIAS_GRAY);
     if (!p->transparent) {
-        cairo_set_source_rgb(cr, 1.0, 1.0, 1.0);
-        cairo_paint(cr);
+        cbm__cairo.cairo_set_source_rgb(cr, 1.0, 1.0, 1.0);
+        cbm__cairo.cairo_paint(cr);
     }
     cbm__canvas c = {&cairo_ops, cr};
     cbm_status st = cbm__plot_draw(p, &c);
-    cairo_surface_flush(surf);
-    if (st == CBM_OK && cairo_status(cr) != CAIRO_STATUS_SUCCESS)
+    cbm__cairo.cairo_surface_flush(surf);
+    if (st == CBM_OK && cbm__cairo.cairo_status(cr) != CAIRO_STATUS_SUCCESS)
         st = cbm__fail(p->ctx, CBM_E_INTERNAL, "plot: cairo: %s",
-                       cairo_status_to_string(cairo_status(cr)));
+                       cbm__cairo.cairo_status_to_string(cbm__cairo.cairo_status(cr)));
     cbm_image *img = NULL;
     if (st == CBM_OK)
         st = cbm_image_create(p->ctx, p->width, p->height, &img);
     if (st == CBM_OK) {
-        const unsigned char *data = cairo_image_surface_get_data(surf);
-        int stride = cairo_image_surface_get_stride(surf);
+        const unsigned char *data = cbm__cairo.cairo_image_surface_get_data(surf);
+        int stride = cbm__cairo.cairo_image_surface_get_stride(surf);
         for (int y = 0; y < p->height; y++) {
             const uint32_t *row =
                 (const uint32_t *)(const void *)(data + (size_t)y * (size_t)stride);
@@ -221,7 +224,7 @@ cbm_status cbm__plot_render_cairo(const cbm_plot *p, cbm_image **out)
             }
         }
     }
-    cairo_destroy(cr);
+    cbm__cairo.cairo_destroy(cr);
     *out = img;
     return st;
 }

@@ -211,6 +211,7 @@ static const cbm__canvas_ops svg_ops = {group_begin, group_end, clip_begin, clip
 
 cbm_status cbm__plot_write_svg(const cbm_plot *p, FILE *f)
 {
+    CBM_TRY(cbm__cairo_load(p->ctx, "plot"));
     svg_canvas c = {{&svg_ops, cbm__font_measurer()}, f, 0};
     if (!c.base.measure)
         return CBM_E_NOMEM;
@@ -231,6 +232,6 @@ cbm_status cbm__plot_write_svg(const cbm_plot *p, FILE *f)
     fputs("<g font-family=\"" CBM_FONT_FAMILY ", sans-serif\" fill=\"#1a1a1a\">\n", f);
     cbm_status st = cbm__plot_draw(p, &c.base);
     fputs("</g>\n</svg>\n", f);
-    cairo_destroy(c.base.measure);
+    cbm__cairo.cairo_destroy(c.base.measure);
     return st;
 }

@@ -13,15 +13,16 @@
 
 void cbm__font_use(cairo_t *cr, double size)
 {
-    cairo_select_font_face(cr, CBM_FONT_FAMILY, CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_font_size(cr, size);
-    cairo_font_options_t *fo = cairo_font_options_create();
-    cairo_font_options_set_antialias(fo, CAIRO_ANTIALIAS_GRAY);
-    cairo_font_options_set_hint_style(fo, CAIRO_HINT_STYLE_NONE);
-    cairo_font_options_set_hint_metrics(fo, CAIRO_HINT_METRICS_OFF);
-    cairo_font_options_set_subpixel_order(fo, CAIRO_SUBPIXEL_ORDER_DEFAULT);
-    cairo_set_font_options(cr, fo);
-    cairo_font_options_destroy(fo);
+    cbm__cairo.cairo_select_font_face(cr, CBM_FONT_FAMILY, CAIRO_FONT_SLANT_NORMAL,
+                                      CAIRO_FONT_WEIGHT_NORMAL);
+    cbm__cairo.cairo_set_font_size(cr, size);
+    cairo_font_options_t *fo = cbm__cairo.cairo_font_options_create();
+    cbm__cairo.cairo_font_options_set_antialias(fo, CAIRO_ANTIALIAS_GRAY);
+    cbm__cairo.cairo_font_options_set_hint_style(fo, CAIRO_HINT_STYLE_NONE);
+    cbm__cairo.cairo_font_options_set_hint_metrics(fo, CAIRO_HINT_METRICS_OFF);
+    cbm__cairo.cairo_font_options_set_subpixel_order(fo, CAIRO_SUBPIXEL_ORDER_DEFAULT);
+    cbm__cairo.cairo_set_font_options(cr, fo);
+    cbm__cairo.cairo_font_options_destroy(fo);
 }
 
 double cbm__font_width(cairo_t *cr, const char *text, double size)
@@ -30,7 +31,7 @@ double cbm__font_width(cairo_t *cr, const char *text, double size)
         return 0.0;
     cbm__font_use(cr, size);
     cairo_text_extents_t e;
-    cairo_text_extents(cr, text, &e);
+    cbm__cairo.cairo_text_extents(cr, text, &e);
     return e.x_advance;
 }
 
@@ -38,17 +39,19 @@ double cbm__font_cap_height(cairo_t *cr, double size)
 {
     cbm__font_use(cr, size);
     cairo_text_extents_t e;
-    cairo_text_extents(cr, "H", &e);
+    cbm__cairo.cairo_text_extents(cr, "H", &e);
     return -e.y_bearing;
 }
 
 cairo_t *cbm__font_measurer(void)
 {
-    cairo_surface_t *s = cairo_image_surface_create(CAIRO_FORMAT_A8, 1, 1);
-    cairo_t *cr = cairo_create(s);
-    cairo_surface_destroy(s);
-    if (cairo_status(cr) != CAIRO_STATUS_SUCCESS) {
-        cairo_destroy(cr);
+    if (cbm__cairo_load(NULL, "font") != CBM_OK)
+        return NULL;
+    cairo_surface_t *s = cbm__cairo.cairo_image_surface_create(CAIRO_FORMAT_A8, 1, 1);
+    cairo_t *cr = cbm__cairo.cairo_create(s);
+    cbm__cairo.cairo_surface_destroy(s);
+    if (cbm__cairo.cairo_status(cr) != CAIRO_STATUS_SUCCESS) {
+        cbm__cairo.cairo_destroy(cr);
         return NULL;
     }
     return cr;
@@ -105,6 +108,7 @@ cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__
 {
     if (!img || !text || !*text || !(size > 0))
         return CBM_OK;
+    CBM_TRY(cbm__cairo_load(NULL, "font"));
     char clean[512];
     cbm__font_clean(text, clean, sizeof clean);
     cairo_t *m = cbm__font_measurer();
@@ -112,8 +116,8 @@ cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__
         return CBM_E_NOMEM;
     cbm__font_use(m, size);
     cairo_text_extents_t e;
-    cairo_text_extents(m, clean, &e);
-    cairo_destroy(m);
+    cbm__cairo.cairo_text_extents(m, clean, &e);
+    cbm__cairo.cairo_destroy(m);
     double x0 = align == CBM__TEXT_CENTER  ? x - 0.5 * e.x_advance
                 : align == CBM__TEXT_RIGHT ? x - e.x_advance
                                            : x;
@@ -122,15 +126,15 @@ cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__
     int bw = (int)ceil(e.width) + 3, bh = (int)ceil(e.height) + 3;
     if (bw <= 0 || bh <= 0 || bx >= img->width || by >= img->height || bx + bw <= 0 || by + bh <= 0)
         return CBM_OK;
-    cairo_surface_t *s = cairo_image_surface_create(CAIRO_FORMAT_A8, bw, bh);
-    cairo_t *cr = cairo_create(s);
+    cairo_surface_t *s = cbm__cairo.cairo_image_surface_create(CAIRO_FORMAT_A8, bw, bh);
+    cairo_t *cr = cbm__cairo.cairo_create(s);
     cbm__font_use(cr, size);
-    cairo_move_to(cr, x0 - bx, y - by);
-    cairo_show_text(cr, clean);
-    cairo_surface_flush(s);
-    cbm_status st = cairo_status(cr) == CAIRO_STATUS_SUCCESS ? CBM_OK : CBM_E_NOMEM;
-    const unsigned char *mask = cairo_image_surface_get_data(s);
-    int stride = cairo_image_surface_get_stride(s);
+    cbm__cairo.cairo_move_to(cr, x0 - bx, y - by);
+    cbm__cairo.cairo_show_text(cr, clean);
+    cbm__cairo.cairo_surface_flush(s);
+    cbm_status st = cbm__cairo.cairo_status(cr) == CAIRO_STATUS_SUCCESS ? CBM_OK : CBM_E_NOMEM;
+    const unsigned char *mask = cbm__cairo.cairo_image_surface_get_data(s);
+    int stride = cbm__cairo.cairo_image_surface_get_stride(s);
     for (int j = 0; st == CBM_OK && mask && j < bh; j++) {
         int Y = by + j;
         if (Y < 0 || Y >= img->height)
@@ -148,7 +152,7 @@ cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__
             q[3] = (uint8_t)lround(out * 255.0);
         }
     }
-    cairo_destroy(cr);
-    cairo_surface_destroy(s);
+    cbm__cairo.cairo_destroy(cr);
+    cbm__cairo.cairo_surface_destroy(s);
     return st;
 }

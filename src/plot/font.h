@@ -6,7 +6,7 @@
 
 #include "cambium/write.h"
 
-#include <cairo.h>
+#include "cairo_lib.h"
 
 /// The family asked of fontconfig (Debian package fonts-dejavu-core).
 #define CBM_FONT_FAMILY "DejaVu Sans"
@@ -20,14 +20,16 @@ double cbm__font_cap_height(cairo_t *cr, double size);
 /// Copies text into out (at most size bytes with the NUL) as valid UTF-8 without control
 /// characters: bytes of broken sequences and controls become '?'. Never splits a character.
 void cbm__font_clean(const char *text, char *out, size_t size);
-/// A context on a 1 x 1 surface for measuring; NULL when out of memory. cairo_destroy it.
+/// A context on a 1 x 1 surface for measuring; NULL when out of memory or when cairo cannot be
+/// loaded (cbm__cairo_load first, for the message). cbm__cairo.cairo_destroy it.
 cairo_t *cbm__font_measurer(void);
 
 /// Horizontal anchor of text drawn on a picture.
 typedef enum cbm__text_align { CBM__TEXT_LEFT, CBM__TEXT_CENTER, CBM__TEXT_RIGHT } cbm__text_align;
 
 /// Draws text on a picture (8-bit sRGB RGBA) with its baseline at y and anchored at x, blending
-/// the ink by coverage (anti-aliased); parts outside the picture are clipped.
+/// the ink by coverage (anti-aliased); parts outside the picture are clipped. CBM_E_UNSUPPORTED
+/// when cairo cannot be loaded (cbm__cairo_load first, for the message).
 cbm_status cbm__font_draw(cbm_image *img, double x, double y, double size, cbm__text_align align,
                           const char *text, const uint8_t rgb[3]);
 

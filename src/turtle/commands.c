@@ -9,59 +9,31 @@
 
 typedef struct tname {
     const char *name;
+    size_t len; /* strlen(name): compared first, without a strlen per entry and module */
     int cmd;
 } tname;
 
+#define TNAME(s, cmd)                                                                              \
+    {                                                                                              \
+        (s), sizeof(s) - 1, (cmd)                                                                  \
+    }
+
+/* The commands of two and three characters (those of one are in single[] below), looked up
+ * for the multi-character modules of L+C and for cpfg's @ and ? prefixes with their symbol. */
 static const tname names[] = {
-    {"F", CBM_T_F},
-    {"f", CBM_T_f},
-    {"G", CBM_T_G},
-    {"g", CBM_T_g},
-    {"+", CBM_T_LEFT},
-    {"-", CBM_T_RIGHT},
-    {"&", CBM_T_PITCH_DOWN},
-    {"^", CBM_T_PITCH_UP},
-    {"\\", CBM_T_ROLL_LEFT},
-    {"/", CBM_T_ROLL_RIGHT},
-    {"|", CBM_T_TURN_AROUND},
-    {"[", CBM_T_PUSH},
-    {"]", CBM_T_POP},
-    {"!", CBM_T_WIDTH},
-    {"'", CBM_T_COLOR_INC},
-    {";", CBM_T_COLOR_INC},
-    {",", CBM_T_COLOR_DEC},
-    {"#", CBM_T_WIDTH_INC},
-    {"~", CBM_T_SURFACE},
-    {"%", CBM_T_CUT},
-    {"{", CBM_T_POLY_BEGIN},
-    {"}", CBM_T_POLY_END},
-    {".", CBM_T_POLY_VERTEX},
-    {"_", CBM_T_ELASTICITY},
-    {"@v", CBM_T_ROLL_HORIZ},
-    {"@O", CBM_T_SPHERE},
-    {"@o", CBM_T_CIRCLE},
-    {"@c", CBM_T_CONTOUR},
-    {"@M", CBM_T_MOVE_TO},
-    {"@Ts", CBM_T_TROPISM_SET},
-    {"@Ti", CBM_T_TROPISM_INC},
-    {"@Td", CBM_T_TROPISM_DEC},
-    {"@Gs", CBM_T_GC_START},
-    {"@Gc", CBM_T_GC_CONTROL},
-    {"@Ge", CBM_T_GC_END},
-    {"@Gt", CBM_T_GC_TANGENT},
-    {"@Gr", CBM_T_GC_RADIUS},
-    {"@Tp", CBM_T_TWIST_ADJUST},
-    {"@Tf", CBM_T_TWIST_KEEP},
-    {"@#", CBM_T_CONTOUR_SET},
-    {"@!", CBM_T_SIDES_SET},
-    {"@D", CBM_T_SCALE_SET},
-    {"@Di", CBM_T_SCALE_MUL},
-    {"@Dd", CBM_T_SCALE_DIV},
-    {"?P", CBM_T_QUERY_P},
-    {"?H", CBM_T_QUERY_H},
-    {"?L", CBM_T_QUERY_L},
-    {"?U", CBM_T_QUERY_U},
-    {"?Q", CBM_T_QUERY_Q},
+    TNAME("@v", CBM_T_ROLL_HORIZ),   TNAME("@O", CBM_T_SPHERE),
+    TNAME("@o", CBM_T_CIRCLE),       TNAME("@c", CBM_T_CONTOUR),
+    TNAME("@M", CBM_T_MOVE_TO),      TNAME("@Ts", CBM_T_TROPISM_SET),
+    TNAME("@Ti", CBM_T_TROPISM_INC), TNAME("@Td", CBM_T_TROPISM_DEC),
+    TNAME("@Gs", CBM_T_GC_START),    TNAME("@Gc", CBM_T_GC_CONTROL),
+    TNAME("@Ge", CBM_T_GC_END),      TNAME("@Gt", CBM_T_GC_TANGENT),
+    TNAME("@Gr", CBM_T_GC_RADIUS),   TNAME("@Tp", CBM_T_TWIST_ADJUST),
+    TNAME("@Tf", CBM_T_TWIST_KEEP),  TNAME("@#", CBM_T_CONTOUR_SET),
+    TNAME("@!", CBM_T_SIDES_SET),    TNAME("@D", CBM_T_SCALE_SET),
+    TNAME("@Di", CBM_T_SCALE_MUL),   TNAME("@Dd", CBM_T_SCALE_DIV),
+    TNAME("?P", CBM_T_QUERY_P),      TNAME("?H", CBM_T_QUERY_H),
+    TNAME("?L", CBM_T_QUERY_L),      TNAME("?U", CBM_T_QUERY_U),
+    TNAME("?Q", CBM_T_QUERY_Q),
 };
 
 /* One-character commands, by character (the common case, looked up per module by
@@ -86,7 +58,8 @@ int cbm__turtle_lookup(const char *name, size_t len)
         return c < 128 ? single[c] : CBM_T_NONE;
     }
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
-        if (strlen(names[i].name) == len && memcmp(names[i].name, name, len) == 0)
+        if (names[i].len == len && names[i].name[1] == name[1] &&
+            memcmp(names[i].name, name, len) == 0) /* len > 1: the second byte tells most */
             return names[i].cmd;
     return CBM_T_NONE;
 }

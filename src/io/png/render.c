@@ -101,7 +101,7 @@ static bool occluded(const render_job *j, cbm_vec3 org, cbm_vec3 dir, double dis
     rtcInitIntersectContext(&ic);
     struct RTCRay r;
     set_ray(&r, org, dir, dist);
-    rtcOccluded1(j->rs, &ic, &r);
+    cbm__rtc.rtcOccluded1(j->rs, &ic, &r);
     return r.tfar < 0.0f;
 }
 
@@ -120,7 +120,7 @@ static void shade_sample(const render_job *j, double px, double py, uint64_t pix
     set_ray(&rh.ray, org, c->dir, INFINITY);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(j->rs, &ic, &rh);
+    cbm__rtc.rtcIntersect1(j->rs, &ic, &rh);
     *depth = INFINITY;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
         out[0] = out[1] = out[2] = out[3] = 0.0f;
@@ -698,33 +698,33 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
     if (fitted && kept > 0 && bounded) {
         if ((st = cbm__rtc_device(ctx, nthreads, "renderer", &watch, &dev)) != CBM_OK)
             goto done;
-        rs = rtcNewScene(dev);
-        RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rs = cbm__rtc.rtcNewScene(dev);
+        RTCGeometry g = cbm__rtc.rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
         /* positions straight from the scene's vertices (stride 24 bytes; the 16-byte reads of
          * the last position stay inside its vertex) */
-        rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                   cbm_scene_vertices(s), 0, sizeof(cbm_scene_vertex),
-                                   cbm_scene_vertex_count(s));
-        unsigned *ib = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                               3 * sizeof(unsigned), kept);
+        cbm__rtc.rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                            cbm_scene_vertices(s), 0, sizeof(cbm_scene_vertex),
+                                            cbm_scene_vertex_count(s));
+        unsigned *ib = cbm__rtc.rtcSetNewGeometryBuffer(
+            g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), kept);
         if (ib)
             for (size_t k = 0; k < kept; k++)
                 for (int q = 0; q < 3; q++)
                     ib[3 * k + (size_t)q] = tri[3 * (size_t)prim[k] + (size_t)q];
-        rtcCommitGeometry(g);
-        rtcAttachGeometryByID(rs, g, 0);
-        rtcReleaseGeometry(g);
+        cbm__rtc.rtcCommitGeometry(g);
+        cbm__rtc.rtcAttachGeometryByID(rs, g, 0);
+        cbm__rtc.rtcReleaseGeometry(g);
         if (o->ground && !has_ground) {
             cbm_vec3 c = v3_scale(v3_add(blo, bhi), 0.5);
             double half = fmax(bhi.x - blo.x, bhi.z - blo.z);
             half = 1.5 * fmax(half, 0.6 * (bhi.y - blo.y));
             if (!(half > 0))
                 half = 1.0;
-            RTCGeometry gg = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-            float *vb = rtcSetNewGeometryBuffer(gg, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                3 * sizeof(float), 4);
-            unsigned *gi = rtcSetNewGeometryBuffer(gg, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                   3 * sizeof(unsigned), 2);
+            RTCGeometry gg = cbm__rtc.rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
+            float *vb = cbm__rtc.rtcSetNewGeometryBuffer(gg, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4);
+            unsigned *gi = cbm__rtc.rtcSetNewGeometryBuffer(
+                gg, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 2);
             if (vb && gi) {
                 const double sx[4] = {-1, 1, 1, -1}, sz[4] = {-1, -1, 1, 1};
                 for (int k = 0; k < 4; k++) {
@@ -735,12 +735,12 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
                 const unsigned q[6] = {0, 2, 1, 0, 3, 2};
                 memcpy(gi, q, sizeof q);
             }
-            rtcCommitGeometry(gg);
-            rtcAttachGeometryByID(rs, gg, 1);
-            rtcReleaseGeometry(gg);
+            cbm__rtc.rtcCommitGeometry(gg);
+            cbm__rtc.rtcAttachGeometryByID(rs, gg, 1);
+            cbm__rtc.rtcReleaseGeometry(gg);
             size += 2.0 * half;
         }
-        rtcCommitScene(rs);
+        cbm__rtc.rtcCommitScene(rs);
         if ((st = cbm__rtc_status(ctx, dev, "renderer", "building the ray-casting scene")) !=
             CBM_OK)
             goto done;
@@ -786,13 +786,13 @@ cbm_status cbm_render(cbm_context *ctx, const cbm_scene *s, const cbm_write_opti
         }
         q[3] = (uint8_t)lroundf(fminf(fmaxf(outa, 0.0f), 1.0f) * 255.0f);
     }
-    if (legend)
+    if (legend && (st = cbm__cairo_load(ctx, "renderer")) == CBM_OK)
         st = draw_legend(img, s, o, W - legend_w, lo, hi);
 done:
     if (rs)
-        rtcReleaseScene(rs);
+        cbm__rtc.rtcReleaseScene(rs);
     if (dev)
-        rtcReleaseDevice(dev);
+        cbm__rtc.rtcReleaseDevice(dev);
     cbm__free(ctx, colors, 4 * (np ? np : 1) * sizeof *colors);
     cbm__free(ctx, prim, (nt ? nt : 1) * sizeof *prim);
     cbm__free(ctx, j.accum, pix * 4 * sizeof(float));
