@@ -7,6 +7,7 @@
 #include "cambium/cambium.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 
 typedef void (*cbm_test_fn)(void);
@@ -92,6 +93,17 @@ void test_ctx_end_at(cbm_context *ctx, const char *file, int line);
 typedef cbm_status (*test_oom_fn)(cbm_context *ctx, void *ud);
 int test_oom_loop_at(test_oom_fn fn, void *ud, const char *file, int line);
 #define test_oom_loop(fn, ud) test_oom_loop_at((fn), (ud), __FILE__, __LINE__)
+
+/// Every file of a directory, for replaying a fuzz corpus: calls fn(path, data, size, ud) with
+/// the bytes of each file (names starting with '.' left out; data is followed by a NUL not counted
+/// in size) and, when cuts is true, again with prefixes of it cut at every seventh of its
+/// length, which exercises the readers' errors. A directory or a file that cannot be read is a
+/// failure. Returns the number of files replayed.
+typedef void (*test_bytes_fn)(const char *path, const uint8_t *data, size_t size, void *ud);
+int test_replay_dir_at(const char *dir, bool cuts, test_bytes_fn fn, void *ud, const char *file,
+                       int line);
+#define test_replay_dir(dir, cuts, fn, ud)                                                         \
+    test_replay_dir_at((dir), (cuts), (fn), (ud), __FILE__, __LINE__)
 
 /// Directory of the repository's test data (tests/data) and of ../shared, set by CMake.
 const char *test_source_dir(void);

@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "test.h"
 
+#include <dirent.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -157,6 +158,76 @@ int test_oom_loop_at(test_oom_fn fn, void *ud, const char *file, int line)
     }
     cbm_test_fail(file, line, "OOM loop did not finish");
     return 0;
+}
+
+/* The whole file at path, followed by a NUL; NULL if it cannot be read. */
+static uint8_t *read_bytes(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    uint8_t *b = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (cap - n < 4096) {
+            cap = cap ? 2 * cap : 65536;
+            uint8_t *nb = realloc(b, cap + 1);
+            if (!nb) {
+                free(b);
+                fclose(f);
+                return NULL;
+            }
+            b = nb;
+        }
+        size_t k = fread(b + n, 1, cap - n, f);
+        n += k;
+        if (k == 0)
+            break;
+    }
+    bool bad = ferror(f) != 0;
+    fclose(f);
+    if (bad) {
+        free(b);
+        return NULL;
+    }
+    b[n] = 0;
+    *size = n;
+    return b;
+}
+
+int test_replay_dir_at(const char *dir, bool cuts, test_bytes_fn fn, void *ud, const char *file,
+                       int line)
+{
+    DIR *d = opendir(dir);
+    if (!d) {
+        cbm_test_fail(file, line, "cannot open the directory %s", dir);
+        return 0;
+    }
+    int n = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        if (e->d_name[0] == '.')
+            continue;
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        size_t len = 0;
+        uint8_t *data = read_bytes(path, &len);
+        if (!data) {
+            cbm_test_fail(file, line, "cannot read %s", path);
+            continue;
+        }
+        fn(path, data, len, ud);
+        if (cuts)
+            for (size_t cut = len / 7; cut < len; cut += len / 7 + 1) {
+                uint8_t keep = data[cut];
+                data[cut] = 0; /* the prefix is NUL-terminated too */
+                fn(path, data, cut, ud);
+                data[cut] = keep;
+            }
+        free(data);
+        n++;
+    }
+    closedir(d);
+    return n;
 }
 
 const char *test_source_dir(void)

@@ -3,9 +3,9 @@
 #define _POSIX_C_SOURCE 200809L
 #include "test.h"
 #include "cambium/bend.h"
-#include "fuzz/fuzz_spec.h"
+#define CBM_FUZZ_NO_MAIN
+#include "fuzz/fuzz_spec.c"
 
-#include <dirent.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -156,32 +156,20 @@ TEST(mech_bend_job_static_and_growth)
     test_ctx_end(ctx);
 }
 
+static void replay_spec(const char *path, const uint8_t *data, size_t size, void *ud)
+{
+    (void)path;
+    (void)ud;
+    cbm_fuzz_spec(data, size);
+}
+
 TEST(mech_spec_corpus_replay)
 {
     char dir[1024];
     snprintf(dir, sizeof dir, "%s/tests/fuzz/corpus/spec", test_source_dir());
-    DIR *d = opendir(dir);
-    CHECK(d != NULL);
-    if (!d)
-        return;
-    int files = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        if (e->d_name[0] == '.')
-            continue;
-        char path[2048];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        FILE *f = fopen(path, "rb");
-        if (!f)
-            continue;
-        static uint8_t buf[1 << 16];
-        size_t n = fread(buf, 1, sizeof buf, f);
-        fclose(f);
-        cbm_fuzz_spec_one(buf, n);
-        files++;
-    }
-    closedir(d);
-    CHECK(files >= 5);
+    int n = test_replay_dir(dir, false, replay_spec, NULL);
+    printf("replayed %d corpus files\n", n);
+    CHECK(n >= 14);
 }
 
 /* The node table of a tip-moment problem: uniform curvature M/EI at every node, moment M,

@@ -8,42 +8,22 @@
 
 #include "test.h"
 
-#include <dirent.h>
 #include <stdio.h>
 
-static int replay_dir(const char *dir)
+static void replay(const char *path, const uint8_t *data, size_t size, void *ud)
 {
-    DIR *d = opendir(dir);
-    CHECK_MSG(d != NULL, "cannot open %s", dir);
-    if (!d)
-        return 0;
-    int n = 0;
-    struct dirent *e;
-    while ((e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        FILE *f = fopen(path, "rb");
-        if (!f)
-            continue;
-        static uint8_t buf[1 << 16];
-        size_t len = fread(buf, 1, sizeof buf, f);
-        fclose(f);
-        cbm_fuzz_tree_params(buf, len);
-        for (size_t cut = len / 7; cut < len; cut += len / 7 + 1)
-            cbm_fuzz_tree_params(buf, cut);
-        n++;
-    }
-    closedir(d);
-    return n;
+    (void)path;
+    (void)ud;
+    cbm_fuzz_tree_params(data, size);
 }
 
 TEST(tree_params_corpus_replay)
 {
     char dir[2048];
     snprintf(dir, sizeof dir, "%s/tests/fuzz/corpus/fuzz_tree_params", CBM_TEST_SOURCE_DIR);
-    CHECK(replay_dir(dir) >= 10);
+    int n = test_replay_dir(dir, true, replay, NULL);
+    printf("replayed %d corpus files\n", n);
+    CHECK(n >= 11);
 }
 
 /* The shipped models read, check and survive their writer (not only "no crash"). */

@@ -9,7 +9,6 @@
 #include "core/vecmath.h"
 #include "turtle/view_internal.h"
 
-#include <dirent.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -266,42 +265,30 @@ TEST(random_spline_programs)
     CHECK(ngcyl > 100);
 }
 
+static void replay_side(const char *path, const uint8_t *data, size_t size, void *ud)
+{
+    (void)ud;
+    if (size == 0)
+        return;
+    cbm_context *ctx = limited_ctx();
+    cbm_view *v = NULL;
+    CHECK_OK(cbm_view_create(ctx, &v));
+    cbm__side_kind kind = (cbm__side_kind)(data[0] % 5);
+    cbm_status s = cbm__view_add_text(v, kind, "l.s", (const char *)data + 1);
+    CHECK_MSG(acceptable(s), "%s: %s", path, cbm_status_name(s));
+    run_program(ctx, v);
+    cbm_view_destroy(v);
+    cbm_context_clear_errors(ctx);
+    test_ctx_end(ctx);
+}
+
 /* The corpus of the libFuzzer target fuzz_turtle_side: first byte selects the reader. */
 TEST(fuzz_corpus_replay)
 {
-    const char *dir = CBM_TEST_SOURCE_DIR "/tests/fuzz/corpus/fuzz_turtle_side";
-    DIR *d = opendir(dir);
-    CHECK_MSG(d != NULL, "no corpus in %s", dir);
-    if (!d)
-        return;
-    struct dirent *e;
-    int n = 0;
-    while ((e = readdir(d)) != NULL) {
-        if (e->d_name[0] == '.')
-            continue;
-        char path[2048];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        size_t len;
-        char *data = slurp(path, &len);
-        if (!data || len == 0) {
-            free(data);
-            continue;
-        }
-        cbm_context *ctx = limited_ctx();
-        cbm_view *v = NULL;
-        CHECK_OK(cbm_view_create(ctx, &v));
-        cbm__side_kind kind = (cbm__side_kind)((unsigned char)data[0] % 5);
-        cbm_status s = cbm__view_add_text(v, kind, "l.s", data + 1);
-        CHECK_MSG(acceptable(s), "%s: %s", path, cbm_status_name(s));
-        run_program(ctx, v);
-        cbm_view_destroy(v);
-        cbm_context_clear_errors(ctx);
-        test_ctx_end(ctx);
-        free(data);
-        n++;
-    }
-    closedir(d);
-    CHECK(n > 0);
+    int n = test_replay_dir(CBM_TEST_SOURCE_DIR "/tests/fuzz/corpus/fuzz_turtle_side", false,
+                            replay_side, NULL);
+    printf("replayed %d corpus files\n", n);
+    CHECK(n >= 7);
 }
 
 /* Out-of-memory loop over reading every kind of side file and interpreting with them. */

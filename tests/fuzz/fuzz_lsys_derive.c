@@ -2,10 +2,7 @@
  * under small limits (modules, memory, steps, decomposition depth, loop iterations), in double
  * and float32 modes, with printf formatting into a sink and the mechanical plant of models with
  * mechanics. Must never crash, leak or hang. */
-#include "cambium/cambium.h"
-
-#include <stdlib.h>
-#include <string.h>
+#include "fuzz_util.h"
 
 int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size);
 
@@ -21,12 +18,10 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
 {
     if (size > 1 << 14)
         return 0;
-    char *text = malloc(size + 1);
+    char *text = cbm_fuzz_text(data, size);
     if (!text)
         return 0;
     bool float32 = size & 1; /* both number modes, without spending input bytes */
-    memcpy(text, data, size);
-    text[size] = 0;
     cbm_context_def cd = cbm_context_def_default();
     cd.output = sink;
     cd.limits.max_bytes = 64u << 20;
@@ -61,17 +56,8 @@ int cbm_fuzz_lsys_derive(const uint8_t *data, size_t size)
             cbm_plant_destroy(pl);
         cbm_lsys_destroy(ls);
     }
-    if (cbm_context_bytes(ctx) != 0)
-        abort();
-    cbm_context_destroy(ctx);
     free(text);
-    return 0;
+    return cbm_fuzz_end(ctx);
 }
 
-#ifndef CBM_FUZZ_NO_MAIN
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
-    return cbm_fuzz_lsys_derive(data, size);
-}
-#endif
+CBM_FUZZ_ENTRY(cbm_fuzz_lsys_derive)

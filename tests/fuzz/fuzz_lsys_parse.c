@@ -1,10 +1,7 @@
 /* libFuzzer target: the model-language front end (preprocessor and parser) on arbitrary text,
  * under small limits. Must never crash, leak or hang; every failure is a status with a message.
  * Build with `make fuzz`; run build-fuzz/bin/fuzz_lsys_parse tests/fuzz/corpus/lsys. */
-#include "cambium/cambium.h"
-
-#include <stdlib.h>
-#include <string.h>
+#include "fuzz_util.h"
 
 int cbm_fuzz_lsys_parse(const uint8_t *data, size_t size);
 
@@ -12,11 +9,9 @@ int cbm_fuzz_lsys_parse(const uint8_t *data, size_t size)
 {
     if (size > 1 << 16)
         return 0;
-    char *text = malloc(size + 1);
+    char *text = cbm_fuzz_text(data, size);
     if (!text)
         return 0;
-    memcpy(text, data, size);
-    text[size] = 0;
     cbm_context_def cd = cbm_context_def_default();
     cd.limits.max_bytes = 64u << 20;
     cd.limits.max_modules = 100000;
@@ -37,17 +32,8 @@ int cbm_fuzz_lsys_parse(const uint8_t *data, size_t size)
     cbm_lsys *ls = NULL;
     if (cbm_lsys_load(ctx, &def, &ls) == CBM_OK)
         cbm_lsys_destroy(ls);
-    if (cbm_context_bytes(ctx) != 0)
-        abort(); /* a leak */
-    cbm_context_destroy(ctx);
     free(text);
-    return 0;
+    return cbm_fuzz_end(ctx);
 }
 
-#ifndef CBM_FUZZ_NO_MAIN
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
-    return cbm_fuzz_lsys_parse(data, size);
-}
-#endif
+CBM_FUZZ_ENTRY(cbm_fuzz_lsys_parse)

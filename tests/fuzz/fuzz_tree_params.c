@@ -5,10 +5,7 @@
  * cbm_*_def_format writes reads back, checks, and writes the same text again.
  * Build with `make fuzz`; run build-fuzz/bin/fuzz_tree_params tests/fuzz/corpus/fuzz_tree_params.
  */
-#include "cambium/cambium.h"
-
-#include <stdlib.h>
-#include <string.h>
+#include "fuzz_util.h"
 
 int cbm_fuzz_tree_params(const uint8_t *data, size_t size);
 
@@ -43,11 +40,9 @@ int cbm_fuzz_tree_params(const uint8_t *data, size_t size)
 {
     if (size > 1 << 16)
         return 0;
-    char *text = malloc(size + 1);
+    char *text = cbm_fuzz_text(data, size);
     if (!text)
         return 0;
-    memcpy(text, data, size);
-    text[size] = 0;
     cbm_context_def cd = cbm_context_def_default();
     cd.limits.max_bytes = 64u << 20;
     cd.limits.max_operations = 200000;
@@ -67,17 +62,8 @@ int cbm_fuzz_tree_params(const uint8_t *data, size_t size)
         free(twice);
         free(once);
     }
-    if (cbm_context_bytes(ctx) != 0)
-        abort(); /* a leak */
-    cbm_context_destroy(ctx);
     free(text);
-    return 0;
+    return cbm_fuzz_end(ctx);
 }
 
-#ifndef CBM_FUZZ_NO_MAIN
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
-{
-    return cbm_fuzz_tree_params(data, size);
-}
-#endif
+CBM_FUZZ_ENTRY(cbm_fuzz_tree_params)

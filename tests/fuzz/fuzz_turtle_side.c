@@ -3,18 +3,15 @@
  * text; the resulting view then interprets a short string using surfaces, contours, generalized
  * cylinders, polygons and tropisms. Runs under a 64 MB byte limit; aborts if bytes leak.
  * Its corpus (tests/fuzz/corpus/fuzz_turtle_side) is replayed by tests/test_turtle_fuzz.c. */
-#include "cambium/cambium.h"
+#include "fuzz_util.h"
 #include "turtle/view_internal.h"
-
-#include <stdlib.h>
-#include <string.h>
 
 static const char *const program[] = {"@#", "@Gs", "F", "~", "a", "~", "l", "@Gc", "+", "F",
                                       "_",  "@Ge", "{", ".", "F", ".", "F", ".",   "}", "@O"};
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int cbm_fuzz_turtle_side(const uint8_t *data, size_t size);
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+int cbm_fuzz_turtle_side(const uint8_t *data, size_t size)
 {
     if (size < 1 || size > 1 << 16)
         return 0;
@@ -23,9 +20,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cbm_context *ctx;
     if (cbm_context_create(&def, &ctx) != CBM_OK)
         return 0;
-    char *text = malloc(size);
-    memcpy(text, data + 1, size - 1);
-    text[size - 1] = 0;
+    char *text = cbm_fuzz_text(data + 1, size - 1);
+    if (!text)
+        return cbm_fuzz_end(ctx);
     cbm_view *v;
     if (cbm_view_create(ctx, &v) == CBM_OK) {
         (void)cbm__view_add_text(v, (cbm__side_kind)(data[0] % 5), "l.s", text);
@@ -51,8 +48,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cbm_view_destroy(v);
     }
     free(text);
-    if (cbm_context_bytes(ctx) != 0)
-        abort();
-    cbm_context_destroy(ctx);
-    return 0;
+    return cbm_fuzz_end(ctx);
 }
+
+CBM_FUZZ_ENTRY(cbm_fuzz_turtle_side)
