@@ -36,11 +36,15 @@ trap 'rm -rf "$tmp"' EXIT
 # --no-native); a first run of each model fills it, as lpfg's first run compiles its model
 export XDG_CACHE_HOME=$tmp/cache
 
-# wall seconds and peak RSS (MB) of one command, "s mb"
+# wall seconds (bash's microsecond clock around the process: /usr/bin/time's %e counts in
+# hundredths, too coarse for runs of 10 ms) and peak RSS (MB) of one command, "s mb"
 measure() {
-    /usr/bin/time -f "%e %M" -o "$tmp/t" "$@" >/dev/null 2>"$tmp/err" || {
+    local t0 t1
+    t0=$EPOCHREALTIME
+    /usr/bin/time -f "%M" -o "$tmp/t" "$@" >/dev/null 2>"$tmp/err" || {
         echo "FAIL"; return; }
-    awk '{printf "%.3f %.0f", $1, $2 / 1024}' "$tmp/t"
+    t1=$EPOCHREALTIME
+    awk -v a="$t0" -v b="$t1" '{printf "%.4f %.0f", b - a, $1 / 1024}' "$tmp/t"
 }
 median() { sort -n | awk '{a[NR] = $1} END {print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2}'; }
 
