@@ -1,6 +1,6 @@
 /* Linking against an installed cambium (README, "Installing and linking"):
  *
- *     cc bend_rod.c $(pkg-config --cflags --libs cambium) -o bend_rod
+ *     cc bend_rod.c $(pkg-config --cflags --libs cambium) -lm -o bend_rod
  *
  * A stiff horizontal rod, clamped at one end, bends under its own weight. The program builds it
  * segment by segment, brings it to static equilibrium with the fast solver and prints the tip's
