@@ -79,10 +79,11 @@ typedef struct cbm__mech_work {
 #define CBM__KIN_CHILDREN 1u /* some segment has this one as its parent */
 #define CBM__KIN_FIRST    2u /* the child of highest index of its parent */
 /* acc = acc + x, or 0.0 + x for the first term (the same bits as acc cleared, then added to) */
-static inline void cbm__kin_add3(double *acc, const double *x, bool first)
+static inline void cbm__kin_add3(cbm_vec3 *acc, cbm_vec3 x, bool first)
 {
-    for (int k = 0; k < 3; k++)
-        acc[k] = (first ? 0.0 : acc[k]) + x[k];
+    acc->x = (first ? 0.0 : acc->x) + x.x;
+    acc->y = (first ? 0.0 : acc->y) + x.y;
+    acc->z = (first ? 0.0 : acc->z) + x.z;
 }
 static inline void cbm__kin_add9(double *acc, const double *x, bool first)
 {

@@ -484,8 +484,8 @@ static inline void backward_seg(cbm_plant *p, size_t i, pass_job *j, bool ground
     int64_t pa = p->parent[i];
     if (pa >= 0 && !defer) {
         bool first = (kin & CBM__KIN_FIRST) != 0;
-        cbm__kin_add3(&f[pa].x, &fi.x, first);
-        cbm__kin_add3(&m[pa].x, &mi.x, first);
+        cbm__kin_add3(&f[pa], fi, first);
+        cbm__kin_add3(&m[pa], mi, first);
     }
     cbm_vec3 ml = v3(v3_dot(mi, h), v3_dot(mi, l), v3_dot(mi, u));
     cbm_vec3 c = w->cj[i], o = p->omega[i], r0 = w->rj[i];
@@ -606,12 +606,12 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
             } else if (e & CBM__PART_ROOT) {
                 int64_t pa = p->parent[i];
                 bool first = (w->kin[i] & CBM__KIN_FIRST) != 0;
-                cbm__kin_add3(&f[pa].x, &f[i].x, first);
-                cbm__kin_add3(&m[pa].x, &m[i].x, first);
+                cbm__kin_add3(&f[pa], f[i], first);
+                cbm__kin_add3(&m[pa], m[i], first);
                 if (fuse) {
                     /* Phi (cbm__mech_factor_one), kept in fwad */
                     cbm__kin_add9(w->fw + 9 * (size_t)pa, w->fwad + 9 * i, first);
-                    cbm__kin_add3(&w->dm[pa].x, &w->dm[i].x, first);
+                    cbm__kin_add3(&w->dm[pa], w->dm[i], first);
                 }
             }
         }

@@ -553,7 +553,7 @@ static void sweeps(sweep *sw)
                 if (!sw->only_solve) /* Phi, kept in fwad */
                     cbm__kin_add9(w->fw + 9 * (size_t)pa, w->fwad + 9 * i, first);
                 if (solve)
-                    cbm__kin_add3(&w->dm[pa].x, &w->dm[i].x, first);
+                    cbm__kin_add3(&w->dm[pa], w->dm[i], first);
             }
         }
     }
@@ -721,7 +721,7 @@ static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wa
         w->dm[i] = psi; /* not read again */
         return;
     }
-    cbm__kin_add3(&w->dm[pa].x, &psi.x, (kin & CBM__KIN_FIRST) != 0);
+    cbm__kin_add3(&w->dm[pa], psi, (kin & CBM__KIN_FIRST) != 0);
     if (act) {
         cbm_vec3 chi = v3_add(mvec(w->fzad + 9 * i, ui), f0);
         w->dfc[pa] = v3_add(w->dfc[pa], chi);
