@@ -630,6 +630,50 @@ cbm_status cbm__turtle_finish(cbm_turtle *t)
     return CBM_OK;
 }
 
+/* ---- branches a query pass may pass over ---- */
+
+/* The modules of cpfg's string that act only on the turtle's state (tstate, which the `]` of
+ * their branch restores), on what a pass without scene or record does not keep (the segment in
+ * progress, the box), on the turn angle's cache, or on nothing: the turns, `[` `]`, width and
+ * colour, and the symbols that are no command. Not the moves (F f G g: a position that stops
+ * being finite is an error), nor `%`, `{` `}` `.`, `~`, `_`, `$`, `?`, whose effects outlive the
+ * branch or are the point of the pass. After a parameterless `@`, the commands @M @O @o @c @v. */
+static const bool branch_local_single[128] = {
+    ['+'] = true, ['-'] = true, ['&'] = true, ['^'] = true,  ['\\'] = true,
+    ['/'] = true, ['|'] = true, ['['] = true, [']'] = true,  ['!'] = true,
+    ['#'] = true, [';'] = true, [','] = true, ['\''] = true,
+};
+static const bool branch_local_at[128] = {
+    ['M'] = true, ['O'] = true, ['o'] = true, ['c'] = true, ['v'] = true,
+};
+
+bool cbm__turtle_branch_local(int symbol, bool after_at)
+{
+    if (symbol <= 0 || symbol >= 128)
+        return false;
+    if (after_at)
+        return branch_local_at[symbol];
+    if (branch_local_single[symbol])
+        return true;
+    char c = (char)symbol;
+    return symbol != '@' && symbol != '?' && symbol != '~' && symbol != '$' &&
+           cbm__turtle_lookup(&c, 1) == CBM_T_NONE;
+}
+
+bool cbm__turtle_may_pass_over(const cbm_turtle *t)
+{
+    return !t->scene && !t->record && !t->lpfg && t->nprefix == 0 && t->cut_depth == 0 &&
+           t->polystart.len == 0 && t->cur.spl < 0;
+}
+
+cbm_status cbm__turtle_pass_over(cbm_turtle *t, int64_t modules)
+{
+    /* what the branch's `[` and `]` do outside the state: the segment in progress ended (`[`
+     * ends it; the one the branch opens, `]` ends), every module counted */
+    t->module_index += modules;
+    return cbm__turtle_end_node(t);
+}
+
 /* ---- single-symbol modules (cpfg's string) ---- */
 
 cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int nparams)
