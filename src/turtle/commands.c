@@ -18,22 +18,26 @@ typedef struct tname {
         (s), sizeof(s) - 1, (cmd)                                                                  \
     }
 
-/* The commands of two and three characters (those of one are in single[] below), looked up
- * for the multi-character modules of L+C and for cpfg's @ and ? prefixes with their symbol. */
+/* The commands of two characters, by their second one: cpfg's @ and ? prefixes with their
+ * symbol (cbm__turtle_feed looks one up for every @ module of a string). */
+static const int16_t at_names[128] = {
+    ['v'] = CBM_T_ROLL_HORIZ, ['O'] = CBM_T_SPHERE,    ['o'] = CBM_T_CIRCLE,
+    ['c'] = CBM_T_CONTOUR,    ['M'] = CBM_T_MOVE_TO,   ['#'] = CBM_T_CONTOUR_SET,
+    ['!'] = CBM_T_SIDES_SET,  ['D'] = CBM_T_SCALE_SET,
+};
+static const int16_t query_names[128] = {
+    ['P'] = CBM_T_QUERY_P, ['H'] = CBM_T_QUERY_H, ['L'] = CBM_T_QUERY_L,
+    ['U'] = CBM_T_QUERY_U, ['Q'] = CBM_T_QUERY_Q,
+};
+
+/* The commands of three characters. */
 static const tname names[] = {
-    TNAME("@v", CBM_T_ROLL_HORIZ),   TNAME("@O", CBM_T_SPHERE),
-    TNAME("@o", CBM_T_CIRCLE),       TNAME("@c", CBM_T_CONTOUR),
-    TNAME("@M", CBM_T_MOVE_TO),      TNAME("@Ts", CBM_T_TROPISM_SET),
-    TNAME("@Ti", CBM_T_TROPISM_INC), TNAME("@Td", CBM_T_TROPISM_DEC),
-    TNAME("@Gs", CBM_T_GC_START),    TNAME("@Gc", CBM_T_GC_CONTROL),
-    TNAME("@Ge", CBM_T_GC_END),      TNAME("@Gt", CBM_T_GC_TANGENT),
-    TNAME("@Gr", CBM_T_GC_RADIUS),   TNAME("@Tp", CBM_T_TWIST_ADJUST),
-    TNAME("@Tf", CBM_T_TWIST_KEEP),  TNAME("@#", CBM_T_CONTOUR_SET),
-    TNAME("@!", CBM_T_SIDES_SET),    TNAME("@D", CBM_T_SCALE_SET),
-    TNAME("@Di", CBM_T_SCALE_MUL),   TNAME("@Dd", CBM_T_SCALE_DIV),
-    TNAME("?P", CBM_T_QUERY_P),      TNAME("?H", CBM_T_QUERY_H),
-    TNAME("?L", CBM_T_QUERY_L),      TNAME("?U", CBM_T_QUERY_U),
-    TNAME("?Q", CBM_T_QUERY_Q),
+    TNAME("@Ts", CBM_T_TROPISM_SET),  TNAME("@Ti", CBM_T_TROPISM_INC),
+    TNAME("@Td", CBM_T_TROPISM_DEC),  TNAME("@Gs", CBM_T_GC_START),
+    TNAME("@Gc", CBM_T_GC_CONTROL),   TNAME("@Ge", CBM_T_GC_END),
+    TNAME("@Gt", CBM_T_GC_TANGENT),   TNAME("@Gr", CBM_T_GC_RADIUS),
+    TNAME("@Tp", CBM_T_TWIST_ADJUST), TNAME("@Tf", CBM_T_TWIST_KEEP),
+    TNAME("@Di", CBM_T_SCALE_MUL),    TNAME("@Dd", CBM_T_SCALE_DIV),
 };
 
 /* One-character commands, by character (the common case, looked up per module by
@@ -57,9 +61,15 @@ int cbm__turtle_lookup(const char *name, size_t len)
             return CBM_T_ELASTICITY;
         return c < 128 ? single[c] : CBM_T_NONE;
     }
+    if (len == 2) {
+        unsigned char c = (unsigned char)name[1];
+        if (c >= 128)
+            return CBM_T_NONE;
+        return name[0] == '@' ? at_names[c] : name[0] == '?' ? query_names[c] : CBM_T_NONE;
+    }
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (names[i].len == len && names[i].name[1] == name[1] &&
-            memcmp(names[i].name, name, len) == 0) /* len > 1: the second byte tells most */
+            memcmp(names[i].name, name, len) == 0) /* the second byte tells most */
             return names[i].cmd;
     return CBM_T_NONE;
 }
