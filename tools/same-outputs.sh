@@ -24,7 +24,7 @@ check() {
     local ext rb ra
     for ext in str glb obj ply; do
         for side in before after; do
-            rm -rf "$work/$side" && cp -r "$dir" "$work/$side" && chmod -R u+w "$work/$side"
+            rm -rf "${work:?}/$side" && cp -r "$dir" "$work/$side" && chmod -R u+w "$work/$side"
         done
         (cd "$work/before" && "$before" "$@" -o "out.$ext" >/dev/null 2>&1)
         rb=$?

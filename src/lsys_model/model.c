@@ -8,12 +8,13 @@
  * one-character modules `@ M(...)`, `? P(...)`, `~ l(...)`) and writes the values the turtle put
  * in the query modules back into the image; the engine hands them to the string's query modules
  * in order. Steps whose string has no query module skip the pass (it could not change anything),
- * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
- * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
- * it reads the string itself rather than a copy (half the memory on the largest strings).
- * L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the model maps each
- * symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's meaning
- * (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
+ * so plain models derive at the engine's speed; within the pass, a short branch that holds no
+ * query and acts only on the turtle's state is passed over (pass_over_branch). cbm_model_interpret
+ * runs the same protocol once with a turtle that draws into a scene and keeps the primitive record;
+ * without a homomorphism it reads the string itself rather than a copy (half the memory on the
+ * largest strings). L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the
+ * model maps each symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's
+ * meaning (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
  * RollL/RollR follow lpfg's "corrected rotation:"; Sphere takes a radius; SetColor ignores
  * colours outside 1..255), and the turtle runs in lpfg's mode (colour 1 at the start, each F its
  * own cylinder). func(name, x) calls the function set's function of that name, and functions are
