@@ -466,14 +466,17 @@ static char *run_functions(cbm_context *ctx, const char *path, const char *text,
 
 /* Native code (lang/lc_native.c) gives the register code's strings byte for byte: int wrap,
  * division, float rounding, loops, ++/--, globals, math built-ins, recursion
- * (compiled-functions.l), and a 400-term series (bench/lc/compute.l, 12 steps); loading it a
- * second time takes the cached object. */
+ * (compiled-functions.l), a 400-term series (bench/lc/compute.l, 12 steps), and conversions to
+ * int of NaN, the infinities and the values at and beyond int32's ends (native-int-edges.l);
+ * loading it a second time takes the cached object. */
 TEST(lpfg_native_matches_register_code)
 {
     static const struct {
         const char *file;
         int steps;
-    } models[] = {{"tests/lpfg/compiled-functions.l", 6}, {"bench/lc/compute.l", 12}};
+    } models[] = {{"tests/lpfg/compiled-functions.l", 6},
+                  {"bench/lc/compute.l", 12},
+                  {"tests/lpfg/native-int-edges.l", 1}};
     cbm_context *ctx = test_ctx();
     for (size_t k = 0; k < sizeof models / sizeof models[0]; k++) {
         char path[4096];

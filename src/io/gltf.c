@@ -126,8 +126,10 @@ typedef struct glb {
     CBM_ARRAY(color_mat) cmats;
     CBM_ARRAY(bucket) buckets;
     CBM_ARRAY(uint32_t) ibucket, iorder, htab; /* scratch of the instance grouping */
-    /* a direct write of one scene: the measuring pass keeps the parts' colours and the sorted
-     * instances (keep), which the streaming pass of the same, unchanged scene reuses (reuse) */
+    /* a direct write of one scene: the measuring pass keeps the parts' colours, the sorted
+     * instances, each triangle's group (tgroup) and the groups' triangle counts, each vertex's
+     * part and segment (keep), which the streaming pass of the same, unchanged scene reuses
+     * (reuse) */
     bool keep, reuse;
     /* the part values _STRESS_RATIO, _AGE, _REACTION_WOOD, _ORDER that every part of the scene
      * has alike (part_same[q]), the instances' attribute written without reading them */
@@ -135,6 +137,10 @@ typedef struct glb {
     float part_val[4];
     float *kept_col;
     size_t kept_np;
+    uint32_t *kept_vpart;
+    float *kept_vseg;
+    size_t kept_nv;
+    size_t kept_ntg[CBM_ORGAN_COUNT + MAX_ORDER_GROUPS];
 } glb;
 
 /* A view of `bytes` at the next 4-aligned offset of BIN, its padding written; its bytes follow
@@ -630,10 +636,13 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     enum { NG = CBM_ORGAN_COUNT + MAX_ORDER_GROUPS };
     _Static_assert(NG < NO_GROUP, "a group is a byte");
     size_t ntg[NG] = {0};
+    bool reuse = g->reuse && g->kept_col && g->kept_np == np && g->kept_vpart && g->kept_nv == nv;
     /* each triangle's group, once: every group's mesh then scans bytes, not parts */
     CBM_TRY(CBM_ARRAY_RESERVE(ctx, g->tgroup, nt ? nt : 1));
     uint8_t *tg = g->tgroup.data;
-    for (size_t t = 0; t < nt; t++) {
+    if (reuse)
+        memcpy(ntg, g->kept_ntg, sizeof ntg);
+    for (size_t t = 0; t < nt && !reuse; t++) {
         const cbm_part *p = &parts[tp[t]];
         tg[t] = cbm__part_kept(p, o) ? (uint8_t)group_of(p) : NO_GROUP;
         if (tg[t] != NO_GROUP)
@@ -651,15 +660,17 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
      * by the smaller; the attributes and the indices go in chunks */
     size_t cap_gv = nv < cap_v ? (nv ? nv : 1) : cap_v;
     cbm_status st;
-    bool reuse = g->reuse && g->kept_col && g->kept_np == np;
     g->smeshes.len = 0; /* shapes are the scene's */
     g->smesh_mesh0 = g->meshes.len;
-    if (reuse)
+    if (reuse) {
         col = g->kept_col;
-    if ((!reuse && (st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK) ||
-        (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK)
+        vpart = g->kept_vpart;
+        vseg = g->kept_vseg;
+    }
+    if (!reuse && ((st = cbm__part_colors(ctx, s, o, &col, NULL, NULL)) != CBM_OK ||
+                   (st = cbm__vertex_parts(ctx, s, &vpart)) != CBM_OK))
         goto done;
-    if (tseg) {
+    if (tseg && !reuse) {
         /* the segment of the triangle cbm__vertex_parts took the part of: the last one */
         const uint32_t *tri = cbm_scene_triangles(s);
         if (!(vseg = cbm__alloc(ctx, (nv ? nv : 1) * sizeof *vseg))) {
@@ -703,6 +714,10 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
     if (g->keep && !reuse) {
         g->kept_col = col; /* freed with the writer */
         g->kept_np = np;
+        g->kept_vpart = vpart;
+        g->kept_vseg = vseg;
+        g->kept_nv = nv;
+        memcpy(g->kept_ntg, ntg, sizeof ntg);
         g->keep = false;
     }
     bool has_inst[NG] = {false};
@@ -744,8 +759,10 @@ static cbm_status add_scene_groups(glb *g, const cbm_scene *s, size_t *first_chi
 done:
     if (col != g->kept_col)
         cbm__free(ctx, col, 4 * (np ? np : 1) * sizeof *col);
-    cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
-    cbm__free(ctx, vseg, (nv ? nv : 1) * sizeof *vseg);
+    if (vpart != g->kept_vpart)
+        cbm__free(ctx, vpart, (nv ? nv : 1) * sizeof *vpart);
+    if (vseg != g->kept_vseg)
+        cbm__free(ctx, vseg, (nv ? nv : 1) * sizeof *vseg);
     return st;
 }
 
@@ -755,22 +772,28 @@ static void vertex_attr(const cbm_scene *s, const float *col, const vertex_src *
 {
     const uint32_t *vpart = vs->part;
     const cbm_scene_vertex *v = cbm_scene_vertices(s);
-    for (size_t i = 0; i < n; i++) {
-        if (q == 0) {
+    /* one loop per attribute, not a test of q per vertex */
+    if (q == 0) {
+        for (size_t i = 0; i < n; i++)
             memcpy(f + 3 * i, v[verts[i]].p, 3 * sizeof(float));
-        } else if (q == 1) {
+    } else if (q == 1) {
+        for (size_t i = 0; i < n; i++) {
             const float *nr = v[verts[i]].n;
             double len =
                 sqrt((double)nr[0] * nr[0] + (double)nr[1] * nr[1] + (double)nr[2] * nr[2]);
             for (int k = 0; k < 3; k++)
                 f[3 * i + (size_t)k] = len > 0 ? (float)(nr[k] / len) : (k == 1 ? 1.0f : 0.0f);
-        } else if (q == 2) {
-            memcpy(f + 4 * i, col + 4 * (size_t)vpart[verts[i]], 4 * sizeof(float));
-        } else if (q == 7 && vs->seg) {
-            f[i] = vs->seg[verts[i]];
-        } else {
-            f[i] = vs->pval[PART_VALUES * (size_t)vpart[verts[i]] + (size_t)(q - 3)];
         }
+    } else if (q == 2) {
+        for (size_t i = 0; i < n; i++)
+            memcpy(f + 4 * i, col + 4 * (size_t)vpart[verts[i]], 4 * sizeof(float));
+    } else if (q == 7 && vs->seg) {
+        for (size_t i = 0; i < n; i++)
+            f[i] = vs->seg[verts[i]];
+    } else {
+        const float *pv = vs->pval + (q - 3);
+        for (size_t i = 0; i < n; i++)
+            f[i] = pv[PART_VALUES * (size_t)vpart[verts[i]]];
     }
 }
 
@@ -804,10 +827,12 @@ static cbm_status add_group_mesh(glb *g, const cbm_scene *s, const float *col, c
                                &m.age, &m.react, &m.order, &m.seg};
     for (int q = 0; q < VERT_ATTRS; q++) {
         int nc = q == 2 ? 4 : q < 2 ? 3 : 1;
-        bool bounds = q == 0; /* POSITION's; measuring needs them and nothing else */
+        /* POSITION's bounds: measuring needs them and nothing else; streaming, whose JSON is
+         * written, does not take them again */
+        bool bounds = q == 0 && g->mode != BIN_STREAM;
         accessor a;
         cbm__gltf_accessor_set(&a, 0, NULL, nvg, nc, GL_FLOAT, false);
-        a.minmax = bounds;
+        a.minmax = q == 0;
         for (int k = 0; k < nc; k++) {
             a.min[k] = INFINITY;
             a.max[k] = -INFINITY;
@@ -1083,6 +1108,9 @@ void cbm_animation_destroy(cbm_animation *a)
     CBM_ARRAY_FREE(ctx, a->g.iorder);
     CBM_ARRAY_FREE(ctx, a->g.htab);
     cbm__free(ctx, a->g.kept_col, 4 * (a->g.kept_np ? a->g.kept_np : 1) * sizeof(float));
+    size_t knv = a->g.kept_nv ? a->g.kept_nv : 1;
+    cbm__free(ctx, a->g.kept_vpart, knv * sizeof *a->g.kept_vpart);
+    cbm__free(ctx, a->g.kept_vseg, knv * sizeof *a->g.kept_vseg);
     cbm__free(ctx, a, sizeof *a);
 }
 

@@ -196,21 +196,32 @@ static void put(c_source *s, const char *fmt, ...)
     va_end(ap2);
 }
 
-/* the helpers are lang/lc.h's lc_c_int and lc_wrap_int (the same text) */
+/* The helpers are lang/lc.h's lc_c_int and lc_wrap_int. cint, the conversion to int of every
+ * int operation, is lc_c_int's text where the target has no SSE2; with SSE2 (every x86-64) it is
+ * the instruction CVTTSD2SI, which truncates toward zero and gives 0x80000000 (INT32_MIN) for NaN
+ * and for every value whose truncation is outside int32: exactly lc_c_int's result for every
+ * double, without its two comparisons (bench/lc/compute.l's loop: 616 M instructions to 563 M;
+ * test lpfg_native_matches_register_code, tests/lpfg/native-int-edges.l). The intrinsic is
+ * defined for every input, unlike C's (int32_t) of an out-of-range double. */
 static const char prelude[] =
     "#include <math.h>\n#include <stddef.h>\n#include <stdint.h>\n" LC_STR(
         LC_RT_STRUCT) "\n"
+                      "#if defined(__SSE2__)\n#include <emmintrin.h>\n"
+                      "static double cint(double v) { return "
+                      "(double)_mm_cvttsd_si32(_mm_set_sd(v)); }\n"
+                      "#else\n"
                       "static double cint(double v) { if (!(v > -2147483649.0 && v < "
                       "2147483648.0)) "
                       "return -2147483648.0; return (double)(int32_t)v; }\n"
+                      "#endif\n"
                       "static double wrap(long long r) { return "
                       "(double)(int32_t)(uint32_t)(unsigned long long)r; "
                       "}\n"
                       "static double kbits(uint64_t b) { union { uint64_t u; double d; } x; x.u = "
                       "b; return x.d; "
                       "}\n"
-                      "#define SPEND(at) do { if (*R->ops > 0 && *R->budget > 0) { --*R->ops; "
-                      "--*R->budget; } "
+                      "#define SPEND(at) do { if (*R_ops > 0 && *R_budget > 0) { --*R_ops; "
+                      "--*R_budget; } "
                       "else { R->limit(R, at); return 0; } } while (0)\n";
 
 /* "%s" of a value of register text e converted to type t, as lc_conv_scalar */
@@ -480,7 +491,10 @@ static void put_function(c_source *s, const lc_program *p, const lc_model *m, in
             : !in_frame ? "    double r%d = fr[%d];\n"
                         : "#define r%d fr[%d]\n",
             r, r);
-    put(s, "    (void)fr; (void)R; (void)at;\n");
+    /* the budget counters' addresses in locals: R is reloaded after every call (sin, cos, the
+     * host's), these stay in registers (SPEND) */
+    put(s, "    long *const R_ops = R->ops, *const R_budget = R->budget;\n");
+    put(s, "    (void)fr; (void)R; (void)at; (void)R_ops; (void)R_budget;\n");
     for (size_t i = 0; i < fc->ins.len; i++) {
         const lc_ins *x = &fc->ins.data[i];
         put(s, "L%zu:", i);

@@ -8,12 +8,13 @@
  * one-character modules `@ M(...)`, `? P(...)`, `~ l(...)`) and writes the values the turtle put
  * in the query modules back into the image; the engine hands them to the string's query modules
  * in order. Steps whose string has no query module skip the pass (it could not change anything),
- * so plain models derive at the engine's speed. cbm_model_interpret runs the same protocol once
- * with a turtle that draws into a scene and keeps the primitive record; without a homomorphism
- * it reads the string itself rather than a copy (half the memory on the largest strings).
- * L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the model maps each
- * symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's meaning
- * (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
+ * so plain models derive at the engine's speed; within the pass, a short branch that holds no
+ * query and acts only on the turtle's state is passed over (pass_over_branch). cbm_model_interpret
+ * runs the same protocol once with a turtle that draws into a scene and keeps the primitive record;
+ * without a homomorphism it reads the string itself rather than a copy (half the memory on the
+ * largest strings). L+C (lpfg) models: their modules are named, most without a cpfg symbol, so the
+ * model maps each symbol once, by its name (cbm_lsys_module_name), to a turtle command with lpfg's
+ * meaning (lpfg_map; docs/turtle.md "lpfg modules": lpfg's U is opposite to ours, so Up/Down and
  * RollL/RollR follow lpfg's "corrected rotation:"; Sphere takes a radius; SetColor ignores
  * colours outside 1..255), and the turtle runs in lpfg's mode (colour 1 at the start, each F its
  * own cylinder). func(name, x) calls the function set's function of that name, and functions are
@@ -21,6 +22,7 @@
  * "Synthetic topiary" (query modules); the lpfg manual (L+C turtle modules).
  */
 #include "cambium/model.h"
+#include "model_internal.h"
 
 #include "core/core.h"
 #include "lang/mechsegment.h"
@@ -39,6 +41,7 @@ struct cbm_model {
     bool image;               /* the pass reads the homomorphic image (else the string) */
     bool may_query;           /* some successor or the axiom holds a '?' */
     bool lpfg;                /* L+C dialect: modules are mapped by name (lpfg_map) */
+    bool no_pass_over;        /* the query pass interprets every branch (tests) */
     int16_t lmap[128];        /* L+C: the lpfg operation of each symbol (LP_*), 0: none */
 };
 
@@ -167,14 +170,74 @@ static cbm_status lpfg_exec(cbm_turtle *t, int op, double *p, int n)
     }
 }
 
+/* The read-ahead of the query pass at a `[`, in modules at most: a branch longer than that is
+ * interpreted, so that the read-ahead of a branch that must be interpreted after all (one that
+ * holds a query) stays a bounded part of the pass. */
+#define PASS_OVER_MODULES 32
+
+/* The per-step query pass at a `[` (c has just read it): when the branch it opens holds no
+ * query and only modules that act on nothing but the turtle's state, which its `]` restores
+ * (cbm__turtle_branch_local, cbm__turtle_may_pass_over), no query of the pass depends on it:
+ * the turtle is told (cbm__turtle_pass_over) and c moves past the `]`. ahead is the cursor of
+ * the read-ahead (positioned here, its buffer not copied). False, c unmoved, when the branch
+ * is to be interpreted. */
+static bool pass_over_branch(cbm_model *m, cbm_lsys_cursor *c, cbm_lsys_cursor *ahead,
+                             cbm_status *st)
+{
+    if (m->pass != m->query_turtle || m->lpfg || m->no_pass_over ||
+        !cbm__turtle_may_pass_over(m->pass))
+        return false;
+    ahead->module = c->module;
+    ahead->pmodule = c->pmodule;
+    ahead->param = c->param;
+    ahead->homomorphism = c->homomorphism;
+    int depth = 1;
+    int64_t modules = 1; /* the `[`; a `@` and its command are one module of the turtle */
+    bool after_at = false;
+    for (int k = 0; k < PASS_OVER_MODULES && cbm_lsys_cursor_next(m->ls, m->image, ahead); k++) {
+        int sym = ahead->symbol;
+        for (int i = 0; i < ahead->nparams; i++)
+            if (!isfinite(ahead->params[i]))
+                return false; /* the turtle reports it */
+        if (after_at) {
+            if (!cbm__turtle_branch_local(sym, true))
+                return false;
+            after_at = false;
+            continue;
+        }
+        if (sym == '@' && ahead->nparams == 0) {
+            after_at = true;
+            modules++;
+            continue;
+        }
+        if (!cbm__turtle_branch_local(sym, false))
+            return false;
+        modules++;
+        if (sym == '[')
+            depth++;
+        else if (sym == ']' && --depth == 0) {
+            c->module = ahead->module;
+            c->pmodule = ahead->pmodule;
+            c->param = ahead->param;
+            c->symbol = ']';
+            c->nparams = 0;
+            c->params = NULL;
+            *st = cbm__turtle_pass_over(m->pass, modules);
+            return true;
+        }
+    }
+    return false;
+}
+
 /* The turtle over the homomorphic image; query values written back into the image. */
 static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
 {
     cbm_model *m = ud;
     cbm_turtle *t = m->pass;
     cbm__turtle_reset(t);
-    cbm_lsys_cursor c;
+    cbm_lsys_cursor c, ahead;
     cbm_lsys_cursor_begin(ls, m->image, &c);
+    cbm_lsys_cursor_begin(ls, m->image, &ahead);
     double buf[256];
     bool after_query = false;
     cbm_status s = CBM_OK;
@@ -185,6 +248,10 @@ static cbm_status interpret_cb(void *ud, cbm_lsys *ls)
         if (m->lpfg) {
             int op = c.symbol > 0 && c.symbol < 128 ? m->lmap[c.symbol] : 0;
             s = lpfg_exec(t, op, buf, n);
+            continue;
+        }
+        if (c.symbol == '[' && n == 0 && pass_over_branch(m, &c, &ahead, &s)) {
+            after_query = false;
             continue;
         }
         s = cbm__turtle_feed(t, c.symbol, buf, n);
@@ -277,6 +344,11 @@ cbm_status cbm_model_load(cbm_context *ctx, const cbm_model_def *def, cbm_model 
     }
     *out = m;
     return CBM_OK;
+}
+
+void cbm__model_set_pass_over(cbm_model *m, bool on)
+{
+    m->no_pass_over = !on;
 }
 
 void cbm_model_destroy(cbm_model *m)

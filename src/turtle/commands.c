@@ -18,22 +18,26 @@ typedef struct tname {
         (s), sizeof(s) - 1, (cmd)                                                                  \
     }
 
-/* The commands of two and three characters (those of one are in single[] below), looked up
- * for the multi-character modules of L+C and for cpfg's @ and ? prefixes with their symbol. */
+/* The commands of two characters, by their second one: cpfg's @ and ? prefixes with their
+ * symbol (cbm__turtle_feed looks one up for every @ module of a string). */
+static const int16_t at_names[128] = {
+    ['v'] = CBM_T_ROLL_HORIZ, ['O'] = CBM_T_SPHERE,    ['o'] = CBM_T_CIRCLE,
+    ['c'] = CBM_T_CONTOUR,    ['M'] = CBM_T_MOVE_TO,   ['#'] = CBM_T_CONTOUR_SET,
+    ['!'] = CBM_T_SIDES_SET,  ['D'] = CBM_T_SCALE_SET,
+};
+static const int16_t query_names[128] = {
+    ['P'] = CBM_T_QUERY_P, ['H'] = CBM_T_QUERY_H, ['L'] = CBM_T_QUERY_L,
+    ['U'] = CBM_T_QUERY_U, ['Q'] = CBM_T_QUERY_Q,
+};
+
+/* The commands of three characters. */
 static const tname names[] = {
-    TNAME("@v", CBM_T_ROLL_HORIZ),   TNAME("@O", CBM_T_SPHERE),
-    TNAME("@o", CBM_T_CIRCLE),       TNAME("@c", CBM_T_CONTOUR),
-    TNAME("@M", CBM_T_MOVE_TO),      TNAME("@Ts", CBM_T_TROPISM_SET),
-    TNAME("@Ti", CBM_T_TROPISM_INC), TNAME("@Td", CBM_T_TROPISM_DEC),
-    TNAME("@Gs", CBM_T_GC_START),    TNAME("@Gc", CBM_T_GC_CONTROL),
-    TNAME("@Ge", CBM_T_GC_END),      TNAME("@Gt", CBM_T_GC_TANGENT),
-    TNAME("@Gr", CBM_T_GC_RADIUS),   TNAME("@Tp", CBM_T_TWIST_ADJUST),
-    TNAME("@Tf", CBM_T_TWIST_KEEP),  TNAME("@#", CBM_T_CONTOUR_SET),
-    TNAME("@!", CBM_T_SIDES_SET),    TNAME("@D", CBM_T_SCALE_SET),
-    TNAME("@Di", CBM_T_SCALE_MUL),   TNAME("@Dd", CBM_T_SCALE_DIV),
-    TNAME("?P", CBM_T_QUERY_P),      TNAME("?H", CBM_T_QUERY_H),
-    TNAME("?L", CBM_T_QUERY_L),      TNAME("?U", CBM_T_QUERY_U),
-    TNAME("?Q", CBM_T_QUERY_Q),
+    TNAME("@Ts", CBM_T_TROPISM_SET),  TNAME("@Ti", CBM_T_TROPISM_INC),
+    TNAME("@Td", CBM_T_TROPISM_DEC),  TNAME("@Gs", CBM_T_GC_START),
+    TNAME("@Gc", CBM_T_GC_CONTROL),   TNAME("@Ge", CBM_T_GC_END),
+    TNAME("@Gt", CBM_T_GC_TANGENT),   TNAME("@Gr", CBM_T_GC_RADIUS),
+    TNAME("@Tp", CBM_T_TWIST_ADJUST), TNAME("@Tf", CBM_T_TWIST_KEEP),
+    TNAME("@Di", CBM_T_SCALE_MUL),    TNAME("@Dd", CBM_T_SCALE_DIV),
 };
 
 /* One-character commands, by character (the common case, looked up per module by
@@ -57,9 +61,15 @@ int cbm__turtle_lookup(const char *name, size_t len)
             return CBM_T_ELASTICITY;
         return c < 128 ? single[c] : CBM_T_NONE;
     }
+    if (len == 2) {
+        unsigned char c = (unsigned char)name[1];
+        if (c >= 128)
+            return CBM_T_NONE;
+        return name[0] == '@' ? at_names[c] : name[0] == '?' ? query_names[c] : CBM_T_NONE;
+    }
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (names[i].len == len && names[i].name[1] == name[1] &&
-            memcmp(names[i].name, name, len) == 0) /* len > 1: the second byte tells most */
+            memcmp(names[i].name, name, len) == 0) /* the second byte tells most */
             return names[i].cmd;
     return CBM_T_NONE;
 }
@@ -628,6 +638,50 @@ cbm_status cbm__turtle_finish(cbm_turtle *t)
     while (t->polystart.len > 0)
         CBM_TRY(poly_end(t));
     return CBM_OK;
+}
+
+/* ---- branches a query pass may pass over ---- */
+
+/* The modules of cpfg's string that act only on the turtle's state (tstate, which the `]` of
+ * their branch restores), on what a pass without scene or record does not keep (the segment in
+ * progress, the box), on the turn angle's cache, or on nothing: the turns, `[` `]`, width and
+ * colour, and the symbols that are no command. Not the moves (F f G g: a position that stops
+ * being finite is an error), nor `%`, `{` `}` `.`, `~`, `_`, `$`, `?`, whose effects outlive the
+ * branch or are the point of the pass. After a parameterless `@`, the commands @M @O @o @c @v. */
+static const bool branch_local_single[128] = {
+    ['+'] = true, ['-'] = true, ['&'] = true, ['^'] = true,  ['\\'] = true,
+    ['/'] = true, ['|'] = true, ['['] = true, [']'] = true,  ['!'] = true,
+    ['#'] = true, [';'] = true, [','] = true, ['\''] = true,
+};
+static const bool branch_local_at[128] = {
+    ['M'] = true, ['O'] = true, ['o'] = true, ['c'] = true, ['v'] = true,
+};
+
+bool cbm__turtle_branch_local(int symbol, bool after_at)
+{
+    if (symbol <= 0 || symbol >= 128)
+        return false;
+    if (after_at)
+        return branch_local_at[symbol];
+    if (branch_local_single[symbol])
+        return true;
+    char c = (char)symbol;
+    return symbol != '@' && symbol != '?' && symbol != '~' && symbol != '$' &&
+           cbm__turtle_lookup(&c, 1) == CBM_T_NONE;
+}
+
+bool cbm__turtle_may_pass_over(const cbm_turtle *t)
+{
+    return !t->scene && !t->record && !t->lpfg && t->nprefix == 0 && t->cut_depth == 0 &&
+           t->polystart.len == 0 && t->cur.spl < 0;
+}
+
+cbm_status cbm__turtle_pass_over(cbm_turtle *t, int64_t modules)
+{
+    /* what the branch's `[` and `]` do outside the state: the segment in progress ended (`[`
+     * ends it; the one the branch opens, `]` ends), every module counted */
+    t->module_index += modules;
+    return cbm__turtle_end_node(t);
 }
 
 /* ---- single-symbol modules (cpfg's string) ---- */

@@ -111,8 +111,18 @@ cbm_status cbm__turtle_surface(cbm_turtle *t, const char *name, size_t len, cons
 /// up and executed; symbols that are not turtle commands are skipped. An engine with one-character
 /// symbols can call this for every module instead of lookup + exec.
 cbm_status cbm__turtle_feed(cbm_turtle *t, int symbol, double *params, int nparams);
-/// Keep a record of the primitives (cylinders, polygons, ...; see cbm_turtle_prims). Off by
-/// default.
+/// The query pass's short cut (cbm_model_step): a branch of cpfg's string that holds no query
+/// and only modules for which cbm__turtle_branch_local is true (after_at: the module follows a
+/// parameterless `@`), all parameters finite, leaves every query of the pass as it would be: a
+/// turtle for which cbm__turtle_may_pass_over is true (no scene, no record, cpfg's turtle, no
+/// `@`/`?` waiting, no cut, polygon or spline cylinder open) may be given, for that branch,
+/// cbm__turtle_pass_over with the number of turtle modules it holds (a `@` and its command are
+/// one), instead of the branch. Its state after is the state cbm__turtle_feed would leave.
+bool cbm__turtle_branch_local(int symbol, bool after_at);
+bool cbm__turtle_may_pass_over(const cbm_turtle *t);
+cbm_status cbm__turtle_pass_over(cbm_turtle *t, int64_t modules);
+/// Keep a record of the primitives/// Keep a record of the primitives (cylinders, polygons, ...;
+/// see cbm_turtle_prims). Off by default.
 void cbm__turtle_set_record(cbm_turtle *t, bool record);
 
 /// lpfg's initial state (L+C models): colour index 1 instead of the view's, as lpfg's turtle.
