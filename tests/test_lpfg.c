@@ -306,6 +306,11 @@ TEST(lpfg_group0_cut_nproduce)
     run_model("group0-cut-nproduce.l");
 }
 
+TEST(lpfg_cut_forward_backward)
+{
+    run_model("cut-forward-backward.l");
+}
+
 static void expect_error(const char *text, const char *where, const char *what)
 {
     cbm_context *ctx = test_ctx();

@@ -551,7 +551,175 @@ static void release_consumed(release *r, const lstr *cur, const lpos *p)
     r->at = p->i + RELEASE_EVERY;
 }
 
-static cbm_status derive_scan(cbm_lsys *ls, release *rel);
+/* ---- the step: the step loop of lsys_internal.h with the cpfg dialect's hooks ---- */
+
+/* The state of a step's pass over the current string. */
+typedef struct cpfg_pass {
+    cbm_lsys *ls;
+    const lstr *cur; /* the current string */
+    lstr *next;      /* the string being produced */
+    release *rel;
+    const prodset *set, *dset; /* of the L-system of the module at hand */
+    bool decomp, stoch;
+    bool sub;   /* the model has sub-L-systems: follow their markers */
+    int cursys; /* the L-system of the module at hand (index in ls->sys) */
+    bool cut;   /* the module just consumed was a cut */
+    size_t max_modules;
+} cpfg_pass;
+
+/* The stochastic choice at p (cpfg): every production that matches, their probabilities summed
+ * in float32, one drand48 draw; the chosen one's parameters bound again. */
+static cbm_status choose_stochastic(cbm_lsys *ls, const prodset *set, lpos p, lpos *end,
+                                    const prod **chosen)
+{
+    const lstr *cur = &ls->cur;
+    uint8_t s = cur->sym[p.i] & 0x7f;
+    float total = 0;
+    ls->appl.len = 0;
+    ls->applp.len = 0;
+    for (int32_t o = set->start[s]; o < set->start[s + 1]; o++) {
+        int32_t pi = set->order[o];
+        const prod *c = &set->prods.data[pi];
+        lpos e;
+        if (match(ls, c, cur, p, &e, cur, NULL, NULL)) {
+            float pb = c->prob >= 0 ? (float)cbm__eval_expr(&ls->ev, c->prob) : 1.0f;
+            total += pb;
+            CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, ls->appl, pi));
+            CBM_TRY(CBM_ARRAY_PUSH(ls->ctx, ls->applp, pb));
+        }
+        if (!runtime_ok(ls))
+            return CBM_E_RUNTIME;
+    }
+    float r = (float)((double)total * cbm__rand48_next(&ls->drand));
+    for (size_t a = 0; a < ls->appl.len; a++) {
+        if ((r -= ls->applp.data[a]) <= 0) {
+            const prod *pr = &set->prods.data[ls->appl.data[a]];
+            int lslots = 0;
+            for (int32_t k = 0; k < pr->nlc; k++)
+                lslots += ls->fmods.data[pr->lc + k].np;
+            int pslots = 0;
+            for (int32_t k = 0; k < pr->npred; k++)
+                pslots += ls->fmods.data[pr->pred + k].np;
+            match_predecessor(ls, pr, cur, p, end, lslots);
+            if (pr->nrc)
+                match_right_context(ls, pr, cur, *end, lslots + pslots);
+            if (pr->nlc)
+                match_left_context(ls, pr, cur, p);
+            *chosen = pr;
+            break;
+        }
+    }
+    return CBM_OK;
+}
+
+/* The production of the module at *p (the first that matches, or the stochastic choice), its
+ * successor written to the next string, decomposed as it is produced when the L-system has a
+ * decomposition. */
+static cbm_status cpfg_rewrite(void *d, lpos *p, size_t c, bool *applied)
+{
+    cpfg_pass *ps = d;
+    cbm_lsys *ls = ps->ls;
+    const prodset *set = ps->set;
+    lpos end = *p;
+    const prod *pr = NULL;
+    if (ps->stoch)
+        CBM_TRY(choose_stochastic(ls, set, *p, &end, &pr));
+    else if (set->start[c] < set->start[c + 1])
+        pr = find_first(ls, set, ps->cur, *p, &end, ps->cur, NULL, NULL);
+    if (!runtime_ok(ls))
+        return CBM_E_RUNTIME;
+    *applied = pr != NULL;
+    if (!pr)
+        return CBM_OK;
+    if (ps->decomp) {
+        cbm__lstr_clear(&ls->succ);
+        CBM_TRY(append_succ(ls, pr, &ls->succ));
+        lpos lc = *p;
+        CBM_TRY(decompose_succ(ls, ps->dset, &lc, &end));
+    } else {
+        CBM_TRY(append_succ(ls, pr, ps->next));
+    }
+    if (!runtime_ok(ls))
+        return CBM_E_RUNTIME;
+    *p = end;
+    return CBM_OK;
+}
+
+/* A cut `%` at *p: p goes past it to the end of its branch (the ']' is kept), or to the '$'
+ * that ends the sub-L-system the cut is in (kept too), or to the end of the string. */
+static void cut_branch(const lstr *s, lpos *p)
+{
+    cbm__pos_next(s, p);
+    int level = 0, slevel = 0;
+    while (p->i < s->n) {
+        uint8_t b = s->sym[p->i];
+        uint8_t c = b & 0x7f;
+        if (c == '[')
+            level++;
+        else if (c == ']' && level-- == 0)
+            break;
+        else if (b == ('?' | LSYS_PARAM_BIT))
+            slevel++;
+        else if (b == '$' && slevel-- == 0)
+            break;
+        cbm__pos_next(s, p);
+    }
+}
+
+/* A module no production rewrites: decomposed (depth 0 of the decomposition), else cut if it
+ * is a `%` without parameters, else copied. */
+static cbm_status cpfg_unmatched(void *d, lpos *p, size_t c)
+{
+    cpfg_pass *ps = d;
+    cbm_lsys *ls = ps->ls;
+    const lstr *cur = ps->cur;
+    bool done = false;
+    if (ps->decomp) {
+        lpos lc = *p, rc = *p;
+        cbm__pos_next(cur, &rc);
+        CBM_TRY(rewrite(ls, ps->dset, cur, p, ps->next, cur, &lc, &rc, 0, &done));
+    }
+    if (done)
+        return CBM_OK;
+    if (c == '%' && cbm__module_params(cur, p) == 0) {
+        cut_branch(cur, p);
+        ps->cut = true;
+        return CBM_OK;
+    }
+    return cbm__lstr_copy_module(ls->ctx, cur, p, ps->next);
+}
+
+/* After the modules from..p: the sub-L-system markers among them (not after a cut), the
+ * max_modules limit, the pages the pass has left behind. */
+static cbm_status cpfg_after(void *d, const lpos *from, const lpos *p)
+{
+    cpfg_pass *ps = d;
+    cbm_lsys *ls = ps->ls;
+    if (ps->sub && !ps->cut) {
+        int cursys = ps->cursys; /* (a copy: ps is not taken by address, it stays in registers) */
+        CBM_TRY(follow_markers(ls, ps->cur, *from, p->i, &cursys, ls->steps + 1));
+        if (cursys != ps->cursys) {
+            ps->cursys = cursys;
+            const lsysv *L = &ls->sys[cursys];
+            ps->set = L->main;
+            ps->dset = L->decomp;
+            ps->decomp = ps->dset->present;
+            ps->stoch = L->stochastic;
+            ls->ign = L->ignore;
+        }
+    }
+    ps->cut = false;
+    if (ps->next->n > ps->max_modules)
+        return cbm__fail(ls->ctx, CBM_E_LIMIT,
+                         "step %d: the string would exceed %zu modules (the max_modules "
+                         "limit); stopped after step %d",
+                         ls->steps + 1, ps->max_modules, ls->steps);
+    if (ps->rel->on && p->i >= ps->rel->at)
+        release_consumed(ps->rel, ps->cur, p);
+    return CBM_OK;
+}
+
+static const cbm__step_hooks CPFG_STEP = {cpfg_rewrite, cpfg_unmatched, cpfg_after};
 
 /* A step that failed after releasing part of the current string cannot keep it: the string is
  * then emptied (cbm_lsys_step documents this). */
@@ -559,142 +727,27 @@ static cbm_status derive(cbm_lsys *ls)
 {
     release rel;
     release_begin(ls, &rel);
-    cbm_status s = derive_scan(ls, &rel);
+    cbm__lstr_clear(&ls->next);
+    ls->lstack.len = 0;
+    ls->ign = ls->ignore;
+    cpfg_pass ps = {.ls = ls,
+                    .cur = &ls->cur,
+                    .next = &ls->next,
+                    .rel = &rel,
+                    .set = &ls->main,
+                    .dset = &ls->decomp,
+                    .decomp = ls->decomp.present,
+                    .stoch = ls->stochastic,
+                    .sub = ls->subcalls,
+                    .max_modules = cbm_context_limits(ls->ctx)->max_modules};
+    lpos start = {0, 0, 0};
+    cbm_status s = cbm__step_loop(&CPFG_STEP, &ps, &ls->cur, start);
     if (s != CBM_OK && (rel.done[0] || rel.done[1] || rel.done[2])) {
         cbm__lstr_clear(&ls->cur);
         ls->cur_gen++;
         ls->homo_valid = false;
     }
     return s;
-}
-
-static cbm_status derive_scan(cbm_lsys *ls, release *rel)
-{
-    cbm_context *ctx = ls->ctx;
-    const lstr *cur = &ls->cur;
-    lstr *next = &ls->next;
-    cbm__lstr_clear(next);
-    const prodset *set = &ls->main, *dset = &ls->decomp;
-    bool decomp = ls->decomp.present, stoch = ls->stochastic;
-    /* sub-L-systems: the L-system of the module at hand (index in ls->sys) */
-    const bool sub = ls->subcalls;
-    int cursys = 0;
-    ls->lstack.len = 0;
-    ls->ign = ls->ignore;
-    size_t max_modules = cbm_context_limits(ctx)->max_modules;
-    lpos p = {0, 0, 0};
-    while (p.i < cur->n) {
-        uint8_t s = cur->sym[p.i] & 0x7f;
-        const prod *pr = NULL;
-        lpos end = p;
-        const lpos start = p;
-        bool cut = false;
-        if (stoch) {
-            float total = 0;
-            ls->appl.len = 0;
-            ls->applp.len = 0;
-            for (int32_t o = set->start[s]; o < set->start[s + 1]; o++) {
-                int32_t pi = set->order[o];
-                const prod *c = &set->prods.data[pi];
-                lpos e;
-                if (match(ls, c, cur, p, &e, cur, NULL, NULL)) {
-                    float pb = c->prob >= 0 ? (float)cbm__eval_expr(&ls->ev, c->prob) : 1.0f;
-                    total += pb;
-                    CBM_TRY(CBM_ARRAY_PUSH(ctx, ls->appl, pi));
-                    CBM_TRY(CBM_ARRAY_PUSH(ctx, ls->applp, pb));
-                }
-                if (!runtime_ok(ls))
-                    return CBM_E_RUNTIME;
-            }
-            float r = (float)((double)total * cbm__rand48_next(&ls->drand));
-            for (size_t a = 0; a < ls->appl.len; a++) {
-                if ((r -= ls->applp.data[a]) <= 0) {
-                    pr = &set->prods.data[ls->appl.data[a]];
-                    /* bind the chosen production's parameters again */
-                    int lslots = 0;
-                    for (int32_t k = 0; k < pr->nlc; k++)
-                        lslots += ls->fmods.data[pr->lc + k].np;
-                    int pslots = 0;
-                    for (int32_t k = 0; k < pr->npred; k++)
-                        pslots += ls->fmods.data[pr->pred + k].np;
-                    match_predecessor(ls, pr, cur, p, &end, lslots);
-                    if (pr->nrc)
-                        match_right_context(ls, pr, cur, end, lslots + pslots);
-                    if (pr->nlc)
-                        match_left_context(ls, pr, cur, p);
-                    break;
-                }
-            }
-        } else if (set->start[s] < set->start[s + 1]) {
-            pr = find_first(ls, set, cur, p, &end, cur, NULL, NULL);
-        }
-        if (!runtime_ok(ls))
-            return CBM_E_RUNTIME;
-        if (pr) {
-            if (decomp) {
-                cbm__lstr_clear(&ls->succ);
-                CBM_TRY(append_succ(ls, pr, &ls->succ));
-                lpos lc = p;
-                CBM_TRY(decompose_succ(ls, dset, &lc, &end));
-            } else {
-                CBM_TRY(append_succ(ls, pr, next));
-            }
-            if (!runtime_ok(ls))
-                return CBM_E_RUNTIME;
-            p = end;
-        } else {
-            bool done = false;
-            if (decomp) {
-                lpos lc = p, rc = p;
-                cbm__pos_next(cur, &rc);
-                CBM_TRY(rewrite(ls, dset, cur, &p, next, cur, &lc, &rc, 0, &done));
-            }
-            if (!done) {
-                if (s == '%' && cbm__module_params(cur, &p) == 0) {
-                    /* cut: skip to the end of the branch (the ']' is kept), or to the '$'
-                     * that ends the sub-L-system the cut is in (kept too) */
-                    cbm__pos_next(cur, &p);
-                    int level = 0, slevel = 0;
-                    while (p.i < cur->n) {
-                        uint8_t b = cur->sym[p.i];
-                        uint8_t c = b & 0x7f;
-                        if (c == '[')
-                            level++;
-                        else if (c == ']' && level-- == 0)
-                            break;
-                        else if (b == ('?' | LSYS_PARAM_BIT))
-                            slevel++;
-                        else if (b == '$' && slevel-- == 0)
-                            break;
-                        cbm__pos_next(cur, &p);
-                    }
-                    cut = true;
-                } else {
-                    CBM_TRY(cbm__lstr_copy_module(ctx, cur, &p, next));
-                }
-            }
-        }
-        if (sub && !cut) {
-            int was = cursys;
-            CBM_TRY(follow_markers(ls, cur, start, p.i, &cursys, ls->steps + 1));
-            if (cursys != was) {
-                const lsysv *L = &ls->sys[cursys];
-                set = L->main;
-                dset = L->decomp;
-                decomp = dset->present;
-                stoch = L->stochastic;
-                ls->ign = L->ignore;
-            }
-        }
-        if (next->n > max_modules)
-            return cbm__fail(ctx, CBM_E_LIMIT,
-                             "step %d: the string would exceed %zu modules (the max_modules "
-                             "limit); stopped after step %d",
-                             ls->steps + 1, max_modules, ls->steps);
-        if (rel->on && p.i >= rel->at)
-            release_consumed(rel, cur, &p);
-    }
-    return CBM_OK;
 }
 
 static cbm_status cpfg_step(cbm_lsys *ls)

@@ -759,64 +759,97 @@ static cbm_status decompose_cur(cbm_lsys *ls)
     return CBM_OK;
 }
 
+/* ---- the step: the step loop of lsys_internal.h with the L+C dialect's hooks ---- */
+
+/* The state of the generative pass. */
+typedef struct lpfg_pass {
+    cbm_lsys *ls;
+    bool back; /* Backward(): the string is read right to left, the output built reversed */
+    size_t cut, sb, eb; /* the codes of Cut, SB and EB */
+} lpfg_pass;
+
+/* p to the next module in the pass's direction; going Backward, the parameters of a module are
+ * at (j, k) as going Forward, and before the first module i is SIZE_MAX (the loop's end) */
+static inline void pass_next(const lpfg_pass *ps, const lstr *s, lpos *p)
+{
+    if (!ps->back)
+        cbm__pos_next(s, p);
+    else if (p->i-- > 0 && (s->sym[p->i] & LSYS_PARAM_BIT))
+        p->k -= s->pc[--p->j];
+}
+
+/* The production of the module at *p (the first module of its predecessor, the last going
+ * Backward). Going Forward the successor is produced in place at the end of the new string (a
+ * body that does not produce truncates it back); Backward it is produced apart and reversed
+ * into it. Going Forward, a Cut is not rewritten by the productions (lpfg): it drops the rest
+ * of its branch, up to the EB that closes it (copied next) or the end of the string. */
+static cbm_status lpfg_rewrite(void *d, lpos *p, size_t c, bool *applied)
+{
+    lpfg_pass *ps = d;
+    cbm_lsys *ls = ps->ls;
+    lpfg *lp = ls->lp;
+    const lstr *src = &ls->cur;
+    *applied = true;
+    if (!ps->back && c == ps->cut) {
+        cbm__walk w = cbm__walk_at(src, p->i, p->j, p->k, 1);
+        cbm__walk_find_closing(&w, (int)ps->sb, (int)ps->eb, true);
+        p->i = (size_t)w.i, p->j = w.j, p->k = w.k;
+        return CBM_OK;
+    }
+    lstr *succ = &lp->succ;
+    succ->n = succ->npm = succ->npar = 0;
+    int done =
+        try_rewrite(ls, &lp->m.main, src, p->i, p->j, p->k, &ls->next, ps->back ? succ : &ls->next);
+    if (lp->vm.err != CBM_OK)
+        return lp->vm.err;
+    *applied = done > 0;
+    if (!done)
+        return CBM_OK;
+    if (ps->back)
+        CBM_TRY(cbm__lstr_append(ls->ctx, &ls->next, succ, true));
+    pass_next(ps, src, p);
+    for (int a = 1; a < done; a++) /* further predecessor modules */
+        pass_next(ps, src, p);
+    return CBM_OK;
+}
+
+/* A module no production rewrites: copied. */
+static cbm_status lpfg_unmatched(void *d, lpos *p, size_t c)
+{
+    (void)c;
+    const lpfg_pass *ps = d;
+    const lstr *src = &ps->ls->cur;
+    CBM_TRY(copy_module_at(ps->ls->ctx, src, p->i, p->j, p->k, &ps->ls->next));
+    pass_next(ps, src, p);
+    return CBM_OK;
+}
+
+static cbm_status lpfg_after(void *d, const lpos *from, const lpos *p)
+{
+    (void)from, (void)p;
+    const lpfg_pass *ps = d;
+    return check_size(ps->ls, &ps->ls->next);
+}
+
+static const cbm__step_hooks LPFG_STEP = {lpfg_rewrite, lpfg_unmatched, lpfg_after};
+
 static cbm_status generate_pass(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
-    const lstr *src = &ls->cur;
-    lstr *nxt = &ls->next;
-    lstr *succ = &lp->succ;
+    lstr *nxt = &ls->next, *succ = &lp->succ;
     nxt->n = nxt->npm = nxt->npar = 0;
-    bool back = lp->backward;
-    size_t n = src->n;
-    size_t j = back ? src->npm : 0, k = back ? src->npar : 0;
-    int cutc = lp->m.mods.data[cbm__lc_find_module(&lp->m, "Cut", 3)].code;
-    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
-    for (size_t c = 0; c < n; c++) {
-        size_t i = back ? n - 1 - c : c;
-        if (back && (src->sym[i] & LSYS_PARAM_BIT))
-            k -= src->pc[--j];
-        if (!back && (src->sym[i] & 0x7f) == cutc) { /* Cut: the rest of the branch goes */
-            int depth = 0;
-            for (; c < n; c++, i++) {
-                int sc = src->sym[i] & 0x7f;
-                if (sc == sbc)
-                    depth++;
-                else if (sc == ebc && depth-- == 0)
-                    break;
-                if (src->sym[i] & LSYS_PARAM_BIT)
-                    k += src->pc[j++];
-            }
-            if (c < n)
-                c--; /* the closing EB is copied by the next iteration */
-            continue;
-        }
-        /* going Forward the successor is produced in place at the end of the new string (a
-         * body that does not produce truncates it back); Backward it is reversed into it */
-        succ->n = succ->npm = succ->npar = 0;
-        int done = try_rewrite(ls, &lp->m.main, src, i, j, k, nxt, back ? succ : nxt);
-        if (lp->vm.err != CBM_OK)
-            return lp->vm.err;
-        for (int extra = 1; extra < done; extra++) { /* further predecessor modules */
-            if (back) {
-                i--;
-                if (src->sym[i] & LSYS_PARAM_BIT)
-                    k -= src->pc[--j];
-            } else {
-                if (src->sym[i] & LSYS_PARAM_BIT)
-                    k += src->pc[j++];
-                i++;
-            }
-            c++;
-        }
-        if (!done)
-            CBM_TRY(copy_module_at(ls->ctx, src, i, j, k, nxt));
-        else if (back)
-            CBM_TRY(cbm__lstr_append(ls->ctx, nxt, succ, true));
-        CBM_TRY(check_size(ls, nxt));
-        if (!back && (src->sym[i] & LSYS_PARAM_BIT))
-            k += src->pc[j++];
+    lpfg_pass ps = {.ls = ls,
+                    .back = lp->backward,
+                    .cut = lp->m.mods.data[cbm__lc_find_module(&lp->m, "Cut", 3)].code,
+                    .sb = lp->m.mods.data[lp->m.sb].code,
+                    .eb = lp->m.mods.data[lp->m.eb].code};
+    lpos start = {0, 0, 0};
+    if (ps.back) { /* from the last module */
+        start = (lpos){ls->cur.n, ls->cur.npm, ls->cur.npar};
+        pass_next(&ps, &ls->cur, &start);
     }
-    if (back) { /* the output was built reversed */
+    CBM_TRY(cbm__step_loop(&LPFG_STEP, &ps, &ls->cur, start));
+    if (ps.back) { /* the output was built reversed */
         succ->n = succ->npm = succ->npar = 0;
         CBM_TRY(cbm__lstr_append(ls->ctx, succ, nxt, true));
         lstr t = *nxt;

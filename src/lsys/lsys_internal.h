@@ -44,9 +44,10 @@ typedef struct lpos {
 
 /* ---- The parts of a step both dialects share (here and step.c) ----
  * Walking the packed string (a module, its parameter count, its parameters), making room in
- * it, copying and appending modules, and the bracket table that makes skipping a branch a jump.
- * What the dialects do differently (matching a production, producing its successor,
- * decomposition, interpretation) stays in derive.c and lpfg.c (docs/design.md, "The step"). */
+ * it, copying and appending modules, the bracket table that makes skipping a branch a jump, and
+ * the step loop itself. What the dialects do differently (matching a production, producing its
+ * successor, cutting, decomposition, interpretation) stays in derive.c and lpfg.c, the step's as
+ * the hooks of the loop (docs/design.md, "The step"). */
 
 /* the bytes of one parameter of s */
 static inline size_t cbm__param_size(const lstr *s)
@@ -285,6 +286,43 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
 static inline bool cbm__walk_to_branch_start(cbm__walk *w, int open, int close)
 {
     return cbm__walk_find_closing(w, close, open, false);
+}
+
+/* The step loop, written once for both dialects (derive.c, lpfg.c): every module of the current
+ * string, in the pass's direction, is rewritten by the production that applies at it, or else
+ * handled as unmatched (copied, cut, decomposed), and then the dialect's bookkeeping runs. What
+ * a dialect does at each of these points is its table of hooks; d is its pass state. */
+typedef struct cbm__step_hooks {
+    /* Rewrites the module at *p (its symbol c) with the production that applies there (its
+     * successor written), moving *p past the modules of its predecessor; *applied false: none
+     * applies, *p is left where it was. */
+    cbm_status (*rewrite)(void *d, lpos *p, size_t c, bool *applied);
+    /* The module at *p (its symbol c), no production applying: copied, or cut with the rest
+     * of its branch, or decomposed; moves *p past what it consumed. */
+    cbm_status (*unmatched)(void *d, lpos *p, size_t c);
+    /* After the modules from `from` up to *p were consumed: sub-L-system markers, limits,
+     * handing pages back. */
+    cbm_status (*after)(void *d, const lpos *from, const lpos *p);
+} cbm__step_hooks;
+
+/* The loop over string s from p. A pass that reads s right to left (the L+C dialect's
+ * Backward()) moves before its first module to p.i == SIZE_MAX, past the end of any string, so
+ * one test ends both directions. Always inline, and each dialect passes a constant table: each
+ * dialect's instance of the loop calls its hooks directly (or inlines them), with no call
+ * through a pointer per module (the Koch curve spends a few nanoseconds per module). */
+static inline __attribute__((always_inline)) cbm_status
+cbm__step_loop(const cbm__step_hooks *h, void *d, const lstr *s, lpos p)
+{
+    while (p.i < s->n) {
+        const lpos from = p;
+        const size_t c = s->sym[p.i] & 0x7fu;
+        bool applied;
+        CBM_TRY(h->rewrite(d, &p, c, &applied));
+        if (!applied)
+            CBM_TRY(h->unmatched(d, &p, c));
+        CBM_TRY(h->after(d, &from, &p));
+    }
+    return CBM_OK;
 }
 
 /* A module of a predecessor or context: symbol and parameter count. Formal parameter names are
