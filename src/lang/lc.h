@@ -43,7 +43,7 @@ enum {
 typedef struct lc_type {
     char *name;
     int size;
-    int nf;
+    int nfields; /* fields: their types, offsets (doubles) and names below */
     int ftype[MAXFLD];
     int foff[MAXFLD];
     char *fname[MAXFLD];
@@ -52,7 +52,7 @@ typedef struct lc_type {
 typedef struct lc_module {
     char *name;
     uint8_t code;
-    int np, size;
+    int nparams, size; /* parameters, and their doubles */
     int ptype[MAXF];
 } lc_module;
 
@@ -100,8 +100,8 @@ typedef struct lc_node {
     int16_t type;
     int32_t a, b, c, d, next;
     int32_t slot;
-    int32_t pos; /* text offset where the parser made it, for runtime messages */
-    double v;
+    int32_t pos;  /* text offset where the parser made it, for runtime messages */
+    double value; /* the number of N_NUM */
 } lc_node;
 
 /* a successor or context pattern: modules with their argument chains */
@@ -114,12 +114,15 @@ typedef struct lc_pattern {
     int32_t first, n; /* in lp->sms */
 } lc_pattern;
 
-enum { CX_LC, CX_NLC, CX_NRC, CX_RC, CX_N };
+/* The contexts of a production, by index in lc_production.context: the left context (`<`), the
+ * new left context (`<<`, matched on the string being produced), the new right context (`>>`)
+ * and the right context (`>`). */
+enum { LC_CTX_LEFT, LC_CTX_NEW_LEFT, LC_CTX_NEW_RIGHT, LC_CTX_RIGHT, LC_CTX_N };
 
 typedef struct lc_production {
-    int mod;             /* predecessor */
-    lc_pattern pred;     /* strict predecessor: one module or several adjacent ones */
-    lc_pattern cx[CX_N]; /* contexts (n = 0: none); formals in args */
+    int mod;                      /* predecessor */
+    lc_pattern pred;              /* strict predecessor: one module or several adjacent ones */
+    lc_pattern context[LC_CTX_N]; /* contexts (n = 0: none); formals in args */
     int32_t body;
     int fsize; /* frame doubles */
     int group;
@@ -128,8 +131,8 @@ typedef struct lc_production {
 
 typedef struct lc_function {
     char *name;
-    int ret;
-    int np;
+    int ret_type; /* the type of the result (T_VOID: none) */
+    int nparams;
     int ptype[MAXF];
     bool pref[MAXF]; /* reference parameter (T& x): copied back to the argument */
     int32_t body;
@@ -180,7 +183,7 @@ typedef struct lc_model {
     int block_fsize[4];
     int32_t dlen_expr;
     bool considered[128];
-    int sb, eb; /* module indices of SB, EB */
+    int sb_module, eb_module; /* module indices of SB, EB */
     lc_mech_decl mech_decl;
 } lc_model;
 
@@ -247,7 +250,7 @@ static inline void lc_conv_value(const lc_model *lp, int t, double *v)
     if (t == T_V3D)
         return;
     const lc_type *ty = &lp->types.data[t];
-    for (int f = 0; f < ty->nf; f++)
+    for (int f = 0; f < ty->nfields; f++)
         lc_conv_value(lp, ty->ftype[f], v + ty->foff[f]);
 }
 

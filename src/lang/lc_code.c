@@ -14,7 +14,7 @@ void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg)
 {
     if (vm->err == CBM_OK) {
         vm->err = s;
-        vm->err_pos = vm->at;
+        vm->err_pos = vm->stmt_pos;
         snprintf(vm->errmsg, sizeof vm->errmsg, "%s", msg);
     }
 }
@@ -97,8 +97,8 @@ double cbm__lc_bin_scalar(int op, int t, double a, double b, lc_vm *vm)
 static double step_incdec(const lc_ins *ip, double *p)
 {
     double old = *p;
-    *p = lc_conv_scalar(ip->t, *p + ((ip->fn & 1) ? -1 : 1));
-    return ip->fn >= 2 ? old : *p;
+    *p = lc_conv_scalar(ip->type, *p + ((ip->subop & 1) ? -1 : 1));
+    return ip->subop >= 2 ? old : *p;
 }
 
 /* A loop iteration: one operation and one iteration from the budgets */
@@ -108,7 +108,7 @@ static double step_incdec(const lc_ins *ip, double *p)
             vm->ops--;                                                                             \
             vm->budget--;                                                                          \
         } else { /* a limit is reached: cbm__lc_spend says which */                                \
-            vm->at = at;                                                                           \
+            vm->stmt_pos = at;                                                                     \
             (void)cbm__lc_spend(vm, true);                                                         \
             return 0;                                                                              \
         }                                                                                          \
@@ -120,222 +120,223 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
         return cbm__lc_native_run(p, f, fr, vm);
     const lc_ins *code = p->fn[f].ins.data, *ip = code;
     double *glob = vm->glob;
-    int32_t at = vm->at;
+    int32_t at = vm->stmt_pos;
     for (;; ip++) {
-        at = ip->at >= 0 ? ip->at : at;
+        at = ip->stmt_pos >= 0 ? ip->stmt_pos : at;
         switch (ip->op) {
         case O_NOP:
             break;
         case O_CONST:
-            fr[ip->d] = ip->k;
+            fr[ip->dst] = ip->imm;
             break;
         case O_MOV:
-            fr[ip->d] = fr[ip->a];
+            fr[ip->dst] = fr[ip->src1];
             break;
         case O_GLD:
-            fr[ip->d] = glob[ip->a];
+            fr[ip->dst] = glob[ip->src1];
             break;
         case O_GST:
-            glob[ip->d] = fr[ip->a];
+            glob[ip->dst] = fr[ip->src1];
             break;
         case O_NEG:
-            fr[ip->d] = -fr[ip->a];
+            fr[ip->dst] = -fr[ip->src1];
             break;
         case O_NOT:
-            fr[ip->d] = fr[ip->a] == 0;
+            fr[ip->dst] = fr[ip->src1] == 0;
             break;
         case O_BOOL:
-            fr[ip->d] = fr[ip->a] != 0;
+            fr[ip->dst] = fr[ip->src1] != 0;
             break;
         case O_CONV:
-            fr[ip->d] = lc_conv_scalar(ip->t, fr[ip->a]);
+            fr[ip->dst] = lc_conv_scalar(ip->type, fr[ip->src1]);
             break;
         case O_ADDD:
-            fr[ip->d] = fr[ip->a] + fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] + fr[ip->src2];
             break;
         case O_SUBD:
-            fr[ip->d] = fr[ip->a] - fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] - fr[ip->src2];
             break;
         case O_MULD:
-            fr[ip->d] = fr[ip->a] * fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] * fr[ip->src2];
             break;
         case O_DIVD:
-            fr[ip->d] = fr[ip->a] / fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] / fr[ip->src2];
             break;
         case O_ADDF:
-            fr[ip->d] = (double)(float)(fr[ip->a] + fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] + fr[ip->src2]);
             break;
         case O_SUBF:
-            fr[ip->d] = (double)(float)(fr[ip->a] - fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] - fr[ip->src2]);
             break;
         case O_MULF:
-            fr[ip->d] = (double)(float)(fr[ip->a] * fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] * fr[ip->src2]);
             break;
         case O_DIVF:
-            fr[ip->d] = (double)(float)(fr[ip->a] / fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] / fr[ip->src2]);
             break;
         case O_ADDI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) + (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) + (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_SUBI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) - (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) - (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_MULI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) * (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) * (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_LT:
-            fr[ip->d] = fr[ip->a] < fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] < fr[ip->src2];
             break;
         case O_GT:
-            fr[ip->d] = fr[ip->a] > fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] > fr[ip->src2];
             break;
         case O_LE:
-            fr[ip->d] = fr[ip->a] <= fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] <= fr[ip->src2];
             break;
         case O_GE:
-            fr[ip->d] = fr[ip->a] >= fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] >= fr[ip->src2];
             break;
         case O_EQ:
-            fr[ip->d] = fr[ip->a] == fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] == fr[ip->src2];
             break;
         case O_NE:
-            fr[ip->d] = fr[ip->a] != fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] != fr[ip->src2];
             break;
         case O_DIVI:
         case O_REMI: {
-            long long x = (long long)lc_c_int(fr[ip->a]), y = (long long)lc_c_int(fr[ip->b]);
+            long long x = (long long)lc_c_int(fr[ip->src1]), y = (long long)lc_c_int(fr[ip->src2]);
             if (y == 0) {
-                vm->at = at;
+                vm->stmt_pos = at;
                 cbm__lc_error(vm, CBM_E_RUNTIME,
                               ip->op == O_DIVI ? "integer division by zero"
                                                : "integer remainder by zero");
                 return 0;
             }
-            fr[ip->d] = lc_wrap_int(ip->op == O_DIVI ? x / y : x % y);
+            fr[ip->dst] = lc_wrap_int(ip->op == O_DIVI ? x / y : x % y);
             break;
         }
         case O_JNLT:
-            if (!(fr[ip->a] < fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] < fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNGT:
-            if (!(fr[ip->a] > fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] > fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNLE:
-            if (!(fr[ip->a] <= fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] <= fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNGE:
-            if (!(fr[ip->a] >= fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] >= fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNEQ:
-            if (!(fr[ip->a] == fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] == fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNNE:
-            if (!(fr[ip->a] != fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] != fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JLT:
-            if (fr[ip->a] < fr[ip->b]) {
+            if (fr[ip->src1] < fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JGT:
-            if (fr[ip->a] > fr[ip->b]) {
+            if (fr[ip->src1] > fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JLE:
-            if (fr[ip->a] <= fr[ip->b]) {
+            if (fr[ip->src1] <= fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JGE:
-            if (fr[ip->a] >= fr[ip->b]) {
+            if (fr[ip->src1] >= fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JEQ:
-            if (fr[ip->a] == fr[ip->b]) {
+            if (fr[ip->src1] == fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JNE:
-            if (fr[ip->a] != fr[ip->b]) {
+            if (fr[ip->src1] != fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_SIN:
-            fr[ip->d] = sin(fr[ip->a]);
+            fr[ip->dst] = sin(fr[ip->src1]);
             break;
         case O_COS:
-            fr[ip->d] = cos(fr[ip->a]);
+            fr[ip->dst] = cos(fr[ip->src1]);
             break;
         case O_SQRT:
-            fr[ip->d] = sqrt(fr[ip->a]);
+            fr[ip->dst] = sqrt(fr[ip->src1]);
             break;
         case O_EXP:
-            fr[ip->d] = exp(fr[ip->a]);
+            fr[ip->dst] = exp(fr[ip->src1]);
             break;
         case O_BIN:
-            vm->at = at;
-            fr[ip->d] = cbm__lc_bin_scalar(ip->fn, ip->t, fr[ip->a], fr[ip->b], vm);
+            vm->stmt_pos = at;
+            fr[ip->dst] = cbm__lc_bin_scalar(ip->subop, ip->type, fr[ip->src1], fr[ip->src2], vm);
             if (vm->err != CBM_OK)
                 return 0;
             break;
         case O_INC:
-            fr[ip->d] = step_incdec(ip, fr + ip->a);
+            fr[ip->dst] = step_incdec(ip, fr + ip->src1);
             break;
         case O_GINC:
-            fr[ip->d] = step_incdec(ip, glob + ip->a);
+            fr[ip->dst] = step_incdec(ip, glob + ip->src1);
             break;
         case O_MATH1:
-            fr[ip->d] = lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], 0, false));
+            fr[ip->dst] =
+                lc_conv_scalar(ip->type, cbm__builtin_math(ip->subop, fr[ip->src1], 0, false));
             break;
         case O_MATH2:
-            fr[ip->d] =
-                lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], false));
+            fr[ip->dst] = lc_conv_scalar(
+                ip->type, cbm__builtin_math(ip->subop, fr[ip->src1], fr[ip->src2], false));
             break;
         case O_JMP:
-            ip = code + ip->a - 1;
+            ip = code + ip->src1 - 1;
             break;
         case O_JZ:
-            if (fr[ip->a] == 0)
-                ip = code + ip->b - 1;
+            if (fr[ip->src1] == 0)
+                ip = code + ip->src2 - 1;
             break;
         case O_JNZ:
-            if (fr[ip->a] != 0)
-                ip = code + ip->b - 1;
+            if (fr[ip->src1] != 0)
+                ip = code + ip->src2 - 1;
             break;
         case O_SPEND:
             SPEND_ONE();
             break;
         case O_JNZS:
-            if (fr[ip->a] != 0) {
+            if (fr[ip->src1] != 0) {
                 SPEND_ONE();
-                ip = code + ip->b - 1;
+                ip = code + ip->src2 - 1;
             }
             break;
         case O_JMPS:
             SPEND_ONE();
-            ip = code + ip->a - 1;
+            ip = code + ip->src1 - 1;
             break;
         case O_CALL: {
-            const lc_fcode *cf = &p->fn[ip->a];
-            double *nf = fr + ip->b;
-            vm->at = at;
+            const lc_fcode *cf = &p->fn[ip->src1];
+            double *nf = fr + ip->src2;
+            vm->stmt_pos = at;
             if (vm->call_depth >= vm->max_call_depth ||
                 (size_t)(nf - vm->stack) + (size_t)cf->nreg + 1 > vm->stack_cap) {
                 cbm__lc_error(vm, CBM_E_LIMIT,
@@ -345,36 +346,36 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             if (!cbm__lc_spend(vm, false))
                 return 0;
             vm->call_depth++;
-            double r = cbm__lc_run(p, ip->a, nf, vm);
+            double r = cbm__lc_run(p, ip->src1, nf, vm);
             vm->call_depth--;
             if (vm->err != CBM_OK)
                 return 0;
             if (cf->rsize) /* a run result, left in the callee's frame */
-                memcpy(fr + ip->d, nf + cf->rslot, (size_t)cf->rsize * sizeof(double));
+                memcpy(fr + ip->dst, nf + cf->rslot, (size_t)cf->rsize * sizeof(double));
             else
-                fr[ip->d] = r;
+                fr[ip->dst] = r;
             break;
         }
         case O_PROD:
-            vm->at = at;
-            if (!vm->produce(vm->host, ip->d, fr + ip->a))
+            vm->stmt_pos = at;
+            if (!vm->produce(vm->host, ip->dst, fr + ip->src1))
                 return 0;
             break;
         case O_DONE:
             return 1;
         /* the cpfg dialect (lang/cpfg_code.c) */
         case O_PLD:
-            fr[ip->d] = vm->par[ip->a];
+            fr[ip->dst] = vm->par[ip->src1];
             break;
         case O_PST:
-            vm->par[ip->d] = fr[ip->a];
+            vm->par[ip->dst] = fr[ip->src1];
             break;
         case O_CMATH:
-            fr[ip->d] = cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], true);
+            fr[ip->dst] = cbm__builtin_math(ip->subop, fr[ip->src1], fr[ip->src2], true);
             break;
         case O_WSPEND:
             if (--vm->budget < 0) {
-                vm->at = at;
+                vm->stmt_pos = at;
                 cbm__lc_error(vm, CBM_E_LIMIT,
                               "while loops ran for more iterations in one step than the limit "
                               "(--max-loop-iterations, --max-operations)");
@@ -382,13 +383,13 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             }
             break;
         case O_HOST:
-            vm->at = at;
-            fr[ip->d] = vm->host_call(vm, ip, fr);
+            vm->stmt_pos = at;
+            fr[ip->dst] = vm->host_call(vm, ip, fr);
             if (vm->err != CBM_OK)
                 return 0;
             break;
         case O_RET:
-            return fr[ip->a];
+            return fr[ip->src1];
         default: /* O_RET0 */
             return 0;
         }
@@ -425,15 +426,15 @@ static const lc_node *node(const codegen *g, int32_t ni)
     return &g->model->nodes.data[ni];
 }
 
-static int32_t emit(codegen *g, int op, int d, int a, int b)
+static int32_t emit(codegen *g, int op, int dst, int src1, int src2)
 {
     lc_ins x;
     memset(&x, 0, sizeof x);
     x.op = (uint8_t)op;
-    x.d = d;
-    x.a = a;
-    x.b = b;
-    x.at = g->pending_at;
+    x.dst = dst;
+    x.src1 = src1;
+    x.src2 = src2;
+    x.stmt_pos = g->pending_at;
     g->pending_at = -1;
     if (CBM_ARRAY_PUSH(g->ctx, g->code->ins, x) != CBM_OK) {
         g->fail = g->out_of_memory = true;
@@ -462,7 +463,9 @@ static void patch_jumps(codegen *g, int32_t chain, int32_t target)
 {
     while (chain >= 0 && !g->out_of_memory) {
         lc_ins *x = instr_at(g, chain);
-        int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->d : x->op == O_JMP ? &x->a : &x->b;
+        int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->dst
+                     : x->op == O_JMP                  ? &x->src1
+                                                       : &x->src2;
         chain = *f;
         *f = target;
     }
@@ -555,11 +558,11 @@ static int const_reg(codegen *g, double v, int hint)
         return g->frame_size + g->nconsts++;
     }
     int32_t i = emit(g, O_CONST, hint, 0, 0);
-    instr_at(g, i)->k = v;
+    instr_at(g, i)->imm = v;
     return hint;
 }
 
-/* Whether instruction op computes a value into its register d (the others use d otherwise). */
+/* Whether instruction op computes a value into its register dst (the others use dst otherwise). */
 static bool computes(int op)
 {
     return (op >= O_CONST && op <= O_CONV && op != O_GST) || (op >= O_ADDD && op <= O_MATH2) ||
@@ -575,8 +578,8 @@ static void emit_move(codegen *g, int d, int r)
     size_t len = g->code->ins.len;
     if (r >= g->temp_base && len > 0 && g->label_at != len) {
         lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == r && computes(last->op) && g->pending_at < 0) {
-            last->d = d;
+        if (last->dst == r && computes(last->op) && g->pending_at < 0) {
+            last->dst = d;
             return;
         }
     }
@@ -678,8 +681,8 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
         g->temp_top = s2;
     }
     lc_ins *x = instr_at(g, emit(g, O_HOST, dst, base, na));
-    x->fn = (uint16_t)n->fn;
-    x->k = (double)ni;
+    x->subop = (uint16_t)n->fn;
+    x->imm = (double)ni;
     g->temp_top = save;
     return dst;
 }
@@ -701,7 +704,7 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     bool scalar = lc_is_scalar(n->type);
     switch (n->op) {
     case N_NUM:
-        return const_reg(g, n->v, hint);
+        return const_reg(g, n->value, hint);
     case N_LOCAL:
         if (!scalar)
             break;
@@ -730,12 +733,12 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
             break;
         if (n->op == N_CAST && node(g, n->a)->op == N_NUM) { /* a converted number: a number */
             lc_node k = *node(g, n->a);
-            k.v = lc_conv_scalar(n->type, k.v);
-            return const_reg(g, k.v, hint);
+            k.value = lc_conv_scalar(n->type, k.value);
+            return const_reg(g, k.value, hint);
         }
         int r = compile_scalar(g, n->a, hint);
         int32_t i = emit(g, n->op == N_NEG ? O_NEG : n->op == N_NOT ? O_NOT : O_CONV, hint, r, 0);
-        instr_at(g, i)->t = (uint8_t)n->type;
+        instr_at(g, i)->type = (uint8_t)n->type;
         return hint;
     }
     case N_BIN: {
@@ -758,8 +761,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         int ty;
         int op = scalar_bin_opcode(n->fn, ct, &ty);
         int32_t i = emit(g, op, hint, ra, rb);
-        instr_at(g, i)->t = (uint8_t)ty;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)ty;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_AND:
@@ -809,8 +812,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         if (slot < 0)
             break;
         int32_t i = emit(g, global ? O_GINC : O_INC, hint, slot, 0);
-        instr_at(g, i)->t = (uint8_t)n->type;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)n->type;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_CALLB: {
@@ -841,7 +844,7 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         if (na == 0) { /* no argument: both are 0 */
             r[0] = new_temp(g);
             int32_t i = emit(g, O_CONST, r[0], 0, 0);
-            instr_at(g, i)->k = 0;
+            instr_at(g, i)->imm = 0;
         }
         int t = n->type == T_VOID ? T_DOUBLE : n->type;
         int op = na == 2 ? O_MATH2 : O_MATH1;
@@ -852,8 +855,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
                  : n->fn == FN_EXP  ? O_EXP
                                     : op;
         int32_t i = emit(g, op, hint, r[0], r[1]);
-        instr_at(g, i)->t = (uint8_t)t;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)t;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_CALLU:
@@ -862,8 +865,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         return compile_call(g, ni, hint);
     case N_INCTX: { /* the host matches the context and binds its formals in the frame */
         lc_ins *x = instr_at(g, emit(g, O_HOST, hint, 0, 0));
-        x->fn = LC_HOST_CONTEXT;
-        x->k = (double)ni;
+        x->subop = LC_HOST_CONTEXT;
+        x->imm = (double)ni;
         return hint;
     }
     default:
@@ -890,18 +893,18 @@ static void conv_run(codegen *g, int t, int r)
 {
     if (lc_is_scalar(t)) {
         if (t != T_DOUBLE)
-            instr_at(g, emit(g, O_CONV, r, r, 0))->t = (uint8_t)t;
+            instr_at(g, emit(g, O_CONV, r, r, 0))->type = (uint8_t)t;
         return;
     }
     if (t == T_V3F) {
         for (int i = 0; i < 3; i++)
-            instr_at(g, emit(g, O_CONV, r + i, r + i, 0))->t = T_FLOAT;
+            instr_at(g, emit(g, O_CONV, r + i, r + i, 0))->type = T_FLOAT;
         return;
     }
     if (t == T_V3D)
         return;
     const lc_type *ty = &g->model->types.data[t];
-    for (int f = 0; f < ty->nf; f++)
+    for (int f = 0; f < ty->nfields; f++)
         conv_run(g, ty->ftype[f], r + ty->foff[f]);
 }
 
@@ -933,7 +936,7 @@ static int compile_value(codegen *g, int32_t ni, int dst)
     case N_CTOR: {
         if (n->a < 0) {
             for (int i = 0; i < sz; i++)
-                instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->imm = 0;
             return dst;
         }
         int off = 0;
@@ -1102,7 +1105,7 @@ static bool vec_builtin(codegen *g, int32_t ni, int dst)
     int32_t jend = emit(g, O_JMP, 0, -1, 0);
     patch_jumps(g, jzero, label_here(g));
     for (int i = 0; i < 3; i++)
-        instr_at(g, emit(g, O_CONST, r + i, 0, 0))->k = 0;
+        instr_at(g, emit(g, O_CONST, r + i, 0, 0))->imm = 0;
     patch_jumps(g, jend, label_here(g));
     copy_run(g, dst, r, 3, false);
     conv_run(g, n->type, dst);
@@ -1348,7 +1351,7 @@ static bool frame_builtin(codegen *g, int32_t ni, int dst)
             int32_t je = emit(g, O_JMP, 0, -1, 0);
             patch_jumps(g, jz, label_here(g));
             for (int i = 0; i < 3; i++)
-                instr_at(g, emit(g, O_CONST, r + p - u + i, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, r + p - u + i, 0, 0))->imm = 0;
             patch_jumps(g, je, label_here(g));
         }
         store_result(g, dst, r, 9, n->type);
@@ -1375,10 +1378,11 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     int a = 0;
     for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
         const lc_node *xn = node(g, x);
-        ok = a < f->np && lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
+        ok = a < f->nparams &&
+             lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
              (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
     }
-    if (!ok || a != f->np)
+    if (!ok || a != f->nparams)
         return unsupported(g, dst);
     int save = g->temp_top;
     int base = new_temps(g, cf->npd);
@@ -1424,7 +1428,7 @@ static void compile_produce(codegen *g, const lc_node *n)
         int base = new_temps(g, mod->size);
         int off = 0, a = 0;
         for (int32_t x = sm->args; x >= 0; x = node(g, x)->next, a++) {
-            int xs = a < mod->np ? lc_type_size(g->model, mod->ptype[a]) : -1;
+            int xs = a < mod->nparams ? lc_type_size(g->model, mod->ptype[a]) : -1;
             if (xs != lc_type_size(g->model, node(g, x)->type) || off + xs > mod->size) {
                 g->fail = true;
                 return;
@@ -1461,7 +1465,7 @@ static int compile_condition(codegen *g, int32_t c, lc_ins **cmp)
     size_t len = g->code->ins.len;
     if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
         lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == t && last->op >= O_LT && last->op <= O_NE)
+        if (last->dst == t && last->op >= O_LT && last->op <= O_NE)
             *cmp = last;
     }
     return r;
@@ -1475,7 +1479,7 @@ static int32_t jump_false(codegen *g, int32_t c)
     int r = compile_condition(g, c, &cmp);
     if (cmp) {
         cmp->op = (uint8_t)(O_JNLT + (cmp->op - O_LT));
-        cmp->d = -1;
+        cmp->dst = -1;
         return (int32_t)g->code->ins.len - 1;
     }
     return emit(g, O_JZ, 0, r, -1);
@@ -1488,7 +1492,7 @@ static void jump_true(codegen *g, int32_t c, int32_t target)
     int r = compile_condition(g, c, &cmp);
     if (cmp) {
         cmp->op = (uint8_t)(O_JLT + (cmp->op - O_LT));
-        cmp->d = target;
+        cmp->dst = target;
         return;
     }
     emit(g, O_JNZS, 0, r, target);
@@ -1631,15 +1635,15 @@ static void compile_stmt(codegen *g, int32_t ni)
                     conv_run(g, n->type, n->slot);
                 } else
                     for (int i = 0; i < sz; i++)
-                        instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->k = 0;
+                        instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->imm = 0;
             } else if (n->a >= 0) {
                 int r = compile_scalar(g, n->a, new_temp(g));
                 if (n->type == T_DOUBLE)
                     emit_move(g, n->slot, r);
                 else
-                    instr_at(g, emit(g, O_CONV, n->slot, r, 0))->t = (uint8_t)n->type;
+                    instr_at(g, emit(g, O_CONV, n->slot, r, 0))->type = (uint8_t)n->type;
             } else
-                instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->imm = 0;
             break;
         case S_BLOCK:
             compile_stmts(g, n->a);
@@ -1688,7 +1692,7 @@ static void compile_stmt(codegen *g, int32_t ni)
                 int r = compile_scalar(g, n->a, new_temp(g));
                 if (n->type != T_DOUBLE) {
                     int t = new_temp(g);
-                    instr_at(g, emit(g, O_CONV, t, r, 0))->t = (uint8_t)n->type;
+                    instr_at(g, emit(g, O_CONV, t, r, 0))->type = (uint8_t)n->type;
                     r = t;
                 }
                 emit(g, O_RET, 0, r, 0);
@@ -1792,13 +1796,13 @@ static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int
         g.temp_base = g.temp_top = fsize + nconsts;
         fc->nreg = g.temp_top;
         for (int c = 0; c < nconsts; c++)
-            instr_at(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = consts[c];
+            instr_at(&g, emit(&g, O_CONST, fsize + c, 0, 0))->imm = consts[c];
         if (kind == ROOT_STMTS)
             compile_stmts(&g, body);
         else
             compile_root(&g, kind, body);
         for (int i = 0; i < fc->rsize; i++) /* falling off the end: a result of zeros */
-            instr_at(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
+            instr_at(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->imm = 0;
         emit(&g, O_RET0, 0, 0, 0);
         if (g.fail)
             break;
@@ -1847,12 +1851,14 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
         const lc_function *fn = &m->funcs.data[f];
         lc_fcode *fc = &p->fn[f];
         fc->compiled = true;
-        for (int i = 0; i < fn->np; i++) {
+        for (int i = 0; i < fn->nparams; i++) {
             fc->npd += lc_type_size(m, fn->ptype[i]);
             fc->refs = fc->refs || fn->pref[i];
         }
         fc->rslot = fn->fsize;
-        fc->rsize = fn->ret == T_VOID || lc_is_scalar(fn->ret) ? 0 : lc_type_size(m, fn->ret);
+        fc->rsize = fn->ret_type == T_VOID || lc_is_scalar(fn->ret_type)
+                        ? 0
+                        : lc_type_size(m, fn->ret_type);
     }
     for (bool changed = true; changed;) {
         changed = false;

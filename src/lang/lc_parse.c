@@ -276,7 +276,7 @@ static int add_mod(lc_parser *L, const char *name, size_t len, const int *ptypes
     memcpy(m.name, name, len);
     m.name[len] = 0;
     m.code = (uint8_t)code;
-    m.np = np;
+    m.nparams = np;
     for (int i = 0; i < np; i++) {
         m.ptype[i] = ptypes[i];
         m.size += lc_type_size(lp, ptypes[i]);
@@ -370,7 +370,7 @@ static int32_t assign_expr(lc_parser *L);
 static int32_t num_node(lc_parser *L, double v, int type)
 {
     lc_node n = blank_node(N_NUM, type);
-    n.v = v;
+    n.value = v;
     return add_node(L, n);
 }
 
@@ -497,7 +497,7 @@ static int32_t brace_init(lc_parser *L, int t)
     if (!expect(L, "{"))
         return -1;
     const lc_type *ty = &L->model->types.data[t];
-    int nf = lc_is_vec(t) ? 3 : ty->nf;
+    int nf = lc_is_vec(t) ? 3 : ty->nfields;
     if (lc_is_scalar(t)) {
         int32_t e = coerce(L, assign_expr(L), t, pos);
         expect(L, "}");
@@ -548,7 +548,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
     /* In*Context(pattern) */
     static const char *const CTXF[] = {"InLeftContext", "InNewLeftContext", "InNewRightContext",
                                        "InRightContext"};
-    for (int k = 0; k < CX_N; k++)
+    for (int k = 0; k < LC_CTX_N; k++)
         if (strlen(CTXF[k]) == n && !strncmp(s, CTXF[k], n)) {
             lc_pattern p = {0, 0};
             if (!expect(L, "("))
@@ -597,11 +597,12 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             x.a = first;
             return add_node(L, x);
         }
-        if (lp->types.data[t].nf > 0 && na == 0) { /* Name(): a zero value */
+        if (lp->types.data[t].nfields > 0 && na == 0) { /* Name(): a zero value */
             lc_node x = blank_node(N_CTOR, t);
             return add_node(L, x);
         }
-        if (lp->types.data[t].nf > 0 && na == lp->types.data[t].nf) { /* Name(f1, f2, ...) */
+        if (lp->types.data[t].nfields > 0 &&
+            na == lp->types.data[t].nfields) { /* Name(f1, f2, ...) */
             int32_t first = -1, last = -1;
             for (int i = 0; i < na; i++) {
                 int32_t e = args;
@@ -664,9 +665,9 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         int na = parse_args(L, &args);
         if (na < 0)
             return -1;
-        if (na != f->np) {
-            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", f->name, f->np,
-                      f->np == 1 ? "" : "s", na);
+        if (na != f->nparams) {
+            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", f->name, f->nparams,
+                      f->nparams == 1 ? "" : "s", na);
             return -1;
         }
         int32_t first = -1, last = -1;
@@ -684,7 +685,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 return -1;
             chain(L, &first, &last, e);
         }
-        lc_node c = blank_node(N_CALLU, f->ret);
+        lc_node c = blank_node(N_CALLU, f->ret_type);
         c.a = first;
         c.slot = (int32_t)i;
         return add_node(L, c);
@@ -961,9 +962,9 @@ static int32_t primary(lc_parser *L)
                     off = f[0] - 'x';
                     ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
                 }
-            } else if (L->model->types.data[t].nf > 0) {
+            } else if (L->model->types.data[t].nfields > 0) {
                 const lc_type *ty = &L->model->types.data[t];
-                for (int k = 0; k < ty->nf; k++)
+                for (int k = 0; k < ty->nfields; k++)
                     if (strlen(ty->fname[k]) == n && !strncmp(ty->fname[k], f, n)) {
                         off = ty->foff[k];
                         ft = ty->ftype[k];
@@ -1250,9 +1251,9 @@ static int succ_list(lc_parser *L, lc_pattern *p)
         if (na < 0)
             return -1;
         const lc_module *md = &lp->mods.data[m];
-        if (na != md->np) {
-            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, %d given", md->name, md->np,
-                      md->np == 1 ? "" : "s", na);
+        if (na != md->nparams) {
+            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, %d given", md->name, md->nparams,
+                      md->nparams == 1 ? "" : "s", na);
             return -1;
         }
         int32_t first = -1, last = -1;
@@ -1309,7 +1310,7 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                         return -1;
                     }
                     L->cur->pos += k;
-                    if (na >= md->np) {
+                    if (na >= md->nparams) {
                         na++;
                         continue;
                     }
@@ -1340,9 +1341,9 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                     return -1;
             }
         }
-        if (na != md->np) {
+        if (na != md->nparams) {
             cbm__cerr(L->cur, pos, "module %s has %d parameter%s, the pattern names %d", md->name,
-                      md->np, md->np == 1 ? "" : "s", na);
+                      md->nparams, md->nparams == 1 ? "" : "s", na);
             return -1;
         }
         lc_modref sm = {m, first};
@@ -1643,7 +1644,7 @@ static void parse_struct(lc_parser *L, size_t pos)
                 recover(L);
                 goto fail;
             }
-            if (ty.nf >= MAXFLD) {
+            if (ty.nfields >= MAXFLD) {
                 cbm__cerr(L->cur, L->cur->pos, "more than %d fields in struct %s", MAXFLD, name);
                 recover(L);
                 goto fail;
@@ -1657,11 +1658,11 @@ static void parse_struct(lc_parser *L, size_t pos)
             memcpy(fn, L->text + L->cur->pos, k);
             fn[k] = 0;
             L->cur->pos += k;
-            ty.fname[ty.nf] = fn;
-            ty.ftype[ty.nf] = ft;
-            ty.foff[ty.nf] = ty.size;
+            ty.fname[ty.nfields] = fn;
+            ty.ftype[ty.nfields] = ft;
+            ty.foff[ty.nfields] = ty.size;
             ty.size += lc_type_size(lp, ft);
-            ty.nf++;
+            ty.nfields++;
         } while (accept(L, ","));
         if (!expect(L, ";")) {
             recover(L);
@@ -1682,7 +1683,7 @@ static void parse_struct(lc_parser *L, size_t pos)
     }
     return;
 fail:
-    for (int i = 0; i < ty.nf; i++)
+    for (int i = 0; i < ty.nfields; i++)
         cbm__strfree(L->cur->ctx, ty.fname[i]);
 }
 
@@ -1812,9 +1813,9 @@ static bool parse_roles(lc_parser *L, const lc_module *md, const decl_roles *r, 
                       L->text + pos, r->kind, r->role[0], r->role[1]);
             return false;
         }
-        if (k >= md->np) {
-            cbm__cerr(L->cur, pos, "module '%s' has %d parameter%s", md->name, md->np,
-                      md->np == 1 ? "" : "s");
+        if (k >= md->nparams) {
+            cbm__cerr(L->cur, pos, "module '%s' has %d parameter%s", md->name, md->nparams,
+                      md->nparams == 1 ? "" : "s");
             return false;
         }
         if (dst && *dst >= 0) {
@@ -1867,7 +1868,7 @@ static void mech_decl(lc_parser *L, bool mass)
                     break;
                 continue;
             }
-            for (int i = 0; i < md->np && found < 0; i++) {
+            for (int i = 0; i < md->nparams && found < 0; i++) {
                 if (mass ? i == 0 && lc_is_scalar(md->ptype[i]) : md->ptype[i] == T_MSEG)
                     found = off;
                 off += lc_type_size(lp, md->ptype[i]);
@@ -1876,8 +1877,8 @@ static void mech_decl(lc_parser *L, bool mass)
                 cbm__cerr(L->cur, pos,
                           "the first parameter of point-mass module '%s' must be a number "
                           "(its mass, kg)%s%s",
-                          md->name, md->np ? ", not " : "",
-                          md->np ? lp->types.data[md->ptype[0]].name : "");
+                          md->name, md->nparams ? ", not " : "",
+                          md->nparams ? lp->types.data[md->ptype[0]].name : "");
             else if (found < 0)
                 cbm__cerr(L->cur, pos, "mechanical module '%s' needs a MechSegment parameter",
                           md->name);
@@ -1986,13 +1987,13 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     /* pattern k is followed by operator ops[k]: left contexts precede the predecessor */
     int ip = 0;
     while (ip < npats && (ops[ip] == 0 || ops[ip] == 1)) {
-        int k = ops[ip] == 0 ? CX_LC : CX_NLC;
-        if (pr.cx[k].n) {
-            cbm__cerr(L->cur, pos, "two %s contexts", k == CX_LC ? "left" : "new left");
+        int k = ops[ip] == 0 ? LC_CTX_LEFT : LC_CTX_NEW_LEFT;
+        if (pr.context[k].n) {
+            cbm__cerr(L->cur, pos, "two %s contexts", k == LC_CTX_LEFT ? "left" : "new left");
             recover(L);
             return;
         }
-        pr.cx[k] = pats[ip++];
+        pr.context[k] = pats[ip++];
     }
     if (ip >= npats) {
         cbm__cerr(L->cur, pos, "production without a predecessor");
@@ -2003,16 +2004,16 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     pr.pred = pats[ip];
     int prev = ops[ip];
     for (int k = ip + 1; k < npats; k++) {
-        int cx = prev == 2 ? CX_NRC : prev == 3 ? CX_RC : -1;
-        if (cx < 0 || pr.cx[cx].n) {
+        int cx = prev == 2 ? LC_CTX_NEW_RIGHT : prev == 3 ? LC_CTX_RIGHT : -1;
+        if (cx < 0 || pr.context[cx].n) {
             cbm__cerr(L->cur, pos, "misplaced context");
             recover(L);
             return;
         }
-        pr.cx[cx] = pats[k];
+        pr.context[cx] = pats[k];
         prev = ops[k];
     }
-    if (pr.cx[CX_NLC].n && pr.cx[CX_NRC].n) {
+    if (pr.context[LC_CTX_NEW_LEFT].n && pr.context[LC_CTX_NEW_RIGHT].n) {
         cbm__cerr(L->cur, pos, "a production cannot have both new left and new right context");
         recover(L);
         return;
@@ -2040,7 +2041,7 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
     size_t n = ident(L);
     lc_function f;
     memset(&f, 0, sizeof f);
-    f.ret = rt;
+    f.ret_type = rt;
     f.pos = pos;
     f.name = cbm__alloc(L->cur->ctx, n + 1);
     if (!f.name) {
@@ -2059,14 +2060,14 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
             int t = parse_type(L);
             bool ref = t >= 0 && accept(L, "&");
             size_t k = t >= 0 ? ident(L) : 0;
-            if (t < 0 || !k || f.np >= MAXF) {
+            if (t < 0 || !k || f.nparams >= MAXF) {
                 expected(L, "a parameter (type and name)");
                 recover(L);
                 cbm__strfree(L->cur->ctx, f.name);
                 return;
             }
-            f.pref[f.np] = ref;
-            f.ptype[f.np++] = t;
+            f.pref[f.nparams] = ref;
+            f.ptype[f.nparams++] = t;
             declare_local(L, L->text + L->cur->pos, k, t);
             L->cur->pos += k;
         } while (accept(L, ","));
@@ -2188,7 +2189,7 @@ static cbm_status setup_builtins(lc_parser *L)
         q->fname[i] = cbm__strdup(ctx, QF[i]);
         q->ftype[i] = T_DOUBLE;
         q->foff[i] = i;
-        q->nf++;
+        q->nfields++;
         if (!q->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2198,7 +2199,7 @@ static cbm_status setup_builtins(lc_parser *L)
         lv->fname[i] = cbm__strdup(ctx, LF[i]);
         lv->ftype[i] = T_FLOAT;
         lv->foff[i] = i;
-        lv->nf++;
+        lv->nfields++;
         if (!lv->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2206,7 +2207,7 @@ static cbm_status setup_builtins(lc_parser *L)
         tv->fname[i] = cbm__strdup(ctx, TF[i]);
         tv->ftype[i] = T_V3F;
         tv->foff[i] = 3 * i;
-        tv->nf++;
+        tv->nfields++;
         if (!tv->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2225,7 +2226,7 @@ static cbm_status setup_builtins(lc_parser *L)
                            ? T_V3D
                            : T_DOUBLE;
         ms->foff[i] = MO[i];
-        ms->nf++;
+        ms->nfields++;
         if (!ms->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2246,8 +2247,8 @@ static cbm_status setup_builtins(lc_parser *L)
             return L->cur->status != CBM_OK ? L->cur->status : CBM_E_NOMEM;
     }
     /* V3f and its synonyms */
-    lp->sb = find_mod(lp, "SB", 2);
-    lp->eb = find_mod(lp, "EB", 2);
+    lp->sb_module = find_mod(lp, "SB", 2);
+    lp->eb_module = find_mod(lp, "EB", 2);
     return CBM_OK;
 }
 
@@ -2323,10 +2324,10 @@ static void parse_top(lc_parser *L)
         } else if (accept_kw(L, "group")) {
             size_t p2 = L->cur->pos;
             int32_t e = const_int(L, "group");
-            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
-                cbm__cerr(L->cur, p2, "group %g is out of range (an int)", ND(e).v);
+            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).value) <= 2147483647.0))
+                cbm__cerr(L->cur, p2, "group %g is out of range (an int)", ND(e).value);
             else if (e >= 0 && ND(e).op == N_NUM)
-                group = (int)ND(e).v;
+                group = (int)ND(e).value;
             else if (e >= 0)
                 cbm__cerr(L->cur, p2, "group needs a number");
             expect(L, ":");
@@ -2425,7 +2426,7 @@ void cbm__lc_model_free(cbm_context *ctx, lc_model *m)
 {
     for (size_t i = 0; i < m->types.len; i++) {
         cbm__strfree(ctx, m->types.data[i].name);
-        for (int f = 0; f < m->types.data[i].nf; f++)
+        for (int f = 0; f < m->types.data[i].nfields; f++)
             cbm__strfree(ctx, m->types.data[i].fname[f]);
     }
     CBM_ARRAY_FREE(ctx, m->types);
