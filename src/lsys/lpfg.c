@@ -407,7 +407,7 @@ static cbm__walk walk_end(const lstr *s, int dir)
     if (s->n)
         cbm__walk_prev_in_memory(&w);
     else
-        w.i = -1;
+        w.mod = -1;
     return w;
 }
 
@@ -469,9 +469,9 @@ static bool accept_left(const lpfg *lp, cbm__walk *w, int code)
 static void bind_formals(cbm_lsys *ls, const cbm__walk *w, int32_t formals, double *fr)
 {
     lpfg *lp = ls->lp;
-    if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
+    if (!(w->s->sym[w->mod] & LSYS_PARAM_BIT))
         return;
-    const double *p = (const double *)w->s->par + w->k;
+    const double *p = (const double *)w->s->par + w->param;
     for (int32_t f = formals; f >= 0; f = lp->m.nodes.data[f].next) {
         const lc_node *x = &lp->m.nodes.data[f];
         int sz = lc_type_size(&lp->m, x->type);
@@ -640,7 +640,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             cbm__walk first = cbm__walk_at(src, i, j, k, 1);
             bool ok = true;
             for (int32_t a = 0; a < anchor && ok; a++) {
-                if (first.i == 0)
+                if (first.mod == 0)
                     ok = false;
                 else
                     cbm__walk_prev_in_memory(&first);

@@ -37,9 +37,12 @@ typedef struct lstr {
     bool f32;
 } lstr;
 
-/* a position in a string */
+/* A position in a string: module `mod`, with the indices that go with it in the other two
+ * arrays. */
 typedef struct lpos {
-    size_t i, j, k;
+    size_t mod;   /* the module's index (in sym) */
+    size_t pmod;  /* the parametric modules before it: its parameter count is pc[pmod] */
+    size_t param; /* the parameters before it: its first parameter is par[param] */
 } lpos;
 
 /* ---- The parts of a step both dialects share (here and step.c) ----
@@ -57,21 +60,21 @@ static inline size_t cbm__param_size(const lstr *s)
 /* p to the next module of s */
 static inline void cbm__pos_next(const lstr *s, lpos *p)
 {
-    if (s->sym[p->i++] & LSYS_PARAM_BIT)
-        p->k += s->pc[p->j++];
+    if (s->sym[p->mod++] & LSYS_PARAM_BIT)
+        p->param += s->pc[p->pmod++];
 }
 
 /* p to the previous module of s */
 static inline void cbm__pos_prev(const lstr *s, lpos *p)
 {
-    if (s->sym[--p->i] & LSYS_PARAM_BIT)
-        p->k -= s->pc[--p->j];
+    if (s->sym[--p->mod] & LSYS_PARAM_BIT)
+        p->param -= s->pc[--p->pmod];
 }
 
 /* the parameter count of the module at p */
 static inline int cbm__module_params(const lstr *s, const lpos *p)
 {
-    return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
+    return (s->sym[p->mod] & LSYS_PARAM_BIT) ? s->pc[p->pmod] : 0;
 }
 
 /* n parameters from parameter index k of s into dst, as doubles */
@@ -111,11 +114,12 @@ static inline cbm_status cbm__lstr_copy_module(cbm_context *ctx, const lstr *src
 {
     int np = cbm__module_params(src, p);
     CBM_TRY(cbm__lstr_room(ctx, dst, 1, 1, (size_t)np));
-    dst->sym[dst->n++] = src->sym[p->i];
+    dst->sym[dst->n++] = src->sym[p->mod];
     if (np) {
         size_t w = cbm__param_size(src);
         dst->pc[dst->npm++] = (uint8_t)np;
-        memcpy((char *)dst->par + dst->npar * w, (const char *)src->par + p->k * w, (size_t)np * w);
+        memcpy((char *)dst->par + dst->npar * w, (const char *)src->par + p->param * w,
+               (size_t)np * w);
         dst->npar += (size_t)np;
     }
     cbm__pos_next(src, p);
@@ -136,10 +140,10 @@ typedef struct cbm__brackets {
     const lstr *s;            /* the string it describes, NULL: none */
     int dir;                  /* +1 or -1, above */
     uint8_t open, close;      /* the bracket symbols: '[' ']', or the L+C dialect's SB EB codes */
-    lpos at;                  /* modules before at.i are in the table */
+    lpos at;                  /* modules before at.mod are in the table */
     CBM_ARRAY(size_t) opened; /* module index of every opening bracket, increasing */
-    CBM_ARRAY(lpos) closed;   /* the closing bracket that matches it; i == SIZE_MAX: none */
-    CBM_ARRAY(lpos) waiting;  /* brackets waiting for their match (.i: an index in opened) */
+    CBM_ARRAY(lpos) closed;   /* the closing bracket that matches it; mod == SIZE_MAX: none */
+    CBM_ARRAY(lpos) waiting;  /* brackets waiting for their match (.mod: an index in opened) */
 } cbm__brackets;
 
 /* The table describes string s read in direction dir (forgetting what it held). */
@@ -153,45 +157,46 @@ void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t);
 
 /* A walk over a packed string, for context matching: a position and a reading direction, dir
  * +1 left to right, -1 right to left (the L+C dialect's new string, built reversed going
- * Backward()). i runs from -1 (before the first module in memory) to n (after the last). */
+ * Backward()). The position is an lpos's (mod, pmod, param), but mod runs from -1 (before the
+ * first module in memory) to n (after the last). */
 typedef struct cbm__walk {
     const lstr *s;
-    ptrdiff_t i;
-    size_t j, k;
+    ptrdiff_t mod;
+    size_t pmod, param;
     int dir;
 } cbm__walk;
 
-static inline cbm__walk cbm__walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
+static inline cbm__walk cbm__walk_at(const lstr *s, size_t mod, size_t pmod, size_t param, int dir)
 {
-    cbm__walk w = {s, (ptrdiff_t)i, j, k, dir};
+    cbm__walk w = {s, (ptrdiff_t)mod, pmod, param, dir};
     return w;
 }
 
 /* whether w is on a module of its string */
 static inline bool cbm__walk_inside(const cbm__walk *w)
 {
-    return w->i >= 0 && (size_t)w->i < w->s->n;
+    return w->mod >= 0 && (size_t)w->mod < w->s->n;
 }
 
 /* the symbol of the module w is on */
 static inline int cbm__walk_symbol(const cbm__walk *w)
 {
-    return w->s->sym[w->i] & 0x7f;
+    return w->s->sym[w->mod] & 0x7f;
 }
 
 /* a step in memory order, whatever the direction */
 static inline void cbm__walk_next_in_memory(cbm__walk *w)
 {
-    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
-        w->k += w->s->pc[w->j++];
-    w->i++;
+    if (w->s->sym[w->mod] & LSYS_PARAM_BIT)
+        w->param += w->s->pc[w->pmod++];
+    w->mod++;
 }
 
 static inline void cbm__walk_prev_in_memory(cbm__walk *w)
 {
-    w->i--;
-    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
-        w->k -= w->s->pc[--w->j];
+    w->mod--;
+    if (w->mod >= 0 && (w->s->sym[w->mod] & LSYS_PARAM_BIT))
+        w->param -= w->s->pc[--w->pmod];
 }
 
 /* a step in the walk's direction; false when it leaves the string */
@@ -210,19 +215,19 @@ static inline bool cbm__walk_forward(cbm__walk *w)
 static inline bool cbm__walk_backward(cbm__walk *w)
 {
     if (w->dir > 0) {
-        if (w->i <= 0) {
-            w->i = -1;
+        if (w->mod <= 0) {
+            w->mod = -1;
             return false;
         }
-        if (w->i > (ptrdiff_t)w->s->n)
+        if (w->mod > (ptrdiff_t)w->s->n)
             return false;
         cbm__walk_prev_in_memory(w);
     } else {
-        if (w->i >= (ptrdiff_t)w->s->n - 1) {
-            w->i = (ptrdiff_t)w->s->n;
+        if (w->mod >= (ptrdiff_t)w->s->n - 1) {
+            w->mod = (ptrdiff_t)w->s->n;
             return false;
         }
-        if (w->i < 0) /* before the logical start */
+        if (w->mod < 0) /* before the logical start */
             return false;
         cbm__walk_next_in_memory(w);
     }
@@ -244,8 +249,8 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
 {
     const lstr *s = w->s;
     const ptrdiff_t n = (ptrdiff_t)s->n;
-    ptrdiff_t i = w->i;
-    size_t j = w->j, k = w->k;
+    ptrdiff_t i = w->mod;
+    size_t j = w->pmod, k = w->param;
     int depth = 0;
     if (forward == (w->dir > 0)) { /* up in memory */
         for (; i >= 0 && i < n; i++) {
@@ -254,7 +259,7 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
             if (c == opener) {
                 depth++;
             } else if (c == closer && depth-- == 0) {
-                w->i = i, w->j = j, w->k = k;
+                w->mod = i, w->pmod = j, w->param = k;
                 return true;
             }
             if (b & LSYS_PARAM_BIT)
@@ -269,14 +274,14 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
             if (c == opener) {
                 depth++;
             } else if (c == closer && depth-- == 0) {
-                w->i = i, w->j = j, w->k = k;
+                w->mod = i, w->pmod = j, w->param = k;
                 return true;
             }
             if (i > 0 && (s->sym[i - 1] & LSYS_PARAM_BIT))
                 k -= s->pc[--j];
         }
     }
-    w->i = i < 0 ? -1 : n;
+    w->mod = i < 0 ? -1 : n;
     return false;
 }
 
@@ -301,9 +306,9 @@ typedef struct smod {
 } smod;
 
 typedef struct prod {
-    int32_t lc, nlc;     /* left context in fmods, in text order */
-    int32_t pred, npred; /* strict predecessor */
-    int32_t rc, nrc;     /* right context */
+    int32_t left_ctx, nleft_ctx;   /* left context in fmods, in text order */
+    int32_t pred, npred;           /* strict predecessor */
+    int32_t right_ctx, nright_ctx; /* right context */
     int nformals;
     int32_t pre, cond, post, prob; /* -1: none */
     int32_t succ, nsucc;           /* in smods */
