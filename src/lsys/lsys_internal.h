@@ -241,6 +241,18 @@ bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int
 /* Moves w forward to the closing bracket of the branch it is in, over the branches inside;
  * false when there is none. */
 bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* The bracket-depth test of a scan for the bracket that closes the current nesting level:
+ * symbol c met, depth the branches entered so far (opened by `opener`); true when c is the
+ * `closer` of the level the scan started in. */
+static inline bool cbm__closes_level(int c, int opener, int closer, int *depth)
+{
+    if (c == opener) {
+        ++*depth;
+        return false;
+    }
+    return c == closer && (*depth)-- == 0;
+}
+
 /* Walks to the bracket that closes the current nesting level: forward to its closing bracket
  * (opener: the opening one), or backward to its opening one (opener: the closing one).
  * Branches met on the way are passed whole. A scan in memory order, up or down whatever the
@@ -249,39 +261,32 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
 {
     const lstr *s = w->s;
     const ptrdiff_t n = (ptrdiff_t)s->n;
-    ptrdiff_t i = w->mod;
-    size_t j = w->pmod, k = w->param;
+    ptrdiff_t mod = w->mod;
+    size_t pmod = w->pmod, param = w->param;
     int depth = 0;
     if (forward == (w->dir > 0)) { /* up in memory */
-        for (; i >= 0 && i < n; i++) {
-            uint8_t b = s->sym[i];
-            int c = b & 0x7f;
-            if (c == opener) {
-                depth++;
-            } else if (c == closer && depth-- == 0) {
-                w->mod = i, w->pmod = j, w->param = k;
+        for (; mod >= 0 && mod < n; mod++) {
+            uint8_t b = s->sym[mod];
+            if (cbm__closes_level(b & 0x7f, opener, closer, &depth)) {
+                w->mod = mod, w->pmod = pmod, w->param = param;
                 return true;
             }
             if (b & LSYS_PARAM_BIT)
-                k += s->pc[j++];
+                param += s->pc[pmod++];
         }
     } else { /* down */
-        if (i >= n)
-            i = -1;
-        for (; i >= 0; i--) {
-            uint8_t b = s->sym[i];
-            int c = b & 0x7f;
-            if (c == opener) {
-                depth++;
-            } else if (c == closer && depth-- == 0) {
-                w->mod = i, w->pmod = j, w->param = k;
+        if (mod >= n)
+            mod = -1;
+        for (; mod >= 0; mod--) {
+            if (cbm__closes_level(s->sym[mod] & 0x7f, opener, closer, &depth)) {
+                w->mod = mod, w->pmod = pmod, w->param = param;
                 return true;
             }
-            if (i > 0 && (s->sym[i - 1] & LSYS_PARAM_BIT))
-                k -= s->pc[--j];
+            if (mod > 0 && (s->sym[mod - 1] & LSYS_PARAM_BIT))
+                param -= s->pc[--pmod];
         }
     }
-    w->mod = i < 0 ? -1 : n;
+    w->mod = mod < 0 ? -1 : n;
     return false;
 }
 
