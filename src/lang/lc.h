@@ -56,12 +56,16 @@ typedef struct lc_module {
     int ptype[MAXF];
 } lc_module;
 
-/* nodes */
+/* The kinds of node (lc_node.op): expressions N_, statements S_. A node's children are indices
+ * in the node array (-1: none), in the order the construct reads: the operands of an operator;
+ * the condition, `then` and `else` of N_COND and S_IF; the condition and body of S_WHILE and
+ * S_DO; init, condition, step and body of S_FOR (child1 .. child4); the value of S_EXPR,
+ * S_RETURN and a declaration's initialiser; the others below. */
 enum {
     N_NUM,
     N_LOCAL,
     N_GLOBAL,
-    N_FIELD, /* a: base value, slot: offset */
+    N_FIELD, /* child1: the base value, slot: the field's offset */
     N_NEG,
     N_NOT,
     N_CAST,
@@ -69,11 +73,11 @@ enum {
     N_AND,
     N_OR,
     N_COND,
-    N_ASSIGN, /* a: lvalue, b: value, fn: operator (0 for =) */
-    N_INCDEC, /* a: lvalue, fn: 0 ++x, 1 --x, 2 x++, 3 x-- */
+    N_ASSIGN, /* child1: the lvalue, child2: the value, fn: the operator (0 for =) */
+    N_INCDEC, /* child1: the lvalue, fn: 0 ++x, 1 --x, 2 x++, 3 x-- */
     N_CALLB,
     N_CALLU,
-    N_CTOR, /* args a: fields of type */
+    N_CTOR, /* child1: the chain of arguments, the fields of its type */
     N_INCTX,
     N_COMMA,
     N_STR, /* a string literal, printf's arguments only: slot is its offset in the strings */
@@ -88,8 +92,8 @@ enum {
     S_CONTINUE,
     S_PRODUCE,
     S_BLOCK,
-    S_SWITCH, /* a: value, b: body */
-    S_CASE,   /* a: label value, -1 for default */
+    S_SWITCH, /* child1: the value, child2: the body */
+    S_CASE,   /* child1: the label's value, -1 for default */
     S_NOP
 };
 
@@ -98,7 +102,7 @@ enum { B_ADD, B_SUB, B_MUL, B_DIV, B_REM, B_LT, B_GT, B_LE, B_GE, B_EQ, B_NE };
 typedef struct lc_node {
     uint8_t op, fn;
     int16_t type;
-    int32_t a, b, c, d, next;
+    int32_t child1, child2, child3, child4, next;
     int32_t slot;
     int32_t pos;  /* text offset where the parser made it, for runtime messages */
     double value; /* the number of N_NUM */

@@ -505,17 +505,17 @@ static bool may_write(const codegen *g, int32_t ni)
     case N_NEG:
     case N_NOT:
     case N_CAST:
-        return may_write(g, n->a);
+        return may_write(g, n->child1);
     case N_BIN:
     case N_AND:
     case N_OR:
     case N_COMMA:
-        return may_write(g, n->a) || may_write(g, n->b);
+        return may_write(g, n->child1) || may_write(g, n->child2);
     case N_COND:
-        return may_write(g, n->a) || may_write(g, n->b) || may_write(g, n->c);
+        return may_write(g, n->child1) || may_write(g, n->child2) || may_write(g, n->child3);
     case N_CALLB:
         if (n->fn < FN_MATH_END) {
-            for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            for (int32_t x = n->child1; x >= 0; x = node(g, x)->next)
                 if (may_write(g, x))
                     return true;
             return false;
@@ -614,7 +614,7 @@ static int place(const codegen *g, int32_t ni, bool *global)
     }
     if (l->op != N_FIELD)
         return -1;
-    int base = place(g, l->a, global);
+    int base = place(g, l->child1, global);
     return base < 0 ? -1 : base + l->slot;
 }
 
@@ -665,7 +665,7 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int na = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, na++)
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, na++)
         if ((!lc_is_scalar(node(g, x)->type) && node(g, x)->op != N_STR) || na == LC_HOST_MAXARGS) {
             g->fail = true;
             return dst;
@@ -673,7 +673,7 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
     int save = g->temp_top;
     int base = new_temps(g, na);
     int i = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, i++) {
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, i++) {
         if (node(g, x)->op == N_STR)
             continue;
         int s2 = g->temp_top;
@@ -729,32 +729,33 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     case N_NEG:
     case N_NOT:
     case N_CAST: {
-        if (!scalar || !lc_is_scalar(node(g, n->a)->type))
+        if (!scalar || !lc_is_scalar(node(g, n->child1)->type))
             break;
-        if (n->op == N_CAST && node(g, n->a)->op == N_NUM) { /* a converted number: a number */
-            lc_node k = *node(g, n->a);
+        if (n->op == N_CAST && node(g, n->child1)->op == N_NUM) { /* a converted number: a number */
+            lc_node k = *node(g, n->child1);
             k.value = lc_conv_scalar(n->type, k.value);
             return const_reg(g, k.value, hint);
         }
-        int r = compile_scalar(g, n->a, hint);
+        int r = compile_scalar(g, n->child1, hint);
         int32_t i = emit(g, n->op == N_NEG ? O_NEG : n->op == N_NOT ? O_NOT : O_CONV, hint, r, 0);
         instr_at(g, i)->type = (uint8_t)n->type;
         return hint;
     }
     case N_BIN: {
-        int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+        int ta = node(g, n->child1)->type, tb = node(g, n->child2)->type;
         if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
             if (scalar && vec_bin(g, ni, hint)) /* a dot product */
                 return hint;
             break;
         }
-        int ra = compile_scalar(g, n->a, new_temp(g));
-        if (ra < g->frame_size && may_write(g, n->b)) { /* read before the right operand runs */
+        int ra = compile_scalar(g, n->child1, new_temp(g));
+        if (ra < g->frame_size &&
+            may_write(g, n->child2)) { /* read before the right operand runs */
             int t = new_temp(g);
             emit(g, O_MOV, t, ra, 0);
             ra = t;
         }
-        int rb = compile_scalar(g, n->b, new_temp(g));
+        int rb = compile_scalar(g, n->child2, new_temp(g));
         int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
         if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
             ct = T_DOUBLE;
@@ -767,10 +768,10 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     }
     case N_AND:
     case N_OR: {
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
         int32_t j = emit(g, n->op == N_AND ? O_JZ : O_JNZ, 0, hint, -1);
-        r = compile_scalar(g, n->b, new_temp(g));
+        r = compile_scalar(g, n->child2, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
         patch_jumps(g, j, label_here(g));
         return hint;
@@ -778,27 +779,27 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     case N_COND: {
         if (!scalar)
             break;
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        emit_move(g, hint, compile_scalar(g, n->b, hint));
+        emit_move(g, hint, compile_scalar(g, n->child2, hint));
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
         patch_jumps(g, jelse, label_here(g));
-        emit_move(g, hint, compile_scalar(g, n->c, hint));
+        emit_move(g, hint, compile_scalar(g, n->child3, hint));
         patch_jumps(g, jend, label_here(g));
         return hint;
     }
     case N_COMMA: {
         if (!scalar)
             break;
-        compile_for_effect(g, n->a);
-        return compile_scalar(g, n->b, hint);
+        compile_for_effect(g, n->child1);
+        return compile_scalar(g, n->child2, hint);
     }
     case N_ASSIGN: {
         bool global;
-        int slot = lvalue(g, n->a, &global);
+        int slot = lvalue(g, n->child1, &global);
         if (!scalar || slot < 0)
             break;
-        int r = compile_scalar(g, n->b, hint);
+        int r = compile_scalar(g, n->child2, hint);
         if (global) {
             emit(g, O_GST, slot, r, 0);
             return r;
@@ -808,7 +809,7 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     }
     case N_INCDEC: {
         bool global;
-        int slot = lvalue(g, n->a, &global);
+        int slot = lvalue(g, n->child1, &global);
         if (slot < 0)
             break;
         int32_t i = emit(g, global ? O_GINC : O_INC, hint, slot, 0);
@@ -824,11 +825,11 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
                 return hint;
             break;
         }
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+        for (int32_t x = n->child1; x >= 0; x = node(g, x)->next)
             if (!lc_is_scalar(node(g, x)->type))
                 return unsupported(g, hint);
         int r[2] = {-1, -1}, na = 0;
-        for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
+        for (int32_t x = n->child1; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
                 g->fail = true;
                 return hint;
@@ -934,13 +935,13 @@ static int compile_value(codegen *g, int32_t ni, int dst)
         return dst;
     }
     case N_CTOR: {
-        if (n->a < 0) {
+        if (n->child1 < 0) {
             for (int i = 0; i < sz; i++)
                 instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->imm = 0;
             return dst;
         }
         int off = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next) {
+        for (int32_t x = n->child1; x >= 0; x = node(g, x)->next) {
             int xs = lc_type_size(g->model, node(g, x)->type);
             if (off + xs > sz) {
                 g->fail = true;
@@ -956,21 +957,21 @@ static int compile_value(codegen *g, int32_t ni, int dst)
     }
     case N_ASSIGN: {
         bool global;
-        int slot = place(g, n->a, &global);
-        if (slot < 0 || lc_type_size(g->model, node(g, n->a)->type) != sz)
+        int slot = place(g, n->child1, &global);
+        if (slot < 0 || lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        int r = compile_value(g, n->b, dst);
+        int r = compile_value(g, n->child2, dst);
         for (int i = 0; i < sz; i++)
             emit(g, global ? O_GST : O_MOV, slot + i, r + i, 0);
         return r;
     }
     case N_COND: {
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        copy_run(g, dst, compile_value(g, n->b, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child2, dst), sz, false);
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
         patch_jumps(g, jelse, label_here(g));
-        copy_run(g, dst, compile_value(g, n->c, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child3, dst), sz, false);
         patch_jumps(g, jend, label_here(g));
         return dst;
     }
@@ -981,9 +982,9 @@ static int compile_value(codegen *g, int32_t ni, int dst)
             return dst;
         break;
     case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
-        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        copy_run(g, dst, compile_value(g, n->a, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child1, dst), sz, false);
         conv_run(g, n->type, dst);
         return dst;
     case N_CALLB:
@@ -991,16 +992,16 @@ static int compile_value(codegen *g, int32_t ni, int dst)
             return dst;
         break;
     case N_NEG: { /* each component negated, as ev */
-        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        int r = compile_value(g, n->a, dst);
+        int r = compile_value(g, n->child1, dst);
         for (int i = 0; i < sz; i++)
             emit(g, O_NEG, dst + i, r + i, 0);
         return dst;
     }
     case N_COMMA: {
-        compile_for_effect(g, n->a);
-        return compile_value(g, n->b, dst);
+        compile_for_effect(g, n->child1);
+        return compile_value(g, n->child2, dst);
     }
     default:
         break;
@@ -1065,7 +1066,7 @@ static bool vec_op(codegen *g, int32_t ia, int32_t ib, int fn, int type, int dst
 static bool vec_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    return vec_op(g, n->a, n->b, n->fn, n->type, dst);
+    return vec_op(g, n->child1, n->child2, n->fn, n->type, dst);
 }
 
 /* The vector built-ins Dot, Cross, Length and Normalize of V3f and V3d as call_builtin computes
@@ -1073,7 +1074,7 @@ static bool vec_bin(codegen *g, int32_t ni, int dst)
 static bool vec_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int32_t x = n->a;
+    int32_t x = n->child1;
     if (x < 0 || !lc_is_vec(node(g, x)->type))
         return false;
     int32_t x1 = node(g, x)->next;
@@ -1174,12 +1175,12 @@ static int field_of(codegen *g, int32_t ni, int dst, int sz)
 {
     const lc_node *n = node(g, ni);
     int save = g->temp_top;
-    int bs = lc_type_size(g->model, node(g, n->a)->type);
+    int bs = lc_type_size(g->model, node(g, n->child1)->type);
     if (n->slot + sz > bs) {
         g->fail = true;
         return dst;
     }
-    int r = arg_run(g, n->a, bs);
+    int r = arg_run(g, n->child1, bs);
     copy_run(g, dst, r + n->slot, sz, false);
     g->temp_top = save;
     return dst;
@@ -1199,14 +1200,14 @@ static const signed char HAMILTON[4][4][3] = {
 static bool frame_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+    int ta = node(g, n->child1)->type, tb = node(g, n->child2)->type;
     int sa = lc_type_size(g->model, ta), sb = lc_type_size(g->model, tb);
     int sz = lc_type_size(g->model, n->type);
     int save = g->temp_top;
     if (n->type == T_LOCVEC) {
         if ((sa != 1 && sa != 3) || (sb != 1 && sb != 3) || sz != 3)
             return false;
-        int a = arg_run(g, n->a, sa), b = arg_run(g, n->b, sb), r = new_temps(g, 3);
+        int a = arg_run(g, n->child1, sa), b = arg_run(g, n->child2, sb), r = new_temps(g, 3);
         int op = n->fn == B_ADD   ? O_ADDD
                  : n->fn == B_SUB ? O_SUBD
                  : n->fn == B_MUL ? O_MULD
@@ -1222,7 +1223,8 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
     if (tb == T_QUAT) {
         if (sa != 4 || sb != 4 || sz != 4)
             return false;
-        int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, 4), r = new_temps(g, 4), t = new_temp(g);
+        int q = arg_run(g, n->child1, 4), b = arg_run(g, n->child2, 4), r = new_temps(g, 4),
+            t = new_temp(g);
         for (int i = 0; i < 4; i++)
             for (int k = 0; k < 4; k++) {
                 const signed char *h = HAMILTON[i][k];
@@ -1237,7 +1239,7 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
     int nv = tb == T_TVEC ? 3 : 1;
     if (sa != 4 || sb != 3 * nv || sz != 3 * nv || (tb != T_TVEC && !lc_is_vec(tb)))
         return false;
-    int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, sb), r = new_temps(g, sz);
+    int q = arg_run(g, n->child1, 4), b = arg_run(g, n->child2, sb), r = new_temps(g, sz);
     int t = new_temps(g, 3), c = new_temps(g, 3), x = new_temp(g), two = new_temp(g);
     two = const_reg(g, 2.0, two);
     for (int v = 0; v < nv; v++) {
@@ -1263,7 +1265,7 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
 static bool frame_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int32_t x = n->a;
+    int32_t x = n->child1;
     if (x < 0)
         return false;
     int32_t x1 = node(g, x)->next;
@@ -1376,7 +1378,7 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     const lc_fcode *cf = &g->program->fn[n->slot];
     bool ok = cf->compiled;
     int a = 0;
-    for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0 && ok; x = node(g, x)->next, a++) {
         const lc_node *xn = node(g, x);
         ok = a < f->nparams &&
              lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
@@ -1388,7 +1390,7 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     int base = new_temps(g, cf->npd);
     int off = 0;
     a = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, a++) {
         int xs = lc_type_size(g->model, f->ptype[a]);
         int s2 = g->temp_top;
         if (lc_is_scalar(node(g, x)->type))
@@ -1405,7 +1407,7 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     emit(g, O_CALL, dst, n->slot, base);
     off = 0;
     a = 0;
-    for (int32_t x = n->a; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
         int xs = lc_type_size(g->model, f->ptype[a]);
         const lc_node *xn = node(g, x);
         for (int i = 0; i < xs && f->pref[a]; i++)
@@ -1421,8 +1423,8 @@ static int compile_call(codegen *g, int32_t ni, int dst)
  * body. */
 static void compile_produce(codegen *g, const lc_node *n)
 {
-    for (int32_t i = 0; i < n->b && !g->fail; i++) {
-        const lc_modref *sm = &g->model->sms.data[n->a + i];
+    for (int32_t i = 0; i < n->child2 && !g->fail; i++) {
+        const lc_modref *sm = &g->model->sms.data[n->child1 + i];
         const lc_module *mod = &g->model->mods.data[sm->mod];
         int save = g->temp_top;
         int base = new_temps(g, mod->size);
@@ -1445,7 +1447,7 @@ static void compile_produce(codegen *g, const lc_node *n)
             g->fail = true;
             return;
         }
-        emit(g, O_PROD, n->a + i, base, 0);
+        emit(g, O_PROD, n->child1 + i, base, 0);
         g->temp_top = save;
     }
     if (!n->fn)
@@ -1506,9 +1508,9 @@ static void compile_loop(codegen *g, const lc_node *n)
     int32_t outer_breaks = g->break_jumps, outer_continues = g->continue_jumps;
     g->break_jumps = g->continue_jumps = -1;
     g->loops++;
-    if (n->op == S_FOR && n->a >= 0)
-        compile_stmts(g, n->a);
-    int32_t c = n->op == S_FOR ? n->b : n->a;
+    if (n->op == S_FOR && n->child1 >= 0)
+        compile_stmts(g, n->child1);
+    int32_t c = n->op == S_FOR ? n->child2 : n->child1;
     if (c >= 0 && !lc_is_scalar(node(g, c)->type)) {
         g->fail = true;
         return;
@@ -1517,14 +1519,14 @@ static void compile_loop(codegen *g, const lc_node *n)
     if (n->op == S_DO || c < 0)
         emit(g, O_SPEND, 0, 0, 0);
     int32_t top = label_here(g);
-    compile_stmts(g, n->op == S_FOR ? n->d : n->b);
+    compile_stmts(g, n->op == S_FOR ? n->child4 : n->child2);
     patch_jumps(g, g->continue_jumps, label_here(g));
     int save = g->temp_top;
-    if (n->op == S_FOR && n->c >= 0) {
-        if (!lc_is_scalar(node(g, n->c)->type))
+    if (n->op == S_FOR && n->child3 >= 0) {
+        if (!lc_is_scalar(node(g, n->child3)->type))
             g->fail = true;
         else
-            (void)compile_scalar(g, n->c, new_temp(g));
+            (void)compile_scalar(g, n->child3, new_temp(g));
     }
     g->temp_top = save;
     patch_jumps(g, to_test, label_here(g));
@@ -1555,31 +1557,31 @@ static void compile_stmts(codegen *g, int32_t ni)
 #define LC_MAX_CASES 256
 static void compile_switch(codegen *g, const lc_node *n)
 {
-    if (!lc_is_scalar(node(g, n->a)->type)) {
+    if (!lc_is_scalar(node(g, n->child1)->type)) {
         g->fail = true;
         return;
     }
-    int32_t body = node(g, n->b)->op == S_BLOCK ? node(g, n->b)->a : n->b;
+    int32_t body = node(g, n->child2)->op == S_BLOCK ? node(g, n->child2)->child1 : n->child2;
     int32_t jump[LC_MAX_CASES];
     int nc = 0;
     int32_t dflt = -1; /* the default's case node */
     int v = new_temp(g);
-    emit_move(g, v, compile_scalar(g, n->a, v));
+    emit_move(g, v, compile_scalar(g, n->child1, v));
     for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
         const lc_node *cn = node(g, c);
         if (cn->op != S_CASE)
             continue;
-        if (cn->a < 0) {
+        if (cn->child1 < 0) {
             dflt = c;
             continue;
         }
-        if (nc == LC_MAX_CASES || !lc_is_scalar(node(g, cn->a)->type)) {
+        if (nc == LC_MAX_CASES || !lc_is_scalar(node(g, cn->child1)->type)) {
             g->fail = true;
             return;
         }
         int save = g->temp_top;
         int t = new_temp(g);
-        int r = compile_scalar(g, cn->a, t);
+        int r = compile_scalar(g, cn->child1, t);
         emit(g, O_EQ, t, v, r);
         jump[nc++] = emit(g, O_JNZ, 0, t, -1);
         g->temp_top = save;
@@ -1595,7 +1597,7 @@ static void compile_switch(codegen *g, const lc_node *n)
         const lc_node *cn = node(g, c);
         if (cn->op == S_CASE) {
             int32_t at = label_here(g);
-            if (cn->a >= 0 && k < nc) /* the same cases as above, in order: k < nc */
+            if (cn->child1 >= 0 && k < nc) /* the same cases as above, in order: k < nc */
                 patch_jumps(g, jump[k++], at);
             if (c == dflt) {
                 patch_jumps(g, jd, at);
@@ -1620,24 +1622,24 @@ static void compile_stmt(codegen *g, int32_t ni)
         int save = g->temp_top;
         switch (n->op) {
         case S_EXPR: {
-            const lc_node *e = node(g, n->a);
+            const lc_node *e = node(g, n->child1);
             if (lc_is_scalar(e->type) || e->type == T_VOID)
-                (void)compile_scalar(g, n->a, new_temp(g));
+                (void)compile_scalar(g, n->child1, new_temp(g));
             else
-                (void)compile_value(g, n->a, new_temps(g, lc_type_size(g->model, e->type)));
+                (void)compile_value(g, n->child1, new_temps(g, lc_type_size(g->model, e->type)));
             break;
         }
         case S_DECL:
             if (!lc_is_scalar(n->type)) { /* into its run, then rounded as exec does */
                 int sz = lc_type_size(g->model, n->type);
-                if (n->a >= 0) {
-                    copy_run(g, n->slot, compile_value(g, n->a, n->slot), sz, false);
+                if (n->child1 >= 0) {
+                    copy_run(g, n->slot, compile_value(g, n->child1, n->slot), sz, false);
                     conv_run(g, n->type, n->slot);
                 } else
                     for (int i = 0; i < sz; i++)
                         instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->imm = 0;
-            } else if (n->a >= 0) {
-                int r = compile_scalar(g, n->a, new_temp(g));
+            } else if (n->child1 >= 0) {
+                int r = compile_scalar(g, n->child1, new_temp(g));
                 if (n->type == T_DOUBLE)
                     emit_move(g, n->slot, r);
                 else
@@ -1646,19 +1648,19 @@ static void compile_stmt(codegen *g, int32_t ni)
                 instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->imm = 0;
             break;
         case S_BLOCK:
-            compile_stmts(g, n->a);
+            compile_stmts(g, n->child1);
             break;
         case S_IF: {
-            if (!lc_is_scalar(node(g, n->a)->type)) {
+            if (!lc_is_scalar(node(g, n->child1)->type)) {
                 g->fail = true;
                 break;
             }
-            int32_t jelse = jump_false(g, n->a);
-            compile_stmts(g, n->b);
-            if (n->c >= 0) {
+            int32_t jelse = jump_false(g, n->child1);
+            compile_stmts(g, n->child2);
+            if (n->child3 >= 0) {
                 int32_t jend = emit(g, O_JMP, 0, -1, 0);
                 patch_jumps(g, jelse, label_here(g));
-                compile_stmts(g, n->c);
+                compile_stmts(g, n->child3);
                 patch_jumps(g, jend, label_here(g));
             } else
                 patch_jumps(g, jelse, label_here(g));
@@ -1671,13 +1673,14 @@ static void compile_stmt(codegen *g, int32_t ni)
             break;
         case S_RETURN:
             if (g->is_body) { /* a body's return: its value is dropped, nothing produced */
-                if (n->a >= 0 && lc_is_scalar(node(g, n->a)->type))
-                    (void)compile_scalar(g, n->a, new_temp(g));
-                else if (n->a >= 0)
-                    (void)compile_value(g, n->a,
-                                        new_temps(g, lc_type_size(g->model, node(g, n->a)->type)));
+                if (n->child1 >= 0 && lc_is_scalar(node(g, n->child1)->type))
+                    (void)compile_scalar(g, n->child1, new_temp(g));
+                else if (n->child1 >= 0)
+                    (void)compile_value(
+                        g, n->child1,
+                        new_temps(g, lc_type_size(g->model, node(g, n->child1)->type)));
                 emit(g, O_RET0, 0, 0, 0);
-            } else if (n->a < 0)
+            } else if (n->child1 < 0)
                 emit(g, O_RET0, 0, 0, 0);
             else if (!lc_is_scalar(n->type)) { /* the run result, rounded as exec does */
                 int sz = lc_type_size(g->model, n->type);
@@ -1685,11 +1688,12 @@ static void compile_stmt(codegen *g, int32_t ni)
                     g->fail = true;
                     break;
                 }
-                copy_run(g, g->code->rslot, compile_value(g, n->a, new_temps(g, sz)), sz, false);
+                copy_run(g, g->code->rslot, compile_value(g, n->child1, new_temps(g, sz)), sz,
+                         false);
                 conv_run(g, n->type, g->code->rslot);
                 emit(g, O_RET0, 0, 0, 0);
             } else {
-                int r = compile_scalar(g, n->a, new_temp(g));
+                int r = compile_scalar(g, n->child1, new_temp(g));
                 if (n->type != T_DOUBLE) {
                     int t = new_temp(g);
                     instr_at(g, emit(g, O_CONV, t, r, 0))->type = (uint8_t)n->type;
@@ -1752,8 +1756,8 @@ static void compile_root(codegen *g, int kind, int32_t body)
         lc_node n;
         memset(&n, 0, sizeof n);
         n.op = S_PRODUCE;
-        n.a = g->model->axiom.first;
-        n.b = g->model->axiom.n;
+        n.child1 = g->model->axiom.first;
+        n.child2 = g->model->axiom.n;
         n.fn = 1;
         g->arg_pos = true;
         compile_produce(g, &n);

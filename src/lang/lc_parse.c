@@ -314,7 +314,7 @@ static lc_node blank_node(int op, int type)
     memset(&n, 0, sizeof n);
     n.op = (uint8_t)op;
     n.type = (int16_t)type;
-    n.a = n.b = n.c = n.d = n.next = -1;
+    n.child1 = n.child2 = n.child3 = n.child4 = n.next = -1;
     return n;
 }
 
@@ -384,12 +384,12 @@ static int32_t coerce(lc_parser *L, int32_t e, int t, size_t pos)
         return e;
     if (lc_is_scalar(et) && lc_is_scalar(t)) {
         lc_node n = blank_node(N_CAST, t);
-        n.a = e;
+        n.child1 = e;
         return add_node(L, n);
     }
     if (lc_is_vec(et) && lc_is_vec(t)) {
         lc_node n = blank_node(N_CAST, t);
-        n.a = e;
+        n.child1 = e;
         return add_node(L, n);
     }
     cbm__cerr(L->cur, pos, "cannot convert %s to %s", L->model->types.data[et].name,
@@ -486,7 +486,7 @@ static int32_t printf_call(lc_parser *L, size_t pos)
     lc_node x = blank_node(N_CALLB, T_INT);
     x.fn = FN_PRINTF;
     x.slot = (int32_t)fmt;
-    x.a = first;
+    x.child1 = first;
     return add_node(L, x);
 }
 
@@ -517,7 +517,7 @@ static int32_t brace_init(lc_parser *L, int t)
     if (!expect(L, "}"))
         return -1;
     lc_node n = blank_node(N_CTOR, t);
-    n.a = first;
+    n.child1 = first;
     return add_node(L, n);
 }
 
@@ -563,8 +563,8 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             }
             lc_node x = blank_node(N_INCTX, T_BOOL);
             x.fn = (uint8_t)k;
-            x.a = p.first;
-            x.b = p.n;
+            x.child1 = p.first;
+            x.child2 = p.n;
             return add_node(L, x);
         }
     /* vector and struct constructors */
@@ -594,7 +594,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 chain(L, &first, &last, e);
             }
             lc_node x = blank_node(N_CTOR, t);
-            x.a = first;
+            x.child1 = first;
             return add_node(L, x);
         }
         if (lp->types.data[t].nfields > 0 && na == 0) { /* Name(): a zero value */
@@ -614,7 +614,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 chain(L, &first, &last, e);
             }
             lc_node x = blank_node(N_CTOR, t);
-            x.a = first;
+            x.child1 = first;
             return add_node(L, x);
         }
         cbm__cerr(L->cur, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
@@ -653,7 +653,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             return -1;
         lc_node c = blank_node(N_CALLB, T_DOUBLE);
         c.fn = FN_FUNC;
-        c.a = x;
+        c.child1 = x;
         c.slot = (int32_t)id + 1;
         return add_node(L, c);
     }
@@ -686,7 +686,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             chain(L, &first, &last, e);
         }
         lc_node c = blank_node(N_CALLU, f->ret_type);
-        c.a = first;
+        c.child1 = first;
         c.slot = (int32_t)i;
         return add_node(L, c);
     }
@@ -775,7 +775,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         }
         lc_node c = blank_node(N_CALLB, rt);
         c.fn = (uint8_t)b->fn;
-        c.a = args;
+        c.child1 = args;
         return add_node(L, c);
     }
     cbm__cerr(L->cur, pos, "unknown function '%.*s'", (int)n, s);
@@ -828,7 +828,7 @@ static int32_t primary(lc_parser *L)
             int32_t e = primary(L);
             if (e >= 0) {
                 lc_node n = blank_node(N_CAST, t);
-                n.a = e;
+                n.child1 = e;
                 if (!(lc_is_scalar(t) && lc_is_scalar(ND(e).type)) && ND(e).type != t) {
                     cbm__cerr(L->cur, pos, "invalid cast");
                     r = -1;
@@ -847,14 +847,14 @@ static int32_t primary(lc_parser *L)
             L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
+            n.child1 = e;
             n.fn = 1;
             r = e >= 0 ? add_node(L, n) : -1;
         } else if (s[0] == '+' && s[1] == '+') {
             L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
+            n.child1 = e;
             n.fn = 0;
             r = e >= 0 ? add_node(L, n) : -1;
         } else {
@@ -870,7 +870,7 @@ static int32_t primary(lc_parser *L)
                 else {
                     lc_node n = blank_node(s[0] == '-' ? N_NEG : N_NOT,
                                            s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
-                    n.a = e;
+                    n.child1 = e;
                     r = add_node(L, n);
                 }
             }
@@ -942,15 +942,15 @@ static int32_t primary(lc_parser *L)
                 }
                 lc_node c = blank_node(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
                 c.fn = (uint8_t)(len ? FN_LENGTH : FN_NORMALIZE);
-                c.a = r;
+                c.child1 = r;
                 if (nor && n == 9 && (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL)) {
                     /* v.Normalize() normalizes v in place */
                     int32_t cn = add_node(L, c);
                     lc_node as = blank_node(N_ASSIGN, t);
                     lc_node lv = ND(r);
                     int32_t l2 = add_node(L, lv);
-                    as.a = l2;
-                    as.b = cn;
+                    as.child1 = l2;
+                    as.child2 = cn;
                     r = add_node(L, as);
                 } else
                     r = add_node(L, c);
@@ -981,14 +981,14 @@ static int32_t primary(lc_parser *L)
                 ND(r).type = (int16_t)ft;
             } else {
                 lc_node x = blank_node(N_FIELD, ft);
-                x.a = r;
+                x.child1 = r;
                 x.slot = off;
                 r = add_node(L, x);
             }
         } else if (!strncmp(L->text + p2, "++", 2) || !strncmp(L->text + p2, "--", 2)) {
             L->cur->pos += 2;
             lc_node x = blank_node(N_INCDEC, ND(r).type);
-            x.a = r;
+            x.child1 = r;
             x.fn = L->text[p2] == '+' ? 2 : 3;
             r = add_node(L, x);
         } else
@@ -1034,8 +1034,8 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
         return -1;
     int ta = ND(a).type, tb = ND(b).type;
     lc_node n = blank_node(N_BIN, 0);
-    n.a = a;
-    n.b = b;
+    n.child1 = a;
+    n.child2 = b;
     n.fn = (uint8_t)op->op;
     if (op->op < 0) {
         if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
@@ -1141,9 +1141,9 @@ static int32_t ternary_inner(lc_parser *L)
         return -1;
     }
     lc_node n = blank_node(N_COND, t);
-    n.a = c;
-    n.b = coerce(L, a, t, pos);
-    n.c = coerce(L, b, t, pos);
+    n.child1 = c;
+    n.child2 = coerce(L, a, t, pos);
+    n.child3 = coerce(L, b, t, pos);
     return add_node(L, n);
 }
 
@@ -1188,14 +1188,14 @@ static int32_t assign_expr(lc_parser *L)
                 return -1;
         }
         lc_node x = blank_node(N_ASSIGN, lt);
-        x.a = l;
-        x.b = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
-        if (x.b >= 0 && ND(x.b).type != lt) {
-            cbm__cerr(L->cur, p2, "cannot assign %s to %s", L->model->types.data[ND(x.b).type].name,
-                      L->model->types.data[lt].name);
+        x.child1 = l;
+        x.child2 = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
+        if (x.child2 >= 0 && ND(x.child2).type != lt) {
+            cbm__cerr(L->cur, p2, "cannot assign %s to %s",
+                      L->model->types.data[ND(x.child2).type].name, L->model->types.data[lt].name);
             return -1;
         }
-        return x.b >= 0 ? add_node(L, x) : -1;
+        return x.child2 >= 0 ? add_node(L, x) : -1;
     }
     return l;
 }
@@ -1218,8 +1218,8 @@ static int32_t comma_expr(lc_parser *L)
         if (b < 0)
             return -1;
         lc_node n = blank_node(N_COMMA, ND(b).type);
-        n.a = a;
-        n.b = b;
+        n.child1 = a;
+        n.child2 = b;
         a = add_node(L, n);
     }
     return a;
@@ -1392,7 +1392,7 @@ static int32_t block(lc_parser *L)
     L->vars.len = nvars;
     L->frame_size = fs;
     lc_node b = blank_node(S_BLOCK, 0);
-    b.a = first;
+    b.child1 = first;
     return ok ? add_node(L, b) : -1;
 }
 
@@ -1427,7 +1427,7 @@ static int32_t declaration(lc_parser *L, int t)
         }
         lc_node d = blank_node(S_DECL, t);
         d.slot = declare_local(L, L->text + pos, n, t);
-        d.a = init;
+        d.child1 = init;
         int32_t s = add_node(L, d);
         if (s < 0)
             return -1;
@@ -1455,33 +1455,33 @@ static int32_t statement(lc_parser *L)
     } else if (accept_kw(L, "if")) {
         lc_node n = blank_node(S_IF, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
+                n.child2 = statement(L);
                 if (accept_kw(L, "else"))
-                    n.c = statement(L);
-                if (n.b >= 0)
+                    n.child3 = statement(L);
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "while")) {
         lc_node n = blank_node(S_WHILE, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
-                if (n.b >= 0)
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
+                n.child2 = statement(L);
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "do")) {
         lc_node n = blank_node(S_DO, 0);
-        n.b = statement(L);
-        if (n.b >= 0 && accept_kw(L, "while") && expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")") && expect(L, ";"))
+        n.child2 = statement(L);
+        if (n.child2 >= 0 && accept_kw(L, "while") && expect(L, "(")) {
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")") && expect(L, ";"))
                 r = add_node(L, n);
-        } else if (n.b >= 0)
+        } else if (n.child2 >= 0)
             expected(L, "'while'");
     } else if (accept_kw(L, "for")) {
         size_t nvars = L->vars.len;
@@ -1491,29 +1491,29 @@ static int32_t statement(lc_parser *L)
         if (ok && !accept(L, ";")) {
             int ty = parse_type(L);
             if (ty >= 0)
-                n.a = declaration(L, ty);
+                n.child1 = declaration(L, ty);
             else {
                 int32_t e = expr(L);
                 if (e >= 0) {
                     lc_node s = blank_node(S_EXPR, 0);
-                    s.a = e;
-                    n.a = add_node(L, s);
+                    s.child1 = e;
+                    n.child1 = add_node(L, s);
                 }
                 ok = e >= 0 && expect(L, ";");
             }
-            ok = ok && n.a >= 0;
+            ok = ok && n.child1 >= 0;
         }
         if (ok && !accept(L, ";")) {
-            n.b = coerce(L, expr(L), T_BOOL, pos);
-            ok = n.b >= 0 && expect(L, ";");
+            n.child2 = coerce(L, expr(L), T_BOOL, pos);
+            ok = n.child2 >= 0 && expect(L, ";");
         }
         if (ok && !accept(L, ")")) {
-            n.c = expr(L);
-            ok = n.c >= 0 && expect(L, ")");
+            n.child3 = expr(L);
+            ok = n.child3 >= 0 && expect(L, ")");
         }
         if (ok) {
-            n.d = statement(L);
-            if (n.d >= 0)
+            n.child4 = statement(L);
+            if (n.child4 >= 0)
                 r = add_node(L, n);
         }
         L->vars.len = nvars;
@@ -1527,9 +1527,9 @@ static int32_t statement(lc_parser *L)
                 L->depth--;
                 return -1;
             }
-            n.a = coerce(L, expr(L), L->ret_type, pos);
-            if (n.a < 0 && L->ret_type >= T_NBUILTIN)
-                n.a = -1;
+            n.child1 = coerce(L, expr(L), L->ret_type, pos);
+            if (n.child1 < 0 && L->ret_type >= T_NBUILTIN)
+                n.child1 = -1;
         } else if (L->ret_type != T_VOID && !L->in_prod) {
             cbm__cerr(L->cur, pos, "return needs a value");
         }
@@ -1538,12 +1538,12 @@ static int32_t statement(lc_parser *L)
     } else if (accept_kw(L, "switch")) {
         lc_node n = blank_node(S_SWITCH, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-            if (n.a >= 0 && expect(L, ")")) {
+            n.child1 = coerce(L, expr(L), T_DOUBLE, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
                 L->in_switch++;
-                n.b = statement(L);
+                n.child2 = statement(L);
                 L->in_switch--;
-                if (n.b >= 0)
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
@@ -1551,8 +1551,8 @@ static int32_t statement(lc_parser *L)
         lc_node n = blank_node(S_CASE, 0);
         bool dflt = L->text[pos] == 'd';
         if (!dflt)
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-        if ((dflt || n.a >= 0) && expect(L, ":"))
+            n.child1 = coerce(L, expr(L), T_DOUBLE, pos);
+        if ((dflt || n.child1 >= 0) && expect(L, ":"))
             r = add_node(L, n);
     } else if (accept_kw(L, "break")) {
         if (expect(L, ";"))
@@ -1569,8 +1569,8 @@ static int32_t statement(lc_parser *L)
             lc_pattern p;
             if (succ_list(L, &p) == 0 && expect(L, ";")) {
                 lc_node n = blank_node(S_PRODUCE, 0);
-                n.a = p.first;
-                n.b = p.n;
+                n.child1 = p.first;
+                n.child2 = p.n;
                 n.fn = partial;
                 r = add_node(L, n);
             } else
@@ -1582,7 +1582,7 @@ static int32_t statement(lc_parser *L)
         int32_t e = expr(L);
         if (e >= 0 && expect(L, ";")) {
             lc_node s = blank_node(S_EXPR, 0);
-            s.a = e;
+            s.child1 = e;
             r = add_node(L, s);
         } else if (!fatal(L))
             recover_stmt(L);

@@ -292,7 +292,8 @@ static void print(cbm_lsys *ls, const lc_node *n, const double *v)
     cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
     int k = 0;
     const char *strings = ls->comp.strings.data;
-    for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
+    for (int32_t x = n->child1; x >= 0 && k < CBM__FMT_MAX_ARGS;
+         x = lp->m.nodes.data[x].next, k++) {
         const lc_node *an = &lp->m.nodes.data[x];
         args[k].s = an->op == N_STR ? strings + an->slot : NULL;
         args[k].v = an->op == N_STR ? 0 : v[k];
@@ -366,7 +367,7 @@ static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
     const lc_node *n = &lp->m.nodes.data[(int32_t)ip->imm];
     const double *arg = fr + ip->src1;
     if (ip->subop == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
-        return match_context(ls, n->fn, n->a, n->b, fr);
+        return match_context(ls, n->fn, n->child1, n->child2, fr);
     if (n->fn == FN_PRINTF) {
         print(ls, n, arg);
         return 0;
