@@ -157,7 +157,7 @@ enum {
  *   stmt_pos  the statement that starts at this instruction, as its dialect locates it (runtime
  *             messages name it): its text offset (L+C), or its node (cpfg: the node a
  *             runtime error names, also O_HOST's array); -1: none;
- *   imm       an immediate constant (O_CONST's value, O_HOST's node). */
+ *   imm       an immediate constant (O_CONST's value; the L+C dialect's O_HOST: its node). */
 typedef struct lc_ins {
     uint8_t op, type;
     uint16_t subop;
