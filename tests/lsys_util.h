@@ -118,16 +118,33 @@ static inline cbm_status lsys_derive(cbm_context *ctx, const char *path, const c
     return s;
 }
 
+/* What a run of lsys_derive_homomorphism derived: the steps, and the modules of the string and
+ * of its homomorphism (0 where it failed before). */
+typedef struct lsys_derived {
+    int steps;
+    size_t modules, homomorphism_modules;
+} lsys_derived;
+
 /* lsys_derive, then the homomorphism applied, the model released: the first failure's status
- * (unchecked: for the out-of-memory loops). */
+ * (unchecked: for the out-of-memory loops), and what was derived in *out (may be NULL), so that
+ * the loops can check that their last run, the one without a failure, derived the whole. */
 static inline cbm_status lsys_derive_homomorphism(cbm_context *ctx, const char *path,
-                                                  const char *text, int steps)
+                                                  const char *text, int steps, lsys_derived *out)
 {
     cbm_lsys *ls = NULL;
     cbm_status s = lsys_derive(ctx, path, text, steps, &ls);
+    lsys_derived d = {0, 0, 0};
+    if (ls) {
+        d.steps = cbm_lsys_steps_done(ls);
+        d.modules = cbm_lsys_module_count(ls);
+    }
     if (s == CBM_OK)
         s = cbm_lsys_apply_homomorphism(ls);
+    if (s == CBM_OK)
+        d.homomorphism_modules = cbm_lsys_homomorphism_module_count(ls);
     cbm_lsys_destroy(ls);
+    if (out)
+        *out = d;
     return s;
 }
 

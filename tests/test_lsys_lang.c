@@ -496,7 +496,6 @@ TEST(step_limit)
 /* ---- out of memory ---- */
 static cbm_status oom_run(cbm_context *ctx, void *ud)
 {
-    (void)ud;
     const char *text =
         "#define R(x) (x*2)\nLsystem: 1\ndefine: {array t[3] = {1,2,3};}\n"
         "derivation length: 3\nignore: +\nAxiom: A(1)\n"
@@ -504,13 +503,26 @@ static cbm_status oom_run(cbm_context *ctx, void *ud)
         "A(y) --> B(y)A(y)\n"
         "decomposition\nmaximum depth: 2\nB(x) --> C(x)\nhomomorphism\nC(x) --> F(x)\n"
         "endlsystem\n";
-    return lsys_derive_homomorphism(ctx, "oom.l", text, 3);
+    return lsys_derive_homomorphism(ctx, "oom.l", text, 3, ud);
 }
 
+/* Every allocation failed in turn; the last run, without a failure, derived the three steps and
+ * the strings a run with memory enough derives. */
 TEST(out_of_memory_at_every_allocation)
 {
-    int runs = test_oom_loop(oom_run, NULL);
+    lsys_derived last, whole;
+    int runs = test_oom_loop(oom_run, &last);
     CHECK(runs > 20);
+    cbm_context *ctx = test_ctx();
+    CHECK_OK(oom_run(ctx, &whole));
+    test_ctx_end(ctx);
+    CHECK_EQ_INT(whole.steps, 3);
+    /* C(1) C(1) C(1) A(1): a B decomposed to C before the A at every step; F(1) F(1) F(1) A(1) */
+    CHECK_EQ_INT(whole.modules, 4);
+    CHECK_EQ_INT(whole.homomorphism_modules, 4);
+    CHECK_EQ_INT(last.steps, whole.steps);
+    CHECK_EQ_INT(last.modules, whole.modules);
+    CHECK_EQ_INT(last.homomorphism_modules, whole.homomorphism_modules);
 }
 
 /* ---- environmental interpretation hook (query modules) ---- */

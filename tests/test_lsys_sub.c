@@ -259,18 +259,30 @@ TEST(a_call_is_not_a_query)
 /* ---- out of memory ---- */
 static cbm_status oom_run(cbm_context *ctx, void *ud)
 {
-    (void)ud;
     const char *text = "Lsystem: 1\nderivation length: 3\nAxiom: A(1)\n"
                        "A(x) --> I?(2,0.5)B(x)$A(x+1)\nhomomorphism\nI --> F\nendlsystem\n"
                        "Lsystem: 2\nignore: +\nAxiom: B(1)\nStartEach: {n = n + 1;}\n"
                        "B(x) --> +C(x)?(3)D$\nC(x) --> C(x+n)\n"
                        "decomposition\nC(x) --> E(x)\nhomomorphism\nseed: 3\nE(x) --> F(ran(x))\n"
                        "endlsystem\nLsystem: 3\nAxiom: D\nD --> DD\nendlsystem\n";
-    return lsys_derive_homomorphism(ctx, "oom.l", text, 3);
+    return lsys_derive_homomorphism(ctx, "oom.l", text, 3, ud);
 }
 
+/* Every allocation failed in turn; the last run, without a failure, derived the three steps and
+ * the strings a run with memory enough derives. */
 TEST(out_of_memory_at_every_allocation)
 {
-    int runs = test_oom_loop(oom_run, NULL);
+    lsys_derived last, whole;
+    int runs = test_oom_loop(oom_run, &last);
     CHECK(runs > 20);
+    cbm_context *ctx = test_ctx();
+    CHECK_OK(oom_run(ctx, &whole));
+    test_ctx_end(ctx);
+    CHECK_EQ_INT(whole.steps, 3);
+    /* I ?(2,0.5) + E(1) ?(3) D D $ $ I ?(2,0.5) + E(2) ?(3) D $ $ I ?(2,0.5) B(3) $ A(4) */
+    CHECK_EQ_INT(whole.modules, 22);
+    CHECK_EQ_INT(whole.homomorphism_modules, 22);
+    CHECK_EQ_INT(last.steps, whole.steps);
+    CHECK_EQ_INT(last.modules, whole.modules);
+    CHECK_EQ_INT(last.homomorphism_modules, whole.homomorphism_modules);
 }

@@ -1,6 +1,6 @@
 /* Libraries loaded when first needed (dynlib.h): dlopen with RTLD_NOW | RTLD_LOCAL, every name
- * resolved with dlsym before the table is published. The handle is kept for the rest of the
- * process (the functions stay in use; there is nothing to gain from closing it at exit). */
+ * resolved with dlsym, once, before the table is published. The handle is kept for the rest of
+ * the process (the functions stay in use; there is nothing to gain from closing it at exit). */
 #include "dynlib.h"
 
 #include <dlfcn.h>
@@ -9,7 +9,10 @@
 
 static pthread_mutex_t load_lock = PTHREAD_MUTEX_INITIALIZER;
 
-/* Opens lib and fills its table, or says why not in lib->why; under load_lock. */
+/* Opens lib and fills its table, or says why not in lib->why; under load_lock. Each name is
+ * looked up once and its pointer stored as it is found; when one is missing, the pointers
+ * stored before it are cleared again, so a refused library leaves its table as it was: empty
+ * (a table is filled once per process, by the first load). */
 static bool open_lib(cbm__dynlib *lib)
 {
     void *h = dlopen(lib->soname, RTLD_NOW | RTLD_LOCAL);
@@ -23,12 +26,12 @@ static bool open_lib(cbm__dynlib *lib)
         void *f = dlsym(h, lib->syms[i].name);
         if (!f) {
             snprintf(lib->why, sizeof lib->why, "it has no function %s", lib->syms[i].name);
+            void *none = NULL;
+            for (size_t k = 0; k < i; k++)
+                memcpy((char *)lib->table + lib->syms[k].offset, &none, sizeof none);
             dlclose(h);
             return false;
         }
-    }
-    for (size_t i = 0; i < lib->nsyms; i++) {
-        void *f = dlsym(h, lib->syms[i].name);
         /* POSIX: the object pointer dlsym returns converts to the function's pointer */
         memcpy((char *)lib->table + lib->syms[i].offset, &f, sizeof f);
     }

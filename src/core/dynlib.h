@@ -12,7 +12,7 @@
  * when it is missing) and a table of named function pointers to fill. cbm__dynlib_load opens it
  * and resolves every name once per process, under a lock, whichever thread asks first; after
  * that a load is one atomic read. A library that cannot be opened, or lacks a function, leaves
- * the table untouched and every load fails with the same message. */
+ * the table as it was, empty (its pointers NULL), and every load fails with the same message. */
 #ifndef CBM_CORE_DYNLIB_H
 #define CBM_CORE_DYNLIB_H
 

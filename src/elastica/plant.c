@@ -266,10 +266,6 @@ static cbm_status build_parent(plant *P, size_t b, const cbm_elastica_scan_def *
 
 /* ---- downstream ---- */
 
-typedef struct rec {
-    double *phi; /* tip angle per branch */
-} rec;
-
 /* Fills phi of b's subtree from segment g of b at base angle x; `shift` is the whole turns by
  * which the tables of b's frame are turned in the plant. */
 static void descend(plant *P, size_t b, const segment *g, double x, double shift, double *phi)

@@ -17,14 +17,14 @@
 #include <math.h>
 #include <stdlib.h>
 
-typedef struct rd {
+typedef struct spec_reader {
     cbm_context *ctx;
     const char *file;
     int errors;
-} rd;
+} spec_reader;
 
 CBM_PRINTF(4, 5)
-static void err(rd *r, int line, int col, const char *fmt, ...)
+static void spec_error(spec_reader *r, int line, int col, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -40,12 +40,12 @@ static bool word(char c)
 }
 
 /* A number token text[p..q); false (reported) if not a finite number in [lo, hi]. */
-static bool number(rd *r, const char *name, const char *t, size_t n, int line, int col, double lo,
-                   double hi, double *out)
+static bool number(spec_reader *r, const char *name, const char *t, size_t n, int line, int col,
+                   double lo, double hi, double *out)
 {
     char buf[64];
     if (n == 0 || n >= sizeof buf) {
-        err(r, line, col, "'%s' expects a number", name);
+        spec_error(r, line, col, "'%s' expects a number", name);
         return false;
     }
     memcpy(buf, t, n);
@@ -54,11 +54,11 @@ static bool number(rd *r, const char *name, const char *t, size_t n, int line, i
     char *end = NULL;
     double x = strtod(buf, &end);
     if (end == buf || *end || errno == ERANGE || !isfinite(x)) {
-        err(r, line, col, "'%s' expects a finite number, found '%s'", name, buf);
+        spec_error(r, line, col, "'%s' expects a finite number, found '%s'", name, buf);
         return false;
     }
     if (x < lo || x > hi) {
-        err(r, line, col, "'%s' = %s is out of range (%g .. %g)", name, buf, lo, hi);
+        spec_error(r, line, col, "'%s' = %s is out of range (%g .. %g)", name, buf, lo, hi);
         return false;
     }
     *out = x;
@@ -127,8 +127,8 @@ typedef struct branch_line {
     const char *dim_name, *nondim_name;
 } branch_line;
 
-static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, int line, size_t idx,
-                         cbm_elastica_branch_spec *b, branch_line *bl)
+static void parse_branch(spec_reader *r, const char *t, size_t p, size_t e, size_t ls, int line,
+                         size_t idx, cbm_elastica_branch_spec *b, branch_line *bl)
 {
     static const char *const names[] = {"parent",     "offset",         "length",    "radius",
                                         "radius_tip", "stiffness",      "weight",    "tip_load",
@@ -149,19 +149,20 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
         int kcol = (int)(ks - ls) + 1;
         size_t kn = p - ks;
         if (kn == 0) {
-            err(r, line, kcol, "unexpected '%c' in a branch line", t[ks]);
+            spec_error(r, line, kcol, "unexpected '%c' in a branch line", t[ks]);
             return;
         }
         size_t k = 0;
         while (k < 11 && !(strlen(names[k]) == kn && !memcmp(names[k], t + ks, kn)))
             k++;
         if (k == 11) {
-            err(r, line, kcol, "unknown branch key '%.*s' (parent, offset, length, radius, ...)",
-                (int)(kn > 40 ? 40 : kn), t + ks);
+            spec_error(r, line, kcol,
+                       "unknown branch key '%.*s' (parent, offset, length, radius, ...)",
+                       (int)(kn > 40 ? 40 : kn), t + ks);
             return;
         }
         if (seen[k]) {
-            err(r, line, kcol, "branch key '%s' given twice", names[k]);
+            spec_error(r, line, kcol, "branch key '%s' given twice", names[k]);
             return;
         }
         seen[k] = true;
@@ -183,7 +184,7 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
         if (!number(r, names[k], t + vs, p - vs, line, vcol, lo, hi, &x))
             return;
         if (k == 0 && x != floor(x)) {
-            err(r, line, vcol, "'parent' expects a whole number");
+            spec_error(r, line, vcol, "'parent' expects a whole number");
             return;
         }
         double *f[] = {NULL,           &b->offset,         &b->length,    &b->radius,
@@ -199,7 +200,8 @@ static void parse_branch(rd *r, const char *t, size_t p, size_t e, size_t ls, in
             bl->col_nondim = kcol, bl->nondim_name = names[k];
     }
     if (!seen[0])
-        err(r, line, 1, "a branch needs 'parent' (0: the base rod, k: the k-th branch line)");
+        spec_error(r, line, 1,
+                   "a branch needs 'parent' (0: the base rod, k: the k-th branch line)");
 }
 
 cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t len, const char *file,
@@ -212,7 +214,7 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
     sp.theta_tip_min = -90, sp.theta_tip_max = 270;
     sp.sweep_min = -90, sp.sweep_max = 270;
     sp.stiffness_ratio = 1, sp.stiffness_tau = 1, sp.substeps = 1, sp.step_time = 1, sp.side = 1;
-    rd r = {ctx, file ? file : "<spec>", 0};
+    spec_reader r = {ctx, file ? file : "<spec>", 0};
     char *copy = cbm__alloc(ctx, len + 1);
     if (!copy)
         return CBM_E_NOMEM;
@@ -258,14 +260,14 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
         while (p < e && (text[p] == ' ' || text[p] == '\t'))
             p++;
         if (p >= e || text[p] != '=') {
-            err(&r, line, (int)(p - ls) + 1, "expected '=' after '%s'", own[k]);
+            spec_error(&r, line, (int)(p - ls) + 1, "expected '=' after '%s'", own[k]);
             syntax = true;
             continue;
         }
         p++;
         if (k == S_BRANCH) {
             if (sp.n_branches == CBM_ELASTICA_MAX_BRANCHES) {
-                err(&r, line, kcol, "more than %d branches", CBM_ELASTICA_MAX_BRANCHES);
+                spec_error(&r, line, kcol, "more than %d branches", CBM_ELASTICA_MAX_BRANCHES);
                 continue;
             }
             parse_branch(&r, text, p, e, ls, line, sp.n_branches, &sp.branches[sp.n_branches],
@@ -274,7 +276,7 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
             continue;
         }
         if (seen[k]) {
-            err(&r, line, kcol, "key '%s' given twice", own[k]);
+            spec_error(&r, line, kcol, "key '%s' given twice", own[k]);
             continue;
         }
         seen[k] = true;
@@ -288,7 +290,8 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
         while (p < e && (text[p] == ' ' || text[p] == '\t' || text[p] == '\r'))
             p++;
         if (p < e) {
-            err(&r, line, (int)(p - ls) + 1, "unexpected text after the value of '%s'", own[k]);
+            spec_error(&r, line, (int)(p - ls) + 1, "unexpected text after the value of '%s'",
+                       own[k]);
             syntax = true;
             continue;
         }
@@ -301,9 +304,9 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
             while (m < 3 && !(w[m] && strlen(w[m]) == vn && !memcmp(w[m], text + vs, vn)))
                 m++;
             if (m == 3) {
-                err(&r, line, vcol, "'%s' expects %s, found '%.*s'", own[k],
-                    k == S_TAPER ? "linear, uniform or step" : "growth, remodel or none",
-                    (int)(vn > 40 ? 40 : vn), text + vs);
+                spec_error(&r, line, vcol, "'%s' expects %s, found '%.*s'", own[k],
+                           k == S_TAPER ? "linear, uniform or step" : "growth, remodel or none",
+                           (int)(vn > 40 ? 40 : vn), text + vs);
                 continue;
             }
             if (k == S_TAPER)
@@ -345,42 +348,43 @@ cbm_status cbm_elastica_spec_parse(cbm_context *ctx, const char *text, size_t le
     cbm_status st = cbm_bend_spec_parse(ctx, copy, len, r.file, &sp.bend);
     cbm__free(ctx, copy, len + 1);
     if (sp.dimensionless && dim_line)
-        err(&r, dim_line, dim_col,
-            "'%s' has no meaning with 'alpha' (non-dimensional: L = D = 1, w = alpha)", dim_name);
+        spec_error(&r, dim_line, dim_col,
+                   "'%s' has no meaning with 'alpha' (non-dimensional: L = D = 1, w = alpha)",
+                   dim_name);
     for (size_t b = 0; b < sp.n_branches; b++) {
         if (sp.dimensionless && bl[b].col_dim)
-            err(&r, bl[b].line, bl[b].col_dim, "branch key '%s' needs the dimensional mode",
-                bl[b].dim_name);
+            spec_error(&r, bl[b].line, bl[b].col_dim, "branch key '%s' needs the dimensional mode",
+                       bl[b].dim_name);
         if (!sp.dimensionless && bl[b].col_nondim)
-            err(&r, bl[b].line, bl[b].col_nondim, "branch key '%s' needs 'alpha'",
-                bl[b].nondim_name);
+            spec_error(&r, bl[b].line, bl[b].col_nondim, "branch key '%s' needs 'alpha'",
+                       bl[b].nondim_name);
     }
     sp.grows = st == CBM_OK && sp.bend.steps > 0;
     sp.has_preferred = seen[S_PREF];
     sp.has_youngs_final = seen[S_EFINAL];
     for (int k = S_TAPER; k < S_N; k++)
         if (seen[k] && !sp.grows)
-            err(&r, 0, 0, "'%s' is a growth key: it needs steps > 0", own[k]);
+            spec_error(&r, 0, 0, "'%s' is a growth key: it needs steps > 0", own[k]);
     if (seen[S_SUBSTEPS] && sp.substeps != floor(sp.substeps))
-        err(&r, 0, 0, "'substeps' expects a whole number");
+        spec_error(&r, 0, 0, "'substeps' expects a whole number");
     if (sp.grows) {
         const cbm_bend_spec *b = &sp.bend;
         if (sp.dimensionless)
-            err(&r, 0, 0, "growth is dimensional: drop 'alpha'");
+            spec_error(&r, 0, 0, "growth is dimensional: drop 'alpha'");
         if (sp.n_branches)
-            err(&r, 0, 0, "growth is for a single rod: drop the branch lines");
+            spec_error(&r, 0, 0, "growth is for a single rod: drop the branch lines");
         if (b->aspect != 1 || b->radius_base > 0 || b->radius_tip > 0)
-            err(&r, 0, 0,
-                "growth starts from a round, uniform rod: drop aspect, radius_base and "
-                "radius_tip (radius_final sets the taper)");
+            spec_error(&r, 0, 0,
+                       "growth starts from a round, uniform rod: drop aspect, radius_base and "
+                       "radius_tip (radius_final sets the taper)");
         if (b->tip_moment != 0 || b->tropism != 0)
-            err(&r, 0, 0, "growth takes no tip_moment or tropism (use preferred_angle)");
+            spec_error(&r, 0, 0, "growth takes no tip_moment or tropism (use preferred_angle)");
     }
     if (!(sp.theta_tip_max > sp.theta_tip_min))
-        err(&r, 0, 0, "theta_tip_max (%g) must exceed theta_tip_min (%g)", sp.theta_tip_max,
-            sp.theta_tip_min);
+        spec_error(&r, 0, 0, "theta_tip_max (%g) must exceed theta_tip_min (%g)", sp.theta_tip_max,
+                   sp.theta_tip_min);
     if (sp.n_branches && sp.theta_tip_max - sp.theta_tip_min < 360)
-        err(&r, 0, 0, "a branched plant needs a full turn of theta_tip (max - min >= 360)");
+        spec_error(&r, 0, 0, "a branched plant needs a full turn of theta_tip (max - min >= 360)");
     if (st != CBM_OK)
         return st;
     if (r.errors)

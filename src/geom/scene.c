@@ -226,7 +226,7 @@ static bool same_but_segment(const cbm_part *a, const cbm_part *b)
            same_bits(a->light, b->light);
 }
 
-static uint64_t mix(uint64_t h, uint64_t x)
+static uint64_t hash_mix(uint64_t h, uint64_t x)
 {
     return (h ^ x) * 0x100000001B3ull + (x >> 29);
 }
@@ -244,16 +244,16 @@ static size_t share_hash(const cbm_part *p, size_t cap)
     uint32_t c[4];
     memcpy(c, p->color, sizeof c);
     uint64_t h = 0xCBF29CE484222325ull;
-    h = mix(h, (uint64_t)p->organ | (uint64_t)(uint32_t)p->order << 32);
-    h = mix(h, (uint64_t)p->parent);
-    h = mix(h, (uint64_t)(uint32_t)p->material);
-    h = mix(h, (uint64_t)c[0] | (uint64_t)c[1] << 32);
-    h = mix(h, (uint64_t)c[2] | (uint64_t)c[3] << 32);
-    h = mix(h, double_bits(p->stress_ratio));
-    h = mix(h, double_bits(p->stress));
-    h = mix(h, double_bits(p->age));
-    h = mix(h, double_bits(p->reaction_wood));
-    h = mix(h, double_bits(p->light));
+    h = hash_mix(h, (uint64_t)p->organ | (uint64_t)(uint32_t)p->order << 32);
+    h = hash_mix(h, (uint64_t)p->parent);
+    h = hash_mix(h, (uint64_t)(uint32_t)p->material);
+    h = hash_mix(h, (uint64_t)c[0] | (uint64_t)c[1] << 32);
+    h = hash_mix(h, (uint64_t)c[2] | (uint64_t)c[3] << 32);
+    h = hash_mix(h, double_bits(p->stress_ratio));
+    h = hash_mix(h, double_bits(p->stress));
+    h = hash_mix(h, double_bits(p->age));
+    h = hash_mix(h, double_bits(p->reaction_wood));
+    h = hash_mix(h, double_bits(p->light));
     return (size_t)((h * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
 }
 
@@ -525,7 +525,7 @@ static bool same_floats(const float *a, const float *b, size_t n)
     return memcmp(a, b, n * sizeof *a) == 0;
 }
 
-static uint8_t *put(uint8_t *d, const void *v, size_t n)
+static uint8_t *pack_bytes(uint8_t *d, const void *v, size_t n)
 {
     memcpy(d, v, n);
     return d + n;
@@ -556,30 +556,30 @@ static cbm_status encode_instance(cbm_scene *s, const cbm_scene_instance *in)
     uint8_t *d = s->inst.data + s->inst.len, *d0 = d;
     *d++ = (uint8_t)flags;
     if (!(flags & INST_P0_LAST))
-        d = put(d, in->p0, sizeof in->p0);
+        d = pack_bytes(d, in->p0, sizeof in->p0);
     if (!(flags & INST_U_LAST))
-        d = put(d, in->u, sizeof in->u);
+        d = pack_bytes(d, in->u, sizeof in->u);
     if (!(flags & INST_AB_LAST)) {
-        d = put(d, &in->a, sizeof in->a);
-        d = put(d, &in->b, sizeof in->b);
+        d = pack_bytes(d, &in->a, sizeof in->a);
+        d = pack_bytes(d, &in->b, sizeof in->b);
     }
     if (!(flags & INST_KIND_LAST)) {
-        d = put(d, &in->taper, sizeof in->taper);
-        d = put(d, &in->part, sizeof in->part);
-        d = put(d, &in->sides, sizeof in->sides);
+        d = pack_bytes(d, &in->taper, sizeof in->taper);
+        d = pack_bytes(d, &in->part, sizeof in->part);
+        d = pack_bytes(d, &in->sides, sizeof in->sides);
     }
     if (flags & INST_SEG_STEP)
         *d++ = (uint8_t)(int8_t)step;
     else
-        d = put(d, &in->segment, sizeof in->segment);
-    d = put(d, in->p1, sizeof in->p1);
+        d = pack_bytes(d, &in->segment, sizeof in->segment);
+    d = pack_bytes(d, in->p1, sizeof in->p1);
     s->inst.len += (size_t)(d - d0);
     s->inst_last = *in;
     s->ninst++;
     return CBM_OK;
 }
 
-static const uint8_t *get(const uint8_t *d, void *v, size_t n)
+static const uint8_t *unpack_bytes(const uint8_t *d, void *v, size_t n)
 {
     memcpy(v, d, n);
     return d + n;
@@ -593,23 +593,23 @@ static size_t decode_instance(const cbm_scene *s, size_t off, cbm_scene_instance
     if (flags & INST_P0_LAST)
         memcpy(l->p0, l->p1, sizeof l->p0);
     else
-        d = get(d, l->p0, sizeof l->p0);
+        d = unpack_bytes(d, l->p0, sizeof l->p0);
     if (!(flags & INST_U_LAST))
-        d = get(d, l->u, sizeof l->u);
+        d = unpack_bytes(d, l->u, sizeof l->u);
     if (!(flags & INST_AB_LAST)) {
-        d = get(d, &l->a, sizeof l->a);
-        d = get(d, &l->b, sizeof l->b);
+        d = unpack_bytes(d, &l->a, sizeof l->a);
+        d = unpack_bytes(d, &l->b, sizeof l->b);
     }
     if (!(flags & INST_KIND_LAST)) {
-        d = get(d, &l->taper, sizeof l->taper);
-        d = get(d, &l->part, sizeof l->part);
-        d = get(d, &l->sides, sizeof l->sides);
+        d = unpack_bytes(d, &l->taper, sizeof l->taper);
+        d = unpack_bytes(d, &l->part, sizeof l->part);
+        d = unpack_bytes(d, &l->sides, sizeof l->sides);
     }
     if (flags & INST_SEG_STEP)
         l->segment += (float)(int8_t)*d++;
     else
-        d = get(d, &l->segment, sizeof l->segment);
-    d = get(d, l->p1, sizeof l->p1);
+        d = unpack_bytes(d, &l->segment, sizeof l->segment);
+    d = unpack_bytes(d, l->p1, sizeof l->p1);
     return off + (size_t)(d - d0);
 }
 

@@ -25,7 +25,7 @@ static void ramp(const float (*pts)[3], int n, double t, float rgb[3])
 }
 
 /* sRGB control points converted to linear once at use */
-static float lin(float c)
+static float srgb_to_linear(float c)
 {
     return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
 }
@@ -69,7 +69,7 @@ void cbm__colormap(cbm_color_by by, double t, float rgb[3])
         break;
     }
     for (int k = 0; k < 3; k++)
-        rgb[k] = lin(c[k]);
+        rgb[k] = srgb_to_linear(c[k]);
 }
 
 uint8_t cbm__srgb8(double c)

@@ -10,7 +10,7 @@
 #include <math.h>
 #include <stdio.h>
 
-static void num(FILE *f, double x)
+static void write_number(FILE *f, double x)
 {
     if (isfinite(x))
         fprintf(f, ",%.9g", x);
@@ -61,15 +61,15 @@ cbm_status cbm_write_parts_csv(cbm_context *ctx, const cbm_scene *s, const char 
                 continue;
             fprintf(f, "%zu,%lld,%lld,%s,%d,%d", i, (long long)p->segment, (long long)p->parent,
                     cbm_organ_name(p->organ), (int)p->order, (int)p->material);
-            num(f, p->stress);
-            num(f, p->stress_ratio);
-            num(f, p->age);
-            num(f, p->reaction_wood);
+            write_number(f, p->stress);
+            write_number(f, p->stress_ratio);
+            write_number(f, p->age);
+            write_number(f, p->reaction_wood);
             for (int k = 0; k < 4; k++)
                 fprintf(f, ",%.4f", p->color[k]);
             fprintf(f, ",%zu", ntri[i]);
             for (int k = 0; k < 3; k++)
-                num(f, nvert[i] ? cen[3 * i + (size_t)k] / (double)nvert[i] : NAN);
+                write_number(f, nvert[i] ? cen[3 * i + (size_t)k] / (double)nvert[i] : NAN);
             fputc('\n', f);
         }
         st = cbm_out_commit(out);

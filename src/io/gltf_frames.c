@@ -293,15 +293,15 @@ typedef struct gmesh {
     size_t pos, nrm, idx, material;
 } gmesh;
 
-typedef struct gw {
+typedef struct frames_writer {
     cbm_context *ctx;
     CBM_ARRAY(uint8_t) bin;
     CBM_ARRAY(acc) accs;
     CBM_ARRAY(gview) views;
-} gw;
+} frames_writer;
 
-static cbm_status put(gw *g, const void *data, size_t count, int ncomp, int ctype, int target,
-                      bool minmax, size_t *id)
+static cbm_status add_accessor(frames_writer *g, const void *data, size_t count, int ncomp,
+                               int ctype, int target, bool minmax, size_t *id)
 {
     size_t bytes = count * (size_t)ncomp * 4, off = cbm__glb_pad4(g->bin.len);
     CBM_TRY(CBM_ARRAY_RESERVE(g->ctx, g->bin, off + bytes));
@@ -330,7 +330,7 @@ static bool same_shape(const body *a, const body *b)
 }
 
 /* A segment along +x from the origin (radii r0 -> r1, closed by discs) or a sphere. */
-static cbm_status body_mesh(gw *g, const body *b, gmesh *gm)
+static cbm_status body_mesh(frames_writer *g, const body *b, gmesh *gm)
 {
     enum { NV = 4 * CYL_SIDES + 2 + (SPHERE_STACKS + 1) * (SPHERE_SLICES + 1) };
     enum { NI = 12 * CYL_SIDES + 6 * SPHERE_STACKS * SPHERE_SLICES };
@@ -390,15 +390,15 @@ static cbm_status body_mesh(gw *g, const body *b, gmesh *gm)
         }
     }
 #undef VTX
-    CBM_TRY(put(g, pos, nv, 3, GL_FLOAT, 34962, true, &gm->pos));
-    CBM_TRY(put(g, nrm, nv, 3, GL_FLOAT, 34962, false, &gm->nrm));
-    return put(g, idx, ni, 1, GL_UNSIGNED_INT, 34963, false, &gm->idx);
+    CBM_TRY(add_accessor(g, pos, nv, 3, GL_FLOAT, 34962, true, &gm->pos));
+    CBM_TRY(add_accessor(g, nrm, nv, 3, GL_FLOAT, 34962, false, &gm->nrm));
+    return add_accessor(g, idx, ni, 1, GL_UNSIGNED_INT, 34963, false, &gm->idx);
 }
 
 /* The BIN chunk is written even when empty (a motion of no part and one frame), as it always was.
  */
 static cbm_status write_container(cbm_context *ctx, const char *path, const char *text, size_t tlen,
-                                  const gw *g)
+                                  const frames_writer *g)
 {
     cbm_out *out;
     CBM_TRY(cbm__glb_open(ctx, path, "motion", text, tlen, g->bin.len, true, &out));
@@ -407,9 +407,9 @@ static cbm_status write_container(cbm_context *ctx, const char *path, const char
     return cbm_out_commit(out);
 }
 
-static void write_json(cbm_json *j, const cbm_turtle_motion *m, const gw *g, const gmesh *meshes,
-                       size_t nmesh, const size_t *mesh_of, size_t nmat, const size_t *mat_body,
-                       long anim_in, const size_t *anim_out)
+static void write_json(cbm_json *j, const cbm_turtle_motion *m, const frames_writer *g,
+                       const gmesh *meshes, size_t nmesh, const size_t *mesh_of, size_t nmat,
+                       const size_t *mat_body, long anim_in, const size_t *anim_out)
 {
     size_t nb = m->bodies.len, nf = m->times.len;
     cbm_json_begin_object(j, NULL);
@@ -525,7 +525,7 @@ cbm_status cbm_turtle_motion_write_glb(const cbm_turtle_motion *m, const char *p
     size_t nb = m->bodies.len, nf = m->times.len;
     if (!nf)
         return cbm__fail(ctx, CBM_E_INVALID, "%s: the motion has no frame", path);
-    gw g = {ctx, {0}, {0}, {0}};
+    frames_writer g = {ctx, {0}, {0}, {0}};
     size_t nchan = 0;
     for (size_t i = 0; i < nb; i++)
         nchan += m->bodies.data[i].sphere ? 1 : 2;
@@ -567,7 +567,7 @@ cbm_status cbm_turtle_motion_write_glb(const cbm_turtle_motion *m, const char *p
                                "(%.9g s); record fewer frames or lengthen the frame time",
                                path, f - 1, f, m->times.data[f]);
         if (st == CBM_OK)
-            st = put(&g, buf, nf, 1, GL_FLOAT, 0, true, &id);
+            st = add_accessor(&g, buf, nf, 1, GL_FLOAT, 0, true, &id);
         anim_in = (long)id;
         size_t s = 0;
         for (size_t i = 0; i < nb && st == CBM_OK; i++)
@@ -585,7 +585,7 @@ cbm_status cbm_turtle_motion_write_glb(const cbm_turtle_motion *m, const char *p
                             buf[3 * f + (size_t)c] = (float)d[c];
                     }
                 }
-                st = put(&g, buf, nf, nc, GL_FLOAT, 0, false, &anim_out[s++]);
+                st = add_accessor(&g, buf, nf, nc, GL_FLOAT, 0, false, &anim_out[s++]);
             }
     }
     if (st == CBM_OK)

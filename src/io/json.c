@@ -42,7 +42,7 @@ void cbm_json_destroy(cbm_json *j)
     cbm__free(j->ctx, j, sizeof *j);
 }
 
-static void put(cbm_json *j, const char *s, size_t n)
+static void append_raw(cbm_json *j, const char *s, size_t n)
 {
     if (j->err)
         return;
@@ -57,30 +57,30 @@ static void put(cbm_json *j, const char *s, size_t n)
 
 static void puts_(cbm_json *j, const char *s)
 {
-    put(j, s, strlen(s));
+    append_raw(j, s, strlen(s));
 }
 
 static void put_string(cbm_json *j, const char *s)
 {
-    put(j, "\"", 1);
+    append_raw(j, "\"", 1);
     for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
         char esc[8];
         if (*p == '"' || *p == '\\') {
             esc[0] = '\\';
             esc[1] = (char)*p;
-            put(j, esc, 2);
+            append_raw(j, esc, 2);
         } else if (*p == '\n') {
-            put(j, "\\n", 2);
+            append_raw(j, "\\n", 2);
         } else if (*p == '\t') {
-            put(j, "\\t", 2);
+            append_raw(j, "\\t", 2);
         } else if (*p < 0x20) {
             snprintf(esc, sizeof esc, "\\u%04x", *p);
-            put(j, esc, 6);
+            append_raw(j, esc, 6);
         } else {
-            put(j, (const char *)p, 1);
+            append_raw(j, (const char *)p, 1);
         }
     }
-    put(j, "\"", 1);
+    append_raw(j, "\"", 1);
 }
 
 /* Comma, key, and checks before any value. */
@@ -101,11 +101,11 @@ static bool value_start(cbm_json *j, const char *key)
         return false;
     }
     if (!j->first[d])
-        put(j, ",", 1);
+        append_raw(j, ",", 1);
     j->first[d] = false;
     if (key) {
         put_string(j, key);
-        put(j, ":", 1);
+        append_raw(j, ":", 1);
     }
     return true;
 }
@@ -124,7 +124,7 @@ static void open_(cbm_json *j, const char *key, char kind)
         j->err = CBM_E_LIMIT;
         return;
     }
-    put(j, kind == 'o' ? "{" : "[", 1);
+    append_raw(j, kind == 'o' ? "{" : "[", 1);
     j->kind[j->depth] = kind;
     j->first[j->depth] = true;
     j->depth++;
@@ -139,7 +139,7 @@ static void close_(cbm_json *j, char kind)
         return;
     }
     j->depth--;
-    put(j, kind == 'o' ? "}" : "]", 1);
+    append_raw(j, kind == 'o' ? "}" : "]", 1);
     value_end(j);
 }
 

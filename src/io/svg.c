@@ -46,7 +46,7 @@ static void project(const cbm__camera *cam, cbm_vec3 p, double *x, double *y)
     *y = cam->cy - v3_dot(d, cam->up) * cam->scale;
 }
 
-static void hex(const float rgb[3], double light, char out[8])
+static void shaded_hex(const float rgb[3], double light, char out[8])
 {
     snprintf(out, 8, "#%02x%02x%02x", cbm__srgb8(rgb[0] * light), cbm__srgb8(rgb[1] * light),
              cbm__srgb8(rgb[2] * light));
@@ -76,7 +76,7 @@ static void legend(FILE *f, const cbm_scene *s, const cbm_write_options *o, int 
             float c[3];
             char h[8];
             cbm__colormap(CBM_COLOR_ORDER, k, c);
-            hex(c, 1.0, h);
+            shaded_hex(c, 1.0, h);
             fprintf(f, "<rect x=\"%d\" y=\"%d\" width=\"%d\" height=\"%d\" fill=\"%s\"/>\n", bx,
                     top + k * step, bw, step - 2, h);
             fprintf(f, "<text x=\"%d\" y=\"%d\">%d</text>\n", bx + bw + 4,
@@ -88,7 +88,7 @@ static void legend(FILE *f, const cbm_scene *s, const cbm_write_options *o, int 
             float c[3];
             char h[8];
             cbm__colormap(o->color_by, k / 10.0, c);
-            hex(c, 1.0, h);
+            shaded_hex(c, 1.0, h);
             fprintf(f, "<stop offset=\"%.1f\" stop-color=\"%s\"/>\n", k / 10.0, h);
         }
         fprintf(f, "</linearGradient></defs>\n");
@@ -193,7 +193,7 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
             fitted ? cam.dir.y : 0.0, fitted ? cam.dir.z : 0.0);
     if (o->background[3] > 0) {
         char h[8];
-        hex(o->background, 1.0, h);
+        shaded_hex(o->background, 1.0, h);
         fprintf(f, "<rect width=\"100%%\" height=\"100%%\" fill=\"%s\" fill-opacity=\"%.3f\"/>\n",
                 h, o->background[3]);
     }
@@ -211,7 +211,7 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
             project(&cam, v3(l->p0[0], l->p0[1], l->p0[2]), &x0, &y0);
             project(&cam, v3(l->p1[0], l->p1[1], l->p1[2]), &x1, &y1);
             char h[8];
-            hex(c, 1.0, h);
+            shaded_hex(c, 1.0, h);
             float w = l->width > 1.0f ? l->width : 1.0f;
             if (!group || strcmp(h, group_hex) || w != group_w || c[3] != group_a) {
                 if (group)
@@ -245,7 +245,7 @@ cbm_status cbm_write_svg(cbm_context *ctx, const cbm_scene *s, const char *path,
             n = v3_neg(n);
         double light = 0.38 + 0.7 * fmax(0.0, v3_dot(n, sun));
         char h[8];
-        hex(c, light, h);
+        shaded_hex(c, light, h);
         fprintf(f, "<path d=\"");
         for (int q = 0; q < 3; q++) {
             double x, y;

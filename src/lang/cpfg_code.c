@@ -20,8 +20,8 @@
  * while an error is pending. A runtime error stops the run at once (the walker went on to the
  * end of the expression, whose value was then discarded), and names the node the walker named:
  * the call, the array element or assignment, the while loop. The instruction that can fail
- * carries that node in its `at`, so vm->err_pos is the node, not a text offset as in the L+C
- * dialect.
+ * carries that node in its `stmt_pos`, so vm->err_pos is the node, not a text offset as in the
+ * L+C dialect.
  */
 #include "lang/lang.h"
 #include "lang/lc_code.h"
@@ -49,7 +49,7 @@ struct cbm__ecode {
     char msg[160]; /* the message of the error handed to the environment */
 };
 
-/* host calls besides the built-ins (ip->fn beyond FN_COUNT) */
+/* host calls besides the built-ins (ip->subop beyond FN_COUNT) */
 enum { H_AIDX = FN_COUNT + 1, H_ALOAD, H_ASTORE };
 
 /* ---------------------------------------------------------------- compiler */
@@ -61,9 +61,16 @@ typedef struct codegen {
     bool out_of_memory;
 } codegen;
 
-static size_t emit(codegen *c, int op, int d, int a, int b, int fn, int32_t at, double k)
+static size_t emit(codegen *c, int op, int dst, int src1, int src2, int subop, int32_t node,
+                   double imm)
 {
-    lc_ins in = {.op = (uint8_t)op, .fn = (uint16_t)fn, .d = d, .a = a, .b = b, .at = at, .k = k};
+    lc_ins in = {.op = (uint8_t)op,
+                 .subop = (uint16_t)subop,
+                 .dst = dst,
+                 .src1 = src1,
+                 .src2 = src2,
+                 .stmt_pos = node,
+                 .imm = imm};
     if (CBM_ARRAY_PUSH(c->ctx, c->code->ins, in) != CBM_OK) {
         c->out_of_memory = true;
         return 0;
@@ -71,16 +78,17 @@ static size_t emit(codegen *c, int op, int d, int a, int b, int fn, int32_t at, 
     return c->code->ins.len - 1;
 }
 
-/* The jump at instruction j lands at the next instruction to come (O_JMP: a, O_JZ/O_JNZ: b). */
+/* The jump at instruction j lands at the next instruction to come (O_JMP: src1, O_JZ/O_JNZ:
+ * src2). */
 static void jump_lands_here(codegen *c, size_t j)
 {
     if (c->out_of_memory)
         return;
     lc_ins *in = &c->code->ins.data[j];
     if (in->op == O_JMP)
-        in->a = (int32_t)c->code->ins.len;
+        in->src1 = (int32_t)c->code->ins.len;
     else
-        in->b = (int32_t)c->code->ins.len;
+        in->src2 = (int32_t)c->code->ins.len;
 }
 
 static int new_register(codegen *c)
@@ -123,7 +131,7 @@ static void compile_expr(codegen *c, int32_t i, int d)
     int r;
     switch ((cbm__op)n->op) {
     case OP_NUM:
-        emit(c, O_CONST, d, 0, 0, 0, -1, n->v);
+        emit(c, O_CONST, d, 0, 0, 0, -1, n->value);
         break;
     case OP_PARAM:
         emit(c, O_PLD, d, n->slot, 0, 0, -1, 0.0);
@@ -132,13 +140,13 @@ static void compile_expr(codegen *c, int32_t i, int d)
         emit(c, O_GLD, d, n->slot, 0, 0, -1, 0.0);
         break;
     case OP_ARRAY: {
-        int o = array_offset(c, i, n->a);
+        int o = array_offset(c, i, n->child1);
         emit(c, O_HOST, d, o, 0, H_ALOAD, i, 0.0);
         break;
     }
     case OP_NEG:
     case OP_NOT:
-        compile_expr(c, n->a, d);
+        compile_expr(c, n->child1, d);
         emit(c, n->op == OP_NEG ? O_NEG : O_NOT, d, d, 0, 0, -1, 0.0);
         break;
     case OP_ADD:
@@ -157,9 +165,9 @@ static void compile_expr(codegen *c, int32_t i, int d)
             [OP_ADD] = O_ADDD,  [OP_SUB] = O_SUBD,  [OP_MUL] = O_MULD, [OP_DIV] = O_DIVD,
             [OP_REM] = O_CMATH, [OP_POW] = O_CMATH, [OP_LT] = O_LT,    [OP_GT] = O_GT,
             [OP_LE] = O_LE,     [OP_GE] = O_GE,     [OP_EQ] = O_EQ,    [OP_NE] = O_NE};
-        compile_expr(c, n->a, d);
+        compile_expr(c, n->child1, d);
         r = new_register(c);
-        compile_expr(c, n->b, r);
+        compile_expr(c, n->child2, r);
         emit(c, ops[n->op], d, d, r,
              n->op == OP_REM   ? FN_FMOD
              : n->op == OP_POW ? FN_POW
@@ -169,21 +177,21 @@ static void compile_expr(codegen *c, int32_t i, int d)
     }
     case OP_AND:
     case OP_OR: {
-        compile_expr(c, n->a, d);
+        compile_expr(c, n->child1, d);
         emit(c, O_BOOL, d, d, 0, 0, -1, 0.0);
         size_t j = emit(c, n->op == OP_AND ? O_JZ : O_JNZ, 0, d, 0, 0, -1, 0.0);
-        compile_expr(c, n->b, d);
+        compile_expr(c, n->child2, d);
         emit(c, O_BOOL, d, d, 0, 0, -1, 0.0);
         jump_lands_here(c, j);
         break;
     }
     case OP_COND: {
-        compile_expr(c, n->a, d);
+        compile_expr(c, n->child1, d);
         size_t jz = emit(c, O_JZ, 0, d, 0, 0, -1, 0.0);
-        compile_expr(c, n->b, d);
+        compile_expr(c, n->child2, d);
         size_t jmp = emit(c, O_JMP, 0, 0, 0, 0, -1, 0.0);
         jump_lands_here(c, jz);
-        compile_expr(c, n->c, d);
+        compile_expr(c, n->child3, d);
         jump_lands_here(c, jmp);
         break;
     }
@@ -191,7 +199,7 @@ static void compile_expr(codegen *c, int32_t i, int d)
         /* the arguments left to right into a run of registers: at most 8 (16 for printf,
          * whose string arguments take a register each but no code), as the walker read them */
         int base = c->temp_top, k = 0;
-        int32_t j = n->a, max = 8;
+        int32_t j = n->child1, max = 8;
         if (n->fn == FN_PRINTF) {
             j = j >= 0 ? c->nodes[j].next : -1; /* after the format */
             max = CBM__FMT_MAX_ARGS;
@@ -240,31 +248,31 @@ static void compile_stmts(codegen *c, int32_t i)
         int save = c->temp_top, r;
         switch ((cbm__op)n->op) {
         case OP_SEQ:
-            compile_stmts(c, n->a);
+            compile_stmts(c, n->child1);
             break;
         case OP_ASSIGN:
         case OP_ASSIGN_PARAM:
             r = new_register(c);
-            compile_expr(c, n->a, r);
+            compile_expr(c, n->child1, r);
             emit(c, n->op == OP_ASSIGN ? O_GST : O_PST, n->slot, r, 0, 0, -1, 0.0);
             break;
         case OP_ASSIGN_ARRAY: {
             r = new_register(c);
-            compile_expr(c, n->a, r); /* the value first, then the indices */
-            int o = array_offset(c, i, n->b);
+            compile_expr(c, n->child1, r); /* the value first, then the indices */
+            int o = array_offset(c, i, n->child2);
             emit(c, O_HOST, o, o, r, H_ASTORE, i, 0.0);
             break;
         }
         case OP_IF: {
             r = new_register(c);
-            compile_expr(c, n->a, r);
+            compile_expr(c, n->child1, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
             c->temp_top = save;
-            compile_stmts(c, n->b);
-            if (n->c >= 0) {
+            compile_stmts(c, n->child2);
+            if (n->child3 >= 0) {
                 size_t jmp = emit(c, O_JMP, 0, 0, 0, 0, -1, 0.0);
                 jump_lands_here(c, jz);
-                compile_stmts(c, n->c);
+                compile_stmts(c, n->child3);
                 jump_lands_here(c, jmp);
             } else {
                 jump_lands_here(c, jz);
@@ -274,14 +282,14 @@ static void compile_stmts(codegen *c, int32_t i)
         case OP_WHILE:
         case OP_DO: {
             if (n->op == OP_DO)
-                compile_stmts(c, n->b);
+                compile_stmts(c, n->child2);
             int32_t test = (int32_t)c->code->ins.len;
             r = new_register(c);
-            compile_expr(c, n->a, r);
+            compile_expr(c, n->child1, r);
             size_t jz = emit(c, O_JZ, 0, r, 0, 0, -1, 0.0);
             c->temp_top = save;
             emit(c, O_WSPEND, 0, 0, 0, 0, i, 0.0);
-            compile_stmts(c, n->b);
+            compile_stmts(c, n->child2);
             emit(c, O_JMP, 0, test, 0, 0, -1, 0.0);
             jump_lands_here(c, jz);
             break;
@@ -339,31 +347,31 @@ static int compile(cbm__eval *e, int32_t root, bool stmt)
 static double host_call(lc_vm *vm, const lc_ins *ip, double *fr)
 {
     cbm__eval *e = vm->host;
-    switch (ip->fn) {
+    switch (ip->subop) {
     case H_AIDX: {
-        const cbm__array *ar = &e->arrays[e->nodes[ip->at].slot];
-        double v = fr[ip->a];
-        if (!(v >= 0 && v < ar->dims[ip->b])) {
+        const cbm__array *ar = &e->arrays[e->nodes[ip->stmt_pos].slot];
+        double v = fr[ip->src1];
+        if (!(v >= 0 && v < ar->dims[ip->src2])) {
             cbm__lc_error(vm, CBM_E_RUNTIME, "array index out of range");
             return 0;
         }
-        return (double)((size_t)fr[ip->d] * (size_t)ar->dims[ip->b] + (size_t)v);
+        return (double)((size_t)fr[ip->dst] * (size_t)ar->dims[ip->src2] + (size_t)v);
     }
     case H_ALOAD:
-        return e->arrays[e->nodes[ip->at].slot].data[(size_t)fr[ip->a]];
+        return e->arrays[e->nodes[ip->stmt_pos].slot].data[(size_t)fr[ip->src1]];
     case H_ASTORE:
-        e->arrays[e->nodes[ip->at].slot].data[(size_t)fr[ip->a]] = fr[ip->b];
-        return fr[ip->a];
+        e->arrays[e->nodes[ip->stmt_pos].slot].data[(size_t)fr[ip->src1]] = fr[ip->src2];
+        return fr[ip->src1];
     case FN_PRINTF: {
         cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
-        int32_t f = e->nodes[ip->at].a;
+        int32_t f = e->nodes[ip->stmt_pos].child1;
         const char *fmt = e->strings && f >= 0 ? e->strings + e->nodes[f].slot : "";
         int k = 0;
-        for (int32_t j = f >= 0 ? e->nodes[f].next : -1; j >= 0 && k < ip->b;
+        for (int32_t j = f >= 0 ? e->nodes[f].next : -1; j >= 0 && k < ip->src2;
              j = e->nodes[j].next, k++) {
             bool s = e->nodes[j].op == OP_STR;
             args[k].s = s && e->strings ? e->strings + e->nodes[j].slot : NULL;
-            args[k].v = s ? 0 : fr[ip->a + k];
+            args[k].v = s ? 0 : fr[ip->src1 + k];
         }
         cbm__fmt_print(e->ctx, fmt, args, k);
         return 0;
@@ -372,11 +380,11 @@ static double host_call(lc_vm *vm, const lc_ins *ip, double *fr)
         break;
     }
     double a[8] = {0};
-    for (int k = 0; k < ip->b && k < 8; k++)
-        a[k] = fr[ip->a + k];
-    if (ip->fn > FN_MATH_END && ip->fn < FN_GROWTH_END)
-        return cbm__builtin_growth(ip->fn, a);
-    switch (ip->fn) {
+    for (int k = 0; k < ip->src2 && k < 8; k++)
+        a[k] = fr[ip->src1 + k];
+    if (ip->subop > FN_MATH_END && ip->subop < FN_GROWTH_END)
+        return cbm__builtin_growth(ip->subop, a);
+    switch (ip->subop) {
     case FN_RAN:
         return cbm__rand48_next(&e->rnd.r48) * a[0];
     case FN_NRAN: {
@@ -469,8 +477,8 @@ static __attribute__((noinline)) int first_run(cbm__eval *e, int32_t root, bool 
         const lc_ins *in = fc->ins.data;
         if (fc->ins.len == 2 && (in->op == O_CONST || in->op == O_PLD || in->op == O_GLD)) {
             en->load = in->op;
-            en->operand = in->a;
-            en->value = in->k;
+            en->operand = in->src1;
+            en->value = in->imm;
         }
     }
     return en->fn_plus_one - 1;
@@ -499,7 +507,7 @@ static __attribute__((noinline)) double run_code(cbm__eval *e, cbm__ecode *ec, i
     vm->glob = e->globals;
     vm->par = e->params;
     vm->budget = e->while_budget;
-    vm->at = -1;
+    vm->stmt_pos = -1;
     const lc_program p = {.fn = ec->fn.data, .n = ec->fn.len};
     double v = cbm__lc_run(&p, f, ec->frame, vm);
     e->while_budget = vm->budget;

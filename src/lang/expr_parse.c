@@ -81,7 +81,8 @@ static int32_t string_literal(cbm__compiler *c)
     size_t off;
     if (!cbm__string_lit(c, &off))
         return -1;
-    cbm__node nd = {.op = OP_STR, .a = -1, .b = -1, .c = -1, .next = -1, .slot = (int32_t)off};
+    cbm__node nd = {
+        .op = OP_STR, .child1 = -1, .child2 = -1, .child3 = -1, .next = -1, .slot = (int32_t)off};
     return add_node(c, nd);
 }
 
@@ -130,13 +131,15 @@ static int32_t binary_node(cbm__compiler *c, int op, int32_t a, int32_t b)
 {
     if (a < 0 || b < 0)
         return -1;
-    cbm__node n = {.op = (uint8_t)op, .a = a, .b = b, .c = -1, .next = -1, .slot = -1};
+    cbm__node n = {
+        .op = (uint8_t)op, .child1 = a, .child2 = b, .child3 = -1, .next = -1, .slot = -1};
     return add_node(c, n);
 }
 
 int32_t cbm__node_num(cbm__compiler *c, double v)
 {
-    cbm__node n = {.op = OP_NUM, .a = -1, .b = -1, .c = -1, .next = -1, .slot = -1, .v = v};
+    cbm__node n = {
+        .op = OP_NUM, .child1 = -1, .child2 = -1, .child3 = -1, .next = -1, .slot = -1, .value = v};
     return add_node(c, n);
 }
 
@@ -146,16 +149,16 @@ bool cbm__node_const(const cbm__compiler *c, int32_t i, double *v)
         return false;
     const cbm__node *n = &c->nodes.data[i];
     if (n->op == OP_NUM) {
-        *v = n->v;
+        *v = n->value;
         return true;
     }
     double a, b;
-    if (n->op == OP_NEG && cbm__node_const(c, n->a, &a)) {
+    if (n->op == OP_NEG && cbm__node_const(c, n->child1, &a)) {
         *v = -a;
         return true;
     }
-    if (n->op >= OP_ADD && n->op <= OP_DIV && cbm__node_const(c, n->a, &a) &&
-        cbm__node_const(c, n->b, &b)) {
+    if (n->op >= OP_ADD && n->op <= OP_DIV && cbm__node_const(c, n->child1, &a) &&
+        cbm__node_const(c, n->child2, &b)) {
         *v = n->op == OP_ADD ? a + b : n->op == OP_SUB ? a - b : n->op == OP_MUL ? a * b : a / b;
         return true;
     }
@@ -313,16 +316,21 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
             }
             cbm__node nd = {.op = OP_CALL,
                             .fn = (uint8_t)fn->fn,
-                            .a = first,
-                            .b = -1,
-                            .c = -1,
+                            .child1 = first,
+                            .child2 = -1,
+                            .child3 = -1,
                             .next = -1,
                             .slot = n};
             return add_node(c, nd);
         }
         for (int i = 0; i < c->nformals; i++)
             if (c->formal_len[i] == len && !memcmp(c->formals[i], t, len)) {
-                cbm__node nd = {.op = OP_PARAM, .a = -1, .b = -1, .c = -1, .next = -1, .slot = i};
+                cbm__node nd = {.op = OP_PARAM,
+                                .child1 = -1,
+                                .child2 = -1,
+                                .child3 = -1,
+                                .next = -1,
+                                .slot = i};
                 return add_node(c, nd);
             }
         int ai = find_array(c, t, len);
@@ -335,13 +343,15 @@ static int32_t parse_primary(cbm__compiler *c, bool nl)
                           c->arrays.data[ai].ndims == 1 ? "" : "s", count, count == 1 ? "" : "es");
                 return -1;
             }
-            cbm__node nd = {.op = OP_ARRAY, .a = idx, .b = -1, .c = -1, .next = -1, .slot = ai};
+            cbm__node nd = {
+                .op = OP_ARRAY, .child1 = idx, .child2 = -1, .child3 = -1, .next = -1, .slot = ai};
             return add_node(c, nd);
         }
         int32_t g = global_slot(c, t, len, false, start);
         if (g < 0)
             return -1;
-        cbm__node nd = {.op = OP_GLOBAL, .a = -1, .b = -1, .c = -1, .next = -1, .slot = g};
+        cbm__node nd = {
+            .op = OP_GLOBAL, .child1 = -1, .child2 = -1, .child3 = -1, .next = -1, .slot = g};
         return add_node(c, nd);
     }
     expected(c, "an expression");
@@ -454,7 +464,7 @@ static int32_t parse_cond(cbm__compiler *c, bool nl)
     int32_t b = parse_ternary(c, nl);
     int32_t n = binary_node(c, OP_COND, cond, a);
     if (n >= 0 && b >= 0) {
-        c->nodes.data[n].c = b;
+        c->nodes.data[n].child3 = b;
         return n;
     }
     return -1;
@@ -579,9 +589,9 @@ static int32_t parse_statement_inner(cbm__compiler *c, bool *ok)
             }
         }
         cbm__node n = {.op = (uint8_t)(is_if ? OP_IF : OP_WHILE),
-                       .a = cond,
-                       .b = body,
-                       .c = other,
+                       .child1 = cond,
+                       .child2 = body,
+                       .child3 = other,
                        .next = -1,
                        .slot = -1};
         return add_node(c, n);
@@ -601,7 +611,8 @@ static int32_t parse_statement_inner(cbm__compiler *c, bool *ok)
         if (cond < 0)
             return -1;
         match(c, ";", true);
-        cbm__node n = {.op = OP_DO, .a = cond, .b = body, .c = -1, .next = -1, .slot = -1};
+        cbm__node n = {
+            .op = OP_DO, .child1 = cond, .child2 = body, .child3 = -1, .next = -1, .slot = -1};
         return add_node(c, n);
     }
 #undef KW
@@ -633,8 +644,12 @@ static int32_t parse_statement_inner(cbm__compiler *c, bool *ok)
             for (int i = 0; i < c->nformals; i++)
                 if (c->formal_len[i] == len && !memcmp(c->formals[i], t, len)) {
                     /* as in cpfg, a parameter may be changed before the successor uses it */
-                    cbm__node n = {
-                        .op = OP_ASSIGN_PARAM, .a = val, .b = -1, .c = -1, .next = -1, .slot = i};
+                    cbm__node n = {.op = OP_ASSIGN_PARAM,
+                                   .child1 = val,
+                                   .child2 = -1,
+                                   .child3 = -1,
+                                   .next = -1,
+                                   .slot = i};
                     return add_node(c, n);
                 }
             if (ai >= 0) {
@@ -644,12 +659,17 @@ static int32_t parse_statement_inner(cbm__compiler *c, bool *ok)
                     *ok = false;
                     return -1;
                 }
-                cbm__node n = {
-                    .op = OP_ASSIGN_ARRAY, .a = val, .b = idx, .c = -1, .next = -1, .slot = ai};
+                cbm__node n = {.op = OP_ASSIGN_ARRAY,
+                               .child1 = val,
+                               .child2 = idx,
+                               .child3 = -1,
+                               .next = -1,
+                               .slot = ai};
                 return add_node(c, n);
             }
             int32_t g = global_slot(c, t, len, true, start);
-            cbm__node n = {.op = OP_ASSIGN, .a = val, .b = -1, .c = -1, .next = -1, .slot = g};
+            cbm__node n = {
+                .op = OP_ASSIGN, .child1 = val, .child2 = -1, .child3 = -1, .next = -1, .slot = g};
             return g < 0 ? -1 : add_node(c, n);
         }
         c->pos = save;
@@ -703,7 +723,8 @@ int32_t cbm__parse_block(cbm__compiler *c, bool *ok)
         if (s < 0)
             continue;
         /* wrap expressions and nested chains in a sequence node so `next` is free */
-        cbm__node seq = {.op = OP_SEQ, .a = s, .b = -1, .c = -1, .next = -1, .slot = -1};
+        cbm__node seq = {
+            .op = OP_SEQ, .child1 = s, .child2 = -1, .child3 = -1, .next = -1, .slot = -1};
         int32_t w = add_node(c, seq);
         if (w < 0)
             break;

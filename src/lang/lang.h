@@ -84,14 +84,18 @@ typedef enum cbm__op {
     OP_STR /* a string literal (printf's arguments only): slot is its offset in strings */
 } cbm__op;
 
-/* One node. Children are indices into the node array (-1: none); OP_CALL and OP_ARRAY keep
- * their arguments as a chain through `next`. */
+/* One node. Its children are indices into the node array (-1: none), in the order the
+ * construct reads: child1 and child2 the operands of an operator; child1, child2, child3 the
+ * condition, the `then` and the `else` of OP_COND and OP_IF; child1 the condition and child2
+ * the body of OP_WHILE and OP_DO; child1 the value and child2 the index of an assignment;
+ * child1 the first argument of OP_CALL and the first index of OP_ARRAY (the others follow as a
+ * chain through `next`); child1 the first statement of OP_SEQ. */
 typedef struct cbm__node {
-    uint8_t op, fn;
-    int32_t a, b, c; /* operands / condition, then, else / body */
-    int32_t next;    /* next argument or next statement */
-    int32_t slot;    /* parameter index, global or array index */
-    double v;
+    uint8_t op, fn;                 /* fn: the built-in of OP_CALL (FN_..., builtins.h) */
+    int32_t child1, child2, child3; /* above */
+    int32_t next;                   /* next argument or next statement */
+    int32_t slot;                   /* parameter index, global or array index */
+    double value;                   /* the number of OP_NUM */
 } cbm__node;
 
 typedef struct cbm__array {

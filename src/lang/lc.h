@@ -43,7 +43,7 @@ enum {
 typedef struct lc_type {
     char *name;
     int size;
-    int nf;
+    int nfields; /* fields: their types, offsets (doubles) and names below */
     int ftype[MAXFLD];
     int foff[MAXFLD];
     char *fname[MAXFLD];
@@ -52,16 +52,20 @@ typedef struct lc_type {
 typedef struct lc_module {
     char *name;
     uint8_t code;
-    int np, size;
+    int nparams, size; /* parameters, and their doubles */
     int ptype[MAXF];
 } lc_module;
 
-/* nodes */
+/* The kinds of node (lc_node.op): expressions N_, statements S_. A node's children are indices
+ * in the node array (-1: none), in the order the construct reads: the operands of an operator;
+ * the condition, `then` and `else` of N_COND and S_IF; the condition and body of S_WHILE and
+ * S_DO; init, condition, step and body of S_FOR (child1 .. child4); the value of S_EXPR,
+ * S_RETURN and a declaration's initialiser; the others below. */
 enum {
     N_NUM,
     N_LOCAL,
     N_GLOBAL,
-    N_FIELD, /* a: base value, slot: offset */
+    N_FIELD, /* child1: the base value, slot: the field's offset */
     N_NEG,
     N_NOT,
     N_CAST,
@@ -69,11 +73,11 @@ enum {
     N_AND,
     N_OR,
     N_COND,
-    N_ASSIGN, /* a: lvalue, b: value, fn: operator (0 for =) */
-    N_INCDEC, /* a: lvalue, fn: 0 ++x, 1 --x, 2 x++, 3 x-- */
+    N_ASSIGN, /* child1: the lvalue, child2: the value, fn: the operator (0 for =) */
+    N_INCDEC, /* child1: the lvalue, fn: 0 ++x, 1 --x, 2 x++, 3 x-- */
     N_CALLB,
     N_CALLU,
-    N_CTOR, /* args a: fields of type */
+    N_CTOR, /* child1: the chain of arguments, the fields of its type */
     N_INCTX,
     N_COMMA,
     N_STR, /* a string literal, printf's arguments only: slot is its offset in the strings */
@@ -88,8 +92,8 @@ enum {
     S_CONTINUE,
     S_PRODUCE,
     S_BLOCK,
-    S_SWITCH, /* a: value, b: body */
-    S_CASE,   /* a: label value, -1 for default */
+    S_SWITCH, /* child1: the value, child2: the body */
+    S_CASE,   /* child1: the label's value, -1 for default */
     S_NOP
 };
 
@@ -98,10 +102,10 @@ enum { B_ADD, B_SUB, B_MUL, B_DIV, B_REM, B_LT, B_GT, B_LE, B_GE, B_EQ, B_NE };
 typedef struct lc_node {
     uint8_t op, fn;
     int16_t type;
-    int32_t a, b, c, d, next;
+    int32_t child1, child2, child3, child4, next;
     int32_t slot;
-    int32_t pos; /* text offset where the parser made it, for runtime messages */
-    double v;
+    int32_t pos;  /* text offset where the parser made it, for runtime messages */
+    double value; /* the number of N_NUM */
 } lc_node;
 
 /* a successor or context pattern: modules with their argument chains */
@@ -114,12 +118,15 @@ typedef struct lc_pattern {
     int32_t first, n; /* in lp->sms */
 } lc_pattern;
 
-enum { CX_LC, CX_NLC, CX_NRC, CX_RC, CX_N };
+/* The contexts of a production, by index in lc_production.context: the left context (`<`), the
+ * new left context (`<<`, matched on the string being produced), the new right context (`>>`)
+ * and the right context (`>`). */
+enum { LC_CTX_LEFT, LC_CTX_NEW_LEFT, LC_CTX_NEW_RIGHT, LC_CTX_RIGHT, LC_CTX_N };
 
 typedef struct lc_production {
-    int mod;             /* predecessor */
-    lc_pattern pred;     /* strict predecessor: one module or several adjacent ones */
-    lc_pattern cx[CX_N]; /* contexts (n = 0: none); formals in args */
+    int mod;                      /* predecessor */
+    lc_pattern pred;              /* strict predecessor: one module or several adjacent ones */
+    lc_pattern context[LC_CTX_N]; /* contexts (n = 0: none); formals in args */
     int32_t body;
     int fsize; /* frame doubles */
     int group;
@@ -128,8 +135,8 @@ typedef struct lc_production {
 
 typedef struct lc_function {
     char *name;
-    int ret;
-    int np;
+    int ret_type; /* the type of the result (T_VOID: none) */
+    int nparams;
     int ptype[MAXF];
     bool pref[MAXF]; /* reference parameter (T& x): copied back to the argument */
     int32_t body;
@@ -180,7 +187,7 @@ typedef struct lc_model {
     int block_fsize[4];
     int32_t dlen_expr;
     bool considered[128];
-    int sb, eb; /* module indices of SB, EB */
+    int sb_module, eb_module; /* module indices of SB, EB */
     lc_mech_decl mech_decl;
 } lc_model;
 
@@ -247,7 +254,7 @@ static inline void lc_conv_value(const lc_model *lp, int t, double *v)
     if (t == T_V3D)
         return;
     const lc_type *ty = &lp->types.data[t];
-    for (int f = 0; f < ty->nf; f++)
+    for (int f = 0; f < ty->nfields; f++)
         lc_conv_value(lp, ty->ftype[f], v + ty->foff[f]);
 }
 

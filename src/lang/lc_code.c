@@ -14,7 +14,7 @@ void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg)
 {
     if (vm->err == CBM_OK) {
         vm->err = s;
-        vm->err_pos = vm->at;
+        vm->err_pos = vm->stmt_pos;
         snprintf(vm->errmsg, sizeof vm->errmsg, "%s", msg);
     }
 }
@@ -97,8 +97,8 @@ double cbm__lc_bin_scalar(int op, int t, double a, double b, lc_vm *vm)
 static double step_incdec(const lc_ins *ip, double *p)
 {
     double old = *p;
-    *p = lc_conv_scalar(ip->t, *p + ((ip->fn & 1) ? -1 : 1));
-    return ip->fn >= 2 ? old : *p;
+    *p = lc_conv_scalar(ip->type, *p + ((ip->subop & 1) ? -1 : 1));
+    return ip->subop >= 2 ? old : *p;
 }
 
 /* A loop iteration: one operation and one iteration from the budgets */
@@ -108,7 +108,7 @@ static double step_incdec(const lc_ins *ip, double *p)
             vm->ops--;                                                                             \
             vm->budget--;                                                                          \
         } else { /* a limit is reached: cbm__lc_spend says which */                                \
-            vm->at = at;                                                                           \
+            vm->stmt_pos = at;                                                                     \
             (void)cbm__lc_spend(vm, true);                                                         \
             return 0;                                                                              \
         }                                                                                          \
@@ -120,222 +120,223 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
         return cbm__lc_native_run(p, f, fr, vm);
     const lc_ins *code = p->fn[f].ins.data, *ip = code;
     double *glob = vm->glob;
-    int32_t at = vm->at;
+    int32_t at = vm->stmt_pos;
     for (;; ip++) {
-        at = ip->at >= 0 ? ip->at : at;
+        at = ip->stmt_pos >= 0 ? ip->stmt_pos : at;
         switch (ip->op) {
         case O_NOP:
             break;
         case O_CONST:
-            fr[ip->d] = ip->k;
+            fr[ip->dst] = ip->imm;
             break;
         case O_MOV:
-            fr[ip->d] = fr[ip->a];
+            fr[ip->dst] = fr[ip->src1];
             break;
         case O_GLD:
-            fr[ip->d] = glob[ip->a];
+            fr[ip->dst] = glob[ip->src1];
             break;
         case O_GST:
-            glob[ip->d] = fr[ip->a];
+            glob[ip->dst] = fr[ip->src1];
             break;
         case O_NEG:
-            fr[ip->d] = -fr[ip->a];
+            fr[ip->dst] = -fr[ip->src1];
             break;
         case O_NOT:
-            fr[ip->d] = fr[ip->a] == 0;
+            fr[ip->dst] = fr[ip->src1] == 0;
             break;
         case O_BOOL:
-            fr[ip->d] = fr[ip->a] != 0;
+            fr[ip->dst] = fr[ip->src1] != 0;
             break;
         case O_CONV:
-            fr[ip->d] = lc_conv_scalar(ip->t, fr[ip->a]);
+            fr[ip->dst] = lc_conv_scalar(ip->type, fr[ip->src1]);
             break;
         case O_ADDD:
-            fr[ip->d] = fr[ip->a] + fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] + fr[ip->src2];
             break;
         case O_SUBD:
-            fr[ip->d] = fr[ip->a] - fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] - fr[ip->src2];
             break;
         case O_MULD:
-            fr[ip->d] = fr[ip->a] * fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] * fr[ip->src2];
             break;
         case O_DIVD:
-            fr[ip->d] = fr[ip->a] / fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] / fr[ip->src2];
             break;
         case O_ADDF:
-            fr[ip->d] = (double)(float)(fr[ip->a] + fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] + fr[ip->src2]);
             break;
         case O_SUBF:
-            fr[ip->d] = (double)(float)(fr[ip->a] - fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] - fr[ip->src2]);
             break;
         case O_MULF:
-            fr[ip->d] = (double)(float)(fr[ip->a] * fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] * fr[ip->src2]);
             break;
         case O_DIVF:
-            fr[ip->d] = (double)(float)(fr[ip->a] / fr[ip->b]);
+            fr[ip->dst] = (double)(float)(fr[ip->src1] / fr[ip->src2]);
             break;
         case O_ADDI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) + (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) + (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_SUBI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) - (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) - (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_MULI:
-            fr[ip->d] =
-                lc_wrap_int((long long)lc_c_int(fr[ip->a]) * (long long)lc_c_int(fr[ip->b]));
+            fr[ip->dst] =
+                lc_wrap_int((long long)lc_c_int(fr[ip->src1]) * (long long)lc_c_int(fr[ip->src2]));
             break;
         case O_LT:
-            fr[ip->d] = fr[ip->a] < fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] < fr[ip->src2];
             break;
         case O_GT:
-            fr[ip->d] = fr[ip->a] > fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] > fr[ip->src2];
             break;
         case O_LE:
-            fr[ip->d] = fr[ip->a] <= fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] <= fr[ip->src2];
             break;
         case O_GE:
-            fr[ip->d] = fr[ip->a] >= fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] >= fr[ip->src2];
             break;
         case O_EQ:
-            fr[ip->d] = fr[ip->a] == fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] == fr[ip->src2];
             break;
         case O_NE:
-            fr[ip->d] = fr[ip->a] != fr[ip->b];
+            fr[ip->dst] = fr[ip->src1] != fr[ip->src2];
             break;
         case O_DIVI:
         case O_REMI: {
-            long long x = (long long)lc_c_int(fr[ip->a]), y = (long long)lc_c_int(fr[ip->b]);
+            long long x = (long long)lc_c_int(fr[ip->src1]), y = (long long)lc_c_int(fr[ip->src2]);
             if (y == 0) {
-                vm->at = at;
+                vm->stmt_pos = at;
                 cbm__lc_error(vm, CBM_E_RUNTIME,
                               ip->op == O_DIVI ? "integer division by zero"
                                                : "integer remainder by zero");
                 return 0;
             }
-            fr[ip->d] = lc_wrap_int(ip->op == O_DIVI ? x / y : x % y);
+            fr[ip->dst] = lc_wrap_int(ip->op == O_DIVI ? x / y : x % y);
             break;
         }
         case O_JNLT:
-            if (!(fr[ip->a] < fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] < fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNGT:
-            if (!(fr[ip->a] > fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] > fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNLE:
-            if (!(fr[ip->a] <= fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] <= fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNGE:
-            if (!(fr[ip->a] >= fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] >= fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNEQ:
-            if (!(fr[ip->a] == fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] == fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JNNE:
-            if (!(fr[ip->a] != fr[ip->b]))
-                ip = code + ip->d - 1;
+            if (!(fr[ip->src1] != fr[ip->src2]))
+                ip = code + ip->dst - 1;
             break;
         case O_JLT:
-            if (fr[ip->a] < fr[ip->b]) {
+            if (fr[ip->src1] < fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JGT:
-            if (fr[ip->a] > fr[ip->b]) {
+            if (fr[ip->src1] > fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JLE:
-            if (fr[ip->a] <= fr[ip->b]) {
+            if (fr[ip->src1] <= fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JGE:
-            if (fr[ip->a] >= fr[ip->b]) {
+            if (fr[ip->src1] >= fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JEQ:
-            if (fr[ip->a] == fr[ip->b]) {
+            if (fr[ip->src1] == fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_JNE:
-            if (fr[ip->a] != fr[ip->b]) {
+            if (fr[ip->src1] != fr[ip->src2]) {
                 SPEND_ONE();
-                ip = code + ip->d - 1;
+                ip = code + ip->dst - 1;
             }
             break;
         case O_SIN:
-            fr[ip->d] = sin(fr[ip->a]);
+            fr[ip->dst] = sin(fr[ip->src1]);
             break;
         case O_COS:
-            fr[ip->d] = cos(fr[ip->a]);
+            fr[ip->dst] = cos(fr[ip->src1]);
             break;
         case O_SQRT:
-            fr[ip->d] = sqrt(fr[ip->a]);
+            fr[ip->dst] = sqrt(fr[ip->src1]);
             break;
         case O_EXP:
-            fr[ip->d] = exp(fr[ip->a]);
+            fr[ip->dst] = exp(fr[ip->src1]);
             break;
         case O_BIN:
-            vm->at = at;
-            fr[ip->d] = cbm__lc_bin_scalar(ip->fn, ip->t, fr[ip->a], fr[ip->b], vm);
+            vm->stmt_pos = at;
+            fr[ip->dst] = cbm__lc_bin_scalar(ip->subop, ip->type, fr[ip->src1], fr[ip->src2], vm);
             if (vm->err != CBM_OK)
                 return 0;
             break;
         case O_INC:
-            fr[ip->d] = step_incdec(ip, fr + ip->a);
+            fr[ip->dst] = step_incdec(ip, fr + ip->src1);
             break;
         case O_GINC:
-            fr[ip->d] = step_incdec(ip, glob + ip->a);
+            fr[ip->dst] = step_incdec(ip, glob + ip->src1);
             break;
         case O_MATH1:
-            fr[ip->d] = lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], 0, false));
+            fr[ip->dst] =
+                lc_conv_scalar(ip->type, cbm__builtin_math(ip->subop, fr[ip->src1], 0, false));
             break;
         case O_MATH2:
-            fr[ip->d] =
-                lc_conv_scalar(ip->t, cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], false));
+            fr[ip->dst] = lc_conv_scalar(
+                ip->type, cbm__builtin_math(ip->subop, fr[ip->src1], fr[ip->src2], false));
             break;
         case O_JMP:
-            ip = code + ip->a - 1;
+            ip = code + ip->src1 - 1;
             break;
         case O_JZ:
-            if (fr[ip->a] == 0)
-                ip = code + ip->b - 1;
+            if (fr[ip->src1] == 0)
+                ip = code + ip->src2 - 1;
             break;
         case O_JNZ:
-            if (fr[ip->a] != 0)
-                ip = code + ip->b - 1;
+            if (fr[ip->src1] != 0)
+                ip = code + ip->src2 - 1;
             break;
         case O_SPEND:
             SPEND_ONE();
             break;
         case O_JNZS:
-            if (fr[ip->a] != 0) {
+            if (fr[ip->src1] != 0) {
                 SPEND_ONE();
-                ip = code + ip->b - 1;
+                ip = code + ip->src2 - 1;
             }
             break;
         case O_JMPS:
             SPEND_ONE();
-            ip = code + ip->a - 1;
+            ip = code + ip->src1 - 1;
             break;
         case O_CALL: {
-            const lc_fcode *cf = &p->fn[ip->a];
-            double *nf = fr + ip->b;
-            vm->at = at;
+            const lc_fcode *cf = &p->fn[ip->src1];
+            double *nf = fr + ip->src2;
+            vm->stmt_pos = at;
             if (vm->call_depth >= vm->max_call_depth ||
                 (size_t)(nf - vm->stack) + (size_t)cf->nreg + 1 > vm->stack_cap) {
                 cbm__lc_error(vm, CBM_E_LIMIT,
@@ -345,36 +346,36 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             if (!cbm__lc_spend(vm, false))
                 return 0;
             vm->call_depth++;
-            double r = cbm__lc_run(p, ip->a, nf, vm);
+            double r = cbm__lc_run(p, ip->src1, nf, vm);
             vm->call_depth--;
             if (vm->err != CBM_OK)
                 return 0;
             if (cf->rsize) /* a run result, left in the callee's frame */
-                memcpy(fr + ip->d, nf + cf->rslot, (size_t)cf->rsize * sizeof(double));
+                memcpy(fr + ip->dst, nf + cf->rslot, (size_t)cf->rsize * sizeof(double));
             else
-                fr[ip->d] = r;
+                fr[ip->dst] = r;
             break;
         }
         case O_PROD:
-            vm->at = at;
-            if (!vm->produce(vm->host, ip->d, fr + ip->a))
+            vm->stmt_pos = at;
+            if (!vm->produce(vm->host, ip->dst, fr + ip->src1))
                 return 0;
             break;
         case O_DONE:
             return 1;
         /* the cpfg dialect (lang/cpfg_code.c) */
         case O_PLD:
-            fr[ip->d] = vm->par[ip->a];
+            fr[ip->dst] = vm->par[ip->src1];
             break;
         case O_PST:
-            vm->par[ip->d] = fr[ip->a];
+            vm->par[ip->dst] = fr[ip->src1];
             break;
         case O_CMATH:
-            fr[ip->d] = cbm__builtin_math(ip->fn, fr[ip->a], fr[ip->b], true);
+            fr[ip->dst] = cbm__builtin_math(ip->subop, fr[ip->src1], fr[ip->src2], true);
             break;
         case O_WSPEND:
             if (--vm->budget < 0) {
-                vm->at = at;
+                vm->stmt_pos = at;
                 cbm__lc_error(vm, CBM_E_LIMIT,
                               "while loops ran for more iterations in one step than the limit "
                               "(--max-loop-iterations, --max-operations)");
@@ -382,13 +383,13 @@ double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
             }
             break;
         case O_HOST:
-            vm->at = at;
-            fr[ip->d] = vm->host_call(vm, ip, fr);
+            vm->stmt_pos = at;
+            fr[ip->dst] = vm->host_call(vm, ip, fr);
             if (vm->err != CBM_OK)
                 return 0;
             break;
         case O_RET:
-            return fr[ip->a];
+            return fr[ip->src1];
         default: /* O_RET0 */
             return 0;
         }
@@ -425,15 +426,15 @@ static const lc_node *node(const codegen *g, int32_t ni)
     return &g->model->nodes.data[ni];
 }
 
-static int32_t emit(codegen *g, int op, int d, int a, int b)
+static int32_t emit(codegen *g, int op, int dst, int src1, int src2)
 {
     lc_ins x;
     memset(&x, 0, sizeof x);
     x.op = (uint8_t)op;
-    x.d = d;
-    x.a = a;
-    x.b = b;
-    x.at = g->pending_at;
+    x.dst = dst;
+    x.src1 = src1;
+    x.src2 = src2;
+    x.stmt_pos = g->pending_at;
     g->pending_at = -1;
     if (CBM_ARRAY_PUSH(g->ctx, g->code->ins, x) != CBM_OK) {
         g->fail = g->out_of_memory = true;
@@ -462,7 +463,9 @@ static void patch_jumps(codegen *g, int32_t chain, int32_t target)
 {
     while (chain >= 0 && !g->out_of_memory) {
         lc_ins *x = instr_at(g, chain);
-        int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->d : x->op == O_JMP ? &x->a : &x->b;
+        int32_t *f = x->op >= O_JNLT && x->op <= O_JNE ? &x->dst
+                     : x->op == O_JMP                  ? &x->src1
+                                                       : &x->src2;
         chain = *f;
         *f = target;
     }
@@ -502,17 +505,17 @@ static bool may_write(const codegen *g, int32_t ni)
     case N_NEG:
     case N_NOT:
     case N_CAST:
-        return may_write(g, n->a);
+        return may_write(g, n->child1);
     case N_BIN:
     case N_AND:
     case N_OR:
     case N_COMMA:
-        return may_write(g, n->a) || may_write(g, n->b);
+        return may_write(g, n->child1) || may_write(g, n->child2);
     case N_COND:
-        return may_write(g, n->a) || may_write(g, n->b) || may_write(g, n->c);
+        return may_write(g, n->child1) || may_write(g, n->child2) || may_write(g, n->child3);
     case N_CALLB:
         if (n->fn < FN_MATH_END) {
-            for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            for (int32_t x = n->child1; x >= 0; x = node(g, x)->next)
                 if (may_write(g, x))
                     return true;
             return false;
@@ -555,11 +558,11 @@ static int const_reg(codegen *g, double v, int hint)
         return g->frame_size + g->nconsts++;
     }
     int32_t i = emit(g, O_CONST, hint, 0, 0);
-    instr_at(g, i)->k = v;
+    instr_at(g, i)->imm = v;
     return hint;
 }
 
-/* Whether instruction op computes a value into its register d (the others use d otherwise). */
+/* Whether instruction op computes a value into its register dst (the others use dst otherwise). */
 static bool computes(int op)
 {
     return (op >= O_CONST && op <= O_CONV && op != O_GST) || (op >= O_ADDD && op <= O_MATH2) ||
@@ -575,8 +578,8 @@ static void emit_move(codegen *g, int d, int r)
     size_t len = g->code->ins.len;
     if (r >= g->temp_base && len > 0 && g->label_at != len) {
         lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == r && computes(last->op) && g->pending_at < 0) {
-            last->d = d;
+        if (last->dst == r && computes(last->op) && g->pending_at < 0) {
+            last->dst = d;
             return;
         }
     }
@@ -611,7 +614,7 @@ static int place(const codegen *g, int32_t ni, bool *global)
     }
     if (l->op != N_FIELD)
         return -1;
-    int base = place(g, l->a, global);
+    int base = place(g, l->child1, global);
     return base < 0 ? -1 : base + l->slot;
 }
 
@@ -662,7 +665,7 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
     int na = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, na++)
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, na++)
         if ((!lc_is_scalar(node(g, x)->type) && node(g, x)->op != N_STR) || na == LC_HOST_MAXARGS) {
             g->fail = true;
             return dst;
@@ -670,7 +673,7 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
     int save = g->temp_top;
     int base = new_temps(g, na);
     int i = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, i++) {
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, i++) {
         if (node(g, x)->op == N_STR)
             continue;
         int s2 = g->temp_top;
@@ -678,8 +681,8 @@ static int compile_host_call(codegen *g, int32_t ni, int dst)
         g->temp_top = s2;
     }
     lc_ins *x = instr_at(g, emit(g, O_HOST, dst, base, na));
-    x->fn = (uint16_t)n->fn;
-    x->k = (double)ni;
+    x->subop = (uint16_t)n->fn;
+    x->imm = (double)ni;
     g->temp_top = save;
     return dst;
 }
@@ -701,7 +704,7 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     bool scalar = lc_is_scalar(n->type);
     switch (n->op) {
     case N_NUM:
-        return const_reg(g, n->v, hint);
+        return const_reg(g, n->value, hint);
     case N_LOCAL:
         if (!scalar)
             break;
@@ -726,48 +729,49 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     case N_NEG:
     case N_NOT:
     case N_CAST: {
-        if (!scalar || !lc_is_scalar(node(g, n->a)->type))
+        if (!scalar || !lc_is_scalar(node(g, n->child1)->type))
             break;
-        if (n->op == N_CAST && node(g, n->a)->op == N_NUM) { /* a converted number: a number */
-            lc_node k = *node(g, n->a);
-            k.v = lc_conv_scalar(n->type, k.v);
-            return const_reg(g, k.v, hint);
+        if (n->op == N_CAST && node(g, n->child1)->op == N_NUM) { /* a converted number: a number */
+            lc_node k = *node(g, n->child1);
+            k.value = lc_conv_scalar(n->type, k.value);
+            return const_reg(g, k.value, hint);
         }
-        int r = compile_scalar(g, n->a, hint);
+        int r = compile_scalar(g, n->child1, hint);
         int32_t i = emit(g, n->op == N_NEG ? O_NEG : n->op == N_NOT ? O_NOT : O_CONV, hint, r, 0);
-        instr_at(g, i)->t = (uint8_t)n->type;
+        instr_at(g, i)->type = (uint8_t)n->type;
         return hint;
     }
     case N_BIN: {
-        int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+        int ta = node(g, n->child1)->type, tb = node(g, n->child2)->type;
         if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
             if (scalar && vec_bin(g, ni, hint)) /* a dot product */
                 return hint;
             break;
         }
-        int ra = compile_scalar(g, n->a, new_temp(g));
-        if (ra < g->frame_size && may_write(g, n->b)) { /* read before the right operand runs */
+        int ra = compile_scalar(g, n->child1, new_temp(g));
+        if (ra < g->frame_size &&
+            may_write(g, n->child2)) { /* read before the right operand runs */
             int t = new_temp(g);
             emit(g, O_MOV, t, ra, 0);
             ra = t;
         }
-        int rb = compile_scalar(g, n->b, new_temp(g));
+        int rb = compile_scalar(g, n->child2, new_temp(g));
         int ct = n->type == T_BOOL ? lc_arith_type(ta, tb) : n->type;
         if (n->type == T_BOOL && ct == T_INT) /* compare ints exactly */
             ct = T_DOUBLE;
         int ty;
         int op = scalar_bin_opcode(n->fn, ct, &ty);
         int32_t i = emit(g, op, hint, ra, rb);
-        instr_at(g, i)->t = (uint8_t)ty;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)ty;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_AND:
     case N_OR: {
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
         int32_t j = emit(g, n->op == N_AND ? O_JZ : O_JNZ, 0, hint, -1);
-        r = compile_scalar(g, n->b, new_temp(g));
+        r = compile_scalar(g, n->child2, new_temp(g));
         emit(g, O_BOOL, hint, r, 0);
         patch_jumps(g, j, label_here(g));
         return hint;
@@ -775,27 +779,27 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     case N_COND: {
         if (!scalar)
             break;
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        emit_move(g, hint, compile_scalar(g, n->b, hint));
+        emit_move(g, hint, compile_scalar(g, n->child2, hint));
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
         patch_jumps(g, jelse, label_here(g));
-        emit_move(g, hint, compile_scalar(g, n->c, hint));
+        emit_move(g, hint, compile_scalar(g, n->child3, hint));
         patch_jumps(g, jend, label_here(g));
         return hint;
     }
     case N_COMMA: {
         if (!scalar)
             break;
-        compile_for_effect(g, n->a);
-        return compile_scalar(g, n->b, hint);
+        compile_for_effect(g, n->child1);
+        return compile_scalar(g, n->child2, hint);
     }
     case N_ASSIGN: {
         bool global;
-        int slot = lvalue(g, n->a, &global);
+        int slot = lvalue(g, n->child1, &global);
         if (!scalar || slot < 0)
             break;
-        int r = compile_scalar(g, n->b, hint);
+        int r = compile_scalar(g, n->child2, hint);
         if (global) {
             emit(g, O_GST, slot, r, 0);
             return r;
@@ -805,12 +809,12 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
     }
     case N_INCDEC: {
         bool global;
-        int slot = lvalue(g, n->a, &global);
+        int slot = lvalue(g, n->child1, &global);
         if (slot < 0)
             break;
         int32_t i = emit(g, global ? O_GINC : O_INC, hint, slot, 0);
-        instr_at(g, i)->t = (uint8_t)n->type;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)n->type;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_CALLB: {
@@ -821,11 +825,11 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
                 return hint;
             break;
         }
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+        for (int32_t x = n->child1; x >= 0; x = node(g, x)->next)
             if (!lc_is_scalar(node(g, x)->type))
                 return unsupported(g, hint);
         int r[2] = {-1, -1}, na = 0;
-        for (int32_t x = n->a; x >= 0 && na < 2; x = node(g, x)->next, na++) {
+        for (int32_t x = n->child1; x >= 0 && na < 2; x = node(g, x)->next, na++) {
             if (!lc_is_scalar(node(g, x)->type)) {
                 g->fail = true;
                 return hint;
@@ -841,7 +845,7 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         if (na == 0) { /* no argument: both are 0 */
             r[0] = new_temp(g);
             int32_t i = emit(g, O_CONST, r[0], 0, 0);
-            instr_at(g, i)->k = 0;
+            instr_at(g, i)->imm = 0;
         }
         int t = n->type == T_VOID ? T_DOUBLE : n->type;
         int op = na == 2 ? O_MATH2 : O_MATH1;
@@ -852,8 +856,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
                  : n->fn == FN_EXP  ? O_EXP
                                     : op;
         int32_t i = emit(g, op, hint, r[0], r[1]);
-        instr_at(g, i)->t = (uint8_t)t;
-        instr_at(g, i)->fn = n->fn;
+        instr_at(g, i)->type = (uint8_t)t;
+        instr_at(g, i)->subop = n->fn;
         return hint;
     }
     case N_CALLU:
@@ -862,8 +866,8 @@ static int compile_scalar(codegen *g, int32_t ni, int hint)
         return compile_call(g, ni, hint);
     case N_INCTX: { /* the host matches the context and binds its formals in the frame */
         lc_ins *x = instr_at(g, emit(g, O_HOST, hint, 0, 0));
-        x->fn = LC_HOST_CONTEXT;
-        x->k = (double)ni;
+        x->subop = LC_HOST_CONTEXT;
+        x->imm = (double)ni;
         return hint;
     }
     default:
@@ -890,18 +894,18 @@ static void conv_run(codegen *g, int t, int r)
 {
     if (lc_is_scalar(t)) {
         if (t != T_DOUBLE)
-            instr_at(g, emit(g, O_CONV, r, r, 0))->t = (uint8_t)t;
+            instr_at(g, emit(g, O_CONV, r, r, 0))->type = (uint8_t)t;
         return;
     }
     if (t == T_V3F) {
         for (int i = 0; i < 3; i++)
-            instr_at(g, emit(g, O_CONV, r + i, r + i, 0))->t = T_FLOAT;
+            instr_at(g, emit(g, O_CONV, r + i, r + i, 0))->type = T_FLOAT;
         return;
     }
     if (t == T_V3D)
         return;
     const lc_type *ty = &g->model->types.data[t];
-    for (int f = 0; f < ty->nf; f++)
+    for (int f = 0; f < ty->nfields; f++)
         conv_run(g, ty->ftype[f], r + ty->foff[f]);
 }
 
@@ -931,13 +935,13 @@ static int compile_value(codegen *g, int32_t ni, int dst)
         return dst;
     }
     case N_CTOR: {
-        if (n->a < 0) {
+        if (n->child1 < 0) {
             for (int i = 0; i < sz; i++)
-                instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, dst + i, 0, 0))->imm = 0;
             return dst;
         }
         int off = 0;
-        for (int32_t x = n->a; x >= 0; x = node(g, x)->next) {
+        for (int32_t x = n->child1; x >= 0; x = node(g, x)->next) {
             int xs = lc_type_size(g->model, node(g, x)->type);
             if (off + xs > sz) {
                 g->fail = true;
@@ -953,21 +957,21 @@ static int compile_value(codegen *g, int32_t ni, int dst)
     }
     case N_ASSIGN: {
         bool global;
-        int slot = place(g, n->a, &global);
-        if (slot < 0 || lc_type_size(g->model, node(g, n->a)->type) != sz)
+        int slot = place(g, n->child1, &global);
+        if (slot < 0 || lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        int r = compile_value(g, n->b, dst);
+        int r = compile_value(g, n->child2, dst);
         for (int i = 0; i < sz; i++)
             emit(g, global ? O_GST : O_MOV, slot + i, r + i, 0);
         return r;
     }
     case N_COND: {
-        int r = compile_scalar(g, n->a, new_temp(g));
+        int r = compile_scalar(g, n->child1, new_temp(g));
         int32_t jelse = emit(g, O_JZ, 0, r, -1);
-        copy_run(g, dst, compile_value(g, n->b, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child2, dst), sz, false);
         int32_t jend = emit(g, O_JMP, 0, -1, 0);
         patch_jumps(g, jelse, label_here(g));
-        copy_run(g, dst, compile_value(g, n->c, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child3, dst), sz, false);
         patch_jumps(g, jend, label_here(g));
         return dst;
     }
@@ -978,9 +982,9 @@ static int compile_value(codegen *g, int32_t ni, int dst)
             return dst;
         break;
     case N_CAST: /* V3d to V3f and back: the components, rounded as the walker's ev */
-        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        copy_run(g, dst, compile_value(g, n->a, dst), sz, false);
+        copy_run(g, dst, compile_value(g, n->child1, dst), sz, false);
         conv_run(g, n->type, dst);
         return dst;
     case N_CALLB:
@@ -988,16 +992,16 @@ static int compile_value(codegen *g, int32_t ni, int dst)
             return dst;
         break;
     case N_NEG: { /* each component negated, as ev */
-        if (lc_type_size(g->model, node(g, n->a)->type) != sz)
+        if (lc_type_size(g->model, node(g, n->child1)->type) != sz)
             break;
-        int r = compile_value(g, n->a, dst);
+        int r = compile_value(g, n->child1, dst);
         for (int i = 0; i < sz; i++)
             emit(g, O_NEG, dst + i, r + i, 0);
         return dst;
     }
     case N_COMMA: {
-        compile_for_effect(g, n->a);
-        return compile_value(g, n->b, dst);
+        compile_for_effect(g, n->child1);
+        return compile_value(g, n->child2, dst);
     }
     default:
         break;
@@ -1062,7 +1066,7 @@ static bool vec_op(codegen *g, int32_t ia, int32_t ib, int fn, int type, int dst
 static bool vec_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    return vec_op(g, n->a, n->b, n->fn, n->type, dst);
+    return vec_op(g, n->child1, n->child2, n->fn, n->type, dst);
 }
 
 /* The vector built-ins Dot, Cross, Length and Normalize of V3f and V3d as call_builtin computes
@@ -1070,7 +1074,7 @@ static bool vec_bin(codegen *g, int32_t ni, int dst)
 static bool vec_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int32_t x = n->a;
+    int32_t x = n->child1;
     if (x < 0 || !lc_is_vec(node(g, x)->type))
         return false;
     int32_t x1 = node(g, x)->next;
@@ -1102,7 +1106,7 @@ static bool vec_builtin(codegen *g, int32_t ni, int dst)
     int32_t jend = emit(g, O_JMP, 0, -1, 0);
     patch_jumps(g, jzero, label_here(g));
     for (int i = 0; i < 3; i++)
-        instr_at(g, emit(g, O_CONST, r + i, 0, 0))->k = 0;
+        instr_at(g, emit(g, O_CONST, r + i, 0, 0))->imm = 0;
     patch_jumps(g, jend, label_here(g));
     copy_run(g, dst, r, 3, false);
     conv_run(g, n->type, dst);
@@ -1171,12 +1175,12 @@ static int field_of(codegen *g, int32_t ni, int dst, int sz)
 {
     const lc_node *n = node(g, ni);
     int save = g->temp_top;
-    int bs = lc_type_size(g->model, node(g, n->a)->type);
+    int bs = lc_type_size(g->model, node(g, n->child1)->type);
     if (n->slot + sz > bs) {
         g->fail = true;
         return dst;
     }
-    int r = arg_run(g, n->a, bs);
+    int r = arg_run(g, n->child1, bs);
     copy_run(g, dst, r + n->slot, sz, false);
     g->temp_top = save;
     return dst;
@@ -1196,14 +1200,14 @@ static const signed char HAMILTON[4][4][3] = {
 static bool frame_bin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int ta = node(g, n->a)->type, tb = node(g, n->b)->type;
+    int ta = node(g, n->child1)->type, tb = node(g, n->child2)->type;
     int sa = lc_type_size(g->model, ta), sb = lc_type_size(g->model, tb);
     int sz = lc_type_size(g->model, n->type);
     int save = g->temp_top;
     if (n->type == T_LOCVEC) {
         if ((sa != 1 && sa != 3) || (sb != 1 && sb != 3) || sz != 3)
             return false;
-        int a = arg_run(g, n->a, sa), b = arg_run(g, n->b, sb), r = new_temps(g, 3);
+        int a = arg_run(g, n->child1, sa), b = arg_run(g, n->child2, sb), r = new_temps(g, 3);
         int op = n->fn == B_ADD   ? O_ADDD
                  : n->fn == B_SUB ? O_SUBD
                  : n->fn == B_MUL ? O_MULD
@@ -1219,7 +1223,8 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
     if (tb == T_QUAT) {
         if (sa != 4 || sb != 4 || sz != 4)
             return false;
-        int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, 4), r = new_temps(g, 4), t = new_temp(g);
+        int q = arg_run(g, n->child1, 4), b = arg_run(g, n->child2, 4), r = new_temps(g, 4),
+            t = new_temp(g);
         for (int i = 0; i < 4; i++)
             for (int k = 0; k < 4; k++) {
                 const signed char *h = HAMILTON[i][k];
@@ -1234,7 +1239,7 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
     int nv = tb == T_TVEC ? 3 : 1;
     if (sa != 4 || sb != 3 * nv || sz != 3 * nv || (tb != T_TVEC && !lc_is_vec(tb)))
         return false;
-    int q = arg_run(g, n->a, 4), b = arg_run(g, n->b, sb), r = new_temps(g, sz);
+    int q = arg_run(g, n->child1, 4), b = arg_run(g, n->child2, sb), r = new_temps(g, sz);
     int t = new_temps(g, 3), c = new_temps(g, 3), x = new_temp(g), two = new_temp(g);
     two = const_reg(g, 2.0, two);
     for (int v = 0; v < nv; v++) {
@@ -1260,7 +1265,7 @@ static bool frame_bin(codegen *g, int32_t ni, int dst)
 static bool frame_builtin(codegen *g, int32_t ni, int dst)
 {
     const lc_node *n = node(g, ni);
-    int32_t x = n->a;
+    int32_t x = n->child1;
     if (x < 0)
         return false;
     int32_t x1 = node(g, x)->next;
@@ -1348,7 +1353,7 @@ static bool frame_builtin(codegen *g, int32_t ni, int dst)
             int32_t je = emit(g, O_JMP, 0, -1, 0);
             patch_jumps(g, jz, label_here(g));
             for (int i = 0; i < 3; i++)
-                instr_at(g, emit(g, O_CONST, r + p - u + i, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, r + p - u + i, 0, 0))->imm = 0;
             patch_jumps(g, je, label_here(g));
         }
         store_result(g, dst, r, 9, n->type);
@@ -1373,18 +1378,19 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     const lc_fcode *cf = &g->program->fn[n->slot];
     bool ok = cf->compiled;
     int a = 0;
-    for (int32_t x = n->a; x >= 0 && ok; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0 && ok; x = node(g, x)->next, a++) {
         const lc_node *xn = node(g, x);
-        ok = a < f->np && lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
+        ok = a < f->nparams &&
+             lc_type_size(g->model, xn->type) == lc_type_size(g->model, f->ptype[a]) &&
              (!f->pref[a] || xn->op == N_LOCAL || xn->op == N_GLOBAL);
     }
-    if (!ok || a != f->np)
+    if (!ok || a != f->nparams)
         return unsupported(g, dst);
     int save = g->temp_top;
     int base = new_temps(g, cf->npd);
     int off = 0;
     a = 0;
-    for (int32_t x = n->a; x >= 0; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0; x = node(g, x)->next, a++) {
         int xs = lc_type_size(g->model, f->ptype[a]);
         int s2 = g->temp_top;
         if (lc_is_scalar(node(g, x)->type))
@@ -1401,7 +1407,7 @@ static int compile_call(codegen *g, int32_t ni, int dst)
     emit(g, O_CALL, dst, n->slot, base);
     off = 0;
     a = 0;
-    for (int32_t x = n->a; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
+    for (int32_t x = n->child1; x >= 0 && cf->refs; x = node(g, x)->next, a++) {
         int xs = lc_type_size(g->model, f->ptype[a]);
         const lc_node *xn = node(g, x);
         for (int i = 0; i < xs && f->pref[a]; i++)
@@ -1417,14 +1423,14 @@ static int compile_call(codegen *g, int32_t ni, int dst)
  * body. */
 static void compile_produce(codegen *g, const lc_node *n)
 {
-    for (int32_t i = 0; i < n->b && !g->fail; i++) {
-        const lc_modref *sm = &g->model->sms.data[n->a + i];
+    for (int32_t i = 0; i < n->child2 && !g->fail; i++) {
+        const lc_modref *sm = &g->model->sms.data[n->child1 + i];
         const lc_module *mod = &g->model->mods.data[sm->mod];
         int save = g->temp_top;
         int base = new_temps(g, mod->size);
         int off = 0, a = 0;
         for (int32_t x = sm->args; x >= 0; x = node(g, x)->next, a++) {
-            int xs = a < mod->np ? lc_type_size(g->model, mod->ptype[a]) : -1;
+            int xs = a < mod->nparams ? lc_type_size(g->model, mod->ptype[a]) : -1;
             if (xs != lc_type_size(g->model, node(g, x)->type) || off + xs > mod->size) {
                 g->fail = true;
                 return;
@@ -1441,7 +1447,7 @@ static void compile_produce(codegen *g, const lc_node *n)
             g->fail = true;
             return;
         }
-        emit(g, O_PROD, n->a + i, base, 0);
+        emit(g, O_PROD, n->child1 + i, base, 0);
         g->temp_top = save;
     }
     if (!n->fn)
@@ -1461,7 +1467,7 @@ static int compile_condition(codegen *g, int32_t c, lc_ins **cmp)
     size_t len = g->code->ins.len;
     if (!g->fail && r == t && len > 0 && g->label_at != len && g->pending_at < 0) {
         lc_ins *last = &g->code->ins.data[len - 1];
-        if (last->d == t && last->op >= O_LT && last->op <= O_NE)
+        if (last->dst == t && last->op >= O_LT && last->op <= O_NE)
             *cmp = last;
     }
     return r;
@@ -1475,7 +1481,7 @@ static int32_t jump_false(codegen *g, int32_t c)
     int r = compile_condition(g, c, &cmp);
     if (cmp) {
         cmp->op = (uint8_t)(O_JNLT + (cmp->op - O_LT));
-        cmp->d = -1;
+        cmp->dst = -1;
         return (int32_t)g->code->ins.len - 1;
     }
     return emit(g, O_JZ, 0, r, -1);
@@ -1488,7 +1494,7 @@ static void jump_true(codegen *g, int32_t c, int32_t target)
     int r = compile_condition(g, c, &cmp);
     if (cmp) {
         cmp->op = (uint8_t)(O_JLT + (cmp->op - O_LT));
-        cmp->d = target;
+        cmp->dst = target;
         return;
     }
     emit(g, O_JNZS, 0, r, target);
@@ -1502,9 +1508,9 @@ static void compile_loop(codegen *g, const lc_node *n)
     int32_t outer_breaks = g->break_jumps, outer_continues = g->continue_jumps;
     g->break_jumps = g->continue_jumps = -1;
     g->loops++;
-    if (n->op == S_FOR && n->a >= 0)
-        compile_stmts(g, n->a);
-    int32_t c = n->op == S_FOR ? n->b : n->a;
+    if (n->op == S_FOR && n->child1 >= 0)
+        compile_stmts(g, n->child1);
+    int32_t c = n->op == S_FOR ? n->child2 : n->child1;
     if (c >= 0 && !lc_is_scalar(node(g, c)->type)) {
         g->fail = true;
         return;
@@ -1513,14 +1519,14 @@ static void compile_loop(codegen *g, const lc_node *n)
     if (n->op == S_DO || c < 0)
         emit(g, O_SPEND, 0, 0, 0);
     int32_t top = label_here(g);
-    compile_stmts(g, n->op == S_FOR ? n->d : n->b);
+    compile_stmts(g, n->op == S_FOR ? n->child4 : n->child2);
     patch_jumps(g, g->continue_jumps, label_here(g));
     int save = g->temp_top;
-    if (n->op == S_FOR && n->c >= 0) {
-        if (!lc_is_scalar(node(g, n->c)->type))
+    if (n->op == S_FOR && n->child3 >= 0) {
+        if (!lc_is_scalar(node(g, n->child3)->type))
             g->fail = true;
         else
-            (void)compile_scalar(g, n->c, new_temp(g));
+            (void)compile_scalar(g, n->child3, new_temp(g));
     }
     g->temp_top = save;
     patch_jumps(g, to_test, label_here(g));
@@ -1551,31 +1557,31 @@ static void compile_stmts(codegen *g, int32_t ni)
 #define LC_MAX_CASES 256
 static void compile_switch(codegen *g, const lc_node *n)
 {
-    if (!lc_is_scalar(node(g, n->a)->type)) {
+    if (!lc_is_scalar(node(g, n->child1)->type)) {
         g->fail = true;
         return;
     }
-    int32_t body = node(g, n->b)->op == S_BLOCK ? node(g, n->b)->a : n->b;
+    int32_t body = node(g, n->child2)->op == S_BLOCK ? node(g, n->child2)->child1 : n->child2;
     int32_t jump[LC_MAX_CASES];
     int nc = 0;
     int32_t dflt = -1; /* the default's case node */
     int v = new_temp(g);
-    emit_move(g, v, compile_scalar(g, n->a, v));
+    emit_move(g, v, compile_scalar(g, n->child1, v));
     for (int32_t c = body; c >= 0 && !g->fail; c = node(g, c)->next) {
         const lc_node *cn = node(g, c);
         if (cn->op != S_CASE)
             continue;
-        if (cn->a < 0) {
+        if (cn->child1 < 0) {
             dflt = c;
             continue;
         }
-        if (nc == LC_MAX_CASES || !lc_is_scalar(node(g, cn->a)->type)) {
+        if (nc == LC_MAX_CASES || !lc_is_scalar(node(g, cn->child1)->type)) {
             g->fail = true;
             return;
         }
         int save = g->temp_top;
         int t = new_temp(g);
-        int r = compile_scalar(g, cn->a, t);
+        int r = compile_scalar(g, cn->child1, t);
         emit(g, O_EQ, t, v, r);
         jump[nc++] = emit(g, O_JNZ, 0, t, -1);
         g->temp_top = save;
@@ -1591,7 +1597,7 @@ static void compile_switch(codegen *g, const lc_node *n)
         const lc_node *cn = node(g, c);
         if (cn->op == S_CASE) {
             int32_t at = label_here(g);
-            if (cn->a >= 0 && k < nc) /* the same cases as above, in order: k < nc */
+            if (cn->child1 >= 0 && k < nc) /* the same cases as above, in order: k < nc */
                 patch_jumps(g, jump[k++], at);
             if (c == dflt) {
                 patch_jumps(g, jd, at);
@@ -1616,45 +1622,45 @@ static void compile_stmt(codegen *g, int32_t ni)
         int save = g->temp_top;
         switch (n->op) {
         case S_EXPR: {
-            const lc_node *e = node(g, n->a);
+            const lc_node *e = node(g, n->child1);
             if (lc_is_scalar(e->type) || e->type == T_VOID)
-                (void)compile_scalar(g, n->a, new_temp(g));
+                (void)compile_scalar(g, n->child1, new_temp(g));
             else
-                (void)compile_value(g, n->a, new_temps(g, lc_type_size(g->model, e->type)));
+                (void)compile_value(g, n->child1, new_temps(g, lc_type_size(g->model, e->type)));
             break;
         }
         case S_DECL:
             if (!lc_is_scalar(n->type)) { /* into its run, then rounded as exec does */
                 int sz = lc_type_size(g->model, n->type);
-                if (n->a >= 0) {
-                    copy_run(g, n->slot, compile_value(g, n->a, n->slot), sz, false);
+                if (n->child1 >= 0) {
+                    copy_run(g, n->slot, compile_value(g, n->child1, n->slot), sz, false);
                     conv_run(g, n->type, n->slot);
                 } else
                     for (int i = 0; i < sz; i++)
-                        instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->k = 0;
-            } else if (n->a >= 0) {
-                int r = compile_scalar(g, n->a, new_temp(g));
+                        instr_at(g, emit(g, O_CONST, n->slot + i, 0, 0))->imm = 0;
+            } else if (n->child1 >= 0) {
+                int r = compile_scalar(g, n->child1, new_temp(g));
                 if (n->type == T_DOUBLE)
                     emit_move(g, n->slot, r);
                 else
-                    instr_at(g, emit(g, O_CONV, n->slot, r, 0))->t = (uint8_t)n->type;
+                    instr_at(g, emit(g, O_CONV, n->slot, r, 0))->type = (uint8_t)n->type;
             } else
-                instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->k = 0;
+                instr_at(g, emit(g, O_CONST, n->slot, 0, 0))->imm = 0;
             break;
         case S_BLOCK:
-            compile_stmts(g, n->a);
+            compile_stmts(g, n->child1);
             break;
         case S_IF: {
-            if (!lc_is_scalar(node(g, n->a)->type)) {
+            if (!lc_is_scalar(node(g, n->child1)->type)) {
                 g->fail = true;
                 break;
             }
-            int32_t jelse = jump_false(g, n->a);
-            compile_stmts(g, n->b);
-            if (n->c >= 0) {
+            int32_t jelse = jump_false(g, n->child1);
+            compile_stmts(g, n->child2);
+            if (n->child3 >= 0) {
                 int32_t jend = emit(g, O_JMP, 0, -1, 0);
                 patch_jumps(g, jelse, label_here(g));
-                compile_stmts(g, n->c);
+                compile_stmts(g, n->child3);
                 patch_jumps(g, jend, label_here(g));
             } else
                 patch_jumps(g, jelse, label_here(g));
@@ -1667,13 +1673,14 @@ static void compile_stmt(codegen *g, int32_t ni)
             break;
         case S_RETURN:
             if (g->is_body) { /* a body's return: its value is dropped, nothing produced */
-                if (n->a >= 0 && lc_is_scalar(node(g, n->a)->type))
-                    (void)compile_scalar(g, n->a, new_temp(g));
-                else if (n->a >= 0)
-                    (void)compile_value(g, n->a,
-                                        new_temps(g, lc_type_size(g->model, node(g, n->a)->type)));
+                if (n->child1 >= 0 && lc_is_scalar(node(g, n->child1)->type))
+                    (void)compile_scalar(g, n->child1, new_temp(g));
+                else if (n->child1 >= 0)
+                    (void)compile_value(
+                        g, n->child1,
+                        new_temps(g, lc_type_size(g->model, node(g, n->child1)->type)));
                 emit(g, O_RET0, 0, 0, 0);
-            } else if (n->a < 0)
+            } else if (n->child1 < 0)
                 emit(g, O_RET0, 0, 0, 0);
             else if (!lc_is_scalar(n->type)) { /* the run result, rounded as exec does */
                 int sz = lc_type_size(g->model, n->type);
@@ -1681,14 +1688,15 @@ static void compile_stmt(codegen *g, int32_t ni)
                     g->fail = true;
                     break;
                 }
-                copy_run(g, g->code->rslot, compile_value(g, n->a, new_temps(g, sz)), sz, false);
+                copy_run(g, g->code->rslot, compile_value(g, n->child1, new_temps(g, sz)), sz,
+                         false);
                 conv_run(g, n->type, g->code->rslot);
                 emit(g, O_RET0, 0, 0, 0);
             } else {
-                int r = compile_scalar(g, n->a, new_temp(g));
+                int r = compile_scalar(g, n->child1, new_temp(g));
                 if (n->type != T_DOUBLE) {
                     int t = new_temp(g);
-                    instr_at(g, emit(g, O_CONV, t, r, 0))->t = (uint8_t)n->type;
+                    instr_at(g, emit(g, O_CONV, t, r, 0))->type = (uint8_t)n->type;
                     r = t;
                 }
                 emit(g, O_RET, 0, r, 0);
@@ -1748,8 +1756,8 @@ static void compile_root(codegen *g, int kind, int32_t body)
         lc_node n;
         memset(&n, 0, sizeof n);
         n.op = S_PRODUCE;
-        n.a = g->model->axiom.first;
-        n.b = g->model->axiom.n;
+        n.child1 = g->model->axiom.first;
+        n.child2 = g->model->axiom.n;
         n.fn = 1;
         g->arg_pos = true;
         compile_produce(g, &n);
@@ -1792,13 +1800,13 @@ static bool compile_code(cbm_context *ctx, const lc_model *m, lc_program *p, int
         g.temp_base = g.temp_top = fsize + nconsts;
         fc->nreg = g.temp_top;
         for (int c = 0; c < nconsts; c++)
-            instr_at(&g, emit(&g, O_CONST, fsize + c, 0, 0))->k = consts[c];
+            instr_at(&g, emit(&g, O_CONST, fsize + c, 0, 0))->imm = consts[c];
         if (kind == ROOT_STMTS)
             compile_stmts(&g, body);
         else
             compile_root(&g, kind, body);
         for (int i = 0; i < fc->rsize; i++) /* falling off the end: a result of zeros */
-            instr_at(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->k = 0;
+            instr_at(&g, emit(&g, O_CONST, fc->rslot + i, 0, 0))->imm = 0;
         emit(&g, O_RET0, 0, 0, 0);
         if (g.fail)
             break;
@@ -1847,12 +1855,14 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
         const lc_function *fn = &m->funcs.data[f];
         lc_fcode *fc = &p->fn[f];
         fc->compiled = true;
-        for (int i = 0; i < fn->np; i++) {
+        for (int i = 0; i < fn->nparams; i++) {
             fc->npd += lc_type_size(m, fn->ptype[i]);
             fc->refs = fc->refs || fn->pref[i];
         }
         fc->rslot = fn->fsize;
-        fc->rsize = fn->ret == T_VOID || lc_is_scalar(fn->ret) ? 0 : lc_type_size(m, fn->ret);
+        fc->rsize = fn->ret_type == T_VOID || lc_is_scalar(fn->ret_type)
+                        ? 0
+                        : lc_type_size(m, fn->ret_type);
     }
     for (bool changed = true; changed;) {
         changed = false;

@@ -38,16 +38,16 @@ typedef struct lc_vm {
     long ops;    /* calls and loop iterations left in this step (limits.max_operations) */
     cbm_status err;
     char errmsg[160];
-    int32_t at;      /* text offset of the statement being executed (runtime messages) */
-    int32_t err_pos; /* where the first runtime error happened, -1: unknown */
+    int32_t stmt_pos; /* text offset of the statement being executed (runtime messages) */
+    int32_t err_pos;  /* where the first runtime error happened, -1: unknown */
     /* `produce` of a compiled production body: appends module sm (an index of the model's
      * sms) with its parameters v (the module's size in doubles) to the string being produced;
      * false after reporting an error (a parameter not finite, out of memory) */
     bool (*produce)(void *ud, int sm, const double *v);
     void *host; /* the ud of produce, and the host of host_call */
     /* the cpfg dialect (lang/cpfg_code.c): the production's formal parameters (O_PLD, O_PST)
-     * and the host's built-ins, arrays and printf (O_HOST: ip->fn says which, ip->at is the
-     * node whose position a runtime error names; the result goes to fr[ip->d]) */
+     * and the host's built-ins, arrays and printf (O_HOST: ip->subop says which, ip->imm is the
+     * node whose position a runtime error names; the result goes to fr[ip->dst]) */
     double *par;
     double (*host_call)(struct lc_vm *vm, const struct lc_ins *ip, double *fr);
 } lc_vm;
@@ -57,12 +57,12 @@ enum {
     O_NOP, /* sets the statement position only */
     O_CONST,
     O_MOV,
-    O_GLD, /* d = glob[a] */
-    O_GST, /* glob[d] = a */
+    O_GLD, /* dst = glob[src1] */
+    O_GST, /* glob[dst] = src1 */
     O_NEG,
     O_NOT,
-    O_BOOL, /* d = a != 0 */
-    O_CONV, /* d = conv(t, a) */
+    O_BOOL, /* dst = src1 != 0 */
+    O_CONV, /* dst = conv(type, src1) */
     O_ADDD,
     O_SUBD,
     O_MULD,
@@ -82,21 +82,24 @@ enum {
     O_NE,
     O_DIVI,
     O_REMI,
-    O_BIN,   /* d = cbm__lc_bin_scalar(t, type fn, a, b): the other operators and types */
-    O_INC,   /* ++/-- on local a: fn the mode, t the type, d the value */
-    O_GINC,  /* the same on global a */
-    O_MATH1, /* d = conv(t, math fn(a)) */
-    O_MATH2, /* d = conv(t, math fn(a, b)) */
-    O_JMP,   /* to a */
-    O_JZ,    /* to b if a == 0 */
-    O_JNZ,   /* to b if a != 0 */
+    O_BIN,   /* dst = cbm__lc_bin_scalar(operator subop, type, src1, src2): the other operators
+              * and types */
+    O_INC,   /* ++/-- on local src1: subop the mode, type the type, dst the value */
+    O_GINC,  /* the same on global src1 */
+    O_MATH1, /* dst = conv(type, math subop(src1)) */
+    O_MATH2, /* dst = conv(type, math subop(src1, src2)) */
+    O_JMP,   /* to src1 */
+    O_JZ,    /* to src2 if src1 == 0 */
+    O_JNZ,   /* to src2 if src1 != 0 */
     O_SPEND, /* a loop iteration */
-    O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to b if a != 0 */
-    O_JMPS,  /* the same without a test (for (;;)): to a */
-    O_CALL,  /* d = function a on the frame at register b (a run result: its run to d..) */
-    O_RET,   /* the value of a */
+    O_JNZS,  /* a loop's test at its bottom: spends an iteration and jumps to src2 if src1 != 0 */
+    O_JMPS,  /* the same without a test (for (;;)): to src1 */
+    O_CALL,  /* dst = function src1 on the frame at register src2 (a run result: its run to
+              * dst..) */
+    O_RET,   /* the value of src1 */
     O_RET0,
-    /* a comparison and the jump on its falsehood in one (if, while, for): to d unless a op b */
+    /* a comparison and the jump on its falsehood in one (if, while, for): to dst unless
+     * src1 op src2 */
     O_JNLT,
     O_JNGT,
     O_JNLE,
@@ -117,31 +120,50 @@ enum {
     O_SQRT,
     O_EXP,
     /* production bodies */
-    O_PROD, /* appends module sm d with its parameters in registers a.. (vm->produce) */
+    O_PROD, /* appends module sm dst with its parameters in registers src1.. (vm->produce) */
     O_DONE, /* `produce` ends the body: the production applied (the run returns 1) */
     /* the cpfg dialect (lang/cpfg_code.c) */
-    O_PLD,    /* d = vm->par[a] */
-    O_PST,    /* vm->par[d] = a */
-    O_CMATH,  /* d = math built-in fn(a, b) with trigonometry in degrees */
+    O_PLD,    /* dst = vm->par[src1] */
+    O_PST,    /* vm->par[dst] = src1 */
+    O_CMATH,  /* dst = math built-in subop(src1, src2) with trigonometry in degrees */
     O_WSPEND, /* an iteration of a while loop from vm->budget (the cpfg message) */
-    O_HOST    /* d = vm->host_call(ip, fr); also the L+C dialect's random numbers, func,
+    O_HOST    /* dst = vm->host_call(ip, fr); also the L+C dialect's random numbers, func,
                * Forward/Backward, UseGroup/CurrentGroup, stop, printf and the mechanics and
-               * light built-ins: fn the built-in, its b (scalar) arguments in registers a..,
-               * k the call's node (lsys/lpfg.c lpfg_host); fn LC_HOST_CONTEXT: the context
-               * (InLeftContext ...) of node k matched, its formals bound in the frame fr */
+               * light built-ins: subop the built-in, its src2 (scalar) arguments in registers
+               * src1.., imm the call's node (lsys/lpfg.c lpfg_host); subop LC_HOST_CONTEXT:
+               * the context (InLeftContext ...) of node imm matched, its formals bound in the
+               * frame fr */
 };
 
-/* O_HOST's fn for a context (N_INCTX): the host matches it and binds its formals in the frame */
+/* O_HOST's subop for a context (N_INCTX): the host matches it and binds its formals in the frame */
 #define LC_HOST_CONTEXT 0xFFFF
 /* the most (scalar) arguments of an O_HOST call (printf's, the mechanics built-ins') */
 #define LC_HOST_MAXARGS 16
 
+/* One instruction. Its fields, by one convention for every opcode (the enum above says which
+ * each uses):
+ *   op        the opcode (O_...);
+ *   type      the type a result is converted to (T_INT, T_FLOAT ...: O_CONV, O_MATH*, O_INC) or
+ *             computed in (O_BIN);
+ *   subop     which variant of the opcode: the operator (O_BIN, a B_* of lc.h), the built-in
+ *             (O_MATH*, O_CMATH, O_HOST: a FN_* of builtins.h, or LC_HOST_CONTEXT), the mode of
+ *             O_INC (bit 0: decrement, >= 2: postfix);
+ *   dst       the destination register (a frame slot), or the global, parameter or module
+ *             written, or the target of a fused compare-and-jump;
+ *   src1      the first operand register, or the global, parameter or function read, or a
+ *             jump's target;
+ *   src2      the second operand register, or a conditional jump's target, or an argument
+ *             count;
+ *   stmt_pos  the statement that starts at this instruction, as its dialect locates it (runtime
+ *             messages name it): its text offset (L+C), or its node (cpfg: the node a
+ *             runtime error names, also O_HOST's array); -1: none;
+ *   imm       an immediate constant (O_CONST's value; the L+C dialect's O_HOST: its node). */
 typedef struct lc_ins {
-    uint8_t op, t; /* t: a type (conversions) or an operator (O_BIN) */
-    uint16_t fn;   /* a built-in (O_MATH) or the increment mode (O_INC) */
-    int32_t d, a, b;
-    int32_t at; /* the statement that starts here (its text offset), -1: none */
-    double k;
+    uint8_t op, type;
+    uint16_t subop;
+    int32_t dst, src1, src2;
+    int32_t stmt_pos;
+    double imm;
 } lc_ins;
 
 typedef struct lc_fcode {
@@ -219,7 +241,7 @@ void cbm__lc_native_free(cbm_context *ctx, lc_program *p);
 bool cbm__lc_native_has(const lc_program *p, int f);
 double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 
-/* The first runtime error of a run wins; its position is vm->at. */
+/* The first runtime error of a run wins; its position is vm->stmt_pos. */
 void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg);
 /* Takes one operation (a call, a production applied or a loop iteration) from the step's
  * budgets; false after reporting the limit. */

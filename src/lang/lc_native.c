@@ -79,7 +79,7 @@ enum { F_DIV, F_REM, F_DEEP };
 static void rt_limit(struct lc_rt *R, int32_t at)
 {
     lc_vm *vm = R->vm;
-    vm->at = at;
+    vm->stmt_pos = at;
     (void)cbm__lc_spend(vm, true);
     R->failed = 1;
 }
@@ -87,7 +87,7 @@ static void rt_limit(struct lc_rt *R, int32_t at)
 static int rt_spend_call(struct lc_rt *R, int32_t at)
 {
     lc_vm *vm = R->vm;
-    vm->at = at;
+    vm->stmt_pos = at;
     if (cbm__lc_spend(vm, false))
         return 1;
     R->failed = 1;
@@ -97,7 +97,7 @@ static int rt_spend_call(struct lc_rt *R, int32_t at)
 static void rt_fault(struct lc_rt *R, int32_t at, int what)
 {
     lc_vm *vm = R->vm;
-    vm->at = at;
+    vm->stmt_pos = at;
     if (what == F_DEEP)
         cbm__lc_error(vm, CBM_E_LIMIT, "function calls nested too deeply (--max-call-depth)");
     else
@@ -114,7 +114,7 @@ static double rt_math(int fn, double a, double b)
 static double rt_bin(struct lc_rt *R, int32_t at, int op, int t, double a, double b)
 {
     lc_vm *vm = R->vm;
-    vm->at = at;
+    vm->stmt_pos = at;
     double r = cbm__lc_bin_scalar(op, t, a, b, vm);
     if (vm->err != CBM_OK)
         R->failed = 1;
@@ -124,7 +124,7 @@ static double rt_bin(struct lc_rt *R, int32_t at, int op, int t, double a, doubl
 static int rt_prod(struct lc_rt *R, int32_t at, int sm, const double *v)
 {
     lc_vm *vm = R->vm;
-    vm->at = at;
+    vm->stmt_pos = at;
     if (vm->produce(vm->host, sm, v))
         return 1;
     R->failed = 1;
@@ -139,11 +139,11 @@ static double rt_host(struct lc_rt *R, int32_t at, int fn, int nargs, int32_t no
     lc_ins x;
     memset(&x, 0, sizeof x);
     x.op = O_HOST;
-    x.fn = (uint16_t)fn;
-    x.b = nargs;
-    x.k = (double)node;
-    x.at = at;
-    vm->at = at;
+    x.subop = (uint16_t)fn;
+    x.src2 = nargs;
+    x.imm = (double)node;
+    x.stmt_pos = at;
+    vm->stmt_pos = at;
     double r = vm->host_call(vm, &x, v);
     if (vm->err != CBM_OK)
         R->failed = 1;
@@ -168,7 +168,7 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm)
                       rt_bin,
                       rt_prod,
                       rt_host};
-    return p->native->fn[f](fr, &R, vm->at);
+    return p->native->fn[f](fr, &R, vm->stmt_pos);
 }
 
 /* ---------------------------------------------------------------- the C source */
@@ -178,8 +178,8 @@ typedef struct c_source {
     bool out_of_memory;
 } c_source;
 
-static void put(c_source *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(c_source *s, const char *fmt, ...)
+static void append_c(c_source *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void append_c(c_source *s, const char *fmt, ...)
 {
     va_list ap, ap2;
     va_start(ap, fmt);
@@ -229,16 +229,16 @@ static void put_conv(c_source *s, int t, const char *e)
 {
     switch (t) {
     case T_INT:
-        put(s, "cint(%s)", e);
+        append_c(s, "cint(%s)", e);
         break;
     case T_FLOAT:
-        put(s, "(double)(float)(%s)", e);
+        append_c(s, "(double)(float)(%s)", e);
         break;
     case T_BOOL:
-        put(s, "(double)(%s != 0)", e);
+        append_c(s, "(double)(%s != 0)", e);
         break;
     default:
-        put(s, "(%s)", e);
+        append_c(s, "(%s)", e);
         break;
     }
 }
@@ -247,7 +247,7 @@ static void put_const(c_source *s, int d, double k)
 {
     uint64_t b;
     memcpy(&b, &k, sizeof b);
-    put(s, "r%d = kbits(0x%016" PRIx64 "u);", d, b);
+    append_c(s, "r%d = kbits(0x%016" PRIx64 "u);", d, b);
 }
 
 static const char *const cmp_c[] = {"<", ">", "<=", ">=", "==", "!="};
@@ -261,11 +261,11 @@ static void put_frame_out(c_source *s, const lc_program *p, const lc_model *m, i
     const lc_function *fn = &m->funcs.data[f];
     const lc_fcode *fc = &p->fn[f];
     for (int i = 0; i < fc->rsize; i++)
-        put(s, "fr[%d] = r%d; ", fc->rslot + i, fc->rslot + i);
-    for (int i = 0, off = 0; i < fn->np && fc->refs; i++) {
+        append_c(s, "fr[%d] = r%d; ", fc->rslot + i, fc->rslot + i);
+    for (int i = 0, off = 0; i < fn->nparams && fc->refs; i++) {
         int sz = lc_type_size(m, fn->ptype[i]);
         for (int k = 0; k < sz && fn->pref[i]; k++)
-            put(s, "fr[%d] = r%d; ", off + k, off + k);
+            append_c(s, "fr[%d] = r%d; ", off + k, off + k);
         off += sz;
     }
 }
@@ -273,54 +273,55 @@ static void put_frame_out(c_source *s, const lc_program *p, const lc_model *m, i
 static void put_ins(c_source *s, const lc_program *p, const lc_model *m, int f, const lc_ins *x)
 {
     char a[64], g[48];
-    snprintf(a, sizeof a, "r%d", x->a);
+    snprintf(a, sizeof a, "r%d", x->src1);
     switch (x->op) {
     case O_NOP:
-        put(s, ";");
+        append_c(s, ";");
         break;
     case O_CONST:
-        put_const(s, x->d, x->k);
+        put_const(s, x->dst, x->imm);
         break;
     case O_MOV:
-        put(s, "r%d = r%d;", x->d, x->a);
+        append_c(s, "r%d = r%d;", x->dst, x->src1);
         break;
     case O_GLD:
-        put(s, "r%d = R->glob[%d];", x->d, x->a);
+        append_c(s, "r%d = R->glob[%d];", x->dst, x->src1);
         break;
     case O_GST:
-        put(s, "R->glob[%d] = r%d;", x->d, x->a);
+        append_c(s, "R->glob[%d] = r%d;", x->dst, x->src1);
         break;
     case O_NEG:
-        put(s, "r%d = -r%d;", x->d, x->a);
+        append_c(s, "r%d = -r%d;", x->dst, x->src1);
         break;
     case O_NOT:
-        put(s, "r%d = (double)(r%d == 0);", x->d, x->a);
+        append_c(s, "r%d = (double)(r%d == 0);", x->dst, x->src1);
         break;
     case O_BOOL:
-        put(s, "r%d = (double)(r%d != 0);", x->d, x->a);
+        append_c(s, "r%d = (double)(r%d != 0);", x->dst, x->src1);
         break;
     case O_CONV:
-        put(s, "r%d = ", x->d);
-        put_conv(s, x->t, a);
-        put(s, ";");
+        append_c(s, "r%d = ", x->dst);
+        put_conv(s, x->type, a);
+        append_c(s, ";");
         break;
     case O_ADDD:
     case O_SUBD:
     case O_MULD:
     case O_DIVD:
-        put(s, "r%d = r%d %c r%d;", x->d, x->a, "+-*/"[x->op - O_ADDD], x -> b);
+        append_c(s, "r%d = r%d %c r%d;", x->dst, x->src1, "+-*/"[x->op - O_ADDD], x -> src2);
         break;
     case O_ADDF:
     case O_SUBF:
     case O_MULF:
     case O_DIVF:
-        put(s, "r%d = (double)(float)(r%d %c r%d);", x->d, x->a, "+-*/"[x->op - O_ADDF], x -> b);
+        append_c(s, "r%d = (double)(float)(r%d %c r%d);", x->dst, x->src1, "+-*/"[x->op - O_ADDF],
+                 x -> src2);
         break;
     case O_ADDI:
     case O_SUBI:
     case O_MULI:
-        put(s, "r%d = wrap((long long)cint(r%d) %c (long long)cint(r%d));", x->d, x->a,
-            "+-*"[x->op - O_ADDI], x -> b);
+        append_c(s, "r%d = wrap((long long)cint(r%d) %c (long long)cint(r%d));", x->dst, x->src1,
+                 "+-*"[x->op - O_ADDI], x -> src2);
         break;
     case O_LT:
     case O_GT:
@@ -328,14 +329,15 @@ static void put_ins(c_source *s, const lc_program *p, const lc_model *m, int f, 
     case O_GE:
     case O_EQ:
     case O_NE:
-        put(s, "r%d = (double)(r%d %s r%d);", x->d, x->a, cmp_c[x->op - O_LT], x->b);
+        append_c(s, "r%d = (double)(r%d %s r%d);", x->dst, x->src1, cmp_c[x->op - O_LT], x->src2);
         break;
     case O_DIVI:
     case O_REMI:
-        put(s,
-            "{ long long x = (long long)cint(r%d), y = (long long)cint(r%d); if (y == 0) { "
-            "R->fault(R, at, %d); return 0; } r%d = wrap(x %c y); }",
-            x->a, x->b, x->op == O_DIVI ? F_DIV : F_REM, x->d, x->op == O_DIVI ? '/' : '%');
+        append_c(s,
+                 "{ long long x = (long long)cint(r%d), y = (long long)cint(r%d); if (y == 0) { "
+                 "R->fault(R, at, %d); return 0; } r%d = wrap(x %c y); }",
+                 x->src1, x->src2, x->op == O_DIVI ? F_DIV : F_REM, x->dst,
+                 x->op == O_DIVI ? '/' : '%');
         break;
     case O_JNLT:
     case O_JNGT:
@@ -343,7 +345,8 @@ static void put_ins(c_source *s, const lc_program *p, const lc_model *m, int f, 
     case O_JNGE:
     case O_JNEQ:
     case O_JNNE:
-        put(s, "if (!(r%d %s r%d)) goto L%d;", x->a, cmp_c[x->op - O_JNLT], x->b, x->d);
+        append_c(s, "if (!(r%d %s r%d)) goto L%d;", x->src1, cmp_c[x->op - O_JNLT], x->src2,
+                 x->dst);
         break;
     case O_JLT:
     case O_JGT:
@@ -351,124 +354,125 @@ static void put_ins(c_source *s, const lc_program *p, const lc_model *m, int f, 
     case O_JGE:
     case O_JEQ:
     case O_JNE:
-        put(s, "if (r%d %s r%d) { SPEND(at); goto L%d; }", x->a, cmp_c[x->op - O_JLT], x->b, x->d);
+        append_c(s, "if (r%d %s r%d) { SPEND(at); goto L%d; }", x->src1, cmp_c[x->op - O_JLT],
+                 x->src2, x->dst);
         break;
     case O_SIN:
     case O_COS:
     case O_SQRT:
     case O_EXP: {
         static const char *const name[] = {"sin", "cos", "sqrt", "exp"};
-        put(s, "r%d = %s(r%d);", x->d, name[x->op - O_SIN], x->a);
+        append_c(s, "r%d = %s(r%d);", x->dst, name[x->op - O_SIN], x->src1);
         break;
     }
     case O_BIN:
-        put(s, "r%d = R->bin(R, at, %d, %d, r%d, r%d); if (R->failed) return 0;", x->d, x->fn, x->t,
-            x->a, x->b);
+        append_c(s, "r%d = R->bin(R, at, %d, %d, r%d, r%d); if (R->failed) return 0;", x->dst,
+                 x->subop, x->type, x->src1, x->src2);
         break;
     case O_INC:
     case O_GINC:
         if (x->op == O_INC)
-            snprintf(g, sizeof g, "r%d", x->a);
+            snprintf(g, sizeof g, "r%d", x->src1);
         else
-            snprintf(g, sizeof g, "R->glob[%d]", x->a);
-        put(s, "{ double o = %s; %s = ", g, g);
-        snprintf(a, sizeof a, "%s + %d", g, (x->fn & 1) ? -1 : 1);
-        put_conv(s, x->t, a);
-        put(s, "; r%d = %s; }", x->d, x->fn >= 2 ? "o" : g);
+            snprintf(g, sizeof g, "R->glob[%d]", x->src1);
+        append_c(s, "{ double o = %s; %s = ", g, g);
+        snprintf(a, sizeof a, "%s + %d", g, (x->subop & 1) ? -1 : 1);
+        put_conv(s, x->type, a);
+        append_c(s, "; r%d = %s; }", x->dst, x->subop >= 2 ? "o" : g);
         break;
     case O_MATH1:
     case O_MATH2:
-        snprintf(g, sizeof g, "R->math(%d, r%d, %s%d)", x->fn, x->a, x->op == O_MATH2 ? "r" : "",
-                 x->op == O_MATH2 ? x->b : 0);
-        put(s, "r%d = ", x->d);
-        put_conv(s, x->t, g);
-        put(s, ";");
+        snprintf(g, sizeof g, "R->math(%d, r%d, %s%d)", x->subop, x->src1,
+                 x->op == O_MATH2 ? "r" : "", x->op == O_MATH2 ? x->src2 : 0);
+        append_c(s, "r%d = ", x->dst);
+        put_conv(s, x->type, g);
+        append_c(s, ";");
         break;
     case O_JMP:
-        put(s, "goto L%d;", x->a);
+        append_c(s, "goto L%d;", x->src1);
         break;
     case O_JZ:
-        put(s, "if (r%d == 0) goto L%d;", x->a, x->b);
+        append_c(s, "if (r%d == 0) goto L%d;", x->src1, x->src2);
         break;
     case O_JNZ:
-        put(s, "if (r%d != 0) goto L%d;", x->a, x->b);
+        append_c(s, "if (r%d != 0) goto L%d;", x->src1, x->src2);
         break;
     case O_SPEND:
-        put(s, "SPEND(at);");
+        append_c(s, "SPEND(at);");
         break;
     case O_JNZS:
-        put(s, "if (r%d != 0) { SPEND(at); goto L%d; }", x->a, x->b);
+        append_c(s, "if (r%d != 0) { SPEND(at); goto L%d; }", x->src1, x->src2);
         break;
     case O_JMPS:
-        put(s, "SPEND(at); goto L%d;", x->a);
+        append_c(s, "SPEND(at); goto L%d;", x->src1);
         break;
     case O_CALL: {
         /* the arguments are in the caller's registers b..; the callee's frame is fr + b as in
          * the loop, so the frame stack and its limit are the same */
-        const lc_function *cf = &m->funcs.data[x->a];
-        const lc_fcode *cc = &p->fn[x->a];
-        put(s, "{ double *nf = fr + %d;", x->b);
+        const lc_function *cf = &m->funcs.data[x->src1];
+        const lc_fcode *cc = &p->fn[x->src1];
+        append_c(s, "{ double *nf = fr + %d;", x->src2);
         for (int i = 0; i < cc->npd; i++)
-            put(s, " nf[%d] = r%d;", i, x->b + i);
-        put(s,
-            " if (*R->call_depth >= R->max_call_depth || (size_t)(nf - R->stack) + %d + 1 > "
-            "R->stack_cap) { R->fault(R, at, %d); return 0; }"
-            " if (!R->spend_call(R, at)) return 0;"
-            " ++*R->call_depth; double v = f%d(nf, R, at); --*R->call_depth;"
-            " if (R->failed) return 0;",
-            cc->nreg, F_DEEP, x->a);
+            append_c(s, " nf[%d] = r%d;", i, x->src2 + i);
+        append_c(s,
+                 " if (*R->call_depth >= R->max_call_depth || (size_t)(nf - R->stack) + %d + 1 > "
+                 "R->stack_cap) { R->fault(R, at, %d); return 0; }"
+                 " if (!R->spend_call(R, at)) return 0;"
+                 " ++*R->call_depth; double v = f%d(nf, R, at); --*R->call_depth;"
+                 " if (R->failed) return 0;",
+                 cc->nreg, F_DEEP, x->src1);
         /* a run result and the reference parameters come back through the callee's frame */
         for (int i = 0; i < cc->rsize; i++)
-            put(s, " r%d = nf[%d];", x->d + i, cc->rslot + i);
+            append_c(s, " r%d = nf[%d];", x->dst + i, cc->rslot + i);
         if (!cc->rsize)
-            put(s, " r%d = v;", x->d);
-        for (int i = 0, off = 0; i < cf->np; i++) {
+            append_c(s, " r%d = v;", x->dst);
+        for (int i = 0, off = 0; i < cf->nparams; i++) {
             int sz = lc_type_size(m, cf->ptype[i]);
             for (int k = 0; k < sz && cf->pref[i]; k++)
-                put(s, " r%d = nf[%d];", x->b + off + k, off + k);
+                append_c(s, " r%d = nf[%d];", x->src2 + off + k, off + k);
             off += sz;
         }
-        put(s, " }");
+        append_c(s, " }");
         break;
     }
     case O_PROD: { /* the module's parameters from its run of registers */
-        int size = m->mods.data[m->sms.data[x->d].mod].size;
+        int size = m->mods.data[m->sms.data[x->dst].mod].size;
         if (!size) {
-            put(s, "if (!R->prod(R, at, %d, 0)) return 0;", x->d);
+            append_c(s, "if (!R->prod(R, at, %d, 0)) return 0;", x->dst);
             break;
         }
-        put(s, "{ double v[%d] = {", size);
+        append_c(s, "{ double v[%d] = {", size);
         for (int i = 0; i < size; i++)
-            put(s, "%sr%d", i ? ", " : "", x->a + i);
-        put(s, "}; if (!R->prod(R, at, %d, v)) return 0; }", x->d);
+            append_c(s, "%sr%d", i ? ", " : "", x->src1 + i);
+        append_c(s, "}; if (!R->prod(R, at, %d, v)) return 0; }", x->dst);
         break;
     }
     case O_DONE:
-        put(s, "return 1;");
+        append_c(s, "return 1;");
         break;
     case O_HOST: /* the L+C host's built-ins (random numbers, func, ...): node k */
-        if (x->fn == LC_HOST_CONTEXT) { /* binds formals in the frame (put_function) */
-            put(s, "r%d = R->host(R, at, %d, 0, %d, fr); if (R->failed) return 0;", x->d, x->fn,
-                (int)x->k);
+        if (x->subop == LC_HOST_CONTEXT) { /* binds formals in the frame (put_function) */
+            append_c(s, "r%d = R->host(R, at, %d, 0, %d, fr); if (R->failed) return 0;", x->dst,
+                     x->subop, (int)x->imm);
             break;
         }
-        put(s, "{ double v[%d] = {0};", x->b > 0 ? x->b : 1);
-        for (int i = 0; i < x->b; i++)
-            put(s, " v[%d] = r%d;", i, x->a + i);
-        put(s, " r%d = R->host(R, at, %d, %d, %d, v); if (R->failed) return 0; }", x->d, x->fn,
-            x->b, (int)x->k);
+        append_c(s, "{ double v[%d] = {0};", x->src2 > 0 ? x->src2 : 1);
+        for (int i = 0; i < x->src2; i++)
+            append_c(s, " v[%d] = r%d;", i, x->src1 + i);
+        append_c(s, " r%d = R->host(R, at, %d, %d, %d, v); if (R->failed) return 0; }", x->dst,
+                 x->subop, x->src2, (int)x->imm);
         break;
     case O_RET:
         put_frame_out(s, p, m, f);
-        put(s, "return r%d;", x->a);
+        append_c(s, "return r%d;", x->src1);
         break;
     case O_RET0:
         put_frame_out(s, p, m, f);
-        put(s, "return 0;");
+        append_c(s, "return 0;");
         break;
     default: /* the cpfg dialect's instructions, never in an L+C program: a compile error, so
               * a program that had one would keep running on the register code */
-        put(s, "\n#error \"instruction %d has no native translation\"\n", (int)x->op);
+        append_c(s, "\n#error \"instruction %d has no native translation\"\n", (int)x->op);
         break;
     }
 }
@@ -477,36 +481,36 @@ static void put_function(c_source *s, const lc_program *p, const lc_model *m, in
 {
     const lc_fcode *fc = &p->fn[f];
     int fsize = fc->fsize;
-    put(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
+    append_c(s, "static double f%d(double *fr, struct lc_rt *R, int32_t at)\n{\n", f);
     /* the locals start as the frame holds them (the loop reads the frame itself); where the
      * host matches a context (binding its formals) it writes them there, so they stay in the
      * frame */
     bool in_frame = false;
     for (size_t i = 0; i < fc->ins.len; i++)
         in_frame =
-            in_frame || (fc->ins.data[i].op == O_HOST && fc->ins.data[i].fn == LC_HOST_CONTEXT);
+            in_frame || (fc->ins.data[i].op == O_HOST && fc->ins.data[i].subop == LC_HOST_CONTEXT);
     for (int r = 0; r < fc->nreg; r++)
-        put(s,
-            r >= fsize  ? "    double r%d = 0;\n"
-            : !in_frame ? "    double r%d = fr[%d];\n"
-                        : "#define r%d fr[%d]\n",
-            r, r);
+        append_c(s,
+                 r >= fsize  ? "    double r%d = 0;\n"
+                 : !in_frame ? "    double r%d = fr[%d];\n"
+                             : "#define r%d fr[%d]\n",
+                 r, r);
     /* the budget counters' addresses in locals: R is reloaded after every call (sin, cos, the
      * host's), these stay in registers (SPEND) */
-    put(s, "    long *const R_ops = R->ops, *const R_budget = R->budget;\n");
-    put(s, "    (void)fr; (void)R; (void)at; (void)R_ops; (void)R_budget;\n");
+    append_c(s, "    long *const R_ops = R->ops, *const R_budget = R->budget;\n");
+    append_c(s, "    (void)fr; (void)R; (void)at; (void)R_ops; (void)R_budget;\n");
     for (size_t i = 0; i < fc->ins.len; i++) {
         const lc_ins *x = &fc->ins.data[i];
-        put(s, "L%zu:", i);
-        if (x->at >= 0)
-            put(s, " at = %d;", (int)x->at);
-        put(s, " ");
+        append_c(s, "L%zu:", i);
+        if (x->stmt_pos >= 0)
+            append_c(s, " at = %d;", (int)x->stmt_pos);
+        append_c(s, " ");
         put_ins(s, p, m, f, x);
-        put(s, "\n");
+        append_c(s, "\n");
     }
-    put(s, "L%zu: return 0;\n}\n", fc->ins.len);
+    append_c(s, "L%zu: return 0;\n}\n", fc->ins.len);
     for (int r = 0; in_frame && r < fsize; r++)
-        put(s, "#undef r%d\n", r);
+        append_c(s, "#undef r%d\n", r);
 }
 
 /* ---------------------------------------------------------------- compile, cache, load */
@@ -675,10 +679,10 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
         return false;
     }
     c_source s = {ctx, {NULL, 0, 0}, false};
-    put(&s, "%s", prelude);
+    append_c(&s, "%s", prelude);
     for (size_t f = 0; f < p->n; f++)
         if (translated(p, f))
-            put(&s, "static double f%zu(double *fr, struct lc_rt *R, int32_t at);\n", f);
+            append_c(&s, "static double f%zu(double *fr, struct lc_rt *R, int32_t at);\n", f);
     for (size_t f = 0; f < p->n; f++)
         if (translated(p, f))
             put_function(&s, p, m, (int)f);
@@ -687,11 +691,11 @@ bool cbm__lc_native_load(cbm_context *ctx, const lc_model *m, lc_program *p, con
         h = fnv1a(h, cc_flags[i], strlen(cc_flags[i]) + 1);
     char key[17];
     snprintf(key, sizeof key, "%016" PRIx64, h);
-    put(&s, "const char cbm_lc_key[] = \"%s\";\nconst int cbm_lc_count = %zu;\n", key, p->n);
-    put(&s, "double (*const cbm_lc_table[%zu])(double *, struct lc_rt *, int32_t) = {", p->n);
+    append_c(&s, "const char cbm_lc_key[] = \"%s\";\nconst int cbm_lc_count = %zu;\n", key, p->n);
+    append_c(&s, "double (*const cbm_lc_table[%zu])(double *, struct lc_rt *, int32_t) = {", p->n);
     for (size_t f = 0; f < p->n; f++)
-        put(&s, translated(p, f) ? "f%zu," : "0,", f);
-    put(&s, "};\n");
+        append_c(&s, translated(p, f) ? "f%zu," : "0,", f);
+    append_c(&s, "};\n");
     bool ok = false;
     char so_path[4096], tmp_so[4096], c_path[4096];
     long pid = (long)getpid();

@@ -276,7 +276,7 @@ static int add_mod(lc_parser *L, const char *name, size_t len, const int *ptypes
     memcpy(m.name, name, len);
     m.name[len] = 0;
     m.code = (uint8_t)code;
-    m.np = np;
+    m.nparams = np;
     for (int i = 0; i < np; i++) {
         m.ptype[i] = ptypes[i];
         m.size += lc_type_size(lp, ptypes[i]);
@@ -314,7 +314,7 @@ static lc_node blank_node(int op, int type)
     memset(&n, 0, sizeof n);
     n.op = (uint8_t)op;
     n.type = (int16_t)type;
-    n.a = n.b = n.c = n.d = n.next = -1;
+    n.child1 = n.child2 = n.child3 = n.child4 = n.next = -1;
     return n;
 }
 
@@ -370,7 +370,7 @@ static int32_t assign_expr(lc_parser *L);
 static int32_t num_node(lc_parser *L, double v, int type)
 {
     lc_node n = blank_node(N_NUM, type);
-    n.v = v;
+    n.value = v;
     return add_node(L, n);
 }
 
@@ -384,12 +384,12 @@ static int32_t coerce(lc_parser *L, int32_t e, int t, size_t pos)
         return e;
     if (lc_is_scalar(et) && lc_is_scalar(t)) {
         lc_node n = blank_node(N_CAST, t);
-        n.a = e;
+        n.child1 = e;
         return add_node(L, n);
     }
     if (lc_is_vec(et) && lc_is_vec(t)) {
         lc_node n = blank_node(N_CAST, t);
-        n.a = e;
+        n.child1 = e;
         return add_node(L, n);
     }
     cbm__cerr(L->cur, pos, "cannot convert %s to %s", L->model->types.data[et].name,
@@ -486,7 +486,7 @@ static int32_t printf_call(lc_parser *L, size_t pos)
     lc_node x = blank_node(N_CALLB, T_INT);
     x.fn = FN_PRINTF;
     x.slot = (int32_t)fmt;
-    x.a = first;
+    x.child1 = first;
     return add_node(L, x);
 }
 
@@ -497,7 +497,7 @@ static int32_t brace_init(lc_parser *L, int t)
     if (!expect(L, "{"))
         return -1;
     const lc_type *ty = &L->model->types.data[t];
-    int nf = lc_is_vec(t) ? 3 : ty->nf;
+    int nf = lc_is_vec(t) ? 3 : ty->nfields;
     if (lc_is_scalar(t)) {
         int32_t e = coerce(L, assign_expr(L), t, pos);
         expect(L, "}");
@@ -517,7 +517,7 @@ static int32_t brace_init(lc_parser *L, int t)
     if (!expect(L, "}"))
         return -1;
     lc_node n = blank_node(N_CTOR, t);
-    n.a = first;
+    n.child1 = first;
     return add_node(L, n);
 }
 
@@ -548,7 +548,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
     /* In*Context(pattern) */
     static const char *const CTXF[] = {"InLeftContext", "InNewLeftContext", "InNewRightContext",
                                        "InRightContext"};
-    for (int k = 0; k < CX_N; k++)
+    for (int k = 0; k < LC_CTX_N; k++)
         if (strlen(CTXF[k]) == n && !strncmp(s, CTXF[k], n)) {
             lc_pattern p = {0, 0};
             if (!expect(L, "("))
@@ -563,8 +563,8 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             }
             lc_node x = blank_node(N_INCTX, T_BOOL);
             x.fn = (uint8_t)k;
-            x.a = p.first;
-            x.b = p.n;
+            x.child1 = p.first;
+            x.child2 = p.n;
             return add_node(L, x);
         }
     /* vector and struct constructors */
@@ -594,14 +594,15 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 chain(L, &first, &last, e);
             }
             lc_node x = blank_node(N_CTOR, t);
-            x.a = first;
+            x.child1 = first;
             return add_node(L, x);
         }
-        if (lp->types.data[t].nf > 0 && na == 0) { /* Name(): a zero value */
+        if (lp->types.data[t].nfields > 0 && na == 0) { /* Name(): a zero value */
             lc_node x = blank_node(N_CTOR, t);
             return add_node(L, x);
         }
-        if (lp->types.data[t].nf > 0 && na == lp->types.data[t].nf) { /* Name(f1, f2, ...) */
+        if (lp->types.data[t].nfields > 0 &&
+            na == lp->types.data[t].nfields) { /* Name(f1, f2, ...) */
             int32_t first = -1, last = -1;
             for (int i = 0; i < na; i++) {
                 int32_t e = args;
@@ -613,7 +614,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 chain(L, &first, &last, e);
             }
             lc_node x = blank_node(N_CTOR, t);
-            x.a = first;
+            x.child1 = first;
             return add_node(L, x);
         }
         cbm__cerr(L->cur, pos, "wrong number of arguments to %s()", lp->types.data[t].name);
@@ -652,7 +653,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
             return -1;
         lc_node c = blank_node(N_CALLB, T_DOUBLE);
         c.fn = FN_FUNC;
-        c.a = x;
+        c.child1 = x;
         c.slot = (int32_t)id + 1;
         return add_node(L, c);
     }
@@ -664,9 +665,9 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         int na = parse_args(L, &args);
         if (na < 0)
             return -1;
-        if (na != f->np) {
-            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", f->name, f->np,
-                      f->np == 1 ? "" : "s", na);
+        if (na != f->nparams) {
+            cbm__cerr(L->cur, pos, "%s() takes %d argument%s, %d given", f->name, f->nparams,
+                      f->nparams == 1 ? "" : "s", na);
             return -1;
         }
         int32_t first = -1, last = -1;
@@ -684,8 +685,8 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
                 return -1;
             chain(L, &first, &last, e);
         }
-        lc_node c = blank_node(N_CALLU, f->ret);
-        c.a = first;
+        lc_node c = blank_node(N_CALLU, f->ret_type);
+        c.child1 = first;
         c.slot = (int32_t)i;
         return add_node(L, c);
     }
@@ -774,7 +775,7 @@ static int32_t call_expr(lc_parser *L, const char *s, size_t n, size_t pos)
         }
         lc_node c = blank_node(N_CALLB, rt);
         c.fn = (uint8_t)b->fn;
-        c.a = args;
+        c.child1 = args;
         return add_node(L, c);
     }
     cbm__cerr(L->cur, pos, "unknown function '%.*s'", (int)n, s);
@@ -827,7 +828,7 @@ static int32_t primary(lc_parser *L)
             int32_t e = primary(L);
             if (e >= 0) {
                 lc_node n = blank_node(N_CAST, t);
-                n.a = e;
+                n.child1 = e;
                 if (!(lc_is_scalar(t) && lc_is_scalar(ND(e).type)) && ND(e).type != t) {
                     cbm__cerr(L->cur, pos, "invalid cast");
                     r = -1;
@@ -846,14 +847,14 @@ static int32_t primary(lc_parser *L)
             L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
+            n.child1 = e;
             n.fn = 1;
             r = e >= 0 ? add_node(L, n) : -1;
         } else if (s[0] == '+' && s[1] == '+') {
             L->cur->pos++;
             int32_t e = primary(L);
             lc_node n = blank_node(N_INCDEC, e >= 0 ? ND(e).type : 0);
-            n.a = e;
+            n.child1 = e;
             n.fn = 0;
             r = e >= 0 ? add_node(L, n) : -1;
         } else {
@@ -869,7 +870,7 @@ static int32_t primary(lc_parser *L)
                 else {
                     lc_node n = blank_node(s[0] == '-' ? N_NEG : N_NOT,
                                            s[0] == '!' ? T_BOOL : (et == T_BOOL ? T_INT : et));
-                    n.a = e;
+                    n.child1 = e;
                     r = add_node(L, n);
                 }
             }
@@ -941,15 +942,15 @@ static int32_t primary(lc_parser *L)
                 }
                 lc_node c = blank_node(N_CALLB, len ? (t == T_V3F ? T_FLOAT : T_DOUBLE) : t);
                 c.fn = (uint8_t)(len ? FN_LENGTH : FN_NORMALIZE);
-                c.a = r;
+                c.child1 = r;
                 if (nor && n == 9 && (ND(r).op == N_LOCAL || ND(r).op == N_GLOBAL)) {
                     /* v.Normalize() normalizes v in place */
                     int32_t cn = add_node(L, c);
                     lc_node as = blank_node(N_ASSIGN, t);
                     lc_node lv = ND(r);
                     int32_t l2 = add_node(L, lv);
-                    as.a = l2;
-                    as.b = cn;
+                    as.child1 = l2;
+                    as.child2 = cn;
                     r = add_node(L, as);
                 } else
                     r = add_node(L, c);
@@ -961,9 +962,9 @@ static int32_t primary(lc_parser *L)
                     off = f[0] - 'x';
                     ft = t == T_V3F ? T_FLOAT : T_DOUBLE;
                 }
-            } else if (L->model->types.data[t].nf > 0) {
+            } else if (L->model->types.data[t].nfields > 0) {
                 const lc_type *ty = &L->model->types.data[t];
-                for (int k = 0; k < ty->nf; k++)
+                for (int k = 0; k < ty->nfields; k++)
                     if (strlen(ty->fname[k]) == n && !strncmp(ty->fname[k], f, n)) {
                         off = ty->foff[k];
                         ft = ty->ftype[k];
@@ -980,14 +981,14 @@ static int32_t primary(lc_parser *L)
                 ND(r).type = (int16_t)ft;
             } else {
                 lc_node x = blank_node(N_FIELD, ft);
-                x.a = r;
+                x.child1 = r;
                 x.slot = off;
                 r = add_node(L, x);
             }
         } else if (!strncmp(L->text + p2, "++", 2) || !strncmp(L->text + p2, "--", 2)) {
             L->cur->pos += 2;
             lc_node x = blank_node(N_INCDEC, ND(r).type);
-            x.a = r;
+            x.child1 = r;
             x.fn = L->text[p2] == '+' ? 2 : 3;
             r = add_node(L, x);
         } else
@@ -1033,8 +1034,8 @@ static int32_t binary(lc_parser *L, int32_t a, const binop *op, int32_t b, size_
         return -1;
     int ta = ND(a).type, tb = ND(b).type;
     lc_node n = blank_node(N_BIN, 0);
-    n.a = a;
-    n.b = b;
+    n.child1 = a;
+    n.child2 = b;
     n.fn = (uint8_t)op->op;
     if (op->op < 0) {
         if (!lc_is_scalar(ta) || !lc_is_scalar(tb)) {
@@ -1140,9 +1141,9 @@ static int32_t ternary_inner(lc_parser *L)
         return -1;
     }
     lc_node n = blank_node(N_COND, t);
-    n.a = c;
-    n.b = coerce(L, a, t, pos);
-    n.c = coerce(L, b, t, pos);
+    n.child1 = c;
+    n.child2 = coerce(L, a, t, pos);
+    n.child3 = coerce(L, b, t, pos);
     return add_node(L, n);
 }
 
@@ -1187,14 +1188,14 @@ static int32_t assign_expr(lc_parser *L)
                 return -1;
         }
         lc_node x = blank_node(N_ASSIGN, lt);
-        x.a = l;
-        x.b = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
-        if (x.b >= 0 && ND(x.b).type != lt) {
-            cbm__cerr(L->cur, p2, "cannot assign %s to %s", L->model->types.data[ND(x.b).type].name,
-                      L->model->types.data[lt].name);
+        x.child1 = l;
+        x.child2 = (lt >= T_NBUILTIN) ? r : coerce(L, r, lt, p2);
+        if (x.child2 >= 0 && ND(x.child2).type != lt) {
+            cbm__cerr(L->cur, p2, "cannot assign %s to %s",
+                      L->model->types.data[ND(x.child2).type].name, L->model->types.data[lt].name);
             return -1;
         }
-        return x.b >= 0 ? add_node(L, x) : -1;
+        return x.child2 >= 0 ? add_node(L, x) : -1;
     }
     return l;
 }
@@ -1217,8 +1218,8 @@ static int32_t comma_expr(lc_parser *L)
         if (b < 0)
             return -1;
         lc_node n = blank_node(N_COMMA, ND(b).type);
-        n.a = a;
-        n.b = b;
+        n.child1 = a;
+        n.child2 = b;
         a = add_node(L, n);
     }
     return a;
@@ -1250,9 +1251,9 @@ static int succ_list(lc_parser *L, lc_pattern *p)
         if (na < 0)
             return -1;
         const lc_module *md = &lp->mods.data[m];
-        if (na != md->np) {
-            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, %d given", md->name, md->np,
-                      md->np == 1 ? "" : "s", na);
+        if (na != md->nparams) {
+            cbm__cerr(L->cur, pos, "module %s has %d parameter%s, %d given", md->name, md->nparams,
+                      md->nparams == 1 ? "" : "s", na);
             return -1;
         }
         int32_t first = -1, last = -1;
@@ -1309,7 +1310,7 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                         return -1;
                     }
                     L->cur->pos += k;
-                    if (na >= md->np) {
+                    if (na >= md->nparams) {
                         na++;
                         continue;
                     }
@@ -1340,9 +1341,9 @@ static int pattern(lc_parser *L, lc_pattern *p, bool declare)
                     return -1;
             }
         }
-        if (na != md->np) {
+        if (na != md->nparams) {
             cbm__cerr(L->cur, pos, "module %s has %d parameter%s, the pattern names %d", md->name,
-                      md->np, md->np == 1 ? "" : "s", na);
+                      md->nparams, md->nparams == 1 ? "" : "s", na);
             return -1;
         }
         lc_modref sm = {m, first};
@@ -1391,7 +1392,7 @@ static int32_t block(lc_parser *L)
     L->vars.len = nvars;
     L->frame_size = fs;
     lc_node b = blank_node(S_BLOCK, 0);
-    b.a = first;
+    b.child1 = first;
     return ok ? add_node(L, b) : -1;
 }
 
@@ -1426,7 +1427,7 @@ static int32_t declaration(lc_parser *L, int t)
         }
         lc_node d = blank_node(S_DECL, t);
         d.slot = declare_local(L, L->text + pos, n, t);
-        d.a = init;
+        d.child1 = init;
         int32_t s = add_node(L, d);
         if (s < 0)
             return -1;
@@ -1454,33 +1455,33 @@ static int32_t statement(lc_parser *L)
     } else if (accept_kw(L, "if")) {
         lc_node n = blank_node(S_IF, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
+                n.child2 = statement(L);
                 if (accept_kw(L, "else"))
-                    n.c = statement(L);
-                if (n.b >= 0)
+                    n.child3 = statement(L);
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "while")) {
         lc_node n = blank_node(S_WHILE, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")")) {
-                n.b = statement(L);
-                if (n.b >= 0)
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
+                n.child2 = statement(L);
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
     } else if (accept_kw(L, "do")) {
         lc_node n = blank_node(S_DO, 0);
-        n.b = statement(L);
-        if (n.b >= 0 && accept_kw(L, "while") && expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_BOOL, pos);
-            if (n.a >= 0 && expect(L, ")") && expect(L, ";"))
+        n.child2 = statement(L);
+        if (n.child2 >= 0 && accept_kw(L, "while") && expect(L, "(")) {
+            n.child1 = coerce(L, expr(L), T_BOOL, pos);
+            if (n.child1 >= 0 && expect(L, ")") && expect(L, ";"))
                 r = add_node(L, n);
-        } else if (n.b >= 0)
+        } else if (n.child2 >= 0)
             expected(L, "'while'");
     } else if (accept_kw(L, "for")) {
         size_t nvars = L->vars.len;
@@ -1490,29 +1491,29 @@ static int32_t statement(lc_parser *L)
         if (ok && !accept(L, ";")) {
             int ty = parse_type(L);
             if (ty >= 0)
-                n.a = declaration(L, ty);
+                n.child1 = declaration(L, ty);
             else {
                 int32_t e = expr(L);
                 if (e >= 0) {
                     lc_node s = blank_node(S_EXPR, 0);
-                    s.a = e;
-                    n.a = add_node(L, s);
+                    s.child1 = e;
+                    n.child1 = add_node(L, s);
                 }
                 ok = e >= 0 && expect(L, ";");
             }
-            ok = ok && n.a >= 0;
+            ok = ok && n.child1 >= 0;
         }
         if (ok && !accept(L, ";")) {
-            n.b = coerce(L, expr(L), T_BOOL, pos);
-            ok = n.b >= 0 && expect(L, ";");
+            n.child2 = coerce(L, expr(L), T_BOOL, pos);
+            ok = n.child2 >= 0 && expect(L, ";");
         }
         if (ok && !accept(L, ")")) {
-            n.c = expr(L);
-            ok = n.c >= 0 && expect(L, ")");
+            n.child3 = expr(L);
+            ok = n.child3 >= 0 && expect(L, ")");
         }
         if (ok) {
-            n.d = statement(L);
-            if (n.d >= 0)
+            n.child4 = statement(L);
+            if (n.child4 >= 0)
                 r = add_node(L, n);
         }
         L->vars.len = nvars;
@@ -1526,9 +1527,9 @@ static int32_t statement(lc_parser *L)
                 L->depth--;
                 return -1;
             }
-            n.a = coerce(L, expr(L), L->ret_type, pos);
-            if (n.a < 0 && L->ret_type >= T_NBUILTIN)
-                n.a = -1;
+            n.child1 = coerce(L, expr(L), L->ret_type, pos);
+            if (n.child1 < 0 && L->ret_type >= T_NBUILTIN)
+                n.child1 = -1;
         } else if (L->ret_type != T_VOID && !L->in_prod) {
             cbm__cerr(L->cur, pos, "return needs a value");
         }
@@ -1537,12 +1538,12 @@ static int32_t statement(lc_parser *L)
     } else if (accept_kw(L, "switch")) {
         lc_node n = blank_node(S_SWITCH, 0);
         if (expect(L, "(")) {
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-            if (n.a >= 0 && expect(L, ")")) {
+            n.child1 = coerce(L, expr(L), T_DOUBLE, pos);
+            if (n.child1 >= 0 && expect(L, ")")) {
                 L->in_switch++;
-                n.b = statement(L);
+                n.child2 = statement(L);
                 L->in_switch--;
-                if (n.b >= 0)
+                if (n.child2 >= 0)
                     r = add_node(L, n);
             }
         }
@@ -1550,8 +1551,8 @@ static int32_t statement(lc_parser *L)
         lc_node n = blank_node(S_CASE, 0);
         bool dflt = L->text[pos] == 'd';
         if (!dflt)
-            n.a = coerce(L, expr(L), T_DOUBLE, pos);
-        if ((dflt || n.a >= 0) && expect(L, ":"))
+            n.child1 = coerce(L, expr(L), T_DOUBLE, pos);
+        if ((dflt || n.child1 >= 0) && expect(L, ":"))
             r = add_node(L, n);
     } else if (accept_kw(L, "break")) {
         if (expect(L, ";"))
@@ -1568,8 +1569,8 @@ static int32_t statement(lc_parser *L)
             lc_pattern p;
             if (succ_list(L, &p) == 0 && expect(L, ";")) {
                 lc_node n = blank_node(S_PRODUCE, 0);
-                n.a = p.first;
-                n.b = p.n;
+                n.child1 = p.first;
+                n.child2 = p.n;
                 n.fn = partial;
                 r = add_node(L, n);
             } else
@@ -1581,7 +1582,7 @@ static int32_t statement(lc_parser *L)
         int32_t e = expr(L);
         if (e >= 0 && expect(L, ";")) {
             lc_node s = blank_node(S_EXPR, 0);
-            s.a = e;
+            s.child1 = e;
             r = add_node(L, s);
         } else if (!fatal(L))
             recover_stmt(L);
@@ -1643,7 +1644,7 @@ static void parse_struct(lc_parser *L, size_t pos)
                 recover(L);
                 goto fail;
             }
-            if (ty.nf >= MAXFLD) {
+            if (ty.nfields >= MAXFLD) {
                 cbm__cerr(L->cur, L->cur->pos, "more than %d fields in struct %s", MAXFLD, name);
                 recover(L);
                 goto fail;
@@ -1657,11 +1658,11 @@ static void parse_struct(lc_parser *L, size_t pos)
             memcpy(fn, L->text + L->cur->pos, k);
             fn[k] = 0;
             L->cur->pos += k;
-            ty.fname[ty.nf] = fn;
-            ty.ftype[ty.nf] = ft;
-            ty.foff[ty.nf] = ty.size;
+            ty.fname[ty.nfields] = fn;
+            ty.ftype[ty.nfields] = ft;
+            ty.foff[ty.nfields] = ty.size;
             ty.size += lc_type_size(lp, ft);
-            ty.nf++;
+            ty.nfields++;
         } while (accept(L, ","));
         if (!expect(L, ";")) {
             recover(L);
@@ -1682,7 +1683,7 @@ static void parse_struct(lc_parser *L, size_t pos)
     }
     return;
 fail:
-    for (int i = 0; i < ty.nf; i++)
+    for (int i = 0; i < ty.nfields; i++)
         cbm__strfree(L->cur->ctx, ty.fname[i]);
 }
 
@@ -1812,9 +1813,9 @@ static bool parse_roles(lc_parser *L, const lc_module *md, const decl_roles *r, 
                       L->text + pos, r->kind, r->role[0], r->role[1]);
             return false;
         }
-        if (k >= md->np) {
-            cbm__cerr(L->cur, pos, "module '%s' has %d parameter%s", md->name, md->np,
-                      md->np == 1 ? "" : "s");
+        if (k >= md->nparams) {
+            cbm__cerr(L->cur, pos, "module '%s' has %d parameter%s", md->name, md->nparams,
+                      md->nparams == 1 ? "" : "s");
             return false;
         }
         if (dst && *dst >= 0) {
@@ -1867,7 +1868,7 @@ static void mech_decl(lc_parser *L, bool mass)
                     break;
                 continue;
             }
-            for (int i = 0; i < md->np && found < 0; i++) {
+            for (int i = 0; i < md->nparams && found < 0; i++) {
                 if (mass ? i == 0 && lc_is_scalar(md->ptype[i]) : md->ptype[i] == T_MSEG)
                     found = off;
                 off += lc_type_size(lp, md->ptype[i]);
@@ -1876,8 +1877,8 @@ static void mech_decl(lc_parser *L, bool mass)
                 cbm__cerr(L->cur, pos,
                           "the first parameter of point-mass module '%s' must be a number "
                           "(its mass, kg)%s%s",
-                          md->name, md->np ? ", not " : "",
-                          md->np ? lp->types.data[md->ptype[0]].name : "");
+                          md->name, md->nparams ? ", not " : "",
+                          md->nparams ? lp->types.data[md->ptype[0]].name : "");
             else if (found < 0)
                 cbm__cerr(L->cur, pos, "mechanical module '%s' needs a MechSegment parameter",
                           md->name);
@@ -1986,13 +1987,13 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     /* pattern k is followed by operator ops[k]: left contexts precede the predecessor */
     int ip = 0;
     while (ip < npats && (ops[ip] == 0 || ops[ip] == 1)) {
-        int k = ops[ip] == 0 ? CX_LC : CX_NLC;
-        if (pr.cx[k].n) {
-            cbm__cerr(L->cur, pos, "two %s contexts", k == CX_LC ? "left" : "new left");
+        int k = ops[ip] == 0 ? LC_CTX_LEFT : LC_CTX_NEW_LEFT;
+        if (pr.context[k].n) {
+            cbm__cerr(L->cur, pos, "two %s contexts", k == LC_CTX_LEFT ? "left" : "new left");
             recover(L);
             return;
         }
-        pr.cx[k] = pats[ip++];
+        pr.context[k] = pats[ip++];
     }
     if (ip >= npats) {
         cbm__cerr(L->cur, pos, "production without a predecessor");
@@ -2003,16 +2004,16 @@ static void parse_production(lc_parser *L, lc_rules *set, int group)
     pr.pred = pats[ip];
     int prev = ops[ip];
     for (int k = ip + 1; k < npats; k++) {
-        int cx = prev == 2 ? CX_NRC : prev == 3 ? CX_RC : -1;
-        if (cx < 0 || pr.cx[cx].n) {
+        int cx = prev == 2 ? LC_CTX_NEW_RIGHT : prev == 3 ? LC_CTX_RIGHT : -1;
+        if (cx < 0 || pr.context[cx].n) {
             cbm__cerr(L->cur, pos, "misplaced context");
             recover(L);
             return;
         }
-        pr.cx[cx] = pats[k];
+        pr.context[cx] = pats[k];
         prev = ops[k];
     }
-    if (pr.cx[CX_NLC].n && pr.cx[CX_NRC].n) {
+    if (pr.context[LC_CTX_NEW_LEFT].n && pr.context[LC_CTX_NEW_RIGHT].n) {
         cbm__cerr(L->cur, pos, "a production cannot have both new left and new right context");
         recover(L);
         return;
@@ -2040,7 +2041,7 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
     size_t n = ident(L);
     lc_function f;
     memset(&f, 0, sizeof f);
-    f.ret = rt;
+    f.ret_type = rt;
     f.pos = pos;
     f.name = cbm__alloc(L->cur->ctx, n + 1);
     if (!f.name) {
@@ -2059,14 +2060,14 @@ static void parse_function(lc_parser *L, int rt, size_t pos)
             int t = parse_type(L);
             bool ref = t >= 0 && accept(L, "&");
             size_t k = t >= 0 ? ident(L) : 0;
-            if (t < 0 || !k || f.np >= MAXF) {
+            if (t < 0 || !k || f.nparams >= MAXF) {
                 expected(L, "a parameter (type and name)");
                 recover(L);
                 cbm__strfree(L->cur->ctx, f.name);
                 return;
             }
-            f.pref[f.np] = ref;
-            f.ptype[f.np++] = t;
+            f.pref[f.nparams] = ref;
+            f.ptype[f.nparams++] = t;
             declare_local(L, L->text + L->cur->pos, k, t);
             L->cur->pos += k;
         } while (accept(L, ","));
@@ -2188,7 +2189,7 @@ static cbm_status setup_builtins(lc_parser *L)
         q->fname[i] = cbm__strdup(ctx, QF[i]);
         q->ftype[i] = T_DOUBLE;
         q->foff[i] = i;
-        q->nf++;
+        q->nfields++;
         if (!q->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2198,7 +2199,7 @@ static cbm_status setup_builtins(lc_parser *L)
         lv->fname[i] = cbm__strdup(ctx, LF[i]);
         lv->ftype[i] = T_FLOAT;
         lv->foff[i] = i;
-        lv->nf++;
+        lv->nfields++;
         if (!lv->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2206,7 +2207,7 @@ static cbm_status setup_builtins(lc_parser *L)
         tv->fname[i] = cbm__strdup(ctx, TF[i]);
         tv->ftype[i] = T_V3F;
         tv->foff[i] = 3 * i;
-        tv->nf++;
+        tv->nfields++;
         if (!tv->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2225,7 +2226,7 @@ static cbm_status setup_builtins(lc_parser *L)
                            ? T_V3D
                            : T_DOUBLE;
         ms->foff[i] = MO[i];
-        ms->nf++;
+        ms->nfields++;
         if (!ms->fname[i])
             return CBM_E_NOMEM;
     }
@@ -2246,8 +2247,8 @@ static cbm_status setup_builtins(lc_parser *L)
             return L->cur->status != CBM_OK ? L->cur->status : CBM_E_NOMEM;
     }
     /* V3f and its synonyms */
-    lp->sb = find_mod(lp, "SB", 2);
-    lp->eb = find_mod(lp, "EB", 2);
+    lp->sb_module = find_mod(lp, "SB", 2);
+    lp->eb_module = find_mod(lp, "EB", 2);
     return CBM_OK;
 }
 
@@ -2323,10 +2324,10 @@ static void parse_top(lc_parser *L)
         } else if (accept_kw(L, "group")) {
             size_t p2 = L->cur->pos;
             int32_t e = const_int(L, "group");
-            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).v) <= 2147483647.0))
-                cbm__cerr(L->cur, p2, "group %g is out of range (an int)", ND(e).v);
+            if (e >= 0 && ND(e).op == N_NUM && !(fabs(ND(e).value) <= 2147483647.0))
+                cbm__cerr(L->cur, p2, "group %g is out of range (an int)", ND(e).value);
             else if (e >= 0 && ND(e).op == N_NUM)
-                group = (int)ND(e).v;
+                group = (int)ND(e).value;
             else if (e >= 0)
                 cbm__cerr(L->cur, p2, "group needs a number");
             expect(L, ":");
@@ -2425,7 +2426,7 @@ void cbm__lc_model_free(cbm_context *ctx, lc_model *m)
 {
     for (size_t i = 0; i < m->types.len; i++) {
         cbm__strfree(ctx, m->types.data[i].name);
-        for (int f = 0; f < m->types.data[i].nf; f++)
+        for (int f = 0; f < m->types.data[i].nfields; f++)
             cbm__strfree(ctx, m->types.data[i].fname[f]);
     }
     CBM_ARRAY_FREE(ctx, m->types);

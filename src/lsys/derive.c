@@ -59,10 +59,11 @@ static bool match_predecessor(cbm_lsys *ls, const prod *pr, const lstr *s, lpos 
 {
     const fmodule *m = ls->fmods.data + pr->pred;
     for (int32_t i = 0; i < pr->npred; i++) {
-        if (p.i >= s->n || (s->sym[p.i] & 0x7f) != m[i].sym || cbm__module_params(s, &p) != m[i].np)
+        if (p.mod >= s->n || (s->sym[p.mod] & 0x7f) != m[i].sym ||
+            cbm__module_params(s, &p) != m[i].np)
             return false;
         if (m[i].np) {
-            cbm__params_load(s, p.k, ls->frame + slot, m[i].np);
+            cbm__params_load(s, p.param, ls->frame + slot, m[i].np);
             slot += m[i].np;
         }
         cbm__pos_next(s, &p);
@@ -89,7 +90,7 @@ static cbm__brackets *brackets_of(cbm_lsys *ls, const lstr *s)
 /* The parameter count of the module w is on. */
 static inline int walk_params(const cbm__walk *w)
 {
-    return (w->s->sym[w->i] & LSYS_PARAM_BIT) ? w->s->pc[w->j] : 0;
+    return (w->s->sym[w->mod] & LSYS_PARAM_BIT) ? w->s->pc[w->pmod] : 0;
 }
 
 /* Right context from r (the module after the predecessor), through the walks of step.c: ignored
@@ -99,19 +100,19 @@ static inline int walk_params(const cbm__walk *w)
  * read. */
 static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos r, int slot)
 {
-    const fmodule *m = ls->fmods.data + pr->rc;
+    const fmodule *m = ls->fmods.data + pr->right_ctx;
     cbm__brackets *t = NULL;
-    cbm__walk w = cbm__walk_at(s, r.i, r.j, r.k, 1);
+    cbm__walk w = cbm__walk_at(s, r.mod, r.pmod, r.param, 1);
     int32_t k = 0;
-    while (k < pr->nrc) {
+    while (k < pr->nright_ctx) {
         if (m[k].sym == '=') {
             t = t ? t : brackets_of(ls, s);
             if (!cbm__walk_to_branch_end(ls->ctx, t, &w, '[', ']'))
-                w.i = (ptrdiff_t)s->n; /* no ']': to the end */
+                w.mod = (ptrdiff_t)s->n; /* no ']': to the end */
             k++;
             continue;
         }
-        if ((size_t)w.i >= s->n) /* (never before the start: the walk only goes right) */
+        if ((size_t)w.mod >= s->n) /* (never before the start: the walk only goes right) */
             return false;
         int c = cbm__walk_symbol(&w);
         if (ls->ign[c]) {
@@ -125,7 +126,7 @@ static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpo
             if (c != m[k].sym || walk_params(&w) != m[k].np)
                 return false;
             if (m[k].np) {
-                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.param, ls->frame + slot, m[k].np);
                 slot += m[k].np;
             }
             cbm__walk_next_in_memory(&w);
@@ -139,19 +140,19 @@ static bool match_right_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpo
  * climbed out of), whole branches are skipped. */
 static bool match_left_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos l)
 {
-    const fmodule *m = ls->fmods.data + pr->lc;
+    const fmodule *m = ls->fmods.data + pr->left_ctx;
     int slot = 0;
-    for (int32_t k = 0; k < pr->nlc; k++)
+    for (int32_t k = 0; k < pr->nleft_ctx; k++)
         slot += m[k].np;
-    cbm__walk w = cbm__walk_at(s, l.i, l.j, l.k, 1);
-    int32_t k = pr->nlc - 1;
+    cbm__walk w = cbm__walk_at(s, l.mod, l.pmod, l.param, 1);
+    int32_t k = pr->nleft_ctx - 1;
     while (k >= 0) {
-        if (w.i <= 0)
+        if (w.mod <= 0)
             return false;
         cbm__walk_prev_in_memory(&w);
         int c = cbm__walk_symbol(&w);
         if (c == ']') { /* to its '[' */
-            if (w.i == 0)
+            if (w.mod == 0)
                 return false;
             cbm__walk_prev_in_memory(&w);
             if (!cbm__walk_to_branch_start(&w, '[', ']'))
@@ -161,7 +162,7 @@ static bool match_left_context(cbm_lsys *ls, const prod *pr, const lstr *s, lpos
                 return false;
             slot -= m[k].np;
             if (m[k].np)
-                cbm__params_load(s, w.k, ls->frame + slot, m[k].np);
+                cbm__params_load(s, w.param, ls->frame + slot, m[k].np);
             k--;
         }
     }
@@ -179,16 +180,16 @@ static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *e
                   const lstr *ctxs, const lpos *lc, const lpos *rc)
 {
     int lslots = 0;
-    for (int32_t k = 0; k < pr->nlc; k++)
-        lslots += ls->fmods.data[pr->lc + k].np;
+    for (int32_t k = 0; k < pr->nleft_ctx; k++)
+        lslots += ls->fmods.data[pr->left_ctx + k].np;
     int pslots = 0;
     for (int32_t k = 0; k < pr->npred; k++)
         pslots += ls->fmods.data[pr->pred + k].np;
     if (!match_predecessor(ls, pr, src, p, end, lslots))
         return false;
-    if (pr->nrc && !match_right_context(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
+    if (pr->nright_ctx && !match_right_context(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
         return false;
-    if (pr->nlc && !match_left_context(ls, pr, ctxs, lc ? *lc : p))
+    if (pr->nleft_ctx && !match_left_context(ls, pr, ctxs, lc ? *lc : p))
         return false;
     ls->ev.params = ls->frame;
     if (pr->pre >= 0)
@@ -270,7 +271,7 @@ static cbm_status append_succ(cbm_lsys *ls, const prod *pr, lstr *dst)
 static const prod *find_first(cbm_lsys *ls, const prodset *set, const lstr *src, lpos p, lpos *end,
                               const lstr *ctxs, const lpos *lc, const lpos *rc)
 {
-    uint8_t s = src->sym[p.i] & 0x7f;
+    uint8_t s = src->sym[p.mod] & 0x7f;
     for (int32_t o = set->start[s]; o < set->start[s + 1]; o++) {
         const prod *pr = &set->prods.data[set->order[o]];
         if (match(ls, pr, src, p, end, ctxs, lc, rc))
@@ -318,7 +319,7 @@ static cbm_status rewrite(cbm_lsys *ls, const prodset *set, const lstr *src, lpo
         return ls->ev.error;
     *p = end;
     lpos q = {0, 0, 0};
-    while (q.i < buf->n) {
+    while (q.mod < buf->n) {
         bool a;
         CBM_TRY(rewrite(ls, set, buf, &q, dst, ctxs, lc, rc, depth + 1, &a));
     }
@@ -390,11 +391,11 @@ static cbm_status run_blocks(cbm_lsys *ls, int which, const char *what)
 static cbm_status follow_markers(cbm_lsys *ls, const lstr *s, lpos a, size_t b, int *cursys,
                                  int step)
 {
-    while (a.i < b) {
-        uint8_t c = s->sym[a.i];
+    while (a.mod < b) {
+        uint8_t c = s->sym[a.mod];
         if (c == ('?' | LSYS_PARAM_BIT)) {
             double v;
-            cbm__params_load(s, a.k, &v, 1);
+            cbm__params_load(s, a.param, &v, 1);
             int k = v >= -2e9 && v <= 2e9 ? cbm__lsys_find(ls, (int)v) : -1;
             if (k < 0) {
                 char where[32] = "homomorphism";
@@ -421,7 +422,7 @@ static cbm_status decompose_succ(cbm_lsys *ls, const prodset *dset, const lpos *
 {
     lpos q = {0, 0, 0};
     const lstr *buf = &ls->succ;
-    while (q.i < buf->n) {
+    while (q.mod < buf->n) {
         bool a;
         CBM_TRY(rewrite(ls, dset, buf, &q, &ls->next, &ls->cur, lc, rc, 0, &a));
         if (!a)
@@ -480,7 +481,7 @@ static void release_begin(const cbm_lsys *ls, release *r)
         const prodset *set = ls->sys[k].main;
         for (size_t i = 0; i < set->prods.len; i++) {
             const prod *pr = &set->prods.data[i];
-            if (pr->nlc)
+            if (pr->nleft_ctx)
                 return;
             size_t np = 0;
             for (int32_t m = 0; !pr->const_succ && m < pr->nsucc; m++)
@@ -545,10 +546,10 @@ static void release_range(const release *r, void *base, size_t used, size_t *don
 /* Called with p the first module the step may still read. */
 static void release_consumed(release *r, const lstr *cur, const lpos *p)
 {
-    release_range(r, cur->sym, p->i, &r->done[0]);
-    release_range(r, cur->pc, p->j, &r->done[1]);
-    release_range(r, cur->par, p->k * cbm__param_size(cur), &r->done[2]);
-    r->at = p->i + RELEASE_EVERY;
+    release_range(r, cur->sym, p->mod, &r->done[0]);
+    release_range(r, cur->pc, p->pmod, &r->done[1]);
+    release_range(r, cur->par, p->param * cbm__param_size(cur), &r->done[2]);
+    r->at = p->mod + RELEASE_EVERY;
 }
 
 /* ---- the step: the step loop of lsys_internal.h with the cpfg dialect's hooks ---- */
@@ -573,7 +574,7 @@ static cbm_status choose_stochastic(cbm_lsys *ls, const prodset *set, lpos p, lp
                                     const prod **chosen)
 {
     const lstr *cur = &ls->cur;
-    uint8_t s = cur->sym[p.i] & 0x7f;
+    uint8_t s = cur->sym[p.mod] & 0x7f;
     float total = 0;
     ls->appl.len = 0;
     ls->applp.len = 0;
@@ -595,15 +596,15 @@ static cbm_status choose_stochastic(cbm_lsys *ls, const prodset *set, lpos p, lp
         if ((r -= ls->applp.data[a]) <= 0) {
             const prod *pr = &set->prods.data[ls->appl.data[a]];
             int lslots = 0;
-            for (int32_t k = 0; k < pr->nlc; k++)
-                lslots += ls->fmods.data[pr->lc + k].np;
+            for (int32_t k = 0; k < pr->nleft_ctx; k++)
+                lslots += ls->fmods.data[pr->left_ctx + k].np;
             int pslots = 0;
             for (int32_t k = 0; k < pr->npred; k++)
                 pslots += ls->fmods.data[pr->pred + k].np;
             match_predecessor(ls, pr, cur, p, end, lslots);
-            if (pr->nrc)
+            if (pr->nright_ctx)
                 match_right_context(ls, pr, cur, *end, lslots + pslots);
-            if (pr->nlc)
+            if (pr->nleft_ctx)
                 match_left_context(ls, pr, cur, p);
             *chosen = pr;
             break;
@@ -651,8 +652,8 @@ static void cut_branch(const lstr *s, lpos *p)
 {
     cbm__pos_next(s, p);
     int level = 0, slevel = 0;
-    while (p->i < s->n) {
-        uint8_t b = s->sym[p->i];
+    while (p->mod < s->n) {
+        uint8_t b = s->sym[p->mod];
         uint8_t c = b & 0x7f;
         if (c == '[')
             level++;
@@ -697,7 +698,7 @@ static cbm_status cpfg_after(void *d, const lpos *from, const lpos *p)
     cbm_lsys *ls = ps->ls;
     if (ps->sub && !ps->cut) {
         int cursys = ps->cursys; /* (a copy: ps is not taken by address, it stays in registers) */
-        CBM_TRY(follow_markers(ls, ps->cur, *from, p->i, &cursys, ls->steps + 1));
+        CBM_TRY(follow_markers(ls, ps->cur, *from, p->mod, &cursys, ls->steps + 1));
         if (cursys != ps->cursys) {
             ps->cursys = cursys;
             const lsysv *L = &ls->sys[cursys];
@@ -714,7 +715,7 @@ static cbm_status cpfg_after(void *d, const lpos *from, const lpos *p)
                          "step %d: the string would exceed %zu modules (the max_modules "
                          "limit); stopped after step %d",
                          ls->steps + 1, ps->max_modules, ls->steps);
-    if (ps->rel->on && p->i >= ps->rel->at)
+    if (ps->rel->on && p->mod >= ps->rel->at)
         release_consumed(ps->rel, ps->cur, p);
     return CBM_OK;
 }
@@ -882,7 +883,7 @@ static cbm_status homomorphism_sub(cbm_lsys *ls, const lstr *cur, lstr *out)
     lpos p = {0, 0, 0};
     int cursys = 0;
     ls->lstack.len = 0;
-    while (p.i < cur->n) {
+    while (p.mod < cur->n) {
         const lsysv *L = &ls->sys[cursys];
         ls->ign = L->ignore;
         lpos o = {out->n, out->npm, out->npar};
@@ -918,7 +919,7 @@ static cbm_status homomorphism(cbm_lsys *ls, const lstr *cur, lstr *out)
 {
     lpos p = {0, 0, 0};
     ls->ign = ls->ignore;
-    while (p.i < cur->n) {
+    while (p.mod < cur->n) {
         bool done = false;
         if (ls->homo.present) {
             lpos lc = p, rc = p;
@@ -1073,20 +1074,20 @@ static void return_queries(cbm_lsys *ls)
     lpos a = {0, 0, 0}, b = {0, 0, 0};
     for (;;) {
         /* a '?' with parameters is a sub-L-system call, not a query */
-        while (a.i < img->n && !(a.i > 0 && img->sym[a.i - 1] == '?'))
+        while (a.mod < img->n && !(a.mod > 0 && img->sym[a.mod - 1] == '?'))
             cbm__pos_next(img, &a);
-        while (b.i < str->n && !(b.i > 0 && str->sym[b.i - 1] == '?'))
+        while (b.mod < str->n && !(b.mod > 0 && str->sym[b.mod - 1] == '?'))
             cbm__pos_next(str, &b);
-        if (a.i >= img->n || b.i >= str->n)
+        if (a.mod >= img->n || b.mod >= str->n)
             return;
         int na = cbm__module_params(img, &a), nb = cbm__module_params(str, &b);
         double v[LSYS_MAX_PARAMS];
-        cbm__params_load(img, a.k, v, na < nb ? na : nb);
+        cbm__params_load(img, a.param, v, na < nb ? na : nb);
         for (int j = 0; j < na && j < nb; j++) {
             if (str->f32)
-                ((float *)str->par)[b.k + (size_t)j] = (float)v[j];
+                ((float *)str->par)[b.param + (size_t)j] = (float)v[j];
             else
-                ((double *)str->par)[b.k + (size_t)j] = v[j];
+                ((double *)str->par)[b.param + (size_t)j] = v[j];
         }
         cbm__pos_next(img, &a);
         cbm__pos_next(str, &b);

@@ -39,7 +39,7 @@ struct lpfg {
     lstr *out;     /* where produce appends */
     bool produced; /* produce executed */
     int prod_ix;
-    cbm__walk scan[CX_N];
+    cbm__walk scan[LC_CTX_N];
     lstr succ;
     CBM_ARRAY(lstr) scratch;
     bool nonfinite_warned;
@@ -292,7 +292,8 @@ static void print(cbm_lsys *ls, const lc_node *n, const double *v)
     cbm__fmt_arg args[CBM__FMT_MAX_ARGS];
     int k = 0;
     const char *strings = ls->comp.strings.data;
-    for (int32_t x = n->a; x >= 0 && k < CBM__FMT_MAX_ARGS; x = lp->m.nodes.data[x].next, k++) {
+    for (int32_t x = n->child1; x >= 0 && k < CBM__FMT_MAX_ARGS;
+         x = lp->m.nodes.data[x].next, k++) {
         const lc_node *an = &lp->m.nodes.data[x];
         args[k].s = an->op == N_STR ? strings + an->slot : NULL;
         args[k].v = an->op == N_STR ? 0 : v[k];
@@ -357,27 +358,27 @@ static double host_builtin(cbm_lsys *ls, const lc_node *n, const double *a)
     return lc_conv_scalar(n->type == T_VOID ? T_DOUBLE : n->type, r);
 }
 
-/* O_HOST of the register code (lc_vm.host_call): built-in node ip->k at its ip->b arguments in
- * registers ip->a.. */
+/* O_HOST of the register code (lc_vm.host_call): built-in node ip->imm at its ip->src2
+ * arguments in registers ip->src1.. */
 static double lpfg_host(lc_vm *vm, const lc_ins *ip, double *fr)
 {
     cbm_lsys *ls = vm->host;
     lpfg *lp = ls->lp;
-    const lc_node *n = &lp->m.nodes.data[(int32_t)ip->k];
-    const double *arg = fr + ip->a;
-    if (ip->fn == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
-        return match_context(ls, n->fn, n->a, n->b, fr);
+    const lc_node *n = &lp->m.nodes.data[(int32_t)ip->imm];
+    const double *arg = fr + ip->src1;
+    if (ip->subop == LC_HOST_CONTEXT) /* InLeftContext ...: the formals bound in the frame */
+        return match_context(ls, n->fn, n->child1, n->child2, fr);
     if (n->fn == FN_PRINTF) {
         print(ls, n, arg);
         return 0;
     }
     if (n->fn >= FN_EQUILIBRIUM && n->fn <= FN_REACTIONBOUND) {
         double out = 0;
-        call_mech(ls, n, arg, ip->b, &out);
+        call_mech(ls, n, arg, ip->src2, &out);
         return out;
     }
     double a[2] = {0, 0};
-    for (int i = 0; i < ip->b && i < 2; i++)
+    for (int i = 0; i < ip->src2 && i < 2; i++)
         a[i] = arg[i];
     return host_builtin(ls, n, a);
 }
@@ -407,7 +408,7 @@ static cbm__walk walk_end(const lstr *s, int dir)
     if (s->n)
         cbm__walk_prev_in_memory(&w);
     else
-        w.i = -1;
+        w.mod = -1;
     return w;
 }
 
@@ -424,7 +425,7 @@ static cbm__brackets *brackets_of(cbm_lsys *ls, const cbm__walk *w)
 static bool accept_right(cbm_lsys *ls, cbm__walk *w, int code)
 {
     const lpfg *lp = ls->lp;
-    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
+    int sbc = lp->m.mods.data[lp->m.sb_module].code, ebc = lp->m.mods.data[lp->m.eb_module].code;
     if (!cbm__walk_inside(w))
         return false;
     if (code == ebc && !cbm__walk_to_branch_end(ls->ctx, brackets_of(ls, w), w, sbc, ebc))
@@ -448,7 +449,7 @@ static bool accept_right(cbm_lsys *ls, cbm__walk *w, int code)
  * branches are skipped. */
 static bool accept_left(const lpfg *lp, cbm__walk *w, int code)
 {
-    int sbc = lp->m.mods.data[lp->m.sb].code, ebc = lp->m.mods.data[lp->m.eb].code;
+    int sbc = lp->m.mods.data[lp->m.sb_module].code, ebc = lp->m.mods.data[lp->m.eb_module].code;
     if (!cbm__walk_backward(w))
         return false;
     while (cbm__walk_inside(w) && cbm__walk_symbol(w) != code) {
@@ -469,9 +470,9 @@ static bool accept_left(const lpfg *lp, cbm__walk *w, int code)
 static void bind_formals(cbm_lsys *ls, const cbm__walk *w, int32_t formals, double *fr)
 {
     lpfg *lp = ls->lp;
-    if (!(w->s->sym[w->i] & LSYS_PARAM_BIT))
+    if (!(w->s->sym[w->mod] & LSYS_PARAM_BIT))
         return;
-    const double *p = (const double *)w->s->par + w->k;
+    const double *p = (const double *)w->s->par + w->param;
     for (int32_t f = formals; f >= 0; f = lp->m.nodes.data[f].next) {
         const lc_node *x = &lp->m.nodes.data[f];
         int sz = lc_type_size(&lp->m, x->type);
@@ -488,7 +489,7 @@ static bool match_context(cbm_lsys *ls, int k, int32_t first, int32_t n, double 
     cbm__walk w = lp->scan[k];
     if (!w.s)
         return false;
-    if (k == CX_RC || k == CX_NRC) {
+    if (k == LC_CTX_RIGHT || k == LC_CTX_NEW_RIGHT) {
         for (int32_t i = 0; i < n; i++) {
             const lc_modref *m = &lp->m.sms.data[first + i];
             if (!accept_right(ls, &w, lp->m.mods.data[m->mod].code))
@@ -640,7 +641,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             cbm__walk first = cbm__walk_at(src, i, j, k, 1);
             bool ok = true;
             for (int32_t a = 0; a < anchor && ok; a++) {
-                if (first.i == 0)
+                if (first.mod == 0)
                     ok = false;
                 else
                     cbm__walk_prev_in_memory(&first);
@@ -658,17 +659,17 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             }
             if (!ok)
                 continue;
-            lp->scan[CX_LC] = first;
-            lp->scan[CX_RC] = w;
-            memset(&lp->scan[CX_NLC], 0, sizeof(cbm__walk));
-            memset(&lp->scan[CX_NRC], 0, sizeof(cbm__walk));
+            lp->scan[LC_CTX_LEFT] = first;
+            lp->scan[LC_CTX_RIGHT] = w;
+            memset(&lp->scan[LC_CTX_NEW_LEFT], 0, sizeof(cbm__walk));
+            memset(&lp->scan[LC_CTX_NEW_RIGHT], 0, sizeof(cbm__walk));
             if (nxt && !lp->backward)
-                lp->scan[CX_NLC] = cbm__walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
+                lp->scan[LC_CTX_NEW_LEFT] = cbm__walk_at(nxt, nxt->n, nxt->npm, nxt->npar, 1);
             else if (nxt)
-                lp->scan[CX_NRC] = walk_end(nxt, -1);
-            for (int c = 0; c < CX_N && ok; c++)
-                if (pr->cx[c].n)
-                    ok = match_context(ls, c, pr->cx[c].first, pr->cx[c].n, fr);
+                lp->scan[LC_CTX_NEW_RIGHT] = walk_end(nxt, -1);
+            for (int c = 0; c < LC_CTX_N && ok; c++)
+                if (pr->context[c].n)
+                    ok = match_context(ls, c, pr->context[c].first, pr->context[c].n, fr);
             if (!ok)
                 continue;
             size_t n0 = out->n, npm0 = out->npm, npar0 = out->npar;
@@ -676,7 +677,7 @@ static int try_rewrite(cbm_lsys *ls, const lc_rules *set, const lstr *src, size_
             lp->produced = false;
             /* a production applied is an operation: a decomposition that doubles to its
              * maximum depth stops at the budget */
-            lp->vm.at = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
+            lp->vm.stmt_pos = (int32_t)(pr->pos < INT32_MAX ? pr->pos : INT32_MAX);
             if (!spend_operation(lp, false))
                 return 0;
             int bi = cbm__lc_body(&lp->prog, which, p);
@@ -774,8 +775,8 @@ static inline void pass_next(const lpfg_pass *ps, const lstr *s, lpos *p)
 {
     if (!ps->back)
         cbm__pos_next(s, p);
-    else if (p->i-- > 0 && (s->sym[p->i] & LSYS_PARAM_BIT))
-        p->k -= s->pc[--p->j];
+    else if (p->mod-- > 0 && (s->sym[p->mod] & LSYS_PARAM_BIT))
+        p->param -= s->pc[--p->pmod];
 }
 
 /* The production of the module at *p (the first module of its predecessor, the last going
@@ -791,15 +792,15 @@ static cbm_status lpfg_rewrite(void *d, lpos *p, size_t c, bool *applied)
     const lstr *src = &ls->cur;
     *applied = true;
     if (!ps->back && c == ps->cut) {
-        cbm__walk w = cbm__walk_at(src, p->i, p->j, p->k, 1);
+        cbm__walk w = cbm__walk_at(src, p->mod, p->pmod, p->param, 1);
         cbm__walk_find_closing(&w, (int)ps->sb, (int)ps->eb, true);
-        p->i = (size_t)w.i, p->j = w.j, p->k = w.k;
+        p->mod = (size_t)w.mod, p->pmod = w.pmod, p->param = w.param;
         return CBM_OK;
     }
     lstr *succ = &lp->succ;
     succ->n = succ->npm = succ->npar = 0;
-    int done =
-        try_rewrite(ls, &lp->m.main, src, p->i, p->j, p->k, &ls->next, ps->back ? succ : &ls->next);
+    int done = try_rewrite(ls, &lp->m.main, src, p->mod, p->pmod, p->param, &ls->next,
+                           ps->back ? succ : &ls->next);
     if (lp->vm.err != CBM_OK)
         return lp->vm.err;
     *applied = done > 0;
@@ -819,7 +820,7 @@ static cbm_status lpfg_unmatched(void *d, lpos *p, size_t c)
     (void)c;
     const lpfg_pass *ps = d;
     const lstr *src = &ps->ls->cur;
-    CBM_TRY(copy_module_at(ps->ls->ctx, src, p->i, p->j, p->k, &ps->ls->next));
+    CBM_TRY(copy_module_at(ps->ls->ctx, src, p->mod, p->pmod, p->param, &ps->ls->next));
     pass_next(ps, src, p);
     return CBM_OK;
 }
@@ -841,8 +842,8 @@ static cbm_status generate_pass(cbm_lsys *ls)
     lpfg_pass ps = {.ls = ls,
                     .back = lp->backward,
                     .cut = lp->m.mods.data[cbm__lc_find_module(&lp->m, "Cut", 3)].code,
-                    .sb = lp->m.mods.data[lp->m.sb].code,
-                    .eb = lp->m.mods.data[lp->m.eb].code};
+                    .sb = lp->m.mods.data[lp->m.sb_module].code,
+                    .eb = lp->m.mods.data[lp->m.eb_module].code};
     lpos start = {0, 0, 0};
     if (ps.back) { /* from the last module */
         start = (lpos){ls->cur.n, ls->cur.npm, ls->cur.npar};
@@ -866,8 +867,8 @@ static cbm_status generate_pass(cbm_lsys *ls)
 static cbm_status generate(cbm_lsys *ls)
 {
     const lpfg *lp = ls->lp;
-    uint8_t sbc = (uint8_t)lp->m.mods.data[lp->m.sb].code;
-    uint8_t ebc = (uint8_t)lp->m.mods.data[lp->m.eb].code;
+    uint8_t sbc = (uint8_t)lp->m.mods.data[lp->m.sb_module].code;
+    uint8_t ebc = (uint8_t)lp->m.mods.data[lp->m.eb_module].code;
     cbm__brackets_start(&ls->brackets[0], &ls->cur, 1, sbc, ebc);
     cbm__brackets_start(&ls->brackets[1], &ls->next, -1, sbc, ebc);
     cbm_status s = generate_pass(ls);
@@ -933,7 +934,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     lpfg *lp = ls->lp;
     memset(lp->vm.glob, 0, (size_t)(lp->m.nglobal + 1) * sizeof(double));
     lp->vm.err = CBM_OK;
-    lp->vm.at = lp->vm.err_pos = -1;
+    lp->vm.stmt_pos = lp->vm.err_pos = -1;
     lp->nonfinite_warned = false;
     set_budgets(ls);
     lp->backward = false;
@@ -951,7 +952,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     for (size_t g = 0; g < lp->m.gvars.len; g++) {
         const lc_global *v = &lp->m.gvars.data[g];
-        lp->vm.at = -1;
+        lp->vm.stmt_pos = -1;
         if (v->init >= 0)
             (void)run_root(ls, lp->prog.init0 + g);
         if (lp->vm.err != CBM_OK)
@@ -960,7 +961,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     CBM_TRY(run_block(ls, 0));
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     lp->out = &ls->cur;
-    lp->vm.at = -1;
+    lp->vm.stmt_pos = -1;
     (void)run_root(ls, lp->prog.axiom);
     if (lp->vm.err != CBM_OK)
         return run_error(ls, "axiom");
@@ -1008,7 +1009,7 @@ static const double *write_value(cbm__strw *w, const lpfg *lp, int t, const doub
         return v + 1;
     }
     cbm__strw_char(w, '{');
-    int nf = lc_is_vec(t) ? 3 : lp->m.types.data[t].nf;
+    int nf = lc_is_vec(t) ? 3 : lp->m.types.data[t].nfields;
     for (int i = 0; i < nf; i++) {
         if (i)
             cbm__strw_char(w, ',');
@@ -1033,9 +1034,9 @@ cbm_status cbm__lpfg_write_str(const cbm_lsys *ls, bool homomorphism, cbm_out *o
     while (cbm_lsys_cursor_next(ls, homomorphism, &c)) {
         const lc_module *m = &lp->m.mods.data[lp->m.bycode[c.symbol & 0x7f]];
         cbm__strw_bytes(w, m->name, namelen[c.symbol & 0x7f]);
-        if (m->np) {
+        if (m->nparams) {
             const double *v = c.params;
-            for (int i = 0; i < m->np; i++) {
+            for (int i = 0; i < m->nparams; i++) {
                 cbm__strw_char(w, i ? ',' : '(');
                 v = write_value(w, lp, m->ptype[i], v);
             }

@@ -37,9 +37,12 @@ typedef struct lstr {
     bool f32;
 } lstr;
 
-/* a position in a string */
+/* A position in a string: module `mod`, with the indices that go with it in the other two
+ * arrays. */
 typedef struct lpos {
-    size_t i, j, k;
+    size_t mod;   /* the module's index (in sym) */
+    size_t pmod;  /* the parametric modules before it: its parameter count is pc[pmod] */
+    size_t param; /* the parameters before it: its first parameter is par[param] */
 } lpos;
 
 /* ---- The parts of a step both dialects share (here and step.c) ----
@@ -58,21 +61,21 @@ static inline size_t cbm__param_size(const lstr *s)
 /* p to the next module of s */
 static inline void cbm__pos_next(const lstr *s, lpos *p)
 {
-    if (s->sym[p->i++] & LSYS_PARAM_BIT)
-        p->k += s->pc[p->j++];
+    if (s->sym[p->mod++] & LSYS_PARAM_BIT)
+        p->param += s->pc[p->pmod++];
 }
 
 /* p to the previous module of s */
 static inline void cbm__pos_prev(const lstr *s, lpos *p)
 {
-    if (s->sym[--p->i] & LSYS_PARAM_BIT)
-        p->k -= s->pc[--p->j];
+    if (s->sym[--p->mod] & LSYS_PARAM_BIT)
+        p->param -= s->pc[--p->pmod];
 }
 
 /* the parameter count of the module at p */
 static inline int cbm__module_params(const lstr *s, const lpos *p)
 {
-    return (s->sym[p->i] & LSYS_PARAM_BIT) ? s->pc[p->j] : 0;
+    return (s->sym[p->mod] & LSYS_PARAM_BIT) ? s->pc[p->pmod] : 0;
 }
 
 /* n parameters from parameter index k of s into dst, as doubles */
@@ -112,11 +115,12 @@ static inline cbm_status cbm__lstr_copy_module(cbm_context *ctx, const lstr *src
 {
     int np = cbm__module_params(src, p);
     CBM_TRY(cbm__lstr_room(ctx, dst, 1, 1, (size_t)np));
-    dst->sym[dst->n++] = src->sym[p->i];
+    dst->sym[dst->n++] = src->sym[p->mod];
     if (np) {
         size_t w = cbm__param_size(src);
         dst->pc[dst->npm++] = (uint8_t)np;
-        memcpy((char *)dst->par + dst->npar * w, (const char *)src->par + p->k * w, (size_t)np * w);
+        memcpy((char *)dst->par + dst->npar * w, (const char *)src->par + p->param * w,
+               (size_t)np * w);
         dst->npar += (size_t)np;
     }
     cbm__pos_next(src, p);
@@ -137,16 +141,16 @@ typedef struct cbm__brackets {
     const lstr *s;            /* the string it describes, NULL: none */
     int dir;                  /* +1 or -1, above */
     uint8_t open, close;      /* the bracket symbols: '[' ']', or the L+C dialect's SB EB codes */
-    lpos at;                  /* modules before at.i are in the table */
+    lpos at;                  /* modules before at.mod are in the table */
     CBM_ARRAY(size_t) opened; /* module index of every opening bracket, increasing */
-    CBM_ARRAY(lpos) closed;   /* the closing bracket that matches it; i == SIZE_MAX: none */
-    CBM_ARRAY(lpos) waiting;  /* brackets waiting for their match (.i: an index in opened) */
+    CBM_ARRAY(lpos) closed;   /* the closing bracket that matches it; mod == SIZE_MAX: none */
+    CBM_ARRAY(lpos) waiting;  /* brackets waiting for their match (.mod: an index in opened) */
 } cbm__brackets;
 
 /* The table describes string s read in direction dir (forgetting what it held). */
 void cbm__brackets_start(cbm__brackets *t, const lstr *s, int dir, uint8_t open, uint8_t close);
 /* The opening bracket at module `at` of s: the position of the bracket that closes it in
- * *close (i == SIZE_MAX when none does). False when the table does not describe s in direction
+ * *close (mod == SIZE_MAX when none does). False when the table does not describe s in direction
  * dir, or memory refuses (the table is then dropped and the caller scans). */
 bool cbm__brackets_jump(cbm_context *ctx, cbm__brackets *t, const lstr *s, int dir, size_t at,
                         lpos *close);
@@ -154,45 +158,46 @@ void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t);
 
 /* A walk over a packed string, for context matching: a position and a reading direction, dir
  * +1 left to right, -1 right to left (the L+C dialect's new string, built reversed going
- * Backward()). i runs from -1 (before the first module in memory) to n (after the last). */
+ * Backward()). The position is an lpos's (mod, pmod, param), but mod runs from -1 (before the
+ * first module in memory) to n (after the last). */
 typedef struct cbm__walk {
     const lstr *s;
-    ptrdiff_t i;
-    size_t j, k;
+    ptrdiff_t mod;
+    size_t pmod, param;
     int dir;
 } cbm__walk;
 
-static inline cbm__walk cbm__walk_at(const lstr *s, size_t i, size_t j, size_t k, int dir)
+static inline cbm__walk cbm__walk_at(const lstr *s, size_t mod, size_t pmod, size_t param, int dir)
 {
-    cbm__walk w = {s, (ptrdiff_t)i, j, k, dir};
+    cbm__walk w = {s, (ptrdiff_t)mod, pmod, param, dir};
     return w;
 }
 
 /* whether w is on a module of its string */
 static inline bool cbm__walk_inside(const cbm__walk *w)
 {
-    return w->i >= 0 && (size_t)w->i < w->s->n;
+    return w->mod >= 0 && (size_t)w->mod < w->s->n;
 }
 
 /* the symbol of the module w is on */
 static inline int cbm__walk_symbol(const cbm__walk *w)
 {
-    return w->s->sym[w->i] & 0x7f;
+    return w->s->sym[w->mod] & 0x7f;
 }
 
 /* a step in memory order, whatever the direction */
 static inline void cbm__walk_next_in_memory(cbm__walk *w)
 {
-    if (w->s->sym[w->i] & LSYS_PARAM_BIT)
-        w->k += w->s->pc[w->j++];
-    w->i++;
+    if (w->s->sym[w->mod] & LSYS_PARAM_BIT)
+        w->param += w->s->pc[w->pmod++];
+    w->mod++;
 }
 
 static inline void cbm__walk_prev_in_memory(cbm__walk *w)
 {
-    w->i--;
-    if (w->i >= 0 && (w->s->sym[w->i] & LSYS_PARAM_BIT))
-        w->k -= w->s->pc[--w->j];
+    w->mod--;
+    if (w->mod >= 0 && (w->s->sym[w->mod] & LSYS_PARAM_BIT))
+        w->param -= w->s->pc[--w->pmod];
 }
 
 /* a step in the walk's direction; false when it leaves the string */
@@ -211,19 +216,19 @@ static inline bool cbm__walk_forward(cbm__walk *w)
 static inline bool cbm__walk_backward(cbm__walk *w)
 {
     if (w->dir > 0) {
-        if (w->i <= 0) {
-            w->i = -1;
+        if (w->mod <= 0) {
+            w->mod = -1;
             return false;
         }
-        if (w->i > (ptrdiff_t)w->s->n)
+        if (w->mod > (ptrdiff_t)w->s->n)
             return false;
         cbm__walk_prev_in_memory(w);
     } else {
-        if (w->i >= (ptrdiff_t)w->s->n - 1) {
-            w->i = (ptrdiff_t)w->s->n;
+        if (w->mod >= (ptrdiff_t)w->s->n - 1) {
+            w->mod = (ptrdiff_t)w->s->n;
             return false;
         }
-        if (w->i < 0) /* before the logical start */
+        if (w->mod < 0) /* before the logical start */
             return false;
         cbm__walk_next_in_memory(w);
     }
@@ -237,6 +242,18 @@ bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int
 /* Moves w forward to the closing bracket of the branch it is in, over the branches inside;
  * false when there is none. */
 bool cbm__walk_to_branch_end(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close);
+/* The bracket-depth test of a scan for the bracket that closes the current nesting level:
+ * symbol c met, depth the branches entered so far (opened by `opener`); true when c is the
+ * `closer` of the level the scan started in. */
+static inline bool cbm__closes_level(int c, int opener, int closer, int *depth)
+{
+    if (c == opener) {
+        ++*depth;
+        return false;
+    }
+    return c == closer && (*depth)-- == 0;
+}
+
 /* Walks to the bracket that closes the current nesting level: forward to its closing bracket
  * (opener: the opening one), or backward to its opening one (opener: the closing one).
  * Branches met on the way are passed whole. A scan in memory order, up or down whatever the
@@ -245,39 +262,32 @@ static inline bool cbm__walk_find_closing(cbm__walk *w, int opener, int closer, 
 {
     const lstr *s = w->s;
     const ptrdiff_t n = (ptrdiff_t)s->n;
-    ptrdiff_t i = w->i;
-    size_t j = w->j, k = w->k;
+    ptrdiff_t mod = w->mod;
+    size_t pmod = w->pmod, param = w->param;
     int depth = 0;
     if (forward == (w->dir > 0)) { /* up in memory */
-        for (; i >= 0 && i < n; i++) {
-            uint8_t b = s->sym[i];
-            int c = b & 0x7f;
-            if (c == opener) {
-                depth++;
-            } else if (c == closer && depth-- == 0) {
-                w->i = i, w->j = j, w->k = k;
+        for (; mod >= 0 && mod < n; mod++) {
+            uint8_t b = s->sym[mod];
+            if (cbm__closes_level(b & 0x7f, opener, closer, &depth)) {
+                w->mod = mod, w->pmod = pmod, w->param = param;
                 return true;
             }
             if (b & LSYS_PARAM_BIT)
-                k += s->pc[j++];
+                param += s->pc[pmod++];
         }
     } else { /* down */
-        if (i >= n)
-            i = -1;
-        for (; i >= 0; i--) {
-            uint8_t b = s->sym[i];
-            int c = b & 0x7f;
-            if (c == opener) {
-                depth++;
-            } else if (c == closer && depth-- == 0) {
-                w->i = i, w->j = j, w->k = k;
+        if (mod >= n)
+            mod = -1;
+        for (; mod >= 0; mod--) {
+            if (cbm__closes_level(s->sym[mod] & 0x7f, opener, closer, &depth)) {
+                w->mod = mod, w->pmod = pmod, w->param = param;
                 return true;
             }
-            if (i > 0 && (s->sym[i - 1] & LSYS_PARAM_BIT))
-                k -= s->pc[--j];
+            if (mod > 0 && (s->sym[mod - 1] & LSYS_PARAM_BIT))
+                param -= s->pc[--pmod];
         }
     }
-    w->i = i < 0 ? -1 : n;
+    w->mod = mod < 0 ? -1 : n;
     return false;
 }
 
@@ -306,16 +316,16 @@ typedef struct cbm__step_hooks {
 } cbm__step_hooks;
 
 /* The loop over string s from p. A pass that reads s right to left (the L+C dialect's
- * Backward()) moves before its first module to p.i == SIZE_MAX, past the end of any string, so
+ * Backward()) moves before its first module to p.mod == SIZE_MAX, past the end of any string, so
  * one test ends both directions. Always inline, and each dialect passes a constant table: each
  * dialect's instance of the loop calls its hooks directly (or inlines them), with no call
  * through a pointer per module (the Koch curve spends a few nanoseconds per module). */
 static inline __attribute__((always_inline)) cbm_status
 cbm__step_loop(const cbm__step_hooks *h, void *d, const lstr *s, lpos p)
 {
-    while (p.i < s->n) {
+    while (p.mod < s->n) {
         const lpos from = p;
-        const size_t c = s->sym[p.i] & 0x7fu;
+        const size_t c = s->sym[p.mod] & 0x7fu;
         bool applied;
         CBM_TRY(h->rewrite(d, &p, c, &applied));
         if (!applied)
@@ -339,9 +349,9 @@ typedef struct smod {
 } smod;
 
 typedef struct prod {
-    int32_t lc, nlc;     /* left context in fmods, in text order */
-    int32_t pred, npred; /* strict predecessor */
-    int32_t rc, nrc;     /* right context */
+    int32_t left_ctx, nleft_ctx;   /* left context in fmods, in text order */
+    int32_t pred, npred;           /* strict predecessor */
+    int32_t right_ctx, nright_ctx; /* right context */
     int nformals;
     int32_t pre, cond, post, prob; /* -1: none */
     int32_t succ, nsucc;           /* in smods */

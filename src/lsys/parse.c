@@ -258,7 +258,7 @@ static void parse_production(parser *p)
     const char *names[LSYS_MAX_PARAMS + 1];
     size_t lens[LSYS_MAX_PARAMS + 1];
     int nnames = 0;
-    prod pr = {.pre = -1, .cond = -1, .post = -1, .prob = -1, .lc = 0, .rc = 0};
+    prod pr = {.pre = -1, .cond = -1, .post = -1, .prob = -1, .left_ctx = 0, .right_ctx = 0};
     pr.pos = c->pos;
     int32_t f, n;
     cbm__skip(c, false);
@@ -278,7 +278,7 @@ static void parse_production(parser *p)
     cbm__skip(c, false);
     if (p->t[c->pos] == '<') {
         c->pos++;
-        pr.lc = f, pr.nlc = n;
+        pr.left_ctx = f, pr.nleft_ctx = n;
         if (!parse_formal(p, &f, &n, names, lens, &nnames))
             goto fail;
     }
@@ -296,8 +296,8 @@ static void parse_production(parser *p)
         cbm__skip(c, false);
         if (p->t[c->pos] == '*') { /* `pred > *`: an empty right context (cpfg) */
             c->pos++;
-            pr.rc = (int32_t)ls->fmods.len, pr.nrc = 0;
-        } else if (!parse_formal(p, &pr.rc, &pr.nrc, names, lens, &nnames)) {
+            pr.right_ctx = (int32_t)ls->fmods.len, pr.nright_ctx = 0;
+        } else if (!parse_formal(p, &pr.right_ctx, &pr.nright_ctx, names, lens, &nnames)) {
             goto fail;
         }
     }

@@ -56,14 +56,14 @@ static bool extend(cbm_context *ctx, cbm__brackets *t)
     const lstr *s = t->s;
     lpos *p = &t->at;
     const lpos none = {SIZE_MAX, 0, 0};
-    while (p->i < s->n) {
-        uint8_t c = s->sym[p->i] & 0x7f;
+    while (p->mod < s->n) {
+        uint8_t c = s->sym[p->mod] & 0x7f;
         bool ok = true;
         if (c == t->open) {
             lpos match = none;
             if (t->dir < 0 && t->waiting.len)
                 match = t->waiting.data[--t->waiting.len];
-            ok = CBM_ARRAY_PUSH(ctx, t->opened, p->i) == CBM_OK &&
+            ok = CBM_ARRAY_PUSH(ctx, t->opened, p->mod) == CBM_OK &&
                  CBM_ARRAY_PUSH(ctx, t->closed, match) == CBM_OK;
             if (ok && t->dir > 0) {
                 lpos order = {t->opened.len - 1, 0, 0};
@@ -73,7 +73,7 @@ static bool extend(cbm_context *ctx, cbm__brackets *t)
             if (t->dir < 0)
                 ok = CBM_ARRAY_PUSH(ctx, t->waiting, *p) == CBM_OK;
             else if (t->waiting.len)
-                t->closed.data[t->waiting.data[--t->waiting.len].i] = *p;
+                t->closed.data[t->waiting.data[--t->waiting.len].mod] = *p;
         }
         if (!ok) {
             t->s = NULL;
@@ -114,12 +114,12 @@ void cbm__brackets_free(cbm_context *ctx, cbm__brackets *t)
 bool cbm__walk_skip_branch(cbm_context *ctx, cbm__brackets *t, cbm__walk *w, int open, int close)
 {
     lpos at;
-    if (t && cbm__brackets_jump(ctx, t, w->s, w->dir, (size_t)w->i, &at)) {
-        if (at.i == SIZE_MAX) { /* unmatched: the walk leaves the string */
-            w->i = -1;
+    if (t && cbm__brackets_jump(ctx, t, w->s, w->dir, (size_t)w->mod, &at)) {
+        if (at.mod == SIZE_MAX) { /* unmatched: the walk leaves the string */
+            w->mod = -1;
             return false;
         }
-        *w = cbm__walk_at(w->s, at.i, at.j, at.k, w->dir);
+        *w = cbm__walk_at(w->s, at.mod, at.pmod, at.param, w->dir);
         return true;
     }
     cbm__walk_forward(w);

@@ -170,7 +170,7 @@ typedef struct reader {
 } reader;
 
 CBM_PRINTF(4, 5)
-static void err(reader *r, int line, int col, const char *fmt, ...)
+static void spec_error(reader *r, int line, int col, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -185,7 +185,7 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
 {
     char buf[64];
     if (vn >= sizeof buf) {
-        err(r, line, col, "value of '%s' is too long", k->name);
+        spec_error(r, line, col, "value of '%s' is too long", k->name);
         r->status = CBM_E_SEMANTIC;
         return;
     }
@@ -197,8 +197,8 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
         if (!cbm_mech_solver_parse(buf, &sv)) {
             char names[128];
             cbm_mech_solver_names(names, sizeof names);
-            err(r, line, col, "unknown solver '%s' (expected one of: %s; newton = fast)", buf,
-                names);
+            spec_error(r, line, col, "unknown solver '%s' (expected one of: %s; newton = fast)",
+                       buf, names);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -208,7 +208,8 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
     if (k->kind == K_APPROX_MODE) {
         cbm_approx_mode m;
         if (!cbm_approx_mode_parse(buf, &m)) {
-            err(r, line, col, "unknown approx_mode '%s' (expected corrected or thesis)", buf);
+            spec_error(r, line, col, "unknown approx_mode '%s' (expected corrected or thesis)",
+                       buf);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -229,7 +230,7 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
                 strncat(names, w ? " or " : "", sizeof names - strlen(names) - 1);
                 strncat(names, words[w], sizeof names - strlen(names) - 1);
             }
-            err(r, line, col, "unknown %s '%s' (expected %s)", k->name, buf, names);
+            spec_error(r, line, col, "unknown %s '%s' (expected %s)", k->name, buf, names);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -243,7 +244,7 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
         else if (!strcmp(buf, "listing"))
             a = CBM_FEM_AXIAL_LISTING;
         else {
-            err(r, line, col, "unknown fem_axial '%s' (expected formula or listing)", buf);
+            spec_error(r, line, col, "unknown fem_axial '%s' (expected formula or listing)", buf);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -257,7 +258,8 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
         else if (!strcmp(buf, "chain"))
             d = CBM_MECH_CHAIN;
         else {
-            err(r, line, col, "unknown discretization '%s' (expected staggered or chain)", buf);
+            spec_error(r, line, col, "unknown discretization '%s' (expected staggered or chain)",
+                       buf);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -268,19 +270,19 @@ static void set_value(reader *r, const key_desc *k, const char *v, size_t vn, in
     char *end = NULL;
     double x = strtod(buf, &end);
     if (end == buf || *end != 0 || errno == ERANGE || !isfinite(x)) {
-        err(r, line, col, "'%s' expects a finite number, found '%s'", k->name, buf);
+        spec_error(r, line, col, "'%s' expects a finite number, found '%s'", k->name, buf);
         r->status = CBM_E_SEMANTIC;
         return;
     }
     if (x < k->lo || x > k->hi || (k->lo_open && x == k->lo)) {
-        err(r, line, col, "'%s' = %s is out of range (%s%g .. %g)", k->name, buf,
-            k->lo_open ? "above " : "", k->lo, k->hi);
+        spec_error(r, line, col, "'%s' = %s is out of range (%s%g .. %g)", k->name, buf,
+                   k->lo_open ? "above " : "", k->lo, k->hi);
         r->status = CBM_E_SEMANTIC;
         return;
     }
     if (k->kind == K_INT) {
         if (x != floor(x)) {
-            err(r, line, col, "'%s' expects a whole number, found '%s'", k->name, buf);
+            spec_error(r, line, col, "'%s' expects a whole number, found '%s'", k->name, buf);
             r->status = CBM_E_SEMANTIC;
             return;
         }
@@ -313,18 +315,19 @@ static void thesis_check(reader *r, cbm_bend_spec *s, const bool *seen)
         "modulus_of_rupture", "steps",    "fem_increments", "control_curvature", "aspect"};
     for (size_t k = 0; k < sizeof refused / sizeof *refused; k++)
         if (key_seen(seen, refused[k])) {
-            err(r, 0, 0,
-                "fem_path = thesis grows its own chain of fem_elements steps under its own "
-                "weight: '%s' has no meaning there",
-                refused[k]);
+            spec_error(r, 0, 0,
+                       "fem_path = thesis grows its own chain of fem_elements steps under its own "
+                       "weight: '%s' has no meaning there",
+                       refused[k]);
             r->status = CBM_E_SEMANTIC;
         }
     if (s->gravity < 0) {
-        err(r, 0, 0, "fem_path = thesis needs gravity >= 0 (got %g)", s->gravity);
+        spec_error(r, 0, 0, "fem_path = thesis needs gravity >= 0 (got %g)", s->gravity);
         r->status = CBM_E_SEMANTIC;
     }
     if (s->segments < s->fem_elements) {
-        err(r, 0, 0,
+        spec_error(
+            r, 0, 0,
             "fem_path = thesis resamples fem_elements = %ld angles to segments = %ld: segments "
             "must be at least fem_elements",
             s->fem_elements, s->segments);
@@ -333,7 +336,7 @@ static void thesis_check(reader *r, cbm_bend_spec *s, const bool *seen)
     double rb = s->radius_base > 0 ? s->radius_base : s->radius;
     double rt = s->radius_tip > 0 ? s->radius_tip : s->radius;
     if (rt > rb) {
-        err(r, 0, 0, "fem_path = thesis needs radius_tip (%g) <= radius_base (%g)", rt, rb);
+        spec_error(r, 0, 0, "fem_path = thesis needs radius_tip (%g) <= radius_base (%g)", rt, rb);
         r->status = CBM_E_SEMANTIC;
     }
     if (!key_seen(seen, "fem_axial"))
@@ -381,15 +384,15 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
         size_t kn = p - ks;
         if (kn == 0) {
             unsigned char c = (unsigned char)text[p];
-            err(&r, line, kcol, "expected a key, found '%s%c'", c < 32 || c > 126 ? "\\x" : "",
-                c < 32 || c > 126 ? '?' : (char)c);
+            spec_error(&r, line, kcol, "expected a key, found '%s%c'",
+                       c < 32 || c > 126 ? "\\x" : "", c < 32 || c > 126 ? '?' : (char)c);
             r.status = r.status ? r.status : CBM_E_SYNTAX;
             continue;
         }
         SKIPWS
         if (p >= e || text[p] != '=') {
-            err(&r, line, (int)(p - ls) + 1, "expected '=' after '%.*s'", (int)(kn > 40 ? 40 : kn),
-                text + ks);
+            spec_error(&r, line, (int)(p - ls) + 1, "expected '=' after '%.*s'",
+                       (int)(kn > 40 ? 40 : kn), text + ks);
             r.status = r.status ? r.status : CBM_E_SYNTAX;
             continue;
         }
@@ -402,13 +405,14 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
         size_t vn = p - vs;
         SKIPWS
         if (vn == 0) {
-            err(&r, line, vcol, "missing value for '%.*s'", (int)(kn > 40 ? 40 : kn), text + ks);
+            spec_error(&r, line, vcol, "missing value for '%.*s'", (int)(kn > 40 ? 40 : kn),
+                       text + ks);
             r.status = r.status ? r.status : CBM_E_SYNTAX;
             continue;
         }
         if (p < e) {
-            err(&r, line, (int)(p - ls) + 1, "unexpected text after the value of '%.*s'",
-                (int)(kn > 40 ? 40 : kn), text + ks);
+            spec_error(&r, line, (int)(p - ls) + 1, "unexpected text after the value of '%.*s'",
+                       (int)(kn > 40 ? 40 : kn), text + ks);
             r.status = r.status ? r.status : CBM_E_SYNTAX;
             continue;
         }
@@ -417,12 +421,12 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
         while (k < NKEYS && !(strlen(keys[k].name) == kn && !memcmp(keys[k].name, text + ks, kn)))
             k++;
         if (k == NKEYS) {
-            err(&r, line, kcol, "unknown key '%.*s'", (int)(kn > 40 ? 40 : kn), text + ks);
+            spec_error(&r, line, kcol, "unknown key '%.*s'", (int)(kn > 40 ? 40 : kn), text + ks);
             r.status = r.status ? r.status : CBM_E_SEMANTIC;
             continue;
         }
         if (seen[k]) {
-            err(&r, line, kcol, "key '%s' given twice", keys[k].name);
+            spec_error(&r, line, kcol, "key '%s' given twice", keys[k].name);
             r.status = r.status ? r.status : CBM_E_SEMANTIC;
             continue;
         }
@@ -432,51 +436,52 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
     if (r.status == CBM_OK) {
         /* consistency of the keys together (reported at line 0: the whole file) */
         if (s.length_initial > s.length) {
-            err(&r, 0, 0, "length_initial (%g) must not exceed length (%g)", s.length_initial,
-                s.length);
+            spec_error(&r, 0, 0, "length_initial (%g) must not exceed length (%g)",
+                       s.length_initial, s.length);
             r.status = CBM_E_SEMANTIC;
         }
         if (s.steps == 0 && (s.length_initial > 0 || s.radius_final > 0)) {
-            err(&r, 0, 0, "length_initial and radius_final need steps > 0");
+            spec_error(&r, 0, 0, "length_initial and radius_final need steps > 0");
             r.status = CBM_E_SEMANTIC;
         }
         double r0 = s.radius_base > 0 ? s.radius_base : s.radius;
         if (s.radius_final > 0 && s.radius_final < r0) {
-            err(&r, 0, 0, "radius_final (%g) must be at least the initial radius (%g)",
-                s.radius_final, r0);
+            spec_error(&r, 0, 0, "radius_final (%g) must be at least the initial radius (%g)",
+                       s.radius_final, r0);
             r.status = CBM_E_SEMANTIC;
         }
         if (s.duration == 0 && (s.dt > 0 || s.damping_ratio > 0 || s.impulse_time > 0 ||
                                 s.impulse_force != 0 || s.initial_tip_load != 0)) {
-            err(&r, 0, 0,
-                "dt, damping_ratio, impulse_time, impulse_force and initial_tip_load need "
-                "duration > 0");
+            spec_error(&r, 0, 0,
+                       "dt, damping_ratio, impulse_time, impulse_force and initial_tip_load need "
+                       "duration > 0");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.motion == 0 && (s.motion_modes > 0 || s.motion_cut_hz > 0 || s.static_correction)) {
-            err(&r, 0, 0, "motion_modes, motion_cut_hz and static_correction need motion = modal");
+            spec_error(&r, 0, 0,
+                       "motion_modes, motion_cut_hz and static_correction need motion = modal");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.motion == 1 && s.duration == 0) {
-            err(&r, 0, 0, "motion = modal needs duration > 0");
+            spec_error(&r, 0, 0, "motion = modal needs duration > 0");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.motion == 1 && s.motion_modes == 0 && !(s.motion_cut_hz > 0)) {
-            err(&r, 0, 0, "motion = modal needs motion_modes > 0 or motion_cut_hz > 0");
+            spec_error(&r, 0, 0, "motion = modal needs motion_modes > 0 or motion_cut_hz > 0");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.dt > 0 && s.duration / s.dt > 1e8) {
-            err(&r, 0, 0, "duration / dt = %g steps is more than 1e8", s.duration / s.dt);
+            spec_error(&r, 0, 0, "duration / dt = %g steps is more than 1e8", s.duration / s.dt);
             r.status = CBM_E_SEMANTIC;
         }
         if (s.duration > 0 && s.solver == CBM_MECH_APPROX) {
-            err(&r, 0, 0,
-                "duration (motion about an equilibrium) needs solver relax or fast: "
-                "approx gives no equilibrium");
+            spec_error(&r, 0, 0,
+                       "duration (motion about an equilibrium) needs solver relax or fast: "
+                       "approx gives no equilibrium");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.duration > 0 && s.steps > 0) {
-            err(&r, 0, 0, "duration (motion) and steps (growth) cannot be combined");
+            spec_error(&r, 0, 0, "duration (motion) and steps (growth) cannot be combined");
             r.status = CBM_E_SEMANTIC;
         }
         bool fem_keys = false;
@@ -484,7 +489,7 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
             if (seen[k] && !strncmp(keys[k].name, "fem_", 4))
                 fem_keys = true;
         if (fem_keys && s.solver != CBM_MECH_FEM) {
-            err(&r, 0, 0, "the fem_* keys need solver = fem");
+            spec_error(&r, 0, 0, "the fem_* keys need solver = fem");
             r.status = CBM_E_SEMANTIC;
         }
         bool thesis_keys = false;
@@ -493,7 +498,8 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
                 !strncmp(keys[k].name, "fem_", 4))
                 thesis_keys = true;
         if (thesis_keys && s.fem_path != CBM_FEM_PATH_THESIS) {
-            err(&r, 0, 0,
+            spec_error(
+                &r, 0, 0,
                 "fem_elements, fem_support, fem_primary_tropism, fem_update and fem_stiffness "
                 "need fem_path = thesis");
             r.status = CBM_E_SEMANTIC;
@@ -501,18 +507,20 @@ cbm_status cbm_bend_spec_parse(cbm_context *ctx, const char *text, size_t len, c
         if (s.fem_path == CBM_FEM_PATH_THESIS)
             thesis_check(&r, &s, seen);
         if (s.solver == CBM_MECH_FEM && s.duration > 0) {
-            err(&r, 0, 0,
-                "solver = fem cannot be combined with duration (motion starts from a "
-                "static equilibrium)");
+            spec_error(&r, 0, 0,
+                       "solver = fem cannot be combined with duration (motion starts from a "
+                       "static equilibrium)");
             r.status = CBM_E_SEMANTIC;
         }
         if (s.solver == CBM_MECH_FEM && s.steps > 0 && s.modulus_of_rupture > 0) {
-            err(&r, 0, 0, "solver = fem grows without breakage: drop modulus_of_rupture or steps");
+            spec_error(&r, 0, 0,
+                       "solver = fem grows without breakage: drop modulus_of_rupture or steps");
             r.status = CBM_E_SEMANTIC;
         }
         size_t lim = cbm_context_limits(ctx)->max_segments;
         if (lim && (size_t)s.segments > lim) {
-            err(&r, 0, 0, "segments = %ld exceeds limits.max_segments (%zu)", s.segments, lim);
+            spec_error(&r, 0, 0, "segments = %ld exceeds limits.max_segments (%zu)", s.segments,
+                       lim);
             r.status = CBM_E_LIMIT;
         }
     }

@@ -471,13 +471,13 @@ static void plane(const arc *a, cbm_vec3 *v)
 }
 
 /* an equilibrium of the branch with its tangent */
-typedef struct apt {
+typedef struct arc_point {
     cbm_vec3 *om, *t; /* n each */
     double lam, tl;
     cbm_bend_branch_point pt;
-} apt;
+} arc_point;
 
-static void apt_copy(const arc *a, apt *dst, const apt *src)
+static void arc_point_copy(const arc *a, arc_point *dst, const arc_point *src)
 {
     memcpy(dst->om, src->om, a->n * sizeof *dst->om);
     memcpy(dst->t, src->t, a->n * sizeof *dst->t);
@@ -553,7 +553,7 @@ static cbm_status linearise(arc *a, double lam, double *relres)
 
 /* the unit tangent at x (an equilibrium in the plant): (-J^-1 dR/dlambda, 1) normalised,
  * oriented along prev (or along the sweep's direction without one) */
-static cbm_status tangent(arc *a, apt *x, const apt *prev, double dir)
+static cbm_status tangent(arc *a, arc_point *x, const arc_point *prev, double dir)
 {
     put_omega(a, x->om);
     CBM_TRY(linearise(a, x->lam, NULL));
@@ -579,8 +579,8 @@ static cbm_status tangent(arc *a, apt *x, const apt *prev, double dir)
 /* Newton from the predictor base + ds t (t, tl: the hyperplane's normal) to an equilibrium on
  * the hyperplane; the result in x (om, lam; the plant holds it). false if it did not converge
  * in 12 iterations or went astray (a joint turning by more than 0.5 rad in one update). */
-static cbm_status correct(arc *a, const apt *base, const cbm_vec3 *t, double tl, double ds, apt *x,
-                          int *iters, bool *ok)
+static cbm_status correct(arc *a, const arc_point *base, const cbm_vec3 *t, double tl, double ds,
+                          arc_point *x, int *iters, bool *ok)
 {
     const size_t n = a->n;
     for (size_t i = 0; i < n; i++)
@@ -635,7 +635,8 @@ static cbm_status correct(arc *a, const apt *base, const cbm_vec3 *t, double tl,
 /* Corrects from base by ds along base's tangent and reads the point (stability included);
  * *ok false when Newton failed or the tip jumped (another branch). */
 
-static cbm_status step_to(arc *a, const apt *base, double ds, apt *x, int *iters, bool *ok)
+static cbm_status step_to(arc *a, const arc_point *base, double ds, arc_point *x, int *iters,
+                          bool *ok)
 {
     CBM_TRY(correct(a, base, base->t, base->tl, ds, x, iters, ok));
     if (!*ok)
@@ -653,7 +654,7 @@ static cbm_status step_to(arc *a, const apt *base, double ds, apt *x, int *iters
 
 typedef enum ev_kind { EV_FOLD, EV_STAB } ev_kind;
 
-static bool has_event(ev_kind k, const apt *a0, const apt *x)
+static bool has_event(ev_kind k, const arc_point *a0, const arc_point *x)
 {
     if (k == EV_FOLD) /* a tangent along a mode (tl = 0, just after a switch) has no side */
         return (a0->tl > 0.0 && x->tl < 0.0) || (a0->tl < 0.0 && x->tl > 0.0);
@@ -662,11 +663,11 @@ static bool has_event(ev_kind k, const apt *a0, const apt *x)
 
 /* Bisection of the step from cur: lo (no event yet) and hi (past it) with |hi - lo| in the
  * parameter below min_step of the range, or the step below 1e-12 of ds. */
-static cbm_status refine(arc *a, const apt *cur, const apt *nxt, double ds, ev_kind k, apt *lo,
-                         apt *hi, apt *mid)
+static cbm_status refine(arc *a, const arc_point *cur, const arc_point *nxt, double ds, ev_kind k,
+                         arc_point *lo, arc_point *hi, arc_point *mid)
 {
-    apt_copy(a, lo, cur);
-    apt_copy(a, hi, nxt);
+    arc_point_copy(a, lo, cur);
+    arc_point_copy(a, hi, nxt);
     double slo = 0.0, shi = ds;
     const double want = a->d->min_step * a->range;
     while (fabs(hi->lam - lo->lam) > want && shi - slo > 1e-12 * ds) {
@@ -677,10 +678,10 @@ static cbm_status refine(arc *a, const apt *cur, const apt *nxt, double ds, ev_k
         if (!ok)
             break; /* the bracket stays as it is */
         if (has_event(k, cur, mid)) {
-            apt_copy(a, hi, mid);
+            arc_point_copy(a, hi, mid);
             shi = sm;
         } else {
-            apt_copy(a, lo, mid);
+            arc_point_copy(a, lo, mid);
             slo = sm;
         }
     }
@@ -688,7 +689,7 @@ static cbm_status refine(arc *a, const apt *cur, const apt *nxt, double ds, ev_k
 }
 
 /* the jump target of a fold at lo: the rod solved just past it with the push */
-static cbm_status jump_from(arc *a, const apt *lo, double dir, cbm_bend_fold *f)
+static cbm_status jump_from(arc *a, const arc_point *lo, double dir, cbm_bend_fold *f)
 {
     cbm_solve_def sd = a->cfg->sd;
     sd.push_unstable = true;
@@ -709,7 +710,7 @@ static cbm_status jump_from(arc *a, const apt *lo, double dir, cbm_bend_fold *f)
 
 /* Leaves the branch at lo along the lowest mode (a bifurcation): lo's tangent becomes the
  * mode (parameter component 0), its sign the one that moves the tip towards +x (+z). */
-static cbm_status switch_at(arc *a, apt *lo)
+static cbm_status switch_at(arc *a, arc_point *lo)
 {
     put_omega(a, lo->om);
     CBM_TRY(eval_at(a, lo->lam, a->res, NULL));
@@ -752,7 +753,8 @@ static cbm_status switch_at(arc *a, apt *lo)
     return CBM_OK;
 }
 
-static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *mid)
+static cbm_status arc_trace(arc *a, arc_point *cur, arc_point *nxt, arc_point *lo, arc_point *hi,
+                            arc_point *mid)
 {
     const cbm_bend_continuation_def *d = a->d;
     const double dir = d->to > d->from ? 1.0 : -1.0;
@@ -824,7 +826,7 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
                 CBM_TRY(push_point(a->g, &lo->pt));
             if (sw) {
                 CBM_TRY(switch_at(a, lo));
-                apt_copy(a, cur, lo);
+                arc_point_copy(a, cur, lo);
                 ds = dsmax;
                 continue;
             }
@@ -832,7 +834,7 @@ static cbm_status arc_trace(arc *a, apt *cur, apt *nxt, apt *lo, apt *hi, apt *m
                 CBM_TRY(push_point(a->g, &hi->pt));
         }
         CBM_TRY(push_point(a->g, &nxt->pt));
-        apt_copy(a, cur, nxt);
+        arc_point_copy(a, cur, nxt);
         ds = it <= 3 ? fmin(2.0 * ds, dsmax) : it >= 7 ? 0.5 * ds : ds;
     }
 }
@@ -884,13 +886,13 @@ static cbm_status trace_arclength(cbm_context *ctx, const cont_cfg *cfg,
         c[i] = dual[i] * cfg->length;
     a.c = c;
     a.res = blk, a.rl = blk + n, a.va = blk + 2 * n, a.vb = blk + 3 * n, a.tmp = blk + 4 * n;
-    apt pts[5];
+    arc_point pts[5];
     for (int k = 0; k < 5; k++) {
         memset(&pts[k], 0, sizeof pts[k]);
         pts[k].om = blk + (5 + 2 * k) * n;
         pts[k].t = blk + (6 + 2 * k) * n;
     }
-    apt *cur = &pts[0];
+    arc_point *cur = &pts[0];
     memcpy(cur->om, cbm_plant_omegas(p), n * sizeof *cur->om);
     cur->lam = d->from;
     st = read_point(a.p, cfg->tip, d->from, NAN, &cur->pt);
@@ -907,8 +909,9 @@ static cbm_status trace_arclength(cbm_context *ctx, const cont_cfg *cfg,
 
 /* The trace of any plant p (its segment count fixed; p is left at the last state traced):
  * the common path of cbm_bend_continue and cbm_plant_continue. */
-static cbm_status run(cbm_context *ctx, const cont_cfg *cfg, const cbm_bend_continuation_def *def,
-                      cbm_plant *p, cbm_bend_branch *out)
+static cbm_status trace_plant(cbm_context *ctx, const cont_cfg *cfg,
+                              const cbm_bend_continuation_def *def, cbm_plant *p,
+                              cbm_bend_branch *out)
 {
     size_t n = cbm_plant_segment_count(p);
     param_ctx pc = {cfg->spec, def->param, NULL, n, 0.0};
@@ -954,7 +957,7 @@ cbm_status cbm_bend_continue(cbm_context *ctx, const cbm_bend_spec *spec,
     cfg.sd.push_unstable = spec->push_unstable != 0;
     cfg.sd.threads = (int)spec->threads;
     cfg.tip = n - 1;
-    cbm_status st = run(ctx, &cfg, def, p, out);
+    cbm_status st = trace_plant(ctx, &cfg, def, p, out);
     cbm_plant_destroy(p);
     return st;
 }
@@ -1026,5 +1029,5 @@ cbm_status cbm_plant_continue(cbm_context *ctx, cbm_plant *plant,
             CBM_TRY(cbm_plant_segment(plant, (size_t)i, &s));
             cfg.length += s.length;
         }
-    return run(ctx, &cfg, &def->cont, plant, out);
+    return trace_plant(ctx, &cfg, &def->cont, plant, out);
 }

@@ -126,12 +126,12 @@ typedef struct basis {
     size_t rows, cap, nb;
 } basis;
 
-static double *blk(const basis *b, size_t k)
+static double *basis_block(const basis *b, size_t k)
 {
     return b->v + k * BLK * b->cap;
 }
 
-static size_t blk_len(const basis *b, size_t k)
+static size_t basis_block_len(const basis *b, size_t k)
 {
     return k + 1 < b->nb ? BLK : b->rows - k * BLK;
 }
@@ -140,9 +140,9 @@ static size_t blk_len(const basis *b, size_t k)
 static void col_set(basis *b, size_t j, double s, const double *w)
 {
     for (size_t k = 0; k < b->nb; k++) {
-        double *c = blk(b, k) + j * BLK;
+        double *c = basis_block(b, k) + j * BLK;
         const double *wk = w + k * BLK;
-        size_t len = blk_len(b, k);
+        size_t len = basis_block_len(b, k);
         for (size_t r = 0; r < len; r++)
             c[r] = s * wk[r];
     }
@@ -152,7 +152,7 @@ static void col_set(basis *b, size_t j, double s, const double *w)
 static void col_axpy(const basis *b, size_t j, double c, double *w)
 {
     for (size_t k = 0; k < b->nb; k++)
-        axpy(c, blk(b, k) + j * BLK, w + k * BLK, blk_len(b, k));
+        axpy(c, basis_block(b, k) + j * BLK, w + k * BLK, basis_block_len(b, k));
 }
 
 /* c[0..cols) = V^T mw */
@@ -161,8 +161,8 @@ static void basis_tmul(const basis *b, size_t cols, const double *mw, double *c)
     for (size_t i = 0; i < cols; i++)
         c[i] = 0.0;
     for (size_t k = 0; k < b->nb; k++) {
-        const double *vk = blk(b, k), *mk = mw + k * BLK;
-        size_t len = blk_len(b, k);
+        const double *vk = basis_block(b, k), *mk = mw + k * BLK;
+        size_t len = basis_block_len(b, k);
         for (size_t i = 0; i < cols; i++)
             c[i] += dot(vk + i * BLK, mk, len);
     }
@@ -172,9 +172,9 @@ static void basis_tmul(const basis *b, size_t cols, const double *mw, double *c)
 static void basis_sub(const basis *b, size_t cols, const double *c, double *w)
 {
     for (size_t k = 0; k < b->nb; k++) {
-        const double *vk = blk(b, k);
+        const double *vk = basis_block(b, k);
         double *wk = w + k * BLK;
-        size_t len = blk_len(b, k);
+        size_t len = basis_block_len(b, k);
         for (size_t i = 0; i < cols; i++)
             axpy(c[i], vk + i * BLK, wk, len);
     }
@@ -184,9 +184,9 @@ static void basis_sub(const basis *b, size_t cols, const double *c, double *w)
 static void basis_combine(const basis *b, size_t m, const double *s, size_t stride, double *out)
 {
     for (size_t k = 0; k < b->nb; k++) {
-        const double *vk = blk(b, k);
+        const double *vk = basis_block(b, k);
         double *ok = out + k * BLK;
-        size_t len = blk_len(b, k);
+        size_t len = basis_block_len(b, k);
         for (size_t r = 0; r < len; r++)
             ok[r] = 0.0;
         for (size_t i = 0; i < m; i++)

@@ -114,7 +114,7 @@
 #define PTC_FAR       1e-3
 #define PTC_MAX_STEPS 400
 
-typedef struct nk {
+typedef struct newton_krylov {
     cbm_plant *p;
     size_t n3; /* 3 n */
     size_t max_passes;
@@ -139,7 +139,7 @@ typedef struct nk {
     bool fuse;             /* evaluations fuse the factorisation (cbm__mech_backward_factor) */
     bool push;             /* push an unstable equilibrium off to a stable one */
     bool want_eig;         /* compute the lowest eigenvalue of a stable equilibrium too */
-} nk;
+} newton_krylov;
 
 /* the fused evaluations (evaluate_as); tests switch them off to compare the bits */
 static bool fuse_on = true;
@@ -163,7 +163,7 @@ static double dot(const double *a, const double *b, size_t n)
  * follows (residual_solve, or the factorisation of stage_stability) to finish in its forward
  * half: a pass less, the same bits. Where no such solve follows (a line search's rejected
  * trial, the last evaluation of a continuation level) that work is lost. */
-static bool evaluate_as(nk *k, bool factor)
+static bool evaluate_as(newton_krylov *k, bool factor)
 {
     cbm_plant *p = k->p;
     cbm__mech_forward_eval(p);
@@ -179,7 +179,7 @@ static bool evaluate_as(nk *k, bool factor)
     return true;
 }
 
-static bool evaluate(nk *k)
+static bool evaluate(newton_krylov *k)
 {
     return evaluate_as(k, false);
 }
@@ -187,7 +187,7 @@ static bool evaluate(nk *k)
 /* (J + mu S) work.tmp = -res by the tree factorisation (work.step = -res, the right-hand
  * side): after a fused evaluation at mu = 0 its forward half alone (work.step untouched). Returns
  * the singular pivots, *nonpd those not positive definite. */
-static size_t residual_solve(nk *k, double mu, size_t *nonpd)
+static size_t residual_solve(newton_krylov *k, double mu, size_t *nonpd)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -202,7 +202,7 @@ static size_t residual_solve(nk *k, double mu, size_t *nonpd)
 }
 
 /* z = P^-1 v (the preconditioner) */
-static void precond(nk *k, const double *v, double *z)
+static void precond(newton_krylov *k, const double *v, double *z)
 {
     cbm_plant *p = k->p;
     if (k->tree) {
@@ -223,7 +223,7 @@ static void precond(nk *k, const double *v, double *z)
 /* Flexible GMRES (Saad 1993) for J x = -res with right preconditioning: the preconditioned
  * vectors z_j = P^-1 v_j are kept, so the step is sum g_j z_j without a further solve. The step
  * goes to work.step. Returns false when the pass budget ran out. */
-static bool gmres(nk *k, double eta, int m)
+static bool gmres(newton_krylov *k, double eta, int m)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -339,7 +339,7 @@ static double largest_turn(const cbm_plant *p)
 /* Does the step d of the shifted system (J + mu C) d = -R clearly descend the merit
  * |d C^-1 R|^2 / 2, i.e. is its slope at most -0.1 |d C^-1 R|^2? The slope needs no pass:
  * J d = -R - mu C d. */
-static bool shifted_descends(const nk *k, const double *d, double mu)
+static bool shifted_descends(const newton_krylov *k, const double *d, double mu)
 {
     const cbm_plant *p = k->p;
     const cbm__mech_work *w = &p->work;
@@ -361,7 +361,7 @@ static bool shifted_descends(const nk *k, const double *d, double mu)
  * sum_i d_i/2 sum_c C_c (Omega_c - rest_c)^2 plus -f . x of every dead load) has the gradient
  * d_i (C_i (Omega_i - rest_i) - J_r(d_i Omega_i)^T M_i^local), which is d_i R_i up to J_r; the
  * stable equilibria are its minima. No pass: R is that of the current state. */
-static double energy_slope(const nk *k, const double *d)
+static double energy_slope(const newton_krylov *k, const double *d)
 {
     const cbm_plant *p = k->p;
     const double *res = (const double *)p->work.res;
@@ -375,7 +375,7 @@ static double energy_slope(const nk *k, const double *d)
 /* Backtracking line search (Armijo, c = 1e-4, halving up to 12 times) along work.step from
  * length lam: NK_DONE with the accepted length in *out and the state evaluated there, or
  * NK_STALL with the unmoved state evaluated again. */
-static nk_result line_search(nk *k, double lam, double *out)
+static nk_result line_search(newton_krylov *k, double lam, double *out)
 {
     cbm_plant *p = k->p;
     double *om = (double *)p->omega;
@@ -403,7 +403,7 @@ static nk_result line_search(nk *k, double lam, double *out)
 /* The trust region on rotations: the step length that limits the largest frame rotation of the
  * full step (the forward sweep of the last tree solve or tangent pass left it in work.dth) to
  * max_turn radians (the linearisation of a large rotation overshoots). */
-static double trust_length(nk *k, int it)
+static double trust_length(newton_krylov *k, int it)
 {
     double tmax = largest_turn(k->p);
     if (it == 0)
@@ -416,7 +416,7 @@ static double trust_length(nk *k, int it)
  * exact (no singular pivot, no touching organ pairs), so the step is the Newton step and needs
  * no FGMRES; *shifted: it is the step of J + mu S; *lam0: the trust region's length.
  * NK_CONTINUE, or NK_BUDGET, or NK_LARGE (first step beyond the trust radius, abort_large). */
-static nk_result tree_step(nk *k, int it, bool abort_large, bool *direct, bool *shifted,
+static nk_result tree_step(newton_krylov *k, int it, bool abort_large, bool *direct, bool *shifted,
                            double *lam0)
 {
     cbm_plant *p = k->p;
@@ -469,7 +469,7 @@ static nk_result tree_step(nk *k, int it, bool abort_large, bool *direct, bool *
 
 /* The trust region from an FGMRES step with touching organ pairs (the factorisation's own step
  * ignores what it lacks): one tangent pass. NK_CONTINUE or NK_LARGE as in tree_step. */
-static nk_result fgmres_trust(nk *k, int it, bool abort_large, double *lam0)
+static nk_result fgmres_trust(newton_krylov *k, int it, bool abort_large, double *lam0)
 {
     cbm_plant *p = k->p;
     cbm__mech_jvp(p, p->work.step, p->work.tmp);
@@ -487,7 +487,7 @@ static nk_result fgmres_trust(nk *k, int it, bool abort_large, double *lam0)
  * J d = -R - mu C d). The plain Newton step is tried instead; the stability check after
  * convergence handles an unstable equilibrium. (From rest the stall hands over to the load
  * continuation, the loading path.) Returns the line search's result, *lam0 and *lam updated. */
-static nk_result plain_step_retry(nk *k, double eta, int m, double *lam0, double *lam)
+static nk_result plain_step_retry(newton_krylov *k, double eta, int m, double *lam0, double *lam)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -510,7 +510,7 @@ static nk_result plain_step_retry(nk *k, double eta, int m, double *lam0, double
 
 /* Newton iterations at the current load level until rel < tol: the step (tree_step, or FGMRES),
  * the trust region, the line search (with plain_step_retry), the forcing term. */
-static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
+static nk_result newton_level(newton_krylov *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
     const double *step = (const double *)p->work.step;
@@ -591,7 +591,7 @@ static nk_result newton_level(nk *k, double tol, int m, bool abort_large)
  * d_i (C (Omega - rest) - J_r^T M_local)); on the fruit tree, states with relative residuals of
  * 1e-2 exist where -S^-1 R ascends the energy, and an energy test then stalls the motion.
  * One step costs one factor-and-solve pass and one evaluation pass. */
-static nk_result transient(nk *k, double tol)
+static nk_result transient(newton_krylov *k, double tol)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -654,7 +654,7 @@ static nk_result transient(nk *k, double tol)
  * (fruit and leaves appearing and growing) this follows the physical loading path from the
  * current equilibrium instead of re-bending the whole plant from rest. Step control as in the
  * continuation from rest. */
-static nk_result from_masses(nk *k, double tol, int m, double dl)
+static nk_result from_masses(newton_krylov *k, double tol, int m, double dl)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -698,7 +698,7 @@ static bool unresolved(nk_result r)
 
 /* The first load increment of a continuation: the one that turns the largest frame by about
  * max_turn when the full step was too large (NK_LARGE), else a quarter; in [1/64, 1/2]. */
-static double first_increment(const nk *k, nk_result r)
+static double first_increment(const newton_krylov *k, nk_result r)
 {
     double dl = r == NK_LARGE && k->first_turn > 0 ? k->max_turn / k->first_turn : 0.25;
     return dl < 1.0 / 64 ? 1.0 / 64 : (dl > 0.5 ? 0.5 : dl);
@@ -708,7 +708,7 @@ static double first_increment(const nk *k, nk_result r)
  * equilibrium on a warm start). With the tree factorisation it gives up at once when the first
  * step is beyond the trust radius (NK_LARGE), and on the transient path it hands over early
  * when the steps crawl. */
-static nk_result stage_newton(nk *k)
+static nk_result stage_newton(newton_krylov *k)
 {
     cbm_plant *p = k->p;
     k->stage = CBM_SOLVE_STAGE_NEWTON;
@@ -722,7 +722,7 @@ static nk_result stage_newton(nk *k)
 
 /* Stage "transient": pseudo-transient continuation from the warm start (transient()). A stall
  * restores the start state for the quasi-static stages. */
-static nk_result stage_transient(nk *k)
+static nk_result stage_transient(newton_krylov *k)
 {
     cbm_plant *p = k->p;
     k->stage = CBM_SOLVE_STAGE_TRANSIENT;
@@ -736,7 +736,7 @@ static nk_result stage_transient(nk *k)
 /* Stage "mass-path": continuation over the point masses from the warm start (from_masses()).
  * A budget that ran out with passes to spare (the steps of one level) counts as a stall, so
  * the load path may still try. */
-static nk_result stage_mass_path(nk *k, nk_result r)
+static nk_result stage_mass_path(newton_krylov *k, nk_result r)
 {
     k->stage = CBM_SOLVE_STAGE_MASS_PATH;
     r = from_masses(k, k->tol, k->m, first_increment(k, r));
@@ -749,7 +749,7 @@ static nk_result stage_mass_path(nk *k, nk_result r)
  * loads are scaled by lambda, the increment doubled after an easy level (<= 4 Newton steps) and
  * halved after a stall; intermediate levels are solved to 1e-3. The equilibrium reached is the
  * one on the loading path, as with the relaxation. */
-static nk_result stage_load_path(nk *k, nk_result r)
+static nk_result stage_load_path(newton_krylov *k, nk_result r)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -790,7 +790,7 @@ static nk_result stage_load_path(nk *k, nk_result r)
 /* Stage "relax-bursts", the last resort: bursts of 25 relaxation passes (the seeds' iteration,
  * alpha 0.1, halved when a burst does not help) between Newton attempts at the full load, from
  * the furthest state the load path reached; at most 8 bursts. */
-static nk_result stage_relax_bursts(nk *k)
+static nk_result stage_relax_bursts(newton_krylov *k)
 {
     cbm_plant *p = k->p;
     cbm_solve_stats *st = k->st;
@@ -819,7 +819,7 @@ static nk_result stage_relax_bursts(nk *k)
 
 /* After the quasi-static stages failed: a consistent state at the full load for the caller to
  * read. */
-static nk_result leave_consistent(nk *k, nk_result r)
+static nk_result leave_consistent(newton_krylov *k, nk_result r)
 {
     k->p->load_scale = 1.0;
     cbm__mech_prepare(k->p);
@@ -835,7 +835,7 @@ static nk_result leave_consistent(nk *k, nk_result r)
  * to it, as the adaptive sigma of transient() does near it), each turning no frame by more
  * than PTC_TURN; once the unshifted tangent has no negative pivot eigenvalue (the basin of a
  * stable equilibrium, convex there) Newton finishes. */
-static nk_result leave_unstable(nk *k, double sigma_min)
+static nk_result leave_unstable(newton_krylov *k, double sigma_min)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -884,7 +884,7 @@ static nk_result leave_unstable(nk *k, double sigma_min)
  * none when `factored` says the workspace already holds the unmodified factorisation of this
  * very state (stage_stability's last one, nothing moved since: the same bits, one sweep less);
  * the pushes are counted. */
-static nk_result stability_modes(nk *k, bool factored)
+static nk_result stability_modes(newton_krylov *k, bool factored)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -960,7 +960,7 @@ static nk_result stability_modes(nk *k, bool factored)
  * soft mode and the level solved again with the modified factorisation, which descends to a
  * stable equilibrium (up to 3 pushes). The converged stage becomes "stability" when a push
  * ends at another equilibrium. */
-static nk_result stage_stability(nk *k)
+static nk_result stage_stability(newton_krylov *k)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
@@ -1008,7 +1008,7 @@ static nk_result stage_stability(nk *k)
 }
 
 /* The solve's status from the pipeline's result, with the reason of a failure. */
-static cbm_status finish(nk *k, nk_result r)
+static cbm_status finish(newton_krylov *k, nk_result r)
 {
     cbm_plant *p = k->p;
     cbm_solve_stats *st = k->st;
@@ -1045,7 +1045,7 @@ static bool masses_changed(const cbm_plant *p)
 cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t max_passes,
                                   cbm_solve_stats *st)
 {
-    nk k;
+    newton_krylov k;
     memset(&k, 0, sizeof k);
     k.p = p;
     k.n3 = 3 * p->n;

@@ -114,7 +114,7 @@ static inline bool minv(const double *a, double scale, double *out)
 }
 
 /* R (local to world) as a row-major matrix: columns H, L, U. */
-static inline m3 rot(cbm_quat q)
+static inline m3 rotation_matrix(cbm_quat q)
 {
     double xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
     double xy = q.x * q.y, xz = q.x * q.z, yz = q.y * q.z;
@@ -221,7 +221,7 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
     cbm__mech_work *w = &p->work;
     const bool ground = sw->ground;
     const double mu = sw->mu;
-    m3 R = rot(p->q[i]), Rt = transpose(R.m);
+    m3 R = rotation_matrix(p->q[i]), Rt = transpose(R.m);
     if (sw->only_solve) {
         solve_back(sw, i, &Rt, w->fwad + 9 * i, ground && w->fact[i], defer);
         return;

@@ -20,7 +20,7 @@ static FILE *out(cbm__canvas *c)
     return ((svg_canvas *)(void *)c)->f;
 }
 
-static void hex(const cbm__rgb *c, char buf[8])
+static void rgb_hex(const cbm__rgb *c, char buf[8])
 {
     int v[3] = {(int)lround(c->r * 255.0), (int)lround(c->g * 255.0), (int)lround(c->b * 255.0)};
     for (int k = 0; k < 3; k++)
@@ -54,7 +54,7 @@ static void escaped(FILE *f, const char *s)
 static void stroke_attrs(FILE *f, const cbm__stroke *s, bool unfilled)
 {
     char h[8];
-    hex(&s->color, h);
+    rgb_hex(&s->color, h);
     if (unfilled)
         fputs(" fill=\"none\"", f);
     fprintf(f, " stroke=\"%s\" stroke-width=\"%.2f\"", h, s->width);
@@ -104,7 +104,7 @@ static void rect(cbm__canvas *c, double x, double y, double w, double h, const c
     fprintf(f, "<rect x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\"", x, y, w, h);
     if (fill) {
         char hf[8];
-        hex(fill, hf);
+        rgb_hex(fill, hf);
         fprintf(f, " fill=\"%s\"", hf);
         if (fill_alpha < 1.0)
             fprintf(f, " fill-opacity=\"%.2f\"", fill_alpha);
@@ -177,7 +177,7 @@ static void markers(cbm__canvas *c, const double *xy, size_t n, cbm_plot_marker 
 {
     FILE *f = out(c);
     char h[8];
-    hex(color, h);
+    rgb_hex(color, h);
     fputs("<path d=\"", f);
     for (size_t i = 0; i < n; i++)
         marker_path(f, m, xy[2 * i], xy[2 * i + 1], r);
@@ -198,7 +198,7 @@ static void text(cbm__canvas *c, double x, double y, const char *t, double size,
     if (vertical)
         fprintf(f, " transform=\"rotate(-90 %.2f %.2f)\"", x, y);
     char h[8];
-    hex(color, h);
+    rgb_hex(color, h);
     if (strcmp(h, "#1a1a1a"))
         fprintf(f, " fill=\"%s\"", h);
     fputc('>', f);

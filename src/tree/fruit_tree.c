@@ -38,7 +38,7 @@
 #include <math.h>
 #include <time.h>
 
-static double now(void)
+static double monotonic_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -245,9 +245,9 @@ static cbm_status solve(cbm_tree *t)
     cbm_solve_stats st;
     if (cbm_plant_segment_count(t->plant) == 0)
         return CBM_OK; /* the tree broke at its base: nothing left to grow */
-    double t0 = now();
+    double t0 = monotonic_seconds();
     cbm_status s = cbm_plant_solve(t->plant, &t->solve, &st);
-    t->cur.seconds_solve += now() - t0;
+    t->cur.seconds_solve += monotonic_seconds() - t0;
     t->cur.passes += st.passes;
     t->cur.newton_steps += st.newton_steps;
     t->converged = s != CBM_E_NOT_CONVERGED;
@@ -326,7 +326,7 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
 {
     const tree_plant v = tree_plant_of(t->plant), *p = &v;
     size_t n = p->n;
-    double t0 = now();
+    double t0 = monotonic_seconds();
     double *a0 = cbm__alloc(t->ctx, (n ? n : 1) * sizeof *a0);
     if (!a0)
         return CBM_E_NOMEM;
@@ -345,7 +345,7 @@ static cbm_status rings(cbm_tree *t, double *max_increment)
     }
     cbm__free(t->ctx, a0, (n ? n : 1) * sizeof *a0);
     *max_increment = gs.max_increment;
-    t->cur.seconds_rings += now() - t0;
+    t->cur.seconds_rings += monotonic_seconds() - t0;
     return s;
 }
 
@@ -649,10 +649,10 @@ static cbm_status prune_trunk(cbm_tree *t)
 static cbm_status end_year(cbm_tree *t)
 {
     /* ageing (8.2) once a year by the year's growth steps: the rings of the year age together */
-    double t0 = now();
+    double t0 = monotonic_seconds();
     CBM_TRY(cbm_plant_age_wood(t->plant, &t->growth,
                                (double)t->cur.growth_steps / t->def.growth_steps_per_year));
-    t->cur.seconds_rings += now() - t0;
+    t->cur.seconds_rings += monotonic_seconds() - t0;
     CBM_TRY(shed_unproductive(t));
     CBM_TRY(prune_trunk(t));
     if (!t->unloaded_recorded)
@@ -665,14 +665,14 @@ static cbm_status end_year(cbm_tree *t)
     CBM_TRY(CBM_ARRAY_PUSH(t->ctx, t->years, t->cur));
     t->year++;
     begin_year(t);
-    t0 = now();
+    t0 = monotonic_seconds();
     CBM_TRY(cbm__tree_spring(t));
     if (t->def.spur_leaves > 0 || t->def.spur_fruit_prob > 0.0)
         for (size_t i = 0; i < t->seg.len; i++)
             if ((t->seg.data[i].flags & (SEG_BUD | SEG_APEX)) == SEG_BUD)
                 CBM_TRY(spur_organs(t, i));
     CBM_TRY(solve(t));
-    t->cur.seconds += now() - t0;
+    t->cur.seconds += monotonic_seconds() - t0;
     return CBM_OK;
 }
 
@@ -709,7 +709,7 @@ cbm_status cbm_tree_step(cbm_tree *t, bool *year_done)
         *year_done = false;
     if (!t)
         return CBM_E_INVALID;
-    double t0 = now();
+    double t0 = monotonic_seconds();
     bool done = false;
     cbm_status s;
     if (t->season == CBM_TREE_SUMMER)
@@ -717,7 +717,7 @@ cbm_status cbm_tree_step(cbm_tree *t, bool *year_done)
     else
         s = winter_step(t, &done);
     t->cur.growth_steps++;
-    t->cur.seconds += now() - t0;
+    t->cur.seconds += monotonic_seconds() - t0;
     if (s == CBM_OK && done) {
         s = end_year(t);
         if (year_done)

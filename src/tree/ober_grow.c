@@ -33,7 +33,7 @@
 
 #define DEG (CBM_PI / 180.0)
 
-static cbm_vec3 rot(cbm_vec3 v, cbm_vec3 axis, double a)
+static cbm_vec3 rotate_about(cbm_vec3 v, cbm_vec3 axis, double a)
 {
     /* Rodrigues: axis is a unit vector */
     double c = cos(a), s = sin(a);
@@ -85,7 +85,7 @@ static void fill_bud(cbm_ober_stand *s, const ober_bud *b, const ober_shoot *mot
     v[V_PARENT_TREND] = mother->trend;
 }
 
-static double uni(cbm_ober_stand *s)
+static double draw_uniform(cbm_ober_stand *s)
 {
     return cbm__rng_uniform(&s->rng);
 }
@@ -93,7 +93,7 @@ static double uni(cbm_ober_stand *s)
 static int sample_buds(cbm_ober_stand *s)
 {
     const cbm_ober_def *d = &s->def;
-    double u = uni(s), acc = 0;
+    double u = draw_uniform(s), acc = 0;
     for (int k = 0; k < d->n_new_shoots; k++) {
         acc += d->number_new_shoots_0[k];
         if (u < acc)
@@ -141,7 +141,8 @@ static cbm_status add_shoot(cbm_ober_stand *s, const new_shoot *n)
     h.first_bud = (int32_t)s->buds.len;
     double offset = n->order == 0 ? d->offset_0 : d->offset_x;
     for (int i = 1; i <= n->nodes; i++) {
-        bool fertile = uni(s) < (n->order == 0 ? d->possibility_node_0 : d->possibility_node_x);
+        bool fertile =
+            draw_uniform(s) < (n->order == 0 ? d->possibility_node_0 : d->possibility_node_x);
         int k = n->order == 0 ? sample_buds(s) : d->n_shoot_poss;
         double ph = h.phase + i * offset;
         for (int j = 0; j < k; j++) {
@@ -153,7 +154,8 @@ static cbm_status add_shoot(cbm_ober_stand *s, const new_shoot *n)
             b.trend = 0;
             b.position = (double)i / n->nodes;
             b.head = n->order == 0 ? ph + j * 360.0 / k : ph + d->shoot_poss[j];
-            bool grows = uni(s) < (n->order == 0 ? d->possibility_bud_0 : d->possibility_bud_y);
+            bool grows =
+                draw_uniform(s) < (n->order == 0 ? d->possibility_bud_0 : d->possibility_bud_y);
             if (n->short_shoot || n->order + 1 > d->max_order)
                 b.none = 1;
             else {
@@ -313,10 +315,10 @@ void cbm__ober_geometry(cbm_ober_stand *s)
             base = h->node == 0 ? m->tip : v3_madd(m->base, m->H, m->len * h->node / m->nodes);
         }
         if (h->insert != 0) { /* RH(head) then RL(insert) */
-            L = rot(L, H, h->head * DEG);
-            U = rot(U, H, h->head * DEG);
-            H = rot(H, L, h->insert * DEG);
-            U = rot(U, L, h->insert * DEG);
+            L = rotate_about(L, H, h->head * DEG);
+            U = rotate_about(U, H, h->head * DEG);
+            H = rotate_about(H, L, h->insert * DEG);
+            U = rotate_about(U, L, h->insert * DEG);
         }
         if (h->parent >= 0) { /* the gravitropism joint (RV) */
             cbm_vec3 a = v3_cross(H, g);
@@ -327,9 +329,9 @@ void cbm__ober_geometry(cbm_ober_stand *s)
                 double to_up = acos(fmax(-1.0, fmin(1.0, v3_dot(H, up))));
                 double to_down = CBM_PI - to_up;
                 ang = ang < -to_up ? -to_up : ang > to_down ? to_down : ang;
-                H = rot(H, a, ang);
-                L = rot(L, a, ang);
-                U = rot(U, a, ang);
+                H = rotate_about(H, a, ang);
+                L = rotate_about(L, a, ang);
+                U = rotate_about(U, a, ang);
             }
         }
         /* the bend of the statics (mechanicsFeedback), in the shoot's own frame */
@@ -338,9 +340,9 @@ void cbm__ober_geometry(cbm_ober_stand *s)
         if (wn > 0) {
             cbm_vec3 a = v3_scale(
                 v3_add(v3_add(v3_scale(H, w.x), v3_scale(L, w.y)), v3_scale(U, w.z)), 1.0 / wn);
-            H = rot(H, a, wn);
-            L = rot(L, a, wn);
-            U = rot(U, a, wn);
+            H = rotate_about(H, a, wn);
+            L = rotate_about(L, a, wn);
+            U = rotate_about(U, a, wn);
         }
         h->H = v3_normalize(H), h->L = v3_normalize(L), h->U = v3_normalize(U);
         h->base = base;
@@ -682,11 +684,11 @@ cbm_status cbm_ober_create(cbm_context *ctx, const cbm_ober_def *def, cbm_ober_s
             double x = (ix - 0.5 * (nx - 1)) * def->spacing,
                    z = (iy - 0.5 * (ny - 1)) * def->spacing;
             if (def->jitter > 0) {
-                x += (2 * uni(s) - 1) * def->jitter;
-                z += (2 * uni(s) - 1) * def->jitter;
+                x += (2 * draw_uniform(s) - 1) * def->jitter;
+                z += (2 * draw_uniform(s) - 1) * def->jitter;
             }
             t.pos = v3(100 * x, 0, 100 * z); /* cm */
-            t.timer = def->stagger > 0 ? (int)(uni(s) * (def->stagger + 1)) : 0;
+            t.timer = def->stagger > 0 ? (int)(draw_uniform(s) * (def->stagger + 1)) : 0;
             st = CBM_ARRAY_PUSH(ctx, s->trees, t);
         }
     if (st != CBM_OK) {

@@ -29,7 +29,7 @@ cbm_ober_mech_def cbm_ober_mech_def_default(void)
         .youngs_modulus = 8e9, .density = 800, .leaf_mass_per_area = 0.2, .gravity = 9.81};
 }
 
-static cbm_vec3 rot(cbm_vec3 v, cbm_vec3 axis, double a)
+static cbm_vec3 rotate_about(cbm_vec3 v, cbm_vec3 axis, double a)
 {
     double c = cos(a), s = sin(a);
     return v3_add(v3_add(v3_scale(v, c), v3_scale(v3_cross(axis, v), s)),
@@ -58,10 +58,10 @@ static void straight(const cbm_ober_stand *s, frame3 *f)
                                 : v3_madd(m->base, m->H, mh->len * 0.01 * h->node / mh->nodes);
         }
         if (h->insert != 0) {
-            L = rot(L, H, h->head * DEG);
-            U = rot(U, H, h->head * DEG);
-            H = rot(H, L, h->insert * DEG);
-            U = rot(U, L, h->insert * DEG);
+            L = rotate_about(L, H, h->head * DEG);
+            U = rotate_about(U, H, h->head * DEG);
+            H = rotate_about(H, L, h->insert * DEG);
+            U = rotate_about(U, L, h->insert * DEG);
         }
         /* the bend the wood had memorised under mechanicsFeedback when this year's statics
          * bent it (the rest shape the feedback solved from, less the joint), in the shoot's
@@ -75,9 +75,9 @@ static void straight(const cbm_ober_stand *s, frame3 *f)
             cbm_vec3 w = h->bend_rest;
             cbm_vec3 a = v3_scale(
                 v3_add(v3_add(v3_scale(H, w.x), v3_scale(L, w.y)), v3_scale(U, w.z)), 1.0 / wn);
-            H = rot(H, a, wn);
-            L = rot(L, a, wn);
-            U = rot(U, a, wn);
+            H = rotate_about(H, a, wn);
+            L = rotate_about(L, a, wn);
+            U = rotate_about(U, a, wn);
         }
         f[i].H = v3_normalize(H), f[i].L = v3_normalize(L), f[i].U = v3_normalize(U);
         f[i].base = base;
@@ -287,7 +287,7 @@ static cbm_vec3 min_rotation(cbm_vec3 from, cbm_vec3 to) /* axis x angle, unit v
 static cbm_vec3 apply_rotation(cbm_vec3 w, cbm_vec3 v)
 {
     double a = v3_norm(w);
-    return a > 0 ? rot(v, v3_scale(w, 1.0 / a), a) : v;
+    return a > 0 ? rotate_about(v, v3_scale(w, 1.0 / a), a) : v;
 }
 
 cbm_status cbm__ober_feedback(cbm_ober_stand *s)

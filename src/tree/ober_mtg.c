@@ -23,7 +23,7 @@ typedef struct mtg_rows {
     const size_t *shoot; /* row -> shoot index in the stand */
 } mtg_rows;
 
-static cbm_status row(const void *user, size_t i, double *v)
+static cbm_status shoot_row(const void *user, size_t i, double *v)
 {
     const mtg_rows *m = user;
     cbm_ober_shoot o;
@@ -96,7 +96,7 @@ cbm_status cbm_ober_write_mtg(cbm_context *ctx, const cbm_ober_stand *s, const c
                           .features = features,
                           .nfeatures = sizeof features / sizeof features[0],
                           .nint = NINT,
-                          .row = row,
+                          .row = shoot_row,
                           .user = &user,
                           .plant = plant};
     st = cbm__write_mtg_table(ctx, &tab, path);

@@ -491,8 +491,8 @@ cbm_status cbm_ober_def_check(cbm_context *ctx, const cbm_ober_def *d)
     return st;
 }
 
-static void put(char *buf, size_t size, size_t *n, const char *fmt, ...) CBM_PRINTF(4, 5);
-static void put(char *buf, size_t size, size_t *n, const char *fmt, ...)
+static void append_printf(char *buf, size_t size, size_t *n, const char *fmt, ...) CBM_PRINTF(4, 5);
+static void append_printf(char *buf, size_t size, size_t *n, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -507,7 +507,7 @@ size_t cbm_ober_def_format(const cbm_ober_def *d, char *buf, size_t size)
     size_t n = 0;
     if (buf && size)
         buf[0] = '\0';
-    put(buf, size, &n, "family = oberlaender\n");
+    append_printf(buf, size, &n, "family = oberlaender\n");
     for (size_t i = 0; i < NPARAMS; i++) {
         const param *pm = &PARAMS[i];
         if (i > 0 && PARAMS[i - 1].off == pm->off)
@@ -515,21 +515,23 @@ size_t cbm_ober_def_format(const cbm_ober_def *d, char *buf, size_t size)
         const char *base = (const char *)d + pm->off;
         switch (pm->k) {
         case K_U64:
-            put(buf, size, &n, "%s = %llu\n", pm->name,
-                (unsigned long long)*(const uint64_t *)(const void *)base);
+            append_printf(buf, size, &n, "%s = %llu\n", pm->name,
+                          (unsigned long long)*(const uint64_t *)(const void *)base);
             break;
         case K_INT:
-            put(buf, size, &n, "%s = %d\n", pm->name, *(const int *)(const void *)base);
+            append_printf(buf, size, &n, "%s = %d\n", pm->name, *(const int *)(const void *)base);
             break;
         case K_REAL:
-            put(buf, size, &n, "%s = %.15g\n", pm->name, *(const double *)(const void *)base);
+            append_printf(buf, size, &n, "%s = %.15g\n", pm->name,
+                          *(const double *)(const void *)base);
             break;
         case K_BOOL:
-            put(buf, size, &n, "%s = %d\n", pm->name, *(const bool *)(const void *)base ? 1 : 0);
+            append_printf(buf, size, &n, "%s = %d\n", pm->name,
+                          *(const bool *)(const void *)base ? 1 : 0);
             break;
         case K_FORMULA:
-            put(buf, size, &n, "%s = %s\n", pm->name,
-                ((const cbm_ober_formula *)(const void *)base)->text);
+            append_printf(buf, size, &n, "%s = %s\n", pm->name,
+                          ((const cbm_ober_formula *)(const void *)base)->text);
             break;
         case K_ORDERS: {
             /* slot 0 unindexed, which sets every slot and the count to 1, so the slots read
@@ -538,19 +540,19 @@ size_t cbm_ober_def_format(const cbm_ober_def *d, char *buf, size_t size)
             const cbm_ober_formula *f = (const cbm_ober_formula *)(const void *)base;
             for (int k = 0; k < cnt; k++) {
                 if (k == 0)
-                    put(buf, size, &n, "%s = %s\n", pm->name, f[0].text);
+                    append_printf(buf, size, &n, "%s = %s\n", pm->name, f[0].text);
                 else
-                    put(buf, size, &n, "%s[%d] = %s\n", pm->name, k, f[k].text);
+                    append_printf(buf, size, &n, "%s[%d] = %s\n", pm->name, k, f[k].text);
             }
             break;
         }
         case K_LIST: {
             int cnt = *(const int *)(const void *)((const char *)d + pm->count_off);
-            put(buf, size, &n, "%s = {", pm->name);
+            append_printf(buf, size, &n, "%s = {", pm->name);
             for (int k = 0; k < cnt; k++)
-                put(buf, size, &n, "%s%.15g", k ? ", " : "",
-                    ((const double *)(const void *)base)[k]);
-            put(buf, size, &n, "}\n");
+                append_printf(buf, size, &n, "%s%.15g", k ? ", " : "",
+                              ((const double *)(const void *)base)[k]);
+            append_printf(buf, size, &n, "}\n");
             break;
         }
         }

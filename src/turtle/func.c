@@ -189,7 +189,7 @@ static bool next_line(lines *L, char *buf, size_t cap)
     return true;
 }
 
-static cbm_status bad(cbm_context *ctx, const char *path, int line, const char *what)
+static cbm_status format_error(cbm_context *ctx, const char *path, int line, const char *what)
 {
     cbm__diag(ctx, CBM_ERROR, path, line, 1, "%s", what);
     return CBM_E_FORMAT;
@@ -211,7 +211,8 @@ static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int s
     lines L = *Lp;
     char buf[256];
     if (!next_line(&L, buf, sizeof buf))
-        return bad(ctx, path, L.line + 1, "expected a function ('fver 1 1'), found the end");
+        return format_error(ctx, path, L.line + 1,
+                            "expected a function ('fver 1 1'), found the end");
     int vmaj = 0, vmin = 0;
     float lo, up;
     bool v101 = false;
@@ -219,20 +220,21 @@ static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int s
         v101 = false;
     } else if (sscanf(buf, "fver %d %d", &vmaj, &vmin) == 2) {
         if (vmaj != 1 || vmin != 1)
-            return bad(ctx, path, L.line, "unsupported function file version (expected fver 1 1)");
+            return format_error(ctx, path, L.line,
+                                "unsupported function file version (expected fver 1 1)");
         v101 = true;
     } else {
-        return bad(ctx, path, L.line, "expected 'fver 1 1' or 'range: a b'");
+        return format_error(ctx, path, L.line, "expected 'fver 1 1' or 'range: a b'");
     }
     if (v101) {
         if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "name: %63s", f->name) != 1)
-            return bad(ctx, path, L.line, "expected 'name: NAME'");
+            return format_error(ctx, path, L.line, "expected 'name: NAME'");
         if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "samples: %d", &samples) != 1)
-            return bad(ctx, path, L.line, "expected 'samples: N'");
+            return format_error(ctx, path, L.line, "expected 'samples: N'");
         /* optional background (two lines) and markers; then flip: */
         for (;;) {
             if (!next_line(&L, buf, sizeof buf))
-                return bad(ctx, path, L.line, "unexpected end of file before 'points:'");
+                return format_error(ctx, path, L.line, "unexpected end of file before 'points:'");
             if (strncmp(buf, "background", 10) == 0) {
                 next_line(&L, buf, sizeof buf);
                 continue;
@@ -250,29 +252,29 @@ static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int s
         }
     } else {
         if (!next_line(&L, buf, sizeof buf))
-            return bad(ctx, path, L.line, "expected 'points: N'");
+            return format_error(ctx, path, L.line, "expected 'points: N'");
     }
     int npts = 0;
     if (sscanf(buf, "points: %d", &npts) != 1)
-        return bad(ctx, path, L.line, "expected 'points: N'");
+        return format_error(ctx, path, L.line, "expected 'points: N'");
     if (npts < 4 || npts > 100000)
-        return bad(ctx, path, L.line, "a function needs at least 4 control points");
+        return format_error(ctx, path, L.line, "a function needs at least 4 control points");
     /* first pass: count with multiplicities */
     lines save = L;
     int total = 0;
     for (int i = 0; i < npts; i++) {
         double x, y, m = 1.0;
         if (!next_line(&L, buf, sizeof buf))
-            return bad(ctx, path, L.line, "fewer control points than 'points:' says");
+            return format_error(ctx, path, L.line, "fewer control points than 'points:' says");
         int k = sscanf(buf, "%lf %lf %lf", &x, &y, &m);
         if (k < 2)
-            return bad(ctx, path, L.line, "expected 'x y [multiplicity]'");
+            return format_error(ctx, path, L.line, "expected 'x y [multiplicity]'");
         if (k < 3 || !v101)
             m = 1.0;
         if (!(m >= 1.0 && m <= 4.0))
-            return bad(ctx, path, L.line, "multiplicity must be 1 to 4");
+            return format_error(ctx, path, L.line, "multiplicity must be 1 to 4");
         if (!isfinite(x) || !isfinite(y))
-            return bad(ctx, path, L.line, "control point is not a finite number");
+            return format_error(ctx, path, L.line, "control point is not a finite number");
         total += (int)m;
     }
     L = save;
@@ -300,7 +302,7 @@ static cbm_status read_func(cbm_context *ctx, const char *path, lines *Lp, int s
     if (samples > 2) {
         if (samples > 1000000) {
             cbm__func_free(ctx, f);
-            return bad(ctx, path, 0, "too many samples");
+            return format_error(ctx, path, 0, "too many samples");
         }
         f->vals = cbm__alloc(ctx, (size_t)samples * sizeof(double));
         if (!f->vals) {
@@ -341,12 +343,13 @@ cbm_status cbm__funcset_read_gallery(cbm_context *ctx, const char *path, const c
     char buf[256];
     int vmaj, vmin, items;
     if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "funcgalleryver %d %d", &vmaj, &vmin) != 2)
-        return bad(ctx, path, L.line, "expected 'funcgalleryver 1 1'");
+        return format_error(ctx, path, L.line, "expected 'funcgalleryver 1 1'");
     if (vmaj != 1 || vmin != 1)
-        return bad(ctx, path, L.line, "unsupported function gallery version (expected 1 1)");
+        return format_error(ctx, path, L.line,
+                            "unsupported function gallery version (expected 1 1)");
     if (!next_line(&L, buf, sizeof buf) || sscanf(buf, "items: %d", &items) != 1 || items < 0 ||
         items > 100000)
-        return bad(ctx, path, L.line, "expected 'items: N'");
+        return format_error(ctx, path, L.line, "expected 'items: N'");
     for (int i = 0; i < items; i++) {
         cbm__func f;
         cbm_status s = read_func(ctx, path, &L, -1, &f);
