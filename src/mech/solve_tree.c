@@ -398,7 +398,9 @@ static int split_compute(cbm_plant *p, int t)
             if (load[k] < load[best])
                 best = k;
         load[best] += sz;
-        part[i] |= ((uint32_t)best << PART_SHIFT) | PART_ROOT;
+        /* a root of the plant (a forest's small tree) hands nothing to a parent: its thread
+         * sweeps it whole, the top's sweep never meets it */
+        part[i] |= ((uint32_t)best << PART_SHIFT) | (pa >= 0 ? PART_ROOT : 0u);
     }
     return top * 4 > n ? 1 : t; /* mostly a chain: the threads would wait on the top */
 }
@@ -424,11 +426,13 @@ int cbm__mech_tree_split(cbm_plant *p)
     }
     if (t > MAX_THREADS)
         t = MAX_THREADS;
-    if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments)
+    if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments &&
+        w->tsplit_sorted == p->sorder.active)
         return w->tsplit;
     w->tsplit = split_compute(p, t);
     w->tsplit_req = t;
     w->tsplit_min = tree_min_segments;
+    w->tsplit_sorted = p->sorder.active;
     return w->tsplit;
 }
 
