@@ -34,6 +34,20 @@ static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E, double leaf,
     return p;
 }
 
+/* The solve's depth-first order (solve_order.c) forced on (every size, one thread too) or off,
+ * and back to its defaults. */
+static void order_force(bool on)
+{
+    cbm__mech_order_min_segments(on ? 0 : SIZE_MAX);
+    cbm__mech_order_serial(on);
+}
+
+static void order_default(void)
+{
+    cbm__mech_order_min_segments(50000);
+    cbm__mech_order_serial(false);
+}
+
 typedef struct result {
     size_t n, passes, newton, krylov;
     double residual;
@@ -46,7 +60,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
     result r = {0};
     cbm__mech_newton_fuse(fuse);
     cbm__mech_tree_min_segments(0);
-    cbm__mech_order_min_segments(sorted ? 0 : SIZE_MAX);
+    order_force(sorted);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
     cbm_plant *p = random_tree(ctx, n, E, leaf, chain);
@@ -71,7 +85,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
     }
     cbm_context_destroy(ctx);
     cbm__mech_tree_min_segments(50000); /* the default */
-    cbm__mech_order_min_segments(50000);
+    order_default();
     cbm__mech_newton_fuse(true);
     return r;
 }
@@ -372,12 +386,12 @@ TEST(order_scrambled_against_depth_first_same_bits)
         CHECK(p[k] != NULL);
         if (!p[k])
             continue;
-        cbm__mech_order_min_segments(0);
+        order_force(true);
         cbm_solve_def sd = cbm_solve_def_default();
         sd.warm_start = false;
         sd.threads = 1;
         CHECK_OK(cbm_plant_solve(p[k], &sd, &st[k]));
-        cbm__mech_order_min_segments(50000);
+        order_default();
     }
     if (p[0] && p[1]) {
         const cbm__mech_order *o = &p[0]->sorder;
@@ -457,9 +471,9 @@ TEST(order_follows_edits_same_bits)
                 }
             if (step == 3)
                 CHECK_OK(cbm_plant_remove_subtree(p[k], 2500, NULL));
-            cbm__mech_order_min_segments(k == 0 ? 0 : SIZE_MAX);
+            order_force(k == 0);
             CHECK_OK(cbm_plant_solve(p[k], &sd, NULL));
-            cbm__mech_order_min_segments(50000);
+            order_default();
         }
         CHECK_MSG(p[0]->sorder.valid && !p[0]->sorder.identity && !p[0]->sorder.active,
                   "step %d: the order was not used", step);
@@ -488,7 +502,7 @@ TEST(order_sums_in_plant_order)
     for (int k = 0; k < 2 && p; k++) {
         double ss[2], e[2], sd[2], mm;
         for (int sorted = 0; sorted < 2; sorted++) {
-            cbm__mech_order_min_segments(sorted ? 0 : SIZE_MAX);
+            order_force(sorted);
             CHECK_OK(cbm__mech_work_reserve(p, 10));
             CHECK_OK(cbm__mech_order_enter(p));
             CHECK(p->sorder.active == (sorted == 1));
@@ -500,7 +514,7 @@ TEST(order_sums_in_plant_order)
             e[sorted] = cbm__mech_energy(p);
             sd[sorted] = cbm__mech_sdot(p, p->pos, p->pos);
             cbm__mech_order_leave(p);
-            cbm__mech_order_min_segments(50000);
+            order_default();
         }
         CHECK_MSG(memcmp(&ss[0], &ss[1], sizeof ss[0]) == 0, "merit %.17g against %.17g", ss[0],
                   ss[1]);
@@ -522,9 +536,9 @@ TEST(order_sums_in_plant_order)
         d.preconditioner = CBM_MECH_PRECOND_STIFFNESS;
         d.max_passes = 60;
         cbm_solve_stats st;
-        cbm__mech_order_min_segments(sorted ? 0 : SIZE_MAX);
+        order_force(sorted);
         cbm_status s = q[sorted] ? cbm_plant_solve(q[sorted], &d, &st) : CBM_E_NOMEM;
-        cbm__mech_order_min_segments(50000);
+        order_default();
         CHECK(s == CBM_OK || s == CBM_E_NOT_CONVERGED);
         r[sorted].krylov = st.krylov_iterations;
         r[sorted].residual = st.residual;

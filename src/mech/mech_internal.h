@@ -81,12 +81,15 @@ typedef struct cbm__mech_work {
  * decreasing index as before (the first one is its child of highest index, work.kin), and every
  * sum over all segments runs in the plant's own order (cbm__mech_at), so the results are the
  * same to the bit. */
-#define CBM__ORDER_DATA(X)                                                                         \
-    X(cont)                                                                                        \
-    X(len)                                                                                         \
-    X(branch) X(rig) X(rest) X(mpl) X(omega) X(pmass) X(pmass0) X(crad) X(tipf) X(tipm) X(q)       \
-        X(pos) X(force) X(moment) X(cmass)
-#define CBM__ORDER_ARRAYS(X) X(parent) CBM__ORDER_DATA(X)
+/* of the topology: gathered when the order is computed, kept between solves (the solve does not
+ * write them) */
+#define CBM__ORDER_TOPO(X) X(parent) X(cont)
+/* what the solve reads: gathered at every solve */
+#define CBM__ORDER_IN(X)                                                                           \
+    X(len) X(branch) X(rig) X(rest) X(mpl) X(omega) X(pmass) X(pmass0) X(crad) X(tipf) X(tipm)
+/* what it writes before it reads them (an evaluation first): scattered back, with omega */
+#define CBM__ORDER_OUT(X)    X(q) X(pos) X(force) X(moment) X(cmass)
+#define CBM__ORDER_ARRAYS(X) CBM__ORDER_TOPO(X) CBM__ORDER_IN(X) CBM__ORDER_OUT(X)
 typedef struct cbm__mech_order {
     size_t cap;      /* segments the arrays hold */
     bool valid;      /* ord and at are of the plant's topology (plant.c clears it) */
@@ -188,6 +191,8 @@ void cbm__mech_factor_clear(cbm_plant *p, bool solving);
             }                                                                                      \
         }                                                                                          \
     } while (0)
+/// The threads the plant's tree sweeps ask for (1: serial; the split may still use fewer).
+int cbm__mech_tree_threads(const cbm_plant *p);
 /// The threads the plant's tree sweeps use (1: serial), with the split in work.tpart; cached
 /// until the topology, the thread count or the workspace changes.
 int cbm__mech_tree_split(cbm_plant *p);
@@ -317,9 +322,12 @@ cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i);
 
 /// The least segments for the depth-first order (default 50,000; tests lower it to compare).
 void cbm__mech_order_min_segments(size_t min_segments);
+/// Whether a solve on one thread uses the order too (default false: its gathering and
+/// scattering cost more than its sweeps save, docs/performance.md; tests switch it on).
+void cbm__mech_order_serial(bool on);
 /// Gathers the plant's arrays into the depth-first order and swaps them in (nothing for a small
-/// plant, one with organ contact, or one numbered in that order already). CBM_E_NOMEM leaves the
-/// plant as it was.
+/// plant, one solved on one thread, one with organ contact, or one numbered in that order
+/// already). CBM_E_NOMEM leaves the plant as it was.
 cbm_status cbm__mech_order_enter(cbm_plant *p);
 /// Swaps the plant's own arrays back and scatters the solve's results into them (nothing when
 /// not entered); the workspace is prepared again in the plant's order for its later readers.

@@ -17,17 +17,29 @@
  * order and compare every result bit for bit (test_mech_threads).
  *
  * The order is computed once per topology (plant.c clears it when segments are added or
- * removed); the arrays are gathered at every solve (the loads, rigidities and rotation rates may
- * have changed between solves) and the results scattered back after it. */
+ * removed), with the parents and axis flags in it; what the solve reads is gathered at every
+ * solve (the lengths, loads, rigidities and rotation rates may have changed between solves), and
+ * what it writes (an evaluation sets every frame, position, force, moment and carried mass
+ * before anything reads them) is scattered back after it with the rotation rates. */
 #include "mech/mech_internal.h"
 
 #include <string.h>
 
 static size_t order_min_segments = 50000;
 
+/* how far ahead the gather and the scatter fetch the lines where the order jumps */
+#define ORDER_PF 24
+
+static bool order_serial = false;
+
 void cbm__mech_order_min_segments(size_t min_segments)
 {
     order_min_segments = min_segments;
+}
+
+void cbm__mech_order_serial(bool on)
+{
+    order_serial = on;
 }
 
 void cbm__mech_order_free(cbm_plant *p)
@@ -105,31 +117,87 @@ static void order_compute(cbm_plant *p)
     o->valid = true;
 }
 
+typedef struct move_job {
+    cbm_plant *p;
+    size_t lo, hi; /* places in the order */
+} move_job;
+
+/* What a solve reads, into the order: one pass over [lo, hi); where the order jumps (a lateral's
+ * subtree done, the next begins elsewhere in the plant's arrays) the lines there are fetched
+ * ORDER_PF places ahead. */
+static void gather_job(void *arg)
+{
+    const move_job *j = arg;
+    cbm_plant *p = j->p;
+    cbm__mech_order *o = &p->sorder;
+    const uint32_t *restrict ord = o->ord;
+    for (size_t k = j->lo; k < j->hi; k++) {
+        size_t i = ord[k];
+        if (k + ORDER_PF < j->hi && ord[k + ORDER_PF] != ord[k + ORDER_PF - 1] + 1) {
+            size_t m = ord[k + ORDER_PF];
+#define PREFETCH(f) __builtin_prefetch(&p->f[m], 0, 3);
+            CBM__ORDER_IN(PREFETCH)
+#undef PREFETCH
+        }
+#define GATHER(f) o->f[k] = p->f[i];
+        CBM__ORDER_IN(GATHER)
+#undef GATHER
+    }
+}
+
+/* What a solve wrote, back into the plant's arrays (swapped back), over [lo, hi). */
+static void scatter_job(void *arg)
+{
+    const move_job *j = arg;
+    cbm_plant *p = j->p;
+    cbm__mech_order *o = &p->sorder;
+    const uint32_t *restrict ord = o->ord;
+    for (size_t k = j->lo; k < j->hi; k++) {
+        size_t i = ord[k];
+        if (k + ORDER_PF < j->hi && ord[k + ORDER_PF] != ord[k + ORDER_PF - 1] + 1) {
+            size_t m = ord[k + ORDER_PF];
+#define PREFETCH(f) __builtin_prefetch(&p->f[m], 1, 3);
+            PREFETCH(omega) CBM__ORDER_OUT(PREFETCH)
+#undef PREFETCH
+        }
+        p->omega[i] = o->omega[k];
+#define SCATTER(f) p->f[i] = o->f[k];
+        CBM__ORDER_OUT(SCATTER)
+#undef SCATTER
+    }
+}
+
 cbm_status cbm__mech_order_enter(cbm_plant *p)
 {
     cbm__mech_order *o = &p->sorder;
     const size_t n = p->n;
-    if (o->active || n < order_min_segments || n < 2 || n > UINT32_MAX || p->contacts.on)
+    if (o->active || n < order_min_segments || n < 2 || n > UINT32_MAX || p->contacts.on ||
+        (!order_serial && cbm__mech_tree_threads(p) < 2))
         return CBM_OK;
     if (n > o->cap) {
         o->valid = false;
         CBM_TRY(order_reserve(p));
     }
-    if (!o->valid)
+    bool topo = !o->valid;
+    if (topo)
         order_compute(p);
     if (o->identity)
         return CBM_OK;
     const uint32_t *restrict ord = o->ord;
     const uint32_t *restrict at = o->at;
-    for (size_t k = 0; k < n; k++) {
-        int64_t pa = p->parent[ord[k]];
-        o->parent[k] = pa < 0 ? pa : (int64_t)at[pa];
-    }
-#define GATHER(f)                                                                                  \
-    for (size_t k = 0; k < n; k++)                                                                 \
-        o->f[k] = p->f[ord[k]];
-    CBM__ORDER_DATA(GATHER)
-#undef GATHER
+    if (topo)
+        for (size_t k = 0; k < n; k++) {
+            size_t i = ord[k];
+            int64_t pa = p->parent[i];
+            o->parent[k] = pa < 0 ? pa : (int64_t)at[pa];
+            o->cont[k] = p->cont[i];
+        }
+    /* over the threads of the solve, each a range of the order */
+    int t = cbm__mech_tree_threads(p);
+    move_job jobs[8];
+    for (int k = 0; k < t; k++)
+        jobs[k] = (move_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t};
+    cbm__mech_run_threads(t, gather_job, jobs, sizeof *jobs);
 #define SWAP(f)                                                                                    \
     {                                                                                              \
         void *t_ = p->f;                                                                           \
@@ -151,17 +219,11 @@ void cbm__mech_order_leave(cbm_plant *p)
 #undef SWAP
     o->active = false;
     const size_t n = p->n;
-    const uint32_t *restrict ord = o->ord;
-    /* what a solve writes: the state, the frames and positions, forces, moments, carried masses */
-    for (size_t k = 0; k < n; k++) {
-        size_t i = ord[k];
-        p->omega[i] = o->omega[k];
-        p->q[i] = o->q[k];
-        p->pos[i] = o->pos[k];
-        p->force[i] = o->force[k];
-        p->moment[i] = o->moment[k];
-        p->cmass[i] = o->cmass[k];
-    }
+    int t = cbm__mech_tree_threads(p);
+    move_job jobs[8];
+    for (int k = 0; k < t; k++)
+        jobs[k] = (move_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t};
+    cbm__mech_run_threads(t, scatter_job, jobs, sizeof *jobs);
     /* the workspace's joint arrays, its split and accumulator marks in the plant's order again,
      * for those that read them after a solve (the bend continuation, the stability probes) */
     cbm__mech_prepare(p);

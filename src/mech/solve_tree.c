@@ -414,18 +414,24 @@ static void processors_count(void)
     processors = np > 0 ? (int)(np < 64 ? np : 64) : 1;
 }
 
-int cbm__mech_tree_split(cbm_plant *p)
+int cbm__mech_tree_threads(const cbm_plant *p)
 {
-    cbm__mech_work *w = &p->work;
     if (p->n < tree_min_segments || p->n < 2)
-        return 1; /* before anything else: the small plants of a growth run pay nothing */
+        return 1;
     int t = p->threads;
     if (t <= 0) {
         pthread_once(&processors_once, processors_count); /* sysconf reads files: once */
         t = processors;
     }
-    if (t > MAX_THREADS)
-        t = MAX_THREADS;
+    return t > MAX_THREADS ? MAX_THREADS : t;
+}
+
+int cbm__mech_tree_split(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    if (p->n < tree_min_segments || p->n < 2)
+        return 1; /* before anything else: the small plants of a growth run pay nothing */
+    int t = cbm__mech_tree_threads(p);
     if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments &&
         w->tsplit_sorted == p->sorder.active)
         return w->tsplit;
