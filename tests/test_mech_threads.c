@@ -478,6 +478,19 @@ TEST(order_follows_edits_same_bits)
         CHECK_MSG(p[0]->sorder.valid && !p[0]->sorder.identity && !p[0]->sorder.active,
                   "step %d: the order was not used", step);
         CHECK_MSG(same_plant_bits(p[0], p[1]), "step %d: the solves differ", step);
+        /* the workspace after the solve, renewed for a reader outside a solve, is the one the
+         * solve in the plant's numbering leaves */
+        CHECK(p[0]->work.stale && !p[1]->work.stale);
+        cbm__mech_work_current(p[0]);
+        size_t n = p[0]->n;
+        const cbm__mech_work *w0 = &p[0]->work, *w1 = &p[1]->work;
+        CHECK_MSG(!p[0]->work.stale && !memcmp(w0->dual, w1->dual, n * sizeof *w0->dual) &&
+                      !memcmp(w0->cj, w1->cj, n * sizeof *w0->cj) &&
+                      !memcmp(w0->rj, w1->rj, n * sizeof *w0->rj) &&
+                      !memcmp(w0->wown, w1->wown, n * sizeof *w0->wown) &&
+                      !memcmp(w0->kin, w1->kin, n * sizeof *w0->kin) &&
+                      !memcmp(p[0]->cmass, p[1]->cmass, n * sizeof *p[0]->cmass),
+                  "step %d: the workspace differs after the solve", step);
         double r[2];
         CHECK_OK(cbm_plant_evaluate(p[0], &r[0]));
         CHECK_OK(cbm_plant_evaluate(p[1], &r[1]));

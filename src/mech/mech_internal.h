@@ -61,6 +61,9 @@ typedef struct cbm__mech_work {
     int tsplit, tsplit_req;
     size_t tsplit_min;
     bool tsplit_sorted; /* the split is of the solve's depth-first order (sorder.active) */
+    /* the joint arrays and work.kin were prepared in the solve's depth-first order, which has
+     * been left: cbm__mech_work_current prepares them again before a reader outside a solve */
+    bool stale;
     /* the last evaluation was fused with the factorisation (cbm__mech_backward_factor): the
      * tree arrays hold the factorisation (mu = 0) of the evaluated state (fready), with its
      * counts, and tmp the backward half of the solve J x = -res (fhalf); cleared by every sweep
@@ -330,8 +333,12 @@ void cbm__mech_order_serial(bool on);
 /// already). CBM_E_NOMEM leaves the plant as it was.
 cbm_status cbm__mech_order_enter(cbm_plant *p);
 /// Swaps the plant's own arrays back and scatters the solve's results into them (nothing when
-/// not entered); the workspace is prepared again in the plant's order for its later readers.
+/// not entered); the workspace is left stale (work.stale) until prepared again.
 void cbm__mech_order_leave(cbm_plant *p);
+/// The workspace's joint arrays and accumulator marks for the plant's numbering: prepares them
+/// again after a solve in the depth-first order (for readers of the workspace after a solve
+/// without a prepare of their own, the bend continuation).
+void cbm__mech_work_current(cbm_plant *p);
 void cbm__mech_order_free(cbm_plant *p);
 /// The index in the solve's arrays of the plant's segment k: sums over all segments run over k
 /// in the plant's order, so that they add the same terms in the same order whichever order the

@@ -290,6 +290,7 @@ void cbm__mech_prepare(cbm_plant *p)
 {
     const size_t n = p->n;
     cbm__mech_fused_clear(p);
+    p->work.stale = false;
     kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {

@@ -224,7 +224,13 @@ void cbm__mech_order_leave(cbm_plant *p)
     for (int k = 0; k < t; k++)
         jobs[k] = (move_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t};
     cbm__mech_run_threads(t, scatter_job, jobs, sizeof *jobs);
-    /* the workspace's joint arrays, its split and accumulator marks in the plant's order again,
-     * for those that read them after a solve (the bend continuation, the stability probes) */
-    cbm__mech_prepare(p);
+    /* the workspace's joint arrays and accumulator marks are of the depth-first order: the next
+     * prepare (every solve and evaluation starts with one) or cbm__mech_work_current renews them */
+    p->work.stale = true;
+}
+
+void cbm__mech_work_current(cbm_plant *p)
+{
+    if (p->work.stale)
+        cbm__mech_prepare(p);
 }
