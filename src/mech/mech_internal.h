@@ -74,9 +74,9 @@ typedef struct cbm__mech_work {
     size_t fsing, fnonpd;
 } cbm__mech_work;
 
-/* The depth-first order of the solve (solve_order.c): a plant of many segments is solved with its
- * per-segment arrays in an order of the solver's own, the depth-first preorder that takes the
- * children of a segment in increasing index. There a segment's parent is the segment before it
+/* The depth-first order of the solve (solve_order.c): a plant of many segments solved over
+ * threads runs with its per-segment arrays in an order of the solver's own, the preorder that takes
+ * the children of a segment in increasing index. There a segment's parent is the segment before it
  * or an ancestor still on the path, so the sweeps stream their arrays instead of reaching a
  * lateral's parent anywhere in memory, and a thread's subtrees lie in one stretch of memory.
  * cbm_plant_solve gathers the arrays below into that order, swaps them into the plant for the
@@ -346,11 +346,6 @@ void cbm__mech_order_free(cbm_plant *p);
 static inline size_t cbm__mech_at(const cbm_plant *p, size_t k)
 {
     return p->sorder.active ? p->sorder.at[k] : k;
-}
-/// The plant's segment at index i of the solve's arrays (for messages naming a segment).
-static inline size_t cbm__mech_segment_of(const cbm_plant *p, size_t i)
-{
-    return p->sorder.active ? p->sorder.ord[i] : i;
 }
 
 /* ---- solve_common.c ---- */

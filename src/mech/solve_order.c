@@ -20,7 +20,12 @@
  * removed), with the parents and axis flags in it; what the solve reads is gathered at every
  * solve (the lengths, loads, rigidities and rotation rates may have changed between solves), and
  * what it writes (an evaluation sets every frame, position, force, moment and carried mass
- * before anything reads them) is scattered back after it with the rotation rates. */
+ * before anything reads them) is scattered back after it with the rotation rates.
+ *
+ * Only a solve over threads uses it (plants of 50,000 segments or more, more than one thread):
+ * on one thread the gathering and scattering cost more than the sweeps save, on two the threads
+ * no longer write into each other's lines (docs/performance.md, "The solve's depth-first
+ * order"). */
 #include "mech/mech_internal.h"
 
 #include <string.h>
