@@ -5,12 +5,13 @@
  * factorisation's blocks; docs/performance.md). Writes a CSV.
  *
  * usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out FILE.csv] [--tol T]
- *                   [--threads N] [--repeat N] [--fast-only]
+ *                   [--threads N] [--repeat N] [--fast-only] [--depth-first]
  * (--threads: of the tree factorisation, 0 = one per processor, the default; 1 = serial;
  * --repeat: timed solves per row, from the same start, the row's seconds being their median
- * (default 1; for profiles and quieter figures); --fast-only: no relaxation rows)
- * (the relaxation factor is tuned over 0.1 .. 1 on sizes up to 10^4 and on the smallest size,
- * then the best one is used for the larger sizes)
+ * (default 1; for profiles and quieter figures); --fast-only: no relaxation rows; --depth-first:
+ * the trees numbered in depth-first preorder, the same tree otherwise) (the relaxation factor is
+ * tuned over 0.1 .. 1 on sizes up to 10^4 and on the smallest size, then the best one is used for
+ * the larger sizes)
  *
  * Workloads:
  *   chain: a horizontal cantilever of N segments, length 1 m, alpha = w L^3 / EI = 5 (large
@@ -124,8 +125,20 @@ typedef struct run {
     double seconds, cpu_seconds, residual;
 } run;
 
-static int threads = 0; /* the solver's default: one per processor */
-static int repeat = 1;  /* timed solves per row (--repeat): the row reports their median */
+static int threads = 0;          /* the solver's default: one per processor */
+static int repeat = 1;           /* timed solves per row (--repeat): the row reports their median */
+static bool depth_first = false; /* --depth-first: the trees numbered in depth-first preorder */
+
+/* bench_random_tree, numbered as --depth-first says */
+static cbm_plant *tree(cbm_context *ctx, size_t n, double E, double leaf)
+{
+    random_tree_def d = random_tree_def_default();
+    d.n = d.capacity = n;
+    d.E = E;
+    d.leaf = leaf;
+    d.depth_first = depth_first;
+    return random_tree_create(ctx, &d);
+}
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -190,9 +203,12 @@ int main(int argc, char **argv)
             repeat = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--fast-only"))
             fast_only = true;
+        else if (!strcmp(argv[i], "--depth-first"))
+            depth_first = true;
         else {
             fprintf(stderr, "usage: bench_mech [--min N] [--max N] [--only WORKLOAD] [--out "
-                            "FILE.csv] [--tol T] [--threads N] [--repeat N] [--fast-only]\n");
+                            "FILE.csv] [--tol T] [--threads N] [--repeat N] [--fast-only] "
+                            "[--depth-first]\n");
             return 2;
         }
     }
@@ -224,8 +240,8 @@ int main(int argc, char **argv)
             cbm_plant *p = wl == 0   ? make_chain(pc, n, 5.0, 0.0, 0.0)
                            : wl == 1 ? make_chain(pc, n, 50.0, 0.0, 0.0)
                            : wl == 2 ? make_chain(pc, n, 7.5, PI / 2, 0.01)
-                           : wl == 3 ? bench_random_tree(pc, n, n, 1e10, 0.005)
-                                     : bench_random_tree(pc, n, n, 3e8, 0.02);
+                           : wl == 3 ? tree(pc, n, 1e10, 0.005)
+                                     : tree(pc, n, 3e8, 0.02);
             if (!p) {
                 fprintf(stderr, "bench_mech: cannot build %zu segments\n", n);
                 cbm_context_destroy(pc);

@@ -14,6 +14,7 @@
 #include "mech/mech_internal.h"
 #include "random_tree.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,17 +34,33 @@ static cbm_plant *random_tree(cbm_context *ctx, size_t n, double E, double leaf,
     return p;
 }
 
+/* The solve's depth-first order (solve_order.c) forced on (every size, one thread too) or off,
+ * and back to its defaults. */
+static void order_force(bool on)
+{
+    cbm__mech_order_min_segments(on ? 0 : SIZE_MAX);
+    cbm__mech_order_serial(on);
+}
+
+static void order_default(void)
+{
+    cbm__mech_order_min_segments(50000);
+    cbm__mech_order_serial(false);
+}
+
 typedef struct result {
     size_t n, passes, newton, krylov;
     double residual;
     cbm_vec3 *omega, *moment, *pos;
 } result;
 
-static result solve_with(size_t n, double E, double leaf, bool chain, int threads, bool fuse)
+static result solve_with(size_t n, double E, double leaf, bool chain, int threads, bool fuse,
+                         bool sorted)
 {
     result r = {0};
     cbm__mech_newton_fuse(fuse);
     cbm__mech_tree_min_segments(0);
+    order_force(sorted);
     cbm_context *ctx = NULL;
     CHECK_OK(cbm_context_create(NULL, &ctx));
     cbm_plant *p = random_tree(ctx, n, E, leaf, chain);
@@ -68,6 +85,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
     }
     cbm_context_destroy(ctx);
     cbm__mech_tree_min_segments(50000); /* the default */
+    order_default();
     cbm__mech_newton_fuse(true);
     return r;
 }
@@ -80,15 +98,18 @@ static void result_free(result *r)
 }
 
 /* The solves with 2 and 3 threads (fused evaluations), then with 1 and 2 threads without the
- * fused evaluations (solve_newton.c, evaluate_as), against the serial fused one. */
+ * fused evaluations (solve_newton.c, evaluate_as), against the serial fused one; each in the
+ * plant's numbering and in the solve's depth-first order (solve_order.c), forced for this size. */
 static void check_same(size_t n, double E, double leaf, bool chain)
 {
-    result one = solve_with(n, E, leaf, chain, 1, true);
+    result one = solve_with(n, E, leaf, chain, 1, true, false);
     CHECK(one.n == n && one.passes > 0);
-    for (int t = 2; t <= 5; t++) {
+    for (int v = 2; v <= 11; v++) {
+        int t = v <= 5 ? v : v - 5; /* 2 .. 5, then 1 .. 5 in the depth-first order */
+        bool sorted = v > 5;
         bool fuse = t <= 3;
         int threads = fuse ? t : t - 3;
-        result r = solve_with(n, E, leaf, chain, threads, fuse);
+        result r = solve_with(n, E, leaf, chain, threads, fuse, sorted);
         CHECK(r.n == n);
         CHECK_EQ_INT(r.passes, one.passes);
         CHECK_EQ_INT(r.newton, one.newton);
@@ -96,11 +117,11 @@ static void check_same(size_t n, double E, double leaf, bool chain)
         CHECK(memcmp(&r.residual, &one.residual, sizeof r.residual) == 0);
         if (r.omega && one.omega) {
             CHECK_MSG(!memcmp(r.omega, one.omega, n * sizeof *r.omega),
-                      "%d threads, fused %d: Omega differs", threads, fuse);
+                      "%d threads, fused %d, sorted %d: Omega differs", threads, fuse, sorted);
             CHECK_MSG(!memcmp(r.moment, one.moment, n * sizeof *r.moment),
-                      "%d threads, fused %d: moments differ", threads, fuse);
+                      "%d threads, fused %d, sorted %d: moments differ", threads, fuse, sorted);
             CHECK_MSG(!memcmp(r.pos, one.pos, n * sizeof *r.pos),
-                      "%d threads, fused %d: positions differ", threads, fuse);
+                      "%d threads, fused %d, sorted %d: positions differ", threads, fuse, sorted);
         }
         result_free(&r);
     }
@@ -342,4 +363,205 @@ TEST(lc_solver_threads_same_bits)
     const char *bad[] = {"SolverThreads(-1);", "SolverThreads(1.5);", "SolverThreads(2000);"};
     for (int j = 0; j < 3; j++)
         lc_check_start_error(bad[j], "SolverThreads(n)");
+}
+
+/* The solve's depth-first order (solve_order.c) does not depend on how the plant is numbered:
+ * the random tree in its generator's numbering, solved in that order, and the same tree numbered
+ * depth-first (which that order leaves as it is) give the same Omega, moments and positions to
+ * the bit, segment for segment, with the same statistics. (The sums over all segments, which
+ * follow each plant's numbering, only decide the line search's acceptance here.) */
+TEST(order_scrambled_against_depth_first_same_bits)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p[2] = {NULL, NULL};
+    cbm_solve_stats st[2];
+    for (int k = 0; k < 2 && ctx; k++) {
+        random_tree_def d = random_tree_def_default();
+        d.n = d.capacity = 20000;
+        d.leaf = 0.01;
+        d.seed = 5;
+        d.depth_first = k == 1;
+        p[k] = random_tree_create(ctx, &d);
+        CHECK(p[k] != NULL);
+        if (!p[k])
+            continue;
+        order_force(true);
+        cbm_solve_def sd = cbm_solve_def_default();
+        sd.warm_start = false;
+        sd.threads = 1;
+        CHECK_OK(cbm_plant_solve(p[k], &sd, &st[k]));
+        order_default();
+    }
+    if (p[0] && p[1]) {
+        const cbm__mech_order *o = &p[0]->sorder;
+        CHECK(o->valid && !o->identity && !o->active);
+        CHECK(p[1]->sorder.valid && p[1]->sorder.identity);
+        CHECK_EQ_INT(st[0].passes, st[1].passes);
+        CHECK_EQ_INT(st[0].newton_steps, st[1].newton_steps);
+        CHECK(memcmp(&st[0].residual, &st[1].residual, sizeof st[0].residual) == 0);
+        size_t bad = 0;
+        for (size_t k = 0; k < p[1]->n && o->valid; k++) {
+            size_t i = o->ord[k];
+            bad += !same_vec_bits(p[0]->omega[i], p[1]->omega[k]) ||
+                   !same_vec_bits(p[0]->moment[i], p[1]->moment[k]) ||
+                   !same_vec_bits(p[0]->pos[i], p[1]->pos[k]) ||
+                   !same_vec_bits(p[0]->force[i], p[1]->force[k]);
+        }
+        CHECK_MSG(bad == 0, "%zu segments differ", bad);
+    }
+    cbm_plant_destroy(p[0]);
+    cbm_plant_destroy(p[1]);
+    cbm_context_destroy(ctx);
+}
+
+/* A forest of random trees whose laterals start anywhere before them (roots every 997
+ * segments), with an LCG of its own. */
+static cbm_plant *forest(cbm_context *ctx, size_t n)
+{
+    cbm_plant *p = NULL;
+    CHECK_OK(cbm_plant_create(ctx, NULL, &p));
+    uint64_t r = 12345;
+    for (size_t i = 0; i < n && p; i++) {
+        r = r * 6364136223846793005u + 1442695040888963407u;
+        double u = (double)(r >> 11) / 9007199254740992.0;
+        cbm_segment_def s = cbm_segment_def_default();
+        s.length = 0.02;
+        s.core.a = s.core.b = 0.01;
+        s.core.youngs_modulus = 1e10;
+        s.core.shear_modulus = 1e10 / 16;
+        s.core.density = 700;
+        s.parent = i % 997 == 0 ? -1
+                   : u < 0.8    ? (int64_t)i - 1
+                                : (int64_t)(u * 1.25 * (double)i) % (int64_t)i;
+        if (s.parent >= 0 && s.parent != (int64_t)i - 1)
+            s.deviation = 0.6;
+        s.divergence = 2.4 * (double)i;
+        s.point_mass = 0.002;
+        CHECK_OK(cbm_plant_add_segment(p, &s, NULL));
+    }
+    return p;
+}
+
+/* The order follows the plant between solves: a forest solved in the depth-first order and in
+ * its own numbering stays the same to the bit after loads change, segments are added (the order
+ * is computed again) and a subtree is removed, each followed by a warm solve; and after the
+ * solve the workspace is in the plant's numbering again (a stability probe reads it). */
+TEST(order_follows_edits_same_bits)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p[2] = {forest(ctx, 6000), forest(ctx, 6000)};
+    cbm_solve_def sd = cbm_solve_def_default();
+    sd.threads = 2;
+    cbm__mech_tree_min_segments(0);
+    for (int step = 0; step < 4 && p[0] && p[1]; step++) {
+        for (int k = 0; k < 2; k++) {
+            if (step == 1)
+                CHECK_OK(
+                    cbm_plant_set_load(p[k], 4321, 0.5, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
+            if (step == 2)
+                for (size_t j = 0; j < 300; j++) {
+                    cbm_segment_def s = cbm_segment_def_default();
+                    s.parent = (int64_t)(j * 7919 % p[k]->n);
+                    s.length = 0.02;
+                    s.core.a = s.core.b = 0.004;
+                    s.deviation = 0.5;
+                    CHECK_OK(cbm_plant_add_segment(p[k], &s, NULL));
+                }
+            if (step == 3)
+                CHECK_OK(cbm_plant_remove_subtree(p[k], 2500, NULL));
+            order_force(k == 0);
+            CHECK_OK(cbm_plant_solve(p[k], &sd, NULL));
+            order_default();
+        }
+        CHECK_MSG(p[0]->sorder.valid && !p[0]->sorder.identity && !p[0]->sorder.active,
+                  "step %d: the order was not used", step);
+        CHECK_MSG(same_plant_bits(p[0], p[1]), "step %d: the solves differ", step);
+        /* the workspace after the solve, renewed for a reader outside a solve, is the one the
+         * solve in the plant's numbering leaves */
+        CHECK(p[0]->work.stale && !p[1]->work.stale);
+        cbm__mech_work_current(p[0]);
+        size_t n = p[0]->n;
+        const cbm__mech_work *w0 = &p[0]->work, *w1 = &p[1]->work;
+        CHECK_MSG(!p[0]->work.stale && !memcmp(w0->dual, w1->dual, n * sizeof *w0->dual) &&
+                      !memcmp(w0->cj, w1->cj, n * sizeof *w0->cj) &&
+                      !memcmp(w0->rj, w1->rj, n * sizeof *w0->rj) &&
+                      !memcmp(w0->wown, w1->wown, n * sizeof *w0->wown) &&
+                      !memcmp(w0->kin, w1->kin, n * sizeof *w0->kin) &&
+                      !memcmp(p[0]->cmass, p[1]->cmass, n * sizeof *p[0]->cmass),
+                  "step %d: the workspace differs after the solve", step);
+        double r[2];
+        CHECK_OK(cbm_plant_evaluate(p[0], &r[0]));
+        CHECK_OK(cbm_plant_evaluate(p[1], &r[1]));
+        CHECK(memcmp(&r[0], &r[1], sizeof r[0]) == 0);
+    }
+    cbm__mech_tree_min_segments(50000);
+    cbm_plant_destroy(p[0]);
+    cbm_plant_destroy(p[1]);
+    cbm_context_destroy(ctx);
+}
+
+/* The sums over all segments follow the plant's numbering in the depth-first order too: the line
+ * search's merit of one evaluation, the total potential energy and the S-weighted product of the
+ * stability probes, computed on the arrays in that order (entered by hand, as cbm_plant_solve
+ * does), are the same to the bit as in the plant's order; and the Krylov solver's dot products,
+ * whose values steer every step it takes with the stiffness preconditioner, give the same solve. */
+TEST(order_sums_in_plant_order)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p = random_tree(ctx, 5000, 3e8, 0.02, false);
+    for (int k = 0; k < 2 && p; k++) {
+        double ss[2], e[2], sd[2], mm;
+        for (int sorted = 0; sorted < 2; sorted++) {
+            order_force(sorted);
+            CHECK_OK(cbm__mech_work_reserve(p, 10));
+            CHECK_OK(cbm__mech_order_enter(p));
+            CHECK(p->sorder.active == (sorted == 1));
+            cbm__mech_prepare(p);
+            cbm__mech_forward_eval(p);
+            double r = k == 0 ? cbm__mech_backward(p, 0.0, p->work.res, &mm, &ss[sorted])
+                              : cbm__mech_backward_factor(p, p->work.res, &mm, &ss[sorted]);
+            CHECK(isfinite(r));
+            e[sorted] = cbm__mech_energy(p);
+            sd[sorted] = cbm__mech_sdot(p, p->pos, p->pos);
+            cbm__mech_order_leave(p);
+            order_default();
+        }
+        CHECK_MSG(memcmp(&ss[0], &ss[1], sizeof ss[0]) == 0, "merit %.17g against %.17g", ss[0],
+                  ss[1]);
+        CHECK_MSG(memcmp(&e[0], &e[1], sizeof e[0]) == 0, "energy %.17g against %.17g", e[0], e[1]);
+        CHECK_MSG(memcmp(&sd[0], &sd[1], sizeof sd[0]) == 0, "S product %.17g against %.17g", sd[0],
+                  sd[1]);
+        /* a bent state for the second round */
+        cbm_solve_def d = cbm_solve_def_default();
+        d.max_passes = 3;
+        (void)cbm_plant_solve(p, &d, NULL);
+    }
+    cbm_plant_destroy(p);
+    result r[2];
+    cbm_plant *q[2] = {NULL, NULL};
+    for (int sorted = 0; sorted < 2; sorted++) {
+        q[sorted] = random_tree(ctx, 5000, 3e8, 0.02, false);
+        cbm_solve_def d = cbm_solve_def_default();
+        d.warm_start = false;
+        d.preconditioner = CBM_MECH_PRECOND_STIFFNESS;
+        d.max_passes = 60;
+        cbm_solve_stats st;
+        order_force(sorted);
+        cbm_status s = q[sorted] ? cbm_plant_solve(q[sorted], &d, &st) : CBM_E_NOMEM;
+        order_default();
+        CHECK(s == CBM_OK || s == CBM_E_NOT_CONVERGED);
+        r[sorted].krylov = st.krylov_iterations;
+        r[sorted].residual = st.residual;
+    }
+    printf("stiffness preconditioner: %zu Krylov iterations\n", r[0].krylov);
+    CHECK(r[0].krylov > 5);
+    CHECK_EQ_INT(r[0].krylov, r[1].krylov);
+    CHECK(memcmp(&r[0].residual, &r[1].residual, sizeof r[0].residual) == 0);
+    CHECK(same_plant_bits(q[0], q[1]));
+    cbm_plant_destroy(q[0]);
+    cbm_plant_destroy(q[1]);
+    cbm_context_destroy(ctx);
 }

@@ -107,6 +107,7 @@ static cbm_status start_solve(cbm_context *ctx, const cont_cfg *cfg,
     *sd = cfg->sd;
     CBM_TRY(set_param(pc, p, d->from));
     cbm_status st = cbm_plant_solve(p, sd, ss);
+    cbm__mech_work_current(p); /* the workspace is read below (solve_order.c) */
     if (st == CBM_E_NOT_CONVERGED)
         return cbm__fail(ctx, st, "bend continuation: no equilibrium at the start %g", d->from);
     return st;
@@ -345,6 +346,7 @@ static cbm_status trace(cbm_context *ctx, const cont_cfg *cfg, const cbm_bend_co
         memcpy(saved, cbm_plant_omegas(p), n * sizeof *saved);
         CBM_TRY(set_param(pc, p, pn));
         st = cbm_plant_solve(p, &sd, &ss);
+        cbm__mech_work_current(p); /* the workspace is read below (solve_order.c) */
         if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
             return st;
         cbm_bend_branch_point np;
@@ -398,6 +400,7 @@ static cbm_status trace(cbm_context *ctx, const cont_cfg *cfg, const cbm_bend_co
         cbm_solve_def jd = sd;
         jd.push_unstable = true;
         st = cbm_plant_solve(p, &jd, &ss);
+        cbm__mech_work_current(p); /* the workspace is read below (solve_order.c) */
         if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
             return st;
         if (st == CBM_E_NOT_CONVERGED) {
@@ -698,6 +701,7 @@ static cbm_status jump_from(arc *a, const arc_point *lo, double dir, cbm_bend_fo
     CBM_TRY(set_param(a->pc, a->p, pj));
     cbm_solve_stats ss;
     cbm_status st = cbm_plant_solve(a->p, &sd, &ss);
+    cbm__mech_work_current(a->p); /* the workspace is read below (solve_order.c) */
     if (st != CBM_OK && st != CBM_E_NOT_CONVERGED)
         return st;
     if (st == CBM_OK) {

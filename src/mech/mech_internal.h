@@ -60,6 +60,10 @@ typedef struct cbm__mech_work {
      * changes, a re-carved workspace when it is replaced) */
     int tsplit, tsplit_req;
     size_t tsplit_min;
+    bool tsplit_sorted; /* the split is of the solve's depth-first order (sorder.active) */
+    /* the joint arrays and work.kin were prepared in the solve's depth-first order, which has
+     * been left: cbm__mech_work_current prepares them again before a reader outside a solve */
+    bool stale;
     /* the last evaluation was fused with the factorisation (cbm__mech_backward_factor): the
      * tree arrays hold the factorisation (mu = 0) of the evaluated state (fready), with its
      * counts, and tmp the backward half of the solve J x = -res (fhalf); cleared by every sweep
@@ -69,6 +73,46 @@ typedef struct cbm__mech_work {
                    * contact only; cbm__mech_tree_apply computes it when it needs it) */
     size_t fsing, fnonpd;
 } cbm__mech_work;
+
+/* The depth-first order of the solve (solve_order.c): a plant of many segments solved over
+ * threads runs with its per-segment arrays in an order of the solver's own, the preorder that takes
+ * the children of a segment in increasing index. There a segment's parent is the segment before it
+ * or an ancestor still on the path, so the sweeps stream their arrays instead of reaching a
+ * lateral's parent anywhere in memory, and a thread's subtrees lie in one stretch of memory.
+ * cbm_plant_solve gathers the arrays below into that order, swaps them into the plant for the
+ * solve and scatters its results back. The backward sweeps then meet a parent's children in
+ * decreasing index as before (the first one is its child of highest index, work.kin), and every
+ * sum over all segments runs in the plant's own order (cbm__mech_at), so the results are the
+ * same to the bit. */
+/* of the topology: gathered when the order is computed, kept between solves (the solve does not
+ * write them) */
+#define CBM__ORDER_TOPO(X) X(parent) X(cont)
+/* what the solve reads: gathered at every solve */
+#define CBM__ORDER_IN(X)                                                                           \
+    X(len) X(branch) X(rig) X(rest) X(mpl) X(omega) X(pmass) X(pmass0) X(crad) X(tipf) X(tipm)
+/* what it writes before it reads them (an evaluation first): scattered back, with omega */
+#define CBM__ORDER_OUT(X)    X(q) X(pos) X(force) X(moment) X(cmass)
+#define CBM__ORDER_ARRAYS(X) CBM__ORDER_TOPO(X) CBM__ORDER_IN(X) CBM__ORDER_OUT(X)
+typedef struct cbm__mech_order {
+    size_t cap;      /* segments the arrays hold */
+    bool valid;      /* ord and at are of the plant's topology (plant.c clears it) */
+    bool identity;   /* the plant is numbered in that order already: nothing to do */
+    bool active;     /* a solve runs on the arrays below: the plant's own are held here */
+    uint32_t *ord;   /* the solve's k-th segment is the plant's ord[k] */
+    uint32_t *at;    /* the plant's segment i is the solve's at[i] */
+    int64_t *parent; /* the plant's arrays in that order (swapped with the plant's) */
+    uint8_t *cont;
+    double *len;
+    cbm_quat *branch;
+    cbm_vec3 *rig, *rest;
+    double *mpl;
+    cbm_vec3 *omega;
+    double *pmass, *pmass0, *crad;
+    cbm_vec3 *tipf, *tipm;
+    cbm_quat *q;
+    cbm_vec3 *pos, *force, *moment;
+    double *cmass;
+} cbm__mech_order;
 
 /* work.kin, set by cbm__mech_prepare from the topology: the backward sweeps add what a segment
  * hands to its parent into the parent's accumulators (force and moment of the evaluation, W and
@@ -150,6 +194,8 @@ void cbm__mech_factor_clear(cbm_plant *p, bool solving);
             }                                                                                      \
         }                                                                                          \
     } while (0)
+/// The threads the plant's tree sweeps ask for (1: serial; the split may still use fewer).
+int cbm__mech_tree_threads(const cbm_plant *p);
 /// The threads the plant's tree sweeps use (1: serial), with the split in work.tpart; cached
 /// until the topology, the thread count or the workspace changes.
 int cbm__mech_tree_split(cbm_plant *p);
@@ -263,6 +309,7 @@ struct cbm_plant {
     size_t ring_free[64];
 
     cbm__mech_work work;
+    cbm__mech_order sorder; /* the solve's depth-first order (solve_order.c) */
     /* the incremental FEM's workspace and growth snapshot (fem.c), kept between calls so that a
      * growth step does not fault fresh pages in again; grow-only */
     void *fem_ws, *fem_snap;
@@ -273,6 +320,33 @@ struct cbm_plant {
 
 /// cbm_segment_state.rate of segment i in O(1) (cbm_plant_segment also visits every ring).
 cbm_vec3 cbm__plant_segment_rate(const cbm_plant *p, size_t i);
+
+/* ---- solve_order.c ---- */
+
+/// The least segments for the depth-first order (default 50,000; tests lower it to compare).
+void cbm__mech_order_min_segments(size_t min_segments);
+/// Whether a solve on one thread uses the order too (default false: its gathering and
+/// scattering cost more than its sweeps save, docs/performance.md; tests switch it on).
+void cbm__mech_order_serial(bool on);
+/// Gathers the plant's arrays into the depth-first order and swaps them in (nothing for a small
+/// plant, one solved on one thread, one with organ contact, or one numbered in that order
+/// already). CBM_E_NOMEM leaves the plant as it was.
+cbm_status cbm__mech_order_enter(cbm_plant *p);
+/// Swaps the plant's own arrays back and scatters the solve's results into them (nothing when
+/// not entered); the workspace is left stale (work.stale) until prepared again.
+void cbm__mech_order_leave(cbm_plant *p);
+/// The workspace's joint arrays and accumulator marks for the plant's numbering: prepares them
+/// again after a solve in the depth-first order (for readers of the workspace after a solve
+/// without a prepare of their own, the bend continuation).
+void cbm__mech_work_current(cbm_plant *p);
+void cbm__mech_order_free(cbm_plant *p);
+/// The index in the solve's arrays of the plant's segment k: sums over all segments run over k
+/// in the plant's order, so that they add the same terms in the same order whichever order the
+/// arrays are in.
+static inline size_t cbm__mech_at(const cbm_plant *p, size_t k)
+{
+    return p->sorder.active ? p->sorder.at[k] : k;
+}
 
 /* ---- solve_common.c ---- */
 

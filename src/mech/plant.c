@@ -233,6 +233,7 @@ void cbm_plant_destroy(cbm_plant *p)
 #undef FREE
     cbm__free(ctx, p->angles, p->cap * 3 * sizeof(double));
     CBM_ARRAY_FREE(ctx, p->rings);
+    cbm__mech_order_free(p);
     cbm__mech_work_free(p);
     cbm__mech_pairs_free(p);
     cbm__fem_free(p);
@@ -511,7 +512,8 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->ring_cap[i] = 1;
     int64_t par = def->parent;
     p->parent[i] = par;
-    p->work.tsplit = 0; /* the threads' split is for the old topology */
+    p->work.tsplit = 0;      /* the threads' split is for the old topology */
+    p->sorder.valid = false; /* and the solve's order */
     p->cont[i] = def->lateral && par >= 0 ? 2 : 0;
     p->nchild[i] = 0;
     p->fchild[i] = -1;
@@ -756,7 +758,8 @@ cbm_status cbm_plant_remove_subtree(cbm_plant *p, size_t seg, size_t *removed)
     }
     cbm__free(p->ctx, map, m * sizeof *map);
     p->n = w;
-    p->work.tsplit = 0; /* the threads' split is for the old topology */
+    p->work.tsplit = 0;      /* the threads' split is for the old topology */
+    p->sorder.valid = false; /* and the solve's order */
     /* recompute child counts and continuation flags */
     for (size_t i = 0; i < w; i++) {
         p->nchild[i] = 0;

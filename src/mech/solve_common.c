@@ -290,6 +290,7 @@ void cbm__mech_prepare(cbm_plant *p)
 {
     const size_t n = p->n;
     cbm__mech_fused_clear(p);
+    p->work.stale = false;
     kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
@@ -569,6 +570,7 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
         w->fwad_ok = false; /* not stored by the sweep (cbm__mech_factor_one) */
     }
     if (t <= 1) {
+        const bool sorted = p->sorder.active;
         const int64_t *par = p->parent;
         double *f = (double *)p->force, *m = (double *)p->moment;
         double *fw = w->fw, *dm = (double *)w->dm;
@@ -584,8 +586,14 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
             } else {
                 backward_seg(p, i, &all, ground, pairs, false, &z2);
             }
-            ss += z2;
+            if (sorted)
+                w->zz[i] = z2;
+            else
+                ss += z2;
         }
+        if (sorted) /* the plant's order of the sum */
+            for (size_t k = n; k-- > 0;)
+                ss += w->zz[p->sorder.at[k]];
     } else {
         pass_job jobs[8];
         for (int k = 0; k < t; k++) {
@@ -624,8 +632,8 @@ static double backward_impl(cbm_plant *p, double alpha, cbm_vec3 *res, double *m
             all.fs.nonpd += jobs[k].fs.nonpd;
             all.fs.negative += jobs[k].fs.negative;
         }
-        for (size_t i = n; i-- > 0;) /* the serial order of the sum */
-            ss += zz[i];
+        for (size_t k = n; k-- > 0;) /* the serial order of the sum */
+            ss += zz[cbm__mech_at(p, k)];
     }
     if (!isfinite(all.sum))
         return NAN;
@@ -667,7 +675,8 @@ double cbm__mech_relres(double rmax, double mmax, double *char_moment)
 
 cbm_status cbm__mech_report_nonfinite(cbm_plant *p)
 {
-    for (size_t i = 0; i < p->n; i++) {
+    for (size_t k = 0; k < p->n; k++) {
+        size_t i = cbm__mech_at(p, k); /* the first in the plant's order, named by its number */
         const char *what = NULL;
         if (!v3_isfinite(p->omega[i]))
             what = "rotation rate";
@@ -681,7 +690,7 @@ cbm_status cbm__mech_report_nonfinite(cbm_plant *p)
             what = "moment";
         if (what)
             return cbm__fail(p->ctx, CBM_E_NONFINITE, "segment %zu: the %s became NaN or infinite",
-                             i, what);
+                             k, what);
     }
     return cbm__fail(p->ctx, CBM_E_NONFINITE, "the residual became NaN or infinite");
 }
@@ -925,6 +934,8 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
         maxp = 2;
     /* the relaxation too: the tree factorisation diagnoses its equilibrium's stability */
     CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 1));
+    /* a large plant is solved in the depth-first order (solve_order.c), left below */
+    CBM_TRY(cbm__mech_order_enter(p));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     if (!d.warm_start)
@@ -948,6 +959,7 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     }
     p->load_scale = 1.0;
     p->mass_path = 1.0;
+    cbm__mech_order_leave(p);
     st.lowest_eigenvalue = s == CBM_OK ? st.lowest_eigenvalue : NAN;
     if (s == CBM_OK && !(d.solver == CBM_MECH_NEWTON && d.preconditioner == CBM_MECH_PRECOND_TREE))
         s = diagnose_stability(p, &d, &st);

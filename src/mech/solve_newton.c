@@ -149,11 +149,16 @@ void cbm__mech_newton_fuse(bool on)
     fuse_on = on;
 }
 
-static double dot(const double *a, const double *b, size_t n)
+/* a . b over the plant's 3 n components, summed in the plant's order (solve_order.c) */
+static double dot(const cbm_plant *p, const double *a, const double *b)
 {
     double s = 0.0;
-    for (size_t i = 0; i < n; i++)
+    for (size_t k = 0; k < p->n; k++) {
+        size_t i = 3 * cbm__mech_at(p, k);
         s += a[i] * b[i];
+        s += a[i + 1] * b[i + 1];
+        s += a[i + 2] * b[i + 2];
+    }
     return s;
 }
 
@@ -238,7 +243,7 @@ static bool gmres(newton_krylov *k, double eta, int m)
     memset(x, 0, n3 * sizeof *x);
     const double *res = (const double *)w->res;
     /* the 2-norm of the right-hand side (k->norm is the merit, a scaled norm) */
-    double bnorm = sqrt(dot(res, res, n3));
+    double bnorm = sqrt(dot(p, res, res));
     if (bnorm == 0.0)
         return true;
     double target = eta * bnorm;
@@ -261,12 +266,12 @@ static bool gmres(newton_krylov *k, double eta, int m)
             double *hc = H + (size_t)j * (m + 1);
             for (int i = 0; i <= j; i++) {
                 double *vi = V + (size_t)i * n3;
-                double h = dot(vn, vi, n3);
+                double h = dot(p, vn, vi);
                 hc[i] = h;
                 for (size_t q = 0; q < n3; q++)
                     vn[q] -= h * vi[q];
             }
-            double hn = sqrt(dot(vn, vn, n3));
+            double hn = sqrt(dot(p, vn, vn));
             hc[j + 1] = hn;
             if (hn > 0.0)
                 for (size_t q = 0; q < n3; q++)
@@ -309,7 +314,7 @@ static bool gmres(newton_krylov *k, double eta, int m)
         k->st->passes++;
         for (size_t q = 0; q < n3; q++)
             V[q] = -res[q] - V[q];
-        beta = sqrt(dot(V, V, n3));
+        beta = sqrt(dot(p, V, V));
         if (beta <= target || beta == 0.0)
             break;
         for (size_t q = 0; q < n3; q++)
@@ -345,7 +350,8 @@ static bool shifted_descends(const newton_krylov *k, const double *d, double mu)
     const cbm__mech_work *w = &p->work;
     const double *res = (const double *)w->res;
     double rr = 0.0, slope = 0.0;
-    for (size_t i = 0; i < p->n; i++) {
+    for (size_t o = 0; o < p->n; o++) { /* the sums in the plant's order (solve_order.c) */
+        size_t i = cbm__mech_at(p, o);
         const double c[3] = {w->cj[i].x, w->cj[i].y, w->cj[i].z};
         for (int j = 0; j < 3; j++) {
             double z = w->dual[i] / c[j], r = res[3 * i + j];
@@ -366,9 +372,11 @@ static double energy_slope(const newton_krylov *k, const double *d)
     const cbm_plant *p = k->p;
     const double *res = (const double *)p->work.res;
     double s = 0.0;
-    for (size_t i = 0; i < p->n; i++)
+    for (size_t o = 0; o < p->n; o++) { /* the sum in the plant's order (solve_order.c) */
+        size_t i = cbm__mech_at(p, o);
         s += p->work.dual[i] * (res[3 * i] * d[3 * i] + res[3 * i + 1] * d[3 * i + 1] +
                                 res[3 * i + 2] * d[3 * i + 2]);
+    }
     return s;
 }
 

@@ -398,7 +398,9 @@ static int split_compute(cbm_plant *p, int t)
             if (load[k] < load[best])
                 best = k;
         load[best] += sz;
-        part[i] |= ((uint32_t)best << PART_SHIFT) | PART_ROOT;
+        /* a root of the plant (a forest's small tree) hands nothing to a parent: its thread
+         * sweeps it whole, the top's sweep never meets it */
+        part[i] |= ((uint32_t)best << PART_SHIFT) | (pa >= 0 ? PART_ROOT : 0u);
     }
     return top * 4 > n ? 1 : t; /* mostly a chain: the threads would wait on the top */
 }
@@ -412,23 +414,31 @@ static void processors_count(void)
     processors = np > 0 ? (int)(np < 64 ? np : 64) : 1;
 }
 
-int cbm__mech_tree_split(cbm_plant *p)
+int cbm__mech_tree_threads(const cbm_plant *p)
 {
-    cbm__mech_work *w = &p->work;
     if (p->n < tree_min_segments || p->n < 2)
-        return 1; /* before anything else: the small plants of a growth run pay nothing */
+        return 1;
     int t = p->threads;
     if (t <= 0) {
         pthread_once(&processors_once, processors_count); /* sysconf reads files: once */
         t = processors;
     }
-    if (t > MAX_THREADS)
-        t = MAX_THREADS;
-    if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments)
+    return t > MAX_THREADS ? MAX_THREADS : t;
+}
+
+int cbm__mech_tree_split(cbm_plant *p)
+{
+    cbm__mech_work *w = &p->work;
+    if (p->n < tree_min_segments || p->n < 2)
+        return 1; /* before anything else: the small plants of a growth run pay nothing */
+    int t = cbm__mech_tree_threads(p);
+    if (w->tsplit > 0 && w->tsplit_req == t && w->tsplit_min == tree_min_segments &&
+        w->tsplit_sorted == p->sorder.active)
         return w->tsplit;
     w->tsplit = split_compute(p, t);
     w->tsplit_req = t;
     w->tsplit_min = tree_min_segments;
+    w->tsplit_sorted = p->sorder.active;
     return w->tsplit;
 }
 

@@ -33,7 +33,8 @@ double cbm__mech_energy(const cbm_plant *p)
 {
     const cbm__mech_work *w = &p->work;
     double e = 0.0;
-    for (size_t i = 0; i < p->n; i++) {
+    for (size_t k = 0; k < p->n; k++) { /* the sum in the plant's order (solve_order.c) */
+        size_t i = cbm__mech_at(p, k);
         cbm_vec3 dv = v3_sub(p->omega[i], w->rj[i]);
         cbm_vec3 c = w->cj[i];
         e += 0.5 * w->dual[i] * (c.x * dv.x * dv.x + c.y * dv.y * dv.y + c.z * dv.z * dv.z);
@@ -43,10 +44,10 @@ double cbm__mech_energy(const cbm_plant *p)
         e -= v3_dot(w->wown[i], xc) + v3_dot(w->ftip[i], xd);
         if (p->ground) {
             /* the penalty's potential: its force k d^2 / (2 s), then k (d - s/2) */
-            double depth = p->ground_y - xd.y, s = p->ground_s, k = p->ground_k * p->load_scale;
+            double depth = p->ground_y - xd.y, s = p->ground_s, kg = p->ground_k * p->load_scale;
             if (depth > 0.0)
-                e += depth < s ? k * depth * depth * depth / (6.0 * s)
-                               : k * (0.5 * depth * depth - 0.5 * s * depth + s * s / 6.0);
+                e += depth < s ? kg * depth * depth * depth / (6.0 * s)
+                               : kg * (0.5 * depth * depth - 0.5 * s * depth + s * s / 6.0);
         }
     }
     return e;
@@ -65,8 +66,10 @@ double cbm__mech_sdot(const cbm_plant *p, const cbm_vec3 *a, const cbm_vec3 *b)
 {
     const cbm_vec3 *c = p->work.cj;
     double s = 0.0;
-    for (size_t i = 0; i < p->n; i++)
+    for (size_t k = 0; k < p->n; k++) { /* the sum in the plant's order (solve_order.c) */
+        size_t i = cbm__mech_at(p, k);
         s += c[i].x * a[i].x * b[i].x + c[i].y * a[i].y * b[i].y + c[i].z * a[i].z * b[i].z;
+    }
     return s;
 }
 
@@ -124,7 +127,8 @@ size_t cbm__mech_inverse_iteration(cbm_plant *p, const cbm__mech_inverse_def *d,
         double th = vx / xs; /* eigenvalue of S^-1 (J + mu S) */
         double nx = sqrt(xs);
         double change = 0.0;
-        for (size_t i = 0; i < n; i++) {
+        for (size_t k = 0; k < n; k++) { /* the sum in the plant's order (solve_order.c) */
+            size_t i = cbm__mech_at(p, k);
             cbm_vec3 nvi = v3_scale(x[i], (vx < 0.0 ? -1.0 : 1.0) / nx);
             cbm_vec3 dv = v3_sub(nvi, v[i]);
             change +=
