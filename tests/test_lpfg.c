@@ -889,8 +889,11 @@ TEST(lpfg_native_errors)
 }
 
 /* Errors in compiled production bodies stop at the statement and with the message the tree
- * walker gave (checked against it while it ran), in the register code and in native code alike:
- * a division by zero, a parameter that is not finite (named at its argument), the loop budget,
+ * walker gave (checked against it while it ran), in the register code and in native code alike;
+ * an error inside a produced module's argument names the argument's first character (the walker
+ * named the produce statement, or for a parameter that is not finite the argument's end: its
+ * closing parenthesis), where the faulty expression is, as a compiler would point at it:
+ * a division by zero, a parameter that is not finite, the loop budget,
  * the call depth of a compiled function called from the body, an error in compiled functions
  * with struct parameters (one a reference) and vector arithmetic, an error inside quaternion
  * arithmetic, an error in a compiled switch, func() without function files (a host call,
@@ -907,12 +910,12 @@ TEST(lpfg_bodies_errors)
          "A(x) : {\n"
          "    int d = x - 1;\n"
          "    produce A(10 / d); }\n",
-         "m.l:6:5: ", "integer division by zero", CBM_E_RUNTIME, 1},
+         "m.l:6:15: ", "integer division by zero", CBM_E_RUNTIME, 1},
         {"#include <lpfgall.h>\nmodule A(int, double);\nAxiom: A(1, 0);\n"
          "A(x, y) : {\n"
          "    nproduce A(x, y);\n"
          "    produce A(x + 1, 1 / y); }\n",
-         "m.l:6:27: ", "is not a finite number", CBM_E_RUNTIME, 1},
+         "m.l:6:22: ", "is not a finite number", CBM_E_RUNTIME, 1},
         {"#include <lpfgall.h>\nmodule A(int);\nAxiom: A(1);\n"
          "A(x) : {\n"
          "    while (x > 0)\n"
@@ -951,7 +954,7 @@ TEST(lpfg_bodies_errors)
          "A(x) : {\n"
          "    double y = drand48();\n"
          "    produce A(y + func(F, x)); }\n",
-         "m.l:6:5: ", "needs function files", CBM_E_RUNTIME, 1},
+         "m.l:6:15: ", "needs function files", CBM_E_RUNTIME, 1},
         {"#include <lpfgall.h>\nmodule A(int);\nint z = 0;\nAxiom: A(1);\n"
          "A(x) : { produce A(x + 1); }\n"
          "EndEach: {\n"
@@ -997,7 +1000,9 @@ TEST(lpfg_bodies_errors)
 }
 
 /* Runtime errors of what runs once, compiled as roots of the program: a global's initialiser
- * (named by the global, at the initialiser) and an argument of the axiom (at the argument). */
+ * (named by the global, at the initialiser's first character) and an argument of the axiom (at
+ * the argument's first character, as a produced parameter's; both named the expression's end
+ * before, the axiom's at the module's closing parenthesis). */
 TEST(lpfg_root_errors)
 {
     static const struct {
@@ -1005,10 +1010,16 @@ TEST(lpfg_root_errors)
     } cases[] = {
         {"#include <lpfgall.h>\nmodule A(int);\nint z = 1;\nint g = 7 / (z - 1);\n"
          "Axiom: A(g);\nA(x) : { produce A(x); }\n",
-         "m.l:4:", "g: integer division by zero"},
+         "m.l:4:9: ", "g: integer division by zero"},
         {"#include <lpfgall.h>\nmodule A(int);\nint z = 1;\n"
          "Axiom: A(1) A(7 % (z - 1));\nA(x) : { produce A(x); }\n",
-         "m.l:4:26: ", "axiom: integer remainder by zero"},
+         "m.l:4:15: ", "axiom: integer remainder by zero"},
+        {"#include <lpfgall.h>\nmodule A(int);\nmodule B(int, float);\nint z = 1;\n"
+         "Axiom: A(1) B(z,   (z - 1) + 7 / (z - 1));\nA(x) : { produce A(x); }\n",
+         "m.l:5:20: ", "axiom: integer division by zero"}, /* converted to float */
+        {"#include <lpfgall.h>\nmodule A(int);\nmodule B(int, double);\nint z = 1;\n"
+         "Axiom: A(1) B(z, z / (z - 1.0));\nA(x) : { produce A(x); }\n",
+         "m.l:5:18: ", "axiom: a parameter of B is not a finite number"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const cbm_lsys_def def = lsys_text_def("m.l", cases[k].text);
@@ -1025,4 +1036,52 @@ TEST(lpfg_root_errors)
         cbm_lsys_destroy(ls);
         cbm_context_destroy(ctx);
     }
+}
+
+/* A global's initialiser may read the global itself (C++'s point of declaration is before the
+ * initialiser; it was an unknown name here before): a scalar reads zero, a struct's braces
+ * initialise it in place field by field (p.b reads the p.a just stored), a constructor's
+ * arguments read it before it runs (v.x is zero), a later global reads the earlier ones and a
+ * global without initialiser is zero. The values are those g++ 12 and clang++ 14 give for the
+ * same declarations (V3d a class with a constructor). A step changes every global; after a reset
+ * the run starts as a new lpfg process would (zeros, then the initialisers in order): the same
+ * axiom and the same string after two steps. */
+TEST(lpfg_globals_read_themselves)
+{
+    static const char *const text =
+        "#include <lpfgall.h>\n"
+        "struct P { double a; double b; int n; };\n"
+        "module Q(double, double, double, int, double, double, double, int, double);\n"
+        "double g = g + 1;\n"
+        "P p = {g + 1, p.a * 10, p.n + 3};\n"
+        "V3d v = V3d(v.x + 1, v.x + g, p.b);\n"
+        "int count;\n"
+        "double h = g + p.b + count;\n"
+        "Axiom: Q(g, p.a, p.b, p.n, v.x, v.y, v.z, count, h);\n"
+        "Q(a, b, c, n, x, y, z, k, e) : {\n"
+        "    g = g + 100; p.a = p.a + 1; p.b = -p.b; p.n = p.n * 2; v = v * 3.0;\n"
+        "    count = count + 1; h = -h;\n"
+        "    produce Q(g, p.a, p.b, p.n, v.x, v.y, v.z, count, h); }\n";
+    static const char *const axiom = "Q(1,2,20,3,1,1,20,0,21)";
+    static const char *const after2 = "Q(201,4,20,12,9,9,180,2,21)";
+    cbm_context *ctx = test_ctx();
+    cbm_lsys_def def = lsys_text_def("m.l", text);
+    cbm_lsys *ls = NULL;
+    cbm_status s = cbm_lsys_load(ctx, &def, &ls);
+    CHECK_MSG(s == CBM_OK, "%s", cbm_context_last_error(ctx));
+    for (int run = 0; run < 2 && s == CBM_OK; run++) {
+        CHECK_OK(cbm_lsys_reset(ls));
+        char *got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, axiom), "run %d: axiom '%s', expected '%s'", run,
+                  got ? got : "", axiom);
+        free(got);
+        CHECK_OK(cbm_lsys_step(ls));
+        CHECK_OK(cbm_lsys_step(ls));
+        got = lpfg_string(ctx, ls, false, ' ');
+        CHECK_MSG(got && !strcmp(got, after2), "run %d: after 2 steps '%s', expected '%s'", run,
+                  got ? got : "", after2);
+        free(got);
+    }
+    cbm_lsys_destroy(ls);
+    test_ctx_end(ctx);
 }

@@ -408,7 +408,6 @@ typedef struct codegen {
     bool fail;          /* not compilable (or out of memory: out_of_memory) */
     bool out_of_memory;
     bool is_body;           /* a production body: produce, and return gives no value */
-    bool arg_pos;           /* produce: each argument's first instruction carries its position */
     int loops;              /* enclosing loops */
     int switches;           /* enclosing switches (break leaves the innermost loop or switch) */
     int32_t break_jumps;    /* the chain of jumps to patch at the innermost loop's end */
@@ -1430,8 +1429,7 @@ static void compile_produce(codegen *g, const lc_node *n)
                 return;
             }
             int s2 = g->temp_top;
-            if (g->arg_pos) /* the axiom: a runtime error names the argument */
-                g->pending_at = node(g, x)->pos;
+            g->pending_at = node(g, x)->pos; /* a runtime error names the argument */
             int r = compile_value(g, x, base + off);
             copy_run(g, base + off, r, xs, false);
             g->temp_top = s2;
@@ -1729,6 +1727,37 @@ static void compile_stmt(codegen *g, int32_t ni)
 /* What compile_code compiles: statements, a global's initialiser, the axiom, an expression. */
 enum { ROOT_STMTS, ROOT_INIT, ROOT_AXIOM, ROOT_EXPR };
 
+/* Initialiser ni of type `type` stored into the globals from slot: a struct's braces (or
+ * Name(...)) field by field, each stored before the next is computed, as C++ initialises an
+ * aggregate in place (a field's initialiser that reads the global being initialised sees the
+ * fields before it, and zero after them); any other value computed whole into temporaries,
+ * rounded to its type and stored (a constructor's arguments, V3f(...), are evaluated before it
+ * runs, so they see the global as it was: zero, as reset leaves it). */
+static void store_init(codegen *g, int32_t ni, int type, int slot)
+{
+    const lc_node *n = node(g, ni);
+    if (type >= T_NBUILTIN && n->op == N_CTOR && n->a >= 0) {
+        const lc_type *ty = &g->model->types.data[type];
+        int nf = 0;
+        for (int32_t x = n->a; x >= 0; x = node(g, x)->next)
+            nf++;
+        if (nf == ty->nf) {
+            int f = 0;
+            for (int32_t x = n->a; x >= 0 && !g->fail; x = node(g, x)->next, f++)
+                store_init(g, x, ty->ftype[f], slot + ty->foff[f]);
+            return;
+        }
+    }
+    int sz = lc_type_size(g->model, type);
+    int save = g->temp_top;
+    int t = new_temps(g, sz);
+    copy_run(g, t, compile_value(g, ni, t), sz, false);
+    conv_run(g, type, t);
+    for (int i = 0; i < sz; i++)
+        emit(g, O_GST, slot + i, t + i, 0);
+    g->temp_top = save;
+}
+
 /* The root of kind ROOT_INIT (global number `body`), ROOT_AXIOM or ROOT_EXPR (node `body`) on a
  * frame of no locals: the initialiser's value computed into temporaries, rounded to the global's
  * type and stored, as reset stores it; the axiom's modules produced (as nproduce: the run goes on);
@@ -1737,13 +1766,8 @@ static void compile_root(codegen *g, int kind, int32_t body)
 {
     if (kind == ROOT_INIT) {
         const lc_global *v = &g->model->gvars.data[body];
-        int sz = lc_type_size(g->model, v->type);
-        int t = new_temps(g, sz);
         g->pending_at = node(g, v->init)->pos; /* a runtime error names the initialiser */
-        copy_run(g, t, compile_value(g, v->init, t), sz, false);
-        conv_run(g, v->type, t);
-        for (int i = 0; i < sz; i++)
-            emit(g, O_GST, v->slot + i, t + i, 0);
+        store_init(g, v->init, v->type, v->slot);
     } else if (kind == ROOT_AXIOM) {
         lc_node n;
         memset(&n, 0, sizeof n);
@@ -1751,7 +1775,6 @@ static void compile_root(codegen *g, int kind, int32_t body)
         n.a = g->model->axiom.first;
         n.b = g->model->axiom.n;
         n.fn = 1;
-        g->arg_pos = true;
         compile_produce(g, &n);
     } else {
         if (!lc_is_scalar(node(g, body)->type)) {
