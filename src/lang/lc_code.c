@@ -114,6 +114,36 @@ static double step_incdec(const lc_ins *ip, double *p)
         }                                                                                          \
     } while (0)
 
+bool cbm__lc_stateless(const lc_program *p, size_t f)
+{
+    const lc_fcode *fc = &p->fn[f];
+    for (size_t i = 0; i < fc->ins.len; i++)
+        switch (fc->ins.data[i].op) {
+        case O_GLD:
+        case O_GST:
+        case O_INC:
+        case O_GINC:
+        case O_SPEND:
+        case O_JNZS:
+        case O_JMPS:
+        case O_JLT:
+        case O_JGT:
+        case O_JLE:
+        case O_JGE:
+        case O_JEQ:
+        case O_JNE:
+        case O_CALL:
+        case O_PLD:
+        case O_PST:
+        case O_WSPEND:
+        case O_HOST:
+            return false;
+        default:
+            break;
+        }
+    return fc->compiled;
+}
+
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
     if (cbm__lc_native_has(p, f)) /* the same function as native code (lc_native.c) */
@@ -1772,8 +1802,8 @@ static void compile_root(codegen *g, int kind, int32_t body)
         lc_node n;
         memset(&n, 0, sizeof n);
         n.op = S_PRODUCE;
-        n.a = g->model->axiom.first;
-        n.b = g->model->axiom.n;
+        n.a = g->model->axiom.first + g->program->axiom_from;
+        n.b = g->program->axiom_count;
         n.fn = 1;
         compile_produce(g, &n);
     } else {
@@ -1921,6 +1951,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
                                   m->interp.depth <= -2 ? -2 - m->interp.depth : -1, m->dlen_expr};
     for (int x = 0; x < LC_X_N; x++)
         p->xpresent[x] = expr[x] >= 0;
+    p->axiom_from = 0;
+    p->axiom_count = m->axiom.n < LC_AXIOM_PART ? m->axiom.n : LC_AXIOM_PART;
     for (size_t f = p->init0; f < p->n; f++) {
         int kind = f < p->axiom ? ROOT_INIT : f == p->axiom ? ROOT_AXIOM : ROOT_EXPR;
         int32_t r = kind == ROOT_INIT    ? (int32_t)(f - p->init0)
@@ -1936,6 +1968,19 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             p->fn[f].ins.len = 0;
     }
     return CBM_OK;
+}
+
+cbm_status cbm__lc_codegen_axiom(cbm_context *ctx, const lc_model *m, lc_program *p, int32_t from,
+                                 int32_t count)
+{
+    p->axiom_from = from;
+    p->axiom_count = count;
+    bool nomem = false;
+    lc_fcode *fc = &p->fn[p->axiom];
+    fc->compiled = compile_code(ctx, m, p, (int)p->axiom, 0, 0, true, ROOT_AXIOM, &nomem);
+    if (!fc->compiled)
+        fc->ins.len = 0;
+    return nomem ? CBM_E_NOMEM : CBM_OK;
 }
 
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p)
