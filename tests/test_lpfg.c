@@ -1171,7 +1171,7 @@ TEST(lpfg_axiom_kept_as_string)
         char *text = long_axiom(N, k == 0 ? "3" : "g");
         CHECK(text != NULL);
         if (!text)
-            return;
+            continue; /* the comparisons below fail on the missing strings */
         cbm_context *ctx = test_ctx();
         cbm_lsys_def def = lsys_text_def("m.l", text);
         cbm_lsys *ls = NULL;

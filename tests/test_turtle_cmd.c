@@ -315,6 +315,47 @@ TEST(at_commands)
     end_run(ctx, v, t);
 }
 
+/* A sphere's work is bounded: its slices follow `contour sides` (at least 16) up to
+ * SPHERE_MAX_SLICES (128), with half as many stacks, so `contour sides: 1024` (the largest, as
+ * cylinders allow) makes two spheres of 128 x 65 vertices, not of 1024 x 513 (a million
+ * triangles each: the slow inputs of fuzz_turtle_side, tests/fuzz/corpus/fuzz_turtle_side/
+ * view-sphere-sides). Counted in vertices and triangles, never timed. */
+TEST(sphere_work_bounded)
+{
+    static const struct {
+        const char *view;
+        size_t slices;
+    } cases[] = {{"contour sides: 1024\n", 128}, {"contour sides: 40\n", 40}, {NULL, 16}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        cbm_context *ctx = test_ctx();
+        cbm_view *v = NULL;
+        if (cases[k].view) {
+            char path[1024];
+            snprintf(path, sizeof path, "%s/t.v", test_tmp_dir());
+            write_file(path, cases[k].view);
+            CHECK_OK(cbm_view_load(ctx, path, &v));
+        } else
+            CHECK_OK(cbm_view_create(ctx, &v));
+        prog p;
+        parse(&p, "@O(2) f @O(1)");
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        cbm_turtle *t = NULL;
+        cbm_turtle_def def = {true};
+        CHECK_OK(cbm_turtle_interpret(ctx, v, &def, p.m, p.n, scene, &t));
+        size_t n = cases[k].slices, stacks = n / 2;
+        CHECK_MSG(cbm_scene_vertex_count(scene) == 2 * n * (stacks + 1) &&
+                      cbm_scene_triangle_count(scene) == 2 * n * (2 * stacks - 2),
+                  "%s: %zu vertices, %zu triangles (expected spheres of %zu slices)",
+                  cases[k].view ? cases[k].view : "default view", cbm_scene_vertex_count(scene),
+                  cbm_scene_triangle_count(scene), n);
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+        cbm_view_destroy(v);
+        test_ctx_end(ctx);
+    }
+}
+
 TEST(single_symbol_modules)
 {
     /* cpfg's strings hold one symbol per module: @, ? and ~ combine with the following ones */
