@@ -1252,7 +1252,8 @@ static cbm_status keep_axiom(cbm_lsys *ls)
         int32_t count = total - from < LC_AXIOM_PART ? total - from : LC_AXIOM_PART;
         if (from != p->axiom_from || count != p->axiom_count)
             s = cbm__lc_codegen_axiom(ls->ctx, &lp->m, p, from, count);
-        kept = s == CBM_OK && p->fn[p->axiom].compiled && cbm__lc_stateless(p, p->axiom);
+        kept = s == CBM_OK && p->fn[p->axiom].compiled && cbm__lc_stateless(p, p->axiom) &&
+               (size_t)p->fn[p->axiom].nreg + 1 <= lp->vm.stack_cap;
         if (kept) {
             lp->vm.err = CBM_OK;
             lp->vm.at = lp->vm.err_pos = -1;
