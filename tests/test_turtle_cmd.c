@@ -6,6 +6,7 @@
 #include "core/vecmath.h"
 #include "turtle/view_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -315,6 +316,47 @@ TEST(at_commands)
     end_run(ctx, v, t);
 }
 
+/* A sphere's work is bounded: its slices follow `contour sides` (at least 16) up to
+ * SPHERE_MAX_SLICES (128), with half as many stacks, so `contour sides: 1024` (the largest, as
+ * cylinders allow) makes two spheres of 128 x 65 vertices, not of 1024 x 513 (a million
+ * triangles each: the slow inputs of fuzz_turtle_side, tests/fuzz/corpus/fuzz_turtle_side/
+ * view-sphere-sides). Counted in vertices and triangles, never timed. */
+TEST(sphere_work_bounded)
+{
+    static const struct {
+        const char *view;
+        size_t slices;
+    } cases[] = {{"contour sides: 1024\n", 128}, {"contour sides: 40\n", 40}, {NULL, 16}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        cbm_context *ctx = test_ctx();
+        cbm_view *v = NULL;
+        if (cases[k].view) {
+            char path[1024];
+            snprintf(path, sizeof path, "%s/t.v", test_tmp_dir());
+            write_file(path, cases[k].view);
+            CHECK_OK(cbm_view_load(ctx, path, &v));
+        } else
+            CHECK_OK(cbm_view_create(ctx, &v));
+        prog p;
+        parse(&p, "@O(2) f @O(1)");
+        cbm_scene *scene = NULL;
+        CHECK_OK(cbm_scene_create(ctx, &scene));
+        cbm_turtle *t = NULL;
+        cbm_turtle_def def = {true};
+        CHECK_OK(cbm_turtle_interpret(ctx, v, &def, p.m, p.n, scene, &t));
+        size_t n = cases[k].slices, stacks = n / 2;
+        CHECK_MSG(cbm_scene_vertex_count(scene) == 2 * n * (stacks + 1) &&
+                      cbm_scene_triangle_count(scene) == 2 * n * (2 * stacks - 2),
+                  "%s: %zu vertices, %zu triangles (expected spheres of %zu slices)",
+                  cases[k].view ? cases[k].view : "default view", cbm_scene_vertex_count(scene),
+                  cbm_scene_triangle_count(scene), n);
+        cbm_turtle_destroy(t);
+        cbm_scene_destroy(scene);
+        cbm_view_destroy(v);
+        test_ctx_end(ctx);
+    }
+}
+
 TEST(single_symbol_modules)
 {
     /* cpfg's strings hold one symbol per module: @, ? and ~ combine with the following ones */
@@ -531,6 +573,100 @@ TEST(contour)
     cbm_view_destroy(v);
     cbm_context_clear_errors(ctx);
     test_ctx_end(ctx);
+}
+
+/* The function tabulation as func.c computed it before its work was bounded (every basis
+ * function of every control point, 200 halvings), the reference of function_work_bounded. */
+static int ref_knot(int j, int n)
+{
+    return j < 4 ? 0 : j > n ? n - 2 : j - 3;
+}
+
+static double ref_value(const cbm__func *f, double x)
+{
+    double lo = 0.0, hi = 1.0, cy = 0.0;
+    int n = f->npts - 1;
+    for (int it = 0; it < 200; it++) {
+        double mid = 0.5 * (lo + hi), u = mid * (double)(n - 2), sx = 0.0, sy = 0.0;
+        for (int k = 0; k <= n; k++) {
+            double t1[4];
+            for (int i = 0; i < 4; i++)
+                t1[i] = (ref_knot(k + i, n) <= u && u < ref_knot(k + i + 1, n)) ? 1.0 : 0.0;
+            for (int t = 2; t <= 4; t++)
+                for (int i = 0; i + t <= 4; i++) {
+                    int a = k + i;
+                    double v = 0.0;
+                    int div = ref_knot(a + t - 1, n) - ref_knot(a, n);
+                    if (div != 0)
+                        v = (u - ref_knot(a, n)) / div * t1[i];
+                    div = ref_knot(a + t, n) - ref_knot(a + 1, n);
+                    if (div != 0)
+                        v += (ref_knot(a + t, n) - u) / div * t1[i + 1];
+                    t1[i] = v;
+                }
+            sx += f->px[k] * t1[0];
+            sy += f->py[k] * t1[0];
+        }
+        cy = sy;
+        if (sx > x)
+            hi = mid;
+        else
+            lo = mid;
+        if (fabs(sx - x) <= 0.001)
+            break;
+    }
+    return cy;
+}
+
+/* Tabulating a function costs a bounded number of basis functions a sample: the four of the
+ * point's knot span, not one per control point, and the bisection stops once its interval
+ * cannot shrink (a curve that never reaches x spent all 200 halvings). fuzz_turtle_side's
+ * slow function files (samples: 881 on a curve that turns back) were 0.1 s each. The values
+ * are those of the former computation (ref_value), bit for bit: a zigzag
+ * whose x goes back and forth (1000 control points), a smooth increasing one that ends at
+ * x = 0.5 (the bisection never reaches the samples beyond), and one with a control point beyond
+ * float's range (every term is then summed, as 0 times infinity is NaN). */
+TEST(function_work_bounded)
+{
+    enum { SAMPLES = 301 };
+    for (int kind = 0; kind < 3; kind++) {
+        int npts = kind == 0 ? 1000 : 40;
+        size_t cap = (size_t)npts * 48 + 256, len = 0;
+        char *text = malloc(cap);
+        CHECK(text != NULL);
+        if (!text)
+            return;
+        len += (size_t)snprintf(
+            text, cap, "fver 1 1\nname: f\nsamples: %d\nflip: off\npoints: %d\n", SAMPLES, npts);
+        for (int i = 0; i < npts; i++) {
+            double x = kind == 0 ? (i % 7) / 6.0 : 0.5 * i / (npts - 1);
+            double y = kind == 2 && i == 20 ? 1e39 : sin(0.1 * i);
+            len += (size_t)snprintf(text + len, cap - len, "%.17g %.17g 1\n", x, y);
+        }
+        cbm_context *ctx = test_ctx();
+        cbm__func f;
+        memset(&f, 0, sizeof f);
+        CHECK_OK(cbm__func_read(ctx, "f.func", text, 0, &f));
+        CHECK(f.finite == (kind != 2));
+        int same = 0;
+        for (int i = 0; i < SAMPLES && f.vals; i++) {
+            double r = ref_value(&f, (double)i / (double)(SAMPLES - 1));
+            uint64_t a, b; /* the bits: -0 and NaN told apart */
+            memcpy(&a, &r, sizeof a);
+            memcpy(&b, &f.vals[i], sizeof b);
+            same += a == b;
+        }
+        CHECK_MSG(same == SAMPLES, "kind %d: %d of %d values equal the former computation's", kind,
+                  same, SAMPLES);
+        /* 4 terms a point at most (finite), 64 halvings at most (the interval of [0, 1]
+         * stops shrinking after about 53) */
+        size_t bound = kind == 2 ? (size_t)SAMPLES * 200 * (size_t)npts : (size_t)SAMPLES * 64 * 4;
+        CHECK_MSG(f.basis_evals <= bound, "kind %d: %zu basis functions evaluated (bound %zu)",
+                  kind, f.basis_evals, bound);
+        cbm__func_free(ctx, &f);
+        test_ctx_end(ctx);
+        free(text);
+    }
 }
 
 TEST(nonfinite_parameter)

@@ -114,6 +114,36 @@ static double step_incdec(const lc_ins *ip, double *p)
         }                                                                                          \
     } while (0)
 
+bool cbm__lc_stateless(const lc_program *p, size_t f)
+{
+    const lc_fcode *fc = &p->fn[f];
+    for (size_t i = 0; i < fc->ins.len; i++)
+        switch (fc->ins.data[i].op) {
+        case O_GLD:
+        case O_GST:
+        case O_INC:
+        case O_GINC:
+        case O_SPEND:
+        case O_JNZS:
+        case O_JMPS:
+        case O_JLT:
+        case O_JGT:
+        case O_JLE:
+        case O_JGE:
+        case O_JEQ:
+        case O_JNE:
+        case O_CALL:
+        case O_PLD:
+        case O_PST:
+        case O_WSPEND:
+        case O_HOST:
+            return false;
+        default:
+            break;
+        }
+    return fc->compiled;
+}
+
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm)
 {
     if (cbm__lc_native_has(p, f)) /* the same function as native code (lc_native.c) */
@@ -409,7 +439,6 @@ typedef struct codegen {
     bool fail;          /* not compilable (or out of memory: out_of_memory) */
     bool out_of_memory;
     bool is_body;           /* a production body: produce, and return gives no value */
-    bool arg_pos;           /* produce: each argument's first instruction carries its position */
     int loops;              /* enclosing loops */
     int switches;           /* enclosing switches (break leaves the innermost loop or switch) */
     int32_t break_jumps;    /* the chain of jumps to patch at the innermost loop's end */
@@ -1436,8 +1465,7 @@ static void compile_produce(codegen *g, const lc_node *n)
                 return;
             }
             int s2 = g->temp_top;
-            if (g->arg_pos) /* the axiom: a runtime error names the argument */
-                g->pending_at = node(g, x)->pos;
+            g->pending_at = node(g, x)->pos; /* a runtime error names the argument */
             int r = compile_value(g, x, base + off);
             copy_run(g, base + off, r, xs, false);
             g->temp_top = s2;
@@ -1737,6 +1765,37 @@ static void compile_stmt(codegen *g, int32_t ni)
 /* What compile_code compiles: statements, a global's initialiser, the axiom, an expression. */
 enum { ROOT_STMTS, ROOT_INIT, ROOT_AXIOM, ROOT_EXPR };
 
+/* Initialiser ni of type `type` stored into the globals from slot: a struct's braces (or
+ * Name(...)) field by field, each stored before the next is computed, as C++ initialises an
+ * aggregate in place (a field's initialiser that reads the global being initialised sees the
+ * fields before it, and zero after them); any other value computed whole into temporaries,
+ * rounded to its type and stored (a constructor's arguments, V3f(...), are evaluated before it
+ * runs, so they see the global as it was: zero, as reset leaves it). */
+static void store_init(codegen *g, int32_t ni, int type, int slot)
+{
+    const lc_node *n = node(g, ni);
+    if (type >= T_NBUILTIN && n->op == N_CTOR && n->child1 >= 0) {
+        const lc_type *ty = &g->model->types.data[type];
+        int nf = 0;
+        for (int32_t x = n->child1; x >= 0; x = node(g, x)->next)
+            nf++;
+        if (nf == ty->nfields) {
+            int f = 0;
+            for (int32_t x = n->child1; x >= 0 && !g->fail; x = node(g, x)->next, f++)
+                store_init(g, x, ty->ftype[f], slot + ty->foff[f]);
+            return;
+        }
+    }
+    int sz = lc_type_size(g->model, type);
+    int save = g->temp_top;
+    int t = new_temps(g, sz);
+    copy_run(g, t, compile_value(g, ni, t), sz, false);
+    conv_run(g, type, t);
+    for (int i = 0; i < sz; i++)
+        emit(g, O_GST, slot + i, t + i, 0);
+    g->temp_top = save;
+}
+
 /* The root of kind ROOT_INIT (global number `body`), ROOT_AXIOM or ROOT_EXPR (node `body`) on a
  * frame of no locals: the initialiser's value computed into temporaries, rounded to the global's
  * type and stored, as reset stores it; the axiom's modules produced (as nproduce: the run goes on);
@@ -1745,21 +1804,15 @@ static void compile_root(codegen *g, int kind, int32_t body)
 {
     if (kind == ROOT_INIT) {
         const lc_global *v = &g->model->gvars.data[body];
-        int sz = lc_type_size(g->model, v->type);
-        int t = new_temps(g, sz);
         g->pending_at = node(g, v->init)->pos; /* a runtime error names the initialiser */
-        copy_run(g, t, compile_value(g, v->init, t), sz, false);
-        conv_run(g, v->type, t);
-        for (int i = 0; i < sz; i++)
-            emit(g, O_GST, v->slot + i, t + i, 0);
+        store_init(g, v->init, v->type, v->slot);
     } else if (kind == ROOT_AXIOM) {
         lc_node n;
         memset(&n, 0, sizeof n);
         n.op = S_PRODUCE;
-        n.child1 = g->model->axiom.first;
-        n.child2 = g->model->axiom.n;
+        n.child1 = g->model->axiom.first + g->program->axiom_from;
+        n.child2 = g->program->axiom_count;
         n.fn = 1;
-        g->arg_pos = true;
         compile_produce(g, &n);
     } else {
         if (!lc_is_scalar(node(g, body)->type)) {
@@ -1908,6 +1961,8 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
                                   m->interp.depth <= -2 ? -2 - m->interp.depth : -1, m->dlen_expr};
     for (int x = 0; x < LC_X_N; x++)
         p->xpresent[x] = expr[x] >= 0;
+    p->axiom_from = 0;
+    p->axiom_count = m->axiom.n < LC_AXIOM_PART ? m->axiom.n : LC_AXIOM_PART;
     for (size_t f = p->init0; f < p->n; f++) {
         int kind = f < p->axiom ? ROOT_INIT : f == p->axiom ? ROOT_AXIOM : ROOT_EXPR;
         int32_t r = kind == ROOT_INIT    ? (int32_t)(f - p->init0)
@@ -1923,6 +1978,19 @@ cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p)
             p->fn[f].ins.len = 0;
     }
     return CBM_OK;
+}
+
+cbm_status cbm__lc_codegen_axiom(cbm_context *ctx, const lc_model *m, lc_program *p, int32_t from,
+                                 int32_t count)
+{
+    p->axiom_from = from;
+    p->axiom_count = count;
+    bool nomem = false;
+    lc_fcode *fc = &p->fn[p->axiom];
+    fc->compiled = compile_code(ctx, m, p, (int)p->axiom, 0, 0, true, ROOT_AXIOM, &nomem);
+    if (!fc->compiled)
+        fc->ins.len = 0;
+    return nomem ? CBM_E_NOMEM : CBM_OK;
 }
 
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p)

@@ -199,6 +199,9 @@ typedef struct lc_program {
      * expressions of the decomposition's and the interpretation's maximum depth and of the
      * derivation length (fn[expr0 + LC_X_...], each returning its value) */
     size_t init0, axiom, expr0;
+    /* fn[axiom] holds the axiom's modules [axiom_from, axiom_from + axiom_count): all of them,
+     * or the first LC_AXIOM_PART of a longer one (cbm__lc_codegen_axiom compiles the others) */
+    int32_t axiom_from, axiom_count;
     bool xpresent[LC_X_N]; /* which of the expressions the model has */
     lc_native *native;     /* the compiled functions as native code (lc_native.c), NULL: none */
 } lc_program;
@@ -215,6 +218,16 @@ typedef struct lc_program {
  * printf and the mechanics built-ins are host calls (O_HOST). The run of a body returns 1 when it
  * produced (the production applied), 0 when it ended without. The blocks compile as bodies. */
 cbm_status cbm__lc_codegen(cbm_context *ctx, const lc_model *m, lc_program *p);
+
+/* The most modules of the axiom compiled at once by cbm__lc_codegen: lsys/lpfg.c runs a longer
+ * axiom part by part when its code reads nothing of the run, keeping its string, so that its
+ * whole code (32 bytes a module) never exists; otherwise it compiles it whole. */
+#define LC_AXIOM_PART 4096
+
+/* Compiles the axiom's modules [from, from + count) into fn[p->axiom], in place of what it held;
+ * CBM_E_NOMEM only (fn[p->axiom].compiled says whether it compiled). */
+cbm_status cbm__lc_codegen_axiom(cbm_context *ctx, const lc_model *m, lc_program *p, int32_t from,
+                                 int32_t count);
 void cbm__lc_program_free(cbm_context *ctx, lc_program *p);
 
 /* The production body p of rule set `set` (LC_MAIN ...): its index in p->fn, -1: none. */
@@ -228,6 +241,12 @@ static inline int cbm__lc_body(const lc_program *p, int set, size_t prod)
  * doubles); the result (0 for void). After a runtime error vm->err is set and the result is
  * meaningless. */
 double cbm__lc_run(const lc_program *p, int f, double *fr, lc_vm *vm);
+
+/* Whether fn[f] reads or writes nothing of a run's state but its own frame and what it
+ * produces: no global, function call, host call (random numbers, contexts, the mechanics),
+ * loop or budget. Its result is then the same on every run (lsys/lpfg.c keeps such an axiom's
+ * string rather than its code). */
+bool cbm__lc_stateless(const lc_program *p, size_t f);
 
 /* Native code (lc_native.c): the compiled functions translated to C, compiled by the system C
  * compiler into a shared object cached in cache_dir under the hash of its source, and loaded;

@@ -408,9 +408,14 @@ static int parse_args(lc_parser *L, int32_t *first)
     if (accept(L, ")"))
         return 0;
     do {
+        skip(L);
+        size_t start = L->cur->pos;
         int32_t e = assign_expr(L);
         if (e < 0)
             return -1;
+        /* the argument's position is its first character (a produced parameter that is not
+         * finite is named there), not where its parse ended */
+        ND(e).pos = (int32_t)(start < INT32_MAX ? start : INT32_MAX);
         chain(L, first, &last, e);
         n++;
     } while (accept(L, ","));
@@ -1261,9 +1266,11 @@ static int succ_list(lc_parser *L, lc_pattern *p)
             int32_t e = args;
             args = ND(e).next;
             ND(e).next = -1;
+            int32_t at = ND(e).pos; /* the argument's first character */
             e = coerce(L, e, md->ptype[a], pos);
             if (e < 0)
                 return -1;
+            ND(e).pos = at;
             chain(L, &first, &last, e);
         }
         lc_modref sm = {m, first};
@@ -2110,18 +2117,9 @@ static void parse_global(lc_parser *L, int t)
             return;
         }
         L->cur->pos += n;
-        int32_t init = -1;
-        if (accept(L, "=")) {
-            size_t p2 = L->cur->pos;
-            init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
-            if (init >= 0 && t < T_NBUILTIN)
-                init = coerce(L, init, t, p2);
-            if (init < 0) {
-                recover(L);
-                return;
-            }
-        }
-        lc_global g = {NULL, t, lp->nglobal, init};
+        /* declared before its initialiser, as C++'s point of declaration: the initialiser may
+         * read the global (zero then, on every run: reset zeroes the globals first) */
+        lc_global g = {NULL, t, lp->nglobal, -1};
         g.name = cbm__alloc(L->cur->ctx, n + 1);
         if (!g.name || CBM_ARRAY_PUSH(L->cur->ctx, lp->gvars, g) != CBM_OK) {
             if (g.name)
@@ -2133,6 +2131,20 @@ static void parse_global(lc_parser *L, int t)
         memcpy(g.name, L->text + pos, n);
         g.name[n] = 0;
         lp->nglobal += lc_type_size(lp, t);
+        if (accept(L, "=")) {
+            skip(L);
+            size_t p2 = L->cur->pos;
+            int32_t init = peek(L, "{") ? brace_init(L, t) : assign_expr(L);
+            if (init >= 0 && t < T_NBUILTIN)
+                init = coerce(L, init, t, p2);
+            if (init < 0) {
+                recover(L);
+                return;
+            }
+            /* a runtime error of the initialiser names its first character */
+            ND(init).pos = (int32_t)(p2 < INT32_MAX ? p2 : INT32_MAX);
+            lp->gvars.data[lp->gvars.len - 1].init = init;
+        }
     } while (accept(L, ","));
     if (!expect(L, ";"))
         recover(L);

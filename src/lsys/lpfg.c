@@ -48,6 +48,10 @@ struct lpfg {
      * from (empty: the interpretation is the string itself) */
     CBM_ARRAY(size_t) origin;
     bool rewriting; /* inside a derivation pass: mechanics calls are refused */
+    /* the axiom's string, when its code reads nothing of the run (keep_axiom): reset copies it
+     * and the code is freed (a 400000-module axiom's code is 12.5 MB, its string 0.4 MB) */
+    lstr axiom;
+    bool axiom_kept;
 };
 
 /* ---------------------------------------------------------------- evaluation */
@@ -962,7 +966,10 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
     ls->cur.n = ls->cur.npm = ls->cur.npar = 0;
     lp->out = &ls->cur;
     lp->vm.stmt_pos = -1;
-    (void)run_root(ls, lp->prog.axiom);
+    if (lp->axiom_kept)
+        CBM_TRY(cbm__lstr_append(ls->ctx, &ls->cur, &lp->axiom, false));
+    else
+        (void)run_root(ls, lp->prog.axiom);
     if (lp->vm.err != CBM_OK)
         return run_error(ls, "axiom");
     return decompose_cur(ls);
@@ -1184,6 +1191,7 @@ void cbm__lpfg_free(cbm_lsys *ls)
     cbm__free(ctx, lp->vm.stack, lp->vm.stack_cap * sizeof(double));
     cbm__lc_program_free(ctx, &lp->prog);
     cbm__lstr_free(ctx, &lp->succ);
+    cbm__lstr_free(ctx, &lp->axiom);
     for (size_t i = 0; i < lp->scratch.len; i++)
         cbm__lstr_free(ctx, &lp->scratch.data[i]);
     CBM_ARRAY_FREE(ctx, lp->scratch);
@@ -1237,6 +1245,72 @@ static cbm_status check_compiled(cbm_lsys *ls)
     return CBM_OK;
 }
 
+/* lc_vm.produce while keep_axiom runs the axiom: the module appended to lp->out when its
+ * parameters are finite; otherwise false, and the axiom is left to reset, which reports the
+ * parameter (or warns, --allow-nonfinite) on every run as before. */
+static bool produce_kept(void *ud, int smi, const double *v)
+{
+    cbm_lsys *ls = ud;
+    lpfg *lp = ls->lp;
+    const lc_module *m = &lp->m.mods.data[lp->m.sms.data[smi].mod];
+    for (int q = 0; q < m->size; q++)
+        if (!isfinite(v[q])) {
+            rt_error(lp, CBM_E_RUNTIME, "not finite");
+            return false;
+        }
+    if (push_module(ls->ctx, lp->out, m->code, v, m->size) != CBM_OK) {
+        rt_error(lp, CBM_E_NOMEM, "out of memory");
+        return false;
+    }
+    return true;
+}
+
+/* An axiom whose code reads nothing of the run (no global, random number or call: its
+ * arguments are constants, or arithmetic on them) gives the same string on every run: it is run
+ * once here into lp->axiom, which reset copies, and its code is freed. A long one is compiled
+ * and run LC_AXIOM_PART modules at a time, so that its whole code is never held (the hostile
+ * corpus's 400000 modules: 12.5 MB). Otherwise, or when its run fails (an error, a parameter
+ * that is not finite, the memory limit), the axiom is compiled whole and every reset runs it
+ * and reports its errors, as before. */
+static cbm_status keep_axiom(cbm_lsys *ls)
+{
+    lpfg *lp = ls->lp;
+    lc_program *p = &lp->prog;
+    const int32_t total = lp->m.axiom.n;
+    bool kept = true;
+    cbm_status s = CBM_OK;
+    set_budgets(ls);
+    lp->vm.produce = produce_kept;
+    lp->out = &lp->axiom;
+    for (int32_t from = 0; kept && from < total; from += LC_AXIOM_PART) {
+        int32_t count = total - from < LC_AXIOM_PART ? total - from : LC_AXIOM_PART;
+        if (from != p->axiom_from || count != p->axiom_count)
+            s = cbm__lc_codegen_axiom(ls->ctx, &lp->m, p, from, count);
+        kept = s == CBM_OK && p->fn[p->axiom].compiled && cbm__lc_stateless(p, p->axiom) &&
+               (size_t)p->fn[p->axiom].nreg + 1 <= lp->vm.stack_cap;
+        if (kept) {
+            lp->vm.err = CBM_OK;
+            lp->vm.stmt_pos = lp->vm.err_pos = -1;
+            (void)run_root(ls, p->axiom);
+            kept = lp->vm.err == CBM_OK;
+        }
+    }
+    lp->vm.produce = produce_compiled;
+    lp->out = NULL;
+    lp->vm.err = CBM_OK;
+    lp->vm.stmt_pos = lp->vm.err_pos = -1;
+    CBM_TRY(s);
+    if (kept) {
+        CBM_ARRAY_FREE(ls->ctx, p->fn[p->axiom].ins);
+        lp->axiom_kept = true;
+        return CBM_OK;
+    }
+    cbm__lstr_free(ls->ctx, &lp->axiom);
+    if (p->axiom_from != 0 || p->axiom_count != total)
+        CBM_TRY(cbm__lc_codegen_axiom(ls->ctx, &lp->m, p, 0, total));
+    return CBM_OK;
+}
+
 static int eval_depth(cbm_lsys *ls, lc_rules *s, int dflt, int which)
 {
     if (s->depth <= -2) {
@@ -1275,14 +1349,15 @@ cbm_status cbm__lpfg_parse(cbm_lsys *ls, const cbm__pp *pp)
     lp->vm.produce = produce_compiled;
     lp->vm.host = ls;
     lp->vm.host_call = lpfg_host;
-    for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
-        if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
-            lp->prog.fn[f].compiled = false;
-    CBM_TRY(check_compiled(ls));
     lp->vm.stack = cbm__calloc(ctx, lp->vm.stack_cap, sizeof(double));
     lp->vm.glob = cbm__calloc(ctx, (size_t)lp->m.nglobal + 1, sizeof(double));
     if (!lp->vm.stack || !lp->vm.glob)
         return CBM_E_NOMEM;
+    CBM_TRY(keep_axiom(ls));
+    for (size_t f = lp->prog.body0[LC_MAIN]; f < lp->prog.n; f++) /* a body's frame: the stack */
+        if ((size_t)lp->prog.fn[f].nreg + 1 > lp->vm.stack_cap)
+            lp->prog.fn[f].compiled = false;
+    CBM_TRY(check_compiled(ls));
     for (size_t i = 0; i < lp->m.main.prods.len; i++)
         if ((size_t)lp->m.main.prods.data[i].fsize + 1 > lp->vm.stack_cap)
             return cbm__fail(ctx, CBM_E_LIMIT, "a production has too many local variables");

@@ -111,8 +111,14 @@ static cbm_status sphere_or_disc(cbm_turtle *t, int cmd, const double *params, i
     cbm_part part =
         cbm__turtle_make_part(t, cmd == CBM_T_SPHERE ? CBM_ORGAN_FRUIT : CBM_ORGAN_OTHER, s->color);
     CBM_TRY(cbm_scene_begin_part(t->scene, &part, NULL));
-    if (cmd == CBM_T_SPHERE) /* at least 16 slices: fewer show as polygons in a picture */
-        return cbm_scene_add_sphere(t->scene, s->pos, r, s->sides < 16 ? 16 : s->sides);
+    /* at least 16 slices (fewer show as polygons in a picture) and at most SPHERE_MAX_SLICES:
+     * a sphere is slices x slices / 2 vertices, and `contour sides` (up to 1024 for
+     * cylinders, whose work is linear in it) would make one sphere a million triangles */
+    if (cmd == CBM_T_SPHERE)
+        return cbm_scene_add_sphere(t->scene, s->pos, r,
+                                    s->sides < 16                  ? 16
+                                    : s->sides > SPHERE_MAX_SLICES ? SPHERE_MAX_SLICES
+                                                                   : s->sides);
     int n = s->sides;
     CBM_TRY(CBM_ARRAY_RESERVE(t->ctx, t->scratch, (size_t)n));
     for (int k = 0; k < n; k++) {

@@ -23,6 +23,10 @@ typedef struct gcpt {
 /* bands per connection of a generalized cylinder at most (cpfg has no bound) */
 #define MAX_RINGS 10000
 
+/* slices of a sphere at most (`contour sides` above it): a sphere is slices x slices / 2
+ * vertices; at 128 its outline departs from the circle by 3e-4 of the radius */
+#define SPHERE_MAX_SLICES 128
+
 /* An open spline cylinder {(n) (cpfg's SPLINE and its control points). */
 typedef struct spline {
     bool closed, bspline;

@@ -19,6 +19,8 @@ typedef struct cbm__func {
     double *px, *py; /* control points */
     int samples;     /* > 2: values tabulated at `samples` points and interpolated linearly */
     double *vals;
+    bool finite;        /* every control point finite (as float): curve points sum 4 terms */
+    size_t basis_evals; /* basis functions evaluated while tabulating (the tests bound it) */
 } cbm__func;
 
 struct cbm_funcset {
