@@ -1,25 +1,24 @@
-/* The L+C dialect's register code, its one evaluator: the functions, production bodies, blocks,
- * global initialisers, axiom and header expressions of a compiled model (lang/lc.h) translated
- * to a compact register code, and the loop that runs it (lc_code.c).
+/* The register code, the one evaluator of both dialects: the L+C dialect's functions, production
+ * bodies, blocks, global initialisers, axiom and header expressions (lang/lc.h, compiled by
+ * lc_code.c) and the cpfg dialect's roots (compiled by cpfg_code.c), and the loop that runs it
+ * (cbm__lc_run, lc_code.c). lc_native.c translates the L+C program to C for the system's cc.
  *
- * Why a register code and not native code through the system C compiler (as lpfg does): the
- * run needs no compiler, no temporary files, no dlopen and no cache to keep valid, so it behaves
- * the same on every machine and under ASan; and the tree walker it replaced was slow because of
- * its recursion and its buffers, not because it interprets. A function's locals and parameters
- * are registers of its frame (their slots), temporaries follow them; an instruction names its
- * registers, so `s += sin(x * i) / i` is three instructions, not a walk of six nodes.
+ * Why a register code under native code: the run needs no compiler, no temporary files, no
+ * dlopen and no cache to keep valid, so it behaves the same on every machine and under ASan,
+ * and native code, when it is there, computes the same bits by construction. A function's
+ * locals and parameters are registers of its frame (their slots), temporaries follow them; an
+ * instruction names its registers, so `s += sin(x * i) / i` is three instructions.
  *
- * Arithmetic is lpfg's as the tree walker computed it (cbm__lc_bin_scalar):
- * int operations in 32 bits with the wrap, float results rounded to float32, the same messages
- * for division by zero and the budgets of cbm_limits (a loop iteration and a call each spend
- * one operation, the call depth is bounded). A runtime error reports the position of the
- * statement being executed, as the tree walker did.
+ * Arithmetic is lpfg's compiled C++ on x86-64 (cbm__lc_bin_scalar): int operations in 32 bits
+ * with the wrap, float results rounded to float32, lpfg's messages for division by zero, and
+ * the budgets of cbm_limits (a loop iteration and a call each spend one operation, the call
+ * depth is bounded). A runtime error reports the position of the statement being executed.
  *
  * Every function compiles (switch too). Its parameters and result may be scalars or runs
  * (structs, vectors, quaternions, frames), its parameters references (T& x: the caller copies
- * the parameter's run back to the variable after the call, as the tree walker did). What acts
- * on the run's state (random numbers, contexts, the mechanics, printf) is a host call
- * (O_HOST). */
+ * the parameter's run back to the variable after the call). What acts on the run's state
+ * (random numbers, contexts, the mechanics, printf) is a host call (O_HOST). docs/design.md,
+ * "The language", says more. */
 #ifndef CBM_LANG_LC_CODE_H
 #define CBM_LANG_LC_CODE_H
 

@@ -1,6 +1,6 @@
 /* The L+C dialect's front end: lexing, declarations (types, structs, modules, globals,
  * functions), typed expressions and statements, productions and the sections of the file,
- * compiled into an lc_model (lang/lc_parser.h). Every expression is type-checked and coerced here,
+ * compiled into an lc_model (lang/lc.h). Every expression is type-checked and coerced here,
  * so the evaluator never looks at a type it has not been told. */
 #include "lang/lc.h"
 
