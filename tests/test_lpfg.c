@@ -370,6 +370,27 @@ TEST(lpfg_errors_with_locations)
     cbm_context_destroy(ctx);
 }
 
+/* A declaration whose initialiser fails is one error: the variable is declared all the same, so
+ * its uses later in the body are not reported as unknown names too. */
+TEST(lpfg_failed_declaration_is_one_error)
+{
+    const cbm_lsys_def def =
+        lsys_text_def("m.l", "#include <lpfgall.h>\n"                                      /* 1 */
+                             "module A(float);\n"                                          /* 2 */
+                             "Axiom: A(1);\n"                                              /* 3 */
+                             "A(x) : { double y = zzz + 1; y = y * 2; produce A(y); }\n"); /* 4 */
+    test_diags g;
+    cbm_context *ctx;
+    cbm_lsys *ls;
+    CHECK_STATUS(lsys_load_diags(&g, &def, &ctx, &ls), CBM_E_SYNTAX);
+    CHECK(ls == NULL);
+    CHECK_MSG(g.count == 2 && strstr(g.text, ": 1 error in the model"), "%d diagnostics:\n%s",
+              g.count, g.text);
+    CHECK_MSG(strstr(g.text, "m.l:4:21: unknown name 'zzz'"), "%s", g.text);
+    CHECK_MSG(!strstr(g.text, "'y'"), "%s", g.text);
+    cbm_context_destroy(ctx);
+}
+
 /* Functions compiled to register code against the same statements in a production body (the
  * tree walker): every B module of tests/lpfg/compiled-functions.l equals the C module after
  * it, bit for bit as written; fib by recursion gives the Fibonacci numbers. */

@@ -1427,7 +1427,8 @@ static int32_t declaration(lc_parser *L, int t)
                           L->model->types.data[ND(init).type].name);
                 init = -1;
             }
-            if (init < 0) {
+            if (init < 0) { /* declared all the same, so that its uses are no second error */
+                declare_local(L, L->text + pos, n, t);
                 recover_stmt(L);
                 return -1;
             }
