@@ -10,6 +10,8 @@
 # repository root; FILTER: only the runs whose name contains it)
 # Environment: CBM_SHARED (default ../shared). Skips (exit 0, with a message) without valgrind.
 set -uo pipefail
+# shellcheck source=tools/oracle-command.sh
+. "$(dirname "$0")/oracle-command.sh"
 [ $# -ge 2 ] || { sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 before=$(realpath "$1") after=$(realpath "$2") filter=${3:-}
 root=$(pwd)
@@ -49,19 +51,10 @@ if [ -d "$oracles" ]; then
     for o in "$oracles"/*/; do
         o=${o%/}
         name=$(basename "$o")
-        cmdline=$(grep -m1 -E '^(cpfg|lpfg) ' "$o/ref/commands.txt" 2>/dev/null | sed 's/ *#.*//')
+        cmdline=$(oracle_command "$o")
         [ -n "$cmdline" ] || continue
         read -r -a words <<<"$cmdline"
-        files=()
-        for ((k = 1; k < ${#words[@]}; k++)); do
-            case ${words[k]} in
-            -g | -b | -homo) ;;
-            -str | -strb | -out | -o | -vv | -ray | -obj) k=$((k + 1)) ;;
-            -m | -M) files+=("${words[k + 1]}"); k=$((k + 1)) ;;
-            -*) ;;
-            *) files+=("${words[k]}") ;;
-            esac
-        done
+        oracle_files "${words[@]}"
         d=$work/$name
         cp -r "$o/model" "$d" && chmod -R u+w "$d"
         row "oracle $name, string" "$d" run "${files[@]}" -o c.str

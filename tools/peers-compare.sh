@@ -22,6 +22,8 @@
 # PEERS_ENV (default /tmp/peers/env.sh: puts cpfg, vlabcpp, lpfg on PATH with lpfg's variables).
 # Skips (exit 0, with a message) when the peers or the oracle models are absent.
 set -uo pipefail
+# shellcheck source=tools/oracle-command.sh
+. "$(dirname "$0")/oracle-command.sh"
 
 runs=5
 filter=
@@ -217,22 +219,13 @@ done
 for o in "$oracles"/*/; do
     o=${o%/}
     name=$(basename "$o")
-    cmdline=$(grep -m1 -E '^(cpfg|lpfg) ' "$o/ref/commands.txt" 2>/dev/null | sed 's/ *#.*//')
+    cmdline=$(oracle_command "$o")
     [ -n "$cmdline" ] || continue
     d=$(copy_model "$o/model" "oracle-$name")
     read -r -a words <<<"$cmdline"
     peer=${words[0]}
     # the model and side files of the command, without its options and outputs
-    files=()
-    for ((k = 1; k < ${#words[@]}; k++)); do
-        case ${words[k]} in
-        -g | -b | -homo) ;;
-        -str | -strb | -out | -o | -vv | -ray | -obj) k=$((k + 1)) ;;
-        -m | -M) files+=("${words[k + 1]}"); k=$((k + 1)) ;;
-        -*) ;;
-        *) files+=("${words[k]}") ;;
-        esac
-    done
+    oracle_files "${words[@]}"
     if [ "$peer" = cpfg ]; then
         mapopt=()
         model=

@@ -9,6 +9,8 @@
 # when a file differs or a run fails with one binary only. Skips the oracle models (with a
 # message) when ../shared is absent.
 set -uo pipefail
+# shellcheck source=tools/oracle-command.sh
+. "$(dirname "$0")/oracle-command.sh"
 [ $# -eq 2 ] || { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 before=$(realpath "$1") after=$(realpath "$2")
 shared=${CBM_SHARED:-$(realpath ..)/shared}
@@ -45,19 +47,10 @@ oracles=$shared/oracles/vlab
 if [ -d "$oracles" ]; then
     for o in "$oracles"/*/; do
         o=${o%/}
-        cmdline=$(grep -m1 -E '^(cpfg|lpfg) ' "$o/ref/commands.txt" 2>/dev/null | sed 's/ *#.*//')
+        cmdline=$(oracle_command "$o")
         [ -n "$cmdline" ] || continue
         read -r -a words <<<"$cmdline"
-        files=()
-        for ((k = 1; k < ${#words[@]}; k++)); do
-            case ${words[k]} in
-            -g | -b | -homo) ;;
-            -str | -strb | -out | -o | -vv | -ray | -obj) k=$((k + 1)) ;;
-            -m | -M) files+=("${words[k + 1]}"); k=$((k + 1)) ;;
-            -*) ;;
-            *) files+=("${words[k]}") ;;
-            esac
-        done
+        oracle_files "${words[@]}"
         check "$(basename "$o")" "$o/model" run "${files[@]}"
     done
 else
