@@ -174,17 +174,24 @@ static inline bool runtime_ok(cbm_lsys *ls)
     return ls->ev.error == CBM_OK;
 }
 
+/* The frame slots of a production's left context's parameters (bound first) and of its
+ * predecessor's (then the right context's). */
+static void param_slots(const cbm_lsys *ls, const prod *pr, int *lslots, int *pslots)
+{
+    *lslots = *pslots = 0;
+    for (int32_t k = 0; k < pr->nleft_ctx; k++)
+        *lslots += ls->fmods.data[pr->left_ctx + k].np;
+    for (int32_t k = 0; k < pr->npred; k++)
+        *pslots += ls->fmods.data[pr->pred + k].np;
+}
+
 /* Whole match: predecessor in src at p, context in ctxs at lc/rc (for the main derivation
  * these are the predecessor's own positions; for decomposition the produced module's). */
 static bool match(cbm_lsys *ls, const prod *pr, const lstr *src, lpos p, lpos *end,
                   const lstr *ctxs, const lpos *lc, const lpos *rc)
 {
-    int lslots = 0;
-    for (int32_t k = 0; k < pr->nleft_ctx; k++)
-        lslots += ls->fmods.data[pr->left_ctx + k].np;
-    int pslots = 0;
-    for (int32_t k = 0; k < pr->npred; k++)
-        pslots += ls->fmods.data[pr->pred + k].np;
+    int lslots, pslots;
+    param_slots(ls, pr, &lslots, &pslots);
     if (!match_predecessor(ls, pr, src, p, end, lslots))
         return false;
     if (pr->nright_ctx && !match_right_context(ls, pr, ctxs, rc ? *rc : *end, lslots + pslots))
@@ -595,12 +602,8 @@ static cbm_status choose_stochastic(cbm_lsys *ls, const prodset *set, lpos p, lp
     for (size_t a = 0; a < ls->appl.len; a++) {
         if ((r -= ls->applp.data[a]) <= 0) {
             const prod *pr = &set->prods.data[ls->appl.data[a]];
-            int lslots = 0;
-            for (int32_t k = 0; k < pr->nleft_ctx; k++)
-                lslots += ls->fmods.data[pr->left_ctx + k].np;
-            int pslots = 0;
-            for (int32_t k = 0; k < pr->npred; k++)
-                pslots += ls->fmods.data[pr->pred + k].np;
+            int lslots, pslots;
+            param_slots(ls, pr, &lslots, &pslots);
             match_predecessor(ls, pr, cur, p, end, lslots);
             if (pr->nright_ctx)
                 match_right_context(ls, pr, cur, *end, lslots + pslots);

@@ -127,9 +127,18 @@ typedef struct move_job {
     size_t lo, hi; /* places in the order */
 } move_job;
 
-/* What a solve reads, into the order: one pass over [lo, hi); where the order jumps (a lateral's
- * subtree done, the next begins elsewhere in the plant's arrays) the lines there are fetched
- * ORDER_PF places ahead. */
+/* The plant's segment ORDER_PF places after place k when the order jumps there (a lateral's
+ * subtree done, the next begins elsewhere in the plant's arrays), so that its lines are fetched
+ * ahead; SIZE_MAX where the order runs on in the plant's numbering or the range ends first. */
+static inline size_t jump_ahead(const uint32_t *restrict ord, size_t k, size_t hi)
+{
+    if (k + ORDER_PF < hi && ord[k + ORDER_PF] != ord[k + ORDER_PF - 1] + 1)
+        return ord[k + ORDER_PF];
+    return SIZE_MAX;
+}
+
+/* What a solve reads, into the order: one pass over [lo, hi), the lines where the order jumps
+ * fetched ahead (jump_ahead). */
 static void gather_job(void *arg)
 {
     const move_job *j = arg;
@@ -138,8 +147,8 @@ static void gather_job(void *arg)
     const uint32_t *restrict ord = o->ord;
     for (size_t k = j->lo; k < j->hi; k++) {
         size_t i = ord[k];
-        if (k + ORDER_PF < j->hi && ord[k + ORDER_PF] != ord[k + ORDER_PF - 1] + 1) {
-            size_t m = ord[k + ORDER_PF];
+        size_t m = jump_ahead(ord, k, j->hi);
+        if (m != SIZE_MAX) {
 #define PREFETCH(f) __builtin_prefetch(&p->f[m], 0, 3);
             CBM__ORDER_IN(PREFETCH)
 #undef PREFETCH
@@ -159,8 +168,8 @@ static void scatter_job(void *arg)
     const uint32_t *restrict ord = o->ord;
     for (size_t k = j->lo; k < j->hi; k++) {
         size_t i = ord[k];
-        if (k + ORDER_PF < j->hi && ord[k + ORDER_PF] != ord[k + ORDER_PF - 1] + 1) {
-            size_t m = ord[k + ORDER_PF];
+        size_t m = jump_ahead(ord, k, j->hi);
+        if (m != SIZE_MAX) {
 #define PREFETCH(f) __builtin_prefetch(&p->f[m], 1, 3);
             PREFETCH(omega) CBM__ORDER_OUT(PREFETCH)
 #undef PREFETCH
