@@ -148,6 +148,26 @@ static inline cbm_status lsys_derive_homomorphism(cbm_context *ctx, const char *
     return s;
 }
 
+/* The out-of-memory loop over run (a test_oom_fn whose ud is an lsys_derived, calling
+ * lsys_derive_homomorphism): every allocation failed in turn; the last run, without a failure,
+ * derived what a run with memory enough derives, which is `steps` steps and `modules` modules in
+ * the string and in its homomorphism. */
+static inline void lsys_check_out_of_memory(test_oom_fn run, int steps, size_t modules)
+{
+    lsys_derived last, whole;
+    int runs = test_oom_loop(run, &last);
+    CHECK(runs > 20);
+    cbm_context *ctx = test_ctx();
+    CHECK_OK(run(ctx, &whole));
+    test_ctx_end(ctx);
+    CHECK_EQ_INT(whole.steps, steps);
+    CHECK_EQ_INT(whole.modules, modules);
+    CHECK_EQ_INT(whole.homomorphism_modules, modules);
+    CHECK_EQ_INT(last.steps, whole.steps);
+    CHECK_EQ_INT(last.modules, whole.modules);
+    CHECK_EQ_INT(last.homomorphism_modules, whole.homomorphism_modules);
+}
+
 /* The symbol of the L+C module called `name`, -1 if none. */
 static inline int lsys_symbol(const cbm_lsys *ls, const char *name)
 {
