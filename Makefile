@@ -46,9 +46,10 @@ check: format-check
 bench: build
 	@echo "benchmark programs are in build/bin (see docs/performance.md)"
 
-# clang-tidy over the library and the tool with the checks of .clang-tidy (findings are errors)
+# clang-tidy over the library, the tool, the tests and the benchmarks with the checks of
+# .clang-tidy (tests/ and bench/ leave out a few, each with its reason; findings are errors)
 tidy: configure
-	@run-clang-tidy-14 -p build -j 2 -quiet '$(CURDIR)/(src|tools)/' >build/tidy.log 2>&1 || \
+	@run-clang-tidy-14 -p build -j 2 -quiet '$(CURDIR)/(src|tools|tests|bench)/' >build/tidy.log 2>&1 || \
 	  { grep -E '(warning|error):' build/tidy.log | sort -u; echo "make tidy: findings above"; exit 1; }
 	@echo "make tidy: clean"
 

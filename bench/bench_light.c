@@ -72,8 +72,12 @@ int main(int argc, char **argv)
             continue;
         cbm_light_leaf *l = malloc(n * sizeof *l);
         double *a = malloc(n * sizeof *a);
-        if (!l || !a)
+        if (!l || !a) {
+            free(l);
+            free(a);
+            cbm_context_destroy(ctx);
             return 1;
+        }
         stand(l, n);
         cbm_light_def d = cbm_light_def_default();
         d.samples = samples;

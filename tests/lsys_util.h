@@ -19,8 +19,14 @@ typedef struct tbuf {
 static inline void tb_put(tbuf *b, const char *s, size_t n)
 {
     if (b->n + n + 1 > b->cap) {
-        b->cap = (b->n + n + 1) * 2;
-        b->s = realloc(b->s, b->cap);
+        size_t cap = (b->n + n + 1) * 2;
+        char *s2 = realloc(b->s, cap);
+        if (!s2) {
+            fprintf(stderr, "tb_put: out of memory\n");
+            abort();
+        }
+        b->s = s2;
+        b->cap = cap;
     }
     memcpy(b->s + b->n, s, n);
     b->n += n;

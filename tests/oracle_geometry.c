@@ -106,7 +106,7 @@ static bool read_ray(const char *path, ray *R)
     char pending[256] = "";
     for (;;) {
         if (pending[0]) {
-            strcpy(tok, pending);
+            snprintf(tok, sizeof tok, "%s", pending);
             pending[0] = 0;
         } else if (fscanf(f, "%255s", tok) != 1) {
             break;
@@ -180,7 +180,7 @@ static bool read_ray(const char *path, ray *R)
             rp->first = R->npts;
             while (fscanf(f, "%255s", tok) == 1) {
                 if (!is_number(tok)) {
-                    strcpy(pending, tok);
+                    snprintf(pending, sizeof pending, "%s", tok);
                     break;
                 }
                 if (R->npts * 3 + 3 > pcap)

@@ -35,7 +35,7 @@ TEST(full_cone)
     cbm_context *ctx = test_ctx();
     const double L = 1.0, R = 0.002, E = 1e10, rho = 600;
     /* the first two roots in kappa */
-    double kap[2];
+    double kap[2] = {NAN, NAN};
     int found = 0;
     double k = 1.0, prev = cone_wronskian(k);
     while (found < 2 && k < 1e6) {

@@ -408,13 +408,12 @@ TEST(critical_wind)
     /* the stem: the branch's drag (its axis is across the wind) adds at the stem's top */
     double qb = 0.5 * 1.226 * 1.0 * 2 * rb;
     double mstem = q * L * L / 2 + qb * lb * L;
-    double ustem = sqrt(mor * PI * pow(2 * r, 3) / 32 / mstem);
     /* the stem's weight moment: the branch's weight at lever lb / 2, at right angles to the
      * wind moment */
     double wb = 600 * PI * rb * rb * lb * 9.81;
     double mg = wb * lb / 2;
     double sstem = (pow(mor * PI * pow(2 * r, 3) / 32, 2) - mg * mg) / (mstem * mstem);
-    ustem = sqrt(sqrt(sstem));
+    double ustem = sqrt(sqrt(sstem));
     double mgb = wb * lb / 2, mwb = qb * lb * lb / 2;
     double zb = mor * PI * pow(2 * rb, 3) / 32;
     double ubranch = sqrt(sqrt(zb * zb - mgb * mgb) / mwb);

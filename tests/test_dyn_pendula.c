@@ -226,8 +226,8 @@ static void run(bool text, int passes, double swing)
             for (int i = 0; i < NL; i++) {
                 tip[i] = add(PARENT[i] >= 0 ? tip[PARENT[i]] : V(0, 0, 0), R->l[i].r);
                 cbm_vec3 p0, p1, c0, c1;
-                if (!cbm_turtle_motion_part(mo, (size_t)frames, (size_t)(2 * i), &p0, &p1) ||
-                    !cbm_turtle_motion_part(mo, (size_t)frames, (size_t)(2 * i + 1), &c0, &c1)) {
+                if (!cbm_turtle_motion_part(mo, (size_t)frames, 2 * (size_t)i, &p0, &p1) ||
+                    !cbm_turtle_motion_part(mo, (size_t)frames, 2 * (size_t)i + 1, &c0, &c1)) {
                     CHECK(false);
                     continue;
                 }

@@ -139,7 +139,7 @@ TEST(fem_thesis_free_agrees_with_clamped_when_self_equilibrated)
     for (size_t i = 0; i < s.n; i++)
         scale = fmax(scale, fabs(xc[i]));
     CHECK(scale > 0.0);
-    double dd[48];
+    double dd[48] = {0};
     for (size_t i = 0; i < s.n; i++)
         dd[i] = xf[i] - xc[i];
     /* the rigid motion from node 0: t = dd[0..2], w = dd[3..5] */

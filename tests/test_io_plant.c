@@ -90,8 +90,8 @@ TEST(mtg_topology_read_back)
         while (*q == '\t')
             q++, ncols++;
         CHECK(strncmp(q, "id\torder\t", 9) == 0);
-        int64_t latest[16];
-        int64_t parent[64];
+        int64_t latest[16] = {0};
+        int64_t parent[64] = {0};
         bool seen[64] = {false}, lateral[64] = {false};
         int lines = 0, plants = 0;
         for (char *line = code ? strchr(code + 6, '\n') : NULL; line && line[1];

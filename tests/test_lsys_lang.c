@@ -88,8 +88,8 @@ TEST(stochastic_choice_draws_drand48_per_module)
             want[i] = ax[i];
             continue;
         }
-        float sc = (float)(4.0f * r);
-        want[i] = (sc -= 1.0f) <= 0 ? 'A' : (sc -= 1.0f) <= 0 ? 'B' : 'C';
+        float sc = (float)(4.0f * r) - 1.0f; /* the model's sc -= 1, then once more */
+        want[i] = sc <= 0 ? 'A' : sc - 1.0f <= 0 ? 'B' : 'C';
     }
     CHECK_MSG(!strcmp(got.s, want), "got %s, expected %s", got.s, want);
     tb_free(&got);
@@ -439,13 +439,11 @@ TEST(expression_depth_and_loops_are_bounded)
 {
     test_diags g;
     cbm_context *ctx = test_diag_ctx(&g);
-    char model[4096] = "Lsystem: 1\nAxiom: A(";
-    for (int i = 0; i < 300; i++)
-        strcat(model, "(");
-    strcat(model, "1");
-    for (int i = 0; i < 300; i++)
-        strcat(model, ")");
-    strcat(model, ")\nendlsystem\n");
+    char model[4096], open[301], close[301];
+    memset(open, '(', 300);
+    memset(close, ')', 300);
+    open[300] = close[300] = 0;
+    snprintf(model, sizeof model, "Lsystem: 1\nAxiom: A(%s1%s)\nendlsystem\n", open, close);
     cbm_lsys *ls = NULL;
     CHECK_STATUS(load_text(ctx, model, false, &ls), CBM_E_SYNTAX);
     CHECK_MSG(strstr(g.text, "nested too deeply"), "%s", g.text);

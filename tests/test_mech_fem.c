@@ -81,13 +81,14 @@ TEST(fem_branched_agrees_with_statics_small_load)
             CHECK_OK(cbm_plant_add_segment(p, &d, &fork));
         }
         /* two laterals from the stem's tip, 50 degrees either side, the second rolled */
+        const int half = n / 2; /* segments a branch */
         for (int b = 0; b < 2; b++) {
-            for (int i = 0; i < n / 2; i++) {
+            for (int i = 0; i < half; i++) {
                 d.parent = i == 0 ? (int64_t)fork : (int64_t)last;
                 d.lateral = i == 0;
                 d.deviation = i == 0 ? (b ? -0.87 : 0.87) : 0.0;
                 d.divergence = i == 0 && b ? 0.6 : 0.0;
-                d.length = 0.6 / (n / 2);
+                d.length = 0.6 / half;
                 CHECK_OK(cbm_plant_add_segment(p, &d, &last));
             }
             d.deviation = d.divergence = 0.0;

@@ -266,6 +266,7 @@ TEST(pairs_tangent_matches_finite_differences)
     CHECK(cs.max_overlap > 0.0005);
     CHECK_OK(cbm__mech_work_reserve(p, 1));
     cbm__mech_prepare(p);
+    /* NOLINTNEXTLINE(clang-analyzer-optin.portability.UnixAPI): n > 0, the plant built above */
     cbm_vec3 *v = calloc(n, sizeof *v), *jv = calloc(n, sizeof *jv), *rp = calloc(n, sizeof *rp),
              *rm = calloc(n, sizeof *rm), *om = calloc(n, sizeof *om);
     for (size_t i = 0; i < n; i++) {
@@ -358,7 +359,7 @@ TEST(pairs_symmetric_cantilevers_closed_form)
         CHECK_OK(cbm_plant_set_contact(p, k, 0.0));
         /* the relaxation needs alpha below 2 K / (K + 2 k): slow for a stiff contact */
         for (int solver = 0; solver < (ks[t] < 10 ? 2 : 1); solver++) {
-            for (size_t i = 0; i < (size_t)(2 * n); i++)
+            for (size_t i = 0; i < 2 * (size_t)n; i++)
                 CHECK_OK(cbm_plant_set_omega(p, i, v3(0, 0, 0)));
             cbm_solve_def sd = cbm_solve_def_default();
             sd.tolerance = 1e-10;
@@ -785,6 +786,7 @@ TEST(pairs_lowrank_correction)
             CHECK(cbm__mech_pairs_active(p));
             size_t nonpd = 0;
             cbm__mech_tree_factor(p, 0.0, &nonpd);
+            /* NOLINTNEXTLINE(clang-analyzer-optin.portability.UnixAPI): n > 0, built above */
             cbm_vec3 *v = calloc(n, sizeof *v), *jv = calloc(n, sizeof *jv),
                      *z = calloc(n, sizeof *z);
             for (size_t i = 0; i < n; i++)

@@ -548,7 +548,7 @@ TEST(order_sums_in_plant_order)
         d.warm_start = false;
         d.preconditioner = CBM_MECH_PRECOND_STIFFNESS;
         d.max_passes = 60;
-        cbm_solve_stats st;
+        cbm_solve_stats st = {0};
         order_force(sorted);
         cbm_status s = q[sorted] ? cbm_plant_solve(q[sorted], &d, &st) : CBM_E_NOMEM;
         order_default();

@@ -673,7 +673,7 @@ static void check_keep(const char *path, const char *text, size_t min_kept)
     cbm_context *ctx = test_ctx();
     static double a[200000], b[200000];
     size_t na = 0, nb = 0, ma = 0, mb = 0;
-    cbm_lsys_mech_timing ta, tb;
+    cbm_lsys_mech_timing ta = {0}, tb = {0};
     CHECK_OK(run_keep(ctx, path, text, true, a, 200000, &na, &ta, &ma));
     CHECK_OK(run_keep(ctx, path, text, false, b, 200000, &nb, &tb, &mb));
     CHECK(na > 50 && na < 200000);

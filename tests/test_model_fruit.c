@@ -128,7 +128,7 @@ TEST(model_fruit_deterministic_and_conserving)
 {
     cbm_context *ctx = test_ctx();
     const char *d[] = {"YEARS=3"}, *d7[] = {"YEARS=3", "SEED=7"};
-    stats a, b, c;
+    stats a = {0}, b = {0}, c = {0};
     CHECK_OK(grow(ctx, d, 1, &a));
     CHECK_OK(grow(ctx, d, 1, &b));
     CHECK_OK(grow(ctx, d7, 2, &c));
@@ -176,7 +176,7 @@ TEST(model_fruit_spring_back_after_shedding)
     tree t;
     CHECK_OK(open_tree(ctx, d, 3, &t));
     int checked = 0;
-    stats loaded, st;
+    stats loaded = {0}, st = {0};
     memset(&loaded, 0, sizeof loaded);
     bool summer_over = false;
     for (int k = 0; k < 5000 && !cbm_lsys_stopped(t.ls); k++) {
@@ -210,7 +210,7 @@ TEST(model_fruit_unfair_taller_sparser)
 {
     cbm_context *ctx = test_ctx();
     const char *fair[] = {"YEARS=2", "FAIRNESS=1"}, *unfair[] = {"YEARS=2", "FAIRNESS=0.2"};
-    stats f, u;
+    stats f = {0}, u = {0};
     CHECK_OK(grow(ctx, fair, 2, &f));
     CHECK_OK(grow(ctx, unfair, 2, &u));
     printf("2 years: F = 1: %zu segments, %.3f m; F = 0.2: %zu segments, %.3f m\n", f.segments,
@@ -225,7 +225,7 @@ TEST(model_fruit_low_mor_breaks_high_keeps)
 {
     cbm_context *ctx = test_ctx();
     const char *low[] = {"YEARS=4", "MOR=1.2e5"}, *high[] = {"YEARS=4", "MOR=2.9e7"};
-    stats l, h;
+    stats l = {0}, h = {0};
     CHECK_OK(grow(ctx, low, 2, &l));
     CHECK_OK(grow(ctx, high, 2, &h));
     printf("4 years: MOR 1.2e5 Pa: %d broken, %zu segments; MOR 2.9e7 Pa: %d broken, %zu "
@@ -245,7 +245,7 @@ TEST(model_fruit_crooked_aspen_lower)
     const char *wild[] = {"YEARS=3", "FORM=1", "YEARS_TO_SHED=3", "RELAY_BIAS=1", "FRUIT_PROB=0"};
     const char *crooked[] = {"YEARS=3", "FORM=2", "YEARS_TO_SHED=3", "RELAY_BIAS=1",
                              "FRUIT_PROB=0"};
-    stats w, c;
+    stats w = {0}, c = {0};
     CHECK_OK(grow(ctx, wild, 5, &w));
     CHECK_OK(grow(ctx, crooked, 5, &c));
     printf("3 years: wild %.3f m high, crown %.3f m; crooked %.3f m high, crown %.3f m\n", w.height,

@@ -83,8 +83,8 @@ TEST(general_frame)
     /* a frame with no zero entry and 1 + trace = 0.22: the first branch, from the rows H, L, U */
     const char *mods[3] = {"&", "/", "+"};
     const double ang[3] = {80, 20, 15};
-    cbm_vec3 f[3];
-    double q[4];
+    cbm_vec3 f[3] = {{0}};
+    double q[4] = {0};
     query_after(mods, ang, 3, q, f);
     double w = sqrt(0.25 * (1.0 + f[0].x + f[1].y + f[2].z));
     CHECK(w > 0.1);

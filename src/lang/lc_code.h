@@ -261,6 +261,13 @@ double cbm__lc_native_run(const lc_program *p, int f, double *fr, lc_vm *vm);
 
 /* The first runtime error of a run wins; its position is vm->stmt_pos. */
 void cbm__lc_error(lc_vm *vm, cbm_status s, const char *msg);
+/* No error on record and no statement located: the state before a run whose first runtime
+ * error is to be reported. */
+static inline void cbm__lc_error_clear(lc_vm *vm)
+{
+    vm->err = CBM_OK;
+    vm->stmt_pos = vm->err_pos = -1;
+}
 /* Takes one operation (a call, a production applied or a loop iteration) from the step's
  * budgets; false after reporting the limit. */
 bool cbm__lc_spend(lc_vm *vm, bool loop);

@@ -937,8 +937,7 @@ cbm_status cbm__lpfg_reset(cbm_lsys *ls)
 {
     lpfg *lp = ls->lp;
     memset(lp->vm.glob, 0, (size_t)(lp->m.nglobal + 1) * sizeof(double));
-    lp->vm.err = CBM_OK;
-    lp->vm.stmt_pos = lp->vm.err_pos = -1;
+    cbm__lc_error_clear(&lp->vm);
     lp->nonfinite_warned = false;
     set_budgets(ls);
     lp->backward = false;
@@ -1289,16 +1288,14 @@ static cbm_status keep_axiom(cbm_lsys *ls)
         kept = s == CBM_OK && p->fn[p->axiom].compiled && cbm__lc_stateless(p, p->axiom) &&
                (size_t)p->fn[p->axiom].nreg + 1 <= lp->vm.stack_cap;
         if (kept) {
-            lp->vm.err = CBM_OK;
-            lp->vm.stmt_pos = lp->vm.err_pos = -1;
+            cbm__lc_error_clear(&lp->vm);
             (void)run_root(ls, p->axiom);
             kept = lp->vm.err == CBM_OK;
         }
     }
     lp->vm.produce = produce_compiled;
     lp->out = NULL;
-    lp->vm.err = CBM_OK;
-    lp->vm.stmt_pos = lp->vm.err_pos = -1;
+    cbm__lc_error_clear(&lp->vm);
     CBM_TRY(s);
     if (kept) {
         CBM_ARRAY_FREE(ls->ctx, p->fn[p->axiom].ins);
