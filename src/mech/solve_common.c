@@ -74,6 +74,7 @@
  */
 #include "mech/mech_internal.h"
 #include "mech/fem_internal.h"
+#include "mech/sweep_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -360,35 +361,6 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
  * depend on the order, and the line search's merit is summed from per-joint terms (work.zz) in
  * the serial order afterwards: the results are the same to the bit for any number of threads. */
 
-/* Forward sweep at segment i: its frame and proximal node from its parent's; with clear, its
- * force and moment zeroed (an evaluation's backward sweep sets them without: work.kin). */
-static inline void forward_seg(cbm_plant *p, size_t i, bool clear)
-{
-    const int64_t *restrict par = p->parent;
-    const double *restrict len = p->len;
-    cbm_quat *restrict q = p->q;
-    cbm_vec3 *restrict pos = p->pos;
-    int64_t pa = par[i];
-    cbm_quat qa;
-    cbm_vec3 pp;
-    if (pa < 0) {
-        qa = p->base_q;
-        pp = p->base_pos;
-    } else {
-        qa = q[pa];
-        pp = v3_madd(pos[pa], q_h(qa), len[pa]);
-    }
-    cbm_quat b = p->branch[i];
-    if (b.w != 1.0)
-        qa = q_mul(qa, b);
-    q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(v3_scale(p->omega[i], p->work.dual[i]))));
-    pos[i] = pp;
-    if (clear) {
-        p->force[i] = v3(0, 0, 0);
-        p->moment[i] = v3(0, 0, 0);
-    }
-}
-
 typedef struct pass_job {
     cbm_plant *p;
     uint32_t me; /* the thread's number in the split (1 ..) */
@@ -414,7 +386,7 @@ static void forward_job(void *arg)
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, p->len, 1);
         if (cbm__part_thread(part[i]) == j->me)
-            forward_seg(p, i, j->clear);
+            cbm__mech_forward_seg(p, i, j->clear);
     }
 }
 
@@ -431,14 +403,14 @@ static void forward_impl(cbm_plant *p, bool clear)
             CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
             /* the parent's length too: half of this sweep's time waited on it (perf) */
             CBM__PREFETCH_PARENT_FWD(par, i, n, p->len, 1);
-            forward_seg(p, i, clear);
+            cbm__mech_forward_seg(p, i, clear);
         }
         return;
     }
     const uint32_t *part = p->work.tpart;
     for (size_t i = 0; i < n; i++)
         if (cbm__part_thread(part[i]) == 0)
-            forward_seg(p, i, clear);
+            cbm__mech_forward_seg(p, i, clear);
     pass_job jobs[8];
     for (int k = 0; k < t; k++)
         jobs[k] = (pass_job){.p = p, .me = (uint32_t)k + 1, .clear = clear};
