@@ -192,6 +192,39 @@ TEST(fused_step_same_bits_kept_and_restored)
     CHECK(fused > restored);
 }
 
+/* The prepare finds whether any segment carries a tip moment (work.tip_moment: the fast
+ * solver's loads are conservative without one), serially and over threads, where each thread
+ * prepares a range (a moment on the last segment is in the last thread's); -0.0 is no moment. */
+TEST(prepare_finds_tip_moments)
+{
+    cbm__mech_tree_min_segments(0);
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p = ctx ? random_tree(ctx, 3000, 1e10, 0.005, false) : NULL;
+    if (p) {
+        CHECK_OK(cbm__mech_work_reserve(p, 1));
+        for (int threads = 1; threads <= 2; threads++) {
+            p->threads = threads;
+            const size_t segs[2] = {0, p->n - 1};
+            for (int k = 0; k < 2; k++) {
+                const cbm_vec3 zero = {0.0, -0.0, 0.0}, m = {0.0, 0.0, 1e-3};
+                CHECK_OK(cbm_plant_set_load(p, segs[k], 0.0, zero, zero));
+                cbm__mech_prepare(p);
+                CHECK_MSG(!p->work.tip_moment, "%d threads: a moment of zero found", threads);
+                CHECK_OK(cbm_plant_set_load(p, segs[k], 0.0, zero, m));
+                cbm__mech_prepare(p);
+                CHECK_MSG(p->work.tip_moment, "%d threads: the moment on segment %zu missed",
+                          threads, segs[k]);
+                CHECK_OK(cbm_plant_set_load(p, segs[k], 0.0, zero, zero));
+            }
+            CHECK_EQ_INT(cbm__mech_tree_split(p), threads);
+        }
+        cbm_plant_destroy(p);
+    }
+    cbm_context_destroy(ctx);
+    cbm__mech_tree_min_segments(50000);
+}
+
 TEST(tree_solve_same_bits_any_thread_count)
 {
     check_same(20000, 1e10, 0.005, false);

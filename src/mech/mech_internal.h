@@ -72,6 +72,7 @@ typedef struct cbm__mech_work {
     bool fwad_ok; /* fwad holds W a D^-1 of the factorisation (the sweeps store it with ground
                    * contact only; cbm__mech_tree_apply computes it when it needs it) */
     size_t fsing, fnonpd;
+    bool tip_moment; /* some segment has a tip moment (a component not +-0), cbm__mech_prepare */
 } cbm__mech_work;
 
 /* The depth-first order of the solve (solve_order.c): a plant of many segments solved over

@@ -205,9 +205,11 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 
 /* ---- prepare ---- */
 
-/* The joint arrays of segments [lo, hi). */
-static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
+/* The joint arrays of segments [lo, hi); returns whether one of them has a tip moment (read
+ * here anyway: the fast solver's test for conservative loads needs no loop of its own). */
+static bool prepare_range(cbm_plant *p, size_t lo, size_t hi)
 {
+    bool tip_moment = false;
     cbm__mech_work *w = &p->work;
     double s = p->load_scale;
     cbm_vec3 g = v3_scale(p->gravity, s);
@@ -220,7 +222,9 @@ static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
                         ? p->pmass[i]
                         : p->pmass0[i] + p->mass_path * (p->pmass[i] - p->pmass0[i]);
         w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(p->tipf[i], s));
-        w->mtip[i] = v3_scale(p->tipm[i], s);
+        const cbm_vec3 tm = p->tipm[i];
+        w->mtip[i] = v3_scale(tm, s);
+        tip_moment = tip_moment || !(tm.x == 0.0 && tm.y == 0.0 && tm.z == 0.0);
         if (!stag) {
             w->dual[i] = l;
             w->cj[i] = p->rig[i];
@@ -245,18 +249,20 @@ static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
         }
         p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
     }
+    return tip_moment;
 }
 
 typedef struct prep_job {
     cbm_plant *p;
-    size_t lo, hi; /* the joint arrays of these segments */
-    uint32_t me;   /* then the carried masses of this thread's subtrees */
+    size_t lo, hi;   /* the joint arrays of these segments */
+    uint32_t me;     /* then the carried masses of this thread's subtrees */
+    bool tip_moment; /* one of [lo, hi) has a tip moment */
 } prep_job;
 
 static void prepare_job(void *arg)
 {
     prep_job *j = arg;
-    prepare_range(j->p, j->lo, j->hi);
+    j->tip_moment = prepare_range(j->p, j->lo, j->hi);
 }
 
 static void cmass_job(void *arg)
@@ -295,7 +301,7 @@ void cbm__mech_prepare(cbm_plant *p)
     kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
-        prepare_range(p, 0, n);
+        p->work.tip_moment = prepare_range(p, 0, n);
         /* carried mass (independent of the shape) */
         for (size_t i = n; i-- > 0;)
             if (p->parent[i] >= 0)
@@ -306,8 +312,11 @@ void cbm__mech_prepare(cbm_plant *p)
         prep_job jobs[8];
         for (int k = 0; k < t; k++)
             jobs[k] = (prep_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t,
-                                 (uint32_t)k + 1};
+                                 (uint32_t)k + 1, false};
         cbm__mech_run_threads(t, prepare_job, jobs, sizeof *jobs);
+        p->work.tip_moment = false;
+        for (int k = 0; k < t; k++)
+            p->work.tip_moment = p->work.tip_moment || jobs[k].tip_moment;
         cbm__mech_run_threads(t, cmass_job, jobs, sizeof *jobs);
         const uint32_t *part = p->work.tpart;
         for (size_t i = n; i-- > 0;) {

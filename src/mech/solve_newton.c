@@ -1145,9 +1145,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.st = st;
     k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
     k.max_turn = MAX_TURN;
-    k.conservative = true;
-    for (size_t i = 0; i < p->n && k.conservative; i++)
-        k.conservative = p->tipm[i].x == 0.0 && p->tipm[i].y == 0.0 && p->tipm[i].z == 0.0;
+    k.conservative = !p->work.tip_moment; /* cbm_plant_solve prepared the workspace */
     k.m = def->krylov_dim;
     k.tol = def->tolerance;
     k.push = def->push_unstable;
