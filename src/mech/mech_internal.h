@@ -73,6 +73,9 @@ typedef struct cbm__mech_work {
                    * contact only; cbm__mech_tree_apply computes it when it needs it) */
     size_t fsing, fnonpd;
     bool tip_moment; /* some segment has a tip moment (a component not +-0), cbm__mech_prepare */
+    /* Omega was set to the rest rates (rj) for this solve, none NaN: Omega == rj everywhere
+     * (cbm_plant_solve; the fast solver reads and clears it) */
+    bool at_rest;
 } cbm__mech_work;
 
 /* The depth-first order of the solve (solve_order.c): a plant of many segments solved over

@@ -919,9 +919,18 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     CBM_TRY(cbm__mech_order_enter(p));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
-    if (!d.warm_start)
-        for (size_t i = 0; i < p->n; i++)
-            p->omega[i] = p->work.rj[i];
+    /* a cold start: Omega is the rest state, bit for bit where no rest rate is NaN (the fast
+     * solver's test for a warm start, Omega != rest somewhere, then needs no loop of its own) */
+    p->work.at_rest = false;
+    if (!d.warm_start) {
+        bool nan = false;
+        for (size_t i = 0; i < p->n; i++) {
+            cbm_vec3 r = p->work.rj[i];
+            p->omega[i] = r;
+            nan = nan || isnan(r.x) || isnan(r.y) || isnan(r.z);
+        }
+        p->work.at_rest = !nan;
+    }
     cbm_status s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
                                               : cbm__mech_solve_newton(p, &d, maxp, &st);
     /* an evaluation found more touching organ pairs than the workspace held (contact.c): grow

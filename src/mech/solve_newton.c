@@ -1159,9 +1159,10 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     /* a start away from the rest state is a warm start (the previous equilibrium under
      * changed loads) */
     k.plain = false;
-    for (size_t i = 0; i < p->n && !k.plain; i++)
+    for (size_t i = 0; i < p->n && !k.plain && !w->at_rest; i++)
         k.plain = p->omega[i].x != w->rj[i].x || p->omega[i].y != w->rj[i].y ||
                   p->omega[i].z != w->rj[i].z;
+    w->at_rest = false; /* this solve's: a solve again (organ pairs) starts where it ended */
     /* the transient path from a warm start (the factorisation solves J + sigma S; with ground
      * contact it lacks the contact stiffness) */
     k.transient_path = k.plain && k.tree && !p->ground && def->warm_path == CBM_MECH_WARM_TRANSIENT;
