@@ -49,16 +49,28 @@ static void order_default(void)
 }
 
 typedef struct result {
+    cbm_status status;
     size_t n, passes, newton, krylov;
+    size_t fused, restored; /* Newton steps fused with the line search's first trial; restored */
     double residual;
     cbm_vec3 *omega, *moment, *pos;
 } result;
 
-static result solve_with(size_t n, double E, double leaf, bool chain, int threads, bool fuse,
+/* What the fast solver fuses (solve_newton.c): nothing; the evaluations with the factorisation
+ * (evaluate_as); those and a direct Newton step with the line search's first trial (tree_step,
+ * the default). */
+enum { FUSE_NONE, FUSE_EVAL, FUSE_ALL };
+
+/* The pass budget of solve_with's solves (cbm_solve_def.max_passes); with 0, the default, every
+ * solve must converge, otherwise its status is kept for the comparison. */
+static size_t solve_max_passes = 0;
+
+static result solve_with(size_t n, double E, double leaf, bool chain, int threads, int fuse,
                          bool sorted)
 {
     result r = {0};
-    cbm__mech_newton_fuse(fuse);
+    cbm__mech_newton_fuse(fuse != FUSE_NONE);
+    cbm__mech_newton_fuse_step(fuse == FUSE_ALL);
     cbm__mech_tree_min_segments(0);
     order_force(sorted);
     cbm_context *ctx = NULL;
@@ -69,12 +81,18 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
         d.warm_start = false;
         d.threads = threads;
         cbm_solve_stats st;
-        CHECK_OK(cbm_plant_solve(p, &d, &st));
+        d.max_passes = solve_max_passes;
+        r.status = cbm_plant_solve(p, &d, &st);
+        if (solve_max_passes == 0)
+            CHECK_OK(r.status);
         r.n = p->n;
         r.passes = st.passes;
         r.newton = st.newton_steps;
         r.krylov = st.krylov_iterations;
         r.residual = st.residual;
+        const size_t *count = cbm__context_counters_read(ctx);
+        r.fused = count[CBM__MECH_COUNT_STEP_FUSED];
+        r.restored = count[CBM__MECH_COUNT_STEP_RESTORED];
         r.omega = malloc(n * sizeof *r.omega);
         r.moment = malloc(n * sizeof *r.moment);
         r.pos = malloc(n * sizeof *r.pos);
@@ -87,6 +105,7 @@ static result solve_with(size_t n, double E, double leaf, bool chain, int thread
     cbm__mech_tree_min_segments(50000); /* the default */
     order_default();
     cbm__mech_newton_fuse(true);
+    cbm__mech_newton_fuse_step(true);
     return r;
 }
 
@@ -102,14 +121,14 @@ static void result_free(result *r)
  * plant's numbering and in the solve's depth-first order (solve_order.c), forced for this size. */
 static void check_same(size_t n, double E, double leaf, bool chain)
 {
-    result one = solve_with(n, E, leaf, chain, 1, true, false);
+    result one = solve_with(n, E, leaf, chain, 1, FUSE_ALL, false);
     CHECK(one.n == n && one.passes > 0);
     for (int v = 2; v <= 11; v++) {
         int t = v <= 5 ? v : v - 5; /* 2 .. 5, then 1 .. 5 in the depth-first order */
         bool sorted = v > 5;
         bool fuse = t <= 3;
         int threads = fuse ? t : t - 3;
-        result r = solve_with(n, E, leaf, chain, threads, fuse, sorted);
+        result r = solve_with(n, E, leaf, chain, threads, fuse ? FUSE_ALL : FUSE_NONE, sorted);
         CHECK(r.n == n);
         CHECK_EQ_INT(r.passes, one.passes);
         CHECK_EQ_INT(r.newton, one.newton);
@@ -126,6 +145,90 @@ static void check_same(size_t n, double E, double leaf, bool chain)
         result_free(&r);
     }
     result_free(&one);
+}
+
+/* Two solves the same to the bit: statistics, Omega, moments, positions. */
+static void check_same_result(const result *a, const result *b, const char *what)
+{
+    CHECK(a->n == b->n && a->n > 0);
+    CHECK_MSG(a->status == b->status, "%s: status %d and %d", what, (int)a->status, (int)b->status);
+    CHECK_EQ_INT(a->passes, b->passes);
+    CHECK_EQ_INT(a->newton, b->newton);
+    CHECK_EQ_INT(a->krylov, b->krylov);
+    CHECK_MSG(memcmp(&a->residual, &b->residual, sizeof a->residual) == 0, "%s: residual", what);
+    if (a->omega && b->omega && a->n == b->n) {
+        CHECK_MSG(!memcmp(a->omega, b->omega, a->n * sizeof *a->omega), "%s: Omega differs", what);
+        CHECK_MSG(!memcmp(a->moment, b->moment, a->n * sizeof *a->moment), "%s: moments differ",
+                  what);
+        CHECK_MSG(!memcmp(a->pos, b->pos, a->n * sizeof *a->pos), "%s: positions differ", what);
+    }
+}
+
+/* The fused Newton step (solve_newton.c, fused_step): the solve's forward sweep also takes the
+ * full step and sets the frames of the line search's first trial; where the trust region cuts
+ * the step, Omega is restored. From rest, a tree under heavy leaves is far from equilibrium (the
+ * first step is beyond the trust radius: restored, then the load path, whose steps are cut now
+ * and then), a light one is not: each solve with the fused step against the same solve without
+ * it (the evaluations fused in both), serial and over 2 threads in the depth-first order, and
+ * the counts say that both the kept and the restored steps were taken. */
+TEST(fused_step_same_bits_kept_and_restored)
+{
+    const struct {
+        double E, leaf;
+    } cases[] = {{1e10, 0.005}, {3e8, 0.02}, {3e8, 0.2}};
+    size_t fused = 0, restored = 0;
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++)
+        for (int threads = 1; threads <= 2; threads++) {
+            bool sorted = threads == 2;
+            result a =
+                solve_with(6000, cases[c].E, cases[c].leaf, false, threads, FUSE_EVAL, sorted);
+            result b =
+                solve_with(6000, cases[c].E, cases[c].leaf, false, threads, FUSE_ALL, sorted);
+            char what[96];
+            snprintf(what, sizeof what, "E %g, leaf %g, %d threads", cases[c].E, cases[c].leaf,
+                     threads);
+            printf("%s: %zu passes, %zu Newton steps, %zu fused, %zu restored\n", what, b.passes,
+                   b.newton, b.fused, b.restored);
+            CHECK_EQ_INT(a.fused, 0);
+            CHECK(b.fused > 0);
+            check_same_result(&a, &b, what);
+            fused += b.fused;
+            restored += b.restored;
+            result_free(&a);
+            result_free(&b);
+        }
+    CHECK(restored > 0);
+    CHECK(fused > restored);
+}
+
+/* The same with every pass budget up to convergence, a light tree (Newton from rest, 6 passes)
+ * and a heavy one (the load path, about 20): the budget runs out before, at and after fused
+ * steps, kept or restored, in the newton stage (whose failed state is left as it is) and on the
+ * load path (made consistent after), and the failed solves leave the same state, statistics
+ * and status with the fused step as without. */
+TEST(fused_step_same_bits_when_the_budget_runs_out)
+{
+    const struct {
+        double E, leaf;
+        size_t last;
+    } cases[] = {{1e10, 0.005, 8}, {3e8, 0.2, 22}};
+    size_t failed = 0, solves = 0;
+    for (size_t c = 0; c < 2; c++)
+        for (size_t budget = 2; budget <= cases[c].last; budget++) {
+            solve_max_passes = budget;
+            result a = solve_with(2000, cases[c].E, cases[c].leaf, false, 1, FUSE_EVAL, false);
+            result b = solve_with(2000, cases[c].E, cases[c].leaf, false, 1, FUSE_ALL, false);
+            solve_max_passes = 0;
+            char what[64];
+            snprintf(what, sizeof what, "E %g, budget %zu", cases[c].E, budget);
+            check_same_result(&a, &b, what);
+            failed += b.status != CBM_OK;
+            solves++;
+            result_free(&a);
+            result_free(&b);
+        }
+    printf("%zu of %zu budgets ran out\n", failed, solves);
+    CHECK(failed >= 8 && failed < solves);
 }
 
 TEST(tree_solve_same_bits_any_thread_count)

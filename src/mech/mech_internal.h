@@ -72,6 +72,10 @@ typedef struct cbm__mech_work {
     bool fwad_ok; /* fwad holds W a D^-1 of the factorisation (the sweeps store it with ground
                    * contact only; cbm__mech_tree_apply computes it when it needs it) */
     size_t fsing, fnonpd;
+    bool tip_moment; /* some segment has a tip moment (a component not +-0), cbm__mech_prepare */
+    /* Omega was set to the rest rates (rj) for this solve, none NaN: Omega == rj everywhere
+     * (cbm_plant_solve; the fast solver reads and clears it) */
+    bool at_rest;
 } cbm__mech_work;
 
 /* The depth-first order of the solve (solve_order.c): a plant of many segments solved over
@@ -390,6 +394,21 @@ double cbm__mech_backward_factor(cbm_plant *p, cbm_vec3 *res, double *mmax, doub
 /// what cbm__mech_tree_solve(p, -res, work.tmp, 0, nonpd) would give; returns the singular
 /// pivots and *nonpd as that. False (nothing done) when the workspace holds no such half.
 bool cbm__mech_tree_solve_fused(cbm_plant *p, size_t *singular, size_t *nonpd);
+/// After a fused evaluation (work.fhalf) whose factorisation is exact and stable (no singular
+/// pivot, none not positive definite; no ground): the Newton step's solve, its step and the
+/// line search's first trial in one forward sweep. At each segment, parents first: the forward
+/// half of J x = -res (the bits of cbm__mech_tree_solve_fused) into work.step, the old Omega
+/// into work.tmp, Omega += 1.0 step, the frame and node (the bits of cbm__mech_forward_eval).
+/// *turn: the largest frame rotation of the full step, rad (the maximum of work.dth, as the
+/// trust region reads it). The caller restores Omega from work.tmp where the step is not taken
+/// at full length; the frames are then those of the trial until the next evaluation. Clears
+/// work.fready and work.fhalf. False (nothing done) where the conditions do not hold.
+bool cbm__mech_tree_step_fused(cbm_plant *p, double *turn);
+/* The context's counters (cbm__context_counters) after the solve stages' counts: the Newton
+ * steps taken by cbm__mech_tree_step_fused, and those of them restored (the step not taken at
+ * full length). */
+#define CBM__MECH_COUNT_STEP_FUSED    CBM_SOLVE_STAGE_COUNT
+#define CBM__MECH_COUNT_STEP_RESTORED (CBM_SOLVE_STAGE_COUNT + 1)
 /// Clears work.fready and work.fhalf (the state or the workspace changed).
 static inline void cbm__mech_fused_clear(cbm_plant *p)
 {
@@ -533,6 +552,9 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
 /// Whether the fast solver's evaluations fuse the tree factorisation (default on; the results
 /// are the same to the bit either way: tests switch it off to compare).
 void cbm__mech_newton_fuse(bool on);
+/// Whether a direct Newton step fuses its solve with the line search's first trial
+/// (cbm__mech_tree_step_fused; default on, the same bits either way: tests switch it off).
+void cbm__mech_newton_fuse_step(bool on);
 
 /* ---- solve_approx.c ---- */
 

@@ -74,6 +74,7 @@
  */
 #include "mech/mech_internal.h"
 #include "mech/fem_internal.h"
+#include "mech/sweep_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -204,9 +205,11 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 
 /* ---- prepare ---- */
 
-/* The joint arrays of segments [lo, hi). */
-static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
+/* The joint arrays of segments [lo, hi); returns whether one of them has a tip moment (read
+ * here anyway: the fast solver's test for conservative loads needs no loop of its own). */
+static bool prepare_range(cbm_plant *p, size_t lo, size_t hi)
 {
+    bool tip_moment = false;
     cbm__mech_work *w = &p->work;
     double s = p->load_scale;
     cbm_vec3 g = v3_scale(p->gravity, s);
@@ -219,7 +222,9 @@ static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
                         ? p->pmass[i]
                         : p->pmass0[i] + p->mass_path * (p->pmass[i] - p->pmass0[i]);
         w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(p->tipf[i], s));
-        w->mtip[i] = v3_scale(p->tipm[i], s);
+        const cbm_vec3 tm = p->tipm[i];
+        w->mtip[i] = v3_scale(tm, s);
+        tip_moment = tip_moment || !(tm.x == 0.0 && tm.y == 0.0 && tm.z == 0.0);
         if (!stag) {
             w->dual[i] = l;
             w->cj[i] = p->rig[i];
@@ -244,18 +249,20 @@ static void prepare_range(cbm_plant *p, size_t lo, size_t hi)
         }
         p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
     }
+    return tip_moment;
 }
 
 typedef struct prep_job {
     cbm_plant *p;
-    size_t lo, hi; /* the joint arrays of these segments */
-    uint32_t me;   /* then the carried masses of this thread's subtrees */
+    size_t lo, hi;   /* the joint arrays of these segments */
+    uint32_t me;     /* then the carried masses of this thread's subtrees */
+    bool tip_moment; /* one of [lo, hi) has a tip moment */
 } prep_job;
 
 static void prepare_job(void *arg)
 {
     prep_job *j = arg;
-    prepare_range(j->p, j->lo, j->hi);
+    j->tip_moment = prepare_range(j->p, j->lo, j->hi);
 }
 
 static void cmass_job(void *arg)
@@ -294,7 +301,7 @@ void cbm__mech_prepare(cbm_plant *p)
     kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
-        prepare_range(p, 0, n);
+        p->work.tip_moment = prepare_range(p, 0, n);
         /* carried mass (independent of the shape) */
         for (size_t i = n; i-- > 0;)
             if (p->parent[i] >= 0)
@@ -305,8 +312,11 @@ void cbm__mech_prepare(cbm_plant *p)
         prep_job jobs[8];
         for (int k = 0; k < t; k++)
             jobs[k] = (prep_job){p, n * (size_t)k / (size_t)t, n * (size_t)(k + 1) / (size_t)t,
-                                 (uint32_t)k + 1};
+                                 (uint32_t)k + 1, false};
         cbm__mech_run_threads(t, prepare_job, jobs, sizeof *jobs);
+        p->work.tip_moment = false;
+        for (int k = 0; k < t; k++)
+            p->work.tip_moment = p->work.tip_moment || jobs[k].tip_moment;
         cbm__mech_run_threads(t, cmass_job, jobs, sizeof *jobs);
         const uint32_t *part = p->work.tpart;
         for (size_t i = n; i-- > 0;) {
@@ -360,35 +370,6 @@ double cbm__mech_contact(const cbm_plant *p, size_t i, cbm_vec3 h, double *stiff
  * depend on the order, and the line search's merit is summed from per-joint terms (work.zz) in
  * the serial order afterwards: the results are the same to the bit for any number of threads. */
 
-/* Forward sweep at segment i: its frame and proximal node from its parent's; with clear, its
- * force and moment zeroed (an evaluation's backward sweep sets them without: work.kin). */
-static inline void forward_seg(cbm_plant *p, size_t i, bool clear)
-{
-    const int64_t *restrict par = p->parent;
-    const double *restrict len = p->len;
-    cbm_quat *restrict q = p->q;
-    cbm_vec3 *restrict pos = p->pos;
-    int64_t pa = par[i];
-    cbm_quat qa;
-    cbm_vec3 pp;
-    if (pa < 0) {
-        qa = p->base_q;
-        pp = p->base_pos;
-    } else {
-        qa = q[pa];
-        pp = v3_madd(pos[pa], q_h(qa), len[pa]);
-    }
-    cbm_quat b = p->branch[i];
-    if (b.w != 1.0)
-        qa = q_mul(qa, b);
-    q[i] = cbm__mech_qnorm(q_mul(qa, cbm__mech_qexp(v3_scale(p->omega[i], p->work.dual[i]))));
-    pos[i] = pp;
-    if (clear) {
-        p->force[i] = v3(0, 0, 0);
-        p->moment[i] = v3(0, 0, 0);
-    }
-}
-
 typedef struct pass_job {
     cbm_plant *p;
     uint32_t me; /* the thread's number in the split (1 ..) */
@@ -414,7 +395,7 @@ static void forward_job(void *arg)
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, p->len, 1);
         if (cbm__part_thread(part[i]) == j->me)
-            forward_seg(p, i, j->clear);
+            cbm__mech_forward_seg(p, i, j->clear);
     }
 }
 
@@ -431,14 +412,14 @@ static void forward_impl(cbm_plant *p, bool clear)
             CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
             /* the parent's length too: half of this sweep's time waited on it (perf) */
             CBM__PREFETCH_PARENT_FWD(par, i, n, p->len, 1);
-            forward_seg(p, i, clear);
+            cbm__mech_forward_seg(p, i, clear);
         }
         return;
     }
     const uint32_t *part = p->work.tpart;
     for (size_t i = 0; i < n; i++)
         if (cbm__part_thread(part[i]) == 0)
-            forward_seg(p, i, clear);
+            cbm__mech_forward_seg(p, i, clear);
     pass_job jobs[8];
     for (int k = 0; k < t; k++)
         jobs[k] = (pass_job){.p = p, .me = (uint32_t)k + 1, .clear = clear};
@@ -938,9 +919,18 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     CBM_TRY(cbm__mech_order_enter(p));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
-    if (!d.warm_start)
-        for (size_t i = 0; i < p->n; i++)
-            p->omega[i] = p->work.rj[i];
+    /* a cold start: Omega is the rest state, bit for bit where no rest rate is NaN (the fast
+     * solver's test for a warm start, Omega != rest somewhere, then needs no loop of its own) */
+    p->work.at_rest = false;
+    if (!d.warm_start) {
+        bool nan = false;
+        for (size_t i = 0; i < p->n; i++) {
+            cbm_vec3 r = p->work.rj[i];
+            p->omega[i] = r;
+            nan = nan || isnan(r.x) || isnan(r.y) || isnan(r.z);
+        }
+        p->work.at_rest = !nan;
+    }
     cbm_status s = d.solver == CBM_MECH_RELAX ? cbm__mech_solve_relax(p, &d, maxp, &st)
                                               : cbm__mech_solve_newton(p, &d, maxp, &st);
     /* an evaluation found more touching organ pairs than the workspace held (contact.c): grow

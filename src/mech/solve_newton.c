@@ -98,6 +98,24 @@
  * comes back to after a push along the soft mode is reported stable; if no equilibrium is found
  * from the pushed state, the one found before is kept (with its unstable joints reported).
  * All vectors are in the plant's workspace, allocated before the iteration starts.
+ *
+ * THE SWEEPS OF A NEWTON STEP (tree factorisation; no ground, no organ pairs). An evaluation is
+ * a forward sweep (frames, nodes, base to tips) and a backward sweep that also factorises the
+ * Newton matrix and runs the backward half of the step's solve J x = -R (evaluate_as,
+ * cbm__mech_backward_factor). Where that factorisation is exact and stable (no singular pivot,
+ * none not positive definite) the step is known to be the direct, unshifted Newton step before
+ * it is solved, so one forward sweep (fused_step, cbm__mech_tree_step_fused) finishes the solve
+ * at each segment, takes the step (work.step), moves Omega by the full step and sets the frame
+ * and node there: the line search's first trial (lam = 1), whose evaluation is then its
+ * backward sweep alone. The trust region's largest frame turn is the sweep's maximum; where it
+ * cuts the step (lam0 < 1, or the first step beyond it: LARGE), Omega is restored from the
+ * copy the sweep kept (work.tmp) and the path is the one of the step apart. A converged solve
+ * of the 10^6 tree (evaluate, step, evaluate, the stability stage's factorisation taken from
+ * the last evaluation) is so a prepare and four sweeps, where a step apart takes five and three
+ * loops over the vectors (the copy of the step, its largest turn, Omega += step). The passes are
+ * counted as before: the step's solve and the trial's evaluation are one pass each. Where the
+ * step is solved apart (a shift, FGMRES, the transient's steps, ground, organ pairs), the
+ * solve's result becomes work.step by the two vectors swapping places, not by a copy.
  */
 #include "mech/mech_internal.h"
 #include "core/vecmath.h"
@@ -141,12 +159,19 @@ typedef struct newton_krylov {
     bool want_eig;         /* compute the lowest eigenvalue of a stable equilibrium too */
 } newton_krylov;
 
-/* the fused evaluations (evaluate_as); tests switch them off to compare the bits */
+/* the fused evaluations (evaluate_as) and the fused Newton step (tree_step); tests switch them
+ * off to compare the bits */
 static bool fuse_on = true;
+static bool step_fuse_on = true;
 
 void cbm__mech_newton_fuse(bool on)
 {
     fuse_on = on;
+}
+
+void cbm__mech_newton_fuse_step(bool on)
+{
+    step_fuse_on = on;
 }
 
 /* a . b over the plant's 3 n components, summed in the plant's order (solve_order.c) */
@@ -168,10 +193,11 @@ static double dot(const cbm_plant *p, const double *a, const double *b)
  * follows (residual_solve, or the factorisation of stage_stability) to finish in its forward
  * half: a pass less, the same bits. Where no such solve follows (a line search's rejected
  * trial, the last evaluation of a continuation level) that work is lost. */
-static bool evaluate_as(newton_krylov *k, bool factor)
+static bool evaluate_sweeps(newton_krylov *k, bool factor, bool forward)
 {
     cbm_plant *p = k->p;
-    cbm__mech_forward_eval(p);
+    if (forward)
+        cbm__mech_forward_eval(p);
     double ss = 0.0;
     double r = factor && k->fuse ? cbm__mech_backward_factor(p, p->work.res, &k->mmax, &ss)
                                  : cbm__mech_backward(p, 0.0, p->work.res, &k->mmax, &ss);
@@ -182,6 +208,11 @@ static bool evaluate_as(newton_krylov *k, bool factor)
     k->norm = sqrt(ss);
     k->rel = cbm__mech_relres(r, k->mmax, &k->st->char_moment);
     return true;
+}
+
+static bool evaluate_as(newton_krylov *k, bool factor)
+{
+    return evaluate_sweeps(k, factor, true);
 }
 
 static bool evaluate(newton_krylov *k)
@@ -382,19 +413,23 @@ static double energy_slope(const newton_krylov *k, const double *d)
 
 /* Backtracking line search (Armijo, c = 1e-4, halving up to 12 times) along work.step from
  * length lam: NK_DONE with the accepted length in *out and the state evaluated there, or
- * NK_STALL with the unmoved state evaluated again. */
-static nk_result line_search(newton_krylov *k, double lam, double *out)
+ * NK_STALL with the unmoved state evaluated again. With moved (lam = 1), the fused Newton step
+ * (tree_step) has set the first trial's Omega and frames already: its evaluation is the
+ * backward sweep alone. */
+static nk_result line_search(newton_krylov *k, double lam, double *out, bool moved)
 {
     cbm_plant *p = k->p;
     double *om = (double *)p->omega;
     const double *step = (const double *)p->work.step;
     double f0 = k->norm;
     for (int ls = 0; ls < 12; ls++) {
-        for (size_t q = 0; q < k->n3; q++)
-            om[q] += lam * step[q];
+        bool first_moved = moved && ls == 0;
+        if (!first_moved)
+            for (size_t q = 0; q < k->n3; q++)
+                om[q] += lam * step[q];
         if (k->st->passes + 1 >= k->max_passes)
             return NK_BUDGET;
-        bool fin = evaluate_as(k, true);
+        bool fin = evaluate_sweeps(k, true, !first_moved);
         if (fin && k->norm <= (1.0 - 1e-4 * lam) * f0) {
             *out = lam;
             return NK_DONE;
@@ -419,18 +454,68 @@ static double trust_length(newton_krylov *k, int it)
     return tmax > k->max_turn ? k->max_turn / tmax : 1.0;
 }
 
+/* The fused Newton step (cbm__mech_tree_step_fused): where the fused evaluation's
+ * factorisation is exact and stable (no singular pivot, none not positive definite, no organ
+ * pairs), the step is known to be direct and unshifted before it is solved, so its forward
+ * sweep also moves Omega by the full step and sets the frames there, the line search's first
+ * trial (lam = 1). Only the trust region is known after the sweep: where it cuts the step
+ * (lam0 < 1, or NK_LARGE), Omega is restored from work.tmp, the bits before the sweep, and the
+ * path is that of the step apart (the frames of the trial are not read: every path evaluates
+ * first). Returns false where the conditions do not hold (the caller solves apart). */
+static bool fused_step(newton_krylov *k, int it, bool abort_large, double *lam0, bool *moved,
+                       nk_result *r)
+{
+    cbm_plant *p = k->p;
+    const cbm__mech_work *w = &p->work;
+    /* the line search's first trial must run (its budget check, after this solve's pass) */
+    if (!step_fuse_on || !k->fuse || !w->fready || !w->fhalf || w->fsing != 0 || w->fnonpd != 0 ||
+        cbm__mech_pairs_active(p) || k->st->passes + 2 >= k->max_passes)
+        return false;
+    double turn = 0.0;
+    if (!cbm__mech_tree_step_fused(p, &turn))
+        return false;
+    k->st->passes++;
+    size_t *count = cbm__context_counters(p->ctx);
+    count[CBM__MECH_COUNT_STEP_FUSED]++;
+    if (it == 0)
+        k->first_turn = turn;
+    *lam0 = turn > k->max_turn ? k->max_turn / turn : 1.0;
+    *moved = !(*lam0 < 1.0);
+    if (!*moved) {
+        memcpy(p->omega, w->tmp, p->n * sizeof *p->omega);
+        count[CBM__MECH_COUNT_STEP_RESTORED]++;
+    }
+    *r = it == 0 && abort_large && *lam0 < 1.0 ? NK_LARGE : NK_CONTINUE;
+    return true;
+}
+
+/* work.step = work.tmp, the solve's result: the two vectors swap places (no reader takes tmp
+ * for the step's copy after this). */
+static void take_tmp_as_step(cbm__mech_work *w)
+{
+    cbm_vec3 *t = w->step;
+    w->step = w->tmp;
+    w->tmp = t;
+}
+
 /* The step of one Newton iteration by the tree factorisation (work.step), with the
  * Levenberg-Marquardt shift where the configuration is unstable. *direct: the factorisation was
  * exact (no singular pivot, no touching organ pairs), so the step is the Newton step and needs
- * no FGMRES; *shifted: it is the step of J + mu S; *lam0: the trust region's length.
+ * no FGMRES; *shifted: it is the step of J + mu S; *lam0: the trust region's length; *moved:
+ * the fused step (fused_step) has set the line search's first trial (lam0 = 1).
  * NK_CONTINUE, or NK_BUDGET, or NK_LARGE (first step beyond the trust radius, abort_large). */
 static nk_result tree_step(newton_krylov *k, int it, bool abort_large, bool *direct, bool *shifted,
-                           double *lam0)
+                           double *lam0, bool *moved)
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
-    size_t n3 = k->n3;
-    double *step = (double *)w->step;
+    *moved = false;
+    nk_result fr = NK_CONTINUE;
+    if (fused_step(k, it, abort_large, lam0, moved, &fr)) {
+        *direct = true;
+        *shifted = false;
+        return fr;
+    }
     /* factor and solve J step = -res in one pass; trusted when no pivot was singular (the
      * factorisation is then exact and GMRES would stop after one iteration with this very
      * step); otherwise the factorisation preconditions FGMRES */
@@ -462,7 +547,7 @@ static nk_result tree_step(newton_krylov *k, int it, bool abort_large, bool *dir
         sing = residual_solve(k, mu, &nonpd);
         k->st->passes++;
     }
-    memcpy(step, w->tmp, n3 * sizeof *step);
+    take_tmp_as_step(w);
     /* touching organ pairs couple two paths, which the factorisation does not hold: it then
      * preconditions FGMRES (contact.c) */
     *direct = sing == 0 && !cbm__mech_pairs_active(p);
@@ -499,21 +584,19 @@ static nk_result plain_step_retry(newton_krylov *k, double eta, int m, double *l
 {
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
-    size_t n3 = k->n3;
-    double *step = (double *)w->step;
     if (k->st->passes + 3 >= k->max_passes)
         return NK_BUDGET;
     size_t nonpd = 0;
     size_t sing = residual_solve(k, 0.0, &nonpd);
     k->st->passes++;
-    memcpy(step, w->tmp, n3 * sizeof *step);
+    take_tmp_as_step(w);
     if (sing == 0 && !cbm__mech_pairs_active(p)) {
         double tmax = largest_turn(p);
         *lam0 = tmax > k->max_turn ? k->max_turn / tmax : 1.0;
     } else if (!gmres(k, eta, m))
         return NK_BUDGET;
     *lam = *lam0;
-    return line_search(k, *lam0, lam);
+    return line_search(k, *lam0, lam, false);
 }
 
 /* Newton iterations at the current load level until rel < tol: the step (tree_step, or FGMRES),
@@ -521,7 +604,6 @@ static nk_result plain_step_retry(newton_krylov *k, double eta, int m, double *l
 static nk_result newton_level(newton_krylov *k, double tol, int m, bool abort_large)
 {
     cbm_plant *p = k->p;
-    const double *step = (const double *)p->work.step;
     if (!evaluate_as(k, true))
         return NK_NONFINITE;
     double eta = 0.1, prev = k->norm;
@@ -531,11 +613,11 @@ static nk_result newton_level(newton_krylov *k, double tol, int m, bool abort_la
             return NK_DONE;
         if (k->st->passes + 3 >= k->max_passes)
             return NK_BUDGET;
-        bool direct = false, shifted = false;
+        bool direct = false, shifted = false, moved = false;
         double lam0 = 1.0;
         nk_result r = NK_CONTINUE;
         if (k->tree)
-            r = tree_step(k, it, abort_large, &direct, &shifted, &lam0);
+            r = tree_step(k, it, abort_large, &direct, &shifted, &lam0, &moved);
         if (r != NK_CONTINUE)
             return r;
         if (!direct && !gmres(k, eta, m))
@@ -546,8 +628,10 @@ static nk_result newton_level(newton_krylov *k, double tol, int m, bool abort_la
             return r;
         k->st->newton_steps++;
         double lam = lam0;
-        nk_result ls = line_search(k, lam0, &lam);
-        if (ls == NK_STALL && shifted && k->plain && !shifted_descends(k, step, k->mu))
+        nk_result ls = line_search(k, lam0, &lam, moved);
+        /* (work.step is read where it is now: the solves swap it with work.tmp) */
+        if (ls == NK_STALL && shifted && k->plain &&
+            !shifted_descends(k, (const double *)p->work.step, k->mu))
             ls = plain_step_retry(k, eta, m, &lam0, &lam);
         if (ls != NK_DONE)
             return ls;
@@ -604,7 +688,6 @@ static nk_result transient(newton_krylov *k, double tol)
     cbm_plant *p = k->p;
     cbm__mech_work *w = &p->work;
     size_t n3 = k->n3;
-    double *step = (double *)w->step;
     double *om = (double *)p->omega;
     if (!evaluate(k))
         return NK_NONFINITE;
@@ -629,7 +712,8 @@ static nk_result transient(newton_krylov *k, double tol)
                 return NK_BUDGET;
         }
         sigma = s;
-        memcpy(step, w->tmp, n3 * sizeof *step);
+        take_tmp_as_step(w);
+        const double *step = (const double *)w->step;
         /* the forward sweep of the solve left the frame rotations of the full step in dth */
         double turn = largest_turn(p);
         double lam = turn > PTC_TURN ? PTC_TURN / turn : 1.0;
@@ -1061,9 +1145,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.st = st;
     k.tree = def->preconditioner == CBM_MECH_PRECOND_TREE;
     k.max_turn = MAX_TURN;
-    k.conservative = true;
-    for (size_t i = 0; i < p->n && k.conservative; i++)
-        k.conservative = p->tipm[i].x == 0.0 && p->tipm[i].y == 0.0 && p->tipm[i].z == 0.0;
+    k.conservative = !p->work.tip_moment; /* cbm_plant_solve prepared the workspace */
     k.m = def->krylov_dim;
     k.tol = def->tolerance;
     k.push = def->push_unstable;
@@ -1077,9 +1159,10 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     /* a start away from the rest state is a warm start (the previous equilibrium under
      * changed loads) */
     k.plain = false;
-    for (size_t i = 0; i < p->n && !k.plain; i++)
+    for (size_t i = 0; i < p->n && !k.plain && !w->at_rest; i++)
         k.plain = p->omega[i].x != w->rj[i].x || p->omega[i].y != w->rj[i].y ||
                   p->omega[i].z != w->rj[i].z;
+    w->at_rest = false; /* this solve's: a solve again (organ pairs) starts where it ended */
     /* the transient path from a warm start (the factorisation solves J + sigma S; with ground
      * contact it lacks the contact stiffness) */
     k.transient_path = k.plain && k.tree && !p->ground && def->warm_path == CBM_MECH_WARM_TRANSIENT;

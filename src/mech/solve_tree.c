@@ -48,6 +48,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mech/mech_internal.h"
+#include "mech/sweep_internal.h"
 #include "core/vecmath.h"
 
 #include <math.h>
@@ -134,7 +135,8 @@ static inline m3 transpose(const double *a)
 typedef cbm__mech_fsweep sweep;
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
-static void forward_all(cbm_plant *p, cbm_vec3 *out, int t);
+static void forward_step(cbm_plant *p, double *turn2);
+static void forward_all(cbm_plant *p, cbm_vec3 *out, int t, double *turn2);
 static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
                        bool defer);
 
@@ -478,9 +480,12 @@ typedef struct tree_job {
     sweep sw;
     int thread;
     bool forward;
+    bool step;    /* forward: the Newton step's fused sweep (forward_step_one) */
+    double turn2; /* with step: the largest |dth|^2 of the thread's segments */
 } tree_job;
 
 static void forward_one(cbm_plant *p, size_t i, cbm_vec3 *out, bool ground);
+static void forward_step_one(cbm_plant *p, size_t i, double *turn2);
 
 static void tree_job_run(void *arg)
 {
@@ -490,6 +495,18 @@ static void tree_job_run(void *arg)
     const uint32_t me = (uint32_t)j->thread;
     const int64_t *par = p->parent;
     const double *dth = (const double *)p->work.dth;
+    if (j->forward && j->step) {
+        const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+        for (size_t i = 0; i < p->n; i++) {
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, q, 4);
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, pos, 3);
+            CBM__PREFETCH_PARENT_FWD(par, i, p->n, p->len, 1);
+            if ((part[i] >> PART_SHIFT & 7u) == me)
+                forward_step_one(p, i, &j->turn2);
+        }
+        return;
+    }
     if (j->forward) {
         for (size_t i = 0; i < p->n; i++) {
             CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
@@ -510,9 +527,10 @@ static void tree_job_run(void *arg)
     }
 }
 
-/* Runs the sweep's share of threads 1..t and adds up their counts. */
+/* Runs the sweep's share of threads 1..t and adds up their counts; with turn2 (a forward
+ * sweep), the Newton step's fused sweep, *turn2 raised to the threads' largest |dth|^2. */
 static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular, size_t *nonpd,
-                          size_t *negative)
+                          size_t *negative, double *turn2)
 {
     tree_job jobs[MAX_THREADS];
     memset(jobs, 0, sizeof jobs);
@@ -521,12 +539,15 @@ static void tree_parallel(const sweep *sw, int t, bool forward, size_t *singular
         jobs[k].sw.singular = jobs[k].sw.nonpd = jobs[k].sw.negative = 0;
         jobs[k].thread = k + 1;
         jobs[k].forward = forward;
+        jobs[k].step = turn2 != NULL;
     }
     cbm__mech_run_threads(t, tree_job_run, jobs, sizeof *jobs);
     for (int k = 0; k < t; k++) {
         *singular += jobs[k].sw.singular;
         *nonpd += jobs[k].sw.nonpd;
         *negative += jobs[k].sw.negative;
+        if (turn2 && jobs[k].turn2 > *turn2) /* a maximum: the same whatever the order */
+            *turn2 = jobs[k].turn2;
     }
 }
 
@@ -550,7 +571,7 @@ static void sweeps(sweep *sw)
             cbm__mech_factor_one(sw, i, false);
         }
     } else {
-        tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative);
+        tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative, NULL);
         const uint32_t *part = w->tpart;
         const bool solve = sw->b && sw->out;
         for (size_t i = n; i-- > 0;) {
@@ -568,23 +589,32 @@ static void sweeps(sweep *sw)
         }
     }
     if (sw->b && sw->out)
-        forward_all(p, sw->out, t);
+        forward_all(p, sw->out, t, NULL);
 }
 
-/* The forward half of the solve into out, serial or over t threads. */
-static void forward_all(cbm_plant *p, cbm_vec3 *out, int t)
+/* The forward half of the solve into out, serial or over t threads; with turn2, the Newton
+ * step's fused sweep instead (forward_step_one: out is work.tmp), the largest |dth|^2 into
+ * *turn2. */
+static void forward_all(cbm_plant *p, cbm_vec3 *out, int t, double *turn2)
 {
     if (t <= 1) {
-        forward_solve(p, out);
+        if (turn2)
+            forward_step(p, turn2);
+        else
+            forward_solve(p, out);
         return;
     }
     const uint32_t *part = p->work.tpart;
     for (size_t i = 0; i < p->n; i++)
-        if ((part[i] >> PART_SHIFT & 7u) == 0)
-            forward_one(p, i, out, false);
+        if ((part[i] >> PART_SHIFT & 7u) == 0) {
+            if (turn2)
+                forward_step_one(p, i, turn2);
+            else
+                forward_one(p, i, out, false);
+        }
     sweep sw = {.p = p, .out = out};
     size_t none = 0;
-    tree_parallel(&sw, t, true, &none, &none, &none);
+    tree_parallel(&sw, t, true, &none, &none, &none, turn2);
 }
 
 void cbm__mech_factor_clear(cbm_plant *p, bool solving)
@@ -644,10 +674,22 @@ bool cbm__mech_tree_solve_fused(cbm_plant *p, size_t *singular, size_t *nonpd)
     if (!w->fready || !w->fhalf)
         return false;
     w->fhalf = false;
-    forward_all(p, w->tmp, cbm__mech_tree_split(p));
+    forward_all(p, w->tmp, cbm__mech_tree_split(p), NULL);
     *singular = w->fsing;
     if (nonpd)
         *nonpd = w->fnonpd;
+    return true;
+}
+
+bool cbm__mech_tree_step_fused(cbm_plant *p, double *turn)
+{
+    cbm__mech_work *w = &p->work;
+    if (!w->fready || !w->fhalf || w->fsing != 0 || w->fnonpd != 0 || p->ground)
+        return false;
+    double turn2 = 0.0;
+    forward_all(p, w->tmp, cbm__mech_tree_split(p), &turn2);
+    cbm__mech_fused_clear(p); /* the frames moved: the factorisation is of the state before */
+    *turn = sqrt(turn2);
     return true;
 }
 
@@ -770,5 +812,46 @@ static void forward_solve(cbm_plant *p, cbm_vec3 *out)
     for (size_t i = 0; i < p->n; i++) {
         CBM__PREFETCH_PARENT_FWD(par, i, p->n, dth, 3);
         forward_one(p, i, out, ground);
+    }
+}
+
+/* The Newton step's fused sweep at segment i (its parent done; no ground: the fused
+ * evaluation has none): the forward half of the solve (as forward_one: v_i from u_i in
+ * work.tmp, dth_i), the step v_i into work.step, the old Omega_i into work.tmp (for a
+ * restore), Omega_i + 1.0 v_i (the line search's first trial, its very arithmetic) and the
+ * forward sweep of the evaluation there (cbm__mech_forward_seg, forces and moments left for
+ * the backward sweep). *turn2: the largest |dth|^2 so far (largest_turn's maximum). */
+static void forward_step_one(cbm_plant *p, size_t i, double *turn2)
+{
+    cbm__mech_work *w = &p->work;
+    cbm_vec3 *dth = w->dth, *u = w->tmp, *step = w->step;
+    int64_t pa = p->parent[i];
+    cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
+    cbm_vec3 rhs = v3_add(u[i], mvec(w->fq + 9 * i, tp));
+    cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
+    step[i] = v;
+    cbm_vec3 d = v3_add(tp, mvec(w->fa + 9 * i, v));
+    dth[i] = d;
+    double t = v3_norm2(d);
+    if (t > *turn2)
+        *turn2 = t;
+    cbm_vec3 o = p->omega[i];
+    u[i] = o;
+    p->omega[i] = v3_add(o, v3_scale(v, 1.0));
+    cbm__mech_forward_seg(p, i, false);
+}
+
+static void forward_step(cbm_plant *p, double *turn2)
+{
+    const int64_t *par = p->parent;
+    const size_t n = p->n;
+    const double *dth = (const double *)p->work.dth;
+    const double *q = (const double *)p->q, *pos = (const double *)p->pos;
+    for (size_t i = 0; i < n; i++) {
+        CBM__PREFETCH_PARENT_FWD(par, i, n, dth, 3);
+        CBM__PREFETCH_PARENT_FWD(par, i, n, q, 4);
+        CBM__PREFETCH_PARENT_FWD(par, i, n, pos, 3);
+        CBM__PREFETCH_PARENT_FWD(par, i, n, p->len, 1);
+        forward_step_one(p, i, turn2);
     }
 }
