@@ -504,10 +504,10 @@ TEST(order_follows_edits_same_bits)
 
 /* The rigidities, rest rates, masses and tip loads are not gathered into the depth-first order:
  * the prepare reads them from the plant's own arrays through the order's map (solve_order.c).
- * Edited between warm solves on a plant whose topology stays (tip forces, tip moments and point
- * masses on every fifth segment, then a ring of growth on every segment: its rigidity, mass per
- * length and, by the shape memory, rest rate), the forest solved in the depth-first order stays
- * the same to the bit as the one solved in its own numbering, and each edit moves the
+ * Edited between warm solves on a plant whose topology stays (tip forces and moments on every
+ * fifth segment, then point masses there, then a ring of growth on every segment: its rigidity,
+ * mass per length and, by the shape memory, rest rate), the forest solved in the depth-first order
+ * stays the same to the bit as the one solved in its own numbering, and each edit moves the
  * equilibrium (a solve that read the loads or sections of before would differ). */
 TEST(order_reads_edited_sections_and_loads)
 {
@@ -520,14 +520,15 @@ TEST(order_reads_edited_sections_and_loads)
     cbm__mech_tree_min_segments(0);
     cbm_vec3 *before = p[0] ? malloc(p[0]->n * sizeof *before) : NULL;
     CHECK(before != NULL);
-    for (int step = 0; step < 3 && p[0] && p[1] && before; step++) {
+    for (int step = 0; step < 4 && p[0] && p[1] && before; step++) {
         for (int k = 0; k < 2; k++) {
-            if (step == 1)
-                for (size_t i = 3; i < p[k]->n; i += 5)
-                    CHECK_OK(cbm_plant_set_load(p[k], i, 0.001 * (double)(i % 7),
-                                                (cbm_vec3){0.002 * (double)(i % 3), 0, 0.001},
-                                                (cbm_vec3){0, 0, 1e-5 * (double)(i % 4)}));
-            if (step == 2)
+            /* tip loads alone, then point masses (the forest's own, and more), then rings */
+            for (size_t i = 3; i < p[k]->n && (step == 1 || step == 2); i += 5)
+                CHECK_OK(cbm_plant_set_load(p[k], i,
+                                            step == 1 ? p[k]->pmass[i] : 0.001 * (double)(i % 7),
+                                            (cbm_vec3){0.002 * (double)(i % 3), 0, 0.001},
+                                            (cbm_vec3){0, 0, 1e-5 * (double)(i % 4)}));
+            if (step == 3)
                 CHECK_OK(cbm_plant_grow_rings(p[k], &gd, NULL));
             order_force(k == 0);
             CHECK_OK(cbm_plant_solve(p[k], &sd, NULL));
@@ -545,6 +546,37 @@ TEST(order_reads_edited_sections_and_loads)
     free(before);
     cbm_plant_destroy(p[0]);
     cbm_plant_destroy(p[1]);
+    cbm_context_destroy(ctx);
+}
+
+/* The prepare reads no tip loads on a plant that never had one (prepare_range, p->tip_loads):
+ * every writer of a tip force or moment notes it, -0.0 too (its sign may survive a sum); a zero
+ * load leaves it unset. */
+TEST(tip_loads_noted)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    for (int k = 0; k < 3 && ctx; k++) {
+        cbm_plant *p = NULL;
+        CHECK_OK(cbm_plant_create(ctx, NULL, &p));
+        if (!p)
+            continue;
+        cbm_segment_def s = cbm_segment_def_default();
+        CHECK_OK(cbm_plant_add_segment(p, &s, NULL));
+        CHECK_OK(cbm_plant_set_load(p, 0, 0.1, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
+        CHECK(!p->tip_loads);
+        if (k == 0)
+            CHECK_OK(cbm_plant_set_load(p, 0, 0.0, (cbm_vec3){-0.0, 0, 0}, (cbm_vec3){0, 0, 0}));
+        if (k == 1)
+            CHECK_OK(cbm_plant_set_load(p, 0, 0.0, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 1e-3}));
+        if (k == 2) {
+            s.parent = 0;
+            s.tip_force = (cbm_vec3){0, -1, 0};
+            CHECK_OK(cbm_plant_add_segment(p, &s, NULL));
+        }
+        CHECK_MSG(p->tip_loads, "case %d: the tip load was not noted", k);
+        cbm_plant_destroy(p);
+    }
     cbm_context_destroy(ctx);
 }
 

@@ -297,6 +297,9 @@ struct cbm_plant {
     double *pmass0; /* point masses the last converged solve balanced (0 for new segments) */
     double *crad;   /* contact radius of the organ at the distal node, m (0: none) */
     cbm_vec3 *tipf, *tipm;
+    /* some segment may carry a tip force or moment (some byte of tipf or tipm not +0.0's): set
+     * by every writer of them (plant.c), never cleared; the prepare reads them only then */
+    bool tip_loads;
     /* results */
     cbm_quat *q;
     cbm_vec3 *pos;    /* proximal node */

@@ -475,6 +475,15 @@ static void link_child(cbm_plant *p, size_t i)
     }
 }
 
+/* p->tip_loads after a tip force f and moment m are written: set for any byte not +0.0's (a -0.0
+ * too, whose sign a sum may keep), never cleared (solve_common.c, prepare_range) */
+static void note_tip_loads(cbm_plant *p, cbm_vec3 f, cbm_vec3 m)
+{
+    static const cbm_vec3 zero;
+    p->tip_loads =
+        p->tip_loads || memcmp(&f, &zero, sizeof f) != 0 || memcmp(&m, &zero, sizeof m) != 0;
+}
+
 cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_t *index)
 {
     if (!p || !def)
@@ -531,6 +540,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->crad[i] = def->contact_radius;
     p->tipf[i] = def->tip_force;
     p->tipm[i] = def->tip_moment;
+    note_tip_loads(p, def->tip_force, def->tip_moment);
     p->q[i] = q_identity();
     p->pos[i] = p->base_pos;
     p->force[i] = p->moment[i] = v3(0, 0, 0);
@@ -629,6 +639,7 @@ cbm_status cbm_plant_set_load(cbm_plant *p, size_t seg, double point_mass, cbm_v
     p->pmass[seg] = point_mass;
     p->tipf[seg] = tip_force;
     p->tipm[seg] = tip_moment;
+    note_tip_loads(p, tip_force, tip_moment);
     return CBM_OK;
 }
 

@@ -221,6 +221,7 @@ static inline __attribute__((always_inline)) void prepare_range(cbm_plant *p, si
     const cbm_vec3 *restrict rig = p->rig, *restrict rest = p->rest;
     const cbm_vec3 *restrict tipf = p->tipf, *restrict tipm = p->tipm;
     const double *restrict mpl = p->mpl, *restrict pmass = p->pmass, *restrict pmass0 = p->pmass0;
+    const bool tips = p->tip_loads; /* else every tip load is +0.0: not read */
     for (size_t i = lo; i < hi; i++) {
         size_t si = i;
         if (map) {
@@ -229,8 +230,10 @@ static inline __attribute__((always_inline)) void prepare_range(cbm_plant *p, si
                 size_t a = map[i + CBM__ORDER_AHEAD];
                 __builtin_prefetch(&rig[a], 0, 3);
                 __builtin_prefetch(&rest[a], 0, 3);
-                __builtin_prefetch(&tipf[a], 0, 3);
-                __builtin_prefetch(&tipm[a], 0, 3);
+                if (tips) {
+                    __builtin_prefetch(&tipf[a], 0, 3);
+                    __builtin_prefetch(&tipm[a], 0, 3);
+                }
                 __builtin_prefetch(&mpl[a], 0, 3);
                 __builtin_prefetch(&pmass[a], 0, 3);
             }
@@ -240,8 +243,13 @@ static inline __attribute__((always_inline)) void prepare_range(cbm_plant *p, si
         w->wown[i] = v3_scale(g, mpl[si] * l);
         double pm =
             p->mass_path == 1.0 ? pmass[si] : pmass0[si] + p->mass_path * (pmass[si] - pmass0[si]);
-        w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(tipf[si], s));
-        w->mtip[i] = v3_scale(tipm[si], s);
+        cbm_vec3 tf = v3(0, 0, 0), tm = v3(0, 0, 0); /* the same bits as +0.0 read */
+        if (tips) {
+            tf = tipf[si];
+            tm = tipm[si];
+        }
+        w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(tf, s));
+        w->mtip[i] = v3_scale(tm, s);
         if (!stag) {
             w->dual[i] = l;
             w->cj[i] = rig[si];
