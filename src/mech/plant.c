@@ -475,13 +475,18 @@ static void link_child(cbm_plant *p, size_t i)
     }
 }
 
-/* p->tip_loads after a tip force f and moment m are written: set for any byte not +0.0's (a -0.0
- * too, whose sign a sum may keep), never cleared (solve_common.c, prepare_range) */
+/* v is +0.0 in every component (not -0.0, whose sign a sum may keep) */
+static bool v3_plus_zero(cbm_vec3 v)
+{
+    return v.x == 0.0 && !signbit(v.x) && v.y == 0.0 && !signbit(v.y) && v.z == 0.0 &&
+           !signbit(v.z);
+}
+
+/* p->tip_loads after a tip force f and moment m are written: set for anything but +0.0, never
+ * cleared (solve_common.c, prepare_range) */
 static void note_tip_loads(cbm_plant *p, cbm_vec3 f, cbm_vec3 m)
 {
-    static const cbm_vec3 zero;
-    p->tip_loads =
-        p->tip_loads || memcmp(&f, &zero, sizeof f) != 0 || memcmp(&m, &zero, sizeof m) != 0;
+    p->tip_loads = p->tip_loads || !v3_plus_zero(f) || !v3_plus_zero(m);
 }
 
 cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_t *index)
