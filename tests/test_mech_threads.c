@@ -605,6 +605,84 @@ TEST(order_follows_edits_same_bits)
     cbm_context_destroy(ctx);
 }
 
+/* The rigidities, rest rates, masses and tip loads are not gathered into the depth-first order:
+ * the prepare reads them from the plant's own arrays through the order's map (solve_order.c).
+ * Edited between warm solves on a plant whose topology stays (tip forces and moments on every
+ * fifth segment, then point masses there, then a ring of growth on every segment: its rigidity,
+ * mass per length and, by the shape memory, rest rate), the forest solved in the depth-first order
+ * stays the same to the bit as the one solved in its own numbering, and each edit moves the
+ * equilibrium (a solve that read the loads or sections of before would differ). */
+TEST(order_reads_edited_sections_and_loads)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    cbm_plant *p[2] = {forest(ctx, 6000), forest(ctx, 6000)};
+    cbm_solve_def sd = cbm_solve_def_default();
+    sd.threads = 2;
+    cbm_growth_def gd = cbm_growth_def_default();
+    cbm__mech_tree_min_segments(0);
+    cbm_vec3 *before = p[0] ? malloc(p[0]->n * sizeof *before) : NULL;
+    CHECK(before != NULL);
+    for (int step = 0; step < 4 && p[0] && p[1] && before; step++) {
+        for (int k = 0; k < 2; k++) {
+            /* tip loads alone, then point masses (the forest's own, and more), then rings */
+            for (size_t i = 3; i < p[k]->n && (step == 1 || step == 2); i += 5)
+                CHECK_OK(cbm_plant_set_load(p[k], i,
+                                            step == 1 ? p[k]->pmass[i] : 0.001 * (double)(i % 7),
+                                            (cbm_vec3){0.002 * (double)(i % 3), 0, 0.001},
+                                            (cbm_vec3){0, 0, 1e-5 * (double)(i % 4)}));
+            if (step == 3)
+                CHECK_OK(cbm_plant_grow_rings(p[k], &gd, NULL));
+            order_force(k == 0);
+            CHECK_OK(cbm_plant_solve(p[k], &sd, NULL));
+            order_default();
+        }
+        CHECK_MSG(p[0]->sorder.valid && !p[0]->sorder.identity && !p[0]->sorder.active,
+                  "step %d: the order was not used", step);
+        CHECK_MSG(same_plant_bits(p[0], p[1]), "step %d: the solves differ", step);
+        if (step > 0)
+            CHECK_MSG(memcmp(before, p[0]->omega, p[0]->n * sizeof *before) != 0,
+                      "step %d: the edit did not move the equilibrium", step);
+        memcpy(before, p[0]->omega, p[0]->n * sizeof *before);
+    }
+    cbm__mech_tree_min_segments(50000);
+    free(before);
+    cbm_plant_destroy(p[0]);
+    cbm_plant_destroy(p[1]);
+    cbm_context_destroy(ctx);
+}
+
+/* The prepare reads no tip loads on a plant that never had one (prepare_range, p->tip_loads):
+ * every writer of a tip force or moment notes it, -0.0 too (its sign may survive a sum); a zero
+ * load leaves it unset. */
+TEST(tip_loads_noted)
+{
+    cbm_context *ctx = NULL;
+    CHECK_OK(cbm_context_create(NULL, &ctx));
+    for (int k = 0; k < 3 && ctx; k++) {
+        cbm_plant *p = NULL;
+        CHECK_OK(cbm_plant_create(ctx, NULL, &p));
+        if (!p)
+            continue;
+        cbm_segment_def s = cbm_segment_def_default();
+        CHECK_OK(cbm_plant_add_segment(p, &s, NULL));
+        CHECK_OK(cbm_plant_set_load(p, 0, 0.1, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 0}));
+        CHECK(!p->tip_loads);
+        if (k == 0)
+            CHECK_OK(cbm_plant_set_load(p, 0, 0.0, (cbm_vec3){-0.0, 0, 0}, (cbm_vec3){0, 0, 0}));
+        if (k == 1)
+            CHECK_OK(cbm_plant_set_load(p, 0, 0.0, (cbm_vec3){0, 0, 0}, (cbm_vec3){0, 0, 1e-3}));
+        if (k == 2) {
+            s.parent = 0;
+            s.tip_force = (cbm_vec3){0, -1, 0};
+            CHECK_OK(cbm_plant_add_segment(p, &s, NULL));
+        }
+        CHECK_MSG(p->tip_loads, "case %d: the tip load was not noted", k);
+        cbm_plant_destroy(p);
+    }
+    cbm_context_destroy(ctx);
+}
+
 /* The sums over all segments follow the plant's numbering in the depth-first order too: the line
  * search's merit of one evaluation, the total potential energy and the S-weighted product of the
  * stability probes, computed on the arrays in that order (entered by hand, as cbm_plant_solve
@@ -620,7 +698,7 @@ TEST(order_sums_in_plant_order)
         for (int sorted = 0; sorted < 2; sorted++) {
             order_force(sorted);
             CHECK_OK(cbm__mech_work_reserve(p, 10));
-            CHECK_OK(cbm__mech_order_enter(p));
+            CHECK_OK(cbm__mech_order_enter(p, true));
             CHECK(p->sorder.active == (sorted == 1));
             cbm__mech_prepare(p);
             cbm__mech_forward_eval(p);

@@ -91,12 +91,19 @@ typedef struct cbm__mech_work {
 /* of the topology: gathered when the order is computed, kept between solves (the solve does not
  * write them) */
 #define CBM__ORDER_TOPO(X) X(parent) X(cont)
-/* what the solve reads: gathered at every solve */
-#define CBM__ORDER_IN(X)                                                                           \
-    X(len) X(branch) X(rig) X(rest) X(mpl) X(omega) X(pmass) X(pmass0) X(crad) X(tipf) X(tipm)
-/* what it writes before it reads them (an evaluation first): scattered back, with omega */
-#define CBM__ORDER_OUT(X)    X(q) X(pos) X(force) X(moment) X(cmass)
-#define CBM__ORDER_ARRAYS(X) CBM__ORDER_TOPO(X) CBM__ORDER_IN(X) CBM__ORDER_OUT(X)
+/* what the solve's sweeps read and do not write: gathered at every solve. The rigidities, rest
+ * rates, masses and tip loads (rig, rest, mpl, pmass, pmass0, tipf, tipm) are read in a solve by
+ * cbm__mech_prepare alone, which turns them into the workspace's joint arrays and reads them from
+ * the plant's own arrays through ord; the organ radii (crad) by the organ contact alone, which
+ * never runs in the order. Neither is gathered. */
+#define CBM__ORDER_IN(X) X(len) X(branch)
+/* the state, read and written: gathered for a warm start (a solve from rest sets it before
+ * reading it), scattered back */
+#define CBM__ORDER_STATE(X) X(omega)
+/* what the solve writes before it reads them (an evaluation first): scattered back */
+#define CBM__ORDER_OUT(X) X(q) X(pos) X(force) X(moment) X(cmass)
+#define CBM__ORDER_ARRAYS(X)                                                                       \
+    CBM__ORDER_TOPO(X) CBM__ORDER_IN(X) CBM__ORDER_STATE(X) CBM__ORDER_OUT(X)
 typedef struct cbm__mech_order {
     size_t cap;      /* segments the arrays hold */
     bool valid;      /* ord and at are of the plant's topology (plant.c clears it) */
@@ -108,11 +115,7 @@ typedef struct cbm__mech_order {
     uint8_t *cont;
     double *len;
     cbm_quat *branch;
-    cbm_vec3 *rig, *rest;
-    double *mpl;
     cbm_vec3 *omega;
-    double *pmass, *pmass0, *crad;
-    cbm_vec3 *tipf, *tipm;
     cbm_quat *q;
     cbm_vec3 *pos, *force, *moment;
     double *cmass;
@@ -298,6 +301,9 @@ struct cbm_plant {
     double *pmass0; /* point masses the last converged solve balanced (0 for new segments) */
     double *crad;   /* contact radius of the organ at the distal node, m (0: none) */
     cbm_vec3 *tipf, *tipm;
+    /* some segment may carry a tip force or moment (some byte of tipf or tipm not +0.0's): set
+     * by every writer of them (plant.c), never cleared; the prepare reads them only then */
+    bool tip_loads;
     /* results */
     cbm_quat *q;
     cbm_vec3 *pos;    /* proximal node */
@@ -334,8 +340,10 @@ void cbm__mech_order_min_segments(size_t min_segments);
 void cbm__mech_order_serial(bool on);
 /// Gathers the plant's arrays into the depth-first order and swaps them in (nothing for a small
 /// plant, one solved on one thread, one with organ contact, or one numbered in that order
-/// already). CBM_E_NOMEM leaves the plant as it was.
-cbm_status cbm__mech_order_enter(cbm_plant *p);
+/// already). With omega false the rotation rates are not gathered: the caller sets every one
+/// before anything reads them (a solve from the rest state). CBM_E_NOMEM leaves the plant as it
+/// was.
+cbm_status cbm__mech_order_enter(cbm_plant *p, bool omega);
 /// Swaps the plant's own arrays back and scatters the solve's results into them (nothing when
 /// not entered); the workspace is left stale (work.stale) until prepared again.
 void cbm__mech_order_leave(cbm_plant *p);
@@ -351,6 +359,9 @@ static inline size_t cbm__mech_at(const cbm_plant *p, size_t k)
 {
     return p->sorder.active ? p->sorder.at[k] : k;
 }
+/* how many places ahead a pass through the order (the gather, the prepare, the scatter) fetches
+ * the plant's lines that it will read or write through ord */
+#define CBM__ORDER_AHEAD 24
 
 /* ---- solve_common.c ---- */
 

@@ -475,6 +475,20 @@ static void link_child(cbm_plant *p, size_t i)
     }
 }
 
+/* v is +0.0 in every component (not -0.0, whose sign a sum may keep) */
+static bool v3_plus_zero(cbm_vec3 v)
+{
+    return v.x == 0.0 && !signbit(v.x) && v.y == 0.0 && !signbit(v.y) && v.z == 0.0 &&
+           !signbit(v.z);
+}
+
+/* p->tip_loads after a tip force f and moment m are written: set for anything but +0.0, never
+ * cleared (solve_common.c, prepare_range) */
+static void note_tip_loads(cbm_plant *p, cbm_vec3 f, cbm_vec3 m)
+{
+    p->tip_loads = p->tip_loads || !v3_plus_zero(f) || !v3_plus_zero(m);
+}
+
 cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_t *index)
 {
     if (!p || !def)
@@ -531,6 +545,7 @@ cbm_status cbm_plant_add_segment(cbm_plant *p, const cbm_segment_def *def, size_
     p->crad[i] = def->contact_radius;
     p->tipf[i] = def->tip_force;
     p->tipm[i] = def->tip_moment;
+    note_tip_loads(p, def->tip_force, def->tip_moment);
     p->q[i] = q_identity();
     p->pos[i] = p->base_pos;
     p->force[i] = p->moment[i] = v3(0, 0, 0);
@@ -629,6 +644,7 @@ cbm_status cbm_plant_set_load(cbm_plant *p, size_t seg, double point_mass, cbm_v
     p->pmass[seg] = point_mass;
     p->tipf[seg] = tip_force;
     p->tipm[seg] = tip_moment;
+    note_tip_loads(p, tip_force, tip_moment);
     return CBM_OK;
 }
 

@@ -206,40 +206,70 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
 /* ---- prepare ---- */
 
 /* The joint arrays of segments [lo, hi); returns whether one of them has a tip moment (read
- * here anyway: the fast solver's test for conservative loads needs no loop of its own). */
-static bool prepare_range(cbm_plant *p, size_t lo, size_t hi)
+ * here anyway: the fast solver's test for conservative loads needs no loop of its own). In the
+ * solve's depth-first order (solve_order.c) the segment at place i is the plant's map[i]: its
+ * length, parent and axis flag are in the order, its rigidity, rest rate, masses and tip loads in
+ * the plant's own arrays, read there through the map (they are not gathered: the prepare is their
+ * only reader in a solve), each place's lines fetched CBM__ORDER_AHEAD places ahead as in the
+ * gather. map NULL: the plant's numbering. Always inlined, so that each caller has a loop of its
+ * own and the plant's numbering keeps its code. */
+static inline __attribute__((always_inline)) bool prepare_range(cbm_plant *p, size_t lo, size_t hi,
+                                                                 const uint32_t *restrict map)
 {
     bool tip_moment = false;
     cbm__mech_work *w = &p->work;
     double s = p->load_scale;
     cbm_vec3 g = v3_scale(p->gravity, s);
     bool stag = p->disc == CBM_MECH_STAGGERED;
+    const cbm_vec3 *restrict rig = p->rig, *restrict rest = p->rest;
+    const cbm_vec3 *restrict tipf = p->tipf, *restrict tipm = p->tipm;
+    const double *restrict mpl = p->mpl, *restrict pmass = p->pmass, *restrict pmass0 = p->pmass0;
+    const bool tips = p->tip_loads; /* else every tip load is +0.0: not read */
     for (size_t i = lo; i < hi; i++) {
+        size_t si = i;
+        if (map) {
+            si = map[i];
+            if (i + CBM__ORDER_AHEAD < hi) {
+                size_t a = map[i + CBM__ORDER_AHEAD];
+                __builtin_prefetch(&rig[a], 0, 3);
+                __builtin_prefetch(&rest[a], 0, 3);
+                if (tips) {
+                    __builtin_prefetch(&tipf[a], 0, 3);
+                    __builtin_prefetch(&tipm[a], 0, 3);
+                }
+                __builtin_prefetch(&mpl[a], 0, 3);
+                __builtin_prefetch(&pmass[a], 0, 3);
+            }
+        }
         double l = p->len[i];
         int64_t pa = p->parent[i];
-        w->wown[i] = v3_scale(g, p->mpl[i] * l);
-        double pm = p->mass_path == 1.0
-                        ? p->pmass[i]
-                        : p->pmass0[i] + p->mass_path * (p->pmass[i] - p->pmass0[i]);
-        w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(p->tipf[i], s));
-        const cbm_vec3 tm = p->tipm[i];
+        w->wown[i] = v3_scale(g, mpl[si] * l);
+        double pm =
+            p->mass_path == 1.0 ? pmass[si] : pmass0[si] + p->mass_path * (pmass[si] - pmass0[si]);
+        cbm_vec3 tf = v3(0, 0, 0), tm = v3(0, 0, 0); /* the same bits as +0.0 read */
+        if (tips) {
+            tf = tipf[si];
+            tm = tipm[si];
+        }
+        w->ftip[i] = v3_add(v3_scale(g, pm), v3_scale(tf, s));
         w->mtip[i] = v3_scale(tm, s);
         tip_moment = tip_moment || !(tm.x == 0.0 && tm.y == 0.0 && tm.z == 0.0);
         if (!stag) {
             w->dual[i] = l;
-            w->cj[i] = p->rig[i];
-            w->rj[i] = p->rest[i];
+            w->cj[i] = rig[si];
+            w->rj[i] = rest[si];
             w->lever[i] = l;
         } else if (pa < 0 || !(p->cont[i] & 1)) {
             w->dual[i] = 0.5 * l;
-            w->cj[i] = p->rig[i];
-            w->rj[i] = p->rest[i];
+            w->cj[i] = rig[si];
+            w->rj[i] = rest[si];
             w->lever[i] = 0.5 * l;
         } else {
+            size_t sp = map ? map[pa] : (size_t)pa;
             double lp = p->len[pa];
             double d = 0.5 * (lp + l);
-            cbm_vec3 cp = p->rig[pa], ci = p->rig[i];
-            cbm_vec3 rp = p->rest[pa], ri = p->rest[i];
+            cbm_vec3 cp = rig[sp], ci = rig[si];
+            cbm_vec3 rp = rest[sp], ri = rest[si];
             w->dual[i] = d;
             w->cj[i] =
                 v3(d / (0.5 * lp / cp.x + 0.5 * l / ci.x), d / (0.5 * lp / cp.y + 0.5 * l / ci.y),
@@ -247,9 +277,17 @@ static bool prepare_range(cbm_plant *p, size_t lo, size_t hi)
             w->rj[i] = v3_scale(v3_add(v3_scale(rp, 0.5 * lp), v3_scale(ri, 0.5 * l)), 1.0 / d);
             w->lever[i] = 0.5 * l;
         }
-        p->cmass[i] = p->mpl[i] * p->len[i] + p->pmass[i];
+        p->cmass[i] = mpl[si] * l + pmass[si];
     }
     return tip_moment;
+}
+
+/* prepare_range over [lo, hi) in the numbering the solve runs in */
+static bool prepare_some(cbm_plant *p, size_t lo, size_t hi)
+{
+    if (p->sorder.active)
+        return prepare_range(p, lo, hi, p->sorder.ord);
+    return prepare_range(p, lo, hi, NULL);
 }
 
 typedef struct prep_job {
@@ -262,7 +300,7 @@ typedef struct prep_job {
 static void prepare_job(void *arg)
 {
     prep_job *j = arg;
-    j->tip_moment = prepare_range(j->p, j->lo, j->hi);
+    j->tip_moment = prepare_some(j->p, j->lo, j->hi);
 }
 
 static void cmass_job(void *arg)
@@ -301,7 +339,7 @@ void cbm__mech_prepare(cbm_plant *p)
     kin_compute(p);
     int t = cbm__mech_tree_split(p);
     if (t <= 1) {
-        p->work.tip_moment = prepare_range(p, 0, n);
+        p->work.tip_moment = prepare_some(p, 0, n);
         /* carried mass (independent of the shape) */
         for (size_t i = n; i-- > 0;)
             if (p->parent[i] >= 0)
@@ -916,7 +954,7 @@ cbm_status cbm_plant_solve(cbm_plant *p, const cbm_solve_def *def, cbm_solve_sta
     /* the relaxation too: the tree factorisation diagnoses its equilibrium's stability */
     CBM_TRY(cbm__mech_work_reserve(p, d.solver == CBM_MECH_NEWTON ? d.krylov_dim : 1));
     /* a large plant is solved in the depth-first order (solve_order.c), left below */
-    CBM_TRY(cbm__mech_order_enter(p));
+    CBM_TRY(cbm__mech_order_enter(p, d.warm_start));
     p->load_scale = 1.0;
     cbm__mech_prepare(p);
     /* a cold start: Omega is the rest state, bit for bit where no rest rate is NaN (the fast
