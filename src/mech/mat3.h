@@ -57,6 +57,56 @@ static inline void cbm__m3_mul(double *restrict out, const double *a, const doub
     }
 }
 
+/* The product's row i, columns 0-1 in *lo and column 2 in *hi: the reference's operations */
+static inline void cbm__m3_row(const double *ai, const double *b, cbm__v2 *lo, double *hi)
+{
+    const double x = ai[0], y = ai[1], z = ai[2];
+    *lo = cbm__v2_splat(x) * cbm__v2_load(b) + cbm__v2_splat(y) * cbm__v2_load(b + 3) +
+          cbm__v2_splat(z) * cbm__v2_load(b + 6);
+    *hi = x * b[2] + y * b[5] + z * b[8];
+}
+
+/* out = (a b) s, each entry the reference's product times s (out must not alias a or b) */
+static inline void cbm__m3_mul_scale(double *restrict out, const double *a, const double *b,
+                                     double s)
+{
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; i++) {
+        cbm__v2 lo;
+        double hi;
+        cbm__m3_row(a + 3 * i, b, &lo, &hi);
+        cbm__v2_store(out + 3 * i, lo * cbm__v2_splat(s));
+        out[3 * i + 2] = hi * s;
+    }
+}
+
+/* out = -(a b), each entry the reference's product negated (out must not alias a or b) */
+static inline void cbm__m3_mul_neg(double *restrict out, const double *a, const double *b)
+{
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; i++) {
+        cbm__v2 lo;
+        double hi;
+        cbm__m3_row(a + 3 * i, b, &lo, &hi);
+        cbm__v2_store(out + 3 * i, -lo);
+        out[3 * i + 2] = -hi;
+    }
+}
+
+/* out = a b + c, each entry the reference's product plus c's (out must not alias a, b or c) */
+static inline void cbm__m3_mul_add(double *restrict out, const double *a, const double *b,
+                                   const double *c)
+{
+#pragma GCC unroll 3
+    for (int i = 0; i < 3; i++) {
+        cbm__v2 lo;
+        double hi;
+        cbm__m3_row(a + 3 * i, b, &lo, &hi);
+        cbm__v2_store(out + 3 * i, lo + cbm__v2_load(c + 3 * i));
+        out[3 * i + 2] = hi + c[3 * i + 2];
+    }
+}
+
 /* out = a^T b, entry (i, j) = (a_0i b_0j + a_1i b_1j) + a_2i b_2j: the bits of the product of
  * the transposed copy, without the copy (out must not alias a or b) */
 static inline void cbm__m3_mul_tn(double *restrict out, const double *a, const double *b)

@@ -127,7 +127,7 @@ typedef cbm__mech_fsweep sweep;
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void forward_all(cbm_plant *p, cbm_vec3 *out, int t);
-static void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
+static inline __attribute__((always_inline)) void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
                        bool defer);
 
 /* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
@@ -259,15 +259,11 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer, const double *frame)
         m3 J;
         cbm__m3_jr(J.m, r, t2, c1, c2);
         double *A = w->fa + 9 * i;
-        mmul_to(A, R, J.m);
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            A[k] *= d;
-        m3 QA = mmul(Q, A), D;
+        cbm__m3_mul_scale(A, R, J.m, d);
+        /* D = S - Q a: the negated product, S added on the diagonal */
+        m3 D;
+        cbm__m3_mul_neg(D.m, Q, A);
         cbm_vec3 c = w->cj[i];
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            D.m[k] = -QA.m[k];
         D.m[0] += (1.0 + mu) * c.x;
         D.m[4] += (1.0 + mu) * c.y;
         D.m[8] += (1.0 + mu) * c.z;
@@ -290,10 +286,8 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer, const double *frame)
         double *WAD = ground ? w->fwad + 9 * i : WADm.m;
         mmul_to(WAD, W, AD.m);
         /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
-        m3 Phi = mmul(WAD, Q);
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            Phi.m[k] += W[k];
+        m3 Phi;
+        cbm__m3_mul_add(Phi.m, WAD, Q, W);
         int64_t pa = p->parent[i];
         if (defer) /* for the sweep of the top; W stays */
             memcpy(w->fwad + 9 * i, Phi.m, sizeof Phi.m);
@@ -694,7 +688,7 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
  * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
  * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
-static void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
+static inline __attribute__((always_inline)) void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
                        bool defer)
 {
     const cbm_vec3 *b = sw->b;
