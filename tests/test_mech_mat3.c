@@ -1,7 +1,8 @@
 /* The 3x3 helpers of the tree factorisation (src/mech/mat3.h) against their scalar reference
- * forms, bit for bit: the two-column products, the transposed product and vector, and the right
- * Jacobian of SO(3). Inputs of every magnitude, both signed zeros, subnormals and infinities;
- * NaN only where both forms must agree that it is NaN (its payload is not compared). */
+ * forms, bit for bit: the two-column products (plain, scaled, negated, plus a matrix), the
+ * transposed product and vector, and the right Jacobian of SO(3). Inputs of every magnitude,
+ * both signed zeros, subnormals and infinities; NaN only where both forms must agree that it is
+ * NaN (its payload is not compared). */
 #include "test.h"
 #include "mech/mech_internal.h"
 #include "mech/mat3.h"
@@ -85,6 +86,23 @@ TEST(mat3_products_match_scalar_bits)
         cbm__m3_mul_ref(ref, a, b);
         cbm__m3_mul(vec, a, b);
         bad += count_differing(ref, vec, 9);
+        /* the product scaled, negated, plus a third matrix: the reference's product, then
+         * the one operation per entry */
+        double c[9], s = rng_value(special), want[9];
+        rng_matrix(c, special);
+        cbm__m3_mul_ref(ref, a, b);
+        for (int k = 0; k < 9; k++)
+            want[k] = ref[k] * s;
+        cbm__m3_mul_scale(vec, a, b, s);
+        bad += count_differing(want, vec, 9);
+        for (int k = 0; k < 9; k++)
+            want[k] = -ref[k];
+        cbm__m3_mul_neg(vec, a, b);
+        bad += count_differing(want, vec, 9);
+        for (int k = 0; k < 9; k++)
+            want[k] = ref[k] + c[k];
+        cbm__m3_mul_add(vec, a, b, c);
+        bad += count_differing(want, vec, 9);
         /* a^T b against the product of the transposed copy */
         transpose(at, a);
         cbm__m3_mul_ref(ref, at, b);
@@ -93,7 +111,7 @@ TEST(mat3_products_match_scalar_bits)
         /* a^T v against the scalar product of the transposed copy, row by row */
         cbm_vec3 v = {rng_value(special), rng_value(special), rng_value(special)};
         cbm_vec3 o = cbm__m3_vec_t(a, v);
-        double want[3], got[3] = {o.x, o.y, o.z};
+        double got[3] = {o.x, o.y, o.z};
         for (int i = 0; i < 3; i++)
             want[i] = at[3 * i] * v.x + at[3 * i + 1] * v.y + at[3 * i + 2] * v.z;
         bad += count_differing(want, got, 3);
