@@ -127,8 +127,8 @@ typedef cbm__mech_fsweep sweep;
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void forward_all(cbm_plant *p, cbm_vec3 *out, int t);
-static inline __attribute__((always_inline)) void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
-                       bool defer);
+static inline __attribute__((always_inline)) void
+solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act, bool defer);
 
 /* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
  * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
@@ -688,8 +688,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
  * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
  * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
-static inline __attribute__((always_inline)) void solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act,
-                       bool defer)
+static inline __attribute__((always_inline)) void
+solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act, bool defer)
 {
     const cbm_vec3 *b = sw->b;
     cbm_vec3 *out = sw->out;
