@@ -171,7 +171,9 @@ typedef struct cbm__mech_fsweep {
 } cbm__mech_fsweep;
 /// The factorisation at segment i (and the backward half of the solve there); with defer (a
 /// subtree's root swept by a thread) what it hands to its parent stays in fw[i] and dm[i].
-void cbm__mech_factor_one(cbm__mech_fsweep *sw, size_t i, bool defer);
+/// frame: segment i's rotation matrix R = [H L U] (row-major) if the caller has it (the fused
+/// sweep, from the same expressions of q[i]), else NULL.
+void cbm__mech_factor_one(cbm__mech_fsweep *sw, size_t i, bool defer, const double *frame);
 /// Clears what a backward sweep of the factorisation needs cleared: only the ground's force
 /// accumulators (work.dfc) when solving with ground contact (W and psi: see work.kin).
 void cbm__mech_factor_clear(cbm_plant *p, bool solving);

@@ -38,7 +38,10 @@
  *
  * Speed: the factorisation is most of a growth run's time (52 % of the 10-year fruit tree before
  * the 3x3 loops were unrolled and Q, a and W a D^-1 written in place; 38 % after, same
- * arithmetic in the same order, so the same results to the bit).
+ * arithmetic in the same order, so the same results to the bit). The 3x3 products run two
+ * columns at a time (mat3.h, the same operations per entry), R^T enters through transposed
+ * products instead of a copy, the fused sweep hands its frame over (cbm__mech_factor_one's
+ * frame) and J_r is formed in the fewest operations that give its bits (cbm__m3_jr).
  *
  * Stability: for a conservative load the Newton matrix is (nearly) symmetric and the D_i are
  * the pivots of its block elimination, so the equilibrium is stable when every D_i has a
@@ -48,6 +51,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mech/mech_internal.h"
+#include "mech/mat3.h"
 #include "mech/sweep_internal.h"
 #include "core/vecmath.h"
 
@@ -69,22 +73,16 @@ static inline m3 skew(cbm_vec3 v)
 static inline m3 mmul(const double *a, const double *b)
 {
     m3 r;
-#pragma GCC unroll 9
-    for (int i = 0; i < 3; i++)
-#pragma GCC unroll 9
-        for (int j = 0; j < 3; j++)
-            r.m[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+    cbm__m3_mul(r.m, a, b);
+    /* written whole by the vector stores, which cppcheck does not follow */
+    // cppcheck-suppress uninitvar
     return r;
 }
 
 /* out = a b (out must not alias a or b) */
 static inline void mmul_to(double *restrict out, const double *a, const double *b)
 {
-#pragma GCC unroll 9
-    for (int i = 0; i < 3; i++)
-#pragma GCC unroll 9
-        for (int j = 0; j < 3; j++)
-            out[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+    cbm__m3_mul(out, a, b);
 }
 
 static inline cbm_vec3 mvec(const double *a, cbm_vec3 v)
@@ -126,19 +124,13 @@ static inline m3 rotation_matrix(cbm_quat q)
     return r;
 }
 
-static inline m3 transpose(const double *a)
-{
-    m3 r = {{a[0], a[3], a[6], a[1], a[4], a[7], a[2], a[5], a[8]}};
-    return r;
-}
-
 typedef cbm__mech_fsweep sweep;
 
 static void forward_solve(cbm_plant *p, cbm_vec3 *out);
 static void forward_step(cbm_plant *p, double *turn2);
 static void forward_all(cbm_plant *p, cbm_vec3 *out, int t, double *turn2);
-static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
-                       bool defer);
+static inline __attribute__((always_inline)) void
+solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act, bool defer);
 
 /* Number of negative eigenvalues of the symmetric part of a 3x3 block: its characteristic
  * polynomial has only real roots, so by Descartes' rule the negative ones are the sign changes
@@ -166,7 +158,7 @@ static size_t sym_negative(const double *d)
 }
 
 /* Is the symmetric part of the 3x3 block positive definite (Sylvester's criterion)? */
-static bool sym_pd(const double *d)
+static inline bool sym_pd(const double *d)
 {
     double a = d[0], b = 0.5 * (d[1] + d[3]), c = 0.5 * (d[2] + d[6]);
     double e = d[4], f = 0.5 * (d[5] + d[7]), g = d[8];
@@ -217,19 +209,25 @@ static void contact_pre(const cbm_plant *p, size_t i, cbm_vec3 h, double *W, m3 
  * Xi, are in its accumulators) and, with sw->b, the backward half of the solve there. With
  * defer (a subtree a thread sweeps, see "Threads" below) Phi is left in fw[i] and psi in dm[i]
  * for the sweep of the top to add into the parent, in the serial order. */
-void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
+void cbm__mech_factor_one(sweep *sw, size_t i, bool defer, const double *frame)
 {
     cbm_plant *p = sw->p;
     cbm__mech_work *w = &p->work;
     const bool ground = sw->ground;
     const double mu = sw->mu;
-    m3 R = rotation_matrix(p->q[i]), Rt = transpose(R.m);
+    /* R = [H L U]; R^T enters through the transposed products (cbm__m3_mul_tn) */
+    m3 Rq;
+    if (!frame) {
+        Rq = rotation_matrix(p->q[i]);
+        frame = Rq.m;
+    }
+    const double *R = frame;
     if (sw->only_solve) {
-        solve_back(sw, i, &Rt, w->fwad + 9 * i, ground && w->fact[i], defer);
+        solve_back(sw, i, R, w->fwad + 9 * i, ground && w->fact[i], defer);
         return;
     }
     {
-        cbm_vec3 h = v3(R.m[0], R.m[3], R.m[6]);
+        cbm_vec3 h = v3(R[0], R[3], R[6]);
         cbm_vec3 V = v3_add(v3_scale(v3_sub(p->force[i], w->wown[i]), p->len[i]),
                             v3_scale(w->wown[i], w->lever[i]));
         /* G = [V]x [H]x = H V^T - (V.H) I; W = the children's Phi (none: zero) + G */
@@ -253,32 +251,21 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
         for (int k = 0; k < 9; k++)
             WM.m[k] += W[k];
         double *Q = w->fq + 9 * i;
-        mmul_to(Q, Rt.m, WM.m);
+        cbm__m3_mul_tn(Q, R, WM.m);
         /* a = R J_r(r) d */
         double d = w->dual[i];
         cbm_vec3 r = v3_scale(p->omega[i], d);
         double t2 = v3_norm2(r), c1, c2;
         cbm__mech_jr_coeffs(t2, &c1, &c2);
-        /* J = I - c1 [r]x + c2 [r]x^2, with [r]x^2 = r r^T - |r|^2 I */
-        m3 sr = skew(r), J;
-        const double rv[3] = {r.x, r.y, r.z};
-#pragma GCC unroll 9
-        for (int r0 = 0; r0 < 3; r0++)
-#pragma GCC unroll 9
-            for (int c0 = 0; c0 < 3; c0++) {
-                double id = r0 == c0 ? 1.0 : 0.0;
-                J.m[3 * r0 + c0] = id - c1 * sr.m[3 * r0 + c0] + c2 * (rv[r0] * rv[c0] - id * t2);
-            }
+        /* J = I - c1 [r]x + c2 [r]x^2 (cbm__m3_jr) */
+        m3 J;
+        cbm__m3_jr(J.m, r, t2, c1, c2);
         double *A = w->fa + 9 * i;
-        mmul_to(A, R.m, J.m);
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            A[k] *= d;
-        m3 QA = mmul(Q, A), D;
+        cbm__m3_mul_scale(A, R, J.m, d);
+        /* D = S - Q a: the negated product, S added on the diagonal */
+        m3 D;
+        cbm__m3_mul_neg(D.m, Q, A);
         cbm_vec3 c = w->cj[i];
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            D.m[k] = -QA.m[k];
         D.m[0] += (1.0 + mu) * c.x;
         D.m[4] += (1.0 + mu) * c.y;
         D.m[8] += (1.0 + mu) * c.z;
@@ -301,10 +288,8 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
         double *WAD = ground ? w->fwad + 9 * i : WADm.m;
         mmul_to(WAD, W, AD.m);
         /* Phi = W (I + A D^-1 Q) = W + (W A D^-1) Q */
-        m3 Phi = mmul(WAD, Q);
-#pragma GCC unroll 9
-        for (int k = 0; k < 9; k++)
-            Phi.m[k] += W[k];
+        m3 Phi;
+        cbm__m3_mul_add(Phi.m, WAD, Q, W);
         int64_t pa = p->parent[i];
         if (defer) /* for the sweep of the top; W stays */
             memcpy(w->fwad + 9 * i, Phi.m, sizeof Phi.m);
@@ -312,7 +297,8 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
             cbm__kin_add9(w->fw + 9 * (size_t)pa, Phi.m, (kin & CBM__KIN_FIRST) != 0);
         if (act) {
             /* Gamma = W a D^-1 P + Y, Lambda = Z + (Z a D^-1) Q, Xi = (Z a D^-1) P + Xi' */
-            m3 P = mmul(Rt.m, Y.m), ZAD = mmul(Z.m, AD.m);
+            m3 P, ZAD = mmul(Z.m, AD.m);
+            cbm__m3_mul_tn(P.m, R, Y.m);
             m3 gam = mmul(WAD, P.m), lam = mmul(ZAD.m, Q), xi = mmul(ZAD.m, P.m);
             memcpy(w->fp + 9 * i, P.m, sizeof P.m);
             memcpy(w->fzad + 9 * i, ZAD.m, sizeof ZAD.m);
@@ -326,7 +312,7 @@ void cbm__mech_factor_one(sweep *sw, size_t i, bool defer)
             }
         }
         if (sw->b && sw->out)
-            solve_back(sw, i, &Rt, WAD, act, defer);
+            solve_back(sw, i, R, WAD, act, defer);
     }
 }
 
@@ -523,7 +509,7 @@ static void tree_job_run(void *arg)
         if (solve)
             CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
         if ((part[i] >> PART_SHIFT & 7u) == me)
-            cbm__mech_factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0);
+            cbm__mech_factor_one(&j->sw, i, (part[i] & PART_ROOT) != 0, NULL);
     }
 }
 
@@ -568,7 +554,7 @@ static void sweeps(sweep *sw)
                 CBM__PREFETCH_PARENT_BWD(par, i, fw, 9);
             if (solve)
                 CBM__PREFETCH_PARENT_BWD(par, i, dm, 3);
-            cbm__mech_factor_one(sw, i, false);
+            cbm__mech_factor_one(sw, i, false, NULL);
         }
     } else {
         tree_parallel(sw, t, false, &sw->singular, &sw->nonpd, &sw->negative, NULL);
@@ -577,7 +563,7 @@ static void sweeps(sweep *sw)
         for (size_t i = n; i-- > 0;) {
             uint32_t e = part[i];
             if ((e >> PART_SHIFT & 7u) == 0) {
-                cbm__mech_factor_one(sw, i, false);
+                cbm__mech_factor_one(sw, i, false, NULL);
             } else if (e & PART_ROOT) {
                 int64_t pa = p->parent[i]; /* in the top */
                 bool first = (w->kin[i] & CBM__KIN_FIRST) != 0;
@@ -744,8 +730,8 @@ void cbm__mech_tree_apply(cbm_plant *p, const cbm_vec3 *b, cbm_vec3 *out)
 /* The backward half of a solve at segment i: from psi and chi of its children (accumulated in
  * work.dm and work.dfc), u_i into out[i], and its own psi and chi added into its parent's (with
  * defer psi is left in dm[i] instead, for the sweep of the top; never with ground contact). */
-static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wad, bool act,
-                       bool defer)
+static inline __attribute__((always_inline)) void
+solve_back(const sweep *sw, size_t i, const double *R, const double *wad, bool act, bool defer)
 {
     const cbm_vec3 *b = sw->b;
     cbm_vec3 *out = sw->out;
@@ -759,11 +745,11 @@ static void solve_back(const sweep *sw, size_t i, const m3 *Rt, const double *wa
     cbm_vec3 f0 = act ? w->dfc[i] : v3(0, 0, 0);
     if (act) {
         /* m0 = sum psi - B sum chi = sum psi + l H x sum chi */
-        cbm_vec3 h = v3(Rt->m[0], Rt->m[1], Rt->m[2]);
+        cbm_vec3 h = v3(R[0], R[3], R[6]);
         m0 = v3_add(m0, v3_scale(v3_cross(h, f0), p->len[i]));
     }
     cbm_vec3 bi = sw->neg_b ? v3_scale(b[i], -1.0) : b[i];
-    cbm_vec3 ui = v3_add(bi, mvec(Rt->m, m0));
+    cbm_vec3 ui = v3_add(bi, cbm__m3_vec_t(R, m0));
     out[i] = ui;
     int64_t pa = p->parent[i];
     if (pa < 0)
