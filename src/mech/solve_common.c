@@ -214,7 +214,7 @@ cbm_status cbm__mech_work_reserve(cbm_plant *p, int krylov_dim)
  * gather. map NULL: the plant's numbering. Always inlined, so that each caller has a loop of its
  * own and the plant's numbering keeps its code. */
 static inline __attribute__((always_inline)) bool prepare_range(cbm_plant *p, size_t lo, size_t hi,
-                                                                 const uint32_t *restrict map)
+                                                                const uint32_t *restrict map)
 {
     bool tip_moment = false;
     cbm__mech_work *w = &p->work;
