@@ -120,6 +120,46 @@ TEST(mech_stability_modes_match_dense_hessian)
     test_ctx_end(ctx);
 }
 
+/* cbm_solve_def.confirm_modes = false: the same equilibrium to the bit, the pivots' count
+ * unconfirmed, no eigenvalue; push_unstable and eigenvalue confirm anyway. */
+TEST(mech_stability_unconfirmed_modes_same_state)
+{
+    cbm_context *ctx = test_ctx();
+    cbm_bend_result r;
+    cbm_plant *p = rod(ctx, 8, 90, 1e-4, 40, 0, &r);
+    size_t n = cbm_plant_segment_count(p);
+    cbm_vec3 *om = calloc(n, sizeof *om), *start = calloc(n, sizeof *start);
+    memcpy(start, cbm_plant_omegas(p), n * sizeof *start); /* the unstable state bend kept */
+    struct {
+        bool confirm, eig;
+    } runs[] = {{true, false}, {false, false}, {false, true}};
+    for (int k = 0; k < 3; k++) {
+        for (size_t i = 0; i < n; i++)
+            CHECK_OK(cbm_plant_set_omega(p, i, start[i]));
+        cbm_solve_def d = cbm_solve_def_default();
+        d.confirm_modes = runs[k].confirm;
+        d.eigenvalue = runs[k].eig;
+        cbm_solve_stats st;
+        memset(&st, 0, sizeof st);
+        CHECK_OK(cbm_plant_solve(p, &d, &st));
+        CHECK_EQ_INT(st.unstable_modes, 2); /* the column kept upright past Greenhill */
+        if (runs[k].confirm || runs[k].eig)
+            CHECK(st.lowest_eigenvalue < -0.01);
+        else
+            CHECK(isnan(st.lowest_eigenvalue));
+        const cbm_vec3 *o = cbm_plant_omegas(p);
+        if (k == 0)
+            memcpy(om, o, n * sizeof *om);
+        else
+            CHECK(memcmp(om, o, n * sizeof *om) == 0);
+    }
+    CHECK(cbm_solve_def_default().confirm_modes);
+    free(om);
+    free(start);
+    cbm_plant_destroy(p);
+    test_ctx_end(ctx);
+}
+
 /* The issue's case: an imperfect column at alpha = 8 that Newton brings to the near-straight
  * unstable state; asked for the stable state, the solver pushes along the unstable mode and
  * ends bent, stable, on the side the imperfection favours (the load path's state agrees). */

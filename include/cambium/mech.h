@@ -354,6 +354,14 @@ typedef struct cbm_solve_def {
     /// also compute cbm_solve_stats.lowest_eigenvalue when the equilibrium is stable (shifted
     /// inverse iteration, tens of O(n) passes not counted in `passes`); default false
     bool eigenvalue;
+    /// true (default): where the pivots count unstable modes, confirm them by the lowest
+    /// eigenvalue (shifted inverse iteration, tens of O(n) passes not counted in `passes`), as
+    /// cbm_solve_stats.unstable_modes says. false: unstable_modes is the pivots' count
+    /// unconfirmed and lowest_eigenvalue NaN, for callers that do not read them (the built-in
+    /// tree models' and the L-system's growth: a quarter of a growth run's time went there).
+    /// The equilibrium returned is the same to the bit either way; push_unstable and eigenvalue
+    /// confirm whatever this says.
+    bool confirm_modes;
     /// threads of the sweeps over a branched plant of 50,000 segments or more (fast solver and
     /// relaxation): 0 = one per processor (the default), 1 = serial; at most 7 are used. The
     /// results are the same to the bit for any count. Also used by the plant's later evaluations.

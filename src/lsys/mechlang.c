@@ -91,6 +91,7 @@ void cbm__mechlang_init(cbm__mechlang *m)
     m->growth = cbm_growth_def_default();
     m->growth.ageing = CBM_AGEING_CORE;
     m->solve = cbm_solve_def_default();
+    m->solve.confirm_modes = false; /* no model reads the mode count: the same states, faster */
     /* SolverMethod(2) in growth: the rings memorise approx's shapes, and the thesis's tip load
      * buckles stems (docs/methods.md, "In growth") */
     m->solve.approx_load = CBM_APPROX_LOAD_CALIBRATED;

@@ -825,6 +825,7 @@ cbm_solve_def cbm_solve_def_default(void)
     d.preconditioner = CBM_MECH_PRECOND_TREE;
     d.warm_start = true;
     d.threads = 0; /* one per processor */
+    d.confirm_modes = true;
     d.approx_mode = CBM_APPROX_CORRECTED;
     d.approx_p = 1.0;
     d.approx_force_factor = 1.0;
@@ -898,7 +899,9 @@ static cbm_status diagnose_stability(cbm_plant *p, const cbm_solve_def *d, cbm_s
     size_t modes = w->fneg;
     st->unstable_modes = 0;
     st->lowest_eigenvalue = NAN;
-    if (modes > 0 || d->eigenvalue) {
+    if (modes > 0 && !d->confirm_modes && !d->push_unstable && !d->eigenvalue) {
+        st->unstable_modes = modes; /* unconfirmed (cbm_solve_def.confirm_modes) */
+    } else if (modes > 0 || d->eigenvalue) {
         double lam = NAN;
         (void)cbm__mech_lowest_mode(p, w->save, &lam);
         st->lowest_eigenvalue = lam;

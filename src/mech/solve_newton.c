@@ -157,6 +157,7 @@ typedef struct newton_krylov {
     bool fuse;             /* evaluations fuse the factorisation (cbm__mech_backward_factor) */
     bool push;             /* push an unstable equilibrium off to a stable one */
     bool want_eig;         /* compute the lowest eigenvalue of a stable equilibrium too */
+    bool confirm;          /* confirm the pivots' unstable modes by the lowest eigenvalue */
 } newton_krylov;
 
 /* the fused evaluations (evaluate_as) and the fused Newton step (tree_step); tests switch them
@@ -990,6 +991,10 @@ static nk_result stability_modes(newton_krylov *k, bool factored)
     st->lowest_eigenvalue = NAN;
     if (modes == 0 && !k->want_eig)
         return NK_DONE;
+    if (!k->confirm) { /* the pivots' count, unconfirmed (cbm_solve_def.confirm_modes) */
+        st->unstable_modes = modes;
+        return NK_DONE;
+    }
     double lam = NAN;
     (void)cbm__mech_lowest_mode(p, w->start, &lam);
     st->lowest_eigenvalue = lam;
@@ -1150,6 +1155,7 @@ cbm_status cbm__mech_solve_newton(cbm_plant *p, const cbm_solve_def *def, size_t
     k.tol = def->tolerance;
     k.push = def->push_unstable;
     k.want_eig = def->eigenvalue;
+    k.confirm = def->confirm_modes || k.push || k.want_eig;
     k.stage = CBM_SOLVE_STAGE_NONE;
     cbm__mech_work *w = &p->work;
 

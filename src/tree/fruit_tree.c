@@ -462,6 +462,7 @@ cbm_status cbm_tree_create(cbm_context *ctx, const cbm_tree_def *def, cbm_tree *
     t->solve = cbm_solve_def_default();
     t->solve.tolerance = def->solve_tolerance;
     t->solve.warm_start = true;
+    t->solve.confirm_modes = false; /* the growth reads no mode count: the same tree, faster */
     t->solve.max_passes = (size_t)def->solve_max_passes;
     t->solve.solver = def->solver;
     t->solve.threads = def->solve_threads;

@@ -212,6 +212,7 @@ cbm_status cbm_ober_mechanics(const cbm_ober_stand *s, size_t tree, const cbm_ob
     out->mass = cbm_plant_total_mass(p);
     cbm_solve_def sv = cbm_solve_def_default();
     sv.threads = s->def.solve_threads;
+    sv.confirm_modes = false; /* no mode count read */
     cbm_solve_stats stats;
     memset(&stats, 0, sizeof stats);
     cbm_status ss = cbm_plant_solve(p, &sv, &stats);
@@ -324,6 +325,7 @@ cbm_status cbm__ober_feedback(cbm_ober_stand *s)
             break;
         cbm_solve_def sv = cbm_solve_def_default();
         sv.threads = s->def.solve_threads;
+        sv.confirm_modes = false; /* no mode count read */
         cbm_solve_stats stats;
         memset(&stats, 0, sizeof stats);
         cbm_status ss = cbm_plant_solve(p, &sv, &stats);
