@@ -444,15 +444,20 @@ static nk_result line_search(newton_krylov *k, double lam, double *out, bool mov
     return NK_STALL;
 }
 
-/* The trust region on rotations: the step length that limits the largest frame rotation of the
- * full step (the forward sweep of the last tree solve or tangent pass left it in work.dth) to
- * max_turn radians (the linearisation of a large rotation overshoots). */
-static double trust_length(newton_krylov *k, int it)
+/* The trust region on rotations: the step length that limits the largest frame rotation tmax of
+ * the full step to max_turn radians (the linearisation of a large rotation overshoots). */
+static double trust_for_turn(newton_krylov *k, int it, double tmax)
 {
-    double tmax = largest_turn(k->p);
     if (it == 0)
         k->first_turn = tmax;
     return tmax > k->max_turn ? k->max_turn / tmax : 1.0;
+}
+
+/* trust_for_turn with the largest turn the forward sweep of the last tree solve or tangent pass
+ * left in work.dth */
+static double trust_length(newton_krylov *k, int it)
+{
+    return trust_for_turn(k, it, largest_turn(k->p));
 }
 
 /* The fused Newton step (cbm__mech_tree_step_fused): where the fused evaluation's
@@ -468,9 +473,10 @@ static bool fused_step(newton_krylov *k, int it, bool abort_large, double *lam0,
 {
     cbm_plant *p = k->p;
     const cbm__mech_work *w = &p->work;
-    /* the line search's first trial must run (its budget check, after this solve's pass) */
-    if (!step_fuse_on || !k->fuse || !w->fready || !w->fhalf || w->fsing != 0 || w->fnonpd != 0 ||
-        cbm__mech_pairs_active(p) || k->st->passes + 2 >= k->max_passes)
+    /* the line search's first trial must run (its budget check, after this solve's pass); the
+     * factorisation's conditions are cbm__mech_tree_step_fused's */
+    if (!step_fuse_on || !k->fuse || cbm__mech_pairs_active(p) ||
+        k->st->passes + 2 >= k->max_passes)
         return false;
     double turn = 0.0;
     if (!cbm__mech_tree_step_fused(p, &turn))
@@ -478,9 +484,7 @@ static bool fused_step(newton_krylov *k, int it, bool abort_large, double *lam0,
     k->st->passes++;
     size_t *count = cbm__context_counters(p->ctx);
     count[CBM__MECH_COUNT_STEP_FUSED]++;
-    if (it == 0)
-        k->first_turn = turn;
-    *lam0 = turn > k->max_turn ? k->max_turn / turn : 1.0;
+    *lam0 = trust_for_turn(k, it, turn);
     *moved = !(*lam0 < 1.0);
     if (!*moved) {
         memcpy(p->omega, w->tmp, p->n * sizeof *p->omega);

@@ -810,19 +810,14 @@ static void forward_solve(cbm_plant *p, cbm_vec3 *out)
 static void forward_step_one(cbm_plant *p, size_t i, double *turn2)
 {
     cbm__mech_work *w = &p->work;
-    cbm_vec3 *dth = w->dth, *u = w->tmp, *step = w->step;
-    int64_t pa = p->parent[i];
-    cbm_vec3 tp = pa >= 0 ? dth[pa] : v3(0, 0, 0);
-    cbm_vec3 rhs = v3_add(u[i], mvec(w->fq + 9 * i, tp));
-    cbm_vec3 v = mvec(w->fdinv + 9 * i, rhs);
-    step[i] = v;
-    cbm_vec3 d = v3_add(tp, mvec(w->fa + 9 * i, v));
-    dth[i] = d;
-    double t = v3_norm2(d);
+    forward_one(p, i, w->tmp, false); /* v_i over u_i in tmp, dth_i */
+    cbm_vec3 v = w->tmp[i];
+    w->step[i] = v;
+    double t = v3_norm2(w->dth[i]);
     if (t > *turn2)
         *turn2 = t;
     cbm_vec3 o = p->omega[i];
-    u[i] = o;
+    w->tmp[i] = o;
     p->omega[i] = v3_add(o, v3_scale(v, 1.0));
     cbm__mech_forward_seg(p, i, false);
 }
